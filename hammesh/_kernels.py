@@ -1,0 +1,341 @@
+"""Compiled inner loops (numba) for the few steps numpy cannot vectorize.
+
+Each kernel is O(m) over a plain int64/float64 array, returns plain arrays and
+reports problems through a return code (never raises: the callers turn codes into
+hammesh exceptions with a message). ``cache=True`` stores the machine code in
+``__pycache__`` so only the very first run in an environment pays the compile time
+(measured in ``benchmarks/bench_core.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "half_edge_twins",
+    "mark_segments",
+    "emit_cycles",
+    "spanning_forest",
+    "consecutive_shared_edges",
+    "first_cross_run_edge",
+    "angle_area_stats",
+]
+
+
+@njit(cache=True)
+def half_edge_twins(tri, n_points):
+    """Match half-edges ``h = 3 t + k`` (from ``tri[t, k]`` to ``tri[t, (k+1) % 3]``).
+
+    Half-edges are bucketed by their lower vertex ``lo`` (a counting sort) with the
+    signed offset ``end - origin`` stored alongside, so an undirected edge's two
+    halves meet in one contiguous bucket: offsets ``d`` and ``-d``.
+
+    Returns ``(twin, start, heads, other, bad)``: ``twin[h]`` is the opposite half-edge
+    or -1 (boundary); bucket ``v`` is ``heads[start[v]:start[v + 1]]`` with offsets
+    ``other[...]`` (the far vertex is ``v + |other|``); ``bad`` is -1, or a half-edge
+    whose edge is used twice in one direction or by three triangles.
+    """
+    m = tri.shape[0]
+    nh = 3 * m
+    start = np.zeros(n_points + 1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            start[min(tri[t, k], tri[t, (k + 1) % 3]) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    heads = np.empty(nh, np.int64)
+    other = np.empty(nh, np.int64)
+    for t in range(m):
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            f = fill[lo]
+            heads[f] = 3 * t + k
+            other[f] = b - a
+            fill[lo] = f + 1
+    twin = np.full(nh, -1, np.int64)
+    for v in range(n_points):
+        s1 = start[v + 1]
+        for j in range(start[v], s1):
+            oj = other[j]
+            for i in range(j + 1, s1):
+                oi = other[i]
+                if oi == oj:
+                    return twin, start, heads, other, heads[i]
+                if oi == -oj:
+                    if twin[heads[j]] >= 0 or twin[heads[i]] >= 0:
+                        return twin, start, heads, other, heads[i]
+                    twin[heads[j]] = heads[i]
+                    twin[heads[i]] = heads[j]
+    return twin, start, heads, other, -1
+
+
+@njit(cache=True)
+def mark_segments(start, heads, other, segments, nh):
+    """Flag the half-edges lying on constrained edges (buckets of ``half_edge_twins``).
+
+    Returns ``(is_con (nh,) bool, found (s,) bool)``: ``found[s]`` tells whether
+    segment s is an edge of the mesh.
+    """
+    is_con = np.zeros(nh, np.bool_)
+    found = np.zeros(segments.shape[0], np.bool_)
+    for s in range(segments.shape[0]):
+        lo = min(segments[s, 0], segments[s, 1])
+        d = max(segments[s, 0], segments[s, 1]) - lo
+        for j in range(start[lo], start[lo + 1]):
+            if other[j] == d or other[j] == -d:
+                is_con[heads[j]] = True
+                found[s] = True
+    return is_con, found
+
+
+@njit(cache=True)
+def _find(parent, x):
+    root = x
+    while parent[root] != root:
+        root = parent[root]
+    while parent[x] != root:  # path compression
+        nxt = parent[x]
+        parent[x] = root
+        x = nxt
+    return root
+
+
+@njit(cache=True)
+def spanning_forest(twin, is_con, m):
+    """Spanning forest of the dual graph that crosses the fewest constrained edges.
+
+    Kruskal with two weights: every free (flippable) dual edge first, then the
+    constrained ones, so a constrained edge enters the tree only to join two regions
+    that free edges cannot join. Returns ``(is_tree (3m,) bool, root (m,) int64,
+    firsts (p,) int64)``: ``root[t]`` identifies t's connected piece and ``firsts`` is
+    the lowest triangle of each of the p pieces, ascending.
+    """
+    parent = np.arange(m)
+    is_tree = np.zeros(twin.shape[0], np.bool_)
+    for rnd in range(2):
+        want_con = rnd == 1
+        for h in range(twin.shape[0]):
+            g = twin[h]
+            if g < h or is_con[h] != want_con:
+                continue
+            a = _find(parent, h // 3)
+            b = _find(parent, g // 3)
+            if a != b:
+                parent[a] = b
+                is_tree[h] = True
+                is_tree[g] = True
+    root = np.empty(m, np.int64)
+    seen = np.zeros(m, np.bool_)
+    firsts = np.empty(m, np.int64)
+    n_pieces = 0
+    for t in range(m):
+        r = _find(parent, t)
+        root[t] = r
+        if not seen[r]:
+            seen[r] = True
+            firsts[n_pieces] = t
+            n_pieces += 1
+    return is_tree, root, firsts[:n_pieces]
+
+
+@njit(cache=True)
+def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
+    """Walk the Thm 2.4 cycles and emit the output triangles in cycle order.
+
+    Slot ``h = 3 t + k`` is the sector of input triangle t's incenter ``I_t`` over its
+    edge ``a b`` (``a = tri[t, k]``). Sweeping counter-clockwise around ``I_t``:
+
+    * edge not in the tree: emit ``(I_t, a, b)``; continue with slot ``h + 1`` of t;
+    * tree edge, free: it is flipped; emit ``(I_t, a, I_u)`` (u across, ``g = twin[h]``)
+      and continue in u's sweep after the flipped edge, slot ``g + 1`` of u;
+    * tree edge, constrained: it is split at its midpoint M; emit ``(I_t, a, M)`` and
+      u's ``(I_u, M, a)`` across ``a M``, then continue with slot ``g + 1`` of u.
+
+    The sweep returns to its first slot after visiting every slot of the tree's
+    triangles once: one Hamiltonian cycle per tree (per connected piece).
+    Incenter of t is vertex ``n_points + t``; midpoints are numbered after the
+    incenters in order of first visit.
+
+    Returns ``(out, parent, kind, lengths, mid_a, mid_b)``: output triangles, the input
+    triangle each lies in, its kind (0 incenter, 1 flip, 2 midpoint), the cycle
+    lengths, and the edge ``(mid_a[i], mid_b[i])`` split by midpoint i.
+    """
+    m = tri.shape[0]
+    nh = 3 * m
+    n_mid_half = 0
+    for h in range(nh):
+        if is_tree[h] and is_con[h]:
+            n_mid_half += 1
+    total = nh + n_mid_half
+    out = np.empty((total, 3), np.int64)
+    parent = np.empty(total, np.int64)
+    kind = np.empty(total, np.int8)
+    lengths = np.zeros(firsts.shape[0], np.int64)
+    mid_of = np.full(nh, -1, np.int64)
+    mid_a = np.empty(n_mid_half // 2, np.int64)
+    mid_b = np.empty(n_mid_half // 2, np.int64)
+    n_mid = 0
+    pos = 0
+    for c in range(firsts.shape[0]):
+        first = 3 * firsts[c]
+        run_start = pos
+        h = first
+        while True:
+            if pos >= total:  # not a permutation: caller reports it
+                return out, parent, kind, lengths, mid_a, mid_b
+            t = h // 3
+            k = h - 3 * t
+            a = tri[t, k]
+            inc = n_points + t
+            if not is_tree[h]:
+                out[pos, 0] = inc
+                out[pos, 1] = a
+                out[pos, 2] = tri[t, (k + 1) % 3]
+                parent[pos] = t
+                kind[pos] = 0
+                pos += 1
+                nxt = h + 1 if k < 2 else h - 2
+            else:
+                g = twin[h]
+                u = g // 3
+                kg = g - 3 * u
+                if not is_con[h]:
+                    out[pos, 0] = inc
+                    out[pos, 1] = a
+                    out[pos, 2] = n_points + u
+                    parent[pos] = t
+                    kind[pos] = 1
+                    pos += 1
+                else:
+                    if mid_of[h] < 0:
+                        mid_of[h] = n_points + m + n_mid
+                        mid_of[g] = n_points + m + n_mid
+                        mid_a[n_mid] = a
+                        mid_b[n_mid] = tri[t, (k + 1) % 3]
+                        n_mid += 1
+                    mv = mid_of[h]
+                    out[pos, 0] = inc
+                    out[pos, 1] = a
+                    out[pos, 2] = mv
+                    parent[pos] = t
+                    kind[pos] = 2
+                    out[pos + 1, 0] = n_points + u
+                    out[pos + 1, 1] = mv
+                    out[pos + 1, 2] = a
+                    parent[pos + 1] = u
+                    kind[pos + 1] = 2
+                    pos += 2
+                nxt = g + 1 if kg < 2 else g - 2
+            h = nxt
+            if h == first:
+                break
+        lengths[c] = pos - run_start
+    return out[:pos], parent[:pos], kind[:pos], lengths, mid_a, mid_b
+
+
+@njit(cache=True)
+def consecutive_shared_edges(tri, run_lengths):
+    """Index of the first row that shares no edge with its successor in its run, or -1.
+
+    The successor of a run's last row is the run's first row (the cycle closes). A
+    run of length 1 or 2 cannot be a cycle of distinct triangles and is reported too.
+    """
+    first = 0
+    for r in range(run_lengths.shape[0]):
+        L = run_lengths[r]
+        if L < 3:
+            return first
+        for i in range(first, first + L):
+            j = i + 1 if i + 1 < first + L else first
+            shared = 0
+            for a in range(3):
+                for b in range(3):
+                    if tri[i, a] == tri[j, b]:
+                        shared += 1
+            if shared != 2:
+                return i
+        first += L
+    return -1
+
+
+@njit(cache=True)
+def first_cross_run_edge(twin, run_lengths):
+    """First half-edge whose twin lies in another run (cycle), or -1."""
+    m = twin.shape[0] // 3
+    run = np.empty(m, np.int64)
+    t = 0
+    for r in range(run_lengths.shape[0]):
+        for _ in range(run_lengths[r]):
+            run[t] = r
+            t += 1
+    for h in range(twin.shape[0]):
+        g = twin[h]
+        if g >= 0 and run[h // 3] != run[g // 3]:
+            return h
+    return -1
+
+
+@njit(cache=True)
+def angle_area_stats(points, tri):
+    """One pass over the triangles.
+
+    Returns ``(min_angle, argmin, max_angle, argmax, min_area, argmin_area, total_area)``
+    with angles in radians and signed areas (positive = counter-clockwise).
+
+    The smallest angle of a triangle is opposite its shortest side and is at most 60
+    degrees, so it is found as ``arcsin`` of the smallest ``sin^2 = cross^2 / (|e|^2
+    |f|^2)`` (well conditioned there); the largest, opposite the longest side, from
+    the smallest cosine. One transcendental call per mesh, not per triangle.
+    """
+    best_s2 = np.inf
+    best_c = np.inf
+    amin = -1
+    amax = -1
+    min_area = np.inf
+    aarea = -1
+    total = 0.0
+    for t in range(tri.shape[0]):
+        p0 = tri[t, 0]
+        p1 = tri[t, 1]
+        p2 = tri[t, 2]
+        ax = points[p1, 0] - points[p0, 0]  # side opposite vertex 2
+        ay = points[p1, 1] - points[p0, 1]
+        bx = points[p2, 0] - points[p1, 0]  # opposite vertex 0
+        by = points[p2, 1] - points[p1, 1]
+        cx = points[p0, 0] - points[p2, 0]  # opposite vertex 1
+        cy = points[p0, 1] - points[p2, 1]
+        cr = ax * by - ay * bx  # twice the signed area
+        total += 0.5 * cr
+        if 0.5 * cr < min_area:
+            min_area = 0.5 * cr
+            aarea = t
+        la = ax * ax + ay * ay
+        lb = bx * bx + by * by
+        lc = cx * cx + cy * cy
+        # shortest side s with the other two sides e, f (squared lengths)
+        if la <= lb and la <= lc:
+            s2 = cr * cr / (lb * lc)
+        elif lb <= lc:
+            s2 = cr * cr / (la * lc)
+        else:
+            s2 = cr * cr / (la * lb)
+        if s2 < best_s2:
+            best_s2 = s2
+            amin = t
+        # longest side L opposite the largest angle: cos = (e^2 + f^2 - L^2) / (2 e f)
+        if la >= lb and la >= lc:
+            c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
+        elif lb >= lc:
+            c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
+        else:
+            c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
+        if c < best_c:
+            best_c = c
+            amax = t
+    min_ang = np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0)))
+    max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
+    return min_ang, amin, max_ang, amax, min_area, aarea, total

@@ -1,0 +1,47 @@
+"""Exception hierarchy of hammesh.
+
+Every error hammesh raises derives from :class:`HammeshError`; each subclass also
+inherits the builtin it refines, so ``except ValueError`` keeps working for callers
+who do not know hammesh.  Messages are one line and name the offending item
+(field, index, file, option).
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "HammeshError",
+    "InvalidDomainError",
+    "InvalidMeshError",
+    "InvalidOptionError",
+    "FileFormatError",
+    "MeshingError",
+    "VerificationError",
+]
+
+
+class HammeshError(Exception):
+    """Base class of every error raised by hammesh."""
+
+
+class InvalidDomainError(HammeshError, ValueError):
+    """A planar straight-line graph (vertices, segments, holes, regions) is invalid."""
+
+
+class InvalidMeshError(HammeshError, ValueError):
+    """A triangle mesh given to an algorithm is not a valid planar triangulation."""
+
+
+class InvalidOptionError(HammeshError, ValueError):
+    """An option value is out of range or impossible (e.g. a min angle Triangle cannot reach)."""
+
+
+class FileFormatError(HammeshError, ValueError):
+    """A file is missing, empty, truncated, of an unknown format or malformed."""
+
+
+class MeshingError(HammeshError, RuntimeError):
+    """The meshing backend failed, crashed or timed out."""
+
+
+class VerificationError(HammeshError, AssertionError):
+    """An output failed its certificate (cycle, orientation, angles, area, conformity)."""

@@ -1,0 +1,134 @@
+"""The two plain-data mesh types of hammesh.
+
+Both are frozen dataclasses of numpy arrays; algorithms are free functions that take
+and return them (or plain arrays).  Conventions, everywhere in hammesh:
+
+* ``points``: ``(n, 2) float64``.
+* ``triangles``: ``(m, 3) int64``, zero-based, counter-clockwise.
+* ``neighbors``: ``(m, 3) int64``; ``neighbors[t, k]`` is the triangle across edge
+  ``(triangles[t, k], triangles[t, (k + 1) % 3])``, or ``-1`` on the boundary.
+* ``segments``: ``(s, 2) int64`` constrained edges; each is an edge of ``triangles``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES"]
+
+#: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
+#: 0: an input triangle's side joined to its incenter; 1: a flipped triangle
+#: (two incenters, one input vertex); 2: a triangle at a constrained-edge midpoint.
+KIND_NAMES: tuple[str, ...] = ("incenter", "flip", "midpoint")
+
+
+def _empty_i(shape: tuple[int, ...]) -> np.ndarray:
+    return np.zeros(shape, dtype=np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A planar triangle mesh with constrained edges.
+
+    Attributes
+    ----------
+    points : (n, 2) float64
+    triangles : (m, 3) int64, counter-clockwise
+    segments : (s, 2) int64
+        Constrained edges (input segments, subdivided by the mesher). Never flipped.
+    segment_markers : (s,) int64
+        Boundary marker of each constrained edge (Triangle's convention; 0 if unknown).
+    triangle_attributes : (m, k) float64
+        Regional attributes (``k`` may be 0).
+    neighbors : (m, 3) int64 or None
+        See the module docstring; ``None`` means "compute when needed".
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    segments: np.ndarray = field(default_factory=lambda: _empty_i((0, 2)))
+    segment_markers: np.ndarray = field(default_factory=lambda: _empty_i((0,)))
+    triangle_attributes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    neighbors: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        m = len(self.triangles)
+        if self.triangle_attributes.shape[0] != m:
+            object.__setattr__(
+                self, "triangle_attributes", np.zeros((m, 0), dtype=np.float64)
+            )
+        if len(self.segment_markers) != len(self.segments):
+            object.__setattr__(
+                self, "segment_markers", np.zeros(len(self.segments), dtype=np.int64)
+            )
+
+    @property
+    def n_points(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def n_triangles(self) -> int:
+        return int(self.triangles.shape[0])
+
+
+@dataclass(frozen=True, eq=False)
+class HamiltonianMesh:
+    """A triangle mesh whose triangles are stored in Hamiltonian-cycle order.
+
+    The triangles form ``len(components)`` cycles, stored as consecutive runs of
+    rows: run ``c`` has ``components[c]`` triangles, consecutive rows of a run share
+    an edge and so do its last and first rows.
+
+    Attributes
+    ----------
+    points : (n, 2) float64
+        The input mesh's points first (same indices), then the Steiner points.
+    triangles : (m, 3) int64, counter-clockwise, in cycle order.
+    segments : (s, 2) int64
+        Constrained edges of the output (input segments, split at inserted midpoints).
+    segment_markers : (s,) int64
+    components : (c,) int64
+        Run lengths of the cycles; they sum to ``m``.
+    position : (m,) int64
+        Position of each triangle inside its cycle (0 at each run's start).
+    parent : (m,) int64
+        Input triangle each output triangle lies in (a flip triangle: the first of its two).
+    kind : (m,) int8
+        Index into :data:`KIND_NAMES`.
+    triangle_attributes : (m, k) float64
+        Regional attributes inherited from ``parent``.
+    report : dict
+        Counts, angles, timings and the verification verdict (see ``docs/report.md``).
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    segments: np.ndarray
+    segment_markers: np.ndarray
+    components: np.ndarray
+    position: np.ndarray
+    parent: np.ndarray
+    kind: np.ndarray
+    triangle_attributes: np.ndarray
+    report: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_points(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def n_triangles(self) -> int:
+        return int(self.triangles.shape[0])
+
+    def as_mesh(self) -> Mesh:
+        """The output as a plain :class:`Mesh` (cycle order kept, cycle metadata dropped)."""
+        return Mesh(
+            points=self.points,
+            triangles=self.triangles,
+            segments=self.segments,
+            segment_markers=self.segment_markers,
+            triangle_attributes=self.triangle_attributes,
+        )

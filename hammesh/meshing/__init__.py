@@ -1,0 +1,112 @@
+"""Quality meshing of planar straight-line graphs, over interchangeable C backends.
+
+``BACKENDS`` is the one registry: backend name -> function ``(Domain, MeshOptions)
+-> Mesh``. Validation happens here, before any backend (C code) runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hammesh.domain import Domain
+from hammesh.errors import InvalidOptionError, MeshingError
+from hammesh.mesh import Mesh
+from hammesh.meshing.isolate import run_isolated
+from hammesh.meshing.meshpy_backend import mesh_with_meshpy
+from hammesh.meshing.options import MAX_MIN_ANGLE, MeshOptions, format_number
+from hammesh.meshing.triangle_backend import mesh_with_triangle, triangle_switches
+
+__all__ = [
+    "quality_mesh",
+    "MeshOptions",
+    "BACKENDS",
+    "MAX_MIN_ANGLE",
+    "format_number",
+    "triangle_switches",
+]
+
+BACKENDS = {"triangle": mesh_with_triangle, "meshpy": mesh_with_meshpy}
+_NAMES = {"triangle": "Triangle", "meshpy": "meshpy"}
+
+
+def _hull_area(vertices: np.ndarray) -> float:
+    from scipy.spatial import ConvexHull
+
+    return float(ConvexHull(vertices).volume)
+
+
+def quality_mesh(
+    domain: Domain,
+    *,
+    min_angle: float | None = None,
+    max_area: float | None = None,
+    backend: str = "triangle",
+    conforming_delaunay: bool = False,
+    max_steiner: int | None = None,
+    isolate: bool = True,
+    timeout: float | None = None,
+) -> Mesh:
+    """Constrained (or conforming) Delaunay quality mesh of a planar domain.
+
+    Parameters
+    ----------
+    domain : Domain
+        Vertices, segments (boundary, internal, dangling), holes and regions.
+        Regions' attributes are returned per triangle, their max areas are applied.
+    min_angle : float, optional
+        Minimum angle in degrees (0..34).
+    max_area : float, optional
+        Global maximum triangle area (> 0).
+    backend : {"triangle", "meshpy"}
+    conforming_delaunay : bool
+        Triangle's ``-D`` (triangle backend only).
+    max_steiner : int, optional
+        Limit on added Steiner points (triangle backend only).
+    isolate : bool
+        Run the C mesher in a child process (default), so that a crash or hang of
+        the C code raises :class:`~hammesh.errors.MeshingError` instead of killing
+        the interpreter. ``False`` runs in-process (slightly faster).
+    timeout : float, optional
+        With ``isolate``, seconds after which the mesher is stopped.
+
+    Returns
+    -------
+    Mesh
+        Counter-clockwise triangles with constrained edges (subdivided segments and
+        their markers), neighbours and the regional attribute of every triangle.
+
+    Raises
+    ------
+    InvalidOptionError, InvalidDomainError, MeshingError
+
+    Examples
+    --------
+    >>> import hammesh
+    >>> dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    >>> m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.1)
+    >>> m.triangles.shape[1]
+    3
+    """
+    if backend not in BACKENDS:
+        raise InvalidOptionError(f"backend must be one of {sorted(BACKENDS)}, got {backend!r}")
+    if not isinstance(domain, Domain):
+        raise InvalidOptionError(f"domain must be a hammesh.Domain, got {type(domain).__name__}")
+    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
+        raise InvalidOptionError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    opts = MeshOptions(
+        min_angle=min_angle,
+        max_area=max_area,
+        conforming_delaunay=conforming_delaunay,
+        max_steiner=max_steiner,
+    )
+    opts.check_size(_hull_area(domain.vertices))
+    func = BACKENDS[backend]
+    if isolate:
+        mesh = run_isolated(func, (domain, opts), name=_NAMES[backend], timeout=timeout)
+    else:
+        mesh = func(domain, opts)
+    if mesh.n_triangles == 0:
+        raise MeshingError(
+            f"{_NAMES[backend]} produced no triangles (are all triangles inside holes?)"
+        )
+    return mesh

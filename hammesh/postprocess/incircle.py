@@ -1,0 +1,127 @@
+"""Theorem 2.4: a Hamiltonian cycle mesh from any triangulation, by incenters and flips.
+
+Arkin, Held, Mitchell, Skiena, *Hamiltonian Triangulations for Fast Rendering*, Thm 2.4
+and the paragraph on conformal meshes after it:
+
+1. put a Steiner point at the incenter of every input triangle and join it to the
+   triangle's corners (each triangle becomes three);
+2. take a spanning tree of the dual graph and flip every input edge the tree
+   crosses: the two incenters become joined (the flip is always legal, Fig. 9);
+3. the triangles, walked around the tree, form one Hamiltonian cycle; the minimum
+   angle is at least half the input's.
+
+Constrained edges are never flipped. The tree is a minimum spanning forest in which
+constrained dual edges cost more (``_kernels.spanning_forest``), so it crosses a
+constrained edge only where a closed chain of them separates two regions: exactly
+``regions - pieces`` crossings, one per separated region. A crossed constrained edge
+keeps its place and gets its midpoint instead of a flip (the paper's conformal
+variant); its two input triangles become four triangles around the midpoint.
+
+The cycle is a successor permutation on output triangles (see ``_successors``):
+every output triangle is owned by a *slot*, the half-edge ``h = 3 t + k`` of the input
+triangle ``t``. Sweeping counter-clockwise around the incenter of ``t``, slot ``h``
+holds ``(I_t, a, b)`` if its edge ``ab`` is not in the tree, ``(I_t, a, I_u)`` if it is
+flipped (``u`` across), and ``(I_t, a, M)`` plus ``(I_t, M, b)`` if it is split at ``M``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hammesh import _kernels
+from hammesh.errors import VerificationError
+from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.verify.input_mesh import HalfEdges
+
+__all__ = ["incircle_hamiltonian", "incenters"]
+
+def incenters(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Incenters of triangles.
+
+    Parameters
+    ----------
+    points : (n, 2) float64
+    triangles : (m, 3) int64
+
+    Returns
+    -------
+    (m, 2) float64
+        ``(|BC| A + |CA| B + |AB| C) / (|BC| + |CA| + |AB|)`` for each triangle ABC.
+    """
+    a = points[triangles[:, 0]]
+    b = points[triangles[:, 1]]
+    c = points[triangles[:, 2]]
+    la = np.hypot(*(c - b).T)[:, None]
+    lb = np.hypot(*(a - c).T)[:, None]
+    lc = np.hypot(*(b - a).T)[:, None]
+    return (la * a + lb * b + lc * c) / (la + lb + lc)
+
+
+def incircle_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> HamiltonianMesh:
+    """Build the Thm 2.4 Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Counter-clockwise, validated (``hammesh.verify.input_mesh.prepare_mesh``).
+    he : HalfEdges
+        Its half-edge adjacency.
+    is_con : (3 m,) bool
+        Half-edges on constrained edges.
+
+    Returns
+    -------
+    HamiltonianMesh
+        With ``report`` holding the construction counts only.
+    """
+    pts, tri = mesh.points, mesh.triangles
+    n, m = mesh.n_points, mesh.n_triangles
+    is_tree, _root, firsts = _kernels.spanning_forest(he.twin, is_con, m)
+    out, parent, kind, lengths, mid_a, mid_b = _kernels.emit_cycles(
+        tri, he.twin, is_tree, is_con, firsts, n
+    )
+    if len(out) != 3 * m + 2 * len(mid_a):
+        raise VerificationError(
+            f"internal error: the tree walk emitted {len(out)} of "
+            f"{3 * m + 2 * len(mid_a)} triangles"
+        )
+    q = len(mid_a)
+    points = np.concatenate([pts, incenters(pts, tri), 0.5 * (pts[mid_a] + pts[mid_b])])
+
+    segs, markers = mesh.segments, mesh.segment_markers
+    if q:  # a split constrained edge becomes its two halves
+        n_all = len(points)
+        key = np.minimum(segs[:, 0], segs[:, 1]) * n_all + np.maximum(segs[:, 0], segs[:, 1])
+        mkey = np.minimum(mid_a, mid_b) * n_all + np.maximum(mid_a, mid_b)
+        order = np.argsort(mkey)
+        idx = np.searchsorted(mkey[order], key).clip(max=q - 1)
+        hit = mkey[order][idx] == key
+        mv = n + m + order[idx[hit]]
+        halves = np.concatenate([np.c_[segs[hit, 0], mv], np.c_[mv, segs[hit, 1]]])
+        segs = np.concatenate([segs[~hit], halves])
+        markers = np.concatenate([markers[~hit], markers[hit], markers[hit]])
+
+    position = np.arange(len(out), dtype=np.int64) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    report = {
+        "triangles": int(len(out)),
+        "vertices": int(len(points)),
+        "input_triangles": int(m),
+        "input_vertices": int(n),
+        "steiner_points": int(m + q),
+        "incenters": int(m),
+        "midpoints": int(q),
+        "flips": int((is_tree & ~is_con).sum() // 2),
+        "components": [int(x) for x in lengths],
+    }
+    return HamiltonianMesh(
+        points=points,
+        triangles=out,
+        segments=segs,
+        segment_markers=markers,
+        components=lengths,
+        position=position,
+        parent=parent,
+        kind=kind,
+        triangle_attributes=mesh.triangle_attributes[parent],
+        report=report,
+    )

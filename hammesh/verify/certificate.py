@@ -1,0 +1,273 @@
+"""The certificate every Hamiltonian mesh passes before hammesh returns or writes it.
+
+What is checked (each failure raises :class:`~hammesh.errors.VerificationError`
+naming the triangle, edge or vertex at fault):
+
+1. ``components`` are positive run lengths summing to the number of triangles;
+   inside each run consecutive triangles share an edge (exactly two vertices) and
+   the last shares one with the first: every run is a closed cycle.
+2. Every triangle is counter-clockwise with positive area (no inverted or
+   degenerate triangle).
+3. Edge-manifold and consistently oriented: no directed edge is used twice, which
+   also rules out a triangle appearing twice.
+4. Runs are exactly the connected pieces: no edge joins two runs.
+5. With the input mesh (``reference``): its points are kept unchanged at the same
+   indices, every vertex it used is still used, the total area is unchanged
+   (relative tolerance ``AREA_RTOL``), the boundary edges are the same, every input
+   constrained edge is an output edge or the union of two collinear output edges
+   meeting at its midpoint, and the minimum angle is at least ``angle_ratio`` times
+   the input's minimum angle, up to a relative tolerance ``ANGLE_RTOL`` (the bound of
+   Thm 2.4 is tight: an incenter triangle has exactly half an input angle, which
+   floating point can round either way by a few ulps).
+
+Items 2-3 with the unchanged area and boundary mean the output triangles tile the
+input domain without overlap: an oriented, edge-manifold triangle set whose boundary
+is the domain's boundary covers every point of the domain a whole number of times,
+and equal area makes that number one.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from hammesh import _kernels
+from hammesh.errors import VerificationError
+from hammesh.mesh import HamiltonianMesh, Mesh
+
+__all__ = ["verify", "verify_cycle_mesh", "ANGLE_RTOL", "AREA_RTOL"]
+
+ANGLE_RTOL = 1e-9
+AREA_RTOL = 1e-9
+
+
+def _fail(msg: str) -> None:
+    raise VerificationError(msg)
+
+
+def _edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
+    return a.astype(np.int64) * n + b.astype(np.int64)
+
+
+def _boundary_keys(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
+    h = np.flatnonzero(twin < 0)
+    a = tri.reshape(-1)[h]
+    b = np.roll(tri, -1, axis=1).reshape(-1)[h]
+    return np.sort(_edge_keys(a, b, n))
+
+
+def verify_cycle_mesh(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    components: np.ndarray,
+    *,
+    segments: np.ndarray | None = None,
+    reference: Mesh | None = None,
+    reference_twin: np.ndarray | None = None,
+    angle_ratio: float = 0.5,
+) -> dict[str, Any]:
+    """Check that ``triangles`` in row order form closed Hamiltonian cycles.
+
+    Parameters
+    ----------
+    points : (n, 2) float64
+    triangles : (m, 3) int64
+        In cycle order.
+    components : (c,) int64
+        Run lengths of the cycles.
+    segments : (s, 2) int64, optional
+        The output's constrained edges; each must be an edge of ``triangles``.
+    reference : Mesh, optional
+        The input mesh; enables the checks of item 5 of the module docstring.
+    reference_twin : (3 m_in,) int64, optional
+        The reference's half-edge twins if already computed (saves one pass).
+    angle_ratio : float
+        Required ``min angle out / min angle in`` (Thm 2.4: 0.5).
+
+    Returns
+    -------
+    dict
+        ``min_angle_output_deg``, ``max_angle_output_deg``, ``area`` and, with a
+        reference, ``min_angle_input_deg``.
+
+    Raises
+    ------
+    VerificationError
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    runs = np.asarray(components, dtype=np.int64).reshape(-1)
+    n, m = len(pts), len(tri)
+    if pts.ndim != 2 or pts.shape[1] != 2 or tri.ndim != 2 or tri.shape[1] != 3:
+        _fail(f"bad shapes: points {pts.shape}, triangles {tri.shape}")
+    if m == 0:
+        _fail("the mesh has no triangles")
+    if not np.isfinite(pts).all():
+        _fail(f"point {int(np.argmax(~np.isfinite(pts).all(axis=1)))} is not finite")
+    if tri.min() < 0 or tri.max() >= n:
+        t = int(np.argmax(((tri < 0) | (tri >= n)).any(axis=1)))
+        _fail(f"triangle {t} {tri[t].tolist()} references a vertex outside 0..{n - 1}")
+    if (runs <= 0).any() or runs.sum() != m:
+        _fail(f"components {runs.tolist()[:10]} are not positive run lengths summing to {m}")
+
+    bad = _kernels.consecutive_shared_edges(tri, runs)
+    if bad >= 0:
+        run = int(np.searchsorted(np.cumsum(runs), bad, side="right"))
+        _fail(
+            f"cycle {run} breaks at triangle {bad}: it shares no edge with the next "
+            "triangle of its cycle"
+        )
+
+    amin, tmin, amax, _, area_min, tarea, total = _kernels.angle_area_stats(pts, tri)
+    if not area_min > 0:
+        _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
+
+    twin, start, heads, other, dup = _kernels.half_edge_twins(tri, n)
+    if dup >= 0:
+        t, k = divmod(int(dup), 3)
+        same = np.flatnonzero((np.sort(tri, axis=1) == np.sort(tri[t])).all(axis=1))
+        if len(same) > 1:
+            _fail(f"triangle {tri[t].tolist()} appears twice (rows {same[:2].tolist()})")
+        _fail(
+            f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the "
+            "same direction (overlap or non-manifold edge)"
+        )
+    h = int(_kernels.first_cross_run_edge(twin, runs))
+    if h >= 0:
+        _fail(
+            f"triangles {h // 3} and {int(twin[h]) // 3} share an edge but lie in different "
+            "cycles (a connected piece must be one cycle)"
+        )
+
+    if segments is not None and len(segments):
+        segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
+        if segs.min() < 0 or segs.max() >= n:
+            _fail(f"constrained edges reference vertices outside 0..{n - 1}")
+        _, found = _kernels.mark_segments(start, heads, other, segs, len(twin))
+        if not found.all():
+            s = int(np.argmin(found))
+            _fail(f"constrained edge {s} {segs[s].tolist()} is not an edge of the mesh")
+
+    stats: dict[str, Any] = {
+        "min_angle_output_deg": math.degrees(amin),
+        "max_angle_output_deg": math.degrees(amax),
+        "area": float(total),
+    }
+    if reference is not None:
+        stats.update(
+            _compare_with_input(
+                pts, tri, twin, start, heads, other, reference, reference_twin, amin, tmin, total, angle_ratio
+            )
+        )
+    return stats
+
+
+def _compare_with_input(
+    pts: np.ndarray,
+    tri: np.ndarray,
+    twin: np.ndarray,
+    start: np.ndarray,
+    heads: np.ndarray,
+    other: np.ndarray,
+    ref: Mesh,
+    r_twin: np.ndarray | None,
+    amin: float,
+    tmin: int,
+    total: float,
+    angle_ratio: float,
+) -> dict[str, Any]:
+    n = len(pts)
+    rp = np.asarray(ref.points, dtype=np.float64)
+    rt = np.ascontiguousarray(ref.triangles, dtype=np.int64)
+    n_in = len(rp)
+    if n < n_in or not np.array_equal(pts[:n_in], rp):
+        _fail("the input points are not kept unchanged as the first output points")
+    used_in = np.bincount(rt.reshape(-1), minlength=n_in) > 0
+    used_out = np.bincount(tri.reshape(-1), minlength=n)[:n_in] > 0
+    lost = used_in & ~used_out
+    if lost.any():
+        _fail(f"input vertex {int(np.argmax(lost))} is no longer a vertex of the mesh")
+
+    r_min, _, _, _, r_area_min, _, r_total = _kernels.angle_area_stats(rp, rt)
+    if not math.isclose(total, r_total, rel_tol=AREA_RTOL, abs_tol=0.0):
+        _fail(f"total area changed from {r_total!r} to {total!r}")
+
+    if r_twin is None:
+        r_twin, _, _, _, r_dup = _kernels.half_edge_twins(rt, n_in)
+        if r_dup >= 0:
+            _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
+    b_out = _boundary_keys(tri, twin, n)
+    b_in = _boundary_keys(rt, r_twin, n)
+    if not np.array_equal(b_out, b_in):
+        diff = np.setxor1d(b_out, b_in)
+        k = int(diff[0])
+        _fail(
+            f"boundary changed: edge ({k // n}, {k % n}) is on the boundary of only one of "
+            "input and output"
+        )
+
+    _check_segments_kept(pts, tri, start, heads, other, ref)
+
+    floor = angle_ratio * r_min * (1.0 - ANGLE_RTOL)
+    if amin < floor:
+        _fail(
+            f"triangle {tmin} {tri[tmin].tolist()} has angle {math.degrees(amin):.6f} deg, "
+            f"below {angle_ratio} x the input minimum {math.degrees(r_min):.6f} deg"
+        )
+    return {"min_angle_input_deg": math.degrees(r_min)}
+
+
+def _check_segments_kept(
+    pts: np.ndarray,
+    tri: np.ndarray,
+    start: np.ndarray,
+    heads: np.ndarray,
+    other: np.ndarray,
+    ref: Mesh,
+) -> None:
+    segs = np.ascontiguousarray(ref.segments, dtype=np.int64).reshape(-1, 2)
+    if len(segs) == 0:
+        return
+    nh = 3 * len(tri)
+
+    def has_edges(pairs: np.ndarray) -> np.ndarray:
+        return _kernels.mark_segments(start, heads, other, pairs.reshape(-1, 2), nh)[1]
+
+    # a segment that is no output edge must be split at its midpoint M into the
+    # output edges (a, M) and (M, b); there are few such segments (one per region)
+    for s in np.flatnonzero(~has_edges(segs)).tolist():
+        a, b = int(segs[s, 0]), int(segs[s, 1])
+        mid = 0.5 * (pts[a] + pts[b])
+        lo = min(a, b)
+        cands = lo + np.abs(other[start[lo] : start[lo + 1]])  # neighbours above lo
+        cands = cands[(pts[cands] == mid).all(axis=1)]
+        if not any(has_edges(np.array([[a, c], [c, b]], dtype=np.int64)).all() for c in cands):
+            _fail(
+                f"input constrained edge {s} ({a}, {b}) is neither an output edge nor "
+                "split at its midpoint"
+            )
+
+
+def verify(
+    mesh: HamiltonianMesh,
+    reference: Mesh | None = None,
+    *,
+    reference_twin: np.ndarray | None = None,
+    angle_ratio: float = 0.5,
+) -> dict[str, Any]:
+    """Certificate of a :class:`~hammesh.mesh.HamiltonianMesh` (see module docstring).
+
+    ``reference`` is the input mesh it was made from (counter-clockwise); without it
+    only items 1-4 are checked (what ``hammesh check FILE`` can know).
+    """
+    return verify_cycle_mesh(
+        mesh.points,
+        mesh.triangles,
+        mesh.components,
+        segments=mesh.segments,
+        reference=reference,
+        reference_twin=reference_twin,
+        angle_ratio=angle_ratio,
+    )

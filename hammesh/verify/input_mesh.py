@@ -1,0 +1,149 @@
+"""Validation of a triangle mesh handed to an algorithm (ours or read from a file)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from hammesh import _kernels
+from hammesh.errors import InvalidMeshError
+from hammesh.mesh import Mesh
+
+__all__ = ["HalfEdges", "half_edges", "prepare_mesh"]
+
+
+@dataclass(frozen=True, eq=False)
+class HalfEdges:
+    """Half-edge adjacency of a triangle array.
+
+    ``h = 3 t + k`` runs from ``triangles[t, k]`` to ``triangles[t, (k + 1) % 3]``.
+    ``twin[h]`` is the opposite half-edge (-1 on the boundary). Bucket ``v``,
+    ``heads[start[v]:start[v + 1]]``, holds the half-edges whose lower vertex is ``v``;
+    ``other`` holds their signed offsets ``end - origin`` (far vertex ``v + |other|``).
+    """
+
+    twin: np.ndarray
+    start: np.ndarray
+    heads: np.ndarray
+    other: np.ndarray
+
+    def mark(self, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(is_con (3m,) bool, found (s,) bool)`` for constrained edges ``segments``."""
+        segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
+        return _kernels.mark_segments(self.start, self.heads, self.other, segs, len(self.twin))
+
+
+def half_edges(triangles: np.ndarray, n_points: int) -> HalfEdges:
+    """Match the half-edges of ``triangles``; raise if an edge is non-manifold.
+
+    Parameters
+    ----------
+    triangles : (m, 3) int64, consistently oriented
+    n_points : int
+
+    Raises
+    ------
+    InvalidMeshError
+        An edge is used twice in the same direction: three or more triangles share
+        it, or two neighbours are oriented inconsistently (overlap).
+    """
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    twin, start, heads, other, bad = _kernels.half_edge_twins(tri, int(n_points))
+    if bad >= 0:
+        t, k = divmod(int(bad), 3)
+        a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
+        raise InvalidMeshError(
+            f"edge ({a}, {b}) of triangle {t} is shared by more than two triangles or by "
+            "two triangles in the same direction (non-manifold edge or overlap)"
+        )
+    return HalfEdges(twin=twin, start=start, heads=heads, other=other)
+
+
+def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
+    """Check a planar mesh and return it counter-clockwise with its half-edges.
+
+    Returns
+    -------
+    mesh : Mesh
+        Same mesh with int64/float64 arrays and every triangle counter-clockwise.
+    he : HalfEdges
+    is_con : (3 m,) bool
+        Half-edges that lie on a constrained edge (``mesh.segments``).
+
+    Raises
+    ------
+    InvalidMeshError
+        Naming the bad item: shapes, non-finite points, out-of-range indices, a
+        triangle with a repeated vertex or zero area, a non-manifold edge, a segment
+        that is not an edge of the mesh.
+    """
+    pts = np.asarray(mesh.points)
+    tri = np.asarray(mesh.triangles)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise InvalidMeshError(f"points must have shape (n, 2), got {pts.shape}")
+    if tri.ndim != 2 or tri.shape[1] != 3:
+        raise InvalidMeshError(f"triangles must have shape (m, 3), got {tri.shape}")
+    if len(tri) == 0:
+        raise InvalidMeshError("the mesh has no triangles")
+    if not np.issubdtype(tri.dtype, np.integer):
+        raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    bad = ~np.isfinite(pts).all(axis=1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    n = len(pts)
+    out = (tri < 0) | (tri >= n)
+    if out.any():
+        t = int(np.argmax(out.any(axis=1)))
+        raise InvalidMeshError(
+            f"triangle {t} references vertex {tri[t][out[t]][0]} but there are only {n} points"
+        )
+    rep = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
+    if rep.any():
+        t = int(np.argmax(rep))
+        raise InvalidMeshError(f"triangle {t} repeats a vertex: {tri[t].tolist()}")
+    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    cross = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (
+        p2[:, 0] - p0[:, 0]
+    )
+    if (cross == 0).any():
+        t = int(np.argmax(cross == 0))
+        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area")
+    cw = cross < 0
+    if cw.any():
+        tri = tri.copy()
+        tri[cw] = tri[cw][:, ::-1]
+    segs = np.asarray(mesh.segments)
+    if segs.size == 0:
+        segs = np.zeros((0, 2), dtype=np.int64)
+    if segs.ndim != 2 or segs.shape[1] != 2:
+        raise InvalidMeshError(f"segments must have shape (s, 2), got {segs.shape}")
+    segs = np.ascontiguousarray(segs, dtype=np.int64)
+    sout = (segs < 0) | (segs >= n)
+    if sout.any():
+        s = int(np.argmax(sout.any(axis=1)))
+        raise InvalidMeshError(
+            f"segment {s} references vertex {segs[s][sout[s]][0]} but there are only {n} points"
+        )
+    he = half_edges(tri, n)
+    is_con, found = he.mark(segs)
+    if not found.all():
+        missing = int(np.argmin(found))
+        raise InvalidMeshError(
+            f"segment {missing} {segs[missing].tolist()} is not an edge of the mesh"
+        )
+    attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64)
+    if attrs.ndim != 2 or attrs.shape[0] != len(tri):
+        attrs = np.zeros((len(tri), 0))
+    clean = replace(
+        mesh,
+        points=pts,
+        triangles=tri,
+        segments=segs,
+        segment_markers=np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1),
+        triangle_attributes=attrs,
+    )
+    return clean, he, is_con

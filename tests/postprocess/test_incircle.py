@@ -1,0 +1,206 @@
+"""Thm 2.4 post-process: properties over a corpus of domains and random inputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import triangle
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.spatial import Delaunay
+
+import hammesh
+from hammesh.postprocess import incenters
+from tests.helpers import angles_deg, assert_certificate, dual_pieces, square
+
+# Triangle's bundled planar domains (box and greenland are tested on their own)
+BUNDLED = ["A", "la", "face", "double_hex", "double_hex2", "double_hex3", "square_circle_hole", "spiral", "dots", "ell"]
+
+
+def bundled_domain(name: str) -> hammesh.Domain:
+    d = triangle.get_data(name)
+    return hammesh.Domain(
+        vertices=d["vertices"],
+        segments=d.get("segments", np.zeros((0, 2), int)),
+        holes=d.get("holes", np.zeros((0, 2))),
+    )
+
+
+def _area(dom: hammesh.Domain) -> float:
+    from scipy.spatial import ConvexHull
+
+    return ConvexHull(dom.vertices).volume
+
+
+@pytest.mark.parametrize("name", BUNDLED)
+def test_bundled_domains(name: str) -> None:
+    try:
+        dom = bundled_domain(name)
+    except hammesh.InvalidDomainError as exc:  # a bundled file our validator rejects
+        pytest.skip(f"{name}: {exc}")
+    m = hammesh.quality_mesh(dom, min_angle=25, max_area=_area(dom) / 2000)
+    h = hammesh.hamiltonian(m)
+    assert h.report["verified"] is True
+    assert_certificate(m, h)
+
+
+def test_box_hole_eats_everything_is_a_clear_error() -> None:
+    # box.poly has a hole point but no closed outer boundary: Triangle eats it all
+    with pytest.raises(hammesh.MeshingError, match="no triangles"):
+        hammesh.quality_mesh(bundled_domain("box"), min_angle=20)
+
+
+def test_greenland_file_mesh() -> None:
+    # Triangle's bundled greenland.node/.ele: 64k triangles of a real coastline
+    d = triangle.get_data("greenland")
+    m = hammesh.Mesh(points=d["vertices"], triangles=d["triangles"].astype(np.int64))
+    h = hammesh.hamiltonian(m)
+    assert_certificate(m, h)
+
+
+def test_incenter_is_equidistant_from_sides() -> None:
+    rng = np.random.default_rng(1)
+    pts = rng.random((3, 2))
+    tri = np.array([[0, 1, 2]])
+    c = incenters(pts, tri)[0]
+    d = []
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        e = pts[b] - pts[a]
+        w = c - pts[a]
+        d.append(abs(e[0] * w[1] - e[1] * w[0]) / np.linalg.norm(e))
+    assert np.allclose(d, d[0])
+
+
+def plate_with_loops(n_loops: int) -> hammesh.Domain:
+    """Unit square with ``n_loops`` closed internal constrained squares (interfaces)."""
+    v = square(0, 0, 1)
+    segs = [[0, 1], [1, 2], [2, 3], [3, 0]]
+    for i in range(n_loops):
+        x = 0.1 + 0.28 * i
+        base = len(v)
+        v += square(x, 0.4, 0.2)
+        segs += [[base, base + 1], [base + 1, base + 2], [base + 2, base + 3], [base + 3, base]]
+    return hammesh.Domain(vertices=v, segments=segs)
+
+
+@pytest.mark.parametrize("n_loops", [0, 1, 3])
+def test_midpoints_one_per_separated_region(n_loops: int) -> None:
+    m = hammesh.quality_mesh(plate_with_loops(n_loops), min_angle=30, max_area=0.005)
+    h = hammesh.hamiltonian(m)
+    regions = dual_pieces(m.triangles, m.segments)
+    pieces = dual_pieces(m.triangles)
+    assert regions == n_loops + 1
+    assert h.report["midpoints"] == regions - pieces == n_loops
+    assert (h.kind == 2).sum() == 4 * n_loops
+    assert_certificate(m, h)
+    # every input constrained edge survives: as an edge, or as two halves at its midpoint
+    out_edges = {tuple(sorted(e)) for t in h.triangles.tolist() for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    for a, b in m.segments.tolist():
+        if tuple(sorted((a, b))) not in out_edges:
+            mid = 0.5 * (m.points[a] + m.points[b])
+            c = int(np.flatnonzero((h.points == mid).all(axis=1))[0])
+            assert tuple(sorted((a, c))) in out_edges and tuple(sorted((c, b))) in out_edges
+
+
+def test_constrained_edges_are_never_flipped() -> None:
+    m = hammesh.quality_mesh(plate_with_loops(2), min_angle=30, max_area=0.01)
+    h = hammesh.hamiltonian(m)
+    out_edges = {tuple(sorted(e)) for t in h.triangles.tolist() for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    for a, b in h.segments.tolist():
+        assert tuple(sorted((a, b))) in out_edges
+
+
+def test_crack_needs_no_midpoint() -> None:
+    # a dangling crack from the boundary into the interior: one region, no midpoint
+    v = square(0, 0, 1) + [[0.5, 0.0], [0.5, 0.6]]
+    segs = [[0, 4], [4, 1], [1, 2], [2, 3], [3, 0], [4, 5]]
+    m = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=segs), min_angle=28, max_area=0.01)
+    h = hammesh.hamiltonian(m)
+    assert h.report["midpoints"] == 0
+    assert_certificate(m, h)
+
+
+def test_disconnected_pieces_give_one_cycle_each() -> None:
+    v = square(0, 0, 1) + square(2, 0, 1) + square(4, 0.5, 0.5)
+    segs = []
+    for b in (0, 4, 8):
+        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
+    dom = hammesh.Domain(vertices=v, segments=segs, holes=[[1.5, 0.5], [3.5, 0.5]])
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.02)
+    h = hammesh.hamiltonian(m)
+    assert len(h.components) == 3
+    assert h.report["components"] == h.components.tolist()
+    assert (h.position[np.cumsum(h.components) - h.components] == 0).all()
+    assert_certificate(m, h)
+
+
+def test_sharp_input_angle_bound_still_holds() -> None:
+    # a 5-degree wedge: Triangle cannot improve the tip, the bound is relative to it
+    ang = np.radians(5)
+    v = [[0, 0], [1, 0], [np.cos(ang), np.sin(ang)]]
+    m = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=[[0, 1], [1, 2], [2, 0]]), min_angle=20, max_area=0.001)
+    h = hammesh.hamiltonian(m)
+    assert angles_deg(m.points, m.triangles).min() < 6
+    assert_certificate(m, h)
+
+
+def test_attributes_follow_parent() -> None:
+    v = square(0, 0, 2) + square(0.5, 0.5, 1)
+    segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+    dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.02)
+    h = hammesh.hamiltonian(m)
+    np.testing.assert_array_equal(h.triangle_attributes, m.triangle_attributes[h.parent])
+    inside = (np.abs(h.points[h.triangles].mean(axis=1) - 1.0) < 0.5).all(axis=1)
+    assert (h.triangle_attributes[inside, 0] == 2).all()
+    assert (h.triangle_attributes[~inside, 0] == 1).all()
+
+
+def test_works_on_any_file_mesh_either_orientation() -> None:
+    rng = np.random.default_rng(7)
+    pts = rng.random((300, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    tri[::2] = tri[::2, ::-1]  # mixed orientation, as files may have
+    m = hammesh.Mesh(points=pts, triangles=tri)
+    h = hammesh.hamiltonian(m)
+    ccw = hammesh.Mesh(points=pts, triangles=np.where(np.isin(np.arange(len(tri)), np.arange(0, len(tri), 2))[:, None], tri[:, ::-1], tri))
+    assert_certificate(ccw, h)
+
+
+@st.composite
+def star_pslg(draw):
+    """A random star-shaped polygon, optionally with a hole or an internal loop."""
+    n = draw(st.integers(5, 14))
+    angles = np.sort(np.array(draw(st.lists(st.floats(0, 2 * np.pi, exclude_max=True), min_size=n, max_size=n, unique=True))))
+    if np.diff(np.r_[angles, angles[0] + 2 * np.pi]).min() < 0.05:
+        angles = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    radii = np.array(draw(st.lists(st.floats(0.6, 1.0), min_size=n, max_size=n)))
+    outer = np.c_[radii * np.cos(angles), radii * np.sin(angles)]
+    inner_kind = draw(st.sampled_from(["none", "hole", "loop"]))
+    v = outer.tolist()
+    segs = [[i, (i + 1) % n] for i in range(n)]
+    holes = []
+    if inner_kind != "none":
+        r = draw(st.floats(0.1, 0.3))
+        k = len(v)
+        v += (r * np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])).tolist()
+        segs += [[k, k + 1], [k + 1, k + 2], [k + 2, k + 3], [k + 3, k]]
+        if inner_kind == "hole":
+            holes = [[0.0, 0.0]]
+    return hammesh.Domain(vertices=v, segments=segs, holes=holes)
+
+
+@given(dom=star_pslg(), min_angle=st.floats(0, 30), area=st.sampled_from([None, 0.05, 0.01]))
+def test_random_pslg_certificate(dom: hammesh.Domain, min_angle: float, area: float | None) -> None:
+    m = hammesh.quality_mesh(dom, min_angle=min_angle, max_area=area, isolate=False)
+    h = hammesh.hamiltonian(m)
+    assert_certificate(m, h)
+
+
+@pytest.mark.slow
+def test_large_mesh_certificate() -> None:
+    dom = plate_with_loops(2)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=2e-5)
+    h = hammesh.hamiltonian(m)
+    assert h.report["verified"] and h.n_triangles > 100_000
+    assert h.report["midpoints"] == 2
