@@ -1,0 +1,131 @@
+"""The certificate rejects every kind of broken output (and accepts good ones)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.verify import verify, verify_cycle_mesh
+from tests.helpers import square
+
+
+@pytest.fixture(scope="module")
+def pair() -> tuple[hammesh.Mesh, hammesh.HamiltonianMesh]:
+    v = square(0, 0, 1) + square(0.3, 0.3, 0.3)
+    segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+    m = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=segs), min_angle=30, max_area=0.02)
+    h = hammesh.hamiltonian(m)
+    assert h.report["midpoints"] == 1
+    return m, h
+
+
+def test_good_output_passes(pair) -> None:
+    m, h = pair
+    stats = verify(h, reference=m)
+    assert stats["min_angle_output_deg"] >= 0.5 * stats["min_angle_input_deg"] * (1 - 1e-9)
+    assert np.isclose(stats["area"], 1.0)
+
+
+def test_swapped_rows_break_the_cycle(pair) -> None:
+    _, h = pair
+    tri = h.triangles.copy()
+    tri[[3, 10]] = tri[[10, 3]]
+    with pytest.raises(hammesh.VerificationError, match="breaks at triangle"):
+        verify(replace(h, triangles=tri))
+
+
+def test_inverted_triangle(pair) -> None:
+    _, h = pair
+    tri = h.triangles.copy()
+    tri[5] = tri[5][::-1]
+    with pytest.raises(hammesh.VerificationError, match="triangle 5 .*inverted"):
+        verify(replace(h, triangles=tri))
+
+
+def test_duplicate_triangle(pair) -> None:
+    _, h = pair
+    # repeat a triangle in place of its neighbour's neighbour: cycle breaks or repeats
+    tri = np.concatenate([h.triangles, h.triangles[:1]])
+    comps = h.components.copy()
+    comps[-1] += 1
+    with pytest.raises(hammesh.VerificationError):
+        verify(replace(h, triangles=tri, components=comps))
+
+
+def test_components_must_sum(pair) -> None:
+    _, h = pair
+    with pytest.raises(hammesh.VerificationError, match="run lengths"):
+        verify(replace(h, components=h.components + 1))
+
+
+def test_split_run_is_rejected(pair) -> None:
+    _, h = pair
+    n = h.n_triangles
+    with pytest.raises(hammesh.VerificationError):
+        verify(replace(h, components=np.array([n // 2, n - n // 2])))
+
+
+def test_moved_steiner_point_is_caught(pair) -> None:
+    m, h = pair
+    pts = h.points.copy()
+    inc = int(h.triangles[0, 0])  # the incenter of the first triangle
+    assert inc >= m.n_points
+    pts[inc] = pts[h.triangles[0, 1]] + 2.0 * (pts[h.triangles[0, 1]] - pts[inc])  # pushed out
+    with pytest.raises(hammesh.VerificationError):
+        verify(replace(h, points=pts), reference=m)
+
+
+def test_slightly_moved_steiner_point_still_valid_but_angles_checked(pair) -> None:
+    m, h = pair
+    pts = h.points.copy()
+    inc = int(h.triangles[0, 0])
+    pts[inc] += 1e-9  # still a valid tiling: the certificate accepts it (no false alarm)
+    stats = verify(replace(h, points=pts), reference=m)
+    assert stats["min_angle_output_deg"] > 0
+
+
+def test_input_points_must_be_kept(pair) -> None:
+    m, h = pair
+    pts = h.points.copy()
+    pts[0, 0] += 1e-12
+    with pytest.raises(hammesh.VerificationError, match="input points"):
+        verify(replace(h, points=pts), reference=m)
+
+
+def test_angle_bound_is_enforced(pair) -> None:
+    m, h = pair
+    with pytest.raises(hammesh.VerificationError, match="below 0.9 x the input minimum"):
+        verify(h, reference=m, angle_ratio=0.9)
+
+
+def test_lost_segment_is_detected(pair) -> None:
+    m, h = pair
+    # claim an extra constrained edge that is not in the output: a diagonal of the square
+    bad = replace(m, segments=np.r_[m.segments, [[0, 2]]])
+    with pytest.raises(hammesh.VerificationError, match="constrained edge"):
+        verify(h, reference=bad)
+
+
+def test_output_segments_must_be_edges(pair) -> None:
+    _, h = pair
+    with pytest.raises(hammesh.VerificationError, match="not an edge"):
+        verify(replace(h, segments=np.r_[h.segments, [[0, 2]]]))
+
+
+def test_removed_triangle_changes_boundary(pair) -> None:
+    m, h = pair
+    # drop the last two triangles of the cycle but keep it closed is impossible; instead
+    # cut the mesh: a reference with one more triangle than the output covers
+    with pytest.raises(hammesh.VerificationError):
+        verify_cycle_mesh(h.points, h.triangles[:-1], [h.n_triangles - 1], reference=m)
+
+
+def test_non_finite_points(pair) -> None:
+    _, h = pair
+    pts = h.points.copy()
+    pts[7] = np.nan
+    with pytest.raises(hammesh.VerificationError, match="point 7"):
+        verify(replace(h, points=pts))
