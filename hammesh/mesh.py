@@ -45,6 +45,8 @@ class Mesh:
         Regional attributes (``k`` may be 0).
     neighbors : (m, 3) int64 or None
         See the module docstring; ``None`` means "compute when needed".
+    info : dict
+        Provenance: backend, switches, meshing seconds (``quality_mesh`` fills it).
     """
 
     points: np.ndarray
@@ -53,6 +55,7 @@ class Mesh:
     segment_markers: np.ndarray = field(default_factory=lambda: _empty_i((0,)))
     triangle_attributes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     neighbors: np.ndarray | None = None
+    info: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         m = len(self.triangles)

@@ -6,6 +6,9 @@
 
 from __future__ import annotations
 
+import time
+from dataclasses import replace
+
 import numpy as np
 
 from hammesh.domain import Domain
@@ -101,12 +104,17 @@ def quality_mesh(
     )
     opts.check_size(_hull_area(domain.vertices))
     func = BACKENDS[backend]
+    t0 = time.perf_counter()
     if isolate:
         mesh = run_isolated(func, (domain, opts), name=_NAMES[backend], timeout=timeout)
     else:
         mesh = func(domain, opts)
+    seconds = time.perf_counter() - t0
     if mesh.n_triangles == 0:
         raise MeshingError(
             f"{_NAMES[backend]} produced no triangles (are all triangles inside holes?)"
         )
-    return mesh
+    info = {"backend": backend, "seconds": seconds, "isolated": bool(isolate)}
+    if backend == "triangle":
+        info["switches"] = triangle_switches(domain, opts)
+    return replace(mesh, info=info)

@@ -60,7 +60,11 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
             "min_angle_output_deg": stats["min_angle_output_deg"],
             "max_angle_output_deg": stats["max_angle_output_deg"],
             "verified": True,
-            "seconds": {"hamiltonian": t1 - t0, "verify": t2 - t1},
+            "seconds": {
+                "mesh": mesh.info.get("seconds"),
+                "hamiltonian": t1 - t0,
+                "verify": t2 - t1,
+            },
         }
     )
     return replace(out, report=report)

@@ -1,0 +1,59 @@
+"""Recover the cycle runs of a Hamiltonian mesh read from a file.
+
+A file written by hammesh stores each connected piece's cycle as one consecutive run
+of triangles; formats without cell data (.obj, .ply, ...) keep only that order. The
+runs are therefore the pieces themselves: this module finds the pieces (connected
+components of the dual graph) and checks they are stored as consecutive runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from hammesh.errors import VerificationError
+from hammesh.verify.input_mesh import half_edges
+
+__all__ = ["infer_runs"]
+
+
+def infer_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
+    """Run lengths of the cycles of a mesh stored piece after piece.
+
+    Parameters
+    ----------
+    triangles : (m, 3) int64, in file order
+    n_points : int
+
+    Returns
+    -------
+    (c,) int64
+        Length of each run; one run per connected piece.
+
+    Raises
+    ------
+    VerificationError
+        A piece is split over several runs (its triangles are not consecutive).
+    InvalidMeshError
+        The mesh is not edge-manifold.
+    """
+    tri = np.asarray(triangles, dtype=np.int64)
+    m = len(tri)
+    if m == 0:
+        raise VerificationError("the mesh has no triangles")
+    twin = half_edges(tri, n_points).twin
+    h = np.flatnonzero(twin >= 0)
+    graph = coo_matrix((np.ones(len(h), dtype=np.int8), (h // 3, twin[h] // 3)), shape=(m, m))
+    n_pieces, label = connected_components(graph, directed=False)
+    change = np.flatnonzero(np.diff(label) != 0) + 1
+    starts = np.r_[0, change]
+    if len(starts) != n_pieces:
+        _, first_seen = np.unique(label[starts], return_index=True)
+        repeat = np.setdiff1d(np.arange(len(starts)), first_seen)
+        first_repeat = int(starts[repeat.min()])
+        raise VerificationError(
+            f"connected piece of triangle {first_repeat} is not stored as one consecutive "
+            "run of triangles (each piece must be one cycle)"
+        )
+    return np.diff(np.r_[starts, m]).astype(np.int64)

@@ -1,0 +1,130 @@
+"""The command line: verbs, outputs, exit codes, one-line errors, nothing half-written."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import triangle
+
+import hammesh
+from hammesh.cli import main
+
+DATA = Path(triangle.__file__).parent / "data"
+
+
+def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "hammesh", *args], capture_output=True, text=True, cwd=cwd, timeout=300
+    )
+
+
+def test_mesh_writes_all_outputs(tmp_path: Path) -> None:
+    out, rep, png = tmp_path / "a.vtu", tmp_path / "a.json", tmp_path / "a.png"
+    code = main([
+        "mesh", str(DATA / "A.poly"), "--min-angle", "30", "--max-area", "0.05",
+        "-o", str(out), "--report", str(rep), "--png", str(png),
+    ])
+    assert code == 0
+    report = json.loads(rep.read_text())
+    for key in ("triangles", "vertices", "input_triangles", "steiner_points", "midpoints", "components",
+                "min_angle_input_deg", "min_angle_output_deg", "max_angle_output_deg", "verified", "seconds"):
+        assert key in report, key
+    assert set(report["seconds"]) >= {"mesh", "hamiltonian", "verify"}
+    assert sum(report["components"]) == report["triangles"]
+    assert report["verified"] is True
+    assert report["min_angle_output_deg"] >= 0.5 * report["min_angle_input_deg"] * (1 - 1e-9)
+    back = hammesh.read_mesh(out)
+    assert back.n_triangles == report["triangles"]
+    assert png.stat().st_size > 1000
+    assert main(["check", str(out)]) == 0
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".msh", ".obj", ".ply", ".ele", ".xdmf"])
+def test_check_accepts_every_format_we_write(tmp_path: Path, suffix: str) -> None:
+    out = tmp_path / f"m{suffix}"
+    assert main(["mesh", str(DATA / "double_hex.poly"), "-q", "25", "-o", str(out)]) == 0
+    assert main(["check", str(out)]) == 0
+
+
+def test_mesh_file_input_is_post_processed(tmp_path: Path) -> None:
+    rng = np.random.default_rng(3)
+    from scipy.spatial import Delaunay
+
+    pts = rng.random((200, 2))
+    src = tmp_path / "in.vtu"
+    hammesh.write(hammesh.Mesh(points=pts, triangles=Delaunay(pts).simplices.astype(np.int64)), src)
+    out = tmp_path / "out.vtu"
+    assert main(["mesh", str(src), "-o", str(out)]) == 0
+    assert main(["check", str(out)]) == 0
+
+
+def test_check_fails_with_exit_3_on_a_broken_cycle(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "m.vtu"
+    assert main(["mesh", str(DATA / "A.poly"), "-q", "25", "-o", str(out)]) == 0
+    m = hammesh.read_mesh(out)
+    tri = m.triangles.copy()
+    tri[[2, 40]] = tri[[40, 2]]
+    bad = tmp_path / "bad.obj"
+    hammesh.write(hammesh.Mesh(points=m.points, triangles=tri), bad)
+    capsys.readouterr()
+    assert main(["check", str(bad)]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "verification failed" in err and "breaks at triangle" in err
+
+
+def test_check_min_angle_requirement(tmp_path: Path) -> None:
+    out = tmp_path / "m.vtu"
+    assert main(["mesh", str(DATA / "A.poly"), "-q", "30", "-o", str(out)]) == 0
+    assert main(["check", str(out), "--min-angle", "14"]) == 0
+    assert main(["check", str(out), "--min-angle", "40"]) == 3
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["mesh", "{d}/A.poly", "--min-angle", "40"], "min_angle"),
+        (["mesh", "{d}/A.poly", "--max-area", "-1"], "max_area"),
+        (["mesh", "{t}/missing.poly"], "missing.poly"),
+        (["mesh", "{d}/A.poly", "-o", "{t}/out.unknown"], "out.unknown"),
+        (["mesh", "{d}/A.poly", "--report", "{t}/r.txt"], "r.txt"),
+        (["mesh", "{t}/empty.poly"], "empty.poly"),
+        (["mesh", "{t}/garbage.vtu"], "garbage.vtu"),
+        (["mesh", "{t}/nan.poly"], "vertex 1"),
+        (["check", "{t}/garbage.vtu"], "garbage.vtu"),
+        (["mesh", "{d}/A.poly", "--backend", "gmsh"], "backend"),
+        (["frobnicate"], "invalid choice"),
+    ],
+)
+def test_bad_input_one_line_exit_2_nothing_written(tmp_path: Path, args: list[str], needle: str) -> None:
+    (tmp_path / "empty.poly").write_text("")
+    (tmp_path / "garbage.vtu").write_bytes(os.urandom(300))
+    (tmp_path / "nan.poly").write_text("3 2 0 0\n1 0 0\n2 nan 0\n3 0 1\n3 0\n1 1 2\n2 2 3\n3 3 1\n0\n")
+    before = set(os.listdir(tmp_path))
+    argv = [a.format(d=DATA, t=tmp_path) for a in args]
+    proc = run_cli(*argv, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().count("\n") == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert needle in proc.stderr
+    assert set(os.listdir(tmp_path)) == before
+
+
+def test_help_has_examples() -> None:
+    proc = run_cli("mesh", "--help")
+    assert proc.returncode == 0 and "examples:" in proc.stdout and "--min-angle" in proc.stdout
+
+
+def test_demo_writes_its_three_files(tmp_path: Path) -> None:
+    proc = run_cli("demo", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    d = tmp_path / "hammesh-demo"
+    assert sorted(p.name for p in d.iterdir()) == ["cycle.png", "mesh.vtu", "report.json"]
+    report = json.loads((d / "report.json").read_text())
+    assert report["verified"] and report["midpoints"] >= 1  # the plate has an interface loop
+    assert run_cli("check", str(d / "mesh.vtu")).returncode == 0
