@@ -1,0 +1,70 @@
+"""Write a run report (counts, angles, timings, verdict) as JSON.
+
+The report is plain JSON: ``indent=2``, sorted keys, a trailing newline, written
+atomically.  numpy scalars and arrays become Python numbers and lists, tuples and sets
+become lists, paths become strings, and non-finite floats (``nan``, ``inf``) become
+``null`` so the file stays standard JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import PurePath
+from typing import Any
+
+import numpy as np
+
+from hammesh.io.atomic import atomic_write_text
+
+__all__ = ["write_report", "to_json_value"]
+
+
+def to_json_value(value: Any, where: str = "report") -> Any:
+    """``value`` converted to plain JSON types (see the module docstring).
+
+    Raises
+    ------
+    TypeError
+        A value has no JSON form; the message gives its key path.
+
+    Examples
+    --------
+    >>> to_json_value({"n": np.int64(3), "a": np.array([0.5, np.inf])})
+    {'n': 3, 'a': [0.5, None]}
+    """
+    if isinstance(value, np.ndarray):
+        return [to_json_value(v, f"{where}[{i}]") for i, v in enumerate(value.tolist())]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, int):
+        return int(value)
+    if isinstance(value, float):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, complex):
+        raise TypeError(f"{where}: complex value {value!r} has no JSON form")
+    if isinstance(value, dict):
+        return {str(k): to_json_value(v, f"{where}.{k}") for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_json_value(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    if isinstance(value, (set, frozenset)):
+        return sorted((to_json_value(v, f"{where}{{}}") for v in value), key=repr)
+    if isinstance(value, PurePath):
+        return str(value)
+    raise TypeError(f"{where}: {type(value).__name__} value has no JSON form")
+
+
+def write_report(report: dict[str, Any], path: str | os.PathLike[str]) -> None:
+    """Write ``report`` as JSON to ``path`` (indent 2, sorted keys, atomic).
+
+    Parameters
+    ----------
+    report : dict
+        Nested dicts, lists, numbers, strings, numpy scalars and arrays.
+    path : path-like
+    """
+    text = json.dumps(to_json_value(report), indent=2, sort_keys=True, allow_nan=False)
+    atomic_write_text(path, text + "\n")

@@ -1,0 +1,302 @@
+"""Read and write Jonathan Shewchuk's Triangle files: ``.node`` + ``.ele`` (+ ``.poly``).
+
+A mesh ``foo`` is three files, written together and atomically (each through a
+temporary sibling; the targets are replaced only once all three are complete):
+
+* ``foo.node``: ``<n> 2 0 0`` then ``<i> <x> <y>`` (zero-based, ``%.17g`` so floats
+  round-trip exactly);
+* ``foo.poly``: the constrained edges, as Triangle's ``-p`` output writes them
+  (``0 2 0 1``: vertices are in ``foo.node``; ``<s> 1``; ``<i> <a> <b> <marker>``;
+  ``0`` holes).  Always written, possibly with no segments, so a stale ``.poly`` from an
+  earlier mesh can never be paired with the new ``.node``;
+* ``foo.ele``: ``<m> 3 <k>`` then ``<i> <a> <b> <c> <attributes>``, triangles in row
+  (for a :class:`~hammesh.mesh.HamiltonianMesh`: cycle) order.  The attributes are
+  the columns of ``triangle_attributes`` then, for a Hamiltonian mesh, ``cycle_id``,
+  ``cycle_position`` and ``kind``; a comment ``# attributes: <names>`` names them.
+
+Reading follows Triangle's rules: ``#`` starts a comment, blank lines are skipped, the
+first vertex number in ``.node`` (0 or 1) fixes the numbering of every file.  A
+``.poly`` next to the ``.ele`` is optional; if present its segments are read.  When the
+``# attributes:`` comment is present only the ``attribute_<i>`` columns become
+``triangle_attributes``; otherwise every attribute column does.
+
+Reference: https://www.cs.cmu.edu/~quake/triangle.node.html (and ``.ele``, ``.poly``).
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from hammesh.errors import FileFormatError
+from hammesh.io.atomic import atomic_paths
+from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
+from hammesh.io.validate import validate_mesh
+from hammesh.mesh import HamiltonianMesh, Mesh
+
+__all__ = ["read_ele", "write", "SUFFIXES"]
+
+#: Suffixes handled by this module (either names the same pair of files).
+SUFFIXES: tuple[str, ...] = (".ele", ".node")
+
+#: Order of the cycle fields among the ``.ele`` attributes (after ``attribute_<i>``).
+_CYCLE_FIELDS = ("cycle_id", "cycle_position", "kind")
+_ATTRIBUTES_COMMENT = "# attributes:"
+
+
+def _siblings(path: str | os.PathLike[str]) -> tuple[Path, Path, Path]:
+    path = Path(path)
+    if path.suffix.lower() not in SUFFIXES:
+        raise FileFormatError(f"{path}: expected a .ele or .node path")
+    return path.with_suffix(".node"), path.with_suffix(".poly"), path.with_suffix(".ele")
+
+
+def _savetxt(f: io.TextIOBase, rows: np.ndarray, fmt: list[str]) -> None:
+    if len(rows):
+        np.savetxt(f, rows, fmt=fmt, delimiter=" ")
+
+
+def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
+    """Write ``mesh`` as ``<stem>.node``, ``<stem>.poly`` and ``<stem>.ele``, atomically.
+
+    Parameters
+    ----------
+    mesh : Mesh or HamiltonianMesh
+        Validated first (:func:`hammesh.io.validate.validate_mesh`).
+    path : path-like
+        ``<stem>.ele`` or ``<stem>.node``; both name the same three files.
+    """
+    node_path, poly_path, ele_path = _siblings(path)
+    validate_mesh(mesh)
+    points = np.asarray(mesh.points, dtype=np.float64)
+    triangles = np.asarray(mesh.triangles, dtype=np.int64)
+    segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)
+    markers = np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1)
+    if len(markers) != len(segments):
+        markers = np.zeros(len(segments), dtype=np.int64)
+    n, m, s = len(points), len(triangles), len(segments)
+
+    data = triangle_cell_data(mesh)
+    names = [k for k in data if k.startswith(ATTRIBUTE_PREFIX)]
+    if isinstance(mesh, HamiltonianMesh):
+        names += list(_CYCLE_FIELDS)
+    kind = "Hamiltonian mesh (triangles in cycle order)" if isinstance(mesh, HamiltonianMesh) else "mesh"
+
+    with atomic_paths([node_path, poly_path, ele_path]) as (tmp_node, tmp_poly, tmp_ele):
+        with open(tmp_node, "w", encoding="ascii", newline="\n") as f:
+            f.write(f"# hammesh {kind}: Triangle .node file, zero-based\n")
+            f.write("# <# of vertices> <dimension> <# of attributes> <# of boundary markers>\n")
+            f.write(f"{n} 2 0 0\n")
+            f.write("# <vertex #> <x> <y>\n")
+            rows = np.column_stack([np.arange(n, dtype=np.float64), points])
+            _savetxt(f, rows, ["%d", "%.17g", "%.17g"])
+
+        with open(tmp_poly, "w", encoding="ascii", newline="\n") as f:
+            f.write(f"# hammesh {kind}: Triangle .poly file, zero-based; vertices in {node_path.name}\n")
+            f.write("0 2 0 1\n")
+            f.write("# <# of segments> <# of boundary markers>\n")
+            f.write(f"{s} 1\n")
+            f.write("# <segment #> <endpoint> <endpoint> <boundary marker>\n")
+            rows = np.column_stack([np.arange(s), segments, markers]).astype(np.int64)
+            _savetxt(f, rows, ["%d"] * 4)
+            f.write("# <# of holes>\n0\n")
+
+        with open(tmp_ele, "w", encoding="ascii", newline="\n") as f:
+            f.write(f"# hammesh {kind}: Triangle .ele file, zero-based\n")
+            f.write(f"{_ATTRIBUTES_COMMENT} {' '.join(names)}\n")
+            f.write("# <# of triangles> <nodes per triangle> <# of attributes>\n")
+            f.write(f"{m} 3 {len(names)}\n")
+            f.write("# <triangle #> <node> <node> <node> <attributes>\n")
+            if names:
+                attrs = np.column_stack([data[k].astype(np.float64) for k in names])
+                rows = np.column_stack([np.arange(m), triangles, attrs])
+                fmt = ["%d"] * 4 + ["%.17g" if k.startswith(ATTRIBUTE_PREFIX) else "%d" for k in names]
+                _savetxt(f, rows, fmt)
+            else:
+                rows = np.column_stack([np.arange(m), triangles])
+                _savetxt(f, rows, ["%d"] * 4)
+
+
+class _Tokens:
+    """Non-comment lines of a Triangle file as ``(line number, tokens)``."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        if not path.is_file():
+            raise FileFormatError(f"{path}: file not found")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise FileFormatError(f"{path}: not a text file") from None
+        except OSError as exc:
+            raise FileFormatError(f"{path}: cannot read ({exc.strerror})") from None
+        self.comments = []
+        self._rows: list[tuple[int, list[str]]] = []
+        for lineno, line in enumerate(text.splitlines(), start=1):
+            body, hash_, comment = line.partition("#")
+            if hash_:
+                self.comments.append("#" + comment)
+            tokens = body.split()
+            if tokens:
+                self._rows.append((lineno, tokens))
+        self._it: Iterator[tuple[int, list[str]]] = iter(self._rows)
+        self.lineno = 0
+
+    def error(self, message: str, lineno: int | None = None) -> FileFormatError:
+        where = self.lineno if lineno is None else lineno
+        return FileFormatError(f"{self.path}:{where}: {message}" if where else f"{self.path}: {message}")
+
+    def row(self, what: str, min_tokens: int) -> list[str]:
+        try:
+            self.lineno, tokens = next(self._it)
+        except StopIteration:
+            raise FileFormatError(f"{self.path}: unexpected end of file (expected {what})") from None
+        if len(tokens) < min_tokens:
+            raise self.error(f"expected {min_tokens} numbers ({what}), got {len(tokens)}")
+        return tokens
+
+    def as_int(self, token: str, what: str) -> int:
+        try:
+            return int(token)
+        except ValueError:
+            raise self.error(f"{what} is not an integer: {token!r}") from None
+
+    def as_float(self, token: str, what: str) -> float:
+        try:
+            return float(token)
+        except ValueError:
+            raise self.error(f"{what} is not a number: {token!r}") from None
+
+    def as_count(self, token: str, what: str) -> int:
+        value = self.as_int(token, what)
+        if value < 0:
+            raise self.error(f"{what} is negative: {value}")
+        return value
+
+
+def _read_node(path: Path) -> tuple[np.ndarray, int]:
+    tok = _Tokens(path)
+    head = tok.row("header '<# of vertices> <dimension> <# of attributes> <# of boundary markers>'", 2)
+    n = tok.as_count(head[0], "number of vertices")
+    dim = tok.as_int(head[1], "dimension")
+    if dim != 2:
+        raise tok.error(f"dimension is {dim}, only 2 is supported")
+    n_attr = tok.as_count(head[2], "number of attributes") if len(head) > 2 else 0
+    n_mark = tok.as_count(head[3], "number of boundary markers") if len(head) > 3 else 0
+    if n == 0:
+        raise tok.error("no vertices")
+    points = np.empty((n, 2), dtype=np.float64)
+    base = 0
+    for i in range(n):
+        row = tok.row(f"vertex {i + 1} of {n}", 3 + n_attr + n_mark)
+        number = tok.as_int(row[0], "vertex number")
+        if i == 0:
+            if number not in (0, 1):
+                raise tok.error(f"first vertex number must be 0 or 1, got {number}")
+            base = number
+        elif number != base + i:
+            raise tok.error(f"vertex number {number}, expected {base + i}")
+        x, y = tok.as_float(row[1], "x"), tok.as_float(row[2], "y")
+        if not (np.isfinite(x) and np.isfinite(y)):
+            raise tok.error(f"vertex {number} is not finite")
+        points[i] = x, y
+    return points, base
+
+
+def _vertex(tok: _Tokens, token: str, base: int, n: int) -> int:
+    value = tok.as_int(token, "vertex index")
+    if not base <= value < base + n:
+        raise tok.error(f"vertex index {value} out of range [{base}, {base + n})")
+    return value - base
+
+
+def _read_poly_segments(path: Path, base: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    tok = _Tokens(path)
+    head = tok.row("header '<# of vertices> <dimension> <# of attributes> <# of boundary markers>'", 1)
+    nv = tok.as_count(head[0], "number of vertices")
+    n_attr = tok.as_count(head[2], "number of attributes") if len(head) > 2 else 0
+    n_mark = tok.as_count(head[3], "number of boundary markers") if len(head) > 3 else 0
+    for i in range(nv):  # vertices listed in the .poly itself: Triangle keeps them first in .node
+        tok.row(f"vertex {i + 1} of {nv}", 3 + n_attr + n_mark)
+    head = tok.row("segment header '<# of segments> <# of boundary markers>'", 1)
+    s = tok.as_count(head[0], "number of segments")
+    has_marker = len(head) > 1 and tok.as_int(head[1], "number of boundary markers") > 0
+    segments = np.empty((s, 2), dtype=np.int64)
+    markers = np.zeros(s, dtype=np.int64)
+    for i in range(s):
+        row = tok.row(f"segment {i + 1} of {s}", 3 + int(has_marker))
+        segments[i] = _vertex(tok, row[1], base, n), _vertex(tok, row[2], base, n)
+        if has_marker:
+            markers[i] = tok.as_int(row[3], "boundary marker")
+    return segments, markers
+
+
+def read_ele(path: str | os.PathLike[str]) -> Mesh:
+    """Read ``<stem>.ele`` with its ``<stem>.node`` (and ``<stem>.poly`` if present).
+
+    Parameters
+    ----------
+    path : path-like
+        ``<stem>.ele`` or ``<stem>.node``.
+
+    Returns
+    -------
+    Mesh
+        Zero-based, triangles in file order.  Second-order elements (6 nodes) keep
+        their 3 corners.
+
+    Raises
+    ------
+    FileFormatError
+        A file is missing, not text, truncated or malformed; an index is out of range.
+        The message names the file and, where it applies, the line.
+    """
+    node_path, poly_path, ele_path = _siblings(path)
+    if not ele_path.is_file():
+        raise FileFormatError(f"{ele_path}: file not found")
+    if not node_path.is_file():
+        raise FileFormatError(f"{node_path}: file not found (needed by {ele_path.name})")
+    points, base = _read_node(node_path)
+    n = len(points)
+
+    tok = _Tokens(ele_path)
+    head = tok.row("header '<# of triangles> <nodes per triangle> <# of attributes>'", 1)
+    m = tok.as_count(head[0], "number of triangles")
+    per = tok.as_int(head[1], "nodes per triangle") if len(head) > 1 else 3
+    if per not in (3, 6):
+        raise tok.error(f"nodes per triangle is {per}, expected 3 or 6")
+    k = tok.as_count(head[2], "number of attributes") if len(head) > 2 else 0
+    if m == 0:
+        raise tok.error("no triangles")
+    triangles = np.empty((m, 3), dtype=np.int64)
+    attrs = np.empty((m, k), dtype=np.float64)
+    for i in range(m):
+        row = tok.row(f"triangle {i + 1} of {m}", 1 + per + k)
+        tok.as_int(row[0], "triangle number")
+        triangles[i] = [_vertex(tok, t, base, n) for t in row[1:4]]
+        for j in range(k):
+            attrs[i, j] = tok.as_float(row[1 + per + j], f"attribute {j + 1}")
+
+    names = None
+    for comment in tok.comments:
+        if comment.startswith(_ATTRIBUTES_COMMENT):
+            names = comment[len(_ATTRIBUTES_COMMENT):].split()
+    if names is not None and len(names) == k:
+        attrs = attrs[:, [j for j, name in enumerate(names) if name.startswith(ATTRIBUTE_PREFIX)]]
+
+    segments = np.zeros((0, 2), dtype=np.int64)
+    markers = np.zeros(0, dtype=np.int64)
+    if poly_path.is_file():
+        segments, markers = _read_poly_segments(poly_path, base, n)
+
+    return Mesh(
+        points=points,
+        triangles=triangles,
+        segments=segments,
+        segment_markers=markers,
+        triangle_attributes=np.ascontiguousarray(attrs),
+    )

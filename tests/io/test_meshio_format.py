@@ -1,0 +1,237 @@
+"""hammesh.io.meshio_format: round trips keep points, cycle order and cell data."""
+
+from __future__ import annotations
+
+import os
+import struct
+
+import meshio
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.spatial import Delaunay
+
+from hammesh.errors import FileFormatError
+from hammesh.io import meshio_format
+from hammesh.io.cell_data import cycle_ids
+from hammesh.mesh import Mesh
+
+SUFFIXES = meshio_format.SUFFIXES
+CELL_DATA = sorted(meshio_format.CELL_DATA_SUFFIXES)
+NO_CELL_DATA = sorted(set(SUFFIXES) - meshio_format.CELL_DATA_SUFFIXES)
+
+
+def raw_read(path):
+    """What another program sees: meshio's own reader (Gmsh for .msh)."""
+    fmt = "gmsh" if str(path).endswith(".msh") else None
+    return meshio.read(path, file_format=fmt)
+
+
+def test_suffix_sets():
+    assert set(SUFFIXES) == {".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off"}
+    assert set(CELL_DATA) == {".vtu", ".vtk", ".msh", ".xdmf"}
+
+
+@pytest.mark.parametrize("suffix", SUFFIXES)
+def test_round_trip_keeps_points_and_cycle_order(tmp_path, hmesh, suffix, assert_cycle_order):
+    path = tmp_path / f"m{suffix}"
+    meshio_format.write(hmesh, path)
+    back = meshio_format.read(path)
+    assert back.points.shape == hmesh.points.shape and back.points.dtype == np.float64
+    np.testing.assert_allclose(back.points, hmesh.points, rtol=0, atol=1e-12)
+    assert back.triangles.dtype == np.int64
+    np.testing.assert_array_equal(back.triangles, hmesh.triangles)
+    assert_cycle_order(back.triangles, hmesh.components)
+    assert os.listdir(tmp_path) == [path.name]  # one file, no temp left, no .h5 sidecar
+
+
+@pytest.mark.parametrize("suffix", CELL_DATA)
+def test_cell_data_round_trips(tmp_path, hmesh, suffix):
+    path = tmp_path / f"m{suffix}"
+    meshio_format.write(hmesh, path)
+    raw = raw_read(path)
+    assert [b.type for b in raw.cells] == ["triangle"]
+    data = {k: np.asarray(v[0]) for k, v in raw.cell_data.items()}
+    expected = {
+        "cycle_position": hmesh.position,
+        "cycle_id": cycle_ids(hmesh.components),
+        "parent": hmesh.parent,
+        "kind": hmesh.kind,
+    }
+    for name, want in expected.items():
+        got = data[name]
+        assert got.shape == (hmesh.n_triangles,)
+        np.testing.assert_array_equal(got.astype(np.int64), want, err_msg=name)
+        if suffix != ".msh":  # Gmsh stores every field as float64
+            assert np.issubdtype(got.dtype, np.integer), name
+    for i in range(hmesh.triangle_attributes.shape[1]):
+        np.testing.assert_array_equal(data[f"attribute_{i}"], hmesh.triangle_attributes[:, i])
+    back = meshio_format.read(path)
+    np.testing.assert_array_equal(back.triangle_attributes, hmesh.triangle_attributes)
+
+
+def test_cycle_id_follows_component_runs(tmp_path, two_cycles):
+    meshio_format.write(two_cycles, tmp_path / "m.vtu")
+    ids = raw_read(tmp_path / "m.vtu").cell_data["cycle_id"][0]
+    assert ids.tolist() == [0] * 6 + [1] * 4
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # meshio's STL binary-size probe
+@pytest.mark.parametrize("suffix", NO_CELL_DATA)
+def test_formats_without_cell_data_get_geometry_only(tmp_path, hexagon, suffix):
+    meshio_format.write(hexagon, tmp_path / f"m{suffix}")
+    raw = raw_read(tmp_path / f"m{suffix}")
+    assert not {"cycle_position", "cycle_id", "parent", "kind"} & set(raw.cell_data)
+
+
+def test_plain_mesh_has_no_cycle_fields(tmp_path, plain):
+    meshio_format.write(plain, tmp_path / "m.vtu")
+    assert set(raw_read(tmp_path / "m.vtu").cell_data) == {"attribute_0"}
+
+
+def test_msh_is_gmsh_not_ansys(tmp_path, hexagon):
+    meshio_format.write(hexagon, tmp_path / "m.msh")
+    assert (tmp_path / "m.msh").read_bytes().startswith(b"$MeshFormat\n4.1 1")
+
+
+def test_stl_is_a_soup_but_keeps_triangle_coordinates_in_order(tmp_path):
+    points = np.array([[0.0, 0.0], [5.0, 5.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    triangles = np.array([[0, 2, 4], [0, 4, 3]])  # point 1 unused, first use order 0 2 4 3
+    meshio_format.write(Mesh(points, triangles), tmp_path / "m.stl")
+    back = meshio_format.read(tmp_path / "m.stl")
+    assert back.n_points == 4
+    np.testing.assert_array_equal(back.points[back.triangles], points[triangles])
+
+
+def test_reader_drops_zero_z_and_rejects_varying_z(tmp_path):
+    tri = [("triangle", np.array([[0, 1, 2]]))]
+    flat = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    meshio.write(tmp_path / "flat.vtu", meshio.Mesh(flat, tri))
+    assert meshio_format.read(tmp_path / "flat.vtu").points.shape == (3, 2)
+    bent = flat.copy()
+    bent[2, 2] = 0.5
+    meshio.write(tmp_path / "bent.vtu", meshio.Mesh(bent, tri))
+    with pytest.raises(FileFormatError, match=r"bent\.vtu.*not planar \(z varies\)"):
+        meshio_format.read(tmp_path / "bent.vtu")
+
+
+def test_reader_concatenates_triangle_blocks_keeps_lines_ignores_others(tmp_path):
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]])
+    cells = [
+        ("triangle", np.array([[0, 1, 2]])),
+        ("quad", np.array([[0, 1, 2, 3]])),
+        ("line", np.array([[0, 1], [1, 4]])),
+        ("vertex", np.array([[4]])),
+        ("triangle", np.array([[0, 2, 3], [1, 4, 2]])),
+    ]
+    attribute = [np.array([1.0]), np.array([9.0]), np.zeros(2), np.zeros(1), np.array([2.0, 3.0])]
+    meshio.write(tmp_path / "mixed.vtu", meshio.Mesh(points, cells, cell_data={"attribute_0": attribute}))
+    back = meshio_format.read(tmp_path / "mixed.vtu")
+    assert back.triangles.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]
+    assert back.segments.tolist() == [[0, 1], [1, 4]]
+    assert back.triangle_attributes[:, 0].tolist() == [1.0, 2.0, 3.0]
+
+
+def test_no_triangles_is_an_error(tmp_path):
+    meshio.write(tmp_path / "lines.vtu", meshio.Mesh(np.zeros((2, 3)), [("line", np.array([[0, 1]]))]))
+    with pytest.raises(FileFormatError, match=r"lines\.vtu: no triangles"):
+        meshio_format.read(tmp_path / "lines.vtu")
+
+
+def _garbage(kind: str, good: bytes) -> bytes:
+    rng = np.random.default_rng(7)
+    return {
+        "empty": b"",
+        "random": rng.bytes(4000),
+        "text": b"this is not a mesh\n" * 5,
+        "truncated": good[: len(good) // 2],
+        "header_only": good[:60],
+        "nul": b"\0" * 500,
+    }[kind]
+
+
+# A text format cut at a line end (.obj, ascii .stl) is a valid smaller mesh: not garbage.
+GARBAGE = [
+    (suffix, kind)
+    for suffix in SUFFIXES
+    for kind in ["empty", "random", "text", "truncated", "header_only", "nul"]
+    if not (kind == "truncated" and suffix in (".obj", ".stl"))
+]
+
+
+@pytest.mark.parametrize(("suffix", "kind"), GARBAGE)
+def test_garbage_raises_file_format_error_naming_the_file(tmp_path, hexagon, capfd, suffix, kind):
+    good = tmp_path / f"good{suffix}"
+    meshio_format.write(hexagon, good)
+    bad = tmp_path / f"bad-{kind}{suffix}"
+    bad.write_bytes(_garbage(kind, good.read_bytes()))
+    capfd.readouterr()
+    with pytest.raises(FileFormatError) as info:
+        meshio_format.read(bad)
+    assert capfd.readouterr() == ("", ""), "the reader printed something"
+    message = str(info.value)
+    assert str(bad) in message and "\n" not in message
+    assert info.value.__cause__ is None
+    assert info.value.__context__ is None or info.value.__suppress_context__
+
+
+@pytest.mark.parametrize("cut", [1, 100, 200, 400, 800, -200, -50, -10])
+def test_truncated_vtu(tmp_path, two_cycles, cut):
+    good = tmp_path / "good.vtu"
+    meshio_format.write(two_cycles, good)
+    data = good.read_bytes()
+    bad = tmp_path / "cut.vtu"
+    bad.write_bytes(data[:cut])
+    with pytest.raises(FileFormatError, match="cut.vtu"):
+        meshio_format.read(bad)
+
+
+def test_missing_file_and_unknown_suffix(tmp_path, hexagon):
+    with pytest.raises(FileFormatError, match="nothing.vtu: file not found"):
+        meshio_format.read(tmp_path / "nothing.vtu")
+    with pytest.raises(FileFormatError, match="supported"):
+        meshio_format.write(hexagon, tmp_path / "m.xyz")
+
+
+def test_index_out_of_range_in_file(tmp_path):
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    meshio.write(tmp_path / "bad.vtu", meshio.Mesh(points, [("triangle", np.array([[0, 1, 7]]))]))
+    with pytest.raises(FileFormatError, match=r"bad\.vtu.*index 7 out of range"):
+        meshio_format.read(tmp_path / "bad.vtu")
+
+
+def test_ply_face_count_checked(tmp_path, two_cycles):
+    meshio_format.write(two_cycles, tmp_path / "m.ply")
+    data = (tmp_path / "m.ply").read_bytes()
+    (tmp_path / "cut.ply").write_bytes(data[: len(data) - 13 * 3])  # three binary faces short
+    with pytest.raises(FileFormatError, match="cut.ply"):
+        meshio_format.read(tmp_path / "cut.ply")
+
+
+@st.composite
+def delaunay_meshes(draw):
+    n = draw(st.integers(3, 40))
+    seed = draw(st.integers(0, 2**32 - 1))
+    scale = draw(st.sampled_from([1e-6, 1.0, 1e3, 1e8]))
+    rng = np.random.default_rng(seed)
+    points = (rng.random((n, 2)) - 0.5) * scale + rng.normal(size=2) * scale
+    triangles = Delaunay(points).simplices.astype(np.int64)
+    # counter-clockwise, as hammesh stores them
+    a, b, c = (points[triangles[:, i]] for i in range(3))
+    cw = (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0] < 0
+    triangles[cw] = triangles[cw][:, [0, 2, 1]]
+    triangles = triangles[rng.permutation(len(triangles))]
+    attributes = rng.normal(size=(len(triangles), draw(st.integers(0, 2))))
+    return Mesh(points, triangles, triangle_attributes=attributes)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(mesh=delaunay_meshes())
+def test_vtu_round_trip_property(tmp_path, mesh):
+    path = tmp_path / "h.vtu"
+    meshio_format.write(mesh, path)
+    back = meshio_format.read(path)
+    np.testing.assert_array_equal(back.points, mesh.points)
+    np.testing.assert_array_equal(back.triangles, mesh.triangles)
+    np.testing.assert_array_equal(back.triangle_attributes, mesh.triangle_attributes)
