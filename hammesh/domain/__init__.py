@@ -1,0 +1,41 @@
+"""The input side of hammesh: planar straight-line graphs and Triangle's file formats.
+
+>>> from hammesh.domain import Domain, read_domain, write_poly
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from hammesh.domain.pslg import Domain
+from hammesh.domain.triangle_files import read_node, read_poly, write_poly
+from hammesh.domain.validate import validate_domain
+from hammesh.errors import FileFormatError
+
+__all__ = ["Domain", "validate_domain", "read_domain", "read_node", "read_poly", "write_poly",
+           "READERS"]
+
+#: File suffix -> reader returning a :class:`Domain`.
+READERS = {".poly": read_poly, ".node": read_node}
+
+
+def read_domain(path) -> Domain:
+    """Read a domain file, choosing the reader from the suffix (see :data:`READERS`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.poly`` or ``.node`` file (suffix case-insensitive).
+
+    Raises
+    ------
+    FileFormatError
+        Unknown suffix (the message lists the known ones) or malformed file.
+    """
+    path = Path(path)
+    reader = READERS.get(path.suffix.lower())
+    if reader is None:
+        known = ", ".join(sorted(READERS))
+        raise FileFormatError(
+            f"{path.name}: unknown domain file suffix {path.suffix!r} (known: {known})")
+    return reader(path)

@@ -1,0 +1,261 @@
+"""The input domain: a planar straight-line graph (PSLG) as plain numpy arrays.
+
+A :class:`Domain` is what Triangle's ``-p`` switch consumes: vertices, constrained
+segments, hole points and regional attributes / area limits.  It is validated on
+construction (:func:`~hammesh.domain.validate.validate_domain`), its arrays are
+read-only copies, so an invalid Domain can never exist.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hammesh.domain.validate import validate_domain
+from hammesh.errors import InvalidDomainError
+
+__all__ = ["Domain"]
+
+
+def _empty(ncols, dtype):
+    return lambda: np.zeros((0, ncols), dtype)
+
+
+@dataclass(frozen=True, eq=False)
+class Domain:
+    """A validated planar straight-line graph.
+
+    Parameters
+    ----------
+    vertices : (n, 2) float64
+        Vertex coordinates, zero-based indices into this array are used by ``segments``.
+    segments : (s, 2) int64, optional
+        Constrained edges (vertex index pairs).  Empty: Triangle meshes the convex hull.
+    holes : (h, 2) float64, optional
+        One point strictly inside each hole.
+    regions : (r, 4) float64, optional
+        Columns x, y, attribute, max_area; max_area NaN means no regional area limit.
+    segment_markers : (s,) int64, optional
+        Boundary markers of the segments; default ones (Triangle's "boundary").
+    vertex_markers : (n,) int64, optional
+        Boundary markers of the vertices; default zeros.
+
+    Any array-like (nested lists) is accepted and copied to the dtypes above; the
+    stored arrays are read-only.  Raises :class:`~hammesh.errors.InvalidDomainError`
+    if the graph is invalid (see :func:`~hammesh.domain.validate.validate_domain`).
+
+    Examples
+    --------
+    >>> d = Domain([[0, 0], [1, 0], [0, 1]], [[0, 1], [1, 2], [2, 0]])
+    >>> d.segments.dtype, d.segment_markers.tolist()
+    (dtype('int64'), [1, 1, 1])
+    """
+
+    vertices: np.ndarray
+    segments: np.ndarray = field(default_factory=_empty(2, np.int64))
+    holes: np.ndarray = field(default_factory=_empty(2, np.float64))
+    regions: np.ndarray = field(default_factory=_empty(4, np.float64))
+    segment_markers: np.ndarray | None = None
+    vertex_markers: np.ndarray | None = None
+
+    def __post_init__(self):
+        vertices = _as_float(self.vertices, "vertices", 2)
+        segments = _as_int(self.segments, "segments", 2)
+        holes = _as_float(self.holes, "holes", 2)
+        regions = _as_float(self.regions, "regions", 4)
+        if self.segment_markers is None:
+            segment_markers = np.ones(len(segments), np.int64)
+        else:
+            segment_markers = _as_int(self.segment_markers, "segment_markers", None)
+        if self.vertex_markers is None:
+            vertex_markers = np.zeros(len(vertices), np.int64)
+        else:
+            vertex_markers = _as_int(self.vertex_markers, "vertex_markers", None)
+        values = dict(vertices=vertices, segments=segments, holes=holes, regions=regions,
+                      segment_markers=segment_markers, vertex_markers=vertex_markers)
+        for name, value in values.items():
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+        validate_domain(self)
+
+    def __repr__(self) -> str:
+        return (f"Domain({len(self.vertices)} vertices, {len(self.segments)} segments, "
+                f"{len(self.holes)} holes, {len(self.regions)} regions)")
+
+    @classmethod
+    def from_polygon(cls, outer, holes=(), *, internal_segments=None) -> "Domain":
+        """Build a domain from an outer ring, hole rings and internal polylines.
+
+        Parameters
+        ----------
+        outer : (k, 2) array-like
+            Outer boundary ring, either orientation, not closed (a repeated first
+            point at the end is dropped).
+        holes : sequence of (k_i, 2) array-like
+            Hole rings, same conventions; each must lie inside ``outer`` and not inside
+            another hole.  A hole point strictly inside each ring is computed.
+        internal_segments : sequence of (m_j, 2) array-like, optional
+            Open polylines of constrained segments (cracks, internal loops).  A point
+            exactly equal to an existing vertex reuses it, so a polyline may start on
+            the boundary, and repeating its first point closes it into a loop.
+
+        Returns
+        -------
+        Domain
+            Vertices in order outer ring, hole rings, new polyline points; ring
+            segments have marker 1 and vertex marker 1, internal ones marker 0.
+
+        Examples
+        --------
+        >>> d = Domain.from_polygon([[0, 0], [4, 0], [4, 4], [0, 4]],
+        ...                         [[[1, 1], [2, 1], [2, 2], [1, 2]]])
+        >>> bool(1 < d.holes[0, 0] < 2 and 1 < d.holes[0, 1] < 2)
+        True
+        """
+        rings = [_ring(outer, "outer ring")]
+        rings += [_ring(h, f"hole ring {i}") for i, h in enumerate(holes)]
+        vertices, segments, starts = [], [], []
+        for ring in rings:
+            base = sum(len(r) for r in vertices)
+            k = len(ring)
+            starts.append(base)
+            vertices.append(ring)
+            idx = base + np.arange(k)
+            segments.append(np.stack([idx, np.roll(idx, -1)], axis=1))
+        nb = sum(len(r) for r in vertices)
+        vmarks = [np.ones(nb, np.int64)]
+        smarks = [np.ones(nb, np.int64)]
+
+        if internal_segments is not None:
+            lookup = {}
+            for i, p in enumerate(np.concatenate(vertices)):
+                lookup.setdefault((float(p[0]), float(p[1])), i)
+            extra = []
+            for j, line in enumerate(internal_segments):
+                pts = _points(line, f"internal polyline {j}")
+                if len(pts) < 2:
+                    raise InvalidDomainError(
+                        f"internal polyline {j} needs at least 2 points, got {len(pts)}")
+                idx = []
+                for p in pts:
+                    key = (float(p[0]), float(p[1]))
+                    if key not in lookup:
+                        lookup[key] = nb + len(extra)
+                        extra.append(p)
+                    idx.append(lookup[key])
+                idx = np.asarray(idx, np.int64)
+                segments.append(np.stack([idx[:-1], idx[1:]], axis=1))
+                smarks.append(np.zeros(len(idx) - 1, np.int64))
+            if extra:
+                vertices.append(np.asarray(extra, np.float64))
+                vmarks.append(np.zeros(len(extra), np.int64))
+
+        kw = dict(vertices=np.concatenate(vertices), segments=np.concatenate(segments),
+                  segment_markers=np.concatenate(smarks), vertex_markers=np.concatenate(vmarks))
+        graph = cls(**kw)  # validates rings and polylines before any call to Triangle
+        _check_nesting(rings)
+        hole_points = [_interior_point(r) for r in rings[1:]]
+        return cls(**kw, holes=np.asarray(hole_points, np.float64).reshape(-1, 2)) \
+            if hole_points else graph
+
+
+# ----------------------------------------------------------------------------- conversion
+
+def _as_float(value, name, ncols):
+    try:
+        arr = np.array(value, dtype=np.float64)  # always a copy
+    except (TypeError, ValueError) as exc:
+        raise InvalidDomainError(f"{name} cannot be converted to float64: {exc}") from None
+    if arr.size == 0:
+        arr = arr.reshape(0, ncols)
+    return arr
+
+
+def _as_int(value, name, ncols):
+    try:
+        arr = np.array(value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidDomainError(f"{name} cannot be converted to int64: {exc}") from None
+    if arr.size == 0:
+        return np.zeros((0, ncols) if ncols else (0,), np.int64)
+    if arr.dtype.kind in "iu":
+        if arr.dtype.kind == "u" and arr.max() > np.iinfo(np.int64).max:
+            raise InvalidDomainError(f"{name} has a value too large for int64")
+        return arr.astype(np.int64)
+    if arr.dtype.kind == "f":
+        bad = ~np.isfinite(arr) | (arr != np.round(arr))
+        if bad.any():
+            pos = tuple(int(x) for x in np.argwhere(bad)[0])
+            raise InvalidDomainError(
+                f"{name}{list(pos)} is {float(arr[pos])!r}, not an integer")
+        return arr.astype(np.int64)
+    raise InvalidDomainError(f"{name} must hold integers, got dtype {arr.dtype}")
+
+
+def _points(value, what):
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidDomainError(f"{what} cannot be converted to float64: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidDomainError(f"{what} must have shape (k, 2), got {arr.shape}")
+    return arr
+
+
+def _ring(value, what):
+    ring = _points(value, what)
+    if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
+        ring = ring[:-1]
+    if len(ring) < 3:
+        raise InvalidDomainError(f"{what} needs at least 3 distinct points, got {len(ring)}")
+    return ring
+
+
+# ----------------------------------------------------------------------------- geometry
+
+def _point_in_ring(points, ring):
+    """Even-odd test; ``points (m, 2)``; points on the ring give an arbitrary answer."""
+    points = np.atleast_2d(points)
+    x, y = points[:, 0:1], points[:, 1:2]
+    a, b = ring, np.roll(ring, -1, axis=0)
+    ax, ay, bx, by = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
+    straddle = (ay > y) != (by > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xcross = ax + (y - ay) * (bx - ax) / (by - ay)
+    return (straddle & (x < xcross)).sum(axis=1) % 2 == 1
+
+
+def _check_nesting(rings):
+    """Each hole ring inside the outer ring and not inside another hole ring.
+
+    The rings are already known not to cross or touch, so one vertex per ring decides.
+    """
+    outer, holes = rings[0], rings[1:]
+    if not holes:
+        return
+    probes = np.array([h[0] for h in holes])
+    inside = _point_in_ring(probes, outer)
+    if not inside.all():
+        i = int(np.flatnonzero(~inside)[0])
+        raise InvalidDomainError(f"hole ring {i} is not inside the outer ring")
+    for j, ring in enumerate(holes):
+        nested = _point_in_ring(probes, ring)
+        nested[j] = False
+        if nested.any():
+            i = int(np.flatnonzero(nested)[0])
+            raise InvalidDomainError(f"hole ring {i} lies inside hole ring {j}")
+
+
+def _interior_point(ring):
+    """A point strictly inside a simple polygon: centroid of its largest triangle."""
+    import triangle
+
+    k = len(ring)
+    idx = np.arange(k)
+    tri = triangle.triangulate(
+        {"vertices": ring, "segments": np.stack([idx, np.roll(idx, -1)], axis=1)}, "pQ")
+    t = tri["vertices"][tri["triangles"]]
+    area = np.abs((t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1])
+                  - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0]))
+    return t[np.argmax(area)].mean(axis=0)
