@@ -172,7 +172,8 @@ def star_pslg(draw):
     """A random star-shaped polygon, optionally with a hole or an internal loop."""
     n = draw(st.integers(5, 14))
     angles = np.sort(np.array(draw(st.lists(st.floats(0, 2 * np.pi, exclude_max=True), min_size=n, max_size=n, unique=True))))
-    if np.diff(np.r_[angles, angles[0] + 2 * np.pi]).min() < 0.05:
+    gaps = np.diff(np.r_[angles, angles[0] + 2 * np.pi])
+    if gaps.min() < 0.05 or gaps.max() > 2 * np.pi / 3:  # keep edges >= 0.3 from the centre
         angles = np.linspace(0, 2 * np.pi, n, endpoint=False)
     radii = np.array(draw(st.lists(st.floats(0.6, 1.0), min_size=n, max_size=n)))
     outer = np.c_[radii * np.cos(angles), radii * np.sin(angles)]
@@ -181,7 +182,7 @@ def star_pslg(draw):
     segs = [[i, (i + 1) % n] for i in range(n)]
     holes = []
     if inner_kind != "none":
-        r = draw(st.floats(0.1, 0.3))
+        r = draw(st.floats(0.1, 0.25))
         k = len(v)
         v += (r * np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])).tolist()
         segs += [[k, k + 1], [k + 1, k + 2], [k + 2, k + 3], [k + 3, k]]
