@@ -10,17 +10,129 @@ hammesh exceptions with a message). ``cache=True`` stores the machine code in
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 __all__ = [
+    "orient_ccw",
+    "twins_from_neighbors",
+    "incenters",
+    "boundary_half_edges",
     "half_edge_twins",
+    "vertex_half_edges",
     "mark_segments",
+    "vertex_neighbors",
     "emit_cycles",
     "spanning_forest",
     "consecutive_shared_edges",
     "first_cross_run_edge",
     "angle_area_stats",
 ]
+
+
+@njit(cache=True, parallel=True)
+def orient_ccw(points, tri):
+    """Counter-clockwise copy of ``tri`` (rows with negative area reversed).
+
+    Returns ``(ccw, n_flipped, bad)``: ``bad`` is -1 or the first triangle with a
+    repeated vertex or zero area.
+    """
+    m = tri.shape[0]
+    out = np.empty_like(tri)
+    flipped = np.zeros(m, np.bool_)
+    degenerate = np.zeros(m, np.bool_)
+    for t in prange(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        cr = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1]) - (
+            points[b, 1] - points[a, 1]
+        ) * (points[c, 0] - points[a, 0])
+        if a == b or b == c or c == a or cr == 0.0:
+            degenerate[t] = True
+        if cr < 0.0:
+            out[t, 0] = c
+            out[t, 1] = b
+            out[t, 2] = a
+            flipped[t] = True
+        else:
+            out[t, 0] = a
+            out[t, 1] = b
+            out[t, 2] = c
+    bad = -1
+    for t in range(m):
+        if degenerate[t]:
+            bad = t
+            break
+    return out, flipped.sum(), bad
+
+
+@njit(cache=True)
+def twins_from_neighbors(tri, nbr):
+    """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
+
+    Returns ``(twin, bad)``; ``bad`` is -1, or the first half-edge whose claimed
+    neighbour does not hold the same edge reversed (then the neighbours are not to be
+    trusted and the caller matches half-edges itself).
+    """
+    m = tri.shape[0]
+    twin = np.full(3 * m, -1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            u = nbr[t, k]
+            if u < 0:
+                continue
+            if u >= m:
+                return twin, 3 * t + k
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            found = -1
+            for j in range(3):
+                if tri[u, j] == b and tri[u, (j + 1) % 3] == a:
+                    found = 3 * u + j
+            if found < 0 or nbr[u, found - 3 * u] != t:
+                return twin, 3 * t + k
+            twin[3 * t + k] = found
+    return twin, -1
+
+
+@njit(cache=True, parallel=True)
+def incenters(points, tri):
+    """Incenters ``(|BC| A + |CA| B + |AB| C) / (|BC| + |CA| + |AB|)``, (m, 2)."""
+    m = tri.shape[0]
+    out = np.empty((m, 2), np.float64)
+    for t in prange(m):
+        ax = points[tri[t, 0], 0]
+        ay = points[tri[t, 0], 1]
+        bx = points[tri[t, 1], 0]
+        by = points[tri[t, 1], 1]
+        cx = points[tri[t, 2], 0]
+        cy = points[tri[t, 2], 1]
+        la = np.hypot(cx - bx, cy - by)
+        lb = np.hypot(ax - cx, ay - cy)
+        lc = np.hypot(bx - ax, by - ay)
+        s = la + lb + lc
+        out[t, 0] = (la * ax + lb * bx + lc * cx) / s
+        out[t, 1] = (la * ay + lb * by + lc * cy) / s
+    return out
+
+
+@njit(cache=True)
+def boundary_half_edges(tri, twin):
+    """``(k, 2)`` directed boundary edges (half-edges without twin), in half-edge order."""
+    nb = 0
+    for h in range(twin.shape[0]):
+        if twin[h] < 0:
+            nb += 1
+    out = np.empty((nb, 2), np.int64)
+    i = 0
+    for h in range(twin.shape[0]):
+        if twin[h] < 0:
+            t = h // 3
+            k = h - 3 * t
+            out[i, 0] = tri[t, k]
+            out[i, 1] = tri[t, (k + 1) % 3]
+            i += 1
+    return out
 
 
 @njit(cache=True)
@@ -31,10 +143,9 @@ def half_edge_twins(tri, n_points):
     signed offset ``end - origin`` stored alongside, so an undirected edge's two
     halves meet in one contiguous bucket: offsets ``d`` and ``-d``.
 
-    Returns ``(twin, start, heads, other, bad)``: ``twin[h]`` is the opposite half-edge
-    or -1 (boundary); bucket ``v`` is ``heads[start[v]:start[v + 1]]`` with offsets
-    ``other[...]`` (the far vertex is ``v + |other|``); ``bad`` is -1, or a half-edge
-    whose edge is used twice in one direction or by three triangles.
+    Returns ``(twin, bad)``: ``twin[h]`` is the opposite half-edge or -1 (boundary);
+    ``bad`` is -1, or a half-edge whose edge is used twice in one direction or by
+    three triangles.
     """
     m = tri.shape[0]
     nh = 3 * m
@@ -64,32 +175,135 @@ def half_edge_twins(tri, n_points):
             for i in range(j + 1, s1):
                 oi = other[i]
                 if oi == oj:
-                    return twin, start, heads, other, heads[i]
+                    return twin, heads[i]
                 if oi == -oj:
                     if twin[heads[j]] >= 0 or twin[heads[i]] >= 0:
-                        return twin, start, heads, other, heads[i]
+                        return twin, heads[i]
                     twin[heads[j]] = heads[i]
                     twin[heads[i]] = heads[j]
-    return twin, start, heads, other, -1
+    return twin, -1
 
 
 @njit(cache=True)
-def mark_segments(start, heads, other, segments, nh):
-    """Flag the half-edges lying on constrained edges (buckets of ``half_edge_twins``).
+def vertex_half_edges(tri, n_points):
+    """One half-edge leaving each vertex (-1 for an unused vertex)."""
+    vh = np.full(n_points, -1, np.int64)
+    for t in range(tri.shape[0]):
+        for k in range(3):
+            vh[tri[t, k]] = 3 * t + k
+    return vh
 
-    Returns ``(is_con (nh,) bool, found (s,) bool)``: ``found[s]`` tells whether
-    segment s is an edge of the mesh.
+
+@njit(cache=True)
+def _around(tri, twin, vh, a, buf):
+    """Triangles' half-edges leaving vertex ``a``, by rotation through the twins.
+
+    Writes them into ``buf`` (grown by the caller if full) and returns their count, or
+    -1 if ``buf`` is too small. Works for interior and boundary vertices.
     """
-    is_con = np.zeros(nh, np.bool_)
+    h0 = vh[a]
+    if h0 < 0:
+        return 0
+    cnt = 0
+    h = h0
+    while True:  # one way round: previous half-edge of the triangle, then its twin
+        if cnt >= buf.shape[0]:
+            return -1
+        buf[cnt] = h
+        cnt += 1
+        t = h // 3
+        p = 3 * t + (h - 3 * t + 2) % 3
+        q = twin[p]
+        if q < 0 or q == h0:
+            break
+        h = q
+    if q < 0:  # boundary vertex: go the other way from h0
+        g = twin[h0]
+        while g >= 0:
+            u = g // 3
+            h = 3 * u + (g - 3 * u + 1) % 3
+            if cnt >= buf.shape[0]:
+                return -1
+            buf[cnt] = h
+            cnt += 1
+            g = twin[h]
+    return cnt
+
+
+@njit(cache=True)
+def mark_segments(tri, twin, vh, segments):
+    """Flag the half-edges lying on constrained edges.
+
+    Returns ``(is_con (3m,) bool, found (s,) bool)``: ``found[s]`` tells whether
+    segment s is an edge of the mesh. O(degree) per segment by rotation around its
+    first vertex; segments not found that way (a vertex where two fans only touch)
+    are looked up in one pass over all half-edges.
+    """
+    is_con = np.zeros(twin.shape[0], np.bool_)
     found = np.zeros(segments.shape[0], np.bool_)
+    buf = np.empty(64, np.int64)
     for s in range(segments.shape[0]):
-        lo = min(segments[s, 0], segments[s, 1])
-        d = max(segments[s, 0], segments[s, 1]) - lo
-        for j in range(start[lo], start[lo + 1]):
-            if other[j] == d or other[j] == -d:
-                is_con[heads[j]] = True
+        a = segments[s, 0]
+        b = segments[s, 1]
+        cnt = _around(tri, twin, vh, a, buf)
+        while cnt < 0:
+            buf = np.empty(2 * buf.shape[0], np.int64)
+            cnt = _around(tri, twin, vh, a, buf)
+        for i in range(cnt):
+            h = buf[i]
+            t = h // 3
+            k = h - 3 * t
+            if tri[t, (k + 1) % 3] == b:  # a -> b
+                is_con[h] = True
                 found[s] = True
+                if twin[h] >= 0:
+                    is_con[twin[h]] = True
+            p = 3 * t + (k + 2) % 3
+            if tri[t, (k + 2) % 3] == b:  # b -> a
+                is_con[p] = True
+                found[s] = True
+                if twin[p] >= 0:
+                    is_con[twin[p]] = True
+    n_missing = 0
+    for s in range(segments.shape[0]):
+        if not found[s]:
+            n_missing += 1
+    if n_missing:
+        n = vh.shape[0]
+        want = dict()
+        for s in range(segments.shape[0]):
+            if not found[s]:
+                a = segments[s, 0]
+                b = segments[s, 1]
+                want[min(a, b) * n + max(a, b)] = s
+        for h in range(twin.shape[0]):
+            t = h // 3
+            k = h - 3 * t
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            key = min(a, b) * n + max(a, b)
+            if key in want:
+                is_con[h] = True
+                found[want[key]] = True
     return is_con, found
+
+
+@njit(cache=True)
+def vertex_neighbors(tri, twin, vh, a):
+    """Vertices joined to ``a`` by an edge (may repeat)."""
+    buf = np.empty(64, np.int64)
+    cnt = _around(tri, twin, vh, a, buf)
+    while cnt < 0:
+        buf = np.empty(2 * buf.shape[0], np.int64)
+        cnt = _around(tri, twin, vh, a, buf)
+    out = np.empty(2 * cnt, np.int64)
+    for i in range(cnt):
+        h = buf[i]
+        t = h // 3
+        k = h - 3 * t
+        out[2 * i] = tri[t, (k + 1) % 3]
+        out[2 * i + 1] = tri[t, (k + 2) % 3]
+    return out
 
 
 @njit(cache=True)

@@ -48,13 +48,9 @@ def incenters(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     (m, 2) float64
         ``(|BC| A + |CA| B + |AB| C) / (|BC| + |CA| + |AB|)`` for each triangle ABC.
     """
-    a = points[triangles[:, 0]]
-    b = points[triangles[:, 1]]
-    c = points[triangles[:, 2]]
-    la = np.hypot(*(c - b).T)[:, None]
-    lb = np.hypot(*(a - c).T)[:, None]
-    lc = np.hypot(*(b - a).T)[:, None]
-    return (la * a + lb * b + lc * c) / (la + lb + lc)
+    return _kernels.incenters(
+        np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(triangles, dtype=np.int64)
+    )
 
 
 def incircle_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> HamiltonianMesh:

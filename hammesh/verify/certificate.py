@@ -52,10 +52,8 @@ def _edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
 
 
 def _boundary_keys(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
-    h = np.flatnonzero(twin < 0)
-    a = tri.reshape(-1)[h]
-    b = np.roll(tri, -1, axis=1).reshape(-1)[h]
-    return np.sort(_edge_keys(a, b, n))
+    e = _kernels.boundary_half_edges(tri, twin)
+    return np.sort(_edge_keys(e[:, 0], e[:, 1], n))
 
 
 def verify_cycle_mesh(
@@ -124,7 +122,7 @@ def verify_cycle_mesh(
     if not area_min > 0:
         _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
 
-    twin, start, heads, other, dup = _kernels.half_edge_twins(tri, n)
+    twin, dup = _kernels.half_edge_twins(tri, n)
     if dup >= 0:
         t, k = divmod(int(dup), 3)
         same = np.flatnonzero((np.sort(tri, axis=1) == np.sort(tri[t])).all(axis=1))
@@ -145,7 +143,7 @@ def verify_cycle_mesh(
         segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
         if segs.min() < 0 or segs.max() >= n:
             _fail(f"constrained edges reference vertices outside 0..{n - 1}")
-        _, found = _kernels.mark_segments(start, heads, other, segs, len(twin))
+        _, found = _kernels.mark_segments(tri, twin, _kernels.vertex_half_edges(tri, n), segs)
         if not found.all():
             s = int(np.argmin(found))
             _fail(f"constrained edge {s} {segs[s].tolist()} is not an edge of the mesh")
@@ -158,7 +156,7 @@ def verify_cycle_mesh(
     if reference is not None:
         stats.update(
             _compare_with_input(
-                pts, tri, twin, start, heads, other, reference, reference_twin, amin, tmin, total, angle_ratio
+                pts, tri, twin, reference, reference_twin, amin, tmin, total, angle_ratio
             )
         )
     return stats
@@ -168,9 +166,6 @@ def _compare_with_input(
     pts: np.ndarray,
     tri: np.ndarray,
     twin: np.ndarray,
-    start: np.ndarray,
-    heads: np.ndarray,
-    other: np.ndarray,
     ref: Mesh,
     r_twin: np.ndarray | None,
     amin: float,
@@ -195,7 +190,7 @@ def _compare_with_input(
         _fail(f"total area changed from {r_total!r} to {total!r}")
 
     if r_twin is None:
-        r_twin, _, _, _, r_dup = _kernels.half_edge_twins(rt, n_in)
+        r_twin, r_dup = _kernels.half_edge_twins(rt, n_in)
         if r_dup >= 0:
             _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
     b_out = _boundary_keys(tri, twin, n)
@@ -208,7 +203,7 @@ def _compare_with_input(
             "input and output"
         )
 
-    _check_segments_kept(pts, tri, start, heads, other, ref)
+    _check_segments_kept(pts, tri, twin, ref)
 
     floor = angle_ratio * r_min * (1.0 - ANGLE_RTOL)
     if amin < floor:
@@ -219,30 +214,22 @@ def _compare_with_input(
     return {"min_angle_input_deg": math.degrees(r_min)}
 
 
-def _check_segments_kept(
-    pts: np.ndarray,
-    tri: np.ndarray,
-    start: np.ndarray,
-    heads: np.ndarray,
-    other: np.ndarray,
-    ref: Mesh,
-) -> None:
+def _check_segments_kept(pts: np.ndarray, tri: np.ndarray, twin: np.ndarray, ref: Mesh) -> None:
     segs = np.ascontiguousarray(ref.segments, dtype=np.int64).reshape(-1, 2)
     if len(segs) == 0:
         return
-    nh = 3 * len(tri)
+    vh = _kernels.vertex_half_edges(tri, len(pts))
 
     def has_edges(pairs: np.ndarray) -> np.ndarray:
-        return _kernels.mark_segments(start, heads, other, pairs.reshape(-1, 2), nh)[1]
+        return _kernels.mark_segments(tri, twin, vh, pairs.reshape(-1, 2))[1]
 
     # a segment that is no output edge must be split at its midpoint M into the
     # output edges (a, M) and (M, b); there are few such segments (one per region)
     for s in np.flatnonzero(~has_edges(segs)).tolist():
         a, b = int(segs[s, 0]), int(segs[s, 1])
         mid = 0.5 * (pts[a] + pts[b])
-        lo = min(a, b)
-        cands = lo + np.abs(other[start[lo] : start[lo + 1]])  # neighbours above lo
-        cands = cands[(pts[cands] == mid).all(axis=1)]
+        cands = _kernels.vertex_neighbors(tri, twin, vh, a)
+        cands = np.unique(cands[(pts[cands] == mid).all(axis=1)])
         if not any(has_edges(np.array([[a, c], [c, b]], dtype=np.int64)).all() for c in cands):
             _fail(
                 f"input constrained edge {s} ({a}, {b}) is neither an output edge nor "

@@ -18,29 +18,44 @@ class HalfEdges:
     """Half-edge adjacency of a triangle array.
 
     ``h = 3 t + k`` runs from ``triangles[t, k]`` to ``triangles[t, (k + 1) % 3]``.
-    ``twin[h]`` is the opposite half-edge (-1 on the boundary). Bucket ``v``,
-    ``heads[start[v]:start[v + 1]]``, holds the half-edges whose lower vertex is ``v``;
-    ``other`` holds their signed offsets ``end - origin`` (far vertex ``v + |other|``).
+    ``twin[h]`` is the opposite half-edge (-1 on the boundary); ``vertex_he[v]`` is
+    one half-edge leaving ``v`` (the start of a rotation around ``v``).
     """
 
+    triangles: np.ndarray
     twin: np.ndarray
-    start: np.ndarray
-    heads: np.ndarray
-    other: np.ndarray
+    vertex_he: np.ndarray
 
     def mark(self, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(is_con (3m,) bool, found (s,) bool)`` for constrained edges ``segments``."""
         segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
-        return _kernels.mark_segments(self.start, self.heads, self.other, segs, len(self.twin))
+        return _kernels.mark_segments(self.triangles, self.twin, self.vertex_he, segs)
+
+    def neighbors_of(self, v: int) -> np.ndarray:
+        """Vertices sharing an edge with ``v`` (may repeat)."""
+        return _kernels.vertex_neighbors(self.triangles, self.twin, self.vertex_he, int(v))
 
 
-def half_edges(triangles: np.ndarray, n_points: int) -> HalfEdges:
+def _raise_non_manifold(tri: np.ndarray, bad: int) -> None:
+    t, k = divmod(int(bad), 3)
+    a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
+    raise InvalidMeshError(
+        f"edge ({a}, {b}) of triangle {t} is shared by more than two triangles or by "
+        "two triangles in the same direction (non-manifold edge or overlap)"
+    )
+
+
+def half_edges(triangles: np.ndarray, n_points: int, neighbors: np.ndarray | None = None) -> HalfEdges:
     """Match the half-edges of ``triangles``; raise if an edge is non-manifold.
 
     Parameters
     ----------
     triangles : (m, 3) int64, consistently oriented
     n_points : int
+    neighbors : (m, 3) int64, optional
+        A neighbour array to take the matching from (e.g. Triangle's); it is checked
+        (each claimed neighbour holds the edge reversed and names us back) and ignored
+        if wrong. A trusted neighbour array skips the O(m) bucket matching.
 
     Raises
     ------
@@ -49,15 +64,16 @@ def half_edges(triangles: np.ndarray, n_points: int) -> HalfEdges:
         it, or two neighbours are oriented inconsistently (overlap).
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    twin, start, heads, other, bad = _kernels.half_edge_twins(tri, int(n_points))
-    if bad >= 0:
-        t, k = divmod(int(bad), 3)
-        a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
-        raise InvalidMeshError(
-            f"edge ({a}, {b}) of triangle {t} is shared by more than two triangles or by "
-            "two triangles in the same direction (non-manifold edge or overlap)"
-        )
-    return HalfEdges(twin=twin, start=start, heads=heads, other=other)
+    twin = None
+    if neighbors is not None and np.shape(neighbors) == tri.shape:
+        twin, bad = _kernels.twins_from_neighbors(tri, np.ascontiguousarray(neighbors, dtype=np.int64))
+        if bad >= 0:
+            twin = None
+    if twin is None:
+        twin, bad = _kernels.half_edge_twins(tri, int(n_points))
+        if bad >= 0:
+            _raise_non_manifold(tri, bad)
+    return HalfEdges(triangles=tri, twin=twin, vertex_he=_kernels.vertex_half_edges(tri, int(n_points)))
 
 
 def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
@@ -95,27 +111,18 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         i = int(np.argmax(bad))
         raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
     n = len(pts)
-    out = (tri < 0) | (tri >= n)
-    if out.any():
+    if tri.min() < 0 or tri.max() >= n:
+        out = (tri < 0) | (tri >= n)
         t = int(np.argmax(out.any(axis=1)))
         raise InvalidMeshError(
             f"triangle {t} references vertex {tri[t][out[t]][0]} but there are only {n} points"
         )
-    rep = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
-    if rep.any():
-        t = int(np.argmax(rep))
-        raise InvalidMeshError(f"triangle {t} repeats a vertex: {tri[t].tolist()}")
-    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    cross = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (
-        p2[:, 0] - p0[:, 0]
-    )
-    if (cross == 0).any():
-        t = int(np.argmax(cross == 0))
-        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area")
-    cw = cross < 0
-    if cw.any():
-        tri = tri.copy()
-        tri[cw] = tri[cw][:, ::-1]
+    tri, n_flipped, bad_t = _kernels.orient_ccw(pts, tri)
+    if bad_t >= 0:
+        t = int(bad_t)
+        row = np.asarray(mesh.triangles)[t].tolist()
+        what = "repeats a vertex" if len(set(row)) < 3 else "has zero area"
+        raise InvalidMeshError(f"triangle {t} {row} {what}")
     segs = np.asarray(mesh.segments)
     if segs.size == 0:
         segs = np.zeros((0, 2), dtype=np.int64)
@@ -128,7 +135,8 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         raise InvalidMeshError(
             f"segment {s} references vertex {segs[s][sout[s]][0]} but there are only {n} points"
         )
-    he = half_edges(tri, n)
+    # neighbours (Triangle's) are only valid for the rows as given
+    he = half_edges(tri, n, neighbors=mesh.neighbors if n_flipped == 0 else None)
     is_con, found = he.mark(segs)
     if not found.all():
         missing = int(np.argmin(found))
