@@ -22,6 +22,7 @@ __all__ = [
     "mark_segments",
     "vertex_neighbors",
     "emit_cycles",
+    "check_twin_claim",
     "spanning_forest",
     "consecutive_shared_edges",
     "first_cross_run_edge",
@@ -66,7 +67,7 @@ def orient_ccw(points, tri):
     return out, flipped.sum(), bad
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def twins_from_neighbors(tri, nbr):
     """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
 
@@ -76,13 +77,15 @@ def twins_from_neighbors(tri, nbr):
     """
     m = tri.shape[0]
     twin = np.full(3 * m, -1, np.int64)
-    for t in range(m):
+    wrong = np.zeros(m, np.bool_)
+    for t in prange(m):
         for k in range(3):
             u = nbr[t, k]
             if u < 0:
                 continue
             if u >= m:
-                return twin, 3 * t + k
+                wrong[t] = True
+                break
             a = tri[t, k]
             b = tri[t, (k + 1) % 3]
             found = -1
@@ -90,8 +93,12 @@ def twins_from_neighbors(tri, nbr):
                 if tri[u, j] == b and tri[u, (j + 1) % 3] == a:
                     found = 3 * u + j
             if found < 0 or nbr[u, found - 3 * u] != t:
-                return twin, 3 * t + k
+                wrong[t] = True
+                break
             twin[3 * t + k] = found
+    for t in range(m):
+        if wrong[t]:
+            return twin, 3 * t
     return twin, -1
 
 
@@ -374,9 +381,11 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     Incenter of t is vertex ``n_points + t``; midpoints are numbered after the
     incenters in order of first visit.
 
-    Returns ``(out, parent, kind, lengths, mid_a, mid_b)``: output triangles, the input
-    triangle each lies in, its kind (0 incenter, 1 flip, 2 midpoint), the cycle
-    lengths, and the edge ``(mid_a[i], mid_b[i])`` split by midpoint i.
+    Returns ``(out, parent, kind, lengths, mid_a, mid_b, out_twin)``: output
+    triangles, the input triangle each lies in, its kind (0 incenter, 1 flip, 2
+    midpoint), the cycle lengths, the edge ``(mid_a[i], mid_b[i])`` split by midpoint
+    i, and the output's half-edge twins as the construction implies them (a *claim*
+    the certificate checks, see ``check_twin_claim``).
     """
     m = tri.shape[0]
     nh = 3 * m
@@ -388,19 +397,30 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     out = np.empty((total, 3), np.int64)
     parent = np.empty(total, np.int64)
     kind = np.empty(total, np.int8)
+    claim = np.full(3 * total, -1, np.int64)
     lengths = np.zeros(firsts.shape[0], np.int64)
     mid_of = np.full(nh, -1, np.int64)
+    prim = np.full(nh, -1, np.int64)  # output row of each slot's first triangle
+    y2 = np.full(nh, -1, np.int64)  # output row of (I_t, M, b) for a split slot
     mid_a = np.empty(n_mid_half // 2, np.int64)
     mid_b = np.empty(n_mid_half // 2, np.int64)
     n_mid = 0
     pos = 0
+    # Claimed pairing, part 1: consecutive rows share an edge, known as we go:
+    # the "exit" edge of a row pairs with the "entry" edge of the next (a slot's
+    # first triangle enters by edge 0 (I_t, a); a split's second triangle by edge 1).
     for c in range(firsts.shape[0]):
         first = 3 * firsts[c]
         run_start = pos
+        last_exit = -1
         h = first
         while True:
             if pos >= total:  # not a permutation: caller reports it
-                return out, parent, kind, lengths, mid_a, mid_b
+                return out, parent, kind, lengths, mid_a, mid_b, np.empty(0, np.int64)
+            prim[h] = pos
+            if last_exit >= 0:
+                claim[last_exit] = 3 * pos
+                claim[3 * pos] = last_exit
             t = h // 3
             k = h - 3 * t
             a = tri[t, k]
@@ -411,6 +431,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                 out[pos, 2] = tri[t, (k + 1) % 3]
                 parent[pos] = t
                 kind[pos] = 0
+                last_exit = 3 * pos + 2  # (b, I_t)
                 pos += 1
                 nxt = h + 1 if k < 2 else h - 2
             else:
@@ -423,6 +444,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     out[pos, 2] = n_points + u
                     parent[pos] = t
                     kind[pos] = 1
+                    last_exit = 3 * pos + 1  # (a, I_u)
                     pos += 1
                 else:
                     if mid_of[h] < 0:
@@ -442,13 +464,68 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     out[pos + 1, 2] = a
                     parent[pos + 1] = u
                     kind[pos + 1] = 2
+                    y2[g] = pos + 1
+                    claim[3 * pos + 1] = 3 * (pos + 1) + 1  # (a, M) | (M, a)
+                    claim[3 * (pos + 1) + 1] = 3 * pos + 1
+                    last_exit = 3 * (pos + 1) + 2  # (a, I_u)
                     pos += 2
                 nxt = g + 1 if kg < 2 else g - 2
             h = nxt
             if h == first:
                 break
+        claim[last_exit] = 3 * run_start  # the cycle closes
+        claim[3 * run_start] = last_exit
         lengths[c] = pos - run_start
-    return out[:pos], parent[:pos], kind[:pos], lengths, mid_a, mid_b
+    if pos != total:
+        return out[:pos], parent[:pos], kind[:pos], lengths, mid_a, mid_b, np.empty(0, np.int64)
+    # part 2: the third edge of each row pairs across the input edge (plain slot),
+    # with the other flipped triangle (flip), or with its own split half (split)
+    for h in range(nh):
+        r = prim[h]
+        if not is_tree[h]:
+            g = twin[h]
+            claim[3 * r + 1] = -1 if g < 0 else 3 * prim[g] + 1
+        elif not is_con[h]:
+            claim[3 * r + 2] = 3 * prim[twin[h]] + 2
+        else:
+            claim[3 * r + 2] = 3 * y2[h]
+            claim[3 * y2[h]] = 3 * r + 2
+    return out, parent, kind, lengths, mid_a, mid_b, claim
+
+
+@njit(cache=True, parallel=True)
+def check_twin_claim(tri, claim):
+    """Is ``claim`` a valid half-edge pairing of ``tri``? Returns the first bad half-edge or -1.
+
+    Valid: an involution without fixed points on the paired half-edges, each pair
+    being the same edge in opposite directions. Checking a claim is one read per
+    half-edge; finding the pairing (``half_edge_twins``) needs a bucket sort.
+    """
+    nh = 3 * tri.shape[0]
+    if claim.shape[0] != nh:
+        return 0
+    bounds = _chunks(nh)
+    nc = bounds.shape[0] - 1
+    first = np.full(nc, -1, np.int64)
+    for c in prange(nc):
+        for h in range(bounds[c], bounds[c + 1]):
+            g = claim[h]
+            if g < 0:
+                continue
+            bad = g >= nh or g == h or claim[g] != h
+            if not bad:
+                t = h // 3
+                k = h - 3 * t
+                u = g // 3
+                j = g - 3 * u
+                bad = tri[t, k] != tri[u, (j + 1) % 3] or tri[t, (k + 1) % 3] != tri[u, j]
+            if bad:
+                first[c] = h
+                break
+    for c in range(nc):
+        if first[c] >= 0:
+            return first[c]
+    return -1
 
 
 @njit(cache=True)
@@ -476,7 +553,7 @@ def consecutive_shared_edges(tri, run_lengths):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def first_cross_run_edge(twin, run_lengths):
     """First half-edge whose twin lies in another run (cycle), or -1."""
     m = twin.shape[0] // 3
@@ -486,25 +563,35 @@ def first_cross_run_edge(twin, run_lengths):
         for _ in range(run_lengths[r]):
             run[t] = r
             t += 1
-    for h in range(twin.shape[0]):
-        g = twin[h]
-        if g >= 0 and run[h // 3] != run[g // 3]:
-            return h
+    bounds = _chunks(twin.shape[0])
+    nc = bounds.shape[0] - 1
+    first = np.full(nc, -1, np.int64)
+    for c in prange(nc):
+        for h in range(bounds[c], bounds[c + 1]):
+            g = twin[h]
+            if g >= 0 and run[h // 3] != run[g // 3]:
+                first[c] = h
+                break
+    for c in range(nc):
+        if first[c] >= 0:
+            return first[c]
     return -1
 
 
 @njit(cache=True)
-def angle_area_stats(points, tri):
-    """One pass over the triangles.
+def _chunks(m):
+    """Boundaries splitting range(m) into up to 64 chunks for ``prange`` (enough to
+    balance any usual thread count; a per-chunk result keeps "first index" answers
+    deterministic)."""
+    k = max(1, min(m, 64))
+    out = np.empty(k + 1, np.int64)
+    for i in range(k + 1):
+        out[i] = (m * i) // k
+    return out
 
-    Returns ``(min_angle, argmin, max_angle, argmax, min_area, argmin_area, total_area)``
-    with angles in radians and signed areas (positive = counter-clockwise).
 
-    The smallest angle of a triangle is opposite its shortest side and is at most 60
-    degrees, so it is found as ``arcsin`` of the smallest ``sin^2 = cross^2 / (|e|^2
-    |f|^2)`` (well conditioned there); the largest, opposite the longest side, from
-    the smallest cosine. One transcendental call per mesh, not per triangle.
-    """
+@njit(cache=True)
+def _angle_area_range(points, tri, lo, hi):
     best_s2 = np.inf
     best_c = np.inf
     amin = -1
@@ -512,7 +599,7 @@ def angle_area_stats(points, tri):
     min_area = np.inf
     aarea = -1
     total = 0.0
-    for t in range(tri.shape[0]):
+    for t in range(lo, hi):
         p0 = tri[t, 0]
         p1 = tri[t, 1]
         p2 = tri[t, 2]
@@ -550,6 +637,42 @@ def angle_area_stats(points, tri):
         if c < best_c:
             best_c = c
             amax = t
-    min_ang = np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0)))
-    max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
-    return min_ang, amin, max_ang, amax, min_area, aarea, total
+    return best_s2, amin, best_c, amax, min_area, aarea, total
+
+
+@njit(cache=True, parallel=True)
+def angle_area_stats(points, tri):
+    """One pass over the triangles (in parallel chunks).
+
+    Returns ``(min_angle, argmin, max_angle, argmax, min_area, argmin_area, total_area)``
+    with angles in radians and signed areas (positive = counter-clockwise).
+
+    The smallest angle of a triangle is opposite its shortest side and is at most 60
+    degrees, so it is found as ``arcsin`` of the smallest ``sin^2 = cross^2 / (|e|^2
+    |f|^2)`` (well conditioned there); the largest, opposite the longest side, from
+    the smallest cosine. One transcendental call per mesh, not per triangle.
+    """
+    bounds = _chunks(tri.shape[0])
+    nc = bounds.shape[0] - 1
+    s2 = np.empty(nc)
+    cs = np.empty(nc)
+    ar = np.empty(nc)
+    tot = np.empty(nc)
+    i_s2 = np.empty(nc, np.int64)
+    i_cs = np.empty(nc, np.int64)
+    i_ar = np.empty(nc, np.int64)
+    for c in prange(nc):
+        r = _angle_area_range(points, tri, bounds[c], bounds[c + 1])
+        s2[c] = r[0]
+        i_s2[c] = r[1]
+        cs[c] = r[2]
+        i_cs[c] = r[3]
+        ar[c] = r[4]
+        i_ar[c] = r[5]
+        tot[c] = r[6]
+    a = np.argmin(s2)
+    b = np.argmin(cs)
+    d = np.argmin(ar)
+    min_ang = np.arcsin(np.sqrt(min(max(s2[a], 0.0), 1.0)))
+    max_ang = np.arccos(min(max(cs[b], -1.0), 1.0))
+    return min_ang, i_s2[a], max_ang, i_cs[b], ar[d], i_ar[d], tot.sum()

@@ -48,9 +48,9 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     t0 = time.perf_counter()
     clean, he, is_con = prepare_mesh(mesh)
-    out = MODES[mode](clean, he, is_con)
+    out, claim = MODES[mode](clean, he, is_con)
     t1 = time.perf_counter()
-    stats = verify(out, reference=clean, reference_twin=he.twin)
+    stats = verify(out, reference=clean, reference_twin=he.twin, twin_claim=claim)
     t2 = time.perf_counter()
     report = dict(out.report)
     report.update(

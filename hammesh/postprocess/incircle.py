@@ -53,7 +53,9 @@ def incenters(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     )
 
 
-def incircle_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> HamiltonianMesh:
+def incircle_hamiltonian(
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray
+) -> tuple[HamiltonianMesh, np.ndarray]:
     """Build the Thm 2.4 Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
 
     Parameters
@@ -69,11 +71,14 @@ def incircle_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> Hamil
     -------
     HamiltonianMesh
         With ``report`` holding the construction counts only.
+    claim : (3 m_out,) int64
+        The output's half-edge twins as the construction implies them; the
+        certificate checks this claim instead of recomputing the pairing.
     """
     pts, tri = mesh.points, mesh.triangles
     n, m = mesh.n_points, mesh.n_triangles
     is_tree, _root, firsts = _kernels.spanning_forest(he.twin, is_con, m)
-    out, parent, kind, lengths, mid_a, mid_b = _kernels.emit_cycles(
+    out, parent, kind, lengths, mid_a, mid_b, claim = _kernels.emit_cycles(
         tri, he.twin, is_tree, is_con, firsts, n
     )
     if len(out) != 3 * m + 2 * len(mid_a):
@@ -109,7 +114,7 @@ def incircle_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> Hamil
         "flips": int((is_tree & ~is_con).sum() // 2),
         "components": [int(x) for x in lengths],
     }
-    return HamiltonianMesh(
+    h = HamiltonianMesh(
         points=points,
         triangles=out,
         segments=segs,
@@ -121,3 +126,4 @@ def incircle_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> Hamil
         triangle_attributes=mesh.triangle_attributes[parent],
         report=report,
     )
+    return h, claim

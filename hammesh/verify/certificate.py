@@ -21,9 +21,17 @@ naming the triangle, edge or vertex at fault):
    floating point can round either way by a few ulps).
 
 Items 2-3 with the unchanged area and boundary mean the output triangles tile the
-input domain without overlap: an oriented, edge-manifold triangle set whose boundary
-is the domain's boundary covers every point of the domain a whole number of times,
-and equal area makes that number one.
+input domain without overlap: glue the triangles along a pairing of their half-edges
+(each pair the same edge, opposite directions); the result is a surface whose
+boundary is the unpaired half-edges. Mapped to the plane with every triangle positive
+it covers each point of a domain piece the same number of times (the degree is
+constant away from the image of the boundary); if the unpaired half-edges are exactly
+the input's boundary edges, that number is at least one in every piece (triangles sit
+on the inner side of its boundary), and equal total area makes it exactly one. So
+with a reference, *any* valid pairing proves the tiling, which lets the construction
+hand its own pairing in (``twin_claim``): checking a claim is one read per
+half-edge, where finding the pairing needs a bucket sort. Without a reference the
+pairing is always computed, and a non-manifold edge fails item 3 directly.
 """
 
 from __future__ import annotations
@@ -64,6 +72,7 @@ def verify_cycle_mesh(
     segments: np.ndarray | None = None,
     reference: Mesh | None = None,
     reference_twin: np.ndarray | None = None,
+    twin_claim: np.ndarray | None = None,
     angle_ratio: float = 0.5,
 ) -> dict[str, Any]:
     """Check that ``triangles`` in row order form closed Hamiltonian cycles.
@@ -81,6 +90,11 @@ def verify_cycle_mesh(
         The input mesh; enables the checks of item 5 of the module docstring.
     reference_twin : (3 m_in,) int64, optional
         The reference's half-edge twins if already computed (saves one pass).
+    twin_claim : (3 m,) int64, optional
+        A claimed pairing of the output's half-edges (from the construction). With a
+        reference it replaces the bucket matching: the claim is checked to be a
+        reversed-edge involution, and the boundary/area checks then prove it is the
+        true adjacency (see the module docstring). An invalid claim is ignored.
     angle_ratio : float
         Required ``min angle out / min angle in`` (Thm 2.4: 0.5).
 
@@ -122,7 +136,15 @@ def verify_cycle_mesh(
     if not area_min > 0:
         _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
 
-    twin, dup = _kernels.half_edge_twins(tri, n)
+    dup = -1
+    if (
+        twin_claim is not None
+        and reference is not None
+        and _kernels.check_twin_claim(tri, np.ascontiguousarray(twin_claim, dtype=np.int64)) < 0
+    ):
+        twin = np.ascontiguousarray(twin_claim, dtype=np.int64)
+    else:
+        twin, dup = _kernels.half_edge_twins(tri, n)
     if dup >= 0:
         t, k = divmod(int(dup), 3)
         same = np.flatnonzero((np.sort(tri, axis=1) == np.sort(tri[t])).all(axis=1))
@@ -242,6 +264,7 @@ def verify(
     reference: Mesh | None = None,
     *,
     reference_twin: np.ndarray | None = None,
+    twin_claim: np.ndarray | None = None,
     angle_ratio: float = 0.5,
 ) -> dict[str, Any]:
     """Certificate of a :class:`~hammesh.mesh.HamiltonianMesh` (see module docstring).
@@ -256,5 +279,6 @@ def verify(
         segments=mesh.segments,
         reference=reference,
         reference_twin=reference_twin,
+        twin_claim=twin_claim,
         angle_ratio=angle_ratio,
     )
