@@ -94,7 +94,9 @@ def verify_cycle_mesh(
         A claimed pairing of the output's half-edges (from the construction). With a
         reference it replaces the bucket matching: the claim is checked to be a
         reversed-edge involution, and the boundary/area checks then prove it is the
-        true adjacency (see the module docstring). An invalid claim is ignored.
+        true adjacency (see the module docstring). A claim that is not a valid
+        pairing, or leaves a different number of boundary edges than the input has,
+        is ignored (the pairing is then computed).
     angle_ratio : float
         Required ``min angle out / min angle in`` (Thm 2.4: 0.5).
 
@@ -136,13 +138,22 @@ def verify_cycle_mesh(
     if not area_min > 0:
         _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
 
+    if reference is not None and reference_twin is None:
+        reference_twin, r_dup = _kernels.half_edge_twins(
+            np.ascontiguousarray(reference.triangles, dtype=np.int64), len(reference.points)
+        )
+        if r_dup >= 0:
+            _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
     dup = -1
+    claim = None if twin_claim is None else np.ascontiguousarray(twin_claim, dtype=np.int64)
     if (
-        twin_claim is not None
-        and reference is not None
-        and _kernels.check_twin_claim(tri, np.ascontiguousarray(twin_claim, dtype=np.int64)) < 0
+        claim is not None
+        and reference_twin is not None
+        and claim.shape == (3 * m,)
+        and int((claim < 0).sum()) == int((reference_twin < 0).sum())
+        and _kernels.check_twin_claim(tri, claim) < 0
     ):
-        twin = np.ascontiguousarray(twin_claim, dtype=np.int64)
+        twin = claim
     else:
         twin, dup = _kernels.half_edge_twins(tri, n)
     if dup >= 0:
@@ -189,7 +200,7 @@ def _compare_with_input(
     tri: np.ndarray,
     twin: np.ndarray,
     ref: Mesh,
-    r_twin: np.ndarray | None,
+    r_twin: np.ndarray,
     amin: float,
     tmin: int,
     total: float,
@@ -211,10 +222,6 @@ def _compare_with_input(
     if not math.isclose(total, r_total, rel_tol=AREA_RTOL, abs_tol=0.0):
         _fail(f"total area changed from {r_total!r} to {total!r}")
 
-    if r_twin is None:
-        r_twin, r_dup = _kernels.half_edge_twins(rt, n_in)
-        if r_dup >= 0:
-            _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
     b_out = _boundary_keys(tri, twin, n)
     b_in = _boundary_keys(rt, r_twin, n)
     if not np.array_equal(b_out, b_in):

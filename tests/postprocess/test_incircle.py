@@ -205,3 +205,35 @@ def test_large_mesh_certificate() -> None:
     h = hammesh.hamiltonian(m)
     assert h.report["verified"] and h.n_triangles > 100_000
     assert h.report["midpoints"] == 2
+
+
+@given(dom=star_pslg(), area=st.sampled_from([0.05, 0.01]))
+def test_claimed_pairing_is_the_true_adjacency(dom: hammesh.Domain, area: float) -> None:
+    """The construction's own half-edge pairing (which the certificate checks instead
+    of recomputing) equals an independent bucket matching of the output."""
+    from hammesh import _kernels
+    from hammesh.postprocess.incircle import incircle_hamiltonian
+    from hammesh.verify import prepare_mesh
+
+    m = hammesh.quality_mesh(dom, min_angle=25, max_area=area, isolate=False)
+    clean, he, is_con = prepare_mesh(m)
+    h, claim = incircle_hamiltonian(clean, he, is_con)
+    twin, bad = _kernels.half_edge_twins(h.triangles, h.n_points)
+    assert bad == -1
+    np.testing.assert_array_equal(claim, twin)
+
+
+def test_a_wrong_claim_is_not_believed() -> None:
+    from dataclasses import replace
+
+    from hammesh.verify import verify
+
+    m = hammesh.quality_mesh(plate_with_loops(1), min_angle=30, max_area=0.02)
+    h = hammesh.hamiltonian(m)
+    tri = h.triangles.copy()
+    tri[[0, 1]] = tri[[1, 0]]  # a broken output ...
+    bogus = np.full(3 * len(tri), -1, dtype=np.int64)  # ... with an "all boundary" claim
+    with pytest.raises(hammesh.VerificationError):
+        verify(replace(h, triangles=tri), reference=m, twin_claim=bogus)
+    # a valid output with a bogus claim still passes (the claim is checked, then ignored)
+    verify(h, reference=m, twin_claim=bogus)

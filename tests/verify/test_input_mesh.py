@@ -1,0 +1,97 @@
+"""Validation of meshes handed to hamiltonian(): every bad input is named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.spatial import Delaunay
+
+import hammesh
+from hammesh import _kernels
+from hammesh.verify import half_edges, infer_runs, prepare_mesh
+
+SQ = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+TWO = np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def mesh(points=SQ, triangles=TWO, **kw) -> hammesh.Mesh:
+    return hammesh.Mesh(points=np.asarray(points, float), triangles=np.asarray(triangles), **kw)
+
+
+@pytest.mark.parametrize(
+    "m, needle",
+    [
+        (mesh(points=[[0, 0], [1, 0], [1, np.nan], [0, 1]]), "point 2"),
+        (mesh(triangles=[[0, 1, 2], [0, 2, 7]]), "vertex 7"),
+        (mesh(triangles=[[0, 1, 2], [0, -1, 3]]), "vertex -1"),
+        (mesh(triangles=[[0, 1, 2], [0, 2, 2]]), "triangle 1"),
+        (mesh(points=[[0, 0], [1, 0], [2, 0], [0, 1]], triangles=[[0, 1, 2], [0, 2, 3]]), "triangle 0 .*zero area"),
+        (mesh(triangles=np.zeros((0, 3), int)), "no triangles"),
+        (mesh(triangles=[[0, 1], [1, 2]]), "shape"),
+        (mesh(segments=np.array([[1, 3]])), "segment 0"),
+        (mesh(segments=np.array([[0, 1], [0, 9]])), "segment 1"),
+    ],
+)
+def test_bad_meshes_are_named(m: hammesh.Mesh, needle: str) -> None:
+    with pytest.raises(hammesh.InvalidMeshError, match=needle):
+        hammesh.hamiltonian(m)
+
+
+def test_non_manifold_edge_is_rejected() -> None:
+    pts = np.array([[0, 0], [1, 0], [0.5, 1], [0.5, -1], [0.6, 0.8]], float)
+    tri = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])  # edge (0, 1) in three triangles
+    with pytest.raises(hammesh.InvalidMeshError, match="edge"):
+        hammesh.hamiltonian(mesh(points=pts, triangles=tri))
+
+
+def test_overlapping_triangles_are_rejected() -> None:
+    pts = np.array([[0, 0], [1, 0], [0.5, 1], [0.5, 0.5]], float)
+    tri = np.array([[0, 1, 2], [0, 1, 3]])  # same side of (0, 1): overlap
+    with pytest.raises(hammesh.InvalidMeshError, match="overlap"):
+        hammesh.hamiltonian(mesh(points=pts, triangles=tri))
+
+
+def test_wrong_neighbours_are_not_trusted() -> None:
+    rng = np.random.default_rng(5)
+    pts = rng.random((60, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    good = half_edges(tri[:, ::-1].copy(), len(pts))  # reference (CCW as Delaunay is CCW?)
+    nbr = rng.integers(-1, len(tri), size=tri.shape)
+    m = hammesh.Mesh(points=pts, triangles=tri, neighbors=nbr)
+    clean, he, _ = prepare_mesh(m)
+    ref = half_edges(clean.triangles, len(pts))
+    np.testing.assert_array_equal(he.twin, ref.twin)
+    assert good.twin.shape == ref.twin.shape
+
+
+@given(st.integers(10, 200), st.integers(0, 10_000))
+def test_twins_from_neighbours_equal_bucket_matching(n: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    d = Delaunay(pts)
+    tri = d.simplices.astype(np.int64)
+    # scipy: neighbors[t, k] is opposite vertex k; ours is across edge (k, k+1)
+    nbr = d.neighbors[:, [2, 0, 1]].astype(np.int64)
+    a, bad_a = _kernels.twins_from_neighbors(tri, nbr)
+    b, bad_b = _kernels.half_edge_twins(tri, n)
+    assert bad_a == -1 and bad_b == -1
+    np.testing.assert_array_equal(a, b)
+
+
+def test_segment_found_at_a_vertex_where_two_fans_touch() -> None:
+    # two triangles sharing only vertex 0 (a bow-tie); a segment on the second fan
+    pts = np.array([[0, 0], [1, 0], [1, 1], [-1, 0], [-1, -1]], float)
+    tri = np.array([[0, 1, 2], [0, 3, 4]])
+    he = half_edges(tri, len(pts))
+    _, found = he.mark(np.array([[0, 1], [0, 4], [3, 0], [1, 4]]))
+    assert found.tolist() == [True, True, True, False]
+
+
+def test_infer_runs_from_pieces_in_order() -> None:
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [3, 0], [4, 0], [4, 1]], float)
+    tri = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6]])
+    assert infer_runs(tri, len(pts)).tolist() == [2, 1]
+    with pytest.raises(hammesh.VerificationError, match="consecutive"):
+        infer_runs(tri[[0, 2, 1]], len(pts))
