@@ -329,32 +329,59 @@ def _find(parent, x):
 def spanning_forest(twin, is_con, m):
     """Spanning forest of the dual graph that crosses the fewest constrained edges.
 
-    Kruskal with two weights: every free (flippable) dual edge first, then the
-    constrained ones, so a constrained edge enters the tree only to join two regions
-    that free edges cannot join. Returns ``(is_tree (3m,) bool, root (m,) int64,
-    firsts (p,) int64)``: ``root[t]`` identifies t's connected piece and ``firsts`` is
-    the lowest triangle of each of the p pieces, ascending.
+    First a depth-first search over free (flippable) dual edges only: its trees span
+    the *regions* (pieces of the dual cut along every constrained edge). Then the
+    regions are joined by union-find over the constrained dual edges, each taken only
+    if it joins two regions not yet joined: exactly ``regions - pieces`` crossings,
+    the fewest possible (a crossing joins two regions).
+
+    Returns ``(is_tree (3m,) bool, root (m,) int64, firsts (p,) int64)``: ``root[t]``
+    identifies t's connected piece and ``firsts`` is the lowest triangle of each of
+    the p pieces, ascending.
     """
-    parent = np.arange(m)
     is_tree = np.zeros(twin.shape[0], np.bool_)
-    for rnd in range(2):
-        want_con = rnd == 1
-        for h in range(twin.shape[0]):
-            g = twin[h]
-            if g < h or is_con[h] != want_con:
-                continue
-            a = _find(parent, h // 3)
-            b = _find(parent, g // 3)
-            if a != b:
-                parent[a] = b
-                is_tree[h] = True
-                is_tree[g] = True
+    region = np.full(m, -1, np.int64)
+    stack = np.empty(m, np.int64)
+    n_reg = 0
+    for s in range(m):
+        if region[s] >= 0:
+            continue
+        region[s] = n_reg
+        stack[0] = s
+        top = 1
+        while top > 0:
+            top -= 1
+            t = stack[top]
+            for k in range(3):
+                h = 3 * t + k
+                g = twin[h]
+                if g < 0 or is_con[h]:
+                    continue
+                u = g // 3
+                if region[u] < 0:
+                    region[u] = n_reg
+                    is_tree[h] = True
+                    is_tree[g] = True
+                    stack[top] = u
+                    top += 1
+        n_reg += 1
+    parent = np.arange(n_reg)
+    for h in range(twin.shape[0]):
+        g = twin[h]
+        if g < h or not is_con[h]:
+            continue
+        a = _find(parent, region[h // 3])
+        b = _find(parent, region[g // 3])
+        if a != b:
+            parent[a] = b
+            is_tree[h] = True
+            is_tree[g] = True
     root = np.empty(m, np.int64)
-    seen = np.zeros(m, np.bool_)
+    seen = np.zeros(n_reg, np.bool_)
     firsts = np.empty(m, np.int64)
     n_pieces = 0
     for t in range(m):
-        r = _find(parent, t)
+        r = _find(parent, region[t])
         root[t] = r
         if not seen[r]:
             seen[r] = True
