@@ -549,10 +549,7 @@ def check_twin_claim(tri, claim):
             if bad:
                 first[c] = h
                 break
-    for c in range(nc):
-        if first[c] >= 0:
-            return first[c]
-    return -1
+    return _first_hit(first)
 
 
 @njit(cache=True)
@@ -599,7 +596,13 @@ def first_cross_run_edge(twin, run_lengths):
             if g >= 0 and run[h // 3] != run[g // 3]:
                 first[c] = h
                 break
-    for c in range(nc):
+    return _first_hit(first)
+
+
+@njit(cache=True)
+def _first_hit(first):
+    """The first per-chunk answer that is not -1 (chunks are in index order)."""
+    for c in range(first.shape[0]):
         if first[c] >= 0:
             return first[c]
     return -1

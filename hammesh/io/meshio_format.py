@@ -103,14 +103,49 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     if suffix == ".ply":
         triangles = triangles.astype(np.int32)
+    segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)
+    cells: list[tuple[str, np.ndarray]] = [("triangle", triangles)]
     cell_data: dict[str, list[np.ndarray]] = {}
+    point_data: dict[str, np.ndarray] = {}
     if suffix in CELL_DATA_SUFFIXES:
         cell_data = {k: [v] for k, v in triangle_cell_data(mesh).items()}
-    out = meshio.Mesh(points3, [("triangle", triangles)], cell_data=cell_data)
+        if len(segments):
+            markers = _segment_markers(mesh)
+            if suffix == ".msh":
+                cells, cell_data, point_data = _gmsh_blocks(mesh, triangles, segments, markers)
+            else:
+                cells.append(("line", segments))
+                cell_data = _with_line_block(cell_data, markers)
+    out = meshio.Mesh(points3, cells, point_data=point_data, cell_data=cell_data)
     with atomic_path(path) as tmp:
         meshio.write(tmp, out, file_format=file_format, **kwargs)
 
 
+def _segment_markers(mesh: Mesh | HamiltonianMesh) -> np.ndarray:
+    """``(s,) int64`` markers of ``mesh.segments`` (zeros if their count is off)."""
+    markers = np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1)
+    if len(markers) != len(mesh.segments):
+        markers = np.zeros(len(mesh.segments), dtype=np.int64)
+    return markers
+
+
+def _fill(like: np.ndarray, count: int) -> np.ndarray:
+    """``count`` filler values of ``like``'s kind: -1 for integers, NaN for floats."""
+    if np.issubdtype(like.dtype, np.integer):
+        return np.full(count, -1, dtype=like.dtype)
+    return np.full(count, np.nan, dtype=np.float64)
+
+
+def _with_line_block(
+    triangle_data: dict[str, list[np.ndarray]], markers: np.ndarray
+) -> dict[str, list[np.ndarray]]:
+    """Cell data for the blocks ``[triangles, lines]``: each field gets one entry per block."""
+    m = len(next(iter(triangle_data.values()))[0]) if triangle_data else None
+    data = {k: [v[0], _fill(v[0], len(markers))] for k, v in triangle_data.items()}
+    if m is None:  # a plain mesh without attributes: no triangle field to size from
+        return {SEGMENT_MARKER: [None, markers]}  # replaced by the caller's count below
+    data[SEGMENT_MARKER] = [np.full(m, -1, dtype=np.int64), markers]
+    return data
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     detail = text[0] if text else ""
