@@ -424,18 +424,22 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     out = np.empty((total, 3), np.int64)
     parent = np.empty(total, np.int64)
     kind = np.empty(total, np.int8)
-    claim = np.full(3 * total, -1, np.int64)
+    # every entry of the claim is written exactly once below (a test compares the
+    # claim with an independent matching); an unwritten one would fail the check
+    claim = np.empty(3 * total, np.int64)
     lengths = np.zeros(firsts.shape[0], np.int64)
-    mid_of = np.full(nh, -1, np.int64)
     prim = np.full(nh, -1, np.int64)  # output row of each slot's first triangle
-    y2 = np.full(nh, -1, np.int64)  # output row of (I_t, M, b) for a split slot
+    mid_of = dict()  # split slot -> its midpoint vertex (both halves of the edge)
+    y2 = dict()  # split slot h -> output row of (I_t, M, b)
     mid_a = np.empty(n_mid_half // 2, np.int64)
     mid_b = np.empty(n_mid_half // 2, np.int64)
     n_mid = 0
     pos = 0
-    # Claimed pairing, part 1: consecutive rows share an edge, known as we go:
-    # the "exit" edge of a row pairs with the "entry" edge of the next (a slot's
-    # first triangle enters by edge 0 (I_t, a); a split's second triangle by edge 1).
+    # The claimed pairing: a row's "exit" edge pairs with the next row's "entry" edge
+    # (a slot's first triangle enters by edge 0 (I_t, a), a split's second triangle by
+    # edge 1 (M, a)); the third edge pairs across the input edge (plain slot), with
+    # the other flipped triangle (flip) or with the other half of the split sector;
+    # whichever of two partners is emitted second makes the link.
     for c in range(firsts.shape[0]):
         first = 3 * firsts[c]
         run_start = pos
@@ -452,17 +456,22 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
             k = h - 3 * t
             a = tri[t, k]
             inc = n_points + t
+            g = twin[h]
             if not is_tree[h]:
                 out[pos, 0] = inc
                 out[pos, 1] = a
                 out[pos, 2] = tri[t, (k + 1) % 3]
                 parent[pos] = t
                 kind[pos] = 0
+                if g < 0:
+                    claim[3 * pos + 1] = -1
+                elif prim[g] >= 0:
+                    claim[3 * pos + 1] = 3 * prim[g] + 1
+                    claim[3 * prim[g] + 1] = 3 * pos + 1
                 last_exit = 3 * pos + 2  # (b, I_t)
                 pos += 1
                 nxt = h + 1 if k < 2 else h - 2
             else:
-                g = twin[h]
                 u = g // 3
                 kg = g - 3 * u
                 if not is_con[h]:
@@ -471,12 +480,16 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     out[pos, 2] = n_points + u
                     parent[pos] = t
                     kind[pos] = 1
+                    if prim[g] >= 0:
+                        claim[3 * pos + 2] = 3 * prim[g] + 2
+                        claim[3 * prim[g] + 2] = 3 * pos + 2
                     last_exit = 3 * pos + 1  # (a, I_u)
                     pos += 1
                 else:
-                    if mid_of[h] < 0:
-                        mid_of[h] = n_points + m + n_mid
-                        mid_of[g] = n_points + m + n_mid
+                    if h not in mid_of:
+                        mv = n_points + m + n_mid
+                        mid_of[h] = mv
+                        mid_of[g] = mv
                         mid_a[n_mid] = a
                         mid_b[n_mid] = tri[t, (k + 1) % 3]
                         n_mid += 1
@@ -494,6 +507,12 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     y2[g] = pos + 1
                     claim[3 * pos + 1] = 3 * (pos + 1) + 1  # (a, M) | (M, a)
                     claim[3 * (pos + 1) + 1] = 3 * pos + 1
+                    if h in y2:  # (M, I_t) | (I_t, M): other half of t's sector
+                        claim[3 * pos + 2] = 3 * y2[h]
+                        claim[3 * y2[h]] = 3 * pos + 2
+                    if prim[g] >= 0:  # (I_u, M) | (M, I_u): other half of u's sector
+                        claim[3 * (pos + 1)] = 3 * prim[g] + 2
+                        claim[3 * prim[g] + 2] = 3 * (pos + 1)
                     last_exit = 3 * (pos + 1) + 2  # (a, I_u)
                     pos += 2
                 nxt = g + 1 if kg < 2 else g - 2
@@ -505,18 +524,6 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
         lengths[c] = pos - run_start
     if pos != total:
         return out[:pos], parent[:pos], kind[:pos], lengths, mid_a, mid_b, np.empty(0, np.int64)
-    # part 2: the third edge of each row pairs across the input edge (plain slot),
-    # with the other flipped triangle (flip), or with its own split half (split)
-    for h in range(nh):
-        r = prim[h]
-        if not is_tree[h]:
-            g = twin[h]
-            claim[3 * r + 1] = -1 if g < 0 else 3 * prim[g] + 1
-        elif not is_con[h]:
-            claim[3 * r + 2] = 3 * prim[twin[h]] + 2
-        else:
-            claim[3 * r + 2] = 3 * y2[h]
-            claim[3 * y2[h]] = 3 * r + 2
     return out, parent, kind, lengths, mid_a, mid_b, claim
 
 

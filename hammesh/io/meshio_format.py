@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from hammesh.errors import FileFormatError
+from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_path
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
@@ -61,6 +61,14 @@ SUFFIXES: tuple[str, ...] = tuple(_FORMATS)
 
 #: Suffixes whose files store the per-triangle cell data.
 CELL_DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf"})
+
+#: Cell data holding each constrained edge's boundary marker (-1 on triangles).
+SEGMENT_MARKER = "segment_marker"
+
+#: Gmsh point data: each node's entity (row of the sorted entity list), see :func:`read`.
+NODE_ENTITY = "gmsh_node_entity"
+
+_GMSH_TAGS = ("gmsh:physical", "gmsh:geometrical")
 
 _ATTRIBUTE_RE = re.compile(rf"^{ATTRIBUTE_PREFIX}(\d+)$")
 
@@ -115,7 +123,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
                 cells, cell_data, point_data = _gmsh_blocks(mesh, triangles, segments, markers)
             else:
                 cells.append(("line", segments))
-                cell_data = _with_line_block(cell_data, markers)
+                cell_data = _with_line_block(cell_data, len(triangles), markers)
     out = meshio.Mesh(points3, cells, point_data=point_data, cell_data=cell_data)
     with atomic_path(path) as tmp:
         meshio.write(tmp, out, file_format=file_format, **kwargs)
@@ -137,15 +145,107 @@ def _fill(like: np.ndarray, count: int) -> np.ndarray:
 
 
 def _with_line_block(
-    triangle_data: dict[str, list[np.ndarray]], markers: np.ndarray
+    triangle_data: dict[str, list[np.ndarray]], m: int, markers: np.ndarray
 ) -> dict[str, list[np.ndarray]]:
-    """Cell data for the blocks ``[triangles, lines]``: each field gets one entry per block."""
-    m = len(next(iter(triangle_data.values()))[0]) if triangle_data else None
+    """Cell data for the blocks ``[triangles (m), lines]``: one entry per block and field."""
     data = {k: [v[0], _fill(v[0], len(markers))] for k, v in triangle_data.items()}
-    if m is None:  # a plain mesh without attributes: no triangle field to size from
-        return {SEGMENT_MARKER: [None, markers]}  # replaced by the caller's count below
     data[SEGMENT_MARKER] = [np.full(m, -1, dtype=np.int64), markers]
     return data
+
+
+def _triangle_physical(mesh: Mesh | HamiltonianMesh) -> np.ndarray:
+    """Gmsh physical tag of each triangle: the first regional attribute if it is
+    integral (and fits an int32), else 1."""
+    m = len(mesh.triangles)
+    attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64)
+    if attrs.ndim == 2 and attrs.shape[0] == m and attrs.shape[1]:
+        first = attrs[:, 0]
+        if np.all(first == np.round(first)) and np.all(np.abs(first) < 2**31):
+            return first.astype(np.int64)
+    return np.ones(m, dtype=np.int64)
+
+
+def _runs(values: np.ndarray) -> list[np.ndarray]:
+    """Index arrays of the maximal runs of equal consecutive ``values``."""
+    cuts = np.flatnonzero(np.diff(values)) + 1
+    return np.split(np.arange(len(values)), cuts)
+
+
+def _node_entities(groups: list[np.ndarray], n: int) -> np.ndarray | None:
+    """One distinct node per entity (``groups[e]``: the entity's vertices), or None.
+
+    Returns ``(len(groups),)`` node indices; meshio writes an entity of the
+    ``$Entities`` section (and so its physical tag) only if some node belongs to it.
+    """
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import maximum_bipartite_matching
+
+    rows = np.repeat(np.arange(len(groups)), [len(g) for g in groups])
+    cols = np.concatenate(groups)
+    graph = csr_matrix((np.ones(len(cols)), (rows, cols)), shape=(len(groups), n))
+    match = maximum_bipartite_matching(graph, perm_type="column")
+    return None if np.any(match < 0) else match
+
+
+def _gmsh_blocks(
+    mesh: Mesh | HamiltonianMesh, triangles: np.ndarray, segments: np.ndarray, markers: np.ndarray
+) -> tuple[list[tuple[str, np.ndarray]], dict[str, list[np.ndarray]], dict[str, np.ndarray]]:
+    """Cells, cell data and point data of a Gmsh 4.1 file with physical tags.
+
+    Gmsh 4.1 gives physical tags to entities, not elements, so the triangles are
+    split into maximal runs of equal physical tag (one entity each, in row order:
+    concatenated they are the triangles unchanged) and the segments are grouped by
+    marker (one entity each, markers ascending, file order kept inside a group).  Each
+    entity needs a node of its own (:func:`_node_entities`); if no such choice exists
+    (pathological meshes), the triangles and then the segments are merged into one
+    entity, the physical tag of its first cell; ``segment_marker`` stays exact.
+    """
+    n, m = len(mesh.points), len(triangles)
+    physical = _triangle_physical(mesh)
+    order = np.argsort(markers, kind="stable")
+    tri_data = triangle_cell_data(mesh)
+    for split_triangles, split_lines in ((True, True), (False, True), (False, False)):
+        tri_runs = _runs(physical) if split_triangles else [np.arange(m)]
+        line_groups = _runs(markers[order]) if split_lines else [np.arange(len(order))]
+        line_groups = [order[g] for g in line_groups]
+        groups = [np.unique(triangles[r]) for r in tri_runs]
+        groups += [np.unique(segments[g]) for g in line_groups]
+        owner = _node_entities(groups, n)
+        if owner is not None:
+            break
+    else:
+        raise InvalidMeshError("cannot write Gmsh entities: the cells use fewer than 2 distinct points")
+
+    cells: list[tuple[str, np.ndarray]] = []
+    data: dict[str, list[np.ndarray]] = {k: [] for k in [*tri_data, SEGMENT_MARKER, *_GMSH_TAGS]}
+    for tag, rows in enumerate(tri_runs, start=1):
+        cells.append(("triangle", triangles[rows]))
+        for k, v in tri_data.items():
+            data[k].append(v[rows])
+        data[SEGMENT_MARKER].append(np.full(len(rows), -1, dtype=np.int64))
+        data["gmsh:physical"].append(np.full(len(rows), physical[rows[0]], dtype=np.int64))
+        data["gmsh:geometrical"].append(np.full(len(rows), tag, dtype=np.int64))
+    for tag, rows in enumerate(line_groups, start=1):
+        cells.append(("line", segments[rows]))
+        for k, v in tri_data.items():
+            data[k].append(_fill(v, len(rows)))
+        data[SEGMENT_MARKER].append(markers[rows])
+        data["gmsh:physical"].append(np.full(len(rows), markers[rows[0]], dtype=np.int64))
+        data["gmsh:geometrical"].append(np.full(len(rows), tag, dtype=np.int64))
+
+    # node -> entity (dim, tag): every node in the first triangle entity, then each
+    # entity's own node moved to it
+    dim_tags = np.tile(np.array([2, 1], dtype=np.int64), (n, 1))
+    entities = [(2, t) for t in range(1, len(tri_runs) + 1)]
+    entities += [(1, t) for t in range(1, len(line_groups) + 1)]
+    dim_tags[owner] = np.array(entities, dtype=np.int64)
+    # meshio's Gmsh reader returns the nodes grouped by entity: store each node's
+    # entity (its row in the sorted entity list) to restore the order on reading
+    _, code = np.unique(dim_tags, axis=0, return_inverse=True)
+    point_data = {"gmsh:dim_tags": dim_tags, NODE_ENTITY: code.reshape(-1).astype(np.float64)}
+    return cells, data, point_data
+
+
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     detail = text[0] if text else ""
@@ -243,17 +343,26 @@ def _to_mesh(raw: Any, path: Path) -> Mesh:
         if np.any(points[:, 2] != 0):
             raise FileFormatError(f"{path}: mesh is not planar (z varies)")
         points = points[:, :2]
-    points = np.ascontiguousarray(points)
     if not np.isfinite(points).all():
         raise FileFormatError(f"{path}: non-finite point coordinates")
+    to_original = _gmsh_node_order(raw)
+    if to_original is not None:
+        restored = np.empty_like(points)
+        restored[to_original] = points
+        points = restored
+    points = np.ascontiguousarray(points)
 
-    tri_blocks, seg_blocks, tri_block_ids = [], [], []
+    tri_blocks, seg_blocks, tri_block_ids, seg_block_ids = [], [], [], []
     for b, block in enumerate(raw.cells):
+        data = np.asarray(block.data, dtype=np.int64)
+        if to_original is not None and data.size:
+            data = to_original[data]
         if block.type == "triangle":
-            tri_blocks.append(np.asarray(block.data, dtype=np.int64).reshape(-1, 3))
+            tri_blocks.append(data.reshape(-1, 3))
             tri_block_ids.append(b)
         elif block.type == "line":
-            seg_blocks.append(np.asarray(block.data, dtype=np.int64).reshape(-1, 2))
+            seg_blocks.append(data.reshape(-1, 2))
+            seg_block_ids.append(b)
     if not tri_blocks or sum(len(t) for t in tri_blocks) == 0:
         raise FileFormatError(f"{path}: no triangles")
     triangles = np.concatenate(tri_blocks)
@@ -269,14 +378,8 @@ def _to_mesh(raw: Any, path: Path) -> Mesh:
     columns: dict[int, np.ndarray] = {}
     for key, per_block in raw.cell_data.items():
         match = _ATTRIBUTE_RE.match(key)
-        if match is None:
-            continue
-        try:
-            parts = [np.asarray(per_block[b], dtype=np.float64).reshape(-1) for b in tri_block_ids]
-        except (IndexError, ValueError, TypeError):
-            continue
-        column = np.concatenate(parts)
-        if len(column) == len(triangles):
+        column = None if match is None else _block_column(per_block, tri_block_ids, len(triangles))
+        if column is not None:
             columns[int(match.group(1))] = column
     keys = sorted(columns)
     if keys and keys == list(range(len(keys))):
@@ -284,9 +387,56 @@ def _to_mesh(raw: Any, path: Path) -> Mesh:
     else:
         attributes = np.zeros((len(triangles), 0), dtype=np.float64)
 
+    markers = np.zeros(len(segments), dtype=np.int64)
+    for key in (SEGMENT_MARKER, "gmsh:physical"):
+        column = _block_column(raw.cell_data.get(key), seg_block_ids, len(segments))
+        if column is not None and np.all(column == np.round(column)):
+            markers = column.astype(np.int64)
+            break
+
     return Mesh(
         points=points,
         triangles=np.ascontiguousarray(triangles),
         segments=np.ascontiguousarray(segments),
+        segment_markers=markers,
         triangle_attributes=attributes,
     )
+
+
+def _block_column(per_block: Any, block_ids: list[int], length: int) -> np.ndarray | None:
+    """Cell data ``per_block`` of the blocks ``block_ids``, concatenated, as float64;
+    None if missing, malformed or not ``length`` long."""
+    if per_block is None or not block_ids:
+        return None
+    try:
+        parts = [np.asarray(per_block[b], dtype=np.float64).reshape(-1) for b in block_ids]
+    except (IndexError, ValueError, TypeError):
+        return None
+    column = np.concatenate(parts)
+    return column if len(column) == length else None
+
+
+def _gmsh_node_order(raw: Any) -> np.ndarray | None:
+    """For a Gmsh file written by :func:`write`: file position -> original point index.
+
+    meshio's Gmsh reader returns the nodes in file order, grouped by entity, and drops
+    the node tags.  :func:`write` stores each node's entity (its row in the sorted
+    entity list) as point data in tag order; meshio's writer groups the nodes by that
+    row, ascending index inside a group, so a stable sort of the rows is the file
+    order.  None (keep the file order) for any other file.
+    """
+    codes = raw.point_data.get(NODE_ENTITY)
+    dim_tags = raw.point_data.get("gmsh:dim_tags")
+    n = len(raw.points)
+    if codes is None or dim_tags is None:
+        return None
+    codes = np.asarray(codes, dtype=np.float64).reshape(-1)
+    dim_tags = np.asarray(dim_tags)
+    if len(codes) != n or dim_tags.shape != (n, 2) or np.any(codes != np.round(codes)):
+        return None
+    codes = codes.astype(np.int64)
+    to_original = np.argsort(codes, kind="stable")
+    _, file_codes = np.unique(dim_tags, axis=0, return_inverse=True)
+    if not np.array_equal(file_codes.reshape(-1), codes[to_original]):
+        return None
+    return to_original
