@@ -13,8 +13,10 @@ HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian 
 EXAMPLES = """examples:
   hammesh check plate.vtu
   hammesh check plate.obj --min-angle 14.9     # also require a minimum angle
-Each connected piece must be stored as one run of triangles that closes into a cycle;
-exit 0 if verified, 3 if not, 2 if the file cannot be read."""
+Each connected piece must be stored as one run of triangles that closes into a cycle,
+and every constrained edge stored in the file (line cells, or the .poly next to a .ele)
+must be an edge of the triangles; exit 0 if verified, 3 if not, 2 if the file cannot
+be read."""
 
 
 def add_args(p: argparse.ArgumentParser) -> None:

@@ -15,6 +15,8 @@ suffixes                                   module
 Formats that hold cell data (``.vtu .vtk .msh .xdmf``; ``.ele`` as attributes) store a
 :class:`~hammesh.mesh.HamiltonianMesh`'s ``cycle_position``, ``cycle_id``, ``parent``
 and ``kind`` per triangle; every format keeps the triangles' order, which is the cycle.
+The same formats store the constrained edges and their markers (``line`` cells with
+``segment_marker``, Gmsh physical tags in ``.msh``; the ``.poly`` next to a ``.ele``).
 
 Examples
 --------

@@ -7,12 +7,24 @@ that order *is* the cycle) and, where the format can hold cell data (``.vtu``, `
 ``parent``, ``kind`` and ``attribute_<i>``.  The other formats get geometry and
 connectivity only.
 
+Constrained edges (``mesh.segments``) go, in those four formats, into ``line`` cells
+after the triangles, with cell data ``segment_marker`` (the markers; ``-1`` on
+triangles); on line cells the triangle fields are ``-1`` (integers) or NaN
+(``attribute_<i>``).  ``.msh`` also gets ``gmsh:physical`` / ``gmsh:geometrical`` tags
+(see :func:`_gmsh_blocks`).  A mesh without segments is written as before.
+
 Format notes (meshio 5.3):
 
 * Points are always written with ``z = 0``: OBJ and PLY fail on 2D points and the
   others pad themselves while printing a warning.
 * ``.msh`` is written as Gmsh 4.1 binary (meshio's default for ``.msh`` is ANSYS);
   read as Gmsh first, then ANSYS.  Gmsh stores cell data as float64.
+* Gmsh 4.1 tags entities, not elements, and meshio writes an entity (with its
+  physical tag) only if some node is classified on it: each entity gets a node of its
+  own.  meshio's Gmsh reader returns the points grouped by entity and drops the node
+  tags; :func:`write` stores each node's entity (point data ``gmsh_node_entity``) so
+  :func:`read` restores the numbering.
+* meshio prints warnings to ``sys.stderr`` (via rich): reading redirects them.
 * ``.xdmf`` is written with its arrays inline (``data_format="XML"``) so the output is
   one file that can be replaced atomically (the HDF5 default writes a sibling ``.h5``).
 * ``.ply`` cells are written as int32 (PLY has no int64).
@@ -29,6 +41,8 @@ Format notes (meshio 5.3):
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 from pathlib import Path
@@ -42,7 +56,7 @@ from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
-__all__ = ["read", "write", "SUFFIXES", "CELL_DATA_SUFFIXES"]
+__all__ = ["read", "write", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
 
 #: suffix -> (meshio format names tried when reading, format written, writer kwargs)
 _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
@@ -91,6 +105,12 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
         Validated first (:func:`hammesh.io.validate.validate_mesh`).
     path : path-like
         One of :data:`SUFFIXES` (case-insensitive).
+
+    Notes
+    -----
+    ``.vtu .vtk .xdmf``: cells ``[("triangle", triangles), ("line", segments)]`` (no
+    line block without segments).  ``.msh``: triangle blocks (runs of equal physical
+    tag, concatenated in row order) then one line block per marker, markers ascending.
 
     Raises
     ------
@@ -258,8 +278,8 @@ def _meshio_read(path: Path, formats: tuple[str, ...]) -> Any:
     errors = []
     for fmt in formats:
         reader = getattr(meshio, fmt).read
-        try:
-            with np.errstate(all="ignore"):
+        try:  # meshio prints its warnings (rich, to sys.stderr): a library stays quiet
+            with np.errstate(all="ignore"), contextlib.redirect_stderr(io.StringIO()):
                 return reader(str(path))
         except Exception as exc:  # meshio raises anything on a bad file
             errors.append(f"as {fmt}: {_first_line(exc)}")
@@ -295,7 +315,8 @@ def read(path: str | os.PathLike[str]) -> Mesh:
     """Read a planar triangle mesh with meshio.
 
     Triangles keep their file order (all ``triangle`` blocks, concatenated); ``line``
-    blocks become ``segments``; other cell types are ignored.  A ``z`` coordinate that
+    blocks become ``segments`` and their cell data ``segment_marker`` (else
+    ``gmsh:physical``, else 0) ``segment_markers``; other cell types are ignored.  A ``z`` coordinate that
     is zero everywhere is dropped.  Cell data ``attribute_<i>`` (as written by
     :func:`write`) becomes ``triangle_attributes``; the cycle fields are not part of a
     :class:`Mesh` (read them with ``meshio`` directly).

@@ -237,3 +237,219 @@ def test_vtu_round_trip_property(tmp_path, mesh):
     np.testing.assert_array_equal(back.points, mesh.points)
     np.testing.assert_array_equal(back.triangles, mesh.triangles)
     np.testing.assert_array_equal(back.triangle_attributes, mesh.triangle_attributes)
+
+
+# --- constrained edges: line cells after the triangles, with their markers ---------------
+
+
+def undirected(segments, markers):
+    seg = np.sort(np.asarray(segments, dtype=np.int64), axis=1)
+    return sorted(zip(seg[:, 0].tolist(), seg[:, 1].tolist(), np.asarray(markers).tolist()))
+
+
+@pytest.mark.parametrize("suffix", CELL_DATA)
+def test_segments_and_markers_round_trip(tmp_path, hexagon, suffix):
+    path = tmp_path / f"m{suffix}"
+    meshio_format.write(hexagon, path)
+    back = meshio_format.read(path)
+    assert back.segments.dtype == np.int64 and back.segment_markers.dtype == np.int64
+    if suffix == ".msh":  # grouped by marker (one Gmsh entity per marker)
+        assert undirected(back.segments, back.segment_markers) == undirected(
+            hexagon.segments, hexagon.segment_markers
+        )
+    else:  # one line block, in row order
+        np.testing.assert_array_equal(back.segments, hexagon.segments)
+        np.testing.assert_array_equal(back.segment_markers, hexagon.segment_markers)
+    np.testing.assert_array_equal(back.points, hexagon.points)
+    np.testing.assert_array_equal(back.triangles, hexagon.triangles)
+    np.testing.assert_array_equal(back.triangle_attributes, hexagon.triangle_attributes)
+
+
+@pytest.mark.parametrize("suffix", CELL_DATA)
+def test_triangle_blocks_first_and_in_cycle_order(tmp_path, hexagon, suffix):
+    meshio_format.write(hexagon, tmp_path / f"m{suffix}")
+    raw = raw_read(tmp_path / f"m{suffix}")
+    types = [b.type for b in raw.cells]
+    k = types.count("triangle")
+    assert types == ["triangle"] * k + ["line"] * (len(types) - k)
+    if suffix != ".msh":
+        assert types == ["triangle", "line"]
+    triangles = np.concatenate([b.data for b in raw.cells[:k]])
+    # compare corners: meshio's Gmsh reader numbers the points in file order
+    np.testing.assert_array_equal(raw.points[triangles][..., :2], hexagon.points[hexagon.triangles])
+    if suffix != ".msh":
+        np.testing.assert_array_equal(triangles, hexagon.triangles)
+
+
+@pytest.mark.parametrize("suffix", CELL_DATA)
+def test_line_cells_get_fillers_and_triangles_no_marker(tmp_path, hexagon, suffix):
+    meshio_format.write(hexagon, tmp_path / f"m{suffix}")
+    raw = raw_read(tmp_path / f"m{suffix}")
+    for name, per_block in raw.cell_data.items():
+        if name.startswith("gmsh:"):
+            continue
+        for block, values in zip(raw.cells, per_block):
+            values = np.asarray(values)
+            assert len(values) == len(block.data), name
+            if block.type == "triangle" and name == "segment_marker":
+                assert (values == -1).all()
+            elif block.type == "line" and name.startswith("attribute_"):
+                assert np.isnan(values).all(), name
+            elif block.type == "line" and name != "segment_marker":
+                assert (values == -1).all(), name
+
+
+def test_vtu_line_block_holds_the_markers_as_int64(tmp_path, hexagon):
+    meshio_format.write(hexagon, tmp_path / "m.vtu")
+    raw = raw_read(tmp_path / "m.vtu")
+    markers = raw.cell_data["segment_marker"]
+    assert markers[1].dtype == np.int64
+    assert markers[1].tolist() == hexagon.segment_markers.tolist()
+    np.testing.assert_array_equal(raw.cells[1].data, hexagon.segments)
+
+
+def _old_write(mesh, path, suffix):
+    """What :func:`meshio_format.write` wrote before segments were stored."""
+    from hammesh.io.cell_data import triangle_cell_data
+
+    _, fmt, kwargs = meshio_format._FORMATS[suffix]
+    points3 = np.column_stack([mesh.points, np.zeros(len(mesh.points))])
+    cell_data = {k: [v] for k, v in triangle_cell_data(mesh).items()}
+    meshio.write(path, meshio.Mesh(points3, [("triangle", mesh.triangles)], cell_data=cell_data),
+                 file_format=fmt, **kwargs)
+
+
+@pytest.mark.parametrize("suffix", CELL_DATA)
+def test_files_without_segments_are_unchanged(tmp_path, two_cycles, suffix):
+    assert len(two_cycles.segments) == 0
+    new, old = tmp_path / f"new{suffix}", tmp_path / f"old{suffix}"
+    meshio_format.write(two_cycles, new)
+    _old_write(two_cycles, old, suffix)
+    assert new.read_bytes() == old.read_bytes()
+    raw = raw_read(new)
+    assert [b.type for b in raw.cells] == ["triangle"]
+    assert "segment_marker" not in raw.cell_data
+    back = meshio_format.read(new)
+    assert back.segments.shape == (0, 2) and back.segment_markers.shape == (0,)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # meshio's STL binary-size probe
+@pytest.mark.parametrize("suffix", NO_CELL_DATA)
+def test_formats_without_cell_data_stay_triangles_only(tmp_path, hexagon, suffix):
+    meshio_format.write(hexagon, tmp_path / f"m{suffix}")
+    raw = raw_read(tmp_path / f"m{suffix}")
+    assert {b.type for b in raw.cells} == {"triangle"}
+    assert len(meshio_format.read(tmp_path / f"m{suffix}").segments) == 0
+
+
+def _regions_mesh():
+    """Square fan, 8 triangles in cycle order, regions 3 3 7 7 7 3 3 3; boundary markers."""
+    points, triangles = fan((0.0, 0.0), 8)
+    boundary = np.column_stack([np.arange(1, 9), np.arange(1, 9) % 8 + 1])
+    return Mesh(
+        points, triangles, segments=boundary,
+        segment_markers=np.array([4, 4, 2, 2, 2, 4, 0, -3]),
+        triangle_attributes=np.array([[3.0], [3], [7], [7], [7], [3], [3], [3]]),
+    )
+
+
+def fan(center, k, radius=1.0):
+    angles = 2 * np.pi * np.arange(k) / k
+    points = np.vstack([center, np.column_stack([np.cos(angles), np.sin(angles)]) * radius])
+    i = np.arange(1, k + 1)
+    return points, np.column_stack([np.zeros(k, np.int64), i, i % k + 1])
+
+
+def test_gmsh_physical_tags(tmp_path):
+    mesh = _regions_mesh()
+    meshio_format.write(mesh, tmp_path / "m.msh")
+    raw = raw_read(tmp_path / "m.msh")
+    types = [b.type for b in raw.cells]
+    assert types == ["triangle"] * 3 + ["line"] * 4  # runs 3 3 | 7 7 7 | 3 3 3; markers -3 0 2 4
+    physical = [np.unique(p).tolist() for p in raw.cell_data["gmsh:physical"]]
+    assert physical == [[3], [7], [3], [-3], [0], [2], [4]]
+    geometrical = [np.unique(g).tolist() for g in raw.cell_data["gmsh:geometrical"]]
+    assert geometrical == [[1], [2], [3], [1], [2], [3], [4]]
+    for phys, marker in zip(raw.cell_data["gmsh:physical"][3:],
+                            raw.cell_data["segment_marker"][3:]):
+        assert (phys == marker).all()
+    assert raw.point_data["gmsh:dim_tags"].shape == (mesh.n_points, 2)
+    back = meshio_format.read(tmp_path / "m.msh")
+    np.testing.assert_array_equal(back.points, mesh.points)
+    np.testing.assert_array_equal(back.triangles, mesh.triangles)
+    np.testing.assert_array_equal(back.triangle_attributes, mesh.triangle_attributes)
+    assert undirected(back.segments, back.segment_markers) == undirected(mesh.segments, mesh.segment_markers)
+
+
+def test_gmsh_triangles_get_physical_1_without_integral_attribute(tmp_path, hexagon):
+    meshio_format.write(hexagon, tmp_path / "m.msh")  # attributes 0.1 .. 0.9
+    raw = raw_read(tmp_path / "m.msh")
+    assert [b.type for b in raw.cells].count("triangle") == 1
+    assert raw.cell_data["gmsh:physical"][0].tolist() == [1] * 6
+
+
+def test_gmsh_falls_back_to_merged_entities_when_nodes_are_too_few(tmp_path):
+    # 4 points, 6 segments with 6 markers: 7 entities cannot each own a node
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.3, 0.3]])
+    triangles = np.array([[0, 1, 3], [1, 2, 3], [2, 0, 3]])
+    segments = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
+    mesh = Mesh(points, triangles, segments=segments, segment_markers=np.arange(1, 7))
+    meshio_format.write(mesh, tmp_path / "m.msh")
+    raw = raw_read(tmp_path / "m.msh")
+    assert [b.type for b in raw.cells] == ["triangle", "line"]
+    back = meshio_format.read(tmp_path / "m.msh")
+    np.testing.assert_array_equal(back.points, points)
+    np.testing.assert_array_equal(back.triangles, triangles)
+    np.testing.assert_array_equal(back.segments, segments)
+    np.testing.assert_array_equal(back.segment_markers, np.arange(1, 7))  # exact, from segment_marker
+
+
+def test_foreign_gmsh_file_markers_from_physical_tags(tmp_path):
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    cells = [("triangle", np.array([[0, 1, 2], [0, 2, 3]])), ("line", np.array([[0, 1], [1, 2]]))]
+    out = meshio.Mesh(
+        points, cells,
+        point_data={"gmsh:dim_tags": np.array([[1, 1], [2, 1], [2, 1], [2, 1]])},
+        cell_data={"gmsh:physical": [np.array([1, 1]), np.array([8, 8])],
+                   "gmsh:geometrical": [np.array([1, 1]), np.array([1, 1])]},
+    )
+    meshio.write(tmp_path / "f.msh", out, file_format="gmsh", binary=False)
+    back = meshio_format.read(tmp_path / "f.msh")
+    assert back.segment_markers.tolist() == [8, 8]
+    assert undirected(back.segments, back.segment_markers) == [(0, 1, 8), (1, 2, 8)]
+
+
+def test_reader_without_marker_data_gives_zero_markers(tmp_path):
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    cells = [("triangle", np.array([[0, 1, 2]])), ("line", np.array([[0, 1]]))]
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(points, cells))
+    assert meshio_format.read(tmp_path / "m.vtu").segment_markers.tolist() == [0]
+
+
+@st.composite
+def meshes_with_segments(draw):
+    mesh = draw(delaunay_meshes())
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    t = mesh.triangles
+    edges = np.unique(np.sort(np.vstack([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1), axis=0)
+    chosen = edges[rng.random(len(edges)) < draw(st.floats(0.05, 1.0))]
+    if len(chosen) == 0:
+        chosen = edges[:1]
+    chosen = chosen[rng.permutation(len(chosen))]
+    markers = rng.integers(-2, draw(st.integers(1, 12)), size=len(chosen))
+    attributes = mesh.triangle_attributes
+    if attributes.shape[1] and draw(st.booleans()):  # integral region ids: split into runs
+        attributes = np.column_stack([rng.integers(1, 4, len(t)), attributes[:, 1:]]).astype(float)
+    return Mesh(mesh.points, t, segments=chosen, segment_markers=markers, triangle_attributes=attributes)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(mesh=meshes_with_segments(), suffix=st.sampled_from(CELL_DATA))
+def test_segments_round_trip_property(tmp_path, mesh, suffix):
+    path = tmp_path / f"h{suffix}"
+    meshio_format.write(mesh, path)
+    back = meshio_format.read(path)
+    np.testing.assert_array_equal(back.points, mesh.points)
+    np.testing.assert_array_equal(back.triangles, mesh.triangles)
+    np.testing.assert_array_equal(back.triangle_attributes, mesh.triangle_attributes)
+    assert undirected(back.segments, back.segment_markers) == undirected(mesh.segments, mesh.segment_markers)
