@@ -10,7 +10,7 @@ hammesh exceptions with a message). ``cache=True`` stores the machine code in
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 __all__ = [
     "orient_ccw",
@@ -30,7 +30,7 @@ __all__ = [
 ]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def orient_ccw(points, tri):
     """Counter-clockwise copy of ``tri`` (rows with negative area reversed).
 
@@ -41,7 +41,7 @@ def orient_ccw(points, tri):
     out = np.empty_like(tri)
     flipped = np.zeros(m, np.bool_)
     degenerate = np.zeros(m, np.bool_)
-    for t in prange(m):
+    for t in range(m):
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
@@ -67,7 +67,7 @@ def orient_ccw(points, tri):
     return out, flipped.sum(), bad
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def twins_from_neighbors(tri, nbr):
     """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
 
@@ -78,7 +78,7 @@ def twins_from_neighbors(tri, nbr):
     m = tri.shape[0]
     twin = np.full(3 * m, -1, np.int64)
     wrong = np.zeros(m, np.bool_)
-    for t in prange(m):
+    for t in range(m):
         for k in range(3):
             u = nbr[t, k]
             if u < 0:
@@ -102,12 +102,12 @@ def twins_from_neighbors(tri, nbr):
     return twin, -1
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def incenters(points, tri):
     """Incenters ``(|BC| A + |CA| B + |AB| C) / (|BC| + |CA| + |AB|)``, (m, 2)."""
     m = tri.shape[0]
     out = np.empty((m, 2), np.float64)
-    for t in prange(m):
+    for t in range(m):
         ax = points[tri[t, 0], 0]
         ay = points[tri[t, 0], 1]
         bx = points[tri[t, 1], 0]
@@ -429,8 +429,8 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     claim = np.empty(3 * total, np.int64)
     lengths = np.zeros(firsts.shape[0], np.int64)
     prim = np.full(nh, -1, np.int64)  # output row of each slot's first triangle
-    mid_of = dict()  # split slot -> its midpoint vertex (both halves of the edge)
-    y2 = dict()  # split slot h -> output row of (I_t, M, b)
+    mid_of = np.full(nh, -1, np.int64)  # split slot -> its midpoint vertex
+    y2 = np.full(nh, -1, np.int64)  # split slot h -> output row of (I_t, M, b)
     mid_a = np.empty(n_mid_half // 2, np.int64)
     mid_b = np.empty(n_mid_half // 2, np.int64)
     n_mid = 0
@@ -486,7 +486,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     last_exit = 3 * pos + 1  # (a, I_u)
                     pos += 1
                 else:
-                    if h not in mid_of:
+                    if mid_of[h] < 0:
                         mv = n_points + m + n_mid
                         mid_of[h] = mv
                         mid_of[g] = mv
@@ -507,7 +507,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     y2[g] = pos + 1
                     claim[3 * pos + 1] = 3 * (pos + 1) + 1  # (a, M) | (M, a)
                     claim[3 * (pos + 1) + 1] = 3 * pos + 1
-                    if h in y2:  # (M, I_t) | (I_t, M): other half of t's sector
+                    if y2[h] >= 0:  # (M, I_t) | (I_t, M): other half of t's sector
                         claim[3 * pos + 2] = 3 * y2[h]
                         claim[3 * y2[h]] = 3 * pos + 2
                     if prim[g] >= 0:  # (I_u, M) | (M, I_u): other half of u's sector
@@ -527,7 +527,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     return out, parent, kind, lengths, mid_a, mid_b, claim
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def check_twin_claim(tri, claim):
     """Is ``claim`` a valid half-edge pairing of ``tri``? Returns the first bad half-edge or -1.
 
@@ -538,25 +538,19 @@ def check_twin_claim(tri, claim):
     nh = 3 * tri.shape[0]
     if claim.shape[0] != nh:
         return 0
-    bounds = _chunks(nh)
-    nc = bounds.shape[0] - 1
-    first = np.full(nc, -1, np.int64)
-    for c in prange(nc):
-        for h in range(bounds[c], bounds[c + 1]):
-            g = claim[h]
-            if g < 0:
-                continue
-            bad = g >= nh or g == h or claim[g] != h
-            if not bad:
-                t = h // 3
-                k = h - 3 * t
-                u = g // 3
-                j = g - 3 * u
-                bad = tri[t, k] != tri[u, (j + 1) % 3] or tri[t, (k + 1) % 3] != tri[u, j]
-            if bad:
-                first[c] = h
-                break
-    return _first_hit(first)
+    for h in range(nh):
+        g = claim[h]
+        if g < 0:
+            continue
+        if g >= nh or g == h or claim[g] != h:
+            return h
+        t = h // 3
+        k = h - 3 * t
+        u = g // 3
+        j = g - 3 * u
+        if tri[t, k] != tri[u, (j + 1) % 3] or tri[t, (k + 1) % 3] != tri[u, j]:
+            return h
+    return -1
 
 
 @njit(cache=True)
@@ -584,7 +578,7 @@ def consecutive_shared_edges(tri, run_lengths):
     return -1
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def first_cross_run_edge(twin, run_lengths):
     """First half-edge whose twin lies in another run (cycle), or -1."""
     m = twin.shape[0] // 3
@@ -594,37 +588,11 @@ def first_cross_run_edge(twin, run_lengths):
         for _ in range(run_lengths[r]):
             run[t] = r
             t += 1
-    bounds = _chunks(twin.shape[0])
-    nc = bounds.shape[0] - 1
-    first = np.full(nc, -1, np.int64)
-    for c in prange(nc):
-        for h in range(bounds[c], bounds[c + 1]):
-            g = twin[h]
-            if g >= 0 and run[h // 3] != run[g // 3]:
-                first[c] = h
-                break
-    return _first_hit(first)
-
-
-@njit(cache=True)
-def _first_hit(first):
-    """The first per-chunk answer that is not -1 (chunks are in index order)."""
-    for c in range(first.shape[0]):
-        if first[c] >= 0:
-            return first[c]
+    for h in range(twin.shape[0]):
+        g = twin[h]
+        if g >= 0 and run[h // 3] != run[g // 3]:
+            return h
     return -1
-
-
-@njit(cache=True)
-def _chunks(m):
-    """Boundaries splitting range(m) into up to 64 chunks for ``prange`` (enough to
-    balance any usual thread count; a per-chunk result keeps "first index" answers
-    deterministic)."""
-    k = max(1, min(m, 64))
-    out = np.empty(k + 1, np.int64)
-    for i in range(k + 1):
-        out[i] = (m * i) // k
-    return out
 
 
 @njit(cache=True)
@@ -677,9 +645,9 @@ def _angle_area_range(points, tri, lo, hi):
     return best_s2, amin, best_c, amax, min_area, aarea, total
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def angle_area_stats(points, tri):
-    """One pass over the triangles (in parallel chunks).
+    """One pass over the triangles.
 
     Returns ``(min_angle, argmin, max_angle, argmax, min_area, argmin_area, total_area)``
     with angles in radians and signed areas (positive = counter-clockwise).
@@ -689,27 +657,7 @@ def angle_area_stats(points, tri):
     |f|^2)`` (well conditioned there); the largest, opposite the longest side, from
     the smallest cosine. One transcendental call per mesh, not per triangle.
     """
-    bounds = _chunks(tri.shape[0])
-    nc = bounds.shape[0] - 1
-    s2 = np.empty(nc)
-    cs = np.empty(nc)
-    ar = np.empty(nc)
-    tot = np.empty(nc)
-    i_s2 = np.empty(nc, np.int64)
-    i_cs = np.empty(nc, np.int64)
-    i_ar = np.empty(nc, np.int64)
-    for c in prange(nc):
-        r = _angle_area_range(points, tri, bounds[c], bounds[c + 1])
-        s2[c] = r[0]
-        i_s2[c] = r[1]
-        cs[c] = r[2]
-        i_cs[c] = r[3]
-        ar[c] = r[4]
-        i_ar[c] = r[5]
-        tot[c] = r[6]
-    a = np.argmin(s2)
-    b = np.argmin(cs)
-    d = np.argmin(ar)
-    min_ang = np.arcsin(np.sqrt(min(max(s2[a], 0.0), 1.0)))
-    max_ang = np.arccos(min(max(cs[b], -1.0), 1.0))
-    return min_ang, i_s2[a], max_ang, i_cs[b], ar[d], i_ar[d], tot.sum()
+    s2, a, c, b, area, d, total = _angle_area_range(points, tri, 0, tri.shape[0])
+    min_ang = np.arcsin(np.sqrt(min(max(s2, 0.0), 1.0)))
+    max_ang = np.arccos(min(max(c, -1.0), 1.0))
+    return min_ang, a, max_ang, b, area, d, total
