@@ -11,6 +11,7 @@ Based on Arkin, Held, Mitchell, Skiena, "Hamiltonian Triangulations for Fast
 Rendering".
 """
 
+from hammesh import strips
 from hammesh.domain import Domain, read_domain
 from hammesh.errors import (
     FileFormatError,
@@ -40,6 +41,7 @@ __all__ = [
     "Mesh",
     "HamiltonianMesh",
     "KIND_NAMES",
+    "strips",
     "HammeshError",
     "InvalidDomainError",
     "InvalidMeshError",

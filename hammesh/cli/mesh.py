@@ -16,6 +16,7 @@ EXAMPLES = """examples:
   hammesh mesh plate.poly --min-angle 30 --max-area 0.01 -o plate.vtu --report plate.json --png plate.png
   hammesh mesh A.poly --min-angle 25 -o A.msh
   hammesh mesh existing.vtu -o hamiltonian.vtu        # post-process a mesh made elsewhere
+  hammesh mesh plate.poly -q 30 --strip plate.json    # the cycle as one GL triangle strip
 inputs: .poly/.node are domains (meshed first); .vtu .msh .xdmf .obj .ply .ele ... are meshes."""
 
 
@@ -24,6 +25,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", type=Path, help="output mesh (.vtu .msh .xdmf .obj .ply .ele ...)")
     p.add_argument("--report", type=Path, help="write the report JSON here")
     p.add_argument("--png", type=Path, help="draw the mesh and its cycle into this PNG")
+    p.add_argument("--strip", type=Path, help="write the cycle as a GL triangle-strip buffer (.json/.npz)")
     g = p.add_argument_group("quality meshing (domain inputs)")
     g.add_argument("-q", "--min-angle", type=float, help="minimum angle in degrees (0..34)")
     g.add_argument("-a", "--max-area", type=float, help="maximum triangle area (> 0)")
@@ -50,10 +52,15 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidOptionError(
                 f"{args.input} is already a mesh; meshing options ({', '.join(given)}) apply to .poly/.node domains"
             )
-    outputs = Outputs(mesh=args.output, report=args.report, png=args.png)
+    outputs = Outputs(mesh=args.output, report=args.report, png=args.png, strip=args.strip)
     h = run_pipeline(source, options, outputs, mode=args.mode)
     print(summary(h))
-    for label, path in (("mesh", args.output), ("report", args.report), ("picture", args.png)):
+    for label, path in (
+        ("mesh", args.output),
+        ("report", args.report),
+        ("picture", args.png),
+        ("strip", args.strip),
+    ):
         if path is not None:
             print(f"wrote {label}: {path}")
     return 0

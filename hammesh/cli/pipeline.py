@@ -27,6 +27,7 @@ class Outputs:
     mesh: Path | None = None
     report: Path | None = None
     png: Path | None = None
+    strip: Path | None = None
 
     def check(self) -> None:
         """Fail before any work if an output cannot be written in the asked format."""
@@ -38,6 +39,8 @@ class Outputs:
             raise FileFormatError(f"{self.report}: the report is JSON; use a .json file name")
         if self.png is not None and self.png.suffix.lower() != ".png":
             raise FileFormatError(f"{self.png}: the picture is PNG; use a .png file name")
+        if self.strip is not None and self.strip.suffix.lower() not in (".json", ".npz"):
+            raise FileFormatError(f"{self.strip}: the strip buffer is .json or .npz")
 
 
 def load_input(path: Path) -> Domain | Mesh:
@@ -74,7 +77,9 @@ def run_pipeline(
 ) -> HamiltonianMesh:
     """Mesh (if ``source`` is a Domain), make Hamiltonian, verify, then write outputs."""
     outputs.check()
-    steps = _Steps(2 + sum(x is not None for x in (outputs.mesh, outputs.report, outputs.png)))
+    steps = _Steps(
+        2 + sum(x is not None for x in (outputs.mesh, outputs.report, outputs.png, outputs.strip))
+    )
     try:
         if isinstance(source, Domain):
             steps.step("meshing")
@@ -95,6 +100,18 @@ def run_pipeline(
 
             steps.step(f"drawing {outputs.png.name}")
             plot_cycle(h, outputs.png)
+            steps.done()
+        if outputs.strip is not None:
+            from hammesh.strips import encode, write_strip
+
+            steps.step(f"writing {outputs.strip.name}")
+            # the cycle order itself: one strip per cycle (swaps where turns repeat)
+            strip = encode(h, method="order")
+            write_strip(strip, outputs.strip, extra={"method": "order"})
+            h.report["strip"] = {
+                "strips": int(strip.n_strips),
+                "indices_per_triangle": float(strip.indices_per_triangle),
+            }
             steps.done()
         h.report.setdefault("seconds", {})["write"] = time.perf_counter() - t0
         if outputs.report is not None:

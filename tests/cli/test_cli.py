@@ -128,3 +128,21 @@ def test_demo_writes_its_three_files(tmp_path: Path) -> None:
     report = json.loads((d / "report.json").read_text())
     assert report["verified"] and report["midpoints"] >= 1  # the plate has an interface loop
     assert run_cli("check", str(d / "mesh.vtu")).returncode == 0
+
+
+def test_mesh_strip_is_one_strip_that_decodes_to_the_mesh(tmp_path: Path) -> None:
+    from hammesh.strips import decode_gl_strip
+
+    out, strip = tmp_path / "m.vtu", tmp_path / "m.json"
+    assert main(["mesh", str(DATA / "A.poly"), "-q", "30", "-o", str(out), "--strip", str(strip)]) == 0
+    doc = json.loads(strip.read_text())
+    assert doc["primitive"] == "triangle_strip" and doc["strips"] == 1
+    m = hammesh.read_mesh(out)
+    assert doc["triangles"] == m.n_triangles
+    tris = decode_gl_strip(np.array(doc["indices"], dtype=np.int64), doc["restart_index"])
+
+    def canon(t):  # same oriented triangle up to rotation
+        i = int(np.argmin(t))
+        return tuple(np.roll(t, -i).tolist())
+
+    assert sorted(canon(t) for t in tris) == sorted(canon(t) for t in m.triangles)

@@ -1,0 +1,182 @@
+"""Checked input for the strip encoders: a triangle mesh and its dual graph.
+
+Any triangle mesh is accepted, planar ``(n, 2)`` or a surface in space ``(n, 3)``; each
+triangle's winding (the order of its row) is kept, and the strips reproduce it.  Two
+triangles are dual neighbours when they share an edge in opposite directions (the
+half-edge pairing of :func:`hammesh._kernels.half_edge_twins`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Union
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from hammesh import _kernels
+from hammesh.errors import InvalidMeshError
+from hammesh.mesh import HamiltonianMesh, Mesh
+
+__all__ = ["DualMesh", "dual_mesh", "oriented_key"]
+
+MeshLike = Union[Mesh, HamiltonianMesh]
+
+
+@dataclass(frozen=True, eq=False)
+class DualMesh:
+    """A validated triangle mesh with its half-edge pairing and dual components.
+
+    Attributes
+    ----------
+    points : (n, 2) or (n, 3) float64
+    triangles : (m, 3) int64
+        As given (row order and winding kept).
+    twin : (3 m,) int64
+        ``twin[h]`` is the half-edge opposite ``h = 3 t + k`` (from ``triangles[t, k]``
+        to ``triangles[t, (k + 1) % 3]``), or -1 on the boundary.
+    component : (m,) int64
+        Connected piece of the dual graph each triangle belongs to.
+    n_components : int
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    twin: np.ndarray
+    component: np.ndarray
+    n_components: int
+
+    @property
+    def n_triangles(self) -> int:
+        return int(self.triangles.shape[0])
+
+    @property
+    def neighbor_triangles(self) -> np.ndarray:
+        """``(m, 3) int64``: the triangle across each edge ``k`` of each row, or -1."""
+        tw = self.twin.reshape(-1, 3)
+        return np.where(tw >= 0, tw // 3, -1)
+
+
+def _edge_problem(tri: np.ndarray, bad: int) -> str:
+    t, k = divmod(int(bad), 3)
+    a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
+    lo, hi = min(a, b), max(a, b)
+    e0 = np.minimum(tri, np.roll(tri, -1, axis=1))
+    e1 = np.maximum(tri, np.roll(tri, -1, axis=1))
+    users = np.flatnonzero(((e0 == lo) & (e1 == hi)).any(axis=1))
+    shown = ", ".join(str(int(u)) for u in users[:5]) + (", ..." if len(users) > 5 else "")
+    if len(users) > 2:
+        return (
+            f"non-manifold edge ({a}, {b}): shared by {len(users)} triangles ({shown}); "
+            "a strip can only cross an edge between two triangles"
+        )
+    return (
+        f"edge ({a}, {b}) is used in the same direction by triangles {shown}: they are "
+        "oriented inconsistently (or overlap); orient the mesh consistently first"
+    )
+
+
+def dual_mesh(mesh: MeshLike) -> DualMesh:
+    """Check ``mesh`` and build its dual graph.
+
+    Parameters
+    ----------
+    mesh : Mesh or HamiltonianMesh
+        ``points (n, 2) or (n, 3)``, ``triangles (m, 3)`` integer, any consistent winding.
+
+    Returns
+    -------
+    DualMesh
+
+    Raises
+    ------
+    InvalidMeshError
+        Naming the item: shapes, empty mesh, non-finite point, index out of range, a
+        triangle with a repeated vertex or zero area, an edge shared by three or more
+        triangles, two neighbours with inconsistent winding.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammesh.mesh import Mesh
+    >>> d = dual_mesh(Mesh(np.array([[0., 0], [1, 0], [1, 1], [0, 1]]), np.array([[0, 1, 2], [0, 2, 3]])))
+    >>> d.neighbor_triangles.tolist(), d.n_components
+    ([[-1, -1, 1], [0, -1, -1]], 1)
+    """
+    pts = np.asarray(mesh.points)
+    tri = np.asarray(mesh.triangles)
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3):
+        raise InvalidMeshError(f"points must have shape (n, 2) or (n, 3), got {pts.shape}")
+    if tri.ndim != 2 or tri.shape[1] != 3:
+        raise InvalidMeshError(f"triangles must have shape (m, 3), got {tri.shape}")
+    if len(tri) == 0:
+        raise InvalidMeshError("the mesh has no triangles")
+    if not np.issubdtype(tri.dtype, np.integer):
+        raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    finite = np.isfinite(pts).all(axis=1)
+    if not finite.all():
+        i = int(np.argmin(finite))
+        raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    n = len(pts)
+    out = (tri < 0) | (tri >= n)
+    if out.any():
+        t = int(np.argmax(out.any(axis=1)))
+        raise InvalidMeshError(
+            f"triangle {t} references vertex {int(tri[t][out[t]][0])} but there are only {n} points"
+        )
+    repeated = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
+    if repeated.any():
+        t = int(np.argmax(repeated))
+        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} repeats a vertex (degenerate face)")
+    p = pts[tri]
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    if pts.shape[1] == 2:
+        zero = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) == 0.0
+    else:
+        zero = ~np.cross(u, v).any(axis=1)
+    if zero.any():
+        t = int(np.argmax(zero))
+        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area (degenerate face)")
+    twin, bad = _kernels.half_edge_twins(tri, n)
+    if bad >= 0:
+        raise InvalidMeshError(_edge_problem(tri, int(bad)))
+    m = len(tri)
+    h = np.flatnonzero(twin >= 0)
+    graph = coo_matrix((np.ones(len(h), dtype=np.int8), (h // 3, twin[h] // 3)), shape=(m, m))
+    n_comp, label = connected_components(graph, directed=False)
+    return DualMesh(
+        points=pts,
+        triangles=tri,
+        twin=twin,
+        component=label.astype(np.int64),
+        n_components=int(n_comp),
+    )
+
+
+def oriented_key(triangles: np.ndarray) -> np.ndarray:
+    """Oriented triangles as sorted canonical rows (each rotated to start at its least vertex).
+
+    Two arrays of triangles are the same oriented triangles (as multisets) iff their keys
+    are equal; a reversed triangle gets a different key.
+
+    Parameters
+    ----------
+    triangles : (m, 3) int
+
+    Returns
+    -------
+    (m, 3) int64, rows sorted lexicographically.
+
+    Examples
+    --------
+    >>> oriented_key(np.array([[2, 0, 1], [5, 4, 3]])).tolist()
+    [[0, 1, 2], [3, 5, 4]]
+    """
+    tri = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    r = np.argmin(tri, axis=1)
+    rows = tri[np.arange(len(tri))[:, None], (r[:, None] + np.arange(3)) % 3]
+    order = np.lexsort((rows[:, 2], rows[:, 1], rows[:, 0]))
+    return rows[order]

@@ -1,0 +1,134 @@
+"""Shared meshes and independent helpers for the strip tests (pure numpy / Python)."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.mesh import Mesh
+
+SQUARE = [[0, 0], [1, 0], [1, 1], [0, 1]]
+
+
+@functools.lru_cache(maxsize=None)
+def square_mesh(max_area: float = 0.01) -> Mesh:
+    return hammesh.quality_mesh(hammesh.Domain.from_polygon(SQUARE), min_angle=30, max_area=max_area)
+
+
+@functools.lru_cache(maxsize=None)
+def square_hamiltonian(max_area: float = 0.01) -> hammesh.HamiltonianMesh:
+    return hammesh.hamiltonian(square_mesh(max_area))
+
+
+def grid_mesh(nx: int, ny: int, z: bool = False) -> Mesh:
+    """Structured grid split into triangles (counter-clockwise), optionally lifted to 3D."""
+    xs, ys = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0))
+    pts = np.c_[xs.ravel(), ys.ravel()]
+    v = lambda i, j: j * (nx + 1) + i  # noqa: E731
+    tri = []
+    for j in range(ny):
+        for i in range(nx):
+            a, b, c, d = v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)
+            tri += [[a, b, c], [a, c, d]]
+    if z:
+        pts = np.c_[pts, np.sin(pts[:, 0]) * np.cos(pts[:, 1])]
+    return Mesh(pts, np.array(tri, dtype=np.int64))
+
+
+def torus_mesh(nu: int = 12, nv: int = 8) -> Mesh:
+    """Closed 3D surface (no boundary), outward winding."""
+    u, v = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv, indexing="ij")
+    R, r = 2.0, 0.7
+    pts = np.c_[((R + r * np.cos(v)) * np.cos(u)).ravel(), ((R + r * np.cos(v)) * np.sin(u)).ravel(), (r * np.sin(v)).ravel()]
+    idx = lambda i, j: (i % nu) * nv + (j % nv)  # noqa: E731
+    tri = []
+    for i in range(nu):
+        for j in range(nv):
+            a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+            tri += [[a, b, c], [a, c, d]]
+    return Mesh(pts, np.array(tri, dtype=np.int64))
+
+
+def fan_mesh(k: int) -> Mesh:
+    """``k`` counter-clockwise triangles around vertex 0 (open fan, k <= 7)."""
+    ang = np.linspace(0, 1.5 * np.pi, k + 1)
+    pts = np.r_[[[0.0, 0.0]], np.c_[np.cos(ang), np.sin(ang)]]
+    tri = [[0, i, i + 1] for i in range(1, k + 1)]
+    return Mesh(pts, np.array(tri, dtype=np.int64))
+
+
+def zigzag_mesh(k: int) -> Mesh:
+    """``k`` triangles of a zig-zag whose GL strip is 0, 1, ..., k + 1 (no swap)."""
+    pts = np.array([[i // 2, 1 - i % 2] for i in range(k + 2)], dtype=float)
+    tri = []
+    for i in range(k):
+        t = [i, i + 1, i + 2]
+        if i % 2:
+            t = [i + 1, i, i + 2]
+        tri.append(t)
+    return Mesh(pts, np.array(tri, dtype=np.int64))
+
+
+def oriented_set(tri) -> list[tuple[int, int, int]]:
+    """Sorted list of triangles, each rotated to start at its least vertex (independent of hammesh)."""
+    out = []
+    for a, b, c in np.asarray(tri).tolist():
+        r = [a, b, c]
+        i = r.index(min(r))
+        out.append(tuple(r[i:] + r[:i]))
+    return sorted(out)
+
+
+def gl_decode_reference(indices, restart=None) -> list[tuple[int, int, int]]:
+    """Plain-Python OpenGL GL_TRIANGLE_STRIP semantics (for cross-checking the decoder)."""
+    out, strip = [], []
+    for x in list(indices) + ([restart] if restart is not None else []):
+        if restart is not None and x == restart:
+            for i in range(len(strip) - 2):
+                a, b, c = strip[i : i + 3]
+                if len({a, b, c}) == 3:
+                    out.append((b, a, c) if i % 2 else (a, b, c))
+            strip = []
+        else:
+            strip.append(int(x))
+    if restart is None:
+        for i in range(len(strip) - 2):
+            a, b, c = strip[i : i + 3]
+            if len({a, b, c}) == 3:
+                out.append((b, a, c) if i % 2 else (a, b, c))
+    return out
+
+
+def random_path_cover(nbr: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Random partition of the dual graph into paths (random walks on unvisited triangles)."""
+    m = len(nbr)
+    seen = np.zeros(m, bool)
+    order, starts = [], [0]
+    for s in rng.permutation(m):
+        if seen[s]:
+            continue
+        t = int(s)
+        seen[t] = True
+        order.append(t)
+        while True:
+            cand = [int(u) for u in nbr[t] if u >= 0 and not seen[u]]
+            if not cand:
+                break
+            t = cand[rng.integers(len(cand))]
+            seen[t] = True
+            order.append(t)
+        starts.append(len(order))
+    return np.array(order), np.array(starts)
+
+
+@pytest.fixture(scope="session")
+def square():
+    return square_mesh()
+
+
+@pytest.fixture(scope="session")
+def square_ham():
+    return square_hamiltonian()

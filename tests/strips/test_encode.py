@@ -1,0 +1,163 @@
+"""Scalable encoder: round trips on planar and 3D meshes, Hamiltonian meshes as one strip, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.spatial import Delaunay
+
+import hammesh
+from hammesh.errors import InvalidMeshError, InvalidOptionError
+from hammesh.mesh import Mesh
+from hammesh.strips.dual import dual_mesh
+from hammesh.strips.encode import encode, encode_generalized, greedy_paths
+from hammesh.strips.generalized import decode_generalized
+from hammesh.strips.gl import decode_gl_strip
+
+from .conftest import grid_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
+
+
+def delaunay_mesh(seed: int, n: int, lift: bool = False) -> Mesh:
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    p = pts[tri]
+    cr = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0])
+    tri[cr < 0] = tri[cr < 0][:, ::-1]
+    if lift:
+        pts = np.c_[pts, pts[:, 0] ** 2 + pts[:, 1] ** 2]
+    return Mesh(pts, tri)
+
+
+def assert_round_trip(mesh, strip):
+    decoded = decode_gl_strip(strip.indices, strip.restart_index)
+    assert oriented_set(decoded) == oriented_set(mesh.triangles)
+    S = strip.n_strips
+    joins = (S - 1) if strip.restart_index is not None else 2 * (S - 1)
+    assert len(strip.indices) == mesh.n_triangles + 2 * S + strip.n_swaps + joins
+
+
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(3, 60),
+    st.booleans(),
+    st.sampled_from(["restart", "stitch"]),
+)
+def test_greedy_round_trip_random_delaunay(seed, n, lift, join):
+    mesh = delaunay_mesh(seed, n, lift)
+    assert_round_trip(mesh, encode(mesh, join=join))
+    g = encode_generalized(mesh)
+    assert oriented_set(decode_generalized(g)) == oriented_set(mesh.triangles)
+
+
+@pytest.mark.parametrize(
+    "mesh",
+    [square_mesh(), grid_mesh(7, 5), grid_mesh(6, 6, z=True), torus_mesh(), square_hamiltonian().as_mesh()],
+    ids=["square", "grid", "surface", "torus", "hamiltonian-as-mesh"],
+)
+@pytest.mark.parametrize("join", ["restart", "stitch"])
+def test_round_trip_corpus(mesh, join):
+    s = encode(mesh, join=join)
+    assert_round_trip(mesh, s)
+    assert s.n_triangles == mesh.n_triangles
+
+
+def test_greedy_paths_partition_the_dual():
+    d = dual_mesh(square_mesh())
+    order, starts = greedy_paths(d)
+    assert sorted(order.tolist()) == list(range(d.n_triangles))
+    nb = d.neighbor_triangles
+    for a, b in zip(starts[:-1], starts[1:]):
+        for i in range(a, b - 1):
+            assert order[i + 1] in nb[order[i]]
+
+
+def test_hamiltonian_mesh_is_one_strip_per_cycle():
+    h = square_hamiltonian()
+    s = encode(h)
+    assert s.n_strips == len(h.components) == 1
+    assert len(s.indices) == h.n_triangles + 2 + s.n_swaps
+    assert_round_trip(h, s)
+    # two cycles: two strips
+    h2 = hammesh.hamiltonian(
+        hammesh.quality_mesh(
+            hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30, max_area=0.05
+        )
+    )
+    pts = np.r_[h2.points, h2.points + 5]
+    tri = np.r_[h2.triangles, h2.triangles + len(h2.points)]
+    n = len(tri) // 2
+    two = hammesh.HamiltonianMesh(
+        points=pts,
+        triangles=tri,
+        segments=np.zeros((0, 2), np.int64),
+        segment_markers=np.zeros(0, np.int64),
+        components=np.array([n, n]),
+        position=np.r_[np.arange(n), np.arange(n)],
+        parent=np.zeros(2 * n, np.int64),
+        kind=np.zeros(2 * n, np.int8),
+        triangle_attributes=np.zeros((2 * n, 0)),
+    )
+    for join in ("restart", "stitch"):
+        s = encode(two, join=join)
+        assert s.n_strips == 2
+        assert_round_trip(two, s)
+
+
+def test_order_method_on_a_plain_mesh_in_cycle_order():
+    h = square_hamiltonian()
+    s = encode(h.as_mesh(), method="order")
+    assert s.n_strips == 1
+
+
+def test_several_components_are_several_strips():
+    m = grid_mesh(3, 2)
+    two = Mesh(np.r_[m.points, m.points + 10], np.r_[m.triangles, m.triangles + len(m.points)])
+    s = encode(two)
+    assert s.n_strips >= 2
+    assert dual_mesh(two).n_components == 2
+    assert_round_trip(two, s)
+
+
+# --- bad input: clear errors naming the item ---------------------------------------------
+
+
+def test_non_manifold_edge_is_named():
+    pts = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]])
+    tri = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    with pytest.raises(InvalidMeshError, match=r"non-manifold edge \(0, 1\)"):
+        encode(Mesh(pts, tri))
+
+
+def test_inconsistent_winding_is_named():
+    pts = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    with pytest.raises(InvalidMeshError, match="oriented inconsistently"):
+        encode(Mesh(pts, np.array([[0, 1, 2], [0, 2, 3][::-1]])))
+
+
+@pytest.mark.parametrize(
+    "tri,pts,match",
+    [
+        ([[0, 1, 1]], [[0, 0], [1, 0], [0, 1]], "triangle 0 .* repeats a vertex"),
+        ([[0, 1, 2], [1, 3, 2]], [[0, 0], [1, 0], [0, 1], [2, -1]], "triangle 1 .* zero area"),
+        ([[0, 1, 5]], [[0, 0], [1, 0], [0, 1]], "references vertex 5"),
+        ([[0, 1, 2]], [[0, 0, 0, 0]], "shape"),
+        ([[0, 1, 2]], [[0, 0], [1, np.nan], [0, 1]], "point 1"),
+    ],
+)
+def test_bad_meshes(tri, pts, match):
+    with pytest.raises(InvalidMeshError, match=match):
+        encode(Mesh(np.array(pts, dtype=float), np.array(tri)))
+
+
+def test_degenerate_3d_face():
+    pts = np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]])
+    with pytest.raises(InvalidMeshError, match="zero area"):
+        encode(Mesh(pts, np.array([[0, 1, 2]])))
+
+
+def test_bad_method():
+    with pytest.raises(InvalidOptionError):
+        encode(square_mesh(), method="magic")
