@@ -135,6 +135,8 @@ def verify_cycle_mesh(
         )
 
     amin, tmin, amax, _, area_min, tarea, total = _kernels.angle_area_stats(pts, tri)
+    if tmin < 0 or not (math.isfinite(amin) and math.isfinite(total)):
+        _fail("angles and areas are not finite (coordinates too large or too small)")
     if not area_min > 0:
         _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
 

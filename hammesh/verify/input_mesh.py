@@ -7,6 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hammesh import _kernels
+from hammesh.domain.validate import MAX_ABS_COORDINATE
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
 
@@ -110,6 +111,13 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
     if bad.any():
         i = int(np.argmax(bad))
         raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    big = np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE
+    if big.any():
+        i = int(np.argmax(big))
+        raise InvalidMeshError(
+            f"point {i} {pts[i].tolist()} is beyond |x| <= {MAX_ABS_COORDINATE:g} "
+            "(squared lengths would overflow)"
+        )
     n = len(pts)
     if tri.min() < 0 or tri.max() >= n:
         out = (tri < 0) | (tri >= n)

@@ -24,6 +24,7 @@ def mesh(points=SQ, triangles=TWO, **kw) -> hammesh.Mesh:
     "m, needle",
     [
         (mesh(points=[[0, 0], [1, 0], [1, np.nan], [0, 1]]), "point 2"),
+        (mesh(points=[[0, 0], [1, 0], [1, 1e200], [0, 1]]), "point 2"),
         (mesh(triangles=[[0, 1, 2], [0, 2, 7]]), "vertex 7"),
         (mesh(triangles=[[0, 1, 2], [0, -1, 3]]), "vertex -1"),
         (mesh(triangles=[[0, 1, 2], [0, 2, 2]]), "triangle 1"),
