@@ -11,7 +11,7 @@ Based on Arkin, Held, Mitchell, Skiena, "Hamiltonian Triangulations for Fast
 Rendering".
 """
 
-from hammesh import strips
+from hammesh import polygon, strips
 from hammesh.domain import Domain, read_domain
 from hammesh.errors import (
     FileFormatError,
@@ -42,6 +42,7 @@ __all__ = [
     "HamiltonianMesh",
     "KIND_NAMES",
     "strips",
+    "polygon",
     "HammeshError",
     "InvalidDomainError",
     "InvalidMeshError",

@@ -1,0 +1,418 @@
+"""Hamiltonian triangulations with Steiner points (Arkin et al., Theorem 2.3).
+
+Given a decomposition of a simple polygon into ``k > 1`` convex pieces, a Hamiltonian
+*cycle* triangulation needs ``k - 1`` Steiner points and a Hamiltonian *path*
+triangulation ``k - 2``, and the rectilinear comb (Figure 7) shows this is tight.
+
+Construction (the proof of Thm 2.3): the pieces and the diagonals between them form a
+tree.  One Steiner point goes at the midpoint of every diagonal.  Two *root* pieces
+sharing a diagonal are fanned from its Steiner point (the triangles around it form a
+cycle); every other piece is fanned from the Steiner point on the diagonal to its
+parent, and its fan is spliced into the parent's fan between the two triangles on
+that diagonal.  For a *path*, one Steiner point is saved: the paper slides the root
+point onto a vertex; here, equivalently, a leaf piece is fanned from an endpoint of
+its diagonal instead, which cuts the cycle open there (this works whatever other
+diagonals meet at that endpoint).  A convex polygon (``k = 1``) needs no Steiner point
+for a path and one (its centroid) for a cycle.
+
+Decomposition: Hertel--Mehlhorn (drop every diagonal of a triangulation whose removal
+keeps the two merged angles strictly convex), at most 4 times the minimum number of
+pieces; a few removal orders are tried and the fewest pieces kept.  Keil's optimal
+dynamic program is not implemented, so ``k`` may exceed the minimum and so may the
+Steiner count.  Vertices with a straight angle are left out of the decomposition (they
+lie on piece sides), so every piece is strictly convex and no fan triangle is flat.
+
+Complexity: ``O(n)`` after the triangulation (``O(n log n)``, Triangle).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hammesh.errors import InvalidOptionError
+from hammesh.polygon._polygon import Polygon, as_polygon
+from hammesh.polygon._predicates import orient
+from hammesh.polygon._triangulate import triangle_neighbors, triangulate_polygon
+
+__all__ = ["steiner_hamiltonian", "steiner_hamiltonian_result", "convex_decomposition",
+           "SteinerResult", "KINDS"]
+
+#: Accepted values of ``kind``.
+KINDS = ("cycle", "path")
+
+
+@dataclass(frozen=True, eq=False)
+class SteinerResult:
+    """Output of :func:`steiner_hamiltonian_result`.
+
+    Attributes
+    ----------
+    points : (n + s, 2) float64
+        The input vertices (input order) followed by the ``s`` Steiner points.
+    triangles : (m, 3) int64
+        Counter-clockwise, in order along the Hamiltonian cycle or path.
+    pieces : list of (k_i,) int64
+        The convex decomposition used (input vertex indices, counter-clockwise).
+    kind : str
+        ``"cycle"`` or ``"path"``.
+    n_steiner : int
+        ``s``: ``k - 1`` for a cycle, ``k - 2`` for a path (``k > 1``).
+    method : str
+        The decomposition algorithm (``"hertel-mehlhorn"``).
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    pieces: list
+    kind: str
+    n_steiner: int
+    method: str = "hertel-mehlhorn"
+
+    @property
+    def k(self) -> int:
+        """Number of convex pieces."""
+        return len(self.pieces)
+
+
+def steiner_hamiltonian(points, kind: str = "cycle") -> tuple[np.ndarray, np.ndarray]:
+    """A Hamiltonian cycle or path triangulation of a simple polygon with Steiner points.
+
+    Parameters
+    ----------
+    points : (n, 2) array_like of float
+        Simple polygon, clockwise or counter-clockwise.
+    kind : {"cycle", "path"}
+        ``"cycle"``: the dual contains a Hamiltonian cycle, ``k - 1`` Steiner points
+        (1 for a convex polygon); ``"path"``: a Hamiltonian path, ``max(k - 2, 0)``.
+
+    Returns
+    -------
+    Q : (n + s, 2) float64
+        The input points followed by the ``s`` Steiner points (interior, at midpoints
+        of decomposition diagonals).
+    T : (m, 3) int64
+        Counter-clockwise triangles indexing ``Q``, in cycle / path order (for a cycle
+        the last row also shares an edge with the first).
+
+    Raises
+    ------
+    InvalidDomainError
+        ``points`` is not a simple polygon.
+    InvalidOptionError
+        Unknown ``kind``.
+
+    Examples
+    --------
+    >>> points = [[0, 0], [2, -1], [4, 0], [4, 4], [2, 1], [0, 4]]   # two convex pieces
+    >>> Q, T = steiner_hamiltonian(points, kind="cycle")
+    >>> len(Q), len(T)      # one Steiner point, the triangles around it form a cycle
+    (7, 6)
+    >>> Q, T = steiner_hamiltonian(points, kind="path")
+    >>> len(Q), len(T)
+    (6, 4)
+    """
+    res = steiner_hamiltonian_result(points, kind)
+    return res.points, res.triangles
+
+
+def steiner_hamiltonian_result(points, kind: str = "cycle") -> SteinerResult:
+    """:func:`steiner_hamiltonian` with the decomposition used (``k``, pieces, method)."""
+    if kind not in KINDS:
+        raise InvalidOptionError(f"kind must be one of {', '.join(map(repr, KINDS))}, got {kind!r}")
+    poly = as_polygon(points)
+    pieces, diagonals = _decompose(poly)
+    pts, tri = _construct(poly, pieces, diagonals, kind)
+    # internal -> input indices for polygon vertices, Steiner points keep theirs
+    n = poly.n
+    remap = np.concatenate([poly.order, np.arange(n, len(pts))])
+    Q = np.concatenate([np.asarray(points, dtype=np.float64).reshape(n, 2), pts[n:]])
+    return SteinerResult(points=Q, triangles=remap[tri], kind=kind, n_steiner=len(pts) - n,
+                         pieces=[poly.order[np.asarray(p, dtype=np.int64)] for p in pieces])
+
+
+def convex_decomposition(points) -> list[np.ndarray]:
+    """Hertel--Mehlhorn convex decomposition of a simple polygon.
+
+    Returns
+    -------
+    list of (k_i,) int64
+        The pieces as counter-clockwise cycles of input vertex indices; vertices with a
+        straight angle appear on the piece sides they lie on.
+    """
+    poly = as_polygon(points)
+    pieces, _ = _decompose(poly)
+    return [poly.order[np.asarray(p, dtype=np.int64)] for p in pieces]
+
+
+# ----------------------------------------------------------------------------- decomposition
+
+def _corners(poly: Polygon) -> np.ndarray:
+    p = poly.points
+    n = poly.n
+    keep = [k for k in range(n)
+            if orient(p[k - 1, 0], p[k - 1, 1], p[k, 0], p[k, 1],
+                      p[(k + 1) % n, 0], p[(k + 1) % n, 1]) != 0]
+    return np.array(keep, dtype=np.int64)
+
+
+def _decompose(poly: Polygon):
+    """Pieces (lists of internal vertex indices, CCW) and their diagonals.
+
+    Returns ``(pieces, diagonals)`` with ``diagonals`` a dict ``(u, v) -> (piece, side)``
+    for every directed piece side ``u -> v`` that is a diagonal (``u``, ``v`` internal).
+    """
+    corners = _corners(poly)
+    m = len(corners)
+    cp = np.ascontiguousarray(poly.points[corners])
+    tri = triangulate_polygon(cp)
+    nb = triangle_neighbors(tri)
+    best = None
+    t_idx, k_idx = np.nonzero(nb >= 0)
+    keep = t_idx < nb[t_idx, k_idx]
+    t_idx, k_idx = t_idx[keep], k_idx[keep]
+    a = tri[t_idx, k_idx]
+    b = tri[t_idx, (k_idx + 1) % 3]
+    length = np.hypot(*(cp[a] - cp[b]).T)
+    orders = [np.arange(len(a)), np.arange(len(a))[::-1], np.argsort(-length, kind="stable"),
+              np.argsort(length, kind="stable")]
+    for order in orders:
+        faces = _hertel_mehlhorn(cp, tri, nb, t_idx[order], k_idx[order])
+        if best is None or len(faces) < len(best):
+            best = faces
+    # expand: corner indices -> internal vertex indices, with straight-angle vertices
+    n = poly.n
+    pieces = []
+    diagonals = {}
+    for f, face in enumerate(best):
+        verts = []
+        for s in range(len(face)):
+            u, v = face[s], face[(s + 1) % len(face)]
+            cu, cv = int(corners[u]), int(corners[v])
+            verts.append(cu)
+            if (v - u) % m == 1:  # polygon side: include the straight vertices on it
+                w = (cu + 1) % n
+                while w != cv:
+                    verts.append(w)
+                    w = (w + 1) % n
+            else:
+                diagonals[(cu, cv)] = f
+        pieces.append(verts)
+    return pieces, diagonals
+
+
+def _hertel_mehlhorn(cp, tri, nb, t_idx, k_idx):
+    """Faces (lists of corner indices, CCW) after dropping inessential diagonals."""
+    m = len(tri)
+    he_org = tri.reshape(-1)                      # half-edge 3t+k: tri[t,k] -> tri[t,k+1]
+    nxt = (np.arange(3 * m) // 3) * 3 + (np.arange(3 * m) % 3 + 1) % 3
+    prv = (np.arange(3 * m) // 3) * 3 + (np.arange(3 * m) % 3 + 2) % 3
+    nxt, prv = nxt.tolist(), prv.tolist()
+    org = he_org.tolist()
+    twin = [-1] * (3 * m)
+    for t in range(m):
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0:
+                a = tri[t, k]
+                kk = int(np.flatnonzero(tri[u] == tri[t, (k + 1) % 3])[0])
+                assert tri[u, (kk + 1) % 3] == a
+                twin[3 * t + k] = 3 * int(u) + kk
+    alive = [True] * (3 * m)
+
+    def convex(w, a, y):
+        return orient(cp[w, 0], cp[w, 1], cp[a, 0], cp[a, 1], cp[y, 0], cp[y, 1]) > 0
+
+    for t, k in zip(t_idx.tolist(), k_idx.tolist()):
+        h = 3 * t + k
+        g = twin[h]
+        a, b = org[h], org[g]
+        w = org[prv[h]]            # w -> a on h's face
+        y = org[nxt[nxt[g]]]       # a -> y on g's face: next(g) is a -> y
+        z = org[prv[g]]            # z -> b on g's face
+        c = org[nxt[nxt[h]]]       # b -> c on h's face
+        if convex(w, a, y) and convex(z, b, c):
+            ph, nh, pg, ng = prv[h], nxt[h], prv[g], nxt[g]
+            nxt[ph], prv[ng] = ng, ph
+            nxt[pg], prv[nh] = nh, pg
+            alive[h] = alive[g] = False
+    faces = []
+    seen = [False] * (3 * m)
+    for h in range(3 * m):
+        if not alive[h] or seen[h]:
+            continue
+        face, e = [], h
+        while not seen[e]:
+            seen[e] = True
+            face.append(org[e])
+            e = nxt[e]
+        faces.append(face)
+    return faces
+
+
+# ----------------------------------------------------------------------------- construction
+
+def _construct(poly: Polygon, pieces, diagonals, kind):
+    """Steiner points and ordered triangles, internal indices (Steiner points from n).
+
+    For a path, the Steiner-saving step needs a Hamiltonian path of one piece starting
+    on a given side; if a piece with straight-angle vertices has none, the next leaf is
+    tried, and as a last resort the cycle (k - 1 Steiner points) is returned as path.
+    """
+    P = poly.points
+    n = poly.n
+    k = len(pieces)
+    if k == 1:
+        verts = pieces[0]
+        if kind == "path":
+            tri = _fan(P, verts, verts[0])
+            if tri is not None:
+                return P, np.array(tri, dtype=np.int64)
+        corners = _corners(poly)
+        centroid = P[corners].mean(axis=0)
+        tri = [(n, verts[s], verts[(s + 1) % len(verts)]) for s in range(len(verts))]
+        return np.vstack([P, centroid]), np.array(tri, dtype=np.int64)
+
+    # piece adjacency through diagonals: (u, v) side of piece f, (v, u) side of piece g
+    adj = [[] for _ in range(k)]
+    for (u, v), f in diagonals.items():
+        adj[f].append(diagonals[(v, u)])
+    root_a = max(range(k), key=lambda f: (len(adj[f]), -f))
+    root_b = min(adj[root_a])
+    (u0, v0), = [(u, v) for (u, v), f in diagonals.items()
+                 if f == root_a and diagonals[(v, u)] == root_b]
+    if kind == "path" and k == 2:  # no Steiner point: a path through both pieces
+        fa = _fan(P, pieces[root_a], u0, order_from=v0)   # starts on (u0, v0)
+        fb = _fan(P, pieces[root_b], u0, order_from=v0)   # starts on (v0, u0)
+        if fa is not None and fb is not None:
+            return P, np.array(fb[::-1] + fa, dtype=np.int64)
+    parent = {root_a: -1, root_b: -1}
+    stack = [root_a, root_b]
+    while stack:
+        f = stack.pop()
+        for g in adj[f]:
+            if g not in parent:
+                parent[g] = f
+                stack.append(g)
+    leaves = [g for g in range(k) if len(adj[g]) == 1 and g not in (root_a, root_b)]
+    candidates = leaves if kind == "path" else []
+    for saved in candidates + [None]:
+        out = _spliced_cycle(P, pieces, diagonals, parent, root_a, root_b, (u0, v0), saved)
+        if out is not None:
+            return out
+    raise AssertionError("unreachable: the cycle construction always succeeds")  # pragma: no cover
+
+
+def _spliced_cycle(P, pieces, diagonals, parent, root_a, root_b, e0, saved):
+    """The cycle construction; with ``saved`` (a leaf piece) cut open into a path there."""
+    n = len(P)
+    steiner = {}
+    extra = []
+    for (u, v), f in sorted(diagonals.items()):
+        if (v, u) in steiner:
+            steiner[(u, v)] = steiner[(v, u)]
+            continue
+        g = diagonals[(v, u)]
+        if saved is not None and {f, g} == {saved, parent[saved]}:
+            continue
+        steiner[(u, v)] = n + len(extra)
+        extra.append((P[u] + P[v]) / 2.0)
+    Q = np.vstack([P] + ([np.array(extra)] if extra else []))
+
+    def sides(f, apex):
+        """Sides of piece f in CCW order, starting just after the apex's position."""
+        verts = pieces[f]
+        L = len(verts)
+        s0 = next(t for t in range(L) if steiner.get((verts[t], verts[(t + 1) % L])) == apex) + 1
+        return [(verts[(s0 + t) % L], verts[(s0 + t + 1) % L]) for t in range(L)]
+
+    seq = []
+    leaf_fan = None
+
+    def emit(root, apex, parent_f):
+        """Fan of piece ``root`` around Steiner point ``apex``, children spliced in."""
+        nonlocal leaf_fan
+        stack = [["piece", root, apex, parent_f, sides(root, apex), 0]]
+        while stack:
+            fr = stack[-1]
+            if fr[0] == "close":
+                stack.pop()
+                seq.append(fr[1])
+                continue
+            _, f, ap, par, sd, i = fr
+            if i == len(sd):
+                stack.pop()
+                continue
+            fr[5] = i + 1
+            u, v = sd[i]
+            if (u, v) in diagonals:
+                g = diagonals[(v, u)]
+                if g == par:
+                    continue
+                mid = steiner.get((u, v))
+                if mid is None:  # the saved leaf: a path starting on its side (v, u)
+                    seq.append((ap, u, v))
+                    leaf_fan = (len(seq) - 1, _fan(Q, pieces[g], u, order_from=v))
+                    continue
+                seq.append((ap, u, mid))
+                stack.append(["close", (ap, mid, v)])
+                stack.append(["piece", g, mid, f, sides(g, mid), 0])
+                continue
+            if not _collinear(Q, ap, u, v):
+                seq.append((ap, u, v))
+
+    s0 = steiner[e0]
+    emit(root_a, s0, root_b)
+    emit(root_b, s0, root_a)
+    if saved is None:
+        return Q, np.array(seq, dtype=np.int64)
+    T, fan = leaf_fan
+    if fan is None:
+        return None
+    ordered = seq[T + 1:] + seq[:T] + [seq[T]] + fan
+    return Q, np.array(ordered, dtype=np.int64)
+
+
+def _collinear(Q, a, u, v) -> bool:
+    return orient(Q[a, 0], Q[a, 1], Q[u, 0], Q[u, 1], Q[v, 0], Q[v, 1]) == 0
+
+
+def _fan(Q, verts, apex, order_from=None):
+    """Triangles of the convex cycle ``verts`` in a dual path starting on a side at ``apex``.
+
+    ``(apex, order_from)`` (or ``(order_from, apex)``) must be a side of the cycle; the
+    returned triangles (vertex ids of ``Q``) start at the one on that side.  Without
+    straight-angle vertices this is the fan from ``apex``; otherwise the Thm 2.1
+    dynamic program on the piece is used.  Returns None if no such path exists.
+    """
+    from hammesh.polygon._polygon import Polygon
+    from hammesh.polygon.thm21_hamiltonian import _backtrack, _chords_by_gap, _dp
+    from hammesh.polygon.visibility import visibility_matrix
+
+    L = len(verts)
+    s = verts.index(apex)
+    # local CCW order w with the start side (w[L-1], w[0])
+    w = [verts[(s + t) % L] for t in range(L)]
+    if order_from is not None and order_from == w[1]:
+        w = w[1:] + w[:1]          # side (apex, w1) becomes (w[L-1], w[0])
+    if L == 3:
+        return [tuple(w)]
+    straight = any(_collinear(Q, w[t - 1], w[t], w[(t + 1) % L]) for t in range(L))
+    if not straight:
+        a = w[0]
+        tri = [(a, w[t], w[t + 1]) for t in range(1, L - 1)]
+        return tri[::-1]  # start on the side (w[L-1], w[0])
+    pts = np.ascontiguousarray(Q[w])
+    poly = Polygon(points=pts, order=np.arange(L), area=0.0)
+    ci, cj = _chords_by_gap(visibility_matrix(poly))
+    D = _dp(ci, cj, L)
+    # D[0, L-1]: chain 0..L-1 closed by its own side (L-1, 0)
+    if L >= 4 and D[0, L - 2]:
+        first, rest = (0, L - 2, L - 1), _backtrack(D, 0, L - 2, L)
+    elif L >= 4 and D[1, L - 1]:
+        first, rest = (0, 1, L - 1), _backtrack(D, 1, L - 1, L)
+    else:
+        return None
+    local = [first] + [tuple(r) for r in rest]
+    return [tuple(w[i] for i in sorted(t)) for t in local]

@@ -1,0 +1,16 @@
+"""The examples in the docstrings of hammesh.polygon run and stay true."""
+
+import doctest
+import importlib
+
+import pytest
+
+MODULES = ["_polygon", "visibility", "thm21_hamiltonian", "thm44_sequential", "thm23_steiner",
+           "path_partition", "_predicates", "_triangulate", "plot"]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_docstring_examples(name):
+    module = importlib.import_module(f"hammesh.polygon.{name}")
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0
