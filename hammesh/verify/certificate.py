@@ -44,6 +44,7 @@ import numpy as np
 from hammesh import _kernels
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.verify.input_mesh import HalfEdges
 
 __all__ = ["verify", "verify_cycle_mesh", "ANGLE_RTOL", "AREA_RTOL"]
 
@@ -174,11 +175,15 @@ def verify_cycle_mesh(
             "cycles (a connected piece must be one cycle)"
         )
 
-    if segments is not None and len(segments):
+    has_segs = segments is not None and len(segments) > 0
+    out_he = None  # vertex rotation structure, built once if any segment needs it
+    if has_segs or (reference is not None and len(reference.segments) > 0):
+        out_he = HalfEdges(tri, twin, _kernels.vertex_half_edges(tri, n))
+    if has_segs:
         segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
         if segs.min() < 0 or segs.max() >= n:
             _fail(f"constrained edges reference vertices outside 0..{n - 1}")
-        _, found = _kernels.mark_segments(tri, twin, _kernels.vertex_half_edges(tri, n), segs)
+        _, found = out_he.mark(segs)
         if not found.all():
             s = int(np.argmin(found))
             _fail(f"constrained edge {s} {segs[s].tolist()} is not an edge of the mesh")
@@ -191,7 +196,7 @@ def verify_cycle_mesh(
     if reference is not None:
         stats.update(
             _compare_with_input(
-                pts, tri, twin, reference, reference_twin, amin, tmin, total, angle_ratio
+                pts, tri, twin, out_he, reference, reference_twin, amin, tmin, total, angle_ratio
             )
         )
     return stats
@@ -201,6 +206,7 @@ def _compare_with_input(
     pts: np.ndarray,
     tri: np.ndarray,
     twin: np.ndarray,
+    out_he: HalfEdges | None,
     ref: Mesh,
     r_twin: np.ndarray,
     amin: float,
@@ -234,7 +240,8 @@ def _compare_with_input(
             "input and output"
         )
 
-    _check_segments_kept(pts, tri, twin, ref)
+    if out_he is not None:
+        _check_segments_kept(pts, out_he, ref)
 
     floor = angle_ratio * r_min * (1.0 - ANGLE_RTOL)
     if amin < floor:
@@ -245,23 +252,19 @@ def _compare_with_input(
     return {"min_angle_input_deg": math.degrees(r_min)}
 
 
-def _check_segments_kept(pts: np.ndarray, tri: np.ndarray, twin: np.ndarray, ref: Mesh) -> None:
+def _check_segments_kept(pts: np.ndarray, he: HalfEdges, ref: Mesh) -> None:
+    """Every input constrained edge is an output edge, or split at its exact midpoint."""
     segs = np.ascontiguousarray(ref.segments, dtype=np.int64).reshape(-1, 2)
     if len(segs) == 0:
         return
-    vh = _kernels.vertex_half_edges(tri, len(pts))
-
-    def has_edges(pairs: np.ndarray) -> np.ndarray:
-        return _kernels.mark_segments(tri, twin, vh, pairs.reshape(-1, 2))[1]
-
     # a segment that is no output edge must be split at its midpoint M into the
     # output edges (a, M) and (M, b); there are few such segments (one per region)
-    for s in np.flatnonzero(~has_edges(segs)).tolist():
+    for s in np.flatnonzero(~he.mark(segs)[1]).tolist():
         a, b = int(segs[s, 0]), int(segs[s, 1])
         mid = 0.5 * (pts[a] + pts[b])
-        cands = _kernels.vertex_neighbors(tri, twin, vh, a)
+        cands = he.neighbors_of(a)
         cands = np.unique(cands[(pts[cands] == mid).all(axis=1)])
-        if not any(has_edges(np.array([[a, c], [c, b]], dtype=np.int64)).all() for c in cands):
+        if not any(he.mark(np.array([[a, c], [c, b]], dtype=np.int64))[1].all() for c in cands):
             _fail(
                 f"input constrained edge {s} ({a}, {b}) is neither an output edge nor "
                 "split at its midpoint"
