@@ -26,6 +26,29 @@ def planar(max_area: float, poly=((0, 0), (1, 0), (1, 1), (0, 1))) -> Mesh:
     return hammesh.quality_mesh(hammesh.Domain.from_polygon([list(p) for p in poly]), min_angle=30, max_area=max_area)
 
 
+#: Triangle's bundled PSLGs (``triangle.get_data``) and the max area giving ~12k triangles
+#: at min angle 30.
+BUNDLED = {
+    "A": 1.1e-5,
+    "la": 0.064,
+    "face": 2.7,
+    "double_hex": 1.25e-4,
+    "square_circle_hole": 5.9e-3,
+    "spiral": 2.5e-3,
+}
+
+
+def bundled(name: str, max_area: float) -> Mesh | None:
+    try:
+        import triangle
+    except ImportError:
+        return None
+    d = triangle.get_data(name)
+    kw = {k: d[k] for k in ("segments", "holes") if k in d}
+    dom = hammesh.Domain(vertices=d["vertices"], **kw)
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=max_area)
+
+
 def torus(nu: int, nv: int) -> Mesh:
     u, v = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv, indexing="ij")
     R, r = 2.0, 0.7
@@ -123,6 +146,7 @@ def main() -> None:
         meshes.update(
             {
                 "square a=1e-4": planar(1e-4),
+                **{name: bundled(name, a) for name, a in BUNDLED.items()},
                 "icosphere nsub=5": icosphere(5),
                 "torus 100k": torus(320, 160),
             }

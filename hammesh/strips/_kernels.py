@@ -282,11 +282,12 @@ def _grow(cur, entry, prev_pivot, tri, twin, nb, visited, deg, bucket, top, out,
 
 
 @njit(cache=True)
-def greedy_paths(tri, twin, w_swap):
+def greedy_paths(tri, twin, w_swap, seed_order):
     """Partition the dual graph into paths, greedily (O(m)).
 
     Seeds are taken with the fewest unvisited neighbours (a bucket queue, most recent
-    first, so new paths start along the previous ones); each path is grown forward from
+    first, so new paths start along the previous ones; ties at the start broken by
+    ``seed_order``, last first); each path is grown forward from
     its seed, then backward through the seed's remaining edges, turn-aware.
 
     Returns ``(order, starts)`` as in :mod:`hammesh.strips.paths`.
@@ -303,7 +304,8 @@ def greedy_paths(tri, twin, w_swap):
     visited = np.zeros(m, np.bool_)
     bucket = np.empty((4, m), np.int64)
     top = np.zeros(4, np.int64)
-    for t in range(m - 1, -1, -1):
+    for i in range(m):
+        t = seed_order[i]
         d = deg[t]
         bucket[d, top[d]] = t
         top[d] += 1
@@ -357,3 +359,248 @@ def greedy_paths(tri, twin, w_swap):
         S += 1
         starts[S] = L
     return order, starts[: S + 1].copy()
+
+
+# --- improving a path cover: merge adjacent path ends, rotate ends (Posa) -------------
+
+
+@njit(cache=True)
+def _walk(link, t, prev, buf, n0):
+    """Write the path from ``t`` away from its neighbour ``prev`` (-1: ``t`` is an end) into ``buf[n0:]``.
+
+    Returns the offset after the last triangle written.
+    """
+    n = n0
+    while t >= 0:
+        buf[n] = t
+        n += 1
+        a = link[t, 0]
+        nxt = a if a != prev else link[t, 1]
+        prev = t
+        t = nxt
+    return n
+
+
+@njit(cache=True)
+def _local_edge(nb, t, u):
+    for k in range(3):
+        if nb[t, k] == u:
+            return k
+    return -1
+
+
+@njit(cache=True)
+def _seq_cost(tri, nb, seq, a, b):
+    """Indices of one GL strip drawing the dual path ``seq[a:b]``: ``n + 2 + swaps``, best direction."""
+    n = b - a
+    if n <= 2:
+        return n + 2
+    interior = 0
+    prev_pivot = -1
+    p1 = -1
+    pl = -1
+    for i in range(a + 1, b - 1):
+        t = seq[i]
+        kin = _local_edge(nb, t, seq[i - 1])
+        kout = _local_edge(nb, t, seq[i + 1])
+        if kout == (kin + 1) % 3:
+            p = tri[t, kout]
+        else:
+            p = tri[t, kin]
+        if i == a + 1:
+            p1 = p
+        elif p == prev_pivot:
+            interior += 1
+        pl = p
+        prev_pivot = p
+    # the first triangle's pivot is the tail of its exit half-edge; take the better end
+    f = 1 if tri[seq[a], _local_edge(nb, seq[a], seq[a + 1])] == p1 else 0
+    r = 1 if tri[seq[b - 1], _local_edge(nb, seq[b - 1], seq[b - 2])] == pl else 0
+    return n + 2 + interior + min(f, r)
+
+
+@njit(cache=True)
+def _relink(link, pid, seq, a, b, label):
+    for i in range(a, b):
+        t = seq[i]
+        link[t, 0] = seq[i - 1] if i > a else -1
+        link[t, 1] = seq[i + 1] if i + 1 < b else -1
+        pid[t] = label
+
+
+@njit(cache=True)
+def _is_end(link, t):
+    return link[t, 0] < 0 or link[t, 1] < 0
+
+
+@njit(cache=True)
+def _try_join(tri, nb, link, pid, cost, buf, a, b, label, budget):
+    """Join the path ``buf[a:b]`` (its end ``buf[b-1]``) to a neighbouring path end if the total drops.
+
+    ``budget``: cost of the paths involved so far (``buf[a:b]`` and what it replaced);
+    the joined path is written after ``b``.  Returns the improved total or -1.
+    """
+    y = buf[b - 1]
+    for k in range(3):
+        v = nb[y, k]
+        if v < 0 or not _is_end(link, v):
+            continue
+        rv = pid[v]
+        if rv == label or rv == pid[y]:
+            continue
+        nv = _walk(link, v, -1, buf, b)
+        c = _seq_cost(tri, nb, buf, a, nv)
+        if c < budget + cost[rv] + 1:
+            _relink(link, pid, buf, a, nv, label)
+            cost[rv] = 0
+            cost[label] = c
+            return c
+    return -1
+
+
+@njit(cache=True)
+def improve_paths(tri, twin, order, starts, max_passes):
+    """Lower the cost (indices plus one restart per path) of a dual path cover.
+
+    Moves around each path end ``e``, each kept only when the total strictly drops:
+
+    * join: ``e`` next to another path's end: one path (saves a start and a restart,
+      may add swaps at the joint);
+    * rotate: ``e`` next to ``x`` inside its own path: ``.. x y .. e`` becomes
+      ``.. x e .. y`` (Posa's rotation), kept if it saves swaps or the new end ``y``
+      joins another path;
+    * tunnel: ``e`` next to ``x`` inside another path ``.. w x z ..``: ``e`` takes ``x``
+      and one side of it, the other side is left (and may join a third path).
+
+    Returns ``(order, starts)`` of the improved cover.
+    """
+    m = tri.shape[0]
+    nb = np.full((m, 3), -1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            h = twin[3 * t + k]
+            if h >= 0:
+                nb[t, k] = h // 3
+    link = np.full((m, 2), -1, np.int64)
+    pid = np.zeros(m, np.int64)
+    cost = np.zeros(m, np.int64)
+    S = starts.shape[0] - 1
+    for s in range(S):
+        _relink(link, pid, order, starts[s], starts[s + 1], s)
+        cost[s] = _seq_cost(tri, nb, order, starts[s], starts[s + 1])
+    buf = np.empty(3 * m, np.int64)
+    seq = np.empty(m, np.int64)
+    for _ in range(max_passes):
+        improved = False
+        for e in range(m):
+            if not _is_end(link, e):
+                continue
+            rp = pid[e]
+            n = _walk(link, e, -1, buf, 0)
+            for i in range(n):
+                seq[i] = buf[n - 1 - i]  # P, ending at e
+            # join
+            for i in range(n):
+                buf[i] = seq[i]
+            if _try_join(tri, nb, link, pid, cost, buf, 0, n, rp, cost[rp]) >= 0:
+                improved = True
+                continue
+            done = False
+            for k in range(3):
+                x = nb[e, k]
+                if x < 0 or x == link[e, 0] or x == link[e, 1]:
+                    continue
+                if pid[x] == rp:
+                    # rotate
+                    j = -1
+                    for i in range(n):
+                        if seq[i] == x:
+                            j = i
+                    for i in range(j + 1):
+                        buf[i] = seq[i]
+                    for i in range(j + 1, n):
+                        buf[i] = seq[n - 1 - (i - j - 1)]
+                    c = _seq_cost(tri, nb, buf, 0, n)
+                    if c < cost[rp]:
+                        _relink(link, pid, buf, 0, n, rp)
+                        cost[rp] = c
+                        done = True
+                        break
+                    if _try_join(tri, nb, link, pid, cost, buf, 0, n, rp, cost[rp]) >= 0:
+                        done = True
+                        break
+                elif not _is_end(link, x):
+                    # tunnel: P + x + one side of x; the other side is left over
+                    rq = pid[x]
+                    for side in range(2):
+                        for i in range(n):
+                            buf[i] = seq[i]
+                        buf[n] = x
+                        nt = _walk(link, link[x, side], x, buf, n + 1)
+                        # leftover, starting next to x
+                        nl = _walk(link, link[x, 1 - side], x, buf, nt)
+                        # reverse it so that its new end is last
+                        for i in range((nl - nt) // 2):
+                            tmp = buf[nt + i]
+                            buf[nt + i] = buf[nl - 1 - i]
+                            buf[nl - 1 - i] = tmp
+                        old = cost[rp] + cost[rq] + 1
+                        c1 = _seq_cost(tri, nb, buf, 0, nt)
+                        c2 = _seq_cost(tri, nb, buf, nt, nl)
+                        if c1 + c2 + 1 < old:
+                            _relink(link, pid, buf, 0, nt, rp)
+                            _relink(link, pid, buf, nt, nl, rq)
+                            cost[rp] = c1
+                            cost[rq] = c2
+                            done = True
+                            break
+                        # the leftover's new end joins a third path
+                        for i in range(nl - nt):
+                            buf[nl + i] = buf[nt + i]
+                        # relink only if the join succeeds: test on copies of the labels
+                        y = buf[nl + (nl - nt) - 1]
+                        ok = False
+                        for k2 in range(3):
+                            v = nb[y, k2]
+                            if v < 0 or not _is_end(link, v):
+                                continue
+                            rv = pid[v]
+                            if rv == rp or rv == rq:
+                                continue
+                            nv = _walk(link, v, -1, buf, nl + (nl - nt))
+                            c3 = _seq_cost(tri, nb, buf, nl, nv)
+                            if c1 + c3 < old + cost[rv] + 1:
+                                _relink(link, pid, buf, 0, nt, rp)
+                                _relink(link, pid, buf, nl, nv, rq)
+                                cost[rp] = c1
+                                cost[rq] = c3
+                                cost[rv] = 0
+                                ok = True
+                                break
+                        if ok:
+                            done = True
+                            break
+                    if done:
+                        break
+            if done:
+                improved = True
+        if not improved:
+            break
+    out = np.empty(m, np.int64)
+    st = np.empty(m + 1, np.int64)
+    seen = np.zeros(m, np.bool_)
+    L = 0
+    S2 = 0
+    st[0] = 0
+    for i in range(S):
+        for j in range(starts[i], starts[i + 1]):
+            t = order[j]
+            if seen[t] or not _is_end(link, t):
+                continue
+            n = _walk(link, t, -1, out, L)
+            for i2 in range(L, n):
+                seen[out[i2]] = True
+            L = n
+            S2 += 1
+            st[S2] = L
+    return out, st[: S2 + 1].copy()
