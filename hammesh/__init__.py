@@ -11,7 +11,7 @@ Based on Arkin, Held, Mitchell, Skiena, "Hamiltonian Triangulations for Fast
 Rendering".
 """
 
-from hammesh import polygon, strips
+from hammesh import pointset, polygon, strips
 from hammesh.domain import Domain, read_domain
 from hammesh.errors import (
     FileFormatError,
@@ -43,6 +43,7 @@ __all__ = [
     "KIND_NAMES",
     "strips",
     "polygon",
+    "pointset",
     "HammeshError",
     "InvalidDomainError",
     "InvalidMeshError",
