@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
-from hammesh.pointset._predicates import orient_many
+from hammesh.predicates import orient_many
 from hammesh.pointset.sequential_search import check_sequential
 from hammesh.pointset.validate import as_points, convex_hull
 

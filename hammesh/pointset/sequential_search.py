@@ -29,7 +29,7 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import Mesh
-from hammesh.pointset._predicates import orient
+from hammesh.predicates import orient
 from hammesh.pointset.validate import as_points, convex_hull
 from hammesh.pointset.verify import verify_point_triangulation
 

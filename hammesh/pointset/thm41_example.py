@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammesh.errors import InvalidOptionError, VerificationError
-from hammesh.pointset._predicates import orient
+from hammesh.predicates import orient
 from hammesh.pointset.validate import as_points, convex_hull
 
 __all__ = ["no_sequential_example", "LABELS"]

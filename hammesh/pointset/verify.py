@@ -29,7 +29,7 @@ import numpy as np
 
 from hammesh import _kernels as core_kernels
 from hammesh.errors import VerificationError
-from hammesh.pointset._predicates import orient_many
+from hammesh.predicates import orient_many
 from hammesh.pointset.validate import convex_hull
 from hammesh.verify.certificate import verify_cycle_mesh
 

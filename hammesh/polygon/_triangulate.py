@@ -12,7 +12,7 @@ import numpy as np
 
 from hammesh.errors import MeshingError
 from hammesh.polygon._polygon import polygon_edges
-from hammesh.polygon._predicates import orient_many
+from hammesh.predicates import orient_rows as orient_many
 
 __all__ = ["triangulate_polygon", "triangle_neighbors"]
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 from hammesh.polygon._polygon import Polygon, as_polygon
-from hammesh.polygon._predicates import orient
+from hammesh.predicates import orient
 from hammesh.polygon._triangulate import triangle_neighbors, triangulate_polygon
 
 __all__ = ["steiner_hamiltonian", "steiner_hamiltonian_result", "convex_decomposition",

@@ -11,7 +11,7 @@ still visible from ``i`` (a funnel walk through the dual tree); the vertex oppos
 the entry edge of each reached triangle is visible iff it lies strictly inside the
 wedge.  Every triangle is entered at most once per source, so the walk costs ``O(n)``
 per vertex and ``O(n^2)`` in all (parallel over sources), plus ``O(n^2)`` memory for
-the dense matrix.  All orientation tests are exact (:mod:`._predicates`).  Measured:
+the dense matrix.  All orientation tests are exact (:mod:`hammesh.predicates`).  Measured:
 2,000 vertices in well under a second (``benchmarks/bench_polygon.py``).
 """
 
@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from hammesh.polygon._polygon import Polygon, as_polygon
-from hammesh.polygon._predicates import orient
+from hammesh.predicates import orient
 from hammesh.polygon._triangulate import triangle_neighbors, triangulate_polygon
 
 __all__ = ["visibility_graph", "visibility_matrix"]

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from hammesh.errors import HammeshError, InvalidDomainError, MeshingError, VerificationError
 from hammesh.pointset import convex_hull, hamiltonian_triangulation, verify_point_triangulation
-from hammesh.pointset._predicates import orient
+from hammesh.predicates import orient
 
 
 def _check(pts, tri, convex=None):

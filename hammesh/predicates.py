@@ -1,4 +1,4 @@
-"""Exact orientation predicate (numba), used by every point-set algorithm.
+"""Exact orientation predicate (numba), shared by the polygon and point-set algorithms.
 
 ``orient(ax, ay, bx, by, cx, cy)`` returns the sign (-1, 0, +1) of the determinant
 ``| b - a, c - a |``: +1 when ``a, b, c`` turn counter-clockwise.  A floating-point
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["orient", "orient_points", "orient_many"]
+__all__ = ["orient", "orient_points", "orient_many", "orient_rows"]
 
 _SPLITTER = 134217729.0  # 2**27 + 1
 _ERRBOUND = 3.3306690738754716e-16  # (3 + 16 eps) eps
@@ -95,4 +95,14 @@ def orient_many(pts, tri):
     out = np.empty(m, np.int8)
     for t in range(m):
         out[t] = orient_points(pts, tri[t, 0], tri[t, 1], tri[t, 2])
+    return out
+
+
+@njit(cache=True)
+def orient_rows(a, b, c):
+    """:func:`orient` over rows of three ``(k, 2)`` point arrays -> ``(k,) int8``."""
+    k = a.shape[0]
+    out = np.empty(k, np.int8)
+    for i in range(k):
+        out[i] = orient(a[i, 0], a[i, 1], b[i, 0], b[i, 1], c[i, 0], c[i, 1])
     return out
