@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from hammesh.errors import FileFormatError
+from hammesh.io.points_text import read_points
 
 HELP = "triangulate a point set so that its triangles form one Hamiltonian cycle (Thm 3.1)"
 EXAMPLES = """examples:
@@ -27,45 +28,6 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sequential", action="store_true",
                    help="require a sequential triangulation (alternating strip, §4; small sets)")
     p.add_argument("--seed", type=int, help="seed of the random splitters (Lemma 3.2)")
-
-
-def read_points(path: Path) -> np.ndarray:
-    """Read ``(n, 2)`` points from ``.node``, ``.npy`` or plain ``x y`` text.
-
-    Raises
-    ------
-    FileFormatError
-        Missing or malformed file (the message names file and line).
-    """
-    if not path.exists():
-        raise FileFormatError(f"{path}: no such file")
-    suffix = path.suffix.lower()
-    if suffix == ".node":
-        from hammesh.domain import read_node
-
-        return np.asarray(read_node(path).vertices, dtype=np.float64)
-    if suffix == ".npy":
-        try:
-            arr = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as exc:
-            raise FileFormatError(f"{path.name}: not a numpy array file ({exc})") from None
-        if arr.ndim != 2 or arr.shape[1] != 2:
-            raise FileFormatError(f"{path.name}: expected an (n, 2) array, got shape {arr.shape}")
-        return np.asarray(arr, dtype=np.float64)
-    rows = []
-    for k, line in enumerate(path.read_text().splitlines(), start=1):
-        text = line.split("#", 1)[0].replace(",", " ").split()
-        if not text:
-            continue
-        if len(text) != 2:
-            raise FileFormatError(f"{path.name}:{k}: expected two numbers 'x y', got {line.strip()!r}")
-        try:
-            rows.append((float(text[0]), float(text[1])))
-        except ValueError:
-            raise FileFormatError(f"{path.name}:{k}: not a number in {line.strip()!r}") from None
-    if not rows:
-        raise FileFormatError(f"{path.name}: no points")
-    return np.array(rows, dtype=np.float64)
 
 
 def _as_mesh(points: np.ndarray, tri: np.ndarray):

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidDomainError
+from hammesh.io.points_text import read_points
 
 HELP = "triangulate a simple polygon so that its triangles form one dual path (Thm 2.1, 2.3, 4.4)"
 EXAMPLES = """examples:
@@ -52,7 +53,7 @@ def read_polygon(path: Path) -> np.ndarray:
     elif suffix == ".wkt":
         pts = _from_wkt(path)
     else:
-        pts = _from_text(path)
+        pts = read_points(path)
     if len(pts) > 1 and np.array_equal(pts[0], pts[-1]):
         pts = pts[:-1]
     return pts
@@ -114,21 +115,6 @@ def _from_wkt(path: Path) -> np.ndarray:
     if not m:
         raise FileFormatError(f"{path.name}: expected 'POLYGON ((x y, ...))' without holes")
     return _array([c.split() for c in m.group(1).split(",")], path)
-
-
-def _from_text(path: Path) -> np.ndarray:
-    rows = []
-    for k, line in enumerate(path.read_text().splitlines(), 1):
-        line = line.split("#", 1)[0].strip()
-        if not line:
-            continue
-        tok = line.replace(",", " ").split()
-        if len(tok) != 2:
-            raise FileFormatError(f"{path.name}:{k}: expected 'x y', got {line!r}")
-        rows.append(tok)
-    if not rows:
-        raise FileFormatError(f"{path.name}: no vertices")
-    return _array(rows, path)
 
 
 def _array(rows, path: Path) -> np.ndarray:

@@ -64,8 +64,8 @@ def test_poly_geojson_wkt_inputs(tmp_path):
 
 
 @pytest.mark.parametrize("name, text, match", [
-    ("b.txt", "0 0\n1 0 2\n", "expected 'x y'"),
-    ("b.txt", "# nothing\n", "no vertices"),
+    ("b.txt", "0 0\n1 0 2\n", "expected two numbers 'x y'"),
+    ("b.txt", "# nothing\n", "no points"),
     ("b.wkt", "POLYGON ((0 0, 1 0, 0 1), (0.1 0.1, 0.2 0.1, 0.1 0.2))", "without holes"),
     ("b.geojson", '{"type": "Point", "coordinates": [0, 0]}', "expected a GeoJSON Polygon"),
 ])
