@@ -1,0 +1,28 @@
+"""The benchmark scripts keep running (tiny sizes; nothing here is timed or compared)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).parent.parent / "benchmarks"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "script, args, needle",
+    [
+        ("bench_core.py", ["--max-area", "0.001", "--repeat", "1"], "ratio ours / triangle"),
+        ("bench_polygon.py", ["--sizes", "60"], "60"),
+        ("bench_points.py", ["--sizes", "2000"], "uniform"),
+    ],
+)
+def test_benchmark_script_runs(script: str, args: list[str], needle: str) -> None:
+    proc = subprocess.run(
+        [sys.executable, str(BENCH / script), *args], capture_output=True, text=True, timeout=600
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert needle in proc.stdout
