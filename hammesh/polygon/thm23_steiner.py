@@ -15,14 +15,18 @@ its diagonal instead, which cuts the cycle open there (this works whatever other
 diagonals meet at that endpoint).  A convex polygon (``k = 1``) needs no Steiner point
 for a path and one (its centroid) for a cycle.
 
-Decomposition: Hertel--Mehlhorn (drop every diagonal of a triangulation whose removal
-keeps the two merged angles strictly convex), at most 4 times the minimum number of
-pieces; a few removal orders are tried and the fewest pieces kept.  Keil's optimal
-dynamic program is not implemented, so ``k`` may exceed the minimum and so may the
-Steiner count.  Vertices with a straight angle are left out of the decomposition (they
-lie on piece sides), so every piece is strictly convex and no fan triangle is flat.
+Decomposition: for at most :data:`MAX_VERTICES` vertices an exact minimum convex
+decomposition (:mod:`~hammesh.polygon.min_convex`, integer program), whose pieces may
+have straight angles at diagonal ends; the piece tree is then rooted so that every
+piece is fanned from a diagonal where it is strictly convex (:func:`_fan_tree`), else
+the minimum strictly convex decomposition is used.  Larger polygons: Hertel--Mehlhorn
+(drop every diagonal of a triangulation whose removal keeps the two merged angles
+strictly convex), at most 4 times the minimum number of pieces; a few removal orders
+are tried and the fewest pieces kept.  Vertices with a straight angle are left out of
+the Hertel--Mehlhorn decomposition (they lie on piece sides).
 
-Complexity: ``O(n)`` after the triangulation (``O(n log n)``, Triangle).
+Complexity: ``O(n)`` after the Hertel--Mehlhorn decomposition (``O(n log n)``, Triangle);
+the integer program is exponential in the worst case, hence the size limit.
 """
 
 from __future__ import annotations
@@ -33,14 +37,17 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 from hammesh.polygon._polygon import Polygon, as_polygon
+from hammesh.polygon.min_convex import MAX_VERTICES, minimum_convex_faces
 from hammesh.predicates import orient
 from hammesh.polygon._triangulate import triangle_neighbors, triangulate_polygon
 
 __all__ = ["steiner_hamiltonian", "steiner_hamiltonian_result", "convex_decomposition",
-           "SteinerResult", "KINDS"]
+           "SteinerResult", "KINDS", "DECOMPOSITIONS", "MAX_VERTICES"]
 
 #: Accepted values of ``kind``.
 KINDS = ("cycle", "path")
+#: Accepted values of ``decomposition``.
+DECOMPOSITIONS = ("auto", "optimal", "hertel-mehlhorn")
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,7 +67,11 @@ class SteinerResult:
     n_steiner : int
         ``s``: ``k - 1`` for a cycle, ``k - 2`` for a path (``k > 1``).
     method : str
-        The decomposition algorithm (``"hertel-mehlhorn"``).
+        The decomposition used: ``"optimal"`` (a minimum convex decomposition, exact
+        integer program, so ``k`` is the minimum over decompositions by diagonals),
+        ``"optimal-strict"`` (minimum among decompositions whose pieces are strictly
+        convex at diagonal ends, used when the minimum one admits no degenerate-free
+        fan tree) or ``"hertel-mehlhorn"`` (at most 4 times the minimum).
     """
 
     points: np.ndarray
@@ -76,7 +87,8 @@ class SteinerResult:
         return len(self.pieces)
 
 
-def steiner_hamiltonian(points, kind: str = "cycle") -> tuple[np.ndarray, np.ndarray]:
+def steiner_hamiltonian(points, kind: str = "cycle", *, holes=None,
+                        decomposition: str = "auto") -> tuple[np.ndarray, np.ndarray]:
     """A Hamiltonian cycle or path triangulation of a simple polygon with Steiner points.
 
     Parameters
@@ -86,12 +98,21 @@ def steiner_hamiltonian(points, kind: str = "cycle") -> tuple[np.ndarray, np.nda
     kind : {"cycle", "path"}
         ``"cycle"``: the dual contains a Hamiltonian cycle, ``k - 1`` Steiner points
         (1 for a convex polygon); ``"path"``: a Hamiltonian path, ``max(k - 2, 0)``.
+    holes : sequence of (n_i, 2) array_like of float, optional
+        Polygonal holes (either orientation), strictly inside ``points`` and disjoint.
+        The same construction applies (the paper, after Thm 2.3) with a spanning tree
+        of the pieces; the decomposition is Hertel--Mehlhorn (a minimum one is NP-hard
+        to find with holes), so ``k`` is not the minimum.
+    decomposition : {"auto", "optimal", "hertel-mehlhorn"}
+        ``"auto"``: the exact minimum convex decomposition when the polygon has at most
+        :data:`MAX_VERTICES` vertices, Hertel--Mehlhorn otherwise.
+        ``"optimal"`` past that size raises :class:`InvalidOptionError`.
 
     Returns
     -------
     Q : (n + s, 2) float64
-        The input points followed by the ``s`` Steiner points (interior, at midpoints
-        of decomposition diagonals).
+        The input points (then the holes' points, in order) followed by the ``s``
+        Steiner points (interior, at midpoints of decomposition diagonals).
     T : (m, 3) int64
         Counter-clockwise triangles indexing ``Q``, in cycle / path order (for a cycle
         the last row also shares an edge with the first).
@@ -99,9 +120,10 @@ def steiner_hamiltonian(points, kind: str = "cycle") -> tuple[np.ndarray, np.nda
     Raises
     ------
     InvalidDomainError
-        ``points`` is not a simple polygon.
+        ``points`` is not a simple polygon, or the holes are invalid.
     InvalidOptionError
-        Unknown ``kind``.
+        Unknown ``kind`` or ``decomposition``; ``"optimal"`` on a polygon with more
+        than :data:`MAX_VERTICES` vertices or with holes.
 
     Examples
     --------
@@ -113,27 +135,65 @@ def steiner_hamiltonian(points, kind: str = "cycle") -> tuple[np.ndarray, np.nda
     >>> len(Q), len(T)
     (6, 4)
     """
-    res = steiner_hamiltonian_result(points, kind)
+    res = steiner_hamiltonian_result(points, kind, holes=holes, decomposition=decomposition)
     return res.points, res.triangles
 
 
-def steiner_hamiltonian_result(points, kind: str = "cycle") -> SteinerResult:
+def steiner_hamiltonian_result(points, kind: str = "cycle", *, holes=None,
+                               decomposition: str = "auto") -> SteinerResult:
     """:func:`steiner_hamiltonian` with the decomposition used (``k``, pieces, method)."""
     if kind not in KINDS:
         raise InvalidOptionError(f"kind must be one of {', '.join(map(repr, KINDS))}, got {kind!r}")
+    if holes is not None and len(holes):
+        return _with_holes(points, holes, kind, decomposition)
     poly = as_polygon(points)
-    pieces, diagonals = _decompose(poly)
+    pieces, diagonals, method = _decompose(poly, _check_decomposition(poly, decomposition))
     pts, tri = _construct(poly, pieces, diagonals, kind)
     # internal -> input indices for polygon vertices, Steiner points keep theirs
     n = poly.n
     remap = np.concatenate([poly.order, np.arange(n, len(pts))])
     Q = np.concatenate([np.asarray(points, dtype=np.float64).reshape(n, 2), pts[n:]])
     return SteinerResult(points=Q, triangles=remap[tri], kind=kind, n_steiner=len(pts) - n,
-                         pieces=[poly.order[np.asarray(p, dtype=np.int64)] for p in pieces])
+                         method=method, pieces=[poly.order[np.asarray(p, dtype=np.int64)] for p in pieces])
 
 
-def convex_decomposition(points) -> list[np.ndarray]:
-    """Hertel--Mehlhorn convex decomposition of a simple polygon.
+def _with_holes(points, holes, kind, decomposition) -> SteinerResult:
+    from hammesh.polygon._holes import as_domain, triangulate_domain
+
+    if decomposition not in DECOMPOSITIONS:
+        _check_decomposition(None, decomposition)
+    if decomposition == "optimal":
+        raise InvalidOptionError("decomposition='optimal' is not available with holes (a minimum "
+                                 "convex decomposition is NP-hard there); use 'auto'")
+    dom = as_domain(points, holes)
+    P = dom.points
+    tri = triangulate_domain(dom)
+    nb = triangle_neighbors(tri)
+    t_idx, k_idx = np.nonzero(nb >= 0)
+    keep = t_idx < nb[t_idx, k_idx]
+    faces = _hertel_mehlhorn(P, tri, nb, t_idx[keep], k_idx[keep])
+    boundary = set(zip(range(dom.n), dom.nxt.tolist()))
+    diagonals = {}
+    for f, face in enumerate(faces):
+        for s in range(len(face)):
+            e = (face[s], face[(s + 1) % len(face)])
+            if e not in boundary:
+                diagonals[e] = f
+    poly = Polygon(points=P, order=dom.order, area=dom.area)
+    pts, T = _construct(poly, faces, diagonals, kind)
+    N = dom.n
+    remap = np.concatenate([dom.order, np.arange(N, len(pts))])
+    Q = np.empty_like(pts)
+    Q[remap] = pts
+    return SteinerResult(points=Q, triangles=remap[T], kind=kind, n_steiner=len(pts) - N,
+                         method="hertel-mehlhorn",
+                         pieces=[dom.order[np.asarray(p, dtype=np.int64)] for p in faces])
+
+
+def convex_decomposition(points, *, decomposition: str = "auto") -> list[np.ndarray]:
+    """Convex decomposition of a simple polygon, as used by :func:`steiner_hamiltonian`.
+
+    ``decomposition`` as there (minimum for small polygons, else Hertel--Mehlhorn).
 
     Returns
     -------
@@ -142,11 +202,22 @@ def convex_decomposition(points) -> list[np.ndarray]:
         straight angle appear on the piece sides they lie on.
     """
     poly = as_polygon(points)
-    pieces, _ = _decompose(poly)
+    pieces, _, _ = _decompose(poly, _check_decomposition(poly, decomposition))
     return [poly.order[np.asarray(p, dtype=np.int64)] for p in pieces]
 
 
 # ----------------------------------------------------------------------------- decomposition
+
+def _check_decomposition(poly: Polygon, decomposition: str) -> str:
+    if decomposition not in DECOMPOSITIONS:
+        raise InvalidOptionError(f"decomposition must be one of "
+                                 f"{', '.join(map(repr, DECOMPOSITIONS))}, got {decomposition!r}")
+    if poly is not None and decomposition == "optimal" and poly.n > MAX_VERTICES:
+        raise InvalidOptionError(
+            f"decomposition='optimal' is limited to {MAX_VERTICES} vertices, the polygon "
+            f"has {poly.n}; use 'auto' or 'hertel-mehlhorn'")
+    return decomposition
+
 
 def _corners(poly: Polygon) -> np.ndarray:
     p = poly.points
@@ -157,15 +228,41 @@ def _corners(poly: Polygon) -> np.ndarray:
     return np.array(keep, dtype=np.int64)
 
 
-def _decompose(poly: Polygon):
-    """Pieces (lists of internal vertex indices, CCW) and their diagonals.
+def _decompose(poly: Polygon, method: str = "auto"):
+    """Pieces (lists of internal vertex indices, CCW), their diagonals and the method.
 
-    Returns ``(pieces, diagonals)`` with ``diagonals`` a dict ``(u, v) -> (piece, side)``
+    Returns ``(pieces, diagonals, method)`` with ``diagonals`` a dict ``(u, v) -> piece``
     for every directed piece side ``u -> v`` that is a diagonal (``u``, ``v`` internal).
+    The first decomposition that admits a fan tree (:func:`_fan_tree`) is used: the
+    minimum one (straight angles allowed, then not) when ``method`` allows it, else
+    Hertel--Mehlhorn, whose pieces are strictly convex.
     """
     corners = _corners(poly)
-    m = len(corners)
     cp = np.ascontiguousarray(poly.points[corners])
+    tries = []
+    if method == "optimal" or (method == "auto" and poly.n <= MAX_VERTICES):
+        tries = [("optimal", True), ("optimal", False)]
+    k_min = None
+    everything = np.arange(poly.n)
+    for name, straight in tries:
+        # all vertices: a diagonal from a reflex vertex may end at a straight one
+        faces = minimum_convex_faces(poly.points, straight=straight)
+        if faces is None:
+            break
+        k_min = len(faces) if k_min is None else k_min
+        pieces, diagonals = _expand(poly, everything, faces)
+        if _fan_tree(poly.points, pieces, diagonals) is not None:
+            return pieces, diagonals, name if len(faces) == k_min else "optimal-strict"
+    if method == "optimal":
+        raise InvalidOptionError(
+            "the exact minimum convex decomposition failed (solver time limit); "
+            "use decomposition='hertel-mehlhorn'")
+    pieces, diagonals = _expand(poly, corners, _hm_faces(cp))
+    return pieces, diagonals, "hertel-mehlhorn"
+
+
+def _hm_faces(cp: np.ndarray):
+    """Hertel--Mehlhorn faces (corner indices) over a few removal orders, fewest kept."""
     tri = triangulate_polygon(cp)
     nb = triangle_neighbors(tri)
     best = None
@@ -181,11 +278,16 @@ def _decompose(poly: Polygon):
         faces = _hertel_mehlhorn(cp, tri, nb, t_idx[order], k_idx[order])
         if best is None or len(faces) < len(best):
             best = faces
-    # expand: corner indices -> internal vertex indices, with straight-angle vertices
+    return best
+
+
+def _expand(poly: Polygon, corners: np.ndarray, faces):
+    """Corner-index faces -> internal vertex indices, with straight-angle vertices."""
+    m = len(corners)
     n = poly.n
     pieces = []
     diagonals = {}
-    for f, face in enumerate(best):
+    for f, face in enumerate(faces):
         verts = []
         for s in range(len(face)):
             u, v = face[s], face[(s + 1) % len(face)]
@@ -200,6 +302,63 @@ def _decompose(poly: Polygon):
                 diagonals[(cu, cv)] = f
         pieces.append(verts)
     return pieces, diagonals
+
+
+def _good(P, piece, u, v) -> bool:
+    """Whether ``piece`` is strictly convex at both ends of its side ``u -> v``.
+
+    Only then is the fan from a point inside that side free of flat triangles.
+    """
+    L = len(piece)
+    s = piece.index(u)
+    w, x = piece[s - 1], piece[(s + 2) % L]
+    return (orient(P[w, 0], P[w, 1], P[u, 0], P[u, 1], P[v, 0], P[v, 1]) != 0
+            and orient(P[u, 0], P[u, 1], P[v, 0], P[v, 1], P[x, 0], P[x, 1]) != 0)
+
+
+def _fan_tree(P, pieces, diagonals):
+    """Root pieces, root diagonal and parents such that every fan is non-degenerate.
+
+    Every piece but the roots is fanned from the Steiner point on the diagonal to its
+    parent, the roots from the one on the root diagonal; each such diagonal must be
+    :func:`_good` for the piece fanned from it.  Tries the root diagonals from the
+    piece of highest degree first.  With holes the piece graph has cycles; the tree
+    is a spanning tree of it, ``tree`` its diagonals (as vertex-pair frozensets).
+    Returns ``(root_a, root_b, (u0, v0), parent, tree)`` or ``None``.
+    """
+    k = len(pieces)
+    if k == 1:
+        return 0, -1, None, {}, set()
+    adj = [[] for _ in range(k)]
+    for (u, v), f in diagonals.items():
+        adj[f].append(diagonals[(v, u)])
+    good = {(u, v): _good(P, pieces[f], u, v) for (u, v), f in diagonals.items()}
+    sides = [[] for _ in range(k)]
+    for (u, v), f in sorted(diagonals.items()):
+        sides[f].append((u, v))
+    by_degree = sorted(range(k), key=lambda f: (-len(adj[f]), f))
+    for root_a in by_degree:
+        for u0, v0 in sides[root_a]:
+            if not (good[(u0, v0)] and good[(v0, u0)]):
+                continue
+            root_b = diagonals[(v0, u0)]
+            parent = {root_a: -1, root_b: -1}
+            tree = {frozenset((u0, v0))}
+            stack = [root_a, root_b]
+            ok = True
+            while stack and ok:
+                f = stack.pop()
+                for u, v in sides[f]:
+                    if diagonals[(v, u)] not in parent:
+                        if not good[(v, u)]:
+                            ok = False
+                            break
+                        parent[diagonals[(v, u)]] = f
+                        tree.add(frozenset((u, v)))
+                        stack.append(diagonals[(v, u)])
+            if ok:
+                return root_a, root_b, (u0, v0), parent, tree
+    return None
 
 
 def _hertel_mehlhorn(cp, tri, nb, t_idx, k_idx):
@@ -266,50 +425,45 @@ def _construct(poly: Polygon, pieces, diagonals, kind):
     if k == 1:
         verts = pieces[0]
         if kind == "path":
-            tri = _fan(P, verts, verts[0])
-            if tri is not None:
-                return P, np.array(tri, dtype=np.int64)
+            for apex in verts:   # a straight-angle vertex may not start a path
+                tri = _fan(P, verts, apex)
+                if tri is not None:
+                    return P, np.array(tri, dtype=np.int64)
         corners = _corners(poly)
         centroid = P[corners].mean(axis=0)
         tri = [(n, verts[s], verts[(s + 1) % len(verts)]) for s in range(len(verts))]
         return np.vstack([P, centroid]), np.array(tri, dtype=np.int64)
 
-    # piece adjacency through diagonals: (u, v) side of piece f, (v, u) side of piece g
-    adj = [[] for _ in range(k)]
-    for (u, v), f in diagonals.items():
-        adj[f].append(diagonals[(v, u)])
-    root_a = max(range(k), key=lambda f: (len(adj[f]), -f))
-    root_b = min(adj[root_a])
-    (u0, v0), = [(u, v) for (u, v), f in diagonals.items()
-                 if f == root_a and diagonals[(v, u)] == root_b]
+    root_a, root_b, (u0, v0), parent, tree = _fan_tree(P, pieces, diagonals)
+    children = [0] * k
+    for g, f in parent.items():
+        if f >= 0:
+            children[f] += 1
     if kind == "path" and k == 2:  # no Steiner point: a path through both pieces
         fa = _fan(P, pieces[root_a], u0, order_from=v0)   # starts on (u0, v0)
         fb = _fan(P, pieces[root_b], u0, order_from=v0)   # starts on (v0, u0)
         if fa is not None and fb is not None:
             return P, np.array(fb[::-1] + fa, dtype=np.int64)
-    parent = {root_a: -1, root_b: -1}
-    stack = [root_a, root_b]
-    while stack:
-        f = stack.pop()
-        for g in adj[f]:
-            if g not in parent:
-                parent[g] = f
-                stack.append(g)
-    leaves = [g for g in range(k) if len(adj[g]) == 1 and g not in (root_a, root_b)]
+    leaves = [g for g in range(k) if children[g] == 0 and g not in (root_a, root_b)]
     candidates = leaves if kind == "path" else []
     for saved in candidates + [None]:
-        out = _spliced_cycle(P, pieces, diagonals, parent, root_a, root_b, (u0, v0), saved)
+        out = _spliced_cycle(P, pieces, diagonals, tree, parent, root_a, root_b, (u0, v0), saved)
         if out is not None:
             return out
     raise AssertionError("unreachable: the cycle construction always succeeds")  # pragma: no cover
 
 
-def _spliced_cycle(P, pieces, diagonals, parent, root_a, root_b, e0, saved):
-    """The cycle construction; with ``saved`` (a leaf piece) cut open into a path there."""
+def _spliced_cycle(P, pieces, diagonals, tree, parent, root_a, root_b, e0, saved):
+    """The cycle construction; with ``saved`` (a leaf piece) cut open into a path there.
+
+    Only the ``tree`` diagonals get Steiner points; the others are plain sides.
+    """
     n = len(P)
     steiner = {}
     extra = []
     for (u, v), f in sorted(diagonals.items()):
+        if frozenset((u, v)) not in tree:
+            continue
         if (v, u) in steiner:
             steiner[(u, v)] = steiner[(v, u)]
             continue
@@ -346,7 +500,7 @@ def _spliced_cycle(P, pieces, diagonals, parent, root_a, root_b, e0, saved):
                 continue
             fr[5] = i + 1
             u, v = sd[i]
-            if (u, v) in diagonals:
+            if frozenset((u, v)) in tree:
                 g = diagonals[(v, u)]
                 if g == par:
                     continue

@@ -224,3 +224,40 @@ def min_path_partition_size(m, edges) -> int:
                 best = min(best, m - r)
                 break
     return best
+
+
+def min_convex_pieces(pts) -> int:
+    """Fewest convex pieces (straight angles allowed) cut by non-crossing diagonals.
+
+    Tries every set of diagonals by increasing size, splitting the polygon along them
+    one at a time and checking each piece's angles; for small polygons only.
+    """
+    P, _ = ccw(pts)
+    n = len(P)
+    diags = sorted(visibility_pairs(P))
+
+    def crossing(d, e):
+        if set(d) & set(e):
+            return False
+        return segments_intersect(P[d[0]], P[d[1]], P[e[0]], P[e[1]])
+
+    def convex(piece):
+        L = len(piece)
+        return all(orient(P[piece[s - 1]], P[piece[s]], P[piece[(s + 1) % L]]) >= 0
+                   for s in range(L))
+
+    for size in range(len(diags) + 1):
+        for chosen in itertools.combinations(diags, size):
+            if any(crossing(d, e) for d, e in itertools.combinations(chosen, 2)):
+                continue
+            pieces = [list(range(n))]
+            for i, j in chosen:
+                f = next(f for f in pieces if i in f and j in f)
+                a, b = f.index(i), f.index(j)
+                if a > b:
+                    a, b = b, a
+                pieces.remove(f)
+                pieces += [f[a:b + 1], f[b:] + f[:a + 1]]
+            if all(convex(f) for f in pieces):
+                return size + 1
+    raise AssertionError("unreachable: a triangulation is convex")  # pragma: no cover

@@ -64,3 +64,32 @@ def assert_alternates(T):
     shared = [set(map(int, T[k])) & set(map(int, T[k + 1])) for k in range(len(T) - 1)]
     for k in range(len(shared) - 2):
         assert not (shared[k] & shared[k + 1] & shared[k + 2]), f"rows {k}..{k + 3} do not alternate"
+
+
+def assert_triangulates_domain(rings, Q, T):
+    """T triangulates the polygon with holes ``rings`` (outer first); Q starts with the
+    rings' points concatenated.  Same certificate as :func:`assert_triangulates`."""
+    rings = [[tuple(map(float, p)) for p in np.asarray(r, dtype=float)] for r in rings]
+    flat = [p for r in rings for p in r]
+    Q = np.asarray(Q, dtype=float)
+    T = np.asarray(T)
+    assert T.ndim == 2 and T.shape[1] == 3 and T.dtype.kind == "i"
+    assert np.array_equal(Q[:len(flat)], np.asarray(flat))
+    total = Fraction(0)
+    for t in T:
+        a, b, c = (tuple(Q[v]) for v in t)
+        assert brute.orient(a, b, c) > 0, f"triangle {t} is not counter-clockwise"
+        total += brute.signed_area2([a, b, c])
+    want = abs(brute.signed_area2(rings[0])) - sum(abs(brute.signed_area2(r)) for r in rings[1:])
+    assert total == want, "areas do not add up"
+    count = Counter()
+    for t in T:
+        for k in range(3):
+            count[frozenset((int(t[k]), int(t[(k + 1) % 3])))] += 1
+    assert max(count.values()) <= 2
+    boundary = {e for e, c in count.items() if c == 1}
+    ring_edges, off = set(), 0
+    for r in rings:
+        ring_edges |= {frozenset((off + i, off + (i + 1) % len(r))) for i in range(len(r))}
+        off += len(r)
+    assert boundary == ring_edges

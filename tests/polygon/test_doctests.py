@@ -6,7 +6,7 @@ import importlib
 import pytest
 
 MODULES = ["_polygon", "visibility", "thm21_hamiltonian", "thm44_sequential", "thm23_steiner",
-           "path_partition", "_triangulate", "plot"]
+           "path_partition", "_triangulate", "plot", "min_convex", "_holes", "thm22_holes"]
 
 
 @pytest.mark.parametrize("name", MODULES)
