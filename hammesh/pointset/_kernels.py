@@ -432,6 +432,8 @@ def insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri0, seed):
     turns the configuration around, see ``docs/pointset.md``) or, failing that, by
     another point of the bucket; a triangle with no usable point is retried after
     all others (its neighbors may have changed).  Returns ``(n_tri, status)``.
+    On ``STUCK`` the arrays are consistent (nothing half-committed): the caller may
+    repair the mesh (``_cycle_repair``) and call again with the current ``n_tri``.
     """
     m_max = tri.shape[0]
     state = np.zeros(2, np.int64)

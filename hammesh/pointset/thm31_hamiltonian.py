@@ -16,10 +16,12 @@ Degenerate input (the paper assumes general position) is handled exactly:
   point on a hull edge splits its triangle into two (the cycle always passes);
 * a point on an interior edge splits both triangles into four pieces forming a ring;
   the cycle passes unless it crosses that edge entering and leaving at opposite
-  pieces; then a strictly interior point of either triangle is inserted first (the
-  cycle then enters the edge's triangle from the other side), or another point of the
-  bucket; a triangle with no usable point waits until its neighbors changed, and if a
-  whole round stalls the construction restarts with other random choices;
+  pieces; then the kernel first tries other splitters (a strictly interior point of
+  either triangle turns the configuration around); when every remaining point is
+  stuck, :mod:`hammesh.pointset._cycle_repair` inserts one by re-triangulating a few
+  consecutive cycle triangles around it (exact search, the cycle is kept), or makes
+  a cycle-preserving flip nearby, and the kernel resumes; a restart with other random
+  choices is the last resort (not observed on grids up to 20x20);
 * duplicates, fewer than 3 points, all points on one line: :class:`InvalidDomainError`.
 
 The output has ``2 n - h - 2`` triangles (``h`` points on the hull boundary) and is
@@ -32,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammesh.errors import MeshingError
-from hammesh.pointset import _kernels
+from hammesh.pointset import _cycle_repair, _kernels
 from hammesh.pointset.validate import Hull, as_points, convex_hull
 from hammesh.pointset.verify import verify_point_triangulation
 
@@ -42,6 +44,9 @@ __all__ = ["hamiltonian_triangulation", "MAX_ATTEMPTS"]
 MAX_ATTEMPTS = 12
 #: Random interior apexes tried for the start fan (the first with no point on a spoke wins).
 APEX_TRIES = 8
+#: Repairs (:mod:`hammesh.pointset._cycle_repair`: region re-triangulations or flips)
+#: per point before a restart.
+MAX_REPAIRS_PER_POINT = 1
 
 
 def hamiltonian_triangulation(points: np.ndarray, seed: int | None = None) -> np.ndarray:
@@ -66,7 +71,7 @@ def hamiltonian_triangulation(points: np.ndarray, seed: int | None = None) -> np
     InvalidDomainError
         Fewer than 3 points, non-finite or duplicate points, all points collinear.
     MeshingError
-        A degenerate configuration defeated every restart (not observed in tests).
+        A degenerate configuration defeated every repair and restart (not observed).
     VerificationError
         The output failed its certificate (a bug).
 
@@ -177,6 +182,17 @@ def _attempt(pts: np.ndarray, hull: Hull, rng: np.random.Generator) -> np.ndarra
     B = np.ascontiguousarray(rest, dtype=np.int64)
     seed = int(rng.integers(1, 2**62))
     n_tri, status = _kernels.insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n0, seed)
+    repairs = 0
+    while status == _kernels.STUCK and repairs < MAX_REPAIRS_PER_POINT * n + 8:
+        added, B = _cycle_repair.insert_by_chain(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri)
+        n_tri += added
+        if not added:
+            done, B = _cycle_repair.repair(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, rng)
+            if not done:
+                break
+        repairs += 1
+        seed = int(rng.integers(1, 2**62))
+        n_tri, status = _kernels.insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, seed)
     if status == _kernels.STUCK:
         return None
     if status != _kernels.OK or n_tri != m:

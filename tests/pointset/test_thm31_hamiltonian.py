@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from hammesh.errors import HammeshError, InvalidDomainError, MeshingError, VerificationError
+from hammesh.errors import HammeshError, InvalidDomainError, VerificationError
 from hammesh.pointset import convex_hull, hamiltonian_triangulation, verify_point_triangulation
 from hammesh.predicates import orient
 
@@ -77,9 +77,71 @@ def test_integer_sets_with_collinearities(raw, seed):
         xs = pts - pts[0]
         assert np.all(xs[:, 0] * xs[-1, 1] - xs[:, 1] * xs[-1, 0] == 0) or len(pts) < 3
         return
-    except MeshingError:
-        pytest.skip("degenerate configuration not handled (documented limitation)")
     _check(pts, tri)
+
+
+def _collinear(pts):
+    d, e = pts[1:] - pts[0], pts[-1] - pts[0]
+    return bool(np.all(d[:, 0] * e[1] - d[:, 1] * e[0] == 0))
+
+
+def _grid(kx, ky):
+    return np.stack(np.meshgrid(np.arange(float(kx)), np.arange(float(ky))), -1).reshape(-1, 2)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(2, 10), st.integers(2, 10), st.integers(0, 2**32 - 1))
+def test_integer_grids_up_to_10x10(kx, ky, seed):
+    """Grids: every interior point is on many lines through other points (issue 5)."""
+    pts = _grid(kx, ky)
+    if kx * ky < 3:
+        return
+    _check(pts, hamiltonian_triangulation(pts, seed=seed), convex=kx == 2 or ky == 2)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(3, 10), st.integers(3, 10), st.floats(0.2, 1.0), st.integers(0, 2**32 - 1))
+def test_random_subsets_of_grids(kx, ky, keep, seed):
+    rng = np.random.default_rng(seed)
+    pts = _grid(kx, ky)
+    pts = pts[rng.random(len(pts)) < keep]
+    if len(pts) < 3 or _collinear(pts):
+        return
+    pts = pts[rng.permutation(len(pts))]
+    _check(pts, hamiltonian_triangulation(pts, seed=seed))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(1, 5), st.integers(2, 12), st.integers(0, 2**32 - 1))
+def test_points_on_a_few_lines(n_lines, per_line, seed):
+    """Several lines through a common or random point, each holding many points."""
+    rng = np.random.default_rng(seed)
+    chunks = [rng.integers(-20, 21, size=(3, 2)).astype(float)]
+    for _ in range(n_lines):
+        a = rng.integers(-20, 21, size=2)
+        d = rng.integers(-3, 4, size=2)
+        if not d.any():
+            d = np.array([1, 0])
+        chunks.append(a + np.outer(np.arange(per_line), d))
+    pts = np.unique(np.vstack(chunks), axis=0)
+    if len(pts) < 3 or _collinear(pts):
+        return
+    _check(pts, hamiltonian_triangulation(pts, seed=seed))
+
+
+@pytest.mark.parametrize("k", [5, 8, 10])
+def test_grids_that_used_to_stall(k):
+    pts = _grid(k, k)
+    for seed in range(10):
+        _check(pts, hamiltonian_triangulation(pts, seed=seed))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [15, 20])
+def test_larger_grids(k):
+    pts = _grid(k, k)
+    for seed in range(3):
+        _check(pts, hamiltonian_triangulation(pts, seed=seed))
 
 
 def test_small_grids_and_collinear_interior():
