@@ -9,6 +9,7 @@ overrun of ``timeout`` kills the child.
 
 from __future__ import annotations
 
+import faulthandler
 import multiprocessing as mp
 import os
 import signal
@@ -36,6 +37,7 @@ def _c_output(log: Any) -> str:
 def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...]) -> None:
     # the C library prints to file descriptors 1/2 directly: keep that out of the
     # caller's terminal and use it to explain a failure instead
+    faulthandler.disable()  # a crash is reported by the parent (signal name), not dumped
     log = tempfile.TemporaryFile()
     os.dup2(log.fileno(), 1)
     os.dup2(log.fileno(), 2)
