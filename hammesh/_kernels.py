@@ -22,11 +22,10 @@ __all__ = [
     "mark_segments",
     "vertex_neighbors",
     "emit_cycles",
-    "check_twin_claim",
     "spanning_forest",
-    "consecutive_shared_edges",
     "first_cross_run_edge",
     "angle_area_stats",
+    "certify_rows",
 ]
 
 
@@ -412,7 +411,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     triangles, the input triangle each lies in, its kind (0 incenter, 1 flip, 2
     midpoint), the cycle lengths, the edge ``(mid_a[i], mid_b[i])`` split by midpoint
     i, and the output's half-edge twins as the construction implies them (a *claim*
-    the certificate checks, see ``check_twin_claim``).
+    the certificate checks, see ``certify_rows``).
     """
     m = tri.shape[0]
     nh = 3 * m
@@ -528,57 +527,6 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
 
 
 @njit(cache=True)
-def check_twin_claim(tri, claim):
-    """Is ``claim`` a valid half-edge pairing of ``tri``? Returns the first bad half-edge or -1.
-
-    Valid: an involution without fixed points on the paired half-edges, each pair
-    being the same edge in opposite directions. Checking a claim is one read per
-    half-edge; finding the pairing (``half_edge_twins``) needs a bucket sort.
-    """
-    nh = 3 * tri.shape[0]
-    if claim.shape[0] != nh:
-        return 0
-    for h in range(nh):
-        g = claim[h]
-        if g < 0:
-            continue
-        if g >= nh or g == h or claim[g] != h:
-            return h
-        t = h // 3
-        k = h - 3 * t
-        u = g // 3
-        j = g - 3 * u
-        if tri[t, k] != tri[u, (j + 1) % 3] or tri[t, (k + 1) % 3] != tri[u, j]:
-            return h
-    return -1
-
-
-@njit(cache=True)
-def consecutive_shared_edges(tri, run_lengths):
-    """Index of the first row that shares no edge with its successor in its run, or -1.
-
-    The successor of a run's last row is the run's first row (the cycle closes). A
-    run of length 1 or 2 cannot be a cycle of distinct triangles and is reported too.
-    """
-    first = 0
-    for r in range(run_lengths.shape[0]):
-        L = run_lengths[r]
-        if L < 3:
-            return first
-        for i in range(first, first + L):
-            j = i + 1 if i + 1 < first + L else first
-            shared = 0
-            for a in range(3):
-                for b in range(3):
-                    if tri[i, a] == tri[j, b]:
-                        shared += 1
-            if shared != 2:
-                return i
-        first += L
-    return -1
-
-
-@njit(cache=True)
 def first_cross_run_edge(twin, run_lengths):
     """First half-edge whose twin lies in another run (cycle), or -1."""
     m = twin.shape[0] // 3
@@ -643,6 +591,114 @@ def _angle_area_range(points, tri, lo, hi):
             best_c = c
             amax = t
     return best_s2, amin, best_c, amax, min_area, aarea, total
+
+
+@njit(cache=True)
+def certify_rows(points, tri, runs, pair):
+    """The certificate's per-row checks in one pass over a cycle-ordered mesh.
+
+    ``runs`` are the cycle lengths (positive, summing to ``m``: checked by the
+    caller); ``pair`` is a half-edge pairing to check (an empty array skips those
+    checks). For each kind of failure the first row (or half-edge) is returned, -1
+    if none: ``(bad_index, bad_consecutive, bad_pair, cross_run, min_angle, argmin,
+    max_angle, argmax, min_area, argmin_area, total_area)``.
+
+    * bad_index: a row with a vertex outside ``0..n-1`` (such rows are skipped);
+    * bad_consecutive: a row sharing no edge (exactly two vertices) with the next row
+      of its run (the last with the first), or the start of a run shorter than 3;
+    * bad_pair: a half-edge whose partner is out of range, itself, not paired back, or
+      not the same edge reversed;
+    * cross_run: a half-edge paired with a half-edge of another run.
+    """
+    m = tri.shape[0]
+    n = points.shape[0]
+    check_pair = pair.shape[0] == 3 * m
+    bad_index = -1
+    bad_consec = -1
+    bad_pair = -1
+    cross = -1
+    best_s2 = np.inf
+    best_c = np.inf
+    amin = -1
+    amax = -1
+    min_area = np.inf
+    aarea = -1
+    total = 0.0
+    r_start = 0
+    for r in range(runs.shape[0]):
+        r_end = r_start + runs[r]
+        if runs[r] < 3 and bad_consec < 0:
+            bad_consec = r_start
+        for i in range(r_start, r_end):
+            p0 = tri[i, 0]
+            p1 = tri[i, 1]
+            p2 = tri[i, 2]
+            if p0 < 0 or p1 < 0 or p2 < 0 or p0 >= n or p1 >= n or p2 >= n:
+                if bad_index < 0:
+                    bad_index = i
+                continue
+            j = i + 1 if i + 1 < r_end else r_start
+            shared = 0
+            for a in range(3):
+                for b in range(3):
+                    if tri[i, a] == tri[j, b]:
+                        shared += 1
+            if shared != 2 and bad_consec < 0:
+                bad_consec = i
+            ax = points[p1, 0] - points[p0, 0]
+            ay = points[p1, 1] - points[p0, 1]
+            bx = points[p2, 0] - points[p1, 0]
+            by = points[p2, 1] - points[p1, 1]
+            cx = points[p0, 0] - points[p2, 0]
+            cy = points[p0, 1] - points[p2, 1]
+            cr = ax * by - ay * bx
+            total += 0.5 * cr
+            if 0.5 * cr < min_area:
+                min_area = 0.5 * cr
+                aarea = i
+            la = ax * ax + ay * ay
+            lb = bx * bx + by * by
+            lc = cx * cx + cy * cy
+            if la <= lb and la <= lc:
+                s2 = cr * cr / (lb * lc)
+            elif lb <= lc:
+                s2 = cr * cr / (la * lc)
+            else:
+                s2 = cr * cr / (la * lb)
+            if s2 < best_s2:
+                best_s2 = s2
+                amin = i
+            if la >= lb and la >= lc:
+                c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
+            elif lb >= lc:
+                c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
+            else:
+                c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
+            if c < best_c:
+                best_c = c
+                amax = i
+            if check_pair:
+                for k in range(3):
+                    h = 3 * i + k
+                    g = pair[h]
+                    if g < 0:
+                        continue
+                    if g >= 3 * m or g == h or pair[g] != h:
+                        if bad_pair < 0:
+                            bad_pair = h
+                        continue
+                    u = g // 3
+                    jg = g - 3 * u
+                    if tri[i, k] != tri[u, (jg + 1) % 3] or tri[i, (k + 1) % 3] != tri[u, jg]:
+                        if bad_pair < 0:
+                            bad_pair = h
+                    if (u < r_start or u >= r_end) and cross < 0:
+                        cross = h
+        r_start = r_end
+    min_ang = np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0)))
+    max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
+    return (bad_index, bad_consec, bad_pair, cross, min_ang, amin, max_ang, amax,
+            min_area, aarea, total)
 
 
 @njit(cache=True)

@@ -121,44 +121,50 @@ def verify_cycle_mesh(
         _fail("the mesh has no triangles")
     if not np.isfinite(pts).all():
         _fail(f"point {int(np.argmax(~np.isfinite(pts).all(axis=1)))} is not finite")
-    if tri.min() < 0 or tri.max() >= n:
-        t = int(np.argmax(((tri < 0) | (tri >= n)).any(axis=1)))
-        _fail(f"triangle {t} {tri[t].tolist()} references a vertex outside 0..{n - 1}")
     if (runs <= 0).any() or runs.sum() != m:
         _fail(f"components {runs.tolist()[:10]} are not positive run lengths summing to {m}")
 
-    bad = _kernels.consecutive_shared_edges(tri, runs)
+    if reference is not None and reference_twin is None:
+        r_tri = np.asarray(reference.triangles)
+        if r_tri.size and (r_tri.min() < 0 or r_tri.max() >= len(reference.points)):
+            _fail("the reference mesh references vertices outside its points")
+        reference_twin, r_dup = _kernels.half_edge_twins(
+            np.ascontiguousarray(reference.triangles, dtype=np.int64), len(reference.points)
+        )
+        if r_dup >= 0:
+            _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
+    # a claimed pairing is only of use with a reference (the tiling argument needs the
+    # input's boundary) and must leave as many boundary edges as the input has
+    claim = None if twin_claim is None else np.ascontiguousarray(twin_claim, dtype=np.int64)
+    if not (
+        claim is not None
+        and reference_twin is not None
+        and claim.shape == (3 * m,)
+        and int((claim < 0).sum()) == int((reference_twin < 0).sum())
+    ):
+        claim = np.empty(0, dtype=np.int64)
+    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total) = (
+        _kernels.certify_rows(pts, tri, runs, claim)
+    )
+    if bad_index >= 0:
+        _fail(f"triangle {bad_index} {tri[bad_index].tolist()} references a vertex outside 0..{n - 1}")
     if bad >= 0:
         run = int(np.searchsorted(np.cumsum(runs), bad, side="right"))
         _fail(
             f"cycle {run} breaks at triangle {bad}: it shares no edge with the next "
             "triangle of its cycle"
         )
-
-    amin, tmin, amax, _, area_min, tarea, total = _kernels.angle_area_stats(pts, tri)
     if tmin < 0 or not (math.isfinite(amin) and math.isfinite(total)):
         _fail("angles and areas are not finite (coordinates too large or too small)")
     if not area_min > 0:
         _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
 
-    if reference is not None and reference_twin is None:
-        reference_twin, r_dup = _kernels.half_edge_twins(
-            np.ascontiguousarray(reference.triangles, dtype=np.int64), len(reference.points)
-        )
-        if r_dup >= 0:
-            _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
     dup = -1
-    claim = None if twin_claim is None else np.ascontiguousarray(twin_claim, dtype=np.int64)
-    if (
-        claim is not None
-        and reference_twin is not None
-        and claim.shape == (3 * m,)
-        and int((claim < 0).sum()) == int((reference_twin < 0).sum())
-        and _kernels.check_twin_claim(tri, claim) < 0
-    ):
+    if len(claim) and bad_pair < 0:
         twin = claim
-    else:
+    else:  # no (valid) claim: find the pairing, then check the runs with it
         twin, dup = _kernels.half_edge_twins(tri, n)
+        cross = -1 if dup >= 0 else int(_kernels.first_cross_run_edge(twin, runs))
     if dup >= 0:
         t, k = divmod(int(dup), 3)
         same = np.flatnonzero((np.sort(tri, axis=1) == np.sort(tri[t])).all(axis=1))
@@ -168,7 +174,7 @@ def verify_cycle_mesh(
             f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the "
             "same direction (overlap or non-manifold edge)"
         )
-    h = int(_kernels.first_cross_run_edge(twin, runs))
+    h = int(cross)
     if h >= 0:
         _fail(
             f"triangles {h // 3} and {int(twin[h]) // 3} share an edge but lie in different "
