@@ -543,6 +543,39 @@ def first_cross_run_edge(twin, run_lengths):
     return -1
 
 
+@njit(cache=True, inline="always")
+def _measures(points, p0, p1, p2):
+    """``(cross, sin^2 of the smallest angle, cos of the largest)`` of one triangle.
+
+    ``cross`` is twice the signed area. The smallest angle is opposite the shortest
+    side (at most 60 degrees: ``arcsin`` is well conditioned there), the largest
+    opposite the longest side (cosine law).
+    """
+    ax = points[p1, 0] - points[p0, 0]  # side opposite vertex 2
+    ay = points[p1, 1] - points[p0, 1]
+    bx = points[p2, 0] - points[p1, 0]  # opposite vertex 0
+    by = points[p2, 1] - points[p1, 1]
+    cx = points[p0, 0] - points[p2, 0]  # opposite vertex 1
+    cy = points[p0, 1] - points[p2, 1]
+    cr = ax * by - ay * bx
+    la = ax * ax + ay * ay
+    lb = bx * bx + by * by
+    lc = cx * cx + cy * cy
+    if la <= lb and la <= lc:
+        s2 = cr * cr / (lb * lc)
+    elif lb <= lc:
+        s2 = cr * cr / (la * lc)
+    else:
+        s2 = cr * cr / (la * lb)
+    if la >= lb and la >= lc:
+        c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
+    elif lb >= lc:
+        c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
+    else:
+        c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
+    return cr, s2, c
+
+
 @njit(cache=True)
 def _angle_area_range(points, tri, lo, hi):
     best_s2 = np.inf
@@ -556,37 +589,14 @@ def _angle_area_range(points, tri, lo, hi):
         p0 = tri[t, 0]
         p1 = tri[t, 1]
         p2 = tri[t, 2]
-        ax = points[p1, 0] - points[p0, 0]  # side opposite vertex 2
-        ay = points[p1, 1] - points[p0, 1]
-        bx = points[p2, 0] - points[p1, 0]  # opposite vertex 0
-        by = points[p2, 1] - points[p1, 1]
-        cx = points[p0, 0] - points[p2, 0]  # opposite vertex 1
-        cy = points[p0, 1] - points[p2, 1]
-        cr = ax * by - ay * bx  # twice the signed area
+        cr, s2, c = _measures(points, p0, p1, p2)
         total += 0.5 * cr
         if 0.5 * cr < min_area:
             min_area = 0.5 * cr
             aarea = t
-        la = ax * ax + ay * ay
-        lb = bx * bx + by * by
-        lc = cx * cx + cy * cy
-        # shortest side s with the other two sides e, f (squared lengths)
-        if la <= lb and la <= lc:
-            s2 = cr * cr / (lb * lc)
-        elif lb <= lc:
-            s2 = cr * cr / (la * lc)
-        else:
-            s2 = cr * cr / (la * lb)
         if s2 < best_s2:
             best_s2 = s2
             amin = t
-        # longest side L opposite the largest angle: cos = (e^2 + f^2 - L^2) / (2 e f)
-        if la >= lb and la >= lc:
-            c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
-        elif lb >= lc:
-            c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
-        else:
-            c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
         if c < best_c:
             best_c = c
             amax = t
@@ -645,35 +655,14 @@ def certify_rows(points, tri, runs, pair):
                         shared += 1
             if shared != 2 and bad_consec < 0:
                 bad_consec = i
-            ax = points[p1, 0] - points[p0, 0]
-            ay = points[p1, 1] - points[p0, 1]
-            bx = points[p2, 0] - points[p1, 0]
-            by = points[p2, 1] - points[p1, 1]
-            cx = points[p0, 0] - points[p2, 0]
-            cy = points[p0, 1] - points[p2, 1]
-            cr = ax * by - ay * bx
+            cr, s2, c = _measures(points, p0, p1, p2)
             total += 0.5 * cr
             if 0.5 * cr < min_area:
                 min_area = 0.5 * cr
                 aarea = i
-            la = ax * ax + ay * ay
-            lb = bx * bx + by * by
-            lc = cx * cx + cy * cy
-            if la <= lb and la <= lc:
-                s2 = cr * cr / (lb * lc)
-            elif lb <= lc:
-                s2 = cr * cr / (la * lc)
-            else:
-                s2 = cr * cr / (la * lb)
             if s2 < best_s2:
                 best_s2 = s2
                 amin = i
-            if la >= lb and la >= lc:
-                c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
-            elif lb >= lc:
-                c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
-            else:
-                c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
             if c < best_c:
                 best_c = c
                 amax = i

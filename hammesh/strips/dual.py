@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import connected_components
 from hammesh import _kernels
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.verify.input_mesh import mesh_arrays
 
 __all__ = ["DualMesh", "dual_mesh", "oriented_key"]
 
@@ -104,29 +105,8 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     >>> d.neighbor_triangles.tolist(), d.n_components
     ([[-1, -1, 1], [0, -1, -1]], 1)
     """
-    pts = np.asarray(mesh.points)
-    tri = np.asarray(mesh.triangles)
-    if pts.ndim != 2 or pts.shape[1] not in (2, 3):
-        raise InvalidMeshError(f"points must have shape (n, 2) or (n, 3), got {pts.shape}")
-    if tri.ndim != 2 or tri.shape[1] != 3:
-        raise InvalidMeshError(f"triangles must have shape (m, 3), got {tri.shape}")
-    if len(tri) == 0:
-        raise InvalidMeshError("the mesh has no triangles")
-    if not np.issubdtype(tri.dtype, np.integer):
-        raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
-    pts = np.ascontiguousarray(pts, dtype=np.float64)
-    tri = np.ascontiguousarray(tri, dtype=np.int64)
-    finite = np.isfinite(pts).all(axis=1)
-    if not finite.all():
-        i = int(np.argmin(finite))
-        raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
     n = len(pts)
-    out = (tri < 0) | (tri >= n)
-    if out.any():
-        t = int(np.argmax(out.any(axis=1)))
-        raise InvalidMeshError(
-            f"triangle {t} references vertex {int(tri[t][out[t]][0])} but there are only {n} points"
-        )
     repeated = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
     if repeated.any():
         t = int(np.argmax(repeated))

@@ -11,7 +11,7 @@ from hammesh.domain.validate import MAX_ABS_COORDINATE
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
 
-__all__ = ["HalfEdges", "half_edges", "prepare_mesh"]
+__all__ = ["HalfEdges", "half_edges", "mesh_arrays", "prepare_mesh"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,6 +77,49 @@ def half_edges(triangles: np.ndarray, n_points: int, neighbors: np.ndarray | Non
     return HalfEdges(triangles=tri, twin=twin, vertex_he=_kernels.vertex_half_edges(tri, int(n_points)))
 
 
+def mesh_arrays(
+    points: np.ndarray, triangles: np.ndarray, dims: tuple[int, ...] = (2,)
+) -> tuple[np.ndarray, np.ndarray]:
+    """Contiguous ``float64`` points and ``int64`` triangles, checked before any kernel.
+
+    Parameters
+    ----------
+    points : (n, d) array_like, d in ``dims``
+    triangles : (m, 3) array_like of int
+
+    Raises
+    ------
+    InvalidMeshError
+        Wrong shapes or dtype, no triangles, a non-finite point, an index out of range
+        (the message names the point or triangle).
+    """
+    pts = np.asarray(points)
+    tri = np.asarray(triangles)
+    if pts.ndim != 2 or pts.shape[1] not in dims:
+        shapes = " or ".join(f"(n, {d})" for d in dims)
+        raise InvalidMeshError(f"points must have shape {shapes}, got {pts.shape}")
+    if tri.ndim != 2 or tri.shape[1] != 3:
+        raise InvalidMeshError(f"triangles must have shape (m, 3), got {tri.shape}")
+    if len(tri) == 0:
+        raise InvalidMeshError("the mesh has no triangles")
+    if not np.issubdtype(tri.dtype, np.integer):
+        raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    finite = np.isfinite(pts).all(axis=1)
+    if not finite.all():
+        i = int(np.argmin(finite))
+        raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    n = len(pts)
+    if tri.min() < 0 or tri.max() >= n:
+        out = (tri < 0) | (tri >= n)
+        t = int(np.argmax(out.any(axis=1)))
+        raise InvalidMeshError(
+            f"triangle {t} references vertex {int(tri[t][out[t]][0])} but there are only {n} points"
+        )
+    return pts, tri
+
+
 def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
     """Check a planar mesh and return it counter-clockwise with its half-edges.
 
@@ -95,22 +138,7 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         triangle with a repeated vertex or zero area, a non-manifold edge, a segment
         that is not an edge of the mesh.
     """
-    pts = np.asarray(mesh.points)
-    tri = np.asarray(mesh.triangles)
-    if pts.ndim != 2 or pts.shape[1] != 2:
-        raise InvalidMeshError(f"points must have shape (n, 2), got {pts.shape}")
-    if tri.ndim != 2 or tri.shape[1] != 3:
-        raise InvalidMeshError(f"triangles must have shape (m, 3), got {tri.shape}")
-    if len(tri) == 0:
-        raise InvalidMeshError("the mesh has no triangles")
-    if not np.issubdtype(tri.dtype, np.integer):
-        raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
-    pts = np.ascontiguousarray(pts, dtype=np.float64)
-    tri = np.ascontiguousarray(tri, dtype=np.int64)
-    bad = ~np.isfinite(pts).all(axis=1)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    pts, tri = mesh_arrays(mesh.points, mesh.triangles)
     big = np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE
     if big.any():
         i = int(np.argmax(big))
@@ -119,12 +147,6 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
             "(squared lengths would overflow)"
         )
     n = len(pts)
-    if tri.min() < 0 or tri.max() >= n:
-        out = (tri < 0) | (tri >= n)
-        t = int(np.argmax(out.any(axis=1)))
-        raise InvalidMeshError(
-            f"triangle {t} references vertex {tri[t][out[t]][0]} but there are only {n} points"
-        )
     tri, n_flipped, bad_t = _kernels.orient_ccw(pts, tri)
     if bad_t >= 0:
         t = int(bad_t)
