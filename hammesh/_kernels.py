@@ -23,9 +23,12 @@ __all__ = [
     "vertex_neighbors",
     "emit_cycles",
     "spanning_forest",
+    "spanning_forest_ordered",
+    "renumber_triangles",
     "first_cross_run_edge",
     "angle_area_stats",
     "certify_rows",
+    "certify_row_range",
 ]
 
 
@@ -70,34 +73,36 @@ def orient_ccw(points, tri):
 def twins_from_neighbors(tri, nbr):
     """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
 
-    Returns ``(twin, bad)``; ``bad`` is -1, or the first half-edge whose claimed
-    neighbour does not hold the same edge reversed (then the neighbours are not to be
-    trusted and the caller matches half-edges itself).
+    Returns ``(twin, bad)``; ``bad`` is -1, or a half-edge whose claimed neighbour
+    does not hold the same edge reversed or does not name it back (then the
+    neighbours are not to be trusted and the caller matches half-edges itself).
+    Each pair is matched once, from its lower triangle; the higher one only checks
+    that it was matched (half the random reads of checking both sides).
     """
     m = tri.shape[0]
     twin = np.full(3 * m, -1, np.int64)
-    wrong = np.zeros(m, np.bool_)
     for t in range(m):
         for k in range(3):
             u = nbr[t, k]
             if u < 0:
                 continue
+            h = 3 * t + k
             if u >= m:
-                wrong[t] = True
-                break
+                return twin, h
+            if u < t:  # matched from u already (or u does not name t back)
+                if twin[h] < 0:
+                    return twin, h
+                continue
             a = tri[t, k]
             b = tri[t, (k + 1) % 3]
             found = -1
             for j in range(3):
                 if tri[u, j] == b and tri[u, (j + 1) % 3] == a:
                     found = 3 * u + j
-            if found < 0 or nbr[u, found - 3 * u] != t:
-                wrong[t] = True
-                break
-            twin[3 * t + k] = found
-    for t in range(m):
-        if wrong[t]:
-            return twin, 3 * t
+            if found < 0 or nbr[u, found - 3 * u] != t or twin[found] >= 0 or u == t:
+                return twin, h
+            twin[h] = found
+            twin[found] = h
     return twin, -1
 
 
@@ -113,9 +118,11 @@ def incenters(points, tri):
         by = points[tri[t, 1], 1]
         cx = points[tri[t, 2], 0]
         cy = points[tri[t, 2], 1]
-        la = np.hypot(cx - bx, cy - by)
-        lb = np.hypot(ax - cx, ay - cy)
-        lc = np.hypot(bx - ax, by - ay)
+        # plain sqrt: np.hypot's overflow guard costs 5x here, and |x| <= 1e30 is
+        # validated, so the squares cannot overflow
+        la = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+        lb = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+        lc = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
         s = la + lb + lc
         out[t, 0] = (la * ax + lb * bx + lc * cx) / s
         out[t, 1] = (la * ay + lb * by + lc * cy) / s
@@ -326,6 +333,13 @@ def _find(parent, x):
 
 @njit(cache=True)
 def spanning_forest(twin, is_con, m):
+    """``spanning_forest_ordered`` without the visiting order."""
+    is_tree, root, firsts, _order = spanning_forest_ordered(twin, is_con, m)
+    return is_tree, root, firsts
+
+
+@njit(cache=True)
+def spanning_forest_ordered(twin, is_con, m):
     """Spanning forest of the dual graph that crosses the fewest constrained edges.
 
     First a depth-first search over free (flippable) dual edges only: its trees span
@@ -334,13 +348,17 @@ def spanning_forest(twin, is_con, m):
     if it joins two regions not yet joined: exactly ``regions - pieces`` crossings,
     the fewest possible (a crossing joins two regions).
 
-    Returns ``(is_tree (3m,) bool, root (m,) int64, firsts (p,) int64)``: ``root[t]``
-    identifies t's connected piece and ``firsts`` is the lowest triangle of each of
-    the p pieces, ascending.
+    Returns ``(is_tree (3m,) bool, root (m,) int64, firsts (p,) int64, order (m,)
+    int64)``: ``root[t]`` identifies t's connected piece, ``firsts`` is the lowest
+    triangle of each of the p pieces, ascending, and ``order`` lists the triangles in
+    the order the search took them off its stack (neighbours in the plane end up
+    close in this order: ``renumber_triangles`` uses it for memory locality).
     """
     is_tree = np.zeros(twin.shape[0], np.bool_)
     region = np.full(m, -1, np.int64)
     stack = np.empty(m, np.int64)
+    order = np.empty(m, np.int64)
+    n_seen = 0
     n_reg = 0
     for s in range(m):
         if region[s] >= 0:
@@ -351,6 +369,8 @@ def spanning_forest(twin, is_con, m):
         while top > 0:
             top -= 1
             t = stack[top]
+            order[n_seen] = t
+            n_seen += 1
             for k in range(3):
                 h = 3 * t + k
                 g = twin[h]
@@ -386,7 +406,35 @@ def spanning_forest(twin, is_con, m):
             seen[r] = True
             firsts[n_pieces] = t
             n_pieces += 1
-    return is_tree, root, firsts[:n_pieces]
+    return is_tree, root, firsts[:n_pieces], order
+
+
+@njit(cache=True)
+def renumber_triangles(tri, twin, is_tree, is_con, order):
+    """The half-edge arrays with triangle ``order[i]`` renumbered ``i``.
+
+    Returns ``(tri, twin, is_tree, is_con, rank)`` in the new numbering, ``rank`` the
+    inverse of ``order``. The Thm 2.4 walk follows the spanning tree, so with the
+    tree search's own order its reads become nearly sequential (measured: the walk
+    and the certificate run about 1.6x faster at 1.5 M triangles).
+    """
+    m = tri.shape[0]
+    rank = np.empty(m, np.int64)
+    for i in range(m):
+        rank[order[i]] = i
+    tri_r = np.empty_like(tri)
+    twin_r = np.empty_like(twin)
+    tree_r = np.empty_like(is_tree)
+    con_r = np.empty_like(is_con)
+    for i in range(m):
+        t = order[i]
+        for k in range(3):
+            tri_r[i, k] = tri[t, k]
+            g = twin[3 * t + k]
+            twin_r[3 * i + k] = -1 if g < 0 else 3 * rank[g // 3] + g % 3
+            tree_r[3 * i + k] = is_tree[3 * t + k]
+            con_r[3 * i + k] = is_con[3 * t + k]
+    return tri_r, twin_r, tree_r, con_r, rank
 
 
 @njit(cache=True)
@@ -603,8 +651,8 @@ def _angle_area_range(points, tri, lo, hi):
     return best_s2, amin, best_c, amax, min_area, aarea, total
 
 
-@njit(cache=True)
-def certify_rows(points, tri, runs, pair):
+@njit(cache=True, nogil=True)
+def certify_row_range(points, tri, runs, pair, lo, hi):
     """The certificate's per-row checks in one pass over a cycle-ordered mesh.
 
     ``runs`` are the cycle lengths (positive, summing to ``m``: checked by the
@@ -619,6 +667,9 @@ def certify_rows(points, tri, runs, pair):
     * bad_pair: a half-edge whose partner is out of range, itself, not paired back, or
       not the same edge reversed;
     * cross_run: a half-edge paired with a half-edge of another run.
+
+    Only rows ``lo <= i < hi`` are checked (they may cut runs anywhere), so that
+    threads can share the work: the kernel releases the GIL.
     """
     m = tri.shape[0]
     n = points.shape[0]
@@ -637,9 +688,12 @@ def certify_rows(points, tri, runs, pair):
     r_start = 0
     for r in range(runs.shape[0]):
         r_end = r_start + runs[r]
-        if runs[r] < 3 and bad_consec < 0:
+        if r_end <= lo or r_start >= hi:
+            r_start = r_end
+            continue
+        if runs[r] < 3 and bad_consec < 0 and r_start >= lo:
             bad_consec = r_start
-        for i in range(r_start, r_end):
+        for i in range(max(r_start, lo), min(r_end, hi)):
             p0 = tri[i, 0]
             p1 = tri[i, 1]
             p2 = tri[i, 2]
@@ -688,6 +742,12 @@ def certify_rows(points, tri, runs, pair):
     max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
     return (bad_index, bad_consec, bad_pair, cross, min_ang, amin, max_ang, amax,
             min_area, aarea, total)
+
+
+@njit(cache=True)
+def certify_rows(points, tri, runs, pair):
+    """``certify_row_range`` over all rows."""
+    return certify_row_range(points, tri, runs, pair, 0, tri.shape[0])
 
 
 @njit(cache=True)

@@ -75,12 +75,17 @@ def incircle_hamiltonian(
         The output's half-edge twins as the construction implies them; the
         certificate checks this claim instead of recomputing the pairing.
     """
-    pts, tri = mesh.points, mesh.triangles
+    pts = mesh.points
     n, m = mesh.n_points, mesh.n_triangles
-    is_tree, _root, firsts = _kernels.spanning_forest(he.twin, is_con, m)
-    out, parent, kind, lengths, mid_a, mid_b, claim = _kernels.emit_cycles(
-        tri, he.twin, is_tree, is_con, firsts, n
+    is_tree, _root, firsts, order = _kernels.spanning_forest_ordered(he.twin, is_con, m)
+    # walk in the tree search's numbering (locality); incenter i is that of order[i]
+    tri, twin, is_tree, is_con, rank = _kernels.renumber_triangles(
+        mesh.triangles, he.twin, is_tree, is_con, order
     )
+    out, parent, kind, lengths, mid_a, mid_b, claim = _kernels.emit_cycles(
+        tri, twin, is_tree, is_con, rank[firsts], n
+    )
+    parent = order[parent]
     if len(out) != 3 * m + 2 * len(mid_a):
         raise VerificationError(
             f"internal error: the tree walk emitted {len(out)} of "
@@ -111,7 +116,7 @@ def incircle_hamiltonian(
         "steiner_points": int(m + q),
         "incenters": int(m),
         "midpoints": int(q),
-        "flips": int((is_tree & ~is_con).sum() // 2),
+        "flips": int(np.count_nonzero(is_tree & ~is_con) // 2),
         "components": [int(x) for x in lengths],
     }
     h = HamiltonianMesh(

@@ -37,6 +37,8 @@ pairing is always computed, and a non-manifold edge fails item 3 directly.
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -58,6 +60,39 @@ def _fail(msg: str) -> None:
 
 def _edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
     return a.astype(np.int64) * n + b.astype(np.int64)
+
+
+#: Rows per thread below which the row checks run in one call.
+THREAD_MIN_ROWS = 200_000
+
+
+def _certify_rows(pts: np.ndarray, tri: np.ndarray, runs: np.ndarray, claim: np.ndarray) -> tuple:
+    """``_kernels.certify_row_range`` over all rows, split across the machine's cores.
+
+    The kernel releases the GIL, so plain threads share the pass; the chunks' results
+    combine exactly (first failures by row, extremes, sums), the same as one call.
+    """
+    m = len(tri)
+    k = max(1, min(os.cpu_count() or 1, m // THREAD_MIN_ROWS))
+    if k == 1:
+        return _kernels.certify_row_range(pts, tri, runs, claim, 0, m)
+    cuts = [m * i // k for i in range(k + 1)]
+    with ThreadPoolExecutor(k) as pool:
+        parts = list(
+            pool.map(lambda i: _kernels.certify_row_range(pts, tri, runs, claim, cuts[i], cuts[i + 1]), range(k))
+        )
+
+    def first(j: int) -> int:
+        hits = [p[j] for p in parts if p[j] >= 0]
+        return min(hits) if hits else -1
+
+    lo = min(parts, key=lambda p: p[4])
+    hi = max(parts, key=lambda p: p[6])
+    small = min(parts, key=lambda p: p[8])
+    return (
+        first(0), first(1), first(2), first(3), lo[4], lo[5], hi[6], hi[7], small[8], small[9],
+        math.fsum(p[10] for p in parts),
+    )
 
 
 def _boundary_keys(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
@@ -144,7 +179,7 @@ def verify_cycle_mesh(
     ):
         claim = np.empty(0, dtype=np.int64)
     (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total) = (
-        _kernels.certify_rows(pts, tri, runs, claim)
+        _certify_rows(pts, tri, runs, claim)
     )
     if bad_index >= 0:
         _fail(f"triangle {bad_index} {tri[bad_index].tolist()} references a vertex outside 0..{n - 1}")

@@ -106,9 +106,8 @@ def mesh_arrays(
         raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
-    finite = np.isfinite(pts).all(axis=1)
-    if not finite.all():
-        i = int(np.argmin(finite))
+    if not np.isfinite(pts).all():  # (the row-wise search only on failure: 4x slower)
+        i = int(np.argmin(np.isfinite(pts).all(axis=1)))
         raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
     n = len(pts)
     if tri.min() < 0 or tri.max() >= n:
@@ -139,9 +138,8 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         that is not an edge of the mesh.
     """
     pts, tri = mesh_arrays(mesh.points, mesh.triangles)
-    big = np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE
-    if big.any():
-        i = int(np.argmax(big))
+    if max(-pts.min(), pts.max()) > MAX_ABS_COORDINATE:
+        i = int(np.argmax(np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE))
         raise InvalidMeshError(
             f"point {i} {pts[i].tolist()} is beyond |x| <= {MAX_ABS_COORDINATE:g} "
             "(squared lengths would overflow)"

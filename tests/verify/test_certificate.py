@@ -129,3 +129,38 @@ def test_non_finite_points(pair) -> None:
     pts[7] = np.nan
     with pytest.raises(hammesh.VerificationError, match="point 7"):
         verify(replace(h, points=pts))
+
+
+def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
+    """Split across threads, the row checks give exactly the one-call result."""
+    from hammesh import _kernels
+    from hammesh.verify import certificate
+
+    _, h = pair
+    monkeypatch.setattr(certificate, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(certificate.os, "cpu_count", lambda: 3)
+    empty = np.empty(0, dtype=np.int64)
+    tri = h.triangles.copy()
+    for broken in (None, len(tri) // 2, len(tri) - 1):
+        if broken is not None:  # break the cycle in the middle chunk / the last row
+            tri = h.triangles.copy()
+            tri[broken] = tri[broken][[1, 2, 0]][::-1]
+        one = _kernels.certify_rows(h.points, tri, h.components, empty)
+        split = certificate._certify_rows(h.points, tri, h.components, empty)
+        assert split[:4] == one[:4] and split[5] == one[5] and split[7] == one[7]
+        assert np.isclose(split[4], one[4]) and np.isclose(split[6], one[6])
+        assert np.isclose(split[10], one[10], rtol=1e-12)
+        if broken is not None:
+            assert split[8] < 0 and split[9] == broken  # reversed row: negative area
+
+
+def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
+    from hammesh.verify import certificate
+
+    _, h = pair
+    monkeypatch.setattr(certificate, "THREAD_MIN_ROWS", 5)
+    tri = h.triangles.copy()
+    k = 2 * len(tri) // 3
+    tri[[k, k + 5]] = tri[[k + 5, k]]
+    with pytest.raises(hammesh.VerificationError, match=f"breaks at triangle {k - 1}"):
+        verify(replace(h, triangles=tri))
