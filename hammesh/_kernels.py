@@ -5,6 +5,11 @@ reports problems through a return code (never raises: the callers turn codes int
 hammesh exceptions with a message). ``cache=True`` stores the machine code in
 ``__pycache__`` so only the very first run in an environment pays the compile time
 (measured in ``benchmarks/bench_core.py``).
+
+Large outputs are allocated by numpy in thin Python wrappers and filled by a
+``_..._into`` kernel: numpy asks the kernel for transparent huge pages on big
+arrays and numba's allocator does not, and first-touch page faults made fresh numba
+arrays about 3x slower to fill on this project's machine (200 MB: 0.07 s vs 0.23 s).
 """
 
 from __future__ import annotations
@@ -23,26 +28,30 @@ __all__ = [
     "vertex_neighbors",
     "emit_cycles",
     "spanning_forest",
-    "spanning_forest_ordered",
-    "renumber_triangles",
     "first_cross_run_edge",
     "angle_area_stats",
     "certify_rows",
     "certify_row_range",
+    "mark_used",
 ]
 
 
-@njit(cache=True)
 def orient_ccw(points, tri):
     """Counter-clockwise copy of ``tri`` (rows with negative area reversed).
 
     Returns ``(ccw, n_flipped, bad)``: ``bad`` is -1 or the first triangle with a
     repeated vertex or zero area.
     """
-    m = tri.shape[0]
     out = np.empty_like(tri)
-    flipped = np.zeros(m, np.bool_)
-    degenerate = np.zeros(m, np.bool_)
+    n_flipped, bad = _orient_ccw_into(points, tri, out)
+    return out, n_flipped, bad
+
+
+@njit(cache=True)
+def _orient_ccw_into(points, tri, out):
+    m = tri.shape[0]
+    n_flipped = 0
+    bad = -1
     for t in range(m):
         a = tri[t, 0]
         b = tri[t, 1]
@@ -50,26 +59,20 @@ def orient_ccw(points, tri):
         cr = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1]) - (
             points[b, 1] - points[a, 1]
         ) * (points[c, 0] - points[a, 0])
-        if a == b or b == c or c == a or cr == 0.0:
-            degenerate[t] = True
+        if (a == b or b == c or c == a or cr == 0.0) and bad < 0:
+            bad = t
         if cr < 0.0:
             out[t, 0] = c
             out[t, 1] = b
             out[t, 2] = a
-            flipped[t] = True
+            n_flipped += 1
         else:
             out[t, 0] = a
             out[t, 1] = b
             out[t, 2] = c
-    bad = -1
-    for t in range(m):
-        if degenerate[t]:
-            bad = t
-            break
-    return out, flipped.sum(), bad
+    return n_flipped, bad
 
 
-@njit(cache=True)
 def twins_from_neighbors(tri, nbr):
     """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
 
@@ -79,8 +82,13 @@ def twins_from_neighbors(tri, nbr):
     Each pair is matched once, from its lower triangle; the higher one only checks
     that it was matched (half the random reads of checking both sides).
     """
+    twin = np.full(3 * tri.shape[0], -1, np.int64)
+    return twin, _twins_from_neighbors_into(tri, nbr, twin)
+
+
+@njit(cache=True)
+def _twins_from_neighbors_into(tri, nbr, twin):
     m = tri.shape[0]
-    twin = np.full(3 * m, -1, np.int64)
     for t in range(m):
         for k in range(3):
             u = nbr[t, k]
@@ -88,10 +96,10 @@ def twins_from_neighbors(tri, nbr):
                 continue
             h = 3 * t + k
             if u >= m:
-                return twin, h
+                return h
             if u < t:  # matched from u already (or u does not name t back)
                 if twin[h] < 0:
-                    return twin, h
+                    return h
                 continue
             a = tri[t, k]
             b = tri[t, (k + 1) % 3]
@@ -100,17 +108,27 @@ def twins_from_neighbors(tri, nbr):
                 if tri[u, j] == b and tri[u, (j + 1) % 3] == a:
                     found = 3 * u + j
             if found < 0 or nbr[u, found - 3 * u] != t or twin[found] >= 0 or u == t:
-                return twin, h
+                return h
             twin[h] = found
             twin[found] = h
-    return twin, -1
+    return -1
+
+
+def incenters(points, tri, out=None):
+    """Incenters ``(|BC| A + |CA| B + |AB| C) / (|BC| + |CA| + |AB|)``, (m, 2).
+
+    ``out`` may be a preallocated (m, 2) float64 array (e.g. a slice of the output's
+    point array, saving a copy).
+    """
+    if out is None:
+        out = np.empty((tri.shape[0], 2), np.float64)
+    _incenters_into(points, tri, out)
+    return out
 
 
 @njit(cache=True)
-def incenters(points, tri):
-    """Incenters ``(|BC| A + |CA| B + |AB| C) / (|BC| + |CA| + |AB|)``, (m, 2)."""
+def _incenters_into(points, tri, out):
     m = tri.shape[0]
-    out = np.empty((m, 2), np.float64)
     for t in range(m):
         ax = points[tri[t, 0], 0]
         ay = points[tri[t, 0], 1]
@@ -126,10 +144,9 @@ def incenters(points, tri):
         s = la + lb + lc
         out[t, 0] = (la * ax + lb * bx + lc * cx) / s
         out[t, 1] = (la * ay + lb * by + lc * cy) / s
-    return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def boundary_half_edges(tri, twin):
     """``(k, 2)`` directed boundary edges (half-edges without twin), in half-edge order."""
     nb = 0
@@ -197,14 +214,18 @@ def half_edge_twins(tri, n_points):
     return twin, -1
 
 
-@njit(cache=True)
 def vertex_half_edges(tri, n_points):
     """One half-edge leaving each vertex (-1 for an unused vertex)."""
-    vh = np.full(n_points, -1, np.int64)
+    vh = np.full(int(n_points), -1, np.int64)
+    _vertex_half_edges_into(tri, vh)
+    return vh
+
+
+@njit(cache=True)
+def _vertex_half_edges_into(tri, vh):
     for t in range(tri.shape[0]):
         for k in range(3):
             vh[tri[t, k]] = 3 * t + k
-    return vh
 
 
 @njit(cache=True)
@@ -331,15 +352,13 @@ def _find(parent, x):
     return root
 
 
-@njit(cache=True)
-def spanning_forest(twin, is_con, m):
-    """``spanning_forest_ordered`` without the visiting order."""
-    is_tree, root, firsts, _order = spanning_forest_ordered(twin, is_con, m)
-    return is_tree, root, firsts
+#: Bits of a packed half-edge code (``spanning_forest``): ``code >> 2`` is the twin
+#: plus one (0 on the boundary); bit 1 marks a tree edge, bit 0 a constrained one.
+TREE_BIT = 2
+CON_BIT = 1
 
 
-@njit(cache=True)
-def spanning_forest_ordered(twin, is_con, m):
+def spanning_forest(tri, twin, is_con):
     """Spanning forest of the dual graph that crosses the fewest constrained edges.
 
     First a depth-first search over free (flippable) dual edges only: its trees span
@@ -348,16 +367,46 @@ def spanning_forest_ordered(twin, is_con, m):
     if it joins two regions not yet joined: exactly ``regions - pieces`` crossings,
     the fewest possible (a crossing joins two regions).
 
-    Returns ``(is_tree (3m,) bool, root (m,) int64, firsts (p,) int64, order (m,)
-    int64)``: ``root[t]`` identifies t's connected piece, ``firsts`` is the lowest
-    triangle of each of the p pieces, ascending, and ``order`` lists the triangles in
-    the order the search took them off its stack (neighbours in the plane end up
-    close in this order: ``renumber_triangles`` uses it for memory locality).
+    The triangles come back renumbered in the order the search took them off its
+    stack: the Thm 2.4 walk follows the tree, so in this numbering its reads are
+    nearly sequential (memory locality), and the half-edge data is packed into one
+    array so that the walk reads one word per half-edge.
+
+    Parameters
+    ----------
+    tri : (m, 3) int64
+    twin : (3 m,) int64
+    is_con : (3 m,) bool
+
+    Returns
+    -------
+    tri_r : (m, 3) int64
+        ``tri[order]``.
+    code : (3 m,) int64
+        For half-edge ``h = 3 i + k`` of ``tri_r``: ``(twin + 1) << 2 | tree << 1 |
+        constrained``, the twin in the new numbering (see ``TREE_BIT``, ``CON_BIT``).
+    order : (m,) int64
+        New triangle ``i`` is input triangle ``order[i]``.
+    firsts : (p,) int64
+        One triangle of each connected piece, new numbering, the pieces ordered by
+        their lowest input triangle.
     """
-    is_tree = np.zeros(twin.shape[0], np.bool_)
+    m = tri.shape[0]
     region = np.full(m, -1, np.int64)
     stack = np.empty(m, np.int64)
+    via = np.empty(m, np.int64)
     order = np.empty(m, np.int64)
+    rank = np.empty(m, np.int64)
+    tri_r = np.empty_like(tri)
+    code = np.empty(3 * m, np.int64)
+    n_pieces = _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tri_r, code)
+    # ``stack`` holds the lowest triangle of each piece (new numbering) on return
+    return tri_r, code, order, stack[:n_pieces].copy()
+
+
+@njit(cache=True)
+def _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tri_r, code):
+    m = tri.shape[0]
     n_seen = 0
     n_reg = 0
     for s in range(m):
@@ -365,24 +414,32 @@ def spanning_forest_ordered(twin, is_con, m):
             continue
         region[s] = n_reg
         stack[0] = s
+        via[0] = -1
         top = 1
         while top > 0:
             top -= 1
             t = stack[top]
-            order[n_seen] = t
+            entry = via[top]  # t's half-edge of the tree edge it was reached by
+            i = n_seen
             n_seen += 1
+            order[i] = t
+            rank[t] = i
             for k in range(3):
                 h = 3 * t + k
+                tri_r[i, k] = tri[t, k]
                 g = twin[h]
-                if g < 0 or is_con[h]:
-                    continue
-                u = g // 3
-                if region[u] < 0:
-                    region[u] = n_reg
-                    is_tree[h] = True
-                    is_tree[g] = True
-                    stack[top] = u
-                    top += 1
+                bits = CON_BIT if is_con[h] else 0
+                if h == entry:
+                    bits |= TREE_BIT
+                elif g >= 0 and not is_con[h]:
+                    u = g // 3
+                    if region[u] < 0:
+                        region[u] = n_reg
+                        bits |= TREE_BIT
+                        stack[top] = u
+                        via[top] = g
+                        top += 1
+                code[3 * i + k] = ((g + 1) << 2) | bits  # twin still in input numbering
         n_reg += 1
     parent = np.arange(n_reg)
     for h in range(twin.shape[0]):
@@ -393,52 +450,24 @@ def spanning_forest_ordered(twin, is_con, m):
         b = _find(parent, region[g // 3])
         if a != b:
             parent[a] = b
-            is_tree[h] = True
-            is_tree[g] = True
-    root = np.empty(m, np.int64)
+            code[3 * rank[h // 3] + h % 3] |= TREE_BIT
+            code[3 * rank[g // 3] + g % 3] |= TREE_BIT
+    for j in range(3 * m):  # twins into the new numbering
+        g = (code[j] >> 2) - 1
+        if g >= 0:
+            code[j] = ((3 * rank[g // 3] + g % 3 + 1) << 2) | (code[j] & 3)
     seen = np.zeros(n_reg, np.bool_)
-    firsts = np.empty(m, np.int64)
     n_pieces = 0
     for t in range(m):
         r = _find(parent, region[t])
-        root[t] = r
         if not seen[r]:
             seen[r] = True
-            firsts[n_pieces] = t
+            stack[n_pieces] = rank[t]
             n_pieces += 1
-    return is_tree, root, firsts[:n_pieces], order
+    return n_pieces
 
 
-@njit(cache=True)
-def renumber_triangles(tri, twin, is_tree, is_con, order):
-    """The half-edge arrays with triangle ``order[i]`` renumbered ``i``.
-
-    Returns ``(tri, twin, is_tree, is_con, rank)`` in the new numbering, ``rank`` the
-    inverse of ``order``. The Thm 2.4 walk follows the spanning tree, so with the
-    tree search's own order its reads become nearly sequential (measured: the walk
-    and the certificate run about 1.6x faster at 1.5 M triangles).
-    """
-    m = tri.shape[0]
-    rank = np.empty(m, np.int64)
-    for i in range(m):
-        rank[order[i]] = i
-    tri_r = np.empty_like(tri)
-    twin_r = np.empty_like(twin)
-    tree_r = np.empty_like(is_tree)
-    con_r = np.empty_like(is_con)
-    for i in range(m):
-        t = order[i]
-        for k in range(3):
-            tri_r[i, k] = tri[t, k]
-            g = twin[3 * t + k]
-            twin_r[3 * i + k] = -1 if g < 0 else 3 * rank[g // 3] + g % 3
-            tree_r[3 * i + k] = is_tree[3 * t + k]
-            con_r[3 * i + k] = is_con[3 * t + k]
-    return tri_r, twin_r, tree_r, con_r, rank
-
-
-@njit(cache=True)
-def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
+def emit_cycles(tri, code, firsts, n_points):
     """Walk the Thm 2.4 cycles and emit the output triangles in cycle order.
 
     Slot ``h = 3 t + k`` is the sector of input triangle t's incenter ``I_t`` over its
@@ -455,31 +484,49 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
     Incenter of t is vertex ``n_points + t``; midpoints are numbered after the
     incenters in order of first visit.
 
-    Returns ``(out, parent, kind, lengths, mid_a, mid_b, out_twin)``: output
-    triangles, the input triangle each lies in, its kind (0 incenter, 1 flip, 2
-    midpoint), the cycle lengths, the edge ``(mid_a[i], mid_b[i])`` split by midpoint
-    i, and the output's half-edge twins as the construction implies them (a *claim*
-    the certificate checks, see ``certify_rows``).
+    Parameters
+    ----------
+    tri : (m, 3) int64
+    code : (3 m,) int64
+        Packed twins and tree/constrained bits (``spanning_forest``).
+    firsts : (p,) int64
+        One triangle of each connected piece (where its cycle starts).
+    n_points : int
+
+    Returns
+    -------
+    ``(out, parent, kind, lengths, mid_a, mid_b, out_twin)``: output triangles, the
+    input triangle each lies in, its kind (0 incenter, 1 flip, 2 midpoint), the cycle
+    lengths, the edge ``(mid_a[i], mid_b[i])`` split by midpoint i, and the output's
+    half-edge twins as the construction implies them (a *claim* the certificate
+    checks, see ``certify_rows``); the claim is empty if the walk did not emit every
+    slot exactly once.
     """
-    m = tri.shape[0]
-    nh = 3 * m
-    n_mid_half = 0
-    for h in range(nh):
-        if is_tree[h] and is_con[h]:
-            n_mid_half += 1
-    total = nh + n_mid_half
+    nh = code.shape[0]
+    total = nh + int(np.count_nonzero((code & 3) == 3))
     out = np.empty((total, 3), np.int64)
     parent = np.empty(total, np.int64)
     kind = np.empty(total, np.int8)
-    # every entry of the claim is written exactly once below (a test compares the
-    # claim with an independent matching); an unwritten one would fail the check
+    # every entry of the claim is written exactly once (a test compares the claim
+    # with an independent matching); an unwritten one would fail the check
     claim = np.empty(3 * total, np.int64)
-    lengths = np.zeros(firsts.shape[0], np.int64)
     prim = np.full(nh, -1, np.int64)  # output row of each slot's first triangle
-    mid_of = np.full(nh, -1, np.int64)  # split slot -> its midpoint vertex
-    y2 = np.full(nh, -1, np.int64)  # split slot h -> output row of (I_t, M, b)
-    mid_a = np.empty(n_mid_half // 2, np.int64)
-    mid_b = np.empty(n_mid_half // 2, np.int64)
+    lengths = np.zeros(len(firsts), np.int64)
+    mid_a = np.empty((total - nh) // 2, np.int64)
+    mid_b = np.empty((total - nh) // 2, np.int64)
+    pos = _emit_into(tri, code, firsts, int(n_points), out, parent, kind, claim, prim, lengths, mid_a, mid_b)
+    if pos != total:  # not a permutation: the caller reports it
+        k = max(pos, 0)
+        return out[:k], parent[:k], kind[:k], lengths, mid_a, mid_b, np.empty(0, np.int64)
+    return out, parent, kind, lengths, mid_a, mid_b, claim
+
+
+@njit(cache=True)
+def _emit_into(tri, code, firsts, n_points, out, parent, kind, claim, prim, lengths, mid_a, mid_b):
+    m = tri.shape[0]
+    total = out.shape[0]
+    mid_of = dict()  # split slot -> its midpoint vertex (few: one per region)
+    y2 = dict()  # split slot h -> output row of (I_t, M, b)
     n_mid = 0
     pos = 0
     # The claimed pairing: a row's "exit" edge pairs with the next row's "entry" edge
@@ -493,8 +540,8 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
         last_exit = -1
         h = first
         while True:
-            if pos >= total:  # not a permutation: caller reports it
-                return out, parent, kind, lengths, mid_a, mid_b, np.empty(0, np.int64)
+            if pos >= total or prim[h] >= 0:  # not a permutation
+                return -1
             prim[h] = pos
             if last_exit >= 0:
                 claim[last_exit] = 3 * pos
@@ -503,8 +550,9 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
             k = h - 3 * t
             a = tri[t, k]
             inc = n_points + t
-            g = twin[h]
-            if not is_tree[h]:
+            cd = code[h]
+            g = (cd >> 2) - 1
+            if not (cd & TREE_BIT):
                 out[pos, 0] = inc
                 out[pos, 1] = a
                 out[pos, 2] = tri[t, (k + 1) % 3]
@@ -512,28 +560,33 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                 kind[pos] = 0
                 if g < 0:
                     claim[3 * pos + 1] = -1
-                elif prim[g] >= 0:
-                    claim[3 * pos + 1] = 3 * prim[g] + 1
-                    claim[3 * prim[g] + 1] = 3 * pos + 1
+                else:
+                    pg = prim[g]
+                    if pg >= 0:
+                        claim[3 * pos + 1] = 3 * pg + 1
+                        claim[3 * pg + 1] = 3 * pos + 1
                 last_exit = 3 * pos + 2  # (b, I_t)
                 pos += 1
                 nxt = h + 1 if k < 2 else h - 2
             else:
                 u = g // 3
                 kg = g - 3 * u
-                if not is_con[h]:
+                if not (cd & CON_BIT):
                     out[pos, 0] = inc
                     out[pos, 1] = a
                     out[pos, 2] = n_points + u
                     parent[pos] = t
                     kind[pos] = 1
-                    if prim[g] >= 0:
-                        claim[3 * pos + 2] = 3 * prim[g] + 2
-                        claim[3 * prim[g] + 2] = 3 * pos + 2
+                    pg = prim[g]
+                    if pg >= 0:
+                        claim[3 * pos + 2] = 3 * pg + 2
+                        claim[3 * pg + 2] = 3 * pos + 2
                     last_exit = 3 * pos + 1  # (a, I_u)
                     pos += 1
                 else:
-                    if mid_of[h] < 0:
+                    if pos + 1 >= total:
+                        return -1
+                    if h not in mid_of:
                         mv = n_points + m + n_mid
                         mid_of[h] = mv
                         mid_of[g] = mv
@@ -554,12 +607,14 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
                     y2[g] = pos + 1
                     claim[3 * pos + 1] = 3 * (pos + 1) + 1  # (a, M) | (M, a)
                     claim[3 * (pos + 1) + 1] = 3 * pos + 1
-                    if y2[h] >= 0:  # (M, I_t) | (I_t, M): other half of t's sector
-                        claim[3 * pos + 2] = 3 * y2[h]
-                        claim[3 * y2[h]] = 3 * pos + 2
-                    if prim[g] >= 0:  # (I_u, M) | (M, I_u): other half of u's sector
-                        claim[3 * (pos + 1)] = 3 * prim[g] + 2
-                        claim[3 * prim[g] + 2] = 3 * (pos + 1)
+                    if h in y2:  # (M, I_t) | (I_t, M): other half of t's sector
+                        yh = y2[h]
+                        claim[3 * pos + 2] = 3 * yh
+                        claim[3 * yh] = 3 * pos + 2
+                    pg = prim[g]
+                    if pg >= 0:  # (I_u, M) | (M, I_u): other half of u's sector
+                        claim[3 * (pos + 1)] = 3 * pg + 2
+                        claim[3 * pg + 2] = 3 * (pos + 1)
                     last_exit = 3 * (pos + 1) + 2  # (a, I_u)
                     pos += 2
                 nxt = g + 1 if kg < 2 else g - 2
@@ -569,9 +624,7 @@ def emit_cycles(tri, twin, is_tree, is_con, firsts, n_points):
         claim[last_exit] = 3 * run_start  # the cycle closes
         claim[3 * run_start] = last_exit
         lengths[c] = pos - run_start
-    if pos != total:
-        return out[:pos], parent[:pos], kind[:pos], lengths, mid_a, mid_b, np.empty(0, np.int64)
-    return out, parent, kind, lengths, mid_a, mid_b, claim
+    return pos
 
 
 @njit(cache=True)
@@ -624,7 +677,7 @@ def _measures(points, p0, p1, p2):
     return cr, s2, c
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _angle_area_range(points, tri, lo, hi):
     best_s2 = np.inf
     best_c = np.inf
@@ -652,7 +705,7 @@ def _angle_area_range(points, tri, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def certify_row_range(points, tri, runs, pair, lo, hi):
+def certify_row_range(points, tri, runs, pair, lo, hi, used):
     """The certificate's per-row checks in one pass over a cycle-ordered mesh.
 
     ``runs`` are the cycle lengths (positive, summing to ``m``: checked by the
@@ -669,7 +722,8 @@ def certify_row_range(points, tri, runs, pair, lo, hi):
     * cross_run: a half-edge paired with a half-edge of another run.
 
     Only rows ``lo <= i < hi`` are checked (they may cut runs anywhere), so that
-    threads can share the work: the kernel releases the GIL.
+    threads can share the work: the kernel releases the GIL. ``used[v]`` is set for
+    every vertex of a checked row (threads may share ``used``: they only set it).
     """
     m = tri.shape[0]
     n = points.shape[0]
@@ -701,6 +755,9 @@ def certify_row_range(points, tri, runs, pair, lo, hi):
                 if bad_index < 0:
                     bad_index = i
                 continue
+            used[p0] = True
+            used[p1] = True
+            used[p2] = True
             j = i + 1 if i + 1 < r_end else r_start
             shared = 0
             for a in range(3):
@@ -747,10 +804,19 @@ def certify_row_range(points, tri, runs, pair, lo, hi):
 @njit(cache=True)
 def certify_rows(points, tri, runs, pair):
     """``certify_row_range`` over all rows."""
-    return certify_row_range(points, tri, runs, pair, 0, tri.shape[0])
+    used = np.zeros(points.shape[0], np.bool_)
+    return certify_row_range(points, tri, runs, pair, 0, tri.shape[0], used)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
+def mark_used(tri, used):
+    """Set ``used[v]`` for every vertex of ``tri``."""
+    for t in range(tri.shape[0]):
+        for k in range(3):
+            used[tri[t, k]] = True
+
+
+@njit(cache=True, nogil=True)
 def angle_area_stats(points, tri):
     """One pass over the triangles.
 

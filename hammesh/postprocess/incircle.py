@@ -77,14 +77,10 @@ def incircle_hamiltonian(
     """
     pts = mesh.points
     n, m = mesh.n_points, mesh.n_triangles
-    is_tree, _root, firsts, order = _kernels.spanning_forest_ordered(he.twin, is_con, m)
-    # walk in the tree search's numbering (locality); incenter i is that of order[i]
-    tri, twin, is_tree, is_con, rank = _kernels.renumber_triangles(
-        mesh.triangles, he.twin, is_tree, is_con, order
-    )
-    out, parent, kind, lengths, mid_a, mid_b, claim = _kernels.emit_cycles(
-        tri, twin, is_tree, is_con, rank[firsts], n
-    )
+    # the walk runs in the tree search's numbering (locality): incenter n + i is that
+    # of input triangle order[i]
+    tri, code, order, firsts = _kernels.spanning_forest(mesh.triangles, he.twin, is_con)
+    out, parent, kind, lengths, mid_a, mid_b, claim = _kernels.emit_cycles(tri, code, firsts, n)
     parent = order[parent]
     if len(out) != 3 * m + 2 * len(mid_a):
         raise VerificationError(
@@ -92,7 +88,10 @@ def incircle_hamiltonian(
             f"{3 * m + 2 * len(mid_a)} triangles"
         )
     q = len(mid_a)
-    points = np.concatenate([pts, incenters(pts, tri), 0.5 * (pts[mid_a] + pts[mid_b])])
+    points = np.empty((n + m + q, 2))
+    points[:n] = pts
+    _kernels.incenters(pts, tri, out=points[n : n + m])
+    points[n + m :] = 0.5 * (pts[mid_a] + pts[mid_b])
 
     segs, markers = mesh.segments, mesh.segment_markers
     if q:  # a split constrained edge becomes its two halves
@@ -116,7 +115,7 @@ def incircle_hamiltonian(
         "steiner_points": int(m + q),
         "incenters": int(m),
         "midpoints": int(q),
-        "flips": int(np.count_nonzero(is_tree & ~is_con) // 2),
+        "flips": int(np.count_nonzero((code & 3) == _kernels.TREE_BIT) // 2),
         "components": [int(x) for x in lengths],
     }
     h = HamiltonianMesh(

@@ -39,7 +39,7 @@ from __future__ import annotations
 import math
 import os
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -66,21 +66,36 @@ def _edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
 THREAD_MIN_ROWS = 200_000
 
 
-def _certify_rows(pts: np.ndarray, tri: np.ndarray, runs: np.ndarray, claim: np.ndarray) -> tuple:
+def _certify_rows(
+    pts: np.ndarray,
+    tri: np.ndarray,
+    runs: np.ndarray,
+    claim: np.ndarray,
+    used: np.ndarray,
+    side: Callable[[], Any] | None = None,
+) -> tuple[tuple, Any]:
     """``_kernels.certify_row_range`` over all rows, split across the machine's cores.
 
-    The kernel releases the GIL, so plain threads share the pass; the chunks' results
+    The kernels release the GIL, so plain threads share the pass; the chunks' results
     combine exactly (first failures by row, extremes, sums), the same as one call.
+    ``side`` (the input-side facts) runs alongside; its result is returned second.
     """
     m = len(tri)
     k = max(1, min(os.cpu_count() or 1, m // THREAD_MIN_ROWS))
-    if k == 1:
-        return _kernels.certify_row_range(pts, tri, runs, claim, 0, m)
     cuts = [m * i // k for i in range(k + 1)]
-    with ThreadPoolExecutor(k) as pool:
-        parts = list(
-            pool.map(lambda i: _kernels.certify_row_range(pts, tri, runs, claim, cuts[i], cuts[i + 1]), range(k))
-        )
+    calls = [
+        (lambda i=i: _kernels.certify_row_range(pts, tri, runs, claim, cuts[i], cuts[i + 1], used))
+        for i in range(k)
+    ]
+    if side is not None:
+        calls.append(side)
+    if len(calls) == 1:
+        results = [calls[0]()]
+    else:
+        with ThreadPoolExecutor(min(len(calls), os.cpu_count() or 1)) as pool:
+            results = [f.result() for f in [pool.submit(c) for c in calls]]
+    parts = results[:k]
+    side_result = results[k] if side is not None else None
 
     def first(j: int) -> int:
         hits = [p[j] for p in parts if p[j] >= 0]
@@ -89,10 +104,26 @@ def _certify_rows(pts: np.ndarray, tri: np.ndarray, runs: np.ndarray, claim: np.
     lo = min(parts, key=lambda p: p[4])
     hi = max(parts, key=lambda p: p[6])
     small = min(parts, key=lambda p: p[8])
-    return (
+    rows = (
         first(0), first(1), first(2), first(3), lo[4], lo[5], hi[6], hi[7], small[8], small[9],
         math.fsum(p[10] for p in parts),
     )
+    return rows, side_result
+
+
+def _input_facts(ref: Mesh, r_twin: np.ndarray, n_out: int) -> dict[str, Any]:
+    """What the comparison needs from the input mesh (runs beside the row checks)."""
+    rp = np.asarray(ref.points, dtype=np.float64)
+    rt = np.ascontiguousarray(ref.triangles, dtype=np.int64)
+    r_min, _, _, _, _, _, r_total = _kernels.angle_area_stats(rp, rt)
+    used = np.zeros(len(rp), dtype=np.bool_)
+    _kernels.mark_used(rt, used)
+    return {
+        "min_angle": r_min,
+        "total": r_total,
+        "used": used,
+        "boundary": _boundary_keys(rt, r_twin, n_out),
+    }
 
 
 def _boundary_keys(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
@@ -178,9 +209,10 @@ def verify_cycle_mesh(
         and int((claim < 0).sum()) == int((reference_twin < 0).sum())
     ):
         claim = np.empty(0, dtype=np.int64)
-    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total) = (
-        _certify_rows(pts, tri, runs, claim)
-    )
+    used = np.zeros(n, dtype=np.bool_)
+    side = None if reference is None else (lambda: _input_facts(reference, reference_twin, n))
+    rows, ref_facts = _certify_rows(pts, tri, runs, claim, used, side)
+    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total) = rows
     if bad_index >= 0:
         _fail(f"triangle {bad_index} {tri[bad_index].tolist()} references a vertex outside 0..{n - 1}")
     if bad >= 0:
@@ -237,7 +269,7 @@ def verify_cycle_mesh(
     if reference is not None:
         stats.update(
             _compare_with_input(
-                pts, tri, twin, out_he, reference, reference_twin, amin, tmin, total, angle_ratio
+                pts, tri, twin, out_he, reference, ref_facts, used, amin, tmin, total, angle_ratio
             )
         )
     return stats
@@ -249,7 +281,8 @@ def _compare_with_input(
     twin: np.ndarray,
     out_he: HalfEdges | None,
     ref: Mesh,
-    r_twin: np.ndarray,
+    facts: dict[str, Any],
+    used_out: np.ndarray,
     amin: float,
     tmin: int,
     total: float,
@@ -257,22 +290,19 @@ def _compare_with_input(
 ) -> dict[str, Any]:
     n = len(pts)
     rp = np.asarray(ref.points, dtype=np.float64)
-    rt = np.ascontiguousarray(ref.triangles, dtype=np.int64)
     n_in = len(rp)
     if n < n_in or not np.array_equal(pts[:n_in], rp):
         _fail("the input points are not kept unchanged as the first output points")
-    used_in = np.bincount(rt.reshape(-1), minlength=n_in) > 0
-    used_out = np.bincount(tri.reshape(-1), minlength=n)[:n_in] > 0
-    lost = used_in & ~used_out
+    lost = facts["used"] & ~used_out[:n_in]
     if lost.any():
         _fail(f"input vertex {int(np.argmax(lost))} is no longer a vertex of the mesh")
 
-    r_min, _, _, _, r_area_min, _, r_total = _kernels.angle_area_stats(rp, rt)
+    r_min, r_total = facts["min_angle"], facts["total"]
     if not math.isclose(total, r_total, rel_tol=AREA_RTOL, abs_tol=0.0):
         _fail(f"total area changed from {r_total!r} to {total!r}")
 
     b_out = _boundary_keys(tri, twin, n)
-    b_in = _boundary_keys(rt, r_twin, n)
+    b_in = facts["boundary"]
     if not np.array_equal(b_out, b_in):
         diff = np.setxor1d(b_out, b_in)
         k = int(diff[0])

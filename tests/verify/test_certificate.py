@@ -146,7 +146,9 @@ def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
             tri = h.triangles.copy()
             tri[broken] = tri[broken][[1, 2, 0]][::-1]
         one = _kernels.certify_rows(h.points, tri, h.components, empty)
-        split = certificate._certify_rows(h.points, tri, h.components, empty)
+        used = np.zeros(len(h.points), dtype=bool)
+        split, _ = certificate._certify_rows(h.points, tri, h.components, empty, used)
+        assert np.array_equal(used, np.bincount(tri.ravel(), minlength=len(h.points)) > 0)
         assert split[:4] == one[:4] and split[5] == one[5] and split[7] == one[7]
         assert np.isclose(split[4], one[4]) and np.isclose(split[6], one[6])
         assert np.isclose(split[10], one[10], rtol=1e-12)
