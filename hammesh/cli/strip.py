@@ -12,7 +12,7 @@ EXAMPLES = """examples:
   hammesh strip bunny.ply -o bunny.json                  # greedy strips joined by restart
   hammesh strip plate.vtu -o plate.json --join stitch    # one strip, degenerate stitching
   hammesh strip plate.vtu -o plate.npz                   # binary (uint32 indices)
-  hammesh strip small.obj -o small.json --method christofides   # Thm 5.3, <= 1000 triangles
+  hammesh strip small.obj -o small.json --method christofides   # Thm 5.3, <= 5000 triangles
   hammesh strip plate.vtu -o plate.json --generalized    # IRIS GL: one vertex + one bit each
 methods: auto (a file stored in Hamiltonian-cycle order, as 'hammesh mesh' writes it, is sent
 as one strip per cycle when that is shorter than the greedy cover), greedy, order, christofides.

@@ -15,7 +15,7 @@ import numpy as np
 from hammesh.errors import InvalidMeshError
 from hammesh.polygon._triangulate import triangle_neighbors
 
-__all__ = ["path_partition"]
+__all__ = ["path_partition", "forest_path_partition"]
 
 
 def path_partition(points, triangles) -> list[np.ndarray]:
@@ -81,6 +81,29 @@ def path_partition(points, triangles) -> list[np.ndarray]:
             "the dual graph of the triangles has a cycle; Lemma 5.1 needs a triangulation of "
             "a simple polygon (a tree), minimum path partition is NP-hard in general")
     return _greedy(nb)
+
+
+def forest_path_partition(neighbors) -> list[np.ndarray]:
+    """Lemma 5.1 on a dual forest given as its neighbour array (no geometry checks).
+
+    Parameters
+    ----------
+    neighbors : (m, 3) array_like of int
+        ``neighbors[t, k]``: the triangle across edge ``k`` of ``t``, or -1; symmetric,
+        and the graph must be a forest (the caller checks; e.g. the strip encoders).
+
+    Returns
+    -------
+    list of (k_i,) int64
+        As :func:`path_partition`: the fewest dual paths, each row in exactly one.
+
+    Examples
+    --------
+    >>> [p.tolist() for p in forest_path_partition([[1, -1, -1], [0, 2, 3], [1, -1, -1], [1, -1, -1]])]
+    [[0], [2, 1, 3]]
+    """
+    nb = np.asarray(neighbors, dtype=np.int64).reshape(-1, 3)
+    return _greedy(nb) if len(nb) else []
 
 
 def _components(nb: np.ndarray) -> np.ndarray:

@@ -9,7 +9,8 @@ module                                   what
 :mod:`hammesh.strips.gl`                 GL_TRIANGLE_STRIP buffers, restart / stitching,
                                          the OpenGL decoder and the round-trip proof
 :mod:`hammesh.strips.sequential`         Thm 4.3: is a triangulation sequential, O(n)
-:mod:`hammesh.strips.encode`             scalable encoder (greedy dual paths, cycles)
+:mod:`hammesh.strips.encode`             scalable encoder (greedy dual paths, cycles,
+                                         Lemma 5.1 on dual forests)
 :mod:`hammesh.strips.christofides`       Thm 5.3: 9/4-approximate encoding (networkx)
 :mod:`hammesh.strips.files`              3D mesh reading, ``.json`` / ``.npz`` output
 =======================================  =================================================

@@ -2,8 +2,11 @@
 
 Everything that cannot be vectorized lives here: joining strips by degenerate
 stitching (a running parity), decoding generalized strips (two registers), growing
-greedy dual paths, and the forced chains of the sequential test.  Kernels take and
-return plain int64/bool arrays and never raise; callers check their inputs.
+greedy dual paths and improving the cover at its ends, the forced chains of the
+sequential test, and the encoder's fast path from mesh arrays to a proven buffer
+(face checks, dual components, turns, orientation, emission, the decode-and-compare
+proof).  Kernels take and return plain int64/bool arrays and never raise; callers
+check their inputs and turn error codes into messages.
 """
 
 from __future__ import annotations
@@ -11,7 +14,26 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["stitch", "decode_generalized", "greedy_paths", "sequential_chain"]
+#: Helpers called inside the loops: they read and write the arrays they are given but
+#: never allocate, so they are compiled without numba's reference counting (NRT);
+#: otherwise every call increfs and decrefs each array argument, ~70 ns a call here,
+#: which made the path-cover moves ten times slower than their arithmetic.
+_leaf = njit(cache=True, _nrt=False)
+
+__all__ = [
+    "stitch",
+    "decode_generalized",
+    "greedy_paths",
+    "improve_cover",
+    "sequential_chain",
+    "face_problem",
+    "dual_components",
+    "path_turns",
+    "orient_paths",
+    "emit_restart",
+    "encode_restart",
+    "check_draws",
+]
 
 
 @njit(cache=True)
@@ -116,7 +138,7 @@ def decode_generalized(vertices, vertex_starts, swaps, tri_starts):
     return out
 
 
-@njit(cache=True)
+@_leaf
 def _across(tri, twin, t, b, c):
     """Triangle across edge {b, c} of triangle t and its third vertex, or (-1, -1)."""
     for k in range(3):
@@ -219,7 +241,7 @@ def sequential_chain(tri, twin, t0, a, b, c):
     return empty, empty
 
 
-@njit(cache=True)
+@_leaf
 def _visit(t, nb, visited, deg, bucket, top):
     visited[t] = True
     for k in range(3):
@@ -231,7 +253,7 @@ def _visit(t, nb, visited, deg, bucket, top):
             top[d] += 1
 
 
-@njit(cache=True)
+@_leaf
 def _grow(cur, entry, prev_pivot, tri, twin, nb, visited, deg, bucket, top, out, w_swap):
     """Extend a path from ``cur`` (entered through local edge ``entry``, -1: none).
 
@@ -361,10 +383,10 @@ def greedy_paths(tri, twin, w_swap, seed_order):
     return order, starts[: S + 1].copy()
 
 
-# --- improving a path cover: merge adjacent path ends, rotate ends (Posa) -------------
+# --- walking a path cover ---------------------------------------------------------------
 
 
-@njit(cache=True)
+@_leaf
 def _walk(link, t, prev, buf, n0):
     """Write the path from ``t`` away from its neighbour ``prev`` (-1: ``t`` is an end) into ``buf[n0:]``.
 
@@ -381,7 +403,7 @@ def _walk(link, t, prev, buf, n0):
     return n
 
 
-@njit(cache=True)
+@_leaf
 def _local_edge(nb, t, u):
     for k in range(3):
         if nb[t, k] == u:
@@ -389,90 +411,458 @@ def _local_edge(nb, t, u):
     return -1
 
 
-@njit(cache=True)
-def _seq_cost(tri, nb, seq, a, b):
-    """Indices of one GL strip drawing the dual path ``seq[a:b]``: ``n + 2 + swaps``, best direction."""
-    n = b - a
-    if n <= 2:
-        return n + 2
-    interior = 0
-    prev_pivot = -1
-    p1 = -1
-    pl = -1
-    for i in range(a + 1, b - 1):
-        t = seq[i]
-        kin = _local_edge(nb, t, seq[i - 1])
-        kout = _local_edge(nb, t, seq[i + 1])
-        if kout == (kin + 1) % 3:
-            p = tri[t, kout]
-        else:
-            p = tri[t, kin]
-        if i == a + 1:
-            p1 = p
-        elif p == prev_pivot:
-            interior += 1
-        pl = p
-        prev_pivot = p
-    # the first triangle's pivot is the tail of its exit half-edge; take the better end
-    f = 1 if tri[seq[a], _local_edge(nb, seq[a], seq[a + 1])] == p1 else 0
-    r = 1 if tri[seq[b - 1], _local_edge(nb, seq[b - 1], seq[b - 2])] == pl else 0
-    return n + 2 + interior + min(f, r)
+# --- the encoder's fast path: input checks, dual components, turns, emission, proof ----
 
 
 @njit(cache=True)
-def _relink(link, pid, seq, a, b, label):
-    for i in range(a, b):
-        t = seq[i]
-        link[t, 0] = seq[i - 1] if i > a else -1
-        link[t, 1] = seq[i + 1] if i + 1 < b else -1
-        pid[t] = label
+def face_problem(pts, tri):
+    """First bad triangle: ``(t, 1)`` repeats a vertex, ``(t, 2)`` zero area, ``(-1, 0)`` none.
 
-
-@njit(cache=True)
-def _is_end(link, t):
-    return link[t, 0] < 0 or link[t, 1] < 0
-
-
-@njit(cache=True)
-def _try_join(tri, nb, link, pid, cost, buf, a, b, label, budget):
-    """Join the path ``buf[a:b]`` (its end ``buf[b-1]``) to a neighbouring path end if the total drops.
-
-    ``budget``: cost of the paths involved so far (``buf[a:b]`` and what it replaced);
-    the joined path is written after ``b``.  Returns the improved total or -1.
+    Repeated vertices are looked for first over all rows.  The area test is exact:
+    the cross product of two edge vectors is exactly zero (2D: its one component;
+    3D: all three, the same operations as ``numpy.cross``).
     """
-    y = buf[b - 1]
+    m = tri.shape[0]
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        if a == b or b == c or c == a:
+            return t, 1
+    d = pts.shape[1]
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        if d == 2:
+            ux = pts[b, 0] - pts[a, 0]
+            uy = pts[b, 1] - pts[a, 1]
+            vx = pts[c, 0] - pts[a, 0]
+            vy = pts[c, 1] - pts[a, 1]
+            if ux * vy - uy * vx == 0.0:
+                return t, 2
+        else:
+            ux = pts[b, 0] - pts[a, 0]
+            uy = pts[b, 1] - pts[a, 1]
+            uz = pts[b, 2] - pts[a, 2]
+            vx = pts[c, 0] - pts[a, 0]
+            vy = pts[c, 1] - pts[a, 1]
+            vz = pts[c, 2] - pts[a, 2]
+            if uy * vz - uz * vy == 0.0 and uz * vx - ux * vz == 0.0 and ux * vy - uy * vx == 0.0:
+                return t, 2
+    return -1, 0
+
+
+@njit(cache=True)
+def dual_components(twin, m):
+    """Connected pieces of the dual graph, numbered by their least triangle (as scipy does)."""
+    label = np.full(m, -1, np.int64)
+    stack = np.empty(m, np.int64)
+    c = 0
+    for s in range(m):
+        if label[s] >= 0:
+            continue
+        label[s] = c
+        stack[0] = s
+        top = 1
+        while top > 0:
+            top -= 1
+            t = stack[top]
+            for k in range(3):
+                h = twin[3 * t + k]
+                if h >= 0:
+                    u = h // 3
+                    if label[u] < 0:
+                        label[u] = c
+                        stack[top] = u
+                        top += 1
+        c += 1
+    return label, c
+
+
+@njit(cache=True)
+def path_turns(tri, twin, order, starts):
+    """Entry/exit edges, pivots, swaps and heads of flat dual paths (see ``paths.py``).
+
+    Returns ``(first, last, entry, exit, new_vertex, pivot, swap, head, err, pos)``;
+    ``err`` is 0, 1 (positions ``pos``, ``pos + 1`` share no edge) or 2 (the path
+    turns back at ``pos``); on an error the arrays are incomplete.
+    """
+    L = order.shape[0]
+    S = starts.shape[0] - 1
+    first = np.zeros(L, np.bool_)
+    last = np.zeros(L, np.bool_)
+    entry = np.full(L, -1, np.int64)
+    exit_ = np.full(L, -1, np.int64)
+    new_vertex = np.full(L, -1, np.int64)
+    pivot = np.full(L, -1, np.int64)
+    swap = np.zeros(L, np.bool_)
+    head = np.zeros((L, 3), np.int64)
+    for s in range(S):
+        a = starts[s]
+        b = starts[s + 1]
+        first[a] = True
+        last[b - 1] = True
+        for i in range(a, b - 1):
+            t = order[i]
+            u = order[i + 1]
+            k = -1
+            for kk in range(3):
+                h = twin[3 * t + kk]
+                if h >= 0 and h // 3 == u:
+                    k = kk
+                    break
+            if k < 0:
+                return first, last, entry, exit_, new_vertex, pivot, swap, head, 1, i
+            exit_[i] = k
+            entry[i + 1] = twin[3 * t + k] - 3 * u
+    for s in range(S):
+        a = starts[s]
+        b = starts[s + 1]
+        for i in range(a + 1, b - 1):
+            if entry[i] == exit_[i]:
+                return first, last, entry, exit_, new_vertex, pivot, swap, head, 2, i
+    for s in range(S):
+        a = starts[s]
+        b = starts[s + 1]
+        t = order[a]
+        if b - a == 1:
+            head[a, 0] = tri[t, 0]
+            head[a, 1] = tri[t, 1]
+            head[a, 2] = tri[t, 2]
+            continue
+        k = exit_[a]
+        pivot[a] = tri[t, k]
+        head[a, 0] = tri[t, (k + 2) % 3]
+        head[a, 1] = tri[t, k]
+        head[a, 2] = tri[t, (k + 1) % 3]
+        for i in range(a + 1, b):
+            t = order[i]
+            kin = entry[i]
+            new_vertex[i] = tri[t, (kin + 2) % 3]
+            if i < b - 1:
+                kout = exit_[i]
+                if kout == (kin + 1) % 3:
+                    p = tri[t, kout]
+                else:
+                    p = tri[t, kin]
+                pivot[i] = p
+                swap[i] = p == pivot[i - 1]
+    return first, last, entry, exit_, new_vertex, pivot, swap, head, 0, -1
+
+
+@_leaf
+def _edge_to(twin, t, u):
+    """Local edge of ``t`` shared with ``u`` (first one), or -1."""
     for k in range(3):
-        v = nb[y, k]
-        if v < 0 or not _is_end(link, v):
-            continue
-        rv = pid[v]
-        if rv == label or rv == pid[y]:
-            continue
-        nv = _walk(link, v, -1, buf, b)
-        c = _seq_cost(tri, nb, buf, a, nv)
-        if c < budget + cost[rv] + 1:
-            _relink(link, pid, buf, a, nv, label)
-            cost[rv] = 0
-            cost[label] = c
-            return c
+        h = twin[3 * t + k]
+        if h >= 0 and h // 3 == u:
+            return k
     return -1
 
 
+@_leaf
+def _pivot_at(tri, twin, prev, t, nxt):
+    """Vertex shared by the edges of ``t`` towards ``prev`` and ``nxt`` (direction free)."""
+    kin = _edge_to(twin, t, prev)
+    kout = _edge_to(twin, t, nxt)
+    if kout == (kin + 1) % 3:
+        return tri[t, kout]
+    return tri[t, kin]
+
+
 @njit(cache=True)
-def improve_paths(tri, twin, order, starts, max_passes):
-    """Lower the cost (indices plus one restart per path) of a dual path cover.
+def orient_paths(tri, twin, order, starts):
+    """Reverse each path whose first swap goes away that way.
 
-    Moves around each path end ``e``, each kept only when the total strictly drops:
+    Interior pivots (so interior swaps) do not depend on the direction; only the swap
+    after the first triangle does: it is needed when the second triangle's pivot is the
+    tail of the first triangle's exit half-edge.  Paths must be valid dual paths.
+    Returns ``(order, any_reversed)``.
+    """
+    out = order.copy()
+    flipped = False
+    S = starts.shape[0] - 1
+    for s in range(S):
+        a = starts[s]
+        b = starts[s + 1] - 1
+        if b - a < 2:
+            continue
+        t0 = order[a]
+        sf = tri[t0, _edge_to(twin, t0, order[a + 1])] == _pivot_at(tri, twin, t0, order[a + 1], order[a + 2])
+        if not sf:
+            continue
+        tb = order[b]
+        sb = tri[tb, _edge_to(twin, tb, order[b - 1])] == _pivot_at(tri, twin, order[b - 2], order[b - 1], tb)
+        if not sb:
+            flipped = True
+            for i in range(b - a + 1):
+                out[a + i] = order[b - i]
+    return out, flipped
 
-    * join: ``e`` next to another path's end: one path (saves a start and a restart,
-      may add swaps at the joint);
-    * rotate: ``e`` next to ``x`` inside its own path: ``.. x y .. e`` becomes
-      ``.. x e .. y`` (Posa's rotation), kept if it saves swaps or the new end ``y``
-      joins another path;
+
+@njit(cache=True)
+def emit_restart(first, swap, head, pivot, new_vertex, starts, restart):
+    """The GL buffer of analysed paths, each from an even position, joined by ``restart``.
+
+    Returns ``(indices, max_index)``.
+    """
+    L = first.shape[0]
+    S = starts.shape[0] - 1
+    total = S - 1
+    for i in range(L):
+        if first[i]:
+            total += 3
+        else:
+            total += 2 if swap[i] else 1
+    out = np.empty(total, np.int64)
+    pos = 0
+    mx = -1
+    for s in range(S):
+        if s > 0:
+            out[pos] = restart
+            pos += 1
+        a = starts[s]
+        for j in range(3):
+            v = head[a, j]
+            out[pos] = v
+            pos += 1
+            if v > mx:
+                mx = v
+        for i in range(a + 1, starts[s + 1]):
+            if swap[i]:
+                out[pos] = pivot[i - 1]
+                pos += 1
+            v = new_vertex[i]
+            out[pos] = v
+            pos += 1
+            if v > mx:
+                mx = v
+    return out, mx
+
+
+@njit(cache=True)
+def _same_rotation(a, b, c, x, y, z):
+    return (a == x and b == y and c == z) or (a == y and b == z and c == x) or (a == z and b == x and c == y)
+
+
+@njit(cache=True)
+def check_draws(tri, indices, restart, use_restart, order):
+    """Decode ``indices`` with OpenGL's strip rules and compare with a claimed draw order.
+
+    The ``k``-th non-degenerate triangle drawn must be ``tri[order[k]]`` with the same
+    winding (any rotation), and ``order`` must name every row exactly once: then the
+    buffer draws exactly the mesh's oriented triangles.  Returns ``(status, k)``:
+    0 ok; 1 draw ``k`` differs from the claim; 2 more draws than rows; 3 fewer (``k``
+    draws); 4 ``order[k]`` out of range or repeated.
+    """
+    m = tri.shape[0]
+    if order.shape[0] != m:
+        return 4, min(order.shape[0], m)
+    seen = np.zeros(m, np.bool_)
+    for k in range(m):
+        t = order[k]
+        if t < 0 or t >= m or seen[t]:
+            return 4, k
+        seen[t] = True
+    L = indices.shape[0]
+    pos = 0  # position inside the current strip
+    k = 0
+    for i in range(L):
+        v = indices[i]
+        if use_restart and v == restart:
+            pos = 0
+            continue
+        if pos >= 2:
+            a = indices[i - 2]
+            b = indices[i - 1]
+            if a != b and b != v and a != v:
+                if k >= m:
+                    return 2, k
+                t = order[k]
+                if pos % 2 == 1:
+                    # window starts at the odd position pos - 2: drawn (b, a, v)
+                    ok = _same_rotation(b, a, v, tri[t, 0], tri[t, 1], tri[t, 2])
+                else:
+                    ok = _same_rotation(a, b, v, tri[t, 0], tri[t, 1], tri[t, 2])
+                if not ok:
+                    return 1, k
+                k += 1
+        pos += 1
+    if k != m:
+        return 3, k
+    return 0, -1
+
+
+# --- improving a path cover with O(1) cost updates ---------------------------------------
+#
+# The cover is a set of undirected links ``lk[t] = (a, b)`` (path neighbours, -1 at an
+# end), a label per path (``pid``), the path size per label and the other end of each
+# end triangle (``oth``).  The buffer's length is
+#     sum over paths (n + 2 + end term) + I + (S - 1) restarts,
+# where I counts links between two interior triangles with the same pivot (a swap) and
+# the end term of a path of n >= 3 triangles is 1 when both ends start with a swap.
+# A pivot depends only on the triangle's own links, so a move that changes the links of
+# a few triangles C changes I only on links touching C: every move is costed in O(1),
+# applied tentatively and undone unless the total drops.
+
+
+@_leaf
+def _pivot(tri, lk, le, t):
+    """Pivot of an interior triangle (vertex shared by its two path edges), -1 at an end.
+
+    ``le[t, j]`` is the local edge of ``t`` towards its path neighbour ``lk[t, j]``.
+    """
+    if lk[t, 0] < 0 or lk[t, 1] < 0:
+        return -1
+    k0 = le[t, 0]
+    k1 = le[t, 1]
+    if k1 == (k0 + 1) % 3:
+        return tri[t, k1]
+    return tri[t, k0]
+
+
+@_leaf
+def _local_swaps(tri, lk, le, C, nC):
+    """Swaps (links between interior triangles with equal pivots) on links touching ``C[:nC]``."""
+    s = 0
+    for i in range(nC):
+        c = C[i]
+        pc = _pivot(tri, lk, le, c)
+        if pc < 0:
+            continue
+        for j in range(2):
+            u = lk[c, j]
+            if u < 0:
+                continue
+            inside = False
+            for i2 in range(nC):
+                if C[i2] == u:
+                    inside = True
+            if inside and u < c:
+                continue  # counted from u
+            if _pivot(tri, lk, le, u) == pc:
+                s += 1
+    return s
+
+
+@_leaf
+def _end_flag(tri, lk, le, a):
+    """Starting at end ``a`` costs a swap after the first triangle (path of >= 3)."""
+    j = 0 if lk[a, 0] >= 0 else 1
+    return 1 if tri[a, le[a, j]] == _pivot(tri, lk, le, lk[a, j]) else 0
+
+
+@_leaf
+def _end_term(tri, lk, le, a, b, n):
+    if n < 3:
+        return 0
+    return min(_end_flag(tri, lk, le, a), _end_flag(tri, lk, le, b))
+
+
+@_leaf
+def _set_link(lk, le, nb, t, old, new):
+    j = 0 if lk[t, 0] == old else 1
+    lk[t, j] = new
+    le[t, j] = _local_edge(nb, t, new) if new >= 0 else -1
+
+
+@_leaf
+def _in_links(lk, t, u):
+    return lk[t, 0] == u or lk[t, 1] == u
+
+
+@_leaf
+def _relabel(lk, pid, t, prev, label):
+    """Give ``label`` to ``t`` and everything beyond it, walking away from ``prev``."""
+    n = 0
+    while t >= 0:
+        pid[t] = label
+        n += 1
+        a = lk[t, 0]
+        nxt = a if a != prev else lk[t, 1]
+        prev = t
+        t = nxt
+    return n
+
+
+@_leaf
+def _sides(lk, oth, x):
+    """Ends and sizes of both sides of interior ``x``: walk both ways in step, O(shorter side).
+
+    Returns ``(end0, n0, end1, n1)`` for the sides through ``lk[x, 0]`` and ``lk[x, 1]``
+    (``n`` counts the side's triangles, ``x`` excluded).
+    """
+    p0 = x
+    t0 = lk[x, 0]
+    p1 = x
+    t1 = lk[x, 1]
+    n = 1
+    while True:
+        if lk[t0, 0] < 0 or lk[t0, 1] < 0:
+            end0 = t0
+            end1 = oth[t0]
+            break
+        if lk[t1, 0] < 0 or lk[t1, 1] < 0:
+            end1 = t1
+            end0 = oth[t1]
+            break
+        a = lk[t0, 0]
+        nx0 = a if a != p0 else lk[t0, 1]
+        p0 = t0
+        t0 = nx0
+        a = lk[t1, 0]
+        nx1 = a if a != p1 else lk[t1, 1]
+        p1 = t1
+        t1 = nx1
+        n += 1
+    return end0, end1, n, t0 == end0
+
+
+@_leaf
+def _mark(nb, lk, dirty, c):
+    """Ends whose moves may read the links of ``c``: its dual neighbours, those of its path
+    neighbours and of theirs (pivots two links away enter a move's cost)."""
+    if c < 0:
+        return
+    for k in range(3):
+        if nb[c, k] >= 0:
+            dirty[nb[c, k]] = True
+    dirty[c] = True
+    for j in range(2):
+        u = lk[c, j]
+        if u < 0:
+            continue
+        dirty[u] = True
+        for k in range(3):
+            if nb[u, k] >= 0:
+                dirty[nb[u, k]] = True
+        for j2 in range(2):
+            u2 = lk[u, j2]
+            if u2 < 0 or u2 == c:
+                continue
+            for k in range(3):
+                if nb[u2, k] >= 0:
+                    dirty[nb[u2, k]] = True
+
+
+@njit(cache=True)
+def improve_cover(tri, twin, order, starts, max_passes):
+    """Lower the buffer length of a dual path cover by local moves at the path ends.
+
+    Moves around each path end ``e`` (path ``f .. e``), each kept only when the total
+    (indices plus one restart per path) strictly drops, each costed in O(1):
+
+    * join: ``e`` next to another path's end: one path;
+    * rotate: ``e`` next to ``x`` inside its own path: ``f .. x y .. e`` becomes
+      ``f .. x e .. y`` (Posa's rotation), kept if it saves swaps or if the new end ``y``
+      then joins another path;
     * tunnel: ``e`` next to ``x`` inside another path ``.. w x z ..``: ``e`` takes ``x``
-      and one side of it, the other side is left (and may join a third path).
+      and the side of ``z``; the side of ``w`` is left over (and may join a third path).
 
-    Returns ``(order, starts)`` of the improved cover.
+    Finding which neighbour of ``x`` lies towards ``e`` (rotate) or the ends of ``x``'s
+    path (tunnel) walks both ways in step (the shorter side); relabelling after a join
+    or tunnel walks the smaller part.  Returns ``(order, starts)`` of the new cover.
     """
     m = tri.shape[0]
     nb = np.full((m, 3), -1, np.int64)
@@ -481,126 +871,352 @@ def improve_paths(tri, twin, order, starts, max_passes):
             h = twin[3 * t + k]
             if h >= 0:
                 nb[t, k] = h // 3
-    link = np.full((m, 2), -1, np.int64)
-    pid = np.zeros(m, np.int64)
-    cost = np.zeros(m, np.int64)
     S = starts.shape[0] - 1
+    lk = np.full((m, 2), -1, np.int64)
+    le = np.full((m, 2), -1, np.int64)
+    pid = np.zeros(m, np.int64)
+    oth = np.full(m, -1, np.int64)
+    size = np.zeros(m, np.int64)
     for s in range(S):
-        _relink(link, pid, order, starts[s], starts[s + 1], s)
-        cost[s] = _seq_cost(tri, nb, order, starts[s], starts[s + 1])
-    buf = np.empty(3 * m, np.int64)
-    seq = np.empty(m, np.int64)
+        a = starts[s]
+        b = starts[s + 1]
+        for i in range(a, b):
+            t = order[i]
+            pid[t] = s
+            if i > a:
+                lk[t, 0] = order[i - 1]
+                le[t, 0] = _local_edge(nb, t, order[i - 1])
+            if i + 1 < b:
+                lk[t, 1] = order[i + 1]
+                le[t, 1] = _local_edge(nb, t, order[i + 1])
+        size[s] = b - a
+        oth[order[a]] = order[b - 1]
+        oth[order[b - 1]] = order[a]
+    C = np.empty(8, np.int64)
+    T = np.empty(12, np.int64)  # triangles whose links or path ends a committed move changed
+    dirty = np.ones(m, np.bool_)  # ends to (re)consider: all at first, then near changes
+    changed = False
     for _ in range(max_passes):
         improved = False
         for e in range(m):
-            if not _is_end(link, e):
+            if not dirty[e] or (lk[e, 0] >= 0 and lk[e, 1] >= 0):
                 continue
+            dirty[e] = False
+            nT = 0
             rp = pid[e]
-            n = _walk(link, e, -1, buf, 0)
-            for i in range(n):
-                seq[i] = buf[n - 1 - i]  # P, ending at e
+            f = oth[e]
+            nP = size[rp]
+            done = False
             # join
-            for i in range(n):
-                buf[i] = seq[i]
-            if _try_join(tri, nb, link, pid, cost, buf, 0, n, rp, cost[rp]) >= 0:
+            for k in range(3):
+                v = nb[e, k]
+                if v < 0 or _in_links(lk, e, v) or (lk[v, 0] >= 0 and lk[v, 1] >= 0) or pid[v] == rp:
+                    continue
+                rv = pid[v]
+                g = oth[v]
+                nQ = size[rv]
+                C[0] = e
+                C[1] = v
+                before = _local_swaps(tri, lk, le, C, 2) + _end_term(tri, lk, le, e, f, nP)
+                before += _end_term(tri, lk, le, v, g, nQ)
+                _set_link(lk, le, nb, e, -1, v)
+                _set_link(lk, le, nb, v, -1, e)
+                after = _local_swaps(tri, lk, le, C, 2) + _end_term(tri, lk, le, f, g, nP + nQ)
+                if after - before - 3 < 0:
+                    if nP < nQ:
+                        _relabel(lk, pid, e, v, rv)
+                        keep, gone = rv, rp
+                    else:
+                        _relabel(lk, pid, v, e, rp)
+                        keep, gone = rp, rv
+                    size[keep] = nP + nQ
+                    size[gone] = 0
+                    oth[f] = g
+                    oth[g] = f
+                    T[0] = e
+                    T[1] = v
+                    T[2] = f
+                    T[3] = g
+                    nT = 4
+                    done = True
+                    break
+                _set_link(lk, le, nb, e, v, -1)
+                _set_link(lk, le, nb, v, e, -1)
+            if done:
+                for i in range(nT):
+                    _mark(nb, lk, dirty, T[i])
                 improved = True
                 continue
-            done = False
             for k in range(3):
                 x = nb[e, k]
-                if x < 0 or x == link[e, 0] or x == link[e, 1]:
+                if x < 0 or _in_links(lk, e, x):
                     continue
                 if pid[x] == rp:
-                    # rotate
-                    j = -1
-                    for i in range(n):
-                        if seq[i] == x:
-                            j = i
-                    for i in range(j + 1):
-                        buf[i] = seq[i]
-                    for i in range(j + 1, n):
-                        buf[i] = seq[n - 1 - (i - j - 1)]
-                    c = _seq_cost(tri, nb, buf, 0, n)
-                    if c < cost[rp]:
-                        _relink(link, pid, buf, 0, n, rp)
-                        cost[rp] = c
+                    # rotate: y is x's neighbour on e's side
+                    if lk[x, 0] < 0 or lk[x, 1] < 0:
+                        y = lk[x, 0] if lk[x, 0] >= 0 else lk[x, 1]  # x == f
+                    else:
+                        end0, end1, _, first_done = _sides(lk, oth, x)
+                        y = lk[x, 0] if end0 == e else lk[x, 1]
+                    C[0] = x
+                    C[1] = y
+                    C[2] = e
+                    before = _local_swaps(tri, lk, le, C, 3) + _end_term(tri, lk, le, e, f, nP)
+                    _set_link(lk, le, nb, x, y, e)
+                    _set_link(lk, le, nb, y, x, -1)
+                    _set_link(lk, le, nb, e, -1, x)
+                    after = _local_swaps(tri, lk, le, C, 3) + _end_term(tri, lk, le, y, f, nP)
+                    if after < before:
+                        oth[y] = f
+                        oth[f] = y
+                        T[0] = x
+                        T[1] = y
+                        T[2] = e
+                        T[3] = f
+                        nT = 4
                         done = True
                         break
-                    if _try_join(tri, nb, link, pid, cost, buf, 0, n, rp, cost[rp]) >= 0:
-                        done = True
+                    # the new end y joins another path
+                    for k2 in range(3):
+                        v = nb[y, k2]
+                        if v < 0 or _in_links(lk, y, v) or (lk[v, 0] >= 0 and lk[v, 1] >= 0) or pid[v] == rp:
+                            continue
+                        rv = pid[v]
+                        g = oth[v]
+                        nQ = size[rv]
+                        C[3] = v
+                        bj = _local_swaps(tri, lk, le, C[1:], 1) + _local_swaps(tri, lk, le, C[3:], 1)
+                        bj += _end_term(tri, lk, le, v, g, nQ) + _end_term(tri, lk, le, y, f, nP)
+                        _set_link(lk, le, nb, y, -1, v)
+                        _set_link(lk, le, nb, v, -1, y)
+                        C[4] = y
+                        aj = _local_swaps(tri, lk, le, C[3:], 2) + _end_term(tri, lk, le, f, g, nP + nQ)
+                        # bj counted y's and v's links apart; no link joined them before
+                        total = (after - before) + (aj - bj) - 3
+                        if total < 0:
+                            if nP < nQ:
+                                _relabel(lk, pid, y, v, rv)
+                                keep, gone = rv, rp
+                            else:
+                                _relabel(lk, pid, v, y, rp)
+                                keep, gone = rp, rv
+                            size[keep] = nP + nQ
+                            size[gone] = 0
+                            oth[f] = g
+                            oth[g] = f
+                            T[0] = x
+                            T[1] = y
+                            T[2] = e
+                            T[3] = f
+                            T[4] = v
+                            T[5] = g
+                            nT = 6
+                            done = True
+                            break
+                        _set_link(lk, le, nb, y, v, -1)
+                        _set_link(lk, le, nb, v, y, -1)
+                    if done:
                         break
-                elif not _is_end(link, x):
-                    # tunnel: P + x + one side of x; the other side is left over
+                    _set_link(lk, le, nb, e, x, -1)
+                    _set_link(lk, le, nb, y, -1, x)
+                    _set_link(lk, le, nb, x, e, y)
+                elif lk[x, 0] >= 0 and lk[x, 1] >= 0:
+                    # tunnel into x's path
                     rq = pid[x]
+                    nQ = size[rq]
+                    end0, end1, nshort, first_done = _sides(lk, oth, x)
+                    if first_done:
+                        n0 = nshort
+                        n1 = nQ - 1 - nshort
+                    else:
+                        n1 = nshort
+                        n0 = nQ - 1 - nshort
                     for side in range(2):
-                        for i in range(n):
-                            buf[i] = seq[i]
-                        buf[n] = x
-                        nt = _walk(link, link[x, side], x, buf, n + 1)
-                        # leftover, starting next to x
-                        nl = _walk(link, link[x, 1 - side], x, buf, nt)
-                        # reverse it so that its new end is last
-                        for i in range((nl - nt) // 2):
-                            tmp = buf[nt + i]
-                            buf[nt + i] = buf[nl - 1 - i]
-                            buf[nl - 1 - i] = tmp
-                        old = cost[rp] + cost[rq] + 1
-                        c1 = _seq_cost(tri, nb, buf, 0, nt)
-                        c2 = _seq_cost(tri, nb, buf, nt, nl)
-                        if c1 + c2 + 1 < old:
-                            _relink(link, pid, buf, 0, nt, rp)
-                            _relink(link, pid, buf, nt, nl, rq)
-                            cost[rp] = c1
-                            cost[rq] = c2
-                            done = True
-                            break
-                        # the leftover's new end joins a third path
-                        for i in range(nl - nt):
-                            buf[nl + i] = buf[nt + i]
-                        # relink only if the join succeeds: test on copies of the labels
-                        y = buf[nl + (nl - nt) - 1]
-                        ok = False
-                        for k2 in range(3):
-                            v = nb[y, k2]
-                            if v < 0 or not _is_end(link, v):
-                                continue
-                            rv = pid[v]
-                            if rv == rp or rv == rq:
-                                continue
-                            nv = _walk(link, v, -1, buf, nl + (nl - nt))
-                            c3 = _seq_cost(tri, nb, buf, nl, nv)
-                            if c1 + c3 < old + cost[rv] + 1:
-                                _relink(link, pid, buf, 0, nt, rp)
-                                _relink(link, pid, buf, nl, nv, rq)
-                                cost[rp] = c1
-                                cost[rq] = c3
-                                cost[rv] = 0
-                                ok = True
-                                break
+                        z = lk[x, side]
+                        w = lk[x, 1 - side]
+                        endB = end0 if side == 0 else end1
+                        nB = n0 if side == 0 else n1
+                        endA = end1 if side == 0 else end0
+                        nA = n1 if side == 0 else n0
+                        C[0] = e
+                        C[1] = x
+                        C[2] = w
+                        before = _local_swaps(tri, lk, le, C, 3) + _end_term(tri, lk, le, e, f, nP)
+                        before += _end_term(tri, lk, le, end0, end1, nQ)
+                        _set_link(lk, le, nb, e, -1, x)
+                        _set_link(lk, le, nb, x, w, e)
+                        _set_link(lk, le, nb, w, x, -1)
+                        nP2 = nP + 1 + nB
+                        after = _local_swaps(tri, lk, le, C, 3) + _end_term(tri, lk, le, f, endB, nP2)
+                        after += _end_term(tri, lk, le, w, endA, nA)
+                        ok = after < before
+                        rv = -1
+                        g = -1
+                        nR = 0
+                        if not ok:
+                            # the leftover's new end w joins a third path
+                            for k2 in range(3):
+                                v = nb[w, k2]
+                                if v < 0 or _in_links(lk, w, v) or (lk[v, 0] >= 0 and lk[v, 1] >= 0):
+                                    continue
+                                if pid[v] == rp or pid[v] == rq:
+                                    continue
+                                rv = pid[v]
+                                g = oth[v]
+                                nR = size[rv]
+                                C[3] = w
+                                C[4] = v
+                                bj = _local_swaps(tri, lk, le, C[3:], 2) + _end_term(tri, lk, le, v, g, nR)
+                                bj += _end_term(tri, lk, le, w, endA, nA)
+                                _set_link(lk, le, nb, w, -1, v)
+                                _set_link(lk, le, nb, v, -1, w)
+                                aj = _local_swaps(tri, lk, le, C[3:], 2) + _end_term(tri, lk, le, endA, g, nA + nR)
+                                if (after - before) + (aj - bj) - 3 < 0:
+                                    ok = True
+                                    break
+                                _set_link(lk, le, nb, w, v, -1)
+                                _set_link(lk, le, nb, v, w, -1)
+                                rv = -1
                         if ok:
+                            # labels: x and B join P (label rp); A keeps rq
+                            _relabel(lk, pid, x, e, rp)
+                            size[rp] = nP2
+                            oth[f] = endB
+                            oth[endB] = f
+                            if rv < 0:
+                                size[rq] = nA
+                                oth[w] = endA
+                                oth[endA] = w
+                            else:
+                                if nA < nR:
+                                    _relabel(lk, pid, w, v, rv)
+                                    keep, gone = rv, rq
+                                else:
+                                    _relabel(lk, pid, v, w, rq)
+                                    keep, gone = rq, rv
+                                size[keep] = nA + nR
+                                size[gone] = 0
+                                oth[endA] = g
+                                oth[g] = endA
+                            T[0] = e
+                            T[1] = x
+                            T[2] = w
+                            T[3] = f
+                            T[4] = endA
+                            T[5] = endB
+                            T[6] = v if rv >= 0 else -1
+                            T[7] = g
+                            nT = 8
                             done = True
                             break
+                        _set_link(lk, le, nb, w, -1, x)
+                        _set_link(lk, le, nb, x, e, w)
+                        _set_link(lk, le, nb, e, x, -1)
                     if done:
                         break
             if done:
+                for i in range(nT):
+                    _mark(nb, lk, dirty, T[i])
                 improved = True
         if not improved:
             break
+        changed = True
+    if not changed:
+        return order.copy(), starts.copy()
     out = np.empty(m, np.int64)
     st = np.empty(m + 1, np.int64)
     seen = np.zeros(m, np.bool_)
     L = 0
     S2 = 0
     st[0] = 0
-    for i in range(S):
-        for j in range(starts[i], starts[i + 1]):
-            t = order[j]
-            if seen[t] or not _is_end(link, t):
-                continue
-            n = _walk(link, t, -1, out, L)
-            for i2 in range(L, n):
-                seen[out[i2]] = True
-            L = n
-            S2 += 1
-            st[S2] = L
+    for i in range(m):
+        t = order[i]
+        if seen[t] or (lk[t, 0] >= 0 and lk[t, 1] >= 0):
+            continue
+        n = _walk(lk, t, -1, out, L)
+        for i2 in range(L, n):
+            seen[out[i2]] = True
+        L = n
+        S2 += 1
+        st[S2] = L
     return out, st[: S2 + 1].copy()
+
+
+@njit(cache=True)
+def encode_restart(tri, twin, order, starts, restart):
+    """The restart-joined GL buffer of flat dual paths in one pass, no per-position arrays.
+
+    The same turns as :func:`path_turns` + :func:`emit_restart` (head of each path:
+    opposite vertex, then the exit half-edge's tail and head; then one new vertex per
+    triangle, preceded by the previous pivot where two pivots coincide), computed on
+    the fly: the encoder's fast path.  Returns ``(indices, n_swaps, max_index, err)``;
+    ``err`` is 0, or 1 when a path is not a dual path (call :func:`path_turns` for
+    the message).
+    """
+    S = starts.shape[0] - 1
+    L = order.shape[0]
+    empty = np.empty(0, np.int64)
+    # pass 1: length and swaps
+    n_swaps = 0
+    for s in range(S):
+        a = starts[s]
+        b = starts[s + 1]
+        if b - a < 3:
+            continue
+        kprev = _edge_to(twin, order[a], order[a + 1])
+        if kprev < 0:
+            return empty, 0, -1, 1
+        prev_pivot = tri[order[a], kprev]
+        for i in range(a + 1, b - 1):
+            t = order[i]
+            kin = twin[3 * order[i - 1] + kprev] - 3 * t
+            kout = _edge_to(twin, t, order[i + 1])
+            if kout < 0 or kout == kin:
+                return empty, 0, -1, 1
+            p = tri[t, kout] if kout == (kin + 1) % 3 else tri[t, kin]
+            if p == prev_pivot:
+                n_swaps += 1
+            prev_pivot = p
+            kprev = kout
+    out = np.empty(L + 2 * S + n_swaps + S - 1, np.int64)
+    pos = 0
+    mx = -1
+    for s in range(S):
+        a = starts[s]
+        b = starts[s + 1]
+        if s > 0:
+            out[pos] = restart
+            pos += 1
+        t = order[a]
+        if b - a == 1:
+            for j in range(3):
+                out[pos] = tri[t, j]
+                pos += 1
+                mx = max(mx, tri[t, j])
+            continue
+        k = _edge_to(twin, t, order[a + 1])
+        if k < 0:
+            return empty, 0, -1, 1
+        out[pos] = tri[t, (k + 2) % 3]
+        out[pos + 1] = tri[t, k]
+        out[pos + 2] = tri[t, (k + 1) % 3]
+        pos += 3
+        mx = max(mx, tri[t, 0], tri[t, 1], tri[t, 2])
+        prev_pivot = tri[t, k]
+        kprev = k
+        for i in range(a + 1, b):
+            t = order[i]
+            kin = twin[3 * order[i - 1] + kprev] - 3 * t
+            v = tri[t, (kin + 2) % 3]
+            if i < b - 1:
+                kout = _edge_to(twin, t, order[i + 1])
+                p = tri[t, kout] if kout == (kin + 1) % 3 else tri[t, kin]
+                if p == prev_pivot:
+                    out[pos] = prev_pivot
+                    pos += 1
+                prev_pivot = p
+                kprev = kout
+            out[pos] = v
+            pos += 1
+            mx = max(mx, v)
+    return out, n_swaps, mx, 0

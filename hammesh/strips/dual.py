@@ -9,15 +9,14 @@ half-edge pairing of :func:`hammesh._kernels.half_edge_twins`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Union
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-
 from hammesh import _kernels
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.strips import _kernels as _strip_kernels
 from hammesh.verify.input_mesh import mesh_arrays
 
 __all__ = ["DualMesh", "dual_mesh", "oriented_key"]
@@ -38,15 +37,27 @@ class DualMesh:
         ``twin[h]`` is the half-edge opposite ``h = 3 t + k`` (from ``triangles[t, k]``
         to ``triangles[t, (k + 1) % 3]``), or -1 on the boundary.
     component : (m,) int64
-        Connected piece of the dual graph each triangle belongs to.
+        Connected piece of the dual graph each triangle belongs to, numbered by least
+        triangle (computed on first use).
     n_components : int
     """
 
     points: np.ndarray
     triangles: np.ndarray
     twin: np.ndarray
-    component: np.ndarray
-    n_components: int
+
+    @cached_property
+    def _components(self) -> tuple[np.ndarray, int]:
+        label, n_comp = _strip_kernels.dual_components(self.twin, len(self.triangles))
+        return label, int(n_comp)
+
+    @property
+    def component(self) -> np.ndarray:
+        return self._components[0]
+
+    @property
+    def n_components(self) -> int:
+        return self._components[1]
 
     @property
     def n_triangles(self) -> int:
@@ -107,33 +118,15 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     """
     pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
     n = len(pts)
-    repeated = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
-    if repeated.any():
-        t = int(np.argmax(repeated))
+    t, kind = _strip_kernels.face_problem(pts, tri)
+    if kind == 1:
         raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} repeats a vertex (degenerate face)")
-    p = pts[tri]
-    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    if pts.shape[1] == 2:
-        zero = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) == 0.0
-    else:
-        zero = ~np.cross(u, v).any(axis=1)
-    if zero.any():
-        t = int(np.argmax(zero))
+    if kind == 2:
         raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area (degenerate face)")
     twin, bad = _kernels.half_edge_twins(tri, n)
     if bad >= 0:
         raise InvalidMeshError(_edge_problem(tri, int(bad)))
-    m = len(tri)
-    h = np.flatnonzero(twin >= 0)
-    graph = coo_matrix((np.ones(len(h), dtype=np.int8), (h // 3, twin[h] // 3)), shape=(m, m))
-    n_comp, label = connected_components(graph, directed=False)
-    return DualMesh(
-        points=pts,
-        triangles=tri,
-        twin=twin,
-        component=label.astype(np.int64),
-        n_components=int(n_comp),
-    )
+    return DualMesh(points=pts, triangles=tri, twin=twin)
 
 
 def oriented_key(triangles: np.ndarray) -> np.ndarray:

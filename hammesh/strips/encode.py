@@ -5,13 +5,18 @@ the scalable encoder covers the dual graph with few long paths, turn-aware so th
 swaps are needed, and joins them into one buffer:
 
 * a :class:`~hammesh.mesh.HamiltonianMesh` (rows in cycle order, ``components`` run
-  lengths) is sent as exactly one strip per cycle, cut where it saves the most swaps;
+  lengths) is sent as exactly one strip per cycle, cut and directed where that gives
+  the fewest swaps (exact for the fixed order);
+* a mesh whose dual graph is a forest (a triangulated polygon) starts from its minimum
+  path partition (Lemma 5.1, :func:`forest_paths`);
 * any other mesh is covered greedily (:func:`greedy_paths`, O(m) numba), seeds with the
   fewest free neighbours first, each path grown both ways, preferring neighbours with
-  few free neighbours and then the alternating turn; then a few sweeps of local moves
-  at the path ends (join two ends, Posa rotation, tunnelling into a neighbouring path)
-  keep every change that shortens the buffer;
-* each path is sent in the direction that needs fewer swaps at its ends.
+  few free neighbours and then the alternating turn;
+* then a few sweeps of local moves at the path ends (join two ends, Posa rotation,
+  tunnelling into a neighbouring path), each costed in O(1), keep every change that
+  shortens the buffer (never adding a path);
+* each path is sent in the direction that needs fewer swaps at its ends; with restarts
+  the buffer is written in one compiled pass.
 
 Cost of a buffer: ``T + 2 S + swaps`` plus ``S - 1`` restarts or ``2 (S - 1)`` stitches.
 """
@@ -25,10 +30,19 @@ from hammesh.mesh import HamiltonianMesh
 from hammesh.strips import _kernels
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
-from hammesh.strips.gl import RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
-from hammesh.strips.paths import PathTurns, path_turns
+from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
+from hammesh.strips.paths import PathTurns, check_starts, path_turns
 
-__all__ = ["METHODS", "greedy_paths", "cycle_paths", "mesh_paths", "encode", "encode_generalized"]
+__all__ = [
+    "METHODS",
+    "is_forest",
+    "forest_paths",
+    "greedy_paths",
+    "cycle_paths",
+    "mesh_paths",
+    "encode",
+    "encode_generalized",
+]
 
 #: How the dual paths are found: ``"auto"`` is ``"order"`` for a HamiltonianMesh and
 #: ``"greedy"`` otherwise.
@@ -37,13 +51,39 @@ METHODS = ("auto", "greedy", "order")
 #: Weight of a swap against a neighbour's remaining degree in the greedy choice.
 _SWAP_WEIGHT = 1
 
-#: Sweeps of :func:`~hammesh.strips._kernels.improve_paths` over the path ends (each
-#: sweep is O(m); most of the gain comes in the first three).
-_IMPROVE_PASSES = 4
+#: Sweeps of :func:`~hammesh.strips._kernels.improve_cover` over the path ends (a
+#: fourth sweep gains < 0.0002 indices per triangle on the benchmark meshes).
+_IMPROVE_PASSES = 3
+
+
+def is_forest(dual: DualMesh) -> bool:
+    """Is the dual graph a forest (e.g. a triangulated polygon: no interior vertex)?"""
+    edges = int(np.count_nonzero(dual.twin >= 0)) // 2
+    if edges >= dual.n_triangles:  # a forest has at most m - 1 edges: skip the components
+        return False
+    return edges == dual.n_triangles - dual.n_components
+
+
+def forest_paths(dual: DualMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Lemma 5.1: the fewest dual paths of a dual forest, in O(m).
+
+    Uses :func:`hammesh.polygon.path_partition.forest_path_partition` (greedy from the
+    leaves up); the caller checks :func:`is_forest`.
+    """
+    from hammesh.polygon.path_partition import forest_path_partition
+
+    paths = forest_path_partition(dual.neighbor_triangles)
+    order = np.concatenate(paths).astype(np.int64)
+    starts = np.r_[0, np.cumsum([len(p) for p in paths])].astype(np.int64)
+    return order, starts
 
 
 def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Cover the dual graph with paths, greedily, then improve the cover locally.
+
+    A dual forest (a triangulated polygon) starts from its minimum path partition
+    (Lemma 5.1, :func:`forest_paths`) instead; the local moves never add a path, so
+    the strip count stays the minimum.
 
     Parameters
     ----------
@@ -51,7 +91,8 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     improve : bool
         After the greedy pass, join paths whose ends are neighbours, rotate path ends
         and tunnel into neighbouring paths wherever the buffer gets shorter
-        (:func:`~hammesh.strips._kernels.improve_paths`, a few O(m) sweeps).
+        (:func:`~hammesh.strips._kernels.improve_cover`: a few sweeps over the path
+        ends, each move costed in O(1)).
 
     Returns
     -------
@@ -61,14 +102,27 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
         Path offsets.  Paths never cross dual components.
     """
     m = dual.n_triangles
-    order, starts = _kernels.greedy_paths(dual.triangles, dual.twin, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
+    if is_forest(dual):
+        order, starts = forest_paths(dual)
+    else:
+        order, starts = _kernels.greedy_paths(dual.triangles, dual.twin, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     if improve:
-        order, starts = _kernels.improve_paths(dual.triangles, dual.twin, order, starts, _IMPROVE_PASSES)
+        order, starts = _kernels.improve_cover(dual.triangles, dual.twin, order, starts, _IMPROVE_PASSES)
     return order, starts
 
 
 def _cut_cycle(tri: np.ndarray, twin: np.ndarray, run: np.ndarray) -> np.ndarray:
-    """Rotate one cycle so that opening it removes the most swaps."""
+    """Rotate one cycle so that opening it gives the shortest strip (exact, O(k)).
+
+    For a fixed cyclic order the only choices are where to open it and in which
+    direction to send it.  Interior pivots do not depend on either, so with
+    ``f[j] = 1`` when the pivots at ``j - 1`` and ``j`` coincide (a swap in the
+    cycle), opening before ``c`` costs ``k + 2 + sum(f) - f[c - 1] - f[c] - f[c + 1]``
+    plus the first swap of the better direction: forwards it is needed when the tail
+    of ``run[c]``'s exit half-edge is the pivot at ``c + 1``, backwards when the tail
+    of ``run[c - 1]``'s half-edge towards ``run[c - 2]`` is the pivot at ``c - 2``.
+    :func:`_orient` then sends the path in its better direction.
+    """
     k = len(run)
     if k < 4:
         return run
@@ -79,9 +133,13 @@ def _cut_cycle(tri: np.ndarray, twin: np.ndarray, run: np.ndarray) -> np.ndarray
     turns = path_turns(tri, twin, ext, [0, k + 2])
     piv = turns.pivot[1 : k + 1]  # cyclic pivots of run[0..k-1]
     f = (piv == np.roll(piv, 1)).astype(np.int64)  # f[j]: swap at j in the cycle
-    # opening at c drops the swaps at c, c + 1 (start) and c - 1 (end)
-    gain = f + np.roll(f, -1) + np.roll(f, 1)
-    c = int(np.argmax(gain))
+    interior = f.sum() - f - np.roll(f, -1) - np.roll(f, 1)
+    tail_fwd = tri[run, turns.exit[1 : k + 1]]  # run[c] leaving towards run[c + 1]
+    first_fwd = tail_fwd == np.roll(piv, -1)
+    tail_in = tri[run, turns.entry[1 : k + 1]]  # run[j] leaving back towards run[j - 1]
+    first_bwd = np.roll(tail_in, 1) == np.roll(piv, 2)  # path run[c - 1], run[c - 2], ...
+    cost = interior + np.minimum(first_fwd, first_bwd)
+    c = int(np.argmin(cost))
     return np.roll(run, -c)
 
 
@@ -114,22 +172,9 @@ def _orient(dual: DualMesh, order: np.ndarray, starts: np.ndarray) -> PathTurns:
     swap after the first triangle does, so the reversed count comes from the forward
     turns at the path's last two triangles.
     """
-    fwd = path_turns(dual.triangles, dual.twin, order, starts)
-    a, b = starts[:-1], starts[1:] - 1
-    long = b - a >= 2
-    sf = np.zeros(len(a), dtype=bool)
-    sf[long] = fwd.swap[a[long] + 1]
-    sb = np.zeros(len(a), dtype=bool)
-    bl = b[long]
-    sb[long] = dual.triangles[order[bl], fwd.entry[bl]] == fwd.pivot[bl - 1]
-    flip = sf & ~sb
-    if not flip.any():
-        return fwd
-    lengths = np.diff(starts)
-    path_id = np.repeat(np.arange(len(lengths)), lengths)
-    pos = np.arange(len(order)) - starts[path_id]
-    idx = np.where(flip[path_id], starts[path_id] + lengths[path_id] - 1 - pos, np.arange(len(order)))
-    return path_turns(dual.triangles, dual.twin, order[idx], starts)
+    order, starts = check_starts(order, starts, dual.n_triangles)
+    new, _ = _kernels.orient_paths(dual.triangles, dual.twin, order, starts)
+    return path_turns(dual.triangles, dual.twin, new, starts)
 
 
 def _stored_runs(dual: DualMesh) -> np.ndarray:
@@ -141,6 +186,39 @@ def _stored_runs(dual: DualMesh) -> np.ndarray:
             "method 'order' needs each connected piece stored as one consecutive run of rows"
         )
     return np.diff(np.r_[starts, dual.n_triangles])
+
+
+def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, np.ndarray]:
+    """Validated mesh, its dual paths (``order``, ``starts``), each in its better direction."""
+    if method not in METHODS:
+        raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    dual = dual_mesh(mesh)
+    if method == "auto":
+        method = "order" if isinstance(mesh, HamiltonianMesh) else "greedy"
+    if method == "order":
+        if isinstance(mesh, HamiltonianMesh):
+            comps = np.asarray(mesh.components)
+        else:
+            comps = _stored_runs(dual)
+        order, starts = cycle_paths(dual, comps)
+    else:
+        order, starts = greedy_paths(dual)
+    order, starts = check_starts(order, starts, dual.n_triangles)
+    order, _ = _kernels.orient_paths(dual.triangles, dual.twin, order, starts)
+    return dual, order, starts
+
+
+def _restart_strip(dual: DualMesh, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
+    """:func:`~hammesh.strips.gl.gl_strip` with restarts, in one compiled pass (no turn arrays)."""
+    R = int(restart_index)
+    out, n_swaps, top, err = _kernels.encode_restart(dual.triangles, dual.twin, order, starts, R)
+    S = len(starts) - 1
+    if err:
+        turns = path_turns(dual.triangles, dual.twin, order, starts)  # raises, naming the step
+        return gl_strip_from_turns(turns, join="restart", restart_index=R)
+    if 0 <= R <= top and np.count_nonzero(out == R) != S - 1:
+        raise InvalidOptionError(f"restart index {R} is a vertex index of the mesh")
+    return GLStrip(out, R, len(order), S, int(n_swaps))
 
 
 def mesh_paths(mesh: MeshLike, method: str = "auto") -> tuple[DualMesh, PathTurns]:
@@ -159,20 +237,8 @@ def mesh_paths(mesh: MeshLike, method: str = "auto") -> tuple[DualMesh, PathTurn
     dual : DualMesh
     turns : PathTurns
     """
-    if method not in METHODS:
-        raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    dual = dual_mesh(mesh)
-    if method == "auto":
-        method = "order" if isinstance(mesh, HamiltonianMesh) else "greedy"
-    if method == "order":
-        if isinstance(mesh, HamiltonianMesh):
-            comps = np.asarray(mesh.components)
-        else:
-            comps = _stored_runs(dual)
-        order, starts = cycle_paths(dual, comps)
-    else:
-        order, starts = greedy_paths(dual)
-    return dual, _orient(dual, order, starts)
+    dual, order, starts = _oriented_paths(mesh, method)
+    return dual, path_turns(dual.triangles, dual.twin, order, starts)
 
 
 def encode(
@@ -196,7 +262,8 @@ def encode(
         See :func:`mesh_paths`.  A HamiltonianMesh gives exactly one strip per cycle.
     verify : bool
         Decode the buffer with OpenGL's rules and compare with the mesh
-        (:func:`~hammesh.strips.gl.verify_gl_strip`); O(m log m).
+        (:func:`~hammesh.strips.gl.verify_gl_strip`, one O(L) compiled pass against
+        the order the paths were meant to draw).  Costs ~2% of the encoding; leave on.
 
     Returns
     -------
@@ -218,10 +285,16 @@ def encode(
     >>> s.n_triangles == m.n_triangles, s.indices_per_triangle < 2
     (True, True)
     """
-    dual, turns = mesh_paths(mesh, method)
-    strip = gl_strip_from_turns(turns, join=join, restart_index=restart_index)
+    if join not in JOINS:
+        raise InvalidOptionError(f"join must be one of {', '.join(JOINS)}, got {join!r}")
+    dual, order, starts = _oriented_paths(mesh, method)
+    if join == "restart" and restart_index is not None:
+        strip = _restart_strip(dual, order, starts, restart_index)
+    else:
+        turns = path_turns(dual.triangles, dual.twin, order, starts)
+        strip = gl_strip_from_turns(turns, join=join, restart_index=restart_index)
     if verify:
-        verify_gl_strip(dual.triangles, strip.indices, strip.restart_index)
+        verify_gl_strip(dual.triangles, strip.indices, strip.restart_index, order=order)
     return strip
 
 

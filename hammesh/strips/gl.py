@@ -112,22 +112,25 @@ def gl_strip_from_turns(
     """
     if join not in JOINS:
         raise InvalidOptionError(f"join must be one of {', '.join(JOINS)}, got {join!r}")
-    enc, enc_starts = _even_encoding(turns)
     S = turns.n_paths
     n_swaps = turns.n_swaps
-    if S == 1:
-        return GLStrip(enc, restart_index if join == "restart" else None, len(turns.order), 1, n_swaps)
+    if S == 1 and join == "stitch":
+        enc, _ = _even_encoding(turns)
+        return GLStrip(enc, None, len(turns.order), 1, n_swaps)
     if join == "restart":
         if restart_index is None:
+            if S == 1:
+                enc, _ = _even_encoding(turns)
+                return GLStrip(enc, None, len(turns.order), 1, n_swaps)
             raise InvalidOptionError("join='restart' needs a restart_index")
         R = int(restart_index)
-        if 0 <= R < int(enc.max()) + 1 and np.any(enc == R):
+        out, top = _kernels.emit_restart(
+            turns.first, turns.swap, turns.head, turns.pivot, turns.new_vertex, turns.starts, R
+        )
+        if 0 <= R <= top and np.count_nonzero(out == R) != S - 1:
             raise InvalidOptionError(f"restart index {R} is a vertex index of the mesh")
-        lengths = np.diff(enc_starts)
-        out = np.full(len(enc) + S - 1, R, dtype=np.int64)
-        shift = np.repeat(np.arange(S, dtype=np.int64), lengths)
-        out[np.arange(len(enc)) + shift] = enc
         return GLStrip(out, R, len(turns.order), S, n_swaps)
+    enc, enc_starts = _even_encoding(turns)
     ntri = np.diff(turns.starts)
     swap1 = np.zeros(S, dtype=bool)
     long = ntri >= 3
@@ -242,6 +245,7 @@ def verify_gl_strip(
     restart_index: int | None = None,
     *,
     allow_redraw: bool = False,
+    order: np.ndarray | None = None,
 ) -> None:
     """Prove that a buffer draws exactly ``triangles`` with their windings.
 
@@ -253,12 +257,27 @@ def verify_gl_strip(
     allow_redraw : bool
         Accept triangles drawn more than once (walks of Thm 5.3): compare sets instead
         of multisets.
+    order : (m,) int, optional
+        The rows in the order the encoder meant them to be drawn.  Then the proof is
+        one O(L) compiled pass (:func:`~hammesh.strips._kernels.check_draws`): decode
+        with OpenGL's rules, the ``k``-th triangle drawn is row ``order[k]`` with its
+        winding, and ``order`` names every row once.  If that claim fails, the full
+        O(m log m) comparison below decides (and names the problem).
 
     Raises
     ------
     VerificationError
         Naming a triangle that is missing, reversed, extra or drawn twice.
     """
+    if order is not None and not allow_redraw:
+        tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+        idx = np.ascontiguousarray(indices, dtype=np.int64).reshape(-1)
+        use_r = restart_index is not None
+        status, _ = _kernels.check_draws(
+            tri, idx, int(restart_index) if use_r else -1, use_r, np.ascontiguousarray(order, dtype=np.int64)
+        )
+        if status == 0:
+            return
     want = oriented_key(triangles)
     got = oriented_key(decode_gl_strip(indices, restart_index))
     if allow_redraw:

@@ -15,7 +15,7 @@ three consecutively crossed edges share a vertex, the paper's definition of a
 non-sequential step (§4).  The first triangle's older register is the tail of its exit
 half-edge (forced by its winding).
 
-All of it is vectorized: O(L) numpy, no Python loop over triangles.
+One O(L) pass of a compiled kernel (:func:`hammesh.strips._kernels.path_turns`).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammesh.errors import InvalidMeshError
+from hammesh.strips import _kernels
 
 __all__ = ["PathTurns", "path_turns", "check_starts"]
 
@@ -122,63 +123,19 @@ def path_turns(triangles: np.ndarray, twin: np.ndarray, order: np.ndarray, start
         triangle through the edge it entered by (a walk that turns back must be split).
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    m = len(tri)
-    order, starts = check_starts(order, starts, m)
-    L = len(order)
-    first = np.zeros(L, dtype=bool)
-    first[starts[:-1]] = True
-    last = np.zeros(L, dtype=bool)
-    last[starts[1:] - 1] = True
-
-    tw = twin.reshape(-1, 3)
-    nb = np.where(tw >= 0, tw // 3, -1)
-    step = np.flatnonzero(~last)  # positions with a successor
-    t, u = order[step], order[step + 1]
-    match = nb[t] == u[:, None]
-    ok = match.any(axis=1)
-    if not ok.all():
-        j = int(step[np.argmin(ok)])
+    order, starts = check_starts(order, starts, len(tri))
+    twin = np.ascontiguousarray(twin, dtype=np.int64)
+    first, last, entry, exit_, new_vertex, pivot, swap, head, err, j = _kernels.path_turns(tri, twin, order, starts)
+    if err == 1:
         raise InvalidMeshError(
             f"triangles {int(order[j])} and {int(order[j + 1])} (positions {j}, {j + 1} of the "
             "order) are consecutive in a path but share no edge"
         )
-    exit_ = np.full(L, -1, dtype=np.int64)
-    exit_[step] = np.argmax(match, axis=1)
-    entry = np.full(L, -1, dtype=np.int64)
-    entry[step + 1] = twin[3 * t + exit_[step]] % 3
-
-    rows = np.arange(L)
-    ot = tri[order]
-    mid = np.flatnonzero(~first & ~last)
-    back = entry[mid] == exit_[mid]
-    if back.any():
-        j = int(mid[np.argmax(back)])
+    if err == 2:
         raise InvalidMeshError(
             f"the path turns back at position {j} (triangle {int(order[j])} is left through the "
             "edge it was entered by); split the walk there"
         )
-    pivot = np.full(L, -1, dtype=np.int64)
-    kin, kout = entry[mid], exit_[mid]
-    forward = kout == (kin + 1) % 3
-    pivot[mid] = np.where(forward, ot[mid, (kin + 1) % 3], ot[mid, kin])
-    fs = np.flatnonzero(first & ~last)
-    pivot[fs] = ot[fs, exit_[fs]]
-
-    swap = np.zeros(L, dtype=bool)
-    swap[mid] = pivot[mid] == pivot[mid - 1]
-
-    new_vertex = np.full(L, -1, dtype=np.int64)
-    nf = np.flatnonzero(~first)
-    new_vertex[nf] = ot[nf, (entry[nf] + 2) % 3]
-
-    head = np.zeros((L, 3), dtype=np.int64)
-    k = exit_[fs]
-    head[fs, 0] = ot[fs, (k + 2) % 3]
-    head[fs, 1] = ot[fs, k]
-    head[fs, 2] = ot[fs, (k + 1) % 3]
-    single = np.flatnonzero(first & last)
-    head[single] = ot[single]
-    del rows
     return PathTurns(
         order=order,
         starts=starts,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
@@ -179,3 +179,98 @@ def test_improved_cover_is_a_partition_and_never_longer(seed, n, lift):
                 assert order[i + 1] in nb[order[i]]
         lengths.append(len(gl_strip_from_turns(_orient(d, order, starts)).indices))
     assert lengths[1] <= lengths[0]
+
+
+# --- Lemma 5.1: tree duals (triangulated polygons) get the fewest strips ---------------
+
+
+def _polygon_mesh(rng, n):
+    from tests.polygon import brute
+
+    p = brute.random_simple_polygon(rng, n, grid=40, tries=20)
+    if p is None:
+        return None, None
+    tris = brute.all_triangulations(p)
+    tri = np.array(tris[int(rng.integers(len(tris)))], dtype=np.int64)
+    return Mesh(np.array(p, dtype=float), tri), brute.min_path_partition_size(len(tri), brute.dual_edges(tri.tolist()))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(3, 11), st.sampled_from(["restart", "stitch"]))
+def test_tree_dual_gets_the_minimum_number_of_strips(seed, n, join):
+    from hammesh.strips.encode import is_forest
+
+    mesh, fewest = _polygon_mesh(np.random.default_rng(seed), n)
+    if mesh is None:
+        return
+    assert is_forest(dual_mesh(mesh))
+    s = encode(mesh, join=join)
+    assert s.n_strips == fewest
+    assert_round_trip(mesh, s)
+    g = encode_generalized(mesh)
+    assert g.n_strips == fewest
+    assert oriented_set(decode_generalized(g)) == oriented_set(mesh.triangles)
+
+
+def test_tree_duals_on_many_random_polygons():
+    rng = np.random.default_rng(11)
+    done = 0
+    for _ in range(80):
+        mesh, fewest = _polygon_mesh(rng, int(rng.integers(4, 11)))
+        if mesh is None:
+            continue
+        assert encode(mesh).n_strips == fewest
+        done += 1
+    assert done > 50
+
+
+def test_large_polygon_triangulation_in_2d_and_3d():
+    """A 400-gon's triangulation (dual tree), flat and lifted to 3D: Lemma 5.1's count."""
+    from hammesh.polygon._triangulate import triangulate_polygon
+    from hammesh.polygon.path_partition import path_partition
+    from tests.polygon import shapes
+
+    p = shapes.star(400, seed=2)
+    T = triangulate_polygon(p)
+    fewest = len(path_partition(p, T))
+    for pts in (np.asarray(p, float), np.c_[np.asarray(p, float), np.zeros(len(p))]):
+        s = encode(Mesh(pts, T))
+        assert s.n_strips == fewest
+        assert_round_trip(Mesh(pts, T), s)
+
+
+@pytest.mark.parametrize("area", [0.05, 0.01])
+def test_cycle_cut_is_the_best_of_every_cut_and_direction(area):
+    """One strip for a fixed cyclic order: no other cut point or direction is shorter."""
+    from hammesh.strips.gl import gl_strip
+
+    h = square_hamiltonian(area)
+    d = dual_mesh(h)
+    k = h.n_triangles
+    best = min(
+        len(gl_strip(d.triangles, d.twin, np.roll(np.arange(k)[::step], -c), [0, k]).indices)
+        for c in range(k)
+        for step in (1, -1)
+    )
+    s = encode(h)
+    assert s.n_strips == 1
+    assert len(s.indices) == best
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(3, 60), st.booleans())
+def test_dual_components_match_scipy(seed, n, lift):
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    mesh = delaunay_mesh(seed, n, lift)
+    keep = np.random.default_rng(seed).random(mesh.n_triangles) < 0.6  # break it into pieces
+    if not keep.any():
+        return
+    d = dual_mesh(Mesh(mesh.points, mesh.triangles[keep]))
+    h = np.flatnonzero(d.twin >= 0)
+    g = coo_matrix((np.ones(len(h)), (h // 3, d.twin[h] // 3)), shape=(d.n_triangles,) * 2)
+    nc, label = connected_components(g, directed=False)
+    assert d.n_components == nc
+    assert d.component.tolist() == label.tolist()
+    s = encode(Mesh(mesh.points, mesh.triangles[keep]))
+    assert s.n_strips >= nc

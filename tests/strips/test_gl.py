@@ -170,3 +170,86 @@ def test_verify_names_reversed_and_missing():
         verify_gl_strip(m.triangles, [0, 1, 2, 3])
     with pytest.raises(VerificationError, match="twice"):
         verify_gl_strip(m.triangles[:1], [0, 1, 2, 9, 0, 1, 2], 9)
+
+
+# --- the fast proof: a claimed draw order, checked by one compiled pass ------------------
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["restart", "stitch"]), st.integers(0, 4))
+def test_claimed_order_proof_agrees_with_the_full_comparison(seed, join, corrupt):
+    """check_draws accepts exactly the buffers the literal decoder proves right."""
+    from hammesh.strips import _kernels
+
+    m = grid_mesh(4, 3) if seed % 2 else torus_mesh(6, 4)
+    d = dual_mesh(m)
+    rng = np.random.default_rng(seed)
+    order, starts = random_path_cover(d.neighbor_triangles, rng)
+    s = gl_strip(d.triangles, d.twin, order, starts, join=join)
+    idx = s.indices.copy()
+    claim = np.array(order)
+    if corrupt == 1:  # a wrong index in the buffer
+        i = int(rng.integers(len(idx)))
+        if idx[i] != RESTART_INDEX:
+            idx[i] = (idx[i] + 1) % len(m.points)
+    elif corrupt == 2:  # a wrong claim, right buffer
+        claim = claim[::-1].copy()
+    elif corrupt == 3:  # a triangle missing from the end
+        idx = idx[:-1]
+    use_r = s.restart_index is not None
+    status, _ = _kernels.check_draws(d.triangles, idx, s.restart_index if use_r else -1, use_r, claim)
+    truth = oriented_set(decode_gl_strip(idx, s.restart_index)) == oriented_set(m.triangles)
+    if status == 0:
+        assert truth  # the fast proof never accepts a wrong buffer
+    if corrupt == 0:
+        assert status == 0
+    # verify_gl_strip with the claim decides exactly like the full comparison
+    if truth:
+        verify_gl_strip(m.triangles, idx, s.restart_index, order=claim)
+    else:
+        with pytest.raises(VerificationError):
+            verify_gl_strip(m.triangles, idx, s.restart_index, order=claim)
+
+
+def test_claimed_order_with_a_bad_claim_falls_back_to_naming_the_problem():
+    m = zigzag_mesh(3)
+    with pytest.raises(VerificationError, match="reversed"):
+        verify_gl_strip(m.triangles, [1, 0, 2, 3, 4], order=[0, 1, 2])
+    # a right buffer passes whatever the claim (the full comparison decides)
+    verify_gl_strip(m.triangles, [0, 1, 2, 3, 4], order=[2, 0, 1])
+    verify_gl_strip(m.triangles, [0, 1, 2, 3, 4], order=[0, 0, 1])
+    verify_gl_strip(m.triangles, [0, 1, 2, 3, 4], order=[0, 1])
+
+
+@given(st.integers(0, 2**32 - 1), st.booleans())
+def test_one_pass_restart_encoder_equals_the_turn_arrays(seed, restart_is_vertex):
+    """_kernels.encode_restart (encode's fast path) == path_turns + emission, index for index."""
+    from hammesh.strips.encode import _restart_strip
+
+    m = grid_mesh(5, 3, z=True) if seed % 3 else torus_mesh(7, 5)
+    d = dual_mesh(m)
+    order, starts = random_path_cover(d.neighbor_triangles, np.random.default_rng(seed))
+    order, starts = np.asarray(order, np.int64), np.asarray(starts, np.int64)
+    R = 3 if restart_is_vertex else RESTART_INDEX
+    if restart_is_vertex and len(starts) > 2:
+        with pytest.raises(InvalidOptionError, match="restart index 3"):
+            _restart_strip(d, order, starts, R)
+        with pytest.raises(InvalidOptionError, match="restart index 3"):
+            gl_strip(d.triangles, d.twin, order, starts, restart_index=R)
+        return
+    a = gl_strip(d.triangles, d.twin, order, starts, restart_index=R)
+    b = _restart_strip(d, order, starts, R)
+    assert a.indices.tolist() == b.indices.tolist()
+    assert (a.n_swaps, a.n_strips, a.n_triangles) == (b.n_swaps, b.n_strips, b.n_triangles)
+
+
+def test_one_pass_restart_encoder_names_bad_paths():
+    from hammesh.strips.encode import _restart_strip
+
+    m = grid_mesh(3, 3)
+    d = dual_mesh(m)
+    far = int(np.flatnonzero((d.neighbor_triangles != 0).all(axis=1))[-1])
+    with pytest.raises(InvalidMeshError, match="share no edge"):
+        _restart_strip(d, np.array([0, far]), np.array([0, 2]), RESTART_INDEX)
+    u = int(d.neighbor_triangles[0][d.neighbor_triangles[0] >= 0][0])
+    with pytest.raises(InvalidMeshError, match="turns back"):
+        _restart_strip(d, np.array([0, u, 0]), np.array([0, 3]), RESTART_INDEX)

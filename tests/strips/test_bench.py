@@ -1,0 +1,21 @@
+"""benchmarks/bench_strips.py keeps running (tiny sizes; nothing here is timed or compared)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).parent.parent.parent / "benchmarks" / "bench_strips.py"
+
+
+@pytest.mark.slow
+def test_bench_strips_quick_runs():
+    proc = subprocess.run(
+        [sys.executable, str(BENCH), "--quick", "--repeat", "1"], capture_output=True, text=True, timeout=600
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    for needle in ("square a=1e-3", "Christofides (Thm 5.3)", "Lemma 5.1 (tree dual)"):
+        assert needle in proc.stdout
