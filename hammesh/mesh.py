@@ -21,8 +21,11 @@ __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES"]
 
 #: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
 #: 0: an input triangle's side joined to its incenter; 1: a flipped triangle
-#: (two incenters, one input vertex); 2: a triangle at a constrained-edge midpoint.
-KIND_NAMES: tuple[str, ...] = ("incenter", "flip", "midpoint")
+#: (two incenters, one input vertex); 2: a triangle at an edge midpoint (a split
+#: constrained edge; in ``mode="sparse"`` also a free edge split to join two cycles);
+#: 3: an input triangle kept whole, 4: one of two input triangles whose shared edge
+#: was flipped without Steiner point (3 and 4 only in ``mode="sparse"``).
+KIND_NAMES: tuple[str, ...] = ("incenter", "flip", "midpoint", "input", "swap")
 
 
 def _empty_i(shape: tuple[int, ...]) -> np.ndarray:

@@ -26,3 +26,15 @@ def test_benchmark_script_runs(script: str, args: list[str], needle: str) -> Non
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert needle in proc.stdout
+
+
+@pytest.mark.slow
+def test_bench_sparse_runs() -> None:
+    proc = subprocess.run(
+        [sys.executable, str(BENCH / "bench_sparse.py"), "--quick", "--repeat", "1"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "worst planar Steiner points per input triangle" in proc.stdout

@@ -18,7 +18,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from hammesh.cli import check, demo, mesh, points, polygon, strip
+from hammesh.cli import check, demo, mesh, points, polygon, strip, surface
 from hammesh.errors import HammeshError, VerificationError
 
 __all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
@@ -26,7 +26,7 @@ __all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION",
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 
 #: subcommand name -> module with add_args / run (and a one-line HELP)
-COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "points": points, "demo": demo}
+COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "points": points, "surface": surface, "demo": demo}
 
 
 class _Parser(argparse.ArgumentParser):

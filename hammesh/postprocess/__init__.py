@@ -8,13 +8,14 @@ from dataclasses import replace
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian
+from hammesh.postprocess.sparse import sparse_hamiltonian
 from hammesh.verify.certificate import verify
 from hammesh.verify.input_mesh import prepare_mesh
 
-__all__ = ["hamiltonian", "incircle_hamiltonian", "incenters", "MODES"]
+__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES"]
 
 #: Available constructions, by name (``hamiltonian(mesh, mode=...)``).
-MODES = {"incircle": incircle_hamiltonian}
+MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 
 
 def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
@@ -24,12 +25,16 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
     one flip per dual spanning-tree edge; constrained edges are split at their
     midpoint where the tree must cross them (fewest possible: one per region).
 
+    ``mode="sparse"``: the same bound with far fewer Steiner points: a cycle cover of
+    the dual, joined by Steiner-free swaps where the angles allow and by Thm 2.4's
+    incenter-flip bridges elsewhere (``hammesh.postprocess.sparse``, docs/sparse.md).
+
     Parameters
     ----------
     mesh : Mesh
         Any valid planar triangulation (ours or read from a file); triangles may be
         given in either orientation.
-    mode : {"incircle"}
+    mode : {"incircle", "sparse"}
 
     Returns
     -------

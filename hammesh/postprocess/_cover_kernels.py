@@ -1,0 +1,560 @@
+"""Compiled loops (numba) of the dual cycle cover (``cycle_cover.py``).
+
+Serial, nopython, ``cache=True``; O(m) over plain arrays (the augmenting searches are
+bounded by a budget), problems reported by return values, never raised. Half-edge
+``h = 3 t + k`` runs from ``tri[t, k]`` to ``tri[t, (k + 1) % 3]``; ``twin[h]`` is the
+opposite half-edge or -1.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _neighbors(twin, m):
+    nb = np.full((m, 3), -1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            g = twin[3 * t + k]
+            if g >= 0:
+                nb[t, k] = g // 3
+    return nb
+
+
+@njit(cache=True)
+def _find(parent, x):
+    root = x
+    while parent[root] != root:
+        root = parent[root]
+    while parent[x] != root:
+        nxt = parent[x]
+        parent[x] = root
+        x = nxt
+    return root
+
+
+@njit(cache=True)
+def _lca(x, y, fa, mate, parent, stamp, s):
+    while True:
+        if x >= 0:
+            x = _find(fa, x)
+            if stamp[x] == s:
+                return x
+            stamp[x] = s
+            x = parent[mate[x]] if mate[x] >= 0 else -1
+        x, y = y, x
+
+
+@njit(cache=True)
+def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
+    while _find(fa, v) != a:
+        parent[v] = w
+        w = mate[v]
+        if label[w] == 1:  # odd vertex inside the blossom becomes even
+            label[w] = 0
+            queue[tail] = w
+            tail += 1
+        if fa[v] == v:
+            fa[v] = a
+        if fa[w] == w:
+            fa[w] = a
+        v = parent[w]
+    return tail
+
+
+@njit(cache=True)
+def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, budget):
+    """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
+
+    Blossoms are contracted with a union-find over bases (``fa``); the arrays are
+    global (size m) but only the vertices this search touches are reset, so a search
+    costs about what it explores. It gives up after ``budget`` touched vertices.
+    Returns ``(augmented, next lca stamp)``.
+    """
+    n_t = 0
+    head = 0
+    tail = 0
+    label[r] = 0
+    touched[n_t] = r
+    n_t += 1
+    queue[tail] = r
+    tail += 1
+    found = -1
+    s = s0
+    while head < tail and found < 0 and n_t < budget:
+        v = queue[head]
+        head += 1
+        for k in range(3):
+            u = nb[v, k]
+            if u < 0 or not active[u]:
+                continue
+            if label[u] < 0:
+                parent[u] = v
+                label[u] = 1
+                touched[n_t] = u
+                n_t += 1
+                if mate[u] < 0:
+                    found = u
+                    break
+                w = mate[u]
+                label[w] = 0
+                touched[n_t] = w
+                n_t += 1
+                queue[tail] = w
+                tail += 1
+            elif label[u] == 0 and _find(fa, v) != _find(fa, u):
+                s += 1
+                a = _lca(u, v, fa, mate, parent, stamp, s)
+                tail = _blossom(u, v, a, fa, mate, parent, label, queue, tail)
+                tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail)
+    if found >= 0:
+        v = found
+        while v >= 0:
+            pv = parent[v]
+            nv = mate[pv]
+            mate[v] = pv
+            mate[pv] = v
+            v = nv
+    for i in range(n_t):
+        x = touched[i]
+        label[x] = -1
+        parent[x] = -1
+        fa[x] = x
+    return found >= 0, s
+
+
+@njit(cache=True)
+def _peel(nb, m):
+    """Leave out triangles that cannot lie on a cycle (at most one neighbour left)."""
+    alive = np.ones(m, np.bool_)
+    deg = np.zeros(m, np.int64)
+    for t in range(m):
+        for k in range(3):
+            if nb[t, k] >= 0:
+                deg[t] += 1
+    stack = np.empty(m + 1, np.int64)
+    top = 0
+    for t in range(m):
+        if deg[t] <= 1:
+            stack[top] = t
+            top += 1
+    while top > 0:
+        top -= 1
+        t = stack[top]
+        if not alive[t]:
+            continue
+        alive[t] = False
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and alive[u]:
+                deg[u] -= 1
+                if deg[u] == 1:
+                    stack[top] = u
+                    top += 1
+    return alive, deg
+
+
+@njit(cache=True)
+def _greedy_matching(nb, alive, deg, m):
+    """Karp-Sipser: match the degree-3 triangles among themselves, forced pairs first."""
+    stack = np.empty(m + 1, np.int64)
+    # matching on alive triangles of (alive) degree 3, edges between them
+    active = np.zeros(m, np.bool_)
+    for t in range(m):
+        active[t] = alive[t] and deg[t] == 3
+    mate = np.full(m, -1, np.int64)
+    hdeg = np.zeros(m, np.int64)
+    for t in range(m):
+        if active[t]:
+            for k in range(3):
+                u = nb[t, k]
+                if u >= 0 and active[u]:
+                    hdeg[t] += 1
+    top = 0
+    for t in range(m):
+        if active[t] and hdeg[t] == 1:
+            stack[top] = t
+            top += 1
+    scan = 0
+    while True:
+        if top > 0:
+            top -= 1
+            t = stack[top]
+            if mate[t] >= 0 or hdeg[t] == 0:
+                continue
+        else:
+            while scan < m and not (active[scan] and mate[scan] < 0 and hdeg[scan] > 0):
+                scan += 1
+            if scan >= m:
+                break
+            t = scan
+        # partner: the free candidate with fewest free candidates of its own
+        best = -1
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and active[u] and mate[u] < 0:
+                if best < 0 or hdeg[u] < hdeg[best]:
+                    best = u
+        if best < 0:
+            hdeg[t] = 0
+            continue
+        mate[t] = best
+        mate[best] = t
+        for xi in range(2):
+            x = t if xi == 0 else best
+            for k in range(3):
+                w = nb[x, k]
+                if w >= 0 and active[w] and mate[w] < 0:
+                    hdeg[w] -= 1
+                    if hdeg[w] == 1:
+                        stack[top] = w
+                        top += 1
+    return active, mate
+
+
+@njit(cache=True)
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, m):
+    """Augment through chains of degree-2 triangles; a chain used is left uncovered."""
+    # phase 2: a chain of degree-2 triangles between two degree-3 ones x, y may serve
+    # as a matching edge x-y at the price of leaving the chain uncovered
+    nbx = np.full((m, 3), -1, np.int64)
+    clen = np.zeros((m, 3), np.int64)
+    n_free0 = 0
+    for x in range(m):
+        if active[x] and mate[x] < 0:
+            n_free0 += 1
+    if n_free0 > 0:
+        touched2 = np.empty(2 * m + 16, np.int64)
+        queue2 = np.empty(2 * m + 16, np.int64)
+        for x in range(m):
+            if not active[x]:
+                continue
+            for k in range(3):
+                w = nb[x, k]
+                if w < 0 or not alive[w]:
+                    continue
+                prev = x
+                cur = w
+                ln = 0
+                while not active[cur]:
+                    nxt = -1
+                    for j in range(3):
+                        z = nb[cur, j]
+                        if z >= 0 and alive[z] and z != prev:
+                            nxt = z
+                    prev = cur
+                    cur = nxt
+                    ln += 1
+                    if cur < 0 or cur == w:
+                        break
+                if cur < 0 or cur == x or not active[cur]:
+                    continue
+                nbx[x, k] = cur
+                clen[x, k] = ln
+            for k in range(3):  # a simple graph: keep the cheapest edge to each end
+                for j in range(3):
+                    if j != k and nbx[x, j] >= 0 and nbx[x, j] == nbx[x, k]:
+                        if clen[x, j] < clen[x, k] or (clen[x, j] == clen[x, k] and j < k):
+                            nbx[x, k] = -1
+                            break
+        for t in range(m):  # few free triangles are left: search as far as it takes
+            if active[t] and mate[t] < 0:
+                _, s = _augment(t, nbx, active, mate, parent, fa, label, stamp, s, touched2, queue2, 2 * m + 8)
+        # matched through a chain: the chain's triangles are left uncovered
+        for x in range(m):
+            y = mate[x]
+            if not active[x] or y < x:
+                continue
+            direct = False
+            for k in range(3):
+                if nb[x, k] == y:
+                    direct = True
+            if direct:
+                continue
+            kk = -1
+            for k in range(3):
+                if nbx[x, k] == y and (kk < 0 or clen[x, k] < clen[x, kk]):
+                    kk = k
+            prev = x
+            cur = nb[x, kk]
+            while cur != y:
+                nxt = -1
+                for j in range(3):
+                    z = nb[cur, j]
+                    if z >= 0 and alive[z] and z != prev:
+                        nxt = z
+                alive[cur] = False
+                prev = cur
+                cur = nxt
+    return s
+
+
+@njit(cache=True)
+def _cover_edges(nb, alive, mate, m):
+    """Alive-alive dual edges that are not matching edges."""
+    # the cover: alive-alive dual edges that are not matching edges
+    is_cov = np.zeros(3 * m, np.bool_)
+    cdeg = np.zeros(m, np.int64)
+    for t in range(m):
+        if not alive[t]:
+            continue
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and alive[u] and mate[t] != u:
+                is_cov[3 * t + k] = True
+                cdeg[t] += 1
+    return is_cov, cdeg
+
+
+@njit(cache=True)
+def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
+    """Drop the shortest cover arc between two free degree-3 triangles."""
+    # repair: join two free degree-3 triangles by dropping the arc between them
+    for t in range(m):
+        if not (alive[t] and cdeg[t] == 3):
+            continue
+        best_len = arc_limit + 1
+        best_k = -1
+        for k0 in range(3):
+            prev = t
+            cur = nb[t, k0]
+            ln = 0
+            while cur != t and cdeg[cur] == 2 and ln <= arc_limit:
+                nxt = -1
+                for k in range(3):
+                    if is_cov[3 * cur + k] and nb[cur, k] != prev:
+                        nxt = nb[cur, k]
+                prev = cur
+                cur = nxt
+                ln += 1
+            if cur != t and cur >= 0 and cdeg[cur] == 3 and ln < best_len:
+                best_len = ln
+                best_k = k0
+        if best_k < 0:
+            continue
+        cur = nb[t, best_k]
+        h = 3 * t + best_k
+        is_cov[h] = False
+        is_cov[twin[h]] = False
+        cdeg[t] -= 1
+        cdeg[cur] -= 1
+        for _ in range(best_len):  # cur: an inner triangle of the arc, one cover edge left
+            hh = -1
+            for k in range(3):
+                if is_cov[3 * cur + k]:
+                    hh = 3 * cur + k
+            nxt = twin[hh] // 3
+            is_cov[hh] = False
+            is_cov[twin[hh]] = False
+            cdeg[cur] -= 1
+            cdeg[nxt] -= 1
+            alive[cur] = False
+            cur = nxt
+
+
+
+@njit(cache=True)
+def _final_peel(nb, twin, is_cov, cdeg, alive, m):
+    """Peel what still has cover degree other than 2."""
+    stack = np.empty(m + 1, np.int64)
+    # final peel: cover degree must be exactly 2
+    top = 0
+    for t in range(m):
+        if alive[t] and cdeg[t] != 2:
+            stack[top] = t
+            top += 1
+    while top > 0:
+        top -= 1
+        t = stack[top]
+        if not alive[t] or cdeg[t] == 2:
+            continue
+        alive[t] = False
+        for k in range(3):
+            h = 3 * t + k
+            if is_cov[h]:
+                u = nb[t, k]
+                is_cov[h] = False
+                is_cov[twin[h]] = False
+                cdeg[u] -= 1
+                if alive[u] and cdeg[u] != 2:
+                    stack[top] = u
+                    top += 1
+        cdeg[t] = 0
+    n_unc = 0
+    for t in range(m):
+        if cdeg[t] != 2:
+            n_unc += 1
+    return n_unc
+
+
+@njit(cache=True)
+def dual_cover(twin, m, budget, arc_limit):
+    """Vertex-disjoint cycles of the dual graph covering most triangles.
+
+    Gopi & Eppstein's observation, made to work with boundaries: in a graph of
+    degrees 2 and 3 the edges *not* in a matching that pairs every degree-3 vertex
+    (with a degree-3 neighbour) form a 2-factor. Steps:
+
+    1. peel: a triangle with at most one (remaining) neighbour cannot lie on a cycle
+       (ears, and what they leave behind) and is left uncovered;
+    2. match the degree-3 triangles: Karp-Sipser greedy (a triangle with a single
+       free candidate is matched first), then augmenting searches from each free one;
+    3. cover = the remaining dual edges not in the matching; a degree-3 triangle still
+       free is repaired by dropping the shortest cover arc from it to another such
+       triangle (its inner triangles are left uncovered);
+    4. peel again whatever still has cover degree other than 2.
+
+    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered)``.
+    """
+    nb = _neighbors(twin, m)
+    alive, deg = _peel(nb, m)
+    active, mate = _greedy_matching(nb, alive, deg, m)
+    parent = np.full(m, -1, np.int64)
+    fa = np.arange(m)
+    label = np.full(m, -1, np.int64)
+    stamp = np.zeros(m, np.int64)
+    s = 0
+    touched = np.empty(budget + 8, np.int64)
+    queue = np.empty(m + 8, np.int64)
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            _, s = _augment(t, nb, active, mate, parent, fa, label, stamp, s, touched, queue, budget)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, m)
+    n_free = 0
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            n_free += 1
+    is_cov, cdeg = _cover_edges(nb, alive, mate, m)
+    _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m)
+    n_unc = _final_peel(nb, twin, is_cov, cdeg, alive, m)
+    return is_cov, n_free, n_unc
+
+
+@njit(cache=True)
+def cycle_ids(twin, is_cov, m):
+    """Cycle id of each covered triangle (-1 if uncovered) and the number of cycles."""
+    cyc = np.full(m, -1, np.int64)
+    n = 0
+    for s in range(m):
+        if cyc[s] >= 0:
+            continue
+        first = -1
+        for k in range(3):
+            if is_cov[3 * s + k]:
+                first = k
+                break
+        if first < 0:
+            continue
+        cyc[s] = n
+        prev = s
+        cur = twin[3 * s + first] // 3
+        while cur != s:
+            cyc[cur] = n
+            nxt = -1
+            for k in range(3):
+                h = 3 * cur + k
+                if is_cov[h] and twin[h] // 3 != prev:
+                    nxt = twin[h] // 3
+            prev = cur
+            cur = nxt
+            if cur < 0:
+                break
+        n += 1
+    return cyc, n
+
+
+@njit(cache=True)
+def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes):
+    """Merge cover cycles for free by re-matching around vertices.
+
+    Around an interior vertex of even degree 2k whose k spokes alternate matched /
+    cover (the dual edges crossing the spokes), swapping the two roles keeps every
+    triangle at cover degree 2 and the matching perfect; if the k cover spokes lie on
+    k different cycles, the k cycles become one (remove one edge from each: k paths;
+    the new spokes chain them around the vertex). No geometry changes.
+
+    Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
+    returns the number of cycles merged away.
+    """
+    m = tri.shape[0]
+    vh = np.full(n_points, -1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            vh[tri[t, k]] = 3 * t + k
+    uf = np.arange(max(n_cyc, 1))
+    spokes = np.empty(32, np.int64)
+    roots = np.empty(16, np.int64)
+    merged = 0
+    skip = np.zeros(n_points, np.bool_)
+    for _ in range(passes):
+        before = merged
+        # spokes alternate at v iff every triangle around v has its matched (non-cover)
+        # edge at v, i.e. v is no triangle's apex (the corner opposite that edge):
+        # a cheap sequential prefilter before walking rings
+        skip[:] = False
+        for t in range(m):
+            for k in range(3):
+                if cyc[t] < 0:
+                    skip[tri[t, k]] = True
+                elif not is_cov[3 * t + k]:
+                    skip[tri[t, (k + 2) % 3]] = True
+        for v in range(n_points):
+            h0 = vh[v]
+            if h0 < 0 or skip[v]:
+                continue
+            d = 0
+            h = h0
+            ok = True
+            while True:  # h leaves v in triangle t; spoke p = edge (w, v) of t
+                t = h // 3
+                p = 3 * t + (h - 3 * t + 2) % 3
+                q = twin[p]
+                if q < 0 or d >= 32 or cyc[t] < 0:
+                    ok = False
+                    break
+                if d > 0 and is_cov[p] == is_cov[spokes[d - 1]]:
+                    ok = False  # not alternating: most vertices stop here
+                    break
+                spokes[d] = p
+                d += 1
+                h = q
+                if h == h0:
+                    break
+            if not ok or d < 4 or d % 2 == 1:
+                continue
+            nr = 0
+            for i in range(d):
+                if is_cov[spokes[i]]:
+                    r = _find(uf, cyc[spokes[i] // 3])
+                    for j in range(nr):
+                        if roots[j] == r:
+                            ok = False
+                    roots[nr] = r
+                    nr += 1
+            if not ok:
+                continue
+            for i in range(d):
+                p = spokes[i]
+                c = not is_cov[p]
+                is_cov[p] = c
+                is_cov[twin[p]] = c
+            for j in range(1, nr):
+                uf[_find(uf, roots[j])] = _find(uf, roots[0])
+            merged += nr - 1
+        if merged == before:
+            break
+    # cycle ids after the merges: the union-find roots, renumbered
+    if merged > 0:
+        new_id = np.full(max(n_cyc, 1), -1, np.int64)
+        n_new = 0
+        for c in range(n_cyc):
+            r = _find(uf, c)
+            if new_id[r] < 0:
+                new_id[r] = n_new
+                n_new += 1
+        for t in range(m):
+            if cyc[t] >= 0:
+                cyc[t] = new_id[_find(uf, cyc[t])]
+    return merged

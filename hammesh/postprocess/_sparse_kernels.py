@@ -1,0 +1,643 @@
+"""Compiled loops (numba) of the sparse Hamiltonian construction (``sparse.py``).
+
+The cover's loops are in ``_cover_kernels.py``. Serial, nopython, ``cache=True``;
+every kernel is O(m) over plain int64/float64/bool arrays and reports problems by a
+return value, never by raising. Half-edge ``h = 3 t + k`` runs from ``tri[t, k]`` to
+``tri[t, (k + 1) % 3]``; ``twin[h]`` is the opposite half-edge or -1.
+
+Codes shared with ``sparse.py``:
+
+* triangle status: ``PASS`` (kept whole, on a cover cycle), ``SPLIT`` (split at its
+  incenter), ``SWAP`` (one of a pair whose shared edge was flipped without Steiner
+  point), ``EDGE`` (one of a pair whose shared edge was split at its midpoint, each
+  triangle into two, no incenter);
+* slot (half-edge of a split triangle): ``PLAIN`` (its sector ``(I, a, b)``), ``FLIP``
+  (bridge: the edge is flipped between two incenters), ``MID`` (bridge: the edge is
+  split at its midpoint).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from hammesh.postprocess._cover_kernels import _find
+
+PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
+PLAIN, FLIP, MID = 0, 1, 2
+
+
+@njit(cache=True)
+def _corner_s2(o, q, r):
+    """sin^2 of the angle at o of triangle (o, q, r) (coordinate rows, any dimension)."""
+    uu = 0.0
+    vv = 0.0
+    uv = 0.0
+    for i in range(o.shape[0]):
+        u = q[i] - o[i]
+        v = r[i] - o[i]
+        uu += u * u
+        vv += v * v
+        uv += u * v
+    if uu <= 0.0 or vv <= 0.0:
+        return 0.0
+    return 1.0 - (uv * uv) / (uu * vv)
+
+
+@njit(cache=True)
+def _sin2_xyz(x, y, z):
+    """sin^2 of the smallest angle of the triangle with corners x, y, z (Gram form).
+
+    The smallest over the three corners of sin^2 is sin^2 of the smallest angle (an
+    obtuse angle's sine is that of the sum of the two others).
+    """
+    return min(_corner_s2(x, y, z), _corner_s2(y, z, x), _corner_s2(z, x, y))
+
+
+@njit(cache=True)
+def _sin2_min(pts, p0, p1, p2):
+    """sin^2 of the smallest angle of triangle (p0, p1, p2) of ``pts``."""
+    return _sin2_xyz(pts[p0], pts[p1], pts[p2])
+
+
+@njit(cache=True)
+def _orient2(pts, a, b, c):
+    return (pts[b, 0] - pts[a, 0]) * (pts[c, 1] - pts[a, 1]) - (pts[b, 1] - pts[a, 1]) * (
+        pts[c, 0] - pts[a, 0]
+    )
+
+
+@njit(cache=True)
+def _fold3(pts, a, b, c, d):
+    """3D quadrilateral a d b c over edge ab of ``t = (a, b, c)``, ``u = (b, a, d)``.
+
+    Returns ``(cos of the angle between the normals of t and u, convex)``: ``convex``
+    if ``(a, d, c)`` and ``(d, b, c)`` are both positive about the sum of the normals
+    (the swap does not fold the pair over).
+    """
+    ux = pts[b, 0] - pts[a, 0]
+    uy = pts[b, 1] - pts[a, 1]
+    uz = pts[b, 2] - pts[a, 2]
+    vx = pts[c, 0] - pts[a, 0]
+    vy = pts[c, 1] - pts[a, 1]
+    vz = pts[c, 2] - pts[a, 2]
+    wx = pts[d, 0] - pts[a, 0]
+    wy = pts[d, 1] - pts[a, 1]
+    wz = pts[d, 2] - pts[a, 2]
+    n1x = uy * vz - uz * vy  # normal of t: u x v
+    n1y = uz * vx - ux * vz
+    n1z = ux * vy - uy * vx
+    n2x = wy * uz - wz * uy  # normal of u: w x u
+    n2y = wz * ux - wx * uz
+    n2z = wx * uy - wy * ux
+    l1 = np.sqrt(n1x * n1x + n1y * n1y + n1z * n1z)
+    l2 = np.sqrt(n2x * n2x + n2y * n2y + n2z * n2z)
+    if l1 == 0.0 or l2 == 0.0:
+        return -1.0, False
+    cosn = (n1x * n2x + n1y * n2y + n1z * n2z) / (l1 * l2)
+    nx = n1x + n2x
+    ny = n1y + n2y
+    nz = n1z + n2z
+    # (a, d, c): w x v
+    if (wy * vz - wz * vy) * nx + (wz * vx - wx * vz) * ny + (wx * vy - wy * vx) * nz <= 0.0:
+        return cosn, False
+    # (d, b, c): (b - d) x (c - d) = (u - w) x (v - w)
+    ex = ux - wx
+    ey = uy - wy
+    ez = uz - wz
+    fx = vx - wx
+    fy = vy - wy
+    fz = vz - wz
+    return cosn, (ey * fz - ez * fy) * nx + (ez * fx - ex * fz) * ny + (ex * fy - ey * fx) * nz > 0.0
+
+
+@njit(cache=True)
+def split_ok(pts, tri, twin, h, floor_s2):
+    """Can the edge of half-edge h be split at its midpoint M, keeping the angles?
+
+    ``t = (a, b, c)``, ``u = (b, a, d)`` become ``(a, M, c)``, ``(M, b, c)``,
+    ``(b, M, d)``, ``(M, a, d)`` (each in its parent's plane): all four smallest angles
+    must have ``sin^2 >= floor_s2``.
+    """
+    t = h // 3
+    k = h - 3 * t
+    g = twin[h]
+    u = g // 3
+    kg = g - 3 * u
+    a = tri[t, k]
+    b = tri[t, (k + 1) % 3]
+    c = tri[t, (k + 2) % 3]
+    d = tri[u, (kg + 2) % 3]
+    pa = pts[a]
+    pb = pts[b]
+    pc = pts[c]
+    pd = pts[d]
+    mm = 0.5 * (pa + pb)
+    return (
+        _sin2_xyz(pa, mm, pc) >= floor_s2
+        and _sin2_xyz(mm, pb, pc) >= floor_s2
+        and _sin2_xyz(pb, mm, pd) >= floor_s2
+        and _sin2_xyz(mm, pa, pd) >= floor_s2
+    )
+
+
+@njit(cache=True)
+def swap_ok(pts, tri, twin, h, floor_s2, cos_fold):
+    """Can the edge of half-edge h be flipped keeping every angle above the floor?
+
+    ``t = (a, b, c)`` (h from a to b), ``u = (b, a, d)``; the flip makes ``(a, d, c)``
+    and ``(d, b, c)``. In the plane both must be counter-clockwise (the quadrilateral
+    strictly convex); in any dimension both smallest angles must have
+    ``sin^2 >= floor_s2`` (an angle below 90 degrees).
+    """
+    t = h // 3
+    k = h - 3 * t
+    g = twin[h]
+    u = g // 3
+    kg = g - 3 * u
+    a = tri[t, k]
+    b = tri[t, (k + 1) % 3]
+    c = tri[t, (k + 2) % 3]
+    d = tri[u, (kg + 2) % 3]
+    if pts.shape[1] == 2:
+        if _orient2(pts, a, d, c) <= 0.0 or _orient2(pts, d, b, c) <= 0.0:
+            return False
+    else:
+        cosn, convex = _fold3(pts, a, b, c, d)
+        if cosn < cos_fold or not convex:
+            return False
+    return _sin2_min(pts, a, d, c) >= floor_s2 and _sin2_min(pts, d, b, c) >= floor_s2
+
+
+@njit(cache=True)
+def plan_merges(
+    pts, tri, twin, is_con, is_cov, cyc, n_cyc, floor_s2, cos_fold, swaps, edge_splits, no_absorb, flip_bridges
+):
+    """Join the cover cycles and the uncovered triangles into one cycle per piece.
+
+    Nodes are the cover cycles and the uncovered triangles; a dual edge between two
+    nodes can join them (union-find, cheapest first, Kruskal):
+
+    A. ``swaps``: flip the shared edge of a cover triangle and an uncovered one
+       (the uncovered one joins the cycle, unless ``no_absorb[u]``), then of two cover triangles of
+       different cycles (the two cycles become one) -- 0 Steiner points, only where
+       both new triangles keep ``sin^2(min angle) >= floor_s2`` (and, in 3D, the two
+       normals make an angle with cosine ``>= cos_fold``);
+    A'. ``edge_splits``: the same two ways, splitting the shared edge (constrained or
+       not) at its midpoint instead -- 1 Steiner point, where the four new triangles
+       keep the angle floor;
+    B. every uncovered triangle left is split at its incenter (1 point each);
+    C. two split uncovered triangles: bridge across their edge (0 more points);
+    D. split uncovered + cover triangle: split the cover one, bridge (1 point);
+    E. two cover triangles: split both, bridge (2 points);
+    F. constrained edges last: a midpoint bridge (1 point + the splits).
+
+    A bridge over a free edge is a flip between the incenters (Thm 2.4) if
+    ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
+
+    Returns ``(status (m,) int8, slot (3m,) int8, swap_he (m,) int64, counts, bad)``:
+    ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and ``bad`` flags
+    the triangles of connected pieces left as more than one node (an absorbed
+    triangle was some cycle's only way out): the caller retries without absorbing
+    there.
+    """
+    m = tri.shape[0]
+    nh = 3 * m
+    status = np.zeros(m, np.int8)
+    slot = np.zeros(nh, np.int8)
+    swap_he = np.full(m, -1, np.int64)
+    uf = np.arange(n_cyc + m)
+    for t in range(m):
+        if cyc[t] < 0:
+            status[t] = SPLIT  # provisional: uncovered triangles are split unless absorbed
+    # the only candidates: half-edges between two different nodes (both directions)
+    n_cross = 0
+    cross = np.empty(nh, np.int64)
+    for h in range(nh):
+        g = twin[h]
+        if g < 0:
+            continue
+        ct = cyc[h // 3]
+        cu = cyc[g // 3]
+        if ct < 0 or cu < 0 or ct != cu:
+            cross[n_cross] = h
+            n_cross += 1
+    n_abs = 0
+    n_join = 0
+    n_merge = 0
+    n_edge = 0
+    for stage in range(4):
+        if (stage < 2 and not swaps) or (stage >= 2 and not edge_splits):
+            continue
+        if True:
+            for i in range(n_cross):
+                h = cross[i]
+                g = twin[h]
+                if g < 0 or (is_con[h] and stage < 2):
+                    continue
+                t = h // 3
+                u = g // 3
+                if cyc[t] < 0 or swap_he[t] >= 0 or swap_he[u] >= 0:
+                    continue
+                if stage % 2 == 0 and (cyc[u] >= 0 or no_absorb[u]):
+                    continue
+                if stage % 2 == 1 and (cyc[u] < 0 or g < h):
+                    continue
+                nt = cyc[t]
+                nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+                rt = _find(uf, nt)
+                ru = _find(uf, nu)
+                if rt == ru:
+                    continue
+                if stage < 2:
+                    if not swap_ok(pts, tri, twin, h, floor_s2, cos_fold):
+                        continue
+                elif not split_ok(pts, tri, twin, h, floor_s2):
+                    continue
+                uf[rt] = ru
+                swap_he[t] = h
+                swap_he[u] = g
+                status[t] = SWAP if stage < 2 else EDGE
+                status[u] = status[t]
+                if stage < 2:
+                    if stage == 0:
+                        n_abs += 1
+                    else:
+                        n_join += 1
+                else:
+                    n_edge += 1
+    is_split = np.zeros(m, np.bool_)
+    for t in range(m):
+        is_split[t] = status[t] == SPLIT
+    for stage in range(4):
+        for i in range(n_cross):
+            h = cross[i]
+            g = twin[h]
+            if g < h:
+                continue
+            con = is_con[h]
+            if (stage == 3) != con:
+                continue
+            t = h // 3
+            u = g // 3
+            if status[t] >= SWAP or status[u] >= SWAP:
+                continue
+            st = is_split[t] and cyc[t] < 0
+            su = is_split[u] and cyc[u] < 0
+            if stage == 0 and not (st and su):
+                continue
+            if stage == 1 and not (st != su):
+                continue
+            if stage == 2 and (st or su):
+                continue
+            nt = cyc[t] if cyc[t] >= 0 else n_cyc + t
+            nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+            rt = _find(uf, nt)
+            ru = _find(uf, nu)
+            if rt == ru:
+                continue
+            uf[rt] = ru
+            kind = MID if (con or not flip_bridges) else FLIP
+            slot[h] = kind
+            slot[g] = kind
+            is_split[t] = True
+            is_split[u] = True
+            status[t] = SPLIT
+            status[u] = SPLIT
+            n_merge += 1
+    # one node per piece? (pieces = components of the node graph)
+    pu = np.arange(n_cyc + m)
+    for i in range(n_cross):
+        h = cross[i]
+        t = h // 3
+        u = twin[h] // 3
+        a = _find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)
+        b = _find(pu, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        if a != b:
+            pu[a] = b
+    piece_node = np.full(n_cyc + m, -1, np.int64)
+    piece_bad = np.zeros(n_cyc + m, np.bool_)
+    ok = True
+    for node in range(n_cyc + m):
+        if node >= n_cyc and cyc[node - n_cyc] >= 0:
+            continue
+        p = _find(pu, node)
+        r = _find(uf, node)
+        if piece_node[p] < 0:
+            piece_node[p] = r
+        elif piece_node[p] != r:
+            ok = False
+            piece_bad[p] = True
+    bad = np.zeros(m, np.bool_)
+    if not ok:  # absorbed triangles next to another node: they cut it off
+        n_bad = 0
+        for t in range(m):
+            if cyc[t] >= 0 or status[t] < SWAP or not piece_bad[_find(pu, n_cyc + t)]:
+                continue
+            rt = _find(uf, n_cyc + t)
+            for k in range(3):
+                g = twin[3 * t + k]
+                if g < 0:
+                    continue
+                u = g // 3
+                nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+                if _find(uf, nu) != rt:
+                    bad[t] = True
+                    n_bad += 1
+                    break
+        if n_bad == 0:  # should not happen: give up absorbing in those pieces
+            for t in range(m):
+                bad[t] = piece_bad[_find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)]
+    counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
+    return status, slot, swap_he, counts, bad
+
+
+@njit(cache=True)
+def _row(out, link, parent, kind, pos, x, y, z, bits, par, kd):
+    out[pos, 0] = x
+    out[pos, 1] = y
+    out[pos, 2] = z
+    link[pos] = bits
+    parent[pos] = par
+    kind[pos] = kd
+
+
+@njit(cache=True)
+def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
+    """Output triangles, with the two edges the cycle crosses in each.
+
+    ``split_index[t]`` numbers the split triangles (incenter of t is vertex
+    ``n_points + split_index[t]``); midpoints follow, in order of first emission.
+    Each output row gets ``link``: bit j set if the cycle crosses its edge j (from
+    vertex j to j + 1). Row kinds: 0 incenter sector, 1 flip (bridge), 2 midpoint
+    (bridge, or an edge split without incenters), 3 input triangle kept whole, 4
+    swapped pair (flip without Steiner point).
+
+    Returns ``(out, link, parent, kind, mid_a, mid_b)``.
+    """
+    m = tri.shape[0]
+    n_split = 0
+    n_midh = 0
+    for t in range(m):
+        if status[t] == SPLIT:
+            n_split += 1
+    n_edge = 0
+    for h in range(3 * m):
+        if slot[h] == MID:
+            n_midh += 1
+    for t in range(m):
+        if status[t] == EDGE:
+            n_edge += 1  # two rows each
+    total = m + 2 * n_split + n_midh + n_edge
+    n_midh += n_edge  # one midpoint per pair
+    out = np.empty((total, 3), np.int64)
+    link = np.zeros(total, np.uint8)
+    parent = np.empty(total, np.int64)
+    kind = np.empty(total, np.int8)
+    mid_of = np.full(3 * m, -1, np.int64)
+    mid_a = np.empty(n_midh // 2, np.int64)
+    mid_b = np.empty(n_midh // 2, np.int64)
+    n_mid = 0
+    n_all = n_points + n_split
+    pos = 0
+    for t in range(m):
+        st = status[t]
+        if st == PASS:
+            out[pos, 0] = tri[t, 0]
+            out[pos, 1] = tri[t, 1]
+            out[pos, 2] = tri[t, 2]
+            bits = 0
+            for k in range(3):
+                if is_cov[3 * t + k]:
+                    bits |= 1 << k
+            link[pos] = bits
+            parent[pos] = t
+            kind[pos] = 3
+            pos += 1
+        elif st == SWAP:
+            h = swap_he[t]
+            g = twin[h]
+            if g < h:
+                continue  # emitted with its partner
+            k = h - 3 * t
+            u = g // 3
+            kg = g - 3 * u
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            c = tri[t, (k + 2) % 3]
+            d = tri[u, (kg + 2) % 3]
+            # (a, d, c): edges ad (u's), dc (diagonal), ca (t's)
+            out[pos, 0] = a
+            out[pos, 1] = d
+            out[pos, 2] = c
+            bits = 0
+            nb_ = 0
+            if is_cov[3 * u + (kg + 1) % 3]:
+                bits |= 1
+                nb_ += 1
+            if is_cov[3 * t + (k + 2) % 3]:
+                bits |= 4
+                nb_ += 1
+            if nb_ < 2:
+                bits |= 2
+            link[pos] = bits
+            parent[pos] = t
+            kind[pos] = 4
+            pos += 1
+            # (d, b, c): edges db (u's), bc (t's), cd (diagonal)
+            out[pos, 0] = d
+            out[pos, 1] = b
+            out[pos, 2] = c
+            bits = 0
+            nb_ = 0
+            if is_cov[3 * u + (kg + 2) % 3]:
+                bits |= 1
+                nb_ += 1
+            if is_cov[3 * t + (k + 1) % 3]:
+                bits |= 2
+                nb_ += 1
+            if nb_ < 2:
+                bits |= 4
+            link[pos] = bits
+            parent[pos] = u
+            kind[pos] = 4
+            pos += 1
+        elif st == EDGE:
+            h = swap_he[t]
+            g = twin[h]
+            if g < h:
+                continue  # emitted with its partner
+            k = h - 3 * t
+            u = g // 3
+            kg = g - 3 * u
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            c = tri[t, (k + 2) % 3]
+            d = tri[u, (kg + 2) % 3]
+            mv = n_all + n_mid
+            mid_a[n_mid] = a
+            mid_b[n_mid] = b
+            n_mid += 1
+            # t1 (a, M, c), t2 (M, b, c), u1 (b, M, d), u2 (M, a, d); cross links
+            # t1-u2 (aM) and t2-u1 (Mb) are edge 0 of all four; outer edges where
+            # covered, else the sibling (t1-t2, u1-u2)
+            ct = is_cov[3 * t + (k + 2) % 3]
+            _row(out, link, parent, kind, pos, a, mv, c, 1 | (4 if ct else 2), t, 2)
+            ct = is_cov[3 * t + (k + 1) % 3]
+            _row(out, link, parent, kind, pos + 1, mv, b, c, 1 | (2 if ct else 4), t, 2)
+            cu = is_cov[3 * u + (kg + 2) % 3]
+            _row(out, link, parent, kind, pos + 2, b, mv, d, 1 | (4 if cu else 2), u, 2)
+            cu = is_cov[3 * u + (kg + 1) % 3]
+            _row(out, link, parent, kind, pos + 3, mv, a, d, 1 | (2 if cu else 4), u, 2)
+            pos += 4
+        else:
+            inc = n_points + split_index[t]
+            for k in range(3):
+                h = 3 * t + k
+                a = tri[t, k]
+                b = tri[t, (k + 1) % 3]
+                hp = 3 * t + (k + 2) % 3
+                hn = 3 * t + (k + 1) % 3
+                ring_prev = not (is_cov[hp] and is_cov[h])
+                ring_next = not (is_cov[h] and is_cov[hn])
+                s = slot[h]
+                if s == PLAIN:
+                    out[pos, 0] = inc
+                    out[pos, 1] = a
+                    out[pos, 2] = b
+                    bits = 0
+                    if ring_prev:
+                        bits |= 1
+                    if is_cov[h]:
+                        bits |= 2
+                    if ring_next:
+                        bits |= 4
+                    link[pos] = bits
+                    parent[pos] = t
+                    kind[pos] = 0
+                    pos += 1
+                elif s == FLIP:
+                    u = twin[h] // 3
+                    out[pos, 0] = inc
+                    out[pos, 1] = a
+                    out[pos, 2] = n_points + split_index[u]
+                    link[pos] = 3
+                    parent[pos] = t
+                    kind[pos] = 1
+                    pos += 1
+                else:
+                    g = twin[h]
+                    if mid_of[h] < 0:
+                        mid_of[h] = n_all + n_mid
+                        mid_of[g] = n_all + n_mid
+                        mid_a[n_mid] = a
+                        mid_b[n_mid] = b
+                        n_mid += 1
+                    mv = mid_of[h]
+                    out[pos, 0] = inc
+                    out[pos, 1] = a
+                    out[pos, 2] = mv
+                    link[pos] = 3
+                    parent[pos] = t
+                    kind[pos] = 2
+                    pos += 1
+                    out[pos, 0] = inc
+                    out[pos, 1] = mv
+                    out[pos, 2] = b
+                    link[pos] = 6
+                    parent[pos] = t
+                    kind[pos] = 2
+                    pos += 1
+    return out[:pos], link[:pos], parent[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid]
+
+
+@njit(cache=True)
+def walk_links(link, out_twin):
+    """Follow the links into cycles.
+
+    Returns ``(order, lengths, bad)``: rows in cycle order, the cycle lengths, and
+    ``bad`` = -1 or the first row whose links are not two, or cross an edge whose
+    other side does not link back.
+    """
+    k_out = link.shape[0]
+    for x in range(k_out):
+        c = 0
+        for j in range(3):
+            if (link[x] >> j) & 1:
+                c += 1
+                g = out_twin[3 * x + j]
+                if g < 0:
+                    return np.empty(0, np.int64), np.empty(0, np.int64), x
+                y = g // 3
+                if not ((link[y] >> (g - 3 * y)) & 1):
+                    return np.empty(0, np.int64), np.empty(0, np.int64), x
+        if c != 2:
+            return np.empty(0, np.int64), np.empty(0, np.int64), x
+    seen = np.zeros(k_out, np.bool_)
+    order = np.empty(k_out, np.int64)
+    lengths = np.empty(k_out, np.int64)
+    n_c = 0
+    pos = 0
+    for s in range(k_out):
+        if seen[s]:
+            continue
+        start = pos
+        x = s
+        came = -1
+        for j in range(3):
+            if (link[s] >> j) & 1:
+                came = j
+                break
+        while True:
+            seen[x] = True
+            order[pos] = x
+            pos += 1
+            nxt = -1
+            for j in range(3):
+                if j != came and (link[x] >> j) & 1:
+                    nxt = j
+                    break
+            g = out_twin[3 * x + nxt]
+            y = g // 3
+            came = g - 3 * y
+            x = y
+            if x == s:
+                break
+        lengths[n_c] = pos - start
+        n_c += 1
+    return order, lengths[:n_c], -1
+
+
+@njit(cache=True)
+def reorder_runs(order, lengths, run_order, out_twin):
+    """Runs in the order ``run_order``; the half-edge twins renumbered to match.
+
+    Returns ``(rows, lengths, claim)``: output rows in final order, run lengths, and
+    ``claim[3 i + j]`` the twin of edge j of final row i (-1 on the boundary).
+    """
+    c = lengths.shape[0]
+    k = order.shape[0]
+    starts = np.empty(c, np.int64)
+    s = 0
+    for r in range(c):
+        starts[r] = s
+        s += lengths[r]
+    rows = np.empty(k, np.int64)
+    new_len = np.empty(c, np.int64)
+    p = 0
+    for q in range(c):
+        r = run_order[q]
+        new_len[q] = lengths[r]
+        for i in range(starts[r], starts[r] + lengths[r]):
+            rows[p] = order[i]
+            p += 1
+    pos = np.empty(k, np.int64)
+    for i in range(k):
+        pos[rows[i]] = i
+    claim = np.empty(3 * k, np.int64)
+    for i in range(k):
+        x = rows[i]
+        for j in range(3):
+            g = out_twin[3 * x + j]
+            claim[3 * i + j] = -1 if g < 0 else 3 * pos[g // 3] + g % 3
+    return rows, new_len, claim

@@ -1,0 +1,264 @@
+"""Sparse Hamiltonian cycle meshes: Thm 2.4's guarantee with few Steiner points.
+
+Arkin, Held, Mitchell, Skiena, Thm 2.4 splits *every* triangle at its incenter and
+flips one edge per dual spanning-tree edge. Its proof is local: for two adjacent
+triangles t, u split at their incenters ``I_t``, ``I_u``, the quadrilateral
+``a I_u b I_t`` over their shared edge ``ab`` is convex (each incenter sees ``ab`` under
+more than 90 degrees, Fig. 9) and flipping ``ab`` into ``I_t I_u`` creates no angle below
+half an angle of t or u. Nothing in it needs the *other* triangles to be split. So
+(after Gopi & Eppstein, who do the same with edge-midpoint splits and no angle bound):
+
+1. **cover** the dual graph by vertex-disjoint cycles (``cycle_cover``: the complement
+   of a matching, as Gopi & Eppstein; cycles merged for free by re-matching around
+   vertices): a triangle on a cover cycle is kept whole and the cycle walks through it;
+2. **join** the cycles (and the few triangles no cycle covers) into one cycle per
+   connected piece, cheapest first (``_sparse_kernels.plan_merges``):
+
+   * *swap* (0 Steiner points): two cover triangles of different cycles, ``t = abc``
+     and ``u = bad``, are replaced by ``adc`` and ``dbc``; the two cycles, which passed
+     ``p-t-q`` and ``r-u-s``, now pass ``p-dbc-s`` and ``r-adc-q``: one cycle. A cover
+     triangle and an uncovered one swapped the same way take the uncovered one into
+     the cycle (``p-dbc-adc-q``). Used only where both new triangles keep every angle
+     at least half the input's minimum (checked, with margin; the certificate checks
+     again);
+   * *edge split* (1 Steiner point): split ``ab`` at its midpoint M; t, u become
+     ``aMc, Mbc, bMd, Mad`` and the cycles run ``p-Mbc-bMd-s ... r-Mad-aMc-q`` (Gopi &
+     Eppstein's merge); also on constrained edges (kept as two halves); used only
+     where the four triangles keep the angle bound (checked);
+   * *bridge* (Thm 2.4's step, 1 Steiner point per triangle split): split t and u at
+     their incenters and flip ``ab``. In t's three sectors the cycle enters by one
+     cover sector, crosses to the flipped triangle ``(I_t, a, I_u)``, runs around u (and
+     u's whole cycle), returns by ``(I_u, b, I_t)`` and leaves by t's other cover sector.
+     Both cycles become one. An uncovered triangle is split once and can bridge to
+     all three neighbours (its three sectors form a ring, as every triangle's does in
+     Thm 2.4);
+   * *midpoint bridge* across a constrained edge (never flipped): the edge's midpoint
+     and the four triangles of the conformal variant of Thm 2.4, as in incircle mode.
+
+Every output angle is an input angle (whole triangles), half an input angle or more
+(Thm 2.4: sectors, bridges, midpoint bridges), or a swap / edge-split angle checked
+against the bound:
+``min angle out >= 1/2 min angle in``, verified by the same certificate as incircle
+mode. See ``docs/sparse.md`` for the argument and the measured Steiner counts.
+
+The output is assembled as triangles plus, for each, the two edges the cycle crosses
+("links"); the cycle order is read off by following links across the output's
+half-edge twins (``_sparse_kernels.walk_links``), which are also handed to the
+certificate as its pairing claim.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hammesh import _kernels
+from hammesh.errors import VerificationError
+from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.postprocess import _sparse_kernels as _k
+from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
+from hammesh.verify.input_mesh import HalfEdges
+
+__all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles"]
+
+#: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
+SWAP_MARGIN = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class SparseResult:
+    """The sparse construction on plain arrays (2D or 3D points)."""
+
+    points: np.ndarray  # (n_out, d) float64: input points, incenters, midpoints
+    triangles: np.ndarray  # (m_out, 3) int64 in cycle order
+    lengths: np.ndarray  # (c,) int64 cycle lengths
+    parent: np.ndarray  # (m_out,) int64
+    kind: np.ndarray  # (m_out,) int8
+    claim: np.ndarray  # (3 m_out,) int64 half-edge twins of the output rows
+    mid_a: np.ndarray  # (q,) int64 edges split at midpoints
+    mid_b: np.ndarray
+    counts: dict
+
+
+def _incenters(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    p = points[tri]
+    la = np.linalg.norm(p[:, 2] - p[:, 1], axis=1)
+    lb = np.linalg.norm(p[:, 0] - p[:, 2], axis=1)
+    lc = np.linalg.norm(p[:, 1] - p[:, 0], axis=1)
+    return (la[:, None] * p[:, 0] + lb[:, None] * p[:, 1] + lc[:, None] * p[:, 2]) / (la + lb + lc)[:, None]
+
+
+def sparse_cycles(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    twin: np.ndarray,
+    is_con: np.ndarray,
+    min_angle: float,
+    *,
+    swaps: bool = True,
+    edge_splits: bool = True,
+    flip_bridges: bool = True,
+    max_fold_deg: float = 180.0,
+    use_cover: bool = True,
+) -> SparseResult:
+    """The sparse construction on arrays (unverified).
+
+    Parameters
+    ----------
+    points : (n, d) float64, d = 2 (counter-clockwise triangles) or 3 (surface)
+    triangles : (m, 3) int64, consistently oriented
+    twin : (3 m,) int64
+    is_con : (3 m,) bool
+        Constrained half-edges: never flipped nor swapped.
+    min_angle : float
+        The input's minimum angle in radians; swaps keep every angle above half of it.
+    swaps : bool
+        Allow Steiner-free swaps (they change the surface in 3D).
+    edge_splits : bool
+        Allow joins by an edge midpoint alone (1 Steiner point, angles checked).
+    flip_bridges : bool
+        Bridge free edges by flipping between incenters (False: by their midpoint,
+        which keeps a 3D surface exactly).
+    max_fold_deg : float
+        3D swaps only between triangles whose normals differ by at most this.
+    use_cover : bool
+        False: no cover, every triangle is split and bridged (Thm 2.4 itself, as a
+        baseline for surfaces).
+    """
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    tw = np.ascontiguousarray(twin, dtype=np.int64)
+    con = np.ascontiguousarray(is_con, dtype=np.bool_)
+    n, m = len(pts), len(tri)
+    if use_cover:
+        cover = cycle_cover(tri, tw)
+    else:
+        cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
+    floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
+    floor_s2 = math.sin(min(floor, math.pi / 2)) ** 2
+    cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
+    no_absorb = np.zeros(m, np.bool_)
+    for attempt in range(4):
+        if attempt == 3:
+            no_absorb[:] = True
+        status, slot, swap_he, counts, bad = _k.plan_merges(
+            pts, tri, tw, con, cover.is_cov, cover.cycle, cover.n_cycles, floor_s2, cos_fold,
+            swaps, edge_splits, no_absorb, flip_bridges,
+        )
+        if not bad.any():
+            break
+        no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
+    if bad.any():
+        raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+    is_split = status == _k.SPLIT
+    split_index = np.cumsum(is_split) - 1
+    out, link, parent, kind, mid_a, mid_b = _k.emit(
+        tri, tw, cover.is_cov, status, slot, swap_he, split_index, n
+    )
+    n_split = int(is_split.sum())
+    all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), 0.5 * (pts[mid_a] + pts[mid_b])])
+    out_twin, dup = _kernels.half_edge_twins(out, len(all_pts))
+    if dup >= 0:
+        raise VerificationError(f"internal error: output edge of row {int(dup) // 3} used twice")
+    order, lengths, bad = _k.walk_links(link, out_twin)
+    if bad >= 0:
+        raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
+    # runs in the order of their lowest input triangle; twins renumbered as the claim
+    key = np.minimum.reduceat(parent[order], np.cumsum(lengths) - lengths)
+    order, lengths, claim = _k.reorder_runs(order, lengths, np.argsort(key, kind="stable"), out_twin)
+    counts_d = {
+        "cycles_before_merging": int(cover.n_cycles),
+        "cover_rotations": int(cover.n_rotations),
+        "uncovered": int(cover.n_uncovered),
+        "unmatched": int(cover.n_unmatched),
+        "incenters": n_split,
+        "midpoints": int(len(mid_a)),
+        "swaps": int(counts[0] + counts[1]),
+        "swaps_absorbing": int(counts[0]),
+        "edge_splits": int(counts[3]),
+        "merges": int(counts.sum()),
+        "bridges": int(counts[2]),
+        "flips": int((slot == _k.FLIP).sum() // 2),
+        "retries": attempt,
+    }
+    return SparseResult(
+        points=all_pts,
+        triangles=out[order],
+        lengths=lengths.astype(np.int64),
+        parent=parent[order],
+        kind=kind[order],
+        claim=claim,
+        mid_a=mid_a,
+        mid_b=mid_b,
+        counts=counts_d,
+    )
+
+
+def _split_segments(mesh: Mesh, mid_a: np.ndarray, mid_b: np.ndarray, n_before_mid: int, n_all: int):
+    segs, markers = mesh.segments, mesh.segment_markers
+    q = len(mid_a)
+    if not q:
+        return segs, markers
+    key = np.minimum(segs[:, 0], segs[:, 1]) * n_all + np.maximum(segs[:, 0], segs[:, 1])
+    mkey = np.minimum(mid_a, mid_b) * n_all + np.maximum(mid_a, mid_b)
+    order = np.argsort(mkey)
+    idx = np.searchsorted(mkey[order], key).clip(max=q - 1)
+    hit = mkey[order][idx] == key
+    mv = n_before_mid + order[idx[hit]]
+    halves = np.concatenate([np.c_[segs[hit, 0], mv], np.c_[mv, segs[hit, 1]]])
+    return np.concatenate([segs[~hit], halves]), np.concatenate([markers[~hit], markers[hit], markers[hit]])
+
+
+def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[HamiltonianMesh, np.ndarray]:
+    """Build the sparse Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Counter-clockwise, validated (``hammesh.verify.input_mesh.prepare_mesh``).
+    he : HalfEdges
+    is_con : (3 m,) bool
+
+    Returns
+    -------
+    HamiltonianMesh
+        ``kind`` 0 incenter sector, 1 flip, 2 midpoint, 3 input triangle kept whole,
+        4 swapped pair; ``report`` holds the construction counts.
+    claim : (3 m_out,) int64
+        The output's half-edge twins (checked by the certificate).
+    """
+    pts, tri = mesh.points, mesh.triangles
+    n, m = mesh.n_points, mesh.n_triangles
+    amin = float(_kernels.angle_area_stats(pts, tri)[0])
+    r = sparse_cycles(pts, tri, he.twin, is_con, amin)
+    n_inc = r.counts["incenters"]
+    segs, markers = _split_segments(mesh, r.mid_a, r.mid_b, n + n_inc, len(r.points))
+    lengths = r.lengths
+    position = np.arange(len(r.triangles), dtype=np.int64) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    steiner = n_inc + r.counts["midpoints"]
+    report = {
+        "triangles": int(len(r.triangles)),
+        "vertices": int(len(r.points)),
+        "input_triangles": int(m),
+        "input_vertices": int(n),
+        "steiner_points": int(steiner),
+        "steiner_per_input_triangle": steiner / m,
+        "triangles_added": int(len(r.triangles) - m),
+        **r.counts,
+        "components": [int(x) for x in lengths],
+    }
+    h = HamiltonianMesh(
+        points=r.points,
+        triangles=r.triangles,
+        segments=segs,
+        segment_markers=markers,
+        components=lengths,
+        position=position,
+        parent=r.parent,
+        kind=r.kind,
+        triangle_attributes=mesh.triangle_attributes[r.parent],
+        report=report,
+    )
+    return h, r.claim
