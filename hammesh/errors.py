@@ -14,6 +14,7 @@ __all__ = [
     "InvalidMeshError",
     "InvalidOptionError",
     "FileFormatError",
+    "NotPlanarError",
     "MeshingError",
     "VerificationError",
 ]
@@ -37,6 +38,10 @@ class InvalidOptionError(HammeshError, ValueError):
 
 class FileFormatError(HammeshError, ValueError):
     """A file is missing, empty, truncated, of an unknown format or malformed."""
+
+
+class NotPlanarError(FileFormatError):
+    """A mesh file holds a 3D surface where a planar mesh is needed (z varies)."""
 
 
 class MeshingError(HammeshError, RuntimeError):

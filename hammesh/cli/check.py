@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hammesh.errors import FileFormatError
+from hammesh.errors import FileFormatError, NotPlanarError
 from hammesh.io import read_mesh, write_report
 from hammesh.verify import infer_runs, verify_cycle_mesh
 
@@ -13,6 +13,7 @@ HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian 
 EXAMPLES = """examples:
   hammesh check plate.vtu
   hammesh check plate.obj --min-angle 14.9     # also require a minimum angle
+  hammesh check bunny-cycle.ply                # a 3D surface from `hammesh surface`
 Each connected piece must be stored as one run of triangles that closes into a cycle,
 and every constrained edge stored in the file (line cells, or the .poly next to a .ele)
 must be an edge of the triangles; exit 0 if verified, 3 if not, 2 if the file cannot
@@ -28,20 +29,30 @@ def add_args(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if not args.mesh.exists():
         raise FileFormatError(f"{args.mesh}: no such file")
-    mesh = read_mesh(args.mesh)
-    runs = infer_runs(mesh.triangles, mesh.n_points)
-    stats = verify_cycle_mesh(mesh.points, mesh.triangles, runs, segments=mesh.segments)
+    try:
+        mesh = read_mesh(args.mesh)
+    except NotPlanarError:  # a 3D surface: the surface certificate (angles in 3D)
+        from hammesh.surface import read_surface
+        from hammesh.verify.surface import verify_surface
+
+        points, triangles = read_surface(args.mesh)
+        runs = infer_runs(triangles, len(points))
+        stats = verify_surface(points, triangles, runs)
+    else:
+        triangles = mesh.triangles
+        runs = infer_runs(triangles, mesh.n_points)
+        stats = verify_cycle_mesh(mesh.points, triangles, runs, segments=mesh.segments)
     if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
         from hammesh.errors import VerificationError
 
         raise VerificationError(
             f"min angle {stats['min_angle_output_deg']:.6f} deg is below the required {args.min_angle} deg"
         )
-    stats.update({"file": str(args.mesh), "triangles": mesh.n_triangles, "components": runs.tolist(), "verified": True})
+    stats.update({"file": str(args.mesh), "triangles": len(triangles), "components": runs.tolist(), "verified": True})
     if args.report is not None:
         write_report(stats, args.report)
     print(
-        f"OK {args.mesh}: {mesh.n_triangles:,} triangles in {len(runs)} Hamiltonian cycle(s); "
+        f"OK {args.mesh}: {len(triangles):,} triangles in {len(runs)} Hamiltonian cycle(s); "
         f"angles {stats['min_angle_output_deg']:.2f}..{stats['max_angle_output_deg']:.2f} deg"
     )
     return 0

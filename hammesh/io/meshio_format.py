@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from hammesh.errors import FileFormatError, InvalidMeshError
+from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
@@ -127,7 +127,8 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     _, file_format, kwargs = _FORMATS[suffix]
 
     points = np.asarray(mesh.points, dtype=np.float64)
-    points3 = np.column_stack([points, np.zeros(len(points))])
+    # 3D surfaces (hammesh.surface) as they are; planar meshes get z = 0
+    points3 = points if points.shape[1] == 3 else np.column_stack([points, np.zeros(len(points))])
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     if suffix == ".ply":
         triangles = triangles.astype(np.int32)
@@ -362,7 +363,7 @@ def _to_mesh(raw: Any, path: Path) -> Mesh:
         raise FileFormatError(f"{path}: points have shape {points.shape}, expected (n, 2) or (n, 3)")
     if points.shape[1] == 3:
         if np.any(points[:, 2] != 0):
-            raise FileFormatError(f"{path}: mesh is not planar (z varies)")
+            raise NotPlanarError(f"{path}: mesh is not planar (z varies)")
         points = points[:, :2]
     if not np.isfinite(points).all():
         raise FileFormatError(f"{path}: non-finite point coordinates")

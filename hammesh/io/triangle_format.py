@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hammesh.errors import FileFormatError
+from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
@@ -72,6 +72,11 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     """
     node_path, poly_path, ele_path = _siblings(path)
     validate_mesh(mesh)
+    if np.shape(mesh.points)[1] != 2:
+        raise InvalidMeshError(
+            f"{Path(path).name}: Triangle's .node/.ele files hold planar meshes; "
+            "write a 3D surface as .vtu .vtk .obj .ply .stl or .off"
+        )
     points = np.asarray(mesh.points, dtype=np.float64)
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)

@@ -39,7 +39,7 @@ def _check_indices(name: str, arr: np.ndarray, n: int) -> None:
 def validate_mesh(mesh: Mesh | HamiltonianMesh) -> None:
     """Raise :class:`~hammesh.errors.InvalidMeshError` unless ``mesh`` can be written.
 
-    Checks: ``points`` is ``(n, 2)`` and finite; ``triangles`` is a non-empty
+    Checks: ``points`` is ``(n, 2)`` (or ``(n, 3)``, a surface) and finite; ``triangles`` is a non-empty
     ``(m, 3)`` integer array with indices in ``[0, n)``; ``segments`` is ``(s, 2)``
     with indices in range; ``triangle_attributes`` has ``m`` rows and is finite.
     For a :class:`HamiltonianMesh` also: ``components`` are positive and sum to ``m``;
@@ -54,8 +54,8 @@ def validate_mesh(mesh: Mesh | HamiltonianMesh) -> None:
     hammesh.errors.InvalidMeshError: triangles[0, 2] = 3 is out of range [0, 3) (the mesh has 3 points)
     """
     points = np.asarray(mesh.points)
-    if points.ndim != 2 or points.shape[1] != 2:
-        raise InvalidMeshError(f"points must have shape (n, 2), got {points.shape}")
+    if points.ndim != 2 or points.shape[1] not in (2, 3):
+        raise InvalidMeshError(f"points must have shape (n, 2) or (n, 3), got {points.shape}")
     if not np.issubdtype(points.dtype, np.number):
         raise InvalidMeshError(f"points must be numeric, got dtype {points.dtype}")
     finite = np.isfinite(points).all(axis=1)

@@ -71,32 +71,13 @@ def read_surface(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_surface(h: HamiltonianMesh, path: str | os.PathLike[str]) -> None:
-    """Write a Hamiltonian surface in cycle order, atomically.
+    """Write a Hamiltonian surface in cycle order, atomically (:func:`hammesh.io.write`).
 
     ``.vtu .vtk`` also carry cell data ``cycle_id``, ``cycle_position``, ``parent`` and
     ``kind``; ``.obj .ply .stl .off`` hold geometry and order only (``.stl`` repeats
     each triangle's corners).
     """
-    import meshio
+    from hammesh.io import write
 
-    from hammesh.io.atomic import atomic_path
-
-    path = Path(path)
-    fmt = _format(path)
-    cell_data = None
-    if fmt in ("vtu", "vtk"):
-        runs = np.asarray(h.components, dtype=np.int64)
-        cell_data = {
-            "cycle_id": [np.repeat(np.arange(len(runs)), runs)],
-            "cycle_position": [np.asarray(h.position, dtype=np.int64)],
-            "parent": [np.asarray(h.parent, dtype=np.int64)],
-            "kind": [np.asarray(h.kind, dtype=np.int64)],
-        }
-    out = meshio.Mesh(np.asarray(h.points, dtype=np.float64), [("triangle", np.asarray(h.triangles))], cell_data=cell_data)
-    with atomic_path(path) as tmp:
-        if fmt == "obj":  # meshio's obj writer needs the suffix
-            tmp_obj = tmp.with_suffix(".obj")
-            meshio.write(tmp_obj, out, file_format=fmt)
-            os.replace(tmp_obj, tmp)
-        else:
-            meshio.write(tmp, out, file_format=fmt)
+    _format(Path(path))
+    write(h, path)

@@ -68,7 +68,7 @@ BROKEN = {
     "negative index": (lambda m: _broken(m, triangles=np.where(m.triangles == 0, -1, m.triangles)),
                        r"triangles\[0, 0\] = -1 is out of range"),
     "float triangles": (lambda m: _broken(m, triangles=m.triangles.astype(float)), "integer"),
-    "3 columns": (lambda m: _broken(m, points=np.c_[m.points, np.ones(m.n_points)]), r"\(n, 2\)"),
+    "4 columns": (lambda m: _broken(m, points=np.c_[m.points, np.ones((m.n_points, 2))]), r"\(n, 2\) or \(n, 3\)"),
     "no triangles": (lambda m: _broken(m, triangles=np.zeros((0, 3), np.int64), components=np.zeros(0, np.int64),
                                        position=np.zeros(0, np.int64), parent=np.zeros(0, np.int64),
                                        kind=np.zeros(0, np.int8), triangle_attributes=np.zeros((0, 1))),

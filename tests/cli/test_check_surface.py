@@ -1,0 +1,56 @@
+"""``hammesh check`` on 3D surfaces, and 3D surfaces through the shared writer."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.cli import main
+from hammesh.surface import read_surface, surface_hamiltonian
+from hammesh.surface.shapes import torus
+
+
+@pytest.fixture(scope="module")
+def cycle_surface() -> hammesh.HamiltonianMesh:
+    p, t = torus(24, 12, hole=True)
+    return surface_hamiltonian(p, t)
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".vtk", ".obj", ".ply", ".stl", ".off"])
+def test_surface_written_by_hammesh_write_is_rechecked(tmp_path: Path, suffix: str, cycle_surface, capsys) -> None:
+    h = cycle_surface
+    out = tmp_path / f"cycle{suffix}"
+    hammesh.write(h, out)
+    points, triangles = read_surface(out)
+    # same triangles in the same (cycle) order, same 3D coordinates
+    assert np.allclose(points[triangles], h.points[h.triangles])
+    assert main(["check", str(out), "--report", str(tmp_path / "r.json")]) == 0
+    assert f"{h.n_triangles:,} triangles in 1 Hamiltonian cycle" in capsys.readouterr().out
+
+
+def test_check_rejects_a_broken_surface_cycle(tmp_path: Path, cycle_surface, capsys) -> None:
+    h = cycle_surface
+    tri = h.triangles.copy()
+    tri[[3, 40]] = tri[[40, 3]]
+    out = tmp_path / "bad.ply"
+    hammesh.write(replace(h, triangles=tri), out)
+    assert main(["check", str(out)]) == 3
+    assert "breaks at triangle" in capsys.readouterr().err
+
+
+def test_check_surface_min_angle(tmp_path: Path, cycle_surface) -> None:
+    out = tmp_path / "c.vtu"
+    hammesh.write(cycle_surface, out)
+    amin = cycle_surface.report["min_angle_output_deg"]
+    assert main(["check", str(out), "--min-angle", f"{amin - 0.01}"]) == 0
+    assert main(["check", str(out), "--min-angle", f"{amin + 0.5}"]) == 3
+
+
+def test_triangle_files_refuse_a_surface(tmp_path: Path, cycle_surface) -> None:
+    with pytest.raises(hammesh.InvalidMeshError, match="planar"):
+        hammesh.write(cycle_surface, tmp_path / "s.ele")
+    assert not list(tmp_path.iterdir())
