@@ -131,7 +131,12 @@ def summary(h: HamiltonianMesh) -> str:
     lines = [
         f"{r['input_triangles']:,} input triangles -> {r['triangles']:,} triangles in "
         f"{len(r['components'])} Hamiltonian cycle(s), verified",
-        f"steiner points {r['steiner_points']:,} ({r['midpoints']} constrained-edge midpoints)",
+        f"steiner points {r['steiner_points']:,} ({r['midpoints']} constrained-edge midpoints)"
+        + (
+            f", {r['cycles_before_merging']:,} cover cycles joined"
+            if "cycles_before_merging" in r
+            else ""
+        ),
         f"min angle {r['min_angle_input_deg']:.2f} -> {r['min_angle_output_deg']:.2f} deg "
         f"(bound: half), max angle {r['max_angle_output_deg']:.2f} deg",
         "seconds: "

@@ -146,7 +146,7 @@ def test_bad_inputs_raise_named_errors() -> None:
         hammesh.hamiltonian(hammesh.Mesh(points=pts, triangles=np.array([[0, 1, 2]])), mode="sparsest")
 
 
-def test_cli_mode_sparse(tmp_path) -> None:
+def test_cli_mode_sparse(tmp_path, capsys) -> None:
     from hammesh.cli import main
 
     poly = tmp_path / "sq.poly"
@@ -158,6 +158,7 @@ def test_cli_mode_sparse(tmp_path) -> None:
 
     r = json.loads(rep.read_text())
     assert r["mode"] == "sparse" and r["verified"] and "cycles_before_merging" in r
+    assert f"{r['cycles_before_merging']:,} cover cycles joined" in capsys.readouterr().out
     assert main(["check", str(out)]) == 0
     proc = subprocess.run(
         [sys.executable, "-m", "hammesh", "mesh", str(poly), "--mode", "nope"], capture_output=True, text=True
