@@ -26,7 +26,8 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", type=Path, help="output mesh (.vtu .msh .obj .ele ...)")
     p.add_argument("--png", type=Path, help="draw the triangulation and its cycle into this image")
     p.add_argument("--sequential", action="store_true",
-                   help="require a sequential triangulation (alternating strip, §4; small sets)")
+                   help="require a sequential triangulation (alternating strip, §4): any size with "
+                        "at most two interior points (Lemma 4.2), else at most 12 points")
     p.add_argument("--seed", type=int, help="seed of the random splitters (Lemma 3.2)")
 
 
@@ -58,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
         if tri is None:
             raise InvalidDomainError(
                 f"{args.input.name}: these {len(pts)} points have no sequential triangulation "
-                "(exact search)"
+                "(proved by the exact search, or by the zigzag test in convex position)"
             )
         shape = "sequential strip"
     else:

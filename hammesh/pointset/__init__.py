@@ -24,7 +24,12 @@ True
 True
 """
 
-from hammesh.pointset.lemma42_sequential import convex_sequential
+from hammesh.pointset.lemma42_sequential import (
+    NotConstructed,
+    convex_sequential,
+    few_interior_sequential,
+    lemma42_plan,
+)
 from hammesh.pointset.sequential_search import (
     SEARCH_LIMIT,
     search_sequential,
@@ -41,6 +46,9 @@ __all__ = [
     "no_sequential_example",
     "search_sequential",
     "convex_sequential",
+    "few_interior_sequential",
+    "lemma42_plan",
+    "NotConstructed",
     "verify_point_triangulation",
     "convex_hull",
     "as_points",

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammesh.predicates import orient_points
+from hammesh.predicates import orient_points, orient_rows
 
 __all__ = ["repair"]
 
@@ -150,22 +150,36 @@ def _orient(pts, a, b, c):
     return int(orient_points(pts, int(a), int(b), int(c)))
 
 
-def _empty(pts, tri3, V):
+def _orient_table(pts, V):
+    """``o(a, b, c)`` for points of ``V`` from one exact table (the searches repeat them)."""
+    k = len(V)
+    ix = {v: i for i, v in enumerate(V)}
+    g = np.arange(k)
+    a, b, c = (x.ravel() for x in np.meshgrid(g, g, g, indexing="ij"))
+    P = pts[np.asarray(V, dtype=np.int64)]
+    O = orient_rows(P[a], P[b], P[c]).reshape(k, k, k).tolist()
+
+    def o(p, q, r):
+        return O[ix[p]][ix[q]][ix[r]]
+
+    return o
+
+
+def _empty(o, tri3, V):
     a, b, c = tri3
     for q in V:
         if q in tri3:
             continue
-        if (_orient(pts, a, b, q) >= 0 and _orient(pts, b, c, q) >= 0
-                and _orient(pts, c, a, q) >= 0):
+        if o(a, b, q) >= 0 and o(b, c, q) >= 0 and o(c, a, q) >= 0:
             return False
     return True
 
 
-def _disjoint(pts, s, t):
+def _disjoint(o, s, t):
     for x, y in ((s, t), (t, s)):
         for e in range(3):
             a, b = x[e], x[(e + 1) % 3]
-            if all(_orient(pts, a, b, q) <= 0 for q in y):
+            if all(o(a, b, q) <= 0 for q in y):
                 return True
     return False
 
@@ -204,6 +218,7 @@ def _solve_segments(pts, tri, nbr, prv, nxt, segments, p, budget):
         e_in.append(ei[0])
         e_out.append(eo[0])
     V = sorted({int(v) for t in cset for v in tri[t]} | {int(p)})
+    o = _orient_table(pts, V)
     L = len(cset) + 2
     S = len(segments)
     rev_bnd = {(b, a) for (a, b) in bnd}
@@ -216,12 +231,12 @@ def _solve_segments(pts, tri, nbr, prv, nxt, segments, p, budget):
         if key not in cache:
             out = []
             for z in V:
-                if z in (x, y) or _orient(pts, x, y, z) <= 0:
+                if z in (x, y) or o(x, y, z) <= 0:
                     continue
                 t3 = (x, y, z)
                 if any(e in rev_bnd for e in _edges(t3)):
                     continue
-                if _empty(pts, t3, V):
+                if _empty(o, t3, V):
                     out.append(t3)
             cache[key] = out
         return cache[key]
@@ -240,7 +255,7 @@ def _solve_segments(pts, tri, nbr, prv, nxt, segments, p, budget):
     def ok_to_add(t3):
         if any(e in used for e in _edges(t3)):
             return False
-        return all(_disjoint(pts, t3, s) for s in path)
+        return all(_disjoint(o, t3, s) for s in path)
 
     def finish():
         if not set(bnd) <= used:
@@ -384,7 +399,8 @@ def insert_by_chain(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, max_half=6, budge
     """Insert one stalled point by re-triangulating a few runs of the cycle around it.
 
     ``budget`` bounds the search steps of the whole call (all points and regions).
-    Returns ``(n_new_triangles, B)``; ``0`` if no stalled point could be inserted.
+    Returns ``(n_new_triangles, B, steps)``; ``0`` new triangles if no stalled point
+    could be inserted; ``steps`` is the search work spent.
     """
     steps = [0, budget]
     for t in range(n_tri):
@@ -394,7 +410,7 @@ def insert_by_chain(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, max_half=6, budge
             r = int(r)
             for k in range(3):
                 if steps[0] > steps[1]:
-                    return 0, B
+                    return 0, B, steps[0]
                 if _orient(pts, tri[t, k], tri[t, (k + 1) % 3], r) != 0:
                     continue
                 t2 = int(nbr[t, k])
@@ -414,5 +430,5 @@ def insert_by_chain(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, max_half=6, budge
                         runs, bnd = sol
                         B = _commit_segments(pts, tri, nbr, nxt, prv, lo, hi, B, segments, r,
                                              runs, bnd, n_tri)
-                        return 2, B
-    return 0, B
+                        return 2, B, steps[0]
+    return 0, B, steps[0]

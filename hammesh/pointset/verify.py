@@ -11,8 +11,10 @@ names the triangle, edge or point at fault:
 5. the unpaired edges are exactly the hull boundary edges, counter-clockwise, and the
    triangle areas sum to the hull area (relative tolerance :data:`AREA_RTOL`);
 6. the order: ``"cycle"``: consecutive rows share an edge and so do the last and
-   first (:func:`hammesh.verify.certificate.verify_cycle_mesh`, which re-checks 3-4
-   and that the cycle is one piece); ``"path"``: consecutive rows share an edge.
+   first; ``"path"``: consecutive rows share an edge.  (Not via
+   :func:`hammesh.verify.certificate.verify_cycle_mesh`: its floating-point area test
+   rejects nearly-flat triangles of nearly-collinear points that items 3-5 accept
+   exactly.)
 
 Items 3-5 prove the triangles tile the convex hull without overlap (positive
 triangles glued along a pairing of their half-edges whose free boundary is the hull
@@ -31,7 +33,6 @@ from hammesh import _kernels as core_kernels
 from hammesh.errors import VerificationError
 from hammesh.predicates import orient_many
 from hammesh.pointset.validate import convex_hull
-from hammesh.verify.certificate import verify_cycle_mesh
 
 __all__ = ["verify_point_triangulation", "AREA_RTOL", "ORDERS"]
 
@@ -106,13 +107,17 @@ def verify_point_triangulation(
     area = 0.5 * float(np.sum((bb[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (bb[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])))
     if not math.isclose(area, hull_area, rel_tol=AREA_RTOL, abs_tol=0.0):
         _fail(f"triangle areas sum to {area!r}, the hull's area is {hull_area!r}")
-    if order == "cycle":
-        if m < 3:
+    if order is not None:
+        if order == "cycle" and m < 3:
             _fail(f"{m} triangles cannot form a cycle")
-        verify_cycle_mesh(pts, tri, np.array([m], dtype=np.int64))
-    elif order == "path":
-        common = (tri[:-1, :, None] == tri[1:, None, :]).sum(axis=(1, 2))
+        # every row is a distinct positive triangle of an edge-manifold triangulation
+        # (checked exactly above), so two rows sharing two vertices share an edge; the
+        # floating-point area test of verify_cycle_mesh is not used: it rejects
+        # nearly-flat triangles of nearly-collinear points that are positive exactly
+        nxt = np.roll(tri, -1, axis=0) if order == "cycle" else tri[1:]
+        common = (tri[: len(nxt), :, None] == nxt[:, None, :]).sum(axis=(1, 2))
         if (common != 2).any():
             t = int(np.argmax(common != 2))
-            _fail(f"the path breaks at triangle {t}: it shares no edge with triangle {t + 1}")
+            what = "cycle" if order == "cycle" else "path"
+            _fail(f"the {what} breaks at triangle {t}: it shares no edge with triangle {(t + 1) % m}")
     return {"n_points": n, "n_triangles": m, "hull_points": h, "area": area}

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from hammesh.errors import HammeshError, InvalidDomainError, VerificationError
+from hammesh.errors import HammeshError, InvalidDomainError, MeshingError, VerificationError
 from hammesh.pointset import convex_hull, hamiltonian_triangulation, verify_point_triangulation
 from hammesh.predicates import orient
 
@@ -129,11 +129,69 @@ def test_points_on_a_few_lines(n_lines, per_line, seed):
     _check(pts, hamiltonian_triangulation(pts, seed=seed))
 
 
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(5, 30), st.floats(1e-9, 0.05), st.integers(0, 2**32 - 1))
+def test_nearly_collinear_runs(per_line, tilt, seed):
+    """Two long nearly-parallel runs in floating point: triangles of three run points are
+    positive exactly but nearly flat (their floating-point area may even be negative);
+    the certificate decides them exactly."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(per_line, dtype=float)
+    a = np.c_[t, tilt * t * t / per_line]
+    b = np.c_[t * np.cos(tilt), 1.0 + t * np.sin(tilt)]
+    pts = np.unique(np.vstack([a, b, rng.random((3, 2)) * [per_line, 1.0]]), axis=0)
+    _check(pts, hamiltonian_triangulation(pts, seed=seed))
+
+
 @pytest.mark.parametrize("k", [5, 8, 10])
 def test_grids_that_used_to_stall(k):
     pts = _grid(k, k)
     for seed in range(10):
         _check(pts, hamiltonian_triangulation(pts, seed=seed))
+
+
+def test_fruitless_repairs_restart_instead_of_searching_on(monkeypatch):
+    """Bounded failure mode: fruitless region searches end an attempt after its budget of
+    wasted steps; MAX_ATTEMPTS such attempts are a MeshingError naming the restarts."""
+    from hammesh.pointset import _cycle_repair, thm31_hamiltonian as thm31
+
+    spent = []
+
+    def fruitless(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, budget):
+        spent.append(budget)
+        return 0, B, budget
+
+    monkeypatch.setattr(_cycle_repair, "insert_by_chain", fruitless)
+    monkeypatch.setattr(_cycle_repair, "repair", lambda *a: (True, a[7]))
+    bound = sum(
+        thm31.WASTED_STEPS_PER_ATTEMPT * min(k + 1, 4) + thm31.CHAIN_BUDGET
+        for k in range(thm31.MAX_ATTEMPTS)
+    )
+    pts = _grid(12, 12)  # stalls in almost every attempt
+    errors = 0
+    for seed in range(3):
+        spent.clear()
+        try:
+            _check(pts, hamiltonian_triangulation(pts, seed=seed))  # an attempt that never stalled
+        except MeshingError as exc:
+            assert "restarts" in str(exc)
+            errors += 1
+        assert 0 < sum(spent) <= bound
+        assert max(spent) == thm31.CHAIN_BUDGET and min(spent) == thm31.RETRY_BUDGET
+    assert errors
+
+
+@pytest.mark.slow
+def test_nearly_parallel_runs_that_used_to_take_minutes():
+    """27 + 27 points on two nearly parallel runs (tilt 3.6e-4) and 3 more: 65 fruitless
+    searches (~120 s) before attempts gave up early; now a few seconds."""
+    per_line, tilt, seed = 27, 0.00035868819999230713, 290117535
+    rng = np.random.default_rng(seed)
+    t = np.arange(per_line, dtype=float)
+    a = np.c_[t, tilt * t * t / per_line]
+    b = np.c_[t * np.cos(tilt), 1.0 + t * np.sin(tilt)]
+    pts = np.unique(np.vstack([a, b, rng.random((3, 2)) * [per_line, 1.0]]), axis=0)
+    _check(pts, hamiltonian_triangulation(pts, seed=seed))
 
 
 @pytest.mark.slow
