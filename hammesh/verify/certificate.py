@@ -6,8 +6,9 @@ naming the triangle, edge or vertex at fault):
 1. ``components`` are positive run lengths summing to the number of triangles;
    inside each run consecutive triangles share an edge (exactly two vertices) and
    the last shares one with the first: every run is a closed cycle.
-2. Every triangle is counter-clockwise with positive area (no inverted or
-   degenerate triangle).
+2. Every triangle is strictly counter-clockwise by the exact orientation predicate
+   (``hammesh.predicates.orient``): no inverted or degenerate triangle, even where a
+   floating-point area would round to the wrong sign.
 3. Edge-manifold and consistently oriented: no directed edge is used twice, which
    also rules out a triangle appearing twice.
 4. Runs are exactly the connected pieces: no edge joins two runs.
@@ -46,6 +47,7 @@ import numpy as np
 from hammesh import _kernels
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.predicates import orient_points
 from hammesh.verify.input_mesh import HalfEdges
 
 __all__ = ["verify", "verify_cycle_mesh", "ANGLE_RTOL", "AREA_RTOL"]
@@ -106,7 +108,7 @@ def _certify_rows(
     small = min(parts, key=lambda p: p[8])
     rows = (
         first(0), first(1), first(2), first(3), lo[4], lo[5], hi[6], hi[7], small[8], small[9],
-        math.fsum(p[10] for p in parts),
+        math.fsum(p[10] for p in parts), first(11),
     )
     return rows, side_result
 
@@ -212,7 +214,7 @@ def verify_cycle_mesh(
     used = np.zeros(n, dtype=np.bool_)
     side = None if reference is None else (lambda: _input_facts(reference, reference_twin, n))
     rows, ref_facts = _certify_rows(pts, tri, runs, claim, used, side)
-    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total) = rows
+    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total, bad_orient) = rows
     if bad_index >= 0:
         _fail(f"triangle {bad_index} {tri[bad_index].tolist()} references a vertex outside 0..{n - 1}")
     if bad >= 0:
@@ -223,8 +225,11 @@ def verify_cycle_mesh(
         )
     if tmin < 0 or not (math.isfinite(amin) and math.isfinite(total)):
         _fail("angles and areas are not finite (coordinates too large or too small)")
-    if not area_min > 0:
-        _fail(f"triangle {tarea} {tri[tarea].tolist()} is inverted or degenerate (area {area_min:.3g})")
+    if bad_orient >= 0:  # exact: a float area may round either way on a flat triangle
+        t = bad_orient
+        sign = int(orient_points(pts, *(int(v) for v in tri[t])))
+        what = "degenerate (collinear corners)" if sign == 0 else "inverted"
+        _fail(f"triangle {t} {tri[t].tolist()} is {what} (exact orientation test)")
 
     dup = -1
     if len(claim) and bad_pair < 0:

@@ -149,11 +149,11 @@ def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
         used = np.zeros(len(h.points), dtype=bool)
         split, _ = certificate._certify_rows(h.points, tri, h.components, empty, used)
         assert np.array_equal(used, np.bincount(tri.ravel(), minlength=len(h.points)) > 0)
-        assert split[:4] == one[:4] and split[5] == one[5] and split[7] == one[7]
+        assert split[:4] == one[:4] and split[5] == one[5] and split[7] == one[7] and split[11] == one[11]
         assert np.isclose(split[4], one[4]) and np.isclose(split[6], one[6])
         assert np.isclose(split[10], one[10], rtol=1e-12)
         if broken is not None:
-            assert split[8] < 0 and split[9] == broken  # reversed row: negative area
+            assert split[8] < 0 and split[9] == broken == split[11]  # reversed row: negative area
 
 
 def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
@@ -166,3 +166,23 @@ def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
     tri[[k, k + 5]] = tri[[k + 5, k]]
     with pytest.raises(hammesh.VerificationError, match=f"breaks at triangle {k - 1}"):
         verify(replace(h, triangles=tri))
+
+
+def test_nearly_flat_inverted_triangle_is_caught_exactly() -> None:
+    """Float area says counter-clockwise, the exact predicate says clockwise: rejected."""
+    from hammesh import _kernels
+    from hammesh.predicates import orient
+
+    rng = np.random.default_rng(1)
+    for _ in range(200_000):  # a nearly flat triangle whose rounded area has the wrong sign
+        y = rng.uniform(0.5, 24, 3)
+        p = np.c_[y, y + rng.integers(-3, 4, 3) * 2.0**-48]
+        (ax, ay), (bx, by) = p[1] - p[0], p[2] - p[1]
+        if ax * by - ay * bx > 0 and orient(*p[0], *p[1], *p[2]) < 0:
+            break
+    else:
+        pytest.fail("no test triangle found")
+    tri = np.array([[0, 1, 2]] * 3)
+    res = _kernels.certify_row_range(p, tri, np.array([3]), np.empty(0, np.int64), 0, 3, np.zeros(3, bool))
+    assert res[8] > 0  # the floating-point area is positive ...
+    assert res[11] == 0  # ... and the exact test flags row 0
