@@ -119,12 +119,17 @@ def _vtk_ipt(mesh: Mesh, out) -> float:
     return total / len(mesh.triangles)
 
 
+#: Per-round times (ours verified, vtk) of the last :func:`compare` call, for the spread.
+ROUNDS: dict[str, list[float]] = {}
+
+
 def compare(mesh: Mesh, repeat: int) -> tuple[tuple[float, float, float], tuple[float, float] | None]:
     """Ours (ipt, time verified, time verify=False) and vtkStripper (ipt, time).
 
     The calls are interleaved (ours, ours without the proof, vtk; ``repeat`` times) and
     the best time of each is kept, so a busy machine slows both sides alike.  vtk's
-    PolyData is built beforehand, as our arrays are.
+    PolyData is built beforehand, as our arrays are.  The per-round times are left in
+    :data:`ROUNDS`.
     """
     try:
         poly = _vtk_poly(mesh)
@@ -144,6 +149,7 @@ def compare(mesh: Mesh, repeat: int) -> tuple[tuple[float, float, float], tuple[
             out = poly.strip()
             tk.append(time.perf_counter() - t)
     verify_gl_strip(mesh.triangles, s.indices, s.restart_index)  # independent full check
+    ROUNDS["ours"], ROUNDS["vtk"] = tv, tk
     o = (s.indices_per_triangle, min(tv), min(tn))
     return o, ((_vtk_ipt(mesh, out), min(tk)) if poly is not None else None)
 
@@ -266,26 +272,30 @@ def main() -> None:
             continue
         o, v = compare(mesh, args.repeat)
         f = pyffi(mesh) if mesh.n_triangles <= 20000 else None
-        rows.append((name, mesh.n_triangles, o, v, f))
+        rows.append((name, mesh.n_triangles, o, v, f, dict(ROUNDS)))
     head = (
         f"{'mesh':<20}{'triangles':>10} | {'ours ipt':>9}{'time s':>8}{'no-ver s':>9} | {'vtk ipt':>8}{'time s':>8}"
         f"{'t ratio':>8} | {'pyffi ipt':>9}{'time s':>8}"
     )
     print(head)
     print("-" * len(head))
-    for name, m, o, v, f in rows:
+    for name, m, o, v, f, _ in rows:
         vs = f"{v[0]:>8.3f}{v[1]:>8.4f}{o[1] / v[1]:>8.2f}" if v else f"{'-':>8}{'-':>8}{'-':>8}"
         fs = f"{f[0]:>9.3f}{f[1]:>8.3f}" if f else f"{'-':>9}{'-':>8}"
         print(f"{name:<20}{m:>10,} | {o[0]:>9.3f}{o[1]:>8.4f}{o[2]:>9.4f} | {vs} | {fs}")
     print("ipt: indices per triangle (restart join); time: best of --repeat interleaved calls, ours")
     print("from arrays to a verified index buffer (no-ver: verify=False); vtk: PolyData.strip() on")
     print("a built PolyData; t ratio: ours (verified) / vtk.")
-    torus_row = next((r for r in rows if r[0] == "torus 100k"), None)
-    if torus_row and torus_row[3]:
-        o, v = torus_row[2], torus_row[3]
+    for row in rows:
+        if row[0] not in ("torus 100k", "square 100k") or not row[3]:
+            continue
+        name, _, o, v, _, rounds = row
+        per_round = np.array(rounds["ours"]) / np.array(rounds["vtk"])
+        q1, med, q3 = np.percentile(per_round, [25, 50, 75])
         print(
-            f"100k-triangle torus: ours {o[1]:.4f} s (verified), {o[2]:.4f} s (verify=False); "
-            f"vtkStripper {v[1]:.4f} s; ratio {o[1] / v[1]:.2f} / {o[2] / v[1]:.2f} (target <= 1.10)"
+            f"{name}: ours {o[1]:.4f} s (verified), {o[2]:.4f} s (verify=False); vtkStripper {v[1]:.4f} s; "
+            f"ratio of bests {o[1] / v[1]:.2f} / {o[2] / v[1]:.2f} (target <= 1.10); per-round ratio "
+            f"median {med:.2f} (quartiles {q1:.2f}-{q3:.2f}, {len(per_round)} rounds)"
         )
     christofides_rows(args.quick)
     polygon_rows(args.repeat)

@@ -14,11 +14,34 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+
+def _leaf_probe(a):
+    a[0] += 1
+    return a[0]
+
+
+def _leaf_decorator():
+    """``njit(cache=True, _nrt=False)`` if this numba accepts and compiles it, else ``njit(cache=True)``.
+
+    ``_nrt`` is a private numba option: a numba that rejects it (when decorating or when
+    compiling) must not break the package, so a tiny probe is compiled (cached) first.
+    """
+    try:
+        dec = njit(cache=True, _nrt=False)
+        probe = dec(_leaf_probe)
+        if probe(np.zeros(1, np.int64)) != 1:
+            raise RuntimeError("probe gave a wrong result")
+        return dec, True
+    except Exception:  # noqa: BLE001 - any failure of the private option: plain njit
+        return njit(cache=True), False
+
+
 #: Helpers called inside the loops: they read and write the arrays they are given but
 #: never allocate, so they are compiled without numba's reference counting (NRT);
 #: otherwise every call increfs and decrefs each array argument, ~70 ns a call here,
-#: which made the path-cover moves ten times slower than their arithmetic.
-_leaf = njit(cache=True, _nrt=False)
+#: which made the path-cover moves ten times slower than their arithmetic.  Falls back
+#: to plain ``njit(cache=True)`` (same results, slower moves) where numba refuses it.
+_leaf, LEAF_WITHOUT_NRT = _leaf_decorator()
 
 __all__ = [
     "stitch",
@@ -32,6 +55,7 @@ __all__ = [
     "orient_paths",
     "emit_restart",
     "encode_restart",
+    "permute_mesh",
     "check_draws",
 ]
 
@@ -242,11 +266,15 @@ def sequential_chain(tri, twin, t0, a, b, c):
 
 
 @_leaf
-def _visit(t, nb, visited, deg, bucket, top):
-    visited[t] = True
+def _visit(t, twin, deg, bucket, top):
+    """Mark ``t`` visited (``deg[t] = -1``) and requeue its free neighbours one degree lower."""
+    deg[t] = -1
     for k in range(3):
-        u = nb[t, k]
-        if u >= 0 and not visited[u]:
+        h = twin[3 * t + k]
+        if h < 0:
+            continue
+        u = h // 3
+        if deg[u] >= 0:
             deg[u] -= 1
             d = deg[u]
             bucket[d, top[d]] = u
@@ -254,7 +282,7 @@ def _visit(t, nb, visited, deg, bucket, top):
 
 
 @_leaf
-def _grow(cur, entry, prev_pivot, tri, twin, nb, visited, deg, bucket, top, out, w_swap):
+def _grow(cur, entry, prev_pivot, tri, twin, deg, bucket, top, out, w_swap):
     """Extend a path from ``cur`` (entered through local edge ``entry``, -1: none).
 
     Each step takes the unvisited neighbour with the least ``2 * remaining degree +
@@ -272,8 +300,11 @@ def _grow(cur, entry, prev_pivot, tri, twin, nb, visited, deg, bucket, top, out,
         for k in range(3):
             if k == entry:
                 continue
-            u = nb[cur, k]
-            if u < 0 or visited[u]:
+            h = twin[3 * cur + k]
+            if h < 0:
+                continue
+            u = h // 3
+            if deg[u] < 0:  # visited
                 continue
             if entry < 0:
                 pivot = tri[cur, k]
@@ -294,7 +325,7 @@ def _grow(cur, entry, prev_pivot, tri, twin, nb, visited, deg, bucket, top, out,
             first_pivot = best_pivot
         h = twin[3 * cur + best]
         u = h // 3
-        _visit(u, nb, visited, deg, bucket, top)
+        _visit(u, twin, deg, bucket, top)
         out[n] = u
         n += 1
         prev_pivot = best_pivot
@@ -303,7 +334,6 @@ def _grow(cur, entry, prev_pivot, tri, twin, nb, visited, deg, bucket, top, out,
     return n, first_exit, first_pivot
 
 
-@njit(cache=True)
 def greedy_paths(tri, twin, w_swap, seed_order):
     """Partition the dual graph into paths, greedily (O(m)).
 
@@ -312,29 +342,33 @@ def greedy_paths(tri, twin, w_swap, seed_order):
     ``seed_order``, last first); each path is grown forward from
     its seed, then backward through the seed's remaining edges, turn-aware.
 
-    Returns ``(order, starts)`` as in :mod:`hammesh.strips.paths`.
+    Returns ``(order, starts)`` as in :mod:`hammesh.strips.paths` (``order`` a view
+    into the work buffer, one numpy allocation: see :func:`improve_cover`).
     """
     m = tri.shape[0]
-    nb = np.full((m, 3), -1, np.int64)
-    deg = np.zeros(m, np.int64)
+    ws = np.empty(9 * m + 5, np.int64)
+    S = _greedy_paths_into(tri, twin, w_swap, seed_order, ws)
+    return ws[5 * m : 6 * m], ws[6 * m : 6 * m + S + 1].copy()
+
+
+@njit(cache=True)
+def _greedy_paths_into(tri, twin, w_swap, seed_order, ws):
+    m = tri.shape[0]
+    deg = ws[:m]  # free neighbours; -1 once visited
+    bucket = ws[m : 5 * m].reshape((4, m))
+    order = ws[5 * m : 6 * m]
+    starts = ws[6 * m : 7 * m + 1]
+    fwd = ws[7 * m + 1 : 8 * m + 1]
+    bwd = ws[8 * m + 1 : 9 * m + 1]
+    top = ws[9 * m + 1 : 9 * m + 5]
+    top[:] = 0
     for t in range(m):
-        for k in range(3):
-            h = twin[3 * t + k]
-            if h >= 0:
-                nb[t, k] = h // 3
-                deg[t] += 1
-    visited = np.zeros(m, np.bool_)
-    bucket = np.empty((4, m), np.int64)
-    top = np.zeros(4, np.int64)
+        deg[t] = (twin[3 * t] >= 0) + (twin[3 * t + 1] >= 0) + (twin[3 * t + 2] >= 0)
     for i in range(m):
         t = seed_order[i]
         d = deg[t]
         bucket[d, top[d]] = t
         top[d] += 1
-    order = np.empty(m, np.int64)
-    starts = np.empty(m + 1, np.int64)
-    fwd = np.empty(m, np.int64)
-    bwd = np.empty(m, np.int64)
     L = 0
     S = 0
     starts[0] = 0
@@ -344,15 +378,15 @@ def greedy_paths(tri, twin, w_swap, seed_order):
             while top[d] > 0:
                 top[d] -= 1
                 t = bucket[d, top[d]]
-                if not visited[t] and deg[t] == d:
+                if deg[t] == d:
                     seed = t
                     break
             if seed >= 0:
                 break
         if seed < 0:
             break
-        _visit(seed, nb, visited, deg, bucket, top)
-        nf, kf, _ = _grow(seed, -1, -1, tri, twin, nb, visited, deg, bucket, top, fwd, w_swap)
+        _visit(seed, twin, deg, bucket, top)
+        nf, kf, _ = _grow(seed, -1, -1, tri, twin, deg, bucket, top, fwd, w_swap)
         nbk = 0
         if nf > 0:
             # the triangle after the seed: its pivot is what the seed's turn must avoid
@@ -363,13 +397,14 @@ def greedy_paths(tri, twin, w_swap, seed_order):
                 ein = twin[3 * seed + kf] - 3 * u
                 eout = -1
                 for k in range(3):
-                    if nb[u, k] == fwd[1]:
+                    h = twin[3 * u + k]
+                    if h >= 0 and h // 3 == fwd[1]:
                         eout = k
                 if eout == (ein + 1) % 3:
                     p1 = tri[u, eout]
                 else:
                     p1 = tri[u, ein]
-            nbk, _, _ = _grow(seed, kf, p1, tri, twin, nb, visited, deg, bucket, top, bwd, w_swap)
+            nbk, _, _ = _grow(seed, kf, p1, tri, twin, deg, bucket, top, bwd, w_swap)
         for i in range(nbk):
             order[L] = bwd[nbk - 1 - i]
             L += 1
@@ -380,7 +415,7 @@ def greedy_paths(tri, twin, w_swap, seed_order):
             L += 1
         S += 1
         starts[S] = L
-    return order, starts[: S + 1].copy()
+    return S
 
 
 # --- walking a path cover ---------------------------------------------------------------
@@ -773,50 +808,45 @@ def _in_links(lk, t, u):
 
 
 @_leaf
-def _relabel(lk, pid, t, prev, label):
-    """Give ``label`` to ``t`` and everything beyond it, walking away from ``prev``."""
-    n = 0
-    while t >= 0:
+def _renumber(lk, pid, ps, t, prev, label, p, d, n):
+    """Give ``label`` and positions ``p, p + d, ...`` to ``n`` triangles from ``t``, walking away from ``prev``."""
+    for _ in range(n):
         pid[t] = label
-        n += 1
+        ps[t] = p
+        p += d
         a = lk[t, 0]
         nxt = a if a != prev else lk[t, 1]
         prev = t
         t = nxt
-    return n
 
 
 @_leaf
-def _sides(lk, oth, x):
-    """Ends and sizes of both sides of interior ``x``: walk both ways in step, O(shorter side).
+def _beyond(lk, ps, t, excl):
+    """Step of the positions leaving path end ``t`` outwards (``excl``: a link to ignore)."""
+    for j in range(2):
+        u = lk[t, j]
+        if u >= 0 and u != excl:
+            return ps[t] - ps[u]
+    return 1
 
-    Returns ``(end0, n0, end1, n1)`` for the sides through ``lk[x, 0]`` and ``lk[x, 1]``
-    (``n`` counts the side's triangles, ``x`` excluded).
+
+@_leaf
+def _toward(ps, x, u, t):
+    """Does ``x``'s path neighbour ``u`` lie on the side of ``t`` (same path)?"""
+    return (ps[u] - ps[x] > 0) == (ps[t] - ps[x] > 0)
+
+
+@_leaf
+def _rotate_positions(lk, pid, ps, x, e, label, dxy, nseg, n):
+    """Positions after a rotation ``f .. x y .. e`` -> ``f .. x e .. y`` (links already changed).
+
+    ``dxy`` was the step from ``x`` towards ``y`` and ``nseg`` the triangles ``y .. e``;
+    renumbers the shorter of ``e .. y`` and ``x .. f``.
     """
-    p0 = x
-    t0 = lk[x, 0]
-    p1 = x
-    t1 = lk[x, 1]
-    n = 1
-    while True:
-        if lk[t0, 0] < 0 or lk[t0, 1] < 0:
-            end0 = t0
-            end1 = oth[t0]
-            break
-        if lk[t1, 0] < 0 or lk[t1, 1] < 0:
-            end1 = t1
-            end0 = oth[t1]
-            break
-        a = lk[t0, 0]
-        nx0 = a if a != p0 else lk[t0, 1]
-        p0 = t0
-        t0 = nx0
-        a = lk[t1, 0]
-        nx1 = a if a != p1 else lk[t1, 1]
-        p1 = t1
-        t1 = nx1
-        n += 1
-    return end0, end1, n, t0 == end0
+    if nseg <= n - nseg:
+        _renumber(lk, pid, ps, e, x, label, ps[x] + dxy, dxy, nseg)
+    else:
+        _renumber(lk, pid, ps, x, e, label, ps[e] + dxy, dxy, n - nseg)
 
 
 @_leaf
@@ -846,8 +876,7 @@ def _mark(nb, lk, dirty, c):
                     dirty[nb[u2, k]] = True
 
 
-@njit(cache=True)
-def improve_cover(tri, twin, order, starts, max_passes):
+def improve_cover(tri, twin, order, starts, max_passes, visit):
     """Lower the buffer length of a dual path cover by local moves at the path ends.
 
     Moves around each path end ``e`` (path ``f .. e``), each kept only when the total
@@ -860,29 +889,65 @@ def improve_cover(tri, twin, order, starts, max_passes):
     * tunnel: ``e`` next to ``x`` inside another path ``.. w x z ..``: ``e`` takes ``x``
       and the side of ``z``; the side of ``w`` is left over (and may join a third path).
 
-    Finding which neighbour of ``x`` lies towards ``e`` (rotate) or the ends of ``x``'s
-    path (tunnel) walks both ways in step (the shorter side); relabelling after a join
-    or tunnel walks the smaller part.  Returns ``(order, starts)`` of the new cover.
+    Every triangle keeps its position along its path (consecutive integers, any
+    offset, either direction), so which neighbour of ``x`` lies towards ``e`` (rotate)
+    and the ends and sizes of both sides of ``x`` (tunnel) are O(1); a committed move
+    renumbers the part it re-attaches (the smaller part of a join, the shorter side of
+    a rotation, the side a tunnel takes).  Path ends are considered in the order of
+    ``visit`` (a permutation of the triangles).  Returns ``(order, starts)`` of the new
+    cover (``order`` a view into the work buffer).
+
+    The work arrays (~14 m int64 and 7 m int32) are numpy buffers sliced by the kernel:
+    numpy asks for transparent huge pages on big ones, and first-touch page faults of a
+    dozen separately allocated arrays had cost ~1/3 of the moves' time at 100k
+    triangles.
     """
     m = tri.shape[0]
-    nb = np.full((m, 3), -1, np.int64)
+    ws = np.empty(14 * m + 1, np.int64)
+    # neighbours, links and their local edges: the arrays every move reads, half the bytes
+    links = np.empty(7 * m, np.int32 if 3 * m < 2**31 else np.int64)
+    flags = np.empty(2 * m, np.bool_)
+    S2 = _improve_cover_into(tri, twin, order, starts, max_passes, visit, ws, links, flags)
+    if S2 < 0:
+        return order.copy(), starts.copy()
+    return ws[12 * m : 13 * m], ws[13 * m : 13 * m + S2 + 1].copy()
+
+
+@njit(cache=True)
+def _improve_cover_into(tri, twin, order, starts, max_passes, visit, ws, links, flags):
+    m = tri.shape[0]
+    nb = links[: 3 * m].reshape((m, 3))
+    lk = links[3 * m : 5 * m].reshape((m, 2))
+    le = links[5 * m : 7 * m].reshape((m, 2))
+    pid = ws[7 * m : 8 * m]
+    oth = ws[8 * m : 9 * m]
+    size = ws[9 * m : 10 * m]
+    ps = ws[10 * m : 11 * m]  # positions: consecutive integers along each path
+    pend = ws[11 * m : 12 * m]  # one end of each path label
+    out = ws[12 * m : 13 * m]
+    st = ws[13 * m : 14 * m + 1]
+    dirty = flags[:m]  # ends to (re)consider: all at first, then near changes
+    seen = flags[m:]
+    nb[:] = -1
+    lk[:] = -1
+    le[:] = -1
+    oth[:] = -1
+    size[:] = 0
+    dirty[:] = True
     for t in range(m):
         for k in range(3):
             h = twin[3 * t + k]
             if h >= 0:
                 nb[t, k] = h // 3
     S = starts.shape[0] - 1
-    lk = np.full((m, 2), -1, np.int64)
-    le = np.full((m, 2), -1, np.int64)
-    pid = np.zeros(m, np.int64)
-    oth = np.full(m, -1, np.int64)
-    size = np.zeros(m, np.int64)
     for s in range(S):
         a = starts[s]
         b = starts[s + 1]
+        pend[s] = order[a]
         for i in range(a, b):
             t = order[i]
             pid[t] = s
+            ps[t] = i
             if i > a:
                 lk[t, 0] = order[i - 1]
                 le[t, 0] = _local_edge(nb, t, order[i - 1])
@@ -894,11 +959,11 @@ def improve_cover(tri, twin, order, starts, max_passes):
         oth[order[b - 1]] = order[a]
     C = np.empty(8, np.int64)
     T = np.empty(12, np.int64)  # triangles whose links or path ends a committed move changed
-    dirty = np.ones(m, np.bool_)  # ends to (re)consider: all at first, then near changes
     changed = False
     for _ in range(max_passes):
         improved = False
-        for e in range(m):
+        for ie in range(m):
+            e = visit[ie]
             if not dirty[e] or (lk[e, 0] >= 0 and lk[e, 1] >= 0):
                 continue
             dirty[e] = False
@@ -924,11 +989,14 @@ def improve_cover(tri, twin, order, starts, max_passes):
                 after = _local_swaps(tri, lk, le, C, 2) + _end_term(tri, lk, le, f, g, nP + nQ)
                 if after - before - 3 < 0:
                     if nP < nQ:
-                        _relabel(lk, pid, e, v, rv)
+                        d = _beyond(lk, ps, v, e)
+                        _renumber(lk, pid, ps, e, v, rv, ps[v] + d, d, nP)
                         keep, gone = rv, rp
                     else:
-                        _relabel(lk, pid, v, e, rp)
+                        d = _beyond(lk, ps, e, v)
+                        _renumber(lk, pid, ps, v, e, rp, ps[e] + d, d, nQ)
                         keep, gone = rp, rv
+                    pend[keep] = f
                     size[keep] = nP + nQ
                     size[gone] = 0
                     oth[f] = g
@@ -956,8 +1024,9 @@ def improve_cover(tri, twin, order, starts, max_passes):
                     if lk[x, 0] < 0 or lk[x, 1] < 0:
                         y = lk[x, 0] if lk[x, 0] >= 0 else lk[x, 1]  # x == f
                     else:
-                        end0, end1, _, first_done = _sides(lk, oth, x)
-                        y = lk[x, 0] if end0 == e else lk[x, 1]
+                        y = lk[x, 0] if _toward(ps, x, lk[x, 0], e) else lk[x, 1]
+                    dxy = 1 if ps[e] > ps[x] else -1
+                    nseg = abs(ps[e] - ps[x])  # triangles y .. e
                     C[0] = x
                     C[1] = y
                     C[2] = e
@@ -967,6 +1036,8 @@ def improve_cover(tri, twin, order, starts, max_passes):
                     _set_link(lk, le, nb, e, -1, x)
                     after = _local_swaps(tri, lk, le, C, 3) + _end_term(tri, lk, le, y, f, nP)
                     if after < before:
+                        _rotate_positions(lk, pid, ps, x, e, rp, dxy, nseg, nP)
+                        pend[rp] = f
                         oth[y] = f
                         oth[f] = y
                         T[0] = x
@@ -994,12 +1065,16 @@ def improve_cover(tri, twin, order, starts, max_passes):
                         # bj counted y's and v's links apart; no link joined them before
                         total = (after - before) + (aj - bj) - 3
                         if total < 0:
+                            _rotate_positions(lk, pid, ps, x, e, rp, dxy, nseg, nP)
                             if nP < nQ:
-                                _relabel(lk, pid, y, v, rv)
+                                d = _beyond(lk, ps, v, y)
+                                _renumber(lk, pid, ps, y, v, rv, ps[v] + d, d, nP)
                                 keep, gone = rv, rp
                             else:
-                                _relabel(lk, pid, v, y, rp)
+                                d = _beyond(lk, ps, y, v)
+                                _renumber(lk, pid, ps, v, y, rp, ps[y] + d, d, nQ)
                                 keep, gone = rp, rv
+                            pend[keep] = f
                             size[keep] = nP + nQ
                             size[gone] = 0
                             oth[f] = g
@@ -1024,13 +1099,15 @@ def improve_cover(tri, twin, order, starts, max_passes):
                     # tunnel into x's path
                     rq = pid[x]
                     nQ = size[rq]
-                    end0, end1, nshort, first_done = _sides(lk, oth, x)
-                    if first_done:
-                        n0 = nshort
-                        n1 = nQ - 1 - nshort
+                    a0 = pend[rq]
+                    if _toward(ps, x, lk[x, 0], a0):
+                        end0 = a0
+                        end1 = oth[a0]
                     else:
-                        n1 = nshort
-                        n0 = nQ - 1 - nshort
+                        end1 = a0
+                        end0 = oth[a0]
+                    n0 = abs(ps[end0] - ps[x])
+                    n1 = abs(ps[end1] - ps[x])
                     for side in range(2):
                         z = lk[x, side]
                         w = lk[x, 1 - side]
@@ -1079,21 +1156,27 @@ def improve_cover(tri, twin, order, starts, max_passes):
                                 rv = -1
                         if ok:
                             # labels: x and B join P (label rp); A keeps rq
-                            _relabel(lk, pid, x, e, rp)
+                            d = _beyond(lk, ps, e, x)
+                            _renumber(lk, pid, ps, x, e, rp, ps[e] + d, d, nB + 1)
+                            pend[rp] = f
                             size[rp] = nP2
                             oth[f] = endB
                             oth[endB] = f
                             if rv < 0:
                                 size[rq] = nA
+                                pend[rq] = w
                                 oth[w] = endA
                                 oth[endA] = w
                             else:
                                 if nA < nR:
-                                    _relabel(lk, pid, w, v, rv)
+                                    d = _beyond(lk, ps, v, w)
+                                    _renumber(lk, pid, ps, w, v, rv, ps[v] + d, d, nA)
                                     keep, gone = rv, rq
                                 else:
-                                    _relabel(lk, pid, v, w, rq)
+                                    d = _beyond(lk, ps, w, v)
+                                    _renumber(lk, pid, ps, v, w, rq, ps[w] + d, d, nR)
                                     keep, gone = rq, rv
+                                pend[keep] = endA
                                 size[keep] = nA + nR
                                 size[gone] = 0
                                 oth[endA] = g
@@ -1122,10 +1205,8 @@ def improve_cover(tri, twin, order, starts, max_passes):
             break
         changed = True
     if not changed:
-        return order.copy(), starts.copy()
-    out = np.empty(m, np.int64)
-    st = np.empty(m + 1, np.int64)
-    seen = np.zeros(m, np.bool_)
+        return -1
+    seen[:] = False
     L = 0
     S2 = 0
     st[0] = 0
@@ -1139,10 +1220,9 @@ def improve_cover(tri, twin, order, starts, max_passes):
         L = n
         S2 += 1
         st[S2] = L
-    return out, st[: S2 + 1].copy()
+    return S2
 
 
-@njit(cache=True)
 def encode_restart(tri, twin, order, starts, restart):
     """The restart-joined GL buffer of flat dual paths in one pass, no per-position arrays.
 
@@ -1151,34 +1231,20 @@ def encode_restart(tri, twin, order, starts, restart):
     triangle, preceded by the previous pivot where two pivots coincide), computed on
     the fly: the encoder's fast path.  Returns ``(indices, n_swaps, max_index, err)``;
     ``err`` is 0, or 1 when a path is not a dual path (call :func:`path_turns` for
-    the message).
+    the message).  The buffer is allocated by numpy at its bound ``2 L + 3 S`` and
+    ``indices`` is its filled prefix (one pass instead of counting the swaps first).
     """
+    out = np.empty(2 * order.shape[0] + 3 * (starts.shape[0] - 1), np.int64)
+    n, n_swaps, mx, err = _encode_restart_into(tri, twin, order, starts, restart, out)
+    if err:
+        return out[:0], 0, -1, err
+    return out[:n], n_swaps, mx, 0
+
+
+@njit(cache=True)
+def _encode_restart_into(tri, twin, order, starts, restart, out):
     S = starts.shape[0] - 1
-    L = order.shape[0]
-    empty = np.empty(0, np.int64)
-    # pass 1: length and swaps
     n_swaps = 0
-    for s in range(S):
-        a = starts[s]
-        b = starts[s + 1]
-        if b - a < 3:
-            continue
-        kprev = _edge_to(twin, order[a], order[a + 1])
-        if kprev < 0:
-            return empty, 0, -1, 1
-        prev_pivot = tri[order[a], kprev]
-        for i in range(a + 1, b - 1):
-            t = order[i]
-            kin = twin[3 * order[i - 1] + kprev] - 3 * t
-            kout = _edge_to(twin, t, order[i + 1])
-            if kout < 0 or kout == kin:
-                return empty, 0, -1, 1
-            p = tri[t, kout] if kout == (kin + 1) % 3 else tri[t, kin]
-            if p == prev_pivot:
-                n_swaps += 1
-            prev_pivot = p
-            kprev = kout
-    out = np.empty(L + 2 * S + n_swaps + S - 1, np.int64)
     pos = 0
     mx = -1
     for s in range(S):
@@ -1196,7 +1262,7 @@ def encode_restart(tri, twin, order, starts, restart):
             continue
         k = _edge_to(twin, t, order[a + 1])
         if k < 0:
-            return empty, 0, -1, 1
+            return 0, 0, -1, 1
         out[pos] = tri[t, (k + 2) % 3]
         out[pos + 1] = tri[t, k]
         out[pos + 2] = tri[t, (k + 1) % 3]
@@ -1210,13 +1276,53 @@ def encode_restart(tri, twin, order, starts, restart):
             v = tri[t, (kin + 2) % 3]
             if i < b - 1:
                 kout = _edge_to(twin, t, order[i + 1])
+                if kout < 0 or kout == kin:
+                    return 0, 0, -1, 1
                 p = tri[t, kout] if kout == (kin + 1) % 3 else tri[t, kin]
                 if p == prev_pivot:
                     out[pos] = prev_pivot
                     pos += 1
+                    n_swaps += 1
                 prev_pivot = p
                 kprev = kout
             out[pos] = v
             pos += 1
             mx = max(mx, v)
-    return out, n_swaps, mx, 0
+    return pos, n_swaps, mx, 0
+
+
+def permute_mesh(tri, twin, order):
+    """The mesh renumbered so that triangle ``i`` is ``order[i]`` (a permutation).
+
+    Returns ``(tri2, twin2, new_id)``: ``tri2[i] = tri[order[i]]`` (rows and windings
+    kept), ``twin2`` the same pairing in the new numbering, ``new_id[t]`` the new
+    number of triangle ``t``.  In path order, neighbours along the paths are
+    neighbours in memory: the improvement moves and the emission then read mostly
+    cached rows.  ``tri2`` and ``twin2`` are int32 where the values fit (half the
+    bytes for every later pass to read), else int64.
+    """
+    m = tri.shape[0]
+    small = 3 * m < 2**31 and (m == 0 or int(tri.max()) < 2**31)
+    buf = np.empty(6 * m, np.int32 if small else np.int64)  # one buffer (huge pages when >= 4 MB)
+    tri2 = buf[: 3 * m].reshape(m, 3)
+    twin2 = buf[3 * m :]
+    new_id = np.empty(m, np.int64)
+    _permute_mesh_into(tri, twin, order, tri2, twin2, new_id)
+    return tri2, twin2, new_id
+
+
+@njit(cache=True)
+def _permute_mesh_into(tri, twin, order, tri2, twin2, new_id):
+    m = tri.shape[0]
+    for i in range(m):
+        new_id[order[i]] = i
+    for i in range(m):
+        t = order[i]
+        for k in range(3):
+            tri2[i, k] = tri[t, k]
+            h = twin[3 * t + k]
+            if h >= 0:
+                u = h // 3
+                twin2[3 * i + k] = 3 * new_id[u] + (h - 3 * u)
+            else:
+                twin2[3 * i + k] = -1

@@ -12,9 +12,10 @@ swaps are needed, and joins them into one buffer:
 * any other mesh is covered greedily (:func:`greedy_paths`, O(m) numba), seeds with the
   fewest free neighbours first, each path grown both ways, preferring neighbours with
   few free neighbours and then the alternating turn;
-* then a few sweeps of local moves at the path ends (join two ends, Posa rotation,
+* then two sweeps of local moves at the path ends (join two ends, Posa rotation,
   tunnelling into a neighbouring path), each costed in O(1), keep every change that
-  shortens the buffer (never adding a path);
+  shortens the buffer (never adding a path), on the mesh renumbered in path order
+  (memory locality; the same moves as in the input's numbering);
 * each path is sent in the direction that needs fewer swaps at its ends; with restarts
   the buffer is written in one compiled pass.
 
@@ -51,9 +52,11 @@ METHODS = ("auto", "greedy", "order")
 #: Weight of a swap against a neighbour's remaining degree in the greedy choice.
 _SWAP_WEIGHT = 1
 
-#: Sweeps of :func:`~hammesh.strips._kernels.improve_cover` over the path ends (a
-#: fourth sweep gains < 0.0002 indices per triangle on the benchmark meshes).
-_IMPROVE_PASSES = 3
+#: Sweeps of :func:`~hammesh.strips._kernels.improve_cover` over the path ends.  On the
+#: benchmark's planar meshes (indices per triangle) the greedy cover gives 1.293-1.318,
+#: one sweep 1.272-1.301, two 1.268-1.297, three 1.267-1.294 (0.0003-0.003 better than
+#: two, for ~10% more time at 100k triangles).  Two keep every planar mesh <= 1.30.
+_IMPROVE_PASSES = 2
 
 
 def is_forest(dual: DualMesh) -> bool:
@@ -92,7 +95,7 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
         After the greedy pass, join paths whose ends are neighbours, rotate path ends
         and tunnel into neighbouring paths wherever the buffer gets shorter
         (:func:`~hammesh.strips._kernels.improve_cover`: a few sweeps over the path
-        ends, each move costed in O(1)).
+        ends, each move costed in O(1)).  A single path is left as it is.
 
     Returns
     -------
@@ -101,14 +104,36 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     starts : (S + 1,) int64
         Path offsets.  Paths never cross dual components.
     """
+    _, _, order, starts, ids = _greedy_cover(dual, improve)
+    return (order if ids is None else ids[order]), starts
+
+
+def _greedy_cover(dual: DualMesh, improve: bool = True):
+    """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
+
+    After the greedy pass (or Lemma 5.1's partition) the mesh is renumbered in path
+    order (:func:`~hammesh.strips._kernels.permute_mesh`): the moves and the emission
+    then walk mostly adjacent rows instead of Triangle's scattered numbering.  The ends
+    are still visited in the input's numbering, so the cover is the same as without
+    renumbering.
+
+    A cover of one path is returned as the greedy pass left it.
+
+    Returns ``(tri, twin, order, starts, ids)``: the arrays the paths ``order`` refer
+    to, and ``ids[i]`` the input triangle of row ``i`` (``None``: the input's own).
+    """
     m = dual.n_triangles
     if is_forest(dual):
         order, starts = forest_paths(dual)
     else:
         order, starts = _kernels.greedy_paths(dual.triangles, dual.twin, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
-    if improve:
-        order, starts = _kernels.improve_cover(dual.triangles, dual.twin, order, starts, _IMPROVE_PASSES)
-    return order, starts
+    if not improve or len(starts) == 2:
+        # one path (a closed surface often is one): no join or tunnel exists, and the
+        # rotations could only move a swap or two at its ends; not worth O(m) set-up
+        return dual.triangles, dual.twin, order, starts, None
+    tri, twin, new_id = _kernels.permute_mesh(dual.triangles, dual.twin, order)
+    local, starts = _kernels.improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, new_id)
+    return tri, twin, local, starts, order
 
 
 def _cut_cycle(tri: np.ndarray, twin: np.ndarray, run: np.ndarray) -> np.ndarray:
@@ -190,6 +215,17 @@ def _stored_runs(dual: DualMesh) -> np.ndarray:
 
 def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, np.ndarray]:
     """Validated mesh, its dual paths (``order``, ``starts``), each in its better direction."""
+    dual, _, _, order, starts, ids = _oriented_local(mesh, method)
+    return dual, (order if ids is None else ids[order]), starts
+
+
+def _oriented_local(mesh: MeshLike, method: str):
+    """:func:`_oriented_paths` in the numbering the paths were improved in.
+
+    Returns ``(dual, tri, twin, order, starts, ids)``: ``order`` refers to the rows of
+    ``tri`` (``twin`` its pairing), ``ids[i]`` is the input triangle of row ``i``
+    (``None``: ``tri`` is the input's own array).
+    """
     if method not in METHODS:
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     dual = dual_mesh(mesh)
@@ -201,20 +237,25 @@ def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, 
         else:
             comps = _stored_runs(dual)
         order, starts = cycle_paths(dual, comps)
+        tri, twin, ids = dual.triangles, dual.twin, None
     else:
-        order, starts = greedy_paths(dual)
+        tri, twin, order, starts, ids = _greedy_cover(dual)
     order, starts = check_starts(order, starts, dual.n_triangles)
-    order, _ = _kernels.orient_paths(dual.triangles, dual.twin, order, starts)
-    return dual, order, starts
+    order, _ = _kernels.orient_paths(tri, twin, order, starts)
+    return dual, tri, twin, order, starts, ids
 
 
 def _restart_strip(dual: DualMesh, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
     """:func:`~hammesh.strips.gl.gl_strip` with restarts, in one compiled pass (no turn arrays)."""
+    return _restart_buffer(dual.triangles, dual.twin, order, starts, restart_index)
+
+
+def _restart_buffer(tri: np.ndarray, twin: np.ndarray, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
     R = int(restart_index)
-    out, n_swaps, top, err = _kernels.encode_restart(dual.triangles, dual.twin, order, starts, R)
+    out, n_swaps, top, err = _kernels.encode_restart(tri, twin, order, starts, R)
     S = len(starts) - 1
     if err:
-        turns = path_turns(dual.triangles, dual.twin, order, starts)  # raises, naming the step
+        turns = path_turns(tri, twin, order, starts)  # raises, naming the step
         return gl_strip_from_turns(turns, join="restart", restart_index=R)
     if 0 <= R <= top and np.count_nonzero(out == R) != S - 1:
         raise InvalidOptionError(f"restart index {R} is a vertex index of the mesh")
@@ -287,9 +328,10 @@ def encode(
     """
     if join not in JOINS:
         raise InvalidOptionError(f"join must be one of {', '.join(JOINS)}, got {join!r}")
-    dual, order, starts = _oriented_paths(mesh, method)
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method)
+    order = local if ids is None else ids[local]
     if join == "restart" and restart_index is not None:
-        strip = _restart_strip(dual, order, starts, restart_index)
+        strip = _restart_buffer(tri, twin, local, starts, restart_index)
     else:
         turns = path_turns(dual.triangles, dual.twin, order, starts)
         strip = gl_strip_from_turns(turns, join=join, restart_index=restart_index)
