@@ -18,16 +18,7 @@ from hammesh.surface import (
     write_surface,
 )
 from hammesh.verify.surface import verify_surface
-
-
-def angles3(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    p = points[tri]
-    out = np.empty(tri.shape)
-    for k in range(3):
-        u = p[:, (k + 1) % 3] - p[:, k]
-        v = p[:, (k + 2) % 3] - p[:, k]
-        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(np.cross(u, v), axis=1), (u * v).sum(axis=1)))
-    return out
+from tests.helpers import angles_deg
 
 
 def pieces(tri: np.ndarray) -> int:
@@ -60,7 +51,7 @@ def check(pts: np.ndarray, tri: np.ndarray, h: hammesh.HamiltonianMesh, exact: b
     assert len(h.components) == pieces(tri)
     np.testing.assert_array_equal(h.points[: len(pts)], pts)
     assert boundary(out) == boundary(tri)
-    a_in, a_out = angles3(pts, tri).min(), angles3(h.points, out).min()
+    a_in, a_out = angles_deg(pts, tri).min(), angles_deg(h.points, out).min()
     assert a_out >= 0.5 * a_in * (1 - 1e-9)
     area = lambda p, t: 0.5 * np.linalg.norm(np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]), axis=1)  # noqa: E731
     if exact:
