@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES"]
+__all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
 
 #: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
 #: 0: an input triangle's side joined to its incenter; 1: a flipped triangle
@@ -138,3 +138,13 @@ class HamiltonianMesh:
             segment_markers=self.segment_markers,
             triangle_attributes=self.triangle_attributes,
         )
+
+
+def cycle_positions(components: np.ndarray) -> np.ndarray:
+    """Position of every row inside its cycle, for run lengths ``components``.
+
+    >>> cycle_positions(np.array([3, 2])).tolist()
+    [0, 1, 2, 0, 1]
+    """
+    runs = np.asarray(components, dtype=np.int64)
+    return np.arange(int(runs.sum()), dtype=np.int64) - np.repeat(np.cumsum(runs) - runs, runs)

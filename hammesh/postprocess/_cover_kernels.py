@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh._kernels import _find
+
 
 @njit(cache=True)
 def _neighbors(twin, m):
@@ -21,18 +23,6 @@ def _neighbors(twin, m):
             if g >= 0:
                 nb[t, k] = g // 3
     return nb
-
-
-@njit(cache=True)
-def _find(parent, x):
-    root = x
-    while parent[root] != root:
-        root = parent[root]
-    while parent[x] != root:
-        nxt = parent[x]
-        parent[x] = root
-        x = nxt
-    return root
 
 
 @njit(cache=True)

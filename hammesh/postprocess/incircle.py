@@ -30,7 +30,8 @@ import numpy as np
 
 from hammesh import _kernels
 from hammesh.errors import VerificationError
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
+from hammesh.postprocess.conform import split_segments
 from hammesh.verify.input_mesh import HalfEdges
 
 __all__ = ["incircle_hamiltonian", "incenters"]
@@ -93,20 +94,8 @@ def incircle_hamiltonian(
     _kernels.incenters(pts, tri, out=points[n : n + m])
     points[n + m :] = 0.5 * (pts[mid_a] + pts[mid_b])
 
-    segs, markers = mesh.segments, mesh.segment_markers
-    if q:  # a split constrained edge becomes its two halves
-        n_all = len(points)
-        key = np.minimum(segs[:, 0], segs[:, 1]) * n_all + np.maximum(segs[:, 0], segs[:, 1])
-        mkey = np.minimum(mid_a, mid_b) * n_all + np.maximum(mid_a, mid_b)
-        order = np.argsort(mkey)
-        idx = np.searchsorted(mkey[order], key).clip(max=q - 1)
-        hit = mkey[order][idx] == key
-        mv = n + m + order[idx[hit]]
-        halves = np.concatenate([np.c_[segs[hit, 0], mv], np.c_[mv, segs[hit, 1]]])
-        segs = np.concatenate([segs[~hit], halves])
-        markers = np.concatenate([markers[~hit], markers[hit], markers[hit]])
-
-    position = np.arange(len(out), dtype=np.int64) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    segs, markers = split_segments(mesh.segments, mesh.segment_markers, mid_a, mid_b, n + m, len(points))
+    position = cycle_positions(lengths)
     report = {
         "triangles": int(len(out)),
         "vertices": int(len(points)),

@@ -56,7 +56,8 @@ import numpy as np
 
 from hammesh import _kernels
 from hammesh.errors import VerificationError
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
+from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
 from hammesh.verify.input_mesh import HalfEdges
@@ -196,19 +197,20 @@ def sparse_cycles(
     )
 
 
-def _split_segments(mesh: Mesh, mid_a: np.ndarray, mid_b: np.ndarray, n_before_mid: int, n_all: int):
-    segs, markers = mesh.segments, mesh.segment_markers
-    q = len(mid_a)
-    if not q:
-        return segs, markers
-    key = np.minimum(segs[:, 0], segs[:, 1]) * n_all + np.maximum(segs[:, 0], segs[:, 1])
-    mkey = np.minimum(mid_a, mid_b) * n_all + np.maximum(mid_a, mid_b)
-    order = np.argsort(mkey)
-    idx = np.searchsorted(mkey[order], key).clip(max=q - 1)
-    hit = mkey[order][idx] == key
-    mv = n_before_mid + order[idx[hit]]
-    halves = np.concatenate([np.c_[segs[hit, 0], mv], np.c_[mv, segs[hit, 1]]])
-    return np.concatenate([segs[~hit], halves]), np.concatenate([markers[~hit], markers[hit], markers[hit]])
+def count_report(r: SparseResult, n: int, m: int) -> dict:
+    """The report's counts of a sparse construction from ``n`` points, ``m`` triangles."""
+    steiner = r.counts["incenters"] + r.counts["midpoints"]
+    return {
+        "triangles": int(len(r.triangles)),
+        "vertices": int(len(r.points)),
+        "input_triangles": int(m),
+        "input_vertices": int(n),
+        "steiner_points": int(steiner),
+        "steiner_per_input_triangle": steiner / m,
+        "triangles_added": int(len(r.triangles) - m),
+        **r.counts,
+        "components": [int(x) for x in r.lengths],
+    }
 
 
 def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[HamiltonianMesh, np.ndarray]:
@@ -234,21 +236,12 @@ def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[H
     amin = float(_kernels.angle_area_stats(pts, tri)[0])
     r = sparse_cycles(pts, tri, he.twin, is_con, amin)
     n_inc = r.counts["incenters"]
-    segs, markers = _split_segments(mesh, r.mid_a, r.mid_b, n + n_inc, len(r.points))
+    segs, markers = split_segments(
+        mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + n_inc, len(r.points)
+    )
     lengths = r.lengths
-    position = np.arange(len(r.triangles), dtype=np.int64) - np.repeat(np.cumsum(lengths) - lengths, lengths)
-    steiner = n_inc + r.counts["midpoints"]
-    report = {
-        "triangles": int(len(r.triangles)),
-        "vertices": int(len(r.points)),
-        "input_triangles": int(m),
-        "input_vertices": int(n),
-        "steiner_points": int(steiner),
-        "steiner_per_input_triangle": steiner / m,
-        "triangles_added": int(len(r.triangles) - m),
-        **r.counts,
-        "components": [int(x) for x in lengths],
-    }
+    position = cycle_positions(lengths)
+    report = count_report(r, n, m)
     h = HamiltonianMesh(
         points=r.points,
         triangles=r.triangles,

@@ -27,8 +27,8 @@ import numpy as np
 
 from hammesh import _kernels
 from hammesh.errors import InvalidMeshError
-from hammesh.mesh import HamiltonianMesh
-from hammesh.postprocess.sparse import sparse_cycles
+from hammesh.mesh import HamiltonianMesh, cycle_positions
+from hammesh.postprocess.sparse import count_report, sparse_cycles
 from hammesh.verify.input_mesh import mesh_arrays
 from hammesh.verify.surface import surface_angles, verify_surface
 
@@ -119,7 +119,7 @@ def surface_hamiltonian(
     t0 = time.perf_counter()
     pts, tri, twin = prepare_surface(points, triangles)
     n, m = len(pts), len(tri)
-    amin, _, _, _ = surface_angles(pts, tri)
+    amin, _, amax_in, _ = surface_angles(pts, tri)
     r = sparse_cycles(
         pts, tri, twin, np.zeros(3 * m, np.bool_), amin, swaps=swaps and not split_all,
         edge_splits=not split_all, flip_bridges=False, max_fold_deg=max_fold_deg, use_cover=not split_all,
@@ -130,21 +130,14 @@ def surface_hamiltonian(
         r.points, r.triangles, lengths, reference_points=pts, reference_triangles=tri, parent=r.parent, exact=not swaps
     )
     t2 = time.perf_counter()
-    steiner = r.counts["incenters"] + r.counts["midpoints"]
-    report = {
-        "triangles": int(len(r.triangles)),
-        "vertices": int(len(r.points)),
-        "input_triangles": int(m),
-        "input_vertices": int(n),
-        "steiner_points": int(steiner),
-        "steiner_per_input_triangle": steiner / m,
-        "triangles_added": int(len(r.triangles) - m),
-        **{k: v for k, v in r.counts.items() if k not in ("retries", "flips")},
-        "components": [int(x) for x in lengths],
+    report = count_report(r, n, m)
+    for key in ("retries", "flips"):  # plane-only notions
+        report.pop(key, None)
+    report |= {
         "min_angle_input_deg": stats["min_angle_input_deg"],
         "min_angle_output_deg": stats["min_angle_output_deg"],
         "max_angle_output_deg": stats["max_angle_output_deg"],
-        "max_angle_input_deg": float(np.degrees(surface_angles(pts, tri)[2])),
+        "max_angle_input_deg": float(np.degrees(amax_in)),
         "area_input": stats["area_input"],
         "area_change_rel": stats["area_change_rel"],
         "exact_surface": not swaps,
@@ -154,7 +147,7 @@ def surface_hamiltonian(
     }
     if swaps:
         report["max_swap_height"] = _swap_height(r.points, r.triangles, r.kind, r.parent, pts, tri)
-    position = np.arange(len(r.triangles), dtype=np.int64) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    position = cycle_positions(lengths)
     h = HamiltonianMesh(
         points=r.points,
         triangles=r.triangles,
