@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hammesh.domain.validate import validate_domain
+from hammesh.domain.validate import point_array, validate_domain
 from hammesh.errors import InvalidDomainError
 
 __all__ = ["Domain"]
@@ -133,7 +133,7 @@ class Domain:
                 lookup.setdefault((float(p[0]), float(p[1])), i)
             extra = []
             for j, line in enumerate(internal_segments):
-                pts = _points(line, f"internal polyline {j}")
+                pts = point_array(line, f"internal polyline {j}")
                 if len(pts) < 2:
                     raise InvalidDomainError(
                         f"internal polyline {j} needs at least 2 points, got {len(pts)}")
@@ -193,18 +193,8 @@ def _as_int(value, name, ncols):
     raise InvalidDomainError(f"{name} must hold integers, got dtype {arr.dtype}")
 
 
-def _points(value, what):
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidDomainError(f"{what} cannot be converted to float64: {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise InvalidDomainError(f"{what} must have shape (k, 2), got {arr.shape}")
-    return arr
-
-
 def _ring(value, what):
-    ring = _points(value, what)
+    ring = point_array(value, what)
     if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
         ring = ring[:-1]
     if len(ring) < 3:

@@ -29,7 +29,7 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["validate_domain", "MAX_ABS_COORDINATE", "COLLINEAR_RTOL"]
+__all__ = ["validate_domain", "point_array", "MAX_ABS_COORDINATE", "COLLINEAR_RTOL"]
 
 #: Beyond this magnitude Triangle's floating-point predicates overflow.
 MAX_ABS_COORDINATE = 1e30
@@ -38,6 +38,25 @@ COLLINEAR_RTOL = 1e-14
 
 _PAIR_CHUNK = 1 << 20  # candidate pairs tested per vectorized batch
 _XY = ("x coordinate", "y coordinate")
+
+
+def point_array(value, what: str, rows: str = "k") -> np.ndarray:
+    """``value`` as a new ``(k, 2) float64`` array, or an error naming ``what``.
+
+    ``rows`` is how the message names the row count (``"n"`` for a point set).
+
+    Raises
+    ------
+    InvalidDomainError
+        Not numbers, or not of shape ``(k, 2)``.
+    """
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidDomainError(f"{what} cannot be converted to float64: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidDomainError(f"{what} must have shape ({rows}, 2), got {arr.shape}")
+    return arr
 
 
 def validate_domain(domain) -> None:

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hammesh.domain.validate import point_array
 from hammesh.errors import InvalidDomainError
 from hammesh.pointset import _kernels
 
@@ -26,12 +27,7 @@ def as_points(points: np.ndarray) -> np.ndarray:
         Wrong shape, fewer than 3 points, a non-finite coordinate, a duplicate point
         (both indices named) or all points on one line.
     """
-    try:
-        pts = np.ascontiguousarray(points, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidDomainError(f"points are not an (n, 2) array of numbers: {exc}") from None
-    if pts.ndim != 2 or pts.shape[1] != 2:
-        raise InvalidDomainError(f"points must have shape (n, 2), got {pts.shape}")
+    pts = point_array(points, "points", rows="n")
     n = len(pts)
     if n < 3:
         raise InvalidDomainError(f"a triangulation needs at least 3 points, got {n}")

@@ -15,7 +15,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hammesh.domain.validate import validate_domain
+from hammesh.domain.validate import point_array, validate_domain
 from hammesh.errors import InvalidDomainError
 
 __all__ = ["Polygon", "as_polygon", "polygon_edges"]
@@ -83,12 +83,7 @@ def as_polygon(points) -> Polygon:
     ...
     hammesh.errors.InvalidDomainError: not a simple polygon: edges 0 and 2 cross at (0.5, 0.5)
     """
-    try:
-        pts = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidDomainError(f"polygon points must be an (n, 2) array of numbers: {exc}") from None
-    if pts.ndim != 2 or pts.shape[1] != 2:
-        raise InvalidDomainError(f"polygon points must have shape (n, 2), got {pts.shape}")
+    pts = point_array(points, "polygon points", rows="n")
     n = len(pts)
     if n < 3:
         raise InvalidDomainError(f"a polygon needs at least 3 vertices, got {n}")
