@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh._threads import row_ranges, run_all
 from hammesh.predicates import orient_points
 
 __all__ = [
@@ -29,6 +30,8 @@ __all__ = [
     "mark_segments",
     "vertex_neighbors",
     "emit_cycles",
+    "emit_cycles_into",
+    "split_slots",
     "spanning_forest",
     "first_cross_run_edge",
     "angle_area_stats",
@@ -38,6 +41,10 @@ __all__ = [
 ]
 
 
+#: Rows per thread below which a row pass runs in one call (``hammesh._threads``).
+THREAD_MIN_ROWS = 200_000
+
+
 def orient_ccw(points, tri):
     """Counter-clockwise copy of ``tri`` (rows with negative area reversed).
 
@@ -45,16 +52,19 @@ def orient_ccw(points, tri):
     repeated vertex or zero area.
     """
     out = np.empty_like(tri)
-    n_flipped, bad = _orient_ccw_into(points, tri, out)
-    return out, n_flipped, bad
+    parts = run_all([
+        (lambda lo=lo, hi=hi: _orient_ccw_into(points, tri, out, lo, hi))
+        for lo, hi in row_ranges(tri.shape[0], THREAD_MIN_ROWS)
+    ])
+    bads = [b for _, b in parts if b >= 0]
+    return out, sum(f for f, _ in parts), (min(bads) if bads else -1)
 
 
-@njit(cache=True)
-def _orient_ccw_into(points, tri, out):
-    m = tri.shape[0]
+@njit(cache=True, nogil=True)
+def _orient_ccw_into(points, tri, out, lo, hi):
     n_flipped = 0
     bad = -1
-    for t in range(m):
+    for t in range(lo, hi):
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
@@ -81,28 +91,33 @@ def twins_from_neighbors(tri, nbr):
     Returns ``(twin, bad)``; ``bad`` is -1, or a half-edge whose claimed neighbour
     does not hold the same edge reversed or does not name it back (then the
     neighbours are not to be trusted and the caller matches half-edges itself).
-    Each pair is matched once, from its lower triangle; the higher one only checks
-    that it was matched (half the random reads of checking both sides).
+    Each pair is matched once, from its lower triangle (half the random reads of
+    checking both sides), in threads over row ranges; a second pass checks that the
+    higher side was matched. A half-edge is only ever matched by the triangle its
+    own row names, so threads never write the same entry.
     """
     twin = np.full(3 * tri.shape[0], -1, np.int64)
-    return twin, _twins_from_neighbors_into(tri, nbr, twin)
+    spans = row_ranges(tri.shape[0], THREAD_MIN_ROWS)
+    for step in (_twins_from_neighbors_into, _unmatched_neighbor):
+        bads = [b for b in run_all([
+            (lambda lo=lo, hi=hi: step(tri, nbr, twin, lo, hi)) for lo, hi in spans
+        ]) if b >= 0]
+        if bads:
+            return twin, min(bads)
+    return twin, -1
 
 
-@njit(cache=True)
-def _twins_from_neighbors_into(tri, nbr, twin):
+@njit(cache=True, nogil=True)
+def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
     m = tri.shape[0]
-    for t in range(m):
+    for t in range(lo, hi):
         for k in range(3):
             u = nbr[t, k]
-            if u < 0:
+            if u < t:  # boundary, or matched from u (checked by _unmatched_neighbor)
                 continue
             h = 3 * t + k
             if u >= m:
                 return h
-            if u < t:  # matched from u already (or u does not name t back)
-                if twin[h] < 0:
-                    return h
-                continue
             a = tri[t, k]
             b = tri[t, (k + 1) % 3]
             found = -1
@@ -113,6 +128,16 @@ def _twins_from_neighbors_into(tri, nbr, twin):
                 return h
             twin[h] = found
             twin[found] = h
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def _unmatched_neighbor(tri, nbr, twin, lo, hi):
+    for t in range(lo, hi):
+        for k in range(3):
+            u = nbr[t, k]
+            if 0 <= u < t and twin[3 * t + k] < 0:  # u does not name t back
+                return 3 * t + k
     return -1
 
 
@@ -128,7 +153,7 @@ def incenters(points, tri, out=None):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _incenters_into(points, tri, out):
     m = tri.shape[0]
     for t in range(m):
@@ -471,7 +496,7 @@ def spanning_forest(tri, twin, is_con):
     return tri_r, code, order, stack[:n_pieces].copy()
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tri_r, code):
     m = tri.shape[0]
     n_seen = 0
@@ -534,8 +559,68 @@ def _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tr
     return n_pieces
 
 
+def split_slots(tri, code):
+    """The constrained tree edges the walk splits at their midpoints.
+
+    Returns ``(mid_h, mid_id, mid_a, mid_b)``: ``mid_h`` the sorted half-edges (both
+    sides of each split edge), ``mid_id`` their midpoint number (``0..q-1``, in order
+    of the lower half-edge), ``(mid_a[i], mid_b[i])`` the edge split by midpoint i.
+    """
+    mid_h = np.flatnonzero((code & 3) == 3).astype(np.int64)
+    g = (code[mid_h] >> 2) - 1
+    lower = mid_h < g
+    mid_id = np.empty(len(mid_h), np.int64)
+    mid_id[lower] = np.arange(int(lower.sum()))
+    mid_id[~lower] = mid_id[np.searchsorted(mid_h, g[~lower])]
+    lo = mid_h[lower]
+    t, k = lo // 3, lo % 3
+    return mid_h, mid_id, tri[t, k].copy(), tri[t, (k + 1) % 3].copy()
+
+
+#: State of a paused walk (``emit_cycles_into``): piece, slot, first free row, row of
+#: the piece's start, the half-edge waiting for its link to the next row, first slot.
+WALK_STATE = 6
+
+
 def emit_cycles(tri, code, firsts, n_points):
-    """Walk the Thm 2.4 cycles and emit the output triangles in cycle order.
+    """Walk the Thm 2.4 cycles and emit the output triangles in cycle order (one call).
+
+    See ``emit_cycles_into`` for the walk. Returns ``(out, parent, kind, lengths,
+    mid_a, mid_b, out_twin)``: output triangles, the (new-numbering) triangle each lies
+    in, its kind (0 incenter, 1 flip, 2 midpoint), the cycle lengths, the edge
+    ``(mid_a[i], mid_b[i])`` split by midpoint ``n_points + m + i``, and the output's
+    half-edge twins as the construction implies them (a *claim* the certificate checks,
+    see ``certify_row_range``); the claim is empty if the walk did not emit every slot
+    exactly once.
+    """
+    mid_h, mid_id, mid_a, mid_b = split_slots(tri, code)
+    nh = code.shape[0]
+    total = nh + len(mid_h)
+    out = np.empty((total, 3), np.int64)
+    parent = np.empty(total, np.int64)
+    kind = np.empty(total, np.int8)
+    claim = np.full(3 * total, UNLINKED, np.int64)
+    prim = np.full(nh, -1, np.int64)
+    lengths = np.zeros(len(firsts), np.int64)
+    y2 = np.full(len(mid_h), -1, np.int64)
+    state = np.zeros(WALK_STATE, np.int64)
+    done = emit_cycles_into(tri, code, firsts, int(n_points), mid_h, mid_id, out, parent, kind, claim,
+                            prim, lengths, y2, state, total)
+    pos = int(state[2])
+    if done != 1 or pos != total:  # not a permutation: the caller reports it
+        k = max(pos, 0)
+        return out[:k], parent[:k], kind[:k], lengths, mid_a, mid_b, np.empty(0, np.int64)
+    return out, parent, kind, lengths, mid_a, mid_b, claim
+
+
+#: Claim entry not written (yet): the certificate skips it and counts the links.
+UNLINKED = -2
+
+
+@njit(cache=True, nogil=True)
+def emit_cycles_into(tri, code, firsts, n_points, mid_h, mid_id, out, parent, kind, claim, prim,
+                     lengths, y2, state, stop):
+    """Walk the Thm 2.4 cycles, emitting rows until row ``stop`` (resumable).
 
     Slot ``h = 3 t + k`` is the sector of input triangle t's incenter ``I_t`` over its
     edge ``a b`` (``a = tri[t, k]``). Sweeping counter-clockwise around ``I_t``:
@@ -543,71 +628,57 @@ def emit_cycles(tri, code, firsts, n_points):
     * edge not in the tree: emit ``(I_t, a, b)``; continue with slot ``h + 1`` of t;
     * tree edge, free: it is flipped; emit ``(I_t, a, I_u)`` (u across, ``g = twin[h]``)
       and continue in u's sweep after the flipped edge, slot ``g + 1`` of u;
-    * tree edge, constrained: it is split at its midpoint M; emit ``(I_t, a, M)`` and
+    * tree edge, constrained: it is split at its midpoint M: emit ``(I_t, a, M)`` and
       u's ``(I_u, M, a)`` across ``a M``, then continue with slot ``g + 1`` of u.
 
     The sweep returns to its first slot after visiting every slot of the tree's
-    triangles once: one Hamiltonian cycle per tree (per connected piece).
-    Incenter of t is vertex ``n_points + t``; midpoints are numbered after the
-    incenters in order of first visit.
+    triangles once: one Hamiltonian cycle per tree (per connected piece). Incenter
+    of t is vertex ``n_points + t``, midpoint i is ``n_points + m + i``
+    (``split_slots`` gives ``mid_h``, ``mid_id``).
 
-    Parameters
-    ----------
-    tri : (m, 3) int64
-    code : (3 m,) int64
-        Packed twins and tree/constrained bits (``spanning_forest``).
-    firsts : (p,) int64
-        One triangle of each connected piece (where its cycle starts).
-    n_points : int
+    The walk stops at a slot boundary once ``stop`` rows are out and keeps where it
+    is in ``state`` (zeros to start); call again to go on. Rows below ``state[2] - 1``
+    are then final together with every claim entry a certificate reads for them, so
+    a checker can run on them while the walk goes on (``claim`` must start as
+    ``UNLINKED``). ``prim`` starts at -1, ``y2`` at -1.
 
-    Returns
-    -------
-    ``(out, parent, kind, lengths, mid_a, mid_b, out_twin)``: output triangles, the
-    input triangle each lies in, its kind (0 incenter, 1 flip, 2 midpoint), the cycle
-    lengths, the edge ``(mid_a[i], mid_b[i])`` split by midpoint i, and the output's
-    half-edge twins as the construction implies them (a *claim* the certificate
-    checks, see ``certify_rows``); the claim is empty if the walk did not emit every
-    slot exactly once.
+    Returns 1 when every piece is walked, 0 when paused, -1 if the walk met a slot
+    twice or ran out of rows (not a permutation).
     """
-    nh = code.shape[0]
-    total = nh + int(np.count_nonzero((code & 3) == 3))
-    out = np.empty((total, 3), np.int64)
-    parent = np.empty(total, np.int64)
-    kind = np.empty(total, np.int8)
-    # every entry of the claim is written exactly once (a test compares the claim
-    # with an independent matching); an unwritten one would fail the check
-    claim = np.empty(3 * total, np.int64)
-    prim = np.full(nh, -1, np.int64)  # output row of each slot's first triangle
-    lengths = np.zeros(len(firsts), np.int64)
-    mid_a = np.empty((total - nh) // 2, np.int64)
-    mid_b = np.empty((total - nh) // 2, np.int64)
-    pos = _emit_into(tri, code, firsts, int(n_points), out, parent, kind, claim, prim, lengths, mid_a, mid_b)
-    if pos != total:  # not a permutation: the caller reports it
-        k = max(pos, 0)
-        return out[:k], parent[:k], kind[:k], lengths, mid_a, mid_b, np.empty(0, np.int64)
-    return out, parent, kind, lengths, mid_a, mid_b, claim
-
-
-@njit(cache=True)
-def _emit_into(tri, code, firsts, n_points, out, parent, kind, claim, prim, lengths, mid_a, mid_b):
     m = tri.shape[0]
     total = out.shape[0]
-    mid_of = dict()  # split slot -> its midpoint vertex (few: one per region)
-    y2 = dict()  # split slot h -> output row of (I_t, M, b)
-    n_mid = 0
-    pos = 0
+    c = state[0]
+    h = state[1]
+    pos = state[2]
+    run_start = state[3]
+    last_exit = state[4]
+    first = state[5]
+    fresh = pos == 0 and c == 0 and last_exit == 0  # state all zeros: a new walk
+    if fresh:
+        last_exit = -1
     # The claimed pairing: a row's "exit" edge pairs with the next row's "entry" edge
     # (a slot's first triangle enters by edge 0 (I_t, a), a split's second triangle by
     # edge 1 (M, a)); the third edge pairs across the input edge (plain slot), with
     # the other flipped triangle (flip) or with the other half of the split sector;
     # whichever of two partners is emitted second makes the link.
-    for c in range(firsts.shape[0]):
-        first = 3 * firsts[c]
-        run_start = pos
-        last_exit = -1
-        h = first
+    while c < firsts.shape[0]:
+        if fresh:
+            first = 3 * firsts[c]
+            h = first
+            run_start = pos
+            last_exit = -1
+        fresh = True
         while True:
+            if pos >= stop:  # pause at a slot boundary
+                state[0] = c
+                state[1] = h
+                state[2] = pos
+                state[3] = run_start
+                state[4] = last_exit
+                state[5] = first
+                return 0
             if pos >= total or prim[h] >= 0:  # not a permutation
+                state[2] = pos
                 return -1
             prim[h] = pos
             if last_exit >= 0:
@@ -652,15 +723,11 @@ def _emit_into(tri, code, firsts, n_points, out, parent, kind, claim, prim, leng
                     pos += 1
                 else:
                     if pos + 1 >= total:
+                        state[2] = pos
                         return -1
-                    if h not in mid_of:
-                        mv = n_points + m + n_mid
-                        mid_of[h] = mv
-                        mid_of[g] = mv
-                        mid_a[n_mid] = a
-                        mid_b[n_mid] = tri[t, (k + 1) % 3]
-                        n_mid += 1
-                    mv = mid_of[h]
+                    ih = np.searchsorted(mid_h, h)
+                    ig = np.searchsorted(mid_h, g)
+                    mv = n_points + m + mid_id[ih]
                     out[pos, 0] = inc
                     out[pos, 1] = a
                     out[pos, 2] = mv
@@ -671,11 +738,11 @@ def _emit_into(tri, code, firsts, n_points, out, parent, kind, claim, prim, leng
                     out[pos + 1, 2] = a
                     parent[pos + 1] = u
                     kind[pos + 1] = 2
-                    y2[g] = pos + 1
+                    y2[ig] = pos + 1
                     claim[3 * pos + 1] = 3 * (pos + 1) + 1  # (a, M) | (M, a)
                     claim[3 * (pos + 1) + 1] = 3 * pos + 1
-                    if h in y2:  # (M, I_t) | (I_t, M): other half of t's sector
-                        yh = y2[h]
+                    yh = y2[ih]
+                    if yh >= 0:  # (M, I_t) | (I_t, M): other half of t's sector
                         claim[3 * pos + 2] = 3 * yh
                         claim[3 * yh] = 3 * pos + 2
                     pg = prim[g]
@@ -691,7 +758,10 @@ def _emit_into(tri, code, firsts, n_points, out, parent, kind, claim, prim, leng
         claim[last_exit] = 3 * run_start  # the cycle closes
         claim[3 * run_start] = last_exit
         lengths[c] = pos - run_start
-    return pos
+        c += 1
+    state[0] = c
+    state[2] = pos
+    return 1
 
 
 @njit(cache=True)
@@ -772,24 +842,31 @@ def _angle_area_range(points, tri, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def certify_row_range(points, tri, runs, pair, lo, hi, used):
+def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
     """The certificate's per-row checks in one pass over a cycle-ordered mesh.
 
     ``runs`` are the cycle lengths (positive, summing to ``m``: checked by the
     caller); ``pair`` is a half-edge pairing to check (an empty array skips those
     checks). For each kind of failure the first row (or half-edge) is returned, -1
     if none: ``(bad_index, bad_consecutive, bad_pair, cross_run, min_angle, argmin,
-    max_angle, argmax, min_area, argmin_area, total_area, bad_orientation)``.
+    max_angle, argmax, min_area, argmin_area, total_area, bad_orientation, links,
+    unpaired)``.
 
     * bad_index: a row with a vertex outside ``0..n-1`` (such rows are skipped);
     * bad_consecutive: a row sharing no edge (exactly two vertices) with the next row
       of its run (the last with the first), or the start of a run shorter than 3;
-    * bad_pair: a half-edge whose partner is out of range, itself, not paired back, or
-      not the same edge reversed;
+      if ``cons_fail`` has one entry per row, such rows are marked there instead (a
+      caller that does not know the runs yet checks the marks later);
+    * bad_pair: a half-edge whose partner is out of range or itself, or (checked
+      from the higher half-edge of each pair) not paired back or not the same edge
+      reversed;
     * cross_run: a half-edge paired with a half-edge of another run;
     * bad_orientation: a row that is not strictly counter-clockwise by the exact
       orientation predicate (a floating-point area can have the wrong sign on a
-      nearly flat triangle; the filter decides almost every row at no extra cost).
+      nearly flat triangle; the filter decides almost every row at no extra cost);
+    * links: pairs checked (each once, from its higher half-edge), unpaired: entries
+      -1. The pairing covers every half-edge exactly when ``2 links + unpaired = 3 m``;
+      entries ``UNLINKED`` are skipped (not written yet), which that count catches.
 
     Only rows ``lo <= i < hi`` are checked (they may cut runs anywhere), so that
     threads can share the work: the kernel releases the GIL. ``used[v]`` is set for
@@ -798,11 +875,14 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used):
     m = tri.shape[0]
     n = points.shape[0]
     check_pair = pair.shape[0] == 3 * m
+    mark_cons = cons_fail.shape[0] == m
     bad_index = -1
     bad_orient = -1
     bad_consec = -1
     bad_pair = -1
     cross = -1
+    links = 0
+    unpaired = 0
     best_s2 = np.inf
     best_c = np.inf
     amin = -1
@@ -837,8 +917,11 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used):
                 for b in range(3):
                     if tri[i, a] == tri[j, b]:
                         shared += 1
-            if shared != 2 and bad_consec < 0:
-                bad_consec = i
+            if shared != 2:
+                if mark_cons:
+                    cons_fail[i] = True
+                elif bad_consec < 0:
+                    bad_consec = i
             cr, s2, c = _measures(points, p0, p1, p2)
             total += 0.5 * cr
             if 0.5 * cr < min_area:
@@ -854,9 +937,12 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used):
                 for k in range(3):
                     h = 3 * i + k
                     g = pair[h]
-                    if g < 0:
+                    if g == -1:
+                        unpaired += 1
                         continue
-                    if g >= 3 * m or g == h or pair[g] != h:
+                    if g == UNLINKED or g > h and g < 3 * m:
+                        continue  # checked from g (or not written yet: counted)
+                    if g < 0 or g >= 3 * m or g == h or pair[g] != h:
                         if bad_pair < 0:
                             bad_pair = h
                         continue
@@ -865,20 +951,39 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used):
                     if tri[i, k] != tri[u, (jg + 1) % 3] or tri[i, (k + 1) % 3] != tri[u, jg]:
                         if bad_pair < 0:
                             bad_pair = h
+                        continue
+                    links += 1
                     if (u < r_start or u >= r_end) and cross < 0:
                         cross = h
         r_start = r_end
     min_ang = np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0)))
     max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
     return (bad_index, bad_consec, bad_pair, cross, min_ang, amin, max_ang, amax,
-            min_area, aarea, total, bad_orient)
+            min_area, aarea, total, bad_orient, links, unpaired)
 
 
 @njit(cache=True)
 def certify_rows(points, tri, runs, pair):
     """``certify_row_range`` over all rows."""
     used = np.zeros(points.shape[0], np.bool_)
-    return certify_row_range(points, tri, runs, pair, 0, tri.shape[0], used)
+    return certify_row_range(points, tri, runs, pair, 0, tri.shape[0], used, np.empty(0, np.bool_))
+
+
+@njit(cache=True, nogil=True)
+def runs_close(tri, runs):
+    """First row that ends a run but shares no edge with the run's first row, or -1."""
+    r_start = 0
+    for r in range(runs.shape[0]):
+        i = r_start + runs[r] - 1
+        shared = 0
+        for a in range(3):
+            for b in range(3):
+                if tri[i, a] == tri[r_start, b]:
+                    shared += 1
+        if shared != 2:
+            return i
+        r_start += runs[r]
+    return -1
 
 
 @njit(cache=True, nogil=True)

@@ -163,6 +163,8 @@ class Domain:
 # ----------------------------------------------------------------------------- conversion
 
 def _as_float(value, name, ncols):
+    if value is None:  # "none of these" (holes=None, regions=None)
+        return np.zeros((0, ncols), np.float64)
     try:
         arr = np.array(value, dtype=np.float64)  # always a copy
     except (TypeError, ValueError) as exc:
@@ -173,6 +175,8 @@ def _as_float(value, name, ncols):
 
 
 def _as_int(value, name, ncols):
+    if value is None:
+        return np.zeros((0, ncols) if ncols else (0,), np.int64)
     try:
         arr = np.array(value)
     except (TypeError, ValueError) as exc:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
-from hammesh.postprocess.incircle import incenters, incircle_hamiltonian
+from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming
 from hammesh.postprocess.sparse import sparse_hamiltonian
-from hammesh.verify.certificate import verify
+from hammesh.verify.certificate import input_facts, verify
 from hammesh.verify.input_mesh import prepare_mesh
 
 __all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES"]
@@ -53,9 +54,22 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     t0 = time.perf_counter()
     clean, he, is_con = prepare_mesh(mesh)
-    out, claim = MODES[mode](clean, he, is_con)
-    t1 = time.perf_counter()
-    stats = verify(out, reference=clean, reference_twin=he.twin, twin_claim=claim)
+    # a second thread works beside the construction: the input's side of the
+    # certificate, and (incircle) the row checks of the rows the walk has finished
+    with ThreadPoolExecutor(1) as side:
+        facts = side.submit(input_facts, clean, he.twin)
+        rows = None
+        if mode == "incircle":
+            out, claim, stream = incircle_streaming(clean, he, is_con, side)
+            t1 = time.perf_counter()
+            stream.work()  # join the row checks
+            rows = (stream.result(out.components), stream.used)
+        else:
+            out, claim = MODES[mode](clean, he, is_con)
+            t1 = time.perf_counter()
+        ref_facts = facts.result()
+    stats = verify(out, reference=clean, reference_twin=he.twin, twin_claim=claim, rows=rows,
+                   input_facts=ref_facts)
     t2 = time.perf_counter()
     report = dict(out.report)
     report.update(

@@ -17,7 +17,7 @@ constrained edge only where a closed chain of them separates two regions: exactl
 keeps its place and gets its midpoint instead of a flip (the paper's conformal
 variant); its two input triangles become four triangles around the midpoint.
 
-The cycle is a successor permutation on output triangles (see ``_successors``):
+The cycle is written by one walk around the tree (``_kernels.emit_cycles_into``):
 every output triangle is owned by a *slot*, the half-edge ``h = 3 t + k`` of the input
 triangle ``t``. Sweeping counter-clockwise around the incenter of ``t``, slot ``h``
 holds ``(I_t, a, b)`` if its edge ``ab`` is not in the tree, ``(I_t, a, I_u)`` if it is
@@ -26,6 +26,8 @@ flipped (``u`` across), and ``(I_t, a, M)`` plus ``(I_t, M, b)`` if it is split 
 
 from __future__ import annotations
 
+from concurrent.futures import Executor
+
 import numpy as np
 
 from hammesh import _kernels
@@ -33,8 +35,9 @@ from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.postprocess.conform import split_segments
 from hammesh.verify.input_mesh import HalfEdges
+from hammesh.verify.stream import RowStream
 
-__all__ = ["incircle_hamiltonian", "incenters"]
+__all__ = ["incircle_hamiltonian", "incircle_streaming", "incenters"]
 
 def incenters(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Incenters of triangles.
@@ -76,23 +79,91 @@ def incircle_hamiltonian(
         The output's half-edge twins as the construction implies them; the
         certificate checks this claim instead of recomputing the pairing.
     """
+    h, claim, _ = incircle_streaming(mesh, he, is_con, None)
+    return h, claim
+
+
+#: Rows the walk writes between two hand-overs to the row checks.
+WALK_CHUNK = 1 << 18
+
+
+def _touched(shape: tuple[int, ...], dtype: type, fill: int) -> np.ndarray:
+    a = np.empty(shape, dtype)
+    a.fill(fill)  # page faults taken here, beside the tree search, not in the walk
+    return a
+
+
+def _walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
+    return {
+        "out": _touched((total, 3), np.int64, 0),
+        "parent": _touched((total,), np.int64, 0),
+        "kind": _touched((total,), np.int8, 0),
+        "claim": _touched((3 * total,), np.int64, _kernels.UNLINKED),
+        "prim": _touched((nh,), np.int64, -1),
+    }
+
+
+def incircle_streaming(
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None
+) -> tuple[HamiltonianMesh, np.ndarray, RowStream | None]:
+    """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
+
+    While the tree search runs, ``side`` allocates the walk's arrays (taking their
+    page faults); while the walk runs, it computes the incenters and then checks the
+    finished rows of the output (``hammesh.verify.stream.RowStream``), which is
+    returned for the caller to finish (``stream.work()``, then ``stream.result``).
+    Without ``side`` it is the plain serial construction and the stream is None.
+    """
     pts = mesh.points
     n, m = mesh.n_points, mesh.n_triangles
+    nh = 3 * m
+    # most meshes split no constrained edge (total = 3 m): their arrays are made now
+    ready = side.submit(_walk_arrays, nh, nh) if side is not None else None
     # the walk runs in the tree search's numbering (locality): incenter n + i is that
     # of input triangle order[i]
     tri, code, order, firsts = _kernels.spanning_forest(mesh.triangles, he.twin, is_con)
-    out, parent, kind, lengths, mid_a, mid_b, claim = _kernels.emit_cycles(tri, code, firsts, n)
-    parent = order[parent]
-    if len(out) != 3 * m + 2 * len(mid_a):
-        raise VerificationError(
-            f"internal error: the tree walk emitted {len(out)} of "
-            f"{3 * m + 2 * len(mid_a)} triangles"
-        )
+    mid_h, mid_id, mid_a, mid_b = _kernels.split_slots(tri, code)
+    total = nh + len(mid_h)
+    arrays = ready.result() if ready is not None else None
+    if arrays is None or len(arrays["out"]) != total:
+        arrays = _walk_arrays(total, nh)
+    out, parent, kind, claim, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
     q = len(mid_a)
     points = np.empty((n + m + q, 2))
     points[:n] = pts
-    _kernels.incenters(pts, tri, out=points[n : n + m])
     points[n + m :] = 0.5 * (pts[mid_a] + pts[mid_b])
+    lengths = np.zeros(len(firsts), np.int64)
+    y2 = np.full(len(mid_h), -1, np.int64)
+    state = np.zeros(_kernels.WALK_STATE, np.int64)
+    args = (tri, code, firsts, n, mid_h, mid_id, out, parent, kind, claim, prim, lengths, y2, state)
+
+    stream = None
+    if side is None:
+        _kernels.incenters(pts, tri, out=points[n : n + m])
+        status = _kernels.emit_cycles_into(*args, total)
+    else:
+        stream = RowStream(points, out, claim)
+
+        def check() -> None:  # the rows use the incenters: compute them first
+            _kernels.incenters(pts, tri, out=points[n : n + m])
+            stream.work()
+
+        checking = side.submit(check)
+        status = -1
+        try:
+            while (status := _kernels.emit_cycles_into(*args, int(state[2]) + WALK_CHUNK)) == 0:
+                stream.publish(int(state[2]) - 1)  # the last row waits for its link
+        finally:  # the checker must never wait for rows that will not come
+            if status == 1 and state[2] == total:
+                stream.publish(total, final=True)
+            else:
+                stream.stop()
+        checking.result()
+    if status != 1 or state[2] != total:
+        raise VerificationError(
+            f"internal error: the tree walk emitted {int(state[2])} of {total} triangles"
+        )
+    parent = order[parent]
 
     segs, markers = split_segments(mesh.segments, mesh.segment_markers, mid_a, mid_b, n + m, len(points))
     position = cycle_positions(lengths)
@@ -104,7 +175,7 @@ def incircle_hamiltonian(
         "steiner_points": int(m + q),
         "incenters": int(m),
         "midpoints": int(q),
-        "flips": int(np.count_nonzero((code & 3) == _kernels.TREE_BIT) // 2),
+        "flips": int(m - len(lengths) - q),  # tree edges not split at a midpoint
         "components": [int(x) for x in lengths],
     }
     h = HamiltonianMesh(
@@ -119,4 +190,4 @@ def incircle_hamiltonian(
         triangle_attributes=mesh.triangle_attributes[parent],
         report=report,
     )
-    return h, claim
+    return h, claim, stream

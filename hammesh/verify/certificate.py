@@ -38,19 +38,18 @@ pairing is always computed, and a non-manifold edge fails item 3 directly.
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable
 
 import numpy as np
 
 from hammesh import _kernels
+from hammesh._threads import row_ranges, run_all
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.predicates import orient_points
 from hammesh.verify.input_mesh import HalfEdges
 
-__all__ = ["verify", "verify_cycle_mesh", "ANGLE_RTOL", "AREA_RTOL"]
+__all__ = ["verify", "verify_cycle_mesh", "input_facts", "ANGLE_RTOL", "AREA_RTOL"]
 
 ANGLE_RTOL = 1e-9
 AREA_RTOL = 1e-9
@@ -60,12 +59,12 @@ def _fail(msg: str) -> None:
     raise VerificationError(msg)
 
 
-def _edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
-    return a.astype(np.int64) * n + b.astype(np.int64)
+#: Edge keys ``a * KEY_BASE + b``: one base for input and output (any vertex < 2**31).
+KEY_BASE = 1 << 32
 
 
-#: Rows per thread below which the row checks run in one call.
-THREAD_MIN_ROWS = 200_000
+def _edge_keys(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a.astype(np.int64) * KEY_BASE + b.astype(np.int64)
 
 
 def _certify_rows(
@@ -82,22 +81,19 @@ def _certify_rows(
     combine exactly (first failures by row, extremes, sums), the same as one call.
     ``side`` (the input-side facts) runs alongside; its result is returned second.
     """
-    m = len(tri)
-    k = max(1, min(os.cpu_count() or 1, m // THREAD_MIN_ROWS))
-    cuts = [m * i // k for i in range(k + 1)]
+    no_marks = np.empty(0, dtype=np.bool_)
+    spans = row_ranges(len(tri), _kernels.THREAD_MIN_ROWS)
     calls = [
-        (lambda i=i: _kernels.certify_row_range(pts, tri, runs, claim, cuts[i], cuts[i + 1], used))
-        for i in range(k)
+        (lambda lo=lo, hi=hi: _kernels.certify_row_range(pts, tri, runs, claim, lo, hi, used, no_marks))
+        for lo, hi in spans
     ]
-    if side is not None:
-        calls.append(side)
-    if len(calls) == 1:
-        results = [calls[0]()]
-    else:
-        with ThreadPoolExecutor(min(len(calls), os.cpu_count() or 1)) as pool:
-            results = [f.result() for f in [pool.submit(c) for c in calls]]
-    parts = results[:k]
-    side_result = results[k] if side is not None else None
+    results = run_all(calls + ([side] if side is not None else []))
+    k = len(spans)
+    return combine_rows(results[:k]), (results[k] if side is not None else None)
+
+
+def combine_rows(parts: list[tuple]) -> tuple:
+    """Combine ``certify_row_range`` results of disjoint row ranges into one."""
 
     def first(j: int) -> int:
         hits = [p[j] for p in parts if p[j] >= 0]
@@ -106,15 +102,14 @@ def _certify_rows(
     lo = min(parts, key=lambda p: p[4])
     hi = max(parts, key=lambda p: p[6])
     small = min(parts, key=lambda p: p[8])
-    rows = (
+    return (
         first(0), first(1), first(2), first(3), lo[4], lo[5], hi[6], hi[7], small[8], small[9],
-        math.fsum(p[10] for p in parts), first(11),
+        math.fsum(p[10] for p in parts), first(11), sum(p[12] for p in parts), sum(p[13] for p in parts),
     )
-    return rows, side_result
 
 
-def _input_facts(ref: Mesh, r_twin: np.ndarray, n_out: int) -> dict[str, Any]:
-    """What the comparison needs from the input mesh (runs beside the row checks)."""
+def _input_facts(ref: Mesh, r_twin: np.ndarray) -> dict[str, Any]:
+    """What the comparison with the input needs from it (runs beside other work)."""
     rp = np.asarray(ref.points, dtype=np.float64)
     rt = np.ascontiguousarray(ref.triangles, dtype=np.int64)
     r_min, _, _, _, _, _, r_total = _kernels.angle_area_stats(rp, rt)
@@ -124,13 +119,17 @@ def _input_facts(ref: Mesh, r_twin: np.ndarray, n_out: int) -> dict[str, Any]:
         "min_angle": r_min,
         "total": r_total,
         "used": used,
-        "boundary": _boundary_keys(rt, r_twin, n_out),
+        "boundary": _boundary_keys(rt, r_twin),
+        "n_boundary": int(np.count_nonzero(r_twin < 0)),
     }
 
 
-def _boundary_keys(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
+input_facts = _input_facts
+
+
+def _boundary_keys(tri: np.ndarray, twin: np.ndarray) -> np.ndarray:
     e = _kernels.boundary_half_edges(tri, twin)
-    return np.sort(_edge_keys(e[:, 0], e[:, 1], n))
+    return np.sort(_edge_keys(e[:, 0], e[:, 1]))
 
 
 def verify_cycle_mesh(
@@ -143,6 +142,8 @@ def verify_cycle_mesh(
     reference_twin: np.ndarray | None = None,
     twin_claim: np.ndarray | None = None,
     angle_ratio: float = 0.5,
+    rows: tuple | None = None,
+    input_facts: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Check that ``triangles`` in row order form closed Hamiltonian cycles.
 
@@ -168,6 +169,12 @@ def verify_cycle_mesh(
         is ignored (the pairing is then computed).
     angle_ratio : float
         Required ``min angle out / min angle in`` (Thm 2.4: 0.5).
+    rows : tuple, optional
+        ``(row results, used)`` already computed by a
+        :class:`~hammesh.verify.stream.RowStream` that checked the rows while they
+        were written; the same checks are then not run again.
+    input_facts : dict, optional
+        ``input_facts(reference, reference_twin)`` if already computed.
 
     Returns
     -------
@@ -202,19 +209,32 @@ def verify_cycle_mesh(
         if r_dup >= 0:
             _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
     # a claimed pairing is only of use with a reference (the tiling argument needs the
-    # input's boundary) and must leave as many boundary edges as the input has
+    # input's boundary)
     claim = None if twin_claim is None else np.ascontiguousarray(twin_claim, dtype=np.int64)
-    if not (
-        claim is not None
-        and reference_twin is not None
-        and claim.shape == (3 * m,)
-        and int((claim < 0).sum()) == int((reference_twin < 0).sum())
-    ):
+    if not (claim is not None and reference_twin is not None and claim.shape == (3 * m,)):
         claim = np.empty(0, dtype=np.int64)
-    used = np.zeros(n, dtype=np.bool_)
-    side = None if reference is None else (lambda: _input_facts(reference, reference_twin, n))
-    rows, ref_facts = _certify_rows(pts, tri, runs, claim, used, side)
-    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total, bad_orient) = rows
+    ref_facts = input_facts
+    if rows is None:
+        used = np.zeros(n, dtype=np.bool_)
+        side = None
+        if reference is not None and ref_facts is None:
+            side = lambda: _input_facts(reference, reference_twin)  # noqa: E731
+        rows, side_facts = _certify_rows(pts, tri, runs, claim, used, side)
+        ref_facts = ref_facts if side is None else side_facts
+    else:  # checked while the construction ran (``hammesh.verify.stream``)
+        rows, used = rows
+        if reference is not None and ref_facts is None:
+            ref_facts = _input_facts(reference, reference_twin)
+    (bad_index, bad, bad_pair, cross, amin, tmin, amax, _, area_min, tarea, total, bad_orient,
+     links, unpaired) = rows
+    # the claim is a pairing of all half-edges with as many unpaired ones as the input
+    # has boundary edges, or it is not used
+    if len(claim) and not (
+        bad_pair < 0
+        and 2 * links + unpaired == 3 * m
+        and (unpaired == ref_facts["n_boundary"] if ref_facts else False)
+    ):
+        bad_pair = 0
     if bad_index >= 0:
         _fail(f"triangle {bad_index} {tri[bad_index].tolist()} references a vertex outside 0..{n - 1}")
     if bad >= 0:
@@ -306,13 +326,13 @@ def _compare_with_input(
     if not math.isclose(total, r_total, rel_tol=AREA_RTOL, abs_tol=0.0):
         _fail(f"total area changed from {r_total!r} to {total!r}")
 
-    b_out = _boundary_keys(tri, twin, n)
+    b_out = _boundary_keys(tri, twin)
     b_in = facts["boundary"]
     if not np.array_equal(b_out, b_in):
         diff = np.setxor1d(b_out, b_in)
         k = int(diff[0])
         _fail(
-            f"boundary changed: edge ({k // n}, {k % n}) is on the boundary of only one of "
+            f"boundary changed: edge ({k // KEY_BASE}, {k % KEY_BASE}) is on the boundary of only one of "
             "input and output"
         )
 
@@ -354,6 +374,8 @@ def verify(
     reference_twin: np.ndarray | None = None,
     twin_claim: np.ndarray | None = None,
     angle_ratio: float = 0.5,
+    rows: tuple | None = None,
+    input_facts: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Certificate of a :class:`~hammesh.mesh.HamiltonianMesh` (see module docstring).
 
@@ -369,4 +391,6 @@ def verify(
         reference_twin=reference_twin,
         twin_claim=twin_claim,
         angle_ratio=angle_ratio,
+        rows=rows,
+        input_facts=input_facts,
     )

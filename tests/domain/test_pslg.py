@@ -54,6 +54,11 @@ def test_empty_lists_become_empty_arrays_of_right_shape():
     assert d.regions.shape == (0, 4) and d.segment_markers.shape == (0,)
 
 
+def test_none_means_none_of_these():
+    d = Domain(vertices=[[0, 0], [1, 0], [0, 1]], segments=None, holes=None, regions=None)
+    assert d.segments.shape == (0, 2) and d.holes.shape == (0, 2) and d.regions.shape == (0, 4)
+
+
 def test_integral_float_segments_are_accepted_fractional_rejected():
     assert Domain(SQUARE, np.array(RING, float)).segments.dtype == np.int64
     with pytest.raises(InvalidDomainError, match=r"segments\[1, 0\] is 1\.5, not an integer"):

@@ -133,12 +133,12 @@ def test_non_finite_points(pair) -> None:
 
 def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
     """Split across threads, the row checks give exactly the one-call result."""
-    from hammesh import _kernels
+    from hammesh import _kernels, _threads
     from hammesh.verify import certificate
 
     _, h = pair
-    monkeypatch.setattr(certificate, "THREAD_MIN_ROWS", 7)
-    monkeypatch.setattr(certificate.os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
     empty = np.empty(0, dtype=np.int64)
     tri = h.triangles.copy()
     for broken in (None, len(tri) // 2, len(tri) - 1):
@@ -157,10 +157,10 @@ def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
 
 
 def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
-    from hammesh.verify import certificate
+    from hammesh import _kernels
 
     _, h = pair
-    monkeypatch.setattr(certificate, "THREAD_MIN_ROWS", 5)
+    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 5)
     tri = h.triangles.copy()
     k = 2 * len(tri) // 3
     tri[[k, k + 5]] = tri[[k + 5, k]]
@@ -183,6 +183,8 @@ def test_nearly_flat_inverted_triangle_is_caught_exactly() -> None:
     else:
         pytest.fail("no test triangle found")
     tri = np.array([[0, 1, 2]] * 3)
-    res = _kernels.certify_row_range(p, tri, np.array([3]), np.empty(0, np.int64), 0, 3, np.zeros(3, bool))
+    res = _kernels.certify_row_range(
+        p, tri, np.array([3]), np.empty(0, np.int64), 0, 3, np.zeros(3, bool), np.empty(0, bool)
+    )
     assert res[8] > 0  # the floating-point area is positive ...
     assert res[11] == 0  # ... and the exact test flags row 0

@@ -96,3 +96,26 @@ def test_infer_runs_from_pieces_in_order() -> None:
     assert infer_runs(tri, len(pts)).tolist() == [2, 1]
     with pytest.raises(hammesh.VerificationError, match="consecutive"):
         infer_runs(tri[[0, 2, 1]], len(pts))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
+    """Row ranges in three threads: the same twins, and bad neighbours still caught."""
+    from hammesh import _threads
+
+    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 5)
+    monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
+    rng = np.random.default_rng(seed)
+    pts = rng.random((60, 2))
+    d = Delaunay(pts)
+    tri = d.simplices.astype(np.int64)
+    nbr = d.neighbors[:, [2, 0, 1]].astype(np.int64)
+    a, bad = _kernels.twins_from_neighbors(tri, nbr)
+    assert bad == -1
+    np.testing.assert_array_equal(a, _kernels.half_edge_twins(tri, len(pts))[0])
+    # a neighbour that does not name its triangle back, in the last thread's range
+    t = len(tri) - 1 - int(np.argmax((nbr[::-1] >= 0).any(axis=1)))
+    k = int(np.argmax(nbr[t] >= 0))
+    wrong = nbr.copy()
+    wrong[t, k] = -1  # t says boundary, its neighbour still names t
+    assert _kernels.twins_from_neighbors(tri, wrong)[1] >= 0

@@ -1,0 +1,146 @@
+"""Row checks run beside the walk (hammesh.verify.stream): the same verdicts as the full pass."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh import _kernels
+from hammesh.postprocess import incircle
+from hammesh.verify import prepare_mesh, verify
+from hammesh.verify.certificate import _certify_rows
+from hammesh.verify.stream import RowStream
+from tests.helpers import assert_certificate, square
+
+
+def plate(n_loops: int, pieces: int) -> hammesh.Mesh:
+    """Squares side by side (several pieces), the first with closed internal loops."""
+    v, segs, holes = [], [], []
+    for p in range(pieces):
+        b = len(v)
+        v += square(2.0 * p, 0, 1)
+        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
+    for i in range(n_loops):
+        b = len(v)
+        v += square(0.1 + 0.28 * i, 0.4, 0.2)
+        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
+    holes = [[2.0 * p - 0.5, 0.5] for p in range(1, pieces)]
+    dom = hammesh.Domain(vertices=v, segments=segs, holes=holes or None)
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=0.004)
+
+
+def streamed(h: hammesh.HamiltonianMesh, claim: np.ndarray, steps: int, workers: int) -> tuple:
+    """Publish ``h``'s rows in ``steps`` steps to ``workers`` threads, as the walk does."""
+    stream = RowStream(h.points, h.triangles, claim, chunk=7)
+    threads = [threading.Thread(target=stream.work) for _ in range(workers)]
+    for t in threads:
+        t.start()
+    m = h.n_triangles
+    for s in range(1, steps):
+        stream.publish(m * s // steps)
+    stream.publish(m, final=True)
+    for t in threads:
+        t.join()
+    return stream.result(h.components), stream.used
+
+
+@pytest.fixture(scope="module")
+def built() -> tuple[hammesh.HamiltonianMesh, np.ndarray]:
+    clean, he, is_con = prepare_mesh(plate(2, 3))
+    h, claim = incircle.incircle_hamiltonian(clean, he, is_con)
+    assert len(h.components) == 3 and h.report["midpoints"] == 2
+    return h, claim
+
+
+def full(h: hammesh.HamiltonianMesh, tri: np.ndarray, claim: np.ndarray) -> tuple:
+    used = np.zeros(len(h.points), dtype=bool)
+    return _certify_rows(h.points, tri, h.components, claim, used)[0], used
+
+
+@pytest.mark.parametrize("steps, workers", [(1, 1), (5, 2), (40, 3)])
+def test_stream_equals_full_pass(built, steps: int, workers: int) -> None:
+    h, claim = built
+    (rows, used), (ref, ref_used) = streamed(h, claim, steps, workers), full(h, h.triangles, claim)
+    assert np.array_equal(used, ref_used)
+    assert rows[:4] == ref[:4] == (-1, -1, -1, -1)
+    assert rows[5] == ref[5] and rows[7] == ref[7] and rows[11:] == ref[11:]
+    assert np.isclose(rows[10], ref[10], rtol=1e-12)
+    assert 2 * rows[12] + rows[13] == 3 * h.n_triangles  # every half-edge paired or boundary
+
+
+@pytest.mark.parametrize("where", ["middle", "run_end", "run_start"])
+def test_stream_finds_the_same_broken_row(built, where: str) -> None:
+    """Breaks inside a run are marked and reported at the same row as the full pass;
+    run ends, which the stream cannot tell apart while it runs, are checked at the end."""
+    h, claim = built
+    ends = np.cumsum(h.components) - 1
+    i = {"middle": int(ends[0]) // 2, "run_end": int(ends[1]), "run_start": int(ends[0]) + 1}[where]
+    j = i - 7 if where == "run_end" else i + 7  # same run
+    tri = h.triangles.copy()
+    tri[[i, j]] = tri[[j, i]]
+    rows, _ = streamed(replace(h, triangles=tri), claim, 6, 2)
+    ref, _ = full(h, tri, claim)
+    assert rows[1] == ref[1] >= 0
+    with pytest.raises(hammesh.VerificationError, match=f"breaks at triangle {ref[1]}"):
+        verify(replace(h, triangles=tri), rows=(rows, np.ones(len(h.points), bool)))
+
+
+def test_unwritten_claim_entries_are_counted(built) -> None:
+    h, claim = built
+    c = claim.copy()
+    c[[5, int(claim[5])]] = _kernels.UNLINKED  # a pair the walk "never wrote"
+    rows, _ = streamed(h, c, 4, 2)
+    assert rows[2] == -1 and 2 * rows[12] + rows[13] == 3 * h.n_triangles - 2
+    # the certificate then does not believe the claim but still proves the good mesh
+    ref = h  # (the mesh itself is fine)
+    clean, he, _ = prepare_mesh(plate(2, 3))
+    verify(ref, reference=clean, reference_twin=he.twin, twin_claim=c, rows=rows_used(h, c))
+
+
+def rows_used(h: hammesh.HamiltonianMesh, claim: np.ndarray) -> tuple:
+    return streamed(h, claim, 3, 2)
+
+
+@pytest.mark.parametrize("n_loops, pieces", [(0, 1), (3, 1), (2, 3)])
+def test_hamiltonian_pipelined_in_small_steps(monkeypatch, n_loops: int, pieces: int) -> None:
+    """The walk handing over every few rows gives the serial walk's output, verified."""
+    m = plate(n_loops, pieces)
+    clean, he, is_con = prepare_mesh(m)
+    ref, ref_claim = incircle.incircle_hamiltonian(clean, he, is_con)
+    monkeypatch.setattr(incircle, "WALK_CHUNK", 5)
+    monkeypatch.setattr(RowStream.__init__, "__defaults__", (3,))
+    h = hammesh.hamiltonian(m)
+    assert h.report["verified"] and h.report["midpoints"] == n_loops
+    np.testing.assert_array_equal(h.triangles, ref.triangles)
+    np.testing.assert_array_equal(h.points, ref.points)
+    assert h.components.tolist() == ref.components.tolist()
+    assert_certificate(m, h)
+
+
+def test_walk_resumes_where_it_paused(built) -> None:
+    """Paused after every row, the resumable walk writes exactly the one-call output."""
+    h, claim = built
+    clean, he, is_con = prepare_mesh(plate(2, 3))
+    tri, code, order, firsts = _kernels.spanning_forest(clean.triangles, he.twin, is_con)
+    ref = _kernels.emit_cycles(tri, code, firsts, clean.n_points)
+    mid_h, mid_id, _, _ = _kernels.split_slots(tri, code)
+    total = len(code) + len(mid_h)
+    out = np.zeros((total, 3), np.int64)
+    parent = np.zeros(total, np.int64)
+    kind = np.zeros(total, np.int8)
+    c = np.full(3 * total, _kernels.UNLINKED, np.int64)
+    prim = np.full(len(code), -1, np.int64)
+    lengths = np.zeros(len(firsts), np.int64)
+    y2 = np.full(len(mid_h), -1, np.int64)
+    state = np.zeros(_kernels.WALK_STATE, np.int64)
+    calls = 0
+    while (st := _kernels.emit_cycles_into(tri, code, firsts, clean.n_points, mid_h, mid_id, out, parent,
+                                           kind, c, prim, lengths, y2, state, int(state[2]) + 1)) == 0:
+        calls += 1
+    assert st == 1 and calls >= total - len(mid_h) - len(firsts)  # a pause at every slot
+    for a, b in zip((out, parent, kind, lengths, c), (ref[0], ref[1], ref[2], ref[3], ref[6])):
+        np.testing.assert_array_equal(a, b)
