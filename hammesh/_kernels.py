@@ -313,7 +313,7 @@ def vertex_half_edges(tri, n_points):
     return vh
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _vertex_half_edges_into(tri, vh):
     for t in range(tri.shape[0]):
         for k in range(3):
@@ -781,7 +781,7 @@ def first_cross_run_edge(twin, run_lengths):
     return -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def _measures(points, p0, p1, p2):
     """``(cross, sin^2 of the smallest angle, cos of the largest)`` of one triangle.
 
@@ -814,7 +814,7 @@ def _measures(points, p0, p1, p2):
     return cr, s2, c
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _angle_area_range(points, tri, lo, hi):
     best_s2 = np.inf
     best_c = np.inf
@@ -841,7 +841,7 @@ def _angle_area_range(points, tri, lo, hi):
     return best_s2, amin, best_c, amax, min_area, aarea, total
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
     """The certificate's per-row checks in one pass over a cycle-ordered mesh.
 
@@ -962,7 +962,7 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
             min_area, aarea, total, bad_orient, links, unpaired)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def certify_rows(points, tri, runs, pair):
     """``certify_row_range`` over all rows."""
     used = np.zeros(points.shape[0], np.bool_)
@@ -994,7 +994,7 @@ def mark_used(tri, used):
             used[tri[t, k]] = True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def angle_area_stats(points, tri):
     """One pass over the triangles.
 

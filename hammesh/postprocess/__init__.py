@@ -10,7 +10,7 @@ from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming
 from hammesh.postprocess.sparse import sparse_hamiltonian
-from hammesh.verify.certificate import input_facts, verify
+from hammesh.verify.certificate import claim_structure, input_facts, verify
 from hammesh.verify.input_mesh import prepare_mesh
 
 __all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES"]
@@ -58,18 +58,20 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
     # certificate, and (incircle) the row checks of the rows the walk has finished
     with ThreadPoolExecutor(1) as side:
         facts = side.submit(input_facts, clean, he.twin)
-        rows = None
+        rows = prepared = None
         if mode == "incircle":
             out, claim, stream = incircle_streaming(clean, he, is_con, side)
             t1 = time.perf_counter()
-            stream.work()  # join the row checks
+            # the certificate's last steps, ahead, while the other thread checks rows
+            prepared = claim_structure(out.triangles, len(out.points), claim)
+            stream.join()  # then help with the row checks still to do
             rows = (stream.result(out.components), stream.used)
         else:
             out, claim = MODES[mode](clean, he, is_con)
             t1 = time.perf_counter()
         ref_facts = facts.result()
     stats = verify(out, reference=clean, reference_twin=he.twin, twin_claim=claim, rows=rows,
-                   input_facts=ref_facts)
+                   input_facts=ref_facts, prepared=prepared)
     t2 = time.perf_counter()
     report = dict(out.report)
     report.update(

@@ -111,7 +111,7 @@ def incircle_streaming(
     While the tree search runs, ``side`` allocates the walk's arrays (taking their
     page faults); while the walk runs, it computes the incenters and then checks the
     finished rows of the output (``hammesh.verify.stream.RowStream``), which is
-    returned for the caller to finish (``stream.work()``, then ``stream.result``).
+    returned for the caller to finish (``stream.join()``, then ``stream.result``).
     Without ``side`` it is the plain serial construction and the stream is None.
     """
     pts = mesh.points
@@ -146,6 +146,7 @@ def incircle_streaming(
 
         def check() -> None:  # the rows use the incenters: compute them first
             _kernels.incenters(pts, tri, out=points[n : n + m])
+            stream.points_final()
             stream.work()
 
         checking = side.submit(check)
@@ -158,7 +159,9 @@ def incircle_streaming(
                 stream.publish(total, final=True)
             else:
                 stream.stop()
-        checking.result()
+        stream.attach(checking)  # the caller joins the checks (``stream.join()``)
+        if status != 1:
+            checking.result()
     if status != 1 or state[2] != total:
         raise VerificationError(
             f"internal error: the tree walk emitted {int(state[2])} of {total} triangles"

@@ -49,7 +49,7 @@ from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.predicates import orient_points
 from hammesh.verify.input_mesh import HalfEdges
 
-__all__ = ["verify", "verify_cycle_mesh", "input_facts", "ANGLE_RTOL", "AREA_RTOL"]
+__all__ = ["verify", "verify_cycle_mesh", "input_facts", "claim_structure", "ANGLE_RTOL", "AREA_RTOL"]
 
 ANGLE_RTOL = 1e-9
 AREA_RTOL = 1e-9
@@ -127,6 +127,20 @@ def _input_facts(ref: Mesh, r_twin: np.ndarray) -> dict[str, Any]:
 input_facts = _input_facts
 
 
+def claim_structure(triangles: np.ndarray, n_points: int, claim: np.ndarray) -> dict[str, Any]:
+    """What the certificate's last steps need from the output, computed ahead.
+
+    One half-edge leaving each vertex and the sorted boundary edge keys if ``claim``
+    is the pairing; ``verify_cycle_mesh(prepared=...)`` uses them only if the claim
+    passes its checks. A construction computes this while its rows are checked.
+    """
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    return {
+        "vertex_he": _kernels.vertex_half_edges(tri, int(n_points)),
+        "boundary": _boundary_keys(tri, claim),
+    }
+
+
 def _boundary_keys(tri: np.ndarray, twin: np.ndarray) -> np.ndarray:
     e = _kernels.boundary_half_edges(tri, twin)
     return np.sort(_edge_keys(e[:, 0], e[:, 1]))
@@ -144,6 +158,7 @@ def verify_cycle_mesh(
     angle_ratio: float = 0.5,
     rows: tuple | None = None,
     input_facts: dict[str, Any] | None = None,
+    prepared: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Check that ``triangles`` in row order form closed Hamiltonian cycles.
 
@@ -175,6 +190,9 @@ def verify_cycle_mesh(
         were written; the same checks are then not run again.
     input_facts : dict, optional
         ``input_facts(reference, reference_twin)`` if already computed.
+    prepared : dict, optional
+        ``claim_structure(triangles, n, twin_claim)`` if already computed (used only
+        if the claim is valid).
 
     Returns
     -------
@@ -252,7 +270,11 @@ def verify_cycle_mesh(
         _fail(f"triangle {t} {tri[t].tolist()} is {what} (exact orientation test)")
 
     dup = -1
-    if len(claim) and bad_pair < 0:
+    if not (len(claim) and bad_pair < 0):
+        prepared = None
+    if prepared is not None:
+        twin = claim
+    elif len(claim) and bad_pair < 0:
         twin = claim
     else:  # no (valid) claim: find the pairing, then check the runs with it
         twin, dup = _kernels.half_edge_twins(tri, n)
@@ -276,7 +298,8 @@ def verify_cycle_mesh(
     has_segs = segments is not None and len(segments) > 0
     out_he = None  # vertex rotation structure, built once if any segment needs it
     if has_segs or (reference is not None and len(reference.segments) > 0):
-        out_he = HalfEdges(tri, twin, _kernels.vertex_half_edges(tri, n))
+        vh = prepared["vertex_he"] if prepared is not None else _kernels.vertex_half_edges(tri, n)
+        out_he = HalfEdges(tri, twin, vh)
     if has_segs:
         segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
         if segs.min() < 0 or segs.max() >= n:
@@ -294,7 +317,8 @@ def verify_cycle_mesh(
     if reference is not None:
         stats.update(
             _compare_with_input(
-                pts, tri, twin, out_he, reference, ref_facts, used, amin, tmin, total, angle_ratio
+                pts, tri, twin, out_he, reference, ref_facts, used, amin, tmin, total, angle_ratio,
+                None if prepared is None else prepared["boundary"],
             )
         )
     return stats
@@ -312,6 +336,7 @@ def _compare_with_input(
     tmin: int,
     total: float,
     angle_ratio: float,
+    b_out: np.ndarray | None = None,
 ) -> dict[str, Any]:
     n = len(pts)
     rp = np.asarray(ref.points, dtype=np.float64)
@@ -326,7 +351,8 @@ def _compare_with_input(
     if not math.isclose(total, r_total, rel_tol=AREA_RTOL, abs_tol=0.0):
         _fail(f"total area changed from {r_total!r} to {total!r}")
 
-    b_out = _boundary_keys(tri, twin)
+    if b_out is None:
+        b_out = _boundary_keys(tri, twin)
     b_in = facts["boundary"]
     if not np.array_equal(b_out, b_in):
         diff = np.setxor1d(b_out, b_in)
@@ -376,6 +402,7 @@ def verify(
     angle_ratio: float = 0.5,
     rows: tuple | None = None,
     input_facts: dict[str, Any] | None = None,
+    prepared: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Certificate of a :class:`~hammesh.mesh.HamiltonianMesh` (see module docstring).
 
@@ -393,4 +420,5 @@ def verify(
         angle_ratio=angle_ratio,
         rows=rows,
         input_facts=input_facts,
+        prepared=prepared,
     )

@@ -23,6 +23,7 @@ half-edge was covered. Any failure only makes the caller run the full certificat
 from __future__ import annotations
 
 import threading
+from concurrent.futures import Future
 
 import numpy as np
 
@@ -38,8 +39,7 @@ class RowStream:
     Parameters
     ----------
     points : (n, 2) float64
-        Output points; every point a checked row uses must be final before the rows
-        that use it are published.
+        Output points; no row is checked before :meth:`points_final` is called.
     triangles : (m, 3) int64
         Output rows, written in order.
     claim : (3 m,) int64
@@ -61,8 +61,16 @@ class RowStream:
         self._ready = 0  # rows that may be checked
         self._final = False
         self._stopped = False
+        self._points = False
         self._next = 0  # first row not handed out yet
         self._parts: list[tuple] = []
+        self._workers: list[Future] = []
+
+    def points_final(self) -> None:
+        """Every point the rows use is written: checking may start (see the class)."""
+        with self._cond:
+            self._points = True
+            self._cond.notify_all()
 
     def publish(self, ready: int, final: bool = False) -> None:
         """Rows below ``ready`` are final (``final``: all rows are written)."""
@@ -83,6 +91,9 @@ class RowStream:
                 if self._stopped:
                     return None
                 lo = self._next
+                if not self._points:
+                    self._cond.wait()
+                    continue
                 if self._final and lo >= self._ready:
                     return None
                 if self._ready - lo >= self.chunk or (self._final and self._ready > lo):
@@ -90,6 +101,16 @@ class RowStream:
                     self._next = hi
                     return lo, hi
                 self._cond.wait()
+
+    def attach(self, worker: Future) -> None:
+        """A thread running :meth:`work` that :meth:`join` waits for."""
+        self._workers.append(worker)
+
+    def join(self) -> None:
+        """Check rows here too until all are checked, then wait for the attached workers."""
+        self.work()
+        for w in self._workers:
+            w.result()
 
     def work(self) -> None:
         """Check published rows until all are checked (blocks while rows are pending)."""

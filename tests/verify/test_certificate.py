@@ -188,3 +188,16 @@ def test_nearly_flat_inverted_triangle_is_caught_exactly() -> None:
     )
     assert res[8] > 0  # the floating-point area is positive ...
     assert res[11] == 0  # ... and the exact test flags row 0
+
+
+def test_degenerate_row_is_a_verification_error(pair) -> None:
+    """A row with a repeated vertex (zero-length sides) is reported, not a ZeroDivisionError."""
+    _, h = pair
+    tri = h.triangles.copy()
+    tri[5] = [tri[5, 0], tri[5, 0], tri[5, 1]]
+    with pytest.raises(hammesh.VerificationError):
+        verify(replace(h, triangles=tri))
+    from hammesh import _kernels
+
+    res = _kernels.certify_rows(h.points, tri, h.components, np.empty(0, dtype=np.int64))
+    assert res[11] == 5  # flagged by the exact orientation test

@@ -36,6 +36,7 @@ def plate(n_loops: int, pieces: int) -> hammesh.Mesh:
 def streamed(h: hammesh.HamiltonianMesh, claim: np.ndarray, steps: int, workers: int) -> tuple:
     """Publish ``h``'s rows in ``steps`` steps to ``workers`` threads, as the walk does."""
     stream = RowStream(h.points, h.triangles, claim, chunk=7)
+    stream.points_final()
     threads = [threading.Thread(target=stream.work) for _ in range(workers)]
     for t in threads:
         t.start()
@@ -144,3 +145,20 @@ def test_walk_resumes_where_it_paused(built) -> None:
     assert st == 1 and calls >= total - len(mid_h) - len(firsts)  # a pause at every slot
     for a, b in zip((out, parent, kind, lengths, c), (ref[0], ref[1], ref[2], ref[3], ref[6])):
         np.testing.assert_array_equal(a, b)
+
+
+def test_no_row_is_checked_before_the_points_are_final(built) -> None:
+    """Workers wait for ``points_final`` (the incenters) even when rows are published."""
+    h, claim = built
+    pts = np.zeros_like(h.points)  # not written yet: every row degenerate
+    stream = RowStream(pts, h.triangles, claim, chunk=7)
+    stream.publish(h.n_triangles, final=True)
+    worker = threading.Thread(target=stream.work)
+    worker.start()
+    worker.join(0.2)
+    assert worker.is_alive() and not stream._parts  # waiting, nothing checked
+    pts[:] = h.points
+    stream.points_final()
+    worker.join()
+    rows = stream.result(h.components)
+    assert rows[11] == -1 and rows[1] == -1
