@@ -450,7 +450,7 @@ TREE_BIT = 2
 CON_BIT = 1
 
 
-def spanning_forest(tri, twin, is_con):
+def spanning_forest(tri, twin, is_con, points=None):
     """Spanning forest of the dual graph that crosses the fewest constrained edges.
 
     First a depth-first search over free (flippable) dual edges only: its trees span
@@ -459,16 +459,25 @@ def spanning_forest(tri, twin, is_con):
     if it joins two regions not yet joined: exactly ``regions - pieces`` crossings,
     the fewest possible (a crossing joins two regions).
 
+    On a large mesh (``points`` given, ``THREAD_MIN_ROWS`` rows per core) the search
+    runs in threads, one per *part*: the triangles split into slabs by the x of their
+    first corner (at quantiles of a sample), each slab searched by its own thread as if
+    the slab's border were constrained. The slabs' trees are joined first across free
+    border edges (flips, as any tree edge), then across constrained edges: still the
+    fewest crossings, since constrained edges come last.
+
     The triangles come back renumbered in the order the search took them off its
-    stack: the Thm 2.4 walk follows the tree, so in this numbering its reads are
-    nearly sequential (memory locality), and the half-edge data is packed into one
-    array so that the walk reads one word per half-edge.
+    stack (part by part): the Thm 2.4 walk follows the tree, so in this numbering its
+    reads are nearly sequential (memory locality), and the half-edge data is packed
+    into one array so that the walk reads one word per half-edge.
 
     Parameters
     ----------
     tri : (m, 3) int64
     twin : (3 m,) int64
     is_con : (3 m,) bool
+    points : (n, 2) float64, optional
+        Enables the threaded search (the slabs need coordinates).
 
     Returns
     -------
@@ -484,27 +493,81 @@ def spanning_forest(tri, twin, is_con):
         their lowest input triangle.
     """
     m = tri.shape[0]
+    spans = row_ranges(m, THREAD_MIN_ROWS)
+    k = len(spans) if points is not None else 1
+    part = np.zeros(m, np.uint8)
+    sizes = np.array([m], np.int64)
+    if k > 1:
+        sample = points[tri[:: max(1, m // 20_000), 0], 0]
+        cuts = np.quantile(sample, np.arange(1, k) / k)
+        counts = run_all([
+            (lambda lo=lo, hi=hi: _assign_parts(points, tri, cuts, part, lo, hi)) for lo, hi in spans
+        ])
+        sizes = np.sum(counts, axis=0)
+    k = len(sizes)
+    base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     region = np.full(m, -1, np.int64)
-    stack = np.empty(m, np.int64)
-    via = np.empty(m, np.int64)
     order = np.empty(m, np.int64)
     rank = np.empty(m, np.int64)
     tri_r = np.empty_like(tri)
     code = np.empty(3 * m, np.int64)
-    n_pieces = _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tri_r, code)
-    # ``stack`` holds the lowest triangle of each piece (new numbering) on return
-    return tri_r, code, order, stack[:n_pieces].copy()
+    work = [
+        tuple(np.empty(s, np.int64) for s in (sizes[p], sizes[p], 3 * sizes[p], 3 * sizes[p], sizes[p]))
+        for p in range(k)
+    ]  # per part: stack, via, border edges, constrained edges, region seeds
+    found = run_all([
+        (lambda p=p: _forest_part(tri, twin, is_con, part, p, k, base[p], region, order, rank, tri_r,
+                                  code, *work[p]))
+        for p in range(k)
+    ])
+    border = np.sort(np.concatenate([work[p][2][: found[p][0]] for p in range(k)]))
+    con = np.sort(np.concatenate([work[p][3][: found[p][1]] for p in range(k)]))
+    seeds = np.full(k * max(f[2] for f in found), -1, np.int64)  # region r: seeds[r]
+    for p in range(k):
+        seeds[p : k * found[p][2] : k] = work[p][4][: found[p][2]]
+    firsts = _join_regions(twin, region, rank, code, border, con, seeds)
+    run_all([
+        (lambda lo=lo, hi=hi: _renumber_twins(code, rank, 3 * lo, 3 * hi)) for lo, hi in spans
+    ])
+    return tri_r, code, order, firsts
 
 
 @njit(cache=True, nogil=True)
-def _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tri_r, code):
+def _assign_parts(points, tri, cuts, part, lo, hi):
+    """``part[t]``: the slab of t's first corner's x among ``cuts``; counts per slab."""
+    counts = np.zeros(cuts.shape[0] + 1, np.int64)
+    for t in range(lo, hi):
+        x = points[tri[t, 0], 0]
+        p = 0
+        while p < cuts.shape[0] and x >= cuts[p]:
+            p += 1
+        part[t] = p
+        counts[p] += 1
+    return counts
+
+
+@njit(cache=True, nogil=True)
+def _forest_part(tri, twin, is_con, part, p, k, base, region, order, rank, tri_r, code,
+                 stack, via, border, con, seeds):
+    """Depth-first search of slab ``p`` over free edges inside it (one thread).
+
+    Numbers its triangles ``base, base + 1, ...`` in the order they leave the stack;
+    region ``j`` of the slab gets id ``p + k j`` and seed ``seeds[j]`` (its lowest
+    triangle). Free edges to a higher slab go to ``border``, constrained interior
+    edges (from their lower half-edge) to ``con``. Returns the three counts.
+    """
     m = tri.shape[0]
-    n_seen = 0
+    n_seen = base
     n_reg = 0
+    n_border = 0
+    n_con = 0
     for s in range(m):
-        if region[s] >= 0:
+        if part[s] != p or region[s] >= 0:
             continue
-        region[s] = n_reg
+        rid = p + k * n_reg
+        seeds[n_reg] = s
+        n_reg += 1
+        region[s] = rid
         stack[0] = s
         via[0] = -1
         top = 1
@@ -516,47 +579,68 @@ def _spanning_forest_into(tri, twin, is_con, region, stack, via, order, rank, tr
             n_seen += 1
             order[i] = t
             rank[t] = i
-            for k in range(3):
-                h = 3 * t + k
-                tri_r[i, k] = tri[t, k]
+            for kk in range(3):
+                h = 3 * t + kk
+                tri_r[i, kk] = tri[t, kk]
                 g = twin[h]
                 bits = CON_BIT if is_con[h] else 0
                 if h == entry:
                     bits |= TREE_BIT
-                elif g >= 0 and not is_con[h]:
+                elif g >= 0:
                     u = g // 3
-                    if region[u] < 0:
-                        region[u] = n_reg
+                    if is_con[h]:
+                        if h < g:
+                            con[n_con] = h
+                            n_con += 1
+                    elif part[u] != p:
+                        if part[u] > p:
+                            border[n_border] = h
+                            n_border += 1
+                    elif region[u] < 0:
+                        region[u] = rid
                         bits |= TREE_BIT
                         stack[top] = u
                         via[top] = g
                         top += 1
-                code[3 * i + k] = ((g + 1) << 2) | bits  # twin still in input numbering
-        n_reg += 1
-    parent = np.arange(n_reg)
-    for h in range(twin.shape[0]):
-        g = twin[h]
-        if g < h or not is_con[h]:
+                code[3 * i + kk] = ((g + 1) << 2) | bits  # twin still in input numbering
+    return n_border, n_con, n_reg
+
+
+@njit(cache=True)
+def _join_regions(twin, region, rank, code, border, con, seeds):
+    """Join the searched regions into one tree per piece: free border edges first,
+    then constrained edges, each only if it joins two trees. Returns the first
+    triangle (new numbering) of each piece, pieces ordered by lowest input triangle."""
+    uf = np.arange(seeds.shape[0])
+    for edges in (border, con):
+        for e in range(edges.shape[0]):
+            h = edges[e]
+            g = twin[h]
+            a = _find(uf, region[h // 3])
+            b = _find(uf, region[g // 3])
+            if a != b:
+                uf[a] = b
+                code[3 * rank[h // 3] + h % 3] |= TREE_BIT
+                code[3 * rank[g // 3] + g % 3] |= TREE_BIT
+    low = np.full(seeds.shape[0], -1, np.int64)  # per root: the piece's lowest triangle
+    for r in range(seeds.shape[0]):
+        if seeds[r] < 0:
             continue
-        a = _find(parent, region[h // 3])
-        b = _find(parent, region[g // 3])
-        if a != b:
-            parent[a] = b
-            code[3 * rank[h // 3] + h % 3] |= TREE_BIT
-            code[3 * rank[g // 3] + g % 3] |= TREE_BIT
-    for j in range(3 * m):  # twins into the new numbering
+        a = _find(uf, r)
+        if low[a] < 0 or seeds[r] < low[a]:
+            low[a] = seeds[r]
+    firsts = np.sort(low[low >= 0])
+    for j in range(firsts.shape[0]):
+        firsts[j] = rank[firsts[j]]
+    return firsts
+
+
+@njit(cache=True, nogil=True)
+def _renumber_twins(code, rank, lo, hi):
+    for j in range(lo, hi):
         g = (code[j] >> 2) - 1
         if g >= 0:
             code[j] = ((3 * rank[g // 3] + g % 3 + 1) << 2) | (code[j] & 3)
-    seen = np.zeros(n_reg, np.bool_)
-    n_pieces = 0
-    for t in range(m):
-        r = _find(parent, region[t])
-        if not seen[r]:
-            seen[r] = True
-            stack[n_pieces] = rank[t]
-            n_pieces += 1
-    return n_pieces
 
 
 def split_slots(tri, code):

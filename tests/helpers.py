@@ -88,3 +88,21 @@ def assert_certificate(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> None:
     assert h.n_triangles == 3 * m.n_triangles + 2 * q
     assert h.n_points == m.n_points + m.n_triangles + q
     assert len(h.components) == dual_pieces(m.triangles)
+
+
+def plate(n_loops: int, pieces: int, max_area: float = 0.004) -> hammesh.Mesh:
+    """Unit squares side by side (``pieces`` pieces), the first with ``n_loops`` closed
+    internal constrained squares (interfaces: one midpoint each), meshed."""
+    v: list[list[float]] = []
+    segs: list[list[int]] = []
+    for p in range(pieces):
+        b = len(v)
+        v += square(2.0 * p, 0, 1)
+        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
+    for i in range(n_loops):
+        b = len(v)
+        v += square(0.1 + 0.28 * i, 0.4, 0.2)
+        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
+    holes = [[2.0 * p - 0.5, 0.5] for p in range(1, pieces)]
+    dom = hammesh.Domain(vertices=v, segments=segs, holes=holes or None)
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=max_area)

@@ -121,7 +121,7 @@ def incircle_streaming(
     ready = side.submit(_walk_arrays, nh, nh) if side is not None else None
     # the walk runs in the tree search's numbering (locality): incenter n + i is that
     # of input triangle order[i]
-    tri, code, order, firsts = _kernels.spanning_forest(mesh.triangles, he.twin, is_con)
+    tri, code, order, firsts = _kernels.spanning_forest(mesh.triangles, he.twin, is_con, pts)
     mid_h, mid_id, mid_a, mid_b = _kernels.split_slots(tri, code)
     total = nh + len(mid_h)
     arrays = ready.result() if ready is not None else None

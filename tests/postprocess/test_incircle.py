@@ -237,3 +237,27 @@ def test_a_wrong_claim_is_not_believed() -> None:
         verify(replace(h, triangles=tri), reference=m, twin_claim=bogus)
     # a valid output with a bogus claim still passes (the claim is checked, then ignored)
     verify(h, reference=m, twin_claim=bogus)
+
+
+@pytest.mark.parametrize("n_loops, pieces", [(0, 1), (3, 1), (2, 3)])
+@pytest.mark.parametrize("cores", [2, 3])
+def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores: int) -> None:
+    """Searched in threads (one slab each), the forest still spans every piece with the
+    fewest midpoints, and the output passes the certificate."""
+    from hammesh import _kernels, _threads
+    from tests.helpers import plate
+
+    m = plate(n_loops, pieces, max_area=0.002)
+    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 50)
+    monkeypatch.setattr(_threads.os, "cpu_count", lambda: cores)
+    from hammesh.verify.input_mesh import prepare_mesh
+
+    clean, he, is_con = prepare_mesh(m)
+    tri, code, order, firsts = _kernels.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
+    assert sorted(order.tolist()) == list(range(m.n_triangles))
+    tree = (code & 3) >= _kernels.TREE_BIT
+    assert tree.sum() == 2 * (m.n_triangles - pieces)  # a spanning forest: m - pieces edges
+    assert ((code & 3) == 3).sum() == 2 * n_loops  # crossings: regions - pieces
+    h = hammesh.hamiltonian(m)
+    assert len(h.components) == pieces and h.report["midpoints"] == n_loops
+    assert_certificate(m, h)

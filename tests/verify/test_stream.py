@@ -14,23 +14,7 @@ from hammesh.postprocess import incircle
 from hammesh.verify import prepare_mesh, verify
 from hammesh.verify.certificate import _certify_rows
 from hammesh.verify.stream import RowStream
-from tests.helpers import assert_certificate, square
-
-
-def plate(n_loops: int, pieces: int) -> hammesh.Mesh:
-    """Squares side by side (several pieces), the first with closed internal loops."""
-    v, segs, holes = [], [], []
-    for p in range(pieces):
-        b = len(v)
-        v += square(2.0 * p, 0, 1)
-        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
-    for i in range(n_loops):
-        b = len(v)
-        v += square(0.1 + 0.28 * i, 0.4, 0.2)
-        segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
-    holes = [[2.0 * p - 0.5, 0.5] for p in range(1, pieces)]
-    dom = hammesh.Domain(vertices=v, segments=segs, holes=holes or None)
-    return hammesh.quality_mesh(dom, min_angle=30, max_area=0.004)
+from tests.helpers import assert_certificate, plate
 
 
 def streamed(h: hammesh.HamiltonianMesh, claim: np.ndarray, steps: int, workers: int) -> tuple:
