@@ -666,11 +666,11 @@ def split_slots(tri, code):
 WALK_STATE = 6
 
 
-def emit_cycles(tri, code, firsts, n_points):
+def emit_cycles(tri, code, firsts, n_points, order=None):
     """Walk the Thm 2.4 cycles and emit the output triangles in cycle order (one call).
 
     See ``emit_cycles_into`` for the walk. Returns ``(out, parent, kind, lengths,
-    mid_a, mid_b, out_twin)``: output triangles, the (new-numbering) triangle each lies
+    mid_a, mid_b, out_twin)``: output triangles, the input triangle (``order[t]``) each lies
     in, its kind (0 incenter, 1 flip, 2 midpoint), the cycle lengths, the edge
     ``(mid_a[i], mid_b[i])`` split by midpoint ``n_points + m + i``, and the output's
     half-edge twins as the construction implies them (a *claim* the certificate checks,
@@ -688,7 +688,8 @@ def emit_cycles(tri, code, firsts, n_points):
     lengths = np.zeros(len(firsts), np.int64)
     y2 = np.full(len(mid_h), -1, np.int64)
     state = np.zeros(WALK_STATE, np.int64)
-    done = emit_cycles_into(tri, code, firsts, int(n_points), mid_h, mid_id, out, parent, kind, claim,
+    order = np.arange(tri.shape[0], dtype=np.int64) if order is None else order
+    done = emit_cycles_into(tri, code, firsts, order, int(n_points), mid_h, mid_id, out, parent, kind, claim,
                             prim, lengths, y2, state, total)
     pos = int(state[2])
     if done != 1 or pos != total:  # not a permutation: the caller reports it
@@ -702,7 +703,7 @@ UNLINKED = -2
 
 
 @njit(cache=True, nogil=True)
-def emit_cycles_into(tri, code, firsts, n_points, mid_h, mid_id, out, parent, kind, claim, prim,
+def emit_cycles_into(tri, code, firsts, order, n_points, mid_h, mid_id, out, parent, kind, claim, prim,
                      lengths, y2, state, stop):
     """Walk the Thm 2.4 cycles, emitting rows until row ``stop`` (resumable).
 
@@ -778,7 +779,7 @@ def emit_cycles_into(tri, code, firsts, n_points, mid_h, mid_id, out, parent, ki
                 out[pos, 0] = inc
                 out[pos, 1] = a
                 out[pos, 2] = tri[t, (k + 1) % 3]
-                parent[pos] = t
+                parent[pos] = order[t]
                 kind[pos] = 0
                 if g < 0:
                     claim[3 * pos + 1] = -1
@@ -797,7 +798,7 @@ def emit_cycles_into(tri, code, firsts, n_points, mid_h, mid_id, out, parent, ki
                     out[pos, 0] = inc
                     out[pos, 1] = a
                     out[pos, 2] = n_points + u
-                    parent[pos] = t
+                    parent[pos] = order[t]
                     kind[pos] = 1
                     pg = prim[g]
                     if pg >= 0:
@@ -815,12 +816,12 @@ def emit_cycles_into(tri, code, firsts, n_points, mid_h, mid_id, out, parent, ki
                     out[pos, 0] = inc
                     out[pos, 1] = a
                     out[pos, 2] = mv
-                    parent[pos] = t
+                    parent[pos] = order[t]
                     kind[pos] = 2
                     out[pos + 1, 0] = n_points + u
                     out[pos + 1, 1] = mv
                     out[pos + 1, 2] = a
-                    parent[pos + 1] = u
+                    parent[pos + 1] = order[u]
                     kind[pos + 1] = 2
                     y2[ig] = pos + 1
                     claim[3 * pos + 1] = 3 * (pos + 1) + 1  # (a, M) | (M, a)

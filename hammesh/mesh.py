@@ -147,4 +147,6 @@ def cycle_positions(components: np.ndarray) -> np.ndarray:
     [0, 1, 2, 0, 1]
     """
     runs = np.asarray(components, dtype=np.int64)
+    if len(runs) == 1:
+        return np.arange(int(runs[0]), dtype=np.int64)
     return np.arange(int(runs.sum()), dtype=np.int64) - np.repeat(np.cumsum(runs) - runs, runs)

@@ -135,7 +135,7 @@ def incircle_streaming(
     lengths = np.zeros(len(firsts), np.int64)
     y2 = np.full(len(mid_h), -1, np.int64)
     state = np.zeros(_kernels.WALK_STATE, np.int64)
-    args = (tri, code, firsts, n, mid_h, mid_id, out, parent, kind, claim, prim, lengths, y2, state)
+    args = (tri, code, firsts, order, n, mid_h, mid_id, out, parent, kind, claim, prim, lengths, y2, state)
 
     stream = None
     if side is None:
@@ -166,7 +166,6 @@ def incircle_streaming(
         raise VerificationError(
             f"internal error: the tree walk emitted {int(state[2])} of {total} triangles"
         )
-    parent = order[parent]
 
     segs, markers = split_segments(mesh.segments, mesh.segment_markers, mid_a, mid_b, n + m, len(points))
     position = cycle_positions(lengths)

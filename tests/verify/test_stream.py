@@ -111,7 +111,7 @@ def test_walk_resumes_where_it_paused(built) -> None:
     h, claim = built
     clean, he, is_con = prepare_mesh(plate(2, 3))
     tri, code, order, firsts = _kernels.spanning_forest(clean.triangles, he.twin, is_con)
-    ref = _kernels.emit_cycles(tri, code, firsts, clean.n_points)
+    ref = _kernels.emit_cycles(tri, code, firsts, clean.n_points, order)
     mid_h, mid_id, _, _ = _kernels.split_slots(tri, code)
     total = len(code) + len(mid_h)
     out = np.zeros((total, 3), np.int64)
@@ -123,7 +123,7 @@ def test_walk_resumes_where_it_paused(built) -> None:
     y2 = np.full(len(mid_h), -1, np.int64)
     state = np.zeros(_kernels.WALK_STATE, np.int64)
     calls = 0
-    while (st := _kernels.emit_cycles_into(tri, code, firsts, clean.n_points, mid_h, mid_id, out, parent,
+    while (st := _kernels.emit_cycles_into(tri, code, firsts, order, clean.n_points, mid_h, mid_id, out, parent,
                                            kind, c, prim, lengths, y2, state, int(state[2]) + 1)) == 0:
         calls += 1
     assert st == 1 and calls >= total - len(mid_h) - len(firsts)  # a pause at every slot
