@@ -56,7 +56,7 @@ def mesh_with_meshpy(domain: Domain, opts: MeshOptions) -> Mesh:
     )
     tri = np.asarray(out.elements, dtype=np.int64).reshape(-1, 3)
     nbr = np.asarray(out.neighbors, dtype=np.int64).reshape(-1, 3)
-    nbr = nbr[:, [2, 0, 1]] if len(nbr) == len(tri) else None
+    nbr = np.ascontiguousarray(nbr[:, [2, 0, 1]]) if len(nbr) == len(tri) else None
     attrs = (
         np.asarray(out.element_attributes, dtype=np.float64).reshape(len(tri), -1)
         if has_regions

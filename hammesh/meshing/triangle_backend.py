@@ -47,7 +47,8 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions) -> Mesh:
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64)
     nbr = np.asarray(out.get("neighbors", np.full((len(tri), 3), -1)), dtype=np.int64)
     # Triangle's neighbour k is opposite vertex k; ours is across edge (k, k+1)
-    nbr = nbr[:, [2, 0, 1]] if len(nbr) else np.zeros((0, 3), dtype=np.int64)
+    # (C order: a column gather returns Fortran order, which every consumer would copy)
+    nbr = np.ascontiguousarray(nbr[:, [2, 0, 1]]) if len(nbr) else np.zeros((0, 3), dtype=np.int64)
     attrs = np.asarray(out.get("triangle_attributes", np.zeros((len(tri), 0))), dtype=np.float64)
     return Mesh(
         points=np.asarray(out["vertices"], dtype=np.float64),

@@ -116,6 +116,18 @@ def test_segments_markers_and_neighbours_are_kept() -> None:
                 assert e <= set(m.triangles[u].tolist())
 
 
+@pytest.mark.parametrize("backend", ["triangle", "meshpy"])
+@pytest.mark.parametrize("isolate", [False, True])
+def test_mesh_arrays_are_c_contiguous(backend: str, isolate: bool) -> None:
+    """Plain C-order arrays: consumers (the post-process) must not pay a copy."""
+    dom = hammesh.Domain(vertices=square(), segments=[[0, 1], [1, 2], [2, 3], [3, 0]])
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.05, backend=backend, isolate=isolate)
+    for name in ("points", "triangles", "neighbors", "segments", "triangle_attributes"):
+        a = getattr(m, name)
+        if a is not None:
+            assert a.flags["C_CONTIGUOUS"], name
+
+
 def test_regions_attributes_and_regional_area() -> None:
     v = square(0, 0, 2) + square(0.5, 0.5, 1)
     segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
