@@ -6,9 +6,11 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 
+import numpy as np
+
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
-from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming
+from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess.sparse import sparse_hamiltonian
 from hammesh.verify.certificate import claim_structure, input_facts, verify
 from hammesh.verify.input_mesh import prepare_mesh
@@ -53,14 +55,19 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     t0 = time.perf_counter()
-    clean, he, is_con = prepare_mesh(mesh)
-    # a second thread works beside the construction: the input's side of the
-    # certificate, and (incircle) the row checks of the rows the walk has finished
+    # a second thread works beside the construction: the walk's arrays (while the
+    # input is checked), the input's side of the certificate, and (incircle) the row
+    # checks of the rows the walk has finished
     with ThreadPoolExecutor(1) as side:
+        ready = None
+        shape = np.shape(mesh.triangles)
+        if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
+            ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0])
+        clean, he, is_con = prepare_mesh(mesh)
         facts = side.submit(input_facts, clean, he.twin)
         rows = prepared = None
         if mode == "incircle":
-            out, claim, stream = incircle_streaming(clean, he, is_con, side)
+            out, claim, stream = incircle_streaming(clean, he, is_con, side, ready)
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows
             prepared = claim_structure(out.triangles, len(out.points), claim)

@@ -26,7 +26,7 @@ flipped (``u`` across), and ``(I_t, a, M)`` plus ``(I_t, M, b)`` if it is split 
 
 from __future__ import annotations
 
-from concurrent.futures import Executor
+from concurrent.futures import Executor, Future
 
 import numpy as np
 
@@ -93,7 +93,8 @@ def _touched(shape: tuple[int, ...], dtype: type, fill: int) -> np.ndarray:
     return a
 
 
-def _walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
+def walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
+    """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched."""
     return {
         "out": _touched((total, 3), np.int64, 0),
         "parent": _touched((total,), np.int64, 0),
@@ -104,7 +105,7 @@ def _walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
 
 
 def incircle_streaming(
-    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None, ready: Future | None = None
 ) -> tuple[HamiltonianMesh, np.ndarray, RowStream | None]:
     """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
 
@@ -113,12 +114,15 @@ def incircle_streaming(
     finished rows of the output (``hammesh.verify.stream.RowStream``), which is
     returned for the caller to finish (``stream.join()``, then ``stream.result``).
     Without ``side`` it is the plain serial construction and the stream is None.
+    ``ready`` may hold ``walk_arrays(3 m, 3 m)`` already submitted (e.g. before the
+    input was validated, to use the other core then).
     """
     pts = mesh.points
     n, m = mesh.n_points, mesh.n_triangles
     nh = 3 * m
     # most meshes split no constrained edge (total = 3 m): their arrays are made now
-    ready = side.submit(_walk_arrays, nh, nh) if side is not None else None
+    if ready is None and side is not None:
+        ready = side.submit(walk_arrays, nh, nh)
     # the walk runs in the tree search's numbering (locality): incenter n + i is that
     # of input triangle order[i]
     tri, code, order, firsts = _kernels.spanning_forest(mesh.triangles, he.twin, is_con, pts)
@@ -126,7 +130,7 @@ def incircle_streaming(
     total = nh + len(mid_h)
     arrays = ready.result() if ready is not None else None
     if arrays is None or len(arrays["out"]) != total:
-        arrays = _walk_arrays(total, nh)
+        arrays = walk_arrays(total, nh)
     out, parent, kind, claim, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
     q = len(mid_a)
     points = np.empty((n + m + q, 2))
