@@ -926,6 +926,17 @@ def _angle_area_range(points, tri, lo, hi):
     return best_s2, amin, best_c, amax, min_area, aarea, total
 
 
+@njit(cache=True, inline="always")
+def _shared(tri, i, j):
+    """How many vertices rows ``i`` and ``j`` have in common (2: they share an edge)."""
+    shared = 0
+    for a in range(3):
+        for b in range(3):
+            if tri[i, a] == tri[j, b]:
+                shared += 1
+    return shared
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
     """The certificate's per-row checks in one pass over a cycle-ordered mesh.
@@ -997,12 +1008,7 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
             if bad_orient < 0 and orient_points(points, p0, p1, p2) <= 0:
                 bad_orient = i
             j = i + 1 if i + 1 < r_end else r_start
-            shared = 0
-            for a in range(3):
-                for b in range(3):
-                    if tri[i, a] == tri[j, b]:
-                        shared += 1
-            if shared != 2:
+            if _shared(tri, i, j) != 2:
                 if mark_cons:
                     cons_fail[i] = True
                 elif bad_consec < 0:
@@ -1060,12 +1066,7 @@ def runs_close(tri, runs):
     r_start = 0
     for r in range(runs.shape[0]):
         i = r_start + runs[r] - 1
-        shared = 0
-        for a in range(3):
-            for b in range(3):
-                if tri[i, a] == tri[r_start, b]:
-                    shared += 1
-        if shared != 2:
+        if _shared(tri, i, r_start) != 2:
             return i
         r_start += runs[r]
     return -1
