@@ -87,24 +87,18 @@ def incircle_hamiltonian(
 WALK_CHUNK = 1 << 18
 
 
-def _touched(shape: tuple[int, ...], dtype: type, fill: int | None = None) -> np.ndarray:
-    """A new array with its pages faulted in now (beside other work, not in the walk):
-    filled with ``fill``, or (None: contents unspecified) one write per 4 KiB page,
-    which makes the kernel hand out zeroed pages without a second pass over them."""
+def _touched(shape: tuple[int, ...], dtype: type, fill: int) -> np.ndarray:
     a = np.empty(shape, dtype)
-    if fill is None:
-        a.reshape(-1).view(np.uint8)[::4096] = 0
-    else:
-        a.fill(fill)
+    a.fill(fill)  # page faults taken here, beside other work, not in the walk
     return a
 
 
 def walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
     """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched."""
     return {
-        "out": _touched((total, 3), np.int64),
-        "parent": _touched((total,), np.int64),
-        "kind": _touched((total,), np.int8),
+        "out": _touched((total, 3), np.int64, 0),
+        "parent": _touched((total,), np.int64, 0),
+        "kind": _touched((total,), np.int8, 0),
         "claim": _touched((3 * total,), np.int64, _kernels.UNLINKED),
         "prim": _touched((nh,), np.int64, -1),
     }
