@@ -491,6 +491,9 @@ def spanning_forest(tri, twin, is_con, points=None):
     firsts : (p,) int64
         One triangle of each connected piece, new numbering, the pieces ordered by
         their lowest input triangle.
+    split : (2 q,) int64
+        The constrained tree edges (both half-edges, new numbering, sorted): where the
+        walk inserts midpoints (``split_slots``).
     """
     m = tri.shape[0]
     spans = row_ranges(m, THREAD_MIN_ROWS)
@@ -525,11 +528,11 @@ def spanning_forest(tri, twin, is_con, points=None):
     seeds = np.full(k * max(f[2] for f in found), -1, np.int64)  # region r: seeds[r]
     for p in range(k):
         seeds[p : k * found[p][2] : k] = work[p][4][: found[p][2]]
-    firsts = _join_regions(twin, region, rank, code, border, con, seeds)
+    firsts, split = _join_regions(twin, region, rank, code, border, con, seeds)
     run_all([
         (lambda lo=lo, hi=hi: _renumber_twins(code, rank, 3 * lo, 3 * hi)) for lo, hi in spans
     ])
-    return tri_r, code, order, firsts
+    return tri_r, code, order, firsts, np.sort(split)
 
 
 @njit(cache=True, nogil=True)
@@ -610,9 +613,13 @@ def _forest_part(tri, twin, is_con, part, p, k, base, region, order, rank, tri_r
 def _join_regions(twin, region, rank, code, border, con, seeds):
     """Join the searched regions into one tree per piece: free border edges first,
     then constrained edges, each only if it joins two trees. Returns the first
-    triangle (new numbering) of each piece, pieces ordered by lowest input triangle."""
+    triangle (new numbering) of each piece, pieces ordered by lowest input triangle,
+    and the constrained edges taken (both half-edges, new numbering)."""
     uf = np.arange(seeds.shape[0])
-    for edges in (border, con):
+    split = np.empty(2 * con.shape[0], np.int64)
+    n_split = 0
+    for step in range(2):
+        edges = border if step == 0 else con
         for e in range(edges.shape[0]):
             h = edges[e]
             g = twin[h]
@@ -620,8 +627,14 @@ def _join_regions(twin, region, rank, code, border, con, seeds):
             b = _find(uf, region[g // 3])
             if a != b:
                 uf[a] = b
-                code[3 * rank[h // 3] + h % 3] |= TREE_BIT
-                code[3 * rank[g // 3] + g % 3] |= TREE_BIT
+                jh = 3 * rank[h // 3] + h % 3
+                jg = 3 * rank[g // 3] + g % 3
+                code[jh] |= TREE_BIT
+                code[jg] |= TREE_BIT
+                if step == 1:
+                    split[n_split] = jh
+                    split[n_split + 1] = jg
+                    n_split += 2
     low = np.full(seeds.shape[0], -1, np.int64)  # per root: the piece's lowest triangle
     for r in range(seeds.shape[0]):
         if seeds[r] < 0:
@@ -632,7 +645,7 @@ def _join_regions(twin, region, rank, code, border, con, seeds):
     firsts = np.sort(low[low >= 0])
     for j in range(firsts.shape[0]):
         firsts[j] = rank[firsts[j]]
-    return firsts
+    return firsts, split[:n_split]
 
 
 @njit(cache=True, nogil=True)
@@ -643,14 +656,18 @@ def _renumber_twins(code, rank, lo, hi):
             code[j] = ((3 * rank[g // 3] + g % 3 + 1) << 2) | (code[j] & 3)
 
 
-def split_slots(tri, code):
+def split_slots(tri, code, mid_h=None):
     """The constrained tree edges the walk splits at their midpoints.
+
+    ``mid_h``: their half-edges if known (``spanning_forest``'s last result), else
+    found by a scan of ``code``.
 
     Returns ``(mid_h, mid_id, mid_a, mid_b)``: ``mid_h`` the sorted half-edges (both
     sides of each split edge), ``mid_id`` their midpoint number (``0..q-1``, in order
     of the lower half-edge), ``(mid_a[i], mid_b[i])`` the edge split by midpoint i.
     """
-    mid_h = np.flatnonzero((code & 3) == 3).astype(np.int64)
+    if mid_h is None:
+        mid_h = np.flatnonzero((code & 3) == 3).astype(np.int64)
     g = (code[mid_h] >> 2) - 1
     lower = mid_h < g
     mid_id = np.empty(len(mid_h), np.int64)

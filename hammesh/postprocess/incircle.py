@@ -93,6 +93,11 @@ def _touched(shape: tuple[int, ...], dtype: type, fill: int) -> np.ndarray:
     return a
 
 
+def _inherit(attrs: np.ndarray, parent: np.ndarray) -> np.ndarray:
+    """Regional attributes of each output triangle's parent (none: no gather pass)."""
+    return attrs[parent] if attrs.shape[1] else np.zeros((len(parent), 0))
+
+
 def walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
     """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched."""
     return {
@@ -125,8 +130,8 @@ def incircle_streaming(
         ready = side.submit(walk_arrays, nh, nh)
     # the walk runs in the tree search's numbering (locality): incenter n + i is that
     # of input triangle order[i]
-    tri, code, order, firsts = _kernels.spanning_forest(mesh.triangles, he.twin, is_con, pts)
-    mid_h, mid_id, mid_a, mid_b = _kernels.split_slots(tri, code)
+    tri, code, order, firsts, split = _kernels.spanning_forest(mesh.triangles, he.twin, is_con, pts)
+    mid_h, mid_id, mid_a, mid_b = _kernels.split_slots(tri, code, split)
     total = nh + len(mid_h)
     arrays = ready.result() if ready is not None else None
     if arrays is None or len(arrays["out"]) != total:
@@ -193,7 +198,7 @@ def incircle_streaming(
         position=position,
         parent=parent,
         kind=kind,
-        triangle_attributes=mesh.triangle_attributes[parent],
+        triangle_attributes=_inherit(mesh.triangle_attributes, parent),
         report=report,
     )
     return h, claim, stream

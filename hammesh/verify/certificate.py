@@ -130,15 +130,13 @@ input_facts = _input_facts
 def claim_structure(triangles: np.ndarray, n_points: int, claim: np.ndarray) -> dict[str, Any]:
     """What the certificate's last steps need from the output, computed ahead.
 
-    One half-edge leaving each vertex and the sorted boundary edge keys if ``claim``
-    is the pairing; ``verify_cycle_mesh(prepared=...)`` uses them only if the claim
-    passes its checks. A construction computes this while its rows are checked.
+    The sorted boundary edge keys if ``claim`` is the pairing;
+    ``verify_cycle_mesh(prepared=...)`` uses them only if the claim passes its checks.
+    A construction computes this while its rows are checked. (The vertex rotations
+    that interior constrained edges need are built only when there are such edges.)
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    return {
-        "vertex_he": _kernels.vertex_half_edges(tri, int(n_points)),
-        "boundary": _boundary_keys(tri, claim),
-    }
+    return {"boundary": _boundary_keys(tri, claim)}
 
 
 def _boundary_keys(tri: np.ndarray, twin: np.ndarray) -> np.ndarray:
@@ -296,18 +294,26 @@ def verify_cycle_mesh(
         )
 
     has_segs = segments is not None and len(segments) > 0
-    out_he = None  # vertex rotation structure, built once if any segment needs it
-    if has_segs or (reference is not None and len(reference.segments) > 0):
-        vh = prepared["vertex_he"] if prepared is not None else _kernels.vertex_half_edges(tri, n)
-        out_he = HalfEdges(tri, twin, vh)
+    b_out = None  # the output's boundary edge keys, if needed
+    if has_segs or reference is not None:
+        b_out = prepared["boundary"] if prepared is not None else _boundary_keys(tri, twin)
+    he_box: list[HalfEdges] = []
+
+    def out_he() -> HalfEdges:  # vertex rotations: built once, only if a segment needs it
+        if not he_box:
+            he_box.append(HalfEdges(tri, twin, _kernels.vertex_half_edges(tri, n)))
+        return he_box[0]
+
     if has_segs:
         segs = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
         if segs.min() < 0 or segs.max() >= n:
             _fail(f"constrained edges reference vertices outside 0..{n - 1}")
-        _, found = out_he.mark(segs)
-        if not found.all():
-            s = int(np.argmin(found))
-            _fail(f"constrained edge {s} {segs[s].tolist()} is not an edge of the mesh")
+        inner = np.flatnonzero(~_on_boundary(segs, b_out))  # boundary edges are edges
+        if len(inner):
+            found = out_he().mark(segs[inner])[1]
+            if not found.all():
+                s = int(inner[np.argmin(found)])
+                _fail(f"constrained edge {s} {segs[s].tolist()} is not an edge of the mesh")
 
     stats: dict[str, Any] = {
         "min_angle_output_deg": math.degrees(amin),
@@ -317,8 +323,7 @@ def verify_cycle_mesh(
     if reference is not None:
         stats.update(
             _compare_with_input(
-                pts, tri, twin, out_he, reference, ref_facts, used, amin, tmin, total, angle_ratio,
-                None if prepared is None else prepared["boundary"],
+                pts, tri, out_he, reference, ref_facts, used, amin, tmin, total, angle_ratio, b_out
             )
         )
     return stats
@@ -327,8 +332,7 @@ def verify_cycle_mesh(
 def _compare_with_input(
     pts: np.ndarray,
     tri: np.ndarray,
-    twin: np.ndarray,
-    out_he: HalfEdges | None,
+    out_he: Callable[[], HalfEdges],
     ref: Mesh,
     facts: dict[str, Any],
     used_out: np.ndarray,
@@ -336,7 +340,7 @@ def _compare_with_input(
     tmin: int,
     total: float,
     angle_ratio: float,
-    b_out: np.ndarray | None = None,
+    b_out: np.ndarray,
 ) -> dict[str, Any]:
     n = len(pts)
     rp = np.asarray(ref.points, dtype=np.float64)
@@ -351,8 +355,6 @@ def _compare_with_input(
     if not math.isclose(total, r_total, rel_tol=AREA_RTOL, abs_tol=0.0):
         _fail(f"total area changed from {r_total!r} to {total!r}")
 
-    if b_out is None:
-        b_out = _boundary_keys(tri, twin)
     b_in = facts["boundary"]
     if not np.array_equal(b_out, b_in):
         diff = np.setxor1d(b_out, b_in)
@@ -362,8 +364,7 @@ def _compare_with_input(
             "input and output"
         )
 
-    if out_he is not None:
-        _check_segments_kept(pts, out_he, ref)
+    _check_segments_kept(pts, out_he, ref, b_out)
 
     floor = angle_ratio * r_min * (1.0 - ANGLE_RTOL)
     if amin < floor:
@@ -374,14 +375,30 @@ def _compare_with_input(
     return {"min_angle_input_deg": math.degrees(r_min)}
 
 
-def _check_segments_kept(pts: np.ndarray, he: HalfEdges, ref: Mesh) -> None:
-    """Every input constrained edge is an output edge, or split at its exact midpoint."""
+def _on_boundary(segs: np.ndarray, keys: np.ndarray) -> np.ndarray:
+    """Which edges ``segs`` (either direction) are among the sorted boundary ``keys``."""
+    out = np.zeros(len(segs), dtype=bool)
+    if len(keys):
+        for k in (_edge_keys(segs[:, 0], segs[:, 1]), _edge_keys(segs[:, 1], segs[:, 0])):
+            i = np.searchsorted(keys, k).clip(max=len(keys) - 1)
+            out |= keys[i] == k
+    return out
+
+
+def _check_segments_kept(pts: np.ndarray, out_he: Callable[[], HalfEdges], ref: Mesh, b_out: np.ndarray) -> None:
+    """Every input constrained edge is an output edge, or split at its exact midpoint.
+
+    Boundary edges are output edges (the boundaries were found equal); only the
+    others need a look at the vertex rotations.
+    """
     segs = np.ascontiguousarray(ref.segments, dtype=np.int64).reshape(-1, 2)
-    if len(segs) == 0:
+    inner = np.flatnonzero(~_on_boundary(segs, b_out))
+    if len(inner) == 0:
         return
+    he = out_he()
     # a segment that is no output edge must be split at its midpoint M into the
     # output edges (a, M) and (M, b); there are few such segments (one per region)
-    for s in np.flatnonzero(~he.mark(segs)[1]).tolist():
+    for s in inner[~he.mark(segs[inner])[1]].tolist():
         a, b = int(segs[s, 0]), int(segs[s, 1])
         mid = 0.5 * (pts[a] + pts[b])
         cands = he.neighbors_of(a)

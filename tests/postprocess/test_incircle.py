@@ -253,7 +253,8 @@ def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores:
     from hammesh.verify.input_mesh import prepare_mesh
 
     clean, he, is_con = prepare_mesh(m)
-    tri, code, order, firsts = _kernels.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
+    tri, code, order, firsts, split = _kernels.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
+    np.testing.assert_array_equal(split, np.flatnonzero((code & 3) == 3))  # the split slots
     assert sorted(order.tolist()) == list(range(m.n_triangles))
     tree = (code & 3) >= _kernels.TREE_BIT
     assert tree.sum() == 2 * (m.n_triangles - pieces)  # a spanning forest: m - pieces edges

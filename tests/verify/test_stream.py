@@ -110,7 +110,7 @@ def test_walk_resumes_where_it_paused(built) -> None:
     """Paused after every row, the resumable walk writes exactly the one-call output."""
     h, claim = built
     clean, he, is_con = prepare_mesh(plate(2, 3))
-    tri, code, order, firsts = _kernels.spanning_forest(clean.triangles, he.twin, is_con)
+    tri, code, order, firsts, _ = _kernels.spanning_forest(clean.triangles, he.twin, is_con)
     ref = _kernels.emit_cycles(tri, code, firsts, clean.n_points, order)
     mid_h, mid_id, _, _ = _kernels.split_slots(tri, code)
     total = len(code) + len(mid_h)
