@@ -57,7 +57,14 @@ __all__ = [
     "encode_restart",
     "permute_mesh",
     "check_draws",
+    "mesh_records",
+    "greedy_paths_records",
+    "permute_records",
 ]
+
+
+#: ``(k + 1) % 3`` as a table: an index select instead of a division or a branch.
+_NEXT = np.array([1, 2, 0], np.int64)
 
 
 @njit(cache=True)
@@ -440,10 +447,16 @@ def _walk(link, t, prev, buf, n0):
 
 @_leaf
 def _local_edge(nb, t, u):
-    for k in range(3):
-        if nb[t, k] == u:
-            return k
-    return -1
+    """First ``k`` with ``nb[t, k] == u``, or -1.
+
+    Branch-free: which edge leads to a path neighbour is a coin toss, and the
+    mispredicted branches of the plain search had cost more than half of
+    :func:`improve_cover`'s set-up.
+    """
+    e0 = np.int64(nb[t, 0] == u)
+    e1 = np.int64(nb[t, 1] == u)
+    e2 = np.int64(nb[t, 2] == u)
+    return (1 - e0) * (e1 + (1 - e1) * (3 * e2 - 1))
 
 
 # --- the encoder's fast path: input checks, dual components, turns, emission, proof ----
@@ -588,12 +601,11 @@ def path_turns(tri, twin, order, starts):
 
 @_leaf
 def _edge_to(twin, t, u):
-    """Local edge of ``t`` shared with ``u`` (first one), or -1."""
-    for k in range(3):
-        h = twin[3 * t + k]
-        if h >= 0 and h // 3 == u:
-            return k
-    return -1
+    """Local edge of ``t`` shared with ``u >= 0`` (first one), or -1 (branch-free, see :func:`_local_edge`)."""
+    e0 = np.int64(twin[3 * t] // 3 == u)  # a boundary's -1 // 3 is -1: never u
+    e1 = np.int64(twin[3 * t + 1] // 3 == u)
+    e2 = np.int64(twin[3 * t + 2] // 3 == u)
+    return (1 - e0) * (e1 + (1 - e1) * (3 * e2 - 1))
 
 
 @_leaf
@@ -678,7 +690,8 @@ def emit_restart(first, swap, head, pivot, new_vertex, starts, restart):
 
 @njit(cache=True)
 def _same_rotation(a, b, c, x, y, z):
-    return (a == x and b == y and c == z) or (a == y and b == z and c == x) or (a == z and b == x and c == y)
+    # & and | rather than short-circuit `and` / `or`: no branches
+    return ((a == x) & (b == y) & (c == z)) | ((a == y) & (b == z) & (c == x)) | ((a == z) & (b == x) & (c == y))
 
 
 @njit(cache=True)
@@ -711,18 +724,19 @@ def check_draws(tri, indices, restart, use_restart, order):
         if pos >= 2:
             a = indices[i - 2]
             b = indices[i - 1]
-            if a != b and b != v and a != v:
-                if k >= m:
-                    return 2, k
-                t = order[k]
-                if pos % 2 == 1:
-                    # window starts at the odd position pos - 2: drawn (b, a, v)
-                    ok = _same_rotation(b, a, v, tri[t, 0], tri[t, 1], tri[t, 2])
-                else:
-                    ok = _same_rotation(a, b, v, tri[t, 0], tri[t, 1], tri[t, 2])
-                if not ok:
-                    return 1, k
-                k += 1
+            # selects instead of branches: a degenerate window (a swap, ~1 in 5) or the
+            # window's parity would be mispredicted; the row read for a degenerate
+            # window is ignored, the two early exits almost never taken
+            drawn = (a != b) & (b != v) & (a != v)
+            if drawn & (k >= m):
+                return 2, k
+            t = order[min(k, m - 1)]
+            odd = pos % 2 == 1  # window starts at an odd position: drawn (b, a, v)
+            x = b if odd else a
+            y = a if odd else b
+            if drawn & (_same_rotation(x, y, v, tri[t, 0], tri[t, 1], tri[t, 2]) == False):  # noqa: E712
+                return 1, k
+            k += np.int64(drawn)
         pos += 1
     if k != m:
         return 3, k
@@ -752,9 +766,8 @@ def _pivot(tri, lk, le, t):
         return -1
     k0 = le[t, 0]
     k1 = le[t, 1]
-    if k1 == (k0 + 1) % 3:
-        return tri[t, k1]
-    return tri[t, k0]
+    k = k1 if k1 == _NEXT[k0] else k0  # an index select (no data-dependent branch)
+    return tri[t, k]
 
 
 @_leaf
@@ -799,7 +812,8 @@ def _end_term(tri, lk, le, a, b, n):
 def _set_link(lk, le, nb, t, old, new):
     j = 0 if lk[t, 0] == old else 1
     lk[t, j] = new
-    le[t, j] = _local_edge(nb, t, new) if new >= 0 else -1
+    k = _local_edge(nb, t, new)
+    le[t, j] = k if new >= 0 else -1  # (-1 would find a boundary edge)
 
 
 @_leaf
@@ -876,6 +890,47 @@ def _mark(nb, lk, dirty, c):
                     dirty[nb[u2, k]] = True
 
 
+@_leaf
+def _shared(tri, t, k0, k1):
+    """Vertex shared by the distinct local edges ``k0`` and ``k1`` of ``t`` (either order)."""
+    return tri[t, k1 if k1 == _NEXT[k0] else k0]
+
+
+@_leaf
+def _tunnel_swaps(tri, lk, le, nb, e, x, side, nP):
+    """Swaps on the links a tunnel creates: ``(p, e)``, ``(e, x)`` and ``(x, z)``, ``z = lk[x, side]``.
+
+    Read before the move (``p`` is ``e``'s path neighbour, if any): a lower bound of
+    the move's new cost, which also counts end terms (>= 0) and no other link (``w``
+    becomes an end).
+    """
+    z = lk[x, side]
+    pnx = _shared(tri, x, _local_edge(nb, x, e), le[x, side])  # x's pivot between e and z
+    n = 1 if _pivot(tri, lk, le, z) == pnx else 0
+    if nP >= 2:
+        j = 0 if lk[e, 0] >= 0 else 1
+        pne = _shared(tri, e, le[e, j], _local_edge(nb, e, x))  # e's pivot between p and x
+        n += 1 if pne == pnx else 0
+        n += 1 if _pivot(tri, lk, le, lk[e, j]) == pne else 0
+    return n
+
+
+@_leaf
+def _third_end(nb, lk, pid, w, x, rp, rq):
+    """Has ``w`` (losing its link to ``x`` in a tunnel) a neighbouring end of a path other than ``rp``, ``rq``?
+
+    The candidates a tunnel's third join tries, read before the move: the move only
+    changes the links of ``e`` (label ``rp``), ``x`` (interior before and after) and ``w``.
+    """
+    for k in range(3):
+        v = nb[w, k]
+        if v < 0 or v == x or _in_links(lk, w, v) or (lk[v, 0] >= 0 and lk[v, 1] >= 0):
+            continue
+        if pid[v] != rp and pid[v] != rq:
+            return True
+    return False
+
+
 def improve_cover(tri, twin, order, starts, max_passes, visit):
     """Lower the buffer length of a dual path cover by local moves at the path ends.
 
@@ -897,20 +952,22 @@ def improve_cover(tri, twin, order, starts, max_passes, visit):
     ``visit`` (a permutation of the triangles).  Returns ``(order, starts)`` of the new
     cover (``order`` a view into the work buffer).
 
-    The work arrays (~14 m int64 and 7 m int32) are numpy buffers sliced by the kernel:
-    numpy asks for transparent huge pages on big ones, and first-touch page faults of a
-    dozen separately allocated arrays had cost ~1/3 of the moves' time at 100k
-    triangles.
+    The work arrays (7 m + 1 int64 and 7 m int32) are numpy buffers sliced by the
+    kernel: numpy asks for transparent huge pages on big ones, and first-touch page
+    faults of a dozen separately allocated arrays had cost ~1/3 of the moves' time at
+    100k triangles.  (Positions stay int64: a committed move continues them from a
+    neighbour's, so they may drift outside ``[0, m)``; an int32 work buffer measured no
+    faster.)
     """
     m = tri.shape[0]
-    ws = np.empty(14 * m + 1, np.int64)
+    ws = np.empty(7 * m + 1, np.int64)
     # neighbours, links and their local edges: the arrays every move reads, half the bytes
     links = np.empty(7 * m, np.int32 if 3 * m < 2**31 else np.int64)
     flags = np.empty(2 * m, np.bool_)
     S2 = _improve_cover_into(tri, twin, order, starts, max_passes, visit, ws, links, flags)
     if S2 < 0:
         return order.copy(), starts.copy()
-    return ws[12 * m : 13 * m], ws[13 * m : 13 * m + S2 + 1].copy()
+    return ws[5 * m : 6 * m], ws[6 * m : 6 * m + S2 + 1].copy()
 
 
 @njit(cache=True)
@@ -919,13 +976,13 @@ def _improve_cover_into(tri, twin, order, starts, max_passes, visit, ws, links, 
     nb = links[: 3 * m].reshape((m, 3))
     lk = links[3 * m : 5 * m].reshape((m, 2))
     le = links[5 * m : 7 * m].reshape((m, 2))
-    pid = ws[7 * m : 8 * m]
-    oth = ws[8 * m : 9 * m]
-    size = ws[9 * m : 10 * m]
-    ps = ws[10 * m : 11 * m]  # positions: consecutive integers along each path
-    pend = ws[11 * m : 12 * m]  # one end of each path label
-    out = ws[12 * m : 13 * m]
-    st = ws[13 * m : 14 * m + 1]
+    pid = ws[:m]
+    oth = ws[m : 2 * m]
+    size = ws[2 * m : 3 * m]
+    ps = ws[3 * m : 4 * m]  # positions: consecutive integers along each path
+    pend = ws[4 * m : 5 * m]  # one end of each path label
+    out = ws[5 * m : 6 * m]
+    st = ws[6 * m : 7 * m + 1]
     dirty = flags[:m]  # ends to (re)consider: all at first, then near changes
     seen = flags[m:]
     nb[:] = -1
@@ -1120,6 +1177,13 @@ def _improve_cover_into(tri, twin, order, starts, max_passes, visit, ws, links, 
                         C[2] = w
                         before = _local_swaps(tri, lk, le, C, 3) + _end_term(tri, lk, le, e, f, nP)
                         before += _end_term(tri, lk, le, end0, end1, nQ)
+                        if before <= _tunnel_swaps(tri, lk, le, nb, e, x, side, nP) and not _third_end(
+                            nb, lk, pid, w, x, rp, rq
+                        ):
+                            # the swaps the move creates already cost what it could save
+                            # (end terms are >= 0), and w has no third path to join: skip
+                            # what evaluating the move would find (most tunnels end here)
+                            continue
                         _set_link(lk, le, nb, e, -1, x)
                         _set_link(lk, le, nb, x, w, e)
                         _set_link(lk, le, nb, w, x, -1)
@@ -1278,11 +1342,13 @@ def _encode_restart_into(tri, twin, order, starts, restart, out):
                 kout = _edge_to(twin, t, order[i + 1])
                 if kout < 0 or kout == kin:
                     return 0, 0, -1, 1
-                p = tri[t, kout] if kout == (kin + 1) % 3 else tri[t, kin]
-                if p == prev_pivot:
-                    out[pos] = prev_pivot
-                    pos += 1
-                    n_swaps += 1
+                p = tri[t, kout if kout == _NEXT[kin] else kin]
+                # a swap (two equal pivots) in ~1 of 5 positions: written always, kept
+                # by advancing or not (a branch here is mispredicted at every swap)
+                sw = np.int64(p == prev_pivot)
+                out[pos] = prev_pivot
+                pos += sw
+                n_swaps += sw
                 prev_pivot = p
                 kprev = kout
             out[pos] = v
@@ -1321,6 +1387,296 @@ def _permute_mesh_into(tri, twin, order, tri2, twin2, new_id):
         for k in range(3):
             tri2[i, k] = tri[t, k]
             h = twin[3 * t + k]
+            if h >= 0:
+                u = h // 3
+                twin2[3 * i + k] = 3 * new_id[u] + (h - 3 * u)
+            else:
+                twin2[3 * i + k] = -1
+
+
+# --- one record per triangle: the encoder's fast path from the input's numbering ------
+#
+# The greedy cover and the renumbering read a triangle's vertices, its three twins and
+# its neighbours' free degrees in Triangle's scattered numbering: almost every step is a
+# cache miss.  With ``int64`` rows and a separate ``int64`` pairing that is two misses
+# per triangle (24 bytes of ``tri`` and 24 of ``twin``, 4.8 MB at 100k triangles); a
+# 32-byte ``int32`` record ``(v0, v1, v2, twin0, twin1, twin2, scratch, pad)`` holds all
+# of it in one half cache line (3.2 MB), ~30% less time for the greedy cover at 100k.
+
+#: Columns of a triangle record (:func:`mesh_records`).
+REC_TWIN = 3
+REC_SCRATCH = 6
+REC_WIDTH = 8
+
+
+def records_fit(m, n_points):
+    """Can ``m`` triangles on ``n_points`` vertices be packed in ``int32`` records?"""
+    return 3 * m < 2**31 - 1 and n_points < 2**30
+
+
+def mesh_records(tri, n_points):
+    """Triangle records and the half-edge pairing in one pass, ``(rec, twin)`` or ``None``.
+
+    ``rec[t] = (tri[t, 0], tri[t, 1], tri[t, 2], twin[3 t], twin[3 t + 1], twin[3 t + 2],
+    scratch, 0)`` as ``int32``, and ``twin`` the ``int64`` pairing of
+    :func:`hammesh._kernels.half_edge_twins` (equal to it).  Half-edges are bucketed by
+    their lower vertex (a counting sort) with the other vertex and the direction packed
+    alongside; inside a bucket a mark per other vertex pairs the two halves of an edge
+    in one read each (the all-pairs scan of the reference is O(k^2) per bucket with a
+    hard-to-predict branch per pair: half of the pairing's time at 100k triangles).
+    ``None`` when the mesh does not fit :func:`records_fit` or has an edge used twice in
+    one direction or by three triangles: the caller then asks the reference kernel,
+    which names the half-edge.  All buffers are numpy's (huge pages, see
+    :func:`improve_cover`).
+    """
+    m = tri.shape[0]
+    if not records_fit(m, n_points):
+        return None
+    rec = np.empty((m, REC_WIDTH), np.int32)
+    keys = np.empty(3 * m, np.int64)
+    start = np.zeros(n_points + 1, np.int64)
+    mark = np.empty(n_points, np.int32)
+    if not _pair_records_into(tri, n_points, rec, keys, start, mark):
+        return None
+    twin = np.empty(3 * m, np.int64)
+    _twin_from_records(rec, twin)
+    return rec, twin
+
+
+@njit(cache=True)
+def _pair_records_into(tri, n_points, rec, keys, start, mark):
+    m = tri.shape[0]
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        rec[t, 0] = a
+        rec[t, 1] = b
+        rec[t, 2] = c
+        rec[t, 3] = -1
+        rec[t, 4] = -1
+        rec[t, 5] = -1
+        rec[t, 6] = 0
+        rec[t, 7] = 0
+        start[min(a, b) + 1] += 1
+        start[min(b, c) + 1] += 1
+        start[min(c, a) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+        mark[v] = -1
+    # key: other vertex << 33 | (origin is the upper vertex) << 32 | half-edge
+    for t in range(m):
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            f = start[lo]
+            keys[f] = (max(a, b) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
+            start[lo] = f + 1
+    # afterwards start[v] is the end of bucket v
+    mask = (1 << 32) - 1
+    s0 = 0
+    for v in range(n_points):
+        s1 = start[v]
+        for j in range(s0, s1):
+            kj = keys[j]
+            o = kj >> 33
+            p = mark[o]
+            if p == -1:  # first half of edge (v, o)
+                mark[o] = j
+            elif p >= 0:  # second half: must run the other way
+                kp = keys[p]
+                if ((kp ^ kj) >> 32) & 1 == 0:
+                    return False
+                hj = kj & mask
+                hp = kp & mask
+                tj = hj // 3
+                tp = hp // 3
+                rec[tj, REC_TWIN + hj - 3 * tj] = hp
+                rec[tp, REC_TWIN + hp - 3 * tp] = hj
+                mark[o] = -2
+            else:  # a third triangle on the edge
+                return False
+        for j in range(s0, s1):
+            mark[keys[j] >> 33] = -1
+        s0 = s1
+    return True
+
+
+@njit(cache=True)
+def _twin_from_records(rec, twin):
+    for t in range(rec.shape[0]):
+        twin[3 * t] = rec[t, 3]
+        twin[3 * t + 1] = rec[t, 4]
+        twin[3 * t + 2] = rec[t, 5]
+
+
+@_leaf
+def _visit_rec(t, rec, bucket, top):
+    """:func:`_visit` on records: the free degree lives in the scratch column."""
+    rec[t, REC_SCRATCH] = -1
+    for k in range(3):
+        h = rec[t, REC_TWIN + k]
+        if h < 0:
+            continue
+        u = h // 3
+        d = rec[u, REC_SCRATCH]
+        if d >= 0:
+            d -= 1
+            rec[u, REC_SCRATCH] = d
+            bucket[d, top[d]] = u
+            top[d] += 1
+
+
+@_leaf
+def _grow_rec(cur, entry, prev_pivot, rec, bucket, top, out, w_swap):
+    """:func:`_grow` on records (the same choices)."""
+    n = 0
+    first_exit = -1
+    first_pivot = -1
+    while True:
+        best = -1
+        best_score = 1 << 30
+        best_pivot = -1
+        for k in range(3):
+            if k == entry:
+                continue
+            h = rec[cur, REC_TWIN + k]
+            if h < 0:
+                continue
+            u = h // 3
+            du = rec[u, REC_SCRATCH]
+            if du < 0:  # visited
+                continue
+            if entry < 0:
+                pivot = rec[cur, k]
+            elif k == (entry + 1) % 3:
+                pivot = rec[cur, k]
+            else:
+                pivot = rec[cur, entry]
+            swap = 1 if (prev_pivot >= 0 and pivot == prev_pivot) else 0
+            score = 2 * du + w_swap * swap
+            if score < best_score:
+                best_score = score
+                best = k
+                best_pivot = pivot
+        if best < 0:
+            break
+        if n == 0:
+            first_exit = best
+            first_pivot = best_pivot
+        h = rec[cur, REC_TWIN + best]
+        u = h // 3
+        _visit_rec(u, rec, bucket, top)
+        out[n] = u
+        n += 1
+        prev_pivot = best_pivot
+        entry = h - 3 * u
+        cur = u
+    return n, first_exit, first_pivot
+
+
+def greedy_paths_records(rec, w_swap, seed_order):
+    """:func:`greedy_paths` on triangle records (:func:`mesh_records`): the same paths.
+
+    Overwrites the records' scratch column (free degrees).  The work buffer is
+    ``int32`` (half the bytes of the bucket queue); ``order`` is a view into it.
+    """
+    m = rec.shape[0]
+    ws = np.empty(9 * m + 5, np.int32)
+    S = _greedy_records_into(rec, w_swap, seed_order, ws)
+    return ws[5 * m : 6 * m], ws[6 * m : 6 * m + S + 1].astype(np.int64)
+
+
+@njit(cache=True)
+def _greedy_records_into(rec, w_swap, seed_order, ws):
+    m = rec.shape[0]
+    bucket = ws[m : 5 * m].reshape((4, m))
+    order = ws[5 * m : 6 * m]
+    starts = ws[6 * m : 7 * m + 1]
+    fwd = ws[7 * m + 1 : 8 * m + 1]
+    bwd = ws[8 * m + 1 : 9 * m + 1]
+    top = ws[9 * m + 1 : 9 * m + 5]
+    top[:] = 0
+    for t in range(m):
+        rec[t, REC_SCRATCH] = (rec[t, 3] >= 0) + (rec[t, 4] >= 0) + (rec[t, 5] >= 0)
+    for i in range(m):
+        t = seed_order[i]
+        d = rec[t, REC_SCRATCH]
+        bucket[d, top[d]] = t
+        top[d] += 1
+    L = 0
+    S = 0
+    starts[0] = 0
+    while True:
+        seed = -1
+        for d in range(4):
+            while top[d] > 0:
+                top[d] -= 1
+                t = bucket[d, top[d]]
+                if rec[t, REC_SCRATCH] == d:
+                    seed = t
+                    break
+            if seed >= 0:
+                break
+        if seed < 0:
+            break
+        _visit_rec(seed, rec, bucket, top)
+        nf, kf, _ = _grow_rec(seed, -1, -1, rec, bucket, top, fwd, w_swap)
+        nbk = 0
+        if nf > 0:
+            # the triangle after the seed: its pivot is what the seed's turn must avoid
+            p1 = -1
+            if nf >= 2:
+                u = fwd[0]
+                ein = rec[seed, REC_TWIN + kf] - 3 * u
+                eout = -1
+                for k in range(3):
+                    h = rec[u, REC_TWIN + k]
+                    if h >= 0 and h // 3 == fwd[1]:
+                        eout = k
+                if eout == (ein + 1) % 3:
+                    p1 = rec[u, eout]
+                else:
+                    p1 = rec[u, ein]
+            nbk, _, _ = _grow_rec(seed, kf, p1, rec, bucket, top, bwd, w_swap)
+        for i in range(nbk):
+            order[L] = bwd[nbk - 1 - i]
+            L += 1
+        order[L] = seed
+        L += 1
+        for i in range(nf):
+            order[L] = fwd[i]
+            L += 1
+        S += 1
+        starts[S] = L
+    return S
+
+
+def permute_records(rec, order):
+    """:func:`permute_mesh` from triangle records (one record read per row): ``(tri2, twin2, new_id)``.
+
+    ``tri2`` and ``twin2`` are ``int32`` (the records fit), ``new_id`` ``int64``.
+    """
+    m = rec.shape[0]
+    buf = np.empty(6 * m, np.int32)
+    tri2 = buf[: 3 * m].reshape(m, 3)
+    twin2 = buf[3 * m :]
+    new_id = np.empty(m, np.int64)
+    _permute_records_into(rec, order, tri2, twin2, new_id)
+    return tri2, twin2, new_id
+
+
+@njit(cache=True)
+def _permute_records_into(rec, order, tri2, twin2, new_id):
+    m = rec.shape[0]
+    for i in range(m):
+        new_id[order[i]] = i
+    for i in range(m):
+        t = order[i]
+        for k in range(3):
+            tri2[i, k] = rec[t, k]
+            h = rec[t, REC_TWIN + k]
             if h >= 0:
                 u = h // 3
                 twin2[3 * i + k] = 3 * new_id[u] + (h - 3 * u)

@@ -3,14 +3,15 @@
 Any triangle mesh is accepted, planar ``(n, 2)`` or a surface in space ``(n, 3)``; each
 triangle's winding (the order of its row) is kept, and the strips reproduce it.  Two
 triangles are dual neighbours when they share an edge in opposite directions (the
-half-edge pairing of :func:`hammesh._kernels.half_edge_twins`).
+half-edge pairing of :func:`hammesh._kernels.half_edge_twins`; built together with
+one ``int32`` record per triangle by :func:`hammesh.strips._kernels.mesh_records`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 from hammesh import _kernels
@@ -40,11 +41,18 @@ class DualMesh:
         Connected piece of the dual graph each triangle belongs to, numbered by least
         triangle (computed on first use).
     n_components : int
+    records : (m, 8) int32 or None
+        ``(v0, v1, v2, twin0, twin1, twin2, scratch, pad)`` per triangle
+        (:func:`hammesh.strips._kernels.mesh_records`): what the greedy cover reads,
+        one half cache line per triangle; the greedy pass keeps its free degrees in the
+        scratch column.  ``None`` for a mesh too large for ``int32`` (or a DualMesh
+        built by hand); the encoder then reads ``triangles`` and ``twin``.
     """
 
     points: np.ndarray
     triangles: np.ndarray
     twin: np.ndarray
+    records: Optional[np.ndarray] = field(default=None, repr=False)
 
     @cached_property
     def _components(self) -> tuple[np.ndarray, int]:
@@ -123,6 +131,10 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
         raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} repeats a vertex (degenerate face)")
     if kind == 2:
         raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area (degenerate face)")
+    packed = _strip_kernels.mesh_records(tri, n)
+    if packed is not None:
+        return DualMesh(points=pts, triangles=tri, twin=packed[1], records=packed[0])
+    # too large for int32 records, or a bad edge: the reference pairing names it
     twin, bad = _kernels.half_edge_twins(tri, n)
     if bad >= 0:
         raise InvalidMeshError(_edge_problem(tri, int(bad)))

@@ -15,7 +15,7 @@ swaps are needed, and joins them into one buffer:
 * then two sweeps of local moves at the path ends (join two ends, Posa rotation,
   tunnelling into a neighbouring path), each costed in O(1), keep every change that
   shortens the buffer (never adding a path), on the mesh renumbered in path order
-  (memory locality; the same moves as in the input's numbering);
+  (memory locality), path ends visited from the last path back to the first;
 * each path is sent in the direction that needs fewer swaps at its ends; with restarts
   the buffer is written in one compiled pass.
 
@@ -54,8 +54,10 @@ _SWAP_WEIGHT = 1
 
 #: Sweeps of :func:`~hammesh.strips._kernels.improve_cover` over the path ends.  On the
 #: benchmark's planar meshes (indices per triangle) the greedy cover gives 1.293-1.318,
-#: one sweep 1.272-1.301, two 1.268-1.297, three 1.267-1.294 (0.0003-0.003 better than
-#: two, for ~10% more time at 100k triangles).  Two keep every planar mesh <= 1.30.
+#: one sweep 1.268-1.295, two 1.266-1.294, three 1.266-1.294 (ends visited from the last
+#: path back; in the input's order it was 1.272-1.301 / 1.268-1.297 / 1.267-1.294).
+#: Two keep every planar mesh <= 1.30 and within 0.0006 of (on 6 of 10, better than)
+#: two sweeps in the input's order; one sweep would lose 0.001-0.002.
 _IMPROVE_PASSES = 2
 
 
@@ -105,17 +107,19 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
         Path offsets.  Paths never cross dual components.
     """
     _, _, order, starts, ids = _greedy_cover(dual, improve)
-    return (order if ids is None else ids[order]), starts
+    return (order if ids is None else ids[order]).astype(np.int64, copy=False), starts
 
 
 def _greedy_cover(dual: DualMesh, improve: bool = True):
     """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
 
-    After the greedy pass (or Lemma 5.1's partition) the mesh is renumbered in path
-    order (:func:`~hammesh.strips._kernels.permute_mesh`): the moves and the emission
-    then walk mostly adjacent rows instead of Triangle's scattered numbering.  The ends
-    are still visited in the input's numbering, so the cover is the same as without
-    renumbering.
+    The greedy pass reads the mesh's int32 records (:attr:`DualMesh.records`, one half
+    cache line per triangle; the same paths as from ``triangles`` and ``twin``).  After
+    it (or Lemma 5.1's partition) the mesh is renumbered in path order
+    (:func:`~hammesh.strips._kernels.permute_records`): the moves and the emission then
+    walk mostly adjacent rows instead of Triangle's scattered numbering.  The moves
+    visit the path ends from the last path back to the first, which is the same cover
+    as visiting them in that order without renumbering.
 
     A cover of one path is returned as the greedy pass left it.
 
@@ -123,16 +127,26 @@ def _greedy_cover(dual: DualMesh, improve: bool = True):
     to, and ``ids[i]`` the input triangle of row ``i`` (``None``: the input's own).
     """
     m = dual.n_triangles
+    rec = dual.records
     if is_forest(dual):
         order, starts = forest_paths(dual)
+    elif rec is not None:  # the same paths, one record read per triangle
+        order, starts = _kernels.greedy_paths_records(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     else:
         order, starts = _kernels.greedy_paths(dual.triangles, dual.twin, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     if not improve or len(starts) == 2:
         # one path (a closed surface often is one): no join or tunnel exists, and the
         # rotations could only move a swap or two at its ends; not worth O(m) set-up
         return dual.triangles, dual.twin, order, starts, None
-    tri, twin, new_id = _kernels.permute_mesh(dual.triangles, dual.twin, order)
-    local, starts = _kernels.improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, new_id)
+    if rec is not None:
+        tri, twin, _ = _kernels.permute_records(rec, order)
+    else:
+        tri, twin, _ = _kernels.permute_mesh(dual.triangles, dual.twin, order)
+    # ends visited from the last path back to the first: neighbouring memory (the
+    # input's numbering had scattered them), and on the benchmark's meshes as good a
+    # cover (-0.0026 to +0.0006 indices per triangle against the input's order)
+    visit = np.arange(m - 1, -1, -1, dtype=np.int64)
+    local, starts = _kernels.improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, visit)
     return tri, twin, local, starts, order
 
 
@@ -304,7 +318,7 @@ def encode(
     verify : bool
         Decode the buffer with OpenGL's rules and compare with the mesh
         (:func:`~hammesh.strips.gl.verify_gl_strip`, one O(L) compiled pass against
-        the order the paths were meant to draw).  Costs ~2% of the encoding; leave on.
+        the order the paths were meant to draw).  Costs ~10% of the encoding; leave on.
 
     Returns
     -------

@@ -3,10 +3,14 @@ the one-pass restart emission and the half-edge pairing it starts from."""
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import inspect
 import os
 import subprocess
 import sys
 import textwrap
+import types
 
 import numpy as np
 import pytest
@@ -14,6 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh import _kernels as core_kernels
+from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
 from hammesh.strips import _kernels
 from hammesh.strips.dual import dual_mesh
@@ -21,6 +26,7 @@ from hammesh.strips.encode import _greedy_cover, encode, greedy_paths
 from hammesh.strips.gl import decode_gl_strip
 
 from .conftest import grid_mesh, oriented_set, square_mesh, torus_mesh
+from .test_encode import delaunay_mesh
 
 _REJECT_NRT = {
     # numba refuses the private option when decorating
@@ -109,7 +115,8 @@ def test_packed_pairing_reports_the_same_bad_half_edge(tri):
 
 @pytest.mark.parametrize("mesh", [square_mesh(0.01), torus_mesh(9, 6), grid_mesh(6, 4, z=True)], ids=["square", "torus", "grid"])
 def test_renumbered_cover_is_the_plain_one(mesh):
-    """Improving in path order (permute_mesh) visits the ends in the input's order: same cover."""
+    """Improving in path order (permute_records) visits the ends from the last path back: the
+    same cover as visiting them in that order in the input's numbering."""
     d = dual_mesh(mesh)
     tri2, twin2, order2, starts2, ids = _greedy_cover(d)
     order0, starts0 = _kernels.greedy_paths(d.triangles, d.twin, 1, np.arange(d.n_triangles - 1, -1, -1))
@@ -118,9 +125,7 @@ def test_renumbered_cover_is_the_plain_one(mesh):
         return
     assert np.array_equal(tri2, d.triangles[ids])
     assert np.array_equal(order0, ids)
-    plain, plain_starts = _kernels.improve_cover(
-        d.triangles, d.twin, order0, starts0, 2, np.arange(d.n_triangles, dtype=np.int64)
-    )
+    plain, plain_starts = _kernels.improve_cover(d.triangles, d.twin, order0, starts0, 2, order0[::-1].copy())
     assert np.array_equal(ids[order2], plain) and np.array_equal(starts2, plain_starts)
     order, starts = greedy_paths(d)
     assert np.array_equal(order, plain) and sorted(order.tolist()) == list(range(d.n_triangles))
@@ -143,3 +148,104 @@ def test_one_pass_emission_has_the_counted_length():
     decoded = decode_gl_strip(s.indices, s.restart_index)
     assert oriented_set(decoded) == oriented_set(m.triangles)
     assert len(s.indices) == m.n_triangles + 2 * s.n_strips + s.n_swaps + s.n_strips - 1
+
+
+def _scattered_mesh(seed: int) -> tuple[np.ndarray, int]:
+    """A grid (2D or a 3D surface) with scattered vertex and row numbering, as Triangle writes."""
+    rng = np.random.default_rng(seed)
+    m = grid_mesh(int(rng.integers(1, 7)), int(rng.integers(1, 7)), z=bool(rng.integers(2)))
+    perm = rng.permutation(len(m.points))
+    return np.argsort(perm)[m.triangles][rng.permutation(m.n_triangles)], len(m.points)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_mesh_records_pair_like_the_reference(seed):
+    tri, n = _scattered_mesh(seed)
+    rec, twin = _kernels.mesh_records(tri, n)
+    ref, bad = core_kernels._half_edge_twins_reference(tri, n)
+    assert bad == -1 and np.array_equal(twin, ref)
+    assert rec.dtype == np.int32 and np.array_equal(rec[:, :3], tri)
+    assert np.array_equal(rec[:, _kernels.REC_TWIN : _kernels.REC_TWIN + 3].ravel(), ref)
+
+
+@pytest.mark.parametrize(
+    "tri",
+    [
+        [[0, 1, 2], [0, 1, 3]],  # edge (0, 1) twice in one direction
+        [[0, 1, 2], [1, 0, 3], [0, 1, 4]],  # three triangles on one edge
+        [[0, 1, 2], [1, 0, 3], [1, 0, 4]],
+    ],
+)
+def test_mesh_records_refuse_bad_edges(tri):
+    """No records for a bad edge: dual_mesh then asks the reference, which names it."""
+    assert _kernels.mesh_records(np.array(tri, np.int64), 5) is None
+    with pytest.raises(InvalidMeshError, match="edge"):
+        dual_mesh(Mesh(np.random.default_rng(0).random((5, 2)), np.array(tri)))
+
+
+def test_mesh_records_of_two_triangles_on_the_same_three_edges():
+    """A closed two-triangle 'pillow': each triangle is the other's neighbour three times."""
+    tri = np.array([[0, 1, 2], [0, 2, 1]], np.int64)
+    rec, twin = _kernels.mesh_records(tri, 3)
+    assert np.array_equal(twin, core_kernels._half_edge_twins_reference(tri, 3)[0])
+    m = Mesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]), tri)
+    assert oriented_set(decode_gl_strip(*(lambda s: (s.indices, s.restart_index))(encode(m)))) == oriented_set(tri)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_records_give_the_same_greedy_cover_and_renumbering(seed):
+    tri, n = _scattered_mesh(seed)
+    rec, twin = _kernels.mesh_records(tri, n)
+    m = len(tri)
+    seeds = np.random.default_rng(seed).permutation(m)
+    order0, starts0 = _kernels.greedy_paths(tri, twin, 1, seeds)
+    order1, starts1 = _kernels.greedy_paths_records(rec, 1, seeds)
+    assert np.array_equal(order0, order1) and np.array_equal(starts0, starts1)
+    for a, b in zip(_kernels.permute_mesh(tri, twin, order0), _kernels.permute_records(rec, order1)):
+        assert np.array_equal(a, b)
+
+
+def test_cover_without_records_is_the_same():
+    """A DualMesh built by hand (no records) takes the int64 kernels: the same cover."""
+    d = dual_mesh(square_mesh(0.01))
+    bare = dataclasses.replace(d, records=None)
+    a, b = _greedy_cover(d), _greedy_cover(bare)
+    assert all(np.array_equal(x, y) for x, y in zip(a[1:], b[1:]))
+
+
+@pytest.mark.parametrize("row", [[5, 7, 9], [7, 7, 9], [9, 5, 7], [-1, 4, -1], [3, 3, 3]])
+@pytest.mark.parametrize("u", [7, 9, -1, 4, 3, 8])
+def test_branch_free_edge_search_is_the_first_match(row, u):
+    nb = np.array([row], np.int32)
+    want = row.index(u) if u in row else -1
+    assert _kernels._local_edge(nb, 0, u) == want
+    if u >= 0:  # _edge_to: the half-edge pairing, twin 3 u + j lies in triangle u
+        twin = np.array([3 * v + 1 if v >= 0 else -1 for v in row], np.int64)
+        assert _kernels._edge_to(twin, 0, u) == want
+
+
+@functools.lru_cache(maxsize=None)
+def _kernels_without_tunnel_filter():
+    """The kernels module compiled apart with the tunnels' pre-filter switched off."""
+    src = inspect.getsource(_kernels)
+    old = "if before <= _tunnel_swaps(tri, lk, le, nb, e, x, side, nP) and not _third_end("
+    assert src.count(old) == 1
+    mod = types.ModuleType("_kernels_unfiltered")
+    exec(compile(src.replace(old, "if False and not _third_end(").replace("cache=True", "cache=False"), "<unfiltered>", "exec"), mod.__dict__)
+    return mod
+
+
+@pytest.mark.slow
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(20, 400), st.booleans())
+def test_tunnel_pre_filter_skips_only_moves_that_would_be_rejected(seed, n, lift):
+    """The pre-filter is exact: the same cover as evaluating every tunnel."""
+    d = dual_mesh(delaunay_mesh(seed, n, lift))
+    m = d.n_triangles
+    order, starts = _kernels.greedy_paths(d.triangles, d.twin, 1, np.arange(m - 1, -1, -1))
+    visit = np.random.default_rng(seed).permutation(m)
+    a = _kernels.improve_cover(d.triangles, d.twin, order, starts, 2, visit)
+    b = _kernels_without_tunnel_filter().improve_cover(d.triangles, d.twin, order, starts, 2, visit)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
