@@ -109,12 +109,20 @@ def combine_rows(parts: list[tuple]) -> tuple:
 
 
 def _input_facts(ref: Mesh, r_twin: np.ndarray) -> dict[str, Any]:
-    """What the comparison with the input needs from it (runs beside other work)."""
+    """What the comparison with the input needs from it (runs beside other work).
+
+    The smallest angle, the area and the used vertices are taken from
+    ``ref.info["validated"]`` when ``prepare_mesh`` found them already.
+    """
     rp = np.asarray(ref.points, dtype=np.float64)
     rt = np.ascontiguousarray(ref.triangles, dtype=np.int64)
-    r_min, _, _, _, _, _, r_total = _kernels.angle_area_stats(rp, rt)
-    used = np.zeros(len(rp), dtype=np.bool_)
-    _kernels.mark_used(rt, used)
+    seen = ref.info.get("validated") if isinstance(ref.info, dict) else None
+    if seen is not None:
+        r_min, r_total, used = seen["min_angle"], seen["total"], seen["used"]
+    else:
+        r_min, _, _, _, _, _, r_total = _kernels.angle_area_stats(rp, rt)
+        used = np.zeros(len(rp), dtype=np.bool_)
+        _kernels.mark_used(rt, used)
     return {
         "min_angle": r_min,
         "total": r_total,

@@ -130,6 +130,10 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
     is_con : (3 m,) bool
         Half-edges that lie on a constrained edge (``mesh.segments``).
 
+    The returned mesh's ``info["validated"]`` holds what the orientation pass found on
+    the way: ``min_angle`` (radians), ``total`` (area) and ``used`` (bool per point),
+    which the certificate's comparison with this input reuses.
+
     Raises
     ------
     InvalidMeshError
@@ -145,7 +149,8 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
             "(squared lengths would overflow)"
         )
     n = len(pts)
-    tri, n_flipped, bad_t = _kernels.orient_ccw(pts, tri)
+    used = np.zeros(n, dtype=np.bool_)
+    tri, n_flipped, bad_t, (min_angle, area) = _kernels.orient_ccw(pts, tri, used)
     if bad_t >= 0:
         t = int(bad_t)
         row = np.asarray(mesh.triangles)[t].tolist()
@@ -181,5 +186,7 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         segments=segs,
         segment_markers=np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1),
         triangle_attributes=attrs,
+        # found on the way, for the certificate's comparison with this input
+        info={**mesh.info, "validated": {"min_angle": min_angle, "total": area, "used": used}},
     )
     return clean, he, is_con

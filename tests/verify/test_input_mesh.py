@@ -119,3 +119,23 @@ def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
     wrong = nbr.copy()
     wrong[t, k] = -1  # t says boundary, its neighbour still names t
     assert _kernels.twins_from_neighbors(tri, wrong)[1] >= 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> None:
+    """Angle, area and used vertices found while orienting (in threads) are what the
+    certificate would compute from the clean mesh itself."""
+    from hammesh import _threads
+
+    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
+    rng = np.random.default_rng(seed)
+    pts = rng.random((80, 2))
+    tri = Delaunay(pts[:70]).simplices.astype(np.int64)  # points 70.. unused
+    tri[::3] = tri[::3, ::-1]  # some clockwise rows
+    clean, _, _ = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri))
+    seen = clean.info["validated"]
+    min_angle, _, _, _, _, _, total = _kernels.angle_area_stats(clean.points, clean.triangles)
+    assert np.isclose(seen["min_angle"], min_angle, rtol=1e-14, atol=0)  # arcsin: numpy vs numba
+    assert np.isclose(seen["total"], total, rtol=1e-14)
+    np.testing.assert_array_equal(seen["used"], np.bincount(tri.ravel(), minlength=80) > 0)
