@@ -47,6 +47,11 @@ __all__ = [
 THREAD_MIN_ROWS = 200_000
 
 
+def index_dtype(n):
+    """int32 for indices below ``n`` when they fit (half the memory traffic), else int64."""
+    return np.int32 if n < 2**31 - 1 else np.int64
+
+
 def orient_ccw(points, tri, used=None):
     """Counter-clockwise copy of ``tri`` (rows with negative area reversed).
 
@@ -719,8 +724,8 @@ def emit_cycles(tri, code, firsts, n_points, order=None):
     out = np.empty((total, 3), np.int64)
     parent = np.empty(total, np.int64)
     kind = np.empty(total, np.int8)
-    claim = np.full(3 * total, UNLINKED, np.int64)
-    prim = np.full(nh, -1, np.int64)
+    claim = np.full(3 * total, UNLINKED, index_dtype(3 * total))
+    prim = np.full(nh, -1, index_dtype(total))
     lengths = np.zeros(len(firsts), np.int64)
     y2 = np.full(len(mid_h), -1, np.int64)
     state = np.zeros(WALK_STATE, np.int64)

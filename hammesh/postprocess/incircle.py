@@ -75,7 +75,7 @@ def incircle_hamiltonian(
     -------
     HamiltonianMesh
         With ``report`` holding the construction counts only.
-    claim : (3 m_out,) int64
+    claim : (3 m_out,) int32 (int64 beyond 2**31 half-edges)
         The output's half-edge twins as the construction implies them; the
         certificate checks this claim instead of recomputing the pairing.
     """
@@ -104,8 +104,8 @@ def walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
         "out": _touched((total, 3), np.int64, 0),
         "parent": _touched((total,), np.int64, 0),
         "kind": _touched((total,), np.int8, 0),
-        "claim": _touched((3 * total,), np.int64, _kernels.UNLINKED),
-        "prim": _touched((nh,), np.int64, -1),
+        "claim": _touched((3 * total,), _kernels.index_dtype(3 * total), _kernels.UNLINKED),
+        "prim": _touched((nh,), _kernels.index_dtype(total), -1),
     }
 
 

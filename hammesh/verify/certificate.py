@@ -234,7 +234,10 @@ def verify_cycle_mesh(
             _fail("the input mesh is not edge-manifold; it cannot serve as a reference")
     # a claimed pairing is only of use with a reference (the tiling argument needs the
     # input's boundary)
-    claim = None if twin_claim is None else np.ascontiguousarray(twin_claim, dtype=np.int64)
+    claim = None
+    if twin_claim is not None:  # int32 claims are checked as they are (no copy)
+        claim = np.asarray(twin_claim)
+        claim = np.ascontiguousarray(claim, dtype=claim.dtype if claim.dtype == np.int32 else np.int64)
     if not (claim is not None and reference_twin is not None and claim.shape == (3 * m,)):
         claim = np.empty(0, dtype=np.int64)
     ref_facts = input_facts

@@ -146,3 +146,17 @@ def test_no_row_is_checked_before_the_points_are_final(built) -> None:
     worker.join()
     rows = stream.result(h.components)
     assert rows[11] == -1 and rows[1] == -1
+
+
+def test_claim_index_width() -> None:
+    """Claims and slot rows are int32 while they fit (half the memory), int64 beyond."""
+    assert _kernels.index_dtype(3 * 10**8) == np.int32
+    assert _kernels.index_dtype(2**31) == np.int64
+    clean, he, is_con = prepare_mesh(plate(1, 1))
+    h, claim = incircle.incircle_hamiltonian(clean, he, is_con)
+    assert claim.dtype == np.int32
+    twin, bad = _kernels.half_edge_twins(h.triangles, h.n_points)
+    assert bad == -1
+    np.testing.assert_array_equal(claim, twin)
+    # the certificate takes either width
+    verify(h, reference=clean, reference_twin=he.twin, twin_claim=claim.astype(np.int64))
