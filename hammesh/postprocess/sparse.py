@@ -233,7 +233,8 @@ def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[H
     """
     pts, tri = mesh.points, mesh.triangles
     n, m = mesh.n_points, mesh.n_triangles
-    amin = float(_kernels.angle_area_stats(pts, tri)[0])
+    seen = mesh.info.get("validated")  # found by prepare_mesh's orientation pass
+    amin = float(seen["min_angle"] if seen else _kernels.angle_area_stats(pts, tri)[0])
     r = sparse_cycles(pts, tri, he.twin, is_con, amin)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
