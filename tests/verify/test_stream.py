@@ -160,3 +160,16 @@ def test_claim_index_width() -> None:
     np.testing.assert_array_equal(claim, twin)
     # the certificate takes either width
     verify(h, reference=clean, reference_twin=he.twin, twin_claim=claim.astype(np.int64))
+
+
+def test_hamiltonian_from_several_threads_at_once(monkeypatch) -> None:
+    """Each call has its own helper thread and stream: concurrent calls do not mix."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(incircle, "WALK_CHUNK", 11)
+    meshes = [plate(n_loops, pieces) for n_loops, pieces in [(0, 1), (2, 1), (1, 3), (3, 2)]]
+    with ThreadPoolExecutor(4) as pool:
+        outs = list(pool.map(hammesh.hamiltonian, meshes))
+    for m, h in zip(meshes, outs):
+        assert h.report["verified"] and h.n_triangles == 3 * m.n_triangles + 2 * h.report["midpoints"]
+        assert_certificate(m, h)
