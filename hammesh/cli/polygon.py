@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hammesh.domain.validate import point_array
 from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io.points_text import read_points
 
@@ -119,12 +120,9 @@ def _from_wkt(path: Path) -> np.ndarray:
 
 def _array(rows, path: Path) -> np.ndarray:
     try:
-        a = np.array(rows, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise FileFormatError(f"{path.name}: bad coordinates: {exc}") from None
-    if a.ndim != 2 or a.shape[1] != 2:
-        raise FileFormatError(f"{path.name}: expected 2D coordinates, got shape {a.shape}")
-    return a
+        return point_array(rows, f"{path.name}: coordinates")
+    except InvalidDomainError as exc:  # a file's fault: reported as a file format error
+        raise FileFormatError(str(exc)) from None
 
 
 def run(args: argparse.Namespace) -> int:

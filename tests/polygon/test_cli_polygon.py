@@ -68,6 +68,8 @@ def test_poly_geojson_wkt_inputs(tmp_path):
     ("b.txt", "# nothing\n", "no points"),
     ("b.wkt", "POLYGON ((0 0, 1 0, 0 1), (0.1 0.1, 0.2 0.1, 0.1 0.2))", "without holes"),
     ("b.geojson", '{"type": "Point", "coordinates": [0, 0]}', "expected a GeoJSON Polygon"),
+    ("b.wkt", "POLYGON ((0 0, 1 x, 0 1))", "b.wkt: coordinates cannot be converted"),
+    ("b.wkt", "POLYGON ((0 0 0, 1 0 0, 0 1 0))", r"b.wkt: coordinates must have shape \(k, 2\)"),
 ])
 def test_bad_files(tmp_path, name, text, match):
     f = tmp_path / name
