@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh import _kernels as _core
+
 
 def _leaf_probe(a):
     a[0] += 1
@@ -1415,100 +1417,34 @@ def records_fit(m, n_points):
 
 
 def mesh_records(tri, n_points):
-    """Triangle records and the half-edge pairing in one pass, ``(rec, twin)`` or ``None``.
+    """Triangle records and the half-edge pairing, ``(rec, twin)`` or ``None``.
 
     ``rec[t] = (tri[t, 0], tri[t, 1], tri[t, 2], twin[3 t], twin[3 t + 1], twin[3 t + 2],
-    scratch, 0)`` as ``int32``, and ``twin`` the ``int64`` pairing of
-    :func:`hammesh._kernels.half_edge_twins` (equal to it).  Half-edges are bucketed by
-    their lower vertex (a counting sort) with the other vertex and the direction packed
-    alongside; inside a bucket a mark per other vertex pairs the two halves of an edge
-    in one read each (the all-pairs scan of the reference is O(k^2) per bucket with a
-    hard-to-predict branch per pair: half of the pairing's time at 100k triangles).
-    ``None`` when the mesh does not fit :func:`records_fit` or has an edge used twice in
-    one direction or by three triangles: the caller then asks the reference kernel,
-    which names the half-edge.  All buffers are numpy's (huge pages, see
-    :func:`improve_cover`).
+    scratch, 0)`` as ``int32``; ``twin`` is :func:`hammesh._kernels.half_edge_twins`'s
+    pairing (its packed fast path), the records one sequential pass after it. ``None``
+    when the mesh does not fit :func:`records_fit` or has an edge used twice in one
+    direction or by three triangles: the caller then asks the reference kernel, which
+    names the half-edge. All buffers are numpy's (huge pages, see :func:`improve_cover`).
     """
     m = tri.shape[0]
     if not records_fit(m, n_points):
         return None
-    rec = np.empty((m, REC_WIDTH), np.int32)
-    keys = np.empty(3 * m, np.int64)
-    start = np.zeros(n_points + 1, np.int64)
-    mark = np.empty(n_points, np.int32)
-    if not _pair_records_into(tri, n_points, rec, keys, start, mark):
-        return None
     twin = np.empty(3 * m, np.int64)
-    _twin_from_records(rec, twin)
+    if not _core._half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
+        return None
+    rec = np.empty((m, REC_WIDTH), np.int32)
+    _records_from_twin(tri, twin, rec)
     return rec, twin
 
 
 @njit(cache=True)
-def _pair_records_into(tri, n_points, rec, keys, start, mark):
-    m = tri.shape[0]
-    for t in range(m):
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        rec[t, 0] = a
-        rec[t, 1] = b
-        rec[t, 2] = c
-        rec[t, 3] = -1
-        rec[t, 4] = -1
-        rec[t, 5] = -1
+def _records_from_twin(tri, twin, rec):
+    for t in range(tri.shape[0]):
+        for k in range(3):
+            rec[t, k] = tri[t, k]
+            rec[t, REC_TWIN + k] = twin[3 * t + k]
         rec[t, 6] = 0
         rec[t, 7] = 0
-        start[min(a, b) + 1] += 1
-        start[min(b, c) + 1] += 1
-        start[min(c, a) + 1] += 1
-    for v in range(n_points):
-        start[v + 1] += start[v]
-        mark[v] = -1
-    # key: other vertex << 33 | (origin is the upper vertex) << 32 | half-edge
-    for t in range(m):
-        for k in range(3):
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            lo = min(a, b)
-            f = start[lo]
-            keys[f] = (max(a, b) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
-            start[lo] = f + 1
-    # afterwards start[v] is the end of bucket v
-    mask = (1 << 32) - 1
-    s0 = 0
-    for v in range(n_points):
-        s1 = start[v]
-        for j in range(s0, s1):
-            kj = keys[j]
-            o = kj >> 33
-            p = mark[o]
-            if p == -1:  # first half of edge (v, o)
-                mark[o] = j
-            elif p >= 0:  # second half: must run the other way
-                kp = keys[p]
-                if ((kp ^ kj) >> 32) & 1 == 0:
-                    return False
-                hj = kj & mask
-                hp = kp & mask
-                tj = hj // 3
-                tp = hp // 3
-                rec[tj, REC_TWIN + hj - 3 * tj] = hp
-                rec[tp, REC_TWIN + hp - 3 * tp] = hj
-                mark[o] = -2
-            else:  # a third triangle on the edge
-                return False
-        for j in range(s0, s1):
-            mark[keys[j] >> 33] = -1
-        s0 = s1
-    return True
-
-
-@njit(cache=True)
-def _twin_from_records(rec, twin):
-    for t in range(rec.shape[0]):
-        twin[3 * t] = rec[t, 3]
-        twin[3 * t + 1] = rec[t, 4]
-        twin[3 * t + 2] = rec[t, 5]
 
 
 @_leaf
