@@ -129,17 +129,22 @@ def test_points_on_a_few_lines(n_lines, per_line, seed):
     _check(pts, hamiltonian_triangulation(pts, seed=seed))
 
 
+def _parallel_runs(per_line: int, tilt: float, seed: int) -> np.ndarray:
+    """Two runs of ``per_line`` points, nearly parallel at ``tilt``, and 3 random points."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(per_line, dtype=float)
+    a = np.c_[t, tilt * t * t / per_line]
+    b = np.c_[t * np.cos(tilt), 1.0 + t * np.sin(tilt)]
+    return np.unique(np.vstack([a, b, rng.random((3, 2)) * [per_line, 1.0]]), axis=0)
+
+
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.integers(5, 30), st.floats(1e-9, 0.05), st.integers(0, 2**32 - 1))
 def test_nearly_collinear_runs(per_line, tilt, seed):
     """Two long nearly-parallel runs in floating point: triangles of three run points are
     positive exactly but nearly flat (their floating-point area may even be negative);
     the certificate decides them exactly."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(per_line, dtype=float)
-    a = np.c_[t, tilt * t * t / per_line]
-    b = np.c_[t * np.cos(tilt), 1.0 + t * np.sin(tilt)]
-    pts = np.unique(np.vstack([a, b, rng.random((3, 2)) * [per_line, 1.0]]), axis=0)
+    pts = _parallel_runs(per_line, tilt, seed)
     _check(pts, hamiltonian_triangulation(pts, seed=seed))
 
 
@@ -186,11 +191,7 @@ def test_nearly_parallel_runs_that_used_to_take_minutes():
     """27 + 27 points on two nearly parallel runs (tilt 3.6e-4) and 3 more: 65 fruitless
     searches (~120 s) before attempts gave up early; now a few seconds."""
     per_line, tilt, seed = 27, 0.00035868819999230713, 290117535
-    rng = np.random.default_rng(seed)
-    t = np.arange(per_line, dtype=float)
-    a = np.c_[t, tilt * t * t / per_line]
-    b = np.c_[t * np.cos(tilt), 1.0 + t * np.sin(tilt)]
-    pts = np.unique(np.vstack([a, b, rng.random((3, 2)) * [per_line, 1.0]]), axis=0)
+    pts = _parallel_runs(per_line, tilt, seed)
     _check(pts, hamiltonian_triangulation(pts, seed=seed))
 
 
