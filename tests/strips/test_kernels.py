@@ -100,14 +100,15 @@ def test_packed_half_edge_pairing_equals_the_reference(seed):
     assert np.array_equal(tri[t, k], tri[g // 3, (g % 3 + 1) % 3])
 
 
-@pytest.mark.parametrize(
-    "tri",
-    [
-        [[0, 1, 2], [0, 1, 3]],  # edge (0, 1) twice in one direction
-        [[0, 1, 2], [1, 0, 3], [0, 1, 4]],  # three triangles on one edge
-        [[0, 1, 2], [1, 0, 3], [1, 0, 4]],
-    ],
-)
+#: Meshes with a bad edge: used twice in one direction, or by three triangles.
+BAD_EDGES = [
+    [[0, 1, 2], [0, 1, 3]],
+    [[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+    [[0, 1, 2], [1, 0, 3], [1, 0, 4]],
+]
+
+
+@pytest.mark.parametrize("tri", BAD_EDGES)
 def test_packed_pairing_reports_the_same_bad_half_edge(tri):
     tri = np.array(tri, np.int64)
     assert core_kernels.half_edge_twins(tri, 5)[1] == core_kernels._half_edge_twins_reference(tri, 5)[1] >= 0
@@ -169,14 +170,7 @@ def test_mesh_records_pair_like_the_reference(seed):
     assert np.array_equal(rec[:, _kernels.REC_TWIN : _kernels.REC_TWIN + 3].ravel(), ref)
 
 
-@pytest.mark.parametrize(
-    "tri",
-    [
-        [[0, 1, 2], [0, 1, 3]],  # edge (0, 1) twice in one direction
-        [[0, 1, 2], [1, 0, 3], [0, 1, 4]],  # three triangles on one edge
-        [[0, 1, 2], [1, 0, 3], [1, 0, 4]],
-    ],
-)
+@pytest.mark.parametrize("tri", BAD_EDGES)
 def test_mesh_records_refuse_bad_edges(tri):
     """No records for a bad edge: dual_mesh then asks the reference, which names it."""
     assert _kernels.mesh_records(np.array(tri, np.int64), 5) is None
