@@ -11,7 +11,11 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable
 
-__all__ = ["row_ranges", "run_all"]
+__all__ = ["row_ranges", "run_all", "THREAD_MIN_ROWS"]
+
+#: Rows per thread below which a row pass runs in one call (tests lower it to exercise
+#: the threaded paths on small meshes).
+THREAD_MIN_ROWS = 200_000
 
 
 def row_ranges(m: int, min_rows: int) -> list[tuple[int, int]]:

@@ -96,7 +96,7 @@ def check_sequential(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     VerificationError
         ``triangles`` is no triangulation of ``points`` or not sequential.
     """
-    from hammesh import _kernels as core_kernels
+    from hammesh.halfedge import _kernels as core_kernels
     from hammesh.strips import sequential_order
     from hammesh.strips.dual import DualMesh
 

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from hammesh import _kernels as core_kernels
+from hammesh.verify import _kernels as core_kernels
 from hammesh.errors import VerificationError
 from hammesh.predicates import orient_many
 from hammesh.pointset.validate import convex_hull

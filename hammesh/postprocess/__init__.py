@@ -13,7 +13,7 @@ from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess.sparse import sparse_hamiltonian
 from hammesh.verify.certificate import claim_structure, input_facts, verify
-from hammesh.verify.input_mesh import prepare_mesh
+from hammesh.halfedge import prepare_mesh
 
 __all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES"]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammesh._kernels import _find
+from hammesh.postprocess._thm24_kernels import find_root as _find
 
 
 @njit(cache=True)

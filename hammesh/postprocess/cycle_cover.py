@@ -75,7 +75,7 @@ def cycle_cover(
     Examples
     --------
     >>> import numpy as np
-    >>> from hammesh.verify.input_mesh import half_edges
+    >>> from hammesh.halfedge import half_edges
     >>> tri = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]])  # a fan around 0
     >>> c = cycle_cover(tri, half_edges(tri, 5).twin)
     >>> c.n_cycles, c.n_uncovered

@@ -30,11 +30,11 @@ from concurrent.futures import Executor, Future
 
 import numpy as np
 
-from hammesh import _kernels
+from hammesh.postprocess import _thm24_kernels as _kernels
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.postprocess.conform import split_segments
-from hammesh.verify.input_mesh import HalfEdges
+from hammesh.halfedge import HalfEdges
 from hammesh.verify.stream import RowStream
 
 __all__ = ["incircle_hamiltonian", "incircle_streaming", "incenters"]
@@ -65,7 +65,7 @@ def incircle_hamiltonian(
     Parameters
     ----------
     mesh : Mesh
-        Counter-clockwise, validated (``hammesh.verify.input_mesh.prepare_mesh``).
+        Counter-clockwise, validated (``hammesh.halfedge.prepare_mesh``).
     he : HalfEdges
         Its half-edge adjacency.
     is_con : (3 m,) bool

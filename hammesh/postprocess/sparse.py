@@ -54,13 +54,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammesh import _kernels
+from hammesh.halfedge import _kernels
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
-from hammesh.verify.input_mesh import HalfEdges
+from hammesh.halfedge import HalfEdges
 
 __all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles"]
 
@@ -219,7 +219,7 @@ def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[H
     Parameters
     ----------
     mesh : Mesh
-        Counter-clockwise, validated (``hammesh.verify.input_mesh.prepare_mesh``).
+        Counter-clockwise, validated (``hammesh.halfedge.prepare_mesh``).
     he : HalfEdges
     is_con : (3 m,) bool
 
@@ -234,7 +234,7 @@ def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[H
     pts, tri = mesh.points, mesh.triangles
     n, m = mesh.n_points, mesh.n_triangles
     seen = mesh.info.get("validated")  # found by prepare_mesh's orientation pass
-    amin = float(seen["min_angle"] if seen else _kernels.angle_area_stats(pts, tri)[0])
+    amin = float(seen["min_angle"] if seen else _kernels.orient_ccw(pts, tri).min_angle)
     r = sparse_cycles(pts, tri, he.twin, is_con, amin)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(

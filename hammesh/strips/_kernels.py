@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammesh import _kernels as _core
+from hammesh.halfedge import _kernels as _core
 
 
 def _leaf_probe(a):
@@ -1420,7 +1420,7 @@ def mesh_records(tri, n_points):
     """Triangle records and the half-edge pairing, ``(rec, twin)`` or ``None``.
 
     ``rec[t] = (tri[t, 0], tri[t, 1], tri[t, 2], twin[3 t], twin[3 t + 1], twin[3 t + 2],
-    scratch, 0)`` as ``int32``; ``twin`` is :func:`hammesh._kernels.half_edge_twins`'s
+    scratch, 0)`` as ``int32``; ``twin`` is :func:`hammesh.halfedge._kernels.half_edge_twins`'s
     pairing (its packed fast path), the records one sequential pass after it. ``None``
     when the mesh does not fit :func:`records_fit` or has an edge used twice in one
     direction or by three triangles: the caller then asks the reference kernel, which
@@ -1430,7 +1430,7 @@ def mesh_records(tri, n_points):
     if not records_fit(m, n_points):
         return None
     twin = np.empty(3 * m, np.int64)
-    if not _core._half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
+    if not _core.half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
         return None
     rec = np.empty((m, REC_WIDTH), np.int32)
     _records_from_twin(tri, twin, rec)

@@ -3,7 +3,7 @@
 Any triangle mesh is accepted, planar ``(n, 2)`` or a surface in space ``(n, 3)``; each
 triangle's winding (the order of its row) is kept, and the strips reproduce it.  Two
 triangles are dual neighbours when they share an edge in opposite directions (the
-half-edge pairing of :func:`hammesh._kernels.half_edge_twins`; built together with
+half-edge pairing of :func:`hammesh.halfedge._kernels.half_edge_twins`; built together with
 one ``int32`` record per triangle by :func:`hammesh.strips._kernels.mesh_records`).
 """
 
@@ -14,11 +14,11 @@ from functools import cached_property
 from typing import Optional, Union
 
 import numpy as np
-from hammesh import _kernels
+from hammesh.halfedge import _kernels
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.strips import _kernels as _strip_kernels
-from hammesh.verify.input_mesh import mesh_arrays
+from hammesh.halfedge import mesh_arrays
 
 __all__ = ["DualMesh", "dual_mesh", "oriented_key"]
 

@@ -25,11 +25,11 @@ from __future__ import annotations
 import time
 import numpy as np
 
-from hammesh import _kernels
+from hammesh.halfedge import _kernels
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, cycle_positions
 from hammesh.postprocess.sparse import count_report, sparse_cycles
-from hammesh.verify.input_mesh import mesh_arrays
+from hammesh.halfedge import mesh_arrays
 from hammesh.verify.surface import surface_angles, verify_surface
 
 __all__ = ["surface_hamiltonian", "prepare_surface"]

@@ -42,12 +42,15 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammesh import _kernels
+from hammesh import _threads
 from hammesh._threads import row_ranges, run_all
+from hammesh.halfedge import HalfEdges
+from hammesh.halfedge._kernels import vertex_half_edges
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.predicates import orient_points
-from hammesh.verify.input_mesh import HalfEdges
+from hammesh.verify import _kernels
+from hammesh.verify._kernels import RowChecks
 
 __all__ = ["verify", "verify_cycle_mesh", "input_facts", "claim_structure", "ANGLE_RTOL", "AREA_RTOL"]
 
@@ -82,7 +85,7 @@ def _certify_rows(
     ``side`` (the input-side facts) runs alongside; its result is returned second.
     """
     no_marks = np.empty(0, dtype=np.bool_)
-    spans = row_ranges(len(tri), _kernels.THREAD_MIN_ROWS)
+    spans = row_ranges(len(tri), _threads.THREAD_MIN_ROWS)
     calls = [
         (lambda lo=lo, hi=hi: _kernels.certify_row_range(pts, tri, runs, claim, lo, hi, used, no_marks))
         for lo, hi in spans
@@ -92,19 +95,31 @@ def _certify_rows(
     return combine_rows(results[:k]), (results[k] if side is not None else None)
 
 
-def combine_rows(parts: list[tuple]) -> tuple:
+def combine_rows(parts: list[RowChecks]) -> RowChecks:
     """Combine ``certify_row_range`` results of disjoint row ranges into one."""
 
-    def first(j: int) -> int:
-        hits = [p[j] for p in parts if p[j] >= 0]
+    def first(name: str) -> int:
+        hits = [getattr(p, name) for p in parts if getattr(p, name) >= 0]
         return min(hits) if hits else -1
 
-    lo = min(parts, key=lambda p: p[4])
-    hi = max(parts, key=lambda p: p[6])
-    small = min(parts, key=lambda p: p[8])
-    return (
-        first(0), first(1), first(2), first(3), lo[4], lo[5], hi[6], hi[7], small[8], small[9],
-        math.fsum(p[10] for p in parts), first(11), sum(p[12] for p in parts), sum(p[13] for p in parts),
+    lo = min(parts, key=lambda p: p.min_angle)
+    hi = max(parts, key=lambda p: p.max_angle)
+    small = min(parts, key=lambda p: p.min_area)
+    return RowChecks(
+        bad_index=first("bad_index"),
+        bad_consecutive=first("bad_consecutive"),
+        bad_pair=first("bad_pair"),
+        cross_run=first("cross_run"),
+        min_angle=lo.min_angle,
+        argmin=lo.argmin,
+        max_angle=hi.max_angle,
+        argmax=hi.argmax,
+        min_area=small.min_area,
+        argmin_area=small.argmin_area,
+        total_area=math.fsum(p.total_area for p in parts),
+        bad_orientation=first("bad_orientation"),
+        links=sum(p.links for p in parts),
+        unpaired=sum(p.unpaired for p in parts),
     )
 
 
@@ -120,7 +135,8 @@ def _input_facts(ref: Mesh, r_twin: np.ndarray) -> dict[str, Any]:
     if seen is not None:
         r_min, r_total, used = seen["min_angle"], seen["total"], seen["used"]
     else:
-        r_min, _, _, _, _, _, r_total = _kernels.angle_area_stats(rp, rt)
+        stats = _kernels.angle_area_stats(rp, rt)
+        r_min, r_total = stats.min_angle, stats.total_area
         used = np.zeros(len(rp), dtype=np.bool_)
         _kernels.mark_used(rt, used)
     return {
@@ -312,7 +328,7 @@ def verify_cycle_mesh(
 
     def out_he() -> HalfEdges:  # vertex rotations: built once, only if a segment needs it
         if not he_box:
-            he_box.append(HalfEdges(tri, twin, _kernels.vertex_half_edges(tri, n)))
+            he_box.append(HalfEdges(tri, twin, vertex_half_edges(tri, n)))
         return he_box[0]
 
     if has_segs:

@@ -13,7 +13,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from hammesh.errors import VerificationError
-from hammesh.verify.input_mesh import half_edges
+from hammesh.halfedge import half_edges
 
 __all__ = ["infer_runs"]
 

@@ -27,10 +27,11 @@ from concurrent.futures import Future
 
 import numpy as np
 
-from hammesh import _kernels
+from hammesh.verify import _kernels
+from hammesh.verify._kernels import UNLINKED, RowChecks
 from hammesh.verify.certificate import combine_rows
 
-__all__ = ["RowStream"]
+__all__ = ["RowStream", "UNLINKED"]
 
 
 class RowStream:
@@ -43,7 +44,7 @@ class RowStream:
     triangles : (m, 3) int64
         Output rows, written in order.
     claim : (3 m,) int64
-        Claimed half-edge pairing, initialised to ``_kernels.UNLINKED``.
+        Claimed half-edge pairing, initialised to ``UNLINKED``.
     chunk : int
         Rows per kernel call.
     """
@@ -122,14 +123,14 @@ class RowStream:
             with self._cond:
                 self._parts.append(res)
 
-    def result(self, runs: np.ndarray) -> tuple:
+    def result(self, runs: np.ndarray) -> RowChecks:
         """The row results for the run lengths ``runs``, as ``certify_row_range`` gives them.
 
         Call after every :meth:`work` has returned and the construction published
         ``final``.
         """
         runs = np.asarray(runs, dtype=np.int64)
-        rows = list(combine_rows(self._parts))
+        rows = combine_rows(self._parts)
         starts = np.cumsum(runs) - runs
         ends = starts + runs - 1
         marked = np.flatnonzero(self._cons_fail)
@@ -141,8 +142,7 @@ class RowStream:
         close = int(_kernels.runs_close(self.triangles, runs))
         if close >= 0:
             bad.append(close)
-        rows[1] = min(bad) if bad else -1
-        rows[3] = -1
-        if len(runs) > 1 and rows[2] < 0:  # pairs between runs (the claim is complete)
-            rows[3] = int(_kernels.first_cross_run_edge(self.claim, runs))
-        return tuple(rows)
+        cross = -1
+        if len(runs) > 1 and rows.bad_pair < 0:  # pairs between runs (the claim is complete)
+            cross = int(_kernels.first_cross_run_edge(self.claim, runs))
+        return rows._replace(bad_consecutive=min(bad) if bad else -1, cross_run=cross)

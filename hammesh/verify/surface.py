@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from hammesh import _kernels
+from hammesh.verify import _kernels
 from hammesh.errors import VerificationError
 
 __all__ = ["verify_surface", "surface_angles", "ANGLE_RTOL", "AREA_RTOL", "PLANE_RTOL"]

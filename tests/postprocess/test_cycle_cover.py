@@ -11,7 +11,7 @@ from scipy.spatial import Delaunay
 
 import hammesh
 from hammesh.postprocess.cycle_cover import cycle_cover
-from hammesh.verify.input_mesh import half_edges
+from hammesh.halfedge import half_edges
 from tests.postprocess.test_incircle import _area, bundled_domain
 
 

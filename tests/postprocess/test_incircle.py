@@ -211,9 +211,9 @@ def test_large_mesh_certificate() -> None:
 def test_claimed_pairing_is_the_true_adjacency(dom: hammesh.Domain, area: float) -> None:
     """The construction's own half-edge pairing (which the certificate checks instead
     of recomputing) equals an independent bucket matching of the output."""
-    from hammesh import _kernels
+    from hammesh.halfedge import prepare_mesh
     from hammesh.postprocess.incircle import incircle_hamiltonian
-    from hammesh.verify import prepare_mesh
+    from hammesh.verify import _kernels
 
     m = hammesh.quality_mesh(dom, min_angle=25, max_area=area, isolate=False)
     clean, he, is_con = prepare_mesh(m)
@@ -244,13 +244,14 @@ def test_a_wrong_claim_is_not_believed() -> None:
 def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores: int) -> None:
     """Searched in threads (one slab each), the forest still spans every piece with the
     fewest midpoints, and the output passes the certificate."""
-    from hammesh import _kernels, _threads
+    from hammesh import _threads
+    from hammesh.postprocess import _thm24_kernels as _kernels
     from tests.helpers import plate
 
     m = plate(n_loops, pieces, max_area=0.002)
-    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 50)
+    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 50)
     monkeypatch.setattr(_threads.os, "cpu_count", lambda: cores)
-    from hammesh.verify.input_mesh import prepare_mesh
+    from hammesh.halfedge import prepare_mesh
 
     clean, he, is_con = prepare_mesh(m)
     tri, code, order, firsts, split = _kernels.spanning_forest(clean.triangles, he.twin, is_con, clean.points)

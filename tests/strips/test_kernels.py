@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hammesh import _kernels as core_kernels
+from hammesh.halfedge import _kernels as core_kernels
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
 from hammesh.strips import _kernels
@@ -90,7 +90,7 @@ def test_packed_half_edge_pairing_equals_the_reference(seed):
     perm = rng.permutation(len(m.points))  # scattered vertex numbering
     tri = np.argsort(perm)[m.triangles][rng.permutation(m.n_triangles)]
     twin, bad = core_kernels.half_edge_twins(tri, len(m.points))
-    ref, rbad = core_kernels._half_edge_twins_reference(tri, len(m.points))
+    ref, rbad = core_kernels.half_edge_twins_reference(tri, len(m.points))
     assert bad == rbad == -1 and np.array_equal(twin, ref)
     # every pair: opposite directions of one edge
     h = np.flatnonzero(twin >= 0)
@@ -111,7 +111,7 @@ BAD_EDGES = [
 @pytest.mark.parametrize("tri", BAD_EDGES)
 def test_packed_pairing_reports_the_same_bad_half_edge(tri):
     tri = np.array(tri, np.int64)
-    assert core_kernels.half_edge_twins(tri, 5)[1] == core_kernels._half_edge_twins_reference(tri, 5)[1] >= 0
+    assert core_kernels.half_edge_twins(tri, 5)[1] == core_kernels.half_edge_twins_reference(tri, 5)[1] >= 0
 
 
 @pytest.mark.parametrize("mesh", [square_mesh(0.01), torus_mesh(9, 6), grid_mesh(6, 4, z=True)], ids=["square", "torus", "grid"])
@@ -164,7 +164,7 @@ def _scattered_mesh(seed: int) -> tuple[np.ndarray, int]:
 def test_mesh_records_pair_like_the_reference(seed):
     tri, n = _scattered_mesh(seed)
     rec, twin = _kernels.mesh_records(tri, n)
-    ref, bad = core_kernels._half_edge_twins_reference(tri, n)
+    ref, bad = core_kernels.half_edge_twins_reference(tri, n)
     assert bad == -1 and np.array_equal(twin, ref)
     assert rec.dtype == np.int32 and np.array_equal(rec[:, :3], tri)
     assert np.array_equal(rec[:, _kernels.REC_TWIN : _kernels.REC_TWIN + 3].ravel(), ref)
@@ -182,7 +182,7 @@ def test_mesh_records_of_two_triangles_on_the_same_three_edges():
     """A closed two-triangle 'pillow': each triangle is the other's neighbour three times."""
     tri = np.array([[0, 1, 2], [0, 2, 1]], np.int64)
     rec, twin = _kernels.mesh_records(tri, 3)
-    assert np.array_equal(twin, core_kernels._half_edge_twins_reference(tri, 3)[0])
+    assert np.array_equal(twin, core_kernels.half_edge_twins_reference(tri, 3)[0])
     m = Mesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]), tri)
     assert oriented_set(decode_gl_strip(*(lambda s: (s.indices, s.restart_index))(encode(m)))) == oriented_set(tri)
 

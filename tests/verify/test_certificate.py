@@ -8,8 +8,16 @@ import numpy as np
 import pytest
 
 import hammesh
-from hammesh.verify import verify, verify_cycle_mesh
+from hammesh.verify import _kernels, verify, verify_cycle_mesh
 from tests.helpers import square
+
+
+def certify_all(points: np.ndarray, tri: np.ndarray, runs: np.ndarray) -> _kernels.RowChecks:
+    """The certificate's row checks in one call over all rows (no pairing claim)."""
+    return _kernels.certify_row_range(
+        points, tri, np.asarray(runs, np.int64), np.empty(0, np.int64), 0, len(tri),
+        np.zeros(len(points), np.bool_), np.empty(0, np.bool_),
+    )
 
 
 @pytest.fixture(scope="module")
@@ -133,11 +141,11 @@ def test_non_finite_points(pair) -> None:
 
 def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
     """Split across threads, the row checks give exactly the one-call result."""
-    from hammesh import _kernels, _threads
+    from hammesh import _threads
     from hammesh.verify import certificate
 
     _, h = pair
-    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 7)
     monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
     empty = np.empty(0, dtype=np.int64)
     tri = h.triangles.copy()
@@ -145,22 +153,23 @@ def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
         if broken is not None:  # break the cycle in the middle chunk / the last row
             tri = h.triangles.copy()
             tri[broken] = tri[broken][[1, 2, 0]][::-1]
-        one = _kernels.certify_rows(h.points, tri, h.components, empty)
+        one = certify_all(h.points, tri, h.components)
         used = np.zeros(len(h.points), dtype=bool)
         split, _ = certificate._certify_rows(h.points, tri, h.components, empty, used)
         assert np.array_equal(used, np.bincount(tri.ravel(), minlength=len(h.points)) > 0)
-        assert split[:4] == one[:4] and split[5] == one[5] and split[7] == one[7] and split[11] == one[11]
-        assert np.isclose(split[4], one[4]) and np.isclose(split[6], one[6])
-        assert np.isclose(split[10], one[10], rtol=1e-12)
-        if broken is not None:
-            assert split[8] < 0 and split[9] == broken == split[11]  # reversed row: negative area
+        for name in ("bad_index", "bad_consecutive", "bad_pair", "cross_run", "argmin", "argmax", "bad_orientation"):
+            assert getattr(split, name) == getattr(one, name), name
+        assert np.isclose(split.min_angle, one.min_angle) and np.isclose(split.max_angle, one.max_angle)
+        assert np.isclose(split.total_area, one.total_area, rtol=1e-12)
+        if broken is not None:  # reversed row: negative area
+            assert split.min_area < 0 and split.argmin_area == broken == split.bad_orientation
 
 
 def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
-    from hammesh import _kernels
+    from hammesh import _threads
 
     _, h = pair
-    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 5)
+    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 5)
     tri = h.triangles.copy()
     k = 2 * len(tri) // 3
     tri[[k, k + 5]] = tri[[k + 5, k]]
@@ -170,8 +179,8 @@ def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
 
 def test_nearly_flat_inverted_triangle_is_caught_exactly() -> None:
     """Float area says counter-clockwise, the exact predicate says clockwise: rejected."""
-    from hammesh import _kernels
     from hammesh.predicates import orient
+    from hammesh.verify import _kernels
 
     rng = np.random.default_rng(1)
     for _ in range(200_000):  # a nearly flat triangle whose rounded area has the wrong sign
@@ -186,8 +195,8 @@ def test_nearly_flat_inverted_triangle_is_caught_exactly() -> None:
     res = _kernels.certify_row_range(
         p, tri, np.array([3]), np.empty(0, np.int64), 0, 3, np.zeros(3, bool), np.empty(0, bool)
     )
-    assert res[8] > 0  # the floating-point area is positive ...
-    assert res[11] == 0  # ... and the exact test flags row 0
+    assert res.min_area > 0  # the floating-point area is positive ...
+    assert res.bad_orientation == 0  # ... and the exact test flags row 0
 
 
 def test_degenerate_row_is_a_verification_error(pair) -> None:
@@ -197,7 +206,5 @@ def test_degenerate_row_is_a_verification_error(pair) -> None:
     tri[5] = [tri[5, 0], tri[5, 0], tri[5, 1]]
     with pytest.raises(hammesh.VerificationError):
         verify(replace(h, triangles=tri))
-    from hammesh import _kernels
-
-    res = _kernels.certify_rows(h.points, tri, h.components, np.empty(0, dtype=np.int64))
-    assert res[11] == 5  # flagged by the exact orientation test
+    res = certify_all(h.points, tri, h.components)
+    assert res.bad_orientation == 5  # flagged by the exact orientation test

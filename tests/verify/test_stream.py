@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 
 import hammesh
-from hammesh import _kernels
+from hammesh.halfedge import prepare_mesh
+from hammesh.postprocess import _thm24_kernels as _kernels
+from hammesh.verify import _kernels as cert_kernels
 from hammesh.postprocess import incircle
-from hammesh.verify import prepare_mesh, verify
+from hammesh.verify import verify
 from hammesh.verify.certificate import _certify_rows
 from hammesh.verify.stream import RowStream
 from tests.helpers import assert_certificate, plate
@@ -51,10 +53,11 @@ def test_stream_equals_full_pass(built, steps: int, workers: int) -> None:
     h, claim = built
     (rows, used), (ref, ref_used) = streamed(h, claim, steps, workers), full(h, h.triangles, claim)
     assert np.array_equal(used, ref_used)
-    assert rows[:4] == ref[:4] == (-1, -1, -1, -1)
-    assert rows[5] == ref[5] and rows[7] == ref[7] and rows[11:] == ref[11:]
-    assert np.isclose(rows[10], ref[10], rtol=1e-12)
-    assert 2 * rows[12] + rows[13] == 3 * h.n_triangles  # every half-edge paired or boundary
+    assert rows[:4] == ref[:4] == (-1, -1, -1, -1)  # bad index, consecutive, pair, cross run
+    for name in ("argmin", "argmax", "bad_orientation", "links", "unpaired"):
+        assert getattr(rows, name) == getattr(ref, name), name
+    assert np.isclose(rows.total_area, ref.total_area, rtol=1e-12)
+    assert 2 * rows.links + rows.unpaired == 3 * h.n_triangles  # every half-edge paired or boundary
 
 
 @pytest.mark.parametrize("where", ["middle", "run_end", "run_start"])
@@ -69,8 +72,8 @@ def test_stream_finds_the_same_broken_row(built, where: str) -> None:
     tri[[i, j]] = tri[[j, i]]
     rows, _ = streamed(replace(h, triangles=tri), claim, 6, 2)
     ref, _ = full(h, tri, claim)
-    assert rows[1] == ref[1] >= 0
-    with pytest.raises(hammesh.VerificationError, match=f"breaks at triangle {ref[1]}"):
+    assert rows.bad_consecutive == ref.bad_consecutive >= 0
+    with pytest.raises(hammesh.VerificationError, match=f"breaks at triangle {ref.bad_consecutive}"):
         verify(replace(h, triangles=tri), rows=(rows, np.ones(len(h.points), bool)))
 
 
@@ -79,7 +82,7 @@ def test_unwritten_claim_entries_are_counted(built) -> None:
     c = claim.copy()
     c[[5, int(claim[5])]] = _kernels.UNLINKED  # a pair the walk "never wrote"
     rows, _ = streamed(h, c, 4, 2)
-    assert rows[2] == -1 and 2 * rows[12] + rows[13] == 3 * h.n_triangles - 2
+    assert rows.bad_pair == -1 and 2 * rows.links + rows.unpaired == 3 * h.n_triangles - 2
     # the certificate then does not believe the claim but still proves the good mesh
     ref = h  # (the mesh itself is fine)
     clean, he, _ = prepare_mesh(plate(2, 3))
@@ -111,23 +114,30 @@ def test_walk_resumes_where_it_paused(built) -> None:
     h, claim = built
     clean, he, is_con = prepare_mesh(plate(2, 3))
     tri, code, order, firsts, _ = _kernels.spanning_forest(clean.triangles, he.twin, is_con)
-    ref = _kernels.emit_cycles(tri, code, firsts, clean.n_points, order)
     mid_h, mid_id, _, _ = _kernels.split_slots(tri, code)
     total = len(code) + len(mid_h)
-    out = np.zeros((total, 3), np.int64)
-    parent = np.zeros(total, np.int64)
-    kind = np.zeros(total, np.int8)
-    c = np.full(3 * total, _kernels.UNLINKED, np.int64)
-    prim = np.full(len(code), -1, np.int64)
-    lengths = np.zeros(len(firsts), np.int64)
-    y2 = np.full(len(mid_h), -1, np.int64)
-    state = np.zeros(_kernels.WALK_STATE, np.int64)
-    calls = 0
-    while (st := _kernels.emit_cycles_into(tri, code, firsts, order, clean.n_points, mid_h, mid_id, out, parent,
-                                           kind, c, prim, lengths, y2, state, int(state[2]) + 1)) == 0:
-        calls += 1
-    assert st == 1 and calls >= total - len(mid_h) - len(firsts)  # a pause at every slot
-    for a, b in zip((out, parent, kind, lengths, c), (ref[0], ref[1], ref[2], ref[3], ref[6])):
+
+    def walk(step: int) -> tuple[int, int, tuple]:
+        """Walk with a pause every ``step`` rows: (status, pauses, arrays)."""
+        out = np.zeros((total, 3), np.int64)
+        parent = np.zeros(total, np.int64)
+        kind = np.zeros(total, np.int8)
+        c = np.full(3 * total, _kernels.UNLINKED, np.int64)
+        prim = np.full(len(code), -1, np.int64)
+        lengths = np.zeros(len(firsts), np.int64)
+        y2 = np.full(len(mid_h), -1, np.int64)
+        state = np.zeros(_kernels.WALK_STATE, np.int64)
+        calls = 0
+        while (st := _kernels.emit_cycles_into(tri, code, firsts, order, clean.n_points, mid_h, mid_id, out, parent,
+                                               kind, c, prim, lengths, y2, state, int(state[2]) + step)) == 0:
+            calls += 1
+        return st, calls, (out, parent, kind, lengths, c)
+
+    st0, calls0, ref = walk(total)  # one call
+    st, calls, got = walk(1)
+    assert st0 == st == 1 and calls0 == 0
+    assert calls >= total - len(mid_h) - len(firsts)  # a pause at every slot
+    for a, b in zip(got, ref):
         np.testing.assert_array_equal(a, b)
 
 
@@ -145,7 +155,7 @@ def test_no_row_is_checked_before_the_points_are_final(built) -> None:
     stream.points_final()
     worker.join()
     rows = stream.result(h.components)
-    assert rows[11] == -1 and rows[1] == -1
+    assert rows.bad_orientation == -1 and rows.bad_consecutive == -1
 
 
 def test_claim_index_width() -> None:
@@ -155,7 +165,7 @@ def test_claim_index_width() -> None:
     clean, he, is_con = prepare_mesh(plate(1, 1))
     h, claim = incircle.incircle_hamiltonian(clean, he, is_con)
     assert claim.dtype == np.int32
-    twin, bad = _kernels.half_edge_twins(h.triangles, h.n_points)
+    twin, bad = cert_kernels.half_edge_twins(h.triangles, h.n_points)
     assert bad == -1
     np.testing.assert_array_equal(claim, twin)
     # the certificate takes either width

@@ -9,8 +9,10 @@ from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
 import hammesh
-from hammesh import _kernels
-from hammesh.verify import half_edges, infer_runs, prepare_mesh
+from hammesh import _threads
+from hammesh.halfedge import _kernels, half_edges, prepare_mesh
+from hammesh.verify import _kernels as cert_kernels
+from hammesh.verify import infer_runs
 
 SQ = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
 TWO = np.array([[0, 1, 2], [0, 2, 3]])
@@ -101,9 +103,7 @@ def test_infer_runs_from_pieces_in_order() -> None:
 @pytest.mark.parametrize("seed", range(6))
 def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
     """Row ranges in three threads: the same twins, and bad neighbours still caught."""
-    from hammesh import _threads
-
-    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 5)
+    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 5)
     monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
     rng = np.random.default_rng(seed)
     pts = rng.random((60, 2))
@@ -125,9 +125,7 @@ def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
 def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> None:
     """Angle, area and used vertices found while orienting (in threads) are what the
     certificate would compute from the clean mesh itself."""
-    from hammesh import _threads
-
-    monkeypatch.setattr(_kernels, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 7)
     monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
     rng = np.random.default_rng(seed)
     pts = rng.random((80, 2))
@@ -135,7 +133,7 @@ def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> N
     tri[::3] = tri[::3, ::-1]  # some clockwise rows
     clean, _, _ = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri))
     seen = clean.info["validated"]
-    min_angle, _, _, _, _, _, total = _kernels.angle_area_stats(clean.points, clean.triangles)
-    assert np.isclose(seen["min_angle"], min_angle, rtol=1e-14, atol=0)  # arcsin: numpy vs numba
-    assert np.isclose(seen["total"], total, rtol=1e-14)
+    stats = cert_kernels.angle_area_stats(clean.points, clean.triangles)
+    assert np.isclose(seen["min_angle"], stats.min_angle, rtol=1e-14, atol=0)  # arcsin: numpy vs numba
+    assert np.isclose(seen["total"], stats.total_area, rtol=1e-14)
     np.testing.assert_array_equal(seen["used"], np.bincount(tri.ravel(), minlength=80) > 0)

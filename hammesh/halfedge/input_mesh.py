@@ -6,7 +6,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hammesh import _kernels
+from hammesh.halfedge import _kernels
 from hammesh.domain.validate import MAX_ABS_COORDINATE
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
@@ -150,7 +150,7 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         )
     n = len(pts)
     used = np.zeros(n, dtype=np.bool_)
-    tri, n_flipped, bad_t, (min_angle, area) = _kernels.orient_ccw(pts, tri, used)
+    tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(pts, tri, used)
     if bad_t >= 0:
         t = int(bad_t)
         row = np.asarray(mesh.triangles)[t].tolist()

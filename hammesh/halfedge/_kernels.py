@@ -1,0 +1,443 @@
+"""Half-edge topology kernels (numba) the constructions run on their input.
+
+Pairing of half-edges (``h = 3 t + k`` runs from ``tri[t, k]`` to ``tri[t, (k+1) % 3]``),
+counter-clockwise orientation of the rows, one half-edge per vertex and rotations
+around a vertex (constrained edges, neighbours). The certificates never call these:
+they pair half-edges with their own code (``hammesh.verify._kernels``), so one bug
+here cannot make a construction and its certificate wrong the same way.
+
+Each kernel is O(m) over a plain int64/float64 array, returns plain arrays and
+reports problems through a return code (never raises: the callers turn codes into
+hammesh exceptions with a message). ``cache=True`` stores the machine code in
+``__pycache__`` so only the very first run in an environment pays the compile time
+(measured in ``benchmarks/bench_core.py``).
+
+Large outputs are allocated by numpy in thin Python wrappers and filled by a
+``_..._into`` kernel: numpy asks the kernel for transparent huge pages on big
+arrays and numba's allocator does not, and first-touch page faults made fresh numba
+arrays about 3x slower to fill on this project's machine (200 MB: 0.07 s vs 0.23 s).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from hammesh import _threads
+from hammesh._threads import row_ranges, run_all
+
+__all__ = [
+    "Oriented",
+    "orient_ccw",
+    "twins_from_neighbors",
+    "half_edge_twins",
+    "half_edge_twins_packed",
+    "half_edge_twins_reference",
+    "vertex_half_edges",
+    "mark_segments",
+    "vertex_neighbors",
+]
+
+
+class Oriented(NamedTuple):
+    """Result of :func:`orient_ccw`."""
+
+    triangles: np.ndarray  # (m, 3) int64, every row counter-clockwise
+    n_flipped: int  # rows that were reversed
+    bad: int  # -1, or the first row with a repeated vertex or zero area
+    min_angle: float  # radians, smallest angle of the counter-clockwise rows
+    area: float  # their total area
+
+
+def orient_ccw(points, tri, used=None):
+    """Counter-clockwise copy of ``tri`` (rows with negative area reversed).
+
+    Returns an :class:`Oriented`: ``bad`` is -1 or the first triangle with a repeated
+    vertex or zero area; the smallest angle (radians) and the total area of the
+    counter-clockwise rows come from the same pass (a construction needs the angle for
+    its bound; the certificate measures the input again with its own code).
+    ``used`` (bool per point), if given, is set for every vertex of a triangle.
+    """
+    out = np.empty_like(tri)
+    if used is None:
+        used = np.zeros(points.shape[0], np.bool_)
+    parts = run_all([
+        (lambda lo=lo, hi=hi: _orient_ccw_into(points, tri, out, used, lo, hi))
+        for lo, hi in row_ranges(tri.shape[0], _threads.THREAD_MIN_ROWS)
+    ])
+    bads = [p[1] for p in parts if p[1] >= 0]
+    s2 = min(p[2] for p in parts)
+    min_angle = float(np.arcsin(np.sqrt(min(max(s2, 0.0), 1.0))))
+    total = math.fsum(p[3] for p in parts)
+    return Oriented(out, sum(p[0] for p in parts), (min(bads) if bads else -1), min_angle, total)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _orient_ccw_into(points, tri, out, used, lo, hi):
+    n_flipped = 0
+    bad = -1
+    best_s2 = np.inf
+    total = 0.0
+    for t in range(lo, hi):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        used[a] = True
+        used[b] = True
+        used[c] = True
+        cr = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1]) - (
+            points[b, 1] - points[a, 1]
+        ) * (points[c, 0] - points[a, 0])
+        if (a == b or b == c or c == a or cr == 0.0) and bad < 0:
+            bad = t
+        if cr < 0.0:
+            out[t, 0] = c
+            out[t, 1] = b
+            out[t, 2] = a
+            n_flipped += 1
+        else:
+            out[t, 0] = a
+            out[t, 1] = b
+            out[t, 2] = c
+        cr2, s2 = _area_sin2(points, out[t, 0], out[t, 1], out[t, 2])
+        total += 0.5 * cr2
+        if s2 < best_s2:
+            best_s2 = s2
+    return n_flipped, bad, best_s2, total
+
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _area_sin2(points, p0, p1, p2):
+    """``(cross, sin^2 of the smallest angle)`` of one triangle (cross: twice the area).
+
+    The smallest angle lies opposite the shortest side and is at most 60 degrees, so
+    its sine squared ``cross^2 / (|e|^2 |f|^2)`` over the two other sides is well
+    conditioned.
+    """
+    ax = points[p1, 0] - points[p0, 0]
+    ay = points[p1, 1] - points[p0, 1]
+    bx = points[p2, 0] - points[p1, 0]
+    by = points[p2, 1] - points[p1, 1]
+    cx = points[p0, 0] - points[p2, 0]
+    cy = points[p0, 1] - points[p2, 1]
+    cr = ax * by - ay * bx
+    la = ax * ax + ay * ay
+    lb = bx * bx + by * by
+    lc = cx * cx + cy * cy
+    if la <= lb and la <= lc:
+        return cr, cr * cr / (lb * lc)
+    if lb <= lc:
+        return cr, cr * cr / (la * lc)
+    return cr, cr * cr / (la * lb)
+
+
+def twins_from_neighbors(tri, nbr):
+    """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
+
+    Returns ``(twin, bad)``; ``bad`` is -1, or a half-edge whose claimed neighbour
+    does not hold the same edge reversed or does not name it back (then the
+    neighbours are not to be trusted and the caller matches half-edges itself).
+    Each pair is matched once, from its lower triangle (half the random reads of
+    checking both sides), in threads over row ranges; a second pass checks that the
+    higher side was matched. A half-edge is only ever matched by the triangle its
+    own row names, so threads never write the same entry.
+    """
+    twin = np.full(3 * tri.shape[0], -1, np.int64)
+    spans = row_ranges(tri.shape[0], _threads.THREAD_MIN_ROWS)
+    for step in (_twins_from_neighbors_into, _unmatched_neighbor):
+        bads = [b for b in run_all([
+            (lambda lo=lo, hi=hi: step(tri, nbr, twin, lo, hi)) for lo, hi in spans
+        ]) if b >= 0]
+        if bads:
+            return twin, min(bads)
+    return twin, -1
+
+
+@njit(cache=True, nogil=True)
+def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
+    m = tri.shape[0]
+    for t in range(lo, hi):
+        for k in range(3):
+            u = nbr[t, k]
+            if u < t:  # boundary, or matched from u (checked by _unmatched_neighbor)
+                continue
+            h = 3 * t + k
+            if u >= m:
+                return h
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            found = -1
+            for j in range(3):
+                if tri[u, j] == b and tri[u, (j + 1) % 3] == a:
+                    found = 3 * u + j
+            if found < 0 or nbr[u, found - 3 * u] != t or twin[found] >= 0 or u == t:
+                return h
+            twin[h] = found
+            twin[found] = h
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def _unmatched_neighbor(tri, nbr, twin, lo, hi):
+    for t in range(lo, hi):
+        for k in range(3):
+            u = nbr[t, k]
+            if 0 <= u < t and twin[3 * t + k] < 0:  # u does not name t back
+                return 3 * t + k
+    return -1
+
+
+@njit(cache=True)
+def half_edge_twins(tri, n_points):
+    """Match half-edges ``h = 3 t + k`` (from ``tri[t, k]`` to ``tri[t, (k+1) % 3]``).
+
+    Half-edges are bucketed by their lower vertex (a counting sort) with the other
+    vertex and the direction stored alongside, so an undirected edge's two halves meet
+    in one contiguous bucket. Vertex, direction and half-edge are packed in one int64
+    (one scattered write per half-edge instead of two); meshes too large to pack, and
+    any mesh with a problem, go through the unpacked reference, which names the
+    half-edge.
+
+    Returns ``(twin, bad)``: ``twin[h]`` is the opposite half-edge or -1 (boundary);
+    ``bad`` is -1, or a half-edge whose edge is used twice in one direction or by
+    three triangles.
+    """
+    m = tri.shape[0]
+    if 3 * m < (1 << 32) and n_points < (1 << 30):
+        twin = np.empty(3 * m, np.int64)
+        if half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
+            return twin, -1
+    return half_edge_twins_reference(tri, n_points)
+
+
+@njit(cache=True)
+def half_edge_twins_packed(tri, n_points, twin, keys):
+    """:func:`half_edge_twins` with packed keys; False on any problem.
+
+    Key: ``other vertex << 33 | (origin is the upper vertex) << 32 | h``, bucketed by
+    the lower vertex. Inside a bucket a mark per other vertex pairs an edge's two
+    halves in one read each (comparing every pair of a bucket costs a hard-to-predict
+    branch per pair). ``twin`` and ``keys``: ``(3 m,)`` int64 outputs / scratch (a
+    caller may hand in numpy-allocated ones); needs ``3 m < 2**32`` and
+    ``n_points < 2**30``.
+    """
+    m = tri.shape[0]
+    nh = 3 * m
+    start = np.zeros(n_points + 1, np.int64)
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        start[min(a, b) + 1] += 1
+        start[min(b, c) + 1] += 1
+        start[min(c, a) + 1] += 1
+    mark = np.empty(n_points, np.int64)
+    for v in range(n_points):
+        start[v + 1] += start[v]
+        mark[v] = -1
+    for t in range(m):  # afterwards start[v] is the end of bucket v (start[v + 1] before)
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            f = start[lo]
+            keys[f] = (max(a, b) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
+            start[lo] = f + 1
+    for h in range(nh):
+        twin[h] = -1
+    mask = (1 << 32) - 1
+    s0 = 0
+    for v in range(n_points):
+        s1 = start[v]
+        for j in range(s0, s1):
+            kj = keys[j]
+            o = kj >> 33
+            p = mark[o]
+            if p == -1:  # first half of edge (v, o)
+                mark[o] = j
+            elif p >= 0:  # second half: must run the other way
+                kp = keys[p]
+                if ((kp ^ kj) >> 32) & 1 == 0:
+                    return False
+                hj = kj & mask
+                hp = kp & mask
+                twin[hj] = hp
+                twin[hp] = hj
+                mark[o] = -2
+            else:  # a third triangle on the edge
+                return False
+        for j in range(s0, s1):
+            mark[keys[j] >> 33] = -1
+        s0 = s1
+    return True
+
+
+@njit(cache=True)
+def half_edge_twins_reference(tri, n_points):
+    """:func:`half_edge_twins` without packing (any size; names the bad half-edge)."""
+    m = tri.shape[0]
+    nh = 3 * m
+    start = np.zeros(n_points + 1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            start[min(tri[t, k], tri[t, (k + 1) % 3]) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    heads = np.empty(nh, np.int64)
+    other = np.empty(nh, np.int64)
+    for t in range(m):
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            f = fill[lo]
+            heads[f] = 3 * t + k
+            other[f] = b - a
+            fill[lo] = f + 1
+    twin = np.full(nh, -1, np.int64)
+    for v in range(n_points):
+        s1 = start[v + 1]
+        for j in range(start[v], s1):
+            oj = other[j]
+            for i in range(j + 1, s1):
+                oi = other[i]
+                if oi == oj:
+                    return twin, heads[i]
+                if oi == -oj:
+                    if twin[heads[j]] >= 0 or twin[heads[i]] >= 0:
+                        return twin, heads[i]
+                    twin[heads[j]] = heads[i]
+                    twin[heads[i]] = heads[j]
+    return twin, -1
+
+
+def vertex_half_edges(tri, n_points):
+    """One half-edge leaving each vertex (-1 for an unused vertex)."""
+    vh = np.full(int(n_points), -1, np.int64)
+    _vertex_half_edges_into(tri, vh)
+    return vh
+
+
+@njit(cache=True, nogil=True)
+def _vertex_half_edges_into(tri, vh):
+    for t in range(tri.shape[0]):
+        for k in range(3):
+            vh[tri[t, k]] = 3 * t + k
+
+
+@njit(cache=True)
+def _around(tri, twin, vh, a, buf):
+    """Triangles' half-edges leaving vertex ``a``, by rotation through the twins.
+
+    Writes them into ``buf`` (grown by the caller if full) and returns their count, or
+    -1 if ``buf`` is too small. Works for interior and boundary vertices.
+    """
+    h0 = vh[a]
+    if h0 < 0:
+        return 0
+    cnt = 0
+    h = h0
+    while True:  # one way round: previous half-edge of the triangle, then its twin
+        if cnt >= buf.shape[0]:
+            return -1
+        buf[cnt] = h
+        cnt += 1
+        t = h // 3
+        p = 3 * t + (h - 3 * t + 2) % 3
+        q = twin[p]
+        if q < 0 or q == h0:
+            break
+        h = q
+    if q < 0:  # boundary vertex: go the other way from h0
+        g = twin[h0]
+        while g >= 0:
+            u = g // 3
+            h = 3 * u + (g - 3 * u + 1) % 3
+            if cnt >= buf.shape[0]:
+                return -1
+            buf[cnt] = h
+            cnt += 1
+            g = twin[h]
+    return cnt
+
+
+@njit(cache=True)
+def mark_segments(tri, twin, vh, segments):
+    """Flag the half-edges lying on constrained edges.
+
+    Returns ``(is_con (3m,) bool, found (s,) bool)``: ``found[s]`` tells whether
+    segment s is an edge of the mesh. O(degree) per segment by rotation around its
+    first vertex; segments not found that way (a vertex where two fans only touch)
+    are looked up in one pass over all half-edges.
+    """
+    is_con = np.zeros(twin.shape[0], np.bool_)
+    found = np.zeros(segments.shape[0], np.bool_)
+    buf = np.empty(64, np.int64)
+    for s in range(segments.shape[0]):
+        a = segments[s, 0]
+        b = segments[s, 1]
+        cnt = _around(tri, twin, vh, a, buf)
+        while cnt < 0:
+            buf = np.empty(2 * buf.shape[0], np.int64)
+            cnt = _around(tri, twin, vh, a, buf)
+        for i in range(cnt):
+            h = buf[i]
+            t = h // 3
+            k = h - 3 * t
+            if tri[t, (k + 1) % 3] == b:  # a -> b
+                is_con[h] = True
+                found[s] = True
+                if twin[h] >= 0:
+                    is_con[twin[h]] = True
+            p = 3 * t + (k + 2) % 3
+            if tri[t, (k + 2) % 3] == b:  # b -> a
+                is_con[p] = True
+                found[s] = True
+                if twin[p] >= 0:
+                    is_con[twin[p]] = True
+    n_missing = 0
+    for s in range(segments.shape[0]):
+        if not found[s]:
+            n_missing += 1
+    if n_missing:
+        n = vh.shape[0]
+        want = dict()
+        for s in range(segments.shape[0]):
+            if not found[s]:
+                a = segments[s, 0]
+                b = segments[s, 1]
+                want[min(a, b) * n + max(a, b)] = s
+        for h in range(twin.shape[0]):
+            t = h // 3
+            k = h - 3 * t
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            key = min(a, b) * n + max(a, b)
+            if key in want:
+                is_con[h] = True
+                found[want[key]] = True
+    return is_con, found
+
+
+@njit(cache=True)
+def vertex_neighbors(tri, twin, vh, a):
+    """Vertices joined to ``a`` by an edge (may repeat)."""
+    buf = np.empty(64, np.int64)
+    cnt = _around(tri, twin, vh, a, buf)
+    while cnt < 0:
+        buf = np.empty(2 * buf.shape[0], np.int64)
+        cnt = _around(tri, twin, vh, a, buf)
+    out = np.empty(2 * cnt, np.int64)
+    for i in range(cnt):
+        h = buf[i]
+        t = h // 3
+        k = h - 3 * t
+        out[2 * i] = tri[t, (k + 1) % 3]
+        out[2 * i + 1] = tri[t, (k + 2) % 3]
+    return out
+

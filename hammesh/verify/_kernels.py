@@ -1,0 +1,404 @@
+"""The certificate's own kernels (numba); no construction code runs here.
+
+What the certificate knows about a mesh it finds with these kernels and the exact
+predicates (``hammesh.predicates``): the row checks of a cycle-ordered output
+(orientation, consecutive rows, the claimed pairing, angles and area), the
+half-edge pairing of a mesh (its own bucket matching, written apart from the
+construction's ``hammesh.halfedge._kernels.half_edge_twins``), boundaries and the
+measures of the input. Results of several values are named tuples.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from hammesh.predicates import orient_points
+
+__all__ = [
+    "RowChecks",
+    "AngleArea",
+    "UNLINKED",
+    "certify_row_range",
+    "runs_close",
+    "first_cross_run_edge",
+    "boundary_half_edges",
+    "half_edge_twins",
+    "angle_area_stats",
+    "mark_used",
+]
+
+#: Claim entry not written (yet): the certificate skips it and counts the links.
+UNLINKED = -2
+
+
+class RowChecks(NamedTuple):
+    """Result of :func:`certify_row_range` (first failing row or half-edge, -1 if none)."""
+
+    bad_index: int
+    bad_consecutive: int
+    bad_pair: int
+    cross_run: int
+    min_angle: float
+    argmin: int
+    max_angle: float
+    argmax: int
+    min_area: float
+    argmin_area: int
+    total_area: float
+    bad_orientation: int
+    links: int
+    unpaired: int
+
+
+class AngleArea(NamedTuple):
+    """Result of :func:`angle_area_stats` (angles in radians, signed areas)."""
+
+    min_angle: float
+    argmin: int
+    max_angle: float
+    argmax: int
+    min_area: float
+    argmin_area: int
+    total_area: float
+
+
+@njit(cache=True, nogil=True)
+def half_edge_twins(tri, n_points):
+    """The certificate's own half-edge pairing (``h = 3 t + k`` from ``tri[t, k]``).
+
+    Written apart from the constructions' pairing (``hammesh.halfedge``) and by another
+    method, so that one bug cannot make both wrong the same way: half-edges are
+    bucketed by their lower vertex (counting sort), each bucket is sorted by its other
+    vertex and direction (insertion sort: buckets hold about a vertex degree), and an edge's
+    halves are then neighbours in their bucket. Vertex indices must lie in
+    ``0..n_points-1`` (checked by the caller).
+
+    Returns ``(twin, bad)``: ``twin[h]`` the opposite half-edge or -1 (boundary);
+    ``bad`` -1, or the lowest half-edge of an edge used twice in one direction or by
+    more than two triangles.
+    """
+    m = tri.shape[0]
+    nh = 3 * m
+    start = np.zeros(n_points + 1, np.int64)
+    for h in range(nh):
+        t = h // 3
+        k = h - 3 * t
+        start[min(tri[t, k], tri[t, (k + 1) % 3]) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    key = np.empty(nh, np.int64)  # 2 * other vertex + (runs downward), sorted per bucket
+    half = np.empty(nh, np.int64)
+    for h in range(nh):  # in order of h: each bucket fills in increasing h
+        t = h // 3
+        k = h - 3 * t
+        a = tri[t, k]
+        b = tri[t, (k + 1) % 3]
+        lo = min(a, b)
+        i = fill[lo]
+        fill[lo] = i + 1
+        key[i] = 2 * max(a, b) + (1 if a > b else 0)
+        half[i] = h
+    for v in range(n_points):
+        s0 = start[v]
+        s1 = start[v + 1]
+        if s1 - s0 > 24:  # a high-degree vertex: a stable sort keeps h increasing
+            p = np.argsort(key[s0:s1], kind="mergesort")
+            key[s0:s1] = key[s0:s1][p]
+            half[s0:s1] = half[s0:s1][p]
+            continue
+        for i in range(s0 + 1, s1):  # insertion sort (stable)
+            kv = key[i]
+            hv = half[i]
+            j = i
+            while j > s0 and key[j - 1] > kv:
+                key[j] = key[j - 1]
+                half[j] = half[j - 1]
+                j -= 1
+            key[j] = kv
+            half[j] = hv
+    twin = np.full(nh, -1, np.int64)
+    bad = -1
+    for v in range(n_points):
+        i = start[v]
+        end = start[v + 1]
+        while i < end:
+            j = i + 1
+            while j < end and key[j] >> 1 == key[i] >> 1:
+                j += 1
+            if j - i == 2 and key[i] != key[i + 1]:  # one half each way
+                twin[half[i]] = half[i + 1]
+                twin[half[i + 1]] = half[i]
+            elif j - i >= 2:  # twice one way, or three or more triangles
+                low = half[i]
+                for q in range(i, j):
+                    low = min(low, half[q])
+                if bad < 0 or low < bad:
+                    bad = low
+            i = j
+    return twin, bad
+
+
+@njit(cache=True, nogil=True)
+def boundary_half_edges(tri, twin):
+    """``(k, 2)`` directed boundary edges (half-edges without twin), in half-edge order."""
+    nb = 0
+    for h in range(twin.shape[0]):
+        if twin[h] < 0:
+            nb += 1
+    out = np.empty((nb, 2), np.int64)
+    i = 0
+    for h in range(twin.shape[0]):
+        if twin[h] < 0:
+            t = h // 3
+            k = h - 3 * t
+            out[i, 0] = tri[t, k]
+            out[i, 1] = tri[t, (k + 1) % 3]
+            i += 1
+    return out
+
+
+@njit(cache=True)
+def first_cross_run_edge(twin, run_lengths):
+    """First half-edge whose twin lies in another run (cycle), or -1."""
+    m = twin.shape[0] // 3
+    run = np.empty(m, np.int64)
+    t = 0
+    for r in range(run_lengths.shape[0]):
+        for _ in range(run_lengths[r]):
+            run[t] = r
+            t += 1
+    for h in range(twin.shape[0]):
+        g = twin[h]
+        if g >= 0 and run[h // 3] != run[g // 3]:
+            return h
+    return -1
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _measures(points, p0, p1, p2):
+    """``(cross, sin^2 of the smallest angle, cos of the largest)`` of one triangle.
+
+    ``cross`` is twice the signed area. The smallest angle is opposite the shortest
+    side (at most 60 degrees: ``arcsin`` is well conditioned there), the largest
+    opposite the longest side (cosine law).
+    """
+    ax = points[p1, 0] - points[p0, 0]  # side opposite vertex 2
+    ay = points[p1, 1] - points[p0, 1]
+    bx = points[p2, 0] - points[p1, 0]  # opposite vertex 0
+    by = points[p2, 1] - points[p1, 1]
+    cx = points[p0, 0] - points[p2, 0]  # opposite vertex 1
+    cy = points[p0, 1] - points[p2, 1]
+    cr = ax * by - ay * bx
+    la = ax * ax + ay * ay
+    lb = bx * bx + by * by
+    lc = cx * cx + cy * cy
+    if la <= lb and la <= lc:
+        s2 = cr * cr / (lb * lc)
+    elif lb <= lc:
+        s2 = cr * cr / (la * lc)
+    else:
+        s2 = cr * cr / (la * lb)
+    if la >= lb and la >= lc:
+        c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
+    elif lb >= lc:
+        c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
+    else:
+        c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
+    return cr, s2, c
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _angle_area_range(points, tri, lo, hi):
+    best_s2 = np.inf
+    best_c = np.inf
+    amin = -1
+    amax = -1
+    min_area = np.inf
+    aarea = -1
+    total = 0.0
+    for t in range(lo, hi):
+        p0 = tri[t, 0]
+        p1 = tri[t, 1]
+        p2 = tri[t, 2]
+        cr, s2, c = _measures(points, p0, p1, p2)
+        total += 0.5 * cr
+        if 0.5 * cr < min_area:
+            min_area = 0.5 * cr
+            aarea = t
+        if s2 < best_s2:
+            best_s2 = s2
+            amin = t
+        if c < best_c:
+            best_c = c
+            amax = t
+    return best_s2, amin, best_c, amax, min_area, aarea, total
+
+
+@njit(cache=True, inline="always")
+def _shared(tri, i, j):
+    """How many vertices rows ``i`` and ``j`` have in common (2: they share an edge)."""
+    shared = 0
+    for a in range(3):
+        for b in range(3):
+            if tri[i, a] == tri[j, b]:
+                shared += 1
+    return shared
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
+    """The certificate's per-row checks in one pass over a cycle-ordered mesh.
+
+    ``runs`` are the cycle lengths (positive, summing to ``m``: checked by the
+    caller); ``pair`` is a half-edge pairing to check (an empty array skips those
+    checks). For each kind of failure the first row (or half-edge) is returned, -1
+    if none: ``(bad_index, bad_consecutive, bad_pair, cross_run, min_angle, argmin,
+    max_angle, argmax, min_area, argmin_area, total_area, bad_orientation, links,
+    unpaired)``.
+
+    * bad_index: a row with a vertex outside ``0..n-1`` (such rows are skipped);
+    * bad_consecutive: a row sharing no edge (exactly two vertices) with the next row
+      of its run (the last with the first), or the start of a run shorter than 3;
+      if ``cons_fail`` has one entry per row, such rows are marked there instead (a
+      caller that does not know the runs yet checks the marks later);
+    * bad_pair: a half-edge whose partner is out of range or itself, or (checked
+      from the higher half-edge of each pair) not paired back or not the same edge
+      reversed;
+    * cross_run: a half-edge paired with a half-edge of another run;
+    * bad_orientation: a row that is not strictly counter-clockwise by the exact
+      orientation predicate (a floating-point area can have the wrong sign on a
+      nearly flat triangle; the filter decides almost every row at no extra cost);
+    * links: pairs checked (each once, from its higher half-edge), unpaired: entries
+      -1. The pairing covers every half-edge exactly when ``2 links + unpaired = 3 m``;
+      entries ``UNLINKED`` are skipped (not written yet), which that count catches.
+
+    Only rows ``lo <= i < hi`` are checked (they may cut runs anywhere), so that
+    threads can share the work: the kernel releases the GIL. ``used[v]`` is set for
+    every vertex of a checked row (threads may share ``used``: they only set it).
+    """
+    m = tri.shape[0]
+    n = points.shape[0]
+    check_pair = pair.shape[0] == 3 * m
+    mark_cons = cons_fail.shape[0] == m
+    bad_index = -1
+    bad_orient = -1
+    bad_consec = -1
+    bad_pair = -1
+    cross = -1
+    links = 0
+    unpaired = 0
+    best_s2 = np.inf
+    best_c = np.inf
+    amin = -1
+    amax = -1
+    min_area = np.inf
+    aarea = -1
+    total = 0.0
+    r_start = 0
+    for r in range(runs.shape[0]):
+        r_end = r_start + runs[r]
+        if r_end <= lo or r_start >= hi:
+            r_start = r_end
+            continue
+        if runs[r] < 3 and bad_consec < 0 and r_start >= lo:
+            bad_consec = r_start
+        for i in range(max(r_start, lo), min(r_end, hi)):
+            p0 = tri[i, 0]
+            p1 = tri[i, 1]
+            p2 = tri[i, 2]
+            if p0 < 0 or p1 < 0 or p2 < 0 or p0 >= n or p1 >= n or p2 >= n:
+                if bad_index < 0:
+                    bad_index = i
+                continue
+            used[p0] = True
+            used[p1] = True
+            used[p2] = True
+            if bad_orient < 0 and orient_points(points, p0, p1, p2) <= 0:
+                bad_orient = i
+            j = i + 1 if i + 1 < r_end else r_start
+            if _shared(tri, i, j) != 2:
+                if mark_cons:
+                    cons_fail[i] = True
+                elif bad_consec < 0:
+                    bad_consec = i
+            cr, s2, c = _measures(points, p0, p1, p2)
+            total += 0.5 * cr
+            if 0.5 * cr < min_area:
+                min_area = 0.5 * cr
+                aarea = i
+            if s2 < best_s2:
+                best_s2 = s2
+                amin = i
+            if c < best_c:
+                best_c = c
+                amax = i
+            if check_pair:
+                for k in range(3):
+                    h = 3 * i + k
+                    g = pair[h]
+                    if g == -1:
+                        unpaired += 1
+                        continue
+                    if g == UNLINKED or g > h and g < 3 * m:
+                        continue  # checked from g (or not written yet: counted)
+                    if g < 0 or g >= 3 * m or g == h or pair[g] != h:
+                        if bad_pair < 0:
+                            bad_pair = h
+                        continue
+                    u = g // 3
+                    jg = g - 3 * u
+                    if tri[i, k] != tri[u, (jg + 1) % 3] or tri[i, (k + 1) % 3] != tri[u, jg]:
+                        if bad_pair < 0:
+                            bad_pair = h
+                        continue
+                    links += 1
+                    if (u < r_start or u >= r_end) and cross < 0:
+                        cross = h
+        r_start = r_end
+    min_ang = np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0)))
+    max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
+    return RowChecks(bad_index, bad_consec, bad_pair, cross, min_ang, amin, max_ang, amax,
+                     min_area, aarea, total, bad_orient, links, unpaired)
+
+
+
+@njit(cache=True, nogil=True)
+def runs_close(tri, runs):
+    """First row that ends a run but shares no edge with the run's first row, or -1."""
+    r_start = 0
+    for r in range(runs.shape[0]):
+        i = r_start + runs[r] - 1
+        if _shared(tri, i, r_start) != 2:
+            return i
+        r_start += runs[r]
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def mark_used(tri, used):
+    """Set ``used[v]`` for every vertex of ``tri``."""
+    for t in range(tri.shape[0]):
+        for k in range(3):
+            used[tri[t, k]] = True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def angle_area_stats(points, tri):
+    """One pass over the triangles.
+
+    Returns an :class:`AngleArea`
+    with angles in radians and signed areas (positive = counter-clockwise).
+
+    The smallest angle of a triangle is opposite its shortest side and is at most 60
+    degrees, so it is found as ``arcsin`` of the smallest ``sin^2 = cross^2 / (|e|^2
+    |f|^2)`` (well conditioned there); the largest, opposite the longest side, from
+    the smallest cosine. One transcendental call per mesh, not per triangle.
+    """
+    s2, a, c, b, area, d, total = _angle_area_range(points, tri, 0, tri.shape[0])
+    min_ang = np.arcsin(np.sqrt(min(max(s2, 0.0), 1.0)))
+    max_ang = np.arccos(min(max(c, -1.0), 1.0))
+    return AngleArea(min_ang, a, max_ang, b, area, d, total)
