@@ -16,7 +16,7 @@ from hammesh.errors import InvalidOptionError, MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.isolate import run_isolated
 from hammesh.meshing.meshpy_backend import mesh_with_meshpy
-from hammesh.meshing.options import MAX_MIN_ANGLE, MeshOptions, format_number
+from hammesh.meshing.options import MAX_MIN_ANGLE, MAX_TRIANGLES, MeshOptions, format_number
 from hammesh.meshing.triangle_backend import mesh_with_triangle, triangle_switches
 
 __all__ = [
@@ -32,10 +32,25 @@ BACKENDS = {"triangle": mesh_with_triangle, "meshpy": mesh_with_meshpy}
 _NAMES = {"triangle": "Triangle", "meshpy": "meshpy"}
 
 
-def _hull_area(vertices: np.ndarray) -> float:
-    from scipy.spatial import ConvexHull
+def _check_size(opts: MeshOptions, vertices: np.ndarray) -> None:
+    """``opts.check_size`` with the convex hull's area, found only when it matters.
 
-    return float(ConvexHull(vertices).volume)
+    The bounding box's area bounds the hull's from above: when the box passes, so does
+    the hull, and scipy.spatial (0.2 s to import) is not needed.
+    """
+    if opts.max_area is None or len(vertices) < 3:
+        return
+    span = np.ptp(np.asarray(vertices, dtype=np.float64), axis=0)
+    box = float(span[0] * span[1])
+    if np.isfinite(box) and box / opts.max_area <= MAX_TRIANGLES:
+        return
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        area = float(ConvexHull(vertices).volume)
+    except QhullError:  # (nearly) flat to Qhull's precision: the box is the estimate
+        area = box
+    opts.check_size(area)
 
 
 def quality_mesh(
@@ -68,7 +83,8 @@ def quality_mesh(
     isolate : bool
         Run the C mesher in a child process (default), so that a crash or hang of
         the C code raises :class:`~hammesh.errors.MeshingError` instead of killing
-        the interpreter. ``False`` runs in-process (slightly faster).
+        the interpreter; the arrays come back through shared memory, without a copy
+        (``hammesh.meshing.isolate``). ``False`` runs in-process.
     timeout : float, optional
         With ``isolate``, seconds after which the mesher is stopped.
 
@@ -102,11 +118,12 @@ def quality_mesh(
         conforming_delaunay=conforming_delaunay,
         max_steiner=max_steiner,
     )
-    opts.check_size(_hull_area(domain.vertices))
+    _check_size(opts, domain.vertices)
     func = BACKENDS[backend]
     t0 = time.perf_counter()
     if isolate:
-        mesh = run_isolated(func, (domain, opts), name=_NAMES[backend], timeout=timeout)
+        # the child allocates its output arrays where this process maps them (no copy)
+        mesh = run_isolated(func, (domain, opts), name=_NAMES[backend], timeout=timeout, alloc=True)
     else:
         mesh = func(domain, opts)
     seconds = time.perf_counter() - t0

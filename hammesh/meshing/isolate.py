@@ -2,24 +2,137 @@
 
 Triangle and meshpy can crash the interpreter (SIGSEGV) or loop forever on inputs
 that slip past validation. ``run_isolated`` forks a child (on platforms with
-``fork``; else spawns one), lets it compute, and receives the result through a
-pipe. A crash becomes :class:`~hammesh.errors.MeshingError` naming the signal, an
-overrun of ``timeout`` kills the child.
+``fork``; else spawns one), lets it compute, and hands the result back. A crash
+becomes :class:`~hammesh.errors.MeshingError` naming the signal, an overrun of
+``timeout`` kills the child, and the child dies with its parent (Linux:
+``PR_SET_PDEATHSIG``; elsewhere a thread watching the parent's pipe).
+
+The result's arrays do not go through the pipe. Before the fork the parent makes an
+anonymous memory file (``memfd_create``); the child allocates its big output arrays
+in that file (:class:`SharedArena`, handed to ``func`` as ``alloc``) and copies any
+other array there, and sends only a small pickle (protocol 5, the arrays out of
+band) naming where each array lies. The parent maps the file once, closes it, and
+the arrays become views of the mapping, without a copy; it is unmapped when the last
+of them is gone. The file has no name (nothing in ``/dev/shm`` can be left behind)
+and the kernel frees it when the last descriptor and mapping are gone: on a crash, a
+timeout or a kill of either process alike. Without
+``memfd_create`` or ``fork`` the result is pickled through the pipe as before.
 """
 
 from __future__ import annotations
 
+import ctypes
 import faulthandler
+import math
+import mmap
 import multiprocessing as mp
 import os
+import pickle
 import signal
+import sys
 import tempfile
+import threading
 import warnings
+import weakref
 from typing import Any, Callable
+
+import numpy as np
 
 from hammesh.errors import HammeshError, MeshingError
 
-__all__ = ["run_isolated"]
+__all__ = ["run_isolated", "SharedArena", "SHARED_MEMORY"]
+
+#: Whether results come back through shared memory (Linux and other systems with
+#: ``memfd_create`` and ``fork``); else they are pickled through a pipe.
+SHARED_MEMORY = hasattr(os, "memfd_create") and "fork" in mp.get_all_start_methods()
+
+#: Arrays smaller than this stay in the child's own memory (and are copied into the
+#: file at the end): a page-aligned mapping per tiny array would cost more.
+ARENA_MIN_BYTES = 1 << 16
+
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+class SharedArena:
+    """Arrays allocated in a memory file that the parent process maps afterwards.
+
+    Each array of at least ``ARENA_MIN_BYTES`` gets its own page-aligned block of
+    the file (the file grows with ``ftruncate``); smaller ones are ordinary arrays.
+    :meth:`place` tells where a buffer lies in the file, copying it to the end of
+    the file if it is not one of the blocks.
+
+    Parameters
+    ----------
+    fd : int
+        A memory file (``os.memfd_create``) shared with the parent.
+    """
+
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
+        self.size = 0
+        self._blocks: list[tuple[int, int, int]] = []  # (address, bytes, offset in file)
+
+    def _grow(self, nbytes: int) -> int:
+        off = self.size
+        self.size = off + -(-max(nbytes, 1) // mmap.PAGESIZE) * mmap.PAGESIZE
+        os.ftruncate(self.fd, self.size)
+        return off
+
+    def empty(self, shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.ndarray:
+        """Like ``np.empty``, in the shared file if the array is big."""
+        shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
+        dt = np.dtype(dtype)
+        count = math.prod(shape)
+        nbytes = count * dt.itemsize
+        if nbytes < ARENA_MIN_BYTES:
+            return np.empty(shape, dt)
+        off = self._grow(nbytes)
+        block = mmap.mmap(self.fd, nbytes, offset=off)
+        arr = np.frombuffer(block, dtype=dt, count=count).reshape(shape)
+        self._blocks.append((arr.ctypes.data, nbytes, off))
+        return arr
+
+    def place(self, buf: memoryview) -> tuple[int, int]:
+        """``(offset, length)`` of the bytes of ``buf`` in the file (copied if needed)."""
+        n = buf.nbytes
+        if n == 0:
+            return 0, 0
+        addr = np.frombuffer(buf, dtype=np.uint8).ctypes.data
+        for start, size, off in self._blocks:
+            if start <= addr and addr + n <= start + size:
+                return off + (addr - start), n
+        off = self._grow(n)
+        done = 0
+        while done < n:  # one write is capped at ~2 GiB
+            done += os.pwrite(self.fd, buf[done:], off + done)
+        return off, n
+
+
+def _die_with_parent() -> None:
+    """Make sure this child cannot outlive the process that forked it.
+
+    Linux: the kernel sends SIGKILL when the parent's forking thread ends (also when
+    the child is inside C code that holds the GIL). Elsewhere a daemon thread waits
+    for the end of the parent's pipe (works while the child runs Python or C code
+    that released the GIL).
+    """
+    parent = mp.parent_process()
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+        # the parent may have died before prctl: then the signal will never come
+        if parent is not None and os.getppid() != parent.pid:
+            os._exit(1)
+    elif parent is not None and parent.sentinel is not None:
+        from multiprocessing.connection import wait
+
+        def watch() -> None:
+            wait([parent.sentinel])
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
 
 
 def _c_output(log: Any) -> str:
@@ -34,7 +147,8 @@ def _c_output(log: Any) -> str:
         return ""
 
 
-def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...]) -> None:
+def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...], fd: int | None, alloc: bool) -> None:
+    _die_with_parent()
     # the C library prints to file descriptors 1/2 directly: keep that out of the
     # caller's terminal and use it to explain a failure instead
     faulthandler.disable()  # a crash is reported by the parent (signal name), not dumped
@@ -42,7 +156,15 @@ def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...]) -> None:
     os.dup2(log.fileno(), 1)
     os.dup2(log.fileno(), 2)
     try:
-        conn.send(("ok", func(*args)))
+        if fd is None:
+            conn.send(("ok", func(*args, alloc=np.empty) if alloc else func(*args)))
+        else:
+            arena = SharedArena(fd)
+            result = func(*args, alloc=arena.empty) if alloc else func(*args)
+            buffers: list[pickle.PickleBuffer] = []
+            head = pickle.dumps(result, protocol=5, buffer_callback=buffers.append)
+            spans = [arena.place(b.raw()) for b in buffers]
+            conn.send(("shared", head, spans, arena.size))
     except HammeshError as exc:  # keep hammesh's own errors as they are
         conn.send(("hammesh", exc))
     except BaseException as exc:  # noqa: BLE001 - reported to the parent, one line
@@ -52,7 +174,57 @@ def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...]) -> None:
         conn.close()
 
 
-def run_isolated(func: Callable[..., Any], args: tuple[Any, ...], *, name: str, timeout: float | None) -> Any:
+def _reap(proc: Any) -> int | None:
+    """Wait for a child that has answered or been killed; its exit code."""
+    proc.join(5)
+    if proc.is_alive():
+        proc.kill()
+        proc.join()
+    code = proc.exitcode
+    proc.close()  # its pipe descriptors now, not when a traceback lets go of it
+    return code
+
+
+def _libc() -> ctypes.CDLL:
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.mmap.restype = ctypes.c_void_p
+    libc.mmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_long]
+    libc.munmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t]
+    return libc
+
+
+def _map_file(fd: int, size: int) -> memoryview:
+    """Map ``size`` bytes of ``fd``, shared; unmapped when no array uses them anymore.
+
+    Not ``mmap.mmap``: that keeps a duplicate of the descriptor open for as long as
+    the mapping lives, one per mesh held (and processes have ~1024).
+    """
+    libc = _libc()
+    flags = mmap.MAP_SHARED | getattr(mmap, "MAP_POPULATE", 0)  # one call maps it all
+    addr = libc.mmap(None, size, mmap.PROT_READ | mmap.PROT_WRITE, flags, fd, 0)
+    if addr in (None, ctypes.c_void_p(-1).value):
+        err = ctypes.get_errno()
+        raise MeshingError(f"cannot map the mesher's result ({size} bytes): {os.strerror(err)}")
+    block = type("SharedResult", (ctypes.c_char * size,), {}).from_address(addr)
+    done = weakref.finalize(block, libc.munmap, addr, size)
+    done.atexit = False  # at exit the process goes anyway; arrays may still be in use
+    return memoryview(block).cast("B")
+
+
+def _unpack(fd: int, head: bytes, spans: list[tuple[int, int]], size: int) -> Any:
+    """The child's result, its arrays mapped from the shared file (no copy)."""
+    view = _map_file(fd, size) if size else memoryview(b"")
+    return pickle.loads(head, buffers=[view[o : o + n] if n else bytearray() for o, n in spans])
+
+
+def run_isolated(
+    func: Callable[..., Any],
+    args: tuple[Any, ...],
+    *,
+    name: str,
+    timeout: float | None,
+    alloc: bool = False,
+) -> Any:
     """Call ``func(*args)`` in a child process and return its result.
 
     Parameters
@@ -63,6 +235,10 @@ def run_isolated(func: Callable[..., Any], args: tuple[Any, ...], *, name: str, 
         What runs, for messages ("Triangle").
     timeout : float or None
         Seconds before the child is killed; None waits forever.
+    alloc : bool
+        Call ``func(*args, alloc=empty)`` with an ``np.empty``-like allocator whose
+        arrays the parent receives without a copy (:class:`SharedArena`): let
+        ``func`` allocate its big outputs with it.
 
     Raises
     ------
@@ -73,36 +249,49 @@ def run_isolated(func: Callable[..., Any], args: tuple[Any, ...], *, name: str, 
     """
     method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
     ctx = mp.get_context(method)
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, func, args), daemon=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)  # fork with threads (3.12+)
-        proc.start()
-    send.close()
+    # anonymous, freed with its last descriptor or mapping; inherited by the fork
+    fd = os.memfd_create("hammesh-result", getattr(os, "MFD_CLOEXEC", 0)) if SHARED_MEMORY else None
     try:
-        if not recv.poll(timeout):
-            proc.kill()
-            proc.join()
-            raise MeshingError(f"{name} did not finish within {timeout:g} s and was stopped")
+        recv, send = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_child, args=(send, func, args, fd, alloc), daemon=True)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)  # fork with threads (3.12+)
+            proc.start()
+        send.close()
+        msg = None
         try:
-            msg = recv.recv()
-        except (EOFError, OSError):
-            proc.join()
-            code = proc.exitcode
+            if not recv.poll(timeout):
+                raise MeshingError(f"{name} did not finish within {timeout:g} s and was stopped")
+            try:
+                msg = recv.recv()
+            except (EOFError, OSError):  # the child ended without an answer
+                pass
+        except BaseException:  # the timeout, also Ctrl-C while waiting: the child goes
+            proc.kill()
+            _reap(proc)
+            raise
+        finally:
+            recv.close()
+        if msg is None:
+            code = _reap(proc)
             if code is not None and code < 0:
                 try:
                     sig = signal.Signals(-code).name
                 except ValueError:
                     sig = f"signal {-code}"
-                raise MeshingError(f"{name} crashed ({sig}) on this input") from None
-            raise MeshingError(f"{name} exited (code {code}) without a result") from None
+                raise MeshingError(f"{name} crashed ({sig}) on this input")
+            raise MeshingError(f"{name} exited (code {code}) without a result")
+        if msg[0] in ("shared", "ok"):
+            # the child exits by itself now; its teardown (tens of ms for a big address
+            # space) need not delay the caller: a daemon thread reaps it
+            threading.Thread(target=_reap, args=(proc,), name="hammesh-reap", daemon=True).start()
+        else:
+            _reap(proc)
+        if msg[0] == "shared":
+            return _unpack(fd, *msg[1:])
     finally:
-        recv.close()
-        if proc.is_alive():
-            proc.join(5)
-            if proc.is_alive():
-                proc.kill()
-    proc.join()
+        if fd is not None:
+            os.close(fd)  # the mapping (if any) keeps the memory alive, nothing else
     if msg[0] == "ok":
         return msg[1]
     if msg[0] == "hammesh":

@@ -8,6 +8,7 @@ from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError
 from hammesh.meshing.options import MeshOptions
 from hammesh.mesh import Mesh
+from hammesh.meshing.triangle_backend import Allocator
 
 __all__ = ["mesh_with_meshpy", "MESHPY_MIN_AREA"]
 
@@ -16,8 +17,17 @@ __all__ = ["mesh_with_meshpy", "MESHPY_MIN_AREA"]
 MESHPY_MIN_AREA = 1e-15
 
 
-def mesh_with_meshpy(domain: Domain, opts: MeshOptions) -> Mesh:
-    """Mesh a validated domain with meshpy (call through ``quality_mesh``)."""
+def _into(alloc: Allocator, a: np.ndarray) -> np.ndarray:
+    out = alloc(a.shape, a.dtype)
+    out[...] = a
+    return out
+
+
+def mesh_with_meshpy(domain: Domain, opts: MeshOptions, *, alloc: Allocator = np.empty) -> Mesh:
+    """Mesh a validated domain with meshpy (call through ``quality_mesh``).
+
+    ``alloc`` (``np.empty``-like) makes the triangle and point arrays.
+    """
     import meshpy.triangle as mt
 
     if opts.max_area is not None and opts.max_area < MESHPY_MIN_AREA:
@@ -54,7 +64,7 @@ def mesh_with_meshpy(domain: Domain, opts: MeshOptions) -> Mesh:
         volume_constraints=regional_area,
         generate_neighbor_lists=True,
     )
-    tri = np.asarray(out.elements, dtype=np.int64).reshape(-1, 3)
+    tri = _into(alloc, np.asarray(out.elements, dtype=np.int64).reshape(-1, 3))
     nbr = np.asarray(out.neighbors, dtype=np.int64).reshape(-1, 3)
     nbr = np.ascontiguousarray(nbr[:, [2, 0, 1]]) if len(nbr) == len(tri) else None
     attrs = (
@@ -63,7 +73,7 @@ def mesh_with_meshpy(domain: Domain, opts: MeshOptions) -> Mesh:
         else np.zeros((len(tri), 0))
     )
     return Mesh(
-        points=np.asarray(out.points, dtype=np.float64).reshape(-1, 2),
+        points=_into(alloc, np.asarray(out.points, dtype=np.float64).reshape(-1, 2)),
         triangles=tri,
         segments=np.asarray(out.facets, dtype=np.int64).reshape(-1, 2),
         segment_markers=np.asarray(out.facet_markers, dtype=np.int64).reshape(-1),

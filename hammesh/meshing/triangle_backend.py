@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from hammesh.domain import Domain
 from hammesh.meshing.options import MeshOptions, format_number
 from hammesh.mesh import Mesh
 
-__all__ = ["triangle_switches", "mesh_with_triangle"]
+#: An ``np.empty``-like allocator: ``alloc(shape, dtype) -> ndarray``.
+Allocator = Callable[..., np.ndarray]
+
+__all__ = ["triangle_switches", "mesh_with_triangle", "Allocator"]
 
 
 def triangle_switches(domain: Domain, opts: MeshOptions) -> str:
@@ -29,8 +34,13 @@ def triangle_switches(domain: Domain, opts: MeshOptions) -> str:
     return sw + "n"
 
 
-def mesh_with_triangle(domain: Domain, opts: MeshOptions) -> Mesh:
-    """Mesh a validated domain with Triangle (call through ``quality_mesh``)."""
+def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = np.empty) -> Mesh:
+    """Mesh a validated domain with Triangle (call through ``quality_mesh``).
+
+    ``alloc`` makes the big output arrays (``np.empty``-like; ``run_isolated`` passes
+    one whose arrays reach the parent process without a copy). Triangle's own int32
+    arrays are converted into them in one pass each.
+    """
     import triangle
 
     data: dict[str, np.ndarray] = {"vertices": np.array(domain.vertices, dtype=np.float64)}
@@ -44,17 +54,28 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions) -> Mesh:
         reg[~np.isfinite(reg[:, 3]), 3] = -1.0  # Triangle: negative = no regional limit
         data["regions"] = reg
     out = triangle.triangulate(data, triangle_switches(domain, opts))
-    tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64)
-    nbr = np.asarray(out.get("neighbors", np.full((len(tri), 3), -1)), dtype=np.int64)
-    # Triangle's neighbour k is opposite vertex k; ours is across edge (k, k+1)
-    # (C order: a column gather returns Fortran order, which every consumer would copy)
-    nbr = np.ascontiguousarray(nbr[:, [2, 0, 1]]) if len(nbr) else np.zeros((0, 3), dtype=np.int64)
-    attrs = np.asarray(out.get("triangle_attributes", np.zeros((len(tri), 0))), dtype=np.float64)
+    raw_tri = out.get("triangles", np.zeros((0, 3), dtype=np.int32)).reshape(-1, 3)
+    m = len(raw_tri)
+    tri = alloc((m, 3), np.int64)
+    tri[...] = raw_tri
+    nbr = alloc((m, 3), np.int64)
+    raw_nbr = out.get("neighbors")
+    if raw_nbr is not None and len(raw_nbr) == m:
+        # Triangle's neighbour k is opposite vertex k; ours is across edge (k, k+1)
+        nbr[:, 0] = raw_nbr[:, 2]
+        nbr[:, 1] = raw_nbr[:, 0]
+        nbr[:, 2] = raw_nbr[:, 1]
+    else:
+        nbr.fill(-1)
+    raw_pts = np.asarray(out["vertices"], dtype=np.float64)
+    points = alloc(raw_pts.shape, np.float64)
+    points[...] = raw_pts
+    attrs = np.asarray(out.get("triangle_attributes", np.zeros((m, 0))), dtype=np.float64)
     return Mesh(
-        points=np.asarray(out["vertices"], dtype=np.float64),
+        points=points,
         triangles=tri,
         segments=np.asarray(out.get("segments", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2),
         segment_markers=np.asarray(out.get("segment_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1),
-        triangle_attributes=attrs.reshape(len(tri), -1) if len(tri) else np.zeros((0, 0)),
+        triangle_attributes=attrs.reshape(m, -1) if m else np.zeros((0, 0)),
         neighbors=nbr,
     )
