@@ -174,6 +174,13 @@ def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...], fd: int |
         conn.close()
 
 
+def _quietly(work: Callable[[], Any]) -> None:
+    try:
+        work()
+    except Exception:  # noqa: BLE001 - optional work; the caller's own call reports
+        pass
+
+
 def _reap(proc: Any) -> int | None:
     """Wait for a child that has answered or been killed; its exit code."""
     proc.join(5)
@@ -224,6 +231,7 @@ def run_isolated(
     name: str,
     timeout: float | None,
     alloc: bool = False,
+    meanwhile: Callable[[], Any] | None = None,
 ) -> Any:
     """Call ``func(*args)`` in a child process and return its result.
 
@@ -239,6 +247,10 @@ def run_isolated(
         Call ``func(*args, alloc=empty)`` with an ``np.empty``-like allocator whose
         arrays the parent receives without a copy (:class:`SharedArena`): let
         ``func`` allocate its big outputs with it.
+    meanwhile : callable, optional
+        Work for this process while the child computes, run in a daemon thread
+        started after the fork (so the child inherits no lock it holds); its result
+        and errors are dropped (e.g. loading the kernels the caller needs next).
 
     Raises
     ------
@@ -258,6 +270,8 @@ def run_isolated(
             warnings.simplefilter("ignore", DeprecationWarning)  # fork with threads (3.12+)
             proc.start()
         send.close()
+        if meanwhile is not None:
+            threading.Thread(target=_quietly, args=(meanwhile,), name="hammesh-meanwhile", daemon=True).start()
         msg = None
         try:
             if not recv.poll(timeout):

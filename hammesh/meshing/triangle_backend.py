@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Callable
 
 import numpy as np
+import triangle  # imported here, not in the forked child (which then imports nothing)
 
 from hammesh.domain import Domain
 from hammesh.meshing.options import MeshOptions, format_number
@@ -41,8 +42,6 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
     one whose arrays reach the parent process without a copy). Triangle's own int32
     arrays are converted into them in one pass each.
     """
-    import triangle
-
     data: dict[str, np.ndarray] = {"vertices": np.array(domain.vertices, dtype=np.float64)}
     if len(domain.segments):
         data["segments"] = np.array(domain.segments, dtype=np.int32)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
@@ -15,10 +16,34 @@ from hammesh.postprocess.sparse import sparse_hamiltonian
 from hammesh.verify.certificate import claim_structure, input_facts, verify
 from hammesh.halfedge import prepare_mesh
 
-__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES"]
+__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels"]
 
 #: Available constructions, by name (``hamiltonian(mesh, mode=...)``).
 MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
+
+
+_loaded = threading.Lock()
+_loaded_modes: set[str] = set()
+
+
+def load_kernels(mode: str = "incircle") -> None:
+    """Load the compiled kernels of ``hamiltonian(mesh, mode=mode)`` into this process.
+
+    A compiled kernel's first call in a process loads its machine code from numba's
+    cache (about 10 ms per kernel, 0.1-0.2 s for one ``hamiltonian()``); this runs
+    ``hamiltonian`` once on a small Triangle mesh so that the next call does not pay
+    it. ``quality_mesh`` calls it while Triangle runs in its child process. Cheap
+    after the first call in a process.
+    """
+    with _loaded:
+        if mode in _loaded_modes:
+            return
+        from hammesh.domain import Domain
+        from hammesh.meshing import quality_mesh
+
+        square = Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+        hamiltonian(quality_mesh(square, min_angle=30, max_area=0.01, isolate=False), mode=mode)
+        _loaded_modes.add(mode)
 
 
 def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:

@@ -1,0 +1,109 @@
+"""The first call is what a user gets (issue 11, item 7): kernels loaded ahead.
+
+``hammesh.postprocess.load_kernels`` loads the compiled kernels of ``hamiltonian()``;
+``quality_mesh`` runs it while Triangle computes in its child process, so that the
+CLI's pipeline (mesh, then hamiltonian) does not load them on the critical path.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+import threading
+
+import numpy as np
+
+import hammesh
+from hammesh.meshing.isolate import run_isolated
+from hammesh.postprocess import load_kernels
+
+
+def _value() -> int:
+    return 42
+
+
+def _fail() -> None:
+    raise RuntimeError("meanwhile failed")
+
+
+def test_meanwhile_runs_beside_the_child_and_cannot_spoil_the_result() -> None:
+    ran = threading.Event()
+    assert run_isolated(_value, (), name="test", timeout=60, meanwhile=ran.set) == 42
+    assert ran.wait(10)
+    assert run_isolated(_value, (), name="test", timeout=60, meanwhile=_fail) == 42
+
+
+# counts the compiled signatures of every numba kernel hammesh has imported
+_SIGNATURES = textwrap.dedent(
+    """
+    import sys
+    from numba.core.registry import CPUDispatcher
+
+    def signatures():
+        out = {}
+        for name, mod in list(sys.modules.items()):
+            if name.startswith("hammesh"):
+                for attr, obj in list(vars(mod).items()):
+                    if isinstance(obj, CPUDispatcher):
+                        out[f"{name}.{attr}"] = len(obj.signatures)
+        return out
+    """
+)
+
+
+def test_load_kernels_loads_what_hamiltonian_runs() -> None:
+    script = _SIGNATURES + textwrap.dedent(
+        """
+        import hammesh
+        from hammesh.postprocess import load_kernels
+
+        dom = hammesh.Domain.from_polygon([[0, 0], [3, 0], [3, 1], [0, 1]], holes=[[[1, 0.4], [2, 0.4], [1.5, 0.6]]])
+        mesh = hammesh.quality_mesh(dom, min_angle=25, max_area=0.002, isolate=False)
+        load_kernels()
+        before = signatures()
+        assert sum(before.values()) > 5, before
+        h = hammesh.hamiltonian(mesh)
+        assert h.report["verified"]
+        after = signatures()
+        new = {k: v for k, v in after.items() if v != before.get(k, 0)}
+        assert not new, f"kernels loaded by the call itself: {new}"
+        print("OK")
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "OK" in proc.stdout
+
+
+def test_quality_mesh_loads_the_kernels_while_triangle_runs() -> None:
+    script = _SIGNATURES + textwrap.dedent(
+        """
+        import threading
+        import hammesh
+
+        assert sum(signatures().values()) == 0
+        dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=1e-4)  # isolated (default)
+        for t in threading.enumerate():
+            if t.name == "hammesh-meanwhile":
+                t.join(300)
+        before = signatures()
+        assert sum(before.values()) > 5, before
+        h = hammesh.hamiltonian(mesh)
+        new = {k: v for k, v in signatures().items() if v != before.get(k, 0)}
+        assert not new, f"kernels loaded by the call itself: {new}"
+        print("OK")
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "OK" in proc.stdout
+
+
+def test_load_kernels_is_idempotent_and_harmless() -> None:
+    load_kernels()
+    load_kernels()
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=20, max_area=0.05))
+    assert h.report["verified"] and np.sum(h.components) == h.n_triangles
