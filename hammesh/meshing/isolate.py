@@ -187,9 +187,7 @@ def _reap(proc: Any) -> int | None:
     if proc.is_alive():
         proc.kill()
         proc.join()
-    code = proc.exitcode
-    proc.close()  # its pipe descriptors now, not when a traceback lets go of it
-    return code
+    return proc.exitcode
 
 
 def _libc() -> ctypes.CDLL:
@@ -283,11 +281,13 @@ def run_isolated(
         except BaseException:  # the timeout, also Ctrl-C while waiting: the child goes
             proc.kill()
             _reap(proc)
+            proc = None  # its pipe descriptors go now, not when the traceback goes
             raise
         finally:
             recv.close()
         if msg is None:
             code = _reap(proc)
+            proc = None
             if code is not None and code < 0:
                 try:
                     sig = signal.Signals(-code).name
@@ -301,6 +301,7 @@ def run_isolated(
             threading.Thread(target=_reap, args=(proc,), name="hammesh-reap", daemon=True).start()
         else:
             _reap(proc)
+            proc = None
         if msg[0] == "shared":
             return _unpack(fd, *msg[1:])
     finally:
