@@ -34,6 +34,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import numpy as np
@@ -44,6 +45,11 @@ SQUARE = [[0, 0], [1, 0], [1, 1], [0, 1]]
 
 def _peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _cpu(who: int = resource.RUSAGE_SELF) -> float:
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
 
 
 def _domain():
@@ -74,9 +80,9 @@ def child(what: str, min_angle: float, max_area: float, path: str) -> dict:
         import triangle
 
         data, switches = _raw_triangle_input(dom, min_angle, max_area)
-        t = time.perf_counter()
+        t, c = time.perf_counter(), _cpu()
         out = triangle.triangulate(data, switches)
-        return {"triangle": time.perf_counter() - t, "triangles": len(out["triangles"])}
+        return {"triangle": time.perf_counter() - t, "triangle_cpu": _cpu() - c, "triangles": len(out["triangles"])}
     if what == "pipeline":  # the CLI's: quality_mesh (isolated), then hamiltonian
         import triangle
 
@@ -92,19 +98,25 @@ def child(what: str, min_angle: float, max_area: float, path: str) -> dict:
             return out
 
         triangle.triangulate = timed
-        t = time.perf_counter()
+        t, c, cc = time.perf_counter(), _cpu(), _cpu(resource.RUSAGE_CHILDREN)
         mesh = hammesh.quality_mesh(dom, min_angle=min_angle, max_area=max_area)
         t_mesh = time.perf_counter() - t
+        c_mesh = _cpu() - c
+        for th in threading.enumerate():  # (untimed) the child reaped, the kernels loaded
+            if th.name in ("hammesh-reap", "hammesh-meanwhile"):
+                th.join()
+        c_mesh += _cpu(resource.RUSAGE_CHILDREN) - cc
         triangle.triangulate = real
         with open(inside) as f:
             t_inside = float(f.read())
-        t = time.perf_counter()
+        t, c = time.perf_counter(), _cpu()
         h = hammesh.hamiltonian(mesh)
-        t_ham = time.perf_counter() - t
+        t_ham, c_ham = time.perf_counter() - t, _cpu() - c
         if path:  # for the "file" run: the same mesh, saved
             np.savez(path, points=mesh.points, triangles=mesh.triangles, neighbors=mesh.neighbors,
                      segments=mesh.segments, segment_markers=mesh.segment_markers)
-        return {"quality_mesh": t_mesh, "hamiltonian": t_ham, "triangle_inside": t_inside, "triangles": mesh.n_triangles,
+        return {"quality_mesh": t_mesh, "hamiltonian": t_ham, "triangle_inside": t_inside,
+                "quality_mesh_cpu": c_mesh, "hamiltonian_cpu": c_ham, "triangles": mesh.n_triangles,
                 "verified": bool(h.report["verified"])}
     if what == "file":  # hamiltonian on a mesh read from a file: kernels loaded cold
         with np.load(path) as f:
@@ -123,7 +135,7 @@ def _fresh(what: str, args: argparse.Namespace, path: str = "") -> dict:
 
 
 def first_calls(args: argparse.Namespace) -> None:
-    rows = []
+    rows, cpus = [], []
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "mesh.npz")
         for i in range(args.fresh):
@@ -138,6 +150,7 @@ def first_calls(args: argparse.Namespace) -> None:
             assert pipe["verified"] and cold["verified"] and pipe["triangles"] == tri["triangles"]
             rows.append((tri["triangle"], pipe["quality_mesh"], pipe["hamiltonian"], cold["hamiltonian_cold"],
                          pipe["triangle_inside"]))
+            cpus.append((tri["triangle_cpu"], pipe["quality_mesh_cpu"], pipe["hamiltonian_cpu"]))
     print(f"first call in a fresh process, {args.fresh} runs (each a new interpreter; seconds, and ratios to raw Triangle's first call")
     print("in its own fresh process; in brackets: to Triangle's time inside that quality_mesh call, same process)")
     print(f"  {'run':>3}  {'triangle':>8}  {'quality_mesh':>12} {'ratio':>15}  {'hamiltonian':>11} {'ratio':>15}  {'ham. cold':>9} {'ratio':>6}")
@@ -154,6 +167,9 @@ def first_calls(args: argparse.Namespace) -> None:
     summary("hamiltonian after quality_mesh / raw Triangle, own process", 2, 0, "; target <= 0.30")
     summary("hamiltonian after quality_mesh / Triangle inside quality_mesh", 2, 4, "")
     summary("hamiltonian on a mesh read from a file (kernels cold) / raw Triangle", 3, 0, "")
+    print("first-call CPU seconds (all threads, and the meshing child): triangle / quality_mesh / hamiltonian")
+    for i, (t, q, h) in enumerate(cpus):
+        print(f"  {i:>3}  {t:8.3f}  {q:8.3f} ({q / t:.3f})  {h:8.3f} ({h / t:.3f})")
 
 
 def best_of(args: argparse.Namespace) -> None:
