@@ -46,8 +46,9 @@ __all__ = ["run_isolated", "SharedArena", "SHARED_MEMORY"]
 #: ``memfd_create`` and ``fork``); else they are pickled through a pipe.
 SHARED_MEMORY = hasattr(os, "memfd_create") and "fork" in mp.get_all_start_methods()
 
-#: Arrays smaller than this stay in the child's own memory (and are copied into the
-#: file at the end): a page-aligned mapping per tiny array would cost more.
+#: Arrays smaller than this are neither allocated in the file nor copied to it: they
+#: travel inside the pickle (a page-aligned block per tiny array would cost more, and
+#: the parent would keep the whole mapping alive for a small array it still holds).
 ARENA_MIN_BYTES = 1 << 16
 
 _PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
@@ -162,7 +163,15 @@ def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...], fd: int |
             arena = SharedArena(fd)
             result = func(*args, alloc=arena.empty) if alloc else func(*args)
             buffers: list[pickle.PickleBuffer] = []
-            head = pickle.dumps(result, protocol=5, buffer_callback=buffers.append)
+
+            def out_of_band(buf: pickle.PickleBuffer) -> bool:
+                # small arrays travel in the pickle: they must not keep the mapping alive
+                if buf.raw().nbytes < ARENA_MIN_BYTES:
+                    return True
+                buffers.append(buf)
+                return False
+
+            head = pickle.dumps(result, protocol=5, buffer_callback=out_of_band)
             spans = [arena.place(b.raw()) for b in buffers]
             conn.send(("shared", head, spans, arena.size))
     except HammeshError as exc:  # keep hammesh's own errors as they are
