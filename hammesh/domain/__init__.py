@@ -8,24 +8,28 @@ from __future__ import annotations
 from pathlib import Path
 
 from hammesh.domain.pslg import Domain
+from hammesh.domain.repair import REPAIR_KINDS, Repair, repair_graph
 from hammesh.domain.triangle_files import read_node, read_poly, write_poly
 from hammesh.domain.validate import validate_domain
 from hammesh.errors import FileFormatError
 
-__all__ = ["Domain", "validate_domain", "read_domain", "read_node", "read_poly", "write_poly",
-           "READERS"]
+__all__ = ["Domain", "Repair", "REPAIR_KINDS", "repair_graph", "validate_domain", "read_domain",
+           "read_node", "read_poly", "write_poly", "READERS"]
 
 #: File suffix -> reader returning a :class:`Domain`.
 READERS = {".poly": read_poly, ".node": read_node}
 
 
-def read_domain(path) -> Domain:
+def read_domain(path, *, strict: bool = False) -> Domain:
     """Read a domain file, choosing the reader from the suffix (see :data:`READERS`).
 
     Parameters
     ----------
     path : str or os.PathLike
         A ``.poly`` or ``.node`` file (suffix case-insensitive).
+    strict : bool
+        Refuse what Triangle would repair instead of repairing it (``Domain.repairs``
+        lists what was repaired otherwise).
 
     Raises
     ------
@@ -38,4 +42,4 @@ def read_domain(path) -> Domain:
         known = ", ".join(sorted(READERS))
         raise FileFormatError(
             f"{path.name}: unknown domain file suffix {path.suffix!r} (known: {known})")
-    return reader(path)
+    return reader(path, strict=strict)

@@ -1,18 +1,22 @@
 """The input domain: a planar straight-line graph (PSLG) as plain numpy arrays.
 
 A :class:`Domain` is what Triangle's ``-p`` switch consumes: vertices, constrained
-segments, hole points and regional attributes / area limits.  It is validated on
-construction (:func:`~hammesh.domain.validate.validate_domain`), its arrays are
-read-only copies, so an invalid Domain can never exist.
+segments, hole points and regional attributes / area limits.  It is checked on
+construction (:func:`~hammesh.domain.validate.check_fields`), and what Triangle would
+repair itself (duplicate vertices, T-junctions, overlapping or crossing segments) is
+repaired and recorded in ``Domain.repairs``
+(:func:`~hammesh.domain.repair.repair_graph`), or refused with ``strict=True``.  Its
+arrays are read-only copies, so an invalid Domain can never exist.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 
-from hammesh.domain.validate import point_array, validate_domain
+from hammesh.domain.repair import Repair, repair_graph
+from hammesh.domain.validate import check_fields, point_array
 from hammesh.errors import InvalidDomainError
 
 __all__ = ["Domain"]
@@ -41,15 +45,30 @@ class Domain:
     vertex_markers : (n,) int64, optional
         Boundary markers of the vertices; default zeros.
 
+    strict : bool, optional
+        Refuse (raise) instead of repairing duplicate vertices, zero-length or repeated
+        segments, vertices inside segments, overlapping or crossing segments.
+
+    Attributes
+    ----------
+    repairs : tuple of Repair
+        What was repaired (:mod:`hammesh.domain.repair`), empty if nothing; the stored
+        arrays are those of the repaired graph (kept vertices at their index, minus
+        dropped duplicates before them; new crossing vertices appended).
+
     Any array-like (nested lists) is accepted and copied to the dtypes above; the
     stored arrays are read-only.  Raises :class:`~hammesh.errors.InvalidDomainError`
-    if the graph is invalid (see :func:`~hammesh.domain.validate.validate_domain`).
+    if the graph is invalid (see :func:`~hammesh.domain.validate.check_fields`) or,
+    with ``strict``, defective.
 
     Examples
     --------
     >>> d = Domain([[0, 0], [1, 0], [0, 1]], [[0, 1], [1, 2], [2, 0]])
     >>> d.segments.dtype, d.segment_markers.tolist()
     (dtype('int64'), [1, 1, 1])
+    >>> t = Domain([[0, 0], [2, 0], [0, 2], [1, 0]], [[0, 1], [1, 2], [2, 0]])
+    >>> [r.kind for r in t.repairs], t.segments.tolist()
+    (['vertex_on_segment'], [[0, 3], [3, 1], [1, 2], [2, 0]])
     """
 
     vertices: np.ndarray
@@ -58,8 +77,10 @@ class Domain:
     regions: np.ndarray = field(default_factory=_empty(4, np.float64))
     segment_markers: np.ndarray | None = None
     vertex_markers: np.ndarray | None = None
+    strict: InitVar[bool] = False
+    repairs: tuple[Repair, ...] = field(default=(), init=False)
 
-    def __post_init__(self):
+    def __post_init__(self, strict: bool = False):
         vertices = _as_float(self.vertices, "vertices", 2)
         segments = _as_int(self.segments, "segments", 2)
         holes = _as_float(self.holes, "holes", 2)
@@ -75,16 +96,25 @@ class Domain:
         values = dict(vertices=vertices, segments=segments, holes=holes, regions=regions,
                       segment_markers=segment_markers, vertex_markers=vertex_markers)
         for name, value in values.items():
+            object.__setattr__(self, name, value)
+        check_fields(self)
+        graph = repair_graph(vertices, segments, segment_markers, vertex_markers,
+                             strict=bool(strict))
+        values.update(vertices=graph.vertices, segments=graph.segments,
+                      segment_markers=graph.segment_markers, vertex_markers=graph.vertex_markers)
+        for name, value in values.items():
             value.setflags(write=False)
             object.__setattr__(self, name, value)
-        validate_domain(self)
+        object.__setattr__(self, "repairs", graph.repairs)
 
     def __repr__(self) -> str:
+        fixed = f", {len(self.repairs)} repairs" if self.repairs else ""
         return (f"Domain({len(self.vertices)} vertices, {len(self.segments)} segments, "
-                f"{len(self.holes)} holes, {len(self.regions)} regions)")
+                f"{len(self.holes)} holes, {len(self.regions)} regions{fixed})")
 
     @classmethod
-    def from_polygon(cls, outer, holes=(), *, internal_segments=None) -> "Domain":
+    def from_polygon(cls, outer, holes=(), *, internal_segments=None,
+                     strict: bool = False) -> "Domain":
         """Build a domain from an outer ring, hole rings and internal polylines.
 
         Parameters
@@ -99,6 +129,10 @@ class Domain:
             Open polylines of constrained segments (cracks, internal loops).  A point
             exactly equal to an existing vertex reuses it, so a polyline may start on
             the boundary, and repeating its first point closes it into a loop.
+        strict : bool
+            Refuse instead of repairing internal polylines that cross, overlap or
+            touch (see :class:`Domain`). The rings themselves are never repaired: they
+            must be simple and disjoint.
 
         Returns
         -------
@@ -126,6 +160,9 @@ class Domain:
         nb = sum(len(r) for r in vertices)
         vmarks = [np.ones(nb, np.int64)]
         smarks = [np.ones(nb, np.int64)]
+        # the rings must be simple and disjoint (hole points, nesting): never repaired
+        repair_graph(np.concatenate(vertices), np.concatenate(segments), smarks[0], vmarks[0],
+                     strict=True)
 
         if internal_segments is not None:
             lookup = {}
@@ -153,11 +190,11 @@ class Domain:
 
         kw = dict(vertices=np.concatenate(vertices), segments=np.concatenate(segments),
                   segment_markers=np.concatenate(smarks), vertex_markers=np.concatenate(vmarks))
-        graph = cls(**kw)  # validates rings and polylines before any call to Triangle
+        graph = cls(**kw, strict=strict)  # checks rings and polylines before Triangle runs
         _check_nesting(rings)
         hole_points = [_interior_point(r) for r in rings[1:]]
-        return cls(**kw, holes=np.asarray(hole_points, np.float64).reshape(-1, 2)) \
-            if hole_points else graph
+        return cls(**kw, holes=np.asarray(hole_points, np.float64).reshape(-1, 2),
+                   strict=strict) if hole_points else graph
 
 
 # ----------------------------------------------------------------------------- conversion

@@ -149,20 +149,22 @@ def _expect_end(lines, section):
         raise lines.error(line, f"unexpected data after the {section} section")
 
 
-def _make_domain(name, base, **arrays):
+def _make_domain(name, base, strict, **arrays):
     try:
-        return Domain(**arrays)
+        return Domain(**arrays, strict=strict)
     except InvalidDomainError as exc:
         note = " (indices zero-based; the file numbers from 1)" if base == 1 else ""
         raise InvalidDomainError(f"{name}: {exc}{note}") from None
 
 
-def read_node(path) -> Domain:
+def read_node(path, *, strict: bool = False) -> Domain:
     """Read a Triangle ``.node`` file as a :class:`Domain` without segments.
 
     Parameters
     ----------
     path : str or os.PathLike
+    strict : bool
+        Refuse duplicate vertices instead of merging them (``Domain.repairs``).
 
     Returns
     -------
@@ -181,16 +183,19 @@ def read_node(path) -> Domain:
     lines = _Lines(path)
     vertices, markers, base, _ = _read_vertices(lines)
     _expect_end(lines, "vertex")
-    return _make_domain(path.name, base, vertices=vertices, vertex_markers=markers)
+    return _make_domain(path.name, base, strict, vertices=vertices, vertex_markers=markers)
 
 
-def read_poly(path) -> Domain:
+def read_poly(path, *, strict: bool = False) -> Domain:
     """Read a Triangle ``.poly`` file as a :class:`Domain`.
 
     Parameters
     ----------
     path : str or os.PathLike
         If the file declares 0 vertices, they are read from ``<stem>.node`` next to it.
+    strict : bool
+        Refuse what Triangle would repair (duplicate vertices, T-junctions, overlapping
+        or crossing segments) instead of repairing it; see ``Domain.repairs``.
 
     Returns
     -------
@@ -203,7 +208,8 @@ def read_poly(path) -> Domain:
     FileFormatError
         Missing, empty, truncated or malformed file (message names file and line).
     InvalidDomainError
-        Well-formed file that is not a valid domain (message starts with the file name).
+        Well-formed file that is not a valid domain, or (``strict``) needs a repair
+        (message starts with the file name).
 
     Examples
     --------
@@ -269,7 +275,7 @@ def read_poly(path) -> Domain:
             regions[i] = [x, y, attr, area if area > 0 else np.nan]
     _expect_end(lines, "region")
 
-    return _make_domain(path.name, base, vertices=vertices, segments=segments, holes=holes,
+    return _make_domain(path.name, base, strict, vertices=vertices, segments=segments, holes=holes,
                         regions=regions, segment_markers=smarkers, vertex_markers=vmarkers)
 
 

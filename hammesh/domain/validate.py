@@ -1,26 +1,18 @@
 """Validation of a planar straight-line graph before it reaches Triangle.
 
-Triangle (a C library) trusts its input: duplicate vertices, crossing segments,
-out-of-range indices or huge coordinates make it loop, silently split segments or
-crash the interpreter with SIGSEGV.  :func:`validate_domain` therefore checks every
-precondition in numpy first and raises :class:`~hammesh.errors.InvalidDomainError`
-with a one-line message naming the offending field, index or point.
+Triangle (a C library) trusts its input: out-of-range indices, NaN or huge
+coordinates make it loop or crash the interpreter with SIGSEGV.  :func:`check_fields`
+checks those preconditions in numpy first and raises
+:class:`~hammesh.errors.InvalidDomainError` with a one-line message naming the
+offending field, index or point.
 
-Decisions
----------
-* Crossing segments are rejected (not split at the intersection).
-* A segment passing through a vertex that is not one of its endpoints is rejected
-  (Triangle would silently split it there).  Segments sharing an endpoint are fine.
-* Orientation tests use float64 cross products; ``|cross| <= 1e-14 * scale**2`` counts
-  as collinear, where ``scale`` is the larger side of the vertices' bounding box.
-
-Complexity: sorting for duplicates, and a uniform grid (cell size adapted to the
-segment lengths) whose candidate pairs are tested in vectorized chunks, so about
-``O((n + s) log(n + s))`` for well-spread inputs; 100k boundary segments take well
-under a second.  Known weak spot: many long segments closer together than their length
-(a vertex of degree 10^4, stacks of thousands of long thin strips) put thousands of
-segments into one cell, and the work grows with the number of pairs sharing a cell
-(about 10^7 pairs per second).
+Geometric defects that Triangle itself repairs (duplicate vertices, a vertex inside a
+segment, overlapping or crossing segments) are repaired, and reported, by
+:mod:`hammesh.domain.repair` with exact predicates; :func:`validate_domain` refuses
+them instead (strict). Both decide with a Shamos-Hoey sweep
+(:mod:`hammesh.domain.intersections`): ``O((n + s) log(n + s))`` whatever the shape,
+so a vertex of degree 10^4 or 2*10^4 long parallel segments take well under a
+second (the old tolerance-based grid took 93 s and 122 s on those).
 """
 
 from __future__ import annotations
@@ -29,14 +21,10 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["validate_domain", "point_array", "MAX_ABS_COORDINATE", "COLLINEAR_RTOL"]
+__all__ = ["validate_domain", "check_fields", "point_array", "MAX_ABS_COORDINATE"]
 
 #: Beyond this magnitude Triangle's floating-point predicates overflow.
 MAX_ABS_COORDINATE = 1e30
-#: ``|cross| <= COLLINEAR_RTOL * scale**2`` is treated as collinear.
-COLLINEAR_RTOL = 1e-14
-
-_PAIR_CHUNK = 1 << 20  # candidate pairs tested per vectorized batch
 _XY = ("x coordinate", "y coordinate")
 
 
@@ -60,7 +48,12 @@ def point_array(value, what: str, rows: str = "k") -> np.ndarray:
 
 
 def validate_domain(domain) -> None:
-    """Check that ``domain`` is a valid planar straight-line graph for Triangle.
+    """Check that ``domain`` is a proper planar straight-line graph (strict: no repairs).
+
+    :func:`check_fields`, then the geometric checks of
+    :func:`~hammesh.domain.repair.repair_graph` with ``strict=True`` (exact predicates):
+    no duplicate vertices, no zero-length or repeated segments, segments meeting only
+    at shared endpoints, no vertex inside a segment.
 
     Parameters
     ----------
@@ -73,10 +66,10 @@ def validate_domain(domain) -> None:
     ------
     InvalidDomainError
         On the first problem found, in this order: field shapes and dtypes; non-finite
-        or too large (> 1e30) coordinates; fewer than 3 vertices; duplicate vertices;
-        all vertices collinear; segment indices out of range or repeated; duplicate
-        segments; crossing or collinearly overlapping segments; a segment through a
-        vertex; region max_area not NaN or > 0.
+        or too large (> 1e30) coordinates; region max_area not NaN or > 0; fewer than 3
+        vertices; segment indices out of range; duplicate vertices; all vertices
+        collinear; zero-length or duplicate segments; crossing or collinearly
+        overlapping segments, a segment through a vertex.
 
     Examples
     --------
@@ -89,6 +82,22 @@ def validate_domain(domain) -> None:
     Traceback (most recent call last):
     ...
     hammesh.errors.InvalidDomainError: vertices 0 and 1 are duplicates: both at (0.0, 0.0)
+    """
+    check_fields(domain)
+    from hammesh.domain.repair import repair_graph
+
+    repair_graph(domain.vertices, domain.segments, domain.segment_markers,
+                 domain.vertex_markers, strict=True)
+
+
+def check_fields(domain) -> None:
+    """The preconditions no repair can meet: shapes, dtypes, finite coordinates,
+    region areas, at least 3 vertices, segment indices in range.
+
+    Raises
+    ------
+    InvalidDomainError
+        Naming the field, row and value at fault.
     """
     vertices = _field(domain, "vertices", np.float64, 2)
     segments = _field(domain, "segments", np.int64, 2)
@@ -111,13 +120,8 @@ def validate_domain(domain) -> None:
 
     if n < 3:
         raise InvalidDomainError(f"a domain needs at least 3 vertices, got {n}")
-    _check_duplicate_vertices(vertices)
-    tol = _check_not_collinear(vertices)
-
     if s:
         _check_segment_indices(segments, n)
-        _check_duplicate_segments(segments)
-        _check_segment_geometry(vertices, segments, tol)
 
 
 # ----------------------------------------------------------------------------- fields
@@ -172,47 +176,6 @@ def _check_max_area(regions):
             "or a finite number > 0")
 
 
-# ----------------------------------------------------------------------------- vertices
-
-def _check_duplicate_vertices(vertices):
-    order = np.lexsort((np.arange(len(vertices)), vertices[:, 1], vertices[:, 0]))
-    v = vertices[order]
-    same = np.flatnonzero((v[1:] == v[:-1]).all(axis=1))
-    if same.size:
-        # report the duplicate pair whose later index is smallest
-        pairs = np.stack([order[same], order[same + 1]], axis=1)
-        pairs.sort(axis=1)
-        i, j = pairs[np.lexsort((pairs[:, 0], pairs[:, 1]))[0]]
-        raise InvalidDomainError(
-            f"vertices {i} and {j} are duplicates: both at {_point(vertices[i])}")
-
-
-def _check_not_collinear(vertices) -> float:
-    """Raise if all vertices are collinear; return the collinearity tolerance."""
-    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    scale = float((hi - lo).max())
-    tol = COLLINEAR_RTOL * scale * scale
-    axis = int(np.argmax(hi - lo))
-    a = vertices[np.argmin(vertices[:, axis])]
-    b = vertices[np.argmax(vertices[:, axis])]
-    cross = _orient(a, b, vertices)
-    if np.all(np.abs(cross) <= tol):
-        raise InvalidDomainError(
-            f"all {len(vertices)} vertices are collinear (the convex hull has zero area)")
-    return tol
-
-
-def _orient(a, b, c):
-    """Twice the signed area of (a, b, c); positive when counter-clockwise."""
-    a, b, c = np.asarray(a), np.asarray(b), np.asarray(c)
-    return ((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
-            - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
-
-
-def _sign(x, tol):
-    return np.where(x > tol, 1, np.where(x < -tol, -1, 0))
-
-
 # ----------------------------------------------------------------------------- segments
 
 def _check_segment_indices(segments, n):
@@ -225,223 +188,3 @@ def _check_segment_indices(segments, n):
         i, j = np.argwhere(out)[0]
         raise InvalidDomainError(
             f"segment {i} references vertex {segments[i, j]} but there are only {n} vertices")
-    same = np.flatnonzero(segments[:, 0] == segments[:, 1])
-    if same.size:
-        i = int(same[0])
-        raise InvalidDomainError(
-            f"segment {i} has zero length: both ends are vertex {segments[i, 0]}")
-
-
-def _check_duplicate_segments(segments):
-    key = np.sort(segments, axis=1)
-    order = np.lexsort((np.arange(len(key)), key[:, 1], key[:, 0]))
-    k = key[order]
-    same = np.flatnonzero((k[1:] == k[:-1]).all(axis=1))
-    if same.size:
-        pairs = np.stack([order[same], order[same + 1]], axis=1)
-        pairs.sort(axis=1)
-        i, j = pairs[np.lexsort((pairs[:, 0], pairs[:, 1]))[0]]
-        a, b = segments[i]
-        raise InvalidDomainError(
-            f"segments {i} and {j} are duplicates: both connect vertices {a} and {b}")
-
-
-def _grid(vertices, segments, tol):
-    """Bucket segments into a uniform grid.
-
-    Returns ``(origin, h, ncols, seg_of_entry, key_of_entry)`` with entries sorted by
-    cell key; every segment is entered in every cell its (padded) bounding box touches.
-    """
-    a = vertices[segments[:, 0]]
-    b = vertices[segments[:, 1]]
-    length = np.hypot(*(b - a).T)
-    # pad so that points within the collinearity tolerance of a segment share a cell
-    pad = tol / length + 1e-12 * max(float(np.abs(vertices).max()), 1.0)
-    lo = np.minimum(a, b) - pad[:, None]
-    hi = np.maximum(a, b) + pad[:, None]
-    origin = vertices.min(axis=0) - pad.max()
-    extent = float((vertices.max(axis=0) - origin).max()) + pad.max()
-    s = len(segments)
-    h = max(float(np.median(np.abs(b - a).max(axis=1))), extent / 2.0**30)  # keys < 2**62
-    while True:
-        c0 = np.floor((lo - origin) / h).astype(np.int64)
-        c1 = np.floor((hi - origin) / h).astype(np.int64)
-        span = c1 - c0 + 1
-        cover = span[:, 0] * span[:, 1]
-        if cover.sum() <= 16 * s + 64 or extent / h < 2:
-            break
-        h *= 2.0
-    ncols = int(np.floor((extent + 2 * pad.max()) / h)) + 3
-    seg = np.repeat(np.arange(s), cover)
-    start = np.cumsum(cover) - cover
-    local = np.arange(len(seg)) - np.repeat(start, cover)
-    w = np.repeat(span[:, 1], cover)
-    cx = np.repeat(c0[:, 0], cover) + local // w
-    cy = np.repeat(c0[:, 1], cover) + local % w
-    key = cx * ncols + cy
-    order = np.argsort(key, kind="stable")
-    return origin, h, ncols, seg[order], key[order]
-
-
-def _pairs_in_groups(keys):
-    """Yield chunks ``(p, q)`` of positions ``p < q`` in ``keys`` (sorted) with equal keys."""
-    m = len(keys)
-    if m < 2:
-        return
-    new = np.ones(m, bool)
-    new[1:] = keys[1:] != keys[:-1]
-    gstart = np.flatnonzero(new)
-    gsize = np.diff(np.append(gstart, m))
-    group_end = np.repeat(gstart + gsize, gsize)
-    after = group_end - np.arange(m) - 1  # partners following each entry in its group
-    pos = 0
-    while pos < m:
-        csum = np.cumsum(after[pos:])
-        stop = pos + max(int(np.searchsorted(csum, _PAIR_CHUNK, side="right")), 1)
-        cnt = after[pos:stop]
-        total = int(cnt.sum())
-        if total:
-            p = np.repeat(np.arange(pos, stop), cnt)
-            offs = np.arange(total) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-            yield p, p + 1 + offs
-        pos = stop
-
-
-def _check_segment_geometry(vertices, segments, tol):
-    origin, h, ncols, seg, key = _grid(vertices, segments, tol)
-    a_all = vertices[segments[:, 0]]
-    b_all = vertices[segments[:, 1]]
-    for p, q in _pairs_in_groups(key):
-        i, j = seg[p], seg[q]
-        i, j = np.minimum(i, j), np.maximum(i, j)
-        found = _test_segment_pairs(vertices, segments, a_all, b_all, i, j, tol)
-        if found is not None:  # deterministic: smallest bad pair of the first bad chunk
-            raise InvalidDomainError(found[2])
-    _check_vertices_on_segments(vertices, segments, a_all, b_all, tol, origin, h, ncols, seg, key)
-
-
-def _test_segment_pairs(vertices, segments, a_all, b_all, i, j, tol):
-    """Test candidate pairs ``i < j``; return ``(i, j, message)`` of the first bad pair."""
-    # bounding-box filter (with a tolerance margin)
-    lo_i, hi_i = np.minimum(a_all[i], b_all[i]), np.maximum(a_all[i], b_all[i])
-    lo_j, hi_j = np.minimum(a_all[j], b_all[j]), np.maximum(a_all[j], b_all[j])
-    margin = 1e-12 * max(float(np.abs(vertices).max()), 1.0) + np.sqrt(tol)
-    keep = ((lo_i <= hi_j + margin) & (lo_j <= hi_i + margin)).all(axis=1)
-    i, j = i[keep], j[keep]
-    if i.size == 0:
-        return None
-    si, sj = segments[i], segments[j]
-    a, b, c, d = vertices[si[:, 0]], vertices[si[:, 1]], vertices[sj[:, 0]], vertices[sj[:, 1]]
-    shared = (si[:, :, None] == sj[:, None, :])  # (k, 2, 2)
-    nshared = shared.sum(axis=(1, 2))
-
-    bad = np.zeros(len(i), bool)
-    kind = np.zeros(len(i), np.int8)  # 1 cross, 2 overlap, 3 touch, 4 overlap at shared end
-
-    # pairs without a shared endpoint
-    d1, d2 = _orient(a, b, c), _orient(a, b, d)
-    d3, d4 = _orient(c, d, a), _orient(c, d, b)
-    s1, s2, s3, s4 = (_sign(x, tol) for x in (d1, d2, d3, d4))
-    free = nshared == 0
-    collinear = free & (((s1 == 0) & (s2 == 0)) | ((s3 == 0) & (s4 == 0)))
-    cross = free & ~collinear & (s1 * s2 < 0) & (s3 * s4 < 0)
-    touch = free & ~collinear & ~cross & (s1 * s2 <= 0) & (s3 * s4 <= 0)
-    # collinear overlap: project on the direction of the longer segment
-    ab, cd = b - a, d - c
-    use_ab = (ab * ab).sum(1) >= (cd * cd).sum(1)
-    o = np.where(use_ab[:, None], a, c)
-    u = np.where(use_ab[:, None], ab, cd)
-    t = [((x - o) * u).sum(1) for x in (a, b, c, d)]
-    lo1, hi1 = np.minimum(t[0], t[1]), np.maximum(t[0], t[1])
-    lo2, hi2 = np.minimum(t[2], t[3]), np.maximum(t[2], t[3])
-    overlap = collinear & (np.maximum(lo1, lo2) < np.minimum(hi1, hi2))
-    kind[cross] = 1
-    kind[overlap] = 2
-    kind[touch] = 3
-    bad |= cross | overlap | touch
-
-    # pairs sharing one endpoint: bad only if they overlap collinearly
-    one = nshared == 1
-    if one.any():
-        k = np.flatnonzero(one)
-        sh = shared[k]
-        ii = np.argmax(sh.any(axis=2), axis=1)  # position of shared vertex in segment i
-        jj = np.argmax(sh.any(axis=1), axis=1)  # position in segment j
-        pivot = vertices[si[k, ii]]
-        u_end = vertices[si[k, 1 - ii]]
-        w_end = vertices[sj[k, 1 - jj]]
-        col = np.abs(_orient(pivot, u_end, w_end)) <= tol
-        same_dir = ((u_end - pivot) * (w_end - pivot)).sum(1) > 0
-        hit = k[col & same_dir]
-        kind[hit] = 4
-        bad[hit] = True
-
-    if not bad.any():
-        return None
-    cand = np.flatnonzero(bad)
-    first = cand[np.lexsort((j[cand], i[cand]))[0]]
-    I, J = int(i[first]), int(j[first])
-    kd = kind[first]
-    if kd == 1:
-        x = c[first] + (d[first] - c[first]) * (d1[first] / (d1[first] - d2[first]))
-        msg = f"segments {I} and {J} cross at {_point(x)}"
-    elif kd == 2:
-        o_, u_ = o[first], u[first]
-        uu = float((u_ * u_).sum())
-        p0 = o_ + u_ * (max(lo1[first], lo2[first]) / uu)
-        p1 = o_ + u_ * (min(hi1[first], hi2[first]) / uu)
-        msg = f"segments {I} and {J} overlap collinearly between {_point(p0)} and {_point(p1)}"
-    elif kd == 4:
-        ends_i, ends_j = set(segments[I].tolist()), set(segments[J].tolist())
-        pivot = (ends_i & ends_j).pop()
-        (ui,), (wj,) = ends_i - {pivot}, ends_j - {pivot}
-        near = ui if (np.sum((vertices[ui] - vertices[pivot]) ** 2)
-                      <= np.sum((vertices[wj] - vertices[pivot]) ** 2)) else wj
-        msg = (f"segments {I} and {J} overlap collinearly between "
-               f"{_point(vertices[pivot])} and {_point(vertices[near])}")
-    else:
-        # one endpoint lies on the other segment (T-junction)
-        sg = [s1[first], s2[first], s3[first], s4[first]]
-        z = sg.index(0)
-        seg_idx, vtx = [(I, segments[J, 0]), (I, segments[J, 1]),
-                        (J, segments[I, 0]), (J, segments[I, 1])][z]
-        msg = (f"segment {seg_idx} passes through vertex {vtx} at {_point(vertices[vtx])}, "
-               "which is not one of its endpoints")
-    return I, J, msg
-
-
-def _check_vertices_on_segments(vertices, segments, a_all, b_all, tol,
-                                origin, h, ncols, seg, key):
-    cell = np.floor((vertices - origin) / h).astype(np.int64)
-    vkey = cell[:, 0] * ncols + cell[:, 1]
-    left = np.searchsorted(key, vkey, side="left")
-    right = np.searchsorted(key, vkey, side="right")
-    cnt = right - left
-    step = _PAIR_CHUNK
-    csum = np.cumsum(cnt)
-    vstart = 0
-    n = len(vertices)
-    while vstart < n:
-        base = csum[vstart - 1] if vstart else 0
-        vstop = max(int(np.searchsorted(csum, base + step, side="right")), vstart + 1)
-        vstop = min(vstop, n)
-        c = cnt[vstart:vstop]
-        m = int(c.sum())
-        if m:
-            v = np.repeat(np.arange(vstart, vstop), c)
-            offs = np.arange(m) - np.repeat(np.cumsum(c) - c, c)
-            sgi = seg[np.repeat(left[vstart:vstop], c) + offs]
-            not_end = (segments[sgi, 0] != v) & (segments[sgi, 1] != v)
-            v, sgi = v[not_end], sgi[not_end]
-            a, b, p = a_all[sgi], b_all[sgi], vertices[v]
-            on = ((np.abs(_orient(a, b, p)) <= tol)
-                  & (((p - a) * (b - a)).sum(1) > 0)
-                  & (((p - b) * (a - b)).sum(1) > 0))
-            if on.any():
-                k = np.flatnonzero(on)
-                best = k[np.lexsort((v[k], sgi[k]))[0]]
-                sgi, v = int(sgi[best]), int(v[best])
-                raise InvalidDomainError(
-                    f"segment {sgi} passes through vertex {v} at {_point(vertices[v])}, "
-                    "which is not one of its endpoints")
-        vstart = vstop

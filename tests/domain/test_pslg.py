@@ -94,7 +94,8 @@ def test_replace_revalidates():
     d2 = dataclasses.replace(d, holes=[[3.0, 3.0]])
     assert d2.holes.tolist() == [[3.0, 3.0]]
     with pytest.raises(InvalidDomainError, match=r"segments 4 and 5 cross"):
-        dataclasses.replace(d, segments=RING + [[0, 2], [1, 3]], segment_markers=None)
+        dataclasses.replace(d, segments=RING + [[0, 2], [1, 3]], segment_markers=None,
+                            strict=True)
 
 
 def test_equality_is_identity():

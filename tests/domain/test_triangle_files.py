@@ -155,9 +155,9 @@ def test_invalid_domain_in_file_names_file(tmp_path):
     text = "4 2 0 0\n1 0 0\n2 1 0\n3 1 1\n4 0 1\n2 0\n1 1 3\n2 2 4\n0\n"
     with pytest.raises(InvalidDomainError,
                        match=r"^x\.poly: segments 0 and 1 cross at \(0\.5, 0\.5\) \(indices zero-based"):
-        read_poly(write(tmp_path, "x.poly", text))
+        read_poly(write(tmp_path, "x.poly", text), strict=True)
     with pytest.raises(InvalidDomainError, match=r"^d\.node: vertices 0 and 2 are duplicates"):
-        read_node(write(tmp_path, "d.node", "3 2 0 0\n0 0 0\n1 1 0\n2 0 0\n"))
+        read_node(write(tmp_path, "d.node", "3 2 0 0\n0 0 0\n1 1 0\n2 0 0\n"), strict=True)
     with pytest.raises(InvalidDomainError, match=r"^o\.poly: segment 0 references vertex 7"):
         read_poly(write(tmp_path, "o.poly", "3 2 0 0\n0 0 0\n1 1 0\n2 0 1\n1 0\n0 0 7\n0\n"))
 

@@ -12,7 +12,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from hammesh.domain import Domain, validate_domain
-from hammesh.domain import validate as validate_module
 from hammesh.errors import HammeshError, InvalidDomainError
 
 SQUARE = [[0, 0], [1, 0], [1, 1], [0, 1]]
@@ -109,9 +108,9 @@ def test_duplicate_vertices_name_both_indices():
     v = [[0, 0], [1, 0], [1, 1], [0, 1], [1, 0]]
     with pytest.raises(InvalidDomainError,
                        match=r"vertices 1 and 4 are duplicates: both at \(1\.0, 0\.0\)"):
-        Domain(v)
+        Domain(v, strict=True)
     with pytest.raises(InvalidDomainError, match=r"vertices 0 and 3 are duplicates"):
-        Domain([[0.0, 0], [1, 0], [1, 1], [-0.0, 0]])  # -0.0 == 0.0
+        Domain([[0.0, 0], [1, 0], [1, 1], [-0.0, 0]], strict=True)  # -0.0 == 0.0
 
 
 def test_segment_index_out_of_range_and_negative():
@@ -124,30 +123,30 @@ def test_segment_index_out_of_range_and_negative():
 
 def test_segment_with_repeated_index():
     with pytest.raises(InvalidDomainError, match=r"segment 3 has zero length: both ends are vertex 2"):
-        Domain(SQUARE, [[0, 1], [1, 2], [2, 3], [2, 2]])
+        Domain(SQUARE, [[0, 1], [1, 2], [2, 3], [2, 2]], strict=True)
 
 
 def test_zero_length_segment_between_equal_vertices_is_a_duplicate_vertex():
     with pytest.raises(InvalidDomainError, match=r"vertices 1 and 4 are duplicates"):
-        Domain(SQUARE + [[1, 0]], RING + [[1, 4]])
+        Domain(SQUARE + [[1, 0]], RING + [[1, 4]], strict=True)
 
 
 @pytest.mark.parametrize("extra", [[1, 0], [0, 1]])
 def test_duplicate_segments_either_order(extra):
     with pytest.raises(InvalidDomainError,
                        match=r"segments 0 and 4 are duplicates: both connect vertices"):
-        Domain(SQUARE, RING + [extra])
+        Domain(SQUARE, RING + [extra], strict=True)
 
 
 def test_crossing_segments_name_both_and_point():
     with pytest.raises(InvalidDomainError, match=r"segments 4 and 5 cross at \(0\.5, 0\.5\)"):
-        Domain(SQUARE, RING + [[0, 2], [1, 3]])
+        Domain(SQUARE, RING + [[0, 2], [1, 3]], strict=True)
 
 
 def test_crossing_point_is_accurate():
     v = [[0, 0], [3, 1], [0, 2], [2, -1], [1, 5]]
     with pytest.raises(InvalidDomainError) as info:
-        Domain(v, [[0, 1], [3, 4]])
+        Domain(v, [[0, 1], [3, 4]], strict=True)
     x, y = (float(t) for t in info.value.args[0].split("at (")[1].rstrip(")").split(", "))
     # intersection of y = x/3 with the line through (2,-1), (1,5): y = -6x + 11
     assert x == pytest.approx(33 / 19) and y == pytest.approx(11 / 19)
@@ -157,14 +156,14 @@ def test_collinear_overlap_without_shared_endpoint():
     v = [[0, 0], [2, 0], [1, 0], [3, 0], [0, 1]]
     with pytest.raises(InvalidDomainError,
                        match=r"segments 0 and 1 overlap collinearly between \(1\.0, 0\.0\) and \(2\.0, 0\.0\)"):
-        Domain(v, [[0, 1], [2, 3]])
+        Domain(v, [[0, 1], [2, 3]], strict=True)
 
 
 def test_collinear_overlap_with_shared_endpoint():
     v = [[0, 0], [2, 0], [1, 0], [0, 1]]
     with pytest.raises(InvalidDomainError,
                        match=r"segments 0 and 1 overlap collinearly between \(0\.0, 0\.0\) and \(1\.0, 0\.0\)"):
-        Domain(v, [[0, 1], [0, 2]])
+        Domain(v, [[0, 1], [0, 2]], strict=True)
 
 
 def test_collinear_segments_meeting_end_to_end_are_fine():
@@ -177,12 +176,12 @@ def test_segment_endpoint_on_other_segment_is_named():
     v = SQUARE + [[0.5, 0], [0.5, 0.5]]
     with pytest.raises(InvalidDomainError,
                        match=r"segment 0 passes through vertex 4 at \(0\.5, 0\.0\), which is not one of its endpoints"):
-        Domain(v, RING + [[4, 5]])
+        Domain(v, RING + [[4, 5]], strict=True)
 
 
 def test_free_vertex_on_segment_is_named():
     with pytest.raises(InvalidDomainError, match=r"segment 1 passes through vertex 4"):
-        Domain(SQUARE + [[1, 0.25]], RING)
+        Domain(SQUARE + [[1, 0.25]], RING, strict=True)
     # the same vertex just off the segment is fine, and so is a vertex on the
     # segment's line but beyond its end
     Domain(SQUARE + [[1 - 1e-9, 0.25]], RING)
@@ -251,7 +250,7 @@ def _agrees_with_reference(pts, pairs):
     collinear = np.linalg.matrix_rank(np.c_[arr, np.ones(len(arr))]) < 3
     expected_bad = (not collinear) and _exact_problem(pts, pairs)
     try:
-        Domain(pts, np.array(pairs, np.int64).reshape(-1, 2))
+        Domain(pts, np.array(pairs, np.int64).reshape(-1, 2), strict=True)
     except InvalidDomainError as exc:
         msg = str(exc)
         if collinear:
@@ -271,10 +270,9 @@ def test_geometry_checks_agree_with_exact_brute_force(soup):
     _agrees_with_reference(*soup)
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, deadline=None)
 @given(segment_soups(grid=40))
-def test_geometry_checks_with_tiny_pair_chunks(monkeypatch, soup):
-    monkeypatch.setattr(validate_module, "_PAIR_CHUNK", 3)
+def test_geometry_checks_on_a_finer_grid(soup):
     _agrees_with_reference(*soup)
 
 
@@ -295,10 +293,11 @@ def test_hundred_thousand_segments_are_fast():
     assert time.perf_counter() - t < 5.0
     # one extra segment leaving the polygon is found among the 100k
     with pytest.raises(InvalidDomainError, match=r"segments \d+ and 100000 cross at"):
-        Domain(np.r_[pts, [[5.0, 0.1]]], np.r_[segs, [[33_333, 100_000]]])
-    # one extra vertex on an edge (midpoint, within rounding) is found too
-    with pytest.raises(InvalidDomainError, match=r"segment 10 passes through vertex 100000"):
-        Domain(np.r_[pts, [(pts[10] + pts[11]) / 2]], segs)
+        Domain(np.r_[pts, [[5.0, 0.1]]], np.r_[segs, [[33_333, 100_000]]], strict=True)
+    # one extra vertex exactly on an edge is found too (a square's edge: exact midpoint)
+    sq = np.array([[-2.0, -2], [2, -2], [2, 2], [-2, 2]])
+    with pytest.raises(InvalidDomainError, match=r"segment 100000 passes through vertex 100004"):
+        Domain(np.r_[pts, sq, [[0.0, -2.0]]], np.r_[segs, 100_000 + np.array(RING)], strict=True)
 
 
 def test_many_short_random_segments_are_fast():
