@@ -10,8 +10,9 @@ Two questions, answered with the exact orientation predicate
   grid validator took 93 s / 122 s on those).  It stops at the first defect.
 * :func:`all_defects` -- every defective pair, for the repair.  A uniform grid whose
   cells' segment pairs are tested in one compiled loop; near-linear for scattered
-  graphs, quadratic in the worst case (many long segments in one cell), about
-  10^8 pair tests per second.  It only runs when the sweep found a defect.
+  graphs, quadratic in the worst case (many long segments in one cell: a vertex of
+  degree 2*10^4 costs 2*10^8 cheap index comparisons, under a second).  It only runs
+  when the sweep found a defect.
 
 Defect kinds (``KIND_*``): a proper crossing, a vertex of one segment inside
 another (T-junction), a collinear overlap, an input vertex inside a segment.
@@ -38,7 +39,8 @@ from numba import njit
 
 from hammesh.predicates import orient
 
-__all__ = ["Defect", "first_defect", "all_defects", "KIND_NONE", "KIND_CROSSING",
+__all__ = ["Defect", "first_defect", "all_defects", "overlap_ends", "pair_kind",
+           "ordered_ends", "KIND_NONE", "KIND_CROSSING",
            "KIND_TOUCH", "KIND_OVERLAP", "KIND_VERTEX"]
 
 KIND_NONE = 0
@@ -112,6 +114,10 @@ def _inside(xy, lo, hi, s, v):
     """Vertex ``v`` lies strictly inside segment ``s`` (not an endpoint)."""
     if v == lo[s] or v == hi[s]:
         return False
+    x, y = xy[v, 0], xy[v, 1]
+    if (x < xy[lo[s], 0] or x > xy[hi[s], 0] or y < min(xy[lo[s], 1], xy[hi[s], 1])
+            or y > max(xy[lo[s], 1], xy[hi[s], 1])):
+        return False  # outside the box: most candidates, without an orientation test
     if _orient3(xy, lo[s], hi[s], v) != 0:
         return False
     return _lex_less(xy, lo[s], v) and _lex_less(xy, v, hi[s])
@@ -202,7 +208,8 @@ def _sweep_into(xy, lo, hi, ev_point, ev_type, ev_item, out):
                         return
 
 
-def _ordered_ends(xy: np.ndarray, segments: np.ndarray):
+def ordered_ends(xy: np.ndarray, segments: np.ndarray):
+    """``(lo, hi)``: each segment's ends, lexicographically smaller first."""
     a, b = segments[:, 0], segments[:, 1]
     swap = (xy[b, 0] < xy[a, 0]) | ((xy[b, 0] == xy[a, 0]) & (xy[b, 1] < xy[a, 1]))
     lo = np.where(swap, b, a).astype(np.int64)
@@ -230,7 +237,7 @@ def first_defect(xy: np.ndarray, segments: np.ndarray) -> Defect:
     n, s = len(xy), len(segments)
     if s == 0:
         return Defect(KIND_NONE, -1, -1)
-    lo, hi = _ordered_ends(xy, segments)
+    lo, hi = ordered_ends(xy, segments)
     point = np.concatenate([hi, np.arange(n, dtype=np.int64), lo])
     etype = np.concatenate([np.zeros(s, np.int64), np.ones(n, np.int64), np.full(s, 2, np.int64)])
     item = np.concatenate([np.arange(s), np.arange(n), np.arange(s)]).astype(np.int64)
@@ -251,7 +258,8 @@ def _cells(xy, lo, hi, extra_points):
     origin = xy.min(axis=0)
     extent = float((xy.max(axis=0) - origin).max())
     s = len(lo)
-    h = float(np.median(np.abs(b - a).max(axis=1)))
+    # from the typical length, or finer where a few cells would hold most segments
+    h = min(float(np.median(np.abs(b - a).max(axis=1))), extent / np.sqrt(s))
     h = max(h, extent / 2.0**20, np.finfo(float).tiny)
     while True:
         c0 = np.floor((blo - origin) / h).astype(np.int64)
@@ -287,7 +295,8 @@ def _grow(arr, m):
 
 @njit(cache=True, nogil=True)
 def _cell_pairs(xy, lo, hi, key, seg):
-    """Every defective pair of segments sharing a grid cell: rows (kind, a, b), a < b."""
+    """Every defective pair of segments sharing a grid cell and no endpoint:
+    rows (kind, a, b), a < b."""
     out = np.empty((64, 3), np.int64)
     m = 0
     n = key.shape[0]
@@ -298,12 +307,17 @@ def _cell_pairs(xy, lo, hi, key, seg):
             e += 1
         for i in range(g, e):
             a = seg[i]
+            la, ha = lo[a], hi[a]
             ax0 = min(xy[lo[a], 0], xy[hi[a], 0])
             ax1 = max(xy[lo[a], 0], xy[hi[a], 0])
             ay0 = min(xy[lo[a], 1], xy[hi[a], 1])
             ay1 = max(xy[lo[a], 1], xy[hi[a], 1])
             for j in range(i + 1, e):
                 b = seg[j]
+                if lo[b] == la or lo[b] == ha or hi[b] == la or hi[b] == ha:
+                    # sharing an end, they can only overlap, and then the shorter's
+                    # other end lies inside the longer: ``_vertices_inside`` finds it
+                    continue
                 if (max(xy[lo[b], 0], xy[hi[b], 0]) < ax0 or min(xy[lo[b], 0], xy[hi[b], 0]) > ax1
                         or max(xy[lo[b], 1], xy[hi[b], 1]) < ay0
                         or min(xy[lo[b], 1], xy[hi[b], 1]) > ay1):
@@ -335,13 +349,19 @@ def _vertices_inside(xy, lo, hi, key, seg, vkey, verts):
     return out[:m]
 
 
-def all_defects(xy: np.ndarray, segments: np.ndarray):
+def all_defects(xy: np.ndarray, segments: np.ndarray, max_tests: float = np.inf):
     """Every defective segment pair and every vertex inside a segment.
+
+    ``max_tests``: if the grid would test more candidate pairs than this (a vertex of
+    huge degree, long segments packed together), return None instead.
 
     Returns
     -------
+    None, or
     pairs : (k, 3) int64
-        Rows ``(kind, a, b)`` with ``a < b``, unique, sorted.
+        Rows ``(kind, a, b)`` with ``a < b``, unique, sorted, of segments without a
+        common endpoint (two that share one can only overlap, and then the shorter's
+        other end is in ``on_segment``).
     on_segment : (j, 2) int64
         Rows ``(segment, vertex)``: the vertex lies strictly inside the segment
         (endpoints of other segments included), unique, sorted.
@@ -349,11 +369,44 @@ def all_defects(xy: np.ndarray, segments: np.ndarray):
     xy = np.ascontiguousarray(xy, dtype=np.float64)
     if len(segments) == 0:
         return np.zeros((0, 3), np.int64), np.zeros((0, 2), np.int64)
-    lo, hi = _ordered_ends(xy, segments)
+    lo, hi = ordered_ends(xy, segments)
     verts = np.arange(len(xy), dtype=np.int64)
     key, seg, vkey = _cells(xy, lo, hi, verts)
+    if np.isfinite(max_tests):
+        _, cnt = np.unique(key, return_counts=True)
+        cost = float((cnt.astype(np.float64) * (cnt - 1) / 2).sum())
+        cost += float((np.searchsorted(key, vkey, "right") - np.searchsorted(key, vkey)).sum())
+        if cost > max_tests:
+            return None
     pairs = _cell_pairs(xy, lo, hi, key, seg)
     pairs = np.unique(pairs, axis=0) if len(pairs) else pairs
     inside = _vertices_inside(xy, lo, hi, key, seg, vkey, verts)
     inside = np.unique(inside, axis=0) if len(inside) else inside
     return pairs, inside
+
+
+@njit(cache=True, nogil=True)
+def _overlap_ends_into(xy, lo, hi, adj_start, adj, inside, out):
+    for r in range(inside.shape[0]):
+        s, v = inside[r, 0], inside[r, 1]
+        out[r] = -1
+        for k in range(adj_start[v], adj_start[v + 1]):
+            if pair_kind(xy, lo, hi, s, adj[k]) == KIND_OVERLAP:
+                out[r] = adj[k]
+                break
+
+
+def overlap_ends(xy: np.ndarray, segments: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """For rows ``(segment, vertex)`` of ``inside``: a segment ending at the vertex
+    that overlaps the segment collinearly, or -1 (then it is a T-junction)."""
+    xy = np.ascontiguousarray(xy, dtype=np.float64)
+    lo, hi = ordered_ends(xy, segments)
+    n = len(xy)
+    ends = segments.ravel()
+    order = np.argsort(ends, kind="stable")
+    adj = (order // 2).astype(np.int64)
+    adj_start = np.zeros(n + 1, np.int64)
+    np.cumsum(np.bincount(ends, minlength=n), out=adj_start[1:])
+    out = np.full(len(inside), -1, np.int64)
+    _overlap_ends_into(xy, lo, hi, adj_start, adj, np.ascontiguousarray(inside, np.int64), out)
+    return out

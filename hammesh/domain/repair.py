@@ -50,6 +50,10 @@ REPAIR_KINDS = ("duplicate_vertex", "zero_length_segment", "duplicate_segment",
                 "vertex_on_segment", "collinear_overlap", "crossing")
 #: Noding rounds before a graph whose crossing points keep creating defects is refused.
 MAX_ROUNDS = 4
+#: Candidate tests above which the grid is not used to find all defects at once...
+GRID_TESTS = 2e7
+#: ... and the sweep repairs one defect at a time, up to this many (then the grid).
+MAX_SINGLE_REPAIRS = 200
 _WHERE = 5  # example locations kept per repair
 
 
@@ -66,14 +70,22 @@ class Repair:
         merged, crossings inserted).
     where : tuple of (float, float)
         Up to five example locations.
-    message : str
-        One line describing the first instance and what was done.
+    defect : str
+        The first instance, as a strict refusal would name it.
+    action : str
+        What was done about it (and the others of its kind).
     """
 
     kind: str
     count: int
     where: tuple
-    message: str
+    defect: str
+    action: str
+
+    @property
+    def message(self) -> str:
+        """One line: the first defect and what was done."""
+        return f"{self.defect}: {self.action}"
 
     def to_dict(self) -> dict:
         """JSON-ready: ``{"kind", "count", "where": [[x, y], ...], "message"}``."""
@@ -128,8 +140,9 @@ def _merge_duplicate_vertices(xy, segs, vmark, strict, repairs):
     how = ("segments re-pointed to it" if used[dropped].any() else "unused")
     repairs.append(Repair(
         "duplicate_vertex", len(dropped), _where(xy[dropped]),
-        f"vertex {j} duplicates vertex {i} at {_pt(xy[i])}: merged ({how}); "
-        f"{len(dropped)} duplicate(s) dropped, later vertices renumbered"))
+        f"vertices {i} and {j} are duplicates: both at {_pt(xy[i])}",
+        f"merged into vertex {i} ({how}); {len(dropped)} duplicate(s) dropped, later "
+        "vertices renumbered"))
     return xy[kept], remap[segs], vmark[kept]
 
 
@@ -143,8 +156,8 @@ def _drop_degenerate_segments(xy, segs, smark, strict, repairs):
             raise InvalidDomainError(
                 f"segment {i} has zero length: both ends are vertex {segs[i, 0]}")
         repairs.append(Repair("zero_length_segment", int(zero.sum()), _where(xy[segs[zero, 0]]),
-                              f"segment {i} has zero length (both ends at {_pt(xy[segs[i, 0]])}): "
-                              "dropped"))
+                              f"segment {i} has zero length: both ends are vertex {segs[i, 0]}",
+                              f"{int(zero.sum())} zero-length segment(s) dropped"))
         segs, smark = segs[~zero], smark[~zero]
     key = np.sort(segs, axis=1)
     order = np.lexsort((np.arange(len(key)), key[:, 1], key[:, 0]))
@@ -163,8 +176,8 @@ def _drop_degenerate_segments(xy, segs, smark, strict, repairs):
                 f"segments {i} and {j} are duplicates: both connect vertices {a} and {b}")
         mid = 0.5 * (xy[segs[dup, 0]] + xy[segs[dup, 1]])
         repairs.append(Repair("duplicate_segment", len(dup), _where(mid),
-                              f"segments {i} and {j} both connect vertices {a} and {b}: "
-                              f"{len(dup)} duplicate(s) dropped"))
+                              f"segments {i} and {j} are duplicates: both connect vertices "
+                              f"{a} and {b}", f"{len(dup)} duplicate(s) dropped"))
         keep = np.ones(len(segs), bool)
         keep[dup] = False
         segs, smark = segs[keep], smark[keep]
@@ -189,7 +202,7 @@ def _describe(xy, segs, d: ix.Defect) -> str:
     """The one-line refusal of defect ``d`` (strict mode)."""
     if d.kind == ix.KIND_VERTEX:
         # the vertex may be the end of a segment lying along this one: say "overlap"
-        lo, hi = ix._ordered_ends(xy, segs)  # noqa: SLF001 (same package)
+        lo, hi = ix.ordered_ends(xy, segs)
         for t in np.flatnonzero((segs == d.b).any(axis=1)):
             if ix.pair_kind(xy, lo, hi, d.a, t) == ix.KIND_OVERLAP:
                 return _describe(xy, segs, ix.Defect(ix.KIND_OVERLAP, min(d.a, t), max(d.a, t)))
@@ -198,7 +211,7 @@ def _describe(xy, segs, d: ix.Defect) -> str:
     i, j = d.a, d.b
     if d.kind == ix.KIND_CROSSING:
         return f"segments {i} and {j} cross at {_pt(_crossing_point(xy, segs[i], segs[j]))}"
-    lo, hi = ix._ordered_ends(xy, segs[[i, j]])  # noqa: SLF001 (same package)
+    lo, hi = ix.ordered_ends(xy, segs[[i, j]])
     if d.kind == ix.KIND_OVERLAP:
         ends = sorted((int(v) for v in (lo[0], hi[0], lo[1], hi[1])),
                       key=lambda v: (xy[v, 0], xy[v, 1]))
@@ -230,12 +243,33 @@ def _crossing_point(xy, s, t):
     return np.clip(x, lo, hi)
 
 
-def _node(xy, segs, smark, vmark, repairs, counts):
-    """Split every segment at the vertices inside it and at its crossings."""
-    pairs, inside = ix.all_defects(xy, segs)
+def _one_defect(xy, segs, d: ix.Defect):
+    """``(pairs, inside)`` as :func:`~hammesh.domain.intersections.all_defects` gives
+    them, for the single defect ``d``."""
+    pairs = np.zeros((0, 3), np.int64)
+    if d.kind == ix.KIND_VERTEX:
+        return pairs, np.array([[d.a, d.b]], np.int64)
+    if d.kind == ix.KIND_CROSSING:
+        return np.array([[d.kind, d.a, d.b]], np.int64), np.zeros((0, 2), np.int64)
+    rows = []
+    for s, t in ((d.a, d.b), (d.b, d.a)):
+        a, b = segs[s]
+        for v in segs[t]:
+            if v in (a, b):
+                continue
+            lo, hi = np.minimum(xy[a], xy[b]), np.maximum(xy[a], xy[b])
+            if (orient_rows(xy[[a]], xy[[b]], xy[[v]])[0] == 0
+                    and (lo <= xy[v]).all() and (xy[v] <= hi).all()):
+                rows.append((s, v))
+    return pairs, np.array(rows, np.int64).reshape(-1, 2)
+
+
+def _node(xy, segs, smark, vmark, found, counts):
+    """Split every segment at the vertices inside it and at its crossings
+    (``found = (pairs, inside)`` as ``all_defects`` returns them)."""
+    pairs, inside = found
     n = len(xy)
     cross = pairs[pairs[:, 0] == ix.KIND_CROSSING]
-    overlap = pairs[pairs[:, 0] == ix.KIND_OVERLAP]
     # crossing points: new vertices, coincident ones merged, existing coordinates reused
     split_seg = [inside[:, 0]]
     split_vtx = [inside[:, 1]]
@@ -264,28 +298,28 @@ def _node(xy, segs, smark, vmark, repairs, counts):
         split_vtx += [vid, vid]
         counts["crossing"].append((len(cross), pts,
                                    f"segments {cross[0, 1]} and {cross[0, 2]} cross at "
-                                   f"{_pt(pts[0])}: a vertex was inserted there and both split"))
-    if len(overlap):
-        mids = []
-        for _, a, b in overlap[:_WHERE]:
-            mids.append(0.25 * (xy[segs[a, 0]] + xy[segs[a, 1]] + xy[segs[b, 0]] + xy[segs[b, 1]]))
-        counts["collinear_overlap"].append((len(overlap), np.array(mids),
-                                            f"segments {overlap[0, 1]} and {overlap[0, 2]} overlap "
-                                            "collinearly: merged (split at each other's ends, "
-                                            "common pieces kept once)"))
-    # junctions not explained by an overlap
+                                   f"{_pt(pts[0])}", "a vertex inserted at each crossing, "
+                                   "both segments split there (as Triangle does)"))
+    # a vertex inside a segment is a T-junction, or the end of an overlapping segment
     if len(inside):
-        explained = set()
-        for _, a, b in overlap:
-            for s, t in ((a, b), (b, a)):
-                for v in segs[t]:
-                    explained.add((int(s), int(v)))
-        tj = np.array([(s, v) not in explained for s, v in inside.tolist()], bool)
+        partner = ix.overlap_ends(xy[:n], segs, inside)
+        along = partner >= 0
+        tj = ~along
         if tj.any():
             s0, v0 = inside[np.flatnonzero(tj)[0]]
             counts["vertex_on_segment"].append((int(tj.sum()), xy[inside[tj, 1]],
                                                 f"segment {s0} passes through vertex {v0} at "
-                                                f"{_pt(xy[v0])}: split there"))
+                                                f"{_pt(xy[v0])}, which is not one of its endpoints",
+                                                "segments split at the vertices inside them"))
+        if along.any():
+            # each overlapping pair puts an end of one inside the other: count pairs
+            pairs = np.unique(np.sort(np.c_[inside[along, 0], partner[along]], axis=1), axis=0)
+            i, j = pairs[0]
+            counts["collinear_overlap"].append((len(pairs), xy[inside[along, 1]],
+                                                _describe(xy, segs, ix.Defect(ix.KIND_OVERLAP,
+                                                                              int(i), int(j))),
+                                                "merged: split at each other's ends, common "
+                                                "pieces kept once"))
     seg_idx = np.concatenate(split_seg).astype(np.int64)
     vtx_idx = np.concatenate(split_vtx).astype(np.int64)
     # order the split points along their segment, chain them
@@ -359,22 +393,31 @@ def repair_graph(vertices, segments, segment_markers, vertex_markers, *,
     if len(segs):
         segs, smark = _drop_degenerate_segments(xy, segs, smark, strict, repairs)
     counts = {k: [] for k in ("vertex_on_segment", "collinear_overlap", "crossing")}
-    for _ in range(MAX_ROUNDS):
+    rounds = singles = 0
+    while True:
         d = ix.first_defect(xy, segs)
         if d.kind == ix.KIND_NONE:
             break
         if strict:
             raise InvalidDomainError(_describe(xy, segs, d))
-        xy, segs, smark, vmark = _node(xy, segs, smark, vmark, repairs, counts)
-    else:
-        d = ix.first_defect(xy, segs)
-        if d.kind != ix.KIND_NONE:
+        if rounds == MAX_ROUNDS:
             raise InvalidDomainError(
                 f"cannot repair the segments robustly: after {MAX_ROUNDS} rounds of inserting "
                 f"crossing points, {_describe(xy, segs, d)}")
+        # all defects at once where the grid is cheap; else (a vertex of huge degree,
+        # long segments packed together) the sweep's one defect at a time, which
+        # costs a sweep per defect: fine for the few a real file has
+        found = ix.all_defects(xy, segs, max_tests=GRID_TESTS if singles < MAX_SINGLE_REPAIRS
+                               else np.inf)
+        if found is None:
+            found = _one_defect(xy, segs, d)
+            singles += 1
+        else:
+            rounds += 1
+        xy, segs, smark, vmark = _node(xy, segs, smark, vmark, found, counts)
     for kind in ("vertex_on_segment", "collinear_overlap", "crossing"):
         if counts[kind]:
-            total = sum(c for c, _, _ in counts[kind])
-            where = np.concatenate([w for _, w, _ in counts[kind]])
-            repairs.append(Repair(kind, total, _where(where), counts[kind][0][2]))
+            total = sum(c for c, _, _, _ in counts[kind])
+            where = np.concatenate([w for _, w, _, _ in counts[kind]])
+            repairs.append(Repair(kind, total, _where(where), *counts[kind][0][2:]))
     return RepairedGraph(xy, segs, smark, vmark, tuple(repairs))

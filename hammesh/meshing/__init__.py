@@ -12,11 +12,11 @@ from dataclasses import replace
 import numpy as np
 
 from hammesh.domain import Domain
-from hammesh.errors import InvalidOptionError, MeshingError
+from hammesh.errors import InvalidDomainError, InvalidOptionError, MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.isolate import run_isolated
 from hammesh.meshing.meshpy_backend import mesh_with_meshpy
-from hammesh.meshing.options import MAX_MIN_ANGLE, MAX_TRIANGLES, MeshOptions, format_number
+from hammesh.meshing.options import MAX_MIN_ANGLE, MeshOptions, check_sizes, format_number
 from hammesh.meshing.triangle_backend import mesh_with_triangle, triangle_switches
 
 __all__ = [
@@ -30,27 +30,6 @@ __all__ = [
 
 BACKENDS = {"triangle": mesh_with_triangle, "meshpy": mesh_with_meshpy}
 _NAMES = {"triangle": "Triangle", "meshpy": "meshpy"}
-
-
-def _check_size(opts: MeshOptions, vertices: np.ndarray) -> None:
-    """``opts.check_size`` with the convex hull's area, found only when it matters.
-
-    The bounding box's area bounds the hull's from above: when the box passes, so does
-    the hull, and scipy.spatial (0.2 s to import) is not needed.
-    """
-    if opts.max_area is None or len(vertices) < 3:
-        return
-    span = np.ptp(np.asarray(vertices, dtype=np.float64), axis=0)
-    box = float(span[0] * span[1])
-    if np.isfinite(box) and box / opts.max_area <= MAX_TRIANGLES:
-        return
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        area = float(ConvexHull(vertices).volume)
-    except QhullError:  # (nearly) flat to Qhull's precision: the box is the estimate
-        area = box
-    opts.check_size(area)
 
 
 def _load_kernels() -> None:
@@ -75,6 +54,7 @@ def quality_mesh(
     max_steiner: int | None = None,
     isolate: bool = True,
     timeout: float | None = None,
+    strict: bool = False,
 ) -> Mesh:
     """Constrained (or conforming) Delaunay quality mesh of a planar domain.
 
@@ -99,6 +79,10 @@ def quality_mesh(
         (``hammesh.meshing.isolate``). ``False`` runs in-process.
     timeout : float, optional
         With ``isolate``, seconds after which the mesher is stopped.
+    strict : bool
+        Refuse a domain that needed repairs (``domain.repairs`` not empty: duplicate
+        vertices, T-junctions, overlapping or crossing segments) instead of meshing
+        the repaired graph; without it the repairs are listed in ``info["repairs"]``.
 
     Returns
     -------
@@ -109,6 +93,8 @@ def quality_mesh(
     Raises
     ------
     InvalidOptionError, InvalidDomainError, MeshingError
+        InvalidOptionError also for a global or regional area bound implying more than
+        ``MAX_TRIANGLES`` triangles (``hammesh.meshing.options.check_sizes``).
 
     Examples
     --------
@@ -130,7 +116,9 @@ def quality_mesh(
         conforming_delaunay=conforming_delaunay,
         max_steiner=max_steiner,
     )
-    _check_size(opts, domain.vertices)
+    if strict and domain.repairs:
+        raise InvalidDomainError(f"{domain.repairs[0].defect} (strict: not repaired)")
+    check_sizes(domain, opts)
     func = BACKENDS[backend]
     t0 = time.perf_counter()
     if isolate:
@@ -145,7 +133,8 @@ def quality_mesh(
         raise MeshingError(
             f"{_NAMES[backend]} produced no triangles (are all triangles inside holes?)"
         )
-    info = {"backend": backend, "seconds": seconds, "isolated": bool(isolate)}
+    info = {"backend": backend, "seconds": seconds, "isolated": bool(isolate),
+            "repairs": [r.to_dict() for r in domain.repairs]}
     if backend == "triangle":
         info["switches"] = triangle_switches(domain, opts)
     return replace(mesh, info=info)

@@ -9,7 +9,8 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["MeshOptions", "MAX_MIN_ANGLE", "MAX_TRIANGLES", "format_number"]
+__all__ = ["MeshOptions", "MAX_MIN_ANGLE", "MAX_TRIANGLES", "format_number", "hull_area",
+           "region_areas", "check_sizes"]
 
 #: Triangle provably terminates for min angles up to 20.7 degrees and in practice up
 #: to about 33.8; above ~34 it loops forever (and ignores Ctrl-C).
@@ -89,3 +90,102 @@ def _number(name: str, x: object) -> float:
     if not math.isfinite(v):
         raise InvalidOptionError(f"{name} must be finite, got {x!r}")
     return v
+
+
+def hull_area(vertices: np.ndarray) -> float:
+    """Area of the convex hull of ``vertices (n, 2)``, computed in a local frame.
+
+    Translated to the bounding box's corner and scaled by a power of two (both exact
+    for the differences that matter), so a 1e-6 square at offset 1e9 is no problem for
+    Qhull; a hull Qhull still calls flat has (near) zero area: its bounding box's area
+    is returned, an upper bound.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    v = np.asarray(vertices, dtype=np.float64)
+    lo = v.min(axis=0)
+    ext = v.max(axis=0) - lo
+    scale = float(ext.max())
+    if not scale > 0:
+        return 0.0
+    k = math.frexp(scale)[1]  # 2**k > scale: exact rescale
+    local = np.ldexp(v - lo, -k)
+    try:
+        area = float(ConvexHull(local).volume)
+    except (QhullError, ValueError):
+        area = float(np.ldexp(ext[0], -k) * np.ldexp(ext[1], -k))
+    return math.ldexp(area, 2 * k)
+
+
+def region_areas(domain) -> np.ndarray:
+    """Area of the face each of ``domain.regions`` claims, as Triangle assigns them.
+
+    One unrefined constrained triangulation (Triangle ``pA``, regions numbered by row)
+    of the validated domain; a region whose point lies in a hole, outside, or in a face
+    another region claims gets 0.
+    """
+    import triangle
+
+    r = len(domain.regions)
+    if r == 0:
+        return np.zeros(0)
+    lo = domain.vertices.min(axis=0)
+    data = {"vertices": np.asarray(domain.vertices - lo, dtype=np.float64)}
+    if len(domain.segments):
+        data["segments"] = np.asarray(domain.segments, dtype=np.int32)
+    if len(domain.holes):
+        data["holes"] = np.asarray(domain.holes - lo, dtype=np.float64)
+    reg = np.zeros((r, 4))
+    reg[:, :2] = domain.regions[:, :2] - lo
+    reg[:, 2] = np.arange(r)
+    reg[:, 3] = -1.0
+    data["regions"] = reg
+    out = triangle.triangulate(data, ("p" if len(domain.segments) else "pc") + "AQ")
+    tri = np.asarray(out.get("triangles", np.zeros((0, 3), np.int64)))
+    if len(tri) == 0:
+        return np.zeros(r)
+    p = np.asarray(out["vertices"])[tri]
+    area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                        - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
+    owner = np.asarray(out["triangle_attributes"]).reshape(-1).round().astype(np.int64)
+    return np.bincount(owner, weights=area, minlength=r)[:r]
+
+
+def check_sizes(domain, opts: MeshOptions) -> None:
+    """Refuse global or regional area bounds that imply more than ``MAX_TRIANGLES``.
+
+    The global bound against the convex hull's area (:meth:`MeshOptions.check_size`);
+    each regional bound (``domain.regions[:, 3]``, a ``.poly`` region's last column)
+    against the area of the face the region claims (:func:`region_areas`, computed
+    only when the hull's area says the bound might be too small). Both are estimates
+    of Triangle's count (about area / bound triangles), checked before it runs:
+    Triangle itself would run until memory is gone.
+
+    Raises
+    ------
+    InvalidOptionError
+        Naming the region (row, point), its bound and the estimated count.
+    """
+    hull = hull_area(domain.vertices)
+    opts.check_size(hull)
+    regions = np.asarray(domain.regions)
+    if len(regions) == 0:
+        return
+    bound = regions[:, 3].copy()
+    if opts.max_area is not None:  # Triangle applies the smaller of the two
+        bound = np.fmin(bound, opts.max_area)
+    limited = np.isfinite(bound)
+    if not limited.any() or hull / bound[limited].min() <= MAX_TRIANGLES:
+        return
+    areas = region_areas(domain)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        count = np.where(limited, areas / np.where(limited, bound, 1.0), 0.0)
+    total = float(count.sum())
+    if total > MAX_TRIANGLES:
+        i = int(np.argmax(count))
+        x, y = regions[i, :2]
+        raise InvalidOptionError(
+            f"region {i} at ({format_number(x)}, {format_number(y)}) has max_area "
+            f"{regions[i, 3]!r}, which would need about {count[i]:.3g} triangles for its "
+            f"area {areas[i]:.3g} ({total:.3g} in all regions; limit {MAX_TRIANGLES:,})"
+        )

@@ -109,6 +109,8 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
     report.update(
         {
             "mode": mode,
+            # what the domain needed before meshing (hammesh.domain.repair), if meshed here
+            "repairs": list(mesh.info.get("repairs", [])),
             "min_angle_input_deg": stats["min_angle_input_deg"],
             "min_angle_output_deg": stats["min_angle_output_deg"],
             "max_angle_output_deg": stats["max_angle_output_deg"],
