@@ -12,6 +12,7 @@ from dataclasses import replace
 import numpy as np
 
 from hammesh.domain import Domain
+from hammesh.domain.resolution import check_resolution
 from hammesh.errors import InvalidDomainError, InvalidOptionError, MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.isolate import run_isolated
@@ -93,6 +94,9 @@ def quality_mesh(
     Raises
     ------
     InvalidOptionError, InvalidDomainError, MeshingError
+        InvalidDomainError also for vertices closer than
+        ``hammesh.domain.resolution.MIN_FEATURE_ULPS`` ulps of their coordinates (a
+        1e-6 square at offset 1e9): no float64 output could keep the guarantee.
         InvalidOptionError also for a global or regional area bound implying more than
         ``MAX_TRIANGLES`` triangles (``hammesh.meshing.options.check_sizes``).
 
@@ -118,6 +122,7 @@ def quality_mesh(
     )
     if strict and domain.repairs:
         raise InvalidDomainError(f"{domain.repairs[0].defect} (strict: not repaired)")
+    check_resolution(domain.vertices)  # features a Hamiltonian mesh can resolve in float64
     check_sizes(domain, opts)
     func = BACKENDS[backend]
     t0 = time.perf_counter()

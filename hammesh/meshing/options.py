@@ -186,6 +186,6 @@ def check_sizes(domain, opts: MeshOptions) -> None:
         x, y = regions[i, :2]
         raise InvalidOptionError(
             f"region {i} at ({format_number(x)}, {format_number(y)}) has max_area "
-            f"{regions[i, 3]!r}, which would need about {count[i]:.3g} triangles for its "
+            f"{float(regions[i, 3])!r}, which would need about {count[i]:.3g} triangles for its "
             f"area {areas[i]:.3g} ({total:.3g} in all regions; limit {MAX_TRIANGLES:,})"
         )

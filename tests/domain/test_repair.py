@@ -14,7 +14,7 @@ import hammesh
 from hammesh.domain import Domain, read_poly
 from hammesh.domain import intersections as ix
 from hammesh.errors import InvalidDomainError, InvalidOptionError
-from hammesh.meshing.options import MAX_TRIANGLES, hull_area, region_areas
+from hammesh.meshing.options import MAX_TRIANGLES, MeshOptions, check_sizes, hull_area, region_areas
 
 SQUARE = [[0, 0], [2, 0], [2, 2], [0, 2]]
 RING = [[0, 1], [1, 2], [2, 3], [3, 0]]
@@ -238,13 +238,38 @@ def test_regional_bound_counts_only_its_own_face():
     d = Domain(v, s, regions=[[1.0005, 1.0005, 2, 1e-11], [500, 500, 1, np.nan]])
     a = region_areas(d)
     assert a[0] == pytest.approx(1e-6, rel=1e-6) and a[1] == pytest.approx(1e6 - 1e-6, rel=1e-9)
-    hammesh.meshing.options.check_sizes(d, hammesh.MeshOptions())
+    check_sizes(d, MeshOptions())
     bad = Domain(v, s, regions=[[500, 500, 1, 1e6 / (2 * MAX_TRIANGLES)]])
     with pytest.raises(InvalidOptionError, match="region 0"):
-        hammesh.meshing.options.check_sizes(bad, hammesh.MeshOptions())
+        check_sizes(bad, MeshOptions())
 
 
 def test_hull_area_in_a_local_frame():
     sq = np.array([[0, 0], [1e-6, 0], [1e-6, 1e-6], [0, 1e-6]]) + 1e9
     assert hull_area(sq) == pytest.approx(np.ptp(sq[:, 0]) * np.ptp(sq[:, 1]), rel=1e-9)
     assert hull_area(np.array([[0, 0], [1, 0], [0, 1], [0.2, 0.2]])) == pytest.approx(0.5)
+
+
+# ----------------------------------------------------------------------------- extreme coordinates
+
+def _square(side, offset):
+    return np.array([[0, 0], [side, 0], [side, side], [0, side]]) + offset
+
+
+@pytest.mark.parametrize("ring", [
+    _square(10 * np.spacing(1e9), 1e9),         # features of ~10 ulp at offset 1e9
+    _square(1e-6, 1e9),                          # a 1e-6 square at offset 1e9 (was Qhull text)
+    np.r_[_square(1.0, 0.0), [[0.5, 0.5], [0.5 + 1e-15, 0.5]]],  # vertices 1e-15 apart
+], ids=["10ulp-at-1e9", "1e-6-square-at-1e9", "1e-15-apart"])
+def test_unrepresentable_detail_is_refused_before_meshing(ring):
+    d = Domain(ring, RING)
+    with pytest.raises(InvalidDomainError, match=r"only \d+ float64 steps \(ulps\)"):
+        hammesh.quality_mesh(d, min_angle=20)
+
+
+@pytest.mark.parametrize("side, offset", [(1e-6, 0.0), (1e-15, 0.0)])
+def test_tiny_domains_near_the_origin_are_meshed_and_verified(side, offset):
+    # the same shapes, resolvable: tiny, but near the origin
+    d = Domain(_square(side, offset), RING)
+    h = hammesh.hamiltonian(hammesh.quality_mesh(d, min_angle=20))
+    assert h.report["verified"]

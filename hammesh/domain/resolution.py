@@ -1,0 +1,92 @@
+"""Is a domain's detail representable where its Hamiltonian mesh must place points?
+
+Triangle meshes a 1e-6 square at offset 1e9, features of 10 ulps or vertices 1e-15
+apart: its output points are the input ones plus Steiner points it rounds to
+float64. A Hamiltonian mesh needs more: Thm 2.4 puts a Steiner point at every
+triangle's incenter and promises that every output angle is at least half the input's
+smallest, which is *tight* (an incenter triangle has exactly half an input angle).
+Rounding an incenter to float64 moves it by up to half a unit in the last place
+(ulp) of its coordinates, which turns an angle by about ``ulp / feature`` radians.
+At 8 ulps (the 1e-6 square at 1e9) that is several degrees: no float64 point
+satisfies the guarantee, in any frame, because the output must be given in the
+input's coordinates (a translated or scaled frame does not survive the way back).
+The run then fails its own certificate (issue 12: exit 3, "angle below half").
+
+:func:`check_resolution` refuses such a domain up front, with an
+:class:`~hammesh.errors.InvalidDomainError` naming the two closest vertices and
+their distance in ulps, when that distance is below :data:`MIN_FEATURE_ULPS`.
+Above it the rounding error is at most ``1 / MIN_FEATURE_ULPS`` of the smallest
+feature. (Refinement can still make triangles smaller than the input's features;
+their incenters are bounded the same way by the certificate's tolerance.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hammesh.errors import InvalidDomainError
+
+__all__ = ["check_resolution", "closest_pair_ulps", "MIN_FEATURE_ULPS"]
+
+#: Two distinct vertices closer than this many ulps of their coordinates are refused.
+MIN_FEATURE_ULPS = 4096.0
+
+
+def closest_pair_ulps(vertices: np.ndarray) -> tuple[int, int, float, float]:
+    """The pair of vertices closest in ulps of their own coordinates.
+
+    Parameters
+    ----------
+    vertices : (n, 2) float64, pairwise distinct, n >= 2
+
+    Returns
+    -------
+    i, j : int
+        The pair (each vertex's nearest neighbour, in a local frame: exact
+        differences, so no precision is lost far from the origin).
+    distance : float
+    ulps : float
+        ``distance`` over the spacing of float64 at the pair's largest coordinate.
+    """
+    from scipy.spatial import cKDTree
+
+    v = np.asarray(vertices, dtype=np.float64)
+    local = v - v.min(axis=0)  # coordinates far out: the tree works on differences
+    dist, idx = cKDTree(local).query(local, k=2)
+    d, j = dist[:, 1], idx[:, 1]
+    mag = np.maximum(np.abs(v).max(axis=1), np.abs(v[j]).max(axis=1))
+    ulps = d / np.spacing(np.maximum(mag, np.finfo(float).tiny))
+    i = int(np.argmin(ulps))
+    return i, int(j[i]), float(d[i]), float(ulps[i])
+
+
+def check_resolution(vertices: np.ndarray) -> None:
+    """Refuse vertices too close for a Hamiltonian mesh's Steiner points in float64.
+
+    Raises
+    ------
+    InvalidDomainError
+        Two vertices fewer than :data:`MIN_FEATURE_ULPS` ulps apart (message: the pair,
+        the distance, the offset, what to do).
+
+    Examples
+    --------
+    >>> sq = np.array([[0, 0], [1e-6, 0], [1e-6, 1e-6], [0, 1e-6]]) + 1e9
+    >>> check_resolution(sq)
+    Traceback (most recent call last):
+    ...
+    hammesh.errors.InvalidDomainError: vertices 0 and 1 are 9.54e-07 apart, only 8 float64 steps (ulps) at coordinates of 1e+09: ...
+    >>> check_resolution(sq - 1e9)   # the same square near the origin is fine
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    if len(v) < 2:
+        return
+    i, j, d, ulps = closest_pair_ulps(v)
+    if ulps < MIN_FEATURE_ULPS:
+        i, j = min(i, j), max(i, j)
+        mag = float(np.abs(v[[i, j]]).max())
+        raise InvalidDomainError(
+            f"vertices {i} and {j} are {d:.3g} apart, only {ulps:.0f} float64 steps (ulps) at "
+            f"coordinates of {mag:.3g}: the incenters of a Hamiltonian mesh cannot be placed "
+            f"that finely (its half-angle guarantee would fail); translate the domain nearer "
+            f"the origin or scale it up (features of at least {MIN_FEATURE_ULPS:.0f} ulps)")
