@@ -91,7 +91,7 @@ def test_bad_domains_are_rejected_before_c_code() -> None:
     with pytest.raises(hammesh.InvalidDomainError, match="segment 1"):
         hammesh.Domain(vertices=square(), segments=[[0, 1], [1, 9]])
     with pytest.raises(hammesh.InvalidDomainError, match="duplicate|same"):
-        hammesh.Domain(vertices=square() + [[1, 1]], segments=[[0, 1], [1, 4], [4, 3], [3, 0]])
+        hammesh.Domain(vertices=square() + [[1, 1]], segments=[[0, 1], [1, 4], [4, 3], [3, 0]], strict=True)
 
 
 def test_segments_markers_and_neighbours_are_kept() -> None:
