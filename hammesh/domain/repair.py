@@ -231,16 +231,20 @@ def _describe(xy, segs, d: ix.Defect) -> str:
 
 
 def _crossing_point(xy, s, t):
-    p0, p1 = xy[s[0]], xy[s[1]]
-    q0, q1 = xy[t[0]], xy[t[1]]
+    """Where segments ``s`` and ``t`` (rows of vertex pairs, or ``(k, 2)`` arrays of
+    them) cross, rounded, clamped into both segments' boxes."""
+    s, t = np.atleast_2d(s), np.atleast_2d(t)
+    p0, p1 = xy[s[:, 0]], xy[s[:, 1]]
+    q0, q1 = xy[t[:, 0]], xy[t[:, 1]]
     r, d = p1 - p0, q1 - q0
     w = q0 - p0
-    den = r[0] * d[1] - r[1] * d[0]
-    u = (w[0] * d[1] - w[1] * d[0]) / den
-    x = p0 + u * r
+    den = r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]
+    u = (w[:, 0] * d[:, 1] - w[:, 1] * d[:, 0]) / den
+    x = p0 + u[:, None] * r
     lo = np.maximum(np.minimum(p0, p1), np.minimum(q0, q1))
     hi = np.minimum(np.maximum(p0, p1), np.maximum(q0, q1))
-    return np.clip(x, lo, hi)
+    out = np.clip(x, lo, hi)
+    return out[0] if out.shape[0] == 1 else out
 
 
 def _one_defect(xy, segs, d: ix.Defect):
@@ -274,7 +278,7 @@ def _node(xy, segs, smark, vmark, found, counts):
     split_seg = [inside[:, 0]]
     split_vtx = [inside[:, 1]]
     if len(cross):
-        pts = np.array([_crossing_point(xy, segs[a], segs[b]) for _, a, b in cross])
+        pts = _crossing_point(xy, segs[cross[:, 1]], segs[cross[:, 2]]).reshape(-1, 2)
         uniq, inv = np.unique(pts, axis=0, return_inverse=True)
         inv = inv.reshape(-1)
         allpts = np.concatenate([xy, uniq])

@@ -52,7 +52,7 @@ def closest_pair_ulps(vertices: np.ndarray) -> tuple[int, int, float, float]:
 
     v = np.asarray(vertices, dtype=np.float64)
     local = v - v.min(axis=0)  # coordinates far out: the tree works on differences
-    dist, idx = cKDTree(local).query(local, k=2)
+    dist, idx = cKDTree(local, balanced_tree=False, compact_nodes=False).query(local, k=2)
     d, j = dist[:, 1], idx[:, 1]
     mag = np.maximum(np.abs(v).max(axis=1), np.abs(v[j]).max(axis=1))
     ulps = d / np.spacing(np.maximum(mag, np.finfo(float).tiny))

@@ -166,9 +166,11 @@ def check_sizes(domain, opts: MeshOptions) -> None:
     InvalidOptionError
         Naming the region (row, point), its bound and the estimated count.
     """
+    regions = np.asarray(domain.regions)
+    if opts.max_area is None and not np.isfinite(regions[:, 3]).any():
+        return  # no bound at all: nothing to estimate (and no hull to compute)
     hull = hull_area(domain.vertices)
     opts.check_size(hull)
-    regions = np.asarray(domain.regions)
     if len(regions) == 0:
         return
     bound = regions[:, 3].copy()
