@@ -145,14 +145,20 @@ def _sweep_into(xy, lo, hi, ev_point, ev_type, ev_item, out):
 
     ``ev_type``: 0 a segment leaves, 1 a vertex, 2 a segment enters (``ev_item`` is
     the segment or the vertex); events sorted by point (x, y), then type.
+
+    The status (active segments, bottom to top) is ``buf[base:base + m]``; an insertion
+    or deletion moves the shorter side, so a stack of parallel segments entering at the
+    top and leaving at the bottom costs O(1) per event (worst case O(m / 2)).
     """
     ns = lo.shape[0]
-    status = np.empty(ns, np.int64)
+    buf = np.empty(3 * ns + 2, np.int64)
+    base = ns
     m = 0
     out[0] = KIND_NONE
     for e in range(ev_type.shape[0]):
         kind = ev_type[e]
         p = ev_point[e]
+        status = buf[base:base + m]
         if kind == 0:
             t = ev_item[e]
             k = _first_not_below(xy, lo, hi, status, m, p)
@@ -162,11 +168,16 @@ def _sweep_into(xy, lo, hi, ev_point, ev_type, ev_item, out):
                 k = 0
                 while status[k] != t:
                     k += 1
-            for i in range(k, m - 1):
-                status[i] = status[i + 1]
+            if k < m - 1 - k:
+                for i in range(k, 0, -1):
+                    buf[base + i] = buf[base + i - 1]
+                base += 1
+            else:
+                for i in range(k, m - 1):
+                    buf[base + i] = buf[base + i + 1]
             m -= 1
             if 0 < k < m:
-                u, w = status[k - 1], status[k]
+                u, w = buf[base + k - 1], buf[base + k]
                 kd = pair_kind(xy, lo, hi, u, w)
                 if kd != KIND_NONE:
                     out[0], out[1], out[2] = kd, min(u, w), max(u, w)
@@ -195,13 +206,18 @@ def _sweep_into(xy, lo, hi, ev_point, ev_type, ev_item, out):
                     a = mid + 1
                 else:
                     b = mid
-            for i in range(m, a, -1):
-                status[i] = status[i - 1]
-            status[a] = s
+            if a < m - a:
+                base -= 1
+                for i in range(a):
+                    buf[base + i] = buf[base + i + 1]
+            else:
+                for i in range(m, a, -1):
+                    buf[base + i] = buf[base + i - 1]
+            buf[base + a] = s
             m += 1
             for k in (a - 1, a + 1):
                 if 0 <= k < m:
-                    t = status[k]
+                    t = buf[base + k]
                     kd = pair_kind(xy, lo, hi, s, t)
                     if kd != KIND_NONE:
                         out[0], out[1], out[2] = kd, min(s, t), max(s, t)

@@ -123,8 +123,9 @@ def _parallel(k, slope):
 
 
 @pytest.mark.parametrize("make", [lambda: _star(10_000), lambda: _parallel(20_000, 0.0),
-                                  lambda: _parallel(20_000, 1.5)],
-                         ids=["star-10k", "parallel-20k", "diagonal-parallel-20k"])
+                                  lambda: _parallel(20_000, 1.5), lambda: _parallel(100_000, -1.5)],
+                         ids=["star-10k", "parallel-20k", "diagonal-parallel-20k",
+                              "diagonal-parallel-100k"])
 def test_sweep_is_fast_on_shapes_that_defeat_a_grid(make):
     """Issue 12 item 7: 93 s / 122 s before; < 1 s here, 5 s allows a loaded CI."""
     xy, segs = make()
