@@ -55,6 +55,8 @@ class Domain:
         What was repaired (:mod:`hammesh.domain.repair`), empty if nothing; the stored
         arrays are those of the repaired graph (kept vertices at their index, minus
         dropped duplicates before them; new crossing vertices appended).
+        ``dataclasses.replace`` re-checks the stored, already repaired arrays: the
+        copy's ``repairs`` is empty.
 
     Any array-like (nested lists) is accepted and copied to the dtypes above; the
     stored arrays are read-only.  Raises :class:`~hammesh.errors.InvalidDomainError`
