@@ -30,6 +30,7 @@ __all__ = ["check_resolution", "closest_pair_ulps", "MIN_FEATURE_ULPS"]
 
 #: Two distinct vertices closer than this many ulps of their coordinates are refused.
 MIN_FEATURE_ULPS = 4096.0
+_BRUTE_FORCE = 2048  # up to this many vertices, all pairs (no scipy.spatial import)
 
 
 def closest_pair_ulps(vertices: np.ndarray) -> tuple[int, int, float, float]:
@@ -48,12 +49,23 @@ def closest_pair_ulps(vertices: np.ndarray) -> tuple[int, int, float, float]:
     ulps : float
         ``distance`` over the spacing of float64 at the pair's largest coordinate.
     """
-    from scipy.spatial import cKDTree
-
     v = np.asarray(vertices, dtype=np.float64)
-    local = v - v.min(axis=0)  # coordinates far out: the tree works on differences
-    dist, idx = cKDTree(local, balanced_tree=False, compact_nodes=False).query(local, k=2)
-    d, j = dist[:, 1], idx[:, 1]
+    local = v - v.min(axis=0)  # coordinates far out: distances from exact differences
+    if len(v) <= _BRUTE_FORCE:  # small domains: no scipy.spatial import (0.2 s)
+        d = np.empty(len(v))
+        j = np.empty(len(v), np.int64)
+        for a in range(0, len(v), 256):
+            blk = local[a:a + 256]
+            dd = np.hypot(blk[:, None, 0] - local[None, :, 0], blk[:, None, 1] - local[None, :, 1])
+            dd[np.arange(len(blk)), a + np.arange(len(blk))] = np.inf
+            j[a:a + 256] = np.argmin(dd, axis=1)
+            d[a:a + 256] = dd[np.arange(len(blk)), j[a:a + 256]]
+    else:
+        from scipy.spatial import cKDTree
+
+        tree = cKDTree(local, balanced_tree=False, compact_nodes=False)
+        dist, idx = tree.query(local, k=2)
+        d, j = dist[:, 1], idx[:, 1]
     mag = np.maximum(np.abs(v).max(axis=1), np.abs(v[j]).max(axis=1))
     ulps = d / np.spacing(np.maximum(mag, np.finfo(float).tiny))
     i = int(np.argmin(ulps))

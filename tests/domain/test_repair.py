@@ -273,3 +273,20 @@ def test_tiny_domains_near_the_origin_are_meshed_and_verified(side, offset):
     d = Domain(_square(side, offset), RING)
     h = hammesh.hamiltonian(hammesh.quality_mesh(d, min_angle=20))
     assert h.report["verified"]
+
+
+def test_closest_pair_brute_force_agrees_with_the_tree():
+    from hammesh.domain import resolution
+
+    rng = np.random.default_rng(3)
+    v = rng.random((2200, 2)) * 1e-3 + 1e6
+    small = resolution.closest_pair_ulps(v[:2000])
+    assert small == resolution.closest_pair_ulps(v[:2000].copy())
+    big = resolution.closest_pair_ulps(v)  # the tree
+    d = np.hypot(*(v[:, None, :] - v[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    i, j = np.unravel_index(np.argmin(d), d.shape)
+    assert {big[0], big[1]} == {i, j} and big[2] == pytest.approx(d[i, j], rel=1e-6)
+    d2 = d[:2000, :2000]
+    i, j = np.unravel_index(np.argmin(d2), d2.shape)
+    assert {small[0], small[1]} == {i, j}
