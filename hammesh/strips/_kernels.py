@@ -51,7 +51,7 @@ __all__ = [
     "greedy_paths",
     "improve_cover",
     "sequential_chain",
-    "face_problem",
+    "face_flags",
     "dual_components",
     "path_turns",
     "orient_paths",
@@ -60,6 +60,8 @@ __all__ = [
     "permute_mesh",
     "check_draws",
     "mesh_records",
+    "records_fit",
+    "records_from_twin",
     "greedy_paths_records",
     "permute_records",
 ]
@@ -464,43 +466,55 @@ def _local_edge(nb, t, u):
 # --- the encoder's fast path: input checks, dual components, turns, emission, proof ----
 
 
-@njit(cache=True)
-def face_problem(pts, tri):
-    """First bad triangle: ``(t, 1)`` repeats a vertex, ``(t, 2)`` zero area, ``(-1, 0)`` none.
+#: ``face_flags`` values.
+FACE_OK, FACE_REPEATED, FACE_ZERO_AREA = 0, 1, 2
 
-    Repeated vertices are looked for first over all rows.  The area test is exact:
-    the cross product of two edge vectors is exactly zero (2D: its one component;
-    3D: all three, the same operations as ``numpy.cross``).
+
+@njit(cache=True, nogil=True)
+def face_flags(pts, tri, rtol, flags):
+    """Fill ``flags[t]``: 1 repeated vertex, 2 zero area, 0 otherwise; return both counts.
+
+    Zero area: twice the area is at most ``rtol`` times the longest side squared, the
+    cross product taken at the vertex opposite the longest side (exact differences for
+    a sliver's short side); the definition of :mod:`hammesh.strips.defects`.
     """
     m = tri.shape[0]
+    d = pts.shape[1]
+    n_rep = 0
+    n_zero = 0
+    e = np.empty((3, 3), np.float64)
     for t in range(m):
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
         if a == b or b == c or c == a:
-            return t, 1
-    d = pts.shape[1]
-    for t in range(m):
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        if d == 2:
-            ux = pts[b, 0] - pts[a, 0]
-            uy = pts[b, 1] - pts[a, 1]
-            vx = pts[c, 0] - pts[a, 0]
-            vy = pts[c, 1] - pts[a, 1]
-            if ux * vy - uy * vx == 0.0:
-                return t, 2
+            flags[t] = FACE_REPEATED
+            n_rep += 1
+            continue
+        best = 0.0
+        kb = 0
+        for k in range(3):
+            p = tri[t, k]
+            q = tri[t, (k + 1) % 3]
+            s = 0.0
+            for j in range(3):
+                e[k, j] = (pts[q, j] - pts[p, j]) if j < d else 0.0
+                s += e[k, j] * e[k, j]
+            if s > best:
+                best = s
+                kb = k
+        # edges at the apex (vertex kb + 2): -e[kb + 1] and e[kb + 2]
+        u = e[(kb + 1) % 3]
+        v = e[(kb + 2) % 3]
+        cx = u[1] * v[2] - u[2] * v[1]
+        cy = u[2] * v[0] - u[0] * v[2]
+        cz = u[0] * v[1] - u[1] * v[0]
+        if best == 0.0 or np.sqrt(cx * cx + cy * cy + cz * cz) <= rtol * best:
+            flags[t] = FACE_ZERO_AREA
+            n_zero += 1
         else:
-            ux = pts[b, 0] - pts[a, 0]
-            uy = pts[b, 1] - pts[a, 1]
-            uz = pts[b, 2] - pts[a, 2]
-            vx = pts[c, 0] - pts[a, 0]
-            vy = pts[c, 1] - pts[a, 1]
-            vz = pts[c, 2] - pts[a, 2]
-            if uy * vz - uz * vy == 0.0 and uz * vx - ux * vz == 0.0 and ux * vy - uy * vx == 0.0:
-                return t, 2
-    return -1, 0
+            flags[t] = FACE_OK
+    return n_rep, n_zero
 
 
 @njit(cache=True)
@@ -1433,12 +1447,12 @@ def mesh_records(tri, n_points):
     if not _core.half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
         return None
     rec = np.empty((m, REC_WIDTH), np.int32)
-    _records_from_twin(tri, twin, rec)
+    records_from_twin(tri, twin, rec)
     return rec, twin
 
 
 @njit(cache=True)
-def _records_from_twin(tri, twin, rec):
+def records_from_twin(tri, twin, rec):
     for t in range(tri.shape[0]):
         for k in range(3):
             rec[t, k] = tri[t, k]

@@ -1,10 +1,15 @@
 """Checked input for the strip encoders: a triangle mesh and its dual graph.
 
-Any triangle mesh is accepted, planar ``(n, 2)`` or a surface in space ``(n, 3)``; each
-triangle's winding (the order of its row) is kept, and the strips reproduce it.  Two
-triangles are dual neighbours when they share an edge in opposite directions (the
-half-edge pairing of :func:`hammesh.halfedge._kernels.half_edge_twins`; built together with
-one ``int32`` record per triangle by :func:`hammesh.strips._kernels.mesh_records`).
+Any triangle mesh is accepted, planar ``(n, 2)`` or a surface in space ``(n, 3)``, and
+need not be a manifold: non-manifold edges, flipped neighbours, non-orientable pieces,
+zero-area and double-sided triangles are all drawn (:mod:`hammesh.strips.defects`).
+Each triangle's winding (the order of its row) is kept, and the strips reproduce it.
+Two triangles are dual neighbours when they are the only two on an edge and use it in
+opposite directions (a *proper* edge); every other edge cuts the dual.  On a clean mesh
+the pairing comes with one ``int32`` record per triangle from the packed kernel
+(:func:`hammesh.strips._kernels.mesh_records`); otherwise from
+:func:`hammesh.strips.defects.proper_pairing`.  Rows repeating a vertex index draw
+nothing in OpenGL: they are dropped (``rows`` lists the kept ones) and counted.
 """
 
 from __future__ import annotations
@@ -14,10 +19,10 @@ from functools import cached_property
 from typing import Optional, Union
 
 import numpy as np
-from hammesh.halfedge import _kernels
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.strips import _kernels as _strip_kernels
+from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects, mesh_defects, proper_pairing
 from hammesh.halfedge import mesh_arrays
 
 __all__ = ["DualMesh", "dual_mesh", "oriented_key"]
@@ -33,10 +38,10 @@ class DualMesh:
     ----------
     points : (n, 2) or (n, 3) float64
     triangles : (m, 3) int64
-        As given (row order and winding kept).
+        As given (row order and winding kept), less the rows repeating a vertex.
     twin : (3 m,) int64
         ``twin[h]`` is the half-edge opposite ``h = 3 t + k`` (from ``triangles[t, k]``
-        to ``triangles[t, (k + 1) % 3]``), or -1 on the boundary.
+        to ``triangles[t, (k + 1) % 3]``) across a proper edge, or -1 (boundary or cut).
     component : (m,) int64
         Connected piece of the dual graph each triangle belongs to, numbered by least
         triangle (computed on first use).
@@ -47,12 +52,19 @@ class DualMesh:
         one half cache line per triangle; the greedy pass keeps its free degrees in the
         scratch column.  ``None`` for a mesh too large for ``int32`` (or a DualMesh
         built by hand); the encoder then reads ``triangles`` and ``twin``.
+    defects : MeshDefects
+        What was found (:mod:`hammesh.strips.defects`).
+    rows : (m,) int64 or None
+        Input row of each triangle when rows repeating a vertex were dropped
+        (``None``: all rows kept).
     """
 
     points: np.ndarray
     triangles: np.ndarray
     twin: np.ndarray
     records: Optional[np.ndarray] = field(default=None, repr=False)
+    defects: MeshDefects = field(default_factory=MeshDefects)
+    rows: Optional[np.ndarray] = field(default=None, repr=False)
 
     @cached_property
     def _components(self) -> tuple[np.ndarray, int]:
@@ -78,25 +90,6 @@ class DualMesh:
         return np.where(tw >= 0, tw // 3, -1)
 
 
-def _edge_problem(tri: np.ndarray, bad: int) -> str:
-    t, k = divmod(int(bad), 3)
-    a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
-    lo, hi = min(a, b), max(a, b)
-    e0 = np.minimum(tri, np.roll(tri, -1, axis=1))
-    e1 = np.maximum(tri, np.roll(tri, -1, axis=1))
-    users = np.flatnonzero(((e0 == lo) & (e1 == hi)).any(axis=1))
-    shown = ", ".join(str(int(u)) for u in users[:5]) + (", ..." if len(users) > 5 else "")
-    if len(users) > 2:
-        return (
-            f"non-manifold edge ({a}, {b}): shared by {len(users)} triangles ({shown}); "
-            "a strip can only cross an edge between two triangles"
-        )
-    return (
-        f"edge ({a}, {b}) is used in the same direction by triangles {shown}: they are "
-        "oriented inconsistently (or overlap); orient the mesh consistently first"
-    )
-
-
 def dual_mesh(mesh: MeshLike) -> DualMesh:
     """Check ``mesh`` and build its dual graph.
 
@@ -112,9 +105,8 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     Raises
     ------
     InvalidMeshError
-        Naming the item: shapes, empty mesh, non-finite point, index out of range, a
-        triangle with a repeated vertex or zero area, an edge shared by three or more
-        triangles, two neighbours with inconsistent winding.
+        Naming the item: shapes, empty mesh, non-finite point, index out of range, no
+        triangle left after dropping those that repeat a vertex.
 
     Examples
     --------
@@ -126,19 +118,27 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     """
     pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
     n = len(pts)
-    t, kind = _strip_kernels.face_problem(pts, tri)
-    if kind == 1:
-        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} repeats a vertex (degenerate face)")
-    if kind == 2:
-        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area (degenerate face)")
+    flags = np.empty(len(tri), np.int8)
+    n_rep, n_zero = _strip_kernels.face_flags(pts, tri, ZERO_AREA_RTOL, flags)
+    rows = None
+    if n_rep:
+        rows = np.flatnonzero(flags != _strip_kernels.FACE_REPEATED)
+        if len(rows) == 0:
+            raise InvalidMeshError(f"all {len(tri)} triangles repeat a vertex: nothing to draw")
+        tri = np.ascontiguousarray(tri[rows])
     packed = _strip_kernels.mesh_records(tri, n)
-    if packed is not None:
-        return DualMesh(points=pts, triangles=tri, twin=packed[1], records=packed[0])
-    # too large for int32 records, or a bad edge: the reference pairing names it
-    twin, bad = _kernels.half_edge_twins(tri, n)
-    if bad >= 0:
-        raise InvalidMeshError(_edge_problem(tri, int(bad)))
-    return DualMesh(points=pts, triangles=tri, twin=twin)
+    if packed is not None:  # every edge proper or boundary: only pillows can be double-sided
+        nb = packed[1].reshape(-1, 3) // 3
+        pillows = int(np.count_nonzero((nb[:, 0] == nb[:, 1]) & (nb[:, 1] == nb[:, 2]) & (packed[1][::3] >= 0)))
+        found = MeshDefects(repeated_vertex=int(n_rep), zero_area=int(n_zero), double_sided=pillows // 2)
+        return DualMesh(pts, tri, packed[1], packed[0], found, rows)
+    pairing = proper_pairing(tri, n)
+    found = mesh_defects(pts, tri, pairing, repeated=int(n_rep), zero_area=int(n_zero))
+    rec = None
+    if _strip_kernels.records_fit(len(tri), n):
+        rec = np.empty((len(tri), _strip_kernels.REC_WIDTH), np.int32)
+        _strip_kernels.records_from_twin(tri, pairing.twin, rec)
+    return DualMesh(pts, tri, pairing.twin, rec, found, rows)
 
 
 def oriented_key(triangles: np.ndarray) -> np.ndarray:

@@ -24,6 +24,8 @@ Cost of a buffer: ``T + 2 S + swaps`` plus ``S - 1`` restarts or ``2 (S - 1)`` s
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
@@ -351,7 +353,16 @@ def encode(
         strip = gl_strip_from_turns(turns, join=join, restart_index=restart_index)
     if verify:
         verify_gl_strip(dual.triangles, strip.indices, strip.restart_index, order=order)
-    return strip
+    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+
+
+def _dropped_rows(mesh: MeshLike, dual: DualMesh) -> np.ndarray:
+    """Input rows the strips leave out (those repeating a vertex)."""
+    if dual.rows is None:
+        return np.zeros(0, np.int64)
+    keep = np.zeros(len(mesh.triangles), dtype=bool)
+    keep[dual.rows] = True
+    return np.flatnonzero(~keep)
 
 
 def encode_generalized(mesh: MeshLike, *, method: str = "auto") -> GeneralizedStrips:
@@ -359,5 +370,5 @@ def encode_generalized(mesh: MeshLike, *, method: str = "auto") -> GeneralizedSt
 
     Same paths as :func:`encode`; see :mod:`hammesh.strips.generalized`.
     """
-    _, turns = mesh_paths(mesh, method)
-    return generalized_from_turns(turns)
+    dual, turns = mesh_paths(mesh, method)
+    return replace(generalized_from_turns(turns), defects=dual.defects, dropped=_dropped_rows(mesh, dual))

@@ -14,12 +14,13 @@ Decoding keeps two registers ``r0, r1`` (the first two vertices).  For each furt
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from hammesh.errors import InvalidMeshError
 from hammesh.strips import _kernels
+from hammesh.strips.defects import MeshDefects, defect_fields
 from hammesh.strips.paths import PathTurns, path_turns
 
 __all__ = ["GeneralizedStrips", "generalized_strips", "generalized_from_turns", "decode_generalized"]
@@ -38,12 +39,18 @@ class GeneralizedStrips:
     vertex_starts : (S + 1,) int64
     triangle_starts : (S + 1,) int64
         Offsets of each strip's triangles (and bits).
+    defects : MeshDefects or None
+        What the input mesh had (set by :func:`~hammesh.strips.encode.encode_generalized`).
+    dropped : (k,) int64
+        Input rows not encoded: they repeat a vertex index.
     """
 
     vertices: np.ndarray
     swaps: np.ndarray
     vertex_starts: np.ndarray
     triangle_starts: np.ndarray
+    defects: MeshDefects | None = None
+    dropped: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False)
 
     @property
     def n_triangles(self) -> int:
@@ -73,7 +80,7 @@ class GeneralizedStrips:
             "strips": self.n_strips,
             "swaps": self.n_swaps,
             "indices_per_triangle": float(self.indices_per_triangle),
-        }
+        } | defect_fields(self.defects, self.dropped)
 
 
 def generalized_from_turns(turns: PathTurns) -> GeneralizedStrips:

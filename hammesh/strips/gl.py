@@ -18,12 +18,13 @@ proves that a buffer draws exactly a mesh's oriented triangles.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.strips import _kernels
+from hammesh.strips.defects import MeshDefects, defect_fields
 from hammesh.strips.dual import oriented_key
 from hammesh.strips.paths import PathTurns, path_turns
 
@@ -59,6 +60,10 @@ class GLStrip:
         Dual paths encoded (strips before joining).
     n_swaps : int
         Repeated indices inserted for two turns the same way.
+    defects : MeshDefects or None
+        What the input mesh had (set by :func:`~hammesh.strips.encode.encode`).
+    dropped : (k,) int64
+        Input rows not drawn: they repeat a vertex index (OpenGL draws nothing for them).
     """
 
     indices: np.ndarray
@@ -66,6 +71,8 @@ class GLStrip:
     n_triangles: int
     n_strips: int
     n_swaps: int
+    defects: MeshDefects | None = None
+    dropped: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False)
 
     @property
     def indices_per_triangle(self) -> float:
@@ -81,7 +88,7 @@ class GLStrip:
             "strips": int(self.n_strips),
             "indices_per_triangle": float(self.indices_per_triangle),
             "swaps": int(self.n_swaps),
-        }
+        } | defect_fields(self.defects, self.dropped)
 
 
 def _even_encoding(turns: PathTurns) -> tuple[np.ndarray, np.ndarray]:
