@@ -1,7 +1,16 @@
 """Hamiltonian cycle surfaces: one cycle (strip) per connected piece of a 3D surface mesh.
 
-The sparse construction of ``hammesh.postprocess.sparse`` on a manifold, consistently
-oriented triangle surface of any genus, with or without boundary:
+The sparse construction of ``hammesh.postprocess.sparse`` on a triangle surface of any
+genus, with or without boundary.  Real-world surfaces need not be clean manifolds
+(issue 12): the surface is cut into pieces at every edge that is not *proper*
+(:mod:`hammesh.strips.defects`: exactly two triangles using it in opposite directions),
+so non-manifold edges, flipped neighbours and the seam of a non-orientable surface
+(Klein bottle, Boy surface, Möbius strip) become piece boundaries, and each piece is
+an oriented manifold (pinched vertices allowed) with its own cycle.  Rows that repeat
+a vertex, zero-area rows (:data:`~hammesh.strips.defects.ZERO_AREA_RTOL`) and further
+copies of a row with the same winding are dropped (they hold no area; listed in the
+report); a double-sided face keeps both sides.  Every kept triangle keeps its winding.
+On each piece:
 
 * a cycle cover of the dual graph (``hammesh.postprocess.cycle_cover``; on a closed
   surface the dual is cubic and the cover is a 2-factor, as in Gopi & Eppstein 2004);
@@ -23,55 +32,118 @@ certificate then checks everything but the exact-geometry item.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 import numpy as np
 
-from hammesh.halfedge import _kernels
+from typing import NamedTuple
+
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, cycle_positions
 from hammesh.postprocess.sparse import count_report, sparse_cycles
+from hammesh.strips.defects import MeshDefects, mesh_defects, proper_pairing, triangle_repeats, zero_area_rows
 from hammesh.halfedge import mesh_arrays
-from hammesh.verify.surface import surface_angles, verify_surface
+from hammesh.verify.surface import verify_surface
 
-__all__ = ["surface_hamiltonian", "prepare_surface"]
+__all__ = ["surface_hamiltonian", "prepare_surface", "PreparedSurface", "surface_angles", "unweld_cuts"]
 
 
-def prepare_surface(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Check a surface mesh; return ``(points (n, 3), triangles (m, 3), twin (3 m,))``.
+class PreparedSurface(NamedTuple):
+    """A surface ready for the construction (:func:`prepare_surface`)."""
+
+    points: np.ndarray  #: (n, 3) float64
+    triangles: np.ndarray  #: (k, 3) int64: the kept rows
+    twin: np.ndarray  #: (3 k,) int64: proper pairing, -1 on boundaries and cuts
+    rows: np.ndarray  #: (k,) int64: input row of each kept triangle
+    defects: MeshDefects
+
+
+def surface_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[float, int, float, np.ndarray]:
+    """``(min angle, argmin row, max angle, areas)`` of the construction's input; radians, 3D areas.
+
+    (The certificate computes its own, :mod:`hammesh.verify.surface`.)
+    """
+    p = points[triangles]
+    e = np.roll(p, -1, axis=1) - p  # e[:, k]: from vertex k to k + 1
+    area = 0.5 * np.linalg.norm(np.cross(e[:, 0], e[:, 1]), axis=1)
+    u = -np.roll(e, 1, axis=1)  # at vertex k: towards k - 1
+    cr = np.linalg.norm(np.cross(e, u), axis=2)
+    a = np.arctan2(cr, (e * u).sum(axis=2))
+    amin = a.min(axis=1)
+    i = int(np.argmin(amin))
+    return float(amin[i]), i, float(a.max()), area
+
+
+def unweld_cuts(triangles: np.ndarray, twin: np.ndarray, n_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """Give each umbrella of a vertex its own copy: cut edges then join no triangles at all.
+
+    The corners at a vertex are grouped by the proper edges between them (its
+    *umbrellas*); the first umbrella keeps the vertex, each further one gets a new index
+    ``n_points + j``.  The proper pairing is unchanged, and every cut edge (non-manifold,
+    flipped, the seam of a non-orientable piece) becomes plain boundary on each side, so
+    the construction sees an oriented manifold with boundary; the caller maps the copies
+    back afterwards.
+
+    Returns
+    -------
+    triangles : (m, 3) int64
+        Renumbered corners.
+    copy_of : (c,) int64
+        The original vertex of each copy ``n_points + j``.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    tri = np.asarray(triangles, dtype=np.int64)
+    m = len(tri)
+    h = np.flatnonzero(twin >= 0)
+    g = twin[h]
+    nxt = lambda x: 3 * (x // 3) + (x % 3 + 1) % 3  # noqa: E731  (corner at the head of half-edge x)
+    # half-edge h: corner h (its tail) ~ corner at the head of its twin; head of h ~ tail of twin
+    a = np.r_[h, nxt(h)]
+    b = np.r_[nxt(g), g]
+    graph = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(3 * m, 3 * m))
+    _, label = connected_components(graph, directed=False)
+    vert = tri.reshape(-1)
+    # one id per (vertex, umbrella): the umbrella holding the vertex's first corner keeps it
+    order = np.lexsort((label, vert))
+    v_s, l_s = vert[order], label[order]
+    new_group = np.r_[True, (v_s[1:] != v_s[:-1]) | (l_s[1:] != l_s[:-1])]
+    first_of_vertex = np.r_[True, v_s[1:] != v_s[:-1]]
+    extra = new_group & ~first_of_vertex
+    copy_id = np.cumsum(extra) - 1 + n_points
+    start = np.maximum.accumulate(np.where(new_group, np.arange(len(v_s)), 0))  # first row of each group
+    ids = np.where(extra[start], copy_id[start], v_s)
+    out = np.empty(3 * m, np.int64)
+    out[order] = ids
+    return out.reshape(-1, 3), v_s[extra].astype(np.int64)
+
+
+def prepare_surface(points: np.ndarray, triangles: np.ndarray) -> PreparedSurface:
+    """Check a surface mesh, drop what holds no area, pair its proper edges.
 
     2D points get ``z = 0``.
 
     Raises
     ------
     InvalidMeshError
-        Shapes, non-finite or out-of-range items, a triangle with a repeated vertex
-        or zero area, two triangles on the same vertices, an edge shared by three
-        triangles or inconsistently oriented.
+        Shapes, non-finite or out-of-range items, or no triangle of positive area.
     """
     pts, tri = mesh_arrays(points, triangles, dims=(2, 3))
     if pts.shape[1] == 2:
         pts = np.c_[pts, np.zeros(len(pts))]
-    rep = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
-    if rep.any():
-        t = int(np.argmax(rep))
-        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} repeats a vertex")
-    _, _, _, area = surface_angles(pts, tri)
-    if not area.min() > 0:
-        t = int(np.argmin(area))
-        raise InvalidMeshError(f"triangle {t} {tri[t].tolist()} has zero area")
-    srt = np.sort(tri, axis=1)
-    o = np.lexsort(srt.T[::-1])
-    same = (srt[o[1:]] == srt[o[:-1]]).all(axis=1)
-    if same.any():
-        i = int(np.argmax(same))
-        raise InvalidMeshError(f"triangles {int(o[i])} and {int(o[i + 1])} have the same vertices {tri[o[i]].tolist()}")
-    twin, bad = _kernels.half_edge_twins(tri, len(pts))
-    if bad >= 0:
-        t, k = divmod(int(bad), 3)
-        raise InvalidMeshError(
-            f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is shared by more than two "
-            "triangles or by two in the same direction (non-manifold edge or inconsistent orientation)"
-        )
-    return pts, tri, twin
+    m = len(tri)
+    repeated = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 2] == tri[:, 0])
+    zero = zero_area_rows(pts, tri) & ~repeated
+    _, _, dup = triangle_repeats(tri)
+    dup &= ~(repeated | zero)
+    rows = np.flatnonzero(~(repeated | zero | dup))
+    if len(rows) == 0:
+        raise InvalidMeshError(f"none of the {m} triangles has a positive area: no surface")
+    kept = np.ascontiguousarray(tri[rows])
+    pairing = proper_pairing(kept, len(pts))
+    found = mesh_defects(pts, kept, pairing, repeated=int(repeated.sum()), zero_area=int(zero.sum()))
+    found = MeshDefects(**(found.to_dict() | {"duplicate": int(dup.sum())}))
+    return PreparedSurface(pts, kept, pairing.twin, rows.astype(np.int64), found)
 
 
 def surface_hamiltonian(
@@ -88,7 +160,8 @@ def surface_hamiltonian(
     ----------
     points : (n, 3) float64 (or (n, 2): z = 0)
     triangles : (m, 3) int64
-        Edge-manifold and consistently oriented; any genus, boundaries allowed.
+        Any triangle surface: any genus, boundaries, non-manifold edges, flipped or
+        non-orientable pieces, degenerate or doubled rows (see the module docstring).
     swaps : bool
         Also use Steiner-free edge flips (changes the surface slightly; see module).
     max_fold_deg : float
@@ -102,7 +175,8 @@ def surface_hamiltonian(
     HamiltonianMesh
         With 3D ``points``; triangles in cycle order, one cycle per connected piece;
         ``kind`` 0 incenter sector, 2 midpoint, 3 input triangle, 4 swapped;
-        ``report`` with the counts, 3D angles in and out, areas, ``verified: True``.
+        ``parent`` the input row; ``report`` with the counts, 3D angles in and out,
+        areas, ``defects`` (what was found) and ``dropped_rows``, ``verified: True``.
 
     Raises
     ------
@@ -117,20 +191,31 @@ def surface_hamiltonian(
     (1, True)
     """
     t0 = time.perf_counter()
-    pts, tri, twin = prepare_surface(points, triangles)
+    prep = prepare_surface(points, triangles)
+    pts, tri, twin = prep.points, prep.triangles, prep.twin
     n, m = len(pts), len(tri)
     amin, _, amax_in, _ = surface_angles(pts, tri)
+    tri_u, copy_of = unweld_cuts(tri, twin, n)
     r = sparse_cycles(
-        pts, tri, twin, np.zeros(3 * m, np.bool_), amin, swaps=swaps and not split_all,
+        np.concatenate([pts, pts[copy_of]]), tri_u, twin, np.zeros(3 * m, np.bool_), amin, swaps=swaps and not split_all,
         edge_splits=not split_all, flip_bridges=False, max_fold_deg=max_fold_deg, use_cover=not split_all,
     )
+    r = _weld_back(r, n, copy_of)
     lengths = r.lengths
+    parent = prep.rows[r.parent]  # input rows
     t1 = time.perf_counter()
     stats = verify_surface(
-        r.points, r.triangles, lengths, reference_points=pts, reference_triangles=tri, parent=r.parent, exact=not swaps
+        r.points, r.triangles, lengths, reference_points=points, reference_triangles=triangles, parent=parent,
+        exact=not swaps,
     )
     t2 = time.perf_counter()
     report = count_report(r, n, m)
+    m_in = int(np.asarray(triangles).reshape(-1, 3).shape[0])
+    keep = np.zeros(m_in, dtype=bool)
+    keep[prep.rows] = True
+    report["input_triangles"] = m_in
+    report["defects"] = prep.defects.to_dict()
+    report["dropped_rows"] = np.flatnonzero(~keep).tolist()
     for key in ("retries", "flips"):  # plane-only notions
         report.pop(key, None)
     report |= {
@@ -155,12 +240,23 @@ def surface_hamiltonian(
         segment_markers=np.zeros(0, np.int64),
         components=lengths,
         position=position,
-        parent=r.parent,
+        parent=parent,
         kind=r.kind,
         triangle_attributes=np.zeros((len(r.triangles), 0)),
         report=report,
     )
     return h
+
+
+def _weld_back(r, n: int, copy_of: np.ndarray):
+    """Map the copies of :func:`unweld_cuts` back to their vertices in a construction's result."""
+    c = len(copy_of)
+    if c == 0:
+        return r
+    t = r.triangles
+    t = np.where(t >= n + c, t - c, np.where(t >= n, copy_of[np.clip(t - n, 0, c - 1)], t))
+    pts = np.concatenate([r.points[:n], r.points[n + c :]])
+    return replace(r, points=pts, triangles=t)
 
 
 def _swap_height(points, tri, kind, parent, pts_in, tri_in) -> float:
