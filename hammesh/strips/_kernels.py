@@ -53,6 +53,8 @@ __all__ = [
     "sequential_chain",
     "face_flags",
     "dual_components",
+    "proper_twins_into",
+    "orientation_count",
     "path_turns",
     "orient_paths",
     "emit_restart",
@@ -515,6 +517,120 @@ def face_flags(pts, tri, rtol, flags):
         else:
             flags[t] = FACE_OK
     return n_rep, n_zero
+
+
+@njit(cache=True, nogil=True)
+def proper_twins_into(tri, n_points, twin, flipped):
+    """Pair the halves of proper edges (two users, opposite directions); the rest get -1.
+
+    Half-edges are bucketed by their lesser endpoint (a counting sort that also copies
+    the other endpoint and the direction, so a bucket is read from contiguous memory);
+    inside a bucket (a vertex's few edges) the users of each edge are gathered by the
+    other endpoint.  ``flipped`` (``(3 m, 2)``) receives the half-edge pairs of edges
+    used twice in one direction.  Returns ``(n_flipped, n_non_manifold)``.
+    """
+    m = tri.shape[0]
+    H = 3 * m
+    start = np.zeros(n_points + 1, np.int64)
+    for t in range(m):
+        for j in range(3):
+            a = tri[t, j]
+            b = tri[t, (j + 1) % 3]
+            start[min(a, b) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    slot = np.empty(H, np.int64)
+    other_end = np.empty(H, np.int64)
+    forward = np.empty(H, np.bool_)  # the half-edge runs from the lesser endpoint
+    for t in range(m):
+        for j in range(3):
+            a = tri[t, j]
+            b = tri[t, (j + 1) % 3]
+            lo = min(a, b)
+            i = fill[lo]
+            slot[i] = 3 * t + j
+            other_end[i] = max(a, b)
+            forward[i] = a < b
+            fill[lo] = i + 1
+            twin[3 * t + j] = -1
+    done = np.zeros(H, np.bool_)
+    n_flip = 0
+    n_nm = 0
+    for v in range(n_points):
+        for i in range(start[v], start[v + 1]):
+            if done[i]:
+                continue
+            hi = other_end[i]
+            users = 1
+            other = -1
+            done[i] = True
+            for j in range(i + 1, start[v + 1]):
+                if not done[j] and other_end[j] == hi:
+                    done[j] = True
+                    users += 1
+                    other = j
+            if users == 2:
+                if forward[other] != forward[i]:
+                    twin[slot[i]] = slot[other]
+                    twin[slot[other]] = slot[i]
+                else:
+                    flipped[n_flip, 0] = slot[i]
+                    flipped[n_flip, 1] = slot[other]
+                    n_flip += 1
+            elif users >= 3:
+                n_nm += 1
+    return n_flip, n_nm
+
+
+@njit(cache=True, nogil=True)
+def orientation_count(twin, flipped, m):
+    """``(pieces, non-orientable pieces)`` across proper and flipped edges (a signed search).
+
+    A proper edge keeps the relative orientation, a flipped one reverses it; a piece
+    that reaches a triangle with both signs cannot be oriented.
+    """
+    flip_of = np.full(3 * m, -1, np.int64)
+    for i in range(flipped.shape[0]):
+        flip_of[flipped[i, 0]] = flipped[i, 1]
+        flip_of[flipped[i, 1]] = flipped[i, 0]
+    label = np.full(m, -1, np.int64)
+    sign = np.zeros(m, np.int8)
+    stack = np.empty(m, np.int64)
+    pieces = 0
+    bad = 0
+    for s in range(m):
+        if label[s] >= 0:
+            continue
+        label[s] = pieces
+        sign[s] = 1
+        stack[0] = s
+        top = 1
+        conflict = False
+        while top > 0:
+            top -= 1
+            t = stack[top]
+            for k in range(3):
+                h = 3 * t + k
+                g = twin[h]
+                want = sign[t]
+                if g < 0:
+                    g = flip_of[h]
+                    want = -sign[t]
+                if g < 0:
+                    continue
+                u = g // 3
+                if label[u] < 0:
+                    label[u] = pieces
+                    sign[u] = want
+                    stack[top] = u
+                    top += 1
+                elif sign[u] != want:
+                    conflict = True
+        if conflict:
+            bad += 1
+        pieces += 1
+    return pieces, bad
 
 
 @njit(cache=True)

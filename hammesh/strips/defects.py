@@ -13,9 +13,10 @@ triangles whose windings disagree across it (a *flipped neighbour*; crossing it 
 strip would cost two repeated indices, a restart costs three, and the encoder never has
 to reverse a triangle).  Every triangle's row is kept as given.
 
-The pairing is one sort of the ``3 m`` half-edges by their undirected key (numpy), used
-only when the packed fast path (:func:`hammesh.strips._kernels.mesh_records`) meets a bad
-edge; on a clean mesh both give the same pairing.
+The pairing (:func:`hammesh.strips._kernels.proper_twins_into`: half-edges bucketed by
+their lesser vertex, users gathered per bucket) is used only when the packed fast path
+(:func:`hammesh.strips._kernels.mesh_records`) meets a bad edge; on a clean mesh both
+give the same pairing.
 
 The defect counts (:class:`MeshDefects`) go into the strip's and the surface's report:
 
@@ -104,26 +105,10 @@ def proper_pairing(triangles: np.ndarray, n_points: int) -> EdgePairing:
     [-1, -1, 3, 2, -1, -1]
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
-    a = tri.reshape(-1)
-    b = tri[:, [1, 2, 0]].reshape(-1)
-    key = np.minimum(a, b) * np.int64(max(int(n_points), 1)) + np.maximum(a, b)
-    order = np.argsort(key, kind="stable")
-    k = key[order]
-    L = len(k)
-    new = np.empty(L, dtype=bool)
-    if L:
-        new[0] = True
-        new[1:] = k[1:] != k[:-1]
-    starts = np.flatnonzero(new)
-    counts = np.diff(np.r_[starts, L])
-    two = starts[counts == 2]
-    h1, h2 = order[two], order[two + 1]
-    opposite = a[h1] != a[h2]
-    twin = np.full(L, -1, dtype=np.int64)
-    twin[h1[opposite]] = h2[opposite]
-    twin[h2[opposite]] = h1[opposite]
-    flipped = np.stack([h1[~opposite], h2[~opposite]], axis=1).astype(np.int64)
-    return EdgePairing(twin, flipped, int(np.count_nonzero(counts >= 3)))
+    twin = np.empty(3 * len(tri), np.int64)
+    flipped = np.empty((3 * len(tri), 2), np.int64)
+    n_flip, n_nm = _kernels.proper_twins_into(tri, int(n_points), twin, flipped)
+    return EdgePairing(twin, flipped[:n_flip].copy(), int(n_nm))
 
 
 def repeated_vertex_rows(triangles: np.ndarray) -> np.ndarray:
@@ -152,24 +137,13 @@ def orientation_pieces(m: int, twin: np.ndarray, flipped: np.ndarray) -> tuple[i
     """``(pieces, non-orientable pieces)`` of the graph joining triangles across two-triangle edges.
 
     A proper edge asks both triangles to keep their relative orientation, a flipped one
-    to change it; a piece can be oriented iff its double cover (triangle x {kept,
-    reversed}) has two components over it, i.e. no triangle is joined to its own reverse.
+    to change it; a piece can be oriented iff no triangle is reached with both signs
+    (:func:`hammesh.strips._kernels.orientation_count`, one search).
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    h = np.flatnonzero(twin >= 0)
-    h = h[h < twin[h]]
-    ta, tb = h // 3, twin[h] // 3
-    fa, fb = flipped[:, 0] // 3, flipped[:, 1] // 3
-    rows = np.concatenate([ta, ta + m, fa, fa + m])
-    cols = np.concatenate([tb, tb + m, fb + m, fb])
-    g = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(2 * m, 2 * m))
-    _, lab2 = connected_components(g, directed=False)
-    single = coo_matrix((np.ones(len(ta) + len(fa), np.int8), (np.r_[ta, fa], np.r_[tb, fb])), shape=(m, m))
-    n_pieces, lab = connected_components(single, directed=False)
-    bad = lab2[:m] == lab2[m:]
-    return int(n_pieces), int(len(np.unique(lab[bad])))
+    p, bad = _kernels.orientation_count(
+        np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(flipped, dtype=np.int64).reshape(-1, 2), int(m)
+    )
+    return int(p), int(bad)
 
 
 def triangle_repeats(triangles: np.ndarray) -> tuple[int, int, np.ndarray]:
@@ -203,7 +177,11 @@ def mesh_defects(
     if zero_area is None:
         zero_area = int(zero_area_rows(points, tri).sum())
     _, non_orientable = orientation_pieces(len(tri), pairing.twin, pairing.flipped)
-    double, dup, _ = triangle_repeats(tri)
+    # a row and its copy (either winding) share three edges, so neither has a proper
+    # neighbour other than the copy: only such rows are compared
+    nb = np.where(pairing.twin >= 0, pairing.twin // 3, -1).reshape(-1, 3)
+    cand = ((nb < 0) | (nb == nb.max(axis=1)[:, None])).all(axis=1)
+    double, dup, _ = triangle_repeats(tri[cand])
     return MeshDefects(
         repeated_vertex=int(repeated),
         zero_area=int(zero_area),

@@ -8,7 +8,19 @@ makes test surfaces.
 
 from hammesh.surface.files import SURFACE_SUFFIXES, read_surface, write_surface
 from hammesh.surface.hamiltonian import prepare_surface, surface_hamiltonian
-from hammesh.surface.shapes import icosphere, noisy_sphere, thick_plate, torus
+from hammesh.surface.shapes import (
+    double_sided,
+    duplicate_and_repeated,
+    finned_torus,
+    flipped_triangle,
+    icosphere,
+    klein_bottle,
+    mobius_strip,
+    noisy_sphere,
+    pole_sphere,
+    thick_plate,
+    torus,
+)
 
 __all__ = [
     "surface_hamiltonian",
@@ -20,4 +32,11 @@ __all__ = [
     "torus",
     "thick_plate",
     "noisy_sphere",
+    "mobius_strip",
+    "klein_bottle",
+    "finned_torus",
+    "pole_sphere",
+    "flipped_triangle",
+    "double_sided",
+    "duplicate_and_repeated",
 ]
