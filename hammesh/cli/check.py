@@ -33,10 +33,10 @@ def run(args: argparse.Namespace) -> int:
         mesh = read_mesh(args.mesh)
     except NotPlanarError:  # a 3D surface: the surface certificate (angles in 3D)
         from hammesh.surface import read_surface
-        from hammesh.verify.surface import verify_surface
+        from hammesh.verify.surface import infer_surface_runs, verify_surface
 
         points, triangles = read_surface(args.mesh)
-        runs = infer_runs(triangles, len(points))
+        runs = infer_surface_runs(triangles, len(points))
         stats = verify_surface(points, triangles, runs)
     else:
         triangles = mesh.triangles

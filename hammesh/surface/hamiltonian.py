@@ -33,15 +33,21 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
-import numpy as np
-
 from typing import NamedTuple
 
+import numpy as np
+
 from hammesh.errors import InvalidMeshError
+from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import HamiltonianMesh, cycle_positions
 from hammesh.postprocess.sparse import count_report, sparse_cycles
-from hammesh.strips.defects import MeshDefects, mesh_defects, proper_pairing, triangle_repeats, zero_area_rows
-from hammesh.halfedge import mesh_arrays
+from hammesh.strips.defects import (
+    MeshDefects,
+    mesh_defects,
+    proper_pairing,
+    triangle_repeats,
+    zero_area_rows,
+)
 from hammesh.verify.surface import verify_surface
 
 __all__ = ["surface_hamiltonian", "prepare_surface", "PreparedSurface", "surface_angles", "unweld_cuts"]

@@ -45,7 +45,7 @@ import numpy as np
 
 from hammesh.errors import VerificationError
 
-__all__ = ["verify_surface", "ANGLE_RTOL", "AREA_RTOL", "PLANE_RTOL", "DROP_RTOL"]
+__all__ = ["verify_surface", "infer_surface_runs", "ANGLE_RTOL", "AREA_RTOL", "PLANE_RTOL", "DROP_RTOL"]
 
 ANGLE_RTOL = 1e-9
 AREA_RTOL = 1e-9
@@ -117,6 +117,40 @@ def _partner(tail: np.ndarray, head: np.ndarray, proper: np.ndarray, n: int) -> 
 
 def _cut_keys(tail: np.ndarray, head: np.ndarray, proper: np.ndarray, n: int) -> np.ndarray:
     return np.sort(tail[~proper] * n + head[~proper])
+
+
+def infer_surface_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
+    """Run lengths of a surface stored piece after piece, pieces joined across proper edges only.
+
+    What ``hammesh check`` needs to re-verify a file written by ``hammesh surface``: unlike
+    the planar :func:`hammesh.verify.infer_runs`, cuts (non-manifold edges, flipped
+    neighbours) are allowed and separate pieces.
+
+    Raises
+    ------
+    VerificationError
+        No triangles, or a piece split over several runs (not consecutive in the file).
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    tri = np.asarray(triangles).astype(np.int64).reshape(-1, 3)
+    m = len(tri)
+    if m == 0:
+        _fail("the mesh has no triangles")
+    tail, head, proper = _half_edges(tri, int(n_points))
+    partner = _partner(tail, head, proper, int(n_points))
+    h = np.flatnonzero(partner >= 0)
+    graph = coo_matrix((np.ones(len(h), dtype=np.int8), (h // 3, partner[h] // 3)), shape=(m, m))
+    n_pieces, label = connected_components(graph, directed=False)
+    starts = np.r_[0, np.flatnonzero(np.diff(label) != 0) + 1]
+    if len(starts) != n_pieces:
+        seen = np.zeros(n_pieces, dtype=bool)
+        for s in starts:
+            if seen[label[s]]:
+                _fail(f"connected piece {int(label[s])} is split over several runs (triangle {int(s)} starts another)")
+            seen[label[s]] = True
+    return np.diff(np.r_[starts, m]).astype(np.int64)
 
 
 def verify_surface(

@@ -12,7 +12,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh.mesh import Mesh
-from hammesh.strips.defects import orientation_pieces, proper_pairing, triangle_repeats, zero_area_rows
+from hammesh.strips.defects import (
+    orientation_pieces,
+    proper_pairing,
+    triangle_repeats,
+    zero_area_rows,
+)
 from hammesh.strips.dual import dual_mesh
 from hammesh.strips.encode import encode, encode_generalized
 from hammesh.strips.generalized import decode_generalized

@@ -18,10 +18,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh.halfedge import _kernels as core_kernels
-from hammesh.errors import InvalidMeshError
-from hammesh.strips.defects import proper_pairing
 from hammesh.mesh import Mesh
 from hammesh.strips import _kernels
+from hammesh.strips.defects import proper_pairing
 from hammesh.strips.dual import dual_mesh
 from hammesh.strips.encode import _greedy_cover, encode, greedy_paths
 from hammesh.strips.gl import decode_gl_strip

@@ -107,3 +107,29 @@ def test_cli_surface_reports_defects(tmp_path):
     doc = json.loads(rep.read_text())
     found = doc.get("defects") or doc.get("report", {}).get("defects")
     assert found["non_orientable_pieces"] == 1 and found["flipped_neighbours"] == 12
+
+
+@pytest.mark.parametrize("name", ["klein", "finned torus (bunny stand-in)", "one flipped triangle"])
+def test_check_rereads_a_defect_surface(tmp_path, name):
+    """`hammesh check` on what `hammesh surface` wrote: pieces across proper edges only.
+
+    (Not the double-sided faces: ``read_surface`` welds exactly coincident points, and
+    the two sides' incenters coincide, so the file reads back as another topology.)
+    """
+    from hammesh.cli import main
+    from hammesh.surface import write_surface
+    from hammesh.verify.surface import infer_surface_runs
+
+    pts, tri, _ = ALL[name]()
+    h = surface_hamiltonian(pts, tri)
+    path = tmp_path / "out.vtu"
+    write_surface(h, path)
+    assert main(["check", str(path)]) in (0, None)
+    assert infer_surface_runs(h.triangles, h.n_points).tolist() == h.components.tolist()
+    if len(h.components) == 1:
+        return
+    # the first cycle's last triangle moved to the end of the file: its piece is split
+    k = int(h.components[0])
+    split = np.r_[h.triangles[: k - 1], h.triangles[k:], h.triangles[k - 1 : k]]
+    with pytest.raises(hammesh.VerificationError, match="split over several runs"):
+        infer_surface_runs(split, h.n_points)
