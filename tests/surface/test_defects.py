@@ -60,6 +60,11 @@ def test_defect_surfaces(name, mode):
         run = h.triangles[a:b]
         for t0, t1 in zip(run, np.roll(run, -1, axis=0)):
             assert len(set(t0.tolist()) & set(t1.tolist())) >= 2
+    from hammesh.strips import encode, verify_gl_strip
+
+    strip = encode(h)  # one strip per cycle, cuts and all
+    assert strip.n_strips == len(h.components)
+    verify_gl_strip(h.triangles, strip.indices, strip.restart_index)
     for key, value in expected.items():
         if key == "non_manifold_edges" and "duplicate" in expected:
             continue  # the surface drops the copy first: the edges are clean again
