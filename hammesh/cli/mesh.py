@@ -34,6 +34,10 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--max-steiner", type=int, help="limit on Steiner points added by the mesher")
     g.add_argument("--timeout", type=float, help="stop the mesher after this many seconds")
     p.add_argument("--mode", choices=sorted(MODES), default="incircle", help="Hamiltonian construction")
+    p.add_argument(
+        "--keep", type=float, default=0.9,
+        help="sparse mode: new angles >= KEEP x the replaced triangles' smallest where a join can (0..1)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
                 f"{args.input} is already a mesh; meshing options ({', '.join(given)}) apply to .poly/.node domains"
             )
     outputs = Outputs(mesh=args.output, report=args.report, png=args.png, strip=args.strip)
-    h = run_pipeline(source, options, outputs, mode=args.mode)
+    h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep)
     print(summary(h))
     for label, path in (
         ("mesh", args.output),

@@ -73,7 +73,7 @@ class _Steps:
 
 
 def run_pipeline(
-    source: Domain | Mesh, mesh_options: dict[str, Any], outputs: Outputs, *, mode: str = "incircle"
+    source: Domain | Mesh, mesh_options: dict[str, Any], outputs: Outputs, *, mode: str = "incircle", keep: float = 0.9
 ) -> HamiltonianMesh:
     """Mesh (if ``source`` is a Domain), make Hamiltonian, verify, then write outputs."""
     outputs.check()
@@ -88,7 +88,7 @@ def run_pipeline(
             mesh = source
         steps.done()
         steps.step("hamiltonian + verify")
-        h = hamiltonian(mesh, mode=mode)
+        h = hamiltonian(mesh, mode=mode, keep=keep)
         steps.done()
         t0 = time.perf_counter()
         if outputs.mesh is not None:

@@ -12,7 +12,7 @@ import numpy as np
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
-from hammesh.postprocess.sparse import sparse_hamiltonian
+from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import claim_structure, input_facts, verify
 from hammesh.halfedge import prepare_mesh
 
@@ -46,7 +46,7 @@ def load_kernels(mode: str = "incircle") -> None:
         _loaded_modes.add(mode)
 
 
-def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
+def hamiltonian(mesh: Mesh, *, mode: str = "incircle", keep: float = KEEP) -> HamiltonianMesh:
     """Turn a planar triangle mesh into a verified Hamiltonian cycle mesh.
 
     Thm 2.4 (``mode="incircle"``): a Steiner point at every triangle's incenter and
@@ -63,6 +63,12 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
         Any valid planar triangulation (ours or read from a file); triangles may be
         given in either orientation.
     mode : {"incircle", "sparse"}
+    keep : float
+        Sparse mode's local quality rule (issue 13): every triangle a join creates
+        keeps its angles >= ``keep`` x the smallest angle of the triangles it
+        replaces and <= the input's largest angle + 5 degrees where any join can
+        (the report counts where none could); the proven floor (>= 1/2 the input's
+        minimum) holds regardless. Ignored by ``"incircle"``.
 
     Returns
     -------
@@ -79,6 +85,8 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
     """
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
+    if not (isinstance(keep, (int, float)) and 0.0 <= keep <= 1.0):
+        raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
     t0 = time.perf_counter()
     # a second thread works beside the construction: the walk's arrays (while the
     # input is checked), the input's side of the certificate, and (incircle) the row
@@ -99,7 +107,7 @@ def hamiltonian(mesh: Mesh, *, mode: str = "incircle") -> HamiltonianMesh:
             stream.join()  # then help with the row checks still to do
             rows = (stream.result(out.components), stream.used)
         else:
-            out, claim = MODES[mode](clean, he, is_con)
+            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep)
             t1 = time.perf_counter()
         ref_facts = facts.result()
     stats = verify(out, reference=clean, reference_twin=he.twin, twin_claim=claim, rows=rows,

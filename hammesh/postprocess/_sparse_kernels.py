@@ -27,165 +27,42 @@ PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
 PLAIN, FLIP, MID = 0, 1, 2
 
 
-@njit(cache=True)
-def _corner_s2(o, q, r):
-    """sin^2 of the angle at o of triangle (o, q, r) (coordinate rows, any dimension)."""
-    uu = 0.0
-    vv = 0.0
-    uv = 0.0
-    for i in range(o.shape[0]):
-        u = q[i] - o[i]
-        v = r[i] - o[i]
-        uu += u * u
-        vv += v * v
-        uv += u * v
-    if uu <= 0.0 or vv <= 0.0:
-        return 0.0
-    return 1.0 - (uv * uv) / (uu * vv)
+@njit(cache=True, nogil=True)
+def join_candidates(twin, cyc):
+    """Half-edges across which a join can merge two nodes.
 
-
-@njit(cache=True)
-def _sin2_xyz(x, y, z):
-    """sin^2 of the smallest angle of the triangle with corners x, y, z (Gram form).
-
-    The smallest over the three corners of sin^2 is sin^2 of the smallest angle (an
-    obtuse angle's sine is that of the sum of the two others).
+    ``h`` of a covered triangle t whose twin is in an uncovered triangle (an
+    absorbing join) or in a covered triangle of another cycle (then only ``h < twin``,
+    one per edge).
     """
-    return min(_corner_s2(x, y, z), _corner_s2(y, z, x), _corner_s2(z, x, y))
+    nh = twin.shape[0]
+    out = np.empty(nh, np.int64)
+    n = 0
+    for h in range(nh):
+        g = twin[h]
+        if g < 0:
+            continue
+        ct = cyc[h // 3]
+        cu = cyc[g // 3]
+        if ct < 0 or ct == cu or (cu >= 0 and g < h):
+            continue
+        out[n] = h
+        n += 1
+    return out[:n]
 
 
-@njit(cache=True)
-def _sin2_min(pts, p0, p1, p2):
-    """sin^2 of the smallest angle of triangle (p0, p1, p2) of ``pts``."""
-    return _sin2_xyz(pts[p0], pts[p1], pts[p2])
-
-
-@njit(cache=True)
-def _orient2(pts, a, b, c):
-    return (pts[b, 0] - pts[a, 0]) * (pts[c, 1] - pts[a, 1]) - (pts[b, 1] - pts[a, 1]) * (
-        pts[c, 0] - pts[a, 0]
-    )
-
-
-@njit(cache=True)
-def _fold3(pts, a, b, c, d):
-    """3D quadrilateral a d b c over edge ab of ``t = (a, b, c)``, ``u = (b, a, d)``.
-
-    Returns ``(cos of the angle between the normals of t and u, convex)``: ``convex``
-    if ``(a, d, c)`` and ``(d, b, c)`` are both positive about the sum of the normals
-    (the swap does not fold the pair over).
-    """
-    ux = pts[b, 0] - pts[a, 0]
-    uy = pts[b, 1] - pts[a, 1]
-    uz = pts[b, 2] - pts[a, 2]
-    vx = pts[c, 0] - pts[a, 0]
-    vy = pts[c, 1] - pts[a, 1]
-    vz = pts[c, 2] - pts[a, 2]
-    wx = pts[d, 0] - pts[a, 0]
-    wy = pts[d, 1] - pts[a, 1]
-    wz = pts[d, 2] - pts[a, 2]
-    n1x = uy * vz - uz * vy  # normal of t: u x v
-    n1y = uz * vx - ux * vz
-    n1z = ux * vy - uy * vx
-    n2x = wy * uz - wz * uy  # normal of u: w x u
-    n2y = wz * ux - wx * uz
-    n2z = wx * uy - wy * ux
-    l1 = np.sqrt(n1x * n1x + n1y * n1y + n1z * n1z)
-    l2 = np.sqrt(n2x * n2x + n2y * n2y + n2z * n2z)
-    if l1 == 0.0 or l2 == 0.0:
-        return -1.0, False
-    cosn = (n1x * n2x + n1y * n2y + n1z * n2z) / (l1 * l2)
-    nx = n1x + n2x
-    ny = n1y + n2y
-    nz = n1z + n2z
-    # (a, d, c): w x v
-    if (wy * vz - wz * vy) * nx + (wz * vx - wx * vz) * ny + (wx * vy - wy * vx) * nz <= 0.0:
-        return cosn, False
-    # (d, b, c): (b - d) x (c - d) = (u - w) x (v - w)
-    ex = ux - wx
-    ey = uy - wy
-    ez = uz - wz
-    fx = vx - wx
-    fy = vy - wy
-    fz = vz - wz
-    return cosn, (ey * fz - ez * fy) * nx + (ez * fx - ex * fz) * ny + (ex * fy - ey * fx) * nz > 0.0
-
-
-@njit(cache=True)
-def split_ok(pts, tri, twin, h, floor_s2):
-    """Can the edge of half-edge h be split at its midpoint M, keeping the angles?
-
-    ``t = (a, b, c)``, ``u = (b, a, d)`` become ``(a, M, c)``, ``(M, b, c)``,
-    ``(b, M, d)``, ``(M, a, d)`` (each in its parent's plane): all four smallest angles
-    must have ``sin^2 >= floor_s2``.
-    """
-    t = h // 3
-    k = h - 3 * t
-    g = twin[h]
-    u = g // 3
-    kg = g - 3 * u
-    a = tri[t, k]
-    b = tri[t, (k + 1) % 3]
-    c = tri[t, (k + 2) % 3]
-    d = tri[u, (kg + 2) % 3]
-    pa = pts[a]
-    pb = pts[b]
-    pc = pts[c]
-    pd = pts[d]
-    mm = 0.5 * (pa + pb)
-    return (
-        _sin2_xyz(pa, mm, pc) >= floor_s2
-        and _sin2_xyz(mm, pb, pc) >= floor_s2
-        and _sin2_xyz(pb, mm, pd) >= floor_s2
-        and _sin2_xyz(mm, pa, pd) >= floor_s2
-    )
-
-
-@njit(cache=True)
-def swap_ok(pts, tri, twin, h, floor_s2, cos_fold):
-    """Can the edge of half-edge h be flipped keeping every angle above the floor?
-
-    ``t = (a, b, c)`` (h from a to b), ``u = (b, a, d)``; the flip makes ``(a, d, c)``
-    and ``(d, b, c)``. In the plane both must be counter-clockwise (the quadrilateral
-    strictly convex); in any dimension both smallest angles must have
-    ``sin^2 >= floor_s2`` (an angle below 90 degrees).
-    """
-    t = h // 3
-    k = h - 3 * t
-    g = twin[h]
-    u = g // 3
-    kg = g - 3 * u
-    a = tri[t, k]
-    b = tri[t, (k + 1) % 3]
-    c = tri[t, (k + 2) % 3]
-    d = tri[u, (kg + 2) % 3]
-    if pts.shape[1] == 2:
-        if _orient2(pts, a, d, c) <= 0.0 or _orient2(pts, d, b, c) <= 0.0:
-            return False
-    else:
-        cosn, convex = _fold3(pts, a, b, c, d)
-        if cosn < cos_fold or not convex:
-            return False
-    return _sin2_min(pts, a, d, c) >= floor_s2 and _sin2_min(pts, d, b, c) >= floor_s2
-
-
-@njit(cache=True)
-def plan_merges(
-    pts, tri, twin, is_con, is_cov, cyc, n_cyc, floor_s2, cos_fold, swaps, edge_splits, no_absorb, flip_bridges
-):
+@njit(cache=True, nogil=True)
+def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
 
     Nodes are the cover cycles and the uncovered triangles; a dual edge between two
-    nodes can join them (union-find, cheapest first, Kruskal):
+    nodes can join them (union-find, best first, Kruskal):
 
-    A. ``swaps``: flip the shared edge of a cover triangle and an uncovered one
-       (the uncovered one joins the cycle, unless ``no_absorb[u]``), then of two cover triangles of
-       different cycles (the two cycles become one) -- 0 Steiner points, only where
-       both new triangles keep ``sin^2(min angle) >= floor_s2`` (and, in 3D, the two
-       normals make an angle with cosine ``>= cos_fold``);
-    A'. ``edge_splits``: the same two ways, splitting the shared edge (constrained or
-       not) at its midpoint instead -- 1 Steiner point, where the four new triangles
-       keep the angle floor;
+    A. the judged joins ``cand`` (half-edge of the covered triangle) in the caller's
+       order (those meeting the local rule first, Steiner-free swaps before splits,
+       larger slack first), ``ckind[i]`` a ``_join_kernels`` kind: swap (0 Steiner
+       points) or split (1); a join with an uncovered triangle absorbs it into the
+       cycle (unless ``no_absorb[u]``); a triangle takes part in one join at most;
     B. every uncovered triangle left is split at its incenter (1 point each);
     C. two split uncovered triangles: bridge across their edge (0 more points);
     D. split uncovered + cover triangle: split the cover one, bridge (1 point);
@@ -195,7 +72,8 @@ def plan_merges(
     A bridge over a free edge is a flip between the incenters (Thm 2.4) if
     ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
 
-    Returns ``(status (m,) int8, slot (3m,) int8, swap_he (m,) int64, counts, bad)``:
+    Returns ``(status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
+    int64, counts, bad)``: ``join[t]`` the index in ``cand`` of t's swap or split,
     ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and ``bad`` flags
     the triangles of connected pieces left as more than one node (an absorbed
     triangle was some cycle's only way out): the caller retries without absorbing
@@ -206,11 +84,12 @@ def plan_merges(
     status = np.zeros(m, np.int8)
     slot = np.zeros(nh, np.int8)
     swap_he = np.full(m, -1, np.int64)
+    join = np.full(m, -1, np.int64)
     uf = np.arange(n_cyc + m)
     for t in range(m):
         if cyc[t] < 0:
             status[t] = SPLIT  # provisional: uncovered triangles are split unless absorbed
-    # the only candidates: half-edges between two different nodes (both directions)
+    # half-edges between two different nodes (both directions)
     n_cross = 0
     cross = np.empty(nh, np.int64)
     for h in range(nh):
@@ -226,46 +105,32 @@ def plan_merges(
     n_join = 0
     n_merge = 0
     n_edge = 0
-    for stage in range(4):
-        if (stage < 2 and not swaps) or (stage >= 2 and not edge_splits):
+    for i in range(cand.shape[0]):
+        h = cand[i]
+        g = twin[h]
+        t = h // 3
+        u = g // 3
+        if swap_he[t] >= 0 or swap_he[u] >= 0 or (cyc[u] < 0 and no_absorb[u]):
             continue
-        if True:
-            for i in range(n_cross):
-                h = cross[i]
-                g = twin[h]
-                if g < 0 or (is_con[h] and stage < 2):
-                    continue
-                t = h // 3
-                u = g // 3
-                if cyc[t] < 0 or swap_he[t] >= 0 or swap_he[u] >= 0:
-                    continue
-                if stage % 2 == 0 and (cyc[u] >= 0 or no_absorb[u]):
-                    continue
-                if stage % 2 == 1 and (cyc[u] < 0 or g < h):
-                    continue
-                nt = cyc[t]
-                nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
-                rt = _find(uf, nt)
-                ru = _find(uf, nu)
-                if rt == ru:
-                    continue
-                if stage < 2:
-                    if not swap_ok(pts, tri, twin, h, floor_s2, cos_fold):
-                        continue
-                elif not split_ok(pts, tri, twin, h, floor_s2):
-                    continue
-                uf[rt] = ru
-                swap_he[t] = h
-                swap_he[u] = g
-                status[t] = SWAP if stage < 2 else EDGE
-                status[u] = status[t]
-                if stage < 2:
-                    if stage == 0:
-                        n_abs += 1
-                    else:
-                        n_join += 1
-                else:
-                    n_edge += 1
+        nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+        rt = _find(uf, cyc[t])
+        ru = _find(uf, nu)
+        if rt == ru:
+            continue
+        uf[rt] = ru
+        swap_he[t] = h
+        swap_he[u] = g
+        join[t] = i
+        join[u] = i
+        status[t] = SWAP if ckind[i] == 1 else EDGE
+        status[u] = status[t]
+        if ckind[i] == 1:
+            if cyc[u] < 0:
+                n_abs += 1
+            else:
+                n_join += 1
+        else:
+            n_edge += 1
     is_split = np.zeros(m, np.bool_)
     for t in range(m):
         is_split[t] = status[t] == SPLIT
@@ -349,16 +214,17 @@ def plan_merges(
             for t in range(m):
                 bad[t] = piece_bad[_find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)]
     counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
-    return status, slot, swap_he, counts, bad
+    return status, slot, swap_he, join, counts, bad
 
 
 @njit(cache=True)
-def _row(out, link, parent, kind, pos, x, y, z, bits, par, kd):
+def _row(out, link, parent, partner, kind, pos, x, y, z, bits, par, prt, kd):
     out[pos, 0] = x
     out[pos, 1] = y
     out[pos, 2] = z
     link[pos] = bits
     parent[pos] = par
+    partner[pos] = prt
     kind[pos] = kd
 
 
@@ -371,9 +237,13 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     Each output row gets ``link``: bit j set if the cycle crosses its edge j (from
     vertex j to j + 1). Row kinds: 0 incenter sector, 1 flip (bridge), 2 midpoint
     (bridge, or an edge split without incenters), 3 input triangle kept whole, 4
-    swapped pair (flip without Steiner point).
+    swapped pair (flip without Steiner point). ``partner`` is the other triangle a
+    join replaced (the twin across the swapped, split or bridged edge; -1 for kept
+    triangles and plain sectors): with ``parent`` the row's parents. ``mid_t[j]`` is
+    the triangle t whose split made midpoint j (-1 for a bridge's midpoint): the
+    caller places those Steiner points.
 
-    Returns ``(out, link, parent, kind, mid_a, mid_b)``.
+    Returns ``(out, link, parent, partner, kind, mid_a, mid_b, mid_t)``.
     """
     m = tri.shape[0]
     n_split = 0
@@ -393,10 +263,12 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
     parent = np.empty(total, np.int64)
+    partner = np.full(total, -1, np.int64)
     kind = np.empty(total, np.int8)
     mid_of = np.full(3 * m, -1, np.int64)
     mid_a = np.empty(n_midh // 2, np.int64)
     mid_b = np.empty(n_midh // 2, np.int64)
+    mid_t = np.full(n_midh // 2, -1, np.int64)
     n_mid = 0
     n_all = n_points + n_split
     pos = 0
@@ -442,6 +314,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                 bits |= 2
             link[pos] = bits
             parent[pos] = t
+            partner[pos] = u
             kind[pos] = 4
             pos += 1
             # (d, b, c): edges db (u's), bc (t's), cd (diagonal)
@@ -460,6 +333,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                 bits |= 4
             link[pos] = bits
             parent[pos] = u
+            partner[pos] = t
             kind[pos] = 4
             pos += 1
         elif st == EDGE:
@@ -477,18 +351,19 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
             mv = n_all + n_mid
             mid_a[n_mid] = a
             mid_b[n_mid] = b
+            mid_t[n_mid] = t
             n_mid += 1
             # t1 (a, M, c), t2 (M, b, c), u1 (b, M, d), u2 (M, a, d); cross links
             # t1-u2 (aM) and t2-u1 (Mb) are edge 0 of all four; outer edges where
             # covered, else the sibling (t1-t2, u1-u2)
             ct = is_cov[3 * t + (k + 2) % 3]
-            _row(out, link, parent, kind, pos, a, mv, c, 1 | (4 if ct else 2), t, 2)
+            _row(out, link, parent, partner, kind, pos, a, mv, c, 1 | (4 if ct else 2), t, u, 2)
             ct = is_cov[3 * t + (k + 1) % 3]
-            _row(out, link, parent, kind, pos + 1, mv, b, c, 1 | (2 if ct else 4), t, 2)
+            _row(out, link, parent, partner, kind, pos + 1, mv, b, c, 1 | (2 if ct else 4), t, u, 2)
             cu = is_cov[3 * u + (kg + 2) % 3]
-            _row(out, link, parent, kind, pos + 2, b, mv, d, 1 | (4 if cu else 2), u, 2)
+            _row(out, link, parent, partner, kind, pos + 2, b, mv, d, 1 | (4 if cu else 2), u, t, 2)
             cu = is_cov[3 * u + (kg + 1) % 3]
-            _row(out, link, parent, kind, pos + 3, mv, a, d, 1 | (2 if cu else 4), u, 2)
+            _row(out, link, parent, partner, kind, pos + 3, mv, a, d, 1 | (2 if cu else 4), u, t, 2)
             pos += 4
         else:
             inc = n_points + split_index[t]
@@ -523,6 +398,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     out[pos, 2] = n_points + split_index[u]
                     link[pos] = 3
                     parent[pos] = t
+                    partner[pos] = u
                     kind[pos] = 1
                     pos += 1
                 else:
@@ -539,6 +415,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     out[pos, 2] = mv
                     link[pos] = 3
                     parent[pos] = t
+                    partner[pos] = g // 3
                     kind[pos] = 2
                     pos += 1
                     out[pos, 0] = inc
@@ -546,9 +423,10 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     out[pos, 2] = b
                     link[pos] = 6
                     parent[pos] = t
+                    partner[pos] = g // 3
                     kind[pos] = 2
                     pos += 1
-    return out[:pos], link[:pos], parent[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid]
+    return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
 @njit(cache=True)

@@ -55,17 +55,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammesh.halfedge import _kernels
-from hammesh.errors import VerificationError
+from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.postprocess.conform import split_segments
+from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
 from hammesh.halfedge import HalfEdges
 
-__all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles"]
+__all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "KEEP"]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
 SWAP_MARGIN = 1e-6
+#: the local quality rule's default factor (issue 13): new angles >= KEEP x the parents' smallest
+KEEP = 0.9
+#: new angles may exceed the input's largest angle by this much (degrees)
+MAX_ANGLE_SLACK_DEG = 5.0
+#: step halvings of the compass search placing a split's Steiner point
+PLACE_ITERS = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,6 +98,31 @@ def _incenters(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
     return (la[:, None] * p[:, 0] + lb[:, None] * p[:, 1] + lc[:, None] * p[:, 2]) / (la + lb + lc)[:, None]
 
 
+def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest angle (radians) of every triangle (2D or 3D points)."""
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    lo = np.empty(len(tri))
+    hi = np.empty(len(tri))
+    _j.triangle_min_max_into(pts, tri, lo, hi)
+    return lo, hi
+
+
+def _join_order(kind: np.ndarray, slack: np.ndarray, newmin: np.ndarray, pmin: np.ndarray) -> np.ndarray:
+    """Candidates in the order Kruskal takes them: best joins first.
+
+    Joins meeting the local rule (slack >= 0) come first, Steiner-free swaps before
+    splits, each by decreasing slack; then the joins that miss the rule but keep at
+    least half their parents' smallest angle (no worse than a Thm 2.4 bridge), by
+    decreasing slack. Other candidates are dropped (a bridge does better).
+    """
+    meets = slack >= 0.0
+    usable = (kind != _j.NO_JOIN) & (meets | (newmin >= 0.5 * pmin))
+    idx = np.flatnonzero(usable)
+    kk = np.where(meets[idx], kind[idx], 0)
+    return idx[np.lexsort((-slack[idx], kk, ~meets[idx]))]
+
+
 def sparse_cycles(
     points: np.ndarray,
     triangles: np.ndarray,
@@ -98,11 +130,13 @@ def sparse_cycles(
     is_con: np.ndarray,
     min_angle: float,
     *,
+    keep: float = KEEP,
     swaps: bool = True,
     edge_splits: bool = True,
     flip_bridges: bool = True,
     max_fold_deg: float = 180.0,
     use_cover: bool = True,
+    place_iters: int = PLACE_ITERS,
 ) -> SparseResult:
     """The sparse construction on arrays (unverified).
 
@@ -112,13 +146,20 @@ def sparse_cycles(
     triangles : (m, 3) int64, consistently oriented
     twin : (3 m,) int64
     is_con : (3 m,) bool
-        Constrained half-edges: never flipped nor swapped.
+        Pinned half-edges: never flipped nor swapped, split only at their midpoint
+        (constrained edges, edges between regions).
     min_angle : float
-        The input's minimum angle in radians; swaps keep every angle above half of it.
+        The input's minimum angle in radians; every join keeps every new angle above
+        half of it (the proven floor, Thm 2.4).
+    keep : float
+        The local quality rule (issue 13): a join *meets* it if every new angle is
+        at least ``keep`` x the smallest angle of the two triangles it replaces and
+        no new angle exceeds the input's largest angle + 5 degrees. Joins meeting it
+        are taken first, best first; where none does, the best one available.
     swaps : bool
         Allow Steiner-free swaps (they change the surface in 3D).
     edge_splits : bool
-        Allow joins by an edge midpoint alone (1 Steiner point, angles checked).
+        Allow joins by one Steiner point on (or, planar and free, near) the shared edge.
     flip_bridges : bool
         Bridge free edges by flipping between incenters (False: by their midpoint,
         which keeps a 3D surface exactly).
@@ -127,7 +168,12 @@ def sparse_cycles(
     use_cover : bool
         False: no cover, every triangle is split and bridged (Thm 2.4 itself, as a
         baseline for surfaces).
+    place_iters : int
+        Step halvings of the compass search placing a split's Steiner point (0: the
+        midpoint).
     """
+    if not 0.0 <= keep <= 1.0:
+        raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     tw = np.ascontiguousarray(twin, dtype=np.int64)
@@ -137,16 +183,27 @@ def sparse_cycles(
         cover = cycle_cover(tri, tw)
     else:
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
+    amin_t, amax_t = triangle_angles(pts, tri)
+    hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
-    floor_s2 = math.sin(min(floor, math.pi / 2)) ** 2
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
+    cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
+    ckind = np.zeros(len(cand), np.int8)
+    slack = np.empty(len(cand))
+    newmin = np.empty(len(cand))
+    point = np.empty((len(cand), pts.shape[1]))
+    _j.score_joins_into(
+        pts, tri, tw, con, cand, amin_t, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
+        int(place_iters), ckind, slack, newmin, point,
+    )
+    t_of, u_of = cand // 3, tw[cand] // 3
+    order = _join_order(ckind, slack, newmin, np.minimum(amin_t[t_of], amin_t[u_of]))
     no_absorb = np.zeros(m, np.bool_)
     for attempt in range(4):
         if attempt == 3:
             no_absorb[:] = True
-        status, slot, swap_he, counts, bad = _k.plan_merges(
-            pts, tri, tw, con, cover.is_cov, cover.cycle, cover.n_cycles, floor_s2, cos_fold,
-            swaps, edge_splits, no_absorb, flip_bridges,
+        status, slot, swap_he, join, counts, bad = _k.plan_merges(
+            tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges
         )
         if not bad.any():
             break
@@ -155,20 +212,27 @@ def sparse_cycles(
         raise VerificationError("internal error: the sparse merge left a piece with two cycles")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
-    out, link, parent, kind, mid_a, mid_b = _k.emit(
+    out, link, parent, partner, kind, mid_a, mid_b, mid_t = _k.emit(
         tri, tw, cover.is_cov, status, slot, swap_he, split_index, n
     )
     n_split = int(is_split.sum())
-    all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), 0.5 * (pts[mid_a] + pts[mid_b])])
+    mids = 0.5 * (pts[mid_a] + pts[mid_b])
+    placed = mid_t >= 0
+    mids[placed] = point[order][join[mid_t[placed]]]
+    all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), mids])
     out_twin, dup = _kernels.half_edge_twins(out, len(all_pts))
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of row {int(dup) // 3} used twice")
-    order, lengths, bad = _k.walk_links(link, out_twin)
+    order_rows, lengths, bad = _k.walk_links(link, out_twin)
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
     # runs in the order of their lowest input triangle; twins renumbered as the claim
-    key = np.minimum.reduceat(parent[order], np.cumsum(lengths) - lengths)
-    order, lengths, claim = _k.reorder_runs(order, lengths, np.argsort(key, kind="stable"), out_twin)
+    key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
+    order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, np.argsort(key, kind="stable"), out_twin)
+    out, parent, partner, kind = out[order_rows], parent[order_rows], partner[order_rows], kind[order_rows]
+    quality = local_quality(all_pts, out, parent, partner, kind, amin_t, keep, hi)
+    quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m else 0.0
+    quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts, tri))
     counts_d = {
         "cycles_before_merging": int(cover.n_cycles),
         "cover_rotations": int(cover.n_rotations),
@@ -183,18 +247,53 @@ def sparse_cycles(
         "bridges": int(counts[2]),
         "flips": int((slot == _k.FLIP).sum() // 2),
         "retries": attempt,
+        "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),
+        **quality,
     }
     return SparseResult(
         points=all_pts,
-        triangles=out[order],
+        triangles=out,
         lengths=lengths.astype(np.int64),
-        parent=parent[order],
-        kind=kind[order],
+        parent=parent,
+        kind=kind,
         claim=claim,
         mid_a=mid_a,
         mid_b=mid_b,
         counts=counts_d,
     )
+
+
+def local_quality(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    parent: np.ndarray,
+    partner: np.ndarray,
+    kind: np.ndarray,
+    parent_min: np.ndarray,
+    keep: float,
+    max_allowed: float,
+) -> dict:
+    """The local quality rule's counts over the output (issue 13, item 1).
+
+    A new triangle (every kind but 3, kept whole) is *below the parent rule* if its
+    smallest angle is under ``keep`` x the smallest angle of its parents (``parent``
+    and, for joins, ``partner``), *above the max rule* if its largest angle exceeds
+    ``max_allowed`` (radians); both up to a relative 1e-9.
+    """
+    lo, hi = triangle_angles(points, triangles)
+    pm = parent_min[parent]
+    has = partner >= 0
+    pm[has] = np.minimum(pm[has], parent_min[partner[has]])
+    new = kind != 3
+    below = new & (lo < keep * pm * (1.0 - 1e-9))
+    above = new & (hi > max_allowed * (1.0 + 1e-9))
+    return {
+        "keep": float(keep),
+        "below_parent_rule": int(below.sum()),
+        "above_max_rule": int(above.sum()),
+        "worst_parent_ratio": float((lo[new] / pm[new]).min()) if new.any() else 1.0,
+        "radius_ratio_output": float(_j.worst_radius_ratio(points, triangles)),
+    }
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
@@ -213,7 +312,9 @@ def count_report(r: SparseResult, n: int, m: int) -> dict:
     }
 
 
-def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[HamiltonianMesh, np.ndarray]:
+def sparse_hamiltonian(
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, *, keep: float = KEEP
+) -> tuple[HamiltonianMesh, np.ndarray]:
     """Build the sparse Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
 
     Parameters
@@ -222,6 +323,8 @@ def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[H
         Counter-clockwise, validated (``hammesh.halfedge.prepare_mesh``).
     he : HalfEdges
     is_con : (3 m,) bool
+    keep : float
+        The local quality rule's factor (``sparse_cycles``).
 
     Returns
     -------
@@ -235,7 +338,18 @@ def sparse_hamiltonian(mesh: Mesh, he: HalfEdges, is_con: np.ndarray) -> tuple[H
     n, m = mesh.n_points, mesh.n_triangles
     seen = mesh.info.get("validated")  # found by prepare_mesh's orientation pass
     amin = float(seen["min_angle"] if seen else _kernels.orient_ccw(pts, tri).min_angle)
-    r = sparse_cycles(pts, tri, he.twin, is_con, amin)
+    pinned = is_con
+    attr = np.asarray(mesh.triangle_attributes)
+    if attr.size and m and (attr != attr[:1]).any():
+        # an edge between two regions is kept where it is (split only at its
+        # midpoint): a moved edge would carry one region's attribute into the other
+        a2 = attr.reshape(m, -1)
+        tw = he.twin
+        inner = tw >= 0
+        differ = np.zeros(3 * m, np.bool_)
+        differ[inner] = (a2[np.arange(3 * m)[inner] // 3] != a2[tw[inner] // 3]).any(axis=1)
+        pinned = is_con | differ
+    r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + n_inc, len(r.points)
