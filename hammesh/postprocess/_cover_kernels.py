@@ -147,8 +147,14 @@ def _peel(nb, m):
 
 
 @njit(cache=True)
-def _greedy_matching(nb, alive, deg, m):
-    """Karp-Sipser: match the degree-3 triangles among themselves, forced pairs first."""
+def _greedy_matching(nb, alive, deg, m, good):
+    """Karp-Sipser: match the degree-3 triangles among themselves, forced pairs first.
+
+    Where a triangle has a choice, its partner is one across a ``good[t, k]`` edge if
+    any (matched edges are where the cover's cycles can later be joined: sparse mode
+    marks the edges whose join keeps the local quality rule), then the one with the
+    fewest free candidates of its own.
+    """
     stack = np.empty(m + 1, np.int64)
     # matching on alive triangles of (alive) degree 3, edges between them
     active = np.zeros(m, np.bool_)
@@ -180,13 +186,16 @@ def _greedy_matching(nb, alive, deg, m):
             if scan >= m:
                 break
             t = scan
-        # partner: the free candidate with fewest free candidates of its own
+        # partner: a good edge first, then the fewest free candidates of its own
         best = -1
+        best_good = False
         for k in range(3):
             u = nb[t, k]
             if u >= 0 and active[u] and mate[u] < 0:
-                if best < 0 or hdeg[u] < hdeg[best]:
+                gk = good[t, k]
+                if best < 0 or (gk and not best_good) or (gk == best_good and hdeg[u] < hdeg[best]):
                     best = u
+                    best_good = gk
         if best < 0:
             hdeg[t] = 0
             continue
@@ -380,7 +389,7 @@ def _final_peel(nb, twin, is_cov, cdeg, alive, m):
 
 
 @njit(cache=True)
-def dual_cover(twin, m, budget, arc_limit):
+def dual_cover(twin, m, budget, arc_limit, good):
     """Vertex-disjoint cycles of the dual graph covering most triangles.
 
     Gopi & Eppstein's observation, made to work with boundaries: in a graph of
@@ -396,11 +405,13 @@ def dual_cover(twin, m, budget, arc_limit):
        triangle (its inner triangles are left uncovered);
     4. peel again whatever still has cover degree other than 2.
 
+    ``good`` (m, 3) bool steers the greedy matching's free choices (``_greedy_matching``).
+
     Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered)``.
     """
     nb = _neighbors(twin, m)
     alive, deg = _peel(nb, m)
-    active, mate = _greedy_matching(nb, alive, deg, m)
+    active, mate = _greedy_matching(nb, alive, deg, m, good)
     parent = np.full(m, -1, np.int64)
     fa = np.arange(m)
     label = np.full(m, -1, np.int64)

@@ -191,13 +191,13 @@ def _swap_geometry(pts, a, b, c, d, cos_fold):
 @njit(cache=True, nogil=True)
 def score_joins_into(
     pts, tri, twin, pinned, cand, amin, keep, hi, floor, cos_fold, swaps, edge_splits, place_iters,
-    kind, slack, newmin, point,
+    kind, slack, newmin, newmax, point,
 ):
     """Judge every candidate join (half-edge ``cand[i]`` of the covered triangle t).
 
     For each candidate the better of its swap and its split (a swap wins a tie: no
-    Steiner point) is kept in ``kind[i]``, ``slack[i]``, ``newmin[i]`` (smallest new
-    angle) and ``point[i]`` (the split's Steiner point). A split of a ``pinned`` edge
+    Steiner point) is kept in ``kind[i]``, ``slack[i]``, ``newmin[i]``, ``newmax[i]``
+    (smallest and largest new angle) and ``point[i]`` (the split's Steiner point). A split of a ``pinned`` edge
     (constrained, or between two regions) or in 3D keeps the midpoint; a free planar
     split is placed by :func:`place_split` unless the swap or the midpoint already
     meets the rule with room to spare. ``kind[i] = NO_JOIN`` where neither keeps every
@@ -219,6 +219,7 @@ def score_joins_into(
         best = -np.inf
         bkind = NO_JOIN
         bmin = 0.0
+        bmax = np.pi
         if swaps and not pinned[h] and _swap_geometry(pts, a, b, c, d, cos_fold):
             l1, h1 = _min_max(pts[a], pts[d], pts[c])
             l2, h2 = _min_max(pts[d], pts[b], pts[c])
@@ -227,24 +228,28 @@ def score_joins_into(
                 best = min(smin - lo, hi - max(h1, h2))
                 bkind = SWAP_JOIN
                 bmin = smin
+                bmax = max(h1, h2)
         for j in range(pts.shape[1]):
             point[i, j] = 0.5 * (pts[a, j] + pts[b, j])
         if edge_splits and best < 0.0:
             s, smin, smax = _star4(pts[a], pts[b], pts[c], pts[d], point[i], lo, hi)
             if planar and not pinned[h] and place_iters > 0:
-                x, y, s2, m2, _ = place_split(pts[a], pts[b], pts[c], pts[d], lo, hi, place_iters)
+                x, y, s2, m2, x2 = place_split(pts[a], pts[b], pts[c], pts[d], lo, hi, place_iters)
                 if s2 > s:
                     s = s2
                     smin = m2
+                    smax = x2
                     point[i, 0] = x
                     point[i, 1] = y
             if smin >= floor and s > best:
                 best = s
                 bkind = SPLIT_JOIN
                 bmin = smin
+                bmax = smax
         kind[i] = bkind
         slack[i] = best
         newmin[i] = bmin
+        newmax[i] = bmax
 
 
 @njit(cache=True, nogil=True)

@@ -50,7 +50,13 @@ class CycleCover:
 
 
 def cycle_cover(
-    triangles: np.ndarray, twin: np.ndarray, *, budget: int = 2000, arc_limit: int | None = None, rotate: bool = True
+    triangles: np.ndarray,
+    twin: np.ndarray,
+    *,
+    budget: int = 2000,
+    arc_limit: int | None = None,
+    rotate: bool = True,
+    good: np.ndarray | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -67,6 +73,10 @@ def cycle_cover(
     rotate : bool
         Merge cycles by re-matching around vertices (``_sparse_kernels.rotate_stars``):
         fewer cycles, same geometry.
+    good : (3 m,) bool, optional
+        Half-edges preferred as matching (non-cover) edges where the greedy matching
+        has a choice: the non-cover edges are where cycles get joined, so sparse mode
+        marks the edges whose join would keep its quality rule.
 
     Returns
     -------
@@ -84,7 +94,8 @@ def cycle_cover(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     m = len(tw) // 3
     limit = m if arc_limit is None else int(arc_limit)
-    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit)
+    g = np.zeros((m, 3), np.bool_) if good is None else np.ascontiguousarray(good, dtype=np.bool_).reshape(m, 3)
+    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g)
     cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:

@@ -108,19 +108,24 @@ def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
     return lo, hi
 
 
-def _join_order(kind: np.ndarray, slack: np.ndarray, newmin: np.ndarray, pmin: np.ndarray) -> np.ndarray:
+def _join_order(
+    kind: np.ndarray, slack: np.ndarray, newmin: np.ndarray, pmin: np.ndarray, whole: np.ndarray
+) -> np.ndarray:
     """Candidates in the order Kruskal takes them: best joins first.
 
     Joins meeting the local rule (slack >= 0) come first, Steiner-free swaps before
-    splits, each by decreasing slack; then the joins that miss the rule but keep at
-    least half their parents' smallest angle (no worse than a Thm 2.4 bridge), by
-    decreasing slack. Other candidates are dropped (a bridge does better).
+    splits, each by decreasing slack; then those that miss it but keep the rule
+    against the input's *global* minimum (``whole``: new angles >= keep x the
+    input's smallest, <= its largest + 5 degrees), then the others that keep at
+    least half their parents' smallest angle (no worse than a Thm 2.4 bridge), each
+    by decreasing slack. Other candidates are dropped (a bridge does better).
     """
     meets = slack >= 0.0
     usable = (kind != _j.NO_JOIN) & (meets | (newmin >= 0.5 * pmin))
     idx = np.flatnonzero(usable)
     kk = np.where(meets[idx], kind[idx], 0)
-    return idx[np.lexsort((-slack[idx], kk, ~meets[idx]))]
+    tier = np.where(meets[idx], 0, np.where(whole[idx], 1, 2))
+    return idx[np.lexsort((-slack[idx], kk, tier))]
 
 
 def sparse_cycles(
@@ -179,25 +184,40 @@ def sparse_cycles(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     con = np.ascontiguousarray(is_con, dtype=np.bool_)
     n, m = len(pts), len(tri)
-    if use_cover:
-        cover = cycle_cover(tri, tw)
-    else:
-        cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     amin_t, amax_t = triangle_angles(pts, tri)
     hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
+    if use_cover:
+        # edges whose join (swap or midpoint split) keeps the rule: the cover's
+        # matching prefers them as its non-cover edges, where cycles get joined
+        inner = np.flatnonzero(tw > np.arange(3 * m))
+        g_kind = np.zeros(len(inner), np.int8)
+        g_slack = np.empty(len(inner))
+        _j.score_joins_into(
+            pts, tri, tw, con, inner, amin_t, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
+            0, g_kind, g_slack, np.empty(len(inner)), np.empty(len(inner)), np.empty((len(inner), pts.shape[1])),
+        )
+        good = np.zeros(3 * m, np.bool_)
+        ok = inner[g_slack >= 0.0]
+        good[ok] = True
+        good[tw[ok]] = True
+        cover = cycle_cover(tri, tw, good=good)
+    else:
+        cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
     ckind = np.zeros(len(cand), np.int8)
     slack = np.empty(len(cand))
     newmin = np.empty(len(cand))
+    newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
     _j.score_joins_into(
         pts, tri, tw, con, cand, amin_t, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
-        int(place_iters), ckind, slack, newmin, point,
+        int(place_iters), ckind, slack, newmin, newmax, point,
     )
     t_of, u_of = cand // 3, tw[cand] // 3
-    order = _join_order(ckind, slack, newmin, np.minimum(amin_t[t_of], amin_t[u_of]))
+    whole = (newmin >= keep * min_angle) & (newmax <= hi)
+    order = _join_order(ckind, slack, newmin, np.minimum(amin_t[t_of], amin_t[u_of]), whole)
     no_absorb = np.zeros(m, np.bool_)
     for attempt in range(4):
         if attempt == 3:
