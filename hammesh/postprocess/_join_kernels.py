@@ -286,3 +286,193 @@ def worst_radius_ratio(pts, tri):
         if x > worst:
             worst = x
     return worst
+
+
+@njit(cache=True, nogil=True)
+def _fan_eval(pts, poly, n, p, lo, hi):
+    """Slack, smallest and largest angle of the fan ``(p, poly[i], poly[i + 1])``."""
+    nmin = np.pi
+    nmax = 0.0
+    for i in range(n):
+        a = pts[poly[i]]
+        b = pts[poly[(i + 1) % n]]
+        s2 = (b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2
+        if _orient(p, a, b) <= 1e-12 * s2:
+            return -np.inf, 0.0, np.pi
+        l1, h1 = _min_max(p, a, b)
+        nmin = min(nmin, l1)
+        nmax = max(nmax, h1)
+    return min(nmin - lo, hi - nmax), nmin, nmax
+
+
+@njit(cache=True, nogil=True)
+def place_fan(pts, poly, n, starts, n_starts, lo, hi, step, iters):
+    """Steiner point of a fan over the polygon ``poly[:n]`` (counter-clockwise).
+
+    Amenta-Bern-Eppstein's placement problem again (see module docstring): the best
+    of the feasible ``starts``, improved by compass search. Returns
+    ``(x, y, slack, smallest angle, largest angle)``; slack ``-inf`` if no start is
+    inside the polygon's kernel.
+    """
+    best = -np.inf
+    bmin = 0.0
+    bmax = np.pi
+    mm = np.empty(2)
+    for s in range(n_starts):
+        sl, lmin, lmax = _fan_eval(pts, poly, n, starts[s], lo, hi)
+        if sl > best:
+            best = sl
+            bmin = lmin
+            bmax = lmax
+            mm[0] = starts[s, 0]
+            mm[1] = starts[s, 1]
+    if best == -np.inf:
+        return 0.0, 0.0, best, bmin, bmax
+    trial = np.empty(2)
+    halvings = 0
+    while halvings < iters:
+        moved = False
+        bx = mm[0]
+        by = mm[1]
+        for k in range(8):
+            ang = 0.25 * math.pi * k
+            trial[0] = mm[0] + step * math.cos(ang)
+            trial[1] = mm[1] + step * math.sin(ang)
+            sl, lmin, lmax = _fan_eval(pts, poly, n, trial, lo, hi)
+            if sl > best:
+                best = sl
+                bmin = lmin
+                bmax = lmax
+                bx = trial[0]
+                by = trial[1]
+                moved = True
+        if moved:
+            mm[0] = bx
+            mm[1] = by
+        else:
+            step *= 0.5
+            halvings += 1
+    return mm[0], mm[1], best, bmin, bmax
+
+
+@njit(cache=True, nogil=True)
+def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters):
+    """Groups of adjacent uncovered triangles, each to be replaced by one fan.
+
+    Chains of triangles no cover cycle passes (thin parts, what ears leave) would
+    otherwise cost a Steiner point each. Greedy: from each uncovered triangle not yet
+    grouped, add uncovered neighbours across free edges one at a time (their apex
+    must be new, so the union stays a triangulated disc without inner vertices)
+    while the polygon has a fan point whose triangles keep every angle >=
+    ``max(floor, 1/2 x the group's smallest)`` (no worse than Thm 2.4's incenter
+    sectors) and <= ``hi_fan``. A fan over a polygon of ``k + 2`` corners is a cycle of
+    ``k + 2`` triangles with one Steiner point, in place of ``k`` triangles.
+
+    Returns ``(group (m,) int64, -1 if none; fan points (g, 2); group minimum angle
+    (g,); polygon offsets (g + 1,); polygon corners; polygon edge half-edges)``:
+    group j's polygon is ``corners[off[j]:off[j + 1]]`` counter-clockwise, its edge
+    ``(corners[i], corners[i + 1])`` is the input half-edge ``he[i]``.
+    """
+    m = tri.shape[0]
+    group = np.full(m, -1, np.int64)
+    fan_pt = np.empty((m // 2 + 1, 2))
+    gmin_out = np.empty(m // 2 + 1)
+    off = np.zeros(m // 2 + 2, np.int64)
+    corners = np.empty(2 * m + 2, np.int64)
+    hes = np.empty(2 * m + 2, np.int64)
+    ng = 0
+    n_c = 0
+    cap = max_group + 3
+    poly = np.empty(cap, np.int64)
+    phe = np.empty(cap, np.int64)
+    tpoly = np.empty(cap, np.int64)
+    tphe = np.empty(cap, np.int64)
+    members = np.empty(cap, np.int64)
+    starts = np.empty((cap, 2))
+    for s in range(m):
+        if cyc[s] >= 0 or group[s] >= 0:
+            continue
+        nm = 1
+        members[0] = s
+        n = 3
+        for k in range(3):
+            poly[k] = tri[s, k]
+            phe[k] = 3 * s + k
+        gmin = amin[s]
+        px = 0.0
+        py = 0.0
+        while nm < max_group:
+            grown = False
+            for i in range(n):
+                h = phe[i]
+                g = twin[h]
+                if g < 0 or pinned[h]:
+                    continue
+                y = g // 3
+                if cyc[y] >= 0 or group[y] >= 0:
+                    continue
+                dup = False
+                for j in range(nm):
+                    if members[j] == y:
+                        dup = True
+                kg = g - 3 * y
+                w = tri[y, (kg + 2) % 3]
+                for j in range(n):
+                    if poly[j] == w:
+                        dup = True
+                if dup:
+                    continue
+                # insert w between poly[i] and poly[i + 1]: edges (a, w), (w, b) of y
+                for j in range(i + 1):
+                    tpoly[j] = poly[j]
+                    tphe[j] = phe[j]
+                tpoly[i + 1] = w
+                tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
+                tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
+                for j in range(i + 1, n):
+                    tpoly[j + 1] = poly[j]
+                    tphe[j + 1] = phe[j]
+                gm = min(gmin, amin[y])
+                ns = 0
+                for j in range(nm + 1):
+                    x = members[j] if j < nm else y
+                    starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
+                    starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
+                    ns += 1
+                if nm > 1:
+                    starts[ns, 0] = px
+                    starts[ns, 1] = py
+                    ns += 1
+                step = 0.25 * math.sqrt(
+                    (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
+                )
+                x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n + 1, starts, ns, keep * gm, hi, step, iters)
+                if sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan:
+                    continue
+                members[nm] = y
+                nm += 1
+                n += 1
+                for j in range(n):
+                    poly[j] = tpoly[j]
+                    phe[j] = tphe[j]
+                gmin = gm
+                px = x0
+                py = y0
+                grown = True
+                break
+            if not grown:
+                break
+        if nm < 2:
+            continue
+        for j in range(nm):
+            group[members[j]] = ng
+        fan_pt[ng, 0] = px
+        fan_pt[ng, 1] = py
+        gmin_out[ng] = gmin
+        for j in range(n):
+            corners[n_c] = poly[j]
+            hes[n_c] = phe[j]
+            n_c += 1
+        ng += 1
+        off[ng] = n_c
+    return group, fan_pt[:ng], gmin_out[:ng], off[: ng + 1], corners[:n_c], hes[:n_c]

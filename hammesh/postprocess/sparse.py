@@ -73,6 +73,8 @@ KEEP = 0.9
 MAX_ANGLE_SLACK_DEG = 5.0
 #: step halvings of the compass search placing a split's Steiner point
 PLACE_ITERS = 12
+#: most triangles one fan (one Steiner point) may replace
+FAN_MAX = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,6 +130,59 @@ def _join_order(
     return idx[np.lexsort((-slack[idx], kk, tier))]
 
 
+def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, floor: float, amax_in: float):
+    """Replace groups of uncovered triangles by fans (``_join_kernels.fan_groups``).
+
+    Returns the modified ``(points, triangles, twin, pinned, cover, parent_min,
+    orig_of, is_fan, n_fan)``: the fans' points follow the input points, fan
+    triangles follow the kept ones; ``orig_of`` maps each triangle to the input
+    triangle it lies in or over (a fan triangle: the one holding its outer edge),
+    ``parent_min`` is the smallest angle of the triangles each one replaces.
+    """
+    m = len(tri)
+    hi_fan = max(hi, 0.5 * math.pi + 0.5 * amax_in)  # no worse than an incenter sector
+    # fan triangles keep the input's minimum angle (2 x floor): a bridge may split
+    # them at their incenters later, and Thm 2.4's bound then needs exactly that
+    group, fpt, gmin, off, corners, hes = _j.fan_groups(
+        pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS
+    )
+    n_fan = len(fpt)
+    if n_fan == 0:
+        return pts, tri, tw, con, cover, amin_t, np.arange(m), np.zeros(m, np.bool_), 0
+    n = len(pts)
+    kept = np.flatnonzero(group < 0)
+    sizes = np.diff(off)
+    g_of = np.repeat(np.arange(n_fan), sizes)
+    nxt = np.arange(len(corners)) + 1
+    nxt[off[1:] - 1] = off[:-1]  # the last corner wraps to the group's first
+    fan_tri = np.stack([n + g_of, corners, corners[nxt]], axis=1)
+    tri2 = np.concatenate([tri[kept], fan_tri])
+    pts2 = np.concatenate([pts, fpt])
+    m2 = len(tri2)
+    tw2, dup = _kernels.half_edge_twins(tri2, len(pts2))
+    if dup >= 0:
+        raise VerificationError(f"internal error: fan edge of row {int(dup) // 3} used twice")
+    con2 = np.concatenate([con.reshape(m, 3)[kept], np.zeros((len(fan_tri), 3), np.bool_)], axis=0)
+    con2[len(kept):, 1] = con[hes]
+    is_cov2 = np.concatenate(
+        [cover.is_cov.reshape(m, 3)[kept], np.tile(np.array([True, False, True]), (len(fan_tri), 1))], axis=0
+    )
+    cyc2 = np.concatenate([cover.cycle[kept], cover.n_cycles + g_of])
+    cover2 = CycleCover(
+        is_cov=is_cov2.reshape(-1),
+        cycle=cyc2,
+        n_cycles=cover.n_cycles + n_fan,
+        n_uncovered=int((cyc2 < 0).sum()),
+        n_unmatched=cover.n_unmatched,
+        n_rotations=cover.n_rotations,
+    )
+    amin2 = np.concatenate([amin_t[kept], gmin[g_of]])
+    orig_of = np.concatenate([kept, hes // 3])
+    is_fan = np.zeros(m2, np.bool_)
+    is_fan[len(kept):] = True
+    return pts2, tri2, tw2, con2.reshape(-1), cover2, amin2, orig_of, is_fan, n_fan
+
+
 def sparse_cycles(
     points: np.ndarray,
     triangles: np.ndarray,
@@ -142,6 +197,7 @@ def sparse_cycles(
     max_fold_deg: float = 180.0,
     use_cover: bool = True,
     place_iters: int = PLACE_ITERS,
+    fans: bool = True,
 ) -> SparseResult:
     """The sparse construction on arrays (unverified).
 
@@ -176,6 +232,9 @@ def sparse_cycles(
     place_iters : int
         Step halvings of the compass search placing a split's Steiner point (0: the
         midpoint).
+    fans : bool
+        Planar only: replace chains of uncovered triangles by fans around one
+        Steiner point each (``_join_kernels.fan_groups``) instead of a point each.
     """
     if not 0.0 <= keep <= 1.0:
         raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
@@ -205,6 +264,14 @@ def sparse_cycles(
         cover = cycle_cover(tri, tw, good=good)
     else:
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
+    n_unc0 = cover.n_uncovered
+    pts0, tri0, m0 = pts, tri, m
+    orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
+    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
+        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_fan = _fans(
+            pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
+        )
+        n, m = len(pts), len(tri)
     cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
     ckind = np.zeros(len(cand), np.int8)
     slack = np.empty(len(cand))
@@ -212,12 +279,12 @@ def sparse_cycles(
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
     _j.score_joins_into(
-        pts, tri, tw, con, cand, amin_t, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
+        pts, tri, tw, con, cand, amin_p, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
         int(place_iters), ckind, slack, newmin, newmax, point,
     )
     t_of, u_of = cand // 3, tw[cand] // 3
     whole = (newmin >= keep * min_angle) & (newmax <= hi)
-    order = _join_order(ckind, slack, newmin, np.minimum(amin_t[t_of], amin_t[u_of]), whole)
+    order = _join_order(ckind, slack, newmin, np.minimum(amin_p[t_of], amin_p[u_of]), whole)
     no_absorb = np.zeros(m, np.bool_)
     for attempt in range(4):
         if attempt == 3:
@@ -250,13 +317,18 @@ def sparse_cycles(
     key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
     order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, np.argsort(key, kind="stable"), out_twin)
     out, parent, partner, kind = out[order_rows], parent[order_rows], partner[order_rows], kind[order_rows]
-    quality = local_quality(all_pts, out, parent, partner, kind, amin_t, keep, hi)
-    quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m else 0.0
-    quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts, tri))
+    if n_fan:
+        kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
+    quality = local_quality(all_pts, out, parent, partner, kind, amin_p, keep, hi)
+    quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
+    quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts0, tri0))
+    parent = orig_of[parent]
     counts_d = {
         "cycles_before_merging": int(cover.n_cycles),
         "cover_rotations": int(cover.n_rotations),
-        "uncovered": int(cover.n_uncovered),
+        "uncovered": int(n_unc0),
+        "fans": int(n_fan),
+        "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,
         "midpoints": int(len(mid_a)),
@@ -318,7 +390,7 @@ def local_quality(
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
     """The report's counts of a sparse construction from ``n`` points, ``m`` triangles."""
-    steiner = r.counts["incenters"] + r.counts["midpoints"]
+    steiner = r.counts["incenters"] + r.counts["midpoints"] + r.counts.get("fans", 0)
     return {
         "triangles": int(len(r.triangles)),
         "vertices": int(len(r.points)),
@@ -372,7 +444,7 @@ def sparse_hamiltonian(
     r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
-        mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + n_inc, len(r.points)
+        mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)
     )
     lengths = r.lengths
     position = cycle_positions(lengths)

@@ -25,8 +25,9 @@ def assert_sparse_certificate(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> No
     assert_tiling_and_bound(m, h)
     assert len(h.components) == dual_pieces(m.triangles)
     r = h.report
-    # every split adds 2 triangles (3 sectors for 1), every midpoint 2 more
-    assert r["steiner_points"] == r["incenters"] + r["midpoints"]
+    # every split adds 2 triangles (3 sectors for 1), every midpoint 2 more, every
+    # fan over k triangles k + 2 triangles
+    assert r["steiner_points"] == r["incenters"] + r["midpoints"] + r["fans"]
     assert r["triangles_added"] == 2 * r["steiner_points"] == h.n_triangles - m.n_triangles
     assert h.n_points == m.n_points + r["steiner_points"]
     assert set(np.unique(h.kind).tolist()) <= set(range(len(KIND_NAMES)))
