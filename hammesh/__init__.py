@@ -4,7 +4,7 @@ The public contract::
 
     dom = hammesh.read_domain("plate.poly")          # or hammesh.Domain(...)
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.01)
-    h = hammesh.hamiltonian(m)                        # Thm 2.4, verified
+    h = hammesh.hamiltonian(m)                        # sparse mode, verified
     hammesh.write(h, "plate.vtu")
 
 Based on Arkin, Held, Mitchell, Skiena, "Hamiltonian Triangulations for Fast

@@ -24,6 +24,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, default=Path("hammesh-demo"), help="output folder (default: hammesh-demo)")
     p.add_argument("--min-angle", type=float, default=30.0)
     p.add_argument("--max-area", type=float, default=0.01)
+    p.add_argument("--mode", choices=["sparse", "incircle"], default="sparse", help="Hamiltonian construction")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -32,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = Outputs(
         mesh=args.out / "mesh.vtu", report=args.out / "report.json", png=args.out / "cycle.png"
     )
-    h = run_pipeline(domain, {"min_angle": args.min_angle, "max_area": args.max_area}, outputs)
+    h = run_pipeline(domain, {"min_angle": args.min_angle, "max_area": args.max_area}, outputs, mode=args.mode)
     print(f"demo domain: {demo_domain_path()}")
     print(summary(h))
     print(f"wrote {outputs.mesh}, {outputs.report}, {outputs.png}")

@@ -33,7 +33,10 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--conforming-delaunay", action="store_true", help="every triangle Delaunay (-D)")
     g.add_argument("--max-steiner", type=int, help="limit on Steiner points added by the mesher")
     g.add_argument("--timeout", type=float, help="stop the mesher after this many seconds")
-    p.add_argument("--mode", choices=sorted(MODES), default="incircle", help="Hamiltonian construction")
+    p.add_argument(
+        "--mode", choices=sorted(MODES), default="sparse",
+        help="Hamiltonian construction: sparse (default, keeps the input's quality) or incircle (Thm 2.4)",
+    )
     p.add_argument(
         "--keep", type=float, default=0.9,
         help="sparse mode: new angles >= KEEP x the replaced triangles' smallest where a join can (0..1)",

@@ -73,7 +73,7 @@ class _Steps:
 
 
 def run_pipeline(
-    source: Domain | Mesh, mesh_options: dict[str, Any], outputs: Outputs, *, mode: str = "incircle", keep: float = 0.9
+    source: Domain | Mesh, mesh_options: dict[str, Any], outputs: Outputs, *, mode: str = "sparse", keep: float = 0.9
 ) -> HamiltonianMesh:
     """Mesh (if ``source`` is a Domain), make Hamiltonian, verify, then write outputs."""
     outputs.check()

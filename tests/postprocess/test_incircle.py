@@ -39,7 +39,7 @@ def test_bundled_domains(name: str) -> None:
     except hammesh.InvalidDomainError as exc:  # a bundled file our validator rejects
         pytest.skip(f"{name}: {exc}")
     m = hammesh.quality_mesh(dom, min_angle=25, max_area=_area(dom) / 2000)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert h.report["verified"] is True
     assert_certificate(m, h)
 
@@ -54,7 +54,7 @@ def test_greenland_file_mesh() -> None:
     # Triangle's bundled greenland.node/.ele: 64k triangles of a real coastline
     d = triangle.get_data("greenland")
     m = hammesh.Mesh(points=d["vertices"], triangles=d["triangles"].astype(np.int64))
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert_certificate(m, h)
 
 
@@ -86,7 +86,7 @@ def plate_with_loops(n_loops: int) -> hammesh.Domain:
 @pytest.mark.parametrize("n_loops", [0, 1, 3])
 def test_midpoints_one_per_separated_region(n_loops: int) -> None:
     m = hammesh.quality_mesh(plate_with_loops(n_loops), min_angle=30, max_area=0.005)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     regions = dual_pieces(m.triangles, m.segments)
     pieces = dual_pieces(m.triangles)
     assert regions == n_loops + 1
@@ -104,7 +104,7 @@ def test_midpoints_one_per_separated_region(n_loops: int) -> None:
 
 def test_constrained_edges_are_never_flipped() -> None:
     m = hammesh.quality_mesh(plate_with_loops(2), min_angle=30, max_area=0.01)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     out_edges = {tuple(sorted(e)) for t in h.triangles.tolist() for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
     for a, b in h.segments.tolist():
         assert tuple(sorted((a, b))) in out_edges
@@ -115,7 +115,7 @@ def test_crack_needs_no_midpoint() -> None:
     v = square(0, 0, 1) + [[0.5, 0.0], [0.5, 0.6]]
     segs = [[0, 4], [4, 1], [1, 2], [2, 3], [3, 0], [4, 5]]
     m = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=segs), min_angle=28, max_area=0.01)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert h.report["midpoints"] == 0
     assert_certificate(m, h)
 
@@ -127,7 +127,7 @@ def test_disconnected_pieces_give_one_cycle_each() -> None:
         segs += [[b, b + 1], [b + 1, b + 2], [b + 2, b + 3], [b + 3, b]]
     dom = hammesh.Domain(vertices=v, segments=segs, holes=[[1.5, 0.5], [3.5, 0.5]])
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.02)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert len(h.components) == 3
     assert h.report["components"] == h.components.tolist()
     assert (h.position[np.cumsum(h.components) - h.components] == 0).all()
@@ -139,7 +139,7 @@ def test_sharp_input_angle_bound_still_holds() -> None:
     ang = np.radians(5)
     v = [[0, 0], [1, 0], [np.cos(ang), np.sin(ang)]]
     m = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=[[0, 1], [1, 2], [2, 0]]), min_angle=20, max_area=0.001)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert angles_deg(m.points, m.triangles).min() < 6
     assert_certificate(m, h)
 
@@ -149,7 +149,7 @@ def test_attributes_follow_parent() -> None:
     segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
     dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.02)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     np.testing.assert_array_equal(h.triangle_attributes, m.triangle_attributes[h.parent])
     inside = (np.abs(h.points[h.triangles].mean(axis=1) - 1.0) < 0.5).all(axis=1)
     assert (h.triangle_attributes[inside, 0] == 2).all()
@@ -162,7 +162,7 @@ def test_works_on_any_file_mesh_either_orientation() -> None:
     tri = Delaunay(pts).simplices.astype(np.int64)
     tri[::2] = tri[::2, ::-1]  # mixed orientation, as files may have
     m = hammesh.Mesh(points=pts, triangles=tri)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     ccw = hammesh.Mesh(points=pts, triangles=np.where(np.isin(np.arange(len(tri)), np.arange(0, len(tri), 2))[:, None], tri[:, ::-1], tri))
     assert_certificate(ccw, h)
 
@@ -194,7 +194,7 @@ def star_pslg(draw):
 @given(dom=star_pslg(), min_angle=st.floats(0, 30), area=st.sampled_from([None, 0.05, 0.01]))
 def test_random_pslg_certificate(dom: hammesh.Domain, min_angle: float, area: float | None) -> None:
     m = hammesh.quality_mesh(dom, min_angle=min_angle, max_area=area, isolate=False)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert_certificate(m, h)
 
 
@@ -202,7 +202,7 @@ def test_random_pslg_certificate(dom: hammesh.Domain, min_angle: float, area: fl
 def test_large_mesh_certificate() -> None:
     dom = plate_with_loops(2)
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=2e-5)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert h.report["verified"] and h.n_triangles > 100_000
     assert h.report["midpoints"] == 2
 
@@ -229,7 +229,7 @@ def test_a_wrong_claim_is_not_believed() -> None:
     from hammesh.verify import verify
 
     m = hammesh.quality_mesh(plate_with_loops(1), min_angle=30, max_area=0.02)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     tri = h.triangles.copy()
     tri[[0, 1]] = tri[[1, 0]]  # a broken output ...
     bogus = np.full(3 * len(tri), -1, dtype=np.int64)  # ... with an "all boundary" claim
@@ -260,6 +260,6 @@ def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores:
     tree = (code & 3) >= _kernels.TREE_BIT
     assert tree.sum() == 2 * (m.n_triangles - pieces)  # a spanning forest: m - pieces edges
     assert ((code & 3) == 3).sum() == 2 * n_loops  # crossings: regions - pieces
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert len(h.components) == pieces and h.report["midpoints"] == n_loops
     assert_certificate(m, h)

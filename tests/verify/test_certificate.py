@@ -25,7 +25,7 @@ def pair() -> tuple[hammesh.Mesh, hammesh.HamiltonianMesh]:
     v = square(0, 0, 1) + square(0.3, 0.3, 0.3)
     segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
     m = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=segs), min_angle=30, max_area=0.02)
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert h.report["midpoints"] == 1
     return m, h
 

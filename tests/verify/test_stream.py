@@ -101,7 +101,7 @@ def test_hamiltonian_pipelined_in_small_steps(monkeypatch, n_loops: int, pieces:
     ref, ref_claim = incircle.incircle_hamiltonian(clean, he, is_con)
     monkeypatch.setattr(incircle, "WALK_CHUNK", 5)
     monkeypatch.setattr(RowStream.__init__, "__defaults__", (3,))
-    h = hammesh.hamiltonian(m)
+    h = hammesh.hamiltonian(m, mode="incircle")
     assert h.report["verified"] and h.report["midpoints"] == n_loops
     np.testing.assert_array_equal(h.triangles, ref.triangles)
     np.testing.assert_array_equal(h.points, ref.points)
@@ -179,7 +179,7 @@ def test_hamiltonian_from_several_threads_at_once(monkeypatch) -> None:
     monkeypatch.setattr(incircle, "WALK_CHUNK", 11)
     meshes = [plate(n_loops, pieces) for n_loops, pieces in [(0, 1), (2, 1), (1, 3), (3, 2)]]
     with ThreadPoolExecutor(4) as pool:
-        outs = list(pool.map(hammesh.hamiltonian, meshes))
+        outs = list(pool.map(lambda m: hammesh.hamiltonian(m, mode="incircle"), meshes))
     for m, h in zip(meshes, outs):
         assert h.report["verified"] and h.n_triangles == 3 * m.n_triangles + 2 * h.report["midpoints"]
         assert_certificate(m, h)
