@@ -50,6 +50,7 @@ certificate as its pairing claim.
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,7 +73,9 @@ KEEP = 0.9
 #: new angles may exceed the input's largest angle by this much (degrees)
 MAX_ANGLE_SLACK_DEG = 5.0
 #: step halvings of the compass search placing a split's Steiner point
-PLACE_ITERS = 12
+PLACE_ITERS = 6
+#: a split is placed only if its midpoint misses the rule by less than this (degrees)
+PLACE_REACH_DEG = 10.0
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 
@@ -108,6 +111,21 @@ def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
     hi = np.empty(len(tri))
     _j.triangle_min_max_into(pts, tri, lo, hi)
     return lo, hi
+
+
+def _threaded(fill, n: int, min_rows: int = 20000) -> None:
+    """Run the ``_into`` kernel call ``fill(lo, hi)`` over ``[0, n)`` in two halves at once.
+
+    The kernels are ``nogil``: two threads fill disjoint slices of the outputs.
+    """
+    if n < min_rows:
+        fill(0, n)
+        return
+    half = n // 2
+    with ThreadPoolExecutor(1) as pool:
+        other = pool.submit(fill, half, n)
+        fill(0, half)
+        other.result()
 
 
 def _join_order(
@@ -251,14 +269,26 @@ def sparse_cycles(
         # edges whose join (swap or midpoint split) keeps the rule: the cover's
         # matching prefers them as its non-cover edges, where cycles get joined
         inner = np.flatnonzero(tw > np.arange(3 * m))
-        g_kind = np.zeros(len(inner), np.int8)
-        g_slack = np.empty(len(inner))
-        _j.score_joins_into(
-            pts, tri, tw, con, inner, amin_t, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
-            0, g_kind, g_slack, np.empty(len(inner)), np.empty(len(inner)), np.empty((len(inner), pts.shape[1])),
-        )
+        g_ok = np.zeros(len(inner), np.bool_)
+        if pts.shape[1] == 2:
+            _threaded(
+                lambda lo, hi_: _j.good_edges_into(
+                    pts, tri, tw, con, inner[lo:hi_], amin_t, float(keep), hi, bool(swaps), bool(edge_splits),
+                    g_ok[lo:hi_],
+                ),
+                len(inner),
+            )
+        else:
+            g_kind = np.zeros(len(inner), np.int8)
+            g_slack = np.empty(len(inner))
+            _j.score_joins_into(
+                pts, tri, tw, con, inner, amin_t, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
+                0, 0.0, g_kind, g_slack, np.empty(len(inner)), np.empty(len(inner)),
+                np.empty((len(inner), pts.shape[1])),
+            )
+            g_ok = g_slack >= 0.0
         good = np.zeros(3 * m, np.bool_)
-        ok = inner[g_slack >= 0.0]
+        ok = inner[g_ok]
         good[ok] = True
         good[tw[ok]] = True
         cover = cycle_cover(tri, tw, good=good)
@@ -278,9 +308,13 @@ def sparse_cycles(
     newmin = np.empty(len(cand))
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
-    _j.score_joins_into(
-        pts, tri, tw, con, cand, amin_p, float(keep), hi, floor, cos_fold, bool(swaps), bool(edge_splits),
-        int(place_iters), ckind, slack, newmin, newmax, point,
+    _threaded(
+        lambda lo, hi_: _j.score_joins_into(
+            pts, tri, tw, con, cand[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
+            bool(edge_splits), int(place_iters), math.radians(PLACE_REACH_DEG), ckind[lo:hi_], slack[lo:hi_],
+            newmin[lo:hi_], newmax[lo:hi_], point[lo:hi_],
+        ),
+        len(cand),
     )
     t_of, u_of = cand // 3, tw[cand] // 3
     whole = (newmin >= keep * min_angle) & (newmax <= hi)

@@ -239,3 +239,58 @@ def test_cli_keep_option(tmp_path) -> None:
         [sys.executable, "-m", "hammesh", "mesh", str(poly), "--mode", "sparse", "--keep", "2"], capture_output=True, text=True
     )
     assert proc.returncode == 2 and "keep" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_good_edges_agree_with_the_scored_joins() -> None:
+    """The cover's fast yes/no (cosines) and the join scoring (angles) judge alike."""
+    import math
+
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import _join_kernels as J
+    from hammesh.postprocess.sparse import triangle_angles
+
+    dom = bundled_domain("face")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=_area(dom) / 3000)
+    clean, he, is_con = prepare_mesh(m)
+    pts, tri, tw = clean.points, clean.triangles, he.twin
+    amin, amax = triangle_angles(pts, tri)
+    hi = amax.max() + math.radians(5)
+    inner = np.flatnonzero(tw > np.arange(len(tw)))
+    good = np.zeros(len(inner), bool)
+    J.good_edges_into(pts, tri, tw, is_con, inner, amin, 0.9, hi, True, True, good)
+    n = len(inner)
+    kind, slack = np.zeros(n, np.int8), np.empty(n)
+    J.score_joins_into(
+        pts, tri, tw, is_con, inner, amin, 0.9, hi, 0.5 * amin.min(), -2.0, True, True, 0, 0.0,
+        kind, slack, np.empty(n), np.empty(n), np.empty((n, 2)),
+    )
+    # equal up to rounding at the threshold (cosine vs arctangent)
+    differ = good != (slack >= 0)
+    assert differ.sum() <= 2 and np.all(np.abs(slack[differ]) < 1e-9)
+    assert 0 < good.sum() < n
+
+
+@given(
+    c=st.tuples(st.floats(-1.5, 1.5), st.floats(0.2, 2.0)),
+    d=st.tuples(st.floats(-1.5, 1.5), st.floats(-2.0, -0.2)),
+    lo_deg=st.floats(5, 40),
+)
+def test_placed_split_point_never_worse_than_the_midpoint(c, d, lo_deg) -> None:
+    from hammesh.postprocess import _join_kernels as J
+
+    a, b = (0.0, 0.0), (1.0, 0.0)
+    lo, hi = np.radians(lo_deg), np.radians(125)
+    mid = J._star4_2d(*a, *b, *c, *d, 0.5, 0.0, lo, hi)
+    x, y, s, smin, smax = J.place_split(*a, *b, *c, *d, lo, hi, 6)
+    assert s >= mid[0]
+    # the four triangles around the placed point: counter-clockwise, angles as reported
+    quad = [(a, (x, y), c), ((x, y), b, c), (b, (x, y), d), ((x, y), a, d)]
+    angles = []
+    for p, q, r in quad:
+        p, q, r = map(np.array, (p, q, r))
+        e, f = q - p, r - p
+        assert e[0] * f[1] - e[1] * f[0] > 0
+        for o, u, v in ((p, q, r), (q, r, p), (r, p, q)):
+            cu, cv = u - o, v - o
+            angles.append(np.arccos(np.clip(cu @ cv / np.linalg.norm(cu) / np.linalg.norm(cv), -1, 1)))
+    assert min(angles) == pytest.approx(smin, abs=1e-9) and max(angles) == pytest.approx(smax, abs=1e-9)
