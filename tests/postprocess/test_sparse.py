@@ -294,3 +294,26 @@ def test_placed_split_point_never_worse_than_the_midpoint(c, d, lo_deg) -> None:
             cu, cv = u - o, v - o
             angles.append(np.arccos(np.clip(cu @ cv / np.linalg.norm(cu) / np.linalg.norm(cv), -1, 1)))
     assert min(angles) == pytest.approx(smin, abs=1e-9) and max(angles) == pytest.approx(smax, abs=1e-9)
+
+
+def test_fans_take_thin_parts_with_fewer_points() -> None:
+    # Triangle's A at 87 triangles (q30): strokes one or two triangles wide
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess.sparse import sparse_cycles
+
+    m = hammesh.quality_mesh(bundled_domain("A"), min_angle=30)
+    h = hammesh.hamiltonian(m)
+    assert_sparse_certificate(m, h)
+    assert h.report["fans"] >= 1 and h.report["fan_triangles_replaced"] >= 2 * h.report["fans"]
+    clean, he, is_con = prepare_mesh(m)
+    amin = np.radians(h.report["min_angle_input_deg"])
+    without = sparse_cycles(clean.points, clean.triangles, he.twin, is_con, amin, fans=False)
+    steiner_without = without.counts["incenters"] + without.counts["midpoints"]
+    assert h.report["steiner_points"] < steiner_without
+    # fan points follow the input points (then incenters, midpoints): a fan triangle
+    # not split again (one fan point, two input points) keeps the input's minimum angle
+    n, f = m.n_points, h.report["fans"]
+    t = h.triangles
+    fan_rows = (((t >= n) & (t < n + f)).sum(axis=1) == 1) & ((t < n).sum(axis=1) == 2)
+    assert fan_rows.any()
+    assert _angles(h.points, t[fan_rows]).min() >= h.report["min_angle_input_deg"] * (1 - 1e-9)
