@@ -215,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
         time_row(a, args.repeat)
     if args.big and not args.quick:
         sys.stdout.flush()
-        subprocess.run([sys.executable, __file__, "--fresh", "4e-7"], check=True)
+        subprocess.run([sys.executable, __file__, "--fresh", "1e-6"], check=True)
     print()
     print(f"{'surface':<24}{'triangles':>11}{'steiner/tri':>13}{'steiner/tri':>13}{'time':>8}{'time':>8}")
     print(f"{'':<24}{'':>11}{'thm2.4 3D':>13}{'sparse':>13}{'thm2.4':>8}{'sparse':>8}")
