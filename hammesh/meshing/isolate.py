@@ -255,9 +255,12 @@ def run_isolated(
         arrays the parent receives without a copy (:class:`SharedArena`): let
         ``func`` allocate its big outputs with it.
     meanwhile : callable, optional
-        Work for this process while the child computes, run in a daemon thread
-        started after the fork (so the child inherits no lock it holds); its result
-        and errors are dropped (e.g. loading the kernels the caller needs next).
+        Work for this process while the child computes, run in a thread started
+        after the fork (so the child inherits no lock it holds); its result and
+        errors are dropped (e.g. loading the kernels the caller needs next). The
+        thread is not a daemon: the interpreter waits for it at exit, because a
+        daemon thread still inside numba's compiler when the interpreter finalizes
+        aborts the process (seen as SIGABRT after a script's last line).
 
     Raises
     ------
@@ -278,7 +281,7 @@ def run_isolated(
             proc.start()
         send.close()
         if meanwhile is not None:
-            threading.Thread(target=_quietly, args=(meanwhile,), name="hammesh-meanwhile", daemon=True).start()
+            threading.Thread(target=_quietly, args=(meanwhile,), name="hammesh-meanwhile", daemon=False).start()
         msg = None
         try:
             if not recv.poll(timeout):
