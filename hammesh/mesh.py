@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from hammesh.errors import InvalidMeshError
+
 __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
 
 #: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
@@ -26,6 +28,37 @@ __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
 #: 3: an input triangle kept whole, 4: one of two input triangles whose shared edge
 #: was flipped without Steiner point (3 and 4 only in ``mode="sparse"``).
 KIND_NAMES: tuple[str, ...] = ("incenter", "flip", "midpoint", "input", "swap")
+
+
+def _coerce(obj: Any, name: str, dtype: type, shape: tuple[int | None, ...] | None) -> None:
+    """Store ``obj.name`` as a numpy array of ``dtype`` (lists accepted), or raise
+    :class:`~hammesh.errors.InvalidMeshError` naming the field."""
+    value = getattr(obj, name)
+    if isinstance(value, np.ndarray) and value.dtype == dtype:
+        arr = value
+    else:
+        try:
+            arr = np.asarray(value)
+            if arr.size == 0:
+                arr = arr.astype(dtype)
+            elif np.issubdtype(dtype, np.integer):
+                if not np.issubdtype(arr.dtype, np.integer):
+                    raise TypeError(f"dtype {arr.dtype}")
+                arr = arr.astype(dtype)
+            else:
+                if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+                    raise TypeError(f"dtype {arr.dtype}")
+                arr = arr.astype(dtype)
+        except (TypeError, ValueError, OverflowError) as exc:
+            kind = "integer" if np.issubdtype(dtype, np.integer) else "real"
+            raise InvalidMeshError(f"{name} must be an array of {kind} numbers ({exc})") from None
+    if shape is not None:
+        if arr.size == 0 and arr.ndim != len(shape):
+            arr = arr.reshape((0,) + tuple(s or 0 for s in shape[1:]))
+        if arr.ndim != len(shape) or any(s is not None and arr.shape[i] != s for i, s in enumerate(shape)):
+            want = "(" + ", ".join("k" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+            raise InvalidMeshError(f"{name} must have shape {want}, got {arr.shape}")
+    object.__setattr__(obj, name, arr)
 
 
 def _empty_i(shape: tuple[int, ...]) -> np.ndarray:
@@ -61,8 +94,17 @@ class Mesh:
     info: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        _coerce(self, "points", np.float64, (None, None))
+        _coerce(self, "triangles", np.int64, (None, 3))
+        _coerce(self, "segments", np.int64, (None, 2))
+        _coerce(self, "segment_markers", np.int64, (None,))
+        _coerce(self, "triangle_attributes", np.float64, None)
+        if self.neighbors is not None:
+            _coerce(self, "neighbors", np.int64, (None, 3))
+        if not isinstance(self.info, dict):
+            raise InvalidMeshError(f"info must be a dict, got {type(self.info).__name__}")
         m = len(self.triangles)
-        if self.triangle_attributes.shape[0] != m:
+        if self.triangle_attributes.ndim != 2 or self.triangle_attributes.shape[0] != m:
             object.__setattr__(
                 self, "triangle_attributes", np.zeros((m, 0), dtype=np.float64)
             )
@@ -128,6 +170,26 @@ class HamiltonianMesh:
     @property
     def n_triangles(self) -> int:
         return int(self.triangles.shape[0])
+
+    @classmethod
+    def from_order(cls, points: np.ndarray, triangles: np.ndarray, report: dict[str, Any] | None = None) -> HamiltonianMesh:
+        """One run of triangles in dual-path order, as made by a point-set or polygon
+        construction (no parent mesh: ``parent = -1``, ``kind = 0``)."""
+        points = np.asarray(points, dtype=np.float64)
+        triangles = np.asarray(triangles, dtype=np.int64)
+        m = len(triangles)
+        return cls(
+            points=points,
+            triangles=triangles,
+            segments=np.zeros((0, 2), dtype=np.int64),
+            segment_markers=np.zeros(0, dtype=np.int64),
+            components=np.array([m], dtype=np.int64),
+            position=np.arange(m, dtype=np.int64),
+            parent=np.full(m, -1, dtype=np.int64),
+            kind=np.zeros(m, dtype=np.int8),
+            triangle_attributes=np.zeros((m, 0)),
+            report=dict(report or {}),
+        )
 
     def as_mesh(self) -> Mesh:
         """The output as a plain :class:`Mesh` (cycle order kept, cycle metadata dropped)."""

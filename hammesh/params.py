@@ -30,7 +30,11 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["choice", "number", "integer", "flag", "instance", "invalid"]
+__all__ = ["MAX_SECONDS", "choice", "number", "integer", "flag", "instance", "invalid"]
+
+
+#: Largest time limit accepted (about 24 days): waits take milliseconds as C ints.
+MAX_SECONDS = 2_147_483.0
 
 
 def invalid(name: str, value: Any, must: str) -> InvalidOptionError:
