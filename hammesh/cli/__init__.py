@@ -138,7 +138,8 @@ def _main(argv: Sequence[str] | None) -> int:
     except Exception as exc:  # noqa: BLE001 - the CLI promises no traceback
         if os.environ.get("HAMMESH_DEBUG"):
             raise
-        _say(f"hammesh: internal error: {type(exc).__name__}: {exc} (HAMMESH_DEBUG=1 shows the traceback)")
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        _say(f"hammesh: internal error: {type(exc).__name__}: {first} (HAMMESH_DEBUG=1 shows the traceback)")
         return EXIT_INTERNAL
 
 

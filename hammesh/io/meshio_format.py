@@ -140,6 +140,9 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
         cell_data = {k: [v] for k, v in triangle_cell_data(mesh).items()}
         if len(segments):
             markers = _segment_markers(mesh)
+            if suffix == ".msh" and (markers.min() < -(2**31) or markers.max() >= 2**31):
+                bad = int(markers[np.argmax(np.abs(markers))])
+                raise InvalidMeshError(f"{path}: segment marker {bad} does not fit Gmsh's 32-bit physical tags")
             if suffix == ".msh":
                 cells, cell_data, point_data = _gmsh_blocks(mesh, triangles, segments, markers)
             else:
