@@ -18,8 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from hammesh.domain import Domain, read_domain
-from hammesh.errors import FileFormatError, HammeshError, InvalidDomainError
+from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io import check_outputs, read_mesh, supported_suffixes, write, write_report
+from hammesh.io.guard import reading
 from hammesh.io.paths import written_files
 from hammesh.io.report import collect_repairs
 from hammesh.mesh import HamiltonianMesh, Mesh
@@ -80,16 +81,10 @@ def load_input(path: Path, *, strict: bool = False) -> Domain | Mesh:
     if not path.exists():
         raise FileFormatError(f"{path}: no such file")
     if path.suffix.lower() in DOMAIN_SUFFIXES:
-        try:
+        with reading(path):
             if strict and accepts(read_domain, "strict"):
                 return read_domain(path, strict=True)
             return read_domain(path)
-        except HammeshError:
-            raise
-        except (ValueError, TypeError, OverflowError, IndexError, MemoryError) as exc:
-            # a count or number beyond what the reader can hold: the file's fault
-            detail = str(exc).splitlines()[0] if str(exc) else ""
-            raise FileFormatError(f"{path}: malformed file ({type(exc).__name__}: {detail})") from None
     return read_mesh(path, strict=strict)
 
 

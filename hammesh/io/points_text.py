@@ -30,8 +30,10 @@ def read_points(path: str | Path) -> np.ndarray:
     suffix = path.suffix.lower()
     if suffix == ".node":
         from hammesh.domain import read_node
+        from hammesh.io.guard import reading
 
-        return np.asarray(read_node(path).vertices, dtype=np.float64)
+        with reading(path):
+            return np.asarray(read_node(path).vertices, dtype=np.float64)
     if suffix == ".npy":
         try:
             arr = np.load(path, allow_pickle=False)

@@ -16,6 +16,7 @@ import numpy as np
 
 from hammesh.domain.validate import point_array
 from hammesh.errors import FileFormatError, InvalidDomainError
+from hammesh.io.guard import reading
 from hammesh.io.points_text import read_points
 
 __all__ = ["read_polygon", "POLYGON_SUFFIXES"]
@@ -38,14 +39,15 @@ def read_polygon(path: str | Path) -> np.ndarray:
     if not path.is_file():
         raise FileFormatError(f"{path}: no such file")
     suffix = path.suffix.lower()
-    if suffix == ".poly":
-        pts = _from_poly(path)
-    elif suffix in (".geojson", ".json"):
-        pts = _from_geojson(path)
-    elif suffix == ".wkt":
-        pts = _from_wkt(path)
-    else:
-        pts = read_points(path)
+    with reading(path):
+        if suffix == ".poly":
+            pts = _from_poly(path)
+        elif suffix in (".geojson", ".json"):
+            pts = _from_geojson(path)
+        elif suffix == ".wkt":
+            pts = _from_wkt(path)
+        else:
+            pts = read_points(path)
     if len(pts) > 1 and np.array_equal(pts[0], pts[-1]):
         pts = pts[:-1]
     return pts
