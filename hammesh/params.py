@@ -40,6 +40,8 @@ MAX_SECONDS = 2_147_483.0
 def invalid(name: str, value: Any, must: str) -> InvalidOptionError:
     """The error for ``name=value``; ``must`` says what is accepted."""
     shown = repr(value)
+    if "\n" in shown or isinstance(value, type):
+        shown = f"<{value.__name__ if isinstance(value, type) else type(value).__name__}>"
     if len(shown) > 80:
         shown = shown[:77] + "..."
     return InvalidOptionError(f"{name}={shown} is not valid: must be {must}")

@@ -321,6 +321,10 @@ def _read_raw(path: Path, suffix: str) -> Any:
         from hammesh.io.obj_format import read_obj
 
         return read_obj(path)
+    if suffix == ".off":
+        from hammesh.io.off_format import read_off
+
+        return read_off(path)
     if suffix == ".vtk":
         from hammesh.io.vtk_legacy import dataset_type, read_polydata
 
