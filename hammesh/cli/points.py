@@ -38,6 +38,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seed is not None:
         params.integer("--seed", args.seed, low=0, high=2**63 - 1)
+    from hammesh.errors import FileFormatError
+    from hammesh.io import supported_suffixes
+
+    if args.output is not None and args.output.suffix.lower() not in supported_suffixes():
+        raise FileFormatError(f"{args.output}: unknown output format; supported: {' '.join(supported_suffixes())}")
+    if args.png is not None and args.png.suffix.lower() != ".png":
+        raise FileFormatError(f"{args.png}: the picture is PNG; use a .png file name")
     check_outputs({"-o": args.output, "--png": args.png}, [args.input])
     pts = pointset.as_points(read_points(args.input))
     hull = pointset.convex_hull(pts)

@@ -35,6 +35,13 @@ def add_args(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from hammesh import polygon
 
+    from hammesh.errors import FileFormatError
+    from hammesh.io import supported_suffixes
+
+    if args.output is not None and args.output.suffix.lower() not in (".json", *supported_suffixes()):
+        raise FileFormatError(f"{args.output}: unknown output format; supported: .json {' '.join(supported_suffixes())}")
+    if args.png is not None and args.png.suffix.lower() != ".png":
+        raise FileFormatError(f"{args.png}: the picture is PNG; use a .png file name")
     check_outputs({"-o": args.output, "--png": args.png}, [args.input])
     pts = read_polygon(args.input)
     n_steiner, k, closed = 0, None, False

@@ -235,6 +235,20 @@ def test_defect9_missing_directory_names_the_target_not_the_temp(tmp_path, capsy
     assert ".tmp-" not in str(info.value)
 
 
+def test_defect9_full_disk_names_the_output(tmp_path, sq, capsys, monkeypatch):
+    import errno
+
+    def no_space(path, *args, **kwargs):
+        Path(path).write_bytes(b"half")
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(meshio, "write", no_space)
+    assert main(["mesh", str(sq), "-o", str(tmp_path / "out.vtu")]) == 2
+    line = _one_error_line(capsys)
+    assert line == f"hammesh: error: {tmp_path / 'out.vtu'}: cannot write (No space left on device)"
+    assert sorted(os.listdir(tmp_path)) == ["sq.poly"]
+
+
 def test_defect9_constant_z_is_planar(tmp_path, capsys):
     pts = np.array([[0, 0, 5], [1, 0, 5], [1, 1, 5], [0, 1, 5.0]])
     src = tmp_path / "z5.vtu"
