@@ -58,9 +58,9 @@ def choice(name: str, value: Any, valid: Iterable[str]) -> str:
 def _bounds(low: float | None, high: float | None, low_open: bool, high_open: bool) -> str:
     parts = []
     if low is not None:
-        parts.append(f"{'>' if low_open else '>='} {low:g}")
+        parts.append(f"{'>' if low_open else '>='} {low:.10g}")
     if high is not None:
-        parts.append(f"{'<' if high_open else '<='} {high:g}")
+        parts.append(f"{'<' if high_open else '<='} {high:.10g}")
     return " and ".join(parts)
 
 

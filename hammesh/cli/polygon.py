@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-import numpy as np
 
 from hammesh.errors import InvalidDomainError
 from hammesh.io import check_outputs, read_polygon
+from hammesh.io.polygon_files import write_triangulation
 
 HELP = "triangulate a simple polygon so that its triangles form one dual path (Thm 2.1, 2.3, 4.4)"
 EXAMPLES = """examples:
@@ -62,8 +61,8 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidDomainError(f"{args.input}: the polygon has no Hamiltonian triangulation "
                                      "(Thm 2.1); --steiner path adds k-2 Steiner points (Thm 2.3)")
     if args.output is not None:
-        _write(args.output, Q, T, n=len(pts), n_steiner=n_steiner, k=k,
-               kind=args.steiner or ("sequential" if args.sequential else "hamiltonian"))
+        write_triangulation(args.output, Q, T, n=len(pts), n_steiner=n_steiner, k=k,
+                            kind=args.steiner or ("sequential" if args.sequential else "hamiltonian"))
     if args.png is not None:
         from hammesh.polygon.plot import plot_polygon_path
 
@@ -73,15 +72,3 @@ def run(args: argparse.Namespace) -> int:
         if path is not None:
             print(f"wrote {label}: {path}")
     return 0
-
-
-def _write(path: Path, Q, T, **info) -> None:
-    if path.suffix.lower() == ".json":
-        from hammesh.io.atomic import atomic_write_text
-
-        doc = {"points": np.asarray(Q).tolist(), "triangles": np.asarray(T).tolist(), **info}
-        atomic_write_text(path, json.dumps(doc) + "\n")
-        return
-    import hammesh
-
-    hammesh.io.write(hammesh.Mesh(np.asarray(Q, dtype=np.float64), np.asarray(T, dtype=np.int64)), path)

@@ -19,7 +19,7 @@ from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io.guard import reading
 from hammesh.io.points_text import read_points
 
-__all__ = ["read_polygon", "POLYGON_SUFFIXES"]
+__all__ = ["read_polygon", "write_triangulation", "POLYGON_SUFFIXES"]
 
 #: suffixes with a reader of their own; anything else is read as ``x y`` text
 POLYGON_SUFFIXES = (".poly", ".geojson", ".json", ".wkt")
@@ -146,3 +146,22 @@ def _array(rows: Any, path: Path) -> np.ndarray:
         raise FileFormatError(str(exc)) from None
     except (ValueError, TypeError, OverflowError):
         raise FileFormatError(f"{path}: coordinates are not numbers") from None
+
+
+def write_triangulation(path: str | Path, points: Any, triangles: Any, **info: Any) -> None:
+    """Write a polygon's triangulation: ``.json`` (``points``, ``triangles`` in path order
+    and ``info``) or any mesh format of :mod:`hammesh.io`, atomically."""
+    path = Path(path)
+    points = np.asarray(points, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    if path.suffix.lower() == ".json":
+        from hammesh.io.atomic import atomic_write_text
+        from hammesh.io.report import to_json_value
+
+        doc = {"points": points.tolist(), "triangles": triangles.tolist(), **to_json_value(info)}
+        atomic_write_text(path, json.dumps(doc) + "\n")
+        return
+    from hammesh.io import write
+    from hammesh.mesh import Mesh
+
+    write(Mesh(points, triangles), path)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -25,8 +26,11 @@ def read_surface(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     FileFormatError
         Missing, unreadable, of an unknown format or without triangles.
     """
+    from hammesh.errors import FileFormatError
     from hammesh.io import read_mesh
 
+    if Path(path).suffix.lower() not in SURFACE_SUFFIXES:
+        raise FileFormatError(f"{path}: unknown surface format; supported: {' '.join(SURFACE_SUFFIXES)}")
     mesh = read_mesh(path, dim=3)
     return weld_points(mesh.points, mesh.triangles)
 
