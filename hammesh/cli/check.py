@@ -6,9 +6,10 @@ import argparse
 from pathlib import Path
 
 from hammesh import params
-from hammesh.errors import FileFormatError
+from hammesh.errors import FileFormatError, VerificationError
 from hammesh.io import check_outputs, read_mesh, write_report
 from hammesh.io.report import collect_repairs
+from hammesh.planar_overlap import find_overlap
 from hammesh.verify import infer_runs, verify_cycle_mesh
 
 HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles"
@@ -18,7 +19,8 @@ EXAMPLES = """examples:
   hammesh check bunny-cycle.ply                # a 3D surface from `hammesh surface`
 Each connected piece must be stored as one run of triangles that closes into a cycle,
 and every constrained edge stored in the file (line cells, or the .poly next to a .ele)
-must be an edge of the triangles; exit 0 if verified, 3 if not, 2 if the file cannot
+must be an edge of the triangles; no two triangles of a planar mesh may overlap (exact
+test); exit 0 if verified, 3 if not, 2 if the file cannot
 be read."""
 
 
@@ -48,9 +50,10 @@ def run(args: argparse.Namespace) -> int:
         triangles = mesh.triangles
         runs = infer_runs(triangles, mesh.n_points)
         stats = verify_cycle_mesh(mesh.points, triangles, runs, segments=mesh.segments)
+        pair = find_overlap(mesh.points, triangles)  # no input to compare with: test the plane
+        if pair is not None:
+            raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
     if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
-        from hammesh.errors import VerificationError
-
         raise VerificationError(
             f"min angle {stats['min_angle_output_deg']:.6f} deg is below the required {args.min_angle} deg"
         )

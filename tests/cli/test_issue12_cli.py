@@ -283,6 +283,24 @@ def test_defect9_long_output_name_works(tmp_path, sq):
 # defect 10: invalid input accepted ------------------------------------------------------------
 
 
+def test_defect10_check_refuses_overlapping_triangles(tmp_path, capsys):
+    """Two hexagon fans, each a valid cycle, one on top of the other: not a planar mesh."""
+    ring = np.exp(2j * np.pi * np.arange(6) / 6)
+    fans, tris = [], []
+    for k, centre in enumerate((0.0, 0.3 + 0.2j)):
+        z = np.concatenate([[centre], centre + ring])
+        fans.append(np.column_stack([z.real, z.imag, np.zeros(7)]))
+        i = np.arange(1, 7)
+        tris.append(np.column_stack([np.zeros(6, int), i, i % 6 + 1]) + 7 * k)
+    src = tmp_path / "two.vtu"
+    meshio.write(src, meshio.Mesh(np.vstack(fans), [("triangle", np.vstack(tris))]))
+    assert main(["check", str(src)]) == 3
+    assert "overlap" in _one_error_line(capsys)
+    one = tmp_path / "one.vtu"
+    meshio.write(one, meshio.Mesh(fans[0], [("triangle", tris[0])]))
+    assert main(["check", str(one)]) == 0
+
+
 def test_defect10_check_min_angle_nan_is_refused(tmp_path, sq, capsys):
     out = tmp_path / "m.vtu"
     assert main(["mesh", str(sq), "-o", str(out)]) == 0
