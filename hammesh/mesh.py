@@ -30,34 +30,20 @@ __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
 KIND_NAMES: tuple[str, ...] = ("incenter", "flip", "midpoint", "input", "swap")
 
 
-def _coerce(obj: Any, name: str, dtype: type, shape: tuple[int | None, ...] | None) -> None:
-    """Store ``obj.name`` as a numpy array of ``dtype`` (lists accepted), or raise
-    :class:`~hammesh.errors.InvalidMeshError` naming the field."""
+def _coerce(obj: Any, name: str) -> None:
+    """Store ``obj.name`` as a numpy array (lists accepted), or raise
+    :class:`~hammesh.errors.InvalidMeshError` if it is not numbers.  Shapes and index
+    ranges are checked by the algorithms and writers that use the field (they name the
+    item at fault)."""
     value = getattr(obj, name)
-    if isinstance(value, np.ndarray) and value.dtype == dtype:
-        arr = value
-    else:
-        try:
-            arr = np.asarray(value)
-            if arr.size == 0:
-                arr = arr.astype(dtype)
-            elif np.issubdtype(dtype, np.integer):
-                if not np.issubdtype(arr.dtype, np.integer):
-                    raise TypeError(f"dtype {arr.dtype}")
-                arr = arr.astype(dtype)
-            else:
-                if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
-                    raise TypeError(f"dtype {arr.dtype}")
-                arr = arr.astype(dtype)
-        except (TypeError, ValueError, OverflowError) as exc:
-            kind = "integer" if np.issubdtype(dtype, np.integer) else "real"
-            raise InvalidMeshError(f"{name} must be an array of {kind} numbers ({exc})") from None
-    if shape is not None:
-        if arr.size == 0 and arr.ndim != len(shape):
-            arr = arr.reshape((0,) + tuple(s or 0 for s in shape[1:]))
-        if arr.ndim != len(shape) or any(s is not None and arr.shape[i] != s for i, s in enumerate(shape)):
-            want = "(" + ", ".join("k" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
-            raise InvalidMeshError(f"{name} must have shape {want}, got {arr.shape}")
+    if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+        return
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nested lists
+        raise InvalidMeshError(f"{name} must be an array of numbers ({exc})") from None
+    if arr.size and arr.dtype.kind not in "biuf":
+        raise InvalidMeshError(f"{name} must be an array of numbers, got dtype {arr.dtype}")
     object.__setattr__(obj, name, arr)
 
 
@@ -94,13 +80,10 @@ class Mesh:
     info: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        _coerce(self, "points", np.float64, (None, None))
-        _coerce(self, "triangles", np.int64, (None, 3))
-        _coerce(self, "segments", np.int64, (None, 2))
-        _coerce(self, "segment_markers", np.int64, (None,))
-        _coerce(self, "triangle_attributes", np.float64, None)
+        for name in ("points", "triangles", "segments", "segment_markers", "triangle_attributes"):
+            _coerce(self, name)
         if self.neighbors is not None:
-            _coerce(self, "neighbors", np.int64, (None, 3))
+            _coerce(self, "neighbors")
         if not isinstance(self.info, dict):
             raise InvalidMeshError(f"info must be a dict, got {type(self.info).__name__}")
         m = len(self.triangles)

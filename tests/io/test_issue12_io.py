@@ -269,7 +269,8 @@ def square_domain():
     lambda d: hammesh.read_mesh("a.vtu", dim=4),
     lambda d: Mesh(np.zeros((3, 2)), np.array([[0, 1, 2]]), triangle_attributes="abc"),
     lambda d: Mesh("points", np.array([[0, 1, 2]])),
-    lambda d: Mesh(np.zeros((3, 2)), np.array([[0.5, 1, 2]])),
+    lambda d: hammesh.hamiltonian(Mesh(np.zeros((3, 2)), np.array([[0.5, 1, 2]]))),
+    lambda d: Mesh([[0, 0], [1, 0]], [[0, 1, 2], [0, 1]]),
     lambda d: hammesh.strips.choose_strip(hammesh.quality_mesh(d), restart_index=2**32),
     lambda d: hammesh.strips.choose_strip(hammesh.quality_mesh(d), method="nope"),
 ])
@@ -285,8 +286,8 @@ def test_option_messages_list_the_valid_values(square_domain):
 
 
 def test_mesh_accepts_lists(square_domain):
-    m = Mesh([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]], triangle_attributes=[[3.0]])
-    assert m.points.dtype == np.float64 and m.triangles.dtype == np.int64
+    m = Mesh([[0.0, 0], [1, 0], [0, 1]], [[0, 1, 2]], triangle_attributes=[[3.0]])
+    assert m.points.dtype == np.float64 and m.triangles.dtype.kind == "i"
     assert m.triangle_attributes.tolist() == [[3.0]]
     h = HamiltonianMesh.from_order(m.points, m.triangles)
     assert h.components.tolist() == [1]
