@@ -11,22 +11,27 @@ Based on Arkin, Held, Mitchell, Skiena, "Hamiltonian Triangulations for Fast
 Rendering".
 """
 
-from hammesh import pointset, polygon, strips
-from hammesh.domain import Domain, read_domain
-from hammesh.errors import (
+from hammesh.numba_cache import ensure_cache
+
+ensure_cache()  # before any kernel is compiled (issue 12 #12)
+
+from hammesh import pointset, polygon, strips  # noqa: E402
+from hammesh.domain import Domain, read_domain  # noqa: E402
+from hammesh.errors import (  # noqa: E402
     FileFormatError,
     HammeshError,
     InvalidDomainError,
     InvalidMeshError,
     InvalidOptionError,
     MeshingError,
+    OutputError,
     VerificationError,
 )
-from hammesh.io import read_mesh, write
-from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh
-from hammesh.meshing import quality_mesh
-from hammesh.postprocess import hamiltonian
-from hammesh.verify import verify
+from hammesh.io import read_mesh, write  # noqa: E402
+from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh  # noqa: E402
+from hammesh.meshing import quality_mesh  # noqa: E402
+from hammesh.postprocess import hamiltonian  # noqa: E402
+from hammesh.verify import verify  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -50,5 +55,6 @@ __all__ = [
     "InvalidOptionError",
     "FileFormatError",
     "MeshingError",
+    "OutputError",
     "VerificationError",
 ]

@@ -17,6 +17,8 @@ __all__ = [
     "NotPlanarError",
     "MeshingError",
     "VerificationError",
+    "OutputError",
+    "Terminated",
 ]
 
 
@@ -50,3 +52,19 @@ class MeshingError(HammeshError, RuntimeError):
 
 class VerificationError(HammeshError, AssertionError):
     """An output failed its certificate (cycle, orientation, angles, area, conformity)."""
+
+
+class OutputError(HammeshError, OSError):
+    """An output file cannot be written: missing or unwritable directory, full disk, an
+    output that is also an input, two outputs naming one file.  The message names the
+    target (never a temporary file)."""
+
+
+class Terminated(BaseException):
+    """The process received ``SIGTERM`` (or ``SIGHUP``); raised by the ``hammesh`` command's
+    signal handler so that ``finally`` blocks and temporary-file cleanup run.  Like
+    ``KeyboardInterrupt`` it is not an ``Exception``: ``except Exception`` does not stop it."""
+
+    def __init__(self, signum: int = 15) -> None:
+        super().__init__(f"terminated by signal {signum}")
+        self.signum = signum

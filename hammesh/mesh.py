@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from hammesh.errors import InvalidMeshError
+
 __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
 
 #: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
@@ -26,6 +28,23 @@ __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
 #: 3: an input triangle kept whole, 4: one of two input triangles whose shared edge
 #: was flipped without Steiner point (3 and 4 only in ``mode="sparse"``).
 KIND_NAMES: tuple[str, ...] = ("incenter", "flip", "midpoint", "input", "swap")
+
+
+def _coerce(obj: Any, name: str) -> None:
+    """Store ``obj.name`` as a numpy array (lists accepted), or raise
+    :class:`~hammesh.errors.InvalidMeshError` if it is not numbers.  Shapes and index
+    ranges are checked by the algorithms and writers that use the field (they name the
+    item at fault)."""
+    value = getattr(obj, name)
+    if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+        return
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nested lists
+        raise InvalidMeshError(f"{name} must be an array of numbers ({exc})") from None
+    if arr.size and arr.dtype.kind not in "biuf":
+        raise InvalidMeshError(f"{name} must be an array of numbers, got dtype {arr.dtype}")
+    object.__setattr__(obj, name, arr)
 
 
 def _empty_i(shape: tuple[int, ...]) -> np.ndarray:
@@ -61,8 +80,14 @@ class Mesh:
     info: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for name in ("points", "triangles", "segments", "segment_markers", "triangle_attributes"):
+            _coerce(self, name)
+        if self.neighbors is not None:
+            _coerce(self, "neighbors")
+        if not isinstance(self.info, dict):
+            raise InvalidMeshError(f"info must be a dict, got {type(self.info).__name__}")
         m = len(self.triangles)
-        if self.triangle_attributes.shape[0] != m:
+        if self.triangle_attributes.ndim != 2 or self.triangle_attributes.shape[0] != m:
             object.__setattr__(
                 self, "triangle_attributes", np.zeros((m, 0), dtype=np.float64)
             )
@@ -128,6 +153,26 @@ class HamiltonianMesh:
     @property
     def n_triangles(self) -> int:
         return int(self.triangles.shape[0])
+
+    @classmethod
+    def from_order(cls, points: np.ndarray, triangles: np.ndarray, report: dict[str, Any] | None = None) -> HamiltonianMesh:
+        """One run of triangles in dual-path order, as made by a point-set or polygon
+        construction (no parent mesh: ``parent = -1``, ``kind = 0``)."""
+        points = np.asarray(points, dtype=np.float64)
+        triangles = np.asarray(triangles, dtype=np.int64)
+        m = len(triangles)
+        return cls(
+            points=points,
+            triangles=triangles,
+            segments=np.zeros((0, 2), dtype=np.int64),
+            segment_markers=np.zeros(0, dtype=np.int64),
+            components=np.array([m], dtype=np.int64),
+            position=np.arange(m, dtype=np.int64),
+            parent=np.full(m, -1, dtype=np.int64),
+            kind=np.zeros(m, dtype=np.int8),
+            triangle_attributes=np.zeros((m, 0)),
+            report=dict(report or {}),
+        )
 
     def as_mesh(self) -> Mesh:
         """The output as a plain :class:`Mesh` (cycle order kept, cycle metadata dropped)."""

@@ -8,20 +8,27 @@ turns every hammesh error into one line on stderr and an exit code:
 2     bad input, bad option or usage (nothing is written)
 3     verification failed (nothing is written)
 1     unexpected internal error (set HAMMESH_DEBUG=1 for the traceback)
+130   interrupted (Ctrl-C)
+143   terminated (SIGTERM, e.g. by ``timeout``; 129 for SIGHUP)
 ====  =====================================================
+
+Messages are one line: a newline or other control character in a file name is shown
+escaped.  ``SIGTERM`` and ``SIGHUP`` raise :class:`~hammesh.errors.Terminated` in the
+main thread, so every temporary file is removed and no target is half-written.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 from collections.abc import Sequence
 
 from hammesh.cli import check, demo, mesh, points, polygon, strip, surface
-from hammesh.errors import HammeshError, VerificationError
+from hammesh.errors import HammeshError, Terminated, VerificationError
 
-__all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
+__all__ = ["main", "one_line", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 
@@ -31,7 +38,7 @@ COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "p
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2, as for any bad input
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+        self.exit(EXIT_BAD_INPUT, one_line(f"{self.prog}: error: {message}") + "\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -59,31 +66,80 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def one_line(text: object) -> str:
+    """``text`` on one line: control characters (a newline in a file name) escaped."""
+    s = str(text)
+    if s.isprintable():
+        return s
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in s)
+
+
+def _say(message: str) -> None:
+    print(one_line(message), file=sys.stderr)
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated(signum)
+
+
+def _install_signal_handlers() -> dict[int, object]:
+    """SIGTERM/SIGHUP -> :class:`Terminated` (main thread only); returns the old handlers."""
+    old: dict[int, object] = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is None:
+            continue
+        try:
+            old[signum] = signal.signal(signum, _terminate)
+        except ValueError:  # not the main thread (an embedding application)
+            break
+    return old
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``hammesh`` console script; returns the exit code."""
-    args = build_parser().parse_args(argv)
+    old = _install_signal_handlers()
+    try:
+        return _main(argv)
+    finally:
+        for signum, handler in old.items():
+            signal.signal(signum, handler)  # type: ignore[arg-type]
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+    except Terminated as exc:
+        return 128 + exc.signum
     try:
         return int(args._run(args))
     except VerificationError as exc:
-        print(f"hammesh: verification failed: {exc}", file=sys.stderr)
+        _say(f"hammesh: verification failed: {exc}")
         return EXIT_VERIFICATION
     except HammeshError as exc:
-        print(f"hammesh: error: {exc}", file=sys.stderr)
+        _say(f"hammesh: error: {exc}")
         return EXIT_BAD_INPUT
     except OSError as exc:  # unreadable input, unwritable output directory, ...
-        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"hammesh: error:{where}: {exc.strerror or exc}", file=sys.stderr)
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        _say(f"hammesh: error: {where}{exc.strerror or exc}")
+        return EXIT_BAD_INPUT
+    except MemoryError:  # a declared count or a size beyond this machine
+        _say("hammesh: error: out of memory (input too large for this machine, or a corrupt size field)")
+        return EXIT_BAD_INPUT
+    except RecursionError:  # e.g. JSON nested 100,000 deep
+        _say("hammesh: error: input nested too deeply")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print("hammesh: interrupted", file=sys.stderr)
+        _say("hammesh: interrupted")
         return 130
+    except Terminated as exc:
+        _say(f"hammesh: terminated by signal {exc.signum}")
+        return 128 + exc.signum
     except Exception as exc:  # noqa: BLE001 - the CLI promises no traceback
         if os.environ.get("HAMMESH_DEBUG"):
             raise
-        print(
-            f"hammesh: internal error: {type(exc).__name__}: {exc} (HAMMESH_DEBUG=1 shows the traceback)",
-            file=sys.stderr,
-        )
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        _say(f"hammesh: internal error: {type(exc).__name__}: {first} (HAMMESH_DEBUG=1 shows the traceback)")
         return EXIT_INTERNAL
 
 

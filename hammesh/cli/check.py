@@ -5,8 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hammesh.errors import FileFormatError, NotPlanarError
-from hammesh.io import read_mesh, write_report
+from hammesh import params
+from hammesh.errors import FileFormatError, VerificationError
+from hammesh.io import check_outputs, read_mesh, write_report
+from hammesh.io.report import collect_repairs
+from hammesh.planar_overlap import find_overlap
 from hammesh.verify import infer_runs, verify_cycle_mesh
 
 HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles"
@@ -16,7 +19,8 @@ EXAMPLES = """examples:
   hammesh check bunny-cycle.ply                # a 3D surface from `hammesh surface`
 Each connected piece must be stored as one run of triangles that closes into a cycle,
 and every constrained edge stored in the file (line cells, or the .poly next to a .ele)
-must be an edge of the triangles; exit 0 if verified, 3 if not, 2 if the file cannot
+must be an edge of the triangles; no two triangles of a planar mesh may overlap (exact
+test); exit 0 if verified, 3 if not, 2 if the file cannot
 be read."""
 
 
@@ -27,28 +31,34 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.min_angle is not None:
+        params.number("--min-angle", args.min_angle, low=0, high=60, what="degrees")
+    if args.report is not None and args.report.suffix.lower() != ".json":
+        raise FileFormatError(f"{args.report}: the report is JSON; use a .json file name")
+    check_outputs({"--report": args.report}, [args.mesh])
     if not args.mesh.exists():
         raise FileFormatError(f"{args.mesh}: no such file")
-    try:
-        mesh = read_mesh(args.mesh)
-    except NotPlanarError:  # a 3D surface: the surface certificate (angles in 3D)
-        from hammesh.surface import read_surface
+    mesh = read_mesh(args.mesh, dim=None)
+    if mesh.points.shape[1] == 3:  # a 3D surface: the surface certificate (angles in 3D)
+        from hammesh.surface.files import weld_points
         from hammesh.verify.surface import infer_surface_runs, verify_surface
 
-        points, triangles = read_surface(args.mesh)
+        points, triangles = weld_points(mesh.points, mesh.triangles)
         runs = infer_surface_runs(triangles, len(points))
         stats = verify_surface(points, triangles, runs)
     else:
         triangles = mesh.triangles
         runs = infer_runs(triangles, mesh.n_points)
         stats = verify_cycle_mesh(mesh.points, triangles, runs, segments=mesh.segments)
+        pair = find_overlap(mesh.points, triangles)  # no input to compare with: test the plane
+        if pair is not None:
+            raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
     if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
-        from hammesh.errors import VerificationError
-
         raise VerificationError(
             f"min angle {stats['min_angle_output_deg']:.6f} deg is below the required {args.min_angle} deg"
         )
-    stats.update({"file": str(args.mesh), "triangles": len(triangles), "components": runs.tolist(), "verified": True})
+    stats.update({"file": str(args.mesh), "triangles": len(triangles), "components": runs.tolist(), "verified": True,
+                  "repairs": collect_repairs(mesh)})
     if args.report is not None:
         write_report(stats, args.report)
     print(

@@ -29,9 +29,11 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     domain = read_domain(demo_domain_path())
-    args.out.mkdir(parents=True, exist_ok=True)
-    outputs = Outputs(
-        mesh=args.out / "mesh.vtu", report=args.out / "report.json", png=args.out / "cycle.png"
+    outputs = Outputs(  # the folder is made only once the mesh is verified
+        mesh=args.out / "mesh.vtu",
+        report=args.out / "report.json",
+        png=args.out / "cycle.png",
+        make_dirs=() if args.out.exists() else (args.out,),
     )
     h = run_pipeline(domain, {"min_angle": args.min_angle, "max_area": args.max_area}, outputs, mode=args.mode)
     print(f"demo domain: {demo_domain_path()}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from hammesh import params
 from hammesh.cli.pipeline import Outputs, load_input, run_pipeline, summary
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError
@@ -41,10 +42,17 @@ def add_args(p: argparse.ArgumentParser) -> None:
         "--keep", type=float, default=0.9,
         help="sparse mode: new angles >= KEEP x the replaced triangles' smallest where a join can (0..1)",
     )
+    p.add_argument("--strict", action="store_true",
+                   help="refuse an input that needs repairs (quads, T-junctions, crossing segments...) "
+                        "instead of repairing it; the report's 'repairs' lists what was repaired")
 
 
 def run(args: argparse.Namespace) -> int:
-    source = load_input(args.input)
+    outputs = Outputs(mesh=args.output, report=args.report, png=args.png, strip=args.strip, inputs=(args.input,))
+    outputs.check()  # before reading: a bad output path costs nothing
+    if args.timeout is not None:
+        params.number("--timeout", args.timeout, low=0, low_open=True, high=params.MAX_SECONDS, what="seconds")
+    source = load_input(args.input, strict=args.strict)
     options = {
         "min_angle": args.min_angle,
         "max_area": args.max_area,
@@ -59,8 +67,7 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidOptionError(
                 f"{args.input} is already a mesh; meshing options ({', '.join(given)}) apply to .poly/.node domains"
             )
-    outputs = Outputs(mesh=args.output, report=args.report, png=args.png, strip=args.strip)
-    h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep)
+    h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, strict=args.strict)
     print(summary(h))
     for label, path in (
         ("mesh", args.output),

@@ -1,17 +1,28 @@
 """The pipeline shared by ``hammesh mesh`` and ``hammesh demo``: read, mesh, post-process,
-verify, write — with a progress bar on a terminal and nothing written on failure."""
+verify, write — with a progress bar on a terminal and nothing written on failure.
+
+Every output path is checked before any work (:func:`hammesh.io.check_outputs`: the
+directory exists and is writable, no output is an input or a sibling of one, no two
+outputs are one file); an output written before a later one fails is removed again
+(or, if it existed before the run, left replaced: each file is written atomically)."""
 
 from __future__ import annotations
 
+import contextlib
+import os
 import sys
 import time
-from dataclasses import dataclass
+from collections.abc import Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from hammesh.domain import Domain, read_domain
-from hammesh.errors import FileFormatError
-from hammesh.io import read_mesh, supported_suffixes, write, write_report
+from hammesh.errors import FileFormatError, InvalidDomainError
+from hammesh.io import check_outputs, read_mesh, supported_suffixes, write, write_report
+from hammesh.io.guard import reading
+from hammesh.io.paths import written_files
+from hammesh.io.report import collect_repairs
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.meshing import quality_mesh
 from hammesh.postprocess import hamiltonian
@@ -28,9 +39,17 @@ class Outputs:
     report: Path | None = None
     png: Path | None = None
     strip: Path | None = None
+    #: files read by the run: no output may be one of them (or a sibling)
+    inputs: tuple[Path, ...] = ()
+    #: directories the run creates (``hammesh demo --out``), after the work succeeded
+    make_dirs: tuple[Path, ...] = field(default=())
+
+    def labelled(self) -> dict[str, Path | None]:
+        return {"-o": self.mesh, "--report": self.report, "--png": self.png, "--strip": self.strip}
 
     def check(self) -> None:
-        """Fail before any work if an output cannot be written in the asked format."""
+        """Fail before any work if an output cannot be written in the asked format, or
+        would overwrite an input, or names the same file as another output."""
         if self.mesh is not None and self.mesh.suffix.lower() not in supported_suffixes():
             raise FileFormatError(
                 f"{self.mesh}: unknown output format; supported: {' '.join(supported_suffixes())}"
@@ -41,15 +60,32 @@ class Outputs:
             raise FileFormatError(f"{self.png}: the picture is PNG; use a .png file name")
         if self.strip is not None and self.strip.suffix.lower() not in (".json", ".npz"):
             raise FileFormatError(f"{self.strip}: the strip buffer is .json or .npz")
+        check_outputs(self.labelled(), self.inputs, make_dirs=self.make_dirs)
 
 
-def load_input(path: Path) -> Domain | Mesh:
-    """A domain (``.poly``/``.node``) or a mesh (any other registered suffix)."""
+def accepts(func: Any, name: str) -> bool:
+    """True if ``func`` takes a keyword argument ``name`` (options other modules add)."""
+    import inspect
+
+    try:
+        return name in inspect.signature(func).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+def load_input(path: Path, *, strict: bool = False) -> Domain | Mesh:
+    """A domain (``.poly``/``.node``) or a mesh (any other registered suffix).
+
+    ``strict``: refuse an input that would need repairs instead of repairing it.
+    """
     if not path.exists():
         raise FileFormatError(f"{path}: no such file")
     if path.suffix.lower() in DOMAIN_SUFFIXES:
-        return read_domain(path)
-    return read_mesh(path)
+        with reading(path):
+            if strict and accepts(read_domain, "strict"):
+                return read_domain(path, strict=True)
+            return read_domain(path)
+    return read_mesh(path, strict=strict)
 
 
 class _Steps:
@@ -73,10 +109,25 @@ class _Steps:
 
 
 def run_pipeline(
-    source: Domain | Mesh, mesh_options: dict[str, Any], outputs: Outputs, *, mode: str = "sparse", keep: float = 0.9
+    source: Domain | Mesh,
+    mesh_options: dict[str, Any],
+    outputs: Outputs,
+    *,
+    mode: str = "sparse",
+    keep: float = 0.9,
+    strict: bool = False,
 ) -> HamiltonianMesh:
-    """Mesh (if ``source`` is a Domain), make Hamiltonian, verify, then write outputs."""
+    """Mesh (if ``source`` is a Domain), make Hamiltonian, verify, then write outputs.
+
+    ``strict``: the mesher gets ``strict=True`` (where it takes it) and any repair
+    recorded on the way is refused (:class:`~hammesh.errors.InvalidDomainError`) before
+    anything is written.
+    """
     outputs.check()
+    if strict and accepts(quality_mesh, "strict"):
+        mesh_options = {**mesh_options, "strict": True}
+    written: list[Path] = []
+    created_dirs: list[Path] = []
     steps = _Steps(
         2 + sum(x is not None for x in (outputs.mesh, outputs.report, outputs.png, outputs.strip))
     )
@@ -90,7 +141,19 @@ def run_pipeline(
         steps.step("hamiltonian + verify")
         h = hamiltonian(mesh, mode=mode, keep=keep)
         steps.done()
+        h.report["repairs"] = collect_repairs(source, mesh, h)
+        if strict and h.report["repairs"]:
+            first = h.report["repairs"][0]
+            more = len(h.report["repairs"]) - 1
+            raise InvalidDomainError(
+                f"--strict: the input needs repairs ({first}{f' and {more} more' if more else ''})"
+            )
         t0 = time.perf_counter()
+        for directory in outputs.make_dirs:
+            created_dirs += _make_dir(directory)
+        # files that did not exist before the run: removed again if a later output fails
+        written = [f for p in outputs.labelled().values() if p is not None for f in written_files(p)
+                   if not os.path.lexists(f)]
         if outputs.mesh is not None:
             steps.step(f"writing {outputs.mesh.name}")
             write(h, outputs.mesh)
@@ -118,9 +181,28 @@ def run_pipeline(
             steps.step(f"writing {outputs.report.name}")
             write_report(h.report, outputs.report)
             steps.done()
+    except BaseException:
+        for f in written:
+            with contextlib.suppress(OSError):
+                os.remove(f)
+        for directory in reversed(created_dirs):
+            with contextlib.suppress(OSError):
+                directory.rmdir()  # only if empty
+        raise
     finally:
         steps.close()
     return h
+
+
+def _make_dir(directory: Path) -> list[Path]:
+    """Create ``directory`` and missing parents; return the ones created (outermost first)."""
+    missing: list[Path] = []
+    d = directory
+    while not d.exists():
+        missing.append(d)
+        d = d.parent
+    directory.mkdir(parents=True, exist_ok=True)
+    return list(reversed(missing))
 
 
 def summary(h: HamiltonianMesh) -> str:

@@ -5,9 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
-from hammesh.errors import FileFormatError
 from hammesh.io.points_text import read_points
 
 HELP = "triangulate a point set so that its triangles form one Hamiltonian cycle (Thm 3.1)"
@@ -31,27 +28,24 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, help="seed of the random splitters (Lemma 3.2)")
 
 
-def _as_mesh(points: np.ndarray, tri: np.ndarray):
-    from hammesh.mesh import HamiltonianMesh
-
-    m = len(tri)
-    return HamiltonianMesh(
-        points=points,
-        triangles=tri,
-        segments=np.zeros((0, 2), dtype=np.int64),
-        segment_markers=np.zeros(0, dtype=np.int64),
-        components=np.array([m], dtype=np.int64),
-        position=np.arange(m, dtype=np.int64),
-        parent=np.full(m, -1, dtype=np.int64),
-        kind=np.zeros(m, dtype=np.int8),
-        triangle_attributes=np.zeros((m, 0)),
-    )
-
-
 def run(args: argparse.Namespace) -> int:
     from hammesh import pointset
     from hammesh.errors import InvalidDomainError
 
+    from hammesh import params
+    from hammesh.io import check_outputs
+    from hammesh.mesh import HamiltonianMesh
+
+    if args.seed is not None:
+        params.integer("--seed", args.seed, low=0, high=2**63 - 1)
+    from hammesh.errors import FileFormatError
+    from hammesh.io import supported_suffixes
+
+    if args.output is not None and args.output.suffix.lower() not in supported_suffixes():
+        raise FileFormatError(f"{args.output}: unknown output format; supported: {' '.join(supported_suffixes())}")
+    if args.png is not None and args.png.suffix.lower() != ".png":
+        raise FileFormatError(f"{args.png}: the picture is PNG; use a .png file name")
+    check_outputs({"-o": args.output, "--png": args.png}, [args.input])
     pts = pointset.as_points(read_points(args.input))
     hull = pointset.convex_hull(pts)
     if args.sequential:
@@ -65,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         tri = pointset.hamiltonian_triangulation(pts, seed=args.seed)
         shape = "Hamiltonian cycle" if hull.h < len(pts) else "Hamiltonian path (convex position)"
-    mesh = _as_mesh(pts, tri)
+    mesh = HamiltonianMesh.from_order(pts, tri)
     print(f"{len(pts):,} points ({hull.h} on the hull) -> {len(tri):,} triangles, {shape}, verified")
     if args.output is not None:
         from hammesh.io import write

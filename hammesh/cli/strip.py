@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hammesh.errors import FileFormatError, InvalidOptionError
+from hammesh.errors import FileFormatError
 
 HELP = "encode a triangle mesh (2D or 3D) as a verified GL triangle-strip index buffer"
 EXAMPLES = """examples:
@@ -23,7 +23,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", type=Path, help="triangle mesh (.vtu .msh .obj .ply .stl .off .ele ...)")
     p.add_argument("-o", "--output", type=Path, required=True, help="strip buffer (.json or .npz)")
     p.add_argument("--join", choices=("restart", "stitch"), default="restart", help="how strips are joined")
-    p.add_argument("--restart-index", type=int, default=0xFFFFFFFF, help="primitive restart index")
+    p.add_argument("--restart-index", type=int, default=0xFFFFFFFF, help="primitive restart index (0..4294967295)")
     p.add_argument("--generalized", action="store_true", help="write generalized strips (vertex + turn bit)")
     p.add_argument(
         "--method", choices=("auto", "greedy", "order", "christofides"), default="auto", help="how to find the strips"
@@ -31,53 +31,30 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hammesh.strips.christofides import christofides_strip
-    from hammesh.strips.encode import encode, encode_generalized
-    from hammesh.strips.files import STRIP_SUFFIXES, read_surface, write_strip
+    from hammesh import params
+    from hammesh.io import check_outputs, read_mesh
+    from hammesh.strips.choose import MAX_RESTART_INDEX, choose_strip
+    from hammesh.strips.files import STRIP_SUFFIXES, write_strip
 
     if args.output.suffix.lower() not in STRIP_SUFFIXES:
         raise FileFormatError(f"{args.output}: output must be {' or '.join(STRIP_SUFFIXES)}")
+    params.integer("--restart-index", args.restart_index, low=0, high=MAX_RESTART_INDEX,
+                   what="GL index buffers are uint32")
+    check_outputs({"-o": args.output}, [args.mesh])
     if not args.mesh.exists():
         raise FileFormatError(f"{args.mesh}: no such file")
     if args.generalized and args.method == "christofides":
-        raise InvalidOptionError("--generalized is not available with --method christofides")
-    mesh = read_surface(args.mesh)
-    method = args.method
-    extra: dict = {}
-    if args.generalized:
-        if method == "auto":
-            candidates = [("greedy", encode_generalized(mesh, method="greedy"))]
-            try:
-                candidates.append(("order", encode_generalized(mesh, method="order")))
-            except (InvalidOptionError, ValueError):
-                pass
-            method, strip = min(candidates, key=lambda c: len(c[1].vertices))
-        else:
-            strip = encode_generalized(mesh, method=method)
-    elif method == "christofides":
-        enc = christofides_strip(mesh, join=args.join, restart_index=args.restart_index)
-        strip = enc.strip
-        extra["christofides"] = enc.report()
-        # the contract counts mesh triangles; redrawn ones are reported apart
-        extra["drawn"] = strip.n_triangles
-        extra["triangles"] = enc.n_triangles
-        extra["indices_per_triangle"] = len(strip.indices) / enc.n_triangles
-    elif method == "auto":
-        kw = {"join": args.join, "restart_index": args.restart_index}
-        candidates = [("greedy", encode(mesh, method="greedy", **kw))]
-        try:
-            candidates.append(("order", encode(mesh, method="order", **kw)))
-        except (InvalidOptionError, ValueError):
-            pass  # rows are not stored as dual paths: greedy only
-        method, strip = min(candidates, key=lambda c: len(c[1].indices))
-    else:
-        strip = encode(mesh, method=method, join=args.join, restart_index=args.restart_index)
-    extra["method"] = method
-    write_strip(strip, args.output, extra)
-    n_tri = extra.get("triangles", strip.n_triangles)
-    ipt = extra.get("indices_per_triangle", strip.indices_per_triangle)
+        raise params.invalid("--method", args.method, "not 'christofides' with --generalized")
+    mesh = read_mesh(args.mesh, dim=None)
+    choice = choose_strip(mesh, method=args.method, join=args.join, restart_index=args.restart_index,
+                          generalized=args.generalized)
+    repairs = mesh.info.get("repairs", [])
+    extra = {**choice.extra, "repairs": list(repairs)}
+    write_strip(choice.strip, args.output, extra)
     print(
-        f"{args.mesh}: {n_tri:,} triangles -> {strip.n_strips} strip(s), "
-        f"{strip.n_swaps} swap(s), {ipt:.4f} indices per triangle ({method}); wrote {args.output}"
+        f"{args.mesh}: {choice.n_triangles:,} triangles -> {choice.strip.n_strips} strip(s), "
+        f"{choice.strip.n_swaps} swap(s), {choice.indices_per_triangle:.4f} indices per triangle "
+        f"({choice.method}); wrote {args.output}"
+        + (f"\nrepairs: {'; '.join(map(str, repairs))}" if repairs else "")
     )
     return 0

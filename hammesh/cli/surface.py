@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from hammesh import params
 from hammesh.errors import FileFormatError
 
-HELP = "make a 3D triangle surface (.obj .ply .stl .off .vtu) one strip per piece, few Steiner points"
+HELP = "make a 3D triangle surface (.obj .ply .stl .off .vtu .vtk) one strip per piece, few Steiner points"
 EXAMPLES = """examples:
   hammesh surface bunny.ply -o bunny.vtu --report bunny.json
   hammesh surface part.stl -o part.obj --swaps          # Steiner-free flips too (surface moves slightly)
@@ -20,20 +21,25 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", type=Path, help="output surface (.vtu .vtk .obj .ply .stl .off)")
     p.add_argument("--report", type=Path, help="write the report JSON here")
     p.add_argument("--swaps", action="store_true", help="also flip edges without Steiner points (not exact)")
-    p.add_argument("--max-fold", type=float, default=10.0, help="with --swaps: largest normal change in degrees")
+    p.add_argument("--max-fold", type=float, default=10.0, help="with --swaps: largest normal change in degrees (0..180)")
 
 
 def run(args: argparse.Namespace) -> int:
-    from hammesh.io import write_report
-    from hammesh.surface import read_surface, surface_hamiltonian, write_surface
-    from hammesh.surface.files import _format
+    from hammesh.io import check_outputs, read_mesh, write_report
+    from hammesh.io.report import collect_repairs
+    from hammesh.surface import SURFACE_SUFFIXES, surface_hamiltonian, write_surface
+    from hammesh.surface.files import weld_points
 
-    if args.output is not None:
-        _format(args.output)  # fail on a bad suffix before any work
+    if args.output is not None and args.output.suffix.lower() not in SURFACE_SUFFIXES:
+        raise FileFormatError(f"{args.output}: unknown surface format; supported: {' '.join(SURFACE_SUFFIXES)}")
     if args.report is not None and args.report.suffix.lower() != ".json":
         raise FileFormatError(f"{args.report}: the report is JSON; use a .json file name")
-    pts, tri = read_surface(args.input)
+    params.number("--max-fold", args.max_fold, low=0, high=180, what="degrees")
+    check_outputs({"-o": args.output, "--report": args.report}, [args.input])
+    mesh = read_mesh(args.input, dim=3)
+    pts, tri = weld_points(mesh.points, mesh.triangles)
     h = surface_hamiltonian(pts, tri, swaps=args.swaps, max_fold_deg=args.max_fold)
+    h.report["repairs"] = collect_repairs(mesh, h)
     if args.output is not None:
         write_surface(h, args.output)
     if args.report is not None:

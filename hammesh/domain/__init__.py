@@ -5,8 +5,10 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
+from hammesh import params
 from hammesh.domain.pslg import Domain
 from hammesh.domain.repair import REPAIR_KINDS, Repair, repair_graph
 from hammesh.domain.triangle_files import read_node, read_poly, write_poly
@@ -36,6 +38,7 @@ def read_domain(path, *, strict: bool = False) -> Domain:
     FileFormatError
         Unknown suffix (the message lists the known ones) or malformed file.
     """
+    params.instance("path", path, (str, os.PathLike), "a file path (str or os.PathLike)")
     path = Path(path)
     reader = READERS.get(path.suffix.lower())
     if reader is None:

@@ -95,6 +95,10 @@ class Domain:
             vertex_markers = np.zeros(len(vertices), np.int64)
         else:
             vertex_markers = _as_int(self.vertex_markers, "vertex_markers", None)
+        for name, marks in (("segment_markers", segment_markers), ("vertex_markers", vertex_markers)):
+            if len(marks) and (marks.min() < -2**31 or marks.max() >= 2**31):  # issue 12 #4
+                raise InvalidDomainError(f"{name}: {int(marks[np.argmax(np.abs(marks))])} does not fit "
+                                         "the 32-bit markers of Triangle and Gmsh")
         values = dict(vertices=vertices, segments=segments, holes=holes, regions=regions,
                       segment_markers=segment_markers, vertex_markers=vertex_markers)
         for name, value in values.items():

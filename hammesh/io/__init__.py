@@ -12,6 +12,12 @@ suffixes                                   module
 ``.ele .node``                             :mod:`hammesh.io.triangle_format`
 =========================================  ==========================================
 
+:func:`read_mesh` is the one mesh-reading entry point of hammesh (``hammesh.strips``,
+``hammesh.surface`` and the command line call it): ``dim=2`` planar meshes, ``dim=3``
+surfaces, ``dim=None`` whichever the file holds.  Point lists (:func:`read_points`) and
+simple polygons (:func:`read_polygon`: ``.poly``, GeoJSON, WKT, text) are read here too;
+:func:`check_outputs` checks output paths before a command does any work.
+
 Formats that hold cell data (``.vtu .vtk .msh .xdmf``; ``.ele`` as attributes) store a
 :class:`~hammesh.mesh.HamiltonianMesh`'s ``cycle_position``, ``cycle_id``, ``parent``
 and ``kind`` per triangle; every format keeps the triangles' order, which is the cycle.
@@ -35,12 +41,29 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
+import dataclasses
+
+import numpy as np
+
+from hammesh import params
 from hammesh.errors import FileFormatError
 from hammesh.io import meshio_format, triangle_format
+from hammesh.io.paths import check_outputs
+from hammesh.io.points_text import read_points
+from hammesh.io.polygon_files import read_polygon
 from hammesh.io.report import write_report
 from hammesh.mesh import HamiltonianMesh, Mesh
 
-__all__ = ["FORMATS", "read_mesh", "write", "write_report", "supported_suffixes"]
+__all__ = [
+    "FORMATS",
+    "read_mesh",
+    "read_points",
+    "read_polygon",
+    "write",
+    "write_report",
+    "check_outputs",
+    "supported_suffixes",
+]
 
 Reader = Callable[[str | os.PathLike[str]], Mesh]
 Writer = Callable[[Mesh | HamiltonianMesh, str | os.PathLike[str]], None]
@@ -66,6 +89,8 @@ def supported_suffixes() -> tuple[str, ...]:
 
 
 def _lookup(path: str | os.PathLike[str]) -> tuple[Reader, Writer]:
+    if not isinstance(path, (str, os.PathLike)):
+        raise params.invalid("path", path, "a file path (str or os.PathLike)")
     suffix = Path(path).suffix.lower()
     try:
         return FORMATS[suffix]
@@ -97,16 +122,38 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     writer(mesh, path)
 
 
-def read_mesh(path: str | os.PathLike[str]) -> Mesh:
-    """Read a planar triangle mesh, the format chosen by the suffix.
+def read_mesh(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = False) -> Mesh:
+    """Read a triangle mesh, the format chosen by the suffix.
 
     Triangles keep their file order, so a Hamiltonian mesh written by :func:`write`
-    comes back in cycle order.
+    comes back in cycle order.  Quads and polygons are split into triangles and a
+    constant ``z`` is dropped; each such repair is listed in ``mesh.info["repairs"]``.
+
+    Parameters
+    ----------
+    path : path-like
+    dim : {2, 3, None}
+        2 (default): a planar mesh, ``points (n, 2)``
+        (:class:`~hammesh.errors.NotPlanarError` if ``z`` varies); 3: ``points (n, 3)``
+        (``z = 0`` added to planar files); None: whichever the file holds.
+    strict : bool
+        Refuse a file that needs a repair instead of repairing it.
 
     Raises
     ------
     FileFormatError
         Unknown suffix, missing, empty, truncated or malformed file.
+    InvalidOptionError
+        ``dim`` or ``strict`` out of their range.
     """
     reader, _ = _lookup(path)
-    return reader(path)
+    if dim is not None and (isinstance(dim, bool) or dim not in (2, 3)):
+        raise params.invalid("dim", dim, "2, 3 or None")
+    strict = params.flag("strict", strict)
+    if reader is meshio_format.read:
+        return meshio_format.read(path, dim=dim, strict=strict)
+    mesh = reader(path)
+    if dim == 3 and mesh.points.shape[1] == 2:
+        points3 = np.column_stack([mesh.points, np.zeros(len(mesh.points))])
+        mesh = dataclasses.replace(mesh, points=points3)
+    return mesh

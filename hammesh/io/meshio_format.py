@@ -56,7 +56,7 @@ from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
-__all__ = ["read", "write", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
+__all__ = ["read", "to_mesh", "write", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
 
 #: suffix -> (meshio format names tried when reading, format written, writer kwargs)
 _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
@@ -140,6 +140,9 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
         cell_data = {k: [v] for k, v in triangle_cell_data(mesh).items()}
         if len(segments):
             markers = _segment_markers(mesh)
+            if suffix == ".msh" and (markers.min() < -(2**31) or markers.max() >= 2**31):
+                bad = int(markers[np.argmax(np.abs(markers))])
+                raise InvalidMeshError(f"{path}: segment marker {bad} does not fit Gmsh's 32-bit physical tags")
             if suffix == ".msh":
                 cells, cell_data, point_data = _gmsh_blocks(mesh, triangles, segments, markers)
             else:
@@ -312,35 +315,21 @@ def _check_header(path: Path, suffix: str) -> int | None:
     return faces
 
 
-def read(path: str | os.PathLike[str]) -> Mesh:
-    """Read a planar triangle mesh with meshio.
+def _read_raw(path: Path, suffix: str) -> Any:
+    """The file's points and cells: hammesh's own OBJ and POLYDATA readers, else meshio."""
+    if suffix == ".obj":
+        from hammesh.io.obj_format import read_obj
 
-    Triangles keep their file order (all ``triangle`` blocks, concatenated); ``line``
-    blocks become ``segments`` and their cell data ``segment_marker`` (else
-    ``gmsh:physical``, else 0) ``segment_markers``; other cell types are ignored.  A ``z`` coordinate that
-    is zero everywhere is dropped.  Cell data ``attribute_<i>`` (as written by
-    :func:`write`) becomes ``triangle_attributes``; the cycle fields are not part of a
-    :class:`Mesh` (read them with ``meshio`` directly).
+        return read_obj(path)
+    if suffix == ".off":
+        from hammesh.io.off_format import read_off
 
-    Parameters
-    ----------
-    path : path-like
-        One of :data:`SUFFIXES` (case-insensitive).
+        return read_off(path)
+    if suffix == ".vtk":
+        from hammesh.io.vtk_legacy import dataset_type, read_polydata
 
-    Returns
-    -------
-    Mesh
-
-    Raises
-    ------
-    FileFormatError
-        Missing, empty, truncated or malformed file; no triangles; ``z`` not zero
-        everywhere; index out of range.  The message names the file.
-    """
-    path = Path(path)
-    suffix = _suffix(path)
-    if not path.is_file():
-        raise FileFormatError(f"{path}: file not found")
+        if dataset_type(path) == "POLYDATA":
+            return read_polydata(path)
     expected_faces = _check_header(path, suffix)
     raw = _meshio_read(path, _FORMATS[suffix][0])
     if expected_faces is not None:
@@ -349,58 +338,146 @@ def read(path: str | os.PathLike[str]) -> Mesh:
             raise FileFormatError(
                 f"{path}: truncated (header declares {expected_faces} faces, found {got})"
             )
+    return raw
+
+
+def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = False) -> Mesh:
+    """Read a triangle mesh with meshio (OBJ and legacy VTK POLYDATA: hammesh's readers).
+
+    Triangles keep their file order (all cell blocks, concatenated); quads and polygons
+    are split into triangles in place (:func:`hammesh.io.polygons.triangulate_cells`);
+    ``line`` blocks become ``segments`` and their cell data ``segment_marker`` (else
+    ``gmsh:physical``, else 0) ``segment_markers``; ``vertex`` cells are ignored; other
+    cell types (volumes, second-order cells) are refused.  Cell data ``attribute_<i>``
+    (as written by :func:`write`) becomes ``triangle_attributes``; the cycle fields are
+    not part of a :class:`Mesh` (read them with ``meshio`` directly).  What was changed
+    to accept the file is listed in ``mesh.info["repairs"]``.
+
+    Parameters
+    ----------
+    path : path-like
+        One of :data:`SUFFIXES` (case-insensitive).
+    dim : {2, 3, None}
+        2: a planar mesh (``z`` dropped if constant, refused with
+        :class:`~hammesh.errors.NotPlanarError` if it varies); 3: ``(n, 3)`` points
+        (planar files get ``z = 0``); None: 2 if planar, else 3.
+    strict : bool
+        Refuse (:class:`~hammesh.errors.FileFormatError`) a file that would need a repair.
+
+    Returns
+    -------
+    Mesh
+
+    Raises
+    ------
+    FileFormatError
+        Missing, empty, truncated or malformed file; no triangles; index out of range.
+        The message names the file.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    if not path.is_file():
+        raise FileFormatError(f"{path}: file not found")
     try:
-        return _to_mesh(raw, path)
+        raw = _read_raw(path, suffix)
+        return to_mesh(raw, path, dim=dim, strict=strict)
     except FileFormatError:
         raise
+    except MemoryError:
+        raise FileFormatError(f"{path}: sizes beyond this machine's memory (corrupt counts?)") from None
     except Exception as exc:  # malformed content that meshio accepted
         raise FileFormatError(f"{path}: malformed mesh ({_first_line(exc)})") from None
 
 
-def _to_mesh(raw: Any, path: Path) -> Mesh:
+_IGNORED_CELLS = frozenset({"vertex"})
+_POLYGON_CELLS = frozenset({"quad", "polygon"})
+
+
+def _planar(points: np.ndarray, path: Path, dim: int | None, repairs: list[str]) -> np.ndarray:
+    """Points with the ``dim`` asked for (see :func:`read`)."""
+    if points.shape[1] == 2:
+        return points if dim != 3 else np.column_stack([points, np.zeros(len(points))])
+    if dim == 3:
+        return points
+    z = points[:, 2]
+    if len(z) and np.all(z == z[0]):
+        if z[0] != 0:
+            repairs.append(f"all points at z = {z[0]:.17g}: read as a planar mesh")
+        return points[:, :2]
+    if dim is None:
+        return points
+    lo, hi = (float(z.min()), float(z.max())) if len(z) else (0.0, 0.0)
+    raise NotPlanarError(
+        f"{path}: mesh is not planar (z varies from {lo:.6g} to {hi:.6g}); "
+        "3D surfaces are for 'hammesh strip' and 'hammesh surface'"
+    )
+
+
+def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) -> Mesh:
+    """A :class:`Mesh` from a ``meshio.Mesh`` or :class:`~hammesh.io.raw.RawMesh` (see :func:`read`)."""
+    repairs: list[str] = []
     points = np.asarray(raw.points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] not in (2, 3):
         raise FileFormatError(f"{path}: points have shape {points.shape}, expected (n, 2) or (n, 3)")
-    if points.shape[1] == 3:
-        if np.any(points[:, 2] != 0):
-            raise NotPlanarError(f"{path}: mesh is not planar (z varies)")
-        points = points[:, :2]
     if not np.isfinite(points).all():
         raise FileFormatError(f"{path}: non-finite point coordinates")
+    points = _planar(points, path, dim, repairs)
     to_original = _gmsh_node_order(raw)
     if to_original is not None:
         restored = np.empty_like(points)
         restored[to_original] = points
         points = restored
     points = np.ascontiguousarray(points)
+    n = len(points)
 
-    tri_blocks, seg_blocks, tri_block_ids, seg_block_ids = [], [], [], []
+    tri_blocks, seg_blocks, tri_origin, seg_block_ids = [], [], [], []
+    split: dict[str, list[int]] = {}
+    refused: list[str] = []
     for b, block in enumerate(raw.cells):
+        kind = block.type
         data = np.asarray(block.data, dtype=np.int64)
         if to_original is not None and data.size:
             data = to_original[data]
-        if block.type == "triangle":
+        if data.ndim != 2:
+            raise FileFormatError(f"{path}: {kind} cells of mixed size")
+        if data.size and (data.min() < 0 or data.max() >= n):
+            bad = int(data.max() if data.max() >= n else data.min())
+            raise FileFormatError(f"{path}: {kind} vertex index {bad} out of range [0, {n})")
+        if kind == "triangle":
             tri_blocks.append(data.reshape(-1, 3))
-            tri_block_ids.append(b)
-        elif block.type == "line":
+            tri_origin.append((b, np.arange(len(data), dtype=np.int64)))
+        elif kind in _POLYGON_CELLS or (kind.startswith("polygon") and data.shape[1] >= 3):
+            from hammesh.io.polygons import triangulate_cells
+
+            tris, origin = triangulate_cells(points, data)
+            tri_blocks.append(tris)
+            tri_origin.append((b, origin))
+            count = split.setdefault(f"{data.shape[1]}", [0, 0])
+            count[0] += len(data)
+            count[1] += len(tris)
+        elif kind == "line":
             seg_blocks.append(data.reshape(-1, 2))
             seg_block_ids.append(b)
+        elif kind not in _IGNORED_CELLS:
+            refused.append(kind)
+    if refused:
+        raise FileFormatError(
+            f"{path}: has {refused[0]} cells; hammesh reads triangles, quads, polygons and lines"
+        )
+    for corners, (cells, tris) in split.items():
+        what = "quad" if corners == "4" else f"{corners}-gon"
+        repairs.append(f"triangulated {cells} {what}{'s' if cells != 1 else ''} ({tris} triangles)")
+    if strict and repairs:
+        raise FileFormatError(f"{path}: needs repairs, refused (strict): {'; '.join(repairs)}")
     if not tri_blocks or sum(len(t) for t in tri_blocks) == 0:
         raise FileFormatError(f"{path}: no triangles")
     triangles = np.concatenate(tri_blocks)
     segments = np.concatenate(seg_blocks) if seg_blocks else np.zeros((0, 2), np.int64)
-    n = len(points)
-    for name, arr in (("triangle", triangles), ("line", segments)):
-        if arr.size and (arr.min() < 0 or arr.max() >= n):
-            bad = int(arr.max() if arr.max() >= n else arr.min())
-            raise FileFormatError(
-                f"{path}: {name} vertex index {bad} out of range [0, {n})"
-            )
 
     columns: dict[int, np.ndarray] = {}
     for key, per_block in raw.cell_data.items():
         match = _ATTRIBUTE_RE.match(key)
-        column = None if match is None else _block_column(per_block, tri_block_ids, len(triangles))
+        column = None if match is None else _origin_column(per_block, tri_origin, len(triangles))
         if column is not None:
             columns[int(match.group(1))] = column
     keys = sorted(columns)
@@ -422,7 +499,21 @@ def _to_mesh(raw: Any, path: Path) -> Mesh:
         segments=np.ascontiguousarray(segments),
         segment_markers=markers,
         triangle_attributes=attributes,
+        info={"repairs": repairs} if repairs else {},
     )
+
+
+def _origin_column(per_block: Any, origin: list[tuple[int, np.ndarray]], length: int) -> np.ndarray | None:
+    """Cell data of the triangle-making blocks, one value per triangle (a split polygon's
+    value repeated for each of its triangles); None if missing or malformed."""
+    if per_block is None or not origin:
+        return None
+    try:
+        parts = [np.asarray(per_block[b], dtype=np.float64).reshape(-1)[rows] for b, rows in origin]
+    except (IndexError, ValueError, TypeError):
+        return None
+    column = np.concatenate(parts)
+    return column if len(column) == length else None
 
 
 def _block_column(per_block: Any, block_ids: list[int], length: int) -> np.ndarray | None:

@@ -18,7 +18,7 @@ import numpy as np
 
 from hammesh.io.atomic import atomic_write_text
 
-__all__ = ["write_report", "to_json_value"]
+__all__ = ["write_report", "to_json_value", "collect_repairs"]
 
 
 def to_json_value(value: Any, where: str = "report") -> Any:
@@ -55,6 +55,42 @@ def to_json_value(value: Any, where: str = "report") -> Any:
     if isinstance(value, PurePath):
         return str(value)
     raise TypeError(f"{where}: {type(value).__name__} value has no JSON form")
+
+
+def collect_repairs(*sources: Any) -> list[Any]:
+    """The repairs recorded by ``sources``, in order, each once.
+
+    A repair is what hammesh changed in a legitimate input to accept it (a quad
+    triangulated, a constant ``z`` dropped, a T-junction split...): a string or a
+    JSON-able dict.  Each source may carry them as an attribute ``repairs``, or in its
+    ``info`` or ``report`` dict under ``"repairs"`` (a :class:`~hammesh.domain.Domain`,
+    a :class:`~hammesh.mesh.Mesh`, a :class:`~hammesh.mesh.HamiltonianMesh`).
+
+    Examples
+    --------
+    >>> class Source:
+    ...     info = {"repairs": ["triangulated 1 quad"]}
+    >>> collect_repairs(Source(), {"repairs": ["triangulated 1 quad", "dropped z = 5"]})
+    ['triangulated 1 quad', 'dropped z = 5']
+    """
+    found: list[Any] = []
+    seen: set[str] = set()
+    for source in sources:
+        if source is None:
+            continue
+        lists = [getattr(source, "repairs", None)]
+        for holder in (getattr(source, "info", None), getattr(source, "report", None), source):
+            if isinstance(holder, dict):
+                lists.append(holder.get("repairs"))
+        for items in lists:
+            if not isinstance(items, (list, tuple)):
+                continue
+            for item in items:
+                key = json.dumps(to_json_value(item), sort_keys=True)
+                if key not in seen:
+                    seen.add(key)
+                    found.append(item)
+    return found
 
 
 def write_report(report: dict[str, Any], path: str | os.PathLike[str]) -> None:

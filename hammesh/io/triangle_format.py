@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import io
 import os
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -148,18 +147,24 @@ class _Tokens:
             tokens = body.split()
             if tokens:
                 self._rows.append((lineno, tokens))
-        self._it: Iterator[tuple[int, list[str]]] = iter(self._rows)
+        self._next = 0
         self.lineno = 0
+
+    def check_count(self, count: int, what: str) -> None:
+        """A declared count must not exceed the records left (no allocation for it otherwise)."""
+        left = len(self._rows) - self._next
+        if count > left:
+            raise self.error(f"declares {count} {what}, the file has only {left} more records")
 
     def error(self, message: str, lineno: int | None = None) -> FileFormatError:
         where = self.lineno if lineno is None else lineno
         return FileFormatError(f"{self.path}:{where}: {message}" if where else f"{self.path}: {message}")
 
     def row(self, what: str, min_tokens: int) -> list[str]:
-        try:
-            self.lineno, tokens = next(self._it)
-        except StopIteration:
-            raise FileFormatError(f"{self.path}: unexpected end of file (expected {what})") from None
+        if self._next >= len(self._rows):
+            raise FileFormatError(f"{self.path}: unexpected end of file (expected {what})")
+        self.lineno, tokens = self._rows[self._next]
+        self._next += 1
         if len(tokens) < min_tokens:
             raise self.error(f"expected {min_tokens} numbers ({what}), got {len(tokens)}")
         return tokens
@@ -194,6 +199,7 @@ def _read_node(path: Path) -> tuple[np.ndarray, int]:
     n_mark = tok.as_count(head[3], "number of boundary markers") if len(head) > 3 else 0
     if n == 0:
         raise tok.error("no vertices")
+    tok.check_count(n, "vertices")
     points = np.empty((n, 2), dtype=np.float64)
     base = 0
     for i in range(n):
@@ -225,10 +231,12 @@ def _read_poly_segments(path: Path, base: int, n: int) -> tuple[np.ndarray, np.n
     nv = tok.as_count(head[0], "number of vertices")
     n_attr = tok.as_count(head[2], "number of attributes") if len(head) > 2 else 0
     n_mark = tok.as_count(head[3], "number of boundary markers") if len(head) > 3 else 0
+    tok.check_count(nv, "vertices")
     for i in range(nv):  # vertices listed in the .poly itself: Triangle keeps them first in .node
         tok.row(f"vertex {i + 1} of {nv}", 3 + n_attr + n_mark)
     head = tok.row("segment header '<# of segments> <# of boundary markers>'", 1)
     s = tok.as_count(head[0], "number of segments")
+    tok.check_count(s, "segments")
     has_marker = len(head) > 1 and tok.as_int(head[1], "number of boundary markers") > 0
     segments = np.empty((s, 2), dtype=np.int64)
     markers = np.zeros(s, dtype=np.int64)
@@ -236,7 +244,10 @@ def _read_poly_segments(path: Path, base: int, n: int) -> tuple[np.ndarray, np.n
         row = tok.row(f"segment {i + 1} of {s}", 3 + int(has_marker))
         segments[i] = _vertex(tok, row[1], base, n), _vertex(tok, row[2], base, n)
         if has_marker:
-            markers[i] = tok.as_int(row[3], "boundary marker")
+            marker = tok.as_int(row[3], "boundary marker")
+            if not -(2**63) <= marker < 2**63:
+                raise tok.error(f"boundary marker {marker} does not fit 64 bits")
+            markers[i] = marker
     return segments, markers
 
 
@@ -277,6 +288,9 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
     k = tok.as_count(head[2], "number of attributes") if len(head) > 2 else 0
     if m == 0:
         raise tok.error("no triangles")
+    tok.check_count(m, "triangles")
+    if k > 1_000_000:
+        raise tok.error(f"declares {k} attributes per triangle")
     triangles = np.empty((m, 3), dtype=np.int64)
     attrs = np.empty((m, k), dtype=np.float64)
     for i in range(m):

@@ -11,6 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from hammesh import params
 from hammesh.domain import Domain
 from hammesh.domain.resolution import check_resolution
 from hammesh.errors import InvalidDomainError, InvalidOptionError, MeshingError
@@ -112,8 +113,8 @@ def quality_mesh(
         raise InvalidOptionError(f"backend must be one of {sorted(BACKENDS)}, got {backend!r}")
     if not isinstance(domain, Domain):
         raise InvalidOptionError(f"domain must be a hammesh.Domain, got {type(domain).__name__}")
-    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
-        raise InvalidOptionError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    if timeout is not None:  # finite and bounded: inf or 1e300 overflow the wait (issue 12)
+        timeout = params.number("timeout", timeout, low=0, low_open=True, high=params.MAX_SECONDS, what="seconds")
     opts = MeshOptions(
         min_angle=min_angle,
         max_area=max_area,

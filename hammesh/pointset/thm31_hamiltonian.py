@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hammesh import params
 from hammesh.errors import MeshingError
 from hammesh.pointset import _cycle_repair, _kernels
 from hammesh.pointset.validate import Hull, as_points, convex_hull
@@ -102,7 +103,7 @@ def hamiltonian_triangulation(points: np.ndarray, seed: int | None = None) -> np
     """
     pts = as_points(points)
     hull = convex_hull(pts)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(None if seed is None else params.integer("seed", seed, low=0))
     for attempt in range(MAX_ATTEMPTS):
         tri = _attempt(pts, hull, rng, attempt)
         if tri is not None:

@@ -15,7 +15,10 @@ from hammesh.domain.validate import point_array
 from hammesh.errors import InvalidDomainError
 from hammesh.pointset import _kernels
 
-__all__ = ["as_points", "Hull", "convex_hull"]
+__all__ = ["as_points", "Hull", "convex_hull", "MAX_COORDINATE"]
+
+#: Largest coordinate magnitude: differences squared stay finite in float64.
+MAX_COORDINATE = 1e150
 
 
 def as_points(points: np.ndarray) -> np.ndarray:
@@ -35,6 +38,12 @@ def as_points(points: np.ndarray) -> np.ndarray:
     if not finite.all():
         i = int(np.argmin(finite))
         raise InvalidDomainError(f"point {i} {pts[i].tolist()} is not finite")
+    big = float(np.abs(pts).max())
+    if big > MAX_COORDINATE:  # orientation products would overflow float64 (issue 12 #9)
+        raise InvalidDomainError(
+            f"coordinates reach {big:.3g}: orientation tests overflow float64 beyond "
+            f"{MAX_COORDINATE:.0e}; scale the points (the triangulation does not change)"
+        )
     order = np.lexsort((pts[:, 1], pts[:, 0]))
     s = pts[order]
     same = (s[1:] == s[:-1]).all(axis=1)

@@ -9,6 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from hammesh import params
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
@@ -88,6 +89,7 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
     VerificationError
         The output failed its certificate (never returned then).
     """
+    params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     if not (isinstance(keep, (int, float)) and 0.0 <= keep <= 1.0):

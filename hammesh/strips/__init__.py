@@ -24,6 +24,7 @@ module                                   what
 True
 """
 
+from hammesh.strips.choose import StripChoice, choose_strip
 from hammesh.strips.christofides import ChristofidesEncoding, christofides_strip, christofides_walk
 from hammesh.strips.dual import DualMesh, dual_mesh, oriented_key
 from hammesh.strips.encode import encode, encode_generalized, greedy_paths, mesh_paths
@@ -38,6 +39,8 @@ from hammesh.strips.paths import PathTurns, path_turns
 from hammesh.strips.sequential import SequentialOrder, sequential_order
 
 __all__ = [
+    "choose_strip",
+    "StripChoice",
     "encode",
     "encode_generalized",
     "christofides_strip",

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hammesh.errors import FileFormatError
-from hammesh.io import meshio_format, read_mesh
+from hammesh.errors import FileFormatError, InvalidOptionError
+from hammesh.io import read_mesh
 from hammesh.io.atomic import atomic_path, atomic_write_text
 from hammesh.mesh import Mesh
 from hammesh.strips.generalized import GeneralizedStrips
@@ -29,36 +29,21 @@ STRIP_SUFFIXES = (".json", ".npz")
 
 
 def read_surface(path: str | os.PathLike[str]) -> Mesh:
-    """Read a triangle mesh whose points may be 3D (a surface); 2D files as :func:`hammesh.read_mesh`.
+    """Read a triangle mesh whose points may be 3D (a surface): :func:`hammesh.io.read_mesh`
+    with ``dim=None``.
 
     Returns
     -------
     Mesh
-        ``points (n, 2)`` for planar files, ``(n, 3)`` otherwise.
+        ``points (n, 2)`` for planar files (constant ``z``), ``(n, 3)`` otherwise; quads
+        and polygons split into triangles (listed in ``mesh.info["repairs"]``).
 
     Raises
     ------
     FileFormatError
         Unknown suffix, missing or malformed file, no triangles, index out of range.
     """
-    path = Path(path)
-    try:
-        return read_mesh(path)
-    except FileFormatError as exc:
-        if "not planar" not in str(exc):
-            raise
-    # a surface in space: the same guarded meshio reader, keeping z
-    raw = meshio_format._meshio_read(path, meshio_format._FORMATS[path.suffix.lower()][0])
-    pts = np.ascontiguousarray(raw.points, dtype=np.float64)
-    blocks = [np.asarray(b.data, dtype=np.int64).reshape(-1, 3) for b in raw.cells if b.type == "triangle"]
-    if not blocks or sum(len(b) for b in blocks) == 0:
-        raise FileFormatError(f"{path}: no triangles")
-    tri = np.concatenate(blocks)
-    if tri.min() < 0 or tri.max() >= len(pts):
-        raise FileFormatError(f"{path}: triangle vertex index out of range [0, {len(pts)})")
-    if not np.isfinite(pts).all():
-        raise FileFormatError(f"{path}: non-finite point coordinates")
-    return Mesh(pts, np.ascontiguousarray(tri))
+    return read_mesh(path, dim=None)
 
 
 def write_strip(strip: GLStrip | GeneralizedStrips, path: str | os.PathLike[str], extra: dict | None = None) -> None:
@@ -76,6 +61,15 @@ def write_strip(strip: GLStrip | GeneralizedStrips, path: str | os.PathLike[str]
     suffix = path.suffix.lower()
     if suffix not in STRIP_SUFFIXES:
         raise FileFormatError(f"{path}: strip output must be {' or '.join(STRIP_SUFFIXES)}, got {suffix!r}")
+    restart = getattr(strip, "restart_index", None)
+    if restart is not None and not 0 <= int(restart) <= 2**32 - 1:
+        raise InvalidOptionError(
+            f"restart_index={int(restart)} is not valid: must be an integer >= 0 and <= 4294967295 "
+            "(GL index buffers are uint32)"
+        )
+    own = strip.indices if isinstance(strip, GLStrip) else strip.vertices
+    if len(own) and (int(np.min(own)) < 0 or int(np.max(own)) > 2**32 - 1):
+        raise InvalidOptionError(f"{path}: strip indices do not fit uint32")
     doc = strip.to_dict()
     doc.update(extra or {})
     if suffix == ".json":  # noqa: SIM108

@@ -42,7 +42,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammesh import _threads
+from hammesh import _threads, params
 from hammesh._threads import row_ranges, run_all
 from hammesh.halfedge import HalfEdges
 from hammesh.halfedge._kernels import vertex_half_edges
@@ -453,6 +453,7 @@ def verify(
     ``reference`` is the input mesh it was made from (counter-clockwise); without it
     only items 1-4 are checked (what ``hammesh check FILE`` can know).
     """
+    params.instance("mesh", mesh, HamiltonianMesh, "a hammesh.HamiltonianMesh (a Mesh has no cycles)")
     return verify_cycle_mesh(
         mesh.points,
         mesh.triangles,

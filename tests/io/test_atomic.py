@@ -25,7 +25,7 @@ def test_temp_path_is_a_hidden_sibling_with_the_same_suffix(tmp_path):
     target = tmp_path / "plate.vtu"
     with atomic_path(target) as tmp:
         assert tmp.parent == tmp_path
-        assert tmp.name.startswith(".plate.vtu.tmp-")
+        assert tmp.name.startswith(f".plate.vtu.tmp-{os.getpid()}-")
         assert tmp.suffix == ".vtu"
         assert tmp.exists() and not target.exists()
         tmp.write_text("done")

@@ -114,11 +114,12 @@ def test_reader_drops_zero_z_and_rejects_varying_z(tmp_path):
     bent = flat.copy()
     bent[2, 2] = 0.5
     meshio.write(tmp_path / "bent.vtu", meshio.Mesh(bent, tri))
-    with pytest.raises(FileFormatError, match=r"bent\.vtu.*not planar \(z varies\)"):
+    with pytest.raises(FileFormatError, match=r"bent\.vtu.*not planar \(z varies"):
         meshio_format.read(tmp_path / "bent.vtu")
 
 
-def test_reader_concatenates_triangle_blocks_keeps_lines_ignores_others(tmp_path):
+def test_reader_concatenates_blocks_splits_quads_keeps_lines_ignores_vertices(tmp_path):
+    """Issue 12 defect 2: a quad is split in place (never dropped) and reported."""
     points = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]])
     cells = [
         ("triangle", np.array([[0, 1, 2]])),
@@ -130,9 +131,12 @@ def test_reader_concatenates_triangle_blocks_keeps_lines_ignores_others(tmp_path
     attribute = [np.array([1.0]), np.array([9.0]), np.zeros(2), np.zeros(1), np.array([2.0, 3.0])]
     meshio.write(tmp_path / "mixed.vtu", meshio.Mesh(points, cells, cell_data={"attribute_0": attribute}))
     back = meshio_format.read(tmp_path / "mixed.vtu")
-    assert back.triangles.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]
+    assert back.triangles.tolist() == [[0, 1, 2], [0, 1, 2], [0, 2, 3], [0, 2, 3], [1, 4, 2]]
     assert back.segments.tolist() == [[0, 1], [1, 4]]
-    assert back.triangle_attributes[:, 0].tolist() == [1.0, 2.0, 3.0]
+    assert back.triangle_attributes[:, 0].tolist() == [1.0, 9.0, 9.0, 2.0, 3.0]
+    assert back.info["repairs"] == ["triangulated 1 quad (2 triangles)"]
+    with pytest.raises(FileFormatError, match="strict"):
+        meshio_format.read(tmp_path / "mixed.vtu", strict=True)
 
 
 def test_no_triangles_is_an_error(tmp_path):

@@ -20,7 +20,10 @@ def test_registry_is_explicit_and_complete():
     assert list(hio.FORMATS) == ALL
     for reader, writer in hio.FORMATS.values():
         assert callable(reader) and callable(writer)
-    assert hio.__all__ == ["FORMATS", "read_mesh", "write", "write_report", "supported_suffixes"]
+    assert hio.__all__ == [
+        "FORMATS", "read_mesh", "read_points", "read_polygon", "write", "write_report", "check_outputs",
+        "supported_suffixes",
+    ]
     assert hio.supported_suffixes() == tuple(ALL)
 
 

@@ -108,7 +108,7 @@ NODE_0 = "3 2 0 0\n0 0 0\n1 1 0\n2 0 1\n"
         (NODE_0, "hello world\n", r"bad\.ele:1: number of triangles is not an integer"),
         (NODE_0, "1 3 0\n0 0 1 3\n", r"bad\.ele:2: vertex index 3 out of range \[0, 3\)"),
         (NODE_0, "1 3 0\n0 0 -1 2\n", r"bad\.ele:2: vertex index -1 out of range"),
-        (NODE_0, "2 3 0\n0 0 1 2\n", r"bad\.ele: unexpected end of file \(expected triangle 2 of 2\)"),
+        (NODE_0, "2 3 0\n0 0 1 2\n", r"bad\.ele:1: declares 2 triangles, the file has only 1 more records"),
         (NODE_0, "1 3 1\n0 0 1 2\n", r"bad\.ele:2: expected 5 numbers"),
         (NODE_0, "0 3 0\n", r"bad\.ele:1: no triangles"),
         (NODE_0, "1 4 0\n0 0 1 2 0\n", r"bad\.ele:1: nodes per triangle is 4"),

@@ -144,12 +144,13 @@ def test_small_defective_inputs_are_accepted() -> None:
         assert set(np.unique(h.parent)) | set(h.report["dropped_rows"]) == set(range(len(tri)))
 
 
-def test_quad_faces_are_refused(tmp_path) -> None:
+def test_quad_faces_are_triangulated_in_place(tmp_path) -> None:
+    """Issue 12: a quad is split (keeping its winding), never dropped or refused."""
     pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], float)
     src = tmp_path / "q.vtu"
     meshio.write(src, meshio.Mesh(pts, [("quad", np.array([[0, 1, 2, 3]])), ("triangle", np.array([[1, 4, 2]]))]))
-    with pytest.raises(hammesh.FileFormatError, match="quad"):
-        read_surface(src)
+    _, tri = read_surface(src)
+    assert tri.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]
 
 
 def test_verifier_catches_broken_outputs() -> None:

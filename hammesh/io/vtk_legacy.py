@@ -1,0 +1,225 @@
+"""Legacy VTK ``POLYDATA`` reading (ASCII and binary), which meshio 5 does not read.
+
+Reads ``POINTS`` and the cell sections ``VERTICES LINES POLYGONS TRIANGLE_STRIPS``, in
+both layouts: the classic one (``POLYGONS n size`` then ``n`` lists ``k i0 .. ik-1``)
+and that of file version 5.1 (``POLYGONS n+1 size`` then ``OFFSETS`` and
+``CONNECTIVITY`` arrays).  Binary data is big-endian, as the format says.  ``LINES``
+become segments (a polyline: its consecutive pairs); triangle strips are decoded with
+alternating winding (VTK's ``vtkTriangleStrip`` rule); ``POINT_DATA``/``CELL_DATA``
+and ``METADATA`` end the read (hammesh keeps no fields of foreign files).  Other
+datasets (``UNSTRUCTURED_GRID``, as meshio and hammesh write) are left to meshio.
+
+Reference: "VTK File Formats", legacy format, Dataset format POLYDATA
+(https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from hammesh.errors import FileFormatError
+from hammesh.io.raw import CellBlock, RawMesh, polygon_blocks
+
+__all__ = ["read_polydata", "dataset_type"]
+
+_TYPES = {
+    "bit": None, "unsigned_char": ">u1", "char": ">i1", "unsigned_short": ">u2", "short": ">i2",
+    "unsigned_int": ">u4", "int": ">i4", "unsigned_long": ">u8", "long": ">i8",
+    "float": ">f4", "double": ">f8", "vtktypeint64": ">i8", "vtktypeuint64": ">u8",
+    "vtkidtype": ">i8",
+}
+_SECTIONS = ("VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS")
+_MAX_HEADER = 4096
+
+
+def dataset_type(path: str | Path) -> str | None:
+    """``"POLYDATA"``, ``"UNSTRUCTURED_GRID"``... of a legacy VTK file, or None."""
+    with open(path, "rb") as f:
+        head = f.read(_MAX_HEADER)
+    for line in head.splitlines()[:6]:
+        words = line.split()
+        if len(words) >= 2 and words[0].upper() == b"DATASET":
+            return words[1].decode("ascii", errors="replace").upper()
+    return None
+
+
+class _Reader:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.buf = path.read_bytes()
+        self.pos = 0
+        self.binary = False
+
+    def error(self, message: str) -> FileFormatError:
+        return FileFormatError(f"{self.path}: {message}")
+
+    def line(self) -> list[str] | None:
+        """Next non-blank line's words (None at end of file)."""
+        while self.pos < len(self.buf):
+            end = self.buf.find(b"\n", self.pos)
+            end = len(self.buf) if end < 0 else end
+            raw = self.buf[self.pos:end]
+            self.pos = end + 1
+            words = raw.decode("latin-1").split()
+            if words:
+                return words
+        return None
+
+    def skip_to_blank_line(self) -> None:
+        while self.pos < len(self.buf):
+            end = self.buf.find(b"\n", self.pos)
+            end = len(self.buf) if end < 0 else end
+            blank = not self.buf[self.pos:end].strip()
+            self.pos = end + 1
+            if blank:
+                return
+
+    def count(self, token: str, what: str) -> int:
+        try:
+            n = int(token)
+        except ValueError:
+            raise self.error(f"{what} is not an integer: {token!r}") from None
+        if n < 0:
+            raise self.error(f"{what} is negative: {n}")
+        return n
+
+    def numbers(self, count: int, vtk_type: str, what: str) -> np.ndarray:
+        dtype = _TYPES.get(vtk_type.lower())
+        if dtype is None:
+            raise self.error(f"unsupported data type {vtk_type!r} for {what}")
+        if self.binary:
+            size = np.dtype(dtype).itemsize * count
+            if self.pos + size > len(self.buf):
+                raise self.error(f"truncated {what} (declared {count} values)")
+            arr = np.frombuffer(self.buf, dtype=dtype, count=count, offset=self.pos)
+            self.pos += size
+            if self.buf[self.pos:self.pos + 1] == b"\n":
+                self.pos += 1
+            return arr.astype(np.float64 if dtype[1] == "f" else np.int64)
+        # ASCII: the values may span any number of lines
+        values: list[str] = []
+        while len(values) < count:
+            words = self.line()
+            if words is None:
+                raise self.error(f"truncated {what} (declared {count} values, found {len(values)})")
+            values.extend(words)
+        if len(values) != count:
+            raise self.error(f"{what}: {len(values)} values where {count} were declared")
+        try:
+            return np.array(values, dtype=np.float64 if dtype[1] == "f" else np.int64)
+        except ValueError:
+            raise self.error(f"{what}: a value is not a number") from None
+
+
+def _cells_classic(r: _Reader, n: int, size: int, what: str) -> tuple[np.ndarray, np.ndarray]:
+    flat = r.numbers(size, "int", what)
+    if n and size % n == 0 and size // n >= 2:  # all cells of one size: no walk
+        c = size // n - 1
+        rows = flat.reshape(n, c + 1)
+        if (rows[:, 0] == c).all():
+            return np.arange(n + 1, dtype=np.int64) * c, rows[:, 1:].reshape(-1)
+    offsets = np.empty(n + 1, dtype=np.int64)
+    offsets[0] = 0
+    pos = 0
+    # the sizes are interleaved with the indices: walk them (one step per cell)
+    sizes = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        if pos >= size:
+            raise r.error(f"{what}: {n} cells declared, data ends after {i}")
+        sizes[i] = flat[pos]
+        pos += 1 + int(flat[pos])
+    if pos != size:
+        raise r.error(f"{what}: size {size} does not match the cells' lengths ({pos})")
+    if (sizes < 0).any():
+        raise r.error(f"{what}: negative cell size")
+    offsets[1:] = np.cumsum(sizes)
+    starts = np.cumsum(sizes + 1) - sizes  # position of each cell's first index in flat
+    keep = np.repeat(starts, sizes) + (np.arange(offsets[-1]) - np.repeat(offsets[:-1], sizes))
+    return offsets, flat[keep]
+
+
+def _strip_triangles(offsets: np.ndarray, conn: np.ndarray) -> np.ndarray:
+    tris = []
+    for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()):
+        s = conn[a:b]
+        if len(s) < 3:
+            continue
+        t = np.stack([s[:-2], s[1:-1], s[2:]], axis=1)
+        t[1::2] = t[1::2][:, [1, 0, 2]]  # odd triangles: swap to keep the winding
+        tris.append(t)
+    return np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
+
+
+def read_polydata(path: str | Path) -> RawMesh:
+    """Points and cells of a legacy VTK ``POLYDATA`` file.
+
+    Raises
+    ------
+    FileFormatError
+        Not a legacy VTK POLYDATA file, truncated or malformed data.
+    """
+    path = Path(path)
+    r = _Reader(path)
+    first = r.line()
+    if not first or first[0] != "#" or "vtk" not in " ".join(first).lower():
+        raise r.error("not a legacy VTK file (no '# vtk DataFile' line)")
+    r.line()  # title
+    mode = r.line()
+    if not mode or mode[0].upper() not in ("ASCII", "BINARY"):
+        raise r.error("expected ASCII or BINARY on line 3")
+    r.binary = mode[0].upper() == "BINARY"
+    ds = r.line()
+    if not ds or len(ds) < 2 or ds[0].upper() != "DATASET" or ds[1].upper() != "POLYDATA":
+        raise r.error("not a POLYDATA dataset")
+    points = None
+    blocks: list[CellBlock] = []
+    while True:
+        words = r.line()
+        if words is None:
+            break
+        key = words[0].upper()
+        if key == "POINTS":
+            if len(words) < 3:
+                raise r.error("POINTS needs a count and a type")
+            n = r.count(words[1], "number of points")
+            points = r.numbers(3 * n, words[2], "POINTS").reshape(n, 3)
+        elif key in _SECTIONS:
+            if len(words) < 3:
+                raise r.error(f"{key} needs two counts")
+            n = r.count(words[1], f"{key} count")
+            size = r.count(words[2], f"{key} size")
+            mark = r.pos
+            nxt = r.line()
+            if nxt is not None and nxt[0].upper() == "OFFSETS":  # file version 5.1
+                offsets = r.numbers(n, nxt[1], f"{key} OFFSETS")
+                conn_head = r.line()
+                if conn_head is None or conn_head[0].upper() != "CONNECTIVITY":
+                    raise r.error(f"{key}: CONNECTIVITY expected after OFFSETS")
+                conn = r.numbers(size, conn_head[1], f"{key} CONNECTIVITY")
+                if len(offsets) == 0 or offsets[0] != 0 or offsets[-1] != size or (np.diff(offsets) < 0).any():
+                    raise r.error(f"{key}: OFFSETS are not increasing from 0 to {size}")
+            else:
+                r.pos = mark
+                offsets, conn = _cells_classic(r, n, size, key)
+            if key == "POLYGONS":
+                blocks.extend(polygon_blocks(offsets, conn))
+            elif key == "TRIANGLE_STRIPS":
+                blocks.append(CellBlock("triangle", _strip_triangles(offsets, conn)))
+            elif key == "LINES":
+                sizes = np.diff(offsets)
+                pairs = [np.stack([conn[a:b - 1], conn[a + 1:b]], axis=1)
+                         for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()) if b - a >= 2]
+                if pairs:
+                    blocks.append(CellBlock("line", np.concatenate(pairs)))
+                del sizes
+        elif key == "METADATA":  # text up to a blank line (file versions >= 4.2)
+            r.skip_to_blank_line()
+        elif key in ("POINT_DATA", "CELL_DATA", "FIELD"):
+            break
+        else:
+            raise r.error(f"unexpected section {words[0]!r}")
+    if points is None:
+        raise r.error("no POINTS section")
+    return RawMesh(points, blocks)

@@ -1,0 +1,68 @@
+"""Where numba keeps hammesh's compiled kernels, and a fallback when nowhere is writable.
+
+The kernels are compiled with ``cache=True``.  numba stores the cache in the package's
+``__pycache__`` if it can write there, else in the user's cache directory
+(``$XDG_CACHE_HOME/numba`` or ``~/.cache/numba``); a non-root user of a read-only
+installation with an unwritable or missing ``HOME`` has neither, and numba then fails at
+import time ("cannot cache function ...: no locator available").  :func:`ensure_cache`
+runs before any kernel module is imported: if neither place is writable (and the user
+did not set ``NUMBA_CACHE_DIR``), kernels are cached in a private temporary directory
+for this process only, with one warning — the same as no caching.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import warnings
+from pathlib import Path
+
+__all__ = ["ensure_cache", "writable_dir"]
+
+
+def writable_dir(path: str | os.PathLike[str]) -> bool:
+    """True if ``path`` is (or can be made) a directory this process can write to."""
+    try:
+        os.makedirs(path, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError:
+        return False
+    return True
+
+
+def _user_cache() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "numba"
+
+
+def ensure_cache(candidates: list[Path] | None = None) -> str | None:
+    """Make numba's kernel cache usable; return the fallback directory if one was needed.
+
+    Parameters
+    ----------
+    candidates : list of Path, optional
+        The directories numba would try (default: this package's ``__pycache__`` and
+        the user cache directory).
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None  # the user chose; numba reports problems with it itself
+    if candidates is None:
+        candidates = [Path(__file__).parent / "__pycache__", _user_cache()]
+    if any(writable_dir(c) for c in candidates):
+        return None
+    fallback = tempfile.mkdtemp(prefix="hammesh-numba-")
+    os.environ["NUMBA_CACHE_DIR"] = fallback
+    try:  # numba may already be imported by the caller: its config is read once
+        import numba.core.config as config
+
+        config.CACHE_DIR = fallback
+    except ImportError:  # pragma: no cover - numba is a dependency
+        pass
+    warnings.warn(
+        f"hammesh: no writable numba cache directory ({', '.join(map(str, candidates))}); "
+        "compiled kernels are not kept after this process (set NUMBA_CACHE_DIR to keep them)",
+        RuntimeWarning,
+        stacklevel=2,
+    )
+    return fallback

@@ -1,0 +1,111 @@
+"""``hammesh strip``'s policy as a library call: pick the encoding, return it with its facts.
+
+``method="auto"`` encodes greedily and, when the file's rows are stored as dual paths
+(a Hamiltonian mesh written by ``hammesh mesh``), also in row order, and keeps the
+shorter buffer; ``"christofides"`` is Thm 5.3's 9/4-approximation, which may redraw
+triangles (its counts are reported apart).  Moved here from the command line so that
+a script gets what the command gets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from hammesh import params
+from hammesh.errors import InvalidOptionError
+from hammesh.strips.generalized import GeneralizedStrips
+from hammesh.strips.gl import RESTART_INDEX, GLStrip
+
+__all__ = ["StripChoice", "choose_strip", "METHODS", "JOINS", "MAX_RESTART_INDEX"]
+
+METHODS = ("auto", "greedy", "order", "christofides")
+JOINS = ("restart", "stitch")
+#: GL index buffers are uint32: the largest restart index there is.
+MAX_RESTART_INDEX = 2**32 - 1
+
+
+@dataclass(frozen=True)
+class StripChoice:
+    """The encoding chosen and what ``hammesh strip`` reports about it.
+
+    Attributes
+    ----------
+    strip : GLStrip or GeneralizedStrips
+    method : str
+        The method that produced ``strip`` (``"auto"`` resolved).
+    extra : dict
+        Fields added to the written document (``method``; with Christofides the
+        mesh's triangle count and its ``indices_per_triangle``).
+    """
+
+    strip: GLStrip | GeneralizedStrips
+    method: str
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_triangles(self) -> int:
+        return int(self.extra.get("triangles", self.strip.n_triangles))
+
+    @property
+    def indices_per_triangle(self) -> float:
+        return float(self.extra.get("indices_per_triangle", self.strip.indices_per_triangle))
+
+
+def choose_strip(
+    mesh: Any,
+    *,
+    method: str = "auto",
+    join: str = "restart",
+    restart_index: int = RESTART_INDEX,
+    generalized: bool = False,
+) -> StripChoice:
+    """Encode ``mesh`` as ``hammesh strip`` does (see the module docstring).
+
+    Raises
+    ------
+    InvalidOptionError
+        An unknown method or join, a restart index outside ``[0, 2**32 - 1]``,
+        ``generalized`` with Christofides.
+    """
+    from hammesh.strips.christofides import christofides_strip
+    from hammesh.strips.encode import encode, encode_generalized
+
+    method = params.choice("method", method, METHODS)
+    join = params.choice("join", join, JOINS)
+    restart_index = params.integer("restart_index", restart_index, low=0, high=MAX_RESTART_INDEX,
+                                   what="GL index buffers are uint32")
+    generalized = params.flag("generalized", generalized)
+    if generalized and method == "christofides":
+        raise InvalidOptionError("generalized strips are not available with method 'christofides'")
+    extra: dict[str, Any] = {}
+    if generalized:
+        if method == "auto":
+            candidates = [("greedy", encode_generalized(mesh, method="greedy"))]
+            try:
+                candidates.append(("order", encode_generalized(mesh, method="order")))
+            except (InvalidOptionError, ValueError):
+                pass  # rows are not stored as dual paths: greedy only
+            method, strip = min(candidates, key=lambda c: len(c[1].vertices))
+        else:
+            strip = encode_generalized(mesh, method=method)
+    elif method == "christofides":
+        enc = christofides_strip(mesh, join=join, restart_index=restart_index)
+        strip = enc.strip
+        extra["christofides"] = enc.report()
+        # the contract counts mesh triangles; redrawn ones are reported apart
+        extra["drawn"] = strip.n_triangles
+        extra["triangles"] = enc.n_triangles
+        extra["indices_per_triangle"] = len(strip.indices) / enc.n_triangles
+    elif method == "auto":
+        kw = {"join": join, "restart_index": restart_index}
+        candidates = [("greedy", encode(mesh, method="greedy", **kw))]
+        try:
+            candidates.append(("order", encode(mesh, method="order", **kw)))
+        except (InvalidOptionError, ValueError):
+            pass  # rows are not stored as dual paths: greedy only
+        method, strip = min(candidates, key=lambda c: len(c[1].indices))
+    else:
+        strip = encode(mesh, method=method, join=join, restart_index=restart_index)
+    extra["method"] = method
+    return StripChoice(strip, method, extra)
