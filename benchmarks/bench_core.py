@@ -71,7 +71,7 @@ def _raw_triangle_input(dom, min_angle: float, max_area: float) -> tuple[dict, s
     return data, triangle_switches(dom, MeshOptions(min_angle=min_angle, max_area=max_area))
 
 
-def child(what: str, min_angle: float, max_area: float, path: str) -> dict:
+def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "incircle") -> dict:
     """One first-call measurement in this (fresh) interpreter."""
     import hammesh
 
@@ -110,7 +110,7 @@ def child(what: str, min_angle: float, max_area: float, path: str) -> dict:
         with open(inside) as f:
             t_inside = float(f.read())
         t, c = time.perf_counter(), _cpu()
-        h = hammesh.hamiltonian(mesh)
+        h = hammesh.hamiltonian(mesh, mode=mode)
         t_ham, c_ham = time.perf_counter() - t, _cpu() - c
         if path:  # for the "file" run: the same mesh, saved
             np.savez(path, points=mesh.points, triangles=mesh.triangles, neighbors=mesh.neighbors,
@@ -122,14 +122,14 @@ def child(what: str, min_angle: float, max_area: float, path: str) -> dict:
         with np.load(path) as f:
             mesh = hammesh.Mesh(**{k: f[k] for k in f.files})
         t = time.perf_counter()
-        h = hammesh.hamiltonian(mesh)
+        h = hammesh.hamiltonian(mesh, mode=mode)
         return {"hamiltonian_cold": time.perf_counter() - t, "verified": bool(h.report["verified"])}
     raise ValueError(what)
 
 
 def _fresh(what: str, args: argparse.Namespace, path: str = "") -> dict:
     cmd = [sys.executable, os.path.abspath(__file__), "--child", what, "--max-area", repr(args.max_area),
-           "--min-angle", repr(args.min_angle), "--path", path]
+           "--min-angle", repr(args.min_angle), "--path", path, "--mode", args.mode]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -197,7 +197,7 @@ def best_of(args: argparse.Namespace) -> None:
     t_hams = []
     for _ in range(args.repeat):
         t0 = time.perf_counter()
-        h = hammesh.hamiltonian(mesh)
+        h = hammesh.hamiltonian(mesh, mode=args.mode)
         t_hams.append(time.perf_counter() - t0)
         if len(t_hams) == 1:
             rss2 = _peak_rss_mib()
@@ -224,16 +224,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--min-angle", type=float, default=30.0)
     ap.add_argument("--repeat", type=int, default=5, help="runs of each step in one process; the best is compared")
     ap.add_argument("--fresh", type=int, default=3, help="fresh-process first-call runs (0: skip)")
+    ap.add_argument("--mode", default="incircle", choices=["incircle", "sparse"],
+                    help="hamiltonian() mode; incircle (Thm 2.4) is what the issue-2/11 targets are about, "
+                    "sparse (the default of hamiltonian()) is measured by bench_sparse.py")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--path", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        print(json.dumps(child(args.child, args.min_angle, args.max_area, args.path)))
+        print(json.dumps(child(args.child, args.min_angle, args.max_area, args.path, args.mode)))
         return 0
 
     # numba cold start: compile (or load the cache) in a fresh interpreter, measured
     cold = time.perf_counter()
-    subprocess.run([sys.executable, "-c", "from hammesh.postprocess import load_kernels; load_kernels()"], check=True)
+    subprocess.run([sys.executable, "-c", f"from hammesh.postprocess import load_kernels; load_kernels({args.mode!r})"], check=True)
     cold = time.perf_counter() - cold
     print(f"numba cold start (fresh interpreter: import + the kernels of hamiltonian() on a tiny mesh) {cold:.2f} s")
     if args.fresh > 0:

@@ -40,10 +40,12 @@ def _load_kernels() -> None:
     The parent process only waits meanwhile; the first call of each compiled kernel
     in a process loads its machine code from numba's cache (0.1-0.2 s in all), which
     a ``quality_mesh`` -> ``hamiltonian`` pipeline (the CLI's) then no longer pays.
+    Both modes: the default (sparse) and Thm 2.4's incircle construction.
     """
     from hammesh.postprocess import load_kernels
 
-    load_kernels()
+    load_kernels("sparse")
+    load_kernels("incircle")
 
 
 def quality_mesh(
