@@ -14,7 +14,8 @@ from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
-from hammesh.verify.certificate import claim_structure, input_facts, verify
+from hammesh.verify.certificate import certify, claim_structure
+from hammesh.verify.reference import input_facts
 from hammesh.halfedge import prepare_mesh
 
 __all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels"]
@@ -103,22 +104,23 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
         shape = np.shape(mesh.triangles)
         if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
             ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0])
+        # the certificate's own look at the caller's input (never at the construction's
+        # validated copy), beside the construction's validation
+        facts = side.submit(input_facts, mesh)
         clean, he, is_con = prepare_mesh(mesh)
-        facts = side.submit(input_facts, clean, he.twin)
         rows = prepared = None
         if mode == "incircle":
             out, claim, stream = incircle_streaming(clean, he, is_con, side, ready)
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows
-            prepared = claim_structure(out.triangles, len(out.points), claim)
+            prepared = claim_structure(out.triangles, claim)
             stream.join()  # then help with the row checks still to do
             rows = (stream.result(out.components), stream.used)
         else:
             out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep)
             t1 = time.perf_counter()
         ref_facts = facts.result()
-    stats = verify(out, reference=clean, reference_twin=he.twin, twin_claim=claim, rows=rows,
-                   input_facts=ref_facts, prepared=prepared)
+    stats = certify(out, ref_facts, claim=claim, rows=rows, prepared=prepared)
     t2 = time.perf_counter()
     report = dict(out.report)
     report.update(

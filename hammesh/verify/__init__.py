@@ -1,4 +1,8 @@
-"""Certificates: every output of hammesh passes one before it is returned or written."""
+"""Certificates: every output of hammesh passes one before it is returned or written.
+
+The certificates share only the exact predicates (``hammesh.predicates``) and numpy
+with the constructions they check: every fact about an input is derived here.
+"""
 
 from hammesh.verify.certificate import ANGLE_RTOL, AREA_RTOL, verify, verify_cycle_mesh
 from hammesh.verify.runs import infer_runs

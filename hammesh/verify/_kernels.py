@@ -20,6 +20,10 @@ from hammesh.predicates import orient_points
 __all__ = [
     "RowChecks",
     "AngleArea",
+    "InputMeasure",
+    "orient_input_into",
+    "find_edges",
+    "hull_chain",
     "UNLINKED",
     "certify_row_range",
     "runs_close",
@@ -402,3 +406,107 @@ def angle_area_stats(points, tri):
     min_ang = np.arcsin(np.sqrt(min(max(s2, 0.0), 1.0)))
     max_ang = np.arccos(min(max(c, -1.0), 1.0))
     return AngleArea(min_ang, a, max_ang, b, area, d, total)
+
+
+class InputMeasure(NamedTuple):
+    """Result of :func:`orient_input_into`."""
+
+    bad: int  # -1, or the first row that is degenerate by the exact predicate
+    n_flipped: int
+    min_angle: float  # radians, over all rows
+    total_area: float
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def orient_input_into(points, tri, out, used):
+    """The certificate's look at an input mesh: ``out`` = rows made counter-clockwise.
+
+    Orientation by the exact predicate (``hammesh.predicates``): a row with sign 0 is
+    degenerate (``bad``), a negative one is reversed. The smallest angle and the total
+    area come from the same pass, ``used[v]`` is set for every vertex of a row.
+    Indices must be in range (checked by the caller).
+    """
+    bad = -1
+    n_flipped = 0
+    best_s2 = np.inf
+    total = 0.0
+    for t in range(tri.shape[0]):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        used[a] = True
+        used[b] = True
+        used[c] = True
+        s = orient_points(points, a, b, c)
+        if s == 0:
+            if bad < 0:
+                bad = t
+            out[t, 0] = a
+            out[t, 1] = b
+            out[t, 2] = c
+            continue
+        if s < 0:
+            a, c = c, a
+            n_flipped += 1
+        out[t, 0] = a
+        out[t, 1] = b
+        out[t, 2] = c
+        cr, s2, _ = _measures(points, a, b, c)
+        total += 0.5 * cr
+        if s2 < best_s2:
+            best_s2 = s2
+    return InputMeasure(bad, n_flipped, np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0))), total)
+
+
+@njit(cache=True, nogil=True)
+def find_edges(tri, n_points, want):
+    """Which undirected edges ``want`` (sorted keys ``lo * n_points + hi``) ``tri`` has.
+
+    One pass over the half-edges; only those whose lower vertex is the lower vertex of
+    a wanted edge are looked up (binary search), so the pass costs a read per half-edge.
+    """
+    found = np.zeros(want.shape[0], np.bool_)
+    if want.shape[0] == 0:
+        return found
+    mark = np.zeros(n_points, np.bool_)
+    for i in range(want.shape[0]):
+        mark[want[i] // n_points] = True
+    for t in range(tri.shape[0]):
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            if mark[lo]:
+                key = lo * n_points + max(a, b)
+                i = np.searchsorted(want, key)
+                if i < want.shape[0] and want[i] == key:
+                    found[i] = True
+    return found
+
+
+@njit(cache=True, nogil=True)
+def hull_chain(points, order):
+    """Convex hull boundary, counter-clockwise, collinear boundary points included.
+
+    Andrew's monotone chain over ``order`` (the points sorted by x, then y) with the
+    exact orientation predicate; a point is dropped only on a strict clockwise turn,
+    so points on a hull edge stay. The points must be distinct and not all collinear.
+    Written for the certificates, apart from the point-set constructions' hull.
+    """
+    n = order.shape[0]
+    out = np.empty(2 * n, np.int64)
+    k = 0
+    for i in range(n):  # lower chain
+        p = order[i]
+        while k >= 2 and orient_points(points, out[k - 2], out[k - 1], p) < 0:
+            k -= 1
+        out[k] = p
+        k += 1
+    low = k + 1
+    for i in range(n - 2, -1, -1):  # upper chain
+        p = order[i]
+        while k >= low and orient_points(points, out[k - 2], out[k - 1], p) < 0:
+            k -= 1
+        out[k] = p
+        k += 1
+    return out[: k - 1]

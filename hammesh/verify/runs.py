@@ -12,8 +12,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from hammesh.errors import VerificationError
-from hammesh.halfedge import half_edges
+from hammesh.errors import InvalidMeshError, VerificationError
+from hammesh.verify import _kernels
 
 __all__ = ["infer_runs"]
 
@@ -42,7 +42,15 @@ def infer_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
     m = len(tri)
     if m == 0:
         raise VerificationError("the mesh has no triangles")
-    twin = half_edges(tri, n_points).twin
+    if tri.min() < 0 or tri.max() >= n_points:
+        raise InvalidMeshError(f"triangles reference vertices outside 0..{n_points - 1}")
+    twin, bad = _kernels.half_edge_twins(np.ascontiguousarray(tri), int(n_points))  # the certificate's own
+    if bad >= 0:
+        t, k = divmod(int(bad), 3)
+        raise InvalidMeshError(
+            f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is shared by more than two "
+            "triangles or by two triangles in the same direction (non-manifold edge or overlap)"
+        )
     h = np.flatnonzero(twin >= 0)
     graph = coo_matrix((np.ones(len(h), dtype=np.int8), (h // 3, twin[h] // 3)), shape=(m, m))
     n_pieces, label = connected_components(graph, directed=False)

@@ -226,7 +226,8 @@ def test_claimed_pairing_is_the_true_adjacency(dom: hammesh.Domain, area: float)
 def test_a_wrong_claim_is_not_believed() -> None:
     from dataclasses import replace
 
-    from hammesh.verify import verify
+    from hammesh.verify.certificate import certify
+    from hammesh.verify.reference import input_facts
 
     m = hammesh.quality_mesh(plate_with_loops(1), min_angle=30, max_area=0.02)
     h = hammesh.hamiltonian(m, mode="incircle")
@@ -234,9 +235,9 @@ def test_a_wrong_claim_is_not_believed() -> None:
     tri[[0, 1]] = tri[[1, 0]]  # a broken output ...
     bogus = np.full(3 * len(tri), -1, dtype=np.int64)  # ... with an "all boundary" claim
     with pytest.raises(hammesh.VerificationError):
-        verify(replace(h, triangles=tri), reference=m, twin_claim=bogus)
+        certify(replace(h, triangles=tri), input_facts(m), claim=bogus)
     # a valid output with a bogus claim still passes (the claim is checked, then ignored)
-    verify(h, reference=m, twin_claim=bogus)
+    certify(h, input_facts(m), claim=bogus)
 
 
 @pytest.mark.parametrize("n_loops, pieces", [(0, 1), (3, 1), (2, 3)])

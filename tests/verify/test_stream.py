@@ -14,6 +14,8 @@ from hammesh.postprocess import _thm24_kernels as _kernels
 from hammesh.verify import _kernels as cert_kernels
 from hammesh.postprocess import incircle
 from hammesh.verify import verify
+from hammesh.verify.certificate import certify
+from hammesh.verify.reference import input_facts
 from hammesh.verify.certificate import _certify_rows
 from hammesh.verify.stream import RowStream
 from tests.helpers import assert_certificate, plate
@@ -74,7 +76,7 @@ def test_stream_finds_the_same_broken_row(built, where: str) -> None:
     ref, _ = full(h, tri, claim)
     assert rows.bad_consecutive == ref.bad_consecutive >= 0
     with pytest.raises(hammesh.VerificationError, match=f"breaks at triangle {ref.bad_consecutive}"):
-        verify(replace(h, triangles=tri), rows=(rows, np.ones(len(h.points), bool)))
+        certify(replace(h, triangles=tri), None, rows=(rows, np.ones(len(h.points), bool)))
 
 
 def test_unwritten_claim_entries_are_counted(built) -> None:
@@ -84,9 +86,7 @@ def test_unwritten_claim_entries_are_counted(built) -> None:
     rows, _ = streamed(h, c, 4, 2)
     assert rows.bad_pair == -1 and 2 * rows.links + rows.unpaired == 3 * h.n_triangles - 2
     # the certificate then does not believe the claim but still proves the good mesh
-    ref = h  # (the mesh itself is fine)
-    clean, he, _ = prepare_mesh(plate(2, 3))
-    verify(ref, reference=clean, reference_twin=he.twin, twin_claim=c, rows=rows_used(h, c))
+    certify(h, input_facts(plate(2, 3)), claim=c, rows=rows_used(h, c))  # (the mesh itself is fine)
 
 
 def rows_used(h: hammesh.HamiltonianMesh, claim: np.ndarray) -> tuple:
@@ -162,14 +162,15 @@ def test_claim_index_width() -> None:
     """Claims and slot rows are int32 while they fit (half the memory), int64 beyond."""
     assert _kernels.index_dtype(3 * 10**8) == np.int32
     assert _kernels.index_dtype(2**31) == np.int64
-    clean, he, is_con = prepare_mesh(plate(1, 1))
+    m = plate(1, 1)
+    clean, he, is_con = prepare_mesh(m)
     h, claim = incircle.incircle_hamiltonian(clean, he, is_con)
     assert claim.dtype == np.int32
     twin, bad = cert_kernels.half_edge_twins(h.triangles, h.n_points)
     assert bad == -1
     np.testing.assert_array_equal(claim, twin)
     # the certificate takes either width
-    verify(h, reference=clean, reference_twin=he.twin, twin_claim=claim.astype(np.int64))
+    certify(h, input_facts(m), claim=claim.astype(np.int64))
 
 
 def test_hamiltonian_from_several_threads_at_once(monkeypatch) -> None:

@@ -1,0 +1,323 @@
+"""Injected construction bugs: every one must be caught by the certificate, by name.
+
+Two kinds of mutation: a monkeypatch of construction code (the input's half-edge
+pairing, orientation and constrained edges in ``hammesh.halfedge``; Thm 2.4's
+incenters and spanning forest in ``hammesh.postprocess._thm24_kernels``), after
+which ``hammesh.hamiltonian`` must raise; and an output damaged by hand, which the
+public ``hammesh.verify(output, input)`` must reject. Each case names the message
+the certificate must give. Both constructions (``mode="incircle"``, ``"sparse"``)
+run through the construction-side patches and the hand damage.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.halfedge import _kernels as he_kernels
+from hammesh.postprocess import _thm24_kernels as thm24
+from tests.helpers import plate
+
+MODES = ("incircle", "sparse")
+
+
+def grid(nx: int = 12, ny: int = 6) -> hammesh.Mesh:
+    """``nx`` x ``ny`` unit squares, each cut into two triangles; no neighbour array."""
+    xs, ys = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0))
+    pts = np.c_[xs.ravel(), ys.ravel()]
+    v = lambda i, j: j * (nx + 1) + i  # noqa: E731
+    tri = []
+    for j in range(ny):
+        for i in range(nx):
+            tri += [[v(i, j), v(i + 1, j), v(i + 1, j + 1)], [v(i, j), v(i + 1, j + 1), v(i, j + 1)]]
+    return hammesh.Mesh(points=pts, triangles=np.array(tri, dtype=np.int64))
+
+
+def on_line_x1(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Half-edges (``3 t + k``) lying on the line x = 1."""
+    a = points[tri[:, [0, 1, 2]], 0]
+    b = points[tri[:, [1, 2, 0]], 0]
+    return np.flatnonzero(((a == 1.0) & (b == 1.0)).ravel())
+
+
+def drop_pairs_on_x1(monkeypatch, points: np.ndarray) -> None:
+    """The construction's pairing forgets every edge on x = 1 (both halves boundary)."""
+    real = he_kernels.half_edge_twins
+
+    def broken(tri, n_points):
+        twin, bad = real(tri, n_points)
+        if n_points != len(points):  # (sparse pairs its output with it too: left intact)
+            return twin, bad
+        twin = twin.copy()
+        twin[on_line_x1(points, tri)] = -1
+        return twin, bad
+
+    monkeypatch.setattr(he_kernels, "half_edge_twins", broken)
+
+
+# ---------------------------------------------------------------- the issue's grid
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_grid_with_six_pairings_dropped_is_rejected(monkeypatch, mode: str) -> None:
+    """Issue 11: the construction-side pairing drops the 6 interior edges on x = 1 of a
+    12 x 6 grid of unit squares (144 triangles): two cycles for one piece."""
+    m = grid()
+    assert m.n_triangles == 144 and m.neighbors is None
+    h = hammesh.hamiltonian(m, mode=mode)  # intact: one cycle
+    assert len(h.components) == 1
+    assert len(on_line_x1(m.points, m.triangles)) == 12  # 6 edges, both halves
+    drop_pairs_on_x1(monkeypatch, m.points)
+    with pytest.raises(hammesh.VerificationError, match="different cycles|boundary changed"):
+        hammesh.hamiltonian(m, mode=mode)
+
+
+# ---------------------------------------------------------------- construction patches
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_extra_pairing_is_rejected(monkeypatch, mode: str) -> None:
+    """The pairing joins the left and right boundary edges of the grid (a cylinder)."""
+    m = grid(4, 3)
+    real = he_kernels.half_edge_twins
+    pts = m.points
+
+    def broken(tri, n_points):
+        twin, bad = real(tri, n_points)
+        if n_points != len(pts):  # the input's pairing only
+            return twin, bad
+        twin = twin.copy()
+        a = pts[tri[:, [0, 1, 2]]].reshape(-1, 2)
+        b = pts[tri[:, [1, 2, 0]]].reshape(-1, 2)
+        left = np.flatnonzero((a[:, 0] == 0) & (b[:, 0] == 0) & (twin < 0))
+        right = np.flatnonzero((a[:, 0] == 4) & (b[:, 0] == 4) & (twin < 0))
+        ly = np.minimum(a[left, 1], b[left, 1])
+        ry = np.minimum(a[right, 1], b[right, 1])
+        left, right = left[np.argsort(ly)], right[np.argsort(ry)]
+        twin[left] = right
+        twin[right] = left
+        return twin, bad
+
+    monkeypatch.setattr(he_kernels, "half_edge_twins", broken)
+    with pytest.raises(hammesh.VerificationError, match="breaks at triangle|inverted|boundary changed|not linked into a cycle"):
+        hammesh.hamiltonian(m, mode=mode)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_wrong_orientation_pass_is_rejected(monkeypatch, mode: str) -> None:
+    """The construction's orientation pass turns every row clockwise."""
+    real = he_kernels.orient_ccw
+
+    def broken(points, tri, used=None):
+        r = real(points, tri, used)
+        return r._replace(triangles=r.triangles[:, ::-1].copy())
+
+    monkeypatch.setattr(he_kernels, "orient_ccw", broken)
+    with pytest.raises(hammesh.VerificationError, match="inverted"):
+        hammesh.hamiltonian(grid(3, 2), mode=mode)
+
+
+@pytest.mark.parametrize("mode, loops", [("incircle", (2, 0.01)), ("sparse", (3, 0.002))])
+def test_forgotten_constrained_edges_are_rejected(monkeypatch, mode: str, loops: tuple) -> None:
+    """The construction does not see the constrained edges: it flips one (incircle:
+    every tree edge; sparse: a swap across a loop on this plate)."""
+    m = plate(loops[0], 1, max_area=loops[1])
+    real = he_kernels.mark_segments
+
+    def broken(tri, twin, vh, segments):
+        is_con, found = real(tri, twin, vh, segments)
+        return np.zeros_like(is_con), found
+
+    monkeypatch.setattr(he_kernels, "mark_segments", broken)
+    with pytest.raises(
+        hammesh.VerificationError,
+        match="constrained edge .* (is not an edge of the mesh|is neither an output edge nor split at its midpoint)",
+    ):
+        hammesh.hamiltonian(m, mode=mode)
+
+
+def test_incenter_outside_its_triangle_is_rejected(monkeypatch) -> None:
+    """Thm 2.4's incenters: one lands outside its triangle (mirrored over an edge)."""
+    real = thm24.incenters
+
+    def broken(points, tri, out=None):
+        out = real(points, tri, out)
+        a, b = points[tri[0, 0]], points[tri[0, 1]]
+        out[0] = a + b - out[0]  # point reflection through the edge's midpoint
+        return out
+
+    monkeypatch.setattr(thm24, "incenters", broken)
+    with pytest.raises(hammesh.VerificationError, match="inverted|breaks"):
+        hammesh.hamiltonian(grid(3, 2), mode="incircle")
+
+
+def test_tree_edge_dropped_splits_the_cycle(monkeypatch) -> None:
+    """The spanning forest loses a tree edge: the walk makes two cycles for one piece."""
+    real = thm24.spanning_forest
+
+    def broken(tri, twin, is_con, points=None):
+        f = real(tri, twin, is_con, points)
+        code = f.code.copy()
+        h = int(np.flatnonzero(((code & thm24.TREE_BIT) != 0) & ((code & thm24.CON_BIT) == 0))[-1])
+        g = int((code[h] >> 2) - 1)
+        code[[h, g]] &= ~thm24.TREE_BIT
+        return f._replace(code=code)
+
+    monkeypatch.setattr(thm24, "spanning_forest", broken)
+    with pytest.raises(hammesh.VerificationError, match="tree walk|different cycles"):
+        hammesh.hamiltonian(grid(3, 2), mode="incircle")
+
+
+def lie_about_the_angle(monkeypatch) -> None:
+    """The construction's validation reports a tiny input minimum angle."""
+    import hammesh.postprocess as post
+
+    real = post.prepare_mesh
+
+    def lying(mesh):
+        clean, he, is_con = real(mesh)
+        info = {**clean.info, "validated": {**clean.info["validated"], "min_angle": 1e-3}}
+        return replace(clean, info=info), he, is_con
+
+    monkeypatch.setattr(post, "prepare_mesh", lying)
+
+
+def test_wrong_angle_cache_misleads_sparse_not_the_certificate(monkeypatch) -> None:
+    """Sparse mode's swaps trust the cached angle: they go below the true bound, and the
+    certificate (which measures the input itself) rejects the output."""
+    m = plate(1, 1, max_area=0.01)
+    hammesh.hamiltonian(m, mode="sparse")  # honest: passes
+    lie_about_the_angle(monkeypatch)
+    with pytest.raises(hammesh.VerificationError, match="below 0.5 x the input minimum"):
+        hammesh.hamiltonian(m, mode="sparse")
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_angle_cache_in_the_input_is_not_trusted(monkeypatch, mode: str) -> None:
+    """Issue 11: a cache in ``info["validated"]`` claiming a tiny input angle does not
+    let an output below the true bound through ``hammesh.verify``."""
+    m = plate(1, 1, max_area=0.01)
+    h = made_in(mode, m)
+    lied = replace(m, info={"validated": {"min_angle": 1e-3, "total": 1.0, "used": np.ones(m.n_points, bool)}})
+    hammesh.verify(h, lied)  # the valid output passes
+    with pytest.raises(hammesh.VerificationError, match="below 0.5 x the input minimum"):
+        hammesh.verify(squeezed(m, h), lied)
+
+
+# ---------------------------------------------------------------- hand-damaged outputs
+
+
+def made_in(mode: str, m: hammesh.Mesh) -> hammesh.HamiltonianMesh:
+    """``hamiltonian(m, mode)``; sparse without swaps and edge splits, so that its
+    merges are Thm 2.4 bridges (incenters to damage)."""
+    from hammesh.postprocess import sparse
+
+    with pytest.MonkeyPatch.context() as mp:
+        if mode == "sparse":
+            mp.setattr(sparse.sparse_cycles, "__kwdefaults__",
+                       {**sparse.sparse_cycles.__kwdefaults__, "swaps": False, "edge_splits": False})
+        h = hammesh.hamiltonian(m, mode=mode)
+    assert h.report["incenters"] >= 1
+    return h
+
+
+@functools.lru_cache(maxsize=None)
+def made(mode: str) -> tuple[hammesh.Mesh, hammesh.HamiltonianMesh]:
+    """The loops plate and its output (built once per mode)."""
+    m = plate(2, 1, max_area=0.01)
+    return m, made_in(mode, m)
+
+
+def squeezed(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> hammesh.HamiltonianMesh:
+    """Move one Steiner point (inside the fan of triangles around it) toward a corner:
+    still a valid tiling, but with a small angle."""
+    star = np.flatnonzero((h.triangles >= m.n_points).any(axis=1))
+    v = int(h.triangles[star[0]][h.triangles[star[0]] >= m.n_points][0])
+    fan = np.flatnonzero((h.triangles == v).any(axis=1))
+    corner = int(next(u for u in h.triangles[fan[0]] if u != v))
+    pts = h.points.copy()
+    pts[v] = pts[v] + 0.9 * (pts[corner] - pts[v])
+    return replace(h, points=pts)
+
+
+def damaged(h: hammesh.HamiltonianMesh, what: str, m: hammesh.Mesh) -> hammesh.HamiltonianMesh:
+    tri, pts, runs = h.triangles.copy(), h.points.copy(), h.components.copy()
+    n_in = m.n_points
+    if what == "missing triangle":
+        return replace(h, triangles=np.delete(tri, 5, axis=0), components=runs - np.eye(len(runs), dtype=int)[0])
+    if what == "duplicated triangle":
+        tri[7] = tri[3]
+        return replace(h, triangles=tri)
+    if what == "rows swapped":
+        tri[[4, 9]] = tri[[9, 4]]
+        return replace(h, triangles=tri)
+    if what == "run length off by one":
+        runs[0] += 1
+        return replace(h, components=runs)
+    if what == "cycle split in two":
+        k = int(runs[0]) // 2
+        return replace(h, components=np.r_[k, runs[0] - k, runs[1:]].astype(np.int64))
+    if what == "flipped orientation":
+        tri[11] = tri[11, ::-1]
+        return replace(h, triangles=tri)
+    if what == "moved input vertex":
+        pts[3] += [1e-12, 0.0]
+        return replace(h, points=pts)
+    if what == "incenter outside its triangle":
+        v = int(np.max(tri[h.kind == 0]))  # a Steiner point at an incenter
+        t = int(np.flatnonzero((tri == v).any(axis=1))[0])
+        a, b = (u for u in tri[t] if u != v)
+        pts[v] = pts[a] + pts[b] - pts[v]
+        return replace(h, points=pts)
+    if what == "midpoint off the segment":  # slid along its segment: no longer the midpoint
+        halves = h.segments[(h.segments >= n_in).any(axis=1)]
+        mid = int(halves[0].max())
+        a, b = (int(e.min()) for e in halves if e.max() == mid)
+        pts[mid] += 0.01 * (pts[b] - pts[a])
+        return replace(h, points=pts)
+    if what == "vertex out of range":
+        tri[2, 1] = len(pts) + 3
+        return replace(h, triangles=tri)
+    if what == "point not finite":
+        pts[-1, 0] = np.nan
+        return replace(h, points=pts)
+    if what == "output segment not an edge":
+        segs = np.r_[h.segments, [[0, len(pts) - 1]]]
+        return replace(h, segments=segs.astype(np.int64), segment_markers=np.r_[h.segment_markers, 1])
+    if what == "small angle":
+        return squeezed(m, h)
+    raise AssertionError(what)
+
+
+CASES = {
+    "missing triangle": "breaks at triangle|boundary changed|area",
+    "duplicated triangle": "breaks at triangle|appears twice",
+    "rows swapped": "breaks at triangle",
+    "run length off by one": "not positive run lengths summing",
+    "cycle split in two": "breaks at triangle",
+    "flipped orientation": "inverted",
+    "moved input vertex": "input point 3 .* not kept unchanged",
+    "incenter outside its triangle": "inverted",
+    "vertex out of range": "references a vertex outside",
+    "point not finite": "not finite",
+    "midpoint off the segment": "constrained edge .* neither an output edge nor split at its midpoint",
+    "output segment not an edge": "constrained edge .* not an edge of the mesh",
+    "small angle": "below 0.5 x the input minimum",
+}
+
+
+#: Sparse mode splits no constrained edge on the loops plate: its midpoint case is incircle's.
+DAMAGES = [(mode, what) for mode in MODES for what in sorted(CASES)
+           if not (mode == "sparse" and what == "midpoint off the segment")]
+
+
+@pytest.mark.parametrize("mode, what", DAMAGES)
+def test_damaged_output_is_rejected(mode: str, what: str) -> None:
+    m, h = made(mode)
+    hammesh.verify(h, m)  # the intact output passes
+    with pytest.raises(hammesh.VerificationError, match=CASES[what]):
+        hammesh.verify(damaged(h, what, m), m)
