@@ -1,14 +1,140 @@
-"""Shared test helpers: independent (pure numpy / networkx) re-checks of outputs.
+"""Shared test support: meshes and domains built by hand, and independent re-checks.
 
-These deliberately do not call hammesh's numba kernels, so that a bug there cannot
-hide itself in a test.
+The one module test files share (no test module imports another): hand-built
+Hamiltonian meshes (``fan``, ``hand_hamiltonian``; the ``hexagon``/``two_cycles``
+fixtures in ``tests/conftest.py``), grids, Triangle's bundled domains, random PSLGs
+(hypothesis), meshes with a bad edge, and re-checks of outputs in pure numpy /
+networkx, which deliberately do not call hammesh's numba kernels, so that a bug
+there cannot hide itself in a test.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import triangle
+from hypothesis import strategies as st
 
 import hammesh
+from hammesh.mesh import HamiltonianMesh, Mesh
+
+#: Meshes with a bad edge: used twice in one direction, or by three triangles.
+BAD_EDGES = [
+    [[0, 1, 2], [0, 1, 3]],
+    [[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+    [[0, 1, 2], [1, 0, 3], [1, 0, 4]],
+]
+
+
+def fan(center: tuple[float, float], k: int, radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Centre point + regular ``k``-gon; triangles ``(0, i, i+1)`` CCW, in cycle order."""
+    angles = 2 * np.pi * np.arange(k) / k
+    ring = np.column_stack([np.cos(angles), np.sin(angles)]) * radius + center
+    points = np.vstack([center, ring])
+    i = np.arange(1, k + 1)
+    triangles = np.column_stack([np.zeros(k, np.int64), i, i % k + 1])
+    return points, triangles
+
+
+def hand_hamiltonian(points, triangles, components, segments=None, n_attributes: int = 1) -> HamiltonianMesh:
+    """A HamiltonianMesh from rows already in cycle order (runs ``components``)."""
+    m = len(triangles)
+    components = np.asarray(components, dtype=np.int64)
+    starts = np.repeat(np.cumsum(components) - components, components)
+    segments = np.zeros((0, 2), np.int64) if segments is None else np.asarray(segments, np.int64).reshape(-1, 2)
+    return HamiltonianMesh(
+        points=np.asarray(points, dtype=np.float64),
+        triangles=np.asarray(triangles, dtype=np.int64),
+        segments=segments,
+        segment_markers=np.arange(1, len(segments) + 1, dtype=np.int64),
+        components=components,
+        position=np.arange(m, dtype=np.int64) - starts,
+        parent=np.arange(m, dtype=np.int64) // 2,
+        kind=(np.arange(m) % 3).astype(np.int8),
+        triangle_attributes=np.linspace(0.1, 0.9, m)[:, None] * np.arange(1, n_attributes + 1),
+        report={"n_triangles": m},
+    )
+
+
+def hexagon_mesh() -> HamiltonianMesh:
+    """6 triangles around the centre of a regular hexagon: one cycle, boundary segments."""
+    points, triangles = fan((0.0, 0.0), 6)
+    boundary = np.column_stack([np.arange(1, 7), np.arange(1, 7) % 6 + 1])
+    return hand_hamiltonian(points, triangles, [6], segments=boundary)
+
+
+def two_cycles_mesh() -> HamiltonianMesh:
+    """A hexagon fan (6 triangles) and a square fan (4 triangles): two cycles."""
+    p1, t1 = fan((0.0, 0.0), 6)
+    p2, t2 = fan((3.0, 0.5), 4, radius=0.7)
+    return hand_hamiltonian(np.vstack([p1, p2]), np.vstack([t1, t2 + len(p1)]), [6, 4], n_attributes=2)
+
+
+def grid_mesh(nx: int, ny: int, z: bool = False) -> Mesh:
+    """Structured grid split into triangles (counter-clockwise), optionally lifted to 3D."""
+    xs, ys = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0))
+    pts = np.c_[xs.ravel(), ys.ravel()]
+    v = lambda i, j: j * (nx + 1) + i  # noqa: E731
+    tri = []
+    for j in range(ny):
+        for i in range(nx):
+            a, b, c, d = v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)
+            tri += [[a, b, c], [a, c, d]]
+    if z:
+        pts = np.c_[pts, np.sin(pts[:, 0]) * np.cos(pts[:, 1])]
+    return Mesh(pts, np.array(tri, dtype=np.int64))
+
+
+def bundled_domain(name: str) -> hammesh.Domain:
+    """One of Triangle's bundled example domains."""
+    d = triangle.get_data(name)
+    return hammesh.Domain(
+        vertices=d["vertices"],
+        segments=d.get("segments", np.zeros((0, 2), int)),
+        holes=d.get("holes", np.zeros((0, 2))),
+    )
+
+
+def hull_area(dom: hammesh.Domain) -> float:
+    """Area of the convex hull of a domain's vertices (a scale for ``max_area``)."""
+    from scipy.spatial import ConvexHull
+
+    return ConvexHull(dom.vertices).volume
+
+
+def plate_with_loops(n_loops: int) -> hammesh.Domain:
+    """Unit square with ``n_loops`` closed internal constrained squares (interfaces)."""
+    v = square(0, 0, 1)
+    segs = [[0, 1], [1, 2], [2, 3], [3, 0]]
+    for i in range(n_loops):
+        x = 0.1 + 0.28 * i
+        base = len(v)
+        v += square(x, 0.4, 0.2)
+        segs += [[base, base + 1], [base + 1, base + 2], [base + 2, base + 3], [base + 3, base]]
+    return hammesh.Domain(vertices=v, segments=segs)
+
+
+@st.composite
+def star_pslg(draw):
+    """A random star-shaped polygon, optionally with a hole or an internal loop."""
+    n = draw(st.integers(5, 14))
+    angles = np.sort(np.array(draw(st.lists(st.floats(0, 2 * np.pi, exclude_max=True), min_size=n, max_size=n, unique=True))))
+    gaps = np.diff(np.r_[angles, angles[0] + 2 * np.pi])
+    if gaps.min() < 0.05 or gaps.max() > 2 * np.pi / 3:  # keep edges >= 0.3 from the centre
+        angles = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    radii = np.array(draw(st.lists(st.floats(0.6, 1.0), min_size=n, max_size=n)))
+    outer = np.c_[radii * np.cos(angles), radii * np.sin(angles)]
+    inner_kind = draw(st.sampled_from(["none", "hole", "loop"]))
+    v = outer.tolist()
+    segs = [[i, (i + 1) % n] for i in range(n)]
+    holes = []
+    if inner_kind != "none":
+        r = draw(st.floats(0.1, 0.25))
+        k = len(v)
+        v += (r * np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])).tolist()
+        segs += [[k, k + 1], [k + 1, k + 2], [k + 2, k + 3], [k + 3, k]]
+        if inner_kind == "hole":
+            holes = [[0.0, 0.0]]
+    return hammesh.Domain(vertices=v, segments=segs, holes=holes)
 
 
 def square(x0: float = 0.0, y0: float = 0.0, s: float = 1.0) -> list[list[float]]:

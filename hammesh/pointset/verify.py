@@ -20,6 +20,11 @@ Items 3-5 prove the triangles tile the convex hull without overlap (positive
 triangles glued along a pairing of their half-edges whose free boundary is the hull
 boundary cover each point of the hull exactly once, see
 :mod:`hammesh.verify.certificate`), and with 1-2 the triangulation of the point set.
+
+Shared with the point-set constructions: ``hammesh.predicates`` and numpy only. The
+hull is the certificate's own (``hammesh.verify._kernels.hull_chain``, a monotone
+chain with the exact predicate), not the constructions' ``pointset.convex_hull``;
+the pairing is the certificate's own bucket matching.
 """
 
 from __future__ import annotations
@@ -29,10 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from hammesh.verify import _kernels as core_kernels
 from hammesh.errors import VerificationError
 from hammesh.predicates import orient_many
-from hammesh.pointset.validate import convex_hull
+from hammesh.verify import _kernels as core_kernels
 
 __all__ = ["verify_point_triangulation", "AREA_RTOL", "ORDERS"]
 
@@ -79,8 +83,14 @@ def verify_point_triangulation(
     if tri.min() < 0 or tri.max() >= n:
         t = int(np.argmax(((tri < 0) | (tri >= n)).any(axis=1)))
         _fail(f"triangle {t} {tri[t].tolist()} references a point outside 0..{n - 1}")
-    hull = convex_hull(pts)
-    h = hull.h
+    if not np.isfinite(pts).all():
+        _fail(f"point {int(np.argmin(np.isfinite(pts).all(axis=1)))} is not finite")
+    if len(np.unique(pts, axis=0)) < n:
+        _fail("the points are not distinct")
+    hull_b = core_kernels.hull_chain(pts, np.lexsort((pts[:, 1], pts[:, 0])).astype(np.int64))
+    h = len(hull_b)
+    if len(np.unique(hull_b)) != h:  # the chain runs back over itself
+        _fail("the points are all collinear: there is no triangulation")
     if m != 2 * n - h - 2:
         _fail(f"{m} triangles, but a triangulation of {n} points with {h} on the hull has {2 * n - h - 2}")
     used = np.bincount(tri.reshape(-1), minlength=n) > 0
@@ -96,7 +106,7 @@ def verify_point_triangulation(
         _fail(f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the same direction")
     free = core_kernels.boundary_half_edges(tri, twin)
     got = np.sort(free[:, 0].astype(np.int64) * n + free[:, 1])
-    b = hull.boundary
+    b = hull_b
     want = np.sort(b.astype(np.int64) * n + np.roll(b, -1))
     if not np.array_equal(got, want):
         k = int(np.setxor1d(got, want)[0])

@@ -30,6 +30,7 @@ __all__ = [
     "first_cross_run_edge",
     "boundary_half_edges",
     "half_edge_twins",
+    "half_edge_twins_wide",
     "angle_area_stats",
     "mark_used",
 ]
@@ -76,8 +77,9 @@ def half_edge_twins(tri, n_points):
     Written apart from the constructions' pairing (``hammesh.halfedge``) and by another
     method, so that one bug cannot make both wrong the same way: half-edges are
     bucketed by their lower vertex (counting sort), each bucket is sorted by its other
-    vertex and direction (insertion sort: buckets hold about a vertex degree), and an edge's
-    halves are then neighbours in their bucket. Vertex indices must lie in
+    vertex, then direction, then half-edge (insertion sort: a bucket holds about half a
+    vertex degree; a stable merge sort for a high-degree vertex), and an edge's halves
+    are then neighbours in their bucket. Vertex indices must lie in
     ``0..n_points-1`` (checked by the caller).
 
     Returns ``(twin, bad)``: ``twin[h]`` the opposite half-edge or -1 (boundary);
@@ -87,43 +89,95 @@ def half_edge_twins(tri, n_points):
     m = tri.shape[0]
     nh = 3 * m
     start = np.zeros(n_points + 1, np.int64)
-    for h in range(nh):
-        t = h // 3
-        k = h - 3 * t
-        start[min(tri[t, k], tri[t, (k + 1) % 3]) + 1] += 1
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        start[min(a, b) + 1] += 1
+        start[min(b, c) + 1] += 1
+        start[min(c, a) + 1] += 1
     for v in range(n_points):
         start[v + 1] += start[v]
     fill = start[:-1].copy()
-    key = np.empty(nh, np.int64)  # 2 * other vertex + (runs downward), sorted per bucket
-    half = np.empty(nh, np.int64)
-    for h in range(nh):  # in order of h: each bucket fills in increasing h
-        t = h // 3
-        k = h - 3 * t
-        a = tri[t, k]
-        b = tri[t, (k + 1) % 3]
-        lo = min(a, b)
-        i = fill[lo]
-        fill[lo] = i + 1
-        key[i] = 2 * max(a, b) + (1 if a > b else 0)
-        half[i] = h
+    # one sort key per half-edge: (2 * other vertex + runs downward) << 32 | h, so that
+    # an edge's halves are adjacent and a group's lowest half-edge comes first
+    if nh >= (1 << 32) or n_points >= (1 << 30):
+        return half_edge_twins_wide(tri, n_points, start, fill)
+    mask = (1 << 32) - 1
+    key = np.empty(nh, np.int64)
+    for t in range(m):
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            i = fill[lo]
+            fill[lo] = i + 1
+            key[i] = ((2 * max(a, b) + (1 if a > b else 0)) << 32) | (3 * t + k)
     for v in range(n_points):
         s0 = start[v]
         s1 = start[v + 1]
-        if s1 - s0 > 24:  # a high-degree vertex: a stable sort keeps h increasing
-            p = np.argsort(key[s0:s1], kind="mergesort")
-            key[s0:s1] = key[s0:s1][p]
-            half[s0:s1] = half[s0:s1][p]
+        if s1 - s0 > 24:  # a high-degree vertex
+            key[s0:s1] = np.sort(key[s0:s1])
             continue
-        for i in range(s0 + 1, s1):  # insertion sort (stable)
+        for i in range(s0 + 1, s1):  # insertion sort
             kv = key[i]
-            hv = half[i]
             j = i
             while j > s0 and key[j - 1] > kv:
                 key[j] = key[j - 1]
-                half[j] = half[j - 1]
                 j -= 1
             key[j] = kv
-            half[j] = hv
+    twin = np.empty(nh, np.int64)
+    twin.fill(-1)
+    bad = -1
+    for v in range(n_points):
+        i = start[v]
+        end = start[v + 1]
+        while i < end:
+            other = key[i] >> 33
+            j = i + 1
+            while j < end and key[j] >> 33 == other:
+                j += 1
+            hi_ = key[i] & mask
+            if j - i == 2 and (key[i] >> 32) & 1 == 0 and (key[i + 1] >> 32) & 1 == 1:  # one each way
+                hj = key[i + 1] & mask
+                twin[hi_] = hj
+                twin[hj] = hi_
+            elif j - i >= 2:  # twice one way, or three or more triangles
+                low = hi_
+                for q in range(i + 1, j):
+                    low = min(low, key[q] & mask)
+                if bad < 0 or low < bad:
+                    bad = low
+            i = j
+    return twin, bad
+
+
+@njit(cache=True, nogil=True)
+def half_edge_twins_wide(tri, n_points, start, fill):
+    """:func:`half_edge_twins` for meshes too large for one int64 key per half-edge.
+
+    ``start``: bucket starts (``n_points + 1``, counts of half-edges per lower vertex,
+    cumulated); ``fill``: a copy of ``start[:-1]`` (consumed).
+    """
+    m = tri.shape[0]
+    nh = 3 * m
+    key = np.empty(nh, np.int64)  # 2 * other vertex + runs downward
+    half = np.empty(nh, np.int64)
+    for t in range(m):
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            i = fill[lo]
+            fill[lo] = i + 1
+            key[i] = 2 * max(a, b) + (1 if a > b else 0)
+            half[i] = 3 * t + k
+    for v in range(n_points):
+        s0 = start[v]
+        s1 = start[v + 1]
+        p = np.argsort(key[s0:s1], kind="mergesort")  # stable: h stays increasing
+        key[s0:s1] = key[s0:s1][p]
+        half[s0:s1] = half[s0:s1][p]
     twin = np.full(nh, -1, np.int64)
     bad = -1
     for v in range(n_points):
@@ -133,10 +187,10 @@ def half_edge_twins(tri, n_points):
             j = i + 1
             while j < end and key[j] >> 1 == key[i] >> 1:
                 j += 1
-            if j - i == 2 and key[i] != key[i + 1]:  # one half each way
+            if j - i == 2 and key[i] != key[i + 1]:
                 twin[half[i]] = half[i + 1]
                 twin[half[i + 1]] = half[i]
-            elif j - i >= 2:  # twice one way, or three or more triangles
+            elif j - i >= 2:
                 low = half[i]
                 for q in range(i, j):
                     low = min(low, half[q])

@@ -12,7 +12,7 @@ from scipy.spatial import Delaunay
 import hammesh
 from hammesh.postprocess.cycle_cover import cycle_cover
 from hammesh.halfedge import half_edges
-from tests.postprocess.test_incircle import _area, bundled_domain
+from tests.helpers import bundled_domain, hull_area
 
 
 def check_cover(tri: np.ndarray, n: int) -> tuple:
@@ -66,7 +66,7 @@ def test_closed_surface_nearly_all_covered() -> None:
 @pytest.mark.parametrize("name", ["A", "face", "square_circle_hole"])
 def test_quality_meshes_nearly_all_covered(name: str) -> None:
     dom = bundled_domain(name)
-    m = hammesh.quality_mesh(dom, min_angle=30, max_area=_area(dom) / 3000)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
     c = check_cover(m.triangles, m.n_points)
     assert c.n_uncovered <= 0.02 * m.n_triangles
     assert c.n_cycles <= 0.05 * m.n_triangles

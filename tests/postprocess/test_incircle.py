@@ -11,25 +11,19 @@ from scipy.spatial import Delaunay
 
 import hammesh
 from hammesh.postprocess import incenters
-from tests.helpers import angles_deg, assert_certificate, dual_pieces, square
+from tests.helpers import (
+    angles_deg,
+    assert_certificate,
+    bundled_domain,
+    dual_pieces,
+    hull_area,
+    plate_with_loops,
+    square,
+    star_pslg,
+)
 
 # Triangle's bundled planar domains (box and greenland are tested on their own)
 BUNDLED = ["A", "la", "face", "double_hex", "double_hex2", "double_hex3", "square_circle_hole", "spiral", "dots", "ell"]
-
-
-def bundled_domain(name: str) -> hammesh.Domain:
-    d = triangle.get_data(name)
-    return hammesh.Domain(
-        vertices=d["vertices"],
-        segments=d.get("segments", np.zeros((0, 2), int)),
-        holes=d.get("holes", np.zeros((0, 2))),
-    )
-
-
-def _area(dom: hammesh.Domain) -> float:
-    from scipy.spatial import ConvexHull
-
-    return ConvexHull(dom.vertices).volume
 
 
 @pytest.mark.parametrize("name", BUNDLED)
@@ -38,7 +32,7 @@ def test_bundled_domains(name: str) -> None:
         dom = bundled_domain(name)
     except hammesh.InvalidDomainError as exc:  # a bundled file our validator rejects
         pytest.skip(f"{name}: {exc}")
-    m = hammesh.quality_mesh(dom, min_angle=25, max_area=_area(dom) / 2000)
+    m = hammesh.quality_mesh(dom, min_angle=25, max_area=hull_area(dom) / 2000)
     h = hammesh.hamiltonian(m, mode="incircle")
     assert h.report["verified"] is True
     assert_certificate(m, h)
@@ -69,18 +63,6 @@ def test_incenter_is_equidistant_from_sides() -> None:
         w = c - pts[a]
         d.append(abs(e[0] * w[1] - e[1] * w[0]) / np.linalg.norm(e))
     assert np.allclose(d, d[0])
-
-
-def plate_with_loops(n_loops: int) -> hammesh.Domain:
-    """Unit square with ``n_loops`` closed internal constrained squares (interfaces)."""
-    v = square(0, 0, 1)
-    segs = [[0, 1], [1, 2], [2, 3], [3, 0]]
-    for i in range(n_loops):
-        x = 0.1 + 0.28 * i
-        base = len(v)
-        v += square(x, 0.4, 0.2)
-        segs += [[base, base + 1], [base + 1, base + 2], [base + 2, base + 3], [base + 3, base]]
-    return hammesh.Domain(vertices=v, segments=segs)
 
 
 @pytest.mark.parametrize("n_loops", [0, 1, 3])
@@ -165,30 +147,6 @@ def test_works_on_any_file_mesh_either_orientation() -> None:
     h = hammesh.hamiltonian(m, mode="incircle")
     ccw = hammesh.Mesh(points=pts, triangles=np.where(np.isin(np.arange(len(tri)), np.arange(0, len(tri), 2))[:, None], tri[:, ::-1], tri))
     assert_certificate(ccw, h)
-
-
-@st.composite
-def star_pslg(draw):
-    """A random star-shaped polygon, optionally with a hole or an internal loop."""
-    n = draw(st.integers(5, 14))
-    angles = np.sort(np.array(draw(st.lists(st.floats(0, 2 * np.pi, exclude_max=True), min_size=n, max_size=n, unique=True))))
-    gaps = np.diff(np.r_[angles, angles[0] + 2 * np.pi])
-    if gaps.min() < 0.05 or gaps.max() > 2 * np.pi / 3:  # keep edges >= 0.3 from the centre
-        angles = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    radii = np.array(draw(st.lists(st.floats(0.6, 1.0), min_size=n, max_size=n)))
-    outer = np.c_[radii * np.cos(angles), radii * np.sin(angles)]
-    inner_kind = draw(st.sampled_from(["none", "hole", "loop"]))
-    v = outer.tolist()
-    segs = [[i, (i + 1) % n] for i in range(n)]
-    holes = []
-    if inner_kind != "none":
-        r = draw(st.floats(0.1, 0.25))
-        k = len(v)
-        v += (r * np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])).tolist()
-        segs += [[k, k + 1], [k + 1, k + 2], [k + 2, k + 3], [k + 3, k]]
-        if inner_kind == "hole":
-            holes = [[0.0, 0.0]]
-    return hammesh.Domain(vertices=v, segments=segs, holes=holes)
 
 
 @given(dom=star_pslg(), min_angle=st.floats(0, 30), area=st.sampled_from([None, 0.05, 0.01]))

@@ -14,7 +14,7 @@ from scipy.spatial import Delaunay
 import hammesh
 from hammesh.mesh import KIND_NAMES
 from tests.helpers import assert_tiling_and_bound, dual_pieces, signed_areas, square
-from tests.postprocess.test_incircle import _area, bundled_domain, plate_with_loops, star_pslg
+from tests.helpers import bundled_domain, hull_area, plate_with_loops, star_pslg
 
 CORPUS = ["A", "la", "face", "double_hex", "square_circle_hole", "spiral"]
 
@@ -41,7 +41,7 @@ def assert_sparse_certificate(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> No
 @pytest.mark.parametrize("name", CORPUS)
 def test_corpus_steiner_target(name: str) -> None:
     dom = bundled_domain(name)
-    m = hammesh.quality_mesh(dom, min_angle=30, max_area=_area(dom) / 6000)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
     assert m.n_triangles > 4000
     h = hammesh.hamiltonian(m, mode="sparse")
     assert_sparse_certificate(m, h)

@@ -5,10 +5,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+from scipy.spatial import Delaunay
 import pytest
 
 import hammesh
 from hammesh.mesh import Mesh
+from tests.helpers import grid_mesh  # noqa: F401  (shared; the strip tests import it from here)
 
 SQUARE = [[0, 0], [1, 0], [1, 1], [0, 1]]
 
@@ -23,19 +25,16 @@ def square_hamiltonian(max_area: float = 0.01) -> hammesh.HamiltonianMesh:
     return hammesh.hamiltonian(square_mesh(max_area))
 
 
-def grid_mesh(nx: int, ny: int, z: bool = False) -> Mesh:
-    """Structured grid split into triangles (counter-clockwise), optionally lifted to 3D."""
-    xs, ys = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0))
-    pts = np.c_[xs.ravel(), ys.ravel()]
-    v = lambda i, j: j * (nx + 1) + i  # noqa: E731
-    tri = []
-    for j in range(ny):
-        for i in range(nx):
-            a, b, c, d = v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)
-            tri += [[a, b, c], [a, c, d]]
-    if z:
-        pts = np.c_[pts, np.sin(pts[:, 0]) * np.cos(pts[:, 1])]
-    return Mesh(pts, np.array(tri, dtype=np.int64))
+def delaunay_mesh(seed: int, n: int, lift: bool = False) -> Mesh:
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    p = pts[tri]
+    cr = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0])
+    tri[cr < 0] = tri[cr < 0][:, ::-1]
+    if lift:
+        pts = np.c_[pts, pts[:, 0] ** 2 + pts[:, 1] ** 2]
+    return Mesh(pts, tri)
 
 
 def torus_mesh(nu: int = 12, nv: int = 8) -> Mesh:

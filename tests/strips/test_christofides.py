@@ -14,8 +14,7 @@ from hammesh.strips.gl import decode_gl_strip
 
 from hammesh.mesh import Mesh
 
-from .conftest import fan_mesh, grid_mesh, oriented_set, square_mesh, torus_mesh
-from .test_encode import delaunay_mesh
+from .conftest import delaunay_mesh, fan_mesh, grid_mesh, oriented_set, square_mesh, torus_mesh
 
 
 def check(mesh, enc):

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.spatial import Delaunay
 
 import hammesh
 from hammesh.errors import InvalidMeshError, InvalidOptionError
@@ -16,19 +15,7 @@ from hammesh.strips.encode import encode, encode_generalized, greedy_paths
 from hammesh.strips.generalized import decode_generalized
 from hammesh.strips.gl import decode_gl_strip, verify_gl_strip
 
-from .conftest import grid_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
-
-
-def delaunay_mesh(seed: int, n: int, lift: bool = False) -> Mesh:
-    rng = np.random.default_rng(seed)
-    pts = rng.random((n, 2))
-    tri = Delaunay(pts).simplices.astype(np.int64)
-    p = pts[tri]
-    cr = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0])
-    tri[cr < 0] = tri[cr < 0][:, ::-1]
-    if lift:
-        pts = np.c_[pts, pts[:, 0] ** 2 + pts[:, 1] ** 2]
-    return Mesh(pts, tri)
+from .conftest import delaunay_mesh, grid_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
 
 
 def assert_round_trip(mesh, strip):

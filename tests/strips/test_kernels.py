@@ -1,5 +1,6 @@
 """Compiled helpers of the strip encoder: the ``_nrt`` fallback, the path-order renumbering,
-the one-pass restart emission and the half-edge pairing it starts from."""
+the one-pass restart emission and the records it pairs half-edges in (the core pairing
+itself: tests/halfedge/test_kernels.py)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh.halfedge import _kernels as core_kernels
+from tests.helpers import BAD_EDGES
 from hammesh.mesh import Mesh
 from hammesh.strips import _kernels
 from hammesh.strips.defects import proper_pairing
@@ -25,8 +27,7 @@ from hammesh.strips.dual import dual_mesh
 from hammesh.strips.encode import _greedy_cover, encode, greedy_paths
 from hammesh.strips.gl import decode_gl_strip
 
-from .conftest import grid_mesh, oriented_set, square_mesh, torus_mesh
-from .test_encode import delaunay_mesh
+from .conftest import delaunay_mesh, grid_mesh, oriented_set, square_mesh, torus_mesh
 
 _REJECT_NRT = {
     # numba refuses the private option when decorating
@@ -80,38 +81,6 @@ def test_package_works_when_numba_rejects_the_private_nrt_option(tmp_path, how):
 
 def test_leaf_helpers_compile_without_nrt_here():
     assert _kernels.LEAF_WITHOUT_NRT  # this environment's numba accepts the option
-
-
-@settings(max_examples=30, deadline=None)
-@given(st.integers(0, 2**32 - 1))
-def test_packed_half_edge_pairing_equals_the_reference(seed):
-    rng = np.random.default_rng(seed)
-    m = grid_mesh(int(rng.integers(1, 7)), int(rng.integers(1, 7)))
-    perm = rng.permutation(len(m.points))  # scattered vertex numbering
-    tri = np.argsort(perm)[m.triangles][rng.permutation(m.n_triangles)]
-    twin, bad = core_kernels.half_edge_twins(tri, len(m.points))
-    ref, rbad = core_kernels.half_edge_twins_reference(tri, len(m.points))
-    assert bad == rbad == -1 and np.array_equal(twin, ref)
-    # every pair: opposite directions of one edge
-    h = np.flatnonzero(twin >= 0)
-    t, k = h // 3, h % 3
-    g = twin[h]
-    assert np.array_equal(twin[g], h)
-    assert np.array_equal(tri[t, k], tri[g // 3, (g % 3 + 1) % 3])
-
-
-#: Meshes with a bad edge: used twice in one direction, or by three triangles.
-BAD_EDGES = [
-    [[0, 1, 2], [0, 1, 3]],
-    [[0, 1, 2], [1, 0, 3], [0, 1, 4]],
-    [[0, 1, 2], [1, 0, 3], [1, 0, 4]],
-]
-
-
-@pytest.mark.parametrize("tri", BAD_EDGES)
-def test_packed_pairing_reports_the_same_bad_half_edge(tri):
-    tri = np.array(tri, np.int64)
-    assert core_kernels.half_edge_twins(tri, 5)[1] == core_kernels.half_edge_twins_reference(tri, 5)[1] >= 0
 
 
 @pytest.mark.parametrize("mesh", [square_mesh(0.01), torus_mesh(9, 6), grid_mesh(6, 4, z=True)], ids=["square", "torus", "grid"])

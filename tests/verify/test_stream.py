@@ -13,7 +13,6 @@ from hammesh.halfedge import prepare_mesh
 from hammesh.postprocess import _thm24_kernels as _kernels
 from hammesh.verify import _kernels as cert_kernels
 from hammesh.postprocess import incircle
-from hammesh.verify import verify
 from hammesh.verify.certificate import certify
 from hammesh.verify.reference import input_facts
 from hammesh.verify.certificate import _certify_rows
