@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from hammesh.polygon._polygon import Polygon, as_polygon
+from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.polygon.visibility import visibility_matrix
 
 __all__ = ["hamiltonian_triangulation", "is_hamiltonian"]
@@ -55,7 +56,12 @@ def hamiltonian_triangulation(points) -> np.ndarray | None:
     """
     poly = as_polygon(points)
     tri = _solve(poly)
-    return None if tri is None else poly.to_input(tri)
+    if tri is None:
+        return None
+    T = poly.to_input(tri)
+    pts = np.asarray(points, dtype=np.float64)
+    verify_polygon_triangulation([pts], pts, T, "path")
+    return T
 
 
 def is_hamiltonian(points) -> bool:

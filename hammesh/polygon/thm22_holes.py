@@ -25,6 +25,7 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 from hammesh.polygon._holes import _inside, as_domain
+from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.predicates import orient
 
 __all__ = ["hamiltonian_triangulation_holes", "MAX_VERTICES"]
@@ -78,7 +79,12 @@ def hamiltonian_triangulation_holes(points, holes, kind: str = "path") -> np.nda
             f"Thm 2.2) is limited to {MAX_VERTICES} vertices, got {N}; use "
             f"polygon.steiner_hamiltonian(points, kind, holes=holes) (Thm 2.3, Steiner points)")
     tri = _search(dom, kind)
-    return None if tri is None else dom.order[tri]
+    if tri is None:
+        return None
+    T = dom.order[tri]
+    rings = [np.asarray(points, dtype=np.float64)] + [np.asarray(h, dtype=np.float64) for h in holes]
+    verify_polygon_triangulation(rings, np.concatenate(rings), T, kind)
+    return T
 
 
 def _segments_cross(P, a, b, c, d) -> bool:

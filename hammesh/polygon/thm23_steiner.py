@@ -38,6 +38,7 @@ import numpy as np
 from hammesh.errors import InvalidOptionError
 from hammesh.polygon._polygon import Polygon, as_polygon
 from hammesh.polygon.min_convex import MAX_VERTICES, minimum_convex_faces
+from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.predicates import orient
 from hammesh.polygon._triangulate import triangle_neighbors, triangulate_polygon
 
@@ -145,7 +146,10 @@ def steiner_hamiltonian_result(points, kind: str = "cycle", *, holes=None,
     if kind not in KINDS:
         raise InvalidOptionError(f"kind must be one of {', '.join(map(repr, KINDS))}, got {kind!r}")
     if holes is not None and len(holes):
-        return _with_holes(points, holes, kind, decomposition)
+        res = _with_holes(points, holes, kind, decomposition)
+        rings = [np.asarray(points, dtype=np.float64)] + [np.asarray(h, dtype=np.float64) for h in holes]
+        verify_polygon_triangulation(rings, res.points, res.triangles, kind)
+        return res
     poly = as_polygon(points)
     pieces, diagonals, method = _decompose(poly, _check_decomposition(poly, decomposition))
     pts, tri = _construct(poly, pieces, diagonals, kind)
@@ -153,6 +157,7 @@ def steiner_hamiltonian_result(points, kind: str = "cycle", *, holes=None,
     n = poly.n
     remap = np.concatenate([poly.order, np.arange(n, len(pts))])
     Q = np.concatenate([np.asarray(points, dtype=np.float64).reshape(n, 2), pts[n:]])
+    verify_polygon_triangulation([Q[:n]], Q, remap[tri], kind)
     return SteinerResult(points=Q, triangles=remap[tri], kind=kind, n_steiner=len(pts) - n,
                          method=method, pieces=[poly.order[np.asarray(p, dtype=np.int64)] for p in pieces])
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammesh.polygon._polygon import Polygon, as_polygon
+from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.polygon.visibility import visibility_matrix
 
 __all__ = ["sequential_triangulation", "sequential_starts", "zigzag"]
@@ -56,7 +57,10 @@ def sequential_triangulation(points) -> np.ndarray | None:
     if len(starts) == 0:
         return None
     s, direction = starts[0]
-    return poly.to_input(zigzag(poly.n, int(s), int(direction)))
+    T = poly.to_input(zigzag(poly.n, int(s), int(direction)))
+    pts = np.asarray(points, dtype=np.float64)
+    verify_polygon_triangulation([pts], pts, T, "path")
+    return T
 
 
 def sequential_starts(points) -> np.ndarray:

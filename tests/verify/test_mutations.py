@@ -321,3 +321,107 @@ def test_damaged_output_is_rejected(mode: str, what: str) -> None:
     hammesh.verify(h, m)  # the intact output passes
     with pytest.raises(hammesh.VerificationError, match=CASES[what]):
         hammesh.verify(damaged(h, what, m), m)
+
+
+# ---------------------------------------------------------------- point sets and polygons
+
+
+@pytest.fixture(scope="module")
+def point_set() -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(3)
+    pts = np.r_[rng.random((40, 2)), [[0.0, 0.0], [0.5, 0.0], [1.0, 0.0]]]  # collinear hull points
+    return pts, hammesh.pointset.hamiltonian_triangulation(pts, seed=1)
+
+
+def test_point_set_certificate_does_not_use_the_constructions_hull(monkeypatch, point_set) -> None:
+    from hammesh.pointset import validate
+
+    pts, tri = point_set
+
+    def no_hull(*a, **k):
+        raise AssertionError("the certificate called the constructions' hull")
+
+    monkeypatch.setattr(validate, "convex_hull", no_hull)
+    order = "cycle" if len(tri) and (np.isin(tri[0], tri[-1]).sum() == 2) else "path"
+    hammesh.pointset.verify_point_triangulation(pts, tri, order)
+
+
+POINT_DAMAGES = {
+    "rows swapped": (lambda p, t: (p, t[[3, 0, 1, 2, *range(4, len(t))]]), "breaks at triangle"),
+    "flipped orientation": (lambda p, t: (p, np.r_[t[:5], t[5:6, ::-1], t[6:]]), "triangle 5 .* clockwise"),
+    "missing triangle": (lambda p, t: (p, t[1:]), "triangles, but a triangulation of"),
+    "duplicated triangle": (lambda p, t: (p, np.r_[t[:-1], t[:1]]), "used twice|boundary"),
+    "moved point": (lambda p, t: (p + np.where(np.arange(len(p))[:, None] == 0, 0.3, 0.0), t), "clockwise|boundary|area|degenerate"),
+    "vertex out of range": (lambda p, t: (p, np.where(t == t[0, 0], len(p), t)), "outside"),
+}
+
+
+@pytest.mark.parametrize("what", sorted(POINT_DAMAGES))
+def test_damaged_point_set_triangulation_is_rejected(point_set, what: str) -> None:
+    pts, tri = point_set
+    damage, needle = POINT_DAMAGES[what]
+    p, t = damage(pts.copy(), tri.copy())
+    with pytest.raises(hammesh.VerificationError, match=needle):
+        hammesh.pointset.verify_point_triangulation(p, t, "path")
+
+
+SPIRAL = np.array([[0, 0], [6, 0], [6, 6], [1, 6], [1, 2], [4, 2], [4, 4], [3, 4], [3, 3], [2, 3], [2, 5], [5, 5],
+                   [5, 1], [0, 1]], float)
+
+
+def test_polygon_construction_bug_is_caught(monkeypatch) -> None:
+    """Thm 2.1's solver returns its triangles with one row reversed: the public call raises."""
+    from hammesh.polygon import thm21_hamiltonian
+
+    sq = [[0, 0], [2, 0], [3, 1], [2, 2], [0, 2], [-1, 1]]
+    assert thm21_hamiltonian.hamiltonian_triangulation(sq) is not None
+    real = thm21_hamiltonian._solve
+
+    def broken(poly):
+        tri = real(poly)
+        tri[1] = tri[1, ::-1]
+        return tri
+
+    monkeypatch.setattr(thm21_hamiltonian, "_solve", broken)
+    with pytest.raises(hammesh.VerificationError, match="triangle 1 .* clockwise"):
+        thm21_hamiltonian.hamiltonian_triangulation(sq)
+
+
+def test_steiner_construction_bug_is_caught(monkeypatch) -> None:
+    """Thm 2.3's construction moves a Steiner point outside the polygon."""
+    from hammesh.polygon import thm23_steiner
+
+    real = thm23_steiner._construct
+
+    def broken(poly, pieces, diagonals, kind):
+        pts, tri = real(poly, pieces, diagonals, kind)
+        pts = pts.copy()
+        pts[-1] += 100.0
+        return pts, tri
+
+    monkeypatch.setattr(thm23_steiner, "_construct", broken)
+    with pytest.raises(hammesh.VerificationError, match="clockwise|boundary|area"):
+        hammesh.polygon.steiner_hamiltonian(SPIRAL, "cycle")
+
+
+POLYGON_DAMAGES = {
+    "rows swapped": (lambda q, t: (q, t[[2, 0, 1, *range(3, len(t))]]), "breaks at triangle"),
+    "flipped orientation": (lambda q, t: (q, np.r_[t[:1], t[1:2, ::-1], t[2:]]), "triangle 1 .* clockwise"),
+    "missing triangle": (lambda q, t: (q, t[:-1]), "boundary of only one|not a vertex"),
+    "duplicated triangle": (lambda q, t: (q, np.r_[t, t[:1]]), "used twice"),
+    "moved polygon vertex": (lambda q, t: (q + np.where(np.arange(len(q))[:, None] == 2, 1e-9, 0.0), t), "do not start with the polygon"),
+    "Steiner point moved": (lambda q, t: (q + np.where(np.arange(len(q))[:, None] == len(q) - 1, 100.0, 0.0), t), "clockwise|area|degenerate"),
+}
+
+
+@pytest.mark.parametrize("what", sorted(POLYGON_DAMAGES))
+def test_damaged_polygon_triangulation_is_rejected(what: str) -> None:
+    from hammesh.polygon.verify import verify_polygon_triangulation
+
+    res = hammesh.polygon.steiner_hamiltonian_result(SPIRAL, "cycle")
+    assert res.n_steiner >= 1
+    verify_polygon_triangulation([SPIRAL], res.points, res.triangles, "cycle")  # intact: passes
+    damage, needle = POLYGON_DAMAGES[what]
+    q, t = damage(res.points.copy(), res.triangles.copy())
+    with pytest.raises(hammesh.VerificationError, match=needle):
+        verify_polygon_triangulation([SPIRAL], q, t, "cycle")
