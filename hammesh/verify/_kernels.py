@@ -33,6 +33,8 @@ __all__ = [
     "half_edge_twins_wide",
     "angle_area_stats",
     "mark_used",
+    "digest_range",
+    "points_digest",
 ]
 
 #: Claim entry not written (yet): the certificate skips it and counts the links.
@@ -56,6 +58,9 @@ class RowChecks(NamedTuple):
     bad_orientation: int
     links: int
     unpaired: int
+    row_digest: int  # hash of the rows checked (their index and vertices)
+    pair_digest: int  # hash of the pairing entries checked
+    points_digest: int  # hash of the points when checking began (RowStream), else 0
 
 
 class AngleArea(NamedTuple):
@@ -349,6 +354,8 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
     cross = -1
     links = 0
     unpaired = 0
+    d_rows = 0
+    d_pairs = 0
     best_s2 = np.inf
     best_c = np.inf
     amin = -1
@@ -368,6 +375,7 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
             p0 = tri[i, 0]
             p1 = tri[i, 1]
             p2 = tri[i, 2]
+            d_rows += _row_hash(i, p0, p1, p2)
             if p0 < 0 or p1 < 0 or p2 < 0 or p0 >= n or p1 >= n or p2 >= n:
                 if bad_index < 0:
                     bad_index = i
@@ -400,6 +408,7 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
                     g = pair[h]
                     if g == -1:
                         unpaired += 1
+                        d_pairs += _mix(h, -1)
                         continue
                     if g == UNLINKED or g > h and g < 3 * m:
                         continue  # checked from g (or not written yet: counted)
@@ -414,14 +423,58 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
                             bad_pair = h
                         continue
                     links += 1
+                    d_pairs += _mix(h, g) + _mix(g, h)
                     if (u < r_start or u >= r_end) and cross < 0:
                         cross = h
         r_start = r_end
     min_ang = np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0)))
     max_ang = np.arccos(min(max(best_c, -1.0), 1.0))
     return RowChecks(bad_index, bad_consec, bad_pair, cross, min_ang, amin, max_ang, amax,
-                     min_area, aarea, total, bad_orient, links, unpaired)
+                     min_area, aarea, total, bad_orient, links, unpaired, d_rows, d_pairs, 0)
 
+
+
+@njit(cache=True, inline="always")
+def _mix(a, b):
+    """A 64-bit hash of two integers (wrapping arithmetic; sums of them are order-free)."""
+    x = (a * 0x1E3779B97F4A7C15) ^ (b + 0x2545F4914F6CDD1D)
+    x ^= x >> 29
+    return x * 0x3F58476D1CE4E5B9
+
+
+@njit(cache=True, inline="always")
+def _row_hash(i, a, b, c):
+    return _mix(i, _mix(a, _mix(b, c)))
+
+
+@njit(cache=True, nogil=True)
+def digest_range(tri, pair, lo, hi):
+    """``(row digest, pair digest)`` of rows ``lo..hi`` as :func:`certify_row_range` sums them.
+
+    The certificate compares the digests of the rows (and, for a claim that passed, of
+    the pairing) which a :class:`~hammesh.verify.stream.RowStream` checked while they
+    were written with those of the final arrays: a row or claim entry rewritten after
+    its check is then caught. ``pair`` may be empty (no pair digest).
+    """
+    d_rows = 0
+    d_pairs = 0
+    with_pairs = pair.shape[0] == 3 * tri.shape[0]
+    for i in range(lo, hi):
+        d_rows += _row_hash(i, tri[i, 0], tri[i, 1], tri[i, 2])
+        if with_pairs:
+            for k in range(3):
+                h = 3 * i + k
+                d_pairs += _mix(h, pair[h])
+    return d_rows, d_pairs
+
+
+@njit(cache=True, nogil=True)
+def points_digest(bits):
+    """Digest of points given as their float64 bit patterns (``points.view(np.int64)``)."""
+    d = 0
+    for j in range(bits.shape[0]):
+        d += _mix(j, bits[j])
+    return d
 
 
 @njit(cache=True, nogil=True)

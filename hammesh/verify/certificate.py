@@ -132,7 +132,27 @@ def combine_rows(parts: list[RowChecks]) -> RowChecks:
         bad_orientation=first("bad_orientation"),
         links=sum(p.links for p in parts),
         unpaired=sum(p.unpaired for p in parts),
+        row_digest=_wrap(sum(p.row_digest for p in parts)),
+        pair_digest=_wrap(sum(p.pair_digest for p in parts)),
+        points_digest=0,
     )
+
+
+def _wrap(x: int) -> int:
+    """``x`` modulo 2**64 (digests are sums with wrapping arithmetic)."""
+    return x % (1 << 64)
+
+
+def _final_digests(tri: np.ndarray, pair: np.ndarray) -> tuple[int, int]:
+    """:func:`_kernels.digest_range` over all rows, split across the cores."""
+    spans = row_ranges(len(tri), _threads.THREAD_MIN_ROWS)
+    parts = run_all([(lambda lo=lo, hi=hi: _kernels.digest_range(tri, pair, lo, hi)) for lo, hi in spans])
+    return _wrap(sum(p[0] for p in parts)), _wrap(sum(p[1] for p in parts))
+
+
+def points_digest(points: np.ndarray) -> int:
+    """Digest of a point array's bit patterns (see :func:`_kernels.points_digest`)."""
+    return _wrap(int(_kernels.points_digest(np.ascontiguousarray(points, dtype=np.float64).view(np.int64).ravel())))
 
 
 def claim_structure(triangles: np.ndarray, claim: np.ndarray) -> dict[str, Any]:
@@ -261,6 +281,7 @@ def _certify(
     if twin_claim is not None and facts is not None and np.shape(twin_claim) == (3 * m,):
         claim = np.asarray(twin_claim)  # int32 claims are checked as they are (no copy)
         claim = np.ascontiguousarray(claim, dtype=claim.dtype if claim.dtype == np.int32 else np.int64)
+    streamed = rows is not None
     if rows is None:
         used = np.zeros(n, dtype=np.bool_)
         rows, _ = _certify_rows(pts, tri, runs, claim, used)
@@ -274,6 +295,14 @@ def _certify(
         and 2 * rows.links + rows.unpaired == 3 * m
         and rows.unpaired == len(facts.boundary)
     )
+    if streamed:  # what was checked is what is returned: nothing rewritten since
+        d_rows, d_pairs = _final_digests(tri, claim if claim_ok else np.empty(0, dtype=np.int64))
+        if d_rows != _wrap(rows.row_digest):
+            _fail("the output rows changed after they were checked")
+        if rows.points_digest != points_digest(pts):
+            _fail("the output points changed after the rows using them were checked")
+        if claim_ok and d_pairs != _wrap(rows.pair_digest):
+            claim_ok = False  # changed after its check: not used (the pairing is computed)
     if rows.bad_index >= 0:
         i = rows.bad_index
         _fail(f"triangle {i} {tri[i].tolist()} references a vertex outside 0..{n - 1}")

@@ -29,7 +29,7 @@ import numpy as np
 
 from hammesh.verify import _kernels
 from hammesh.verify._kernels import UNLINKED, RowChecks
-from hammesh.verify.certificate import combine_rows
+from hammesh.verify.certificate import combine_rows, points_digest
 
 __all__ = ["RowStream", "UNLINKED"]
 
@@ -64,11 +64,17 @@ class RowStream:
         self._stopped = False
         self._points = False
         self._next = 0  # first row not handed out yet
+        self._points_digest = 0
         self._parts: list[tuple] = []
         self._workers: list[Future] = []
 
     def points_final(self) -> None:
-        """Every point the rows use is written: checking may start (see the class)."""
+        """Every point the rows use is written: checking may start (see the class).
+
+        The points' digest is taken now; the certificate compares it with the final
+        points' (a point rewritten after the rows using it were checked is caught).
+        """
+        self._points_digest = points_digest(self.points)
         with self._cond:
             self._points = True
             self._cond.notify_all()
@@ -145,4 +151,5 @@ class RowStream:
         cross = -1
         if len(runs) > 1 and rows.bad_pair < 0:  # pairs between runs (the claim is complete)
             cross = int(_kernels.first_cross_run_edge(self.claim, runs))
-        return rows._replace(bad_consecutive=min(bad) if bad else -1, cross_run=cross)
+        return rows._replace(bad_consecutive=min(bad) if bad else -1, cross_run=cross,
+                             points_digest=self._points_digest)

@@ -172,6 +172,41 @@ def test_tree_edge_dropped_splits_the_cycle(monkeypatch) -> None:
         hammesh.hamiltonian(grid(3, 2), mode="incircle")
 
 
+def test_rows_rewritten_after_their_check_are_caught(monkeypatch) -> None:
+    """The walk swaps two rows it already published (the side thread may have checked
+    them): the certificate compares what it checked with what is returned."""
+    real = thm24.emit_cycles_into
+
+    def broken(*args):
+        status = real(*args)
+        if status == 1:
+            out = args[7]
+            out[[1, 4]] = out[[4, 1]]
+        return status
+
+    monkeypatch.setattr(thm24, "emit_cycles_into", broken)
+    with pytest.raises(hammesh.VerificationError, match="rows changed after they were checked|breaks at triangle"):
+        hammesh.hamiltonian(grid(6, 4))
+
+
+def test_points_rewritten_after_the_check_began_are_caught(monkeypatch) -> None:
+    """The construction moves an input point when it assembles its result (the row
+    checks may have started on the points: then their digest differs, else the point
+    is not the input's)."""
+    from hammesh.postprocess import incircle
+
+    real = incircle.HamiltonianMesh
+
+    def moving(**kw):
+        pts = kw["points"]
+        pts[0] += 1e-9
+        return real(**kw)
+
+    monkeypatch.setattr(incircle, "HamiltonianMesh", moving)
+    with pytest.raises(hammesh.VerificationError, match="points changed after|input point 0 .* not kept unchanged"):
+        hammesh.hamiltonian(grid(6, 4))
+
+
 def lie_about_the_angle(monkeypatch) -> None:
     """The construction's validation reports a tiny input minimum angle."""
     import hammesh.postprocess as post
