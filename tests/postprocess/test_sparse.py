@@ -95,7 +95,7 @@ def assert_quality_report(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> None:
 
 def test_keep_trades_steiner_points_for_quality() -> None:
     dom = bundled_domain("face")
-    m = hammesh.quality_mesh(dom, min_angle=30, max_area=_area(dom) / 3000)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
     lax = hammesh.hamiltonian(m, mode="sparse", keep=0.0)
     strict = hammesh.hamiltonian(m, mode="sparse", keep=0.9)
     for h in (lax, strict):
@@ -250,7 +250,7 @@ def test_good_edges_agree_with_the_scored_joins() -> None:
     from hammesh.postprocess.sparse import triangle_angles
 
     dom = bundled_domain("face")
-    m = hammesh.quality_mesh(dom, min_angle=30, max_area=_area(dom) / 3000)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
     clean, he, is_con = prepare_mesh(m)
     pts, tri, tw = clean.points, clean.triangles, he.twin
     amin, amax = triangle_angles(pts, tri)
