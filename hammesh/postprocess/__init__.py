@@ -131,6 +131,8 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
             "min_angle_input_deg": stats["min_angle_input_deg"],
             "min_angle_output_deg": stats["min_angle_output_deg"],
             "max_angle_output_deg": stats["max_angle_output_deg"],
+            # rows within float64 rounding of the bound (verify.certificate.ROUNDING_RTOL_MAX)
+            "angle_rounding_rows": stats.get("angle_rounding_rows", 0),
             "verified": True,
             "seconds": {
                 "mesh": mesh.info.get("seconds"),
