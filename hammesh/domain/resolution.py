@@ -12,7 +12,7 @@ satisfies the guarantee, in any frame, because the output must be given in the
 input's coordinates (a translated or scaled frame does not survive the way back).
 The run then fails its own certificate (issue 12: exit 3, "angle below half").
 
-:func:`check_resolution` refuses such a domain up front, with an
+:func:`check_resolution` names such a domain (``hamiltonian`` calls it when its certificate fails), with an
 :class:`~hammesh.errors.InvalidDomainError` naming the two closest vertices and
 their distance in ulps, when that distance is below :data:`MIN_FEATURE_ULPS`.
 Above it the rounding error is at most ``1 / MIN_FEATURE_ULPS`` of the smallest

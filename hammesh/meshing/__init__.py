@@ -13,7 +13,6 @@ import numpy as np
 
 from hammesh import params
 from hammesh.domain import Domain
-from hammesh.domain.resolution import check_resolution
 from hammesh.errors import InvalidDomainError, InvalidOptionError, MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.isolate import run_isolated
@@ -97,9 +96,8 @@ def quality_mesh(
     Raises
     ------
     InvalidOptionError, InvalidDomainError, MeshingError
-        InvalidDomainError also for vertices closer than
-        ``hammesh.domain.resolution.MIN_FEATURE_ULPS`` ulps of their coordinates (a
-        1e-6 square at offset 1e9): no float64 output could keep the guarantee.
+        Detail below float64 resolution (a 1e-6 square at offset 1e9) is meshed, as
+        Triangle does; ``hamiltonian`` explains it if its certificate then fails.
         InvalidOptionError also for a global or regional area bound implying more than
         ``MAX_TRIANGLES`` triangles (``hammesh.meshing.options.check_sizes``).
 
@@ -125,7 +123,6 @@ def quality_mesh(
     )
     if strict and domain.repairs:
         raise InvalidDomainError(f"{domain.repairs[0].defect} (strict: not repaired)")
-    check_resolution(domain.vertices)  # features a Hamiltonian mesh can resolve in float64
     check_sizes(domain, opts)
     func = BACKENDS[backend]
     t0 = time.perf_counter()

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import time
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -261,10 +263,30 @@ def _square(side, offset):
     _square(1e-6, 1e9),                          # a 1e-6 square at offset 1e9 (was Qhull text)
     np.r_[_square(1.0, 0.0), [[0.5, 0.5], [0.5 + 1e-15, 0.5]]],  # vertices 1e-15 apart
 ], ids=["10ulp-at-1e9", "1e-6-square-at-1e9", "1e-15-apart"])
-def test_unrepresentable_detail_is_refused_before_meshing(ring):
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_unrepresentable_detail_is_meshed_and_verified_or_explained(ring, mode):
+    """Triangle meshes these (issue 12): so does quality_mesh; hamiltonian either
+    verifies its output or, where no float64 Steiner point keeps the bound, refuses
+    with the resolution named (exit 2), never "verification failed"."""
     d = Domain(ring, RING)
-    with pytest.raises(InvalidDomainError, match=r"only \d+ float64 steps \(ulps\)"):
-        hammesh.quality_mesh(d, min_angle=20)
+    m = hammesh.quality_mesh(d, min_angle=20)
+    try:
+        h = hammesh.hamiltonian(m, mode=mode)
+    except InvalidDomainError as exc:
+        assert re.search(r"only \d+ float64 steps \(ulps\)", str(exc))
+        assert "the certificate found" in str(exc)
+    else:
+        assert h.report["verified"]
+        hammesh.verify(h, m)
+
+
+def test_a_notch_of_10_ulps_far_out_is_verified_in_sparse_mode():
+    """Sparse mode places few Steiner points, so fine detail far out still verifies."""
+    s = 10 * np.spacing(1e9)
+    ring = np.array([[0, 0], [1, 0], [1, 1], [0.5, 1], [0.5, 1 - s], [0.5 - s, 1 - s], [0.5 - s, 1], [0, 1]]) + 1e9
+    m = hammesh.quality_mesh(Domain.from_polygon(ring))
+    h = hammesh.hamiltonian(m, mode="sparse")
+    assert h.report["verified"]
 
 
 @pytest.mark.parametrize("side, offset", [(1e-6, 0.0), (1e-15, 0.0)])
