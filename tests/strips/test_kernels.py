@@ -66,7 +66,9 @@ def test_package_works_when_numba_rejects_the_private_nrt_option(tmp_path, how):
         import hammesh
         from hammesh.strips import _kernels, encode, decode_gl_strip
         assert _kernels.LEAF_WITHOUT_NRT is False
-        m = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), max_area=0.01)
+        # isolate=False: no background loading of hamiltonian()'s kernels (compiled from
+        # scratch in this private cache, minutes that this test is not about)
+        m = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), max_area=0.01, isolate=False)
         s = encode(m)  # verify=True: the round trip is proven
         assert len(decode_gl_strip(s.indices, s.restart_index)) == m.n_triangles
         print("ok", s.n_strips)
