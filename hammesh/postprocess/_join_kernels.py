@@ -395,14 +395,16 @@ def _fan_eval(pts, poly, n, px, py, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _fan_eval_fast(pts, poly, n, px, py, lo, hi):
-    """:func:`_fan_eval` for the placement search: by cosines, two ``acos`` per fan.
+def _fan_eval_fast(pts, poly, n, px, py, lo, hi, c_lo, c_hi):
+    """:func:`_fan_eval`'s slack for the placement search: by cosines, two ``acos`` per fan.
 
     The smallest angle of the fan is the arccosine of its largest corner cosine and
     the largest angle that of the smallest: one square root per corner instead of an
     arctangent per corner (the search evaluates ~70 points per fan; on a sliver mesh
-    this was nearly all of sparse mode's time). Cosines near 1 lose digits (~1e-8 rad),
-    so the point found is re-judged by :func:`_fan_eval` before a fan is taken.
+    this was nearly all of sparse mode's time). A corner cosine ``>= c_lo`` or ``<= c_hi``
+    (the cosines of the angles at which the slack would not beat the search's best so
+    far) stops the evaluation: ``-inf``. Cosines near 1 lose digits (~1e-8 rad), so the
+    point found is re-judged by :func:`_fan_eval` before a fan is taken.
     """
     cmax = -1.0
     cmin = 1.0
@@ -427,11 +429,27 @@ def _fan_eval_fast(pts, poly, n, px, py, lo, hi):
             if nn <= 0.0:
                 return -np.inf
             c = (ux * vx + uy * vy) / nn
+            if c >= c_lo or c <= c_hi:
+                return -np.inf
             cmax = max(cmax, c)
             cmin = min(cmin, c)
     nmin = math.acos(min(1.0, cmax))
     nmax = math.acos(max(-1.0, cmin))
     return min(nmin - lo, hi - nmax)
+
+
+@njit(cache=True, nogil=True)
+def _beat_cosines(best, lo, hi):
+    """Corner cosines at which a fan's slack can no longer beat ``best``.
+
+    Slack ``> best`` needs every angle ``> lo + best`` (cosine ``< cos(lo + best)``) and
+    ``< hi - best`` (cosine ``> cos(hi - best)``); outside ``[0, pi]`` no cut (2, -2).
+    """
+    a = lo + best
+    b = hi - best
+    c_lo = 2.0 if a <= 0.0 else (-2.0 if a >= math.pi else math.cos(a))
+    c_hi = -2.0 if b >= math.pi else (2.0 if b <= 0.0 else math.cos(b))
+    return c_lo, c_hi
 
 
 @njit(cache=True, nogil=True)
@@ -447,13 +465,14 @@ def place_fan(pts, poly, n, starts, n_starts, lo, hi, step, iters):
     mx = 0.0
     my = 0.0
     for s in range(n_starts):
-        sl = _fan_eval_fast(pts, poly, n, starts[s, 0], starts[s, 1], lo, hi)
+        sl = _fan_eval_fast(pts, poly, n, starts[s, 0], starts[s, 1], lo, hi, 2.0, -2.0)
         if sl > best:
             best = sl
             mx = starts[s, 0]
             my = starts[s, 1]
     if best == -np.inf:
         return 0.0, 0.0, best, 0.0, np.pi
+    c_lo, c_hi = _beat_cosines(best, lo, hi)
     halvings = 0
     while halvings < iters:
         moved = False
@@ -463,9 +482,10 @@ def place_fan(pts, poly, n, starts, n_starts, lo, hi, step, iters):
             ang = 0.25 * math.pi * k
             tx = mx + step * math.cos(ang)
             ty = my + step * math.sin(ang)
-            sl = _fan_eval_fast(pts, poly, n, tx, ty, lo, hi)
+            sl = _fan_eval_fast(pts, poly, n, tx, ty, lo, hi, c_lo, c_hi)
             if sl > best:
                 best = sl
+                c_lo, c_hi = _beat_cosines(best, lo, hi)
                 bx = tx
                 by = ty
                 moved = True
