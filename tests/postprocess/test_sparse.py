@@ -317,3 +317,45 @@ def test_fans_take_thin_parts_with_fewer_points() -> None:
     fan_rows = (((t >= n) & (t < n + f)).sum(axis=1) == 1) & ((t < n).sum(axis=1) == 2)
     assert fan_rows.any()
     assert _angles(h.points, t[fan_rows]).min() >= h.report["min_angle_input_deg"] * (1 - 1e-9)
+
+
+def _sliver_circle(n: int) -> hammesh.Mesh:
+    """A regular n-gon meshed without a quality switch: n - 2 triangles, angles down to 180/n deg."""
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return hammesh.quality_mesh(hammesh.Domain.from_polygon(np.c_[np.cos(t), np.sin(t)]), min_angle=None)
+
+
+def _best_time(f, repeat: int) -> float:
+    import time
+
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        f()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def test_sliver_circle_is_fast_and_linear() -> None:
+    # A 2,000-gon without quality refinement is all slivers and no cover cycle: every
+    # triangle goes to a fan, whose placement search once cost ~90 % of sparse mode
+    # (5x incircle's time per call, and a cold numba cache cost a minute). The bound is
+    # generous for a loaded CI; compilation is kept out by a warm-up call.
+    hammesh.hamiltonian(_sliver_circle(100))
+    m2 = _sliver_circle(2000)
+    h = None
+
+    def run2() -> None:
+        nonlocal h
+        h = hammesh.hamiltonian(m2)
+
+    t2 = _best_time(run2, 1)
+    assert t2 < 20.0
+    assert_sparse_certificate(m2, h)
+    assert h.report["fans"] >= 1
+    # linear, not quadratic: 4x the triangles must cost well under 16x (best of 5
+    # against load; fixed per-call costs only make the ratio smaller)
+    m1, m4 = _sliver_circle(1000), _sliver_circle(4000)
+    t1 = _best_time(lambda: hammesh.hamiltonian(m1), 5)
+    t4 = _best_time(lambda: hammesh.hamiltonian(m4), 5)
+    assert t4 < 8.0 * t1, (t1, t4)
