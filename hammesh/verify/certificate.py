@@ -311,7 +311,16 @@ def _certify(
         if rows.points_digest != points_digest(pts):
             _fail("the output points changed after the rows using them were checked")
         if claim_ok and d_pairs != _wrap(rows.pair_digest):
-            claim_ok = False  # changed after its check: not used (the pairing is computed)
+            # claim entries written after their rows were checked (the walk links some
+            # pairs late): check the final claim again, whole, in one pass over the rows
+            # (0.2 s at 4.5 M rows, where computing the pairing takes 0.9 s)
+            used = np.zeros(n, dtype=np.bool_)
+            rows, _ = _certify_rows(pts, tri, runs, claim, used)
+            claim_ok = (
+                rows.bad_pair < 0
+                and 2 * rows.links + rows.unpaired == 3 * m
+                and rows.unpaired == len(facts.boundary)
+            )
     if rows.bad_index >= 0:
         i = rows.bad_index
         _fail(f"triangle {i} {tri[i].tolist()} references a vertex outside 0..{n - 1}")
