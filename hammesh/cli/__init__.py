@@ -82,6 +82,24 @@ def _terminate(signum: int, frame: object) -> None:
     raise Terminated(signum)
 
 
+def _interruption(exc: BaseException) -> BaseException | None:
+    """The Terminated/KeyboardInterrupt behind ``exc``, if any.
+
+    A signal handler that raises while a numba kernel is returning makes the
+    dispatcher report ``SystemError: CPUDispatcher(...) returned a result with an
+    exception set`` with the handler's exception as its context (seen under SIGTERM in
+    ``test_defect8_real_sigterm_to_the_command``): still a termination, not a bug.
+    """
+    seen = 0
+    e: BaseException | None = exc
+    while e is not None and seen < 20:
+        if isinstance(e, (Terminated, KeyboardInterrupt)):
+            return e
+        e = e.__cause__ or e.__context__
+        seen += 1
+    return None
+
+
 def _install_signal_handlers() -> dict[int, object]:
     """SIGTERM/SIGHUP -> :class:`Terminated` (main thread only); returns the old handlers."""
     old: dict[int, object] = {}
@@ -136,6 +154,13 @@ def _main(argv: Sequence[str] | None) -> int:
         _say(f"hammesh: terminated by signal {exc.signum}")
         return 128 + exc.signum
     except Exception as exc:  # noqa: BLE001 - the CLI promises no traceback
+        stop = _interruption(exc)
+        if stop is not None:  # a signal that landed as a compiled kernel returned
+            if isinstance(stop, Terminated):
+                _say(f"hammesh: terminated by signal {stop.signum}")
+                return 128 + stop.signum
+            _say("hammesh: interrupted")
+            return 130
         if os.environ.get("HAMMESH_DEBUG"):
             raise
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""

@@ -346,3 +346,25 @@ def test_obj_with_relative_indices_meshes(tmp_path):
     out = tmp_path / "o.vtu"
     assert main(["mesh", str(src), "-o", str(out)]) == 0
     assert hammesh.read_mesh(out).n_triangles > 2
+
+
+def test_defect8_sigterm_inside_a_compiled_kernel_is_a_termination(monkeypatch, capsys):
+    """numba reports a signal handler's exception as SystemError with it as context."""
+    import argparse
+
+    import hammesh.cli as cli
+    from hammesh.errors import Terminated
+
+    def run(args):
+        try:
+            raise Terminated(15)
+        except Terminated as exc:
+            raise SystemError("CPUDispatcher(<function half_edge_twins>) returned a result with an exception set") from exc
+
+    class Parser:
+        def parse_args(self, argv):
+            return argparse.Namespace(_run=run)
+
+    monkeypatch.setattr(cli, "build_parser", lambda: Parser())
+    assert cli.main([]) == 143
+    assert capsys.readouterr().err.strip() == "hammesh: terminated by signal 15"
