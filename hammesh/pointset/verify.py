@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 
 from hammesh.errors import VerificationError
-from hammesh.predicates import orient_many
 from hammesh.verify import _kernels as core_kernels
+from hammesh.verify.tiling import triangulation_boundary_keys
 
 __all__ = ["verify_point_triangulation", "AREA_RTOL", "ORDERS"]
 
@@ -93,19 +93,7 @@ def verify_point_triangulation(
         _fail("the points are all collinear: there is no triangulation")
     if m != 2 * n - h - 2:
         _fail(f"{m} triangles, but a triangulation of {n} points with {h} on the hull has {2 * n - h - 2}")
-    used = np.bincount(tri.reshape(-1), minlength=n) > 0
-    if not used.all():
-        _fail(f"point {int(np.argmin(used))} is not a vertex of the triangulation")
-    sign = orient_many(pts, tri)
-    if (sign <= 0).any():
-        t = int(np.argmax(sign <= 0))
-        _fail(f"triangle {t} {tri[t].tolist()} is {'degenerate' if sign[t] == 0 else 'clockwise'}")
-    twin, dup = core_kernels.half_edge_twins(tri, n)
-    if dup >= 0:
-        t, k = divmod(int(dup), 3)
-        _fail(f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the same direction")
-    free = core_kernels.boundary_half_edges(tri, twin)
-    got = np.sort(free[:, 0].astype(np.int64) * n + free[:, 1])
+    got = triangulation_boundary_keys(pts, tri)  # all used, positive, edge-manifold
     b = hull_b
     want = np.sort(b.astype(np.int64) * n + np.roll(b, -1))
     if not np.array_equal(got, want):

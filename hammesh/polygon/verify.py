@@ -28,8 +28,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from hammesh.errors import VerificationError
-from hammesh.predicates import orient, orient_many
-from hammesh.verify import _kernels
+from hammesh.predicates import orient
+from hammesh.verify.tiling import triangulation_boundary_keys
 
 __all__ = ["verify_polygon_triangulation", "AREA_RTOL", "ORDERS"]
 
@@ -89,19 +89,7 @@ def verify_polygon_triangulation(
     if tri.min() < 0 or tri.max() >= n:
         t = int(np.argmax(((tri < 0) | (tri >= n)).any(axis=1)))
         _fail(f"triangle {t} {tri[t].tolist()} references a point outside 0..{n - 1}")
-    used = np.bincount(tri.reshape(-1), minlength=n) > 0
-    if not used.all():
-        _fail(f"point {int(np.argmin(used))} is not a vertex of the triangulation")
-    sign = orient_many(pts, tri)
-    if (sign <= 0).any():
-        t = int(np.argmax(sign <= 0))
-        _fail(f"triangle {t} {tri[t].tolist()} is {'degenerate' if sign[t] == 0 else 'clockwise'}")
-    twin, dup = _kernels.half_edge_twins(tri, n)
-    if dup >= 0:
-        t, k = divmod(int(dup), 3)
-        _fail(f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the same direction")
-    free = _kernels.boundary_half_edges(tri, twin)
-    got = np.sort(free[:, 0] * n + free[:, 1])
+    got = triangulation_boundary_keys(pts, tri)  # all used, positive, edge-manifold
     want, area, off = [], 0.0, 0
     for j, r in enumerate(rs):
         idx = off + np.arange(len(r), dtype=np.int64)
