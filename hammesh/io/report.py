@@ -54,6 +54,8 @@ def to_json_value(value: Any, where: str = "report") -> Any:
         return sorted((to_json_value(v, f"{where}{{}}") for v in value), key=repr)
     if isinstance(value, PurePath):
         return str(value)
+    if callable(getattr(value, "to_dict", None)):  # records such as hammesh.domain.Repair
+        return to_json_value(value.to_dict(), where)
     raise TypeError(f"{where}: {type(value).__name__} value has no JSON form")
 
 
@@ -86,7 +88,8 @@ def collect_repairs(*sources: Any) -> list[Any]:
             if not isinstance(items, (list, tuple)):
                 continue
             for item in items:
-                key = json.dumps(to_json_value(item), sort_keys=True)
+                item = to_json_value(item)  # a Domain's Repair records become their dicts
+                key = json.dumps(item, sort_keys=True)
                 if key not in seen:
                     seen.add(key)
                     found.append(item)

@@ -368,3 +368,14 @@ def test_defect8_sigterm_inside_a_compiled_kernel_is_a_termination(monkeypatch, 
     monkeypatch.setattr(cli, "build_parser", lambda: Parser())
     assert cli.main([]) == 143
     assert capsys.readouterr().err.strip() == "hammesh: terminated by signal 15"
+
+
+def test_report_lists_the_domain_repairs_of_a_t_junction(tmp_path):
+    """A .poly with a vertex on a segment: meshed, the split reported in the JSON, check passes."""
+    f = tmp_path / "tj.poly"
+    f.write_text("5 2 0 0\n1 0 0\n2 2 0\n3 2 1\n4 0 1\n5 1 0\n5 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n5 5 3\n0\n")
+    out, rep = tmp_path / "tj.vtu", tmp_path / "tj.json"
+    assert main(["mesh", str(f), "-q", "30", "-a", "0.01", "-o", str(out), "--report", str(rep)]) == 0
+    repairs = json.loads(rep.read_text())["repairs"]
+    assert [r["kind"] for r in repairs] == ["vertex_on_segment"]
+    assert main(["check", str(out)]) == 0
