@@ -9,7 +9,6 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-
 from hammesh import params
 from hammesh.domain import Domain
 from hammesh.errors import InvalidDomainError, InvalidOptionError, MeshingError
