@@ -354,8 +354,8 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
     cross = -1
     links = 0
     unpaired = 0
-    d_rows = 0
-    d_pairs = 0
+    d_rows = np.uint64(0)
+    d_pairs = np.uint64(0)
     best_s2 = np.inf
     best_c = np.inf
     amin = -1
@@ -434,12 +434,30 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
 
 
 
+#: the digests' mixing constants, unsigned: see :func:`_mix`
+_MIX_A = np.uint64(0x1E3779B97F4A7C15)
+_MIX_B = np.uint64(0x2545F4914F6CDD1D)
+_MIX_C = np.uint64(0x3F58476D1CE4E5B9)
+_MIX_SHIFT = np.uint64(29)
+
+
 @njit(cache=True, inline="always")
 def _mix(a, b):
-    """A 64-bit hash of two integers (wrapping arithmetic; sums of them are order-free)."""
-    x = (a * 0x1E3779B97F4A7C15) ^ (b + 0x2545F4914F6CDD1D)
-    x ^= x >> 29
-    return x * 0x3F58476D1CE4E5B9
+    """A 64-bit hash of two integers (sums of them are order-free), as ``uint64``.
+
+    Unsigned on purpose: numba emits signed integer ``+`` and ``*`` with LLVM's
+    ``nsw`` flag (signed overflow is undefined behaviour), and a hash overflows on
+    every call. From ``nsw`` LLVM may prove a signed ``x`` non-negative that in fact
+    wrapped and turn ``x >> 29`` into a logical shift: it did so in
+    ``certify_row_range`` for int32 claims (a sign-extended int32 plus a large
+    constant "cannot" be negative), so its pair digest differed from
+    :func:`digest_range`'s on the same claim. Unsigned arithmetic wraps by
+    definition; the arguments are widened to int64 first (sign-extended), then
+    reinterpreted, so an int32 and an int64 of the same value hash alike.
+    """
+    x = (np.uint64(np.int64(a)) * _MIX_A) ^ (np.uint64(np.int64(b)) + _MIX_B)
+    x ^= x >> _MIX_SHIFT
+    return x * _MIX_C
 
 
 @njit(cache=True, inline="always")
@@ -456,8 +474,8 @@ def digest_range(tri, pair, lo, hi):
     were written with those of the final arrays: a row or claim entry rewritten after
     its check is then caught. ``pair`` may be empty (no pair digest).
     """
-    d_rows = 0
-    d_pairs = 0
+    d_rows = np.uint64(0)
+    d_pairs = np.uint64(0)
     with_pairs = pair.shape[0] == 3 * tri.shape[0]
     for i in range(lo, hi):
         d_rows += _row_hash(i, tri[i, 0], tri[i, 1], tri[i, 2])
@@ -471,7 +489,7 @@ def digest_range(tri, pair, lo, hi):
 @njit(cache=True, nogil=True)
 def points_digest(bits):
     """Digest of points given as their float64 bit patterns (``points.view(np.int64)``)."""
-    d = 0
+    d = np.uint64(0)
     for j in range(bits.shape[0]):
         d += _mix(j, bits[j])
     return d

@@ -183,3 +183,77 @@ def test_hamiltonian_from_several_threads_at_once(monkeypatch) -> None:
     for m, h in zip(meshes, outs):
         assert h.report["verified"] and h.n_triangles == 3 * m.n_triangles + 2 * h.report["midpoints"]
         assert_certificate(m, h)
+
+
+def _python_mix(a: int, b: int) -> int:
+    """The digest hash in plain Python integers (mod 2**64): the kernels' reference."""
+    mask = (1 << 64) - 1
+    x = ((a * 0x1E3779B97F4A7C15) & mask) ^ ((b + 0x2545F4914F6CDD1D) & mask)
+    x ^= x >> 29
+    return (x * 0x3F58476D1CE4E5B9) & mask
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64])
+def test_digests_equal_a_python_reference(dtype) -> None:
+    """Both digest kernels equal the hash summed in Python, for either claim width.
+
+    Regression: numba lowers signed ``+``/``*`` with LLVM's ``nsw`` (overflow is
+    undefined), and LLVM turned the hash's arithmetic shift into a logical one in
+    ``certify_row_range`` on int32 claims, so the streamed and final digests differed.
+    """
+    rng = np.random.default_rng(7)
+    m = 50
+    tri = rng.integers(0, 40, size=(m, 3)).astype(np.int64)
+    pair = rng.integers(-1, 3 * m, size=3 * m).astype(dtype)
+    want_rows = sum(_python_mix(i, _python_mix(int(a), _python_mix(int(b), int(c)))) for i, (a, b, c) in enumerate(tri))
+    want_pairs = sum(_python_mix(h, int(g)) for h, g in enumerate(pair))
+    d_rows, d_pairs = cert_kernels.digest_range(tri, pair, 0, m)
+    assert d_rows % (1 << 64) == want_rows % (1 << 64)
+    assert d_pairs % (1 << 64) == want_pairs % (1 << 64)
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64])
+def test_streamed_pair_digest_equals_the_final_one(built, dtype) -> None:
+    """The row checks' pair digest (summed per checked pair) equals ``digest_range``'s
+    over the same claim, whatever its width, in one pass and streamed."""
+    from hammesh.verify.certificate import _final_digests, _wrap
+
+    h, claim = built
+    c = claim.astype(dtype)
+    d_rows, d_pairs = _final_digests(np.ascontiguousarray(h.triangles), c)
+    one, _ = full(h, h.triangles, c)
+    streamed_rows, _ = streamed(h, c, 5, 2)
+    assert _wrap(one.pair_digest) == _wrap(streamed_rows.pair_digest) == d_pairs
+    assert _wrap(one.row_digest) == _wrap(streamed_rows.row_digest) == d_rows
+    wide, _ = _final_digests(np.ascontiguousarray(h.triangles), claim.astype(np.int64))
+    assert wide == d_rows
+
+
+def test_hamiltonian_takes_the_claim_without_a_second_pass(monkeypatch) -> None:
+    """mode="incircle" certifies its (int32) claim from the streamed checks alone: the
+    whole-claim re-check (kept for a claim rewritten after its check) does not run."""
+    from hammesh.verify import certificate
+
+    def no_second_pass(*args, **kw):
+        raise AssertionError("the claim was checked twice")
+
+    monkeypatch.setattr(certificate, "_certify_rows", no_second_pass)
+    h = hammesh.hamiltonian(plate(2, 3), mode="incircle")
+    assert h.report["verified"]
+
+
+def test_claim_rewritten_after_its_check_is_checked_again(built, monkeypatch) -> None:
+    """A claim entry changed after the stream checked it is caught by the digest, and the
+    certificate then checks the final claim whole (here: no longer a pairing, so the
+    certificate finds the pairing itself and still proves the good mesh)."""
+    from hammesh.verify import certificate
+
+    h, claim = built
+    c = claim.copy()
+    rows = streamed(h, c, 4, 2)
+    c[[0, 1]] = c[[1, 0]]  # rewritten after the check
+    calls = []
+    real = certificate._certify_rows
+    monkeypatch.setattr(certificate, "_certify_rows", lambda *a, **k: calls.append(1) or real(*a, **k))
+    certify(h, input_facts(plate(2, 3)), claim=c, rows=rows)
+    assert calls == [1]
