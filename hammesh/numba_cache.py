@@ -8,6 +8,13 @@ import time ("cannot cache function ...: no locator available").  :func:`ensure_
 runs before any kernel module is imported: if neither place is writable (and the user
 did not set ``NUMBA_CACHE_DIR``), kernels are cached in a private temporary directory
 for this process only, with one warning — the same as no caching.
+
+Stale caches are harmless (:func:`guard_stale_indexes`): numba unpickles a cache
+index *before* it compares the index's source stamp with the source file, and an
+index written before a module moved names classes by their old module
+(``hammesh._kernels``): the unpickling raised ``ModuleNotFoundError`` on import
+although the index was stale anyway. An index (or cache entry) that cannot be read is
+now a cache miss: the kernel is compiled again and the index rewritten.
 """
 
 from __future__ import annotations
@@ -17,7 +24,7 @@ import tempfile
 import warnings
 from pathlib import Path
 
-__all__ = ["ensure_cache", "writable_dir"]
+__all__ = ["ensure_cache", "writable_dir", "guard_stale_indexes"]
 
 
 def writable_dir(path: str | os.PathLike[str]) -> bool:
@@ -36,6 +43,45 @@ def _user_cache() -> Path:
     return Path(base) / "numba"
 
 
+def guard_stale_indexes() -> bool:
+    """Make an unreadable numba cache index or entry a cache miss instead of an error.
+
+    Wraps ``numba.core.caching.IndexDataCacheFile._load_index`` (an index that does not
+    unpickle reads as empty, as numba already treats an index of another numba
+    version) and ``.load`` (an entry that does not unpickle is not found). Any numba
+    cache in this process benefits; a fresh cache is read exactly as before. Returns
+    False if this numba has no such methods (nothing patched). Idempotent.
+    """
+    try:
+        from numba.core.caching import IndexDataCacheFile
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return False
+    load_index = getattr(IndexDataCacheFile, "_load_index", None)
+    load = getattr(IndexDataCacheFile, "load", None)
+    if load_index is None or load is None:
+        return False
+    if getattr(load_index, "_hammesh_guard", False):
+        return True
+
+    def _load_index(self):  # type: ignore[no-untyped-def]
+        try:
+            return load_index(self)
+        except Exception:  # noqa: BLE001 - any unreadable index: stale, start afresh
+            return {}
+
+    def _load(self, key):  # type: ignore[no-untyped-def]
+        try:
+            return load(self, key)
+        except Exception:  # noqa: BLE001 - an entry naming a moved module: a miss
+            return None
+
+    _load_index._hammesh_guard = True  # type: ignore[attr-defined]
+    _load._hammesh_guard = True  # type: ignore[attr-defined]
+    IndexDataCacheFile._load_index = _load_index
+    IndexDataCacheFile.load = _load
+    return True
+
+
 def ensure_cache(candidates: list[Path] | None = None) -> str | None:
     """Make numba's kernel cache usable; return the fallback directory if one was needed.
 
@@ -45,6 +91,7 @@ def ensure_cache(candidates: list[Path] | None = None) -> str | None:
         The directories numba would try (default: this package's ``__pycache__`` and
         the user cache directory).
     """
+    guard_stale_indexes()
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None  # the user chose; numba reports problems with it itself
     if candidates is None:
