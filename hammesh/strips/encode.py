@@ -30,7 +30,10 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh
-from hammesh.strips import _kernels
+from hammesh.strips._cover_kernels import greedy_path_cover, renumber_in_path_order
+from hammesh.strips._emit_kernels import restart_buffer
+from hammesh.strips._moves_kernels import improve_cover
+from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
@@ -54,7 +57,7 @@ METHODS = ("auto", "greedy", "order")
 #: Weight of a swap against a neighbour's remaining degree in the greedy choice.
 _SWAP_WEIGHT = 1
 
-#: Sweeps of :func:`~hammesh.strips._kernels.improve_cover` over the path ends.  On the
+#: Sweeps of :func:`~hammesh.strips._moves_kernels.improve_cover` over the path ends.  On the
 #: benchmark's planar meshes (indices per triangle) the greedy cover gives 1.293-1.318,
 #: one sweep 1.268-1.295, two 1.266-1.294, three 1.266-1.294 (ends visited from the last
 #: path back; in the input's order it was 1.272-1.301 / 1.268-1.297 / 1.267-1.294).
@@ -98,7 +101,7 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     improve : bool
         After the greedy pass, join paths whose ends are neighbours, rotate path ends
         and tunnel into neighbouring paths wherever the buffer gets shorter
-        (:func:`~hammesh.strips._kernels.improve_cover`: a few sweeps over the path
+        (:func:`~hammesh.strips._moves_kernels.improve_cover`: a few sweeps over the path
         ends, each move costed in O(1)).  A single path is left as it is.
 
     Returns
@@ -115,10 +118,10 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
 def _greedy_cover(dual: DualMesh, improve: bool = True):
     """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
 
-    The greedy pass reads the mesh's int32 records (:attr:`DualMesh.records`, one half
-    cache line per triangle; the same paths as from ``triangles`` and ``twin``).  After
+    The greedy pass reads the mesh's records (:attr:`DualMesh.records`, one half
+    cache line per triangle).  After
     it (or Lemma 5.1's partition) the mesh is renumbered in path order
-    (:func:`~hammesh.strips._kernels.permute_records`): the moves and the emission then
+    (:func:`~hammesh.strips._cover_kernels.renumber_in_path_order`): the moves and the emission then
     walk mostly adjacent rows instead of Triangle's scattered numbering.  The moves
     visit the path ends from the last path back to the first, which is the same cover
     as visiting them in that order without renumbering.
@@ -129,26 +132,21 @@ def _greedy_cover(dual: DualMesh, improve: bool = True):
     to, and ``ids[i]`` the input triangle of row ``i`` (``None``: the input's own).
     """
     m = dual.n_triangles
-    rec = dual.records
+    rec = dual.cover_records()
     if is_forest(dual):
         order, starts = forest_paths(dual)
-    elif rec is not None:  # the same paths, one record read per triangle
-        order, starts = _kernels.greedy_paths_records(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     else:
-        order, starts = _kernels.greedy_paths(dual.triangles, dual.twin, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
+        order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     if not improve or len(starts) == 2:
         # one path (a closed surface often is one): no join or tunnel exists, and the
         # rotations could only move a swap or two at its ends; not worth O(m) set-up
         return dual.triangles, dual.twin, order, starts, None
-    if rec is not None:
-        tri, twin, _ = _kernels.permute_records(rec, order)
-    else:
-        tri, twin, _ = _kernels.permute_mesh(dual.triangles, dual.twin, order)
+    tri, twin, _ = renumber_in_path_order(rec, order)
     # ends visited from the last path back to the first: neighbouring memory (the
     # input's numbering had scattered them), and on the benchmark's meshes as good a
     # cover (-0.0026 to +0.0006 indices per triangle against the input's order)
     visit = np.arange(m - 1, -1, -1, dtype=np.int64)
-    local, starts = _kernels.improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, visit)
+    local, starts = improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, visit)
     return tri, twin, local, starts, order
 
 
@@ -214,7 +212,7 @@ def _orient(dual: DualMesh, order: np.ndarray, starts: np.ndarray) -> PathTurns:
     turns at the path's last two triangles.
     """
     order, starts = check_starts(order, starts, dual.n_triangles)
-    new, _ = _kernels.orient_paths(dual.triangles, dual.twin, order, starts)
+    new, _ = orient_paths(dual.triangles, dual.twin, order, starts)
     return path_turns(dual.triangles, dual.twin, new, starts)
 
 
@@ -257,7 +255,7 @@ def _oriented_local(mesh: MeshLike, method: str):
     else:
         tri, twin, order, starts, ids = _greedy_cover(dual)
     order, starts = check_starts(order, starts, dual.n_triangles)
-    order, _ = _kernels.orient_paths(tri, twin, order, starts)
+    order, _ = orient_paths(tri, twin, order, starts)
     return dual, tri, twin, order, starts, ids
 
 
@@ -268,7 +266,7 @@ def _restart_strip(dual: DualMesh, order: np.ndarray, starts: np.ndarray, restar
 
 def _restart_buffer(tri: np.ndarray, twin: np.ndarray, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
     R = int(restart_index)
-    out, n_swaps, top, err = _kernels.encode_restart(tri, twin, order, starts, R)
+    out, n_swaps, top, err = restart_buffer(tri, twin, order, starts, R)
     S = len(starts) - 1
     if err:
         turns = path_turns(tri, twin, order, starts)  # raises, naming the step

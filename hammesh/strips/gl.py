@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hammesh.errors import InvalidOptionError, VerificationError
-from hammesh.strips import _kernels
+from hammesh.strips._decode_kernels import check_claimed_draws
+from hammesh.strips._emit_kernels import emit_restart_joined, stitch_strips
 from hammesh.strips.defects import MeshDefects, defect_fields
 from hammesh.strips.dual import oriented_key
 from hammesh.strips.paths import PathTurns, path_turns
@@ -131,7 +132,7 @@ def gl_strip_from_turns(
                 return GLStrip(enc, None, len(turns.order), 1, n_swaps)
             raise InvalidOptionError("join='restart' needs a restart_index")
         R = int(restart_index)
-        out, top = _kernels.emit_restart(
+        out, top = emit_restart_joined(
             turns.first, turns.swap, turns.head, turns.pivot, turns.new_vertex, turns.starts, R
         )
         if 0 <= R <= top and np.count_nonzero(out == R) != S - 1:
@@ -142,7 +143,7 @@ def gl_strip_from_turns(
     swap1 = np.zeros(S, dtype=bool)
     long = ntri >= 3
     swap1[long] = turns.swap[turns.starts[:-1][long] + 1]
-    out = _kernels.stitch(enc, enc_starts, ntri, swap1)
+    out = stitch_strips(enc, enc_starts, ntri, swap1)
     # stitching at odd starts toggles each such strip's first swap; recount from the buffer
     w = np.lib.stride_tricks.sliding_window_view(out, 3) if len(out) >= 3 else np.zeros((0, 3), np.int64)
     degenerate = (w[:, 0] == w[:, 1]) | (w[:, 1] == w[:, 2]) | (w[:, 0] == w[:, 2])
@@ -266,7 +267,7 @@ def verify_gl_strip(
         of multisets.
     order : (m,) int, optional
         The rows in the order the encoder meant them to be drawn.  Then the proof is
-        one O(L) compiled pass (:func:`~hammesh.strips._kernels.check_draws`): decode
+        one O(L) compiled pass (:func:`~hammesh.strips._decode_kernels.check_claimed_draws`): decode
         with OpenGL's rules, the ``k``-th triangle drawn is row ``order[k]`` with its
         winding, and ``order`` names every row once.  If that claim fails, the full
         O(m log m) comparison below decides (and names the problem).
@@ -280,7 +281,7 @@ def verify_gl_strip(
         tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
         idx = np.ascontiguousarray(indices, dtype=np.int64).reshape(-1)
         use_r = restart_index is not None
-        status, _ = _kernels.check_draws(
+        status, _ = check_claimed_draws(
             tri, idx, int(restart_index) if use_r else -1, use_r, np.ascontiguousarray(order, dtype=np.int64)
         )
         if status == 0:
