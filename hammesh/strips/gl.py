@@ -65,6 +65,10 @@ class GLStrip:
         What the input mesh had (set by :func:`~hammesh.strips.encode.encode`).
     dropped : (k,) int64
         Input rows not drawn: they repeat a vertex index (OpenGL draws nothing for them).
+    vertex_order : (n,) int64 or None
+        Set when the vertices were renumbered in order of first use
+        (``encode(..., reorder_vertices=True)``): ``indices`` refer to the vertex buffer
+        ``points[vertex_order]``.
     """
 
     indices: np.ndarray
@@ -74,6 +78,7 @@ class GLStrip:
     n_swaps: int
     defects: MeshDefects | None = None
     dropped: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False)
+    vertex_order: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def indices_per_triangle(self) -> float:
@@ -89,7 +94,9 @@ class GLStrip:
             "strips": int(self.n_strips),
             "indices_per_triangle": float(self.indices_per_triangle),
             "swaps": int(self.n_swaps),
-        } | defect_fields(self.defects, self.dropped)
+        } | defect_fields(self.defects, self.dropped) | (
+            {} if self.vertex_order is None else {"vertex_order": self.vertex_order.tolist()}
+        )
 
 
 def _even_encoding(turns: PathTurns) -> tuple[np.ndarray, np.ndarray]:
