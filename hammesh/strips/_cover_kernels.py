@@ -12,10 +12,10 @@ from collections import namedtuple
 import numpy as np
 
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN
-from hammesh.strips._numba import carve, kernel, loop_helper
+from hammesh.strips._numba import NEXT_CORNER, carve, kernel, loop_helper
 from hammesh.strips._path_kernels import vertex_between
 
-__all__ = ["PathCover", "greedy_path_cover", "Renumbered", "renumber_in_path_order"]
+__all__ = ["PathCover", "greedy_path_cover", "zigzag_path_cover", "Renumbered", "renumber_in_path_order"]
 
 #: A dual path cover: ``order`` every triangle once, path after path; ``starts`` the
 #: ``(S + 1,)`` path offsets.
@@ -198,3 +198,109 @@ def _renumber_into(rec, order, tri2, twin2, new_id):
                 twin2[3 * i + k] = 3 * new_id[u] + (h - 3 * u)
             else:
                 twin2[3 * i + k] = -1
+
+
+@loop_helper
+def _zigzag_step(rec, cur, kout, prev, stamp, mark):
+    """Follow the alternating (swap-free) chain one triangle from ``cur`` leaving by ``kout``.
+
+    Returns ``(u, kout2, pivot)``: the next triangle, the edge it must leave by for the
+    turns to keep alternating, its pivot; ``u = -1`` at the boundary, at a taken
+    triangle or at one already on this chain (``stamp[u] == mark``).
+    """
+    h = rec[cur, REC_TWIN + kout]
+    if h < 0:
+        return -1, -1, -1
+    u = h // 3
+    if rec[u, REC_SCRATCH] < 0 or stamp[u] == mark:
+        return -1, -1, -1
+    kin = h - 3 * u
+    k1 = NEXT_CORNER[kin]
+    p1 = rec[u, k1]  # pivot when leaving by the edge after the entry
+    if p1 != prev:
+        return u, k1, p1
+    return u, NEXT_CORNER[k1], rec[u, kin]
+
+
+def zigzag_path_cover(rec, seed_order) -> PathCover:
+    """Cover the dual graph with swap-free (alternating) chains, longest first from each seed.
+
+    Seeds as in :func:`greedy_path_cover` (fewest free neighbours first); from a seed,
+    each free neighbour starts a forced chain (Thm 4.3: in an alternating strip each
+    triangle fixes the next), the longest is taken.  On a structured grid (pyvista's
+    ``load_random_hills``, latitude-longitude spheres) these are its rows, which the
+    degree-first greedy cover bends into L shapes that each cost a swap.
+    """
+    m = rec.shape[0]
+    bucket, order, starts, top, stamp = carve(np.int64, (4, m), m, m + 1, 4, m)
+    S = _zigzag_path_cover_into(rec, seed_order, bucket, order, starts, top, stamp)
+    return PathCover(order, starts[: S + 1].copy())
+
+
+@kernel
+def _zigzag_path_cover_into(rec, seed_order, bucket, order, starts, top, stamp):
+    m = rec.shape[0]
+    top[:] = 0
+    stamp[:] = -1
+    for t in range(m):
+        rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
+    for i in range(m):
+        t = seed_order[i]
+        d = rec[t, REC_SCRATCH]
+        bucket[d, top[d]] = t
+        top[d] += 1
+    L = 0
+    S = 0
+    mark = 0
+    starts[0] = 0
+    while True:
+        seed = -1
+        for d in range(4):
+            while top[d] > 0:
+                top[d] -= 1
+                t = bucket[d, top[d]]
+                if rec[t, REC_SCRATCH] == d:
+                    seed = t
+                    break
+            if seed >= 0:
+                break
+        if seed < 0:
+            break
+        take_triangle(seed, rec, bucket, top)
+        best_k = -1
+        best_n = 0
+        for k0 in range(3):
+            mark += 1
+            stamp[seed] = mark
+            n = 0
+            cur = seed
+            kout = k0
+            prev = rec[seed, k0]
+            while True:
+                u, kout, prev = _zigzag_step(rec, cur, kout, prev, stamp, mark)
+                if u < 0:
+                    break
+                stamp[u] = mark
+                n += 1
+                cur = u
+            if n > best_n:
+                best_n = n
+                best_k = k0
+        order[L] = seed
+        L += 1
+        if best_k >= 0:
+            mark += 1
+            cur = seed
+            kout = best_k
+            prev = rec[seed, best_k]
+            while True:
+                u, kout, prev = _zigzag_step(rec, cur, kout, prev, stamp, mark)
+                if u < 0:
+                    break
+                take_triangle(u, rec, bucket, top)
+                order[L] = u
+                L += 1
+                cur = u
+        S += 1
+        starts[S] = L
+    return S

@@ -32,7 +32,7 @@ from hammesh import params
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh
 from hammesh.strips._cache_cover_kernels import cache_path_cover
-from hammesh.strips._cover_kernels import greedy_path_cover, renumber_in_path_order
+from hammesh.strips._cover_kernels import greedy_path_cover, renumber_in_path_order, zigzag_path_cover
 from hammesh.strips._emit_kernels import restart_buffer
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
@@ -120,7 +120,7 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     return (order if ids is None else ids[order]).astype(np.int64, copy=False), starts
 
 
-def _greedy_cover(dual: DualMesh, improve: bool = True):
+def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: bool = False):
     """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
 
     The greedy pass reads the mesh's records (:attr:`DualMesh.records`, one half
@@ -138,7 +138,9 @@ def _greedy_cover(dual: DualMesh, improve: bool = True):
     """
     m = dual.n_triangles
     rec = dual.cover_records()
-    if is_forest(dual):
+    if zigzag:
+        order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1))
+    elif is_forest(dual):
         order, starts = forest_paths(dual)
     else:
         order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
@@ -265,7 +267,7 @@ def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, 
     return dual, (order if ids is None else ids[order]), starts
 
 
-def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None):
+def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None, dual: DualMesh | None = None):
     """:func:`_oriented_paths` in the numbering the paths were improved in.
 
     Returns ``(dual, tri, twin, order, starts, ids)``: ``order`` refers to the rows of
@@ -274,7 +276,8 @@ def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None):
     """
     if method not in METHODS:
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    dual = dual_mesh(mesh)
+    zigzag = dual is not None  # a second call: the swap-free chains instead of the greedy cover
+    dual = dual_mesh(mesh) if dual is None else dual
     if cache is not None:
         if method == "order":
             raise InvalidOptionError("a cache-aware encoding makes its own paths: method 'order' does not apply")
@@ -290,7 +293,7 @@ def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None):
         order, starts = cycle_paths(dual, comps)
         tri, twin, ids = dual.triangles, dual.twin, None
     else:
-        tri, twin, order, starts, ids = _greedy_cover(dual)
+        tri, twin, order, starts, ids = _greedy_cover(dual, zigzag=zigzag)
     order, starts = check_starts(order, starts, dual.n_triangles)
     order, _ = orient_paths(tri, twin, order, starts)
     return dual, tri, twin, order, starts, ids
@@ -392,12 +395,15 @@ def encode(
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
     dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache)
-    order = local if ids is None else ids[local]
-    if join == "restart" and restart_index is not None:
-        strip = _restart_buffer(tri, twin, local, starts, restart_index)
-    else:
-        turns = path_turns(dual.triangles, dual.twin, order, starts)
-        strip = gl_strip_from_turns(turns, join=join, restart_index=restart_index)
+    strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
+    greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
+    few_swaps = 1 < strip.n_strips and strip.n_swaps <= _ZIGZAG_TRIGGER * strip.n_strips
+    if greedy and few_swaps and not is_forest(dual):  # a forest keeps Lemma 5.1's fewest strips
+        # few swaps per path: a structured grid, whose swap-free rows the degree-first
+        # cover bends into L shapes (one swap each); try the rows and keep the shorter
+        alt, alt_order = _buffer(*_oriented_local(mesh, method, None, dual), join, restart_index)
+        if len(alt.indices) < len(strip.indices):
+            strip, order = alt, alt_order
     rows = dual.triangles
     if reorder_vertices:
         indices, vertex_order = _first_use_numbering(strip.indices, strip.restart_index, len(dual.points))
@@ -408,6 +414,21 @@ def encode(
     if verify:
         verify_gl_strip(rows, strip.indices, strip.restart_index, order=order)
     return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+
+
+#: Swaps per path at or below which :func:`encode` also tries the swap-free chains
+#: (:func:`~hammesh.strips._cover_kernels.zigzag_path_cover`).  Structured grids and
+#: latitude-longitude spheres have ~1-2 (one per L-shaped path); quality meshes ~10.
+_ZIGZAG_TRIGGER = 2
+
+
+def _buffer(dual, tri, twin, local, starts, ids, join, restart_index) -> tuple[GLStrip, np.ndarray]:
+    """The GL buffer of paths ``local`` (rows of ``tri``) and the input rows in draw order."""
+    order = local if ids is None else ids[local]
+    if join == "restart" and restart_index is not None:
+        return _restart_buffer(tri, twin, local, starts, restart_index), order
+    turns = path_turns(dual.triangles, dual.twin, order, starts)
+    return gl_strip_from_turns(turns, join=join, restart_index=restart_index), order
 
 
 def _dropped_rows(mesh: MeshLike, dual: DualMesh) -> np.ndarray:
