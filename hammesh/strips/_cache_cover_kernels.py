@@ -74,7 +74,7 @@ def _new_vertex(rec, h):
     return rec[u, (h - 3 * u + 2) % 3]
 
 
-def cache_path_cover(rec, n_points, cache_size, max_len, seed_order, w_miss=2) -> PathCover:
+def cache_path_cover(rec, n_points, cache_size, max_len, seed_order, w_miss=2, w_swap=1, w_deg=2) -> PathCover:
     """Cover the dual graph with strips laid for a FIFO cache of ``cache_size`` vertices.
 
     ``rec``: the mesh's records (scratch column overwritten); ``seed_order`` breaks ties
@@ -88,13 +88,13 @@ def cache_path_cover(rec, n_points, cache_size, max_len, seed_order, w_miss=2) -
     stamp = np.zeros(n_points, np.int64)
     ring = np.full(cache_size, -1, np.int64)
     S = _cache_path_cover_into(
-        rec, off, vt, cache_size, max_len, w_miss, seed_order, bucket, order, starts, top, stamp, ring
+        rec, off, vt, cache_size, max_len, w_miss, w_swap, w_deg, seed_order, bucket, order, starts, top, stamp, ring
     )
     return PathCover(order, starts[: S + 1].copy())
 
 
 @kernel
-def _cache_path_cover_into(rec, off, vt, C, max_len, w_miss, seed_order, bucket, order, starts, top, stamp, ring):
+def _cache_path_cover_into(rec, off, vt, C, max_len, w_miss, w_swap, w_deg, seed_order, bucket, order, starts, top, stamp, ring):
     m = rec.shape[0]
     top[:] = 0
     for t in range(m):
@@ -165,7 +165,7 @@ def _cache_path_cover_into(rec, off, vt, C, max_len, w_miss, seed_order, bucket,
                 pivot = rec[cur, k] if entry < 0 else vertex_between(rec, cur, entry, k)
                 swap = 1 if (prev_pivot >= 0 and pivot == prev_pivot) else 0
                 miss = 0 if _cached(stamp, now, C, _new_vertex(rec, h)) else 1
-                score = w_miss * miss + 2 * du + swap
+                score = w_miss * miss + w_deg * du + w_swap * swap
                 if score < bscore:
                     bscore = score
                     bk = k
