@@ -470,7 +470,7 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
     print()
     print("Issue 16: indices per triangle (ipt, restarts counted) / strips / ACMR FIFO16 / ACMR FIFO32; bad = triangles")
     print("a buffer does not draw exactly once with their winding (our decoder); times: best of --repeat, ours verified.")
-    head = f"{'mesh':<20}{'m':>9} " + "".join(f"| {e:<28}" for e in encoders) + "| t/mo  t/mo+vc  t/vtk"
+    head = f"{'mesh':<20}{'m':>9} " + "".join(f"| {e:<28}" for e in encoders) + "| t/mo  t/mo+vc  t/vtk  ours ms  mo ms"
     print(head)
     print("-" * len(head))
     worst: dict[str, list] = {}
@@ -533,6 +533,7 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
         tm_ = times.get("meshopt")
         ratio = lambda k: f"{times['hammesh'] / times[k]:>6.2f}" if k in times else f"{'-':>6}"  # noqa: E731
         line += f"|{ratio('meshopt')} {ratio('meshopt vcache'):>7} {ratio('vtkStripper'):>6}"
+        line += f" {1e3 * times['hammesh']:>8.1f} " + (f"{1e3 * tm_:>6.1f}" if tm_ else f"{'-':>6}")
         print(line)
         peers = [figs[k] for k in ("vtkStripper", "meshopt", "meshopt vcache") if k in figs]
         if peers:
@@ -541,7 +542,7 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
     print(f"hammesh ipt <= min(peers) on {len(worst) - len(behind)} of {len(worst)} meshes"
           + (f"; behind on: {', '.join(f'{k} (+{worst[k][0]:.4f})' for k in behind)}" if behind else ""))
     print("t/mo: hammesh (verified) / meshopt stripify time; t/mo+vc: / meshopt optimize_vertex_cache + stripify;")
-    print("t/vtk: / vtkStripper (PolyData.strip()).")
+    print("t/vtk: / vtkStripper (PolyData.strip()); ours ms, mo ms: best times of hammesh (verified) and meshopt stripify.")
 
 
 def main() -> None:
