@@ -1,0 +1,184 @@
+"""Compiled loop (numba) of sparse mode's last step: cycle-keeping improvement flips.
+
+After the joins, every triangle a join created (a swap, a split's four, a bridge's
+sectors and flips, a fan) is judged against its parents. Where its angles are poor,
+a *Lawson flip* of an edge the cycle crosses can help: it merges the small angle with
+a neighbour's and re-splits the cavity of two triangles along the other diagonal --
+the local re-triangulation of a join's cavity that keeps the cycle.
+
+For two consecutive rows ``x = (a, b, c)``, ``y = (b, a, d)`` of a cycle (the cycle
+crosses ``ab``), the flip of ``ab`` into ``cd`` gives ``X = (a, d, c)`` and
+``Y = (d, b, c)``. The cycle enters ``x`` across one of ``bc``, ``ca`` and leaves ``y``
+across one of ``ad``, ``db``; if those two edges end up in different new triangles
+(``ca`` with ``db``, or ``bc`` with ``ad``) the cycle runs through ``X`` and ``Y``
+across ``cd`` in the same order: still one Hamiltonian cycle, no other row touched.
+A flip is taken only if the quadrilateral is strictly convex, neither edge is pinned
+(constrained, or between regions), the pair's smallest angle grows and its largest
+stays within ``max(hi, the pair's largest)``. The sorted angle vector of the mesh
+then grows lexicographically with every flip, so the loop ends (and is capped).
+
+Serial, nopython, ``cache=True``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def _corner(ox, oy, qx, qy, rx, ry):
+    ux = qx - ox
+    uy = qy - oy
+    vx = rx - ox
+    vy = ry - oy
+    return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+
+
+@njit(cache=True, nogil=True)
+def _min_max(pts, a, b, c):
+    ax = pts[a, 0]
+    ay = pts[a, 1]
+    bx = pts[b, 0]
+    by = pts[b, 1]
+    cx = pts[c, 0]
+    cy = pts[c, 1]
+    a0 = _corner(ax, ay, bx, by, cx, cy)
+    a1 = _corner(bx, by, cx, cy, ax, ay)
+    a2 = math.pi - a0 - a1
+    return min(a0, min(a1, a2)), max(a0, max(a1, a2))
+
+
+@njit(cache=True, nogil=True)
+def _ccw(pts, a, b, c):
+    """Strictly counter-clockwise by more than a relative 1e-12 (no near-degenerate flip)."""
+    ux = pts[b, 0] - pts[a, 0]
+    uy = pts[b, 1] - pts[a, 1]
+    vx = pts[c, 0] - pts[a, 0]
+    vy = pts[c, 1] - pts[a, 1]
+    return ux * vy - uy * vx > 1e-12 * (ux * ux + uy * uy + vx * vx + vy * vy)
+
+
+@njit(cache=True, nogil=True)
+def _set_edge(twin, pinned, h, g, pin):
+    twin[h] = g
+    pinned[h] = pin
+    if g >= 0:
+        twin[g] = h
+
+
+@njit(cache=True, nogil=True)
+def _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x):
+    """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps."""
+    s = run_start[x]
+    ln = run_len[x]
+    if ln < 4:
+        return -1
+    y = x + 1 if x + 1 < s + ln else s
+    p = x - 1 if x > s else s + ln - 1
+    q = y + 1 if y + 1 < s + ln else s
+    kh = -1
+    kp = -1
+    for k in range(3):
+        g = twin[3 * x + k]
+        if g >= 0 and g // 3 == y:
+            kh = k
+        if g >= 0 and g // 3 == p:
+            kp = k
+    if kh < 0 or kp < 0 or pinned[3 * x + kh]:
+        return -1
+    h = 3 * x + kh
+    g = twin[h]
+    kg = g - 3 * y
+    kq = -1
+    for k in range(3):
+        f = twin[3 * y + k]
+        if f >= 0 and f // 3 == q:
+            kq = k
+    if kq < 0:
+        return -1
+    a = out[x, kh]
+    b = out[x, (kh + 1) % 3]
+    c = out[x, (kh + 2) % 3]
+    d = out[y, (kg + 2) % 3]
+    x_ca = kp == (kh + 2) % 3
+    y_db = kq == (kg + 2) % 3
+    if x_ca != y_db:
+        return -1  # both links would land in one new triangle
+    if not (_ccw(pts, a, d, c) and _ccw(pts, d, b, c)):
+        return -1
+    l1, h1 = _min_max(pts, a, b, c)
+    l2, h2 = _min_max(pts, b, a, d)
+    l3, h3 = _min_max(pts, a, d, c)
+    l4, h4 = _min_max(pts, d, b, c)
+    old_min = min(l1, l2)
+    new_min = min(l3, l4)
+    if new_min <= old_min * (1.0 + 1e-9) or max(h3, h4) > max(hi, max(h1, h2)):
+        return -1
+    e_ad = 3 * y + (kg + 1) % 3
+    e_db = 3 * y + (kg + 2) % 3
+    e_bc = 3 * x + (kh + 1) % 3
+    e_ca = 3 * x + (kh + 2) % 3
+    t_ad = twin[e_ad]
+    t_db = twin[e_db]
+    t_bc = twin[e_bc]
+    t_ca = twin[e_ca]
+    p_ad = pinned[e_ad]
+    p_db = pinned[e_db]
+    p_bc = pinned[e_bc]
+    p_ca = pinned[e_ca]
+    # X = (a, d, c) where the link to p is (ca: row x) or to q (ad: row y)
+    rx = x if x_ca else y
+    ry = y if x_ca else x
+    out[rx, 0] = a
+    out[rx, 1] = d
+    out[rx, 2] = c
+    out[ry, 0] = d
+    out[ry, 1] = b
+    out[ry, 2] = c
+    _set_edge(twin, pinned, 3 * rx, t_ad, p_ad)
+    _set_edge(twin, pinned, 3 * rx + 2, t_ca, p_ca)
+    _set_edge(twin, pinned, 3 * ry, t_db, p_db)
+    _set_edge(twin, pinned, 3 * ry + 1, t_bc, p_bc)
+    _set_edge(twin, pinned, 3 * rx + 1, 3 * ry + 2, False)
+    pinned[3 * ry + 2] = False
+    m = min(pm[x], pm[y])
+    pm[x] = m
+    pm[y] = m
+    kind[x] = 4
+    kind[y] = 4
+    return y
+
+
+@njit(cache=True, nogil=True)
+def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, max_flips):
+    """Cycle-keeping Lawson flips around the rows with ``kind != 3`` (module docstring).
+
+    Modifies ``out``, ``twin`` (the output's half-edge twins), ``pinned``, ``pm`` (each
+    row's parents' smallest angle: a flipped pair gets the smaller of the two) and
+    ``kind`` (4 for a flipped row) in place. Returns the number of flips.
+    """
+    k = out.shape[0]
+    stack = np.empty(k + 2 * max_flips + 2, np.int64)
+    top = 0
+    for r in range(k):
+        if kind[r] != 3:
+            stack[top] = r
+            top += 1
+    n = 0
+    while top > 0 and n < max_flips:
+        top -= 1
+        r = stack[top]
+        s = run_start[r]
+        prev = r - 1 if r > s else s + run_len[r] - 1
+        for x in (r, prev):
+            y = _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x)
+            if y >= 0:
+                n += 1
+                stack[top] = x
+                stack[top + 1] = y
+                top += 2
+                break
+    return n
