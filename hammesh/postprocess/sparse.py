@@ -77,6 +77,8 @@ MAX_ANGLE_SLACK_DEG = 5.0
 PLACE_ITERS = 6
 #: a split is placed only if its midpoint misses the rule by less than this (degrees)
 PLACE_REACH_DEG = 10.0
+#: most rows an improvement flip between non-consecutive rows may reverse
+IMPROVE_ARC = 4096
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 
@@ -364,8 +366,9 @@ def sparse_cycles(
     pm[has] = np.minimum(pm[has], amin_p[partner[has]])
     n_improve = 0
     if improve and pts.shape[1] == 2 and len(out):
-        out, claim, kind, pm, n_improve = _improve(all_pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b,
-                                                    n + n_split, hi)
+        out, claim, kind, pm, parent, n_improve = _improve(
+            all_pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi
+        )
     quality = local_quality(all_pts, out, pm, kind, keep, hi)
     quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
     quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts0, tri0))
@@ -435,7 +438,7 @@ def local_quality(
     }
 
 
-def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi):
+def _improve(pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
@@ -464,8 +467,11 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, fir
     starts = np.cumsum(lengths) - lengths
     run_start = np.repeat(starts, lengths).astype(np.int64)
     run_len = np.repeat(lengths, lengths).astype(np.int64)
-    n_flips = _ik.improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, float(hi), 4 * len(out) + 16)
-    return out, twin, kind, pm, int(n_flips)
+    parent = parent.copy()
+    n_flips = _ik.improve_flips(
+        pts, out, twin, pinned, run_start, run_len, pm, kind, parent, float(hi), 4 * len(out) + 16, IMPROVE_ARC
+    )
+    return out, twin, kind, pm, parent, int(n_flips)
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
