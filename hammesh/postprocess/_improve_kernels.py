@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
+from hammesh.postprocess._join_kernels import _beat_cosines, _fan_eval, _fan_eval_fast
+
 
 @njit(cache=True, nogil=True)
 def _corner(ox, oy, qx, qy, rx, ry):
@@ -200,28 +202,28 @@ def _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent
     Both rows' links are their two other edges, so each new triangle gets one link of
     each; the result is one cycle iff the new triangle at the lower position joins the
     two rows' predecessors (or both successors): then the rows between them are
-    reversed in place (at most ``max_arc``).
+    reversed in place (at most ``max_arc``). Returns how many, or -1 if no flip.
     """
     h = 3 * x + kh
     g = twin[h]
     if g < 0 or pinned[h]:
-        return False
+        return -1
     y = g // 3
     s = run_start[x]
     ln = run_len[x]
     if run_start[y] != s or ln < 4:
-        return False
+        return -1
     i = min(x, y)
     j = max(x, y)
     if j - i < 2 or (i == s and j == s + ln - 1) or j - i - 1 > max_arc:
-        return False
+        return -1
     kg = g - 3 * y
     a = out[x, kh]
     b = out[x, (kh + 1) % 3]
     c = out[x, (kh + 2) % 3]
     d = out[y, (kg + 2) % 3]
     if not (_ccw(pts, a, d, c) and _ccw(pts, d, b, c)):
-        return False
+        return -1
     e_ad = 3 * y + (kg + 1) % 3
     e_db = 3 * y + (kg + 2) % 3
     e_bc = 3 * x + (kh + 1) % 3
@@ -229,7 +231,7 @@ def _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent
     t_ad = twin[e_ad]
     t_ca = twin[e_ca]
     if t_ad < 0 or t_ca < 0:
-        return False
+        return -1
     nx = t_ca // 3  # the neighbours X = (a, d, c) joins
     ny = t_ad // 3
     n_i = nx if x == i else ny
@@ -241,13 +243,13 @@ def _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent
     elif n_i == i + 1 and n_j == next_j:
         x_low = False  # Y at i: prev_i -> Y -> j - 1 ... i + 1 -> X -> next_j
     else:
-        return False
+        return -1
     l1, h1 = _min_max(pts, a, b, c)
     l2, h2 = _min_max(pts, b, a, d)
     l3, h3 = _min_max(pts, a, d, c)
     l4, h4 = _min_max(pts, d, b, c)
     if min(l3, l4) <= min(l1, l2) * (1.0 + 1e-9) or max(h3, h4) > max(hi, max(h1, h2)):
-        return False
+        return -1
     t_db = twin[e_db]
     t_bc = twin[e_bc]
     p_ad = pinned[e_ad]
@@ -279,11 +281,11 @@ def _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent
     kind[ry] = 4
     for k in range((j - i - 1) // 2):
         _swap_rows(out, twin, pinned, pm, kind, parent, i + 1 + k, j - 1 - k)
-    return True
+    return j - i - 1
 
 
 @njit(cache=True, nogil=True)
-def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, max_flips, max_arc):
+def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, max_flips, max_arc, arc_budget):
     """Cycle-keeping Lawson flips around the rows with ``kind != 3`` (module docstring).
 
     Modifies ``out``, ``twin`` (the output's half-edge twins), ``pinned``, ``pm`` (each
@@ -292,8 +294,9 @@ def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, 
 
     An edge between two rows of the same run that are not consecutive is flipped too
     where that keeps one cycle (``_try_flip_apart``: the rows between are reversed,
-    at most ``max_arc`` of them, so ``parent`` moves with its rows): this takes an
-    incenter sector's outer edge, merging its halved angles with a neighbour's.
+    at most ``max_arc`` of them, so ``parent`` moves with its rows; ``arc_budget``
+    rows reversed in all, which keeps the loop linear): this takes an incenter
+    sector's outer edge, merging its halved angles with a neighbour's.
     """
     k = out.shape[0]
     stack = np.empty(k + 2 * max_flips + 4, np.int64)
@@ -327,7 +330,11 @@ def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, 
             y = g // 3
             lo = min(r, y)
             hi_r = max(r, y)
-            if _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, r, k, max_arc):
+            moved = _try_flip_apart(
+                pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, r, k, min(max_arc, arc_budget)
+            )
+            if moved >= 0:
+                arc_budget -= moved
                 n += 1
                 # rows between lo and hi_r moved: push the two flipped rows and their
                 # new cycle neighbours
@@ -336,3 +343,136 @@ def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, 
                 top += 2
                 break
     return n
+
+
+@njit(cache=True, nogil=True)
+def _place_star(pts, poly, n, px, py, lo, hi, step, iters):
+    """Compass search from ``(px, py)`` for the star over ``poly[:n]`` (``_join_kernels.place_fan``'s
+    search, with at most ``4 x iters`` rounds so a long thin star costs no more than a
+    round one). Returns ``(x, y, slack, smallest angle, largest angle)``, exact angles.
+    """
+    best = _fan_eval_fast(pts, poly, n, px, py, lo, hi, 2.0, -2.0)
+    if best == -np.inf:
+        return px, py, best, 0.0, np.pi
+    c_lo, c_hi = _beat_cosines(best, lo, hi)
+    mx = px
+    my = py
+    halvings = 0
+    rounds = 0
+    while halvings < iters and rounds < 4 * iters:
+        rounds += 1
+        moved = False
+        bx = mx
+        by = my
+        for k in range(8):
+            ang = 0.25 * math.pi * k
+            tx = mx + step * math.cos(ang)
+            ty = my + step * math.sin(ang)
+            sl = _fan_eval_fast(pts, poly, n, tx, ty, lo, hi, c_lo, c_hi)
+            if sl > best:
+                best = sl
+                c_lo, c_hi = _beat_cosines(best, lo, hi)
+                bx = tx
+                by = ty
+                moved = True
+        if moved:
+            mx = bx
+            my = by
+        else:
+            step *= 0.5
+            halvings += 1
+    best, bmin, bmax = _fan_eval(pts, poly, n, mx, my, lo, hi)
+    return mx, my, best, bmin, bmax
+
+
+@njit(cache=True, nogil=True)
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
+    """Move each free Steiner point to a better place in its star (in place).
+
+    Amenta, Bern & Eppstein's optimal point placement (see ``_join_kernels``):
+    ``_place_star`` maximises the star's slack (smallest angle minus
+    ``keep`` x its rows' parents' smallest, ``hi`` minus the largest) by compass
+    search from the point's current place. Points ``>= first`` whose star is closed
+    and touches no pinned edge (a midpoint of a constrained edge stays) are moved
+    where the star's smallest angle does not drop, its largest stays within
+    ``max(hi, its own)`` and its slack grows. An incenter's star, once improvement
+    flips took its sectors' outer edges, is larger than the triangle it split: the
+    point can move towards the whole angles. Returns the number of points moved.
+    """
+    n_pts = pts.shape[0]
+    k = out.shape[0]
+    cnt = np.zeros(n_pts - first + 1, np.int64)
+    for r in range(k):
+        for j in range(3):
+            v = out[r, j]
+            if v >= first:
+                cnt[v - first + 1] += 1
+    for i in range(1, cnt.shape[0]):
+        cnt[i] += cnt[i - 1]
+    rows = np.empty(cnt[-1], np.int64)
+    fill = cnt[:-1].copy()
+    for r in range(k):
+        for j in range(3):
+            v = out[r, j]
+            if v >= first:
+                rows[fill[v - first]] = 3 * r + j
+                fill[v - first] += 1
+    cap = 64
+    us = np.empty(cap, np.int64)
+    ws = np.empty(cap, np.int64)
+    poly = np.empty(cap, np.int64)
+    moved = 0
+    for v in range(first, n_pts):
+        a0 = cnt[v - first]
+        a1 = cnt[v - first + 1]
+        n = a1 - a0
+        if n < 3 or n > cap:
+            continue
+        ok = True
+        lo = np.inf
+        for i in range(n):
+            h = rows[a0 + i]
+            r = h // 3
+            kv = h - 3 * r
+            e_out = 3 * r + kv  # v -> u
+            e_in = 3 * r + (kv + 2) % 3  # w -> v
+            if twin[e_out] < 0 or twin[e_in] < 0 or pinned[e_out] or pinned[e_in]:
+                ok = False
+                break
+            us[i] = out[r, (kv + 1) % 3]
+            ws[i] = out[r, (kv + 2) % 3]
+            lo = min(lo, pm[r])
+        if not ok:
+            continue
+        # the link polygon, counter-clockwise: u -> w in each star triangle (v, u, w)
+        poly[0] = us[0]
+        cur = ws[0]
+        m = 1
+        while cur != us[0] and m < n:
+            poly[m] = cur
+            nxt = -1
+            for i in range(n):
+                if us[i] == cur:
+                    nxt = ws[i]
+                    break
+            if nxt < 0:
+                break
+            cur = nxt
+            m += 1
+        if m != n or cur != us[0]:
+            continue
+        lo *= keep
+        vx = pts[v, 0]
+        vy = pts[v, 1]
+        s0, n0, x0 = _fan_eval(pts, poly, n, vx, vy, lo, hi)
+        if s0 == -np.inf:
+            continue
+        d2 = np.inf
+        for i in range(n):
+            d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)
+        px, py, s1, n1, x1 = _place_star(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters)
+        if s1 > s0 and n1 >= n0 and x1 <= max(hi, x0):
+            pts[v, 0] = px
+            pts[v, 1] = py
+            moved += 1
+    return moved
