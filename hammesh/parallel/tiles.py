@@ -43,6 +43,8 @@ COARSE_TRIANGLES = 20_000
 CUT_WINDOW = 0.04
 #: cut positions tried in the window
 CUT_CANDIDATES = 33
+#: windows tried next (both axes) when no position in CUT_WINDOW is good
+WIDER_WINDOWS = (0.1, 0.2)
 #: a cut should cross user segments at least this many degrees above the min angle
 CROSS_MARGIN_DEG = 10.0
 #: and stay this many local edge lengths away from vertices
@@ -233,6 +235,7 @@ class _Builder:
     def __init__(self, vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray) -> None:
         self.points = [vertices]
         self.n_points = len(vertices)
+        self.n_input = len(vertices)
         self.pieces = segments.copy()
         self.piece_origin = np.arange(len(segments), dtype=np.int64)
         self.piece_marker = markers.copy()
@@ -257,11 +260,15 @@ def _pieces_in_box(b: _Builder, box: np.ndarray) -> np.ndarray:
     return np.flatnonzero((mid[:, 0] > box[0]) & (mid[:, 0] < box[1]) & (mid[:, 1] > box[2]) & (mid[:, 1] < box[3]))
 
 
-def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> float:
+def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> tuple[float, bool]:
     """The cut position in [c_lo, c_hi] crossing segments at the largest angles, clear of vertices."""
     p = b.coords()
-    o = 1 - axis
-    inside = (p[:, 0] > box[0]) & (p[:, 0] < box[1]) & (p[:, 1] > box[2]) & (p[:, 1] < box[3])
+    # the vertices a separator must keep clear of: segment ends (the coarse mesh's
+    # interior points are no features) and the user's vertices
+    feat = np.zeros(len(p), bool)
+    feat[b.pieces.ravel()] = True
+    feat[: b.n_input] = True
+    inside = feat & (p[:, 0] > box[0]) & (p[:, 0] < box[1]) & (p[:, 1] > box[2]) & (p[:, 1] < box[3])
     v = p[inside]
     hv = sizer(v) if len(v) else np.zeros(0)
     cand = np.unique(np.concatenate([np.linspace(c_lo, c_hi, CUT_CANDIDATES), [c_mid]]))
@@ -278,12 +285,12 @@ def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> 
             continue
         crossing = (a[:, axis] - c) * (e[:, axis] - c) < 0
         ang = float(np.arcsin(np.clip(sin_cross[crossing].min(), 0, 1))) if crossing.any() else math.pi / 2
-        ok = clear_min >= CLEARANCE and ang >= need
-        score = min(clear_min / CLEARANCE, ang / need, 1.0)
-        key = (ok, score if not ok else 1.0, -abs(c - c_mid))
+        # an angle the mesher cannot meet is fatal; closeness to vertices is repaired
+        # by finer separator spacing (and repair rounds), so it only ranks
+        key = (ang >= need, min(clear_min / CLEARANCE, 1.0) if ang >= need else ang / need, -abs(c - c_mid))
         if best_key is None or key > best_key:
             best, best_key = float(c), key
-    return best
+    return best, (best_key if best_key is not None else (False, 0.0, 0.0))
 
 
 def _cut_pieces(b: _Builder, box, axis: int, c: float, cut_id: int) -> None:
@@ -340,7 +347,23 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
             f = k1 / k
             c_mid = at(f)
             c_lo, c_hi = at(max(f - CUT_WINDOW, 0.02)), at(min(f + CUT_WINDOW, 0.98))
-        c = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
+            # no good position near the balanced one: look further, then across the
+            # other axis (balance costs less than an angle the mesher cannot meet)
+            c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
+            for wider in WIDER_WINDOWS:
+                if key[0]:
+                    break
+                for ax in (axis, 1 - axis):
+                    order = np.argsort(cx[:, ax], kind="stable")
+                    xs, cw = cx[order, ax], np.cumsum(w[order])
+                    mid = float(np.interp(f * total, cw, xs))
+                    lo_, hi_ = (float(np.interp(max(f - wider, 0.02) * total, cw, xs)),
+                                float(np.interp(min(f + wider, 0.98) * total, cw, xs)))
+                    c2, key2 = _choose_cut(b, box, ax, lo_, hi_, mid, sizer, min_angle)
+                    if key2[:2] > key[:2]:
+                        c, axis, key = c2, ax, key2
+        if len(cx) == 0 or w.sum() <= 0:
+            c, _ = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
         o = 1 - axis
         cut = _Cut(axis, c, float(box[2 * o]), float(box[2 * o + 1]))
         b.cuts.append(cut)
@@ -532,6 +555,7 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     centroid = ptsc[tric].mean(axis=1)
 
     b = _Builder(ptsc, segs, markers)
+    b.n_input = len(verts)
     b.piece_origin = sub_origin.copy()
     lo, hi = verts.min(axis=0), verts.max(axis=0)
     pad = 0.01 * max(float((hi - lo).max()), 1e-300)

@@ -78,7 +78,10 @@ def test_several_pieces_with_holes_and_a_crack():
 
 
 def test_estimates_are_balanced():
-    dom = hammesh.read_domain("hammesh/data/demo.poly")
+    # a square plate with a square hole: every cut crosses the boundary at 90 degrees
+    v = square(0, 0, 1) + square(0.3, 0.55, 0.2)
+    dom = hammesh.Domain(vertices=v, segments=[[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]],
+                         holes=[[0.4, 0.65]])
     d = decompose(dom, min_angle=30, max_area=2e-4, n_tiles=4)
     est = np.array([t.estimate for t in d.tiles])
     # each cut may move CUT_WINDOW (4 %) of its box's count off the balanced position:
