@@ -34,13 +34,16 @@ def offsets(decomp: Decomposition, n_points: list[int]) -> np.ndarray:
     return len(decomp.vertices) + np.concatenate([[0], np.cumsum(extra)[:-1]]).astype(np.int64)
 
 
-def assemble(decomp: Decomposition, meshes: list[Mesh]) -> Mesh:
+def assemble(decomp: Decomposition, meshes: list[Mesh], start: np.ndarray | None = None) -> Mesh:
     """The tile meshes as one mesh in the global numbering (separators not constrained).
 
     The segments are the tiles' constrained edges minus the separators, each once;
-    ``triangle_attributes`` holds the tile index of every triangle.
+    ``triangle_attributes`` are the tiles' (regional attributes), else the tile index.
+    ``start``: where each tile's Steiner points start (default: one after the other,
+    :func:`offsets`).
     """
-    start = offsets(decomp, [m.n_points for m in meshes])
+    if start is None:
+        start = offsets(decomp, [m.n_points for m in meshes])
     points = [decomp.vertices]
     tris, segs, marks, owner = [], [], [], []
     sep_keys = _keys(decomp.segments[decomp.separator], 1 << 40)
@@ -52,7 +55,8 @@ def assemble(decomp: Decomposition, meshes: list[Mesh]) -> Mesh:
         keep = ~np.isin(_keys(s, 1 << 40), sep_keys)
         segs.append(s[keep])
         marks.append(m.segment_markers[keep])
-        owner.append(np.full(len(m.triangles), i, np.float64))
+        at = np.asarray(m.triangle_attributes)
+        owner.append(at if at.ndim == 2 and at.shape[1] else np.full((len(m.triangles), 1), i, np.float64))
     seg = np.concatenate(segs)
     mk = np.concatenate(marks)
     k = _keys(seg, 1 << 40)
@@ -62,7 +66,7 @@ def assemble(decomp: Decomposition, meshes: list[Mesh]) -> Mesh:
         triangles=np.concatenate(tris),
         segments=seg[np.sort(first)],
         segment_markers=mk[np.sort(first)],
-        triangle_attributes=np.concatenate(owner)[:, None],
+        triangle_attributes=np.concatenate(owner),
         info={"tiles": len(meshes)},
     )
 
