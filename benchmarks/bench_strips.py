@@ -3,6 +3,8 @@
     python benchmarks/bench_strips.py            # all meshes
     python benchmarks/bench_strips.py --quick    # small meshes only
     python benchmarks/bench_strips.py --real-world   # surfaces with defects only (issue 12)
+    python benchmarks/bench_strips.py --peers        # issue 16's closing table only (meshopt, vtk, cache)
+    python benchmarks/bench_strips.py --peers --quick  # the same on meshes up to ~20k triangles
 
 Then Thm 5.3 (Christofides) at ~1,000 and ~3,000 triangles, Lemma 5.1 on triangulated
 polygons, and real-world surfaces (issue 12): pyvista's bundled airplane and globe, its
@@ -13,7 +15,12 @@ vtkStripper draws reversed (ours: none, proved by the round trip), and the time 
 Ours: :func:`hammesh.strips.encode` (greedy dual paths, restart join), timed from the
 mesh arrays to the index buffer with its round-trip proof (the default) and without.  VTK: ``pyvista.PolyData.strip()`` (vtkStripper),
 counted as its strips joined with one restart index each.  pyffi: ``pyffi.utils.tristrip
-.stripify`` + restart join.  Competitors missing from the environment are skipped.  The
+.stripify`` + restart join.  meshoptimizer (the ``meshoptimizer`` package, its ``meshopt_stripify`` called through the
+package's own library handle): ``stripify`` of the input order, and ``optimize_vertex_cache``
++ ``stripify``; every peer's buffer is decoded by our OpenGL decoder and compared with the
+mesh ("bad": triangles missing or drawn reversed).  Cache figures: one FIFO lookup per index
+of the stream (restarts skipped), :func:`hammesh.strips.vertex_cache_stats`.
+Competitors missing from the environment are skipped.  The
 first call of ours pays numba's one-off compile (cached afterwards); a warm-up run is made.
 """
 
@@ -322,12 +329,234 @@ def real_world_rows(repeat: int) -> None:
     print("times: best of --repeat interleaved calls, ours verified; t ratio: ours / vtk.")
 
 
+# --- issue 16: meshoptimizer as a peer, cache figures, the closing table -----------------
+
+R32 = 0xFFFFFFFF
+
+
+def _meshopt():
+    """``(module, library handle)`` of the meshoptimizer package, or ``None``."""
+    try:
+        import ctypes
+
+        import meshoptimizer
+        from meshoptimizer._loader import lib
+    except ImportError:
+        return None
+    lib.meshopt_stripify.restype = ctypes.c_size_t
+    lib.meshopt_stripify.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_uint]
+    lib.meshopt_stripifyBound.restype = ctypes.c_size_t
+    lib.meshopt_stripifyBound.argtypes = [ctypes.c_size_t]
+    return meshoptimizer, lib
+
+
+def meshopt_strip(mo, tri: np.ndarray, n: int, vcache: bool) -> np.ndarray:
+    """meshopt ``stripify`` (restart ``0xFFFFFFFF``) of the rows in input order, or after ``optimize_vertex_cache``."""
+    module, lib = mo
+    idx = np.ascontiguousarray(tri, np.uint32).ravel()
+    if vcache:
+        dst = np.empty_like(idx)
+        module.optimize_vertex_cache(dst, idx, len(idx), n)
+        idx = dst
+    out = np.empty(lib.meshopt_stripifyBound(len(idx)), np.uint32)
+    k = lib.meshopt_stripify(out.ctypes.data, idx.ctypes.data, len(idx), n, R32)
+    return out[:k]
+
+
+def _bad_draws(mesh: Mesh, indices: np.ndarray, restart) -> int:
+    """Mesh triangles a buffer does not draw exactly once with their winding (our OpenGL decoder)."""
+    from hammesh.strips.dual import oriented_key
+
+    try:
+        verify_gl_strip(mesh.triangles, indices, restart)
+        return 0
+    except Exception:  # noqa: BLE001 - count what differs
+        pass
+    got = oriented_key(decode_gl_strip(np.asarray(indices, np.int64), restart))
+    g: dict = {}
+    for r in map(tuple, got.tolist()):
+        g[r] = g.get(r, 0) + 1
+    bad = 0
+    for r in map(tuple, oriented_key(mesh.triangles).tolist()):
+        if g.get(r, 0) > 0:
+            g[r] -= 1
+        else:
+            bad += 1
+    return bad
+
+
+def _vtk_buffer(out) -> np.ndarray:
+    """vtkStripper's strips (and left-over triangles) joined by restart indices."""
+    parts = []
+    for cells in (np.asarray(out.strips), np.asarray(out.faces)):
+        i = 0
+        while i < len(cells):
+            k = int(cells[i])
+            parts.append(np.r_[cells[i + 1 : i + 1 + k], R32])
+            i += k + 1
+    return np.concatenate(parts)[:-1].astype(np.int64) if parts else np.zeros(0, np.int64)
+
+
+def peer_corpus(quick: bool) -> dict[str, Mesh]:
+    """Issue 16's corpus: pyvista's shipped meshes, Triangle q30 meshes, random Delaunay, spheres, torus."""
+    from scipy.spatial import Delaunay
+
+    out: dict[str, Mesh] = {}
+    try:
+        import pyvista as pv
+        from pyvista import examples
+
+        def arrays(poly) -> Mesh:
+            poly = poly.extract_surface() if not isinstance(poly, pv.PolyData) else poly
+            poly = poly if poly.is_all_triangles else poly.triangulate()
+            return Mesh(np.asarray(poly.points, dtype=np.float64), poly.faces.reshape(-1, 4)[:, 1:].astype(np.int64))
+
+        for name in ("airplane", "ant", "nut", "sphere", "globe", "random_hills"):
+            try:
+                out[f"pv {name}"] = arrays(getattr(examples, f"load_{name}")())
+            except Exception:  # noqa: BLE001 - a loader needing the network: skipped
+                pass
+        out["pv.Sphere 30x30"] = arrays(pv.Sphere(theta_resolution=30, phi_resolution=30))
+        out["pv.Sphere 200x200"] = arrays(pv.Sphere(theta_resolution=200, phi_resolution=200))
+        out["icosphere 3"] = icosphere(3)
+        if not quick:
+            out["icosphere 5"] = icosphere(5)
+    except ImportError:
+        pass
+    out["torus 4k"] = torus(60, 40)
+    out["bumpy sphere 10k"] = bumpy_sphere(5000)
+    rng = np.random.default_rng(1)
+    p = rng.random((5000, 2))
+    out["Delaunay 10k"] = Mesh(p, Delaunay(p).simplices.astype(np.int64))  # scipy's rows are CCW
+    out["q30 square 10k"] = planar(1.6e-4)
+    out["q30 A 12k"] = bundled("A", BUNDLED["A"])
+    if not quick:
+        out["q30 square 100k"] = planar(1.6e-5)
+        out["torus 100k"] = torus(320, 160)
+        p = rng.random((50000, 2))
+        out["Delaunay 100k"] = Mesh(p, Delaunay(p).simplices.astype(np.int64))
+        out["q30 square 1M"] = planar(1.6e-6)
+    for k, v in list(out.items()):
+        if v is None:
+            del out[k]
+        elif v.points.shape[1] == 2:  # scipy's Delaunay rows: make them CCW as our meshes are
+            t = v.triangles
+            a, b, c = (v.points[t[:, i]] for i in range(3))
+            cw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
+            if cw.any():
+                t = t.copy()
+                t[cw] = t[cw][:, ::-1]
+                out[k] = Mesh(v.points, t)
+    return out
+
+
+def _row_figures(mesh: Mesh, indices: np.ndarray, restart) -> tuple[float, int, float, float]:
+    from hammesh.strips import vertex_cache_stats
+
+    m = mesh.n_triangles
+    strips = int(np.count_nonzero(np.asarray(indices) == R32)) + 1 if restart is not None else 1
+    c16 = vertex_cache_stats(indices, restart, m, 16)
+    c32 = vertex_cache_stats(indices, restart, m, 32)
+    return len(indices) / m, strips, c16.acmr, c32.acmr
+
+
+def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
+    """Issue 16's closing table: ipt, strips, ACMR (FIFO 16 / 32) per encoder, time ratios vs meshopt."""
+    import threading  # noqa: F401  (the self-check thread is the library's)
+
+    mo = _meshopt()
+    meshes = peer_corpus(quick)
+    encoders = ["hammesh", "hammesh cache", "vtkStripper", "meshopt", "meshopt vcache"]
+    print()
+    print("Issue 16: indices per triangle (ipt, restarts counted) / strips / ACMR FIFO16 / ACMR FIFO32; bad = triangles")
+    print("a buffer does not draw exactly once with their winding (our decoder); times: best of --repeat, ours verified.")
+    head = f"{'mesh':<20}{'m':>9} " + "".join(f"| {e:<28}" for e in encoders) + "| t/mo  t/mo+vc  t/vtk  ours ms  mo ms"
+    print(head)
+    print("-" * len(head))
+    worst: dict[str, list] = {}
+    for name, mesh in meshes.items():
+        m = mesh.n_triangles
+        n = len(mesh.points)
+        cells = {}
+        times = {}
+        tv, tc, tk, tm, tmv = [], [], [], [], []
+        poly = None
+        try:
+            poly = _vtk_poly(mesh)
+        except ImportError:
+            pass
+        s = sc = out = b0 = b1 = None
+        for _ in range(repeat):
+            t = time.perf_counter()
+            s = encode(mesh)
+            tv.append(time.perf_counter() - t)
+            if cache:
+                t = time.perf_counter()
+                sc = encode(mesh, cache=cache)
+                tc.append(time.perf_counter() - t)
+            if poly is not None:
+                t = time.perf_counter()
+                out = poly.strip()
+                tk.append(time.perf_counter() - t)
+            if mo is not None:
+                t = time.perf_counter()
+                b0 = meshopt_strip(mo, mesh.triangles, n, False)
+                tm.append(time.perf_counter() - t)
+                t = time.perf_counter()
+                b1 = meshopt_strip(mo, mesh.triangles, n, True)
+                tmv.append(time.perf_counter() - t)
+        cells["hammesh"] = (s.indices, R32, _bad_draws(mesh, s.indices, R32))
+        times["hammesh"] = min(tv)
+        if sc is not None:
+            cells["hammesh cache"] = (sc.indices, R32, _bad_draws(mesh, sc.indices, R32))
+            times["hammesh cache"] = min(tc)
+        if out is not None:
+            vb = _vtk_buffer(out)
+            cells["vtkStripper"] = (vb, R32, _bad_draws(mesh, vb, R32))
+            times["vtkStripper"] = min(tk)
+        if b0 is not None:
+            cells["meshopt"] = (b0.astype(np.int64), R32, _bad_draws(mesh, b0, R32))
+            cells["meshopt vcache"] = (b1.astype(np.int64), R32, _bad_draws(mesh, b1, R32))
+            times["meshopt"] = min(tm)
+            times["meshopt vcache"] = min(tmv)
+        line = f"{name:<20}{m:>9,} "
+        figs = {}
+        for e in encoders:
+            if e not in cells:
+                line += f"| {'-':<28}"
+                continue
+            ind, r, bad = cells[e]
+            ipt, S, a16, a32 = _row_figures(mesh, ind, r)
+            figs[e] = ipt
+            txt = f"{ipt:.3f} {S:>6} {a16:.3f} {a32:.3f}" + (f" bad {bad}" if bad else "")
+            line += f"| {txt:<28}"
+        tm_ = times.get("meshopt")
+        ratio = lambda k: f"{times['hammesh'] / times[k]:>6.2f}" if k in times else f"{'-':>6}"  # noqa: E731
+        line += f"|{ratio('meshopt')} {ratio('meshopt vcache'):>7} {ratio('vtkStripper'):>6}"
+        line += f" {1e3 * times['hammesh']:>8.1f} " + (f"{1e3 * tm_:>6.1f}" if tm_ else f"{'-':>6}")
+        print(line)
+        peers = [figs[k] for k in ("vtkStripper", "meshopt", "meshopt vcache") if k in figs]
+        if peers:
+            worst[name] = [figs["hammesh"] - min(peers), tm_ and times["hammesh"] / tm_]
+    behind = [k for k, v in worst.items() if v[0] > 1e-12]
+    print(f"hammesh ipt <= min(peers) on {len(worst) - len(behind)} of {len(worst)} meshes"
+          + (f"; behind on: {', '.join(f'{k} (+{worst[k][0]:.4f})' for k in behind)}" if behind else ""))
+    print("t/mo: hammesh (verified) / meshopt stripify time; t/mo+vc: / meshopt optimize_vertex_cache + stripify;")
+    print("t/vtk: / vtkStripper (PolyData.strip()); ours ms, mo ms: best times of hammesh (verified) and meshopt stripify.")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeat", type=int, default=9, help="timed calls per mesh (best is shown)")
     ap.add_argument("--real-world", action="store_true", help="only the real-world surfaces section")
+    ap.add_argument("--peers", action="store_true", help="only issue 16's table (meshopt, vtkStripper, cache mode)")
+    ap.add_argument("--cache", type=int, default=16, help="FIFO size of the cache mode in the peers table (0: off)")
     args = ap.parse_args()
+    if args.peers:
+        encode(torus(8, 6))  # warm-up (numba)
+        peer_rows(args.quick, args.repeat, args.cache or None)
+        return
     if args.real_world:
         encode(Mesh(*__import__("hammesh.surface", fromlist=["torus"]).torus(8, 6)))  # warm-up (numba)
         real_world_rows(args.repeat)
@@ -384,6 +613,7 @@ def main() -> None:
     christofides_rows(args.quick)
     polygon_rows(args.repeat)
     real_world_rows(args.repeat)
+    peer_rows(args.quick, args.repeat, args.cache or None)
 
 
 if __name__ == "__main__":

@@ -14,9 +14,12 @@ EXAMPLES = """examples:
   hammesh strip plate.vtu -o plate.npz                   # binary (uint32 indices)
   hammesh strip small.obj -o small.json --method christofides   # Thm 5.3, <= 5000 triangles
   hammesh strip plate.vtu -o plate.json --generalized    # IRIS GL: one vertex + one bit each
+  hammesh strip plate.vtu -o plate.json --cache 32 --reorder-vertices   # for a 32-entry FIFO
 methods: auto (a file stored in Hamiltonian-cycle order, as 'hammesh mesh' writes it, is sent
 as one strip per cycle when that is shorter than the greedy cover), greedy, order, christofides.
-Every buffer is decoded with OpenGL's rules and compared with the mesh before it is written."""
+Every buffer is decoded with OpenGL's rules and compared with the mesh before it is written.
+The document reports the buffer's FIFO cache figures (acmr, atvr, overfetch; 16 entries
+unless --cache says otherwise)."""
 
 
 def add_args(p: argparse.ArgumentParser) -> None:
@@ -28,6 +31,11 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--method", choices=("auto", "greedy", "order", "christofides"), default="auto", help="how to find the strips"
     )
+    g = p.add_argument_group("GPU caches")
+    g.add_argument("--cache", type=int, default=None, metavar="N",
+                   help="lay strips for a FIFO vertex cache of N entries (typical 16-32)")
+    g.add_argument("--reorder-vertices", action="store_true",
+                   help="renumber vertices in order of first use; the document lists vertex_order")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -45,16 +53,19 @@ def run(args: argparse.Namespace) -> int:
         raise FileFormatError(f"{args.mesh}: no such file")
     if args.generalized and args.method == "christofides":
         raise params.invalid("--method", args.method, "not 'christofides' with --generalized")
+    if args.cache is not None:
+        params.integer("--cache", args.cache, low=3, high=1 << 16, what="FIFO entries")
     mesh = read_mesh(args.mesh, dim=None)
     choice = choose_strip(mesh, method=args.method, join=args.join, restart_index=args.restart_index,
-                          generalized=args.generalized)
+                          generalized=args.generalized, cache=args.cache, reorder_vertices=args.reorder_vertices)
     repairs = mesh.info.get("repairs", [])
     extra = {**choice.extra, "repairs": list(repairs)}
     write_strip(choice.strip, args.output, extra)
+    cache = f"; ACMR {choice.extra['acmr']:.3f} at FIFO {choice.extra['cache_size']}" if "acmr" in choice.extra else ""
     print(
         f"{args.mesh}: {choice.n_triangles:,} triangles -> {choice.strip.n_strips} strip(s), "
         f"{choice.strip.n_swaps} swap(s), {choice.indices_per_triangle:.4f} indices per triangle "
-        f"({choice.method}); wrote {args.output}"
+        f"({choice.method}){cache}; wrote {args.output}"
         + (f"\nrepairs: {'; '.join(map(str, repairs))}" if repairs else "")
     )
     return 0

@@ -110,26 +110,38 @@ TREE_BIT = 2
 CON_BIT = 1
 
 
+#: Bits per axis of the quadtree that orders the tree's edges (:func:`spanning_forest`).
+CELL_BITS = 16
+#: Distance classes per quadtree level: edges nearer a cell's centre are taken first.
+CENTRE_BINS = 16
+
+
 def spanning_forest(tri, twin, is_con, points=None):
-    """Spanning forest of the dual graph that crosses the fewest constrained edges.
+    """A compact spanning forest of the dual graph that crosses the fewest constrained edges.
 
-    First a depth-first search over free (flippable) dual edges only: its trees span
-    the *regions* (pieces of the dual cut along every constrained edge). Then the
-    regions are joined by union-find over the constrained dual edges, each taken only
-    if it joins two regions not yet joined: exactly ``regions - pieces`` crossings,
-    the fewest possible (a crossing joins two regions).
+    Kruskal's algorithm over the dual edges, in the order of a quadtree of the
+    triangles' centroids (``CELL_BITS`` levels; issue 14): an edge's *level* is the
+    size of the smallest quadtree cell holding both its triangles, and edges are taken
+    level by level, smallest first, and inside a level nearest the centre of that cell
+    first (``CENTRE_BINS`` classes, a counting sort). So the triangles of every cell
+    whose dual is connected form one subtree, and a cell's four children hang together
+    at its centre: the Thm 2.4 walk around the tree then sweeps the domain cell by
+    cell, as a space-filling curve does, and any stretch of the cycle covers a
+    compact region (``hammesh.partition`` cuts the cycle into parts). The first idea,
+    edges ordered by Hilbert key alone, links sibling cells anywhere along their
+    shared side; the walk then goes out along one side of the chain of cells and
+    back along the other, and a stretch of the cycle is a thin strip (cuts 6-16x
+    METIS's instead of 1.5x).
 
-    On a large mesh (``points`` given, ``hammesh._threads.THREAD_MIN_ROWS`` rows per core) the search
-    runs in threads, one per *part*: the triangles split into slabs by the x of their
-    first corner (at quantiles of a sample), each slab searched by its own thread as if
-    the slab's border were constrained. The slabs' trees are joined first across free
-    border edges (flips, as any tree edge), then across constrained edges: still the
-    fewest crossings, since constrained edges come last.
+    Constrained edges come after all free ones, each taken only if it joins two
+    trees: the forest crosses exactly ``regions - pieces`` of them (a region is a
+    piece of the dual cut along every constrained edge), the fewest possible.
 
-    The triangles come back renumbered in the order the search took them off its
-    stack (part by part): the Thm 2.4 walk follows the tree, so in this numbering its
-    reads are nearly sequential (memory locality), and the half-edge data is packed
-    into one array so that the walk reads one word per half-edge.
+    The triangles come back renumbered in the quadtree's Morton order (a counting
+    sort): the union-find and the walk, which sweeps cell by cell, then read memory
+    nearly in sequence; the half-edge data is packed into one array so that the walk
+    reads one word per half-edge. Without ``points`` the input order is kept and
+    the edges are taken in that order.
 
     Parameters
     ----------
@@ -137,7 +149,7 @@ def spanning_forest(tri, twin, is_con, points=None):
     twin : (3 m,) int64
     is_con : (3 m,) bool
     points : (n, 2) float64, optional
-        Enables the threaded search (the slabs need coordinates).
+        The quadtree's coordinates.
 
     Returns
     -------
@@ -157,163 +169,212 @@ def spanning_forest(tri, twin, is_con, points=None):
     """
     m = tri.shape[0]
     spans = row_ranges(m, _threads.THREAD_MIN_ROWS)
-    k = len(spans) if points is not None else 1
-    part = np.zeros(m, np.uint8)
-    sizes = np.array([m], np.int64)
-    if k > 1:
-        sample = points[tri[:: max(1, m // 20_000), 0], 0]
-        cuts = np.quantile(sample, np.arange(1, k) / k)
-        counts = run_all([
-            (lambda lo=lo, hi=hi: _assign_parts(points, tri, cuts, part, lo, hi)) for lo, hi in spans
+    qx = np.zeros(m, np.int64)
+    qy = np.zeros(m, np.int64)
+    if points is not None and m:
+        corner = points[tri[:, 0]]  # the box of the first corners: cheap, close enough
+        lo = corner.min(axis=0)
+        span = float((corner.max(axis=0) - lo).max())
+        scale = ((1 << CELL_BITS) - 1) / span if span > 0 else 0.0
+        run_all([
+            (lambda a=a, b=b: _cell_coords_into(points, tri, lo[0], lo[1], scale, qx, qy, a, b)) for a, b in spans
         ])
-        sizes = np.sum(counts, axis=0)
-    k = len(sizes)
-    base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    region = np.full(m, -1, np.int64)
-    order = np.empty(m, np.int64)
+    # everything below runs in the quadtree's (Morton) order of the triangles: the
+    # union-find and the walk then read memory nearly in sequence
+    order, key = _morton_order(qx, qy, MORTON_BITS)
     rank = np.empty(m, np.int64)
-    tri_r = np.empty_like(tri)
+    rank[order] = np.arange(m)
+    tri_r = tri[order]
     code = np.empty(3 * m, np.int64)
-    work = [
-        tuple(np.empty(s, np.int64) for s in (sizes[p], sizes[p], 3 * sizes[p], 3 * sizes[p], sizes[p]))
-        for p in range(k)
-    ]  # per part: stack, via, border edges, constrained edges, region seeds
-    found = run_all([
-        (lambda p=p: _forest_part(tri, twin, is_con, part, p, k, base[p], region, order, rank, tri_r,
-                                  code, *work[p]))
-        for p in range(k)
-    ])
-    border = np.sort(np.concatenate([work[p][2][: found[p][0]] for p in range(k)]))
-    con = np.sort(np.concatenate([work[p][3][: found[p][1]] for p in range(k)]))
-    seeds = np.full(k * max(f[2] for f in found), -1, np.int64)  # region r: seeds[r]
-    for p in range(k):
-        seeds[p : k * found[p][2] : k] = work[p][4][: found[p][2]]
-    firsts, split = _join_regions(twin, region, rank, code, border, con, seeds)
+    bucket = np.empty(3 * m, np.int16)
     run_all([
-        (lambda lo=lo, hi=hi: _renumber_twins(code, rank, 3 * lo, 3 * hi)) for lo, hi in spans
+        (lambda a=a, b=b: _pack_code_into(twin, is_con, order, rank, qx, qy, code, bucket, a, b)) for a, b in spans
     ])
-    return Forest(tri_r, code, order, firsts, np.sort(split))
+    edges = _bucket_order(bucket, 2 * (CELL_BITS + 1), CENTRE_BINS)
+    uf = np.arange(m)
+    _kruskal_into(code, edges, bucket, key[order], uf)
+    firsts = _piece_firsts(uf, order, rank)
+    split = np.flatnonzero((code & 3) == 3).astype(np.int64)
+    return Forest(tri_r, code, order, firsts, split)
+
+
+#: Bits per axis of the Morton order the forest is built in (a counting sort).
+MORTON_BITS = 10
 
 
 @njit(cache=True, nogil=True)
-def _assign_parts(points, tri, cuts, part, lo, hi):
-    """``part[t]``: the slab of t's first corner's x among ``cuts``; counts per slab."""
-    counts = np.zeros(cuts.shape[0] + 1, np.int64)
-    for t in range(lo, hi):
-        x = points[tri[t, 0], 0]
-        p = 0
-        while p < cuts.shape[0] and x >= cuts[p]:
-            p += 1
-        part[t] = p
-        counts[p] += 1
-    return counts
+def _morton_order(qx, qy, bits):
+    """Triangles sorted by the Morton key of their top ``bits`` bits per axis (stable),
+    and the key of each triangle."""
+    m = qx.shape[0]
+    shift = CELL_BITS - bits
+    n_keys = 1 << (2 * bits)
+    key = np.empty(m, np.int64)
+    start = np.zeros(n_keys + 1, np.int64)
+    for t in range(m):
+        x = qx[t] >> shift
+        y = qy[t] >> shift
+        k = 0
+        for j in range(bits):
+            k |= ((x >> j) & 1) << (2 * j) | ((y >> j) & 1) << (2 * j + 1)
+        key[t] = k
+        start[k + 1] += 1
+    for k in range(n_keys):
+        start[k + 1] += start[k]
+    order = np.empty(m, np.int64)
+    for t in range(m):
+        k = key[t]
+        order[start[k]] = t
+        start[k] += 1
+    return order, key
 
 
 @njit(cache=True, nogil=True)
-def _forest_part(tri, twin, is_con, part, p, k, base, region, order, rank, tri_r, code,
-                 stack, via, border, con, seeds):
-    """Depth-first search of slab ``p`` over free edges inside it (one thread).
+def _pack_code_into(twin, is_con, order, rank, qx, qy, code, bucket, lo, hi):
+    """``code`` of new triangles lo..hi (tree bit clear) and the Kruskal class of each
+    dual edge from its lower half-edge (-1 on the others).
 
-    Numbers its triangles ``base, base + 1, ...`` in the order they leave the stack;
-    region ``j`` of the slab gets id ``p + k j`` and seed ``seeds[j]`` (its lowest
-    triangle). Free edges to a higher slab go to ``border``, constrained interior
-    edges (from their lower half-edge) to ``con``. Returns the three counts.
+    Class: ``level * CENTRE_BINS + bin`` (level: bit length of the two triangles'
+    differing coordinate bits; bin: L-infinity distance of the edge's midpoint from
+    the centre of that level's cell, in ``CENTRE_BINS`` steps of its half side), plus
+    ``(CELL_BITS + 1) * CENTRE_BINS`` for a constrained edge.
     """
-    m = tri.shape[0]
-    n_seen = base
-    n_reg = 0
-    n_border = 0
-    n_con = 0
-    for s in range(m):
-        if part[s] != p or region[s] >= 0:
-            continue
-        rid = p + k * n_reg
-        seeds[n_reg] = s
-        n_reg += 1
-        region[s] = rid
-        stack[0] = s
-        via[0] = -1
-        top = 1
-        while top > 0:
-            top -= 1
-            t = stack[top]
-            entry = via[top]  # t's half-edge of the tree edge it was reached by
-            i = n_seen
-            n_seen += 1
-            order[i] = t
-            rank[t] = i
-            for kk in range(3):
-                h = 3 * t + kk
-                tri_r[i, kk] = tri[t, kk]
-                g = twin[h]
-                bits = CON_BIT if is_con[h] else 0
-                if h == entry:
-                    bits |= TREE_BIT
-                elif g >= 0:
-                    u = g // 3
-                    if is_con[h]:
-                        if h < g:
-                            con[n_con] = h
-                            n_con += 1
-                    elif part[u] != p:
-                        if part[u] > p:
-                            border[n_border] = h
-                            n_border += 1
-                    elif region[u] < 0:
-                        region[u] = rid
-                        bits |= TREE_BIT
-                        stack[top] = u
-                        via[top] = g
-                        top += 1
-                code[3 * i + kk] = ((g + 1) << 2) | bits  # twin still in input numbering
-    return n_border, n_con, n_reg
-
-
-@njit(cache=True)
-def _join_regions(twin, region, rank, code, border, con, seeds):
-    """Join the searched regions into one tree per piece: free border edges first,
-    then constrained edges, each only if it joins two trees. Returns the first
-    triangle (new numbering) of each piece, pieces ordered by lowest input triangle,
-    and the constrained edges taken (both half-edges, new numbering)."""
-    uf = np.arange(seeds.shape[0])
-    split = np.empty(2 * con.shape[0], np.int64)
-    n_split = 0
-    for step in range(2):
-        edges = border if step == 0 else con
-        for e in range(edges.shape[0]):
-            h = edges[e]
+    con_base = (CELL_BITS + 1) * CENTRE_BINS
+    for i in range(lo, hi):
+        t = order[i]
+        ax = qx[t]
+        ay = qy[t]
+        for kk in range(3):
+            h = 3 * t + kk
+            j = 3 * i + kk
             g = twin[h]
-            a = find_root(uf, region[h // 3])
-            b = find_root(uf, region[g // 3])
-            if a != b:
-                uf[a] = b
-                jh = 3 * rank[h // 3] + h % 3
-                jg = 3 * rank[g // 3] + g % 3
-                code[jh] |= TREE_BIT
-                code[jg] |= TREE_BIT
-                if step == 1:
-                    split[n_split] = jh
-                    split[n_split + 1] = jg
-                    n_split += 2
-    low = np.full(seeds.shape[0], -1, np.int64)  # per root: the piece's lowest triangle
-    for r in range(seeds.shape[0]):
-        if seeds[r] < 0:
-            continue
-        a = find_root(uf, r)
-        if low[a] < 0 or seeds[r] < low[a]:
-            low[a] = seeds[r]
-    firsts = np.sort(low[low >= 0])
+            con = is_con[h]
+            if g < 0:
+                code[j] = CON_BIT if con else 0
+                bucket[j] = -1
+                continue
+            u = g // 3
+            gj = 3 * rank[u] + g - 3 * u
+            code[j] = ((gj + 1) << 2) | (CON_BIT if con else 0)
+            if gj < j:
+                bucket[j] = -1
+                continue
+            bx = qx[u]
+            by = qy[u]
+            diff = (ax ^ bx) | (ay ^ by)
+            level = 0
+            while diff > 0:
+                level += 1
+                diff >>= 1
+            b = 0
+            if level > 0:
+                # twice the midpoint against twice the centre of the level's cell
+                cx = ((ax >> level) << level) + (1 << (level - 1))
+                cy = ((ay >> level) << level) + (1 << (level - 1))
+                d = max(abs(ax + bx - 2 * cx), abs(ay + by - 2 * cy))  # <= 2 ** level
+                b = min(CENTRE_BINS - 1, (d * CENTRE_BINS) >> level)
+            c = level * CENTRE_BINS + b
+            if con:
+                c += con_base
+            bucket[j] = c
+
+
+@njit(cache=True, nogil=True)
+def _cell_coords_into(points, tri, x0, y0, scale, qx, qy, lo, hi):
+    """Quadtree coordinates (``CELL_BITS`` bits) of the centroids of triangles lo..hi."""
+    top = (1 << CELL_BITS) - 1
+    for t in range(lo, hi):
+        x = (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0
+        y = (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0
+        ix = int((x - x0) * scale)
+        iy = int((y - y0) * scale)
+        qx[t] = min(max(ix, 0), top)
+        qy[t] = min(max(iy, 0), top)
+
+
+@njit(cache=True, nogil=True)
+def _bucket_order(bucket, n_bins, per_bin):
+    """The lower half-edges, sorted by ``bucket // per_bin`` (stable counting sort)."""
+    start = np.zeros(n_bins + 1, np.int64)
+    for h in range(bucket.shape[0]):
+        if bucket[h] >= 0:
+            start[bucket[h] // per_bin + 1] += 1
+    for b in range(n_bins):
+        start[b + 1] += start[b]
+    out = np.empty(start[n_bins], np.int64)
+    for h in range(bucket.shape[0]):
+        if bucket[h] >= 0:
+            b = bucket[h] // per_bin
+            out[start[b]] = h
+            start[b] += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _cell_of(key, h, level):
+    """The quadtree cell at ``level`` of half-edge h's triangle (from its Morton key)."""
+    shift = 2 * (level - (CELL_BITS - MORTON_BITS))
+    return key[h // 3] >> shift if shift > 0 else key[h // 3]
+
+
+@njit(cache=True, nogil=True)
+def _kruskal_into(code, edges, bucket, key, uf):
+    """Kruskal over ``edges`` (grouped by level, Morton order inside a level): set the
+    tree bit of (both halves of) each edge that joins two trees of ``uf``.
+
+    A level's edges come cell by cell (a cell is a run of the Morton order), and
+    inside a cell by their centre class: the same tree as one global sort by class,
+    since cells of one level share no triangle, but the union-find's reads stay in
+    one cell's stretch of memory.
+    """
+    n = edges.shape[0]
+    levels = CELL_BITS + 1
+    e = 0
+    while e < n:
+        lev = bucket[edges[e]] // CENTRE_BINS
+        level = lev % levels
+        cell = _cell_of(key, edges[e], level)
+        f = e + 1
+        while f < n and bucket[edges[f]] // CENTRE_BINS == lev and _cell_of(key, edges[f], level) == cell:
+            f += 1
+        for b in range(CENTRE_BINS):
+            for x in range(e, f):
+                h = edges[x]
+                if bucket[h] % CENTRE_BINS != b:
+                    continue
+                g = (code[h] >> 2) - 1
+                ra = h // 3
+                while uf[ra] != ra:  # path halving
+                    uf[ra] = uf[uf[ra]]
+                    ra = uf[ra]
+                rb = g // 3
+                while uf[rb] != rb:
+                    uf[rb] = uf[uf[rb]]
+                    rb = uf[rb]
+                if ra != rb:
+                    if ra < rb:
+                        uf[rb] = ra
+                    else:
+                        uf[ra] = rb
+                    code[h] |= TREE_BIT
+                    code[g] |= TREE_BIT
+        e = f
+
+
+@njit(cache=True, nogil=True)
+def _piece_firsts(uf, order, rank):
+    """Per piece (tree of ``uf``), its lowest input triangle's new number, the pieces
+    in that order."""
+    m = uf.shape[0]
+    low = np.full(m, m, np.int64)  # per root: lowest input triangle
+    for i in range(m):
+        r = find_root(uf, i)
+        if order[i] < low[r]:
+            low[r] = order[i]
+    firsts = np.sort(low[low < m])
     for j in range(firsts.shape[0]):
         firsts[j] = rank[firsts[j]]
-    return firsts, split[:n_split]
-
-
-@njit(cache=True, nogil=True)
-def _renumber_twins(code, rank, lo, hi):
-    for j in range(lo, hi):
-        g = (code[j] >> 2) - 1
-        if g >= 0:
-            code[j] = ((3 * rank[g // 3] + g % 3 + 1) << 2) | (code[j] & 3)
+    return firsts
 
 
 def split_slots(tri, code, mid_h=None):

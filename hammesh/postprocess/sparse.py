@@ -59,6 +59,7 @@ from hammesh.halfedge import _kernels
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.postprocess.conform import split_segments
+from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
@@ -76,6 +77,10 @@ MAX_ANGLE_SLACK_DEG = 5.0
 PLACE_ITERS = 6
 #: a split is placed only if its midpoint misses the rule by less than this (degrees)
 PLACE_REACH_DEG = 10.0
+#: most rows an improvement flip between non-consecutive rows may reverse
+IMPROVE_ARC = 4096
+#: rounds of improvement flips and Steiner point moves
+IMPROVE_ROUNDS = 3
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 
@@ -216,6 +221,7 @@ def sparse_cycles(
     use_cover: bool = True,
     place_iters: int = PLACE_ITERS,
     fans: bool = True,
+    improve: bool = True,
 ) -> SparseResult:
     """The sparse construction on arrays (unverified).
 
@@ -253,6 +259,10 @@ def sparse_cycles(
     fans : bool
         Planar only: replace chains of uncovered triangles by fans around one
         Steiner point each (``_join_kernels.fan_groups``) instead of a point each.
+    improve : bool
+        Planar only: after the joins, flip edges the cycle crosses between two
+        consecutive triangles where that keeps the cycle and raises the pair's
+        smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
     """
     if not 0.0 <= keep <= 1.0:
         raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
@@ -353,7 +363,16 @@ def sparse_cycles(
     out, parent, partner, kind = out[order_rows], parent[order_rows], partner[order_rows], kind[order_rows]
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
-    quality = local_quality(all_pts, out, parent, partner, kind, amin_p, keep, hi)
+    pm = amin_p[parent]  # each row's parents' smallest angle
+    has = partner >= 0
+    pm[has] = np.minimum(pm[has], amin_p[partner[has]])
+    n_improve = n_moved = 0
+    n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
+    if improve and pts.shape[1] == 2 and len(out):
+        out, claim, kind, pm, parent, n_improve, n_moved = _improve(
+            all_pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi, n0_input, keep
+        )
+    quality = local_quality(all_pts, out, pm, kind, keep, hi)
     quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
     quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts0, tri0))
     parent = orig_of[parent]
@@ -373,6 +392,8 @@ def sparse_cycles(
         "bridges": int(counts[2]),
         "flips": int((slot == _k.FLIP).sum() // 2),
         "retries": attempt,
+        "improvement_flips": int(n_improve),
+        "steiner_moved": int(n_moved),
         "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),
         **quality,
     }
@@ -392,34 +413,78 @@ def sparse_cycles(
 def local_quality(
     points: np.ndarray,
     triangles: np.ndarray,
-    parent: np.ndarray,
-    partner: np.ndarray,
+    parents_min: np.ndarray,
     kind: np.ndarray,
-    parent_min: np.ndarray,
     keep: float,
     max_allowed: float,
 ) -> dict:
     """The local quality rule's counts over the output (issue 13, item 1).
 
     A new triangle (every kind but 3, kept whole) is *below the parent rule* if its
-    smallest angle is under ``keep`` x the smallest angle of its parents (``parent``
-    and, for joins, ``partner``), *above the max rule* if its largest angle exceeds
-    ``max_allowed`` (radians); both up to a relative 1e-9.
+    smallest angle is under ``keep`` x ``parents_min`` (the smallest angle of the
+    input triangles it replaces), *above the max rule* if its largest angle exceeds
+    ``max_allowed`` (radians); both up to a relative 1e-9. Only the new rows are
+    measured (a kept row has its input triangle's angles).
     """
-    lo, hi = triangle_angles(points, triangles)
-    pm = parent_min[parent]
-    has = partner >= 0
-    pm[has] = np.minimum(pm[has], parent_min[partner[has]])
-    new = kind != 3
-    below = new & (lo < keep * pm * (1.0 - 1e-9))
-    above = new & (hi > max_allowed * (1.0 + 1e-9))
+    new = np.flatnonzero(kind != 3)
+    lo, hi = triangle_angles(points, triangles[new])
+    pm = parents_min[new]
+    below = lo < keep * pm * (1.0 - 1e-9)
+    above = hi > max_allowed * (1.0 + 1e-9)
     return {
         "keep": float(keep),
         "below_parent_rule": int(below.sum()),
         "above_max_rule": int(above.sum()),
-        "worst_parent_ratio": float((lo[new] / pm[new]).min()) if new.any() else 1.0,
+        "worst_parent_ratio": float((lo / pm).min()) if len(new) else 1.0,
+        "min_angle_new_deg": math.degrees(float(lo.min())) if len(new) else None,
+        "max_angle_new_deg": math.degrees(float(hi.max())) if len(new) else None,
         "radius_ratio_output": float(_j.worst_radius_ratio(points, triangles)),
     }
+
+
+def _improve(pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi, first_steiner, keep):
+    """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
+
+    An output edge is pinned if it is a pinned input edge (constrained, between
+    regions; ``con`` over ``tri``) or a half of one split at its midpoint.
+    """
+    n_all = len(pts)
+    m = len(tri)
+    inner = np.flatnonzero(con & (tw >= 0))
+    a = tri.reshape(-1)[inner]
+    b = tri[np.arange(m).repeat(3).reshape(m, 3), (np.arange(3)[None, :] + 1) % 3].reshape(-1)[inner]
+    keys = [np.minimum(a, b) * n_all + np.maximum(a, b)]
+    if len(mid_a):
+        ma, mb = np.minimum(mid_a, mid_b), np.maximum(mid_a, mid_b)
+        split = np.isin(ma * n_all + mb, keys[0])
+        mv = first_mid + np.arange(len(mid_a))
+        for end in (ma, mb):
+            keys.append(np.minimum(end, mv)[split] * n_all + np.maximum(end, mv)[split])
+    pin_keys = np.concatenate(keys)
+    o0 = out.reshape(-1)
+    o1 = out[:, [1, 2, 0]].reshape(-1)
+    pinned = np.isin(np.minimum(o0, o1) * n_all + np.maximum(o0, o1), pin_keys)
+    out = np.ascontiguousarray(out, dtype=np.int64).copy()
+    twin = np.ascontiguousarray(claim, dtype=np.int64).copy()
+    kind = kind.copy()
+    pm = np.ascontiguousarray(pm, dtype=np.float64).copy()
+    starts = np.cumsum(lengths) - lengths
+    run_start = np.repeat(starts, lengths).astype(np.int64)
+    run_len = np.repeat(lengths, lengths).astype(np.int64)
+    parent = parent.copy()
+    n_flips = n_moved = 0
+    for _ in range(IMPROVE_ROUNDS):
+        n_flips += _ik.improve_flips(
+            pts, out, twin, pinned, run_start, run_len, pm, kind, parent, float(hi), 4 * len(out) + 16, IMPROVE_ARC,
+            2 * len(out) + 10 * IMPROVE_ARC,
+        )
+        if first_steiner >= len(pts):
+            break
+        moved = _ik.smooth_steiner(pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS)
+        n_moved += moved
+        if moved == 0:
+            break
+    return out, twin, kind, pm, parent, int(n_flips), int(n_moved)
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:

@@ -12,6 +12,7 @@ module                                   what
 :mod:`hammesh.strips.encode`             scalable encoder (greedy dual paths, cycles,
                                          Lemma 5.1 on dual forests)
 :mod:`hammesh.strips.christofides`       Thm 5.3: 9/4-approximate encoding (networkx)
+:mod:`hammesh.strips.cache`              vertex cache / fetch figures, first-use numbering
 :mod:`hammesh.strips.files`              3D mesh reading, ``.json`` / ``.npz`` output
 =======================================  =================================================
 
@@ -24,6 +25,7 @@ module                                   what
 True
 """
 
+from hammesh.strips.cache import VertexCacheStats, reorder_vertices, vertex_cache_stats
 from hammesh.strips.choose import StripChoice, choose_strip
 from hammesh.strips.christofides import ChristofidesEncoding, christofides_strip, christofides_walk
 from hammesh.strips.dual import DualMesh, dual_mesh, oriented_key
@@ -65,4 +67,7 @@ __all__ = [
     "oriented_key",
     "read_surface",
     "write_strip",
+    "vertex_cache_stats",
+    "VertexCacheStats",
+    "reorder_vertices",
 ]

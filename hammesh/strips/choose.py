@@ -14,6 +14,7 @@ from typing import Any
 
 from hammesh import params
 from hammesh.errors import InvalidOptionError
+from hammesh.strips.cache import DEFAULT_CACHE, vertex_cache_stats
 from hammesh.strips.generalized import GeneralizedStrips
 from hammesh.strips.gl import RESTART_INDEX, GLStrip
 
@@ -59,6 +60,8 @@ def choose_strip(
     join: str = "restart",
     restart_index: int = RESTART_INDEX,
     generalized: bool = False,
+    cache: int | None = None,
+    reorder_vertices: bool = False,
 ) -> StripChoice:
     """Encode ``mesh`` as ``hammesh strip`` does (see the module docstring).
 
@@ -78,6 +81,13 @@ def choose_strip(
     generalized = params.flag("generalized", generalized)
     if generalized and method == "christofides":
         raise InvalidOptionError("generalized strips are not available with method 'christofides'")
+    reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
+    if cache is not None:
+        cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
+        if generalized or method not in ("auto", "greedy"):
+            raise InvalidOptionError("a cache-aware encoding is a GL strip of its own paths: method auto or greedy only")
+    if reorder_vertices and (generalized or method == "christofides"):
+        raise InvalidOptionError("reorder_vertices applies to GL strips of method auto, greedy or order")
     extra: dict[str, Any] = {}
     if generalized:
         if method == "auto":
@@ -97,8 +107,11 @@ def choose_strip(
         extra["drawn"] = strip.n_triangles
         extra["triangles"] = enc.n_triangles
         extra["indices_per_triangle"] = len(strip.indices) / enc.n_triangles
+    elif cache is not None:
+        strip = encode(mesh, join=join, restart_index=restart_index, cache=cache, reorder_vertices=reorder_vertices)
+        method = "cache"
     elif method == "auto":
-        kw = {"join": join, "restart_index": restart_index}
+        kw = {"join": join, "restart_index": restart_index, "reorder_vertices": reorder_vertices}
         candidates = [("greedy", encode(mesh, method="greedy", **kw))]
         try:
             candidates.append(("order", encode(mesh, method="order", **kw)))
@@ -106,6 +119,9 @@ def choose_strip(
             pass  # rows are not stored as dual paths: greedy only
         method, strip = min(candidates, key=lambda c: len(c[1].indices))
     else:
-        strip = encode(mesh, method=method, join=join, restart_index=restart_index)
+        strip = encode(mesh, method=method, join=join, restart_index=restart_index, reorder_vertices=reorder_vertices)
     extra["method"] = method
+    if isinstance(strip, GLStrip):
+        stats = vertex_cache_stats(strip.indices, strip.restart_index, strip.n_triangles, cache or DEFAULT_CACHE)
+        extra.update(stats.to_dict())
     return StripChoice(strip, method, extra)

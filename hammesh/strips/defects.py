@@ -13,9 +13,9 @@ triangles whose windings disagree across it (a *flipped neighbour*; crossing it 
 strip would cost two repeated indices, a restart costs three, and the encoder never has
 to reverse a triangle).  Every triangle's row is kept as given.
 
-The pairing (:func:`hammesh.strips._kernels.proper_twins_into`: half-edges bucketed by
+The pairing (:func:`hammesh.strips._dual_kernels.proper_twins_into`: half-edges bucketed by
 their lesser vertex, users gathered per bucket) is used only when the packed fast path
-(:func:`hammesh.strips._kernels.mesh_records`) meets a bad edge; on a clean mesh both
+(:func:`hammesh.strips._dual_kernels.mesh_records`) meets a bad edge; on a clean mesh both
 give the same pairing.
 
 The defect counts (:class:`MeshDefects`) go into the strip's and the surface's report:
@@ -41,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from hammesh.strips import _kernels
+from hammesh.strips import _dual_kernels as _kernels
 
 __all__ = [
     "MeshDefects",
@@ -138,7 +138,7 @@ def orientation_pieces(m: int, twin: np.ndarray, flipped: np.ndarray) -> tuple[i
 
     A proper edge asks both triangles to keep their relative orientation, a flipped one
     to change it; a piece can be oriented iff no triangle is reached with both signs
-    (:func:`hammesh.strips._kernels.orientation_count`, one search).
+    (:func:`hammesh.strips._dual_kernels.orientation_count`, one search).
     """
     p, bad = _kernels.orientation_count(
         np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(flipped, dtype=np.int64).reshape(-1, 2), int(m)

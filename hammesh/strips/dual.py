@@ -7,7 +7,7 @@ Each triangle's winding (the order of its row) is kept, and the strips reproduce
 Two triangles are dual neighbours when they are the only two on an edge and use it in
 opposite directions (a *proper* edge); every other edge cuts the dual.  On a clean mesh
 the pairing comes with one ``int32`` record per triangle from the packed kernel
-(:func:`hammesh.strips._kernels.mesh_records`); otherwise from
+(:func:`hammesh.strips._dual_kernels.mesh_records`); otherwise from
 :func:`hammesh.strips.defects.proper_pairing`.  Rows repeating a vertex index draw
 nothing in OpenGL: they are dropped (``rows`` lists the kept ones) and counted.
 """
@@ -21,7 +21,7 @@ from typing import Optional, Union
 import numpy as np
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, Mesh
-from hammesh.strips import _kernels as _strip_kernels
+from hammesh.strips import _dual_kernels
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects, mesh_defects, proper_pairing
 from hammesh.halfedge import mesh_arrays
 
@@ -46,12 +46,12 @@ class DualMesh:
         Connected piece of the dual graph each triangle belongs to, numbered by least
         triangle (computed on first use).
     n_components : int
-    records : (m, 8) int32 or None
+    records : (m, 8) int32 (int64 for a mesh too large for int32) or None
         ``(v0, v1, v2, twin0, twin1, twin2, scratch, pad)`` per triangle
-        (:func:`hammesh.strips._kernels.mesh_records`): what the greedy cover reads,
+        (:func:`hammesh.strips._dual_kernels.mesh_records`): what the greedy cover reads,
         one half cache line per triangle; the greedy pass keeps its free degrees in the
-        scratch column.  ``None`` for a mesh too large for ``int32`` (or a DualMesh
-        built by hand); the encoder then reads ``triangles`` and ``twin``.
+        scratch column.  ``None`` only for a DualMesh built by hand:
+        :meth:`cover_records` then builds them.
     defects : MeshDefects
         What was found (:mod:`hammesh.strips.defects`).
     rows : (m,) int64 or None
@@ -68,7 +68,7 @@ class DualMesh:
 
     @cached_property
     def _components(self) -> tuple[np.ndarray, int]:
-        label, n_comp = _strip_kernels.dual_components(self.twin, len(self.triangles))
+        label, n_comp = _dual_kernels.dual_components(self.twin, len(self.triangles))
         return label, int(n_comp)
 
     @property
@@ -78,6 +78,16 @@ class DualMesh:
     @property
     def n_components(self) -> int:
         return self._components[1]
+
+    def cover_records(self) -> np.ndarray:
+        """:attr:`records`, or new ones from ``triangles`` and ``twin`` (a DualMesh built by hand)."""
+        if self.records is not None:
+            return self.records
+        m = len(self.triangles)
+        n = int(self.triangles.max()) + 1 if m else 0
+        rec = np.empty((m, _dual_kernels.REC_WIDTH), _dual_kernels.records_dtype(m, n))
+        _dual_kernels.records_from_twin(self.triangles, np.ascontiguousarray(self.twin, dtype=np.int64), rec)
+        return rec
 
     @property
     def n_triangles(self) -> int:
@@ -119,14 +129,14 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
     n = len(pts)
     flags = np.empty(len(tri), np.int8)
-    n_rep, n_zero = _strip_kernels.face_flags(pts, tri, ZERO_AREA_RTOL, flags)
+    n_rep, n_zero = _dual_kernels.face_flags(pts, tri, ZERO_AREA_RTOL, flags)
     rows = None
     if n_rep:
-        rows = np.flatnonzero(flags != _strip_kernels.FACE_REPEATED)
+        rows = np.flatnonzero(flags != _dual_kernels.FACE_REPEATED)
         if len(rows) == 0:
             raise InvalidMeshError(f"all {len(tri)} triangles repeat a vertex: nothing to draw")
         tri = np.ascontiguousarray(tri[rows])
-    packed = _strip_kernels.mesh_records(tri, n)
+    packed = _dual_kernels.mesh_records(tri, n)
     if packed is not None:  # every edge proper or boundary: only pillows can be double-sided
         nb = packed[1].reshape(-1, 3) // 3
         pillows = int(np.count_nonzero((nb[:, 0] == nb[:, 1]) & (nb[:, 1] == nb[:, 2]) & (packed[1][::3] >= 0)))
@@ -134,10 +144,8 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
         return DualMesh(pts, tri, packed[1], packed[0], found, rows)
     pairing = proper_pairing(tri, n)
     found = mesh_defects(pts, tri, pairing, repeated=int(n_rep), zero_area=int(n_zero))
-    rec = None
-    if _strip_kernels.records_fit(len(tri), n):
-        rec = np.empty((len(tri), _strip_kernels.REC_WIDTH), np.int32)
-        _strip_kernels.records_from_twin(tri, pairing.twin, rec)
+    rec = np.empty((len(tri), _dual_kernels.REC_WIDTH), _dual_kernels.records_dtype(len(tri), n))
+    _dual_kernels.records_from_twin(tri, pairing.twin, rec)
     return DualMesh(pts, tri, pairing.twin, rec, found, rows)
 
 

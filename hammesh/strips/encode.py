@@ -28,10 +28,16 @@ from dataclasses import replace
 
 import numpy as np
 
+from hammesh import params
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh
-from hammesh.strips import _kernels
+from hammesh.strips._cache_cover_kernels import cache_path_cover
+from hammesh.strips._cover_kernels import greedy_path_cover, renumber_in_path_order, zigzag_path_cover
+from hammesh.strips._emit_kernels import restart_buffer
+from hammesh.strips._moves_kernels import improve_cover
+from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
+from hammesh.strips.cache import reorder_vertices as _first_use_numbering
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
@@ -45,6 +51,8 @@ __all__ = [
     "mesh_paths",
     "encode",
     "encode_generalized",
+    "cache_paths",
+    "CACHE_STRIP_LENGTH",
 ]
 
 #: How the dual paths are found: ``"auto"`` is ``"order"`` for a HamiltonianMesh and
@@ -54,7 +62,7 @@ METHODS = ("auto", "greedy", "order")
 #: Weight of a swap against a neighbour's remaining degree in the greedy choice.
 _SWAP_WEIGHT = 1
 
-#: Sweeps of :func:`~hammesh.strips._kernels.improve_cover` over the path ends.  On the
+#: Sweeps of :func:`~hammesh.strips._moves_kernels.improve_cover` over the path ends.  On the
 #: benchmark's planar meshes (indices per triangle) the greedy cover gives 1.293-1.318,
 #: one sweep 1.268-1.295, two 1.266-1.294, three 1.266-1.294 (ends visited from the last
 #: path back; in the input's order it was 1.272-1.301 / 1.268-1.297 / 1.267-1.294).
@@ -98,7 +106,7 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     improve : bool
         After the greedy pass, join paths whose ends are neighbours, rotate path ends
         and tunnel into neighbouring paths wherever the buffer gets shorter
-        (:func:`~hammesh.strips._kernels.improve_cover`: a few sweeps over the path
+        (:func:`~hammesh.strips._moves_kernels.improve_cover`: a few sweeps over the path
         ends, each move costed in O(1)).  A single path is left as it is.
 
     Returns
@@ -112,13 +120,13 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     return (order if ids is None else ids[order]).astype(np.int64, copy=False), starts
 
 
-def _greedy_cover(dual: DualMesh, improve: bool = True):
+def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: bool = False):
     """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
 
-    The greedy pass reads the mesh's int32 records (:attr:`DualMesh.records`, one half
-    cache line per triangle; the same paths as from ``triangles`` and ``twin``).  After
+    The greedy pass reads the mesh's records (:attr:`DualMesh.records`, one half
+    cache line per triangle).  After
     it (or Lemma 5.1's partition) the mesh is renumbered in path order
-    (:func:`~hammesh.strips._kernels.permute_records`): the moves and the emission then
+    (:func:`~hammesh.strips._cover_kernels.renumber_in_path_order`): the moves and the emission then
     walk mostly adjacent rows instead of Triangle's scattered numbering.  The moves
     visit the path ends from the last path back to the first, which is the same cover
     as visiting them in that order without renumbering.
@@ -129,27 +137,51 @@ def _greedy_cover(dual: DualMesh, improve: bool = True):
     to, and ``ids[i]`` the input triangle of row ``i`` (``None``: the input's own).
     """
     m = dual.n_triangles
-    rec = dual.records
-    if is_forest(dual):
+    rec = dual.cover_records()
+    if zigzag:
+        order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1))
+    elif is_forest(dual):
         order, starts = forest_paths(dual)
-    elif rec is not None:  # the same paths, one record read per triangle
-        order, starts = _kernels.greedy_paths_records(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     else:
-        order, starts = _kernels.greedy_paths(dual.triangles, dual.twin, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
+        order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     if not improve or len(starts) == 2:
         # one path (a closed surface often is one): no join or tunnel exists, and the
         # rotations could only move a swap or two at its ends; not worth O(m) set-up
         return dual.triangles, dual.twin, order, starts, None
-    if rec is not None:
-        tri, twin, _ = _kernels.permute_records(rec, order)
-    else:
-        tri, twin, _ = _kernels.permute_mesh(dual.triangles, dual.twin, order)
+    tri, twin, _ = renumber_in_path_order(rec, order)
     # ends visited from the last path back to the first: neighbouring memory (the
     # input's numbering had scattered them), and on the benchmark's meshes as good a
     # cover (-0.0026 to +0.0006 indices per triangle against the input's order)
     visit = np.arange(m - 1, -1, -1, dtype=np.int64)
-    local, starts = _kernels.improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, visit)
+    local, starts = improve_cover(tri, twin, np.arange(m, dtype=np.int64), starts, _IMPROVE_PASSES, visit)
     return tri, twin, local, starts, order
+
+
+#: Longest strip of the cache-aware cover, in multiples of the cache size: a strip loads
+#: about one new vertex per two triangles once it runs beside the previous one, so at
+#: ``3 C`` triangles the next strip still finds most shared vertices cached.  On a q30
+#: square of 10k triangles (FIFO 32): 2 C gave 1.368 indices per triangle and ACMR 0.798,
+#: 3 C 1.347 / 0.789, 4 C 1.363 / 0.791, no limit 1.339 / 0.808.
+CACHE_STRIP_LENGTH = 3
+
+#: Weight of a cache miss against a free neighbour (2 each) in the cache-aware growth.
+_CACHE_MISS_WEIGHT = 4
+
+
+def cache_paths(dual: DualMesh, cache_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Dual paths laid for a FIFO vertex cache of ``cache_size`` entries (``order``, ``starts``).
+
+    See :mod:`hammesh.strips._cache_cover_kernels`.  No local moves and no reversal
+    afterwards: both change the index stream the cache was simulated on (joining paths
+    gave 0.06 fewer indices per triangle but 0.08 more cache misses per triangle).
+    """
+    m = dual.n_triangles
+    rec = dual.cover_records()
+    order, starts = cache_path_cover(
+        rec, len(dual.points), int(cache_size), CACHE_STRIP_LENGTH * int(cache_size), np.arange(m - 1, -1, -1),
+        _CACHE_MISS_WEIGHT,
+    )
+    return order, starts
 
 
 def _cut_cycle(tri: np.ndarray, twin: np.ndarray, run: np.ndarray) -> np.ndarray:
@@ -214,7 +246,7 @@ def _orient(dual: DualMesh, order: np.ndarray, starts: np.ndarray) -> PathTurns:
     turns at the path's last two triangles.
     """
     order, starts = check_starts(order, starts, dual.n_triangles)
-    new, _ = _kernels.orient_paths(dual.triangles, dual.twin, order, starts)
+    new, _ = orient_paths(dual.triangles, dual.twin, order, starts)
     return path_turns(dual.triangles, dual.twin, new, starts)
 
 
@@ -235,7 +267,7 @@ def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, 
     return dual, (order if ids is None else ids[order]), starts
 
 
-def _oriented_local(mesh: MeshLike, method: str):
+def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None, dual: DualMesh | None = None):
     """:func:`_oriented_paths` in the numbering the paths were improved in.
 
     Returns ``(dual, tri, twin, order, starts, ids)``: ``order`` refers to the rows of
@@ -244,7 +276,13 @@ def _oriented_local(mesh: MeshLike, method: str):
     """
     if method not in METHODS:
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    dual = dual_mesh(mesh)
+    zigzag = dual is not None  # a second call: the swap-free chains instead of the greedy cover
+    dual = dual_mesh(mesh) if dual is None else dual
+    if cache is not None:
+        if method == "order":
+            raise InvalidOptionError("a cache-aware encoding makes its own paths: method 'order' does not apply")
+        order, starts = cache_paths(dual, cache)
+        return dual, dual.triangles, dual.twin, order, starts, None
     if method == "auto":
         method = "order" if isinstance(mesh, HamiltonianMesh) else "greedy"
     if method == "order":
@@ -255,9 +293,9 @@ def _oriented_local(mesh: MeshLike, method: str):
         order, starts = cycle_paths(dual, comps)
         tri, twin, ids = dual.triangles, dual.twin, None
     else:
-        tri, twin, order, starts, ids = _greedy_cover(dual)
+        tri, twin, order, starts, ids = _greedy_cover(dual, zigzag=zigzag)
     order, starts = check_starts(order, starts, dual.n_triangles)
-    order, _ = _kernels.orient_paths(tri, twin, order, starts)
+    order, _ = orient_paths(tri, twin, order, starts)
     return dual, tri, twin, order, starts, ids
 
 
@@ -268,7 +306,7 @@ def _restart_strip(dual: DualMesh, order: np.ndarray, starts: np.ndarray, restar
 
 def _restart_buffer(tri: np.ndarray, twin: np.ndarray, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
     R = int(restart_index)
-    out, n_swaps, top, err = _kernels.encode_restart(tri, twin, order, starts, R)
+    out, n_swaps, top, err = restart_buffer(tri, twin, order, starts, R)
     S = len(starts) - 1
     if err:
         turns = path_turns(tri, twin, order, starts)  # raises, naming the step
@@ -305,6 +343,8 @@ def encode(
     restart_index: int | None = RESTART_INDEX,
     method: str = "auto",
     verify: bool = True,
+    cache: int | None = None,
+    reorder_vertices: bool = False,
 ) -> GLStrip:
     """One GL_TRIANGLE_STRIP index buffer drawing every triangle of ``mesh`` once.
 
@@ -321,6 +361,13 @@ def encode(
         Decode the buffer with OpenGL's rules and compare with the mesh
         (:func:`~hammesh.strips.gl.verify_gl_strip`, one O(L) compiled pass against
         the order the paths were meant to draw).  Costs ~10% of the encoding; leave on.
+    cache : int, optional
+        Lay the strips for a FIFO vertex cache of this many entries (at least 3;
+        :func:`cache_paths`): fewer vertex-shader runs for some more indices.
+    reorder_vertices : bool
+        Renumber the vertices in order of first use (as meshoptimizer's
+        ``optimizeVertexFetch``); the result's ``vertex_order`` says which old vertex
+        each new one is (write ``points[vertex_order]``).
 
     Returns
     -------
@@ -344,16 +391,44 @@ def encode(
     """
     if join not in JOINS:
         raise InvalidOptionError(f"join must be one of {', '.join(JOINS)}, got {join!r}")
-    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method)
+    if cache is not None:
+        cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
+    reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache)
+    strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
+    greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
+    few_swaps = 1 < strip.n_strips and strip.n_swaps <= _ZIGZAG_TRIGGER * strip.n_strips
+    if greedy and few_swaps and not is_forest(dual):  # a forest keeps Lemma 5.1's fewest strips
+        # few swaps per path: a structured grid, whose swap-free rows the degree-first
+        # cover bends into L shapes (one swap each); try the rows and keep the shorter
+        alt, alt_order = _buffer(*_oriented_local(mesh, method, None, dual), join, restart_index)
+        if len(alt.indices) < len(strip.indices):
+            strip, order = alt, alt_order
+    rows = dual.triangles
+    if reorder_vertices:
+        indices, vertex_order = _first_use_numbering(strip.indices, strip.restart_index, len(dual.points))
+        new_id = np.empty_like(vertex_order)
+        new_id[vertex_order] = np.arange(len(vertex_order))
+        rows = new_id[dual.triangles]
+        strip = replace(strip, indices=indices, vertex_order=vertex_order)
+    if verify:
+        verify_gl_strip(rows, strip.indices, strip.restart_index, order=order)
+    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+
+
+#: Swaps per path at or below which :func:`encode` also tries the swap-free chains
+#: (:func:`~hammesh.strips._cover_kernels.zigzag_path_cover`).  Structured grids and
+#: latitude-longitude spheres have ~1-2 (one per L-shaped path); quality meshes ~10.
+_ZIGZAG_TRIGGER = 2
+
+
+def _buffer(dual, tri, twin, local, starts, ids, join, restart_index) -> tuple[GLStrip, np.ndarray]:
+    """The GL buffer of paths ``local`` (rows of ``tri``) and the input rows in draw order."""
     order = local if ids is None else ids[local]
     if join == "restart" and restart_index is not None:
-        strip = _restart_buffer(tri, twin, local, starts, restart_index)
-    else:
-        turns = path_turns(dual.triangles, dual.twin, order, starts)
-        strip = gl_strip_from_turns(turns, join=join, restart_index=restart_index)
-    if verify:
-        verify_gl_strip(dual.triangles, strip.indices, strip.restart_index, order=order)
-    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+        return _restart_buffer(tri, twin, local, starts, restart_index), order
+    turns = path_turns(dual.triangles, dual.twin, order, starts)
+    return gl_strip_from_turns(turns, join=join, restart_index=restart_index), order
 
 
 def _dropped_rows(mesh: MeshLike, dual: DualMesh) -> np.ndarray:

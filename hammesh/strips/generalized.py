@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hammesh.errors import InvalidMeshError
-from hammesh.strips import _kernels
+from hammesh.strips._decode_kernels import decode_generalized_strips
 from hammesh.strips.defects import MeshDefects, defect_fields
 from hammesh.strips.paths import PathTurns, path_turns
 
@@ -164,4 +164,4 @@ def decode_generalized(strips: GeneralizedStrips) -> np.ndarray:
     if np.any(b[ts[:-1]]):
         s = int(np.argmax(b[ts[:-1]]))
         raise InvalidMeshError(f"generalized strip {s} has a swap bit on its first triangle")
-    return _kernels.decode_generalized(v, vs, b, ts)
+    return decode_generalized_strips(v, vs, b, ts)

@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hammesh.errors import InvalidOptionError, VerificationError
-from hammesh.strips import _kernels
+from hammesh.strips._decode_kernels import check_claimed_draws
+from hammesh.strips._emit_kernels import emit_restart_joined, stitch_strips
 from hammesh.strips.defects import MeshDefects, defect_fields
 from hammesh.strips.dual import oriented_key
 from hammesh.strips.paths import PathTurns, path_turns
@@ -64,6 +65,10 @@ class GLStrip:
         What the input mesh had (set by :func:`~hammesh.strips.encode.encode`).
     dropped : (k,) int64
         Input rows not drawn: they repeat a vertex index (OpenGL draws nothing for them).
+    vertex_order : (n,) int64 or None
+        Set when the vertices were renumbered in order of first use
+        (``encode(..., reorder_vertices=True)``): ``indices`` refer to the vertex buffer
+        ``points[vertex_order]``.
     """
 
     indices: np.ndarray
@@ -73,6 +78,7 @@ class GLStrip:
     n_swaps: int
     defects: MeshDefects | None = None
     dropped: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False)
+    vertex_order: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def indices_per_triangle(self) -> float:
@@ -88,7 +94,9 @@ class GLStrip:
             "strips": int(self.n_strips),
             "indices_per_triangle": float(self.indices_per_triangle),
             "swaps": int(self.n_swaps),
-        } | defect_fields(self.defects, self.dropped)
+        } | defect_fields(self.defects, self.dropped) | (
+            {} if self.vertex_order is None else {"vertex_order": self.vertex_order.tolist()}
+        )
 
 
 def _even_encoding(turns: PathTurns) -> tuple[np.ndarray, np.ndarray]:
@@ -131,7 +139,7 @@ def gl_strip_from_turns(
                 return GLStrip(enc, None, len(turns.order), 1, n_swaps)
             raise InvalidOptionError("join='restart' needs a restart_index")
         R = int(restart_index)
-        out, top = _kernels.emit_restart(
+        out, top = emit_restart_joined(
             turns.first, turns.swap, turns.head, turns.pivot, turns.new_vertex, turns.starts, R
         )
         if 0 <= R <= top and np.count_nonzero(out == R) != S - 1:
@@ -142,7 +150,7 @@ def gl_strip_from_turns(
     swap1 = np.zeros(S, dtype=bool)
     long = ntri >= 3
     swap1[long] = turns.swap[turns.starts[:-1][long] + 1]
-    out = _kernels.stitch(enc, enc_starts, ntri, swap1)
+    out = stitch_strips(enc, enc_starts, ntri, swap1)
     # stitching at odd starts toggles each such strip's first swap; recount from the buffer
     w = np.lib.stride_tricks.sliding_window_view(out, 3) if len(out) >= 3 else np.zeros((0, 3), np.int64)
     degenerate = (w[:, 0] == w[:, 1]) | (w[:, 1] == w[:, 2]) | (w[:, 0] == w[:, 2])
@@ -266,7 +274,7 @@ def verify_gl_strip(
         of multisets.
     order : (m,) int, optional
         The rows in the order the encoder meant them to be drawn.  Then the proof is
-        one O(L) compiled pass (:func:`~hammesh.strips._kernels.check_draws`): decode
+        one O(L) compiled pass (:func:`~hammesh.strips._decode_kernels.check_claimed_draws`): decode
         with OpenGL's rules, the ``k``-th triangle drawn is row ``order[k]`` with its
         winding, and ``order`` names every row once.  If that claim fails, the full
         O(m log m) comparison below decides (and names the problem).
@@ -280,7 +288,7 @@ def verify_gl_strip(
         tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
         idx = np.ascontiguousarray(indices, dtype=np.int64).reshape(-1)
         use_r = restart_index is not None
-        status, _ = _kernels.check_draws(
+        status, _ = check_claimed_draws(
             tri, idx, int(restart_index) if use_r else -1, use_r, np.ascontiguousarray(order, dtype=np.int64)
         )
         if status == 0:

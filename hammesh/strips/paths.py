@@ -15,7 +15,7 @@ three consecutively crossed edges share a vertex, the paper's definition of a
 non-sequential step (§4).  The first triangle's older register is the tail of its exit
 half-edge (forced by its winding).
 
-One O(L) pass of a compiled kernel (:func:`hammesh.strips._kernels.path_turns`).
+One O(L) pass of a compiled kernel (:func:`hammesh.strips._path_kernels.path_turns`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammesh.errors import InvalidMeshError
-from hammesh.strips import _kernels
+from hammesh.strips import _path_kernels
 
 __all__ = ["PathTurns", "path_turns", "check_starts"]
 
@@ -125,7 +125,8 @@ def path_turns(triangles: np.ndarray, twin: np.ndarray, order: np.ndarray, start
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     order, starts = check_starts(order, starts, len(tri))
     twin = np.ascontiguousarray(twin, dtype=np.int64)
-    first, last, entry, exit_, new_vertex, pivot, swap, head, err, j = _kernels.path_turns(tri, twin, order, starts)
+    r = _path_kernels.path_turns(tri, twin, order, starts)
+    err, j = r.err, r.pos
     if err == 1:
         raise InvalidMeshError(
             f"triangles {int(order[j])} and {int(order[j + 1])} (positions {j}, {j + 1} of the "
@@ -139,12 +140,12 @@ def path_turns(triangles: np.ndarray, twin: np.ndarray, order: np.ndarray, start
     return PathTurns(
         order=order,
         starts=starts,
-        first=first,
-        last=last,
-        entry=entry,
-        exit=exit_,
-        new_vertex=new_vertex,
-        pivot=pivot,
-        swap=swap,
-        head=head,
+        first=r.first,
+        last=r.last,
+        entry=r.entry,
+        exit=r.exit,
+        new_vertex=r.new_vertex,
+        pivot=r.pivot,
+        swap=r.swap,
+        head=r.head,
     )

@@ -16,7 +16,7 @@ from itertools import permutations
 
 import numpy as np
 
-from hammesh.strips import _kernels
+from hammesh.strips._sequential_kernels import sequential_chain
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
 
 __all__ = ["SequentialOrder", "sequential_order"]
@@ -73,7 +73,7 @@ def sequential_order(mesh: MeshLike | DualMesh) -> SequentialOrder | None:
     tri = d.triangles
     t0 = 0
     for a, b, c in permutations(tri[t0].tolist()):
-        order, verts = _kernels.sequential_chain(tri, d.twin, t0, a, b, c)
+        order, verts = sequential_chain(tri, d.twin, t0, a, b, c)
         if len(order):
             return SequentialOrder(order=order, vertices=verts)
     return None

@@ -359,3 +359,45 @@ def test_sliver_circle_is_fast_and_linear() -> None:
     t1 = _best_time(lambda: hammesh.hamiltonian(m1), 5)
     t4 = _best_time(lambda: hammesh.hamiltonian(m4), 5)
     assert t4 < 8.0 * t1, (t1, t4)
+
+
+@pytest.mark.parametrize("name", ["face", "square_circle_hole"])
+def test_improvement_flips_keep_the_cycle_and_never_worsen(name: str) -> None:
+    # issue 13: the cavity of a join re-triangulated by flips of edges the cycle
+    # crosses between consecutive triangles (``_improve_kernels``)
+    from hammesh.halfedge import _kernels, prepare_mesh
+    from hammesh.postprocess.sparse import sparse_cycles
+
+    dom = bundled_domain(name)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
+    clean, he, is_con = prepare_mesh(m)
+    amin = float(clean.info["validated"]["min_angle"])
+    runs = {imp: sparse_cycles(clean.points, clean.triangles, he.twin, is_con, amin, improve=imp) for imp in (0, 1)}
+    off, on = runs[False], runs[True]
+    assert off.counts["improvement_flips"] == 0 < on.counts["improvement_flips"]
+    assert off.counts["steiner_moved"] == 0
+    if name == "face":
+        assert on.counts["steiner_moved"] > 0  # incenters moved into their larger stars
+    np.testing.assert_array_equal(on.points[: m.n_points], clean.points)  # input points stay
+    # the pairing handed to the certificate is the output's true one after the flips
+    twin, dup = _kernels.half_edge_twins(on.triangles, len(on.points))
+    assert dup < 0
+    np.testing.assert_array_equal(on.claim, twin)
+    # consecutive rows of each run share an edge (the cycle is intact)
+    start = 0
+    for ln in on.lengths.tolist():
+        rows = np.arange(start, start + ln)
+        nxt = np.roll(rows, -1)
+        assert np.all((twin.reshape(-1, 3)[rows] // 3 == nxt[:, None]).any(axis=1))
+        start += ln
+    # a flip raises the smallest angle of the pair it touches, a Steiner point moves
+    # only where its star's smallest angle does not drop (so the output's minimum never
+    # drops); the largest stays within max(input max + 5, what it was)
+    lo_off, hi_off = _angles(off.points, off.triangles).min(), _angles(off.points, off.triangles).max()
+    lo_on, hi_on = _angles(on.points, on.triangles).min(), _angles(on.points, on.triangles).max()
+    assert lo_on >= lo_off - 1e-9
+    assert hi_on <= max(hi_off, on.counts["max_angle_input_deg"] + 5) + 1e-9
+    assert len(on.triangles) == len(off.triangles) and len(on.points) == len(off.points)
+    h = hammesh.hamiltonian(m)
+    assert_sparse_certificate(m, h)
+    assert_quality_report(m, h)

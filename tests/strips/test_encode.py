@@ -272,3 +272,29 @@ def test_dual_components_match_scipy(seed, n, lift):
     assert d.component.tolist() == label.tolist()
     s = encode(Mesh(mesh.points, mesh.triangles[keep]))
     assert s.n_strips >= nc
+
+
+def test_structured_grid_rows_are_swap_free():
+    """A structured quad grid split into triangles: its rows are swap-free strips (issue 16:
+    pyvista's load_random_hills took 97 swaps in L-shaped paths where the peers use none)."""
+    from hammesh.strips._cover_kernels import zigzag_path_cover
+
+    nx, ny = 30, 12
+    x, y = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0))
+    pts = np.c_[x.ravel(), y.ravel(), np.sin(x.ravel()) * 0.1]
+    v = lambda i, j: j * (nx + 1) + i  # noqa: E731
+    tri = [[v(i, j), v(i + 1, j), v(i + 1, j + 1)] for j in range(ny) for i in range(nx)]
+    tri += [[v(i, j), v(i + 1, j + 1), v(i, j + 1)] for j in range(ny) for i in range(nx)]
+    m = Mesh(pts, np.array(tri, np.int64))
+    s = encode(m)
+    assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+    assert s.n_swaps == 0 and s.n_strips <= ny
+    assert len(s.indices) <= m.n_triangles + 3 * ny - 1  # rows: T + 2 S + (S - 1) restarts
+    # the chains themselves: every consecutive pair of a chain shares an edge, every triangle once
+    d = dual_mesh(m)
+    order, starts = zigzag_path_cover(d.records.copy(), np.arange(d.n_triangles - 1, -1, -1))
+    assert sorted(order.tolist()) == list(range(d.n_triangles))
+    nb = d.neighbor_triangles
+    for a, b in zip(starts[:-1], starts[1:]):
+        for i in range(a, b - 1):
+            assert order[i + 1] in nb[order[i]]

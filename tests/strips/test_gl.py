@@ -178,7 +178,7 @@ def test_verify_names_reversed_and_missing():
 @given(st.integers(0, 2**32 - 1), st.sampled_from(["restart", "stitch"]), st.integers(0, 4))
 def test_claimed_order_proof_agrees_with_the_full_comparison(seed, join, corrupt):
     """check_draws accepts exactly the buffers the literal decoder proves right."""
-    from hammesh.strips import _kernels
+    from hammesh.strips._decode_kernels import check_claimed_draws
 
     m = grid_mesh(4, 3) if seed % 2 else torus_mesh(6, 4)
     d = dual_mesh(m)
@@ -196,7 +196,7 @@ def test_claimed_order_proof_agrees_with_the_full_comparison(seed, join, corrupt
     elif corrupt == 3:  # a triangle missing from the end
         idx = idx[:-1]
     use_r = s.restart_index is not None
-    status, _ = _kernels.check_draws(d.triangles, idx, s.restart_index if use_r else -1, use_r, claim)
+    status, _ = check_claimed_draws(d.triangles, idx, s.restart_index if use_r else -1, use_r, claim)
     truth = oriented_set(decode_gl_strip(idx, s.restart_index)) == oriented_set(m.triangles)
     if status == 0:
         assert truth  # the fast proof never accepts a wrong buffer
@@ -222,7 +222,7 @@ def test_claimed_order_with_a_bad_claim_falls_back_to_naming_the_problem():
 
 @given(st.integers(0, 2**32 - 1), st.booleans())
 def test_one_pass_restart_encoder_equals_the_turn_arrays(seed, restart_is_vertex):
-    """_kernels.encode_restart (encode's fast path) == path_turns + emission, index for index."""
+    """_emit_kernels.restart_buffer (encode's fast path) == path_turns + emission, index for index."""
     from hammesh.strips.encode import _restart_strip
 
     m = grid_mesh(5, 3, z=True) if seed % 3 else torus_mesh(7, 5)

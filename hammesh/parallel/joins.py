@@ -1,0 +1,499 @@
+"""Per-tile Hamiltonian cycles joined across separators into one cycle per piece (issue 15).
+
+Each tile's cycles are built alone (:func:`hammesh.hamiltonian` on the tile's mesh,
+certified against it). Two cycles of adjacent tiles are then joined across one
+separator edge ``ab`` by Thm 2.4's bridge (Arkin, Held, Mitchell, Skiena, proof of
+Thm 2.4, Fig. 9): the two triangles ``t = abc`` and ``u = bad`` on either side are split
+at their incenters ``I_t, I_u`` and ``ab`` is flipped into ``I_t I_u``; the cycle that
+passed ``... - t - ...`` now runs
+
+    [ca side] - I_t c a - I_t a I_u - I_u a d - [u's whole cycle] - I_u d b - I_u b I_t - I_t b c - [bc side]
+
+The proof is local (each incenter sees ``ab`` under more than 90 degrees, so the flip is
+legal, and no new angle is below half an angle of ``t`` or ``u``), so it holds in the
+union of two tiles as in one mesh. Bridges are used only between triangles both tiles
+kept whole (``kind`` 3: input triangles of their tile), so every new angle is at least
+half the union's input minimum, as the certificate requires. One bridge per edge of a
+spanning forest of the graph whose nodes are the tiles' cycles (Kruskal, best pair of
+triangles first) leaves one cycle per connected piece of the domain.
+
+The global cycle order is planned by the driver from small per-tile summaries
+(:func:`border_rows`): a list of blocks (runs of a tile's cycle, walked forward or
+backward, and single join triangles) whose lengths give every block its place; each
+tile then numbers its own rows (:func:`finish_tile`) without the others' triangles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hammesh.errors import VerificationError
+from hammesh.mesh import HamiltonianMesh
+from hammesh.parallel.tiles import Tile
+
+__all__ = ["BorderRows", "Join", "Plan", "border_rows", "plan_joins", "finish_tile", "TilePiece", "KIND_INPUT"]
+
+#: ``HamiltonianMesh.kind`` of a triangle kept whole
+KIND_INPUT = 3
+#: a swap's new angles must exceed half the input's minimum by this factor
+SWAP_MARGIN = 1e-6
+#: join triangle names, in forward cycle order (t side, u side, t side)
+T_NAMES = ("S_ca", "F_a", "F_b", "S_bc", "A1", "A2")
+U_NAMES = ("S_ad", "S_db")
+
+
+@dataclass(frozen=True, eq=False)
+class BorderRows:
+    """A tile's output triangles on its separator edges (small: one row per edge).
+
+    For each: the directed separator edge ``x -> y`` as the triangle has it
+    (counter-clockwise), global ids; the apex ``z`` (local id in the tile's output);
+    the row, its run, position and run length; the positions of the run neighbours
+    sharing edge ``y-z`` (*after*) and ``z-x`` (*before*) (-1: none); the kind; the
+    three corners' coordinates ``x, y, z``; the smallest angle (degrees).
+    """
+
+    tile: int
+    x: np.ndarray
+    y: np.ndarray
+    z_local: np.ndarray
+    row: np.ndarray
+    run: np.ndarray
+    pos: np.ndarray
+    run_length: np.ndarray
+    after: np.ndarray
+    before: np.ndarray
+    kind: np.ndarray
+    xyz: np.ndarray
+    min_angle: np.ndarray
+    run_starts: np.ndarray
+    n_points: int
+    n_triangles: int
+    input_min_angle: float = 0.0
+
+
+def _min_angle_deg(p: np.ndarray) -> np.ndarray:
+    """Smallest angle of triangles given as corners ``(m, 3, 2)``."""
+    e = [p[:, (k + 1) % 3] - p[:, k] for k in range(3)]
+    out = np.full(len(p), np.inf)
+    for k in range(3):
+        u, v = e[k], -e[(k + 2) % 3]
+        cos = (u * v).sum(1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300)
+        out = np.minimum(out, np.degrees(np.arccos(np.clip(cos, -1, 1))))
+    return out
+
+
+def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
+    """The rows of a tile's Hamiltonian output that hold its separator edges."""
+    k = len(tile.vertex_ids)
+    sep = tile.segments[tile.separator]
+    n = len(h.points)
+    key_sep = np.sort(sep, axis=1) @ np.array([n, 1])
+    tri = h.triangles
+    rows, slot = [], []
+    for s in range(3):
+        a, b = tri[:, s], tri[:, (s + 1) % 3]
+        key = np.minimum(a, b) * n + np.maximum(a, b)
+        hit = np.flatnonzero(np.isin(key, key_sep))
+        rows.append(hit)
+        slot.append(np.full(len(hit), s))
+    rows = np.concatenate(rows)
+    slot = np.concatenate(slot)
+    x = tri[rows, slot]
+    y = tri[rows, (slot + 1) % 3]
+    z = tri[rows, (slot + 2) % 3]
+    if (x >= k).any() or (y >= k).any():
+        raise VerificationError(f"tile {tile_index}: a separator edge was split by the Hamiltonian construction")
+    ends = np.cumsum(h.components)
+    starts = ends - h.components
+    run = np.searchsorted(ends, rows, side="right")
+    pos = rows - starts[run]
+    L = h.components[run]
+    prev = starts[run] + (pos - 1) % L
+    nxt = starts[run] + (pos + 1) % L
+
+    def has(rr, u, v):
+        t = tri[rr]
+        return (t == u[:, None]).any(1) & (t == v[:, None]).any(1)
+
+    after = np.where(has(nxt, y, z) & (L > 1), (pos + 1) % L, np.where(has(prev, y, z) & (L > 1), (pos - 1) % L, -1))
+    before = np.where(has(nxt, z, x) & (L > 1), (pos + 1) % L, np.where(has(prev, z, x) & (L > 1), (pos - 1) % L, -1))
+    xyz = np.stack([h.points[x], h.points[y], h.points[z]], axis=1)
+    return BorderRows(
+        tile=tile_index, x=tile.vertex_ids[x], y=tile.vertex_ids[y], z_local=z, row=rows, run=run, pos=pos,
+        run_length=L, after=after, before=before, kind=np.asarray(h.kind)[rows], xyz=xyz,
+        min_angle=_min_angle_deg(xyz), run_starts=starts, n_points=n, n_triangles=len(tri),
+        input_min_angle=float(h.report.get("min_angle_input_deg", 0.0)),
+    )
+
+
+@dataclass(frozen=True)
+class Join:
+    """One bridge: tile ``t_tile`` row ``t_row`` (``a b c``) and ``u_tile`` row ``u_row`` (``b a d``)."""
+
+    index: int
+    t_tile: int
+    t_row: int
+    u_tile: int
+    u_row: int
+    a: int  # global ids of the separator edge, a -> b counter-clockwise in t
+    b: int
+    I_t: tuple[float, float]
+    I_u: tuple[float, float]
+    swap: bool = False  # flip ab into cd (no Steiner point) instead of a bridge
+    slot: int = -1  # a bridge's incenters are join points 2 slot and 2 slot + 1
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """The joins and the global cycle order, as blocks.
+
+    ``blocks``: ``(tile, "run", run, start, step, count)`` or ``(tile, "tri", join, name)``
+    in cycle order; ``start`` (global position of each block); ``components``: the
+    number of triangles of each cycle (one per piece); ``join_point_base``: global id of
+    the first join point (join ``j`` adds ``base + 2 j`` = ``I_t`` and ``base + 2 j + 1``).
+    """
+
+    joins: tuple[Join, ...]
+    blocks: list
+    start: np.ndarray
+    components: np.ndarray
+    join_point_base: int
+    nodes: int
+    pieces: int
+    fallback_joins: int = 0
+
+
+def _incenter(p: np.ndarray) -> tuple[float, float]:
+    la = np.linalg.norm(p[2] - p[1])
+    lb = np.linalg.norm(p[0] - p[2])
+    lc = np.linalg.norm(p[1] - p[0])
+    c = (la * p[0] + lb * p[1] + lc * p[2]) / (la + lb + lc)
+    return float(c[0]), float(c[1])
+
+
+class _UF:
+    def __init__(self, n: int) -> None:
+        self.p = list(range(n))
+
+    def find(self, a: int) -> int:
+        while self.p[a] != a:
+            self.p[a] = self.p[self.p[a]]
+            a = self.p[a]
+        return a
+
+    def union(self, a: int, b: int) -> bool:
+        a, b = self.find(a), self.find(b)
+        if a == b:
+            return False
+        self.p[a] = b
+        return True
+
+
+def _swap_min_angle(t_xyz: np.ndarray, d: np.ndarray) -> float:
+    """Smallest angle of ``adc, dbc`` after flipping ``ab`` of ``t = abc``, ``u = bad``;
+    0 if ``acbd`` is not strictly convex (the flip is not legal)."""
+    a, b, c = t_xyz
+
+    def cross(o, p, q):
+        return (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0])
+
+    if not (cross(c, d, a) < 0 < cross(c, d, b)) and not (cross(c, d, b) < 0 < cross(c, d, a)):
+        return 0.0
+    tris = np.array([[a, d, c], [d, b, c]])
+    return float(_min_angle_deg(tris).min())
+
+
+def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: float = 0.9) -> Plan:
+    """Choose the joins (Kruskal over the tiles' cycles) and the global cycle order.
+
+    Best first: a *swap* (flip ``ab`` into ``cd``, no Steiner point, the sparse mode's
+    join) whose new angles meet the local quality rule (>= ``keep`` x the two
+    triangles' smallest); Thm 2.4's bridge between triangles kept whole (proven:
+    >= half their angles); a swap keeping half the input's minimum; last a bridge of
+    other triangles (only the certificate vouches for those; counted in the report).
+    """
+    floor = 0.5 * min((b.input_min_angle for b in borders), default=0.0)
+    # nodes: (tile, run)
+    node_base = np.concatenate([[0], np.cumsum([len(b.run_starts) for b in borders])]).astype(np.int64)
+    n_nodes = int(node_base[-1])
+    run_len = np.concatenate([np.diff(np.concatenate([b.run_starts, [b.n_triangles]])) for b in borders])
+    # match the two sides of every separator edge by its directed key
+    ent = []
+    for b in borders:
+        ent.append(np.stack([np.full(len(b.row), b.tile), np.arange(len(b.row)), b.x, b.y], axis=1))
+    ent = np.concatenate(ent) if ent else np.zeros((0, 4), np.int64)
+    big = int(max(n_decomposition_points, 1))
+    fwd = ent[:, 2] * big + ent[:, 3]
+    back = ent[:, 3] * big + ent[:, 2]
+    order = np.argsort(fwd)
+    where = np.searchsorted(fwd[order], back)
+    where = np.minimum(where, len(order) - 1)
+    mate = order[where]
+    ok = fwd[mate] == back
+    pairs = [(i, int(mate[i])) for i in np.flatnonzero(ok) if i < mate[i]]
+    uf_all = _UF(n_nodes)
+    cand = []
+    for i, j in pairs:
+        ti, ri = int(ent[i, 0]), int(ent[i, 1])
+        tj, rj = int(ent[j, 0]), int(ent[j, 1])
+        bi, bj = borders[ti], borders[tj]
+        ni = int(node_base[ti] + bi.run[ri])
+        nj = int(node_base[tj] + bj.run[rj])
+        uf_all.union(ni, nj)
+        usable = bi.run_length[ri] >= 3 and bj.run_length[rj] >= 3
+        usable = usable and bi.after[ri] >= 0 and bi.before[ri] >= 0 and bj.after[rj] >= 0 and bj.before[rj] >= 0
+        if not usable:
+            continue
+        whole = bi.kind[ri] == KIND_INPUT and bj.kind[rj] == KIND_INPUT
+        parents = min(bi.min_angle[ri], bj.min_angle[rj])
+        new = _swap_min_angle(bi.xyz[ri], bj.xyz[rj][2])
+        if new >= max(keep * parents, floor * (1 + SWAP_MARGIN)):
+            rank = 0  # a swap meeting the local quality rule: no Steiner point
+        elif whole:
+            rank = 1  # Thm 2.4's bridge, proven bound
+        elif new >= floor * (1 + SWAP_MARGIN):
+            rank = 2  # a swap keeping the certificate's bound
+        else:
+            rank = 3  # a bridge of triangles not kept whole: checked by the certificate only
+        cand.append((rank, -min(parents, new if rank in (0, 2) else parents), ti, ri, tj, rj, ni, nj))
+    cand.sort()
+    uf = _UF(n_nodes)
+    used: set[tuple[int, int]] = set()
+    chosen = []
+    fallback = 0
+    swaps = {}
+    for rank, _, ti, ri, tj, rj, ni, nj in cand:
+        if (ti, ri) in used or (tj, rj) in used:
+            continue
+        if uf.union(ni, nj):
+            used.add((ti, ri))
+            used.add((tj, rj))
+            chosen.append((ti, ri, tj, rj, ni, nj))
+            swaps[(ti, ri)] = swaps[(tj, rj)] = rank in (0, 2)
+            fallback += int(rank == 3)
+    pieces = len({uf_all.find(i) for i in range(n_nodes)})
+    if n_nodes - len(chosen) != pieces:
+        raise VerificationError(
+            f"could not join the tiles' {n_nodes} cycles into {pieces} (one per piece): "
+            f"{len(chosen)} joins found")
+    # orient the forest: root each tree, the parent side of a join is its t side
+    adj: dict[int, list] = {i: [] for i in range(n_nodes)}
+    for c in chosen:
+        ti, ri, tj, rj, ni, nj = c
+        adj[ni].append((nj, (ti, ri, tj, rj)))
+        adj[nj].append((ni, (tj, rj, ti, ri)))
+    seen = np.zeros(n_nodes, bool)
+    joins: list[Join] = []
+    children: dict[int, list] = {i: [] for i in range(n_nodes)}  # node -> [(pos, join index, child)]
+    roots = []
+    for r in range(n_nodes):
+        if seen[r]:
+            continue
+        roots.append(r)
+        seen[r] = True
+        stack = [r]
+        while stack:
+            v = stack.pop()
+            for w, (tt, rt, tu, ru) in adj[v]:
+                if seen[w]:
+                    continue
+                seen[w] = True
+                bt, bu = borders[tt], borders[tu]
+                a, b = int(bt.x[rt]), int(bt.y[rt])
+                j = Join(index=len(joins), t_tile=tt, t_row=int(bt.row[rt]), u_tile=tu, u_row=int(bu.row[ru]),
+                         a=a, b=b, I_t=_incenter(bt.xyz[rt]), I_u=_incenter(bu.xyz[ru]), swap=swaps[(tt, rt)],
+                         slot=-1 if swaps[(tt, rt)] else sum(not x.swap for x in joins))
+                joins.append(j)
+                children[v].append((int(bt.pos[rt]), j.index, w, (tt, rt), (tu, ru)))
+                stack.append(w)
+    # the global order: walk every tree
+    node_tile = np.repeat(np.arange(len(borders)), np.diff(node_base))
+    node_run = np.arange(n_nodes) - node_base[node_tile]
+    blocks: list = []
+    components = []
+
+    def walk(node: int, start: int, step: int, count: int) -> None:
+        L = int(run_len[node])
+        tile = int(node_tile[node])
+        here = []
+        for pos, ji, child, (tt, rt), (tu, ru) in children[node]:
+            k = ((pos - start) * step) % L
+            if k < count:
+                here.append((k, pos, ji, child, (tt, rt), (tu, ru)))
+        here.sort()
+        done = 0
+        for k, pos, ji, child, (tt, rt), (tu, ru) in here:
+            if k > done:
+                blocks.append((tile, "run", int(node_run[node]), (start + step * done) % L, step, k - done))
+            bt, bu = borders[tt], borders[tu]
+            arrival = (pos - step) % L
+            forward = arrival == int(bt.before[rt])
+            upos = int(bu.pos[ru])
+            Lc = int(run_len[child])
+            ua, ub = int(bu.after[ru]), int(bu.before[ru])
+            if joins[ji].swap:  # [ca] - adc - [u's cycle from ad to db] - dbc - [bc]
+                seq_a, seq_b = (("A1",), ("A2",)) if forward else (("A2",), ("A1",))
+                u_first = u_last = None
+            elif forward:
+                seq_a, seq_b = ("S_ca", "F_a"), ("F_b", "S_bc")
+                u_first, u_last = "S_ad", "S_db"
+            else:
+                seq_a, seq_b = ("S_bc", "F_b"), ("F_a", "S_ca")
+                u_first, u_last = "S_db", "S_ad"
+            enter = ua if forward else ub
+            for name in seq_a:
+                blocks.append((tt, "tri", ji, name))
+            if u_first:
+                blocks.append((tu, "tri", ji, u_first))
+            cstep = 1 if enter == (upos + 1) % Lc else -1
+            walk(child, enter, cstep, Lc - 1)
+            if u_last:
+                blocks.append((tu, "tri", ji, u_last))
+            for name in seq_b:
+                blocks.append((tt, "tri", ji, name))
+            done = k + 1
+        if count > done:
+            blocks.append((tile, "run", int(node_run[node]), (start + step * done) % L, step, count - done))
+
+    import sys
+
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 4 * n_nodes + 100))
+    for r in roots:
+        first = len(blocks)
+        walk(r, 0, 1, int(run_len[r]))
+        sizes = [_block_size(bk) for bk in blocks[first:]]
+        components.append(int(sum(sizes)))
+    sizes = np.array([_block_size(bk) for bk in blocks], dtype=np.int64)
+    start = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    return Plan(joins=tuple(joins), blocks=blocks, start=start, components=np.array(components, np.int64),
+                join_point_base=0, nodes=n_nodes, pieces=pieces, fallback_joins=fallback)
+
+
+def _block_size(bk) -> int:
+    return int(bk[5]) if bk[1] == "run" else 1
+
+
+@dataclass(frozen=True, eq=False)
+class TilePiece:
+    """One tile's share of the output, in global numbering, rows in cycle order.
+
+    ``point_ids`` / ``points``: the global points its triangles use; ``position``: the
+    global cycle position of each row.
+    """
+
+    tile: int
+    point_ids: np.ndarray
+    points: np.ndarray
+    triangles: np.ndarray
+    position: np.ndarray
+    kind: np.ndarray
+    parent: np.ndarray
+    triangle_attributes: np.ndarray
+    segments: np.ndarray
+    segment_markers: np.ndarray
+
+
+def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: list, plan_start: np.ndarray,
+                joins: list[Join], mesh_offset: int, n_mesh_points: int, ham_offset: int, join_point_base: int,
+                triangle_offset: int, separator_keys: np.ndarray, n_global: int,
+                swap_apex: dict | None = None) -> TilePiece:
+    """Number a tile's rows and points globally and apply its side of the joins.
+
+    Global points: the decomposition's, then every tile's mesh Steiner points (tile
+    ``i``'s from ``mesh_offset``), then every tile's Hamiltonian Steiner points (from
+    ``ham_offset``), then the join points (``join_point_base``): so the union of the
+    tile meshes is a prefix of the output, as the certificate wants its input.
+    """
+    k = len(tile.vertex_ids)
+    n = len(h.points)
+    gid = np.concatenate([tile.vertex_ids, mesh_offset + np.arange(n_mesh_points - k, dtype=np.int64),
+                          ham_offset + np.arange(n - n_mesh_points, dtype=np.int64)])
+    m = len(h.triangles)
+    gpos = np.full(m, -1, np.int64)
+    ends = np.cumsum(h.components)
+    starts = ends - h.components
+    new_tri, new_pos, new_kind, new_parent, new_attr = [], [], [], [], []
+    jmap = {j.index: j for j in joins}
+    # a swap's far apex d: (global id, coordinates), from the other tile via the driver
+    h_other_apex = {ji: int(v[0]) for ji, v in (swap_apex or {}).items()}
+    attrs = np.asarray(h.triangle_attributes)
+    for bk, g in zip(plan_blocks, plan_start.tolist()):
+        if bk[0] != tile_index:
+            continue
+        if bk[1] == "run":
+            _, _, run, start, step, count = bk
+            L = int(h.components[run])
+            rows = starts[run] + (start + step * np.arange(count)) % L
+            gpos[rows] = g + np.arange(count)
+        else:
+            _, _, ji, name = bk
+            j = jmap[ji]
+            It, Iu = join_point_base + 2 * j.slot, join_point_base + 2 * j.slot + 1
+            if name in T_NAMES:
+                row = j.t_row
+                t = h.triangles[row]
+                loc = {int(gid[v]): v for v in t}
+                c = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
+                del loc
+                if name in ("A1", "A2"):
+                    u = h_other_apex[j.index]
+                    tri = (j.a, u, c) if name == "A1" else (u, j.b, c)
+                else:
+                    tri = {"S_ca": (It, c, j.a), "F_a": (It, j.a, Iu), "F_b": (Iu, j.b, It), "S_bc": (It, j.b, c)}[name]
+            else:
+                row = j.u_row
+                t = h.triangles[row]
+                d = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
+                tri = {"S_ad": (Iu, j.a, d), "S_db": (Iu, d, j.b)}[name]
+            new_tri.append(tri)
+            new_pos.append(g)
+            new_kind.append(4 if name in ("A1", "A2") else (1 if name in ("F_a", "F_b") else 0))
+            new_parent.append(triangle_offset + int(h.parent[row]) if h.parent[row] >= 0 else -1)
+            new_attr.append(attrs[row] if attrs.shape[1] else np.zeros(0))
+    removed = set()
+    for j in joins:
+        if j.t_tile == tile_index:
+            removed.add(j.t_row)
+        if j.u_tile == tile_index:
+            removed.add(j.u_row)
+    missing = np.flatnonzero(gpos < 0)
+    if set(missing.tolist()) != removed:
+        raise VerificationError(f"tile {tile_index}: the cycle plan does not cover its rows")
+    keep = gpos >= 0
+    tri = gid[h.triangles[keep]]
+    pos = gpos[keep]
+    kind = np.asarray(h.kind)[keep].astype(np.int8)
+    parent = np.where(h.parent[keep] >= 0, triangle_offset + h.parent[keep], -1)
+    attr = attrs[keep]
+    if new_tri:
+        tri = np.concatenate([tri, np.asarray(new_tri, np.int64)])
+        pos = np.concatenate([pos, new_pos])
+        kind = np.concatenate([kind, np.asarray(new_kind, np.int8)])
+        parent = np.concatenate([parent, new_parent])
+        attr = np.concatenate([attr, np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])])
+    order = np.argsort(pos, kind="stable")
+    tri, pos, kind, parent, attr = tri[order], pos[order], kind[order], parent[order], attr[order]
+    # the points this piece uses: its own and the join points
+    jp_ids, jp_xy = [], []
+    for j in joins:
+        if j.swap:
+            if j.t_tile == tile_index:
+                gid_d, xy_d = swap_apex[j.index]
+                jp_ids.append(int(gid_d))
+                jp_xy.append(tuple(xy_d))
+            continue
+        jp_ids += [join_point_base + 2 * j.slot, join_point_base + 2 * j.slot + 1]
+        jp_xy += [j.I_t, j.I_u]
+    ids = np.concatenate([gid, np.asarray(jp_ids, np.int64)])
+    xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)])
+    used = np.isin(ids, np.unique(tri))
+    # constrained edges: the tile's, minus its separators (interior edges of the union)
+    segs = gid[h.segments]
+    keys = np.sort(segs, axis=1) @ np.array([n_global, 1])
+    keep_s = ~np.isin(keys, separator_keys)
+    return TilePiece(tile=tile_index, point_ids=ids[used], points=xy[used], triangles=tri, position=pos,
+                     kind=kind, parent=parent, triangle_attributes=attr, segments=segs[keep_s],
+                     segment_markers=np.asarray(h.segment_markers)[keep_s])

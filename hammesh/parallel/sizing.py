@@ -1,0 +1,81 @@
+"""The mesh size a quality Triangle run would use, and graded 1D discretisations.
+
+A tile is meshed alone with its separators kept unsplit (Triangle ``-Y``), so the
+separators (and the user's segments, which ``-Y`` keeps unsplit too where they bound
+the tile) are discretised beforehand with the spacing Triangle itself would pick:
+``EDGE_PER_SQRT_AREA * sqrt(max_area)`` where nothing is near, and the local feature
+size near input features (read off a coarse quality mesh of the whole domain, whose
+edges Triangle grades to the features). The spacing is then graded (neighbouring
+subsegments differ by a bounded ratio) so that no subsegment is much longer than its
+neighbour: a long subsegment next to a short one is encroached by the short one's
+apex, and ``-Y`` forbids the split that would repair it (Linardakis & Chrisochoides,
+*Graded Delaunay decoupling method for parallel guaranteed quality planar mesh
+generation*, SIAM J. Sci. Comput. 30(4), 2008: separator points spaced by the local
+size function, graded, so each subdomain's Delaunay refinement never needs to split
+them).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["EDGE_PER_SQRT_AREA", "AREA_FILL", "GRADING", "graded_points"]
+
+#: Triangle's boundary subsegments on a ``q30 a A`` mesh are ~1.25 sqrt(A) long
+#: (measured on a unit square, A = 1e-5); 1.2 sqrt(A) meets q30 in every tile with no
+#: over-refinement (1.0: +0.07 % triangles, 1.6: q30 missed by 0.02 degrees)
+EDGE_PER_SQRT_AREA = 1.2
+#: the mean triangle area of a ``q30 a A`` Triangle mesh is ~0.63 A (same run)
+AREA_FILL = 0.63
+#: sizes of neighbouring subsegments: h grows by at most GRADING x distance
+GRADING = 0.4
+#: most samples of the size function along one piece
+MAX_SAMPLES = 2_000_000
+
+
+def graded_points(length: float, size, cap0: float, cap1: float) -> np.ndarray:
+    """Interior stations ``0 < s_1 < ... < s_{n-1} < length`` of a graded discretisation.
+
+    Parameters
+    ----------
+    length : float
+        Length of the piece (> 0).
+    size : callable
+        ``size(s) -> h`` for an array of stations ``s``: the wanted edge length there.
+    cap0, cap1 : float
+        Largest edge length allowed at the two ends (features meeting there).
+
+    Returns
+    -------
+    (n - 1,) float64
+        Stations of the new points; the ``n`` subsegments follow ``size`` (at most
+        ``cap`` at the ends), graded by at most ``GRADING`` per unit length.
+    """
+    ends = np.array([0.0, length])
+    h_end = np.minimum(size(ends), [cap0, cap1])
+    h_min = max(float(h_end.min()), 1e-300)
+    m = int(min(MAX_SAMPLES, max(16, np.ceil(4.0 * length / h_min))))
+    s = np.linspace(0.0, length, m + 1)
+    h = np.asarray(size(s), dtype=np.float64)
+    m2 = int(min(MAX_SAMPLES, max(m, np.ceil(4.0 * length / max(float(h.min()), 1e-300)))))
+    if m2 > m:  # a feature finer than the first sampling: sample again at its scale
+        s = np.linspace(0.0, length, m2 + 1)
+        h = np.asarray(size(s), dtype=np.float64)
+    h[0] = min(h[0], cap0)
+    h[-1] = min(h[-1], cap1)
+    # Lipschitz limit h(s) <= h(t) + GRADING |s - t|: two passes of a running minimum
+    ds = s[1] - s[0]
+    k = GRADING * ds * np.arange(len(s))
+    h = np.minimum(h, np.minimum.accumulate(h - k) + k)
+    rev = h[::-1]
+    rev = np.minimum(rev, np.minimum.accumulate(rev - k) + k)
+    h = rev[::-1]
+    inv = 1.0 / h
+    F = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * ds)])
+    n = max(1, int(math.ceil(F[-1] - 0.05)))  # ceil: no subsegment much over its size
+    if n == 1:
+        return np.zeros(0)
+    targets = F[-1] * np.arange(1, n) / n
+    return np.interp(targets, F, s)

@@ -1,0 +1,691 @@
+"""Decoupled tiles: a domain cut into tiles that Triangle can mesh one at a time (issue 15).
+
+The Delaunay decoupling method (Linardakis & Chrisochoides, SIAM J. Sci. Comput.
+30(4), 2008) with axis-parallel cuts:
+
+1. a **coarse quality mesh** of the whole domain (Triangle ``pq`` with a large area
+   bound, a few ten thousand triangles) gives the domain itself (its area, which side
+   of a cut is inside), the local feature size (its edge lengths) and the estimated
+   triangle count of any part (its area over ``AREA_FILL x max_area``);
+2. a **kd split** cuts the bounding box into ``n_tiles`` boxes of about equal
+   estimated count; each cut is moved (within a few percent of the balanced position)
+   to where it crosses the user's segments at large angles and stays clear of their
+   vertices, so that no small angle or tiny feature appears where none was;
+3. the user's segments are **cut** where they cross a cut; the parts of each cut that
+   lie inside the domain are the **separators**; every separator and every user
+   segment piece is **discretised** with the spacing Triangle would give it
+   (:mod:`hammesh.parallel.sizing`, graded near features);
+4. each tile gets the pieces inside its box and the separators on its border; Triangle
+   meshes it with ``-Y`` (no Steiner point on the tile's boundary), so both tiles
+   along a separator end with exactly its subsegments: the union conforms.
+
+Every point of the decomposition has one global index (the input's vertices first, at
+their indices), shared by all tiles that use it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from hammesh.domain import Domain
+from hammesh.errors import InvalidOptionError
+from hammesh.meshing.options import MAX_MIN_ANGLE, format_number
+from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points
+
+__all__ = ["Tile", "Decomposition", "decompose", "split_segments", "COARSE_TRIANGLES"]
+
+#: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
+COARSE_TRIANGLES = 20_000
+#: a cut may move this fraction of its box's estimated count off the balanced position
+CUT_WINDOW = 0.04
+#: cut positions tried in the window
+CUT_CANDIDATES = 33
+#: windows tried next (both axes) when no position in CUT_WINDOW is good
+WIDER_WINDOWS = (0.1, 0.2)
+#: a cut should cross user segments at least this many degrees above the min angle
+CROSS_MARGIN_DEG = 10.0
+#: and stay this many local edge lengths away from vertices
+CLEARANCE = 0.5
+#: a separator's subsegment is at most this times its distance to a vertex off its line
+OBSTACLE_FACTOR = 1.5
+
+
+@dataclass(frozen=True, eq=False)
+class Tile:
+    """One tile: the PSLG Triangle meshes alone.
+
+    Attributes
+    ----------
+    index : int
+    box : (4,) float64
+        ``xmin, xmax, ymin, ymax`` (closed).
+    vertex_ids : (k,) int64
+        Global index of each of the tile's vertices (sorted).
+    vertices : (k, 2) float64
+    segments : (s, 2) int64
+        Local indices.
+    segment_markers : (s,) int64
+        The user's markers; 0 on separators.
+    separator : (s,) bool
+        Which segments are separator subsegments (shared with one other tile).
+    holes : (h, 2) float64
+    estimate : float
+        Estimated triangle count.
+    """
+
+    index: int
+    box: np.ndarray
+    vertex_ids: np.ndarray
+    vertices: np.ndarray
+    segments: np.ndarray
+    segment_markers: np.ndarray
+    separator: np.ndarray
+    holes: np.ndarray
+    estimate: float
+    #: coarse triangles over the box and their regional attribute (empty: no regions)
+    region_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+    region_triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64), repr=False)
+    region_attribute: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+
+
+@dataclass(frozen=True, eq=False)
+class Decomposition:
+    """A domain cut into tiles (:func:`decompose`).
+
+    Attributes
+    ----------
+    vertices : (N, 2) float64
+        Global points: the domain's vertices at their indices, then crossing points,
+        junctions of cuts and the points of the discretisation.
+    n_input : int
+        ``len(domain.vertices)``.
+    segments : (S, 2) int64
+        Global segments: the user's segments cut and discretised, and the separators.
+    separator : (S,) bool
+    origin : (S,) int64
+        The user segment each piece came from (-1 for separators).
+    tiles : tuple of Tile
+    area : float
+        The domain's area (coarse mesh).
+    cuts : (c, 4) float64
+        ``axis (0: x = value), value, lo, hi`` of every cut.
+    estimate : float
+        Estimated triangle count of a single Triangle run.
+    min_angle, max_area : float or None
+        The options the tiles are meshed with.
+    coarse_points, coarse_triangles, coarse_region : arrays
+        The coarse mesh and the region row of each of its triangles (-1: none), used
+        to give the tiles' triangles their regional attributes.
+    """
+
+    vertices: np.ndarray
+    n_input: int
+    segments: np.ndarray
+    separator: np.ndarray
+    origin: np.ndarray
+    tiles: tuple[Tile, ...]
+    area: float
+    cuts: np.ndarray
+    estimate: float
+    min_angle: float | None
+    max_area: float | None
+    coarse_points: np.ndarray = field(repr=False)
+    coarse_triangles: np.ndarray = field(repr=False)
+    coarse_region: np.ndarray = field(repr=False)
+    regions: np.ndarray = field(repr=False)
+    holes: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 2)))
+    segment_markers: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def n_tiles(self) -> int:
+        return len(self.tiles)
+
+
+# ---------------------------------------------------------------------------- coarse mesh
+
+
+def _tri_area(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+
+def _hull_segments(vertices: np.ndarray) -> np.ndarray:
+    import triangle
+
+    out = triangle.triangulate({"vertices": np.array(vertices)}, "pcQ")
+    return np.asarray(out["segments"], dtype=np.int64).reshape(-1, 2)
+
+
+def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
+    """Triangle's coarse quality mesh of the domain: points, triangles, region rows,
+    and its subsegments with the user segment each lies on (Triangle's own grading of
+    the segments near small angles and close features, kept by the tiles)."""
+    import triangle
+
+    ext = np.ptp(vertices, axis=0)
+    area_bound = max(float(ext[0] * ext[1]) / COARSE_TRIANGLES, 4.0 * max_area)
+    q = 20.0 if min_angle is None else min(float(min_angle), 30.0)
+    data = {"vertices": np.array(vertices), "segments": segments.astype(np.int32),
+            # the marker carries the segment's row, to find it again on each subsegment
+            "segment_markers": (np.arange(len(segments), dtype=np.int32) + 1)[:, None]}
+    if len(holes):
+        data["holes"] = holes
+    sw = "p" + "q" + format_number(q) + "a" + format_number(area_bound)
+    if len(regions):
+        reg = np.zeros((len(regions), 4))
+        reg[:, :2] = regions[:, :2]
+        reg[:, 2] = np.arange(len(regions))
+        reg[:, 3] = -1.0
+        data["regions"] = reg
+        sw += "A"
+    out = triangle.triangulate(data, sw + "Q")
+    pts = np.asarray(out["vertices"], dtype=np.float64)
+    tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(regions):
+        row = np.asarray(out["triangle_attributes"]).reshape(-1).round().astype(np.int64)
+    else:
+        row = np.full(len(tri), -1, np.int64)
+    sub = np.asarray(out.get("segments", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2)
+    origin = np.asarray(out.get("segment_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1) - 1
+    return pts, tri, row, sub, origin
+
+
+class _Sizer:
+    """Wanted edge length at any point: min(area-implied, coarse mesh's local size)."""
+
+    def __init__(self, pts: np.ndarray, tri: np.ndarray, tri_area_bound: np.ndarray) -> None:
+        from scipy.spatial import cKDTree
+
+        edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+        length = np.linalg.norm(pts[edges[:, 0]] - pts[edges[:, 1]], axis=1)
+        n = len(pts)
+        total = np.bincount(edges.ravel(), weights=np.repeat(length, 2), minlength=n)
+        count = np.bincount(edges.ravel(), minlength=n)
+        local = np.where(count > 0, total / np.maximum(count, 1), np.inf)
+        bound = np.full(n, np.inf)
+        np.minimum.at(bound, tri.ravel(), np.repeat(tri_area_bound, 3))
+        h = np.minimum(EDGE_PER_SQRT_AREA * np.sqrt(bound), local)
+        used = np.isfinite(h)
+        self.tree = cKDTree(pts[used])
+        self.h = h[used]
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray:
+        _, i = self.tree.query(np.asarray(xy, dtype=np.float64).reshape(-1, 2))
+        return self.h[i]
+
+
+# ---------------------------------------------------------------------------- kd split
+
+
+@dataclass
+class _Cut:
+    axis: int  # 0: the line x = value; 1: y = value
+    value: float
+    lo: float
+    hi: float
+    fixed: list = field(default_factory=list)  # (coordinate along the line, vertex id)
+
+
+class _Builder:
+    """Mutable state of the decomposition while it is built (vertices, pieces, cuts)."""
+
+    def __init__(self, vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray) -> None:
+        self.points = [vertices]
+        self.n_points = len(vertices)
+        self.n_input = len(vertices)
+        self.pieces = segments.copy()
+        self.piece_origin = np.arange(len(segments), dtype=np.int64)
+        self.piece_marker = markers.copy()
+        self.cuts: list[_Cut] = []
+
+    def coords(self) -> np.ndarray:
+        if len(self.points) > 1:
+            self.points = [np.concatenate(self.points)]
+        return self.points[0]
+
+    def add_points(self, xy: np.ndarray) -> np.ndarray:
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        ids = self.n_points + np.arange(len(xy), dtype=np.int64)
+        self.points.append(xy)
+        self.n_points += len(xy)
+        return ids
+
+
+def _pieces_in_box(b: _Builder, box: np.ndarray) -> np.ndarray:
+    p = b.coords()
+    mid = 0.5 * (p[b.pieces[:, 0]] + p[b.pieces[:, 1]])
+    return np.flatnonzero((mid[:, 0] > box[0]) & (mid[:, 0] < box[1]) & (mid[:, 1] > box[2]) & (mid[:, 1] < box[3]))
+
+
+def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> tuple[float, bool]:
+    """The cut position in [c_lo, c_hi] crossing segments at the largest angles, clear of vertices."""
+    p = b.coords()
+    # the vertices a separator must keep clear of: segment ends (the coarse mesh's
+    # interior points are no features) and the user's vertices
+    feat = np.zeros(len(p), bool)
+    feat[b.pieces.ravel()] = True
+    feat[: b.n_input] = True
+    inside = feat & (p[:, 0] > box[0]) & (p[:, 0] < box[1]) & (p[:, 1] > box[2]) & (p[:, 1] < box[3])
+    v = p[inside]
+    hv = sizer(v) if len(v) else np.zeros(0)
+    cand = np.unique(np.concatenate([np.linspace(c_lo, c_hi, CUT_CANDIDATES), [c_mid]]))
+    pieces = b.pieces[_pieces_in_box(b, box)]
+    a, e = p[pieces[:, 0]], p[pieces[:, 1]]
+    d = e - a
+    sin_cross = np.abs(d[:, axis]) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
+    need = math.radians(min(90.0, (min_angle or 20.0) + CROSS_MARGIN_DEG))
+    best, best_key = c_mid, None
+    for c in cand:
+        clear = np.abs(v[:, axis] - c) / hv if len(v) else np.array([np.inf])
+        clear_min = float(clear.min()) if len(clear) else np.inf
+        if clear_min == 0.0:
+            continue
+        crossing = (a[:, axis] - c) * (e[:, axis] - c) < 0
+        ang = float(np.arcsin(np.clip(sin_cross[crossing].min(), 0, 1))) if crossing.any() else math.pi / 2
+        # an angle the mesher cannot meet is fatal; closeness to vertices is repaired
+        # by finer separator spacing (and repair rounds), so it only ranks
+        key = (ang >= need, min(clear_min / CLEARANCE, 1.0) if ang >= need else ang / need, -abs(c - c_mid))
+        if best_key is None or key > best_key:
+            best, best_key = float(c), key
+    return best, (best_key if best_key is not None else (False, 0.0, 0.0))
+
+
+def _cut_pieces(b: _Builder, box, axis: int, c: float, cut_id: int) -> None:
+    """Split the pieces inside ``box`` that cross the line at ``c``; record crossings."""
+    p = b.coords()
+    idx = _pieces_in_box(b, box)
+    a, e = p[b.pieces[idx, 0]], p[b.pieces[idx, 1]]
+    cross = (a[:, axis] - c) * (e[:, axis] - c) < 0
+    idx, a, e = idx[cross], a[cross], e[cross]
+    if len(idx) == 0:
+        return
+    o = 1 - axis
+    t = (c - a[:, axis]) / (e[:, axis] - a[:, axis])
+    xy = np.empty((len(idx), 2))
+    xy[:, axis] = c
+    xy[:, o] = a[:, o] + t * (e[:, o] - a[:, o])
+    ids = b.add_points(xy)
+    tail = np.stack([ids, b.pieces[idx, 1]], axis=1)
+    b.pieces[idx, 1] = ids
+    b.pieces = np.concatenate([b.pieces, tail])
+    b.piece_origin = np.concatenate([b.piece_origin, b.piece_origin[idx]])
+    b.piece_marker = np.concatenate([b.piece_marker, b.piece_marker[idx]])
+    b.cuts[cut_id].fixed.extend(zip(xy[:, o].tolist(), ids.tolist()))
+
+
+def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
+    """Leaves ``(box, sides)``; ``sides[k]``: cut id the box side k lies on (-1: the root)."""
+    leaves = []
+    stack = [(root, np.array([-1, -1, -1, -1]), n_tiles)]
+    while stack:
+        box, sides, k = stack.pop()
+        if k == 1:
+            leaves.append((box, sides))
+            continue
+        inb = (centroid[:, 0] > box[0]) & (centroid[:, 0] < box[1]) & (centroid[:, 1] > box[2]) & (centroid[:, 1] < box[3])
+        cx, w = centroid[inb], weight[inb]
+        if len(cx):
+            span = cx.max(axis=0) - cx.min(axis=0)
+        else:
+            span = np.array([box[1] - box[0], box[3] - box[2]])
+        axis = 0 if span[0] >= span[1] else 1
+        k1 = k // 2
+        if len(cx) == 0 or w.sum() <= 0:
+            c_lo = c_hi = c_mid = 0.5 * (box[2 * axis] + box[2 * axis + 1])
+            c_lo, c_hi = box[2 * axis] + 0.4 * (box[2 * axis + 1] - box[2 * axis]), box[2 * axis] + 0.6 * (box[2 * axis + 1] - box[2 * axis])
+        else:
+            order = np.argsort(cx[:, axis], kind="stable")
+            xs, cw = cx[order, axis], np.cumsum(w[order])
+            total = cw[-1]
+
+            def at(f):
+                return float(np.interp(f * total, cw, xs))
+
+            f = k1 / k
+            c_mid = at(f)
+            c_lo, c_hi = at(max(f - CUT_WINDOW, 0.02)), at(min(f + CUT_WINDOW, 0.98))
+            # no good position near the balanced one: look further, then across the
+            # other axis (balance costs less than an angle the mesher cannot meet)
+            c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
+            for wider in WIDER_WINDOWS:
+                if key[0]:
+                    break
+                for ax in (axis, 1 - axis):
+                    order = np.argsort(cx[:, ax], kind="stable")
+                    xs, cw = cx[order, ax], np.cumsum(w[order])
+                    mid = float(np.interp(f * total, cw, xs))
+                    lo_, hi_ = (float(np.interp(max(f - wider, 0.02) * total, cw, xs)),
+                                float(np.interp(min(f + wider, 0.98) * total, cw, xs)))
+                    c2, key2 = _choose_cut(b, box, ax, lo_, hi_, mid, sizer, min_angle)
+                    if key2[:2] > key[:2]:
+                        c, axis, key = c2, ax, key2
+        if len(cx) == 0 or w.sum() <= 0:
+            c, _ = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
+        o = 1 - axis
+        cut = _Cut(axis, c, float(box[2 * o]), float(box[2 * o + 1]))
+        b.cuts.append(cut)
+        cut_id = len(b.cuts) - 1
+        # the cut's ends on earlier cuts are junctions: one vertex on both lines
+        for end, side in ((cut.lo, sides[2 * o]), (cut.hi, sides[2 * o + 1])):
+            if side >= 0:
+                xy = np.empty(2)
+                xy[axis], xy[o] = c, end
+                vid = int(b.add_points(xy)[0])
+                cut.fixed.append((end, vid))
+                b.cuts[side].fixed.append((c, vid))
+            else:
+                cut.fixed.append((end, -1))
+        _cut_pieces(b, box, axis, c, cut_id)
+        low, high = box.copy(), box.copy()
+        low[2 * axis + 1] = c
+        high[2 * axis] = c
+        s_low, s_high = sides.copy(), sides.copy()
+        s_low[2 * axis + 1] = cut_id
+        s_high[2 * axis] = cut_id
+        stack.append((high, s_high, k - k1))
+        stack.append((low, s_low, k1))
+    return leaves
+
+
+# ---------------------------------------------------------------------------- separators
+
+
+def _line_cover(ptsc: np.ndarray, tric: np.ndarray, axis: int, c: float) -> np.ndarray:
+    """Merged intervals (along the line) where the line ``axis = c`` is inside the coarse mesh."""
+    o = 1 - axis
+    P = ptsc[tric]  # (t, 3, 2)
+    lo_ax, hi_ax = P[:, :, axis].min(axis=1), P[:, :, axis].max(axis=1)
+    hit = (lo_ax < c) & (hi_ax > c)
+    P = P[hit]
+    if len(P) == 0:
+        return np.zeros((0, 2))
+    lo = np.full(len(P), np.inf)
+    hi = np.full(len(P), -np.inf)
+    for k in range(3):
+        p, q = P[:, k], P[:, (k + 1) % 3]
+        s = (p[:, axis] - c) * (q[:, axis] - c) <= 0
+        den = q[:, axis] - p[:, axis]
+        s &= den != 0
+        t = np.where(s, (c - p[:, axis]) / np.where(den == 0, 1.0, den), 0.0)
+        val = p[:, o] + t * (q[:, o] - p[:, o])
+        lo = np.where(s, np.minimum(lo, val), lo)
+        hi = np.where(s, np.maximum(hi, val), hi)
+    order = np.argsort(lo)
+    lo, hi = lo[order], hi[order]
+    run_hi = np.maximum.accumulate(hi)
+    tol = 1e-12 * max(1.0, float(np.abs(P).max()))
+    start = np.concatenate([[True], lo[1:] > run_hi[:-1] + tol])
+    first = np.flatnonzero(start)
+    last = np.concatenate([first[1:] - 1, [len(lo) - 1]])
+    return np.stack([lo[first], run_hi[last]], axis=1)
+
+
+def _covered(intervals: np.ndarray, x: np.ndarray) -> np.ndarray:
+    if len(intervals) == 0:
+        return np.zeros(len(x), bool)
+    i = np.searchsorted(intervals[:, 0], x, side="right") - 1
+    ok = i >= 0
+    return ok & (x < intervals[np.maximum(i, 0), 1]) & (x > intervals[np.maximum(i, 0), 0])
+
+
+def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles) -> list[np.ndarray]:
+    """Stations of the new points on every segment ``(a, b)`` (graded, capped at the ends).
+
+    On a separator (axis-parallel) the size is also at most ``OBSTACLE_FACTOR`` times
+    the distance to the nearest vertex off its line: a longer subsegment would have
+    that vertex in its diametral circle (encroached), and ``-Y`` forbids the split
+    that Delaunay refinement would make.
+    """
+    plans = []
+    for u, v in segs.tolist():
+        a, e = p[u], p[v]
+        d = e - a
+        length = float(math.hypot(d[0], d[1]))
+        axis = 0 if d[0] == 0 else (1 if d[1] == 0 else -1)
+
+        def size(s, a=a, d=d, length=length, axis=axis):
+            xy = a + np.outer(np.asarray(s) / length, d)
+            h = sizer(xy)
+            if axis >= 0 and obstacles is not None:
+                dist, idx = obstacles.query(xy, k=4)
+                off = obstacles.data[np.minimum(idx, len(obstacles.data) - 1)][..., axis] != a[axis]
+                dist = np.where(off & np.isfinite(dist), dist, np.inf).min(axis=1)
+                h = np.minimum(h, OBSTACLE_FACTOR * dist)
+            return h
+
+        plans.append(graded_points(length, size, caps[u], caps[v]) if length > 0 else np.zeros(0))
+    return plans
+
+
+def _end_lengths(p: np.ndarray, segs: np.ndarray, plans: list[np.ndarray], n: int) -> np.ndarray:
+    """Shortest planned subsegment at every vertex."""
+    out = np.full(n, np.inf)
+    length = np.linalg.norm(p[segs[:, 0]] - p[segs[:, 1]], axis=1)
+    first = np.array([st[0] if len(st) else L for st, L in zip(plans, length)])
+    last = np.array([L - st[-1] if len(st) else L for st, L in zip(plans, length)])
+    np.minimum.at(out, segs[:, 0], first)
+    np.minimum.at(out, segs[:, 1], last)
+    return out
+
+
+def _commit(b: _Builder, segs: np.ndarray, plans: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Add the planned points; the new segments and the row each came from."""
+    p = b.coords()
+    out, rows, new_xy = [], [], []
+    next_id = b.n_points
+    for r, ((u, v), st) in enumerate(zip(segs.tolist(), plans)):
+        if len(st) == 0:
+            out.append((u, v))
+            rows.append(r)
+            continue
+        a, e = p[u], p[v]
+        d = e - a
+        length = float(math.hypot(d[0], d[1]))
+        xy = a + np.outer(st / length, d)
+        for k in (0, 1):  # a separator keeps its constant coordinate exactly
+            if a[k] == e[k]:
+                xy[:, k] = a[k]
+        ids = next_id + np.arange(len(st))
+        next_id += len(st)
+        new_xy.append(xy)
+        chain = np.concatenate([[u], ids, [v]])
+        out.extend(zip(chain[:-1].tolist(), chain[1:].tolist()))
+        rows.extend([r] * (len(chain) - 1))
+    if new_xy:
+        b.add_points(np.concatenate(new_xy))
+    return np.asarray(out, np.int64).reshape(-1, 2), np.asarray(rows, np.int64)
+
+
+# ---------------------------------------------------------------------------- decompose
+
+
+def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_tiles: int) -> Decomposition:
+    """Cut ``domain`` into ``n_tiles`` tiles that Triangle meshes alone into a conforming union.
+
+    Parameters
+    ----------
+    domain : Domain
+    min_angle : float or None
+        Degrees, as :func:`hammesh.quality_mesh`.
+    max_area : float
+        Global area bound (required: it sets the separators' spacing).
+    n_tiles : int
+        Number of tiles (>= 1).
+
+    Returns
+    -------
+    Decomposition
+
+    Raises
+    ------
+    InvalidOptionError
+        No ``max_area``, or regional area bounds (not supported by the tiles yet).
+    """
+    if max_area is None:
+        raise InvalidOptionError("parallel meshing needs max_area (-a): it sets the separators' spacing")
+    if min_angle is not None and not 0 <= float(min_angle) <= MAX_MIN_ANGLE:
+        raise InvalidOptionError(f"min_angle must be between 0 and {MAX_MIN_ANGLE} degrees, got {min_angle!r}")
+    if not (isinstance(n_tiles, (int, np.integer)) and n_tiles >= 1):
+        raise InvalidOptionError(f"tiles must be a positive integer, got {n_tiles!r}")
+    regions = np.asarray(domain.regions, dtype=np.float64).reshape(-1, 4)
+    if len(regions) and np.isfinite(regions[:, 3]).any():
+        raise InvalidOptionError(
+            "regional area bounds are not supported by parallel meshing yet; mesh without --workers"
+        )
+    verts = np.array(domain.vertices, dtype=np.float64)  # writable copies: Triangle's buffers
+    segs = np.array(domain.segments, dtype=np.int64).reshape(-1, 2)
+    markers = np.array(domain.segment_markers, dtype=np.int64).reshape(-1)
+    if len(segs) == 0:  # Triangle's "pc": the convex hull is the domain's boundary
+        segs = _hull_segments(verts)
+        markers = np.ones(len(segs), np.int64)
+    holes = np.array(domain.holes, dtype=np.float64).reshape(-1, 2)
+    ptsc, tric, rowc, sub, sub_origin = _coarse_mesh(verts, segs, holes, regions, min_angle, float(max_area))
+    if not np.array_equal(ptsc[: len(verts)], verts):
+        raise InvalidOptionError("Triangle did not keep the domain's vertices in order")
+    # user segments eaten by holes are not in the coarse mesh's output: segments of
+    # the domain's own outline and interior are, as Triangle's graded subsegments
+    segs, markers = sub, markers[np.clip(sub_origin, 0, len(markers) - 1)]
+    area_c = _tri_area(ptsc, tric)
+    bound_c = np.full(len(tric), float(max_area))
+    sizer = _Sizer(ptsc, tric, bound_c)
+    weight = area_c / (AREA_FILL * bound_c)
+    centroid = ptsc[tric].mean(axis=1)
+
+    b = _Builder(ptsc, segs, markers)
+    b.n_input = len(verts)
+    b.piece_origin = sub_origin.copy()
+    lo, hi = verts.min(axis=0), verts.max(axis=0)
+    pad = 0.01 * max(float((hi - lo).max()), 1e-300)
+    root = np.array([lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad])
+    leaves = _kd_split(b, root, int(n_tiles), centroid, weight, sizer, min_angle)
+
+    # separators: the parts of each cut inside the domain, between consecutive fixed points
+    p = b.coords()
+    sep = []
+    for cut in b.cuts:
+        fixed = sorted(cut.fixed)
+        cover = _line_cover(ptsc, tric, cut.axis, cut.value)
+        coords = np.array([f[0] for f in fixed])
+        mids = 0.5 * (coords[1:] + coords[:-1])
+        inside = _covered(cover, mids)
+        for j in np.flatnonzero(inside):
+            u, v = fixed[j][1], fixed[j + 1][1]
+            if u < 0 or v < 0:
+                continue  # reaches the padded root box: cannot be inside
+            sep.append((u, v))
+    sep = np.asarray(sep, np.int64).reshape(-1, 2)
+
+    # caps at every vertex: the shortest piece or separator part meeting it
+    p = b.coords()
+    allsegs = np.concatenate([b.pieces, sep])
+    length = np.linalg.norm(p[allsegs[:, 0]] - p[allsegs[:, 1]], axis=1)
+    caps = np.full(b.n_points, np.inf)
+    np.minimum.at(caps, allsegs.ravel(), np.repeat(length, 2))
+    # plan, then plan again with every vertex's ends capped at the shortest subsegment
+    # meeting it: where a separator crosses a segment both start equally short
+    from scipy.spatial import cKDTree
+
+    lonely_user = np.ones(len(p), bool)
+    lonely_user[segs.ravel()] = False
+    lonely_user = lonely_user[: len(verts)]
+    obstacles = cKDTree(np.concatenate([p[np.unique(b.pieces)], verts[lonely_user]]))
+    for _ in range(2):
+        plans = _plan(p, allsegs, sizer, caps, obstacles)
+        caps = np.minimum(caps, _end_lengths(p, allsegs, plans, len(p)))
+    plans = _plan(p, allsegs, sizer, caps, obstacles)
+    new, rows = _commit(b, allsegs, plans)
+    is_user_row = rows < len(b.pieces)
+    user_new, user_rows = new[is_user_row], rows[is_user_row]
+    sep_new = new[~is_user_row]
+    p = b.coords()
+    segments = np.concatenate([user_new, sep_new])
+    is_sep = np.concatenate([np.zeros(len(user_new), bool), np.ones(len(sep_new), bool)])
+    origin = np.concatenate([b.piece_origin[user_rows], np.full(len(sep_new), -1, np.int64)])
+    seg_marker = np.concatenate([b.piece_marker[user_rows], np.zeros(len(sep_new), np.int64)])
+
+    boxes = [box for box, _ in leaves]
+    tiles = _make_tiles(p, segments, is_sep, seg_marker, boxes, len(verts), holes, ptsc, tric, rowc, regions,
+                        centroid, weight)
+    cuts = np.array([[c.axis, c.value, c.lo, c.hi] for c in b.cuts]).reshape(-1, 4)
+    return Decomposition(
+        vertices=p, n_input=len(verts), segments=segments, separator=is_sep, origin=origin,
+        tiles=tuple(tiles), area=float(area_c.sum()), cuts=cuts, estimate=float(weight.sum()),
+        min_angle=None if min_angle is None else float(min_angle), max_area=float(max_area),
+        coarse_points=ptsc, coarse_triangles=tric, coarse_region=rowc, regions=regions,
+        holes=holes, segment_markers=seg_marker,
+    )
+
+
+def _make_tiles(p, segments, is_sep, seg_marker, boxes, n_input, holes, ptsc, tric, rowc, regions,
+                centroid=None, weight=None) -> list[Tile]:
+    """Each box's tile: the segments whose midpoint lies in the (closed) box."""
+    if weight is None:
+        centroid = ptsc[tric].mean(axis=1)
+        weight = np.zeros(len(tric))
+    mid = 0.5 * (p[segments[:, 0]] + p[segments[:, 1]])
+    on_seg = np.zeros(len(p), bool)
+    on_seg[segments.ravel()] = True
+    lonely = np.flatnonzero(~on_seg[:n_input])  # the user's vertices on no segment
+    tiles = []
+    for i, box in enumerate(boxes):
+        sel = (mid[:, 0] >= box[0]) & (mid[:, 0] <= box[1]) & (mid[:, 1] >= box[2]) & (mid[:, 1] <= box[3])
+        lv = lonely[(p[lonely, 0] > box[0]) & (p[lonely, 0] < box[1]) & (p[lonely, 1] > box[2]) & (p[lonely, 1] < box[3])]
+        ids = np.unique(np.concatenate([segments[sel].ravel(), lv]))
+        local = np.searchsorted(ids, segments[sel])
+        hsel = (holes[:, 0] >= box[0]) & (holes[:, 0] <= box[1]) & (holes[:, 1] >= box[2]) & (holes[:, 1] <= box[3])
+        inb = (centroid[:, 0] > box[0]) & (centroid[:, 0] < box[1]) & (centroid[:, 1] > box[2]) & (centroid[:, 1] < box[3])
+        extra = {}
+        if len(regions):
+            P = ptsc[tric]
+            over = ((P[:, :, 0].max(axis=1) >= box[0]) & (P[:, :, 0].min(axis=1) <= box[1])
+                    & (P[:, :, 1].max(axis=1) >= box[2]) & (P[:, :, 1].min(axis=1) <= box[3]))
+            rt = tric[over]
+            used, inv = np.unique(rt, return_inverse=True)
+            attr = np.where(rowc[over] >= 0, regions[np.clip(rowc[over], 0, None), 2], 0.0)
+            extra = dict(region_points=ptsc[used], region_triangles=inv.reshape(-1, 3), region_attribute=attr)
+        tiles.append(Tile(
+            index=i, box=box, vertex_ids=ids, vertices=p[ids], segments=local.astype(np.int64),
+            segment_markers=seg_marker[sel], separator=is_sep[sel], holes=holes[hsel],
+            estimate=float(weight[inb].sum()), **extra,
+        ))
+    return tiles
+
+
+def split_segments(decomp: Decomposition, rows: np.ndarray) -> tuple[Decomposition, np.ndarray]:
+    """Split the decomposition's segments ``rows`` at their midpoints.
+
+    Used where a tile's Triangle run could not meet the min angle next to a segment
+    it was not allowed to split (``-Y``): both tiles along a separator get the same
+    new point. Returns the new decomposition and the indices of the tiles that changed.
+    """
+    rows = np.unique(np.asarray(rows, dtype=np.int64))
+    p = decomp.vertices
+    seg = decomp.segments
+    a, e = p[seg[rows, 0]], p[seg[rows, 1]]
+    mid = 0.5 * (a + e)
+    for k in (0, 1):
+        same = a[:, k] == e[:, k]
+        mid[same, k] = a[same, k]
+    ids = len(p) + np.arange(len(rows), dtype=np.int64)
+    tail = np.stack([ids, seg[rows, 1]], axis=1)
+    seg2 = seg.copy()
+    seg2[rows, 1] = ids
+    segments = np.concatenate([seg2, tail])
+    is_sep = np.concatenate([decomp.separator, decomp.separator[rows]])
+    origin = np.concatenate([decomp.origin, decomp.origin[rows]])
+    marker = np.concatenate([decomp.segment_markers, decomp.segment_markers[rows]])
+    points = np.concatenate([p, mid])
+    boxes = [t.box for t in decomp.tiles]
+    tiles = _make_tiles(points, segments, is_sep, marker, boxes, decomp.n_input, decomp.holes,
+                        decomp.coarse_points, decomp.coarse_triangles, decomp.coarse_region, decomp.regions)
+    changed = []
+    for i, (old, new) in enumerate(zip(decomp.tiles, tiles)):
+        if len(old.segments) != len(new.segments):
+            changed.append(i)
+        tiles[i] = replace(new, estimate=old.estimate)
+    out = replace(decomp, vertices=points, segments=segments, separator=is_sep, origin=origin,
+                  segment_markers=marker, tiles=tuple(tiles))
+    return out, np.asarray(changed, dtype=np.int64)

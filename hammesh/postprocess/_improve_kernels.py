@@ -1,0 +1,478 @@
+"""Compiled loop (numba) of sparse mode's last step: cycle-keeping improvement flips.
+
+After the joins, every triangle a join created (a swap, a split's four, a bridge's
+sectors and flips, a fan) is judged against its parents. Where its angles are poor,
+a *Lawson flip* of an edge the cycle crosses can help: it merges the small angle with
+a neighbour's and re-splits the cavity of two triangles along the other diagonal --
+the local re-triangulation of a join's cavity that keeps the cycle.
+
+For two consecutive rows ``x = (a, b, c)``, ``y = (b, a, d)`` of a cycle (the cycle
+crosses ``ab``), the flip of ``ab`` into ``cd`` gives ``X = (a, d, c)`` and
+``Y = (d, b, c)``. The cycle enters ``x`` across one of ``bc``, ``ca`` and leaves ``y``
+across one of ``ad``, ``db``; if those two edges end up in different new triangles
+(``ca`` with ``db``, or ``bc`` with ``ad``) the cycle runs through ``X`` and ``Y``
+across ``cd`` in the same order: still one Hamiltonian cycle, no other row touched.
+A flip is taken only if the quadrilateral is strictly convex, neither edge is pinned
+(constrained, or between regions), the pair's smallest angle grows and its largest
+stays within ``max(hi, the pair's largest)``. The sorted angle vector of the mesh
+then grows lexicographically with every flip, so the loop ends (and is capped).
+
+Serial, nopython, ``cache=True``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hammesh.postprocess._join_kernels import _beat_cosines, _fan_eval, _fan_eval_fast
+
+
+@njit(cache=True, nogil=True)
+def _corner(ox, oy, qx, qy, rx, ry):
+    ux = qx - ox
+    uy = qy - oy
+    vx = rx - ox
+    vy = ry - oy
+    return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+
+
+@njit(cache=True, nogil=True)
+def _min_max(pts, a, b, c):
+    ax = pts[a, 0]
+    ay = pts[a, 1]
+    bx = pts[b, 0]
+    by = pts[b, 1]
+    cx = pts[c, 0]
+    cy = pts[c, 1]
+    a0 = _corner(ax, ay, bx, by, cx, cy)
+    a1 = _corner(bx, by, cx, cy, ax, ay)
+    a2 = math.pi - a0 - a1
+    return min(a0, min(a1, a2)), max(a0, max(a1, a2))
+
+
+@njit(cache=True, nogil=True)
+def _ccw(pts, a, b, c):
+    """Strictly counter-clockwise by more than a relative 1e-12 (no near-degenerate flip)."""
+    ux = pts[b, 0] - pts[a, 0]
+    uy = pts[b, 1] - pts[a, 1]
+    vx = pts[c, 0] - pts[a, 0]
+    vy = pts[c, 1] - pts[a, 1]
+    return ux * vy - uy * vx > 1e-12 * (ux * ux + uy * uy + vx * vx + vy * vy)
+
+
+@njit(cache=True, nogil=True)
+def _set_edge(twin, pinned, h, g, pin):
+    twin[h] = g
+    pinned[h] = pin
+    if g >= 0:
+        twin[g] = h
+
+
+@njit(cache=True, nogil=True)
+def _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x):
+    """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps."""
+    s = run_start[x]
+    ln = run_len[x]
+    if ln < 4:
+        return -1
+    y = x + 1 if x + 1 < s + ln else s
+    p = x - 1 if x > s else s + ln - 1
+    q = y + 1 if y + 1 < s + ln else s
+    kh = -1
+    kp = -1
+    for k in range(3):
+        g = twin[3 * x + k]
+        if g >= 0 and g // 3 == y:
+            kh = k
+        if g >= 0 and g // 3 == p:
+            kp = k
+    if kh < 0 or kp < 0 or pinned[3 * x + kh]:
+        return -1
+    h = 3 * x + kh
+    g = twin[h]
+    kg = g - 3 * y
+    kq = -1
+    for k in range(3):
+        f = twin[3 * y + k]
+        if f >= 0 and f // 3 == q:
+            kq = k
+    if kq < 0:
+        return -1
+    a = out[x, kh]
+    b = out[x, (kh + 1) % 3]
+    c = out[x, (kh + 2) % 3]
+    d = out[y, (kg + 2) % 3]
+    x_ca = kp == (kh + 2) % 3
+    y_db = kq == (kg + 2) % 3
+    if x_ca != y_db:
+        return -1  # both links would land in one new triangle
+    if not (_ccw(pts, a, d, c) and _ccw(pts, d, b, c)):
+        return -1
+    l1, h1 = _min_max(pts, a, b, c)
+    l2, h2 = _min_max(pts, b, a, d)
+    l3, h3 = _min_max(pts, a, d, c)
+    l4, h4 = _min_max(pts, d, b, c)
+    old_min = min(l1, l2)
+    new_min = min(l3, l4)
+    if new_min <= old_min * (1.0 + 1e-9) or max(h3, h4) > max(hi, max(h1, h2)):
+        return -1
+    e_ad = 3 * y + (kg + 1) % 3
+    e_db = 3 * y + (kg + 2) % 3
+    e_bc = 3 * x + (kh + 1) % 3
+    e_ca = 3 * x + (kh + 2) % 3
+    t_ad = twin[e_ad]
+    t_db = twin[e_db]
+    t_bc = twin[e_bc]
+    t_ca = twin[e_ca]
+    p_ad = pinned[e_ad]
+    p_db = pinned[e_db]
+    p_bc = pinned[e_bc]
+    p_ca = pinned[e_ca]
+    # X = (a, d, c) where the link to p is (ca: row x) or to q (ad: row y)
+    rx = x if x_ca else y
+    ry = y if x_ca else x
+    out[rx, 0] = a
+    out[rx, 1] = d
+    out[rx, 2] = c
+    out[ry, 0] = d
+    out[ry, 1] = b
+    out[ry, 2] = c
+    _set_edge(twin, pinned, 3 * rx, t_ad, p_ad)
+    _set_edge(twin, pinned, 3 * rx + 2, t_ca, p_ca)
+    _set_edge(twin, pinned, 3 * ry, t_db, p_db)
+    _set_edge(twin, pinned, 3 * ry + 1, t_bc, p_bc)
+    _set_edge(twin, pinned, 3 * rx + 1, 3 * ry + 2, False)
+    pinned[3 * ry + 2] = False
+    m = min(pm[x], pm[y])
+    pm[x] = m
+    pm[y] = m
+    kind[x] = 4
+    kind[y] = 4
+    return y
+
+
+@njit(cache=True, nogil=True)
+def _swap_rows(out, twin, pinned, pm, kind, parent, r1, r2):
+    """Exchange rows r1 and r2 (all per-row data) and re-point the twins."""
+    for k in range(3):
+        v = out[r1, k]
+        out[r1, k] = out[r2, k]
+        out[r2, k] = v
+        h1 = 3 * r1 + k
+        h2 = 3 * r2 + k
+        g = twin[h1]
+        twin[h1] = twin[h2]
+        twin[h2] = g
+        f = pinned[h1]
+        pinned[h1] = pinned[h2]
+        pinned[h2] = f
+    v = pm[r1]
+    pm[r1] = pm[r2]
+    pm[r2] = v
+    w = kind[r1]
+    kind[r1] = kind[r2]
+    kind[r2] = w
+    z = parent[r1]
+    parent[r1] = parent[r2]
+    parent[r2] = z
+    for r in (r1, r2):
+        for k in range(3):
+            g = twin[3 * r + k]
+            if g >= 0:
+                q = g // 3
+                if q == r1:
+                    g = 3 * r2 + g % 3
+                elif q == r2:
+                    g = 3 * r1 + g % 3
+                twin[3 * r + k] = g
+    for r in (r1, r2):
+        for k in range(3):
+            g = twin[3 * r + k]
+            if g >= 0:
+                twin[g] = 3 * r + k
+
+
+@njit(cache=True, nogil=True)
+def _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, x, kh, max_arc):
+    """Flip edge ``kh`` of row ``x`` whose other side is a non-consecutive row of the same run.
+
+    Both rows' links are their two other edges, so each new triangle gets one link of
+    each; the result is one cycle iff the new triangle at the lower position joins the
+    two rows' predecessors (or both successors): then the rows between them are
+    reversed in place (at most ``max_arc``). Returns how many, or -1 if no flip.
+    """
+    h = 3 * x + kh
+    g = twin[h]
+    if g < 0 or pinned[h]:
+        return -1
+    y = g // 3
+    s = run_start[x]
+    ln = run_len[x]
+    if run_start[y] != s or ln < 4:
+        return -1
+    i = min(x, y)
+    j = max(x, y)
+    if j - i < 2 or (i == s and j == s + ln - 1) or j - i - 1 > max_arc:
+        return -1
+    kg = g - 3 * y
+    a = out[x, kh]
+    b = out[x, (kh + 1) % 3]
+    c = out[x, (kh + 2) % 3]
+    d = out[y, (kg + 2) % 3]
+    if not (_ccw(pts, a, d, c) and _ccw(pts, d, b, c)):
+        return -1
+    e_ad = 3 * y + (kg + 1) % 3
+    e_db = 3 * y + (kg + 2) % 3
+    e_bc = 3 * x + (kh + 1) % 3
+    e_ca = 3 * x + (kh + 2) % 3
+    t_ad = twin[e_ad]
+    t_ca = twin[e_ca]
+    if t_ad < 0 or t_ca < 0:
+        return -1
+    nx = t_ca // 3  # the neighbours X = (a, d, c) joins
+    ny = t_ad // 3
+    n_i = nx if x == i else ny
+    n_j = ny if x == i else nx
+    prev_i = i - 1 if i > s else s + ln - 1
+    next_j = j + 1 if j + 1 < s + ln else s
+    if n_i == prev_i and n_j == j - 1:
+        x_low = True  # X at i: prev_i -> X -> j - 1 ... i + 1 -> Y -> next_j
+    elif n_i == i + 1 and n_j == next_j:
+        x_low = False  # Y at i: prev_i -> Y -> j - 1 ... i + 1 -> X -> next_j
+    else:
+        return -1
+    l1, h1 = _min_max(pts, a, b, c)
+    l2, h2 = _min_max(pts, b, a, d)
+    l3, h3 = _min_max(pts, a, d, c)
+    l4, h4 = _min_max(pts, d, b, c)
+    if min(l3, l4) <= min(l1, l2) * (1.0 + 1e-9) or max(h3, h4) > max(hi, max(h1, h2)):
+        return -1
+    t_db = twin[e_db]
+    t_bc = twin[e_bc]
+    p_ad = pinned[e_ad]
+    p_db = pinned[e_db]
+    p_bc = pinned[e_bc]
+    p_ca = pinned[e_ca]
+    par_x = parent[x]
+    par_y = parent[y]
+    mn = min(pm[x], pm[y])
+    rx = i if x_low else j
+    ry = j if x_low else i
+    out[rx, 0] = a
+    out[rx, 1] = d
+    out[rx, 2] = c
+    out[ry, 0] = d
+    out[ry, 1] = b
+    out[ry, 2] = c
+    _set_edge(twin, pinned, 3 * rx, t_ad, p_ad)
+    _set_edge(twin, pinned, 3 * rx + 2, t_ca, p_ca)
+    _set_edge(twin, pinned, 3 * ry, t_db, p_db)
+    _set_edge(twin, pinned, 3 * ry + 1, t_bc, p_bc)
+    _set_edge(twin, pinned, 3 * rx + 1, 3 * ry + 2, False)
+    pinned[3 * ry + 2] = False
+    parent[rx] = par_x
+    parent[ry] = par_y
+    pm[rx] = mn
+    pm[ry] = mn
+    kind[rx] = 4
+    kind[ry] = 4
+    for k in range((j - i - 1) // 2):
+        _swap_rows(out, twin, pinned, pm, kind, parent, i + 1 + k, j - 1 - k)
+    return j - i - 1
+
+
+@njit(cache=True, nogil=True)
+def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, max_flips, max_arc, arc_budget):
+    """Cycle-keeping Lawson flips around the rows with ``kind != 3`` (module docstring).
+
+    Modifies ``out``, ``twin`` (the output's half-edge twins), ``pinned``, ``pm`` (each
+    row's parents' smallest angle: a flipped pair gets the smaller of the two) and
+    ``kind`` (4 for a flipped row) in place. Returns the number of flips.
+
+    An edge between two rows of the same run that are not consecutive is flipped too
+    where that keeps one cycle (``_try_flip_apart``: the rows between are reversed,
+    at most ``max_arc`` of them, so ``parent`` moves with its rows; ``arc_budget``
+    rows reversed in all, which keeps the loop linear): this takes an incenter
+    sector's outer edge, merging its halved angles with a neighbour's.
+    """
+    k = out.shape[0]
+    stack = np.empty(k + 2 * max_flips + 4, np.int64)
+    top = 0
+    for r in range(k):
+        if kind[r] != 3:
+            stack[top] = r
+            top += 1
+    n = 0
+    while top > 0 and n < max_flips:
+        top -= 1
+        r = stack[top]
+        s = run_start[r]
+        prev = r - 1 if r > s else s + run_len[r] - 1
+        done = False
+        for x in (r, prev):
+            y = _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x)
+            if y >= 0:
+                n += 1
+                stack[top] = x
+                stack[top + 1] = y
+                top += 2
+                done = True
+                break
+        if done or kind[r] == 3:
+            continue
+        for k in range(3):
+            g = twin[3 * r + k]
+            if g < 0:
+                continue
+            y = g // 3
+            lo = min(r, y)
+            hi_r = max(r, y)
+            moved = _try_flip_apart(
+                pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, r, k, min(max_arc, arc_budget)
+            )
+            if moved >= 0:
+                arc_budget -= moved
+                n += 1
+                # rows between lo and hi_r moved: push the two flipped rows and their
+                # new cycle neighbours
+                stack[top] = lo
+                stack[top + 1] = hi_r
+                top += 2
+                break
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _place_star(pts, poly, n, px, py, lo, hi, step, iters):
+    """Compass search from ``(px, py)`` for the star over ``poly[:n]`` (``_join_kernels.place_fan``'s
+    search, with at most ``4 x iters`` rounds so a long thin star costs no more than a
+    round one). Returns ``(x, y, slack, smallest angle, largest angle)``, exact angles.
+    """
+    best = _fan_eval_fast(pts, poly, n, px, py, lo, hi, 2.0, -2.0)
+    if best == -np.inf:
+        return px, py, best, 0.0, np.pi
+    c_lo, c_hi = _beat_cosines(best, lo, hi)
+    mx = px
+    my = py
+    halvings = 0
+    rounds = 0
+    while halvings < iters and rounds < 4 * iters:
+        rounds += 1
+        moved = False
+        bx = mx
+        by = my
+        for k in range(8):
+            ang = 0.25 * math.pi * k
+            tx = mx + step * math.cos(ang)
+            ty = my + step * math.sin(ang)
+            sl = _fan_eval_fast(pts, poly, n, tx, ty, lo, hi, c_lo, c_hi)
+            if sl > best:
+                best = sl
+                c_lo, c_hi = _beat_cosines(best, lo, hi)
+                bx = tx
+                by = ty
+                moved = True
+        if moved:
+            mx = bx
+            my = by
+        else:
+            step *= 0.5
+            halvings += 1
+    best, bmin, bmax = _fan_eval(pts, poly, n, mx, my, lo, hi)
+    return mx, my, best, bmin, bmax
+
+
+@njit(cache=True, nogil=True)
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
+    """Move each free Steiner point to a better place in its star (in place).
+
+    Amenta, Bern & Eppstein's optimal point placement (see ``_join_kernels``):
+    ``_place_star`` maximises the star's slack (smallest angle minus
+    ``keep`` x its rows' parents' smallest, ``hi`` minus the largest) by compass
+    search from the point's current place. Points ``>= first`` whose star is closed
+    and touches no pinned edge (a midpoint of a constrained edge stays) are moved
+    where the star's smallest angle does not drop, its largest stays within
+    ``max(hi, its own)`` and its slack grows. An incenter's star, once improvement
+    flips took its sectors' outer edges, is larger than the triangle it split: the
+    point can move towards the whole angles. Returns the number of points moved.
+    """
+    n_pts = pts.shape[0]
+    k = out.shape[0]
+    cnt = np.zeros(n_pts - first + 1, np.int64)
+    for r in range(k):
+        for j in range(3):
+            v = out[r, j]
+            if v >= first:
+                cnt[v - first + 1] += 1
+    for i in range(1, cnt.shape[0]):
+        cnt[i] += cnt[i - 1]
+    rows = np.empty(cnt[-1], np.int64)
+    fill = cnt[:-1].copy()
+    for r in range(k):
+        for j in range(3):
+            v = out[r, j]
+            if v >= first:
+                rows[fill[v - first]] = 3 * r + j
+                fill[v - first] += 1
+    cap = 64
+    us = np.empty(cap, np.int64)
+    ws = np.empty(cap, np.int64)
+    poly = np.empty(cap, np.int64)
+    moved = 0
+    for v in range(first, n_pts):
+        a0 = cnt[v - first]
+        a1 = cnt[v - first + 1]
+        n = a1 - a0
+        if n < 3 or n > cap:
+            continue
+        ok = True
+        lo = np.inf
+        for i in range(n):
+            h = rows[a0 + i]
+            r = h // 3
+            kv = h - 3 * r
+            e_out = 3 * r + kv  # v -> u
+            e_in = 3 * r + (kv + 2) % 3  # w -> v
+            if twin[e_out] < 0 or twin[e_in] < 0 or pinned[e_out] or pinned[e_in]:
+                ok = False
+                break
+            us[i] = out[r, (kv + 1) % 3]
+            ws[i] = out[r, (kv + 2) % 3]
+            lo = min(lo, pm[r])
+        if not ok:
+            continue
+        # the link polygon, counter-clockwise: u -> w in each star triangle (v, u, w)
+        poly[0] = us[0]
+        cur = ws[0]
+        m = 1
+        while cur != us[0] and m < n:
+            poly[m] = cur
+            nxt = -1
+            for i in range(n):
+                if us[i] == cur:
+                    nxt = ws[i]
+                    break
+            if nxt < 0:
+                break
+            cur = nxt
+            m += 1
+        if m != n or cur != us[0]:
+            continue
+        lo *= keep
+        vx = pts[v, 0]
+        vy = pts[v, 1]
+        s0, n0, x0 = _fan_eval(pts, poly, n, vx, vy, lo, hi)
+        if s0 == -np.inf:
+            continue
+        d2 = np.inf
+        for i in range(n):
+            d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)
+        px, py, s1, n1, x1 = _place_star(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters)
+        if s1 > s0 and n1 >= n0 and x1 <= max(hi, x0):
+            pts[v, 0] = px
+            pts[v, 1] = py
+            moved += 1
+    return moved

@@ -1,0 +1,55 @@
+"""Per-tile Hamiltonian cycles joined across separators (issue 15 step 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.parallel.run import parallel_hamiltonian
+from tests.helpers import angles_deg, assert_cycles, dual_pieces, signed_areas
+from tests.parallel.test_tiles import _pieces_domain
+
+
+def _domain_area(dom, q, a):
+    m = hammesh.quality_mesh(dom, min_angle=q, max_area=a, isolate=False)
+    return np.abs(signed_areas(m.points, m.triangles)).sum()
+
+
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_demo_tiles_joined_into_one_certified_cycle(mode):
+    dom = hammesh.read_domain("hammesh/data/demo.poly")
+    h = parallel_hamiltonian(dom, min_angle=30, max_area=1e-3, tiles=3, mode=mode)
+    rep = h.report
+    assert rep["verified"] is True
+    par = rep["parallel"]
+    assert par["tiles"] == 3 and par["pieces"] == 1
+    assert par["joins"] == par["tile_cycles"] - 1 >= 2
+    assert par["joins_not_whole"] == 0  # every bridge between whole triangles: Thm 2.4's bound
+    # independent of the certificate
+    assert len(h.components) == 1
+    assert_cycles(h)
+    assert dual_pieces(h.triangles) == 1
+    assert (signed_areas(h.points, h.triangles) > 0).all()
+    assert signed_areas(h.points, h.triangles).sum() == pytest.approx(_domain_area(dom, 30, 1e-3), rel=1e-9)
+    assert angles_deg(h.points, h.triangles).min() >= 15.0 * (1 - 1e-9)
+    np.testing.assert_array_equal(h.points[: len(dom.vertices)], dom.vertices)
+    # regional attributes travel with the triangles (the demo's two regions)
+    assert set(np.unique(h.triangle_attributes[:, 0]).tolist()) == {1.0, 2.0}
+
+
+def test_several_pieces_get_one_cycle_each():
+    dom = _pieces_domain()
+    h = parallel_hamiltonian(dom, min_angle=28, max_area=1e-3, tiles=4)
+    assert h.report["verified"] is True
+    assert len(h.components) == 2 == dual_pieces(h.triangles)
+    assert_cycles(h)
+    assert signed_areas(h.points, h.triangles).sum() == pytest.approx(_domain_area(dom, 28, 1e-3), rel=1e-9)
+
+
+def test_one_tile_is_the_plain_pipeline():
+    dom = hammesh.read_domain("hammesh/data/demo.poly")
+    h = parallel_hamiltonian(dom, min_angle=30, max_area=2e-3, tiles=1)
+    assert h.report["parallel"]["joins"] == 0
+    assert len(h.components) == 1
+    assert_cycles(h)
