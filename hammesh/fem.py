@@ -56,11 +56,11 @@ def _require(module: str) -> Any:
         ) from None
 
 
-def _check(mesh: Any) -> Mesh | HamiltonianMesh:
+def _check(mesh: Any, *, planar: bool = False) -> Mesh | HamiltonianMesh:
     if not isinstance(mesh, (Mesh, HamiltonianMesh)):
         raise InvalidMeshError(f"expected a hammesh.Mesh or HamiltonianMesh, got {type(mesh).__name__}")
     validate_mesh(mesh)
-    if np.shape(mesh.points)[1] != 2:
+    if planar and np.shape(mesh.points)[1] != 2:
         raise InvalidMeshError(f"expected a planar mesh (points (n, 2)), got points {np.shape(mesh.points)}")
     return mesh
 
@@ -140,7 +140,7 @@ def to_skfem(mesh: Mesh | HamiltonianMesh) -> Any:
         Not a valid planar mesh, or a segment that is not an edge of the triangles.
     """
     skfem = _require("skfem")
-    mesh = _check(mesh)
+    mesh = _check(mesh, planar=True)
     p = np.ascontiguousarray(np.asarray(mesh.points, dtype=np.float64).T)
     t = np.ascontiguousarray(np.asarray(mesh.triangles, dtype=np.int64).T)
     base = skfem.MeshTri(p, t)
@@ -190,7 +190,8 @@ def to_meshio(mesh: Mesh | HamiltonianMesh, *, layout: str = ".vtu") -> Any:
 
 
 def to_pyvista(mesh: Mesh | HamiltonianMesh) -> Any:
-    """A ``pyvista.UnstructuredGrid`` of the triangles only (``z = 0``), with the cell
+    """A ``pyvista.UnstructuredGrid`` of the triangles only (planar meshes at ``z = 0``;
+    3D surfaces as they are), with the cell
     data of :func:`to_meshio` (without the ``skfem:`` fields) and ``vertex_marker`` as
     point data.
 

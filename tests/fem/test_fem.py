@@ -197,3 +197,16 @@ def test_plain_mesh_neighbors(plate_mesh):
     from hammesh.mesh import triangle_neighbors
 
     np.testing.assert_array_equal(neighbors(plate_mesh), triangle_neighbors(plate_mesh.triangles))
+
+
+def test_surfaces_go_to_pyvista_not_to_skfem():
+    pv = pytest.importorskip("pyvista")
+    pytest.importorskip("skfem")
+    from tests.helpers import grid_mesh
+
+    surface = grid_mesh(3, 2, z=True)
+    grid = hammesh.to_pyvista(surface)
+    np.testing.assert_array_equal(grid.points, surface.points)
+    assert set(np.asarray(grid.celltypes).tolist()) == {int(pv.CellType.TRIANGLE)}
+    with pytest.raises(InvalidMeshError, match=r"expected a planar mesh \(points \(n, 2\)\), got points \(12, 3\)"):
+        hammesh.to_skfem(surface)
