@@ -24,10 +24,12 @@ from hammesh.errors import (  # noqa: E402
     InvalidMeshError,
     InvalidOptionError,
     MeshingError,
+    MissingDependencyError,
     OutputError,
     VerificationError,
 )
 from hammesh.io import read_mesh, write  # noqa: E402
+from hammesh.fem import dual_graph, to_meshio, to_pyvista, to_skfem  # noqa: E402
 from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh  # noqa: E402
 from hammesh.meshing import quality_mesh  # noqa: E402
 from hammesh.postprocess import hamiltonian  # noqa: E402
@@ -43,6 +45,10 @@ __all__ = [
     "verify",
     "write",
     "read_mesh",
+    "to_skfem",
+    "to_meshio",
+    "to_pyvista",
+    "dual_graph",
     "Mesh",
     "HamiltonianMesh",
     "KIND_NAMES",
@@ -57,4 +63,5 @@ __all__ = [
     "MeshingError",
     "OutputError",
     "VerificationError",
+    "MissingDependencyError",
 ]

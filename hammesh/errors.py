@@ -18,6 +18,7 @@ __all__ = [
     "MeshingError",
     "VerificationError",
     "OutputError",
+    "MissingDependencyError",
     "Terminated",
 ]
 
@@ -58,6 +59,11 @@ class OutputError(HammeshError, OSError):
     """An output file cannot be written: missing or unwritable directory, full disk, an
     output that is also an input, two outputs naming one file.  The message names the
     target (never a temporary file)."""
+
+
+class MissingDependencyError(HammeshError, ImportError):
+    """An optional dependency (an extra such as ``hammesh[fem]``) is not installed; the
+    message names the ``pip install`` that provides it."""
 
 
 class Terminated(BaseException):

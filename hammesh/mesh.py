@@ -8,18 +8,22 @@ and return them (or plain arrays).  Conventions, everywhere in hammesh:
 * ``neighbors``: ``(m, 3) int64``; ``neighbors[t, k]`` is the triangle across edge
   ``(triangles[t, k], triangles[t, (k + 1) % 3])``, or ``-1`` on the boundary.
 * ``segments``: ``(s, 2) int64`` constrained edges; each is an edge of ``triangles``.
+* ``vertex_markers``: ``(n,) int64`` boundary markers of the points (Triangle's
+  convention: a point on a constrained edge whose own marker is 0 takes the edge's).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from hammesh.errors import InvalidMeshError
 
-__all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions"]
+__all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions", "triangle_neighbors",
+           "output_vertex_markers"]
 
 #: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
 #: 0: an input triangle's side joined to its incenter; 1: a flipped triangle
@@ -66,9 +70,12 @@ class Mesh:
     triangle_attributes : (m, k) float64
         Regional attributes (``k`` may be 0).
     neighbors : (m, 3) int64 or None
-        See the module docstring; ``None`` means "compute when needed".
+        See the module docstring; ``None`` means "compute when needed"
+        (:func:`triangle_neighbors`).
     info : dict
         Provenance: backend, switches, meshing seconds (``quality_mesh`` fills it).
+    vertex_markers : (n,) int64
+        Boundary marker of each point (Triangle's ``pointmarkers``; zeros if unknown).
     """
 
     points: np.ndarray
@@ -78,9 +85,11 @@ class Mesh:
     triangle_attributes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     neighbors: np.ndarray | None = None
     info: dict[str, Any] = field(default_factory=dict)
+    vertex_markers: np.ndarray = field(default_factory=lambda: _empty_i((0,)))
 
     def __post_init__(self) -> None:
-        for name in ("points", "triangles", "segments", "segment_markers", "triangle_attributes"):
+        for name in ("points", "triangles", "segments", "segment_markers", "triangle_attributes",
+                     "vertex_markers"):
             _coerce(self, name)
         if self.neighbors is not None:
             _coerce(self, "neighbors")
@@ -95,6 +104,7 @@ class Mesh:
             object.__setattr__(
                 self, "segment_markers", np.zeros(len(self.segments), dtype=np.int64)
             )
+        _fit_vertex_markers(self)
 
     @property
     def n_points(self) -> int:
@@ -103,6 +113,16 @@ class Mesh:
     @property
     def n_triangles(self) -> int:
         return int(self.triangles.shape[0])
+
+
+def _fit_vertex_markers(obj: Any) -> None:
+    """``obj.vertex_markers`` as ``(n,) int64``: zeros if missing or of the wrong length."""
+    n = len(obj.points)
+    markers = obj.vertex_markers
+    if markers is None or np.shape(markers) != (n,):
+        object.__setattr__(obj, "vertex_markers", np.zeros(n, dtype=np.int64))
+    elif markers.dtype != np.int64:
+        object.__setattr__(obj, "vertex_markers", np.asarray(markers).astype(np.int64))
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,6 +153,12 @@ class HamiltonianMesh:
         Regional attributes inherited from ``parent``.
     report : dict
         Counts, angles, timings and the verification verdict (see ``docs/report.md``).
+    vertex_markers : (n,) int64
+        The input's point markers at their indices; a Steiner point on a constrained
+        edge gets the edge's marker, any other Steiner point 0
+        (:func:`output_vertex_markers`).
+    neighbors : (m, 3) int64
+        Computed on first use (:func:`triangle_neighbors`), then kept.
     """
 
     points: np.ndarray
@@ -145,6 +171,12 @@ class HamiltonianMesh:
     kind: np.ndarray
     triangle_attributes: np.ndarray
     report: dict[str, Any] = field(default_factory=dict)
+    vertex_markers: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.vertex_markers is not None:
+            _coerce(self, "vertex_markers")
+        _fit_vertex_markers(self)
 
     @property
     def n_points(self) -> int:
@@ -153,6 +185,13 @@ class HamiltonianMesh:
     @property
     def n_triangles(self) -> int:
         return int(self.triangles.shape[0])
+
+    @cached_property
+    def neighbors(self) -> np.ndarray:
+        """``(m, 3) int64``: ``neighbors[t, k]`` is the triangle across edge
+        ``(triangles[t, k], triangles[t, (k + 1) % 3])``, -1 on the boundary (and across a
+        constrained edge only if it is on the boundary).  Computed on first use."""
+        return triangle_neighbors(self.triangles, self.n_points)
 
     @classmethod
     def from_order(cls, points: np.ndarray, triangles: np.ndarray, report: dict[str, Any] | None = None) -> HamiltonianMesh:
@@ -182,6 +221,7 @@ class HamiltonianMesh:
             segments=self.segments,
             segment_markers=self.segment_markers,
             triangle_attributes=self.triangle_attributes,
+            vertex_markers=self.vertex_markers,
         )
 
 
@@ -195,3 +235,61 @@ def cycle_positions(components: np.ndarray) -> np.ndarray:
     if len(runs) == 1:
         return np.arange(int(runs[0]), dtype=np.int64)
     return np.arange(int(runs.sum()), dtype=np.int64) - np.repeat(np.cumsum(runs) - runs, runs)
+
+
+def triangle_neighbors(triangles: np.ndarray, n_points: int | None = None) -> np.ndarray:
+    """The neighbour array of a consistently oriented, edge-manifold triangle array.
+
+    Parameters
+    ----------
+    triangles : (m, 3) int
+    n_points : int, optional
+        Number of points (default: ``triangles.max() + 1``).
+
+    Returns
+    -------
+    (m, 3) int64
+        ``[t, k]``: the triangle across edge ``(triangles[t, k], triangles[t, (k+1) % 3])``,
+        -1 on the boundary (see the module docstring).
+
+    Raises
+    ------
+    InvalidMeshError
+        An edge is shared by three triangles or by two in the same direction.
+
+    Examples
+    --------
+    >>> triangle_neighbors(np.array([[0, 1, 2], [2, 1, 3]])).tolist()
+    [[-1, 1, -1], [0, -1, -1]]
+    """
+    from hammesh.halfedge import half_edges  # halfedge imports this module
+
+    tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if n_points is None:
+        n_points = int(tri.max()) + 1 if tri.size else 0
+    twin = half_edges(tri, int(n_points)).twin
+    return np.where(twin >= 0, twin // 3, -1).reshape(-1, 3)
+
+
+def output_vertex_markers(
+    input_markers: np.ndarray, n_points: int, segments: np.ndarray, segment_markers: np.ndarray
+) -> np.ndarray:
+    """Point markers of a post-processed mesh whose first points are the input's.
+
+    The input's ``input_markers`` stay at their indices; a new point that is an end of
+    a constrained edge (a split edge's midpoint) gets that edge's marker, as Triangle
+    marks the points it inserts on a segment; other new points get 0.
+
+    >>> output_vertex_markers(np.array([1, 1]), 4, np.array([[0, 2], [2, 1]]), np.array([7, 7])).tolist()
+    [1, 1, 7, 0]
+    """
+    markers = np.zeros(int(n_points), dtype=np.int64)
+    given = np.asarray(input_markers, dtype=np.int64).reshape(-1)[: int(n_points)]
+    markers[: len(given)] = given
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    mk = np.asarray(segment_markers, dtype=np.int64).reshape(-1)
+    if len(mk) == len(seg):
+        for end in (0, 1):
+            new = seg[:, end] >= len(given)
+            markers[seg[new, end]] = mk[new]
+    return markers

@@ -119,8 +119,8 @@ class Domain:
                 f"{len(self.holes)} holes, {len(self.regions)} regions{fixed})")
 
     @classmethod
-    def from_polygon(cls, outer, holes=(), *, internal_segments=None,
-                     strict: bool = False) -> "Domain":
+    def from_polygon(cls, outer, holes=(), *, internal_segments=None, ring_markers=None,
+                     internal_markers=None, strict: bool = False) -> "Domain":
         """Build a domain from an outer ring, hole rings and internal polylines.
 
         Parameters
@@ -135,6 +135,15 @@ class Domain:
             Open polylines of constrained segments (cracks, internal loops).  A point
             exactly equal to an existing vertex reuses it, so a polyline may start on
             the boundary, and repeating its first point closes it into a loop.
+        ring_markers : sequence, optional
+            One entry per ring, the outer ring first, then the holes: an int (the
+            marker of every side of the ring) or a sequence of ``k_i`` ints (side ``j``
+            runs from ring point ``j`` to ``j + 1``).  Default: 1 everywhere.  A ring
+            point gets the marker of the side leaving it.
+        internal_markers : sequence, optional
+            One entry per internal polyline: an int or one int per segment.  Default 0
+            (new polyline points get vertex marker 0, so Triangle gives the points
+            it meshes on a polyline the polyline's marker).
         strict : bool
             Refuse instead of repairing internal polylines that cross, overlap or
             touch (see :class:`Domain`). The rings themselves are never repaired: they
@@ -143,8 +152,13 @@ class Domain:
         Returns
         -------
         Domain
-            Vertices in order outer ring, hole rings, new polyline points; ring
-            segments have marker 1 and vertex marker 1, internal ones marker 0.
+            Vertices in order outer ring, hole rings, new polyline points; segments in
+            order ring sides (ring by ring), then polyline segments.
+
+        Raises
+        ------
+        InvalidDomainError
+            A marker entry that is neither an int nor one int per side.
 
         Examples
         --------
@@ -152,6 +166,9 @@ class Domain:
         ...                         [[[1, 1], [2, 1], [2, 2], [1, 2]]])
         >>> bool(1 < d.holes[0, 0] < 2 and 1 < d.holes[0, 1] < 2)
         True
+        >>> d = Domain.from_polygon([[0, 0], [4, 0], [4, 4], [0, 4]], ring_markers=[[1, 2, 2, 2]])
+        >>> d.segment_markers.tolist(), d.vertex_markers.tolist()
+        ([1, 2, 2, 2], [1, 2, 2, 2])
         """
         rings = [_ring(outer, "outer ring")]
         rings += [_ring(h, f"hole ring {i}") for i, h in enumerate(holes)]
@@ -164,13 +181,17 @@ class Domain:
             idx = base + np.arange(k)
             segments.append(np.stack([idx, np.roll(idx, -1)], axis=1))
         nb = sum(len(r) for r in vertices)
-        vmarks = [np.ones(nb, np.int64)]
-        smarks = [np.ones(nb, np.int64)]
+        ring_sides = _side_markers(ring_markers, [len(r) for r in rings], "ring_markers", 1)
+        vmarks = [np.concatenate(ring_sides)]  # a ring point: the side leaving it
+        smarks = [np.concatenate(ring_sides)]
         # the rings must be simple and disjoint (hole points, nesting): never repaired
         repair_graph(np.concatenate(vertices), np.concatenate(segments), smarks[0], vmarks[0],
                      strict=True)
 
+        if internal_segments is None and internal_markers is not None:
+            raise InvalidDomainError("internal_markers given without internal_segments")
         if internal_segments is not None:
+            internal_segments = list(internal_segments)
             lookup = {}
             for i, p in enumerate(np.concatenate(vertices)):
                 lookup.setdefault((float(p[0]), float(p[1])), i)
@@ -190,6 +211,8 @@ class Domain:
                 idx = np.asarray(idx, np.int64)
                 segments.append(np.stack([idx[:-1], idx[1:]], axis=1))
                 smarks.append(np.zeros(len(idx) - 1, np.int64))
+            counts = [len(sm) for sm in smarks[1:]]
+            smarks[1:] = _side_markers(internal_markers, counts, "internal_markers", 0)
             if extra:
                 vertices.append(np.asarray(extra, np.float64))
                 vmarks.append(np.zeros(len(extra), np.int64))
@@ -204,6 +227,32 @@ class Domain:
 
 
 # ----------------------------------------------------------------------------- conversion
+
+def _side_markers(markers, sides, name, default):
+    """One ``(sides[i],) int64`` array per ring / polyline from ``markers`` (see
+    :meth:`Domain.from_polygon`): None gives ``default``; an entry is an int or one int
+    per side."""
+    if markers is None:
+        return [np.full(k, default, np.int64) for k in sides]
+    if isinstance(markers, (str, bytes)) or not hasattr(markers, "__len__"):
+        raise InvalidDomainError(f"{name} must be a sequence with one entry per "
+                                 f"{'ring' if name == 'ring_markers' else 'polyline'}, got {markers!r}")
+    markers = list(markers)
+    if len(markers) != len(sides):
+        raise InvalidDomainError(f"{name} has {len(markers)} entries, expected {len(sides)}")
+    out = []
+    for i, (entry, k) in enumerate(zip(markers, sides)):
+        if np.isscalar(entry) or (isinstance(entry, np.ndarray) and entry.ndim == 0):
+            arr = _as_int([entry], f"{name}[{i}]", None)
+            arr = np.full(k, arr[0], np.int64)
+        else:
+            arr = _as_int(entry, f"{name}[{i}]", None)
+            if arr.shape != (k,):
+                raise InvalidDomainError(
+                    f"{name}[{i}] has shape {np.shape(entry)}, expected an int or {k} ints (one per side)")
+        out.append(arr)
+    return out
+
 
 def _as_float(value, name, ncols):
     if value is None:  # "none of these" (holes=None, regions=None)

@@ -21,8 +21,11 @@ simple polygons (:func:`read_polygon`: ``.poly``, GeoJSON, WKT, text) are read h
 Formats that hold cell data (``.vtu .vtk .msh .xdmf``; ``.ele`` as attributes) store a
 :class:`~hammesh.mesh.HamiltonianMesh`'s ``cycle_position``, ``cycle_id``, ``parent``
 and ``kind`` per triangle; every format keeps the triangles' order, which is the cycle.
-The same formats store the constrained edges and their markers (``line`` cells with
-``segment_marker``, Gmsh physical tags in ``.msh``; the ``.poly`` next to a ``.ele``).
+The same formats store the constrained edges and their markers (per-triangle cell data
+in ``.vtu .vtk .xdmf``, which hold triangles only; ``line`` elements with named physical
+groups in ``.msh``; the ``.poly`` next to a ``.ele``), the regions as named sets
+(``marker_<k>``, ``region_<a>``: :mod:`hammesh.io.tags`, read by ``skfem.MeshTri.load``)
+and the points' markers.
 
 Examples
 --------

@@ -4,14 +4,21 @@ Writing keeps the triangles' row order (for a :class:`~hammesh.mesh.HamiltonianM
 that order *is* the cycle) and, where the format can hold cell data (``.vtu``, ``.vtk``,
 ``.msh``, ``.xdmf``), stores the per-triangle fields of
 :func:`hammesh.io.cell_data.triangle_cell_data`: ``cycle_position``, ``cycle_id``,
-``parent``, ``kind`` and ``attribute_<i>``.  The other formats get geometry and
-connectivity only.
+``parent``, ``kind`` and ``attribute_<i>``, and the points' markers (point data
+``vertex_marker``, if any is nonzero).  The other formats get geometry and
+connectivity only.  Constrained edges and regions are stored so that FEM codes find
+them by name (:mod:`hammesh.io.tags`):
 
-Constrained edges (``mesh.segments``) go, in those four formats, into ``line`` cells
-after the triangles, with cell data ``segment_marker`` (the markers; ``-1`` on
-triangles); on line cells the triangle fields are ``-1`` (integers) or NaN
-(``attribute_<i>``).  ``.msh`` also gets ``gmsh:physical`` / ``gmsh:geometrical`` tags
-(see :func:`_gmsh_blocks`).  A mesh without segments is written as before.
+* ``.vtu .vtk .xdmf`` hold **triangles only** (``pyvista.read`` gets a pure triangle
+  grid): the constrained edges are the cell data ``segment_edges`` / ``edge_marker``,
+  and scikit-fem's ``skfem:b:marker_<k>`` / ``skfem:s:region_<a>`` fields name the
+  boundaries and subdomains for ``skfem.MeshTri.load``.  A mesh whose segments are not
+  all distinct triangle edges (invalid, but ``hammesh check`` must be able to report
+  it) is written as before: ``line`` cells after the triangles with cell data
+  ``segment_marker`` (``-1`` on triangles; the triangle fields ``-1`` or NaN on lines).
+* ``.msh`` (Gmsh 4.1) has ``line`` elements per marker and named physical groups
+  (``$PhysicalNames``: ``marker_<k>`` of dimension 1, ``region_<a>`` of dimension 2;
+  see :func:`_gmsh_blocks`), and keeps the point numbering.
 
 Format notes (meshio 5.3):
 
@@ -20,10 +27,14 @@ Format notes (meshio 5.3):
 * ``.msh`` is written as Gmsh 4.1 binary (meshio's default for ``.msh`` is ANSYS);
   read as Gmsh first, then ANSYS.  Gmsh stores cell data as float64.
 * Gmsh 4.1 tags entities, not elements, and meshio writes an entity (with its
-  physical tag) only if some node is classified on it: each entity gets a node of its
-  own.  meshio's Gmsh reader returns the points grouped by entity and drops the node
-  tags; :func:`write` stores each node's entity (point data ``gmsh_node_entity``) so
-  :func:`read` restores the numbering.
+  physical tag) only if some node is classified on it; its reader returns the points
+  grouped by entity, in file order.  :func:`write` classifies node ``i`` on entity
+  ``i`` (entities sorted by dimension, then tag) and every later node on the last one,
+  so the file order is the point order and any Gmsh reader (``meshio``,
+  ``skfem.MeshTri.load``) gets hammesh's numbering.  The classification says nothing
+  about geometry (meshio and Gmsh do not use it).  Files written before stored each
+  node's entity (point data ``gmsh_node_entity``); :func:`read` still restores their
+  numbering.
 * meshio prints warnings to ``sys.stderr`` (via rich): reading redirects them.
 * ``.xdmf`` is written with its arrays inline (``data_format="XML"``) so the output is
   one file that can be replaced atomically (the HDF5 default writes a sibling ``.h5``).
@@ -52,11 +63,12 @@ import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
+from hammesh.io import tags
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
-__all__ = ["read", "to_mesh", "write", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
+__all__ = ["read", "to_mesh", "write", "as_meshio", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
 
 #: suffix -> (meshio format names tried when reading, format written, writer kwargs)
 _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
@@ -108,9 +120,11 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
 
     Notes
     -----
-    ``.vtu .vtk .xdmf``: cells ``[("triangle", triangles), ("line", segments)]`` (no
-    line block without segments).  ``.msh``: triangle blocks (runs of equal physical
-    tag, concatenated in row order) then one line block per marker, markers ascending.
+    ``.vtu .vtk .xdmf``: cells ``[("triangle", triangles)]`` with the edge and
+    ``skfem:`` fields (:mod:`hammesh.io.tags`); ``[("triangle", triangles), ("line",
+    segments)]`` if the segments are not all distinct triangle edges.  ``.msh``:
+    triangle blocks (runs of equal physical tag, concatenated in row order) then one
+    line block per marker, markers ascending.
 
     Raises
     ------
@@ -125,6 +139,33 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     suffix = _suffix(path)
     validate_mesh(mesh)
     _, file_format, kwargs = _FORMATS[suffix]
+    out = _as_meshio(mesh, suffix, path)
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, out, file_format=file_format, **kwargs)
+
+
+def as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str = ".vtu") -> Any:
+    """The ``meshio.Mesh`` that :func:`write` writes to a file of suffix ``suffix``.
+
+    ``".vtu"`` (also ``.vtk .xdmf``): triangles only, the edge, ``skfem:`` and cycle
+    fields as cell data; ``".msh"``: Gmsh blocks with physical tags and names; the
+    formats without cell data: points and triangles.  Points get ``z = 0``.
+
+    Raises
+    ------
+    InvalidMeshError
+        The mesh is not writable.
+    FileFormatError
+        Unknown suffix.
+    """
+    path = Path(f"mesh{suffix}")
+    suffix = _suffix(path)
+    validate_mesh(mesh)
+    return _as_meshio(mesh, suffix, path)
+
+
+def _as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str, path: Path) -> Any:
+    import meshio
 
     points = np.asarray(mesh.points, dtype=np.float64)
     # 3D surfaces (hammesh.surface) as they are; planar meshes get z = 0
@@ -132,25 +173,38 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     if suffix == ".ply":
         triangles = triangles.astype(np.int32)
-    segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)
     cells: list[tuple[str, np.ndarray]] = [("triangle", triangles)]
     cell_data: dict[str, list[np.ndarray]] = {}
     point_data: dict[str, np.ndarray] = {}
+    field_data: dict[str, np.ndarray] = {}
     if suffix in CELL_DATA_SUFFIXES:
-        cell_data = {k: [v] for k, v in triangle_cell_data(mesh).items()}
-        if len(segments):
-            markers = _segment_markers(mesh)
-            if suffix == ".msh" and (markers.min() < -(2**31) or markers.max() >= 2**31):
-                bad = int(markers[np.argmax(np.abs(markers))])
-                raise InvalidMeshError(f"{path}: segment marker {bad} does not fit Gmsh's 32-bit physical tags")
-            if suffix == ".msh":
-                cells, cell_data, point_data = _gmsh_blocks(mesh, triangles, segments, markers)
-            else:
-                cells.append(("line", segments))
-                cell_data = _with_line_block(cell_data, len(triangles), markers)
-    out = meshio.Mesh(points3, cells, point_data=point_data, cell_data=cell_data)
-    with atomic_path(path) as tmp:
-        meshio.write(tmp, out, file_format=file_format, **kwargs)
+        if suffix == ".msh":
+            cells, cell_data, point_data, field_data = _gmsh_blocks(mesh, triangles, path)
+        else:
+            cells, cell_data = _vtk_cells(mesh, triangles)
+        vertex_markers = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64)
+        if vertex_markers.shape == (len(points),) and vertex_markers.any():
+            point_data[tags.VERTEX_MARKER] = vertex_markers
+    return meshio.Mesh(points3, cells, point_data=point_data, cell_data=cell_data, field_data=field_data)
+
+
+def _vtk_cells(
+    mesh: Mesh | HamiltonianMesh, triangles: np.ndarray
+) -> tuple[list[tuple[str, np.ndarray]], dict[str, list[np.ndarray]]]:
+    """Cells and cell data of a ``.vtu .vtk .xdmf`` file (see :func:`write`)."""
+    data = triangle_cell_data(mesh)
+    segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)
+    slots = tags.segment_slots(triangles, segments)
+    if slots is None:  # not storable per triangle: explicit line cells
+        markers = _segment_markers(mesh)
+        cell_data = _with_line_block({k: [v] for k, v in data.items()}, len(triangles), markers)
+        return [("triangle", triangles), ("line", segments)], cell_data
+    if len(segments):
+        flags, edge_marker = tags.edge_fields(mesh)
+        data[tags.SEGMENT_EDGES] = flags
+        data[tags.EDGE_MARKER] = edge_marker
+    data.update(tags.skfem_cell_data(mesh, slots))
+    return [("triangle", triangles)], {k: [v] for k, v in data.items()}
 
 
 def _segment_markers(mesh: Mesh | HamiltonianMesh) -> np.ndarray:
@@ -177,16 +231,25 @@ def _with_line_block(
     return data
 
 
-def _triangle_physical(mesh: Mesh | HamiltonianMesh) -> np.ndarray:
-    """Gmsh physical tag of each triangle: the first regional attribute if it is
-    integral (and fits an int32), else 1."""
+def _triangle_physical(mesh: Mesh | HamiltonianMesh) -> tuple[np.ndarray, dict[int, str]]:
+    """Gmsh physical tag of each triangle and the names of the tags.
+
+    The first regional attribute if it is integral (and fits an int32), else its rank
+    among the distinct values plus 1; named ``region_<a>`` (:func:`hammesh.io.tags.region_name`).
+    Without attributes: tag 1, unnamed.
+    """
     m = len(mesh.triangles)
-    attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64)
-    if attrs.ndim == 2 and attrs.shape[0] == m and attrs.shape[1]:
-        first = attrs[:, 0]
-        if np.all(first == np.round(first)) and np.all(np.abs(first) < 2**31):
-            return first.astype(np.int64)
-    return np.ones(m, dtype=np.int64)
+    regions = tags.region_values(mesh)
+    if regions is None or np.isnan(regions).any():
+        return np.ones(m, dtype=np.int64), {}
+    values, rank = np.unique(regions, return_inverse=True)
+    if np.all(values == np.round(values)) and np.all(np.abs(values) < 2**31):
+        physical = regions.astype(np.int64)
+        names = {int(v): tags.region_name(v) for v in values}
+    else:
+        physical = rank.reshape(-1).astype(np.int64) + 1
+        names = {i + 1: tags.region_name(v) for i, v in enumerate(values)}
+    return physical, names
 
 
 def _runs(values: np.ndarray) -> list[np.ndarray]:
@@ -195,58 +258,51 @@ def _runs(values: np.ndarray) -> list[np.ndarray]:
     return np.split(np.arange(len(values)), cuts)
 
 
-def _node_entities(groups: list[np.ndarray], n: int) -> np.ndarray | None:
-    """One distinct node per entity (``groups[e]``: the entity's vertices), or None.
-
-    Returns ``(len(groups),)`` node indices; meshio writes an entity of the
-    ``$Entities`` section (and so its physical tag) only if some node belongs to it.
-    """
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import maximum_bipartite_matching
-
-    rows = np.repeat(np.arange(len(groups)), [len(g) for g in groups])
-    cols = np.concatenate(groups)
-    graph = csr_matrix((np.ones(len(cols)), (rows, cols)), shape=(len(groups), n))
-    match = maximum_bipartite_matching(graph, perm_type="column")
-    return None if np.any(match < 0) else match
-
-
 def _gmsh_blocks(
-    mesh: Mesh | HamiltonianMesh, triangles: np.ndarray, segments: np.ndarray, markers: np.ndarray
-) -> tuple[list[tuple[str, np.ndarray]], dict[str, list[np.ndarray]], dict[str, np.ndarray]]:
-    """Cells, cell data and point data of a Gmsh 4.1 file with physical tags.
+    mesh: Mesh | HamiltonianMesh, triangles: np.ndarray, path: Path
+) -> tuple[list[tuple[str, np.ndarray]], dict[str, list[np.ndarray]], dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Cells, cell data, point data and field data (physical names) of a Gmsh 4.1 file.
 
     Gmsh 4.1 gives physical tags to entities, not elements, so the triangles are
     split into maximal runs of equal physical tag (one entity each, in row order:
     concatenated they are the triangles unchanged) and the segments are grouped by
-    marker (one entity each, markers ascending, file order kept inside a group).  Each
-    entity needs a node of its own (:func:`_node_entities`); if no such choice exists
-    (pathological meshes), the triangles and then the segments are merged into one
-    entity, the physical tag of its first cell; ``segment_marker`` stays exact.
+    marker (one entity each, markers ascending, file order kept inside a group).
+    Physical names (``field_data``): ``marker_<k>`` (dimension 1) and ``region_<a>``
+    (dimension 2), which meshio turns into ``cell_sets`` and ``skfem.MeshTri.load``
+    into named boundaries and subdomains.
+
+    Each entity needs a node (see the module notes): with more entities than points
+    (pathological meshes) the triangles and then the segments are merged into one
+    entity, the physical tag of its first cell (names dropped); ``segment_marker``
+    and ``attribute_<i>`` stay exact.
     """
     n, m = len(mesh.points), len(triangles)
-    physical = _triangle_physical(mesh)
+    segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)
+    markers = _segment_markers(mesh)
+    if len(markers) and (markers.min() < -(2**31) or markers.max() >= 2**31):
+        bad = int(markers[np.argmax(np.abs(markers))])
+        raise InvalidMeshError(f"{path}: segment marker {bad} does not fit Gmsh's 32-bit physical tags")
+    physical, region_names = _triangle_physical(mesh)
     order = np.argsort(markers, kind="stable")
-    tri_data = triangle_cell_data(mesh)
-    for split_triangles, split_lines in ((True, True), (False, True), (False, False)):
-        tri_runs = _runs(physical) if split_triangles else [np.arange(m)]
-        line_groups = _runs(markers[order]) if split_lines else [np.arange(len(order))]
-        line_groups = [order[g] for g in line_groups]
-        groups = [np.unique(triangles[r]) for r in tri_runs]
-        groups += [np.unique(segments[g]) for g in line_groups]
-        owner = _node_entities(groups, n)
-        if owner is not None:
-            break
-    else:
-        raise InvalidMeshError("cannot write Gmsh entities: the cells use fewer than 2 distinct points")
+    marker_names = {int(k): tags.boundary_name(k) for k in np.unique(markers)}
+    tri_runs = _runs(physical)
+    line_groups = [order[g] for g in _runs(markers[order])] if len(order) else []
+    if len(tri_runs) + len(line_groups) > n:
+        tri_runs, region_names = [np.arange(m)], {}
+    if len(tri_runs) + len(line_groups) > n:
+        line_groups, marker_names = [order], {}
 
+    tri_data = triangle_cell_data(mesh)
+    with_lines = bool(line_groups)
+    keys = [*tri_data, *([SEGMENT_MARKER] if with_lines else []), *_GMSH_TAGS]
     cells: list[tuple[str, np.ndarray]] = []
-    data: dict[str, list[np.ndarray]] = {k: [] for k in [*tri_data, SEGMENT_MARKER, *_GMSH_TAGS]}
+    data: dict[str, list[np.ndarray]] = {k: [] for k in keys}
     for tag, rows in enumerate(tri_runs, start=1):
         cells.append(("triangle", triangles[rows]))
         for k, v in tri_data.items():
             data[k].append(v[rows])
-        data[SEGMENT_MARKER].append(np.full(len(rows), -1, dtype=np.int64))
+        if with_lines:
+            data[SEGMENT_MARKER].append(np.full(len(rows), -1, dtype=np.int64))
         data["gmsh:physical"].append(np.full(len(rows), physical[rows[0]], dtype=np.int64))
         data["gmsh:geometrical"].append(np.full(len(rows), tag, dtype=np.int64))
     for tag, rows in enumerate(line_groups, start=1):
@@ -257,17 +313,16 @@ def _gmsh_blocks(
         data["gmsh:physical"].append(np.full(len(rows), markers[rows[0]], dtype=np.int64))
         data["gmsh:geometrical"].append(np.full(len(rows), tag, dtype=np.int64))
 
-    # node -> entity (dim, tag): every node in the first triangle entity, then each
-    # entity's own node moved to it
-    dim_tags = np.tile(np.array([2, 1], dtype=np.int64), (n, 1))
-    entities = [(2, t) for t in range(1, len(tri_runs) + 1)]
-    entities += [(1, t) for t in range(1, len(line_groups) + 1)]
-    dim_tags[owner] = np.array(entities, dtype=np.int64)
-    # meshio's Gmsh reader returns the nodes grouped by entity: store each node's
-    # entity (its row in the sorted entity list) to restore the order on reading
-    _, code = np.unique(dim_tags, axis=0, return_inverse=True)
-    point_data = {"gmsh:dim_tags": dim_tags, NODE_ENTITY: code.reshape(-1).astype(np.float64)}
-    return cells, data, point_data
+    # node i on entity i (entities in meshio's sorted order: curves, then surfaces by
+    # tag), later nodes on the last entity: the file keeps the point order
+    entities = [(1, t) for t in range(1, len(line_groups) + 1)]
+    entities += [(2, t) for t in range(1, len(tri_runs) + 1)]
+    dim_tags = np.empty((n, 2), dtype=np.int64)
+    dim_tags[: len(entities)] = entities
+    dim_tags[len(entities):] = entities[-1]
+    field_data = {name: np.array([tag, 1]) for tag, name in marker_names.items()}
+    field_data.update({name: np.array([tag, 2]) for tag, name in region_names.items()})
+    return cells, data, {"gmsh:dim_tags": dim_tags}, field_data
 
 
 def _first_line(exc: BaseException) -> str:
@@ -492,6 +547,10 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
         if column is not None and np.all(column == np.round(column)):
             markers = column.astype(np.int64)
             break
+    if not seg_blocks:
+        from_fields = _edge_field_segments(raw.cell_data, tri_origin, triangles)
+        if from_fields is not None:
+            segments, markers = from_fields
 
     return Mesh(
         points=points,
@@ -500,7 +559,49 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
         segment_markers=markers,
         triangle_attributes=attributes,
         info={"repairs": repairs} if repairs else {},
+        vertex_markers=_vertex_markers(raw.point_data, to_original, n),
     )
+
+
+def _vertex_markers(point_data: Any, to_original: np.ndarray | None, n: int) -> np.ndarray:
+    """Point data ``vertex_marker`` in point order, zeros if missing or not integral."""
+    values = point_data.get(tags.VERTEX_MARKER) if point_data else None
+    if values is None:
+        return np.zeros(n, dtype=np.int64)
+    values = np.asarray(values, dtype=np.float64).reshape(-1)
+    if len(values) != n or not np.all(values == np.round(values)):
+        return np.zeros(n, dtype=np.int64)
+    if to_original is not None:
+        restored = np.empty_like(values)
+        restored[to_original] = values
+        values = restored
+    return values.astype(np.int64)
+
+
+def _edge_field_segments(
+    cell_data: Any, origin: list[tuple[int, np.ndarray]], triangles: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Segments stored as the cell data ``segment_edges`` / ``edge_marker``
+    (:mod:`hammesh.io.tags`); None if absent or malformed, or if the triangles are not
+    the file's cells one for one (a split polygon)."""
+    flags_blocks = cell_data.get(tags.SEGMENT_EDGES)
+    marker_blocks = cell_data.get(tags.EDGE_MARKER)
+    if flags_blocks is None or marker_blocks is None:
+        return None
+    try:
+        flags = np.concatenate([np.asarray(flags_blocks[b]).reshape(-1)[rows] for b, rows in origin])
+        marks = np.concatenate([np.asarray(marker_blocks[b]).reshape(-1, 3)[rows] for b, rows in origin])
+    except (IndexError, ValueError, TypeError):
+        return None
+    if len(flags) != len(triangles) or len(marks) != len(triangles):
+        return None
+    if any(len(rows) != len(np.asarray(flags_blocks[b]).reshape(-1)) for b, rows in origin):
+        return None
+    flags = flags.astype(np.float64)
+    marks = marks.astype(np.float64)
+    if not (np.all(flags == np.round(flags)) and np.all(marks == np.round(marks))):
+        return None
+    return tags.segments_from_edge_fields(triangles, flags.astype(np.int64), marks.astype(np.int64))
 
 
 def _origin_column(per_block: Any, origin: list[tuple[int, np.ndarray]], length: int) -> np.ndarray | None:

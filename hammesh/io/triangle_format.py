@@ -3,8 +3,8 @@
 A mesh ``foo`` is three files, written together and atomically (each through a
 temporary sibling; the targets are replaced only once all three are complete):
 
-* ``foo.node``: ``<n> 2 0 0`` then ``<i> <x> <y>`` (zero-based, ``%.17g`` so floats
-  round-trip exactly);
+* ``foo.node``: ``<n> 2 0 1`` then ``<i> <x> <y> <marker>`` (zero-based, ``%.17g`` so
+  floats round-trip exactly; the points' boundary markers, ``vertex_markers``);
 * ``foo.poly``: the constrained edges, as Triangle's ``-p`` output writes them
   (``0 2 0 1``: vertices are in ``foo.node``; ``<s> 1``; ``<i> <a> <b> <marker>``;
   ``0`` holes).  Always written, possibly with no segments, so a stale ``.poly`` from an
@@ -94,10 +94,13 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
         with open(tmp_node, "w", encoding="ascii", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .node file, zero-based\n")
             f.write("# <# of vertices> <dimension> <# of attributes> <# of boundary markers>\n")
-            f.write(f"{n} 2 0 0\n")
-            f.write("# <vertex #> <x> <y>\n")
-            rows = np.column_stack([np.arange(n, dtype=np.float64), points])
-            _savetxt(f, rows, ["%d", "%.17g", "%.17g"])
+            f.write(f"{n} 2 0 1\n")
+            f.write("# <vertex #> <x> <y> <boundary marker>\n")
+            vmarks = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64).reshape(-1)
+            if len(vmarks) != n:
+                vmarks = np.zeros(n, dtype=np.int64)
+            rows = np.column_stack([np.arange(n, dtype=np.float64), points, vmarks.astype(np.float64)])
+            _savetxt(f, rows, ["%d", "%.17g", "%.17g", "%d"])
 
         with open(tmp_poly, "w", encoding="ascii", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .poly file, zero-based; vertices in {node_path.name}\n")
@@ -188,7 +191,7 @@ class _Tokens:
         return value
 
 
-def _read_node(path: Path) -> tuple[np.ndarray, int]:
+def _read_node(path: Path) -> tuple[np.ndarray, int, np.ndarray]:
     tok = _Tokens(path)
     head = tok.row("header '<# of vertices> <dimension> <# of attributes> <# of boundary markers>'", 2)
     n = tok.as_count(head[0], "number of vertices")
@@ -201,6 +204,7 @@ def _read_node(path: Path) -> tuple[np.ndarray, int]:
         raise tok.error("no vertices")
     tok.check_count(n, "vertices")
     points = np.empty((n, 2), dtype=np.float64)
+    vmarks = np.zeros(n, dtype=np.int64)
     base = 0
     for i in range(n):
         row = tok.row(f"vertex {i + 1} of {n}", 3 + n_attr + n_mark)
@@ -215,7 +219,9 @@ def _read_node(path: Path) -> tuple[np.ndarray, int]:
         if not (np.isfinite(x) and np.isfinite(y)):
             raise tok.error(f"vertex {number} is not finite")
         points[i] = x, y
-    return points, base
+        if n_mark:
+            vmarks[i] = tok.as_int(row[3 + n_attr], "boundary marker")
+    return points, base, vmarks
 
 
 def _vertex(tok: _Tokens, token: str, base: int, n: int) -> int:
@@ -276,7 +282,7 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         raise FileFormatError(f"{ele_path}: file not found")
     if not node_path.is_file():
         raise FileFormatError(f"{node_path}: file not found (needed by {ele_path.name})")
-    points, base = _read_node(node_path)
+    points, base, vmarks = _read_node(node_path)
     n = len(points)
 
     tok = _Tokens(ele_path)
@@ -318,4 +324,5 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         segments=segments,
         segment_markers=markers,
         triangle_attributes=np.ascontiguousarray(attrs),
+        vertex_markers=vmarks,
     )

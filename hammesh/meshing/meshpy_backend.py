@@ -41,7 +41,8 @@ def mesh_with_meshpy(domain: Domain, opts: MeshOptions, *, alloc: Allocator = np
             "backend (use backend='triangle')"
         )
     info = mt.MeshInfo()
-    info.set_points(np.array(domain.vertices, dtype=np.float64))
+    info.set_points(np.array(domain.vertices, dtype=np.float64),
+                    point_markers=np.asarray(domain.vertex_markers, dtype=np.int64).tolist())
     if len(domain.segments):
         info.set_facets(
             np.asarray(domain.segments, dtype=np.int64).tolist(),
@@ -79,4 +80,5 @@ def mesh_with_meshpy(domain: Domain, opts: MeshOptions, *, alloc: Allocator = np
         segment_markers=np.asarray(out.facet_markers, dtype=np.int64).reshape(-1),
         triangle_attributes=attrs,
         neighbors=nbr,
+        vertex_markers=np.asarray(out.point_markers, dtype=np.int64).reshape(-1),
     )

@@ -43,6 +43,9 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
     arrays are converted into them in one pass each.
     """
     data: dict[str, np.ndarray] = {"vertices": np.array(domain.vertices, dtype=np.float64)}
+    # Triangle keeps the input's point markers and gives a point it inserts on a
+    # segment (and an input point of marker 0 on one) the segment's marker
+    data["vertex_markers"] = np.array(domain.vertex_markers, dtype=np.int32)[:, None]
     if len(domain.segments):
         data["segments"] = np.array(domain.segments, dtype=np.int32)
         data["segment_markers"] = np.array(domain.segment_markers, dtype=np.int32)[:, None]
@@ -77,4 +80,5 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
         segment_markers=np.asarray(out.get("segment_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1),
         triangle_attributes=attrs.reshape(m, -1) if m else np.zeros((0, 0)),
         neighbors=nbr,
+        vertex_markers=np.asarray(out.get("vertex_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1),
     )

@@ -12,7 +12,7 @@ import numpy as np
 from hammesh import params
 from hammesh.domain.resolution import check_resolution
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
@@ -157,4 +157,5 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
             },
         }
     )
-    return replace(out, report=report)
+    vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
+    return replace(out, report=report, vertex_markers=vmarks)

@@ -89,7 +89,8 @@ def test_formats_without_cell_data_get_geometry_only(tmp_path, hexagon, suffix):
 
 def test_plain_mesh_has_no_cycle_fields(tmp_path, plain):
     meshio_format.write(plain, tmp_path / "m.vtu")
-    assert set(raw_read(tmp_path / "m.vtu").cell_data) == {"attribute_0", "segment_marker"}
+    names = set(raw_read(tmp_path / "m.vtu").cell_data)
+    assert {n for n in names if not n.startswith("skfem:")} == {"attribute_0", "segment_edges", "edge_marker"}
 
 
 def test_msh_is_gmsh_not_ansys(tmp_path, hexagon):
@@ -257,16 +258,21 @@ def test_segments_and_markers_round_trip(tmp_path, hexagon, suffix):
     meshio_format.write(hexagon, path)
     back = meshio_format.read(path)
     assert back.segments.dtype == np.int64 and back.segment_markers.dtype == np.int64
-    if suffix == ".msh":  # grouped by marker (one Gmsh entity per marker)
-        assert undirected(back.segments, back.segment_markers) == undirected(
-            hexagon.segments, hexagon.segment_markers
-        )
-    else:  # one line block, in row order
-        np.testing.assert_array_equal(back.segments, hexagon.segments)
-        np.testing.assert_array_equal(back.segment_markers, hexagon.segment_markers)
+    # grouped by marker (.msh: one Gmsh entity per marker) or by triangle (edge fields)
+    assert undirected(back.segments, back.segment_markers) == undirected(
+        hexagon.segments, hexagon.segment_markers
+    )
     np.testing.assert_array_equal(back.points, hexagon.points)
     np.testing.assert_array_equal(back.triangles, hexagon.triangles)
     np.testing.assert_array_equal(back.triangle_attributes, hexagon.triangle_attributes)
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".vtk", ".xdmf"])
+def test_vtk_family_keeps_segment_directions(tmp_path, hexagon, suffix):
+    path = tmp_path / f"m{suffix}"
+    meshio_format.write(hexagon, path)
+    back = meshio_format.read(path)
+    assert sorted(map(tuple, back.segments.tolist())) == sorted(map(tuple, hexagon.segments.tolist()))
 
 
 @pytest.mark.parametrize("suffix", CELL_DATA)
@@ -276,19 +282,17 @@ def test_triangle_blocks_first_and_in_cycle_order(tmp_path, hexagon, suffix):
     types = [b.type for b in raw.cells]
     k = types.count("triangle")
     assert types == ["triangle"] * k + ["line"] * (len(types) - k)
-    if suffix != ".msh":
-        assert types == ["triangle", "line"]
+    if suffix != ".msh":  # the VTK family and XDMF: triangles only (pyvista gets a triangle grid)
+        assert types == ["triangle"]
     triangles = np.concatenate([b.data for b in raw.cells[:k]])
-    # compare corners: meshio's Gmsh reader numbers the points in file order
-    np.testing.assert_array_equal(raw.points[triangles][..., :2], hexagon.points[hexagon.triangles])
-    if suffix != ".msh":
-        np.testing.assert_array_equal(triangles, hexagon.triangles)
+    # the Gmsh file keeps the point numbering too
+    np.testing.assert_array_equal(raw.points[:, :2], hexagon.points)
+    np.testing.assert_array_equal(triangles, hexagon.triangles)
 
 
-@pytest.mark.parametrize("suffix", CELL_DATA)
-def test_line_cells_get_fillers_and_triangles_no_marker(tmp_path, hexagon, suffix):
-    meshio_format.write(hexagon, tmp_path / f"m{suffix}")
-    raw = raw_read(tmp_path / f"m{suffix}")
+def test_msh_line_cells_get_fillers_and_triangles_no_marker(tmp_path, hexagon):
+    meshio_format.write(hexagon, tmp_path / "m.msh")
+    raw = raw_read(tmp_path / "m.msh")
     for name, per_block in raw.cell_data.items():
         if name.startswith("gmsh:"):
             continue
@@ -303,38 +307,46 @@ def test_line_cells_get_fillers_and_triangles_no_marker(tmp_path, hexagon, suffi
                 assert (values == -1).all(), name
 
 
-def test_vtu_line_block_holds_the_markers_as_int64(tmp_path, hexagon):
+def test_vtu_edge_fields_hold_the_markers_as_int64(tmp_path, hexagon):
     meshio_format.write(hexagon, tmp_path / "m.vtu")
     raw = raw_read(tmp_path / "m.vtu")
-    markers = raw.cell_data["segment_marker"]
-    assert markers[1].dtype == np.int64
-    assert markers[1].tolist() == hexagon.segment_markers.tolist()
-    np.testing.assert_array_equal(raw.cells[1].data, hexagon.segments)
+    flags, markers = raw.cell_data["segment_edges"][0], raw.cell_data["edge_marker"][0]
+    assert flags.dtype == np.int64 and markers.dtype == np.int64 and markers.shape == (6, 3)
+    assert (flags < 8).all()  # the hexagon's boundary runs counter-clockwise: no "backwards" bit
+    t, k = np.nonzero((flags[:, None] >> np.arange(3)) & 1)
+    tri = hexagon.triangles
+    stored = {(int(tri[a, b]), int(tri[a, (b + 1) % 3])): int(markers[a, b]) for a, b in zip(t, k)}
+    assert stored == {tuple(s): int(mk) for s, mk in zip(hexagon.segments.tolist(), hexagon.segment_markers)}
+    assert (markers[(flags[:, None] >> np.arange(3)) & 1 == 0] == 0).all()
 
 
-def _old_write(mesh, path, suffix):
-    """What :func:`meshio_format.write` wrote before segments were stored."""
-    from hammesh.io.cell_data import triangle_cell_data
-
-    _, fmt, kwargs = meshio_format._FORMATS[suffix]
-    points3 = np.column_stack([mesh.points, np.zeros(len(mesh.points))])
-    cell_data = {k: [v] for k, v in triangle_cell_data(mesh).items()}
-    meshio.write(path, meshio.Mesh(points3, [("triangle", mesh.triangles)], cell_data=cell_data),
-                 file_format=fmt, **kwargs)
+@pytest.mark.parametrize("suffix", [".vtu", ".vtk", ".xdmf"])
+def test_segments_that_are_not_edges_fall_back_to_line_cells(tmp_path, hexagon, suffix):
+    """An invalid mesh stays writable (``hammesh check`` reports it): as line cells."""
+    bad = Mesh(hexagon.points, hexagon.triangles, segments=np.vstack([hexagon.segments, [[1, 4]]]),
+               segment_markers=np.append(hexagon.segment_markers, 9))
+    meshio_format.write(bad, tmp_path / f"m{suffix}")
+    raw = raw_read(tmp_path / f"m{suffix}")
+    assert [b.type for b in raw.cells] == ["triangle", "line"]
+    np.testing.assert_array_equal(raw.cells[1].data, bad.segments)
+    assert raw.cell_data["segment_marker"][1].tolist() == bad.segment_markers.tolist()
+    back = meshio_format.read(tmp_path / f"m{suffix}")
+    np.testing.assert_array_equal(back.segments, bad.segments)
+    np.testing.assert_array_equal(back.segment_markers, bad.segment_markers)
 
 
 @pytest.mark.parametrize("suffix", CELL_DATA)
-def test_files_without_segments_are_unchanged(tmp_path, two_cycles, suffix):
+def test_files_without_segments_hold_triangles_only(tmp_path, two_cycles, suffix):
     assert len(two_cycles.segments) == 0
-    new, old = tmp_path / f"new{suffix}", tmp_path / f"old{suffix}"
+    new = tmp_path / f"new{suffix}"
     meshio_format.write(two_cycles, new)
-    _old_write(two_cycles, old, suffix)
-    assert new.read_bytes() == old.read_bytes()
     raw = raw_read(new)
-    assert [b.type for b in raw.cells] == ["triangle"]
-    assert "segment_marker" not in raw.cell_data
+    assert {b.type for b in raw.cells} == {"triangle"}  # .msh: a block per run of region
+    assert not {"segment_marker", "segment_edges", "edge_marker"} & set(raw.cell_data)
+    assert "vertex_marker" not in raw.point_data  # all zero: not written
     back = meshio_format.read(new)
     assert back.segments.shape == (0, 2) and back.segment_markers.shape == (0,)
+    np.testing.assert_array_equal(back.triangles, two_cycles.triangles)
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # meshio's STL binary-size probe
@@ -385,11 +397,26 @@ def test_gmsh_physical_tags(tmp_path):
     assert undirected(back.segments, back.segment_markers) == undirected(mesh.segments, mesh.segment_markers)
 
 
-def test_gmsh_triangles_get_physical_1_without_integral_attribute(tmp_path, hexagon):
-    meshio_format.write(hexagon, tmp_path / "m.msh")  # attributes 0.1 .. 0.9
+def test_gmsh_triangles_without_integral_attribute_get_ranks_and_names(tmp_path, hexagon):
+    attrs = np.array([[0.5], [0.5], [0.25], [0.25], [0.5], [0.5]])
+    mesh = Mesh(hexagon.points, hexagon.triangles, hexagon.segments, np.ones(6, np.int64), attrs)
+    meshio_format.write(mesh, tmp_path / "m.msh")  # 3 runs + 1 marker: 4 entities, 7 points
+    raw = raw_read(tmp_path / "m.msh")
+    assert [b.type for b in raw.cells].count("triangle") == 3  # runs 0.5 | 0.25 | 0.5
+    physical = np.concatenate(raw.cell_data["gmsh:physical"][:3]).tolist()
+    assert physical == [2, 2, 1, 1, 2, 2]  # rank + 1
+    assert raw.field_data["region_0.25"].tolist() == [1, 2] and raw.field_data["region_0.5"].tolist() == [2, 2]
+    back = meshio_format.read(tmp_path / "m.msh")
+    np.testing.assert_array_equal(back.triangle_attributes, attrs)  # exact, from attribute_0
+
+
+def test_gmsh_without_attributes_has_one_unnamed_triangle_group(tmp_path, hexagon):
+    mesh = Mesh(hexagon.points, hexagon.triangles, hexagon.segments, hexagon.segment_markers)
+    meshio_format.write(mesh, tmp_path / "m.msh")
     raw = raw_read(tmp_path / "m.msh")
     assert [b.type for b in raw.cells].count("triangle") == 1
     assert raw.cell_data["gmsh:physical"][0].tolist() == [1] * 6
+    assert not [k for k in raw.field_data if k.startswith("region_")]
 
 
 def test_gmsh_falls_back_to_merged_entities_when_nodes_are_too_few(tmp_path):
