@@ -241,8 +241,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
     ``_place_star`` maximises the star's slack (smallest angle minus
     ``keep`` x its rows' parents' smallest, ``hi`` minus the largest) by compass
     search from the point's current place. Points ``>= first`` whose star is closed
-    and touches no pinned edge (a midpoint of a constrained edge stays) are moved
-    where the star's smallest angle does not drop, its largest stays within
+    and touches no pinned edge (a midpoint of a constrained edge stays) and that miss
+    the rule (slack < 0) are moved where the star's smallest angle does not drop, its largest stays within
     ``max(hi, its own)`` and its slack grows. An incenter's star, once improvement
     flips took its sectors' outer edges, is larger than the triangle it split: the
     point can move towards the whole angles. Returns the number of points moved.
@@ -313,8 +313,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
         vx = pts[v, 0]
         vy = pts[v, 1]
         s0, n0, x0 = _fan_eval(pts, poly, n, vx, vy, lo, hi)
-        if s0 == -np.inf:
-            continue
+        if s0 == -np.inf or s0 >= 0.0:
+            continue  # already meets the rule (most fan points: placed for it)
         d2 = np.inf
         for i in range(n):
             d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)
