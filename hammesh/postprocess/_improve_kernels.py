@@ -12,6 +12,13 @@ crosses ``ab``), the flip of ``ab`` into ``cd`` gives ``X = (a, d, c)`` and
 across one of ``ad``, ``db``; if those two edges end up in different new triangles
 (``ca`` with ``db``, or ``bc`` with ``ad``) the cycle runs through ``X`` and ``Y``
 across ``cd`` in the same order: still one Hamiltonian cycle, no other row touched.
+An edge the cycle does *not* cross (between two rows of one cycle that are not
+consecutive, e.g. an incenter sector's outer edge) is never flipped: in the plane
+that always splits the cycle in two (the dual path from ``x`` to ``y`` across the edge
+is a chord of the closed curve the cycle draws; each new triangle closes one side of
+it). Such an edge could only go with a second flip that joins the two cycles again
+(not done).
+
 A flip is taken only if the quadrilateral is strictly convex, neither edge is pinned
 (constrained, or between regions), the pair's smallest angle grows and its largest
 stays within ``max(hi, the pair's largest)``. The sorted angle vector of the mesh
@@ -155,148 +162,12 @@ def _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x):
 
 
 @njit(cache=True, nogil=True)
-def _swap_rows(out, twin, pinned, pm, kind, parent, r1, r2):
-    """Exchange rows r1 and r2 (all per-row data) and re-point the twins."""
-    for k in range(3):
-        v = out[r1, k]
-        out[r1, k] = out[r2, k]
-        out[r2, k] = v
-        h1 = 3 * r1 + k
-        h2 = 3 * r2 + k
-        g = twin[h1]
-        twin[h1] = twin[h2]
-        twin[h2] = g
-        f = pinned[h1]
-        pinned[h1] = pinned[h2]
-        pinned[h2] = f
-    v = pm[r1]
-    pm[r1] = pm[r2]
-    pm[r2] = v
-    w = kind[r1]
-    kind[r1] = kind[r2]
-    kind[r2] = w
-    z = parent[r1]
-    parent[r1] = parent[r2]
-    parent[r2] = z
-    for r in (r1, r2):
-        for k in range(3):
-            g = twin[3 * r + k]
-            if g >= 0:
-                q = g // 3
-                if q == r1:
-                    g = 3 * r2 + g % 3
-                elif q == r2:
-                    g = 3 * r1 + g % 3
-                twin[3 * r + k] = g
-    for r in (r1, r2):
-        for k in range(3):
-            g = twin[3 * r + k]
-            if g >= 0:
-                twin[g] = 3 * r + k
-
-
-@njit(cache=True, nogil=True)
-def _try_flip_apart(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, x, kh, max_arc):
-    """Flip edge ``kh`` of row ``x`` whose other side is a non-consecutive row of the same run.
-
-    Both rows' links are their two other edges, so each new triangle gets one link of
-    each; the result is one cycle iff the new triangle at the lower position joins the
-    two rows' predecessors (or both successors): then the rows between them are
-    reversed in place (at most ``max_arc``). Returns how many, or -1 if no flip.
-    """
-    h = 3 * x + kh
-    g = twin[h]
-    if g < 0 or pinned[h]:
-        return -1
-    y = g // 3
-    s = run_start[x]
-    ln = run_len[x]
-    if run_start[y] != s or ln < 4:
-        return -1
-    i = min(x, y)
-    j = max(x, y)
-    if j - i < 2 or (i == s and j == s + ln - 1) or j - i - 1 > max_arc:
-        return -1
-    kg = g - 3 * y
-    a = out[x, kh]
-    b = out[x, (kh + 1) % 3]
-    c = out[x, (kh + 2) % 3]
-    d = out[y, (kg + 2) % 3]
-    if not (_ccw(pts, a, d, c) and _ccw(pts, d, b, c)):
-        return -1
-    e_ad = 3 * y + (kg + 1) % 3
-    e_db = 3 * y + (kg + 2) % 3
-    e_bc = 3 * x + (kh + 1) % 3
-    e_ca = 3 * x + (kh + 2) % 3
-    t_ad = twin[e_ad]
-    t_ca = twin[e_ca]
-    if t_ad < 0 or t_ca < 0:
-        return -1
-    nx = t_ca // 3  # the neighbours X = (a, d, c) joins
-    ny = t_ad // 3
-    n_i = nx if x == i else ny
-    n_j = ny if x == i else nx
-    prev_i = i - 1 if i > s else s + ln - 1
-    next_j = j + 1 if j + 1 < s + ln else s
-    if n_i == prev_i and n_j == j - 1:
-        x_low = True  # X at i: prev_i -> X -> j - 1 ... i + 1 -> Y -> next_j
-    elif n_i == i + 1 and n_j == next_j:
-        x_low = False  # Y at i: prev_i -> Y -> j - 1 ... i + 1 -> X -> next_j
-    else:
-        return -1
-    l1, h1 = _min_max(pts, a, b, c)
-    l2, h2 = _min_max(pts, b, a, d)
-    l3, h3 = _min_max(pts, a, d, c)
-    l4, h4 = _min_max(pts, d, b, c)
-    if min(l3, l4) <= min(l1, l2) * (1.0 + 1e-9) or max(h3, h4) > max(hi, max(h1, h2)):
-        return -1
-    t_db = twin[e_db]
-    t_bc = twin[e_bc]
-    p_ad = pinned[e_ad]
-    p_db = pinned[e_db]
-    p_bc = pinned[e_bc]
-    p_ca = pinned[e_ca]
-    par_x = parent[x]
-    par_y = parent[y]
-    mn = min(pm[x], pm[y])
-    rx = i if x_low else j
-    ry = j if x_low else i
-    out[rx, 0] = a
-    out[rx, 1] = d
-    out[rx, 2] = c
-    out[ry, 0] = d
-    out[ry, 1] = b
-    out[ry, 2] = c
-    _set_edge(twin, pinned, 3 * rx, t_ad, p_ad)
-    _set_edge(twin, pinned, 3 * rx + 2, t_ca, p_ca)
-    _set_edge(twin, pinned, 3 * ry, t_db, p_db)
-    _set_edge(twin, pinned, 3 * ry + 1, t_bc, p_bc)
-    _set_edge(twin, pinned, 3 * rx + 1, 3 * ry + 2, False)
-    pinned[3 * ry + 2] = False
-    parent[rx] = par_x
-    parent[ry] = par_y
-    pm[rx] = mn
-    pm[ry] = mn
-    kind[rx] = 4
-    kind[ry] = 4
-    for k in range((j - i - 1) // 2):
-        _swap_rows(out, twin, pinned, pm, kind, parent, i + 1 + k, j - 1 - k)
-    return j - i - 1
-
-
-@njit(cache=True, nogil=True)
-def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, max_flips, max_arc, arc_budget):
+def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, max_flips):
     """Cycle-keeping Lawson flips around the rows with ``kind != 3`` (module docstring).
 
     Modifies ``out``, ``twin`` (the output's half-edge twins), ``pinned``, ``pm`` (each
     row's parents' smallest angle: a flipped pair gets the smaller of the two) and
     ``kind`` (4 for a flipped row) in place. Returns the number of flips.
-
-    An edge between two rows of the same run that are not consecutive is flipped too
-    where that keeps one cycle (``_try_flip_apart``: the rows between are reversed,
-    at most ``max_arc`` of them, so ``parent`` moves with its rows; ``arc_budget``
-    rows reversed in all, which keeps the loop linear): this takes an incenter
-    sector's outer edge, merging its halved angles with a neighbour's.
     """
     k = out.shape[0]
     stack = np.empty(k + 2 * max_flips + 4, np.int64)
@@ -311,35 +182,12 @@ def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, parent, 
         r = stack[top]
         s = run_start[r]
         prev = r - 1 if r > s else s + run_len[r] - 1
-        done = False
         for x in (r, prev):
             y = _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x)
             if y >= 0:
                 n += 1
                 stack[top] = x
                 stack[top + 1] = y
-                top += 2
-                done = True
-                break
-        if done or kind[r] == 3:
-            continue
-        for k in range(3):
-            g = twin[3 * r + k]
-            if g < 0:
-                continue
-            y = g // 3
-            lo = min(r, y)
-            hi_r = max(r, y)
-            moved = _try_flip_apart(
-                pts, out, twin, pinned, run_start, run_len, pm, kind, parent, hi, r, k, min(max_arc, arc_budget)
-            )
-            if moved >= 0:
-                arc_budget -= moved
-                n += 1
-                # rows between lo and hi_r moved: push the two flipped rows and their
-                # new cycle neighbours
-                stack[top] = lo
-                stack[top + 1] = hi_r
                 top += 2
                 break
     return n
@@ -393,8 +241,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
     ``_place_star`` maximises the star's slack (smallest angle minus
     ``keep`` x its rows' parents' smallest, ``hi`` minus the largest) by compass
     search from the point's current place. Points ``>= first`` whose star is closed
-    and touches no pinned edge (a midpoint of a constrained edge stays) are moved
-    where the star's smallest angle does not drop, its largest stays within
+    and touches no pinned edge (a midpoint of a constrained edge stays) and that miss
+    the rule (slack < 0) are moved where the star's smallest angle does not drop, its largest stays within
     ``max(hi, its own)`` and its slack grows. An incenter's star, once improvement
     flips took its sectors' outer edges, is larger than the triangle it split: the
     point can move towards the whole angles. Returns the number of points moved.
@@ -465,8 +313,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
         vx = pts[v, 0]
         vy = pts[v, 1]
         s0, n0, x0 = _fan_eval(pts, poly, n, vx, vy, lo, hi)
-        if s0 == -np.inf:
-            continue
+        if s0 == -np.inf or s0 >= 0.0:
+            continue  # already meets the rule (most fan points: placed for it)
         d2 = np.inf
         for i in range(n):
             d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)

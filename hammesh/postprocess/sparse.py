@@ -77,8 +77,6 @@ MAX_ANGLE_SLACK_DEG = 5.0
 PLACE_ITERS = 6
 #: a split is placed only if its midpoint misses the rule by less than this (degrees)
 PLACE_REACH_DEG = 10.0
-#: most rows an improvement flip between non-consecutive rows may reverse
-IMPROVE_ARC = 4096
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
 #: most triangles one fan (one Steiner point) may replace
@@ -369,8 +367,8 @@ def sparse_cycles(
     n_improve = n_moved = 0
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
-        out, claim, kind, pm, parent, n_improve, n_moved = _improve(
-            all_pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi, n0_input, keep
+        out, claim, kind, pm, n_improve, n_moved = _improve(
+            all_pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi, n0_input, keep
         )
     quality = local_quality(all_pts, out, pm, kind, keep, hi)
     quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
@@ -442,7 +440,7 @@ def local_quality(
     }
 
 
-def _improve(pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi, first_steiner, keep):
+def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi, first_steiner, keep):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
@@ -471,20 +469,16 @@ def _improve(pts, out, claim, kind, pm, parent, lengths, tri, tw, con, mid_a, mi
     starts = np.cumsum(lengths) - lengths
     run_start = np.repeat(starts, lengths).astype(np.int64)
     run_len = np.repeat(lengths, lengths).astype(np.int64)
-    parent = parent.copy()
     n_flips = n_moved = 0
     for _ in range(IMPROVE_ROUNDS):
-        n_flips += _ik.improve_flips(
-            pts, out, twin, pinned, run_start, run_len, pm, kind, parent, float(hi), 4 * len(out) + 16, IMPROVE_ARC,
-            2 * len(out) + 10 * IMPROVE_ARC,
-        )
+        n_flips += _ik.improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, float(hi), 4 * len(out) + 16)
         if first_steiner >= len(pts):
             break
         moved = _ik.smooth_steiner(pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS)
         n_moved += moved
         if moved == 0:
             break
-    return out, twin, kind, pm, parent, int(n_flips), int(n_moved)
+    return out, twin, kind, pm, int(n_flips), int(n_moved)
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
