@@ -29,21 +29,31 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from numba import njit
 
 from hammesh import params
 from hammesh.errors import InvalidMeshError
 from hammesh.halfedge import half_edges
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 
-__all__ = ["Partition", "partition", "dual_edges", "edge_cut", "part_components", "cycle_runs"]
+__all__ = [
+    "Partition",
+    "PartitionedMesh",
+    "partition",
+    "partitioned",
+    "as_cycle_mesh",
+    "dual_edges",
+    "edge_cut",
+    "part_components",
+    "cycle_runs",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,13 +138,88 @@ def edge_cut(part: np.ndarray, a: np.ndarray, b: np.ndarray) -> int:
 
 
 def part_components(part: np.ndarray, k: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Edge-connected pieces of each of the ``k`` parts (0 for an empty part)."""
-    m = len(part)
-    keep = part[a] == part[b]
-    g = coo_matrix((np.ones(int(keep.sum()), np.int8), (a[keep], b[keep])), shape=(m, m))
-    _, label = connected_components(g, directed=False)
-    pairs = np.unique(part.astype(np.int64) * (m + 1) + label)
-    return np.bincount(pairs // (m + 1), minlength=k).astype(np.int64)
+    """Edge-connected pieces of each of the ``k`` parts (0 for an empty part).
+
+    Union-find over the edges ``(a, b)`` inside a part; it shares nothing with how
+    the parts were made.
+    """
+    return _pieces_per_part(
+        np.ascontiguousarray(part, dtype=np.int64), int(k), np.ascontiguousarray(a, dtype=np.int64),
+        np.ascontiguousarray(b, dtype=np.int64),
+    )
+
+
+@njit(cache=True, nogil=True)
+def _pieces_per_part(part, k, a, b):
+    m = part.shape[0]
+    uf = np.arange(m)
+    for e in range(a.shape[0]):
+        x = a[e]
+        y = b[e]
+        if part[x] != part[y]:
+            continue
+        while uf[x] != x:  # path halving
+            uf[x] = uf[uf[x]]
+            x = uf[x]
+        while uf[y] != y:
+            uf[y] = uf[uf[y]]
+            y = uf[y]
+        if x != y:
+            uf[max(x, y)] = min(x, y)
+    count = np.zeros(k, np.int64)
+    for t in range(m):
+        if uf[t] == t:
+            count[part[t]] += 1
+    return count
+
+
+@njit(cache=True, nogil=True)
+def _start_depth(n, x, y):
+    """Per cycle position p, the edges a stretch starting at p cuts (short side)."""
+    diff = np.zeros(2 * n + 1, np.int64)
+    for e in range(x.shape[0]):
+        d = y[e] - x[e]
+        if 2 * d > n:  # the short side goes round the cycle's end
+            diff[y[e] + 1] += 1
+            diff[x[e] + n + 1] -= 1
+        else:
+            diff[x[e] + 1] += 1
+            diff[y[e] + 1] -= 1
+    depth = np.zeros(n, np.int64)
+    run = 0
+    for p in range(2 * n):
+        run += diff[p]
+        depth[p % n] += run
+    return depth
+
+
+@njit(cache=True, nogil=True)
+def _shift_costs(depth, k):
+    """Estimated cut of every shift ``s < n // k``: sum of ``depth[s + floor(j n / k)]``."""
+    n = depth.shape[0]
+    q = n // k
+    cost = np.zeros(q, np.int64)
+    for j in range(k):
+        base = (j * n) // k
+        for s in range(q):
+            cost[s] += depth[(base + s) % n]
+    return cost
+
+
+@njit(cache=True, nogil=True)
+def _count_shift_cut(n, k, s, x, y):
+    """Exact cut of the stretches starting at ``s + floor(j n / k)`` (see ``_labels``)."""
+    c = 0
+    for e in range(x.shape[0]):
+        px = x[e] - s
+        if px < 0:
+            px += n
+        py = y[e] - s
+        if py < 0:
+            py += n
+        if ((px + 1) * k - 1) // n != ((py + 1) * k - 1) // n:
+            c += 1
+    return c
 
 
 def cycle_runs(triangles: np.ndarray) -> np.ndarray:
@@ -181,42 +266,39 @@ def _spread(lengths: np.ndarray, k: int) -> np.ndarray:
 
 def _labels(n: int, k: int, s: int) -> np.ndarray:
     """Stretch of each of ``n`` cycle positions when the ``k`` stretches start at
-    ``s + floor(j n / k)`` (positions before ``s`` belong to the last one)."""
-    starts = s + (np.arange(k, dtype=np.int64) * n) // k
-    return (np.searchsorted(starts, np.arange(n, dtype=np.int64), side="right") - 1) % k
+    ``s + floor(j n / k)`` (positions before ``s`` belong to the last one).
+
+    Stretch ``j`` holds the shifted positions ``floor(j n / k) <= p < floor((j+1) n / k)``,
+    that is ``j = floor(((p + 1) k - 1) / n)``.
+    """
+    pos = np.arange(n, dtype=np.int64) - s
+    pos[pos < 0] += n
+    return ((pos + 1) * k - 1) // n
 
 
-def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 3) -> int:
+def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 1) -> int:
     """The shift ``s`` of the starts ``s + floor(j n / k)`` cutting the fewest edges.
 
     ``x < y``: positions of the edges' rows along a cycle of ``n`` rows. The cut of
     every shift is estimated at once (an edge is counted at each start on its short
-    side; exact unless a start is closer than the edge's span); the ``tries`` best
-    estimates and the shift 0 are then counted exactly, so the result never cuts more
-    than the plain starts.
+    side, a difference array; exact unless two starts are closer than the edge's
+    span); the ``tries`` best estimates and the shift 0 are then counted exactly, so
+    the result never cuts more than the plain starts.
     """
     if k <= 1 or n <= k:
         return 0
-    d = y - x
-    wrap = 2 * d > n  # the short side of a long edge goes round the cycle's end
-    lo = np.where(wrap, y, x) + 1  # a start in [lo, hi] cuts the edge
-    hi = np.where(wrap, x + n, y)
-    depth = np.bincount(lo, minlength=2 * n + 1) - np.bincount(hi + 1, minlength=2 * n + 1)
-    depth = np.cumsum(depth)[: 2 * n]
-    depth = depth[:n] + depth[n:]
-    starts = (np.arange(k, dtype=np.int64) * n) // k
-    q = n // k
-    cost = depth[(np.arange(q, dtype=np.int64)[:, None] + starts[None, :]) % n].sum(axis=1)
+    cost = _shift_costs(_start_depth(n, x, y), k)
     best, best_cut = 0, -1
     for s in [0, *np.argsort(cost, kind="stable")[:tries].tolist()]:
-        lab = _labels(n, k, int(s))
-        cut = int(np.count_nonzero(lab[x] != lab[y]))
+        cut = _count_shift_cut(n, k, int(s), x, y)
         if best_cut < 0 or cut < best_cut:
             best, best_cut = int(s), cut
     return best
 
 
-def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Partition:
+def partition(
+    h: HamiltonianMesh | Mesh, k: int, *, check: bool = True, edges: tuple[np.ndarray, np.ndarray] | None = None
+) -> Partition:
     """Cut the cycles of a Hamiltonian cycle mesh into ``k`` contiguous, balanced parts.
 
     Parameters
@@ -228,6 +310,9 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
     check : bool
         Count each part's connected pieces on the mesh (an independent check of what
         contiguity promises); False skips it (``components`` then all 1).
+    edges : (a, b), optional
+        The dual graph's edges (:func:`dual_edges`) if already at hand (as METIS is
+        handed its graph); found from the triangles otherwise.
 
     Returns
     -------
@@ -252,22 +337,28 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
     if m == 0:
         raise InvalidMeshError("the mesh has no triangles to partition")
     lengths = np.asarray(h.components, dtype=np.int64) if isinstance(h, HamiltonianMesh) else cycle_runs(tri)
-    a, b = _interior_edges(tri, len(h.points))
+    a, b = _interior_edges(tri, len(h.points)) if edges is None else edges
     run_start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     run_of = np.repeat(np.arange(len(lengths)), lengths)
-    if (run_of[a] != run_of[b]).any():
-        raise InvalidMeshError("two cycles share an edge: each connected piece must be one cycle")
+    if len(lengths) > 1 and (run_of[a] != run_of[b]).any():
+        raise InvalidMeshError(
+            "two cycles share an edge: the triangles are not in Hamiltonian cycle order (one cycle per piece)"
+        )
     part = np.empty(m, np.int64)
     shifts = np.zeros(len(lengths), np.int64)
     if k >= len(lengths):
         per = _spread(lengths, k)
         base = np.concatenate([[0], np.cumsum(per)[:-1]])
-        order = np.argsort(run_of[a], kind="stable")
-        bounds = np.searchsorted(run_of[a][order], np.arange(len(lengths) + 1))
+        if len(lengths) > 1:
+            order = np.argsort(run_of[a], kind="stable")
+            bounds = np.searchsorted(run_of[a][order], np.arange(len(lengths) + 1))
         for r, (n, kr) in enumerate(zip(lengths.tolist(), per.tolist())):  # per piece, not per triangle
-            sel = order[bounds[r] : bounds[r + 1]]
             s0 = int(run_start[r])
-            s = _best_shift(n, kr, a[sel] - s0, b[sel] - s0)
+            if len(lengths) > 1:
+                sel = order[bounds[r] : bounds[r + 1]]
+                s = _best_shift(n, kr, a[sel] - s0, b[sel] - s0)
+            else:
+                s = _best_shift(n, kr, a, b)
             shifts[r] = s
             part[s0 : s0 + n] = base[r] + _labels(n, kr, s)
     else:  # fewer parts than pieces: whole pieces, largest first onto the lightest part
@@ -296,3 +387,63 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
         "seconds": {"partition": t1 - t0, "check": t2 - t1},
     }
     return Partition(part=part, k=int(k), sizes=sizes, edge_cut=cut, components=comps, report=report)
+
+
+@dataclass(frozen=True, eq=False)
+class PartitionedMesh(HamiltonianMesh):
+    """A :class:`~hammesh.mesh.HamiltonianMesh` with the part of each triangle.
+
+    Writers store ``part`` as a cell array named ``part`` (``hammesh.write``), next to
+    the cycle fields.
+    """
+
+    part: np.ndarray | None = None
+
+
+def as_cycle_mesh(mesh: Mesh | HamiltonianMesh) -> HamiltonianMesh:
+    """``mesh`` as a HamiltonianMesh: a plain mesh whose rows are in cycle order (read
+    from a file) gets its runs from :func:`cycle_runs`; parents unknown (-1)."""
+    if isinstance(mesh, HamiltonianMesh):
+        return mesh
+    params.instance("mesh", mesh, Mesh, "a hammesh.Mesh or HamiltonianMesh")
+    runs = cycle_runs(mesh.triangles)
+    m = mesh.n_triangles
+    h = HamiltonianMesh.from_order(mesh.points, mesh.triangles, report={"source": "file"})
+    changes: dict[str, Any] = {
+        "segments": np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2),
+        "segment_markers": np.asarray(mesh.segment_markers, dtype=np.int64),
+        "components": runs,
+        "position": cycle_positions(runs) if m else np.zeros(0, np.int64),
+        "triangle_attributes": np.asarray(mesh.triangle_attributes, dtype=np.float64).reshape(m, -1),
+    }
+    if hasattr(mesh, "vertex_markers") and "vertex_markers" in {f.name for f in dataclasses.fields(h)}:
+        changes["vertex_markers"] = mesh.vertex_markers
+    return dataclasses.replace(h, **changes)
+
+
+def partitioned(
+    h: HamiltonianMesh | Mesh, k: int | None = None, *, renumber: str | None = None
+) -> HamiltonianMesh:
+    """``h`` with its vertices renumbered and/or its triangles partitioned.
+
+    Parameters
+    ----------
+    h : HamiltonianMesh, or a Mesh in cycle order
+    k : int, optional
+        Parts (:func:`partition`); the result is a :class:`PartitionedMesh` and its
+        report gains ``"partition"`` (edge cut, balance, connectivity).
+    renumber : {"cycle", "rcm", "hilbert"}, optional
+        Vertex numbering (:func:`hammesh.numbering.renumber`); the report gains
+        ``"numbering"`` (bandwidth and profile before and after).
+    """
+    from hammesh.numbering import renumber as renumber_vertices
+
+    out = as_cycle_mesh(h)
+    if renumber is not None:
+        out, _ = renumber_vertices(out, renumber)
+    if k is not None:
+        p = partition(out, k)
+        fields = {f.name: getattr(out, f.name) for f in dataclasses.fields(out) if f.init}
+        fields["report"] = {**out.report, "partition": p.report}
+        out = PartitionedMesh(**fields, part=p.part)
+    return out
