@@ -15,7 +15,7 @@ from typing import Any, Callable
 import numpy as np
 
 from hammesh.domain import Domain
-from hammesh.errors import InvalidOptionError
+from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.parallel.decoupled import MAX_ROUNDS, bad_corner_vertices
 from hammesh.parallel.joins import Plan, border_rows, finish_tile, plan_joins
@@ -89,6 +89,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     run = runner or LocalRunner()
     note = progress or (lambda what, n: None)
     t0 = time.perf_counter()
+    warming = warm_workers(run)  # noqa: F841  (kept alive while the tiles run)
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
     meshes = [run.submit(mesh_tile, t, min_angle, max_area) for t in decomp.tiles]
@@ -117,7 +118,10 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     borders = run.gather([run.submit(border_rows, h, t, i) for i, (h, t) in enumerate(zip(hams, decomp.tiles))])
     note("hamiltonian", len(borders))
     t3 = time.perf_counter()
-    plan = plan_joins(borders, len(decomp.vertices), keep=keep)
+    plan = plan_joins(borders, len(decomp.vertices), keep=keep, n_separators=int(decomp.separator.sum()))
+    area = sum(b.area for b in borders)
+    if abs(area - decomp.area) > 1e-9 * abs(decomp.area) * max(1.0, np.sqrt(sum(b.n_triangles for b in borders))):
+        raise VerificationError(f"the tiles' area {area!r} differs from the domain's {decomp.area!r}")
     mesh_points = np.array([r[1] for r in results], np.int64)
     mesh_triangles = np.array([r[2] for r in results], np.int64)
     ham_points = np.array([b.n_points for b in borders], np.int64)
@@ -164,7 +168,8 @@ def finish_all(tiled: Tiled, runner=None) -> list:
         joins = [j for j in tiled.plan.joins if i in (j.t_tile, j.u_tile)]
         pieces.append(run.submit(finish_tile, tiled.hams[i], t, i, mine, starts, joins, int(mesh_off[i]),
                                  int(tiled.mesh_points[i]), int(ham_off[i]), join_base, int(tri_off[i]), sep, n_global,
-                                 {ji: v for ji, v in apex.items() if tiled.plan.joins[ji].t_tile == i}))
+                                 {ji: v for ji, v in apex.items() if tiled.plan.joins[ji].t_tile == i},
+                                 0.5 * min(b.input_min_angle for b in tiled.borders)))
     return pieces
 
 
@@ -236,8 +241,38 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
 
 
 def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
-    """Estimated triangle count of a Triangle run (from a 1-tile decomposition)."""
-    return decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=1).estimate
+    """Estimated triangle count of a Triangle run: the domain's area (one constrained
+    triangulation, no refinement) over ``AREA_FILL x max_area``."""
+    import triangle
+
+    from hammesh.parallel.sizing import AREA_FILL
+
+    data = {"vertices": np.array(domain.vertices)}
+    if len(domain.segments):
+        data["segments"] = np.array(domain.segments, dtype=np.int32)
+    if len(domain.holes):
+        data["holes"] = np.array(domain.holes)
+    out = triangle.triangulate(data, ("p" if len(domain.segments) else "pc") + "Q")
+    p, t = np.asarray(out["vertices"]), np.asarray(out.get("triangles", np.zeros((0, 3), int)))
+    e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
+    area = float(np.abs(0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])).sum())
+    return area / (AREA_FILL * float(max_area))
+
+
+def _warm() -> None:
+    from hammesh.postprocess import load_kernels
+
+    load_kernels("sparse")
+    load_kernels("incircle")
+
+
+def warm_workers(runner) -> list:
+    """Load the compiled kernels on every Dask worker now, beside the decomposition."""
+    info = getattr(runner, "scheduler_info", None)
+    if info is None:
+        return []
+    return [runner.submit(_warm, workers=[addr], pure=False, allow_other_workers=False)
+            for addr in info().get("workers", {})]
 
 
 def _bar(on: bool, total: int):
