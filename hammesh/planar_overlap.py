@@ -3,105 +3,301 @@
 The certificate of :mod:`hammesh.verify.certificate` proves that an output tiles its
 *input* domain; a file checked on its own has no input to compare with, and two
 counter-clockwise triangles that share no edge (two pieces, each a cycle) can lie on
-top of each other.  :func:`find_overlap` settles it exactly:
+top of each other.  :func:`find_overlap` settles it exactly, in compiled kernels.
 
-* candidate pairs: triangles whose bounding boxes overlap with positive area, found in
-  a uniform grid of about one triangle per cell (pairs sharing a cell, deduplicated);
-  pairs sharing an edge are skipped (counter-clockwise triangles with a consistently
+**Only triangles with a boundary edge need partners.** For counter-clockwise
+triangles, each directed edge used once (the certificate's items 2-3), the number of
+triangles covering a point ``p`` is the winding number around ``p`` of the sum of the
+triangles' edge chains, in which an edge and its reverse cancel: of the *boundary*
+chain (the half-edges without twin). So the covering number changes only across
+boundary edges, and if it is 2 or more somewhere, then at a boundary edge ``e`` on the
+border of that region some side with covering number >= 2 is the side of a triangle
+owning a boundary edge there (if the region lies on the other side of every boundary
+edge through a point, the covering number there rises across them): that triangle's
+interior meets another triangle's. Conversely such a pair is an overlap. So it is
+enough to test the triangles owning a boundary half-edge (few: the mesh's border)
+against all triangles.
+
+* candidate pairs: a triangle against the boundary triangles whose bounding boxes
+  overlap its own with positive area, found in a *hierarchical uniform grid* (a
+  "loose" grid per level, as in collision detection: Ericson, *Real-Time Collision
+  Detection*, 7.2) of the boundary triangles: one whose box is at most ``c0 2**L``
+  wide and high is entered at every level ``>= L`` into the (at most 2 x 2) cells of
+  side ``c0 2**L'`` its box meets. A triangle of level ``l`` looks in the cells its box
+  meets at levels ``>= l``; a pair is tested at level ``max(l, L)`` only, in the one
+  cell holding the lower-left corner of the boxes' intersection (once per pair,
+  whatever the grading of the mesh);
+* pairs sharing an edge are skipped (counter-clockwise triangles with a consistently
   oriented shared edge lie on its two sides: the certificate checks both facts);
 * the test: two counter-clockwise triangles have disjoint interiors iff some edge line
   of one has the other's three vertices on its right or on it (the separating axis
   theorem for convex polygons: a separating line can be taken along an edge), decided
-  exactly: floating point where Shewchuk's error bound decides the sign, else the exact
-  predicate :func:`hammesh.predicates.orient_many`.
+  by the exact predicate :func:`hammesh.predicates.orient_points`.
 
 Triangles that share a vertex and lie side by side are separated by an edge line;
-identical triangles stored twice (under other vertex numbers) are not.
+identical triangles stored twice (under other vertex numbers) are not. The boundary is
+found with the certificate's own pairing (``hammesh.verify._kernels.half_edge_twins``);
+a mesh using a directed edge twice (outside the precondition) has all its triangles
+tested. The triangles are split among the machine's cores (the kernels release the
+GIL); the answer does not depend on the split.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
+from numba import njit
 
-from hammesh.predicates import orient_many
+from hammesh import _threads
+from hammesh._threads import row_ranges, run_all
+from hammesh.predicates import orient_points
+from hammesh.verify._kernels import half_edge_twins
 
-__all__ = ["find_overlap"]
+__all__ = ["find_overlap", "Grid", "build_grid", "boundary_triangles"]
 
-#: pairs tested per batch
-_BATCH = 200_000
-#: grid cells per triangle at most, so a long sliver cannot blow up the grid
-_MAX_CELLS = 64
-#: Shewchuk's ccwerrboundA: a float orientation beyond it has the exact sign
-_ERRBOUND = (3.0 + 16.0 * np.finfo(float).eps) * np.finfo(float).eps / 2
-
-
-def _cells(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, cell: float):
-    i0 = np.floor((lo - origin) / cell).astype(np.int64)
-    i1 = np.floor((hi - origin) / cell).astype(np.int64)
-    span = i1 - i0 + 1
-    return i0, i1, span, span[:, 0] * span[:, 1]
+#: cell numbers at level 0 fit this many bits (the finest cell is at least extent / 2**21)
+_LEVEL_BITS = 21
+_EMPTY = -1
 
 
-def _candidate_pairs(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    m = len(lo)
-    origin = lo.min(axis=0)
-    extent = hi.max(axis=0) - origin
-    area = float(extent[0] * extent[1])
-    cell = max(np.sqrt(area / m) * 2.0 if area > 0 else float(extent.max()), np.finfo(float).tiny)
-    i0, i1, span, count = _cells(lo, hi, origin, cell)
-    while count.max() > _MAX_CELLS:  # coarser grid: a few huge triangles
-        cell *= 2.0
-        i0, i1, span, count = _cells(lo, hi, origin, cell)
-    tri = np.repeat(np.arange(m, dtype=np.int64), count)
-    k = np.arange(len(tri)) - np.repeat(np.cumsum(count) - count, count)
-    w = np.repeat(span[:, 0], count)
-    cx = np.repeat(i0[:, 0], count) + k % w
-    cy = np.repeat(i0[:, 1], count) + k // w
-    key = cx * (int(i1[:, 1].max()) + 2) + cy
-    order = np.argsort(key, kind="stable")
-    key, tri = key[order], tri[order]
-    pairs = []
-    idx = np.arange(len(key))
-    d = 1
-    while len(idx):  # entries d apart in one cell; cells empty out as d grows
-        j = idx + d
-        ok = j < len(key)
-        idx, j = idx[ok], j[ok]
-        same = key[idx] == key[j]
-        idx, j = idx[same], j[same]
-        if len(idx):
-            pairs.append(np.stack([tri[idx], tri[j]], axis=1))
-        d += 1
-    if not pairs:
-        return np.zeros((0, 2), np.int64)
-    p = np.sort(np.concatenate(pairs), axis=1)
-    p = p[p[:, 0] != p[:, 1]]
-    flat = np.sort(p[:, 0] * m + p[:, 1])  # sort + neighbour test: numpy's hashing unique is slow here
-    flat = flat[np.concatenate([[True], flat[1:] != flat[:-1]])]
-    p = np.stack([flat // m, flat % m], axis=1)
-    a, b = p[:, 0], p[:, 1]  # bounding boxes that only touch: interiors disjoint
-    keep = (np.minimum(hi[a], hi[b]) > np.maximum(lo[a], lo[b])).all(axis=1)
-    return p[keep]
+class Grid(NamedTuple):
+    """A hierarchical grid of some triangles' bounding boxes (:func:`build_grid`)."""
+
+    targets: np.ndarray  # (k,) the triangles entered
+    lo: np.ndarray  # (k, 2) their box corners
+    hi: np.ndarray
+    level: np.ndarray  # (k,) int64: their own level
+    origin: np.ndarray  # (2,)
+    c0: float  # cell side at level 0
+    n_levels: int  # levels 0..n_levels-1 exist
+    slot_key: np.ndarray  # hash table of cell keys (-1: empty) ...
+    slot_start: np.ndarray  # ... and the cell's range in ``members``
+    slot_end: np.ndarray
+    members: np.ndarray  # indices into ``targets``, grouped by cell
 
 
-def _signs(pts: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Exact orientation signs of rows ``(a, b, c)``: floating point where its error bound
-    decides (Shewchuk's filter), the exact predicate for the rest."""
-    pa, pb, pc = pts[a], pts[b], pts[c]
-    left = (pa[:, 0] - pc[:, 0]) * (pb[:, 1] - pc[:, 1])
-    right = (pa[:, 1] - pc[:, 1]) * (pb[:, 0] - pc[:, 0])
-    det = left - right
-    sign = np.sign(det).astype(np.int8)
-    unsure = np.abs(det) <= _ERRBOUND * (np.abs(left) + np.abs(right))
-    unsure &= (a != c) & (b != c)  # a repeated vertex: exactly zero already
-    if unsure.any():
-        rows = np.stack([a[unsure], b[unsure], c[unsure]], axis=1)
-        sign[unsure] = orient_many(pts, rows)
-    return sign
+@njit(cache=True, inline="always")
+def _cell(x, origin, side):
+    return np.int64(np.floor((x - origin) / side))
+
+
+@njit(cache=True, inline="always")
+def _key(level, cx, cy, inherited):
+    """A cell's key; ``inherited``: the entries of finer targets (not the cell's own level)."""
+    return (level << (2 * _LEVEL_BITS + 7)) | (cx << (_LEVEL_BITS + 4)) | (cy << 1) | inherited
+
+
+@njit(cache=True, inline="always")
+def _hash(key, mask):
+    x = np.uint64(key) * np.uint64(0x9E3779B97F4A7C15)
+    return np.int64((x >> np.uint64(32)) & np.uint64(mask))
+
+
+@njit(cache=True, inline="always")
+def _level_of(s, c0):
+    """The least ``L >= 0`` with ``s <= c0 2**L``."""
+    L = 0
+    side = c0
+    while s > side:
+        side *= 2.0
+        L += 1
+    return L
+
+
+@njit(cache=True, nogil=True)
+def _box(pts, tri, t):
+    a = tri[t, 0]
+    b = tri[t, 1]
+    c = tri[t, 2]
+    x0 = min(pts[a, 0], min(pts[b, 0], pts[c, 0]))
+    x1 = max(pts[a, 0], max(pts[b, 0], pts[c, 0]))
+    y0 = min(pts[a, 1], min(pts[b, 1], pts[c, 1]))
+    y1 = max(pts[a, 1], max(pts[b, 1], pts[c, 1]))
+    return x0, y0, x1, y1
+
+
+@njit(cache=True, nogil=True)
+def _extent_range(pts, tri, lo_t, hi_t):
+    """``(min x, min y, max x, max y, smallest positive box side)`` over rows ``lo_t..hi_t``."""
+    x0 = np.inf
+    y0 = np.inf
+    x1 = -np.inf
+    y1 = -np.inf
+    smin = np.inf
+    for t in range(lo_t, hi_t):
+        a0, b0, a1, b1 = _box(pts, tri, t)
+        x0 = min(x0, a0)
+        y0 = min(y0, b0)
+        x1 = max(x1, a1)
+        y1 = max(y1, b1)
+        s = max(a1 - a0, b1 - b0)
+        if 0.0 < s < smin:
+            smin = s
+    return x0, y0, x1, y1, smin
+
+
+@njit(cache=True, nogil=True)
+def _target_entries(pts, tri, targets, origin, c0, n_levels, lo, hi, level, keys, members):
+    """Enter each target at every level from its own up (at most 4 cells each)."""
+    k = 0
+    for i in range(targets.shape[0]):
+        x0, y0, x1, y1 = _box(pts, tri, targets[i])
+        lo[i, 0] = x0
+        lo[i, 1] = y0
+        hi[i, 0] = x1
+        hi[i, 1] = y1
+        level[i] = _level_of(max(x1 - x0, y1 - y0), c0)
+        for L in range(level[i], n_levels):
+            side = c0 * 2.0**L
+            for cx in range(_cell(x0, origin[0], side), _cell(x1, origin[0], side) + 1):
+                for cy in range(_cell(y0, origin[1], side), _cell(y1, origin[1], side) + 1):
+                    keys[k] = _key(L, cx, cy, 1 if L > level[i] else 0)
+                    members[k] = i
+                    k += 1
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _hash_cells(keys, slot_key, slot_start, slot_end):
+    """Open-addressing table of the cells of sorted ``keys``: a cell's range of entries."""
+    mask = slot_key.shape[0] - 1
+    i = 0
+    n = keys.shape[0]
+    while i < n:
+        j = i + 1
+        while j < n and keys[j] == keys[i]:
+            j += 1
+        s = _hash(keys[i], mask)
+        while slot_key[s] != _EMPTY:
+            s = (s + 1) & mask
+        slot_key[s] = keys[i]
+        slot_start[s] = i
+        slot_end[s] = j
+        i = j
+
+
+@njit(cache=True, inline="always")
+def _find(slot_key, key):
+    mask = slot_key.shape[0] - 1
+    s = _hash(key, mask)
+    while slot_key[s] != _EMPTY:
+        if slot_key[s] == key:
+            return s
+        s = (s + 1) & mask
+    return -1
+
+
+@njit(cache=True, inline="always")
+def _shares_edge(tri, t, u):
+    shared = 0
+    for a in range(3):
+        for b in range(3):
+            if tri[t, a] == tri[u, b]:
+                shared += 1
+    return shared >= 2
+
+
+@njit(cache=True)
+def _separated(pts, tri, t, u):
+    """Some edge line of ``t`` or ``u`` has the other's corners on its right or on it (exact)."""
+    for side in range(2):
+        own = t if side == 0 else u
+        other = u if side == 0 else t
+        for e in range(3):
+            a = tri[own, e]
+            b = tri[own, (e + 1) % 3]
+            right = True
+            for v in range(3):
+                if orient_points(pts, a, b, tri[other, v]) > 0:
+                    right = False
+                    break
+            if right:
+                return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _first_overlap_range(pts, tri, targets, lo, hi, level, origin, c0, n_levels, top, slot_key, slot_start,
+                         slot_end, members, t_lo, t_hi):
+    """Lowest overlapping pair ``(i, j)``, ``i < j``, of a triangle ``t_lo <= t < t_hi`` and a
+    target, or ``(-1, -1)``. ``top``: the coarsest target's level (no target of its own
+    level is coarser)."""
+    best_i = -1
+    best_j = -1
+    for t in range(t_lo, t_hi):
+        x0, y0, x1, y1 = _box(pts, tri, t)
+        lt = min(_level_of(max(x1 - x0, y1 - y0), c0), n_levels - 1)
+        for L in range(lt, max(lt, top) + 1):
+            side = c0 * 2.0**L
+            for cx in range(_cell(x0, origin[0], side), _cell(x1, origin[0], side) + 1):
+                for cy in range(_cell(y0, origin[1], side), _cell(y1, origin[1], side) + 1):
+                    for inherited in range(2 if L == lt else 1):  # coarser: targets of that level only
+                        s = _find(slot_key, _key(L, cx, cy, inherited))
+                        if s < 0:
+                            continue
+                        for q in range(slot_start[s], slot_end[s]):
+                            r = members[q]
+                            u = targets[r]
+                            if u == t:
+                                continue
+                            i = min(t, u)
+                            j = max(t, u)
+                            if best_i >= 0 and (i > best_i or (i == best_i and j >= best_j)):
+                                continue
+                            px = max(x0, lo[r, 0])
+                            py = max(y0, lo[r, 1])
+                            if not (min(x1, hi[r, 0]) > px and min(y1, hi[r, 1]) > py):
+                                continue  # boxes disjoint or only touching: interiors disjoint
+                            if _cell(px, origin[0], side) != cx or _cell(py, origin[1], side) != cy:
+                                continue  # tested in the cell of the intersection's corner
+                            if _shares_edge(tri, t, u) or _separated(pts, tri, t, u):
+                                continue
+                            best_i = i
+                            best_j = j
+    return best_i, best_j
+
+
+def boundary_triangles(triangles: np.ndarray, n_points: int) -> np.ndarray:
+    """Rows owning a half-edge without twin (all rows if a directed edge is used twice)."""
+    twin, bad = half_edge_twins(triangles, n_points)
+    if bad >= 0:
+        return np.arange(len(triangles), dtype=np.int64)
+    return np.unique(np.flatnonzero(twin < 0) // 3).astype(np.int64)
+
+
+def build_grid(points: np.ndarray, triangles: np.ndarray, targets: np.ndarray) -> Grid:
+    """The hierarchical grid of the ``targets``' bounding boxes (see the module docstring)."""
+    spans = row_ranges(len(triangles), _threads.THREAD_MIN_ROWS)
+    ext = np.array(run_all([(lambda lo=lo, hi=hi: _extent_range(points, triangles, lo, hi)) for lo, hi in spans]))
+    origin = np.array([ext[:, 0].min(), ext[:, 1].min()])
+    extent = float(max(ext[:, 2].max() - origin[0], ext[:, 3].max() - origin[1]))
+    smin = float(ext[:, 4].min())
+    c0 = max(smin if np.isfinite(smin) else extent, extent / 2.0**_LEVEL_BITS, np.finfo(float).tiny)
+    n_levels = int(np.ceil(np.log2(max(extent / c0, 1.0)))) + 2  # every box fits the top level
+    k = len(targets)
+    lo = np.empty((k, 2))
+    hi = np.empty((k, 2))
+    level = np.empty(k, np.int64)
+    keys = np.empty(4 * k * n_levels, np.int64)
+    members = np.empty(4 * k * n_levels, np.int64)
+    used = _target_entries(points, triangles, targets, origin, c0, n_levels, lo, hi, level, keys, members)
+    order = np.argsort(keys[:used], kind="stable")
+    keys, members = keys[:used][order], members[:used][order]
+    n_cells = int(np.count_nonzero(np.diff(keys))) + 1 if used else 0
+    slots = 1 << max(4, int(2 * n_cells).bit_length())
+    slot_key = np.full(slots, _EMPTY, np.int64)
+    slot_start = np.zeros(slots, np.int64)
+    slot_end = np.zeros(slots, np.int64)
+    _hash_cells(keys, slot_key, slot_start, slot_end)
+    return Grid(targets, lo, hi, level, origin, c0, n_levels, slot_key, slot_start, slot_end, members)
 
 
 def find_overlap(points: np.ndarray, triangles: np.ndarray) -> tuple[int, int] | None:
-    """The first pair of triangles whose interiors intersect, or None.
+    """A pair ``(i, j)``, ``i < j``, of triangles whose interiors intersect, or None.
+
+    The pair returned is the lowest among those in which one triangle has a boundary
+    edge (there is one whenever any two triangles overlap: see the module docstring).
 
     Parameters
     ----------
@@ -121,24 +317,12 @@ def find_overlap(points: np.ndarray, triangles: np.ndarray) -> tuple[int, int] |
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     if len(tri) < 2:
         return None
-    corners = pts[tri]
-    pairs = _candidate_pairs(corners.min(axis=1), corners.max(axis=1))
-    if len(pairs):
-        shared = (tri[pairs[:, 0]][:, :, None] == tri[pairs[:, 1]][:, None, :]).sum(axis=(1, 2))
-        pairs = pairs[shared < 2]
-    for start in range(0, len(pairs), _BATCH):
-        p = pairs[start:start + _BATCH]
-        ta, tb = tri[p[:, 0]], tri[p[:, 1]]
-        separated = np.zeros(len(p), dtype=bool)
-        for own, other in ((ta, tb), (tb, ta)):
-            for e in range(3):
-                a, b = own[:, e], own[:, (e + 1) % 3]
-                right = np.ones(len(p), dtype=bool)
-                for v in range(3):
-                    right &= _signs(pts, a, b, other[:, v]) <= 0
-                separated |= right
-        bad = np.flatnonzero(~separated)
-        if len(bad):
-            i, j = (int(x) for x in p[bad[0]])
-            return (i, j)
-    return None
+    g = build_grid(pts, tri, boundary_triangles(tri, len(pts)))
+    found = run_all([
+        (lambda lo=lo, hi=hi: _first_overlap_range(
+            pts, tri, g.targets, g.lo, g.hi, g.level, g.origin, g.c0, g.n_levels, int(g.level.max()), g.slot_key,
+            g.slot_start, g.slot_end, g.members, lo, hi))
+        for lo, hi in row_ranges(len(tri), _threads.THREAD_MIN_ROWS)
+    ])
+    hits = [(int(i), int(j)) for i, j in found if i >= 0]
+    return min(hits) if hits else None
