@@ -26,7 +26,7 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["check_resolution", "closest_pair_ulps", "MIN_FEATURE_ULPS"]
+__all__ = ["check_resolution", "closest_pair_ulps", "snap_steiner_points", "MIN_FEATURE_ULPS"]
 
 #: Two distinct vertices closer than this many ulps of their coordinates are refused.
 MIN_FEATURE_ULPS = 4096.0
@@ -102,3 +102,109 @@ def check_resolution(vertices: np.ndarray) -> None:
             f"coordinates of {mag:.3g}: the incenters of a Hamiltonian mesh cannot be placed "
             f"that finely (its half-angle guarantee would fail); translate the domain nearer "
             f"the origin or scale it up (features of at least {MIN_FEATURE_ULPS:.0f} ulps)")
+
+
+def _min_angles(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Smallest angle (radians) of each row, by ``atan2(|cross|, dot)`` at every corner."""
+    return _corner_min_angles(pts[tri])
+
+
+def _corner_min_angles(corners: np.ndarray) -> np.ndarray:
+    """:func:`_min_angles` of rows given by their corners ``(..., 3, 2)``."""
+    a, b, c = corners[..., 0, :], corners[..., 1, :], corners[..., 2, :]
+    out = np.full(corners.shape[:-2], np.inf)
+    for p, q, r in ((a, b, c), (b, c, a), (c, a, b)):
+        u, v = q - p, r - p
+        cross = np.abs(u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0])
+        out = np.minimum(out, np.arctan2(cross, (u * v).sum(axis=-1)))
+    return out
+
+
+def snap_steiner_points(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    n_fixed: int,
+    bound: float,
+    *,
+    keep: np.ndarray | None = None,
+    reach: int = 3,
+    rounds: int = 6,
+) -> tuple[np.ndarray, int]:
+    """Move Steiner points to nearby float64 values where rounding broke the angle bound.
+
+    Where features are a few ulps wide (a 1e-6 square at offset 1e9 is 8 ulps), the
+    float64 point nearest an incenter can turn an angle by degrees; another nearby
+    float64 point often keeps every incident angle above ``bound`` (the square: the
+    lattice point (5, 3) ulps in from a corner, where the incenter is at (5.66, 2.34)).
+    Each round, every movable Steiner point of a row below ``bound`` tries the points up
+    to ``reach`` ulps away on each axis and takes the one whose incident rows have the
+    largest smallest angle, all counter-clockwise by the exact predicate (coordinate
+    descent: the rows of two Steiner points are improved in turn).
+
+    Nothing here is trusted: the caller runs the full certificate on the result.
+
+    Parameters
+    ----------
+    points : (n, 2) float64
+    triangles : (m, 3) int64
+    n_fixed : int
+        Points ``0..n_fixed-1`` (the input's) never move.
+    bound : float
+        Radians.
+    keep : (n,) bool, optional
+        Steiner points that must not move either (e.g. midpoints of constrained edges,
+        which must stay exact midpoints).
+
+    Returns
+    -------
+    points : (n, 2) float64
+        A copy with the moved points.
+    moved : int
+        How many points moved.
+    """
+    from hammesh.predicates import orient_rows
+
+    pts = np.array(points, dtype=np.float64, copy=True)
+    tri = np.asarray(triangles, dtype=np.int64)
+    n = len(pts)
+    movable = np.zeros(n, dtype=bool)
+    movable[n_fixed:] = True
+    if keep is not None:
+        movable &= ~np.asarray(keep, dtype=bool)
+    order = np.argsort(tri.ravel(), kind="stable")
+    starts = np.searchsorted(tri.ravel()[order], np.arange(n + 1))
+    steps = np.arange(-reach, reach + 1, dtype=np.float64)
+    dx, dy = (g.ravel() for g in np.meshgrid(steps, steps))
+    moved: set[int] = set()
+    for _ in range(rounds):
+        low = np.flatnonzero(_min_angles(pts, tri) < bound)
+        cand = np.unique(tri[low].ravel())
+        cand = cand[movable[cand]]
+        if len(cand) == 0:
+            break
+        changed = False
+        for s in cand.tolist():
+            rows = tri[order[starts[s]:starts[s + 1]] // 3]  # the rows around s
+            here = float(_min_angles(pts, rows).min())
+            if here >= bound:
+                continue
+            x, y = pts[s]
+            trial = np.c_[x + dx * np.spacing(abs(x)), y + dy * np.spacing(abs(y))]
+            # every candidate position in every incident row: (k, r, 3, 2) corners
+            corners = np.broadcast_to(pts[rows], (len(trial),) + rows.shape + (2,)).copy()
+            at = rows == s
+            corners[:, at] = trial[:, None, :]
+            angle = _corner_min_angles(corners)  # (k, r)
+            best = np.argsort(-angle.min(axis=1), kind="stable")
+            for k in best[:8].tolist():
+                if angle[k].min() <= here:
+                    break
+                c = corners[k]
+                if (orient_rows(c[:, 0], c[:, 1], c[:, 2]) > 0).all():  # exact: no row turned over
+                    pts[s] = trial[k]
+                    moved.add(s)
+                    changed = True
+                    break
+        if not changed:
+            break
+    return pts, len(moved)

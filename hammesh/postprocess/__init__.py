@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from hammesh import params
-from hammesh.domain.resolution import check_resolution
+from hammesh.domain.resolution import check_resolution, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
@@ -47,6 +47,25 @@ def load_kernels(mode: str = "sparse") -> None:
         square = Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
         hamiltonian(quality_mesh(square, min_angle=30, max_area=0.01, isolate=False), mode=mode)
         _loaded_modes.add(mode)
+
+
+def _snapped(out: HamiltonianMesh, clean: Mesh, facts, claim) -> tuple[HamiltonianMesh, int, dict | None]:
+    """``out`` with Steiner points moved to nearby float64 values that keep the angle bound
+    (``snap_steiner_points``), fully certified again; stats None if that fails too."""
+    segs = clean.segments
+    keep = np.zeros(out.n_points, dtype=bool)
+    if len(segs):  # midpoints of constrained edges must stay exact midpoints
+        mid = np.ascontiguousarray(0.5 * (clean.points[segs[:, 0]] + clean.points[segs[:, 1]]))
+        pc = np.ascontiguousarray(out.points).view(np.complex128).ravel()
+        keep = np.isin(pc, mid.view(np.complex128).ravel())
+    pts, k = snap_steiner_points(out.points, out.triangles, clean.n_points, 0.5 * facts.min_angle, keep=keep)
+    if k == 0:
+        return out, 0, None
+    moved = replace(out, points=pts)
+    try:
+        return moved, k, certify(moved, facts, claim=claim)
+    except VerificationError:
+        return out, k, None
 
 
 def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> HamiltonianMesh:
@@ -126,17 +145,23 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
             out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep)
             t1 = time.perf_counter()
         ref_facts = facts.result()
+    snapped = 0
     try:
         stats = certify(out, ref_facts, claim=claim, rows=rows, prepared=prepared)
     except VerificationError as exc:
         # detail finer than float64 can place Steiner points around (issue 12: a 1e-6
-        # square at offset 1e9) is the input's limit, not a construction bug: say so
-        # (exit 2) instead of "verification failed"; nothing unverified is returned
+        # square at offset 1e9) is the input's limit, not a construction bug: move the
+        # Steiner points to other float64 values nearby where that keeps the bound (and
+        # certify again, in full), else say so (exit 2) instead of "verification
+        # failed"; nothing unverified is returned
         try:
             check_resolution(mesh.points)
         except InvalidDomainError as limit:
-            raise InvalidDomainError(f"{limit} (the certificate found: {exc})") from exc
-        raise
+            out, snapped, stats = _snapped(out, clean, ref_facts, claim)
+            if stats is None:
+                raise InvalidDomainError(f"{limit} (the certificate found: {exc})") from exc
+        else:
+            raise
     t2 = time.perf_counter()
     report = dict(out.report)
     report.update(
@@ -149,6 +174,8 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
             "max_angle_output_deg": stats["max_angle_output_deg"],
             # rows within float64 rounding of the bound (verify.certificate.ROUNDING_RTOL_MAX)
             "angle_rounding_rows": stats.get("angle_rounding_rows", 0),
+            # Steiner points moved off their rounded place (hammesh.domain.resolution)
+            "steiner_points_snapped": snapped,
             "verified": True,
             "seconds": {
                 "mesh": mesh.info.get("seconds"),
