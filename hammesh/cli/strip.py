@@ -15,8 +15,9 @@ EXAMPLES = """examples:
   hammesh strip small.obj -o small.json --method christofides   # Thm 5.3, <= 5000 triangles
   hammesh strip plate.vtu -o plate.json --generalized    # IRIS GL: one vertex + one bit each
   hammesh strip plate.vtu -o plate.json --cache 32 --reorder-vertices   # for a 32-entry FIFO
-methods: auto (a file stored in Hamiltonian-cycle order, as 'hammesh mesh' writes it, is sent
-as one strip per cycle when that is shorter than the greedy cover), greedy, order, christofides.
+methods: auto (the shortest of greedy, zigzag and, for a file stored in Hamiltonian-cycle order
+as 'hammesh mesh' writes it, one strip per cycle), greedy, zigzag (from swap-free chains),
+order, christofides.
 Every buffer is decoded with OpenGL's rules and compared with the mesh before it is written.
 The document reports the buffer's FIFO cache figures (acmr, atvr, overfetch; 16 entries
 unless --cache says otherwise)."""
@@ -29,7 +30,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--restart-index", type=int, default=0xFFFFFFFF, help="primitive restart index (0..4294967295)")
     p.add_argument("--generalized", action="store_true", help="write generalized strips (vertex + turn bit)")
     p.add_argument(
-        "--method", choices=("auto", "greedy", "order", "christofides"), default="auto", help="how to find the strips"
+        "--method", choices=("auto", "greedy", "order", "zigzag", "christofides"), default="auto", help="how to find the strips"
     )
     g = p.add_argument_group("GPU caches")
     g.add_argument("--cache", type=int, default=None, metavar="N",

@@ -20,7 +20,7 @@ from hammesh.strips.gl import RESTART_INDEX, GLStrip
 
 __all__ = ["StripChoice", "choose_strip", "METHODS", "JOINS", "MAX_RESTART_INDEX"]
 
-METHODS = ("auto", "greedy", "order", "christofides")
+METHODS = ("auto", "greedy", "order", "zigzag", "christofides")
 JOINS = ("restart", "stitch")
 #: GL index buffers are uint32: the largest restart index there is.
 MAX_RESTART_INDEX = 2**32 - 1
@@ -112,7 +112,7 @@ def choose_strip(
         method = "cache"
     elif method == "auto":
         kw = {"join": join, "restart_index": restart_index, "reorder_vertices": reorder_vertices}
-        candidates = [("greedy", encode(mesh, method="greedy", **kw))]
+        candidates = [("greedy", encode(mesh, method="greedy", **kw)), ("zigzag", encode(mesh, method="zigzag", **kw))]
         try:
             candidates.append(("order", encode(mesh, method="order", **kw)))
         except (InvalidOptionError, ValueError):

@@ -56,8 +56,9 @@ __all__ = [
 ]
 
 #: How the dual paths are found: ``"auto"`` is ``"order"`` for a HamiltonianMesh and
-#: ``"greedy"`` otherwise.
-METHODS = ("auto", "greedy", "order")
+#: ``"greedy"`` otherwise (which also tries ``"zigzag"`` on meshes with few swaps);
+#: ``"zigzag"`` starts from the swap-free chains (a dual forest keeps Lemma 5.1's cover).
+METHODS = ("auto", "greedy", "order", "zigzag")
 
 #: Weight of a swap against a neighbour's remaining degree in the greedy choice.
 _SWAP_WEIGHT = 1
@@ -138,10 +139,10 @@ def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: bool = False):
     """
     m = dual.n_triangles
     rec = dual.cover_records()
-    if zigzag:
-        order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1))
-    elif is_forest(dual):
+    if is_forest(dual):
         order, starts = forest_paths(dual)
+    elif zigzag:
+        order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1))
     else:
         order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     if not improve or len(starts) == 2:
@@ -276,7 +277,7 @@ def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None, dual:
     """
     if method not in METHODS:
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    zigzag = dual is not None  # a second call: the swap-free chains instead of the greedy cover
+    zigzag = method == "zigzag"
     dual = dual_mesh(mesh) if dual is None else dual
     if cache is not None:
         if method == "order":
@@ -397,11 +398,11 @@ def encode(
     dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
-    few_swaps = 1 < strip.n_strips and strip.n_swaps <= _ZIGZAG_TRIGGER * strip.n_strips
+    few_swaps = strip.n_swaps <= max(_ZIGZAG_TRIGGER * (strip.n_strips - 1), _ZIGZAG_SWAP_RATE * strip.n_triangles)
     if greedy and few_swaps and not is_forest(dual):  # a forest keeps Lemma 5.1's fewest strips
-        # few swaps per path: a structured grid, whose swap-free rows the degree-first
-        # cover bends into L shapes (one swap each); try the rows and keep the shorter
-        alt, alt_order = _buffer(*_oriented_local(mesh, method, None, dual), join, restart_index)
+        # few swaps: a structured grid or a smooth surface, whose swap-free rows the
+        # degree-first cover bends into L shapes (one swap each); try the rows, keep the shorter
+        alt, alt_order = _buffer(*_oriented_local(mesh, "zigzag", None, dual), join, restart_index)
         if len(alt.indices) < len(strip.indices):
             strip, order = alt, alt_order
     rows = dual.triangles
@@ -420,6 +421,13 @@ def encode(
 #: (:func:`~hammesh.strips._cover_kernels.zigzag_path_cover`).  Structured grids and
 #: latitude-longitude spheres have ~1-2 (one per L-shaped path); quality meshes ~10.
 _ZIGZAG_TRIGGER = 2
+
+#: ... or at most this many swaps per triangle (smooth surfaces: a torus 0.025 and 0.006,
+#: where the chains joined by the end moves give 1.0083 and 1.0031 against the greedy
+#: cover's 1.0250 and 1.0063; q30 planar meshes ~0.2, where they are not tried, to keep
+#: the time: they would give 1.2649 instead of 1.2733 at 100k for ~1.7x the time, see
+#: ``--method zigzag`` and the CLI's ``auto``).
+_ZIGZAG_SWAP_RATE = 0.03
 
 
 def _buffer(dual, tri, twin, local, starts, ids, join, restart_index) -> tuple[GLStrip, np.ndarray]:
