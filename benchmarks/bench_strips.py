@@ -397,6 +397,17 @@ def _vtk_buffer(out) -> np.ndarray:
     return np.concatenate(parts)[:-1].astype(np.int64) if parts else np.zeros(0, np.int64)
 
 
+def nvtristrip_buffer(mesh: Mesh) -> np.ndarray | None:
+    """pyffi's NvTriStrip port (``stripify``, strips not stitched) joined by restarts, or ``None``."""
+    try:
+        from pyffi.utils import tristrip
+    except ImportError:
+        return None
+    strips = tristrip.stripify([tuple(t) for t in mesh.triangles.tolist()], stitchstrips=False)
+    parts = [np.r_[np.asarray(st, np.int64), R32] for st in strips]
+    return np.concatenate(parts)[:-1] if parts else np.zeros(0, np.int64)
+
+
 def peer_corpus(quick: bool) -> dict[str, Mesh]:
     """Issue 16's corpus: pyvista's shipped meshes, Triangle q30 meshes, random Delaunay, spheres, torus."""
     from scipy.spatial import Delaunay
@@ -466,9 +477,10 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
 
     mo = _meshopt()
     meshes = peer_corpus(quick)
-    encoders = ["hammesh", "hammesh cache", "vtkStripper", "meshopt", "meshopt vcache"]
+    encoders = ["hammesh", "hammesh cache", "vtkStripper", "meshopt", "meshopt vcache", "NvTriStrip"]
     print()
     print("Issue 16: indices per triangle (ipt, restarts counted) / strips / ACMR FIFO16 / ACMR FIFO32; bad = triangles")
+    print("(NvTriStrip: pyffi's pure-Python port, meshes up to 20k triangles, not timed)")
     print("a buffer does not draw exactly once with their winding (our decoder); times: best of --repeat, ours verified.")
     head = f"{'mesh':<20}{'m':>9} " + "".join(f"| {e:<28}" for e in encoders) + "| t/mo  t/mo+vc  t/vtk  ours ms  mo ms"
     print(head)
@@ -519,6 +531,9 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
             cells["meshopt vcache"] = (b1.astype(np.int64), R32, _bad_draws(mesh, b1, R32))
             times["meshopt"] = min(tm)
             times["meshopt vcache"] = min(tmv)
+        nv = nvtristrip_buffer(mesh) if m <= 20000 else None
+        if nv is not None:
+            cells["NvTriStrip"] = (nv, R32, _bad_draws(mesh, nv, R32))
         line = f"{name:<20}{m:>9,} "
         figs = {}
         for e in encoders:
@@ -535,7 +550,7 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
         line += f"|{ratio('meshopt')} {ratio('meshopt vcache'):>7} {ratio('vtkStripper'):>6}"
         line += f" {1e3 * times['hammesh']:>8.1f} " + (f"{1e3 * tm_:>6.1f}" if tm_ else f"{'-':>6}")
         print(line)
-        peers = [figs[k] for k in ("vtkStripper", "meshopt", "meshopt vcache") if k in figs]
+        peers = [figs[k] for k in ("vtkStripper", "meshopt", "meshopt vcache", "NvTriStrip") if k in figs]
         if peers:
             worst[name] = [figs["hammesh"] - min(peers), tm_ and times["hammesh"] / tm_]
     behind = [k for k, v in worst.items() if v[0] > 1e-12]
