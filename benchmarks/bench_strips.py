@@ -473,8 +473,6 @@ def _row_figures(mesh: Mesh, indices: np.ndarray, restart) -> tuple[float, int, 
 
 def peer_rows(quick: bool, repeat: int, cache: int | None) -> None:
     """Issue 16's closing table: ipt, strips, ACMR (FIFO 16 / 32) per encoder, time ratios vs meshopt."""
-    import threading  # noqa: F401  (the self-check thread is the library's)
-
     mo = _meshopt()
     meshes = peer_corpus(quick)
     encoders = ["hammesh", "hammesh cache", "vtkStripper", "meshopt", "meshopt vcache", "NvTriStrip"]
