@@ -15,18 +15,20 @@ its diagonal instead, which cuts the cycle open there (this works whatever other
 diagonals meet at that endpoint).  A convex polygon (``k = 1``) needs no Steiner point
 for a path and one (its centroid) for a cycle.
 
-Decomposition: for at most :data:`MAX_VERTICES` vertices an exact minimum convex
-decomposition (:mod:`~hammesh.polygon.min_convex`, integer program), whose pieces may
-have straight angles at diagonal ends; the piece tree is then rooted so that every
-piece is fanned from a diagonal where it is strictly convex (:func:`_fan_tree`), else
-the minimum strictly convex decomposition is used.  Larger polygons: Hertel--Mehlhorn
-(drop every diagonal of a triangulation whose removal keeps the two merged angles
-strictly convex), at most 4 times the minimum number of pieces; a few removal orders
-are tried and the fewest pieces kept.  Vertices with a straight angle are left out of
-the Hertel--Mehlhorn decomposition (they lie on piece sides).
+Decomposition: an exact minimum convex decomposition by diagonals at any size
+(:mod:`~hammesh.polygon.min_convex`, Keil's dynamic program), whose pieces may have
+straight angles at diagonal ends; the piece tree is then rooted so that every piece is
+fanned from a diagonal where it is strictly convex (:func:`_fan_tree`), else the
+minimum strictly convex decomposition is used (it always has such a rooting).
+Hertel--Mehlhorn on request, and with holes (a minimum is NP-hard there): drop every
+diagonal of a triangulation whose removal keeps the two merged angles strictly convex,
+at most 4 times the minimum number of pieces; a few removal orders are tried and the
+fewest pieces kept.  Vertices with a straight angle are left out of the
+Hertel--Mehlhorn decomposition (they lie on piece sides).
 
-Complexity: ``O(n)`` after the Hertel--Mehlhorn decomposition (``O(n log n)``, Triangle);
-the integer program is exponential in the worst case, hence the size limit.
+Complexity: ``O(n)`` after the decomposition; the minimum one costs ``O(n^2)`` for the
+visibility graph and ``O(n r^2)`` splits for ``r`` reflex vertices, Hertel--Mehlhorn
+``O(n log n)`` (Triangle).
 """
 
 from __future__ import annotations
@@ -37,13 +39,13 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 from hammesh.polygon._polygon import Polygon, as_polygon
-from hammesh.polygon.min_convex import MAX_VERTICES, minimum_convex_faces
+from hammesh.polygon.min_convex import minimum_convex_faces
 from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.predicates import orient
 from hammesh.polygon._triangulate import triangle_neighbors, triangulate_polygon
 
 __all__ = ["steiner_hamiltonian", "steiner_hamiltonian_result", "convex_decomposition",
-           "SteinerResult", "KINDS", "DECOMPOSITIONS", "MAX_VERTICES"]
+           "SteinerResult", "KINDS", "DECOMPOSITIONS"]
 
 #: Accepted values of ``kind``.
 KINDS = ("cycle", "path")
@@ -68,8 +70,8 @@ class SteinerResult:
     n_steiner : int
         ``s``: ``k - 1`` for a cycle, ``k - 2`` for a path (``k > 1``).
     method : str
-        The decomposition used: ``"optimal"`` (a minimum convex decomposition, exact
-        integer program, so ``k`` is the minimum over decompositions by diagonals),
+        The decomposition used: ``"optimal"`` (a minimum convex decomposition, Keil's
+        dynamic program, so ``k`` is the minimum over decompositions by diagonals),
         ``"optimal-strict"`` (minimum among decompositions whose pieces are strictly
         convex at diagonal ends, used when the minimum one admits no degenerate-free
         fan tree) or ``"hertel-mehlhorn"`` (at most 4 times the minimum).
@@ -105,9 +107,9 @@ def steiner_hamiltonian(points, kind: str = "cycle", *, holes=None,
         of the pieces; the decomposition is Hertel--Mehlhorn (a minimum one is NP-hard
         to find with holes), so ``k`` is not the minimum.
     decomposition : {"auto", "optimal", "hertel-mehlhorn"}
-        ``"auto"``: the exact minimum convex decomposition when the polygon has at most
-        :data:`MAX_VERTICES` vertices, Hertel--Mehlhorn otherwise.
-        ``"optimal"`` past that size raises :class:`InvalidOptionError`.
+        ``"auto"`` and ``"optimal"``: the exact minimum convex decomposition (any size;
+        with holes ``"auto"`` is Hertel--Mehlhorn).  ``"hertel-mehlhorn"``: the
+        ``O(n log n)`` heuristic, at most 4 times the minimum.
 
     Returns
     -------
@@ -123,8 +125,7 @@ def steiner_hamiltonian(points, kind: str = "cycle", *, holes=None,
     InvalidDomainError
         ``points`` is not a simple polygon, or the holes are invalid.
     InvalidOptionError
-        Unknown ``kind`` or ``decomposition``; ``"optimal"`` on a polygon with more
-        than :data:`MAX_VERTICES` vertices or with holes.
+        Unknown ``kind`` or ``decomposition``; ``"optimal"`` with holes.
 
     Examples
     --------
@@ -198,7 +199,7 @@ def _with_holes(points, holes, kind, decomposition) -> SteinerResult:
 def convex_decomposition(points, *, decomposition: str = "auto") -> list[np.ndarray]:
     """Convex decomposition of a simple polygon, as used by :func:`steiner_hamiltonian`.
 
-    ``decomposition`` as there (minimum for small polygons, else Hertel--Mehlhorn).
+    ``decomposition`` as there (the minimum by default, or Hertel--Mehlhorn).
 
     Returns
     -------
@@ -217,10 +218,6 @@ def _check_decomposition(poly: Polygon, decomposition: str) -> str:
     if decomposition not in DECOMPOSITIONS:
         raise InvalidOptionError(f"decomposition must be one of "
                                  f"{', '.join(map(repr, DECOMPOSITIONS))}, got {decomposition!r}")
-    if poly is not None and decomposition == "optimal" and poly.n > MAX_VERTICES:
-        raise InvalidOptionError(
-            f"decomposition='optimal' is limited to {MAX_VERTICES} vertices, the polygon "
-            f"has {poly.n}; use 'auto' or 'hertel-mehlhorn'")
     return decomposition
 
 
@@ -245,23 +242,19 @@ def _decompose(poly: Polygon, method: str = "auto"):
     corners = _corners(poly)
     cp = np.ascontiguousarray(poly.points[corners])
     tries = []
-    if method == "optimal" or (method == "auto" and poly.n <= MAX_VERTICES):
+    if method in ("optimal", "auto"):
         tries = [("optimal", True), ("optimal", False)]
     k_min = None
     everything = np.arange(poly.n)
     for name, straight in tries:
         # all vertices: a diagonal from a reflex vertex may end at a straight one
         faces = minimum_convex_faces(poly.points, straight=straight)
-        if faces is None:
-            break
         k_min = len(faces) if k_min is None else k_min
         pieces, diagonals = _expand(poly, everything, faces)
         if _fan_tree(poly.points, pieces, diagonals) is not None:
             return pieces, diagonals, name if len(faces) == k_min else "optimal-strict"
-    if method == "optimal":
-        raise InvalidOptionError(
-            "the exact minimum convex decomposition failed (solver time limit); "
-            "use decomposition='hertel-mehlhorn'")
+    if method != "hertel-mehlhorn":  # pragma: no cover - strictly convex pieces always fan
+        raise AssertionError("a strictly convex decomposition always has a fan tree")
     pieces, diagonals = _expand(poly, corners, _hm_faces(cp))
     return pieces, diagonals, "hertel-mehlhorn"
 

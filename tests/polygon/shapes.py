@@ -46,3 +46,17 @@ def monotone(n: int, seed: int = 0) -> np.ndarray:
     lower = np.c_[x[~up], -y[~up]]
     upper = np.c_[x[up], y[up]][::-1]
     return np.vstack([lower, upper])
+
+
+def dented(n: int, r: int, seed: int = 0) -> np.ndarray:
+    """A convex ``n``-gon on the unit circle with ``r`` vertices pushed in (reflex).
+
+    Counter-clockwise, star-shaped from the origin; the pushed vertices are not adjacent,
+    so the polygon has exactly ``r`` reflex vertices when ``n`` is large enough.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    rad = np.ones(n)
+    dents = rng.choice(np.arange(0, n, 2)[: n // 2], size=r, replace=False)
+    rad[dents] = rng.uniform(0.4, 0.85, r)
+    return np.c_[rad * np.cos(t), rad * np.sin(t)]

@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["_polygon", "visibility", "thm21_hamiltonian", "thm44_sequential", "thm23_steiner",
+MODULES = ["_polygon", "visibility", "thm21_hamiltonian", "thm44_sequential", "thm23_steiner", "min_convex_ip",
            "path_partition", "_triangulate", "plot", "min_convex", "_holes", "thm22_holes"]
 
 

@@ -85,10 +85,12 @@ def test_decomposition_option():
     assert len(polygon.convex_decomposition(p, decomposition="hertel-mehlhorn")) == 6
     with pytest.raises(InvalidOptionError, match="decomposition must be one of"):
         polygon.steiner_hamiltonian(p, decomposition="keil")
-    with pytest.raises(InvalidOptionError, match="limited to 24 vertices"):
-        polygon.steiner_hamiltonian(shapes.star(30), decomposition="optimal")
-    res = polygon.steiner_hamiltonian_result(shapes.star(30), "path")
-    assert res.method == "hertel-mehlhorn"
+    # the minimum at any size (Keil's dynamic program), never more pieces than H-M
+    star = shapes.star(60)
+    res = polygon.steiner_hamiltonian_result(star, "path", decomposition="optimal")
+    assert res.method in ("optimal", "optimal-strict")
+    hm = polygon.steiner_hamiltonian_result(star, "path", decomposition="hertel-mehlhorn")
+    assert hm.method == "hertel-mehlhorn" and res.k <= hm.k
 
 
 def test_sheared_comb():
