@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> None:
     from scipy.spatial import Delaunay
 
     from hammesh.pointset import hamiltonian_triangulation
-    from hammesh.pointset import thm31_hamiltonian as thm31
+    from hammesh.pointset import hamiltonian as thm31
     from hammesh.pointset.validate import as_points, convex_hull
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

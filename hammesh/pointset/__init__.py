@@ -1,18 +1,19 @@
 """Triangulations of point sets (paper §3, §4): Hamiltonian and sequential.
 
-=================================================  =========================================
-module                                             what
-=================================================  =========================================
-:mod:`hammesh.pointset.thm31_hamiltonian`          Thm 3.1 / Lemma 3.2: Hamiltonian cycle
-                                                   (path if convex) triangulation, O(n log n)
-:mod:`hammesh.pointset.lemma42_sequential`         Lemma 4.2: sequential triangulation with
-                                                   at most two interior points
-:mod:`hammesh.pointset.sequential_search`          exact search for small sets, and
-                                                   :func:`sequential_triangulation`
-:mod:`hammesh.pointset.thm41_example`              Thm 4.1: sets with no sequential one
-:mod:`hammesh.pointset.verify`                     the certificate of every output
-:mod:`hammesh.pointset.validate`                   checked input, exact convex hull
-=================================================  =========================================
+======================================================  ====================================
+module                                                  what
+======================================================  ====================================
+:mod:`hammesh.pointset.hamiltonian`                     Thm 3.1 / Lemma 3.2: Hamiltonian
+                                                        cycle (path if convex), O(n log n)
+:mod:`hammesh.pointset.sequential`                      :func:`sequential_triangulation`:
+                                                        construction, else exact search
+:mod:`hammesh.pointset.sequential_few_interior`         Lemma 4.2: sequential triangulation
+                                                        with at most two interior points
+:mod:`hammesh.pointset.sequential_search`               exact search for small sets
+:mod:`hammesh.pointset.no_sequential`                   Thm 4.1: sets with no sequential one
+:mod:`hammesh.pointset.verify`                          the certificate of every output
+:mod:`hammesh.pointset.validate`                        checked input, exact convex hull
+======================================================  ====================================
 
 >>> import numpy as np
 >>> from hammesh import pointset
@@ -24,19 +25,16 @@ True
 True
 """
 
-from hammesh.pointset.lemma42_sequential import (
+from hammesh.pointset.sequential_few_interior import (
     NotConstructed,
     convex_sequential,
     few_interior_sequential,
     lemma42_plan,
 )
-from hammesh.pointset.sequential_search import (
-    SEARCH_LIMIT,
-    search_sequential,
-    sequential_triangulation,
-)
-from hammesh.pointset.thm31_hamiltonian import hamiltonian_triangulation
-from hammesh.pointset.thm41_example import no_sequential_example
+from hammesh.pointset.sequential import sequential_triangulation
+from hammesh.pointset.sequential_search import SEARCH_LIMIT, search_sequential
+from hammesh.pointset.hamiltonian import hamiltonian_triangulation
+from hammesh.pointset.no_sequential import no_sequential_example
 from hammesh.pointset.validate import Hull, as_points, convex_hull
 from hammesh.pointset.verify import verify_point_triangulation
 

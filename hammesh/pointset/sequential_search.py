@@ -96,7 +96,7 @@ def check_sequential(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     VerificationError
         ``triangles`` is no triangulation of ``points`` or not sequential.
     """
-    from hammesh.halfedge import _kernels as core_kernels
+    from hammesh.halfedge._kernels import half_edge_twins
     from hammesh.strips import sequential_order
     from hammesh.strips.dual import DualMesh
 
@@ -105,7 +105,7 @@ def check_sequential(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     verify_point_triangulation(pts, tri, None)
     # the exact checks above replace dual_mesh's floating-point area test, which would
     # reject nearly-flat (but positive) triangles of nearly-collinear points
-    twin, _ = core_kernels.half_edge_twins(tri, len(pts))
+    twin, _ = half_edge_twins(tri, len(pts))
     seq = sequential_order(DualMesh(points=pts, triangles=tri, twin=twin))
     if seq is None:
         raise VerificationError("the triangulation is not sequential (Thm 4.3 test)")
@@ -221,42 +221,3 @@ def search_sequential(points: np.ndarray) -> np.ndarray | None:
     if strip is None:
         return None
     return check_sequential(pts, strip_triangles(pts, strip))
-
-
-def sequential_triangulation(points: np.ndarray) -> np.ndarray | None:
-    """A sequential triangulation (one alternating strip) of ``points``, or ``None``.
-
-    At most two interior points: the construction of Lemma 4.2
-    (:func:`hammesh.pointset.lemma42_sequential.few_interior_sequential`), any ``n``; in
-    convex position it also decides exactly (``None`` is then a proof).  Otherwise,
-    and for degenerate input the construction does not cover, the exact search
-    (:func:`search_sequential`) for at most :data:`SEARCH_LIMIT` points.
-
-    Returns
-    -------
-    (2 n - h - 2, 3) int64 or None
-        Counter-clockwise triangles in strip order, certified by Thm 4.3; ``None`` when
-        the set provably has none.
-
-    Raises
-    ------
-    InvalidOptionError
-        The set is too large to decide: more than :data:`SEARCH_LIMIT` points and
-        neither Lemma 4.2 nor the convex-position test applies (the message says why).
-    InvalidDomainError
-        Invalid points (see :func:`hammesh.pointset.validate.as_points`).
-    """
-    from hammesh.pointset.lemma42_sequential import NotConstructed, few_interior_sequential
-
-    pts = as_points(points)
-    n = len(pts)
-    try:
-        return few_interior_sequential(pts)
-    except NotConstructed as exc:
-        if n <= SEARCH_LIMIT:
-            return search_sequential(pts)
-        why = str(exc)
-    raise InvalidOptionError(
-        f"cannot decide whether these {n} points have a sequential triangulation: {why}; "
-        f"no construction is known and the exact search is limited to {SEARCH_LIMIT} points"
-    )

@@ -13,7 +13,7 @@ import numpy as np
 
 from hammesh.domain.validate import point_array
 from hammesh.errors import InvalidDomainError
-from hammesh.pointset import _kernels
+from hammesh.pointset._kernels import all_collinear, hull_boundary
 
 __all__ = ["as_points", "Hull", "convex_hull", "MAX_COORDINATE"]
 
@@ -54,7 +54,7 @@ def as_points(points: np.ndarray) -> np.ndarray:
             f"points {i} and {j} are duplicates {pts[i].tolist()}; remove one "
             "(e.g. np.unique(points, axis=0))"
         )
-    if _kernels.all_collinear(pts, int(order[0]), int(order[-1])):
+    if all_collinear(pts, int(order[0]), int(order[-1])):
         raise InvalidDomainError(f"all {n} points lie on one line; there is no triangle")
     return pts
 
@@ -90,5 +90,5 @@ class Hull:
 def convex_hull(pts: np.ndarray) -> Hull:
     """Hull of points already checked by :func:`as_points` (exact predicates)."""
     order = np.lexsort((pts[:, 1], pts[:, 0])).astype(np.int64)
-    boundary, corner = _kernels.hull_boundary(pts, order)
+    boundary, corner = hull_boundary(pts, order)
     return Hull(boundary=boundary, corner=corner, order=order)

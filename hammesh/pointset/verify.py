@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from hammesh.errors import VerificationError
-from hammesh.verify import _kernels as core_kernels
+from hammesh.verify._kernels import hull_chain
 from hammesh.verify.tiling import triangulation_boundary_keys
 
 __all__ = ["verify_point_triangulation", "AREA_RTOL", "ORDERS"]
@@ -87,7 +87,7 @@ def verify_point_triangulation(
         _fail(f"point {int(np.argmin(np.isfinite(pts).all(axis=1)))} is not finite")
     if len(np.unique(pts, axis=0)) < n:
         _fail("the points are not distinct")
-    hull_b = core_kernels.hull_chain(pts, np.lexsort((pts[:, 1], pts[:, 0])).astype(np.int64))
+    hull_b = hull_chain(pts, np.lexsort((pts[:, 1], pts[:, 0])).astype(np.int64))
     h = len(hull_b)
     if len(np.unique(hull_b)) != h:  # the chain runs back over itself
         _fail("the points are all collinear: there is no triangulation")

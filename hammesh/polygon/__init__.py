@@ -16,9 +16,9 @@ triangles index the input order and are counter-clockwise.  Invalid polygons rai
 
 from hammesh.polygon._polygon import as_polygon as validate_polygon
 from hammesh.polygon.path_partition import path_partition
-from hammesh.polygon.thm21_hamiltonian import hamiltonian_triangulation, is_hamiltonian
-from hammesh.polygon.thm22_holes import hamiltonian_triangulation_holes
-from hammesh.polygon.thm23_steiner import (
+from hammesh.polygon.hamiltonian import hamiltonian_triangulation, is_hamiltonian
+from hammesh.polygon.hamiltonian_holes import hamiltonian_triangulation_holes
+from hammesh.polygon.steiner import (
     DECOMPOSITIONS,
     KINDS,
     SteinerResult,
@@ -26,7 +26,7 @@ from hammesh.polygon.thm23_steiner import (
     steiner_hamiltonian,
     steiner_hamiltonian_result,
 )
-from hammesh.polygon.thm44_sequential import sequential_starts, sequential_triangulation
+from hammesh.polygon.sequential import sequential_starts, sequential_triangulation
 from hammesh.polygon.visibility import visibility_graph
 
 __all__ = [

@@ -1,7 +1,7 @@
 """Validation and triangulation of a polygon with polygonal holes.
 
-Used by :mod:`~hammesh.polygon.thm23_steiner` (``holes=``) and
-:mod:`~hammesh.polygon.thm22_holes`.  Internally the vertices are the outer ring
+Used by :mod:`~hammesh.polygon.steiner` (``holes=``) and
+:mod:`~hammesh.polygon.hamiltonian_holes`.  Internally the vertices are the outer ring
 counter-clockwise followed by every hole clockwise (so the domain is on the left of
 every directed boundary edge); ``order`` maps them to the caller's numbering, which is
 the outer ring's points followed by each hole's points, in the order given.
@@ -16,11 +16,11 @@ import numpy as np
 
 from hammesh.domain.validate import validate_domain
 from hammesh.errors import InvalidDomainError, MeshingError
-from hammesh.polygon._polygon import _rename, as_polygon
+from hammesh.polygon._polygon import edge_wording, as_polygon
 from hammesh.polygon._triangulate import triangulate_polygon
 from hammesh.predicates import orient_rows
 
-__all__ = ["Domain", "as_domain", "triangulate_domain"]
+__all__ = ["Domain", "as_domain", "triangulate_domain", "point_in_ring"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,7 +56,7 @@ class Domain:
         return np.stack([np.arange(self.n), self.nxt], axis=1)
 
 
-def _inside(p, ring: np.ndarray) -> bool:
+def point_in_ring(p, ring: np.ndarray) -> bool:
     """Even-odd test of a point strictly off the ring's edges."""
     x, y = p
     xs, ys = ring[:, 0], ring[:, 1]
@@ -107,13 +107,13 @@ def as_domain(points, holes) -> Domain:
         validate_domain(dom)
     except InvalidDomainError as exc:
         raise InvalidDomainError(f"rings of the polygon with holes cross or touch: "
-                                 f"{_rename(str(exc))}") from None
+                                 f"{edge_wording(str(exc))}") from None
     hole_points = []
     for h, ring in enumerate(rings[1:]):
-        if not _inside(ring.points[0], outer.points):
+        if not point_in_ring(ring.points[0], outer.points):
             raise InvalidDomainError(f"hole {h} is not inside the outer ring")
         for g, other in enumerate(rings[1:]):
-            if g != h and _inside(ring.points[0], other.points):
+            if g != h and point_in_ring(ring.points[0], other.points):
                 raise InvalidDomainError(f"hole {h} is inside hole {g}")
         t = triangulate_polygon(ring.points)[0]
         hole_points.append(ring.points[t].mean(axis=0))

@@ -18,7 +18,7 @@ import numpy as np
 from hammesh.domain.validate import point_array, validate_domain
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["Polygon", "as_polygon", "polygon_edges"]
+__all__ = ["Polygon", "as_polygon", "polygon_edges", "edge_wording"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,7 +54,8 @@ def polygon_edges(n: int) -> np.ndarray:
     return np.stack([k, (k + 1) % n], axis=1)
 
 
-def _rename(message: str) -> str:
+def edge_wording(message: str) -> str:
+    """A domain validator's message in polygon words (segment -> edge)."""
     return re.sub(r"\bsegment(s?)\b", r"edge\1", message)
 
 
@@ -99,7 +100,7 @@ def as_polygon(points) -> Polygon:
             raise InvalidDomainError(f"polygon has zero area: {msg}") from None
         if "duplicates" in msg:
             raise InvalidDomainError(f"polygon has repeated vertices: {msg}") from None
-        raise InvalidDomainError(f"not a simple polygon: {_rename(msg)}") from None
+        raise InvalidDomainError(f"not a simple polygon: {edge_wording(msg)}") from None
     x, y = pts[:, 0], pts[:, 1]
     twice = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
     if twice == 0.0:  # pragma: no cover - a simple polygon has positive area

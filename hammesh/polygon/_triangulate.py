@@ -1,7 +1,7 @@
 """Some triangulation of a simple polygon (no Steiner points), and its dual adjacency.
 
 Used as a scaffold by :mod:`~hammesh.polygon.visibility` (visibility walks through the
-triangles) and :mod:`~hammesh.polygon.thm23_steiner` (Hertel--Mehlhorn starts from a
+triangles) and :mod:`~hammesh.polygon.steiner` (Hertel--Mehlhorn starts from a
 triangulation).  Triangle's constrained Delaunay triangulation (switch ``p``) is used:
 it adds no vertices and eats the triangles outside the boundary.
 """

@@ -18,7 +18,7 @@ from hammesh.pointset import (
     sequential_triangulation,
     verify_point_triangulation,
 )
-from hammesh.pointset.thm41_example import LABELS
+from hammesh.pointset.no_sequential import LABELS
 from hammesh.strips import sequential_order
 
 

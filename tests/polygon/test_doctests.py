@@ -5,8 +5,8 @@ import importlib
 
 import pytest
 
-MODULES = ["_polygon", "visibility", "thm21_hamiltonian", "thm44_sequential", "thm23_steiner", "min_convex_ip",
-           "path_partition", "_triangulate", "plot", "min_convex", "_holes", "thm22_holes"]
+MODULES = ["_polygon", "visibility", "hamiltonian", "sequential", "steiner", "min_convex_ip",
+           "path_partition", "_triangulate", "plot", "min_convex", "_holes", "hamiltonian_holes"]
 
 
 @pytest.mark.parametrize("name", MODULES)

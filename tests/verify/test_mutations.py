@@ -411,27 +411,27 @@ SPIRAL = np.array([[0, 0], [6, 0], [6, 6], [1, 6], [1, 2], [4, 2], [4, 4], [3, 4
 
 def test_polygon_construction_bug_is_caught(monkeypatch) -> None:
     """Thm 2.1's solver returns its triangles with one row reversed: the public call raises."""
-    from hammesh.polygon import thm21_hamiltonian
+    from hammesh.polygon import hamiltonian
 
     sq = [[0, 0], [2, 0], [3, 1], [2, 2], [0, 2], [-1, 1]]
-    assert thm21_hamiltonian.hamiltonian_triangulation(sq) is not None
-    real = thm21_hamiltonian._solve
+    assert hamiltonian.hamiltonian_triangulation(sq) is not None
+    real = hamiltonian._solve
 
     def broken(poly):
         tri = real(poly)
         tri[1] = tri[1, ::-1]
         return tri
 
-    monkeypatch.setattr(thm21_hamiltonian, "_solve", broken)
+    monkeypatch.setattr(hamiltonian, "_solve", broken)
     with pytest.raises(hammesh.VerificationError, match="triangle 1 .* clockwise"):
-        thm21_hamiltonian.hamiltonian_triangulation(sq)
+        hamiltonian.hamiltonian_triangulation(sq)
 
 
 def test_steiner_construction_bug_is_caught(monkeypatch) -> None:
     """Thm 2.3's construction moves a Steiner point outside the polygon."""
-    from hammesh.polygon import thm23_steiner
+    from hammesh.polygon import steiner
 
-    real = thm23_steiner._construct
+    real = steiner._construct
 
     def broken(poly, pieces, diagonals, kind):
         pts, tri = real(poly, pieces, diagonals, kind)
@@ -439,7 +439,7 @@ def test_steiner_construction_bug_is_caught(monkeypatch) -> None:
         pts[-1] += 100.0
         return pts, tri
 
-    monkeypatch.setattr(thm23_steiner, "_construct", broken)
+    monkeypatch.setattr(steiner, "_construct", broken)
     with pytest.raises(hammesh.VerificationError, match="clockwise|boundary|area"):
         hammesh.polygon.steiner_hamiltonian(SPIRAL, "cycle")
 

@@ -24,7 +24,7 @@ import itertools
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
-from hammesh.polygon._holes import _inside, as_domain
+from hammesh.polygon._holes import point_in_ring, as_domain
 from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.predicates import orient
 
@@ -110,7 +110,7 @@ def _search(dom, kind):
                 and min(P[a, 1], P[b, 1]) <= P[w, 1] <= max(P[a, 1], P[b, 1]))
 
     def inside(pt):
-        return _inside(pt, P[rings[0]]) and not any(_inside(pt, P[r]) for r in rings[1:])
+        return point_in_ring(pt, P[rings[0]]) and not any(point_in_ring(pt, P[r]) for r in rings[1:])
 
     ok = set(boundary)
     for a, b in itertools.combinations(range(N), 2):

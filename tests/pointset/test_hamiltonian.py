@@ -158,7 +158,7 @@ def test_grids_that_used_to_stall(k):
 def test_fruitless_repairs_restart_instead_of_searching_on(monkeypatch):
     """Bounded failure mode: fruitless region searches end an attempt after its budget of
     wasted steps; MAX_ATTEMPTS such attempts are a MeshingError naming the restarts."""
-    from hammesh.pointset import _cycle_repair, thm31_hamiltonian as thm31
+    from hammesh.pointset import hamiltonian as thm31
 
     spent = []
 
@@ -166,8 +166,8 @@ def test_fruitless_repairs_restart_instead_of_searching_on(monkeypatch):
         spent.append(budget)
         return 0, B, budget
 
-    monkeypatch.setattr(_cycle_repair, "insert_by_chain", fruitless)
-    monkeypatch.setattr(_cycle_repair, "repair", lambda *a: (True, a[7]))
+    monkeypatch.setattr(thm31, "insert_by_chain", fruitless)
+    monkeypatch.setattr(thm31, "repair", lambda *a: (True, a[7]))
     bound = sum(
         thm31.WASTED_STEPS_PER_ATTEMPT * min(k + 1, 4) + thm31.CHAIN_BUDGET
         for k in range(thm31.MAX_ATTEMPTS)

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh import polygon
-from hammesh.polygon.thm44_sequential import zigzag
+from hammesh.polygon.sequential import zigzag
 from tests.polygon import brute, checks, shapes
 
 

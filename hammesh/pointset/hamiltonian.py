@@ -38,7 +38,8 @@ import numpy as np
 
 from hammesh import params
 from hammesh.errors import MeshingError
-from hammesh.pointset import _cycle_repair, _kernels
+from hammesh.pointset._cycle_repair import insert_by_chain, repair
+from hammesh.pointset._kernels import OK, STUCK, cycle_order, fan_locate, insert_points
 from hammesh.pointset.validate import Hull, as_points, convex_hull
 from hammesh.pointset.verify import verify_point_triangulation
 
@@ -131,7 +132,7 @@ def _locate(
     rel_sp[0] = 0.0
     rel = np.mod(ang - sp[0], 2 * np.pi)
     guess = np.searchsorted(rel_sp, rel, side="right") - 1
-    where, n_on = _kernels.fan_locate(pts, apex, spokes, cyclic, guess.astype(np.int64), rest)
+    where, n_on = fan_locate(pts, apex, spokes, cyclic, guess.astype(np.int64), rest)
     if (where < 0).any():  # pragma: no cover - the fan covers the hull
         raise MeshingError("point location in the start fan failed")
     return rest, where, int(n_on)
@@ -201,31 +202,31 @@ def _attempt(
         lo[:n0] = ends - counts
     B = np.ascontiguousarray(rest, dtype=np.int64)
     seed = int(rng.integers(1, 2**62))
-    n_tri, status = _kernels.insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n0, seed)
+    n_tri, status = insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n0, seed)
     repairs = 0
     wasted = 0  # search steps of fruitless region re-triangulations in this attempt
     budget = CHAIN_BUDGET
-    while status == _kernels.STUCK and repairs < MAX_REPAIRS_PER_POINT * n + 8:
+    while status == STUCK and repairs < MAX_REPAIRS_PER_POINT * n + 8:
         if wasted >= WASTED_STEPS_PER_ATTEMPT * min(attempt + 1, 4):
             return None  # a restart (new apex, new splitters) is cheaper than more search
-        added, B, steps = _cycle_repair.insert_by_chain(
+        added, B, steps = insert_by_chain(
             pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, budget=budget
         )
         n_tri += added
         budget = CHAIN_BUDGET if added else RETRY_BUDGET
         if not added:
             wasted += steps
-            done, B = _cycle_repair.repair(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, rng)
+            done, B = repair(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, rng)
             if not done:
                 break
         repairs += 1
         seed = int(rng.integers(1, 2**62))
-        n_tri, status = _kernels.insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, seed)
-    if status == _kernels.STUCK:
+        n_tri, status = insert_points(pts, tri, nbr, nxt, prv, lo, hi, B, n_tri, seed)
+    if status == STUCK:
         return None
-    if status != _kernels.OK or n_tri != m:
+    if status != OK or n_tri != m:
         raise MeshingError(f"internal error in the insertion (status {status}, {n_tri} of {m} triangles)")
-    order = _kernels.cycle_order(nxt, prv, m)
+    order = cycle_order(nxt, prv, m)
     if len(order) != m:
         raise MeshingError("internal error: the cycle links do not visit every triangle once")
     return tri[order]

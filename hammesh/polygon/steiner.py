@@ -539,7 +539,7 @@ def _fan(Q, verts, apex, order_from=None):
     dynamic program on the piece is used.  Returns None if no such path exists.
     """
     from hammesh.polygon._polygon import Polygon
-    from hammesh.polygon.thm21_hamiltonian import _backtrack, _chords_by_gap, _dp
+    from hammesh.polygon.hamiltonian import chords_by_gap, path_from_table, path_table
     from hammesh.polygon.visibility import visibility_matrix
 
     L = len(verts)
@@ -557,13 +557,13 @@ def _fan(Q, verts, apex, order_from=None):
         return tri[::-1]  # start on the side (w[L-1], w[0])
     pts = np.ascontiguousarray(Q[w])
     poly = Polygon(points=pts, order=np.arange(L), area=0.0)
-    ci, cj = _chords_by_gap(visibility_matrix(poly))
-    D = _dp(ci, cj, L)
+    ci, cj = chords_by_gap(visibility_matrix(poly))
+    D = path_table(ci, cj, L)
     # D[0, L-1]: chain 0..L-1 closed by its own side (L-1, 0)
     if L >= 4 and D[0, L - 2]:
-        first, rest = (0, L - 2, L - 1), _backtrack(D, 0, L - 2, L)
+        first, rest = (0, L - 2, L - 1), path_from_table(D, 0, L - 2, L)
     elif L >= 4 and D[1, L - 1]:
-        first, rest = (0, 1, L - 1), _backtrack(D, 1, L - 1, L)
+        first, rest = (0, 1, L - 1), path_from_table(D, 1, L - 1, L)
     else:
         return None
     local = [first] + [tuple(r) for r in rest]

@@ -25,7 +25,8 @@ from hammesh.polygon._polygon import Polygon, as_polygon
 from hammesh.polygon.verify import verify_polygon_triangulation
 from hammesh.polygon.visibility import visibility_matrix
 
-__all__ = ["hamiltonian_triangulation", "is_hamiltonian"]
+__all__ = ["hamiltonian_triangulation", "is_hamiltonian", "chords_by_gap", "path_table",
+           "path_from_table"]
 
 
 def hamiltonian_triangulation(points) -> np.ndarray | None:
@@ -72,7 +73,7 @@ def is_hamiltonian(points) -> bool:
     return _decide(poly)[0] >= 0
 
 
-def _chords_by_gap(vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def chords_by_gap(vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Directed visible chords ``(i, j)`` sorted by ``(j - i) mod n`` (bucket order)."""
     n = len(vis)
     i, j = np.nonzero(vis)
@@ -83,8 +84,8 @@ def _chords_by_gap(vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _decide(poly: Polygon) -> tuple[int, int, np.ndarray]:
     vis = visibility_matrix(poly)
-    ci, cj = _chords_by_gap(vis)
-    D = _dp(ci, cj, poly.n)
+    ci, cj = chords_by_gap(vis)
+    D = path_table(ci, cj, poly.n)
     i, j = _find_split(ci, cj, D)
     return i, j, D
 
@@ -96,16 +97,21 @@ def _solve(poly: Polygon) -> np.ndarray | None:
     i, j, D = _decide(poly)
     if i < 0:
         return None
-    side_a = _backtrack(D, i, j, n)  # from chord (i, j) out to an ear, chain i..j
-    side_b = _backtrack(D, j, i, n)  # chain j..i
+    side_a = path_from_table(D, i, j, n)  # from chord (i, j) out to an ear, chain i..j
+    side_b = path_from_table(D, j, i, n)  # chain j..i
     tri = np.concatenate([side_b[::-1], side_a])
     # the vertices of a triangle of a CCW polygon, in increasing index order, are CCW
     return np.sort(tri, axis=1)
 
 
 @numba.njit(cache=True)
-def _dp(ci, cj, n):
-    """``D[i, j]``: 0 false, 1 true via (i, j-1), 2 true via (i+1, j), 3 true (ear)."""
+def path_table(ci, cj, n):
+    """The Thm 2.1 table over chords ``ci, cj`` in :func:`chords_by_gap` order.
+
+    ``D[i, j]``: 0 false, 1 true via (i, j-1), 2 true via (i+1, j), 3 true (ear); read
+    back by :func:`path_from_table`.  Also used by :mod:`~hammesh.polygon.steiner` for
+    pieces with straight angles.
+    """
     D = np.zeros((n, n), np.uint8)
     for e in range(ci.shape[0]):
         i = ci[e]
@@ -131,7 +137,7 @@ def _find_split(ci, cj, D):
     return -1, -1
 
 
-def _backtrack(D: np.ndarray, i: int, j: int, n: int) -> np.ndarray:
+def path_from_table(D: np.ndarray, i: int, j: int, n: int) -> np.ndarray:
     """Triangles of chain ``i..j`` from the one on chord ``(i, j)`` out to the ear."""
     out = []
     while True:
