@@ -5,18 +5,22 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 
 from hammesh.errors import InvalidDomainError
-from hammesh.io import check_outputs, read_polygon
-from hammesh.io.polygon_files import write_triangulation
+from hammesh.io import check_outputs
+from hammesh.io.polygon_files import read_polygon_rings, write_triangulation
 
-HELP = "triangulate a simple polygon so that its triangles form one dual path (Thm 2.1, 2.3, 4.4)"
+HELP = "triangulate a polygon (holes allowed) so that its triangles form one dual path (Thm 2.1-2.3, 4.4)"
 EXAMPLES = """examples:
   hammesh polygon outline.poly -o outline.json --png outline.png     # Thm 2.1, or fail
   hammesh polygon outline.txt --sequential -o strip.json             # Thm 4.4 (one strip)
   hammesh polygon comb.poly --steiner path -o comb.vtu               # Thm 2.3, k-2 Steiner points
-inputs: .poly (one closed chain of segments), .geojson/.json (a Polygon without holes),
-        .wkt (POLYGON ((...))), anything else: plain text, one "x y" per line (# comments).
+  hammesh polygon plate.wkt --steiner cycle                          # holes: Thm 2.3 on H-M pieces
+inputs: .poly (closed chains of segments: the largest is the outline, the others holes),
+        .geojson/.json (a Polygon, holes allowed), .wkt (POLYGON ((...), (hole), ...)),
+        anything else: plain text, one "x y" per line (# comments).
 outputs: .json (points, triangles in path order, counts) or any mesh format of hammesh.io."""
 
 
@@ -29,6 +33,9 @@ def add_args(p: argparse.ArgumentParser) -> None:
                    help="require alternating turns (one triangle strip, Thm 4.4)")
     g.add_argument("--steiner", choices=["cycle", "path"],
                    help="add Steiner points: k-1 for a cycle, k-2 for a path (Thm 2.3)")
+    p.add_argument("--decomposition", choices=["auto", "optimal", "hertel-mehlhorn"], default="auto",
+                   help="convex pieces for --steiner: the minimum (auto, optimal; Hertel-Mehlhorn "
+                        "with holes) or Hertel-Mehlhorn")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,12 +49,24 @@ def run(args: argparse.Namespace) -> int:
     if args.png is not None and args.png.suffix.lower() != ".png":
         raise FileFormatError(f"{args.png}: the picture is PNG; use a .png file name")
     check_outputs({"-o": args.output, "--png": args.png}, [args.input])
-    pts = read_polygon(args.input)
+    pts, holes = read_polygon_rings(args.input)
+    rings = [pts, *holes]
     n_steiner, k, closed = 0, None, False
     if args.steiner:
-        res = polygon.steiner_hamiltonian_result(pts, args.steiner)
+        res = polygon.steiner_hamiltonian_result(pts, args.steiner, holes=holes or None,
+                                                 decomposition=args.decomposition)
         Q, T, n_steiner, k, closed = res.points, res.triangles, res.n_steiner, res.k, args.steiner == "cycle"
-        what = f"Hamiltonian {args.steiner} with {n_steiner} Steiner points ({k} convex pieces, {res.method})"
+        what = (f"Hamiltonian {args.steiner} with {n_steiner} Steiner points "
+                f"(k = {k} convex pieces, method {res.method})")
+    elif holes:
+        if args.sequential:
+            raise InvalidDomainError(f"{args.input}: --sequential is for polygons without holes; "
+                                     "try --steiner path")
+        T, Q = polygon.hamiltonian_triangulation_holes(pts, holes), np.concatenate(rings)
+        what = f"Hamiltonian triangulation with {len(holes)} holes"
+        if T is None:
+            raise InvalidDomainError(f"{args.input}: the polygon with holes has no Hamiltonian "
+                                     "triangulation (Thm 2.2); --steiner path adds Steiner points (Thm 2.3)")
     elif args.sequential:
         T, Q = polygon.sequential_triangulation(pts), pts
         what = "sequential triangulation (one strip)"
@@ -60,14 +79,16 @@ def run(args: argparse.Namespace) -> int:
         if T is None:
             raise InvalidDomainError(f"{args.input}: the polygon has no Hamiltonian triangulation "
                                      "(Thm 2.1); --steiner path adds k-2 Steiner points (Thm 2.3)")
+    n_in = sum(len(r) for r in rings)
     if args.output is not None:
-        write_triangulation(args.output, Q, T, n=len(pts), n_steiner=n_steiner, k=k,
+        write_triangulation(args.output, Q, T, n=n_in, n_steiner=n_steiner, k=k,
                             kind=args.steiner or ("sequential" if args.sequential else "hamiltonian"))
     if args.png is not None:
         from hammesh.polygon.plot import plot_polygon_path
 
-        plot_polygon_path(pts, Q, T, args.png, closed=closed, title=f"{args.input.name}: {what}")
-    print(f"{len(pts)} vertices: {what}, {len(T)} triangles")
+        plot_polygon_path(pts, Q, T, args.png, closed=closed, holes=holes,
+                          title=f"{args.input.name}: {what}")
+    print(f"{n_in} vertices: {what}, {len(T)} triangles")
     for label, path in (("triangulation", args.output), ("picture", args.png)):
         if path is not None:
             print(f"wrote {label}: {path}")

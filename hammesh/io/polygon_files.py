@@ -19,7 +19,7 @@ from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io.guard import reading
 from hammesh.io.points_text import read_points
 
-__all__ = ["read_polygon", "write_triangulation", "POLYGON_SUFFIXES"]
+__all__ = ["read_polygon", "read_polygon_rings", "write_triangulation", "POLYGON_SUFFIXES"]
 
 #: suffixes with a reader of their own; anything else is read as ``x y`` text
 POLYGON_SUFFIXES = (".poly", ".geojson", ".json", ".wkt")
@@ -35,22 +35,40 @@ def read_polygon(path: str | Path) -> np.ndarray:
     FileFormatError
         Missing or malformed file, holes, or several polygons.
     """
+    outer, holes = read_polygon_rings(path)
+    if holes:
+        raise FileFormatError(f"{path}: polygons with holes are not supported here "
+                              f"({len(holes)} holes)")
+    return outer
+
+
+def read_polygon_rings(path: str | Path) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Read a polygon with holes: the outer ring and the hole rings, each ``(k, 2)``.
+
+    ``.poly``: the closed chains of segments, the one of largest area outside (hole
+    points are not needed); GeoJSON ``Polygon``: its rings; WKT ``POLYGON ((...), (...))``;
+    plain ``x y`` text: one ring.  A closing vertex equal to the first is dropped.
+
+    Raises
+    ------
+    FileFormatError
+        Missing or malformed file, or several polygons.
+    """
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: no such file")
     suffix = path.suffix.lower()
     with reading(path):
         if suffix == ".poly":
-            pts = _from_poly(path)
+            rings = _from_poly(path)
         elif suffix in (".geojson", ".json"):
-            pts = _from_geojson(path)
+            rings = _from_geojson(path)
         elif suffix == ".wkt":
-            pts = _from_wkt(path)
+            rings = _from_wkt(path)
         else:
-            pts = read_points(path)
-    if len(pts) > 1 and np.array_equal(pts[0], pts[-1]):
-        pts = pts[:-1]
-    return pts
+            rings = [read_points(path)]
+    rings = [r[:-1] if len(r) > 1 and np.array_equal(r[0], r[-1]) else r for r in rings]
+    return rings[0], rings[1:]
 
 
 def _text(path: Path) -> str:
@@ -60,42 +78,49 @@ def _text(path: Path) -> str:
         raise FileFormatError(f"{path}: not UTF-8 text (byte {exc.start})") from None
 
 
-def _from_poly(path: Path) -> np.ndarray:
+def _from_poly(path: Path) -> list[np.ndarray]:
     from hammesh.domain import read_poly
 
     dom = read_poly(path)
-    if len(dom.holes):
-        raise FileFormatError(f"{path}: holes are not supported by 'hammesh polygon'")
     seg = dom.segments
     if len(seg) == 0:
-        return dom.vertices
+        return [dom.vertices]
     nxt: dict[int, list[int]] = {}
     for a, b in seg.tolist():
         for u, v in ((a, b), (b, a)):
             nxt.setdefault(u, []).append(v)
     if any(len(v) != 2 for v in nxt.values()):
-        raise FileFormatError(f"{path}: the segments must form one closed chain "
+        raise FileFormatError(f"{path}: the segments must form closed chains "
                               "(every vertex on exactly two segments)")
-    start = int(seg[0, 0])
-    order, prev, cur = [start], -1, start
-    while True:
-        a, b = nxt[cur]
-        step = a if a != prev else b
-        if step == start:
-            break
-        order.append(step)
-        prev, cur = cur, step
-    if len(order) != len(seg):
-        raise FileFormatError(f"{path}: the segments form several closed chains "
-                              f"(first has {len(order)} of {len(seg)} segments)")
-    return dom.vertices[order]
+    rings, seen = [], set()
+    for start in sorted(nxt):
+        if start in seen:
+            continue
+        order, prev, cur = [start], -1, start
+        seen.add(start)
+        while True:
+            a, b = nxt[cur]
+            step = a if a != prev else b
+            if step == start:
+                break
+            order.append(step)
+            seen.add(step)
+            prev, cur = cur, step
+        rings.append(dom.vertices[order])
+
+    def area(r):
+        x, y = r[:, 0], r[:, 1]
+        return abs(float(x @ np.roll(y, -1) - np.roll(x, -1) @ y))
+
+    rings.sort(key=area, reverse=True)   # the outer ring encloses the others
+    return rings
 
 
 def _get(obj: Any, key: str) -> Any:
     return obj.get(key) if isinstance(obj, dict) else None
 
 
-def _from_geojson(path: Path) -> np.ndarray:
+def _from_geojson(path: Path) -> list[np.ndarray]:
     try:
         data = json.loads(_text(path))
     except RecursionError:
@@ -117,26 +142,31 @@ def _from_geojson(path: Path) -> np.ndarray:
     rings = data.get("coordinates")
     if not isinstance(rings, list):
         raise FileFormatError(f"{path}: Polygon coordinates must be a list of rings")
-    if len(rings) != 1:
-        raise FileFormatError(f"{path}: polygons with holes are not supported ({len(rings)} rings)")
-    ring = rings[0]
-    if not isinstance(ring, list) or not all(
-        isinstance(p, list) and len(p) >= 2 and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in p[:2])
-        for p in ring
-    ):
-        raise FileFormatError(f"{path}: a ring must be a list of [x, y] number pairs")
-    return _array([p[:2] for p in ring], path)
+    if not rings:
+        raise FileFormatError(f"{path}: a Polygon needs at least one ring")
+    out = []
+    for ring in rings:
+        if not isinstance(ring, list) or not all(
+            isinstance(p, list) and len(p) >= 2 and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in p[:2])
+            for p in ring
+        ):
+            raise FileFormatError(f"{path}: a ring must be a list of [x, y] number pairs")
+        out.append(_array([p[:2] for p in ring], path))
+    return out
 
 
-def _from_wkt(path: Path) -> np.ndarray:
+def _from_wkt(path: Path) -> list[np.ndarray]:
     text = _text(path).strip()
-    m = re.fullmatch(r"POLYGON\s*\(\s*\(([^()]*)\)\s*\)", text, flags=re.IGNORECASE)
+    m = re.fullmatch(r"POLYGON\s*\(\s*(\([^()]*\)(?:\s*,\s*\([^()]*\))*)\s*\)", text, flags=re.IGNORECASE)
     if not m:
-        raise FileFormatError(f"{path}: expected 'POLYGON ((x y, ...))' without holes")
-    rows = [c.split() for c in m.group(1).split(",")]
-    if len({len(r) for r in rows}) > 1:
-        raise FileFormatError(f"{path}: each WKT coordinate must be 'x y'")
-    return _array(rows, path)
+        raise FileFormatError(f"{path}: expected 'POLYGON ((x y, ...), (hole ...), ...)'")
+    out = []
+    for body in re.findall(r"\(([^()]*)\)", m.group(1)):
+        rows = [c.split() for c in body.split(",")]
+        if len({len(r) for r in rows}) > 1:
+            raise FileFormatError(f"{path}: each WKT coordinate must be 'x y'")
+        out.append(_array(rows, path))
+    return out
 
 
 def _array(rows: Any, path: Path) -> np.ndarray:

@@ -22,6 +22,7 @@ def plot_polygon_path(
     path: str | os.PathLike[str],
     *,
     closed: bool = False,
+    holes=(),
     title: str | None = None,
     dpi: int = 150,
 ) -> None:
@@ -39,6 +40,9 @@ def plot_polygon_path(
         Output image; the suffix picks the format.
     closed : bool
         Close the path from the last triangle back to the first (a cycle).
+    holes : sequence of (n_i, 2) float
+        Hole rings, drawn like the outline; ``points`` then starts with the outline's
+        and the holes' vertices, in order, before the Steiner points.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
@@ -56,8 +60,11 @@ def plot_polygon_path(
     edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     edges = np.unique(np.sort(edges, axis=1), axis=0)
     ax.add_collection(LineCollection(pts[edges], colors="0.7", linewidths=0.6, zorder=1))
-    ring = np.vstack([poly, poly[:1]])
-    ax.plot(ring[:, 0], ring[:, 1], color="0.1", linewidth=1.6, zorder=3)
+    rings = [poly] + [np.asarray(h, dtype=np.float64) for h in holes]
+    for r in rings:
+        closed_ring = np.vstack([r, r[:1]])
+        ax.plot(closed_ring[:, 0], closed_ring[:, 1], color="0.1", linewidth=1.6, zorder=3)
+    n_ring = sum(len(r) for r in rings)
     c = pts[tri].mean(axis=1)
     if closed and len(c) > 1:
         c = np.vstack([c, c[:1]])
@@ -67,8 +74,8 @@ def plot_polygon_path(
                                norm=Normalize(0, max(len(segs) - 1, 1)), linewidths=1.8, zorder=2)
         ax.add_collection(lines)
         fig.colorbar(lines, ax=ax, shrink=0.8, pad=0.02).set_label("position along dual path")
-    if len(pts) > len(poly):
-        s = pts[len(poly):]
+    if len(pts) > n_ring:
+        s = pts[n_ring:]
         ax.plot(s[:, 0], s[:, 1], "o", color="crimson", markersize=4, zorder=4, label="Steiner")
         ax.legend(loc="upper right")
     ax.autoscale_view()

@@ -57,7 +57,7 @@ MALFORMED: dict[str, bytes] = {
     "nan.npy": _npy(np.array([[0, 0], [1, 0], [0, np.nan]])),
     "not_npy.npy": b"not a numpy file",
     "latin1.wkt": "POLYGON ((0 0, 1 0, 0 1)) \u00e9".encode("latin-1"),
-    "holes.wkt": b"POLYGON ((0 0, 1 0, 0 1), (0.1 0.1, 0.2 0.1, 0.1 0.2))",
+    "hole_crossing.wkt": b"POLYGON ((0 0, 1 0, 0 1), (0.5 0.5, 2 0.5, 0.5 2))",  # holes are read now
     "list.geojson": b"[1, 2, 3]",
     "null.geojson": b"null",
     "number_ring.geojson": b'{"type": "Polygon", "coordinates": [5]}',
