@@ -172,27 +172,40 @@ def spanning_forest(tri, twin, is_con, points=None):
     qx = np.zeros(m, np.int64)
     qy = np.zeros(m, np.int64)
     if points is not None and m:
-        corner = points[tri[:, 0]]  # the box of the first corners: cheap, close enough
-        lo = corner.min(axis=0)
-        span = float((corner.max(axis=0) - lo).max())
+        lo = points.min(axis=0)
+        span = float((points.max(axis=0) - lo).max())
         scale = ((1 << CELL_BITS) - 1) / span if span > 0 else 0.0
         run_all([
             (lambda a=a, b=b: _cell_coords_into(points, tri, lo[0], lo[1], scale, qx, qy, a, b)) for a, b in spans
         ])
     # everything below runs in the quadtree's (Morton) order of the triangles: the
     # union-find and the walk then read memory nearly in sequence
-    order, key = _morton_order(qx, qy, MORTON_BITS)
     rank = np.empty(m, np.int64)
-    rank[order] = np.arange(m)
-    tri_r = tri[order]
+    qr = np.empty(m, np.int64)  # coordinates in the new order, packed (x << 32 | y)
+    order, key = _morton_order(qx, qy, MORTON_BITS, rank, qr)
+    tri_r = np.empty_like(tri)
     code = np.empty(3 * m, np.int64)
     bucket = np.empty(3 * m, np.int16)
     run_all([
-        (lambda a=a, b=b: _pack_code_into(twin, is_con, order, rank, qx, qy, code, bucket, a, b)) for a, b in spans
+        (lambda a=a, b=b: _pack_code_into(tri, twin, is_con, order, rank, qr, tri_r, code, bucket, a, b))
+        for a, b in spans
     ])
-    edges = _bucket_order(bucket, 2 * (CELL_BITS + 1), CENTRE_BINS)
+    levels = CELL_BITS + 1
+    edges, group = _bucket_order(bucket, 2 * levels, CENTRE_BINS)
     uf = np.arange(m)
-    _kruskal_into(code, edges, bucket, key[order], uf)
+    kr = key[order]
+    if len(spans) > 1:
+        # below SPLIT_LEVEL an edge stays inside one cell of that level: the two halves
+        # of the Morton order, cut between two such cells, are joined in two threads
+        # (disjoint union-find entries); the coarse and the constrained edges after
+        shift = 2 * (SPLIT_LEVEL - (CELL_BITS - MORTON_BITS))
+        cut = int(np.searchsorted(kr >> shift, kr[m // 2] >> shift))
+        at = [np.searchsorted(edges[group[v] : group[v + 1]], 3 * cut) + group[v] for v in range(SPLIT_LEVEL)]
+        low = np.concatenate([edges[group[v] : at[v]] for v in range(SPLIT_LEVEL)])
+        high = np.concatenate([edges[at[v] : group[v + 1]] for v in range(SPLIT_LEVEL)])
+        run_all([(lambda e=e: _kruskal_into(code, e, bucket, kr, uf)) for e in (low, high)])
+        edges = edges[group[SPLIT_LEVEL] :]
+    _kruskal_into(code, edges, bucket, kr, uf)
     firsts = _piece_firsts(uf, order, rank)
     split = np.flatnonzero((code & 3) == 3).astype(np.int64)
     return Forest(tri_r, code, order, firsts, split)
@@ -200,12 +213,15 @@ def spanning_forest(tri, twin, is_con, points=None):
 
 #: Bits per axis of the Morton order the forest is built in (a counting sort).
 MORTON_BITS = 10
+#: Edges below this level are joined in two threads, one per half of the Morton order.
+SPLIT_LEVEL = 13
 
 
 @njit(cache=True, nogil=True)
-def _morton_order(qx, qy, bits):
+def _morton_order(qx, qy, bits, rank, qr):
     """Triangles sorted by the Morton key of their top ``bits`` bits per axis (stable),
-    and the key of each triangle."""
+    and the key of each triangle; ``rank`` gets each triangle's place, ``qr`` its
+    coordinates packed ``x << 32 | y`` at that place."""
     m = qx.shape[0]
     shift = CELL_BITS - bits
     n_keys = 1 << (2 * bits)
@@ -225,14 +241,16 @@ def _morton_order(qx, qy, bits):
     for t in range(m):
         k = key[t]
         order[start[k]] = t
+        rank[t] = start[k]
+        qr[start[k]] = (qx[t] << 32) | qy[t]
         start[k] += 1
     return order, key
 
 
 @njit(cache=True, nogil=True)
-def _pack_code_into(twin, is_con, order, rank, qx, qy, code, bucket, lo, hi):
-    """``code`` of new triangles lo..hi (tree bit clear) and the Kruskal class of each
-    dual edge from its lower half-edge (-1 on the others).
+def _pack_code_into(tri, twin, is_con, order, rank, qr, tri_r, code, bucket, lo, hi):
+    """Rows ``tri_r`` and ``code`` of new triangles lo..hi (tree bit clear), and the
+    Kruskal class of each dual edge from its lower half-edge (-1 on the others).
 
     Class: ``level * CENTRE_BINS + bin`` (level: bit length of the two triangles'
     differing coordinate bits; bin: L-infinity distance of the edge's midpoint from
@@ -240,13 +258,15 @@ def _pack_code_into(twin, is_con, order, rank, qx, qy, code, bucket, lo, hi):
     ``(CELL_BITS + 1) * CENTRE_BINS`` for a constrained edge.
     """
     con_base = (CELL_BITS + 1) * CENTRE_BINS
+    low = (1 << 32) - 1
     for i in range(lo, hi):
         t = order[i]
-        ax = qx[t]
-        ay = qy[t]
+        ax = qr[i] >> 32
+        ay = qr[i] & low
         for kk in range(3):
             h = 3 * t + kk
             j = 3 * i + kk
+            tri_r[i, kk] = tri[t, kk]
             g = twin[h]
             con = is_con[h]
             if g < 0:
@@ -259,8 +279,8 @@ def _pack_code_into(twin, is_con, order, rank, qx, qy, code, bucket, lo, hi):
             if gj < j:
                 bucket[j] = -1
                 continue
-            bx = qx[u]
-            by = qy[u]
+            bx = qr[gj // 3] >> 32
+            by = qr[gj // 3] & low
             diff = (ax ^ bx) | (ay ^ by)
             level = 0
             while diff > 0:
@@ -294,20 +314,22 @@ def _cell_coords_into(points, tri, x0, y0, scale, qx, qy, lo, hi):
 
 @njit(cache=True, nogil=True)
 def _bucket_order(bucket, n_bins, per_bin):
-    """The lower half-edges, sorted by ``bucket // per_bin`` (stable counting sort)."""
+    """The lower half-edges, sorted by ``bucket // per_bin`` (stable counting sort), and
+    where each class starts among them (``n_bins + 1`` offsets)."""
     start = np.zeros(n_bins + 1, np.int64)
     for h in range(bucket.shape[0]):
         if bucket[h] >= 0:
             start[bucket[h] // per_bin + 1] += 1
     for b in range(n_bins):
         start[b + 1] += start[b]
+    group = start.copy()
     out = np.empty(start[n_bins], np.int64)
     for h in range(bucket.shape[0]):
         if bucket[h] >= 0:
             b = bucket[h] // per_bin
             out[start[b]] = h
             start[b] += 1
-    return out
+    return out, group
 
 
 @njit(cache=True, nogil=True)
@@ -323,12 +345,14 @@ def _kruskal_into(code, edges, bucket, key, uf):
     tree bit of (both halves of) each edge that joins two trees of ``uf``.
 
     A level's edges come cell by cell (a cell is a run of the Morton order), and
-    inside a cell by their centre class: the same tree as one global sort by class,
-    since cells of one level share no triangle, but the union-find's reads stay in
-    one cell's stretch of memory.
+    inside a cell by their centre class (a counting sort of the run): the same tree
+    as one global sort by class, since cells of one level share no triangle, but the
+    union-find's reads stay in one cell's stretch of memory.
     """
     n = edges.shape[0]
     levels = CELL_BITS + 1
+    run = np.empty(n, np.int64)
+    count = np.zeros(CENTRE_BINS + 1, np.int64)
     e = 0
     while e < n:
         lev = bucket[edges[e]] // CENTRE_BINS
@@ -337,27 +361,33 @@ def _kruskal_into(code, edges, bucket, key, uf):
         f = e + 1
         while f < n and bucket[edges[f]] // CENTRE_BINS == lev and _cell_of(key, edges[f], level) == cell:
             f += 1
+        count[:] = 0
+        for x in range(e, f):
+            count[bucket[edges[x]] % CENTRE_BINS + 1] += 1
         for b in range(CENTRE_BINS):
-            for x in range(e, f):
-                h = edges[x]
-                if bucket[h] % CENTRE_BINS != b:
-                    continue
-                g = (code[h] >> 2) - 1
-                ra = h // 3
-                while uf[ra] != ra:  # path halving
-                    uf[ra] = uf[uf[ra]]
-                    ra = uf[ra]
-                rb = g // 3
-                while uf[rb] != rb:
-                    uf[rb] = uf[uf[rb]]
-                    rb = uf[rb]
-                if ra != rb:
-                    if ra < rb:
-                        uf[rb] = ra
-                    else:
-                        uf[ra] = rb
-                    code[h] |= TREE_BIT
-                    code[g] |= TREE_BIT
+            count[b + 1] += count[b]
+        for x in range(e, f):
+            b = bucket[edges[x]] % CENTRE_BINS
+            run[count[b]] = edges[x]
+            count[b] += 1
+        for x in range(f - e):
+            h = run[x]
+            g = (code[h] >> 2) - 1
+            ra = h // 3
+            while uf[ra] != ra:  # path halving
+                uf[ra] = uf[uf[ra]]
+                ra = uf[ra]
+            rb = g // 3
+            while uf[rb] != rb:
+                uf[rb] = uf[uf[rb]]
+                rb = uf[rb]
+            if ra != rb:
+                if ra < rb:
+                    uf[rb] = ra
+                else:
+                    uf[ra] = rb
+                code[h] |= TREE_BIT
+                code[g] |= TREE_BIT
         e = f
 
 
