@@ -29,6 +29,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import time
 from dataclasses import dataclass, field
@@ -41,9 +42,19 @@ from scipy.sparse.csgraph import connected_components
 from hammesh import params
 from hammesh.errors import InvalidMeshError
 from hammesh.halfedge import half_edges
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 
-__all__ = ["Partition", "partition", "dual_edges", "edge_cut", "part_components", "cycle_runs"]
+__all__ = [
+    "Partition",
+    "PartitionedMesh",
+    "partition",
+    "partitioned",
+    "as_cycle_mesh",
+    "dual_edges",
+    "edge_cut",
+    "part_components",
+    "cycle_runs",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,7 +267,9 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
     run_start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     run_of = np.repeat(np.arange(len(lengths)), lengths)
     if (run_of[a] != run_of[b]).any():
-        raise InvalidMeshError("two cycles share an edge: each connected piece must be one cycle")
+        raise InvalidMeshError(
+            "two cycles share an edge: the triangles are not in Hamiltonian cycle order (one cycle per piece)"
+        )
     part = np.empty(m, np.int64)
     shifts = np.zeros(len(lengths), np.int64)
     if k >= len(lengths):
@@ -296,3 +309,63 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
         "seconds": {"partition": t1 - t0, "check": t2 - t1},
     }
     return Partition(part=part, k=int(k), sizes=sizes, edge_cut=cut, components=comps, report=report)
+
+
+@dataclass(frozen=True, eq=False)
+class PartitionedMesh(HamiltonianMesh):
+    """A :class:`~hammesh.mesh.HamiltonianMesh` with the part of each triangle.
+
+    Writers store ``part`` as a cell array named ``part`` (``hammesh.write``), next to
+    the cycle fields.
+    """
+
+    part: np.ndarray | None = None
+
+
+def as_cycle_mesh(mesh: Mesh | HamiltonianMesh) -> HamiltonianMesh:
+    """``mesh`` as a HamiltonianMesh: a plain mesh whose rows are in cycle order (read
+    from a file) gets its runs from :func:`cycle_runs`; parents unknown (-1)."""
+    if isinstance(mesh, HamiltonianMesh):
+        return mesh
+    params.instance("mesh", mesh, Mesh, "a hammesh.Mesh or HamiltonianMesh")
+    runs = cycle_runs(mesh.triangles)
+    m = mesh.n_triangles
+    h = HamiltonianMesh.from_order(mesh.points, mesh.triangles, report={"source": "file"})
+    changes: dict[str, Any] = {
+        "segments": np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2),
+        "segment_markers": np.asarray(mesh.segment_markers, dtype=np.int64),
+        "components": runs,
+        "position": cycle_positions(runs) if m else np.zeros(0, np.int64),
+        "triangle_attributes": np.asarray(mesh.triangle_attributes, dtype=np.float64).reshape(m, -1),
+    }
+    if hasattr(mesh, "vertex_markers") and "vertex_markers" in {f.name for f in dataclasses.fields(h)}:
+        changes["vertex_markers"] = mesh.vertex_markers
+    return dataclasses.replace(h, **changes)
+
+
+def partitioned(
+    h: HamiltonianMesh | Mesh, k: int | None = None, *, renumber: str | None = None
+) -> HamiltonianMesh:
+    """``h`` with its vertices renumbered and/or its triangles partitioned.
+
+    Parameters
+    ----------
+    h : HamiltonianMesh, or a Mesh in cycle order
+    k : int, optional
+        Parts (:func:`partition`); the result is a :class:`PartitionedMesh` and its
+        report gains ``"partition"`` (edge cut, balance, connectivity).
+    renumber : {"cycle", "rcm", "hilbert"}, optional
+        Vertex numbering (:func:`hammesh.numbering.renumber`); the report gains
+        ``"numbering"`` (bandwidth and profile before and after).
+    """
+    from hammesh.numbering import renumber as renumber_vertices
+
+    out = as_cycle_mesh(h)
+    if renumber is not None:
+        out, _ = renumber_vertices(out, renumber)
+    if k is not None:
+        p = partition(out, k)
+        fields = {f.name: getattr(out, f.name) for f in dataclasses.fields(out) if f.init}
+        fields["report"] = {**out.report, "partition": p.report}
+        out = PartitionedMesh(**fields, part=p.part)
+    return out

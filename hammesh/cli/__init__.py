@@ -25,7 +25,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from hammesh.cli import check, demo, mesh, points, polygon, strip, surface
+from hammesh.cli import check, demo, mesh, partition, points, polygon, strip, surface
 from hammesh.errors import HammeshError, Terminated, VerificationError
 
 __all__ = ["main", "one_line", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
@@ -33,7 +33,8 @@ __all__ = ["main", "one_line", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VE
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 
 #: subcommand name -> module with add_args / run (and a one-line HELP)
-COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "points": points, "surface": surface, "demo": demo}
+COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "points": points, "surface": surface, "demo": demo,
+            "partition": partition}
 
 
 class _Parser(argparse.ArgumentParser):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from functools import partial
 from pathlib import Path
 
 from hammesh import params
@@ -10,6 +11,8 @@ from hammesh.cli.pipeline import Outputs, load_input, run_pipeline, summary
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError
 from hammesh.meshing import BACKENDS
+from hammesh.numbering import NUMBERINGS
+from hammesh.partition import partitioned
 from hammesh.postprocess import MODES
 
 HELP = "mesh a domain (or take a mesh file) and make it a verified Hamiltonian cycle mesh"
@@ -42,6 +45,11 @@ def add_args(p: argparse.ArgumentParser) -> None:
         "--keep", type=float, default=0.9,
         help="sparse mode: new angles >= KEEP x the replaced triangles' smallest where a join can (0..1)",
     )
+    g = p.add_argument_group("partition and numbering (issue 14; docs/partition.md)")
+    g.add_argument("--parts", type=int, metavar="K",
+                   help="cut the cycle into K connected, balanced parts: a 'part' cell array in the output")
+    g.add_argument("--renumber", choices=NUMBERINGS,
+                   help="renumber the vertices (bandwidth/profile in the report)")
     p.add_argument("--strict", action="store_true",
                    help="refuse an input that needs repairs (quads, T-junctions, crossing segments...) "
                         "instead of repairing it; the report's 'repairs' lists what was repaired")
@@ -67,7 +75,12 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidOptionError(
                 f"{args.input} is already a mesh; meshing options ({', '.join(given)}) apply to .poly/.node domains"
             )
-    h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, strict=args.strict)
+    finish = None
+    if args.parts is not None or args.renumber is not None:
+        if args.parts is not None:
+            params.integer("--parts", args.parts, low=1, what="number of parts")
+        finish = partial(partitioned, k=args.parts, renumber=args.renumber)
+    h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, strict=args.strict, finish=finish)
     print(summary(h))
     for label, path in (
         ("mesh", args.output),

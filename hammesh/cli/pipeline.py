@@ -12,7 +12,7 @@ import contextlib
 import os
 import sys
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -116,8 +116,12 @@ def run_pipeline(
     mode: str = "sparse",
     keep: float = 0.9,
     strict: bool = False,
+    finish: Callable[[HamiltonianMesh], HamiltonianMesh] | None = None,
 ) -> HamiltonianMesh:
     """Mesh (if ``source`` is a Domain), make Hamiltonian, verify, then write outputs.
+
+    ``finish``: applied to the verified mesh before anything is written (e.g. the
+    partition and vertex numbering of ``hammesh mesh --parts/--renumber``).
 
     ``strict``: the mesher gets ``strict=True`` (where it takes it) and any repair
     recorded on the way is refused (:class:`~hammesh.errors.InvalidDomainError`) before
@@ -148,6 +152,8 @@ def run_pipeline(
             raise InvalidDomainError(
                 f"--strict: the input needs repairs ({first}{f' and {more} more' if more else ''})"
             )
+        if finish is not None:
+            h = finish(h)
         t0 = time.perf_counter()
         for directory in outputs.make_dirs:
             created_dirs += _make_dir(directory)

@@ -51,6 +51,8 @@ def triangle_cell_data(mesh: Mesh | HamiltonianMesh) -> dict[str, np.ndarray]:
         data["cycle_id"] = cycle_ids(mesh.components)
         data["parent"] = np.asarray(mesh.parent, dtype=np.int64)
         data["kind"] = np.asarray(mesh.kind, dtype=np.int64)
+    if getattr(mesh, "part", None) is not None:  # hammesh.partition.PartitionedMesh
+        data["part"] = np.asarray(mesh.part, dtype=np.int64)
     attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64)
     for i in range(attrs.shape[1] if attrs.ndim == 2 else 0):
         data[f"{ATTRIBUTE_PREFIX}{i}"] = np.ascontiguousarray(attrs[:, i])
