@@ -36,8 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from numba import njit
 
 from hammesh import params
 from hammesh.errors import InvalidMeshError
@@ -139,13 +138,81 @@ def edge_cut(part: np.ndarray, a: np.ndarray, b: np.ndarray) -> int:
 
 
 def part_components(part: np.ndarray, k: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Edge-connected pieces of each of the ``k`` parts (0 for an empty part)."""
-    m = len(part)
-    keep = part[a] == part[b]
-    g = coo_matrix((np.ones(int(keep.sum()), np.int8), (a[keep], b[keep])), shape=(m, m))
-    _, label = connected_components(g, directed=False)
-    pairs = np.unique(part.astype(np.int64) * (m + 1) + label)
-    return np.bincount(pairs // (m + 1), minlength=k).astype(np.int64)
+    """Edge-connected pieces of each of the ``k`` parts (0 for an empty part).
+
+    Union-find over the edges ``(a, b)`` inside a part; it shares nothing with how
+    the parts were made.
+    """
+    return _pieces_per_part(
+        np.ascontiguousarray(part, dtype=np.int64), int(k), np.ascontiguousarray(a, dtype=np.int64),
+        np.ascontiguousarray(b, dtype=np.int64),
+    )
+
+
+@njit(cache=True, nogil=True)
+def _pieces_per_part(part, k, a, b):
+    m = part.shape[0]
+    uf = np.arange(m)
+    for e in range(a.shape[0]):
+        x = a[e]
+        y = b[e]
+        if part[x] != part[y]:
+            continue
+        while uf[x] != x:  # path halving
+            uf[x] = uf[uf[x]]
+            x = uf[x]
+        while uf[y] != y:
+            uf[y] = uf[uf[y]]
+            y = uf[y]
+        if x != y:
+            uf[max(x, y)] = min(x, y)
+    count = np.zeros(k, np.int64)
+    for t in range(m):
+        if uf[t] == t:
+            count[part[t]] += 1
+    return count
+
+
+@njit(cache=True, nogil=True)
+def _start_depth(n, x, y):
+    """Per cycle position p, the edges a stretch starting at p cuts (short side)."""
+    diff = np.zeros(2 * n + 1, np.int64)
+    for e in range(x.shape[0]):
+        d = y[e] - x[e]
+        if 2 * d > n:  # the short side goes round the cycle's end
+            diff[y[e] + 1] += 1
+            diff[x[e] + n + 1] -= 1
+        else:
+            diff[x[e] + 1] += 1
+            diff[y[e] + 1] -= 1
+    depth = np.zeros(n, np.int64)
+    run = 0
+    for p in range(2 * n):
+        run += diff[p]
+        depth[p % n] += run
+    return depth
+
+
+@njit(cache=True, nogil=True)
+def _shift_costs(depth, k):
+    """Estimated cut of every shift ``s < n // k``: sum of ``depth[s + floor(j n / k)]``."""
+    n = depth.shape[0]
+    q = n // k
+    cost = np.zeros(q, np.int64)
+    for j in range(k):
+        base = (j * n) // k
+        for s in range(q):
+            cost[s] += depth[(base + s) % n]
+    return cost
+
+
+@njit(cache=True, nogil=True)
+def _count_cut(label, x, y):
+    c = 0
+    for e in range(x.shape[0]):
+        if label[x[e]] != label[y[e]]:
+            c += 1
+    return c
 
 
 def cycle_runs(triangles: np.ndarray) -> np.ndarray:
@@ -193,8 +260,9 @@ def _spread(lengths: np.ndarray, k: int) -> np.ndarray:
 def _labels(n: int, k: int, s: int) -> np.ndarray:
     """Stretch of each of ``n`` cycle positions when the ``k`` stretches start at
     ``s + floor(j n / k)`` (positions before ``s`` belong to the last one)."""
-    starts = s + (np.arange(k, dtype=np.int64) * n) // k
-    return (np.searchsorted(starts, np.arange(n, dtype=np.int64), side="right") - 1) % k
+    pos = np.arange(n, dtype=np.int64) - s
+    pos[pos < 0] += n
+    return np.searchsorted((np.arange(k, dtype=np.int64) * n) // k, pos, side="right") - 1
 
 
 def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 3) -> int:
@@ -202,32 +270,24 @@ def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 3) ->
 
     ``x < y``: positions of the edges' rows along a cycle of ``n`` rows. The cut of
     every shift is estimated at once (an edge is counted at each start on its short
-    side; exact unless a start is closer than the edge's span); the ``tries`` best
-    estimates and the shift 0 are then counted exactly, so the result never cuts more
-    than the plain starts.
+    side, a difference array; exact unless two starts are closer than the edge's
+    span); the ``tries`` best estimates and the shift 0 are then counted exactly, so
+    the result never cuts more than the plain starts.
     """
     if k <= 1 or n <= k:
         return 0
-    d = y - x
-    wrap = 2 * d > n  # the short side of a long edge goes round the cycle's end
-    lo = np.where(wrap, y, x) + 1  # a start in [lo, hi] cuts the edge
-    hi = np.where(wrap, x + n, y)
-    depth = np.bincount(lo, minlength=2 * n + 1) - np.bincount(hi + 1, minlength=2 * n + 1)
-    depth = np.cumsum(depth)[: 2 * n]
-    depth = depth[:n] + depth[n:]
-    starts = (np.arange(k, dtype=np.int64) * n) // k
-    q = n // k
-    cost = depth[(np.arange(q, dtype=np.int64)[:, None] + starts[None, :]) % n].sum(axis=1)
+    cost = _shift_costs(_start_depth(n, x, y), k)
     best, best_cut = 0, -1
     for s in [0, *np.argsort(cost, kind="stable")[:tries].tolist()]:
-        lab = _labels(n, k, int(s))
-        cut = int(np.count_nonzero(lab[x] != lab[y]))
+        cut = _count_cut(_labels(n, k, int(s)), x, y)
         if best_cut < 0 or cut < best_cut:
             best, best_cut = int(s), cut
     return best
 
 
-def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Partition:
+def partition(
+    h: HamiltonianMesh | Mesh, k: int, *, check: bool = True, edges: tuple[np.ndarray, np.ndarray] | None = None
+) -> Partition:
     """Cut the cycles of a Hamiltonian cycle mesh into ``k`` contiguous, balanced parts.
 
     Parameters
@@ -239,6 +299,9 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
     check : bool
         Count each part's connected pieces on the mesh (an independent check of what
         contiguity promises); False skips it (``components`` then all 1).
+    edges : (a, b), optional
+        The dual graph's edges (:func:`dual_edges`) if already at hand (as METIS is
+        handed its graph); found from the triangles otherwise.
 
     Returns
     -------
@@ -263,10 +326,10 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
     if m == 0:
         raise InvalidMeshError("the mesh has no triangles to partition")
     lengths = np.asarray(h.components, dtype=np.int64) if isinstance(h, HamiltonianMesh) else cycle_runs(tri)
-    a, b = _interior_edges(tri, len(h.points))
+    a, b = _interior_edges(tri, len(h.points)) if edges is None else edges
     run_start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     run_of = np.repeat(np.arange(len(lengths)), lengths)
-    if (run_of[a] != run_of[b]).any():
+    if len(lengths) > 1 and (run_of[a] != run_of[b]).any():
         raise InvalidMeshError(
             "two cycles share an edge: the triangles are not in Hamiltonian cycle order (one cycle per piece)"
         )
@@ -275,12 +338,16 @@ def partition(h: HamiltonianMesh | Mesh, k: int, *, check: bool = True) -> Parti
     if k >= len(lengths):
         per = _spread(lengths, k)
         base = np.concatenate([[0], np.cumsum(per)[:-1]])
-        order = np.argsort(run_of[a], kind="stable")
-        bounds = np.searchsorted(run_of[a][order], np.arange(len(lengths) + 1))
+        if len(lengths) > 1:
+            order = np.argsort(run_of[a], kind="stable")
+            bounds = np.searchsorted(run_of[a][order], np.arange(len(lengths) + 1))
         for r, (n, kr) in enumerate(zip(lengths.tolist(), per.tolist())):  # per piece, not per triangle
-            sel = order[bounds[r] : bounds[r + 1]]
             s0 = int(run_start[r])
-            s = _best_shift(n, kr, a[sel] - s0, b[sel] - s0)
+            if len(lengths) > 1:
+                sel = order[bounds[r] : bounds[r + 1]]
+                s = _best_shift(n, kr, a[sel] - s0, b[sel] - s0)
+            else:
+                s = _best_shift(n, kr, a, b)
             shifts[r] = s
             part[s0 : s0 + n] = base[r] + _labels(n, kr, s)
     else:  # fewer parts than pieces: whole pieces, largest first onto the lightest part

@@ -1,0 +1,200 @@
+"""Partition benchmark (issue 14): cycle pieces vs METIS (pymetis), and vertex numberings.
+
+Two of our domains (a plate with two round holes, a 12-tooth gear with a hole), each
+meshed by Triangle (min angle 30) so that the Hamiltonian mesh has about ``--target``
+triangles (default 300 000) in each mode (``incircle``: Thm 2.4, three triangles per
+input triangle; ``sparse``). For k = 8 and 64, on the output's dual graph (triangles,
+adjacent across an edge):
+
+* ``hammesh.partition(h, k)``: contiguous stretches of the cycle (edge cut, largest
+  part / mean, parts connected: counted by its check), its time: first call in this
+  process and best of ``--repeat`` from the triangles alone, and best of ``--repeat``
+  handed the dual graph (``edges=``) as METIS is (the ratio's figure; both include
+  the connectivity check);
+* ``pymetis.part_graph(k)`` on the same graph (CSR built beforehand, not timed): edge
+  cut, balance, connected parts (counted by the same check), time (best of ``--repeat``);
+* the Hilbert-order baseline (issue 14): the triangles sorted along a Hilbert curve
+  through their centroids, cut into k equal runs: edge cut, disconnected parts.
+
+Targets: cycle cut / METIS cut <= 1.5 (goal 1.1), every part connected, exact
+balance, partition time <= 1/20 of pymetis's.
+
+Numbering table: bandwidth and profile of the output's vertex matrix as hammesh
+writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
+
+    python benchmarks/bench_partition.py [--target 300000] [--repeat 3] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+
+import numpy as np
+
+
+def _domains():
+    import hammesh
+
+    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    circ = np.c_[np.cos(a), np.sin(a)]
+    plate = hammesh.Domain.from_polygon(
+        [[0, 0], [4, 0], [4, 2], [0, 2]], holes=[circ * 0.45 + [1, 1], circ * 0.3 + [3, 1]]
+    )
+    k = np.arange(96)
+    r = np.where((k // 4) % 2 == 0, 1.0, 0.8)  # 12 teeth
+    ang = 2 * np.pi * k / 96
+    gear = hammesh.Domain.from_polygon(np.c_[r * np.cos(ang), r * np.sin(ang)], holes=[circ * 0.3])
+    return [("plate_2_holes", plate, 8.0 - np.pi * (0.45**2 + 0.3**2)), ("gear", gear, 2.62 - np.pi * 0.09)]
+
+
+def _mesh(dom, area: float, target: int, mode: str):
+    import hammesh
+
+    per_input = 3.0 if mode == "incircle" else 1.0
+    m_in = target / per_input
+    # Triangle's triangles at min angle 30 average about 0.63 x max_area
+    mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * m_in))
+    return hammesh.hamiltonian(mesh, mode=mode)
+
+
+def _metis(k: int, xadj: np.ndarray, adjncy: np.ndarray, repeat: int) -> tuple[np.ndarray, float]:
+    import pymetis
+
+    best = np.inf
+    parts = None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = pymetis.part_graph(k, xadj=xadj, adjncy=adjncy)
+        best = min(best, time.perf_counter() - t)
+        parts = np.asarray(res[1], dtype=np.int64)
+    return parts, best
+
+
+def _hilbert_parts(h, k: int) -> np.ndarray:
+    from hammesh.numbering import hilbert_keys
+
+    centroids = h.points[h.triangles].mean(axis=1)
+    order = np.argsort(hilbert_keys(centroids), kind="stable")
+    part = np.empty(h.n_triangles, np.int64)
+    part[order] = (np.arange(h.n_triangles) * k) // h.n_triangles
+    return part
+
+
+def _row(name, mode, h, k, repeat, a, b, xadj, adjncy) -> dict:
+    from hammesh.partition import edge_cut, part_components, partition
+
+    m = h.n_triangles
+    t = time.perf_counter()
+    p = partition(h, k)  # from the triangles alone (finds the dual graph itself)
+    first = time.perf_counter() - t
+    best = best_nocheck = np.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        partition(h, k)
+        best = min(best, time.perf_counter() - t)
+        t = time.perf_counter()
+        p = partition(h, k, edges=(a, b))  # handed the graph, as METIS is
+        best_nocheck = min(best_nocheck, time.perf_counter() - t)
+    mparts, mt = _metis(k, xadj, adjncy, repeat)
+    mcut = edge_cut(mparts, a, b)
+    mcomp = part_components(mparts, k, a, b)
+    hpart = _hilbert_parts(h, k)
+    hcut = edge_cut(hpart, a, b)
+    hcomp = part_components(hpart, k, a, b)
+    return {
+        "domain": name,
+        "mode": mode,
+        "triangles": m,
+        "k": k,
+        "cut": p.edge_cut,
+        "metis_cut": mcut,
+        "cut_ratio": p.edge_cut / mcut,
+        "connected": p.connected,
+        "imbalance": p.imbalance,
+        "metis_imbalance": float(np.bincount(mparts, minlength=k).max() * k / m),
+        "metis_disconnected": int((mcomp > 1).sum()),
+        "hilbert_cut_ratio": hcut / mcut,
+        "hilbert_disconnected": int((hcomp > 1).sum()),
+        "t_first": first,
+        "t_best": best,
+        "t_nocheck": best_nocheck,
+        "t_metis": mt,
+    }
+
+
+def _numbering_rows(name, mode, h) -> list[str]:
+    from hammesh.numbering import bandwidth_profile, renumber
+
+    bw, pf = bandwidth_profile(h.triangles, h.n_points)
+    rows = [f"| {name} | {mode} | as written | {bw:,} | {pf:,} | |"]
+    for method in ("cycle", "rcm", "hilbert"):
+        t = time.perf_counter()
+        _, info = renumber(h, method)
+        dt = time.perf_counter() - t
+        rows.append(f"| {name} | {mode} | {method} | {info['bandwidth']:,} | {info['profile']:,} | {dt:.3f} |")
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--target", type=int, default=300_000, help="triangles of each Hamiltonian mesh")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="30 000 triangles, one repeat (a smoke run)")
+    args = ap.parse_args()
+    if args.quick:
+        args.target, args.repeat = 30_000, 1
+    from scipy.sparse import coo_matrix
+
+    from hammesh.partition import dual_edges
+
+    rows, numbering = [], []
+    for name, dom, area in _domains():
+        for mode in ("incircle", "sparse"):
+            h = _mesh(dom, area, args.target, mode)
+            a, b = dual_edges(h.triangles)
+            m = h.n_triangles
+            g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
+            g = (g + g.T).tocsr()
+            xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
+            for k in (8, 64):
+                r = _row(name, mode, h, k, args.repeat, a, b, xadj, adjncy)
+                rows.append(r)
+                print(
+                    f"{name:14s} {mode:8s} m={m:,} k={k:2d}: cut {r['cut']:,} / METIS {r['metis_cut']:,} = "
+                    f"{r['cut_ratio']:.2f}; connected {r['connected']}; imbalance {r['imbalance']:.5f}; "
+                    f"time {r['t_nocheck']:.4f} s / METIS {r['t_metis']:.3f} s = 1/{r['t_metis'] / r['t_nocheck']:.0f} "
+                    f"(from triangles alone {r['t_best']:.4f} s)",
+                    flush=True,
+                )
+            numbering += _numbering_rows(name, mode, h)
+    print()
+    print("| domain | mode | triangles | k | cycle cut | METIS cut | ratio | parts connected | imbalance "
+          "| METIS imbalance / disconnected | Hilbert ratio / disconnected | partition s (first, best, given graph) "
+          "| METIS s | METIS / partition |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(
+            f"| {r['domain']} | {r['mode']} | {r['triangles']:,} | {r['k']} | {r['cut']:,} | {r['metis_cut']:,} "
+            f"| {r['cut_ratio']:.2f} | {'all' if r['connected'] else 'NO'} | {r['imbalance']:.5f} "
+            f"| {r['metis_imbalance']:.3f} / {r['metis_disconnected']} "
+            f"| {r['hilbert_cut_ratio']:.2f} / {r['hilbert_disconnected']} "
+            f"| {r['t_first']:.4f}, {r['t_best']:.4f}, {r['t_nocheck']:.4f} | {r['t_metis']:.3f} "
+            f"| {r['t_metis'] / r['t_nocheck']:.1f} |"
+        )
+    worst = max(r["cut_ratio"] for r in rows)
+    slow = min(r["t_metis"] / r["t_nocheck"] for r in rows)
+    ok = all(r["connected"] for r in rows) and all(r["imbalance"] <= 1 + 1.0 * r["k"] / r["triangles"] for r in rows)
+    print(f"\nworst cut ratio {worst:.2f} (target <= 1.5, goal 1.1); all connected and balanced: {ok}; "
+          f"smallest METIS / partition time {slow:.1f} (target >= 20)")
+    print()
+    print("| domain | mode | numbering | bandwidth | profile | seconds |")
+    print("|---|---|---|---|---|---|")
+    print("\n".join(numbering))
+
+
+if __name__ == "__main__":
+    main()
