@@ -207,10 +207,17 @@ def _shift_costs(depth, k):
 
 
 @njit(cache=True, nogil=True)
-def _count_cut(label, x, y):
+def _count_shift_cut(n, k, s, x, y):
+    """Exact cut of the stretches starting at ``s + floor(j n / k)`` (see ``_labels``)."""
     c = 0
     for e in range(x.shape[0]):
-        if label[x[e]] != label[y[e]]:
+        px = x[e] - s
+        if px < 0:
+            px += n
+        py = y[e] - s
+        if py < 0:
+            py += n
+        if ((px + 1) * k - 1) // n != ((py + 1) * k - 1) // n:
             c += 1
     return c
 
@@ -259,13 +266,17 @@ def _spread(lengths: np.ndarray, k: int) -> np.ndarray:
 
 def _labels(n: int, k: int, s: int) -> np.ndarray:
     """Stretch of each of ``n`` cycle positions when the ``k`` stretches start at
-    ``s + floor(j n / k)`` (positions before ``s`` belong to the last one)."""
+    ``s + floor(j n / k)`` (positions before ``s`` belong to the last one).
+
+    Stretch ``j`` holds the shifted positions ``floor(j n / k) <= p < floor((j+1) n / k)``,
+    that is ``j = floor(((p + 1) k - 1) / n)``.
+    """
     pos = np.arange(n, dtype=np.int64) - s
     pos[pos < 0] += n
-    return np.searchsorted((np.arange(k, dtype=np.int64) * n) // k, pos, side="right") - 1
+    return ((pos + 1) * k - 1) // n
 
 
-def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 3) -> int:
+def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 1) -> int:
     """The shift ``s`` of the starts ``s + floor(j n / k)`` cutting the fewest edges.
 
     ``x < y``: positions of the edges' rows along a cycle of ``n`` rows. The cut of
@@ -279,7 +290,7 @@ def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 3) ->
     cost = _shift_costs(_start_depth(n, x, y), k)
     best, best_cut = 0, -1
     for s in [0, *np.argsort(cost, kind="stable")[:tries].tolist()]:
-        cut = _count_cut(_labels(n, k, int(s)), x, y)
+        cut = _count_shift_cut(n, k, int(s), x, y)
         if best_cut < 0 or cut < best_cut:
             best, best_cut = int(s), cut
     return best
