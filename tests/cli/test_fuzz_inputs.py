@@ -75,6 +75,7 @@ COMMANDS = {
     "surface": (["surface"], ["-o", "{out}/o.vtu"], (".vtu", ".obj", ".ply", ".off", ".vtk")),
     "points": (["points"], ["-o", "{out}/o.vtu"], (".node", ".npy", ".txt")),
     "polygon": (["polygon"], ["-o", "{out}/o.json"], (".poly", ".wkt", ".geojson", ".txt", ".npy")),
+    "partition": (["partition"], ["-k", "2", "-o", "{out}/o.vtu"], (".ele", ".vtu", ".obj", ".ply", ".off", ".vtk")),
 }
 
 CASES = [
