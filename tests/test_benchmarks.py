@@ -41,3 +41,17 @@ def test_bench_sparse_runs() -> None:
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "worst planar Steiner points per input triangle" in proc.stdout
+
+
+@pytest.mark.slow
+def test_bench_partition_runs() -> None:
+    pytest.importorskip("pymetis")  # a benchmark-only peer
+    proc = subprocess.run(
+        [sys.executable, str(BENCH / "bench_partition.py"), "--target", "4000", "--repeat", "1"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "worst cut ratio" in proc.stdout
+    assert "| gear | incircle | rcm |" in proc.stdout
