@@ -42,12 +42,23 @@ def add_args(p: argparse.ArgumentParser) -> None:
         "--keep", type=float, default=0.9,
         help="sparse mode: new angles >= KEEP x the replaced triangles' smallest where a join can (0..1)",
     )
+    g = p.add_argument_group("parallel (decoupled tiles, docs/scale.md; domain inputs with -a)")
+    g.add_argument("--workers", type=int, help="mesh the tiles on a local Dask cluster of N processes "
+                   "(pip install hammesh[dask])")
+    g.add_argument("--scheduler", help="use the running Dask scheduler at this address instead")
+    g.add_argument("--tiles", type=int, help="number of tiles (default: one per worker, more past 3M triangles)")
+    g.add_argument("--partitioned", action="store_true",
+                   help="-o is a directory: one .vtu per tile written by its worker + mesh.pvtu (cycle order)")
     p.add_argument("--strict", action="store_true",
                    help="refuse an input that needs repairs (quads, T-junctions, crossing segments...) "
                         "instead of repairing it; the report's 'repairs' lists what was repaired")
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.workers is not None or args.scheduler is not None or args.partitioned or args.tiles is not None:
+        from hammesh.parallel.command import run_parallel
+
+        return run_parallel(args)
     outputs = Outputs(mesh=args.output, report=args.report, png=args.png, strip=args.strip, inputs=(args.input,))
     outputs.check()  # before reading: a bad output path costs nothing
     if args.timeout is not None:

@@ -47,7 +47,7 @@ import numpy as np
 
 from hammesh import params
 from hammesh.errors import FileFormatError
-from hammesh.io import meshio_format, triangle_format
+from hammesh.io import meshio_format, pvtu, triangle_format
 from hammesh.io.paths import check_outputs
 from hammesh.io.points_text import read_points
 from hammesh.io.polygon_files import read_polygon
@@ -80,6 +80,7 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
     ".off": (meshio_format.read, meshio_format.write),
     ".ele": (triangle_format.read_ele, triangle_format.write),
     ".node": (triangle_format.read_ele, triangle_format.write),
+    ".pvtu": (pvtu.read, pvtu.write),  # partitioned VTK: an index of .vtu pieces (issue 15)
 }
 
 

@@ -41,6 +41,11 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InvalidOptionError(f"workers must be a positive integer, got {workers!r}")
     distributed = _distributed()
+    import logging
+
+    # one process per worker, one thread each: Triangle and the kernels hold their core;
+    # Dask's shutdown chatter (nanny warnings) is not the user's business
     with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as c:
+                                  dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+            distributed.Client(cluster) as c:
         yield c, workers

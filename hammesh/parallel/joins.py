@@ -72,6 +72,7 @@ class BorderRows:
     n_points: int
     n_triangles: int
     input_min_angle: float = 0.0
+    area: float = 0.0
 
 
 def _min_angle_deg(p: np.ndarray) -> np.ndarray:
@@ -126,7 +127,13 @@ def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
         run_length=L, after=after, before=before, kind=np.asarray(h.kind)[rows], xyz=xyz,
         min_angle=_min_angle_deg(xyz), run_starts=starts, n_points=n, n_triangles=len(tri),
         input_min_angle=float(h.report.get("min_angle_input_deg", 0.0)),
+        area=float(_areas(h.points, h.triangles).sum()),
     )
+
+
+def _areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
 @dataclass(frozen=True)
@@ -206,7 +213,8 @@ def _swap_min_angle(t_xyz: np.ndarray, d: np.ndarray) -> float:
     return float(_min_angle_deg(tris).min())
 
 
-def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: float = 0.9) -> Plan:
+def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: float = 0.9,
+               n_separators: int | None = None) -> Plan:
     """Choose the joins (Kruskal over the tiles' cycles) and the global cycle order.
 
     Best first: a *swap* (flip ``ab`` into ``cd``, no Steiner point, the sparse mode's
@@ -233,6 +241,13 @@ def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: flo
     where = np.minimum(where, len(order) - 1)
     mate = order[where]
     ok = fwd[mate] == back
+    if not ok.all() or np.unique(fwd).size != len(fwd):
+        i = int(np.flatnonzero(~ok)[0]) if not ok.all() else 0
+        raise VerificationError(
+            f"separator edge ({int(ent[i, 2])}, {int(ent[i, 3])}) of tile {int(ent[i, 0])} is not the edge of "
+            "exactly one triangle of one other tile, opposite: the tiles do not conform")
+    if n_separators is not None and len(ent) != 2 * n_separators:
+        raise VerificationError(f"{len(ent)} tile triangles hold the {n_separators} separator edges, not two each")
     pairs = [(i, int(mate[i])) for i in np.flatnonzero(ok) if i < mate[i]]
     uf_all = _UF(n_nodes)
     cand = []
@@ -376,6 +391,28 @@ def _block_size(bk) -> int:
     return int(bk[5]) if bk[1] == "run" else 1
 
 
+def _check_join_triangles(tri, gid, points, joins, base, apex, floor, tile_index) -> None:
+    """Every triangle a join made: counter-clockwise by the exact predicate, every angle
+    at least ``floor`` degrees (half the input's minimum) up to rounding."""
+    from hammesh.predicates import orient_many
+
+    coords = {int(g): points[i] for i, g in enumerate(gid.tolist())}
+    for j in joins:
+        if j.slot >= 0:
+            coords[base + 2 * j.slot] = np.array(j.I_t)
+            coords[base + 2 * j.slot + 1] = np.array(j.I_u)
+    for ji, (g, xy) in (apex or {}).items():
+        coords[int(g)] = np.asarray(xy, dtype=np.float64)
+    ids = np.unique(tri)
+    pts = np.array([coords[int(i)] for i in ids.tolist()])
+    local = np.searchsorted(ids, tri)
+    if (orient_many(np.ascontiguousarray(pts), np.ascontiguousarray(local)) <= 0).any():
+        raise VerificationError(f"tile {tile_index}: a join triangle is not counter-clockwise")
+    low = _min_angle_deg(pts[local]).min()
+    if low < floor * (1 - 1e-6):  # Thm 2.4 is tight: half an angle, up to rounding
+        raise VerificationError(f"tile {tile_index}: a join triangle has an angle {low:.6f} < {floor:.6f} deg")
+
+
 @dataclass(frozen=True, eq=False)
 class TilePiece:
     """One tile's share of the output, in global numbering, rows in cycle order.
@@ -399,7 +436,7 @@ class TilePiece:
 def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: list, plan_start: np.ndarray,
                 joins: list[Join], mesh_offset: int, n_mesh_points: int, ham_offset: int, join_point_base: int,
                 triangle_offset: int, separator_keys: np.ndarray, n_global: int,
-                swap_apex: dict | None = None) -> TilePiece:
+                swap_apex: dict | None = None, floor: float = 0.0) -> TilePiece:
     """Number a tile's rows and points globally and apply its side of the joins.
 
     Global points: the decomposition's, then every tile's mesh Steiner points (tile
@@ -453,6 +490,9 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
             new_kind.append(4 if name in ("A1", "A2") else (1 if name in ("F_a", "F_b") else 0))
             new_parent.append(triangle_offset + int(h.parent[row]) if h.parent[row] >= 0 else -1)
             new_attr.append(attrs[row] if attrs.shape[1] else np.zeros(0))
+    if new_tri:
+        _check_join_triangles(np.asarray(new_tri, np.int64), gid, h.points, joins, join_point_base, swap_apex,
+                              floor, tile_index)
     removed = set()
     for j in joins:
         if j.t_tile == tile_index:

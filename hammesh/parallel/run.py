@@ -15,7 +15,7 @@ from typing import Any, Callable
 import numpy as np
 
 from hammesh.domain import Domain
-from hammesh.errors import InvalidOptionError
+from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.parallel.decoupled import MAX_ROUNDS, bad_corner_vertices
 from hammesh.parallel.joins import Plan, border_rows, finish_tile, plan_joins
@@ -117,7 +117,10 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     borders = run.gather([run.submit(border_rows, h, t, i) for i, (h, t) in enumerate(zip(hams, decomp.tiles))])
     note("hamiltonian", len(borders))
     t3 = time.perf_counter()
-    plan = plan_joins(borders, len(decomp.vertices), keep=keep)
+    plan = plan_joins(borders, len(decomp.vertices), keep=keep, n_separators=int(decomp.separator.sum()))
+    area = sum(b.area for b in borders)
+    if abs(area - decomp.area) > 1e-9 * abs(decomp.area) * max(1.0, np.sqrt(sum(b.n_triangles for b in borders))):
+        raise VerificationError(f"the tiles' area {area!r} differs from the domain's {decomp.area!r}")
     mesh_points = np.array([r[1] for r in results], np.int64)
     mesh_triangles = np.array([r[2] for r in results], np.int64)
     ham_points = np.array([b.n_points for b in borders], np.int64)
@@ -164,7 +167,8 @@ def finish_all(tiled: Tiled, runner=None) -> list:
         joins = [j for j in tiled.plan.joins if i in (j.t_tile, j.u_tile)]
         pieces.append(run.submit(finish_tile, tiled.hams[i], t, i, mine, starts, joins, int(mesh_off[i]),
                                  int(tiled.mesh_points[i]), int(ham_off[i]), join_base, int(tri_off[i]), sep, n_global,
-                                 {ji: v for ji, v in apex.items() if tiled.plan.joins[ji].t_tile == i}))
+                                 {ji: v for ji, v in apex.items() if tiled.plan.joins[ji].t_tile == i},
+                                 0.5 * min(b.input_min_angle for b in tiled.borders)))
     return pieces
 
 

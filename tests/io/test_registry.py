@@ -13,7 +13,7 @@ import pytest
 import hammesh.io as hio
 from hammesh.errors import FileFormatError, InvalidMeshError
 
-ALL = [".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off", ".ele", ".node"]
+ALL = [".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off", ".ele", ".node", ".pvtu"]
 
 
 def test_registry_is_explicit_and_complete():

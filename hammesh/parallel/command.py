@@ -1,0 +1,84 @@
+"""``hammesh mesh ... --workers/--scheduler/--tiles/--partitioned``: the parallel path."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from hammesh import params
+from hammesh.errors import InvalidOptionError
+
+__all__ = ["run_parallel"]
+
+
+def run_parallel(args: argparse.Namespace) -> int:
+    """Check the options, mesh on the tiles, write the outputs (one file or a directory)."""
+    from hammesh.cli.pipeline import DOMAIN_SUFFIXES, Outputs, load_input
+    from hammesh.domain import Domain
+    from hammesh.parallel.cluster import DASK_MISSING
+
+    if args.workers is not None:
+        params.number("--workers", args.workers, low=1, high=4096, what="workers")
+    if args.tiles is not None:
+        params.number("--tiles", args.tiles, low=1, high=1_000_000, what="tiles")
+    if args.workers is not None and args.scheduler is not None:
+        raise InvalidOptionError("--workers starts a local cluster, --scheduler uses a running one: give one")
+    if args.workers is not None or args.scheduler is not None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            raise InvalidOptionError(DASK_MISSING) from None
+    if args.input.suffix.lower() not in DOMAIN_SUFFIXES:
+        raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain (.poly/.node), not a mesh")
+    if args.max_area is None:
+        raise InvalidOptionError("parallel meshing needs -a/--max-area (it sets the separators' spacing)")
+    if args.backend != "triangle" or args.conforming_delaunay or args.max_steiner is not None:
+        raise InvalidOptionError("parallel meshing uses Triangle with -q and -a only "
+                                 "(no --backend, --conforming-delaunay, --max-steiner)")
+    if args.png is not None or args.strip is not None:
+        raise InvalidOptionError("--png and --strip need the whole mesh: not with parallel meshing")
+    progress = sys.stderr.isatty()
+    if args.partitioned:
+        if args.output is None:
+            raise InvalidOptionError("--partitioned needs -o DIRECTORY")
+        from hammesh.io import write_report
+        from hammesh.parallel.partitioned import write_partitioned
+
+        Outputs(report=args.report, inputs=(args.input,)).check()
+        source = load_input(args.input, strict=args.strict)
+        if not isinstance(source, Domain):
+            raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
+        rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
+                                tiles=args.tiles, workers=args.workers, scheduler=args.scheduler, mode=args.mode,
+                                keep=args.keep, progress=progress)
+        if args.report is not None:
+            write_report(rep, args.report)
+        par = rep["parallel"]
+        print(f"{rep['triangles']:,} triangles in {len(rep['components'])} Hamiltonian cycle(s) over "
+              f"{par['tiles']} tiles ({par['joins']} joins), verified per tile and across separators")
+        print(f"wrote index: {rep['index']} ({rep['pieces']} pieces)")
+        return 0
+    from hammesh.io import write, write_report
+    from hammesh.parallel.cluster import runner_for
+    from hammesh.parallel.run import parallel_hamiltonian
+
+    outputs = Outputs(mesh=args.output, report=args.report, inputs=(args.input,))
+    outputs.check()
+    source = load_input(args.input, strict=args.strict)
+    if not isinstance(source, Domain):
+        raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
+    with runner_for(workers=args.workers, scheduler=args.scheduler) as (runner, n):
+        h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
+                                 client=None if args.workers is None and args.scheduler is None else runner,
+                                 mode=args.mode, keep=args.keep, progress=progress)
+    if args.output is not None:
+        write(h, args.output)
+    if args.report is not None:
+        write_report(h.report, args.report)
+    par = h.report["parallel"]
+    print(f"{h.n_triangles:,} triangles in {len(h.components)} Hamiltonian cycle(s) over {par['tiles']} tiles "
+          f"({par['joins']} joins), verified; min angle {h.report['min_angle_output_deg']:.2f} deg")
+    for label, path in (("mesh", args.output), ("report", args.report)):
+        if path is not None:
+            print(f"wrote {label}: {path}")
+    return 0
