@@ -79,3 +79,51 @@ def graded_points(length: float, size, cap0: float, cap1: float) -> np.ndarray:
         return np.zeros(0)
     targets = F[-1] * np.arange(1, n) / n
     return np.interp(targets, F, s)
+
+
+def _segmented_min_accumulate(values: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Running minimum restarting at every new ``seg`` (``seg`` non-decreasing)."""
+    span = float(np.abs(values).max()) if len(values) else 0.0
+    big = 4.0 * span + 1.0
+    # every later segment is lowered by ``big``: the running minimum never carries over
+    shifted = values - seg * big
+    return np.minimum.accumulate(shifted) + seg * big
+
+
+def graded_points_many(lengths: np.ndarray, stations: np.ndarray, seg: np.ndarray, h: np.ndarray,
+                       cap0: np.ndarray, cap1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`graded_points` for many pieces at once, sizes already sampled.
+
+    ``stations`` / ``h``: samples of every piece (``seg`` its index, non-decreasing, each
+    piece sampled from 0 to its length, at least two samples); returns the new points'
+    stations and their piece index.
+    """
+    first = np.concatenate([[True], seg[1:] != seg[:-1]])
+    last = np.concatenate([seg[1:] != seg[:-1], [True]])
+    h = h.copy()
+    h[first] = np.minimum(h[first], cap0[seg[first]])
+    h[last] = np.minimum(h[last], cap1[seg[last]])
+    g = GRADING * stations
+    h = np.minimum(h, _segmented_min_accumulate(h - g, seg) + g)
+    rev = (h + g)[::-1]
+    h = np.minimum(h, (_segmented_min_accumulate(rev, (seg.max() - seg)[::-1]))[::-1] - g)
+    inv = 1.0 / h
+    inc = np.zeros(len(h))
+    inc[1:] = 0.5 * (inv[1:] + inv[:-1]) * np.diff(stations)
+    inc[first] = 0.0
+    F = np.cumsum(inc)
+    F -= np.repeat(F[first], np.bincount(seg)[np.unique(seg)])
+    total = F[last]
+    n = np.maximum(1, np.ceil(total - 0.05).astype(np.int64))
+    pieces = np.unique(seg)
+    # global monotone key: every piece's F lifted above the previous pieces'
+    lift = np.concatenate([[0.0], np.cumsum(total + 1.0)[:-1]])
+    G = F + np.repeat(lift, np.bincount(seg)[pieces])
+    count = n - 1
+    owner = np.repeat(pieces, count)
+    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 1
+    target = np.repeat(lift, count) + k / np.repeat(n, count) * np.repeat(total, count)
+    j = np.clip(np.searchsorted(G, target), 1, len(G) - 1)
+    w = (target - G[j - 1]) / np.maximum(G[j] - G[j - 1], 1e-300)
+    st = stations[j - 1] + np.clip(w, 0, 1) * (stations[j] - stations[j - 1])
+    return st, owner

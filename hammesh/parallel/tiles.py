@@ -33,7 +33,7 @@ import numpy as np
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError
 from hammesh.meshing.options import MAX_MIN_ANGLE, format_number
-from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points
+from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points_many
 
 __all__ = ["Tile", "Decomposition", "decompose", "split_segments", "COARSE_TRIANGLES"]
 
@@ -51,6 +51,8 @@ CROSS_MARGIN_DEG = 10.0
 CLEARANCE = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
 OBSTACLE_FACTOR = 1.5
+#: most samples of the size along one piece
+MAX_SAMPLES_PER_PIECE = 200_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -437,26 +439,49 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles) -
     On a separator (axis-parallel) the size is also at most ``OBSTACLE_FACTOR`` times
     the distance to the nearest vertex off its line: a longer subsegment would have
     that vertex in its diametral circle (encroached), and ``-Y`` forbids the split
-    that Delaunay refinement would make.
+    that Delaunay refinement would make. All pieces are sampled at once; a piece whose
+    sizes turn out finer than its sampling is sampled again at their scale.
     """
-    plans = []
-    for u, v in segs.tolist():
-        a, e = p[u], p[v]
-        d = e - a
-        length = float(math.hypot(d[0], d[1]))
-        axis = 0 if d[0] == 0 else (1 if d[1] == 0 else -1)
-
-        def size(s, a=a, d=d, length=length, axis=axis):
-            xy = a + np.outer(np.asarray(s) / length, d)
-            h = sizer(xy)
-            if axis >= 0 and obstacles is not None:
-                dist, idx = obstacles.query(xy, k=4)
-                off = obstacles.data[np.minimum(idx, len(obstacles.data) - 1)][..., axis] != a[axis]
-                dist = np.where(off & np.isfinite(dist), dist, np.inf).min(axis=1)
-                h = np.minimum(h, OBSTACLE_FACTOR * dist)
-            return h
-
-        plans.append(graded_points(length, size, caps[u], caps[v]) if length > 0 else np.zeros(0))
+    a, e = p[segs[:, 0]], p[segs[:, 1]]
+    d = e - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    axis = np.where(d[:, 0] == 0, 0, np.where(d[:, 1] == 0, 1, -1))
+    h0 = np.minimum(np.minimum(sizer(a), sizer(e)), np.minimum(caps[segs[:, 0]], caps[segs[:, 1]]))
+    m = np.clip(np.ceil(4.0 * length / np.maximum(h0, 1e-300)), 2, MAX_SAMPLES_PER_PIECE).astype(np.int64)
+    live = length > 0
+    for _ in range(3):
+        idx = np.flatnonzero(live)
+        seg = np.repeat(idx, m[idx] + 1)
+        start = np.repeat(np.cumsum(m[idx] + 1) - (m[idx] + 1), m[idx] + 1)
+        frac = (np.arange(len(seg)) - start) / np.repeat(m[idx], m[idx] + 1)
+        st = frac * length[seg]
+        xy = a[seg] + frac[:, None] * d[seg]
+        h = sizer(xy)
+        on_axis = axis[seg] >= 0
+        if obstacles is not None and on_axis.any():
+            q = np.flatnonzero(on_axis)
+            dist, nb = obstacles.query(xy[q], k=4)
+            nb = np.minimum(nb, len(obstacles.data) - 1)
+            ax = axis[seg[q]]
+            pts = obstacles.data[nb]  # (q, 4, 2)
+            own = np.take_along_axis(pts, ax[:, None, None].repeat(4, 1), axis=2)[..., 0]
+            line = a[seg[q], ax]
+            dist = np.where((own != line[:, None]) & np.isfinite(dist), dist, np.inf).min(axis=1)
+            h[q] = np.minimum(h[q], OBSTACLE_FACTOR * dist)
+        hmin = np.full(len(segs), np.inf)
+        np.minimum.at(hmin, seg, h)
+        spacing = length / np.maximum(m, 1)
+        coarse = live & (spacing > 0.5 * hmin) & (m < MAX_SAMPLES_PER_PIECE)
+        if not coarse.any():
+            break
+        m[coarse] = np.clip(np.ceil(4.0 * length[coarse] / np.maximum(hmin[coarse], 1e-300)), 2,
+                            MAX_SAMPLES_PER_PIECE).astype(np.int64)
+    out, owner = graded_points_many(length, st, seg, h, caps[segs[:, 0]], caps[segs[:, 1]])
+    plans = [np.zeros(0)] * len(segs)
+    if len(owner):
+        cut = np.flatnonzero(np.diff(owner)) + 1
+        for grp in np.split(np.arange(len(owner)), cut):
+            plans[int(owner[grp[0]])] = out[grp]
     return plans
 
 
