@@ -10,6 +10,8 @@ from hammesh.parallel.decoupled import DecoupledMesh, mesh_decoupled
 from hammesh.parallel.tile_mesh import mesh_tile
 from hammesh.parallel.tiles import Decomposition, Tile, decompose, split_segments
 from hammesh.parallel.union import UnionFacts, assemble, check_union
+from hammesh.parallel.run import parallel_hamiltonian
+from hammesh.parallel.partitioned import write_partitioned
 
 __all__ = ["decompose", "split_segments", "Decomposition", "Tile", "mesh_tile", "mesh_decoupled",
-           "DecoupledMesh", "assemble", "check_union", "UnionFacts"]
+           "DecoupledMesh", "assemble", "check_union", "UnionFacts", "parallel_hamiltonian", "write_partitioned"]

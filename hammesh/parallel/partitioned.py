@@ -82,6 +82,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             written += paths
             done = runner.gather([runner.submit(_write_piece, p, str(path), tiled.plan.components)
                                   for p, path in zip(pieces, paths)])
+            worker_rss = peak_rss_workers(runner)
         order = sorted(range(len(done)), key=lambda i: done[i][2])
         index = out / INDEX_NAME
         written.append(index)
@@ -104,5 +105,21 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                      "joins_not_whole": tiled.plan.fallback_joins, "tile_cycles": tiled.plan.nodes,
                      "pieces": tiled.plan.pieces, "estimate": d.estimate,
                      "mesh_triangles": int(tiled.mesh_triangles.sum()),
-                     "seconds": {**tiled.seconds, "total": t1 - t0}},
+                     "seconds": {**tiled.seconds, "total": t1 - t0},
+                     "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
+
+
+def peak_rss_mb() -> float:
+    """This process's peak resident set size (MB; Linux reports kB)."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def peak_rss_workers(runner) -> list[float]:
+    """Every Dask worker's peak RSS (MB); [] when the tiles ran in this process."""
+    run = getattr(runner, "run", None)
+    if run is None:
+        return []
+    return sorted(float(v) for v in run(peak_rss_mb).values())
