@@ -55,7 +55,8 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     m = meshio.Mesh(pts3, [("triangle", local.astype(np.int64))], point_data={"global_id": np.asarray(point_ids, np.int64)},
                     cell_data=cell_data)
     tmp = path.with_name(path.name + ".part")
-    meshio.write(str(tmp), m, file_format="vtu")
+    # uncompressed binary: a worker's write costs a memory copy, not zlib (~4x faster)
+    meshio.write(str(tmp), m, file_format="vtu", compression=None)
     os.replace(tmp, path)
 
 

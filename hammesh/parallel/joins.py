@@ -396,7 +396,9 @@ def _check_join_triangles(tri, gid, points, joins, base, apex, floor, tile_index
     at least ``floor`` degrees (half the input's minimum) up to rounding."""
     from hammesh.predicates import orient_many
 
-    coords = {int(g): points[i] for i, g in enumerate(gid.tolist())}
+    need = set(np.unique(tri).tolist())
+    pos = np.flatnonzero(np.isin(gid, np.fromiter(need, np.int64, len(need))))
+    coords = {int(gid[i]): points[i] for i in pos.tolist()}
     for j in joins:
         if j.slot >= 0:
             coords[base + 2 * j.slot] = np.array(j.I_t)

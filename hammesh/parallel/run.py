@@ -89,6 +89,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     run = runner or LocalRunner()
     note = progress or (lambda what, n: None)
     t0 = time.perf_counter()
+    warming = warm_workers(run)  # noqa: F841  (kept alive while the tiles run)
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
     meshes = [run.submit(mesh_tile, t, min_angle, max_area) for t in decomp.tiles]
@@ -240,8 +241,38 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
 
 
 def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
-    """Estimated triangle count of a Triangle run (from a 1-tile decomposition)."""
-    return decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=1).estimate
+    """Estimated triangle count of a Triangle run: the domain's area (one constrained
+    triangulation, no refinement) over ``AREA_FILL x max_area``."""
+    import triangle
+
+    from hammesh.parallel.sizing import AREA_FILL
+
+    data = {"vertices": np.array(domain.vertices)}
+    if len(domain.segments):
+        data["segments"] = np.array(domain.segments, dtype=np.int32)
+    if len(domain.holes):
+        data["holes"] = np.array(domain.holes)
+    out = triangle.triangulate(data, ("p" if len(domain.segments) else "pc") + "Q")
+    p, t = np.asarray(out["vertices"]), np.asarray(out.get("triangles", np.zeros((0, 3), int)))
+    e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
+    area = float(np.abs(0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])).sum())
+    return area / (AREA_FILL * float(max_area))
+
+
+def _warm() -> None:
+    from hammesh.postprocess import load_kernels
+
+    load_kernels("sparse")
+    load_kernels("incircle")
+
+
+def warm_workers(runner) -> list:
+    """Load the compiled kernels on every Dask worker now, beside the decomposition."""
+    info = getattr(runner, "scheduler_info", None)
+    if info is None:
+        return []
+    return [runner.submit(_warm, workers=[addr], pure=False, allow_other_workers=False)
+            for addr in info().get("workers", {})]
 
 
 def _bar(on: bool, total: int):
