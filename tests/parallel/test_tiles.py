@@ -135,3 +135,24 @@ def test_bad_options_are_refused():
                              regions=[[0.2, 1.0, 1.0, 1e-3]])
     with pytest.raises(InvalidOptionError, match="regional area"):
         decompose(bounded, min_angle=30, max_area=1e-3, n_tiles=2)
+
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from tests.helpers import star_pslg  # noqa: E402
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(dom=star_pslg(), n_tiles=st.integers(2, 5))
+def test_union_of_random_domains_conforms(dom, n_tiles):
+    """Any star-shaped domain (with a hole or an internal loop), any tile count: the
+    union conforms, has the domain's area and keeps every vertex and segment."""
+    r = mesh_decoupled(dom, min_angle=None, max_area=2e-3, n_tiles=n_tiles)
+    u = assemble(r.decomposition, list(r.meshes))
+    facts = check_union(r.decomposition, u)
+    single = hammesh.quality_mesh(dom, max_area=2e-3, isolate=False)
+    p = single.points[single.triangles]
+    area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                        - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0])).sum()
+    assert facts.area == pytest.approx(area, rel=1e-9)
