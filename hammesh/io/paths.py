@@ -29,10 +29,17 @@ _NAME_MAX = 255
 
 
 def written_files(path: str | os.PathLike[str]) -> list[Path]:
-    """The files a mesh write to ``path`` creates (``.ele``/``.node``: the Triangle triple)."""
+    """The files a mesh write to ``path`` creates.
+
+    ``.ele``/``.node``: the Triangle triple; ``NAME.pvtu``: the index and its one piece
+    ``NAME.0.vtu`` (:func:`hammesh.io.pvtu.write`), so both are checked before and removed
+    after a failed run.
+    """
     path = Path(path)
     if path.suffix.lower() in (".ele", ".node"):
         return [path.with_suffix(s) for s in TRIANGLE_SIBLINGS]
+    if path.suffix.lower() == ".pvtu":
+        return [path, path.with_name(path.stem + ".0.vtu")]
     return [path]
 
 
