@@ -9,7 +9,7 @@ choose the boundary conditions by name:
 * ``marker_3`` (top) and ``marker_6`` (the hole): Neumann, insulated.
 
 ``hammesh.to_skfem`` hands over the mesh with these names; the Hamiltonian cycle is cut
-into ``k`` contiguous pieces (connected by construction, sizes equal to within one
+into ``k`` contiguous pieces by ``hammesh.partition`` (connected by construction, sizes equal to within one
 triangle), each piece assembles its own elements (as a process of a distributed
 solver would), and the sum is solved by conjugate gradients with a one-level additive
 Schwarz preconditioner over the pieces.  It checks that the assembled pieces add up to
@@ -47,19 +47,6 @@ def domain() -> hammesh.Domain:
                           segment_markers=dom.segment_markers, vertex_markers=dom.vertex_markers)
 
 
-def cycle_parts(h: hammesh.HamiltonianMesh, k: int) -> np.ndarray:
-    """Part of each triangle: each cycle (a connected piece of the domain) cut into
-    contiguous runs, ``k`` in all, in proportion to the cycles' lengths."""
-    lengths = np.asarray(h.components, dtype=np.int64)
-    share = np.maximum(1, np.round(k * lengths / lengths.sum()).astype(np.int64))
-    part = np.empty(int(lengths.sum()), dtype=np.int64)
-    start, first = 0, 0
-    for length, pieces in zip(lengths.tolist(), share.tolist()):
-        part[start:start + length] = first + (np.arange(length) * pieces) // length
-        start, first = start + length, first + pieces
-    return part
-
-
 def main(out: Path, parts: int = 8, max_area: float = 1e-3) -> hammesh.HamiltonianMesh:
     import meshio
     from scipy.sparse import diags
@@ -83,15 +70,18 @@ def main(out: Path, parts: int = 8, max_area: float = 1e-3) -> hammesh.Hamiltoni
         return 0.5 * v
 
     # --- the pieces of the cycle: connected, balanced ---------------------------------
-    part = cycle_parts(h, parts)
+    pieces = hammesh.partition(h, parts)  # contiguous stretches of the cycle, checked connected
+    part = pieces.part
     dual = hammesh.dual_graph(h)
-    sizes = np.bincount(part)
-    for p in range(parts):
+    sizes = np.bincount(part, minlength=parts)
+    for p in range(parts):  # connectivity again, here from scikit-fem's side of the hand-off
         rows = np.flatnonzero(part == p)
         n_pieces, _ = connected_components(dual[rows][:, rows], directed=False)
         assert n_pieces == 1, f"part {p} is not connected"
+    assert pieces.connected
     rows, cols = dual.nonzero()
     cut = int(np.count_nonzero(part[rows] != part[cols]) // 2)
+    assert cut == pieces.edge_cut
 
     # --- each piece assembles its own elements, material by region name ----------------
     A = None

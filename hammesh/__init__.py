@@ -33,6 +33,7 @@ from hammesh.fem import dual_graph, to_meshio, to_pyvista, to_skfem  # noqa: E40
 from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh  # noqa: E402
 from hammesh.meshing import quality_mesh  # noqa: E402
 from hammesh.postprocess import hamiltonian  # noqa: E402
+from hammesh.partition import partition, partitioned  # noqa: E402  (the function shadows the module's name here)
 from hammesh.verify import verify  # noqa: E402
 
 __version__ = "0.1.0"
@@ -43,6 +44,8 @@ __all__ = [
     "quality_mesh",
     "hamiltonian",
     "verify",
+    "partition",
+    "partitioned",
     "write",
     "read_mesh",
     "to_skfem",
