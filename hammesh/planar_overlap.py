@@ -52,7 +52,7 @@ from numba import njit
 from hammesh import _threads
 from hammesh._threads import row_ranges, run_all
 from hammesh.predicates import orient_points
-from hammesh.verify._kernels import half_edge_twins
+from hammesh.verify import half_edge_twins
 
 __all__ = ["find_overlap", "Grid", "build_grid", "boundary_triangles"]
 

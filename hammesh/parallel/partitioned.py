@@ -28,7 +28,7 @@ import numpy as np
 
 from hammesh.domain import Domain
 from hammesh.errors import OutputError
-from hammesh.parallel.run import decompose_estimate, default_tiles, finish_all, run_tiles, _bar
+from hammesh.parallel.run import decompose_estimate, default_tiles, finish_all, run_tiles, progress_bar
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name"]
 
@@ -75,7 +75,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             if tiles is None:
                 tiles = default_tiles(decompose_estimate(domain, min_angle, max_area), n_workers)
             tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
-                              mode=mode, keep=keep, progress=_bar(progress, 3))
+                              mode=mode, keep=keep, progress=progress_bar(progress, 3))
             out.mkdir(parents=True, exist_ok=True)
             pieces = finish_all(tiled, runner)
             paths = [out / piece_name(i) for i in range(len(pieces))]

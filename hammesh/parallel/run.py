@@ -23,7 +23,7 @@ from hammesh.parallel.tile_mesh import mesh_tile
 from hammesh.parallel.tiles import Decomposition, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
-__all__ = ["LocalRunner", "Tiled", "run_tiles", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE"]
+__all__ = ["LocalRunner", "Tiled", "run_tiles", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar"]
 
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
@@ -207,7 +207,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
             est = decompose_estimate(domain, min_angle, max_area)
             tiles = default_tiles(est, n_workers)
         tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
-                          mode=mode, keep=keep, progress=_bar(progress, 3))
+                          mode=mode, keep=keep, progress=progress_bar(progress, 3))
         t1 = time.perf_counter()
         pieces = runner.gather(finish_all(tiled, runner))
         meshes = runner.gather(tiled.meshes) if verify else None
@@ -275,7 +275,8 @@ def warm_workers(runner) -> list:
             for addr in info().get("workers", {})]
 
 
-def _bar(on: bool, total: int):
+def progress_bar(on: bool, total: int):
+    """A progress callback ``note(stage, n_tiles)`` over ``total`` stages (tqdm on stderr), or None when off."""
     if not on:
         return None
     import sys

@@ -96,7 +96,7 @@ def check_sequential(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     VerificationError
         ``triangles`` is no triangulation of ``points`` or not sequential.
     """
-    from hammesh.halfedge._kernels import half_edge_twins
+    from hammesh.halfedge import half_edge_twins
     from hammesh.strips import sequential_order
     from hammesh.strips.dual import DualMesh
 

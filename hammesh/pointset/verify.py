@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from hammesh.errors import VerificationError
-from hammesh.verify._kernels import hull_chain
+from hammesh.verify import hull_chain
 from hammesh.verify.tiling import triangulation_boundary_keys
 
 __all__ = ["verify_point_triangulation", "AREA_RTOL", "ORDERS"]

@@ -55,7 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammesh.halfedge import _kernels
+from hammesh.halfedge import half_edge_twins, orient_ccw
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.postprocess.conform import split_segments
@@ -180,7 +180,7 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     tri2 = np.concatenate([tri[kept], fan_tri])
     pts2 = np.concatenate([pts, fpt])
     m2 = len(tri2)
-    tw2, dup = _kernels.half_edge_twins(tri2, len(pts2))
+    tw2, dup = half_edge_twins(tri2, len(pts2))
     if dup >= 0:
         raise VerificationError(f"internal error: fan edge of row {int(dup) // 3} used twice")
     con2 = np.concatenate([con.reshape(m, 3)[kept], np.zeros((len(fan_tri), 3), np.bool_)], axis=0)
@@ -349,7 +349,7 @@ def sparse_cycles(
     placed = mid_t >= 0
     mids[placed] = point[order][join[mid_t[placed]]]
     all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), mids])
-    out_twin, dup = _kernels.half_edge_twins(out, len(all_pts))
+    out_twin, dup = half_edge_twins(out, len(all_pts))
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of row {int(dup) // 3} used twice")
     order_rows, lengths, bad = _k.walk_links(link, out_twin)
@@ -522,7 +522,7 @@ def sparse_hamiltonian(
     pts, tri = mesh.points, mesh.triangles
     n, m = mesh.n_points, mesh.n_triangles
     seen = mesh.info.get("validated")  # found by prepare_mesh's orientation pass
-    amin = float(seen["min_angle"] if seen else _kernels.orient_ccw(pts, tri).min_angle)
+    amin = float(seen["min_angle"] if seen else orient_ccw(pts, tri).min_angle)
     pinned = is_con
     attr = np.asarray(mesh.triangle_attributes)
     if attr.size and m and (attr != attr[:1]).any():

@@ -11,7 +11,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from hammesh.halfedge import _kernels as _core
+from hammesh.halfedge import half_edge_twins_packed
 from hammesh.strips._numba import kernel
 
 __all__ = [
@@ -263,7 +263,7 @@ def mesh_records(tri, n_points):
     if records_dtype(m, n_points) is not np.int32:
         return None
     twin = np.empty(3 * m, np.int64)
-    if not _core.half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
+    if not half_edge_twins_packed(tri, n_points, twin, np.empty(3 * m, np.int64)):
         return None
     rec = np.empty((m, REC_WIDTH), np.int32)
     records_from_twin(tri, twin, rec)

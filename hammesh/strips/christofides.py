@@ -330,11 +330,11 @@ def christofides_strip(
             f"the Christofides encoding is for meshes of up to {max_triangles} triangles; this one has {m} "
             "(use the greedy encoder, or raise max_triangles)"
         )
-    from hammesh.strips.encode import _orient
+    from hammesh.strips.encode import orient_path_turns
 
     walk, wstarts = christofides_walk(dual)
     order, starts = _split_pieces(walk, wstarts)
-    strip = gl_strip_from_turns(_orient(dual, order, starts), join=join, restart_index=restart_index)
+    strip = gl_strip_from_turns(orient_path_turns(dual, order, starts), join=join, restart_index=restart_index)
     verify_gl_strip(dual.triangles, strip.indices, strip.restart_index, allow_redraw=True)
     deg = (dual.neighbor_triangles >= 0).sum(axis=1)
     size = np.bincount(dual.component)

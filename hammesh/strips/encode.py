@@ -53,6 +53,7 @@ __all__ = [
     "encode_generalized",
     "cache_paths",
     "CACHE_STRIP_LENGTH",
+    "orient_path_turns",
 ]
 
 #: How the dual paths are found: ``"auto"`` is ``"order"`` for a HamiltonianMesh and
@@ -195,7 +196,7 @@ def _cut_cycle(tri: np.ndarray, twin: np.ndarray, run: np.ndarray) -> np.ndarray
     plus the first swap of the better direction: forwards it is needed when the tail
     of ``run[c]``'s exit half-edge is the pivot at ``c + 1``, backwards when the tail
     of ``run[c - 1]``'s half-edge towards ``run[c - 2]`` is the pivot at ``c - 2``.
-    :func:`_orient` then sends the path in its better direction.
+    :func:`orient_path_turns` then sends the path in its better direction.
     """
     k = len(run)
     if k < 4:
@@ -239,7 +240,7 @@ def cycle_paths(dual: DualMesh, components: np.ndarray) -> tuple[np.ndarray, np.
     return order, starts
 
 
-def _orient(dual: DualMesh, order: np.ndarray, starts: np.ndarray) -> PathTurns:
+def orient_path_turns(dual: DualMesh, order: np.ndarray, starts: np.ndarray) -> PathTurns:
     """Turns of the paths, each path reversed where that needs fewer swaps.
 
     Interior pivots (and so interior swaps) do not depend on the direction; only the
