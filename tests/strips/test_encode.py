@@ -163,7 +163,7 @@ def test_bad_method():
 
 @given(st.integers(0, 2**32 - 1), st.integers(3, 80), st.booleans())
 def test_improved_cover_is_a_partition_and_never_longer(seed, n, lift):
-    from hammesh.strips.encode import _orient
+    from hammesh.strips.encode import orient_path_turns
     from hammesh.strips.gl import gl_strip_from_turns
 
     d = dual_mesh(delaunay_mesh(seed, n, lift))
@@ -175,7 +175,7 @@ def test_improved_cover_is_a_partition_and_never_longer(seed, n, lift):
         for a, b in zip(starts[:-1], starts[1:]):
             for i in range(a, b - 1):
                 assert order[i + 1] in nb[order[i]]
-        lengths.append(len(gl_strip_from_turns(_orient(d, order, starts)).indices))
+        lengths.append(len(gl_strip_from_turns(orient_path_turns(d, order, starts)).indices))
     assert lengths[1] <= lengths[0]
 
 
