@@ -29,7 +29,8 @@ plus two per ear (``e`` ears; the proof's accounting), so it is at most
 in the paper); our buffer's ``empty`` count (swaps, plus four per stitched join) is
 reported against ``m'/2 + 2 e`` and is usually far below it (0.3 m' on quality
 meshes), but it is not guaranteed: a walk cut into many pieces, stitched, can exceed
-it (e.g. 21 > 20 on a 38-triangle Delaunay mesh, three pieces).
+it (e.g. 21 > 20 on a 38-triangle Delaunay mesh, three pieces; even one unstitched
+walk of a 7-triangle mesh needs 4 swaps > 3.5: docs/strips.md, "Lemma 5.2").
 
 Checked on every result (:class:`~hammesh.errors.VerificationError` otherwise): the
 round trip, and Thm 5.3's ``length <= 9/4 (m + 2)``: every encoding sequence of ``m``
