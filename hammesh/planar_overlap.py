@@ -49,8 +49,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from hammesh import _threads
-from hammesh._threads import row_ranges, run_all
+from hammesh import threads
+from hammesh.threads import row_ranges, run_all
 from hammesh.predicates import orient_points
 from hammesh.verify import half_edge_twins
 
@@ -268,7 +268,7 @@ def boundary_triangles(triangles: np.ndarray, n_points: int) -> np.ndarray:
 
 def build_grid(points: np.ndarray, triangles: np.ndarray, targets: np.ndarray) -> Grid:
     """The hierarchical grid of the ``targets``' bounding boxes (see the module docstring)."""
-    spans = row_ranges(len(triangles), _threads.THREAD_MIN_ROWS)
+    spans = row_ranges(len(triangles), threads.THREAD_MIN_ROWS)
     ext = np.array(run_all([(lambda lo=lo, hi=hi: _extent_range(points, triangles, lo, hi)) for lo, hi in spans]))
     origin = np.array([ext[:, 0].min(), ext[:, 1].min()])
     extent = float(max(ext[:, 2].max() - origin[0], ext[:, 3].max() - origin[1]))
@@ -322,7 +322,7 @@ def find_overlap(points: np.ndarray, triangles: np.ndarray) -> tuple[int, int] |
         (lambda lo=lo, hi=hi: _first_overlap_range(
             pts, tri, g.targets, g.lo, g.hi, g.level, g.origin, g.c0, g.n_levels, int(g.level.max()), g.slot_key,
             g.slot_start, g.slot_end, g.members, lo, hi))
-        for lo, hi in row_ranges(len(tri), _threads.THREAD_MIN_ROWS)
+        for lo, hi in row_ranges(len(tri), threads.THREAD_MIN_ROWS)
     ])
     hits = [(int(i), int(j)) for i, j in found if i >= 0]
     return min(hits) if hits else None

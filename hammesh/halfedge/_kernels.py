@@ -26,8 +26,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from hammesh import _threads
-from hammesh._threads import row_ranges, run_all
+from hammesh import threads
+from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "Oriented",
@@ -66,7 +66,7 @@ def orient_ccw(points, tri, used=None):
         used = np.zeros(points.shape[0], np.bool_)
     parts = run_all([
         (lambda lo=lo, hi=hi: _orient_ccw_into(points, tri, out, used, lo, hi))
-        for lo, hi in row_ranges(tri.shape[0], _threads.THREAD_MIN_ROWS)
+        for lo, hi in row_ranges(tri.shape[0], threads.THREAD_MIN_ROWS)
     ])
     bads = [p[1] for p in parts if p[1] >= 0]
     s2 = min(p[2] for p in parts)
@@ -147,7 +147,7 @@ def twins_from_neighbors(tri, nbr):
     own row names, so threads never write the same entry.
     """
     twin = np.full(3 * tri.shape[0], -1, np.int64)
-    spans = row_ranges(tri.shape[0], _threads.THREAD_MIN_ROWS)
+    spans = row_ranges(tri.shape[0], threads.THREAD_MIN_ROWS)
     for step in (_twins_from_neighbors_into, _unmatched_neighbor):
         bads = [b for b in run_all([
             (lambda lo=lo, hi=hi: step(tri, nbr, twin, lo, hi)) for lo, hi in spans

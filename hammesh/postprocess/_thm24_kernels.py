@@ -15,8 +15,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from hammesh import _threads
-from hammesh._threads import row_ranges, run_all
+from hammesh import threads
+from hammesh.threads import row_ranges, run_all
 from hammesh.verify.stream import UNLINKED
 
 __all__ = [
@@ -168,7 +168,7 @@ def spanning_forest(tri, twin, is_con, points=None):
         walk inserts midpoints (``split_slots``).
     """
     m = tri.shape[0]
-    spans = row_ranges(m, _threads.THREAD_MIN_ROWS)
+    spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     qx = np.zeros(m, np.int64)
     qy = np.zeros(m, np.int64)
     if points is not None and m:

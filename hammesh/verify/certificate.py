@@ -48,8 +48,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammesh import _threads, params
-from hammesh._threads import row_ranges, run_all
+from hammesh import params, threads
+from hammesh.threads import row_ranges, run_all
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.predicates import orient_points
@@ -106,7 +106,7 @@ def _certify_rows(
     ``side`` (e.g. the input's facts) runs alongside; its result is returned second.
     """
     no_marks = np.empty(0, dtype=np.bool_)
-    spans = row_ranges(len(tri), _threads.THREAD_MIN_ROWS)
+    spans = row_ranges(len(tri), threads.THREAD_MIN_ROWS)
     calls = [
         (lambda lo=lo, hi=hi: _kernels.certify_row_range(pts, tri, runs, claim, lo, hi, used, no_marks))
         for lo, hi in spans
@@ -154,7 +154,7 @@ def _wrap(x: int) -> int:
 
 def _final_digests(tri: np.ndarray, pair: np.ndarray) -> tuple[int, int]:
     """:func:`_kernels.digest_range` over all rows, split across the cores."""
-    spans = row_ranges(len(tri), _threads.THREAD_MIN_ROWS)
+    spans = row_ranges(len(tri), threads.THREAD_MIN_ROWS)
     parts = run_all([(lambda lo=lo, hi=hi: _kernels.digest_range(tri, pair, lo, hi)) for lo, hi in spans])
     return _wrap(sum(p[0] for p in parts)), _wrap(sum(p[1] for p in parts))
 

@@ -94,7 +94,7 @@ def test_grid_equals_brute_force_on_random_triangles(seed, m, spread, lattice):
 
 
 def test_threaded_split_gives_the_same_lowest_pair(monkeypatch):
-    from hammesh import _threads
+    import hammesh.threads as row_threads
 
     rng = np.random.default_rng(3)
     pts = rng.random((300, 2))
@@ -103,7 +103,7 @@ def test_threaded_split_gives_the_same_lowest_pair(monkeypatch):
     n = len(pts)
     tri2 = np.vstack([tri, np.arange(n, n + 9).reshape(3, 3)])
     one = find_overlap(pts2, tri2)
-    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 50)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 50)
     assert find_overlap(pts2, tri2) == one == _brute_force(pts2, tri2)
 
 

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
 import hammesh
-from hammesh import _threads
+from hammesh import threads
 from hammesh.halfedge import _kernels, half_edges, prepare_mesh
 from hammesh.verify import _kernels as cert_kernels
 from hammesh.verify import infer_runs
@@ -103,8 +103,8 @@ def test_infer_runs_from_pieces_in_order() -> None:
 @pytest.mark.parametrize("seed", range(6))
 def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
     """Row ranges in three threads: the same twins, and bad neighbours still caught."""
-    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 5)
-    monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 5)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 3)
     rng = np.random.default_rng(seed)
     pts = rng.random((60, 2))
     d = Delaunay(pts)
@@ -125,8 +125,8 @@ def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
 def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> None:
     """Angle, area and used vertices found while orienting (in threads) are what the
     certificate would compute from the clean mesh itself."""
-    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 7)
-    monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 3)
     rng = np.random.default_rng(seed)
     pts = rng.random((80, 2))
     tri = Delaunay(pts[:70]).simplices.astype(np.int64)  # points 70.. unused

@@ -25,16 +25,16 @@ def _regions(tri: np.ndarray, twin: np.ndarray, is_con: np.ndarray, free_only: b
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(dom=star_pslg(), threads=st.booleans())
 def test_forest_spans_each_piece_crossing_fewest_constrained_edges(dom, threads: bool) -> None:
-    from hammesh import _threads
+    import hammesh.threads as row_threads
 
     mesh = hammesh.quality_mesh(dom, min_angle=25, max_area=0.01)
     clean, he, is_con = prepare_mesh(mesh)
-    old = _threads.THREAD_MIN_ROWS
-    _threads.THREAD_MIN_ROWS = 20 if threads else old
+    old = row_threads.THREAD_MIN_ROWS
+    row_threads.THREAD_MIN_ROWS = 20 if threads else old
     try:
         f = K.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
     finally:
-        _threads.THREAD_MIN_ROWS = old
+        row_threads.THREAD_MIN_ROWS = old
     m = clean.n_triangles
     assert sorted(f.order.tolist()) == list(range(m))
     np.testing.assert_array_equal(f.triangles, clean.triangles[f.order])

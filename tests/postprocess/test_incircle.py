@@ -203,13 +203,13 @@ def test_a_wrong_claim_is_not_believed() -> None:
 def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores: int) -> None:
     """Searched in threads (one slab each), the forest still spans every piece with the
     fewest midpoints, and the output passes the certificate."""
-    from hammesh import _threads
+    import hammesh.threads as row_threads
     from hammesh.postprocess import _thm24_kernels as _kernels
     from tests.helpers import plate
 
     m = plate(n_loops, pieces, max_area=0.002)
-    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 50)
-    monkeypatch.setattr(_threads.os, "cpu_count", lambda: cores)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 50)
+    monkeypatch.setattr(row_threads.os, "cpu_count", lambda: cores)
     from hammesh.halfedge import prepare_mesh
 
     clean, he, is_con = prepare_mesh(m)

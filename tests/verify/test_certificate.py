@@ -142,12 +142,12 @@ def test_non_finite_points(pair) -> None:
 
 def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
     """Split across threads, the row checks give exactly the one-call result."""
-    from hammesh import _threads
+    import hammesh.threads as row_threads
     from hammesh.verify import certificate
 
     _, h = pair
-    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 7)
-    monkeypatch.setattr(_threads.os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(row_threads.os, "cpu_count", lambda: 3)
     empty = np.empty(0, dtype=np.int64)
     tri = h.triangles.copy()
     for broken in (None, len(tri) // 2, len(tri) - 1):
@@ -167,10 +167,10 @@ def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
 
 
 def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
-    from hammesh import _threads
+    import hammesh.threads as row_threads
 
     _, h = pair
-    monkeypatch.setattr(_threads, "THREAD_MIN_ROWS", 5)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 5)
     tri = h.triangles.copy()
     k = 2 * len(tri) // 3
     tri[[k, k + 5]] = tri[[k + 5, k]]
