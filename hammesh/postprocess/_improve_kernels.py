@@ -34,7 +34,7 @@ import math
 import numpy as np
 from numba import njit
 
-from hammesh.postprocess._join_kernels import _beat_cosines, _fan_eval, _fan_eval_fast
+from hammesh.postprocess._join_kernels import compass_search, fan_eval
 
 
 @njit(cache=True, nogil=True)
@@ -194,53 +194,13 @@ def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, max_
 
 
 @njit(cache=True, nogil=True)
-def _place_star(pts, poly, n, px, py, lo, hi, step, iters):
-    """Compass search from ``(px, py)`` for the star over ``poly[:n]`` (``_join_kernels.place_fan``'s
-    search, with at most ``4 x iters`` rounds so a long thin star costs no more than a
-    round one). Returns ``(x, y, slack, smallest angle, largest angle)``, exact angles.
-    """
-    best = _fan_eval_fast(pts, poly, n, px, py, lo, hi, 2.0, -2.0)
-    if best == -np.inf:
-        return px, py, best, 0.0, np.pi
-    c_lo, c_hi = _beat_cosines(best, lo, hi)
-    mx = px
-    my = py
-    halvings = 0
-    rounds = 0
-    while halvings < iters and rounds < 4 * iters:
-        rounds += 1
-        moved = False
-        bx = mx
-        by = my
-        for k in range(8):
-            ang = 0.25 * math.pi * k
-            tx = mx + step * math.cos(ang)
-            ty = my + step * math.sin(ang)
-            sl = _fan_eval_fast(pts, poly, n, tx, ty, lo, hi, c_lo, c_hi)
-            if sl > best:
-                best = sl
-                c_lo, c_hi = _beat_cosines(best, lo, hi)
-                bx = tx
-                by = ty
-                moved = True
-        if moved:
-            mx = bx
-            my = by
-        else:
-            step *= 0.5
-            halvings += 1
-    best, bmin, bmax = _fan_eval(pts, poly, n, mx, my, lo, hi)
-    return mx, my, best, bmin, bmax
-
-
-@njit(cache=True, nogil=True)
 def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
     """Move each free Steiner point to a better place in its star (in place).
 
     Amenta, Bern & Eppstein's optimal point placement (see ``_join_kernels``):
-    ``_place_star`` maximises the star's slack (smallest angle minus
-    ``keep`` x its rows' parents' smallest, ``hi`` minus the largest) by compass
-    search from the point's current place. Points ``>= first`` whose star is closed
+    ``compass_search`` maximises the star's slack (smallest angle minus ``keep`` x its
+    rows' parents' smallest, ``hi`` minus the largest) from the point's current place,
+    in at most ``4 x iters`` rounds so a long thin star costs no more than a round one. Points ``>= first`` whose star is closed
     and touches no pinned edge (a midpoint of a constrained edge stays) and that miss
     the rule (slack < 0) are moved where the star's smallest angle does not drop, its largest stays within
     ``max(hi, its own)`` and its slack grows. An incenter's star, once improvement
@@ -312,13 +272,13 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
         lo *= keep
         vx = pts[v, 0]
         vy = pts[v, 1]
-        s0, n0, x0 = _fan_eval(pts, poly, n, vx, vy, lo, hi)
+        s0, n0, x0 = fan_eval(pts, poly, n, vx, vy, lo, hi)
         if s0 == -np.inf or s0 >= 0.0:
             continue  # already meets the rule (most fan points: placed for it)
         d2 = np.inf
         for i in range(n):
             d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)
-        px, py, s1, n1, x1 = _place_star(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters)
+        px, py, s1, n1, x1 = compass_search(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters, 4 * iters)
         if s1 > s0 and n1 >= n0 and x1 <= max(hi, x0):
             pts[v, 0] = px
             pts[v, 1] = py

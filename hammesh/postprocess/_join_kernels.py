@@ -371,7 +371,7 @@ def worst_radius_ratio(pts, tri):
 
 
 @njit(cache=True, nogil=True)
-def _fan_eval(pts, poly, n, px, py, lo, hi):
+def fan_eval(pts, poly, n, px, py, lo, hi):
     """Slack, smallest and largest angle of the fan ``(p, poly[i], poly[i + 1])``.
 
     Exact angles (``atan2``, two per triangle): what decides whether a fan is taken.
@@ -396,7 +396,7 @@ def _fan_eval(pts, poly, n, px, py, lo, hi):
 
 @njit(cache=True, nogil=True)
 def _fan_eval_fast(pts, poly, n, px, py, lo, hi, c_lo, c_hi):
-    """:func:`_fan_eval`'s slack for the placement search: by cosines, two ``acos`` per fan.
+    """:func:`fan_eval`'s slack for the placement search: by cosines, two ``acos`` per fan.
 
     The smallest angle of the fan is the arccosine of its largest corner cosine and
     the largest angle that of the smallest: one square root per corner instead of an
@@ -404,7 +404,7 @@ def _fan_eval_fast(pts, poly, n, px, py, lo, hi, c_lo, c_hi):
     this was nearly all of sparse mode's time). A corner cosine ``>= c_lo`` or ``<= c_hi``
     (the cosines of the angles at which the slack would not beat the search's best so
     far) stops the evaluation: ``-inf``. Cosines near 1 lose digits (~1e-8 rad), so the
-    point found is re-judged by :func:`_fan_eval` before a fan is taken.
+    point found is re-judged by :func:`fan_eval` before a fan is taken.
     """
     cmax = -1.0
     cmin = 1.0
@@ -472,9 +472,33 @@ def place_fan(pts, poly, n, starts, n_starts, lo, hi, step, iters):
             my = starts[s, 1]
     if best == -np.inf:
         return 0.0, 0.0, best, 0.0, np.pi
+    return compass_search(pts, poly, n, mx, my, lo, hi, step, iters, NO_ROUND_CAP)
+
+
+#: ``compass_search``'s round cap for callers that stop on halvings alone
+NO_ROUND_CAP = 1 << 62
+
+
+@njit(cache=True, nogil=True)
+def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds):
+    """Compass search from ``(px, py)`` for the fan's point over ``poly[:n]``.
+
+    Eight directions per round; the step halves when none improves the slack, up to
+    ``iters`` halvings or ``max_rounds`` rounds. Candidates are compared on cosines
+    (``_fan_eval_fast``); the result is judged on exact angles. Returns ``(x, y,
+    slack, smallest angle, largest angle)``; slack ``-inf`` if ``(px, py)`` is not in
+    the polygon's kernel.
+    """
+    best = _fan_eval_fast(pts, poly, n, px, py, lo, hi, 2.0, -2.0)
+    if best == -np.inf:
+        return px, py, best, 0.0, np.pi
+    mx = px
+    my = py
     c_lo, c_hi = _beat_cosines(best, lo, hi)
     halvings = 0
-    while halvings < iters:
+    rounds = 0
+    while halvings < iters and rounds < max_rounds:
+        rounds += 1
         moved = False
         bx = mx
         by = my
@@ -495,8 +519,7 @@ def place_fan(pts, poly, n, starts, n_starts, lo, hi, step, iters):
         else:
             step *= 0.5
             halvings += 1
-    # the search compared cosines; the fan is judged on exact angles
-    best, bmin, bmax = _fan_eval(pts, poly, n, mx, my, lo, hi)
+    best, bmin, bmax = fan_eval(pts, poly, n, mx, my, lo, hi)
     return mx, my, best, bmin, bmax
 
 
