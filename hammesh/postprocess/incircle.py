@@ -98,19 +98,26 @@ def _inherit(attrs: np.ndarray, parent: np.ndarray) -> np.ndarray:
     return attrs[parent] if attrs.shape[1] else np.zeros((len(parent), 0))
 
 
-def walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
-    """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched."""
-    return {
+def walk_arrays(total: int, nh: int, parent: bool = True) -> dict[str, np.ndarray]:
+    """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched.
+
+    ``parent=False``: without ``parent`` and ``kind`` (``incircle_streaming(...,
+    reuse=True)`` makes them of the input's dead pairing arrays when it can).
+    """
+    arrays = {
         "out": _touched((total, 3), np.int64, 0),
-        "parent": _touched((total,), np.int64, 0),
-        "kind": _touched((total,), np.int8, 0),
         "claim": _touched((3 * total,), _kernels.index_dtype(3 * total), _kernels.UNLINKED),
         "prim": _touched((nh,), _kernels.index_dtype(total), -1),
     }
+    if parent:
+        arrays["parent"] = _touched((total,), np.int64, 0)
+        arrays["kind"] = _touched((total,), np.int8, 0)
+    return arrays
 
 
 def incircle_streaming(
-    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None, ready: Future | None = None
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None, ready: Future | None = None,
+    *, reuse: bool = False,
 ) -> tuple[HamiltonianMesh, np.ndarray, RowStream | None]:
     """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
 
@@ -121,6 +128,12 @@ def incircle_streaming(
     Without ``side`` it is the plain serial construction and the stream is None.
     ``ready`` may hold ``walk_arrays(3 m, 3 m)`` already submitted (e.g. before the
     input was validated, to use the other core then).
+
+    ``reuse=True`` hands ``he.twin`` and ``is_con`` over: once the spanning forest has
+    read them they are dead, and (when no constrained edge is split, ``3 m`` output
+    rows) their memory becomes the output's ``parent`` (int64) and ``kind`` (int8)
+    instead of 40 MB of fresh pages at 1.5 M triangles (fresh memory is what makes
+    the first call slow, docs/benchmarks.md). The caller must not use them after.
     """
     pts = mesh.points
     n, m = mesh.n_points, mesh.n_triangles
@@ -135,7 +148,15 @@ def incircle_streaming(
     total = nh + len(mid_h)
     arrays = ready.result() if ready is not None else None
     if arrays is None or len(arrays["out"]) != total:
-        arrays = walk_arrays(total, nh)
+        arrays = walk_arrays(total, nh, parent=False)
+    if "parent" not in arrays:
+        twin = he.twin
+        if (reuse and total == nh and twin.dtype == np.int64 and twin.shape == (total,) and twin.flags.c_contiguous
+                and is_con.dtype == np.bool_ and is_con.shape == (total,) and is_con.flags.c_contiguous):
+            arrays["parent"], arrays["kind"] = twin, is_con.view(np.int8)  # dead after the forest
+        else:
+            arrays["parent"] = np.empty(total, np.int64)
+            arrays["kind"] = np.empty(total, np.int8)
     out, parent, kind, claim, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
     q = len(mid_a)
     points = np.empty((n + m + q, 2))

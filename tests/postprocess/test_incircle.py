@@ -222,3 +222,26 @@ def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores:
     h = hammesh.hamiltonian(m, mode="incircle")
     assert len(h.components) == pieces and h.report["midpoints"] == n_loops
     assert_certificate(m, h)
+
+
+@pytest.mark.parametrize("loops", [0, 1])
+def test_walk_reusing_the_input_pairing_arrays(loops: int) -> None:
+    """``incircle_streaming(..., reuse=True)`` makes ``parent`` and ``kind`` of the dead
+    pairing arrays when no constrained edge is split (``loops=0``), else allocates them;
+    either way the output equals the plain construction's."""
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess.incircle import incircle_streaming
+    from tests.helpers import plate
+
+    m = plate(loops, 1, max_area=0.01)
+    clean, he, is_con = prepare_mesh(m)
+    plain, claim, _ = incircle_streaming(clean, he, is_con, None)
+    clean, he, is_con = prepare_mesh(m)
+    twin = he.twin
+    got, claim2, _ = incircle_streaming(clean, he, is_con, None, reuse=True)
+    assert np.shares_memory(got.parent, twin) == (loops == 0)
+    assert (plain.report["midpoints"] == 0) == (loops == 0)
+    for k in ("triangles", "parent", "kind", "points", "components"):
+        np.testing.assert_array_equal(getattr(got, k), getattr(plain, k), err_msg=k)
+    np.testing.assert_array_equal(claim2, claim)
+    assert hammesh.verify(got, m)["min_angle_output_deg"] > 0
