@@ -129,7 +129,7 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
         shape = np.shape(mesh.triangles)
         if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
             # (parent and kind: made of the input's pairing arrays once the forest is done)
-            ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0], False)
+            ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0], False, np.shape(mesh.points)[0])
         # the certificate's own look at the caller's input (never at the construction's
         # validated copy), beside the construction's validation
         facts = side.submit(input_facts, mesh)

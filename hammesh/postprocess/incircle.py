@@ -98,11 +98,14 @@ def _inherit(attrs: np.ndarray, parent: np.ndarray) -> np.ndarray:
     return attrs[parent] if attrs.shape[1] else np.zeros((len(parent), 0))
 
 
-def walk_arrays(total: int, nh: int, parent: bool = True) -> dict[str, np.ndarray]:
+def walk_arrays(total: int, nh: int, parent: bool = True, n_points: int | None = None) -> dict[str, np.ndarray]:
     """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched.
 
     ``parent=False``: without ``parent`` and ``kind`` (``incircle_streaming(...,
     reuse=True)`` makes them of the input's dead pairing arrays when it can).
+    ``n_points``: the input's point count; then also the output's ``points`` for no
+    midpoint (``n_points + nh / 3`` rows) and ``position`` for one cycle
+    (``arange(total)``), each used if it fits.
     """
     arrays = {
         "out": _touched((total, 3), np.int64, 0),
@@ -112,6 +115,9 @@ def walk_arrays(total: int, nh: int, parent: bool = True) -> dict[str, np.ndarra
     if parent:
         arrays["parent"] = _touched((total,), np.int64, 0)
         arrays["kind"] = _touched((total,), np.int8, 0)
+    if n_points is not None:
+        arrays["points"] = _touched((n_points + nh // 3, 2), np.float64, 0)
+        arrays["position"] = np.arange(total, dtype=np.int64)
     return arrays
 
 
@@ -122,7 +128,8 @@ def incircle_streaming(
     """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
 
     While the tree search runs, ``side`` allocates the walk's arrays (taking their
-    page faults); while the walk runs, it computes the incenters and then checks the
+    page faults; with ``walk_arrays(..., n_points=n)`` also those of the output's points and
+    positions); while the walk runs, it computes the incenters and then checks the
     finished rows of the output (``hammesh.verify.stream.RowStream``), which is
     returned for the caller to finish (``stream.join()``, then ``stream.result``).
     Without ``side`` it is the plain serial construction and the stream is None.
@@ -159,7 +166,9 @@ def incircle_streaming(
             arrays["kind"] = np.empty(total, np.int8)
     out, parent, kind, claim, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
     q = len(mid_a)
-    points = np.empty((n + m + q, 2))
+    points = arrays.get("points")
+    if points is None or points.shape != (n + m + q, 2):
+        points = np.empty((n + m + q, 2))
     points[:n] = pts
     points[n + m :] = 0.5 * (pts[mid_a] + pts[mid_b])
     lengths = np.zeros(len(firsts), np.int64)
@@ -198,7 +207,9 @@ def incircle_streaming(
         )
 
     segs, markers = split_segments(mesh.segments, mesh.segment_markers, mid_a, mid_b, n + m, len(points))
-    position = cycle_positions(lengths)
+    position = arrays.get("position")
+    if position is None or len(lengths) != 1 or len(position) != total:
+        position = cycle_positions(lengths)
     report = {
         "triangles": int(len(out)),
         "vertices": int(len(points)),
