@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from hammesh import threads
+from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
 __all__ = [
@@ -157,7 +158,7 @@ def twins_from_neighbors(tri, nbr):
     higher side was matched. A half-edge is only ever matched by the triangle its
     own row names, so threads never write the same entry.
     """
-    twin = np.full(3 * tri.shape[0], -1, np.int64)
+    twin = fresh(3 * tri.shape[0], np.int64, -1)  # (small pages: see hammesh.pages)
     spans = row_ranges(tri.shape[0], threads.THREAD_MIN_ROWS)
     for step in (_twins_from_neighbors_into, _unmatched_neighbor):
         bads = [b for b in run_all([

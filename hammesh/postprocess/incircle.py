@@ -33,6 +33,7 @@ import numpy as np
 from hammesh.postprocess import _thm24_kernels as _kernels
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
+from hammesh.pages import fresh
 from hammesh.postprocess.conform import split_segments
 from hammesh.halfedge import HalfEdges
 from hammesh.verify.stream import RowStream
@@ -87,9 +88,12 @@ def incircle_hamiltonian(
 WALK_CHUNK = 1 << 18
 
 
-def _touched(shape: tuple[int, ...], dtype: type, fill: int) -> np.ndarray:
-    a = np.empty(shape, dtype)
-    a.fill(fill)  # page faults taken here, beside other work, not in the walk
+def _positions(total: int) -> np.ndarray:
+    """``arange(total)`` in fresh pages faulted ahead (by chunks: no second big array)."""
+    a = fresh(total, np.int64)
+    step = 1 << 20
+    for i in range(0, total, step):
+        a[i : i + step] = np.arange(i, min(total, i + step), dtype=np.int64)
     return a
 
 
@@ -107,17 +111,19 @@ def walk_arrays(total: int, nh: int, parent: bool = True, n_points: int | None =
     midpoint (``n_points + nh / 3`` rows) and ``position`` for one cycle
     (``arange(total)``), each used if it fits.
     """
+    # (page faults taken here, beside other work, not in the walk; the walk writes
+    # every row, so only the claim and prim need their starting values)
     arrays = {
-        "out": _touched((total, 3), np.int64, 0),
-        "claim": _touched((3 * total,), _kernels.index_dtype(3 * total), _kernels.UNLINKED),
-        "prim": _touched((nh,), _kernels.index_dtype(total), -1),
+        "out": fresh((total, 3), np.int64),
+        "claim": fresh(3 * total, _kernels.index_dtype(3 * total), _kernels.UNLINKED),
+        "prim": fresh(nh, _kernels.index_dtype(total), -1),
     }
     if parent:
-        arrays["parent"] = _touched((total,), np.int64, 0)
-        arrays["kind"] = _touched((total,), np.int8, 0)
+        arrays["parent"] = fresh(total, np.int64)
+        arrays["kind"] = fresh(total, np.int8)
     if n_points is not None:
-        arrays["points"] = _touched((n_points + nh // 3, 2), np.float64, 0)
-        arrays["position"] = np.arange(total, dtype=np.int64)
+        arrays["points"] = fresh((n_points + nh // 3, 2), np.float64)
+        arrays["position"] = _positions(total)
     return arrays
 
 
@@ -162,8 +168,8 @@ def incircle_streaming(
                 and is_con.dtype == np.bool_ and is_con.shape == (total,) and is_con.flags.c_contiguous):
             arrays["parent"], arrays["kind"] = twin, is_con.view(np.int8)  # dead after the forest
         else:
-            arrays["parent"] = np.empty(total, np.int64)
-            arrays["kind"] = np.empty(total, np.int8)
+            arrays["parent"] = fresh(total, np.int64)
+            arrays["kind"] = fresh(total, np.int8)
     out, parent, kind, claim, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
     q = len(mid_a)
     points = arrays.get("points")
