@@ -21,7 +21,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import mmap
-import os
+import sys
 
 import numpy as np
 
@@ -32,7 +32,7 @@ MADV_POPULATE_WRITE = 23
 
 _PAGE = mmap.PAGESIZE
 _libc = None
-if os.name == "posix":
+if sys.platform.startswith("linux"):  # (the advice numbers are Linux's)
     try:
         _libc = ctypes.CDLL(ctypes.util.find_library("c") or None, use_errno=True)
         _libc.madvise.argtypes = (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int)
