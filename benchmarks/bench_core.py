@@ -18,7 +18,10 @@ Two ways, both printed:
    ``--fresh`` times, alternating; every ratio is printed and the median compared.
 2. **Best of ``--repeat``** in one warmed-up process (steady state).
 
-    python benchmarks/bench_core.py [--max-area 1e-6] [--repeat 5] [--fresh 3]
+    python benchmarks/bench_core.py [--max-area 1e-6] [--repeat 5] [--fresh 3] [--mode incircle|sparse]
+
+The children inherit the environment: ``NUMPY_MADVISE_HUGEPAGE=0 python
+benchmarks/bench_core.py`` measures without numpy's transparent-huge-page advice.
 
 Targets (issues 2 and 11): hamiltonian / Triangle <= 0.30 (first call and best of N);
 quality_mesh (isolated) / Triangle <= 1.10 on the first call; <= 1 GiB extra peak memory.
@@ -50,6 +53,11 @@ def _peak_rss_mib() -> float:
 def _cpu(who: int = resource.RUSAGE_SELF) -> float:
     r = resource.getrusage(who)
     return r.ru_utime + r.ru_stime
+
+
+def _sys(who: int = resource.RUSAGE_SELF) -> float:
+    """System CPU seconds (page faults on fresh memory are most of it, docs/benchmarks.md)."""
+    return resource.getrusage(who).ru_stime
 
 
 def _domain():
@@ -88,13 +96,14 @@ def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "
 
         # Triangle's own time inside the isolated call (the forked child inherits this
         # wrapper and writes the time to a file): the peer measured in the same process
-        real, inside = triangle.triangulate, path + ".triangle"
+        real, inside, parent = triangle.triangulate, path + ".triangle", os.getpid()
 
         def timed(*a, **k):
             t = time.perf_counter()
             out = real(*a, **k)
-            with open(inside, "w") as f:
-                f.write(repr(time.perf_counter() - t))
+            if os.getpid() != parent:  # the child's call only (the parent's thread that
+                with open(inside, "w") as f:  # loads the kernels meshes a tiny square)
+                    f.write(repr(time.perf_counter() - t))
             return out
 
         triangle.triangulate = timed
@@ -109,14 +118,15 @@ def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "
         triangle.triangulate = real
         with open(inside) as f:
             t_inside = float(f.read())
-        t, c = time.perf_counter(), _cpu()
+        t, c, k = time.perf_counter(), _cpu(), _sys()
         h = hammesh.hamiltonian(mesh, mode=mode)
-        t_ham, c_ham = time.perf_counter() - t, _cpu() - c
+        t_ham, c_ham, k_ham = time.perf_counter() - t, _cpu() - c, _sys() - k
         if path:  # for the "file" run: the same mesh, saved
             np.savez(path, points=mesh.points, triangles=mesh.triangles, neighbors=mesh.neighbors,
                      segments=mesh.segments, segment_markers=mesh.segment_markers)
         return {"quality_mesh": t_mesh, "hamiltonian": t_ham, "triangle_inside": t_inside,
-                "quality_mesh_cpu": c_mesh, "hamiltonian_cpu": c_ham, "triangles": mesh.n_triangles,
+                "quality_mesh_cpu": c_mesh, "hamiltonian_cpu": c_ham, "hamiltonian_sys": k_ham,
+                "triangles": mesh.n_triangles,
                 "verified": bool(h.report["verified"])}
     if what == "file":  # hamiltonian on a mesh read from a file: kernels loaded cold
         with np.load(path) as f:
@@ -150,8 +160,10 @@ def first_calls(args: argparse.Namespace) -> None:
             assert pipe["verified"] and cold["verified"] and pipe["triangles"] == tri["triangles"]
             rows.append((tri["triangle"], pipe["quality_mesh"], pipe["hamiltonian"], cold["hamiltonian_cold"],
                          pipe["triangle_inside"]))
-            cpus.append((tri["triangle_cpu"], pipe["quality_mesh_cpu"], pipe["hamiltonian_cpu"]))
-    print(f"first call in a fresh process, {args.fresh} runs (each a new interpreter; seconds, and ratios to raw Triangle's first call")
+            cpus.append((tri["triangle_cpu"], pipe["quality_mesh_cpu"], pipe["hamiltonian_cpu"], pipe["hamiltonian_sys"]))
+    hp = os.environ.get("NUMPY_MADVISE_HUGEPAGE", "numpy's default")
+    print(f"first call in a fresh process, mode={args.mode}, NUMPY_MADVISE_HUGEPAGE={hp}, {args.fresh} runs")
+    print("(each a new interpreter; seconds, and ratios to raw Triangle's first call")
     print("in its own fresh process; in brackets: to Triangle's time inside that quality_mesh call, same process)")
     print(f"  {'run':>3}  {'triangle':>8}  {'quality_mesh':>12} {'ratio':>15}  {'hamiltonian':>11} {'ratio':>15}  {'ham. cold':>9} {'ratio':>6}")
     for i, (t, q, h, c, ti) in enumerate(rows):
@@ -167,9 +179,10 @@ def first_calls(args: argparse.Namespace) -> None:
     summary("hamiltonian after quality_mesh / raw Triangle, own process", 2, 0, "; target <= 0.30")
     summary("hamiltonian after quality_mesh / Triangle inside quality_mesh", 2, 4, "")
     summary("hamiltonian on a mesh read from a file (kernels cold) / raw Triangle", 3, 0, "")
-    print("first-call CPU seconds (all threads, and the meshing child): triangle / quality_mesh / hamiltonian")
-    for i, (t, q, h) in enumerate(cpus):
-        print(f"  {i:>3}  {t:8.3f}  {q:8.3f} ({q / t:.3f})  {h:8.3f} ({h / t:.3f})")
+    print("first-call CPU seconds (all threads, and the meshing child): triangle / quality_mesh / hamiltonian"
+          " (of it system time)")
+    for i, (t, q, h, k) in enumerate(cpus):
+        print(f"  {i:>3}  {t:8.3f}  {q:8.3f} ({q / t:.3f})  {h:8.3f} ({h / t:.3f}; system {k:.3f})")
 
 
 def best_of(args: argparse.Namespace) -> None:

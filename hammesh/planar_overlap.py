@@ -258,9 +258,15 @@ def _first_overlap_range(pts, tri, targets, lo, hi, level, origin, c0, n_levels,
     return best_i, best_j
 
 
-def boundary_triangles(triangles: np.ndarray, n_points: int) -> np.ndarray:
-    """Rows owning a half-edge without twin (all rows if a directed edge is used twice)."""
-    twin, bad = half_edge_twins(triangles, n_points)
+def boundary_triangles(triangles: np.ndarray, n_points: int, twin: np.ndarray | None = None) -> np.ndarray:
+    """Rows owning a half-edge without twin (all rows if a directed edge is used twice).
+
+    ``twin``: the certificate's pairing of ``triangles`` if already found (``hammesh
+    check`` finds it once for all its checks).
+    """
+    bad = -1
+    if twin is None or np.shape(twin) != (3 * len(triangles),):
+        twin, bad = half_edge_twins(triangles, n_points)
     if bad >= 0:
         return np.arange(len(triangles), dtype=np.int64)
     return np.unique(np.flatnonzero(twin < 0) // 3).astype(np.int64)
@@ -293,7 +299,9 @@ def build_grid(points: np.ndarray, triangles: np.ndarray, targets: np.ndarray) -
     return Grid(targets, lo, hi, level, origin, c0, n_levels, slot_key, slot_start, slot_end, members)
 
 
-def find_overlap(points: np.ndarray, triangles: np.ndarray) -> tuple[int, int] | None:
+def find_overlap(
+    points: np.ndarray, triangles: np.ndarray, *, twin: np.ndarray | None = None
+) -> tuple[int, int] | None:
     """A pair ``(i, j)``, ``i < j``, of triangles whose interiors intersect, or None.
 
     The pair returned is the lowest among those in which one triangle has a boundary
@@ -304,6 +312,9 @@ def find_overlap(points: np.ndarray, triangles: np.ndarray) -> tuple[int, int] |
     points : (n, 2) float64
     triangles : (m, 3) int64
         Counter-clockwise, each directed edge used once (the certificate's items 2-3).
+    twin : (3 m,) int64, optional
+        Their half-edge pairing as the certificate found it
+        (``hammesh.verify.half_edge_twins``), if at hand: saves pairing them again.
 
     Examples
     --------
@@ -317,7 +328,7 @@ def find_overlap(points: np.ndarray, triangles: np.ndarray) -> tuple[int, int] |
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     if len(tri) < 2:
         return None
-    g = build_grid(pts, tri, boundary_triangles(tri, len(pts)))
+    g = build_grid(pts, tri, boundary_triangles(tri, len(pts), twin))
     found = run_all([
         (lambda lo=lo, hi=hi: _first_overlap_range(
             pts, tri, g.targets, g.lo, g.hi, g.level, g.origin, g.c0, g.n_levels, int(g.level.max()), g.slot_key,

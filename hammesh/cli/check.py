@@ -10,7 +10,7 @@ from hammesh.errors import FileFormatError, VerificationError
 from hammesh.io import check_outputs, read_mesh, write_report
 from hammesh.io.report import collect_repairs
 from hammesh.planar_overlap import find_overlap
-from hammesh.verify import infer_runs, verify_cycle_mesh
+from hammesh.verify.certificate import verify_stored_cycle_mesh
 
 HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles"
 EXAMPLES = """examples:
@@ -48,9 +48,9 @@ def run(args: argparse.Namespace) -> int:
         stats = verify_surface(points, triangles, runs)
     else:
         triangles = mesh.triangles
-        runs = infer_runs(triangles, mesh.n_points)
-        stats = verify_cycle_mesh(mesh.points, triangles, runs, segments=mesh.segments)
-        pair = find_overlap(mesh.points, triangles)  # no input to compare with: test the plane
+        # the half-edges are paired once (the certificate's kernel), for all three checks
+        runs, stats, twin = verify_stored_cycle_mesh(mesh.points, triangles, segments=mesh.segments)
+        pair = find_overlap(mesh.points, triangles, twin=twin)  # no input to compare with: test the plane
         if pair is not None:
             raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
     if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:

@@ -128,14 +128,16 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
         ready = None
         shape = np.shape(mesh.triangles)
         if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
-            ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0])
+            # (parent and kind: made of the input's pairing arrays once the forest is done)
+            ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0], False, np.shape(mesh.points)[0])
         # the certificate's own look at the caller's input (never at the construction's
         # validated copy), beside the construction's validation
         facts = side.submit(input_facts, mesh)
         clean, he, is_con = prepare_mesh(mesh)
         rows = prepared = None
         if mode == "incircle":
-            out, claim, stream = incircle_streaming(clean, he, is_con, side, ready)
+            out, claim, stream = incircle_streaming(clean, he, is_con, side, ready, reuse=True)
+            del he, is_con  # (their memory is the output's parent and kind now)
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows
             prepared = claim_structure(out.triangles, claim)

@@ -33,6 +33,7 @@ import numpy as np
 from hammesh.postprocess import _thm24_kernels as _kernels
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
+from hammesh.pages import fresh
 from hammesh.postprocess.conform import split_segments
 from hammesh.halfedge import HalfEdges
 from hammesh.verify.stream import RowStream
@@ -87,9 +88,12 @@ def incircle_hamiltonian(
 WALK_CHUNK = 1 << 18
 
 
-def _touched(shape: tuple[int, ...], dtype: type, fill: int) -> np.ndarray:
-    a = np.empty(shape, dtype)
-    a.fill(fill)  # page faults taken here, beside other work, not in the walk
+def _positions(total: int) -> np.ndarray:
+    """``arange(total)`` in fresh pages faulted ahead (by chunks: no second big array)."""
+    a = fresh(total, np.int64)
+    step = 1 << 20
+    for i in range(0, total, step):
+        a[i : i + step] = np.arange(i, min(total, i + step), dtype=np.int64)
     return a
 
 
@@ -98,29 +102,51 @@ def _inherit(attrs: np.ndarray, parent: np.ndarray) -> np.ndarray:
     return attrs[parent] if attrs.shape[1] else np.zeros((len(parent), 0))
 
 
-def walk_arrays(total: int, nh: int) -> dict[str, np.ndarray]:
-    """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched."""
-    return {
-        "out": _touched((total, 3), np.int64, 0),
-        "parent": _touched((total,), np.int64, 0),
-        "kind": _touched((total,), np.int8, 0),
-        "claim": _touched((3 * total,), _kernels.index_dtype(3 * total), _kernels.UNLINKED),
-        "prim": _touched((nh,), _kernels.index_dtype(total), -1),
+def walk_arrays(total: int, nh: int, parent: bool = True, n_points: int | None = None) -> dict[str, np.ndarray]:
+    """The walk's output arrays for ``total`` rows and ``nh`` slots, pages touched.
+
+    ``parent=False``: without ``parent`` and ``kind`` (``incircle_streaming(...,
+    reuse=True)`` makes them of the input's dead pairing arrays when it can).
+    ``n_points``: the input's point count; then also the output's ``points`` for no
+    midpoint (``n_points + nh / 3`` rows) and ``position`` for one cycle
+    (``arange(total)``), each used if it fits.
+    """
+    # (page faults taken here, beside other work, not in the walk; the walk writes
+    # every row, so only the claim and prim need their starting values)
+    arrays = {
+        "out": fresh((total, 3), np.int64),
+        "claim": fresh(3 * total, _kernels.index_dtype(3 * total), _kernels.UNLINKED),
+        "prim": fresh(nh, _kernels.index_dtype(total), -1),
     }
+    if parent:
+        arrays["parent"] = fresh(total, np.int64)
+        arrays["kind"] = fresh(total, np.int8)
+    if n_points is not None:
+        arrays["points"] = fresh((n_points + nh // 3, 2), np.float64)
+        arrays["position"] = _positions(total)
+    return arrays
 
 
 def incircle_streaming(
-    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None, ready: Future | None = None
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None, ready: Future | None = None,
+    *, reuse: bool = False,
 ) -> tuple[HamiltonianMesh, np.ndarray, RowStream | None]:
     """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
 
     While the tree search runs, ``side`` allocates the walk's arrays (taking their
-    page faults); while the walk runs, it computes the incenters and then checks the
+    page faults; with ``walk_arrays(..., n_points=n)`` also those of the output's points and
+    positions); while the walk runs, it computes the incenters and then checks the
     finished rows of the output (``hammesh.verify.stream.RowStream``), which is
     returned for the caller to finish (``stream.join()``, then ``stream.result``).
     Without ``side`` it is the plain serial construction and the stream is None.
     ``ready`` may hold ``walk_arrays(3 m, 3 m)`` already submitted (e.g. before the
     input was validated, to use the other core then).
+
+    ``reuse=True`` hands ``he.twin`` and ``is_con`` over: once the spanning forest has
+    read them they are dead, and (when no constrained edge is split, ``3 m`` output
+    rows) their memory becomes the output's ``parent`` (int64) and ``kind`` (int8)
+    instead of 40 MB of fresh pages at 1.5 M triangles (fresh memory is what makes
+    the first call slow, docs/benchmarks.md). The caller must not use them after.
     """
     pts = mesh.points
     n, m = mesh.n_points, mesh.n_triangles
@@ -135,10 +161,20 @@ def incircle_streaming(
     total = nh + len(mid_h)
     arrays = ready.result() if ready is not None else None
     if arrays is None or len(arrays["out"]) != total:
-        arrays = walk_arrays(total, nh)
+        arrays = walk_arrays(total, nh, parent=False)
+    if "parent" not in arrays:
+        twin = he.twin
+        if (reuse and total == nh and twin.dtype == np.int64 and twin.shape == (total,) and twin.flags.c_contiguous
+                and is_con.dtype == np.bool_ and is_con.shape == (total,) and is_con.flags.c_contiguous):
+            arrays["parent"], arrays["kind"] = twin, is_con.view(np.int8)  # dead after the forest
+        else:
+            arrays["parent"] = fresh(total, np.int64)
+            arrays["kind"] = fresh(total, np.int8)
     out, parent, kind, claim, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
     q = len(mid_a)
-    points = np.empty((n + m + q, 2))
+    points = arrays.get("points")
+    if points is None or points.shape != (n + m + q, 2):
+        points = np.empty((n + m + q, 2))
     points[:n] = pts
     points[n + m :] = 0.5 * (pts[mid_a] + pts[mid_b])
     lengths = np.zeros(len(firsts), np.int64)
@@ -177,7 +213,9 @@ def incircle_streaming(
         )
 
     segs, markers = split_segments(mesh.segments, mesh.segment_markers, mid_a, mid_b, n + m, len(points))
-    position = cycle_positions(lengths)
+    position = arrays.get("position")
+    if position is None or len(lengths) != 1 or len(position) != total:
+        position = cycle_positions(lengths)
     report = {
         "triangles": int(len(out)),
         "vertices": int(len(points)),

@@ -22,6 +22,9 @@ __all__ = [
     "AngleArea",
     "InputMeasure",
     "orient_input_into",
+    "InputScan",
+    "scan_input_into",
+    "input_boundary_into",
     "find_edges",
     "hull_chain",
     "UNLINKED",
@@ -36,6 +39,9 @@ __all__ = [
     "digest_range",
     "points_digest",
 ]
+
+#: Directed edge keys ``a * KEY_SHIFT + b`` (``hammesh.verify.reference.KEY_BASE``).
+KEY_SHIFT = 1 << 32
 
 #: Claim entry not written (yet): the certificate skips it and counts the links.
 UNLINKED = -2
@@ -581,6 +587,145 @@ def orient_input_into(points, tri, out, used):
         if s2 < best_s2:
             best_s2 = s2
     return InputMeasure(bad, n_flipped, np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0))), total)
+
+
+class InputScan(NamedTuple):
+    """Result of :func:`scan_input_into`."""
+
+    bad_index: int  # -1, or the first row with a vertex outside 0..n-1
+    bad: int  # -1, or the first row that is degenerate by the exact predicate
+    n_flipped: int
+    min_angle: float  # radians, over the rows in range
+    total_area: float
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def scan_input_into(points, tri, flip, used, start):
+    """The certificate's one pass over an input's rows as the caller gave them.
+
+    For each row: its indices are in range (else ``bad_index``, the row skipped), its
+    orientation by the exact predicate (``hammesh.predicates``; sign 0 is ``bad``, a
+    negative row is counter-clockwise reversed: ``flip[t]`` is set), its smallest
+    angle and area (of the counter-clockwise row), ``used[v]`` for its vertices, and
+    ``start[min(a, b) + 1] += 1`` for each edge ``ab``: the bucket sizes of
+    :func:`input_boundary_into` (the same either way round). Nothing is copied: the
+    pairing reads the rows again with ``flip``.
+    """
+    n = points.shape[0]
+    bad_index = -1
+    bad = -1
+    n_flipped = 0
+    best_s2 = np.inf
+    total = 0.0
+    for t in range(tri.shape[0]):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        if a < 0 or b < 0 or c < 0 or a >= n or b >= n or c >= n:
+            if bad_index < 0:
+                bad_index = t
+            continue
+        used[a] = True
+        used[b] = True
+        used[c] = True
+        start[min(a, b) + 1] += 1
+        start[min(b, c) + 1] += 1
+        start[min(c, a) + 1] += 1
+        s = orient_points(points, a, b, c)
+        if s == 0:
+            if bad < 0:
+                bad = t
+            continue
+        if s < 0:
+            a, c = c, a
+            flip[t] = True
+            n_flipped += 1
+        cr, s2, _ = _measures(points, a, b, c)
+        total += 0.5 * cr
+        if s2 < best_s2:
+            best_s2 = s2
+    return InputScan(bad_index, bad, n_flipped, np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0))), total)
+
+
+@njit(cache=True, nogil=True)
+def input_boundary_into(tri, flip, start, keys):
+    """The input's directed boundary edges, by the certificate's own bucket matching.
+
+    Rows are read as :func:`scan_input_into` oriented them (``flip``), ``start`` holds
+    its bucket sizes (``start[v + 1]``: edges whose lower vertex is ``v``) and is
+    consumed. Each half-edge ``x -> y`` goes into the bucket of ``min(x, y)`` as the
+    key ``2 max(x, y) + (x > y)`` (``keys``: ``3 m`` entries, int32 when ``2 n`` fits);
+    each bucket is sorted (insertion sort; ``np.sort`` for a high-degree vertex), so an
+    edge's halves are neighbours: one half alone is a boundary edge, one each way a
+    pair, anything else an edge used twice in one direction or by three triangles.
+    The halves' identities are not needed (no twin array): the boundary edge comes
+    back from its bucket and key.
+
+    Returns ``(boundary, ok)``: boundary edge keys ``x * 2**32 + y`` (unsorted) and
+    False if some edge is used wrongly (then ``boundary`` is incomplete: the caller
+    names the edge with :func:`half_edge_twins`).
+    """
+    m = tri.shape[0]
+    nv = start.shape[0] - 1
+    for v in range(nv):
+        start[v + 1] += start[v]
+    for t in range(m):  # afterwards start[v] is the end of bucket v
+        if flip[t]:
+            r0 = tri[t, 2]
+            r2 = tri[t, 0]
+        else:
+            r0 = tri[t, 0]
+            r2 = tri[t, 2]
+        r1 = tri[t, 1]
+        for k in range(3):
+            if k == 0:
+                x, y = r0, r1
+            elif k == 1:
+                x, y = r1, r2
+            else:
+                x, y = r2, r0
+            if x < y:
+                lo = x
+                key = 2 * y
+            else:
+                lo = y
+                key = 2 * x + 1
+            i = start[lo]
+            keys[i] = key
+            start[lo] = i + 1
+    nb = 0
+    out = np.empty(3 * m, np.int64)  # only the pages written are touched
+    ok = True
+    s0 = 0
+    for v in range(nv):
+        s1 = start[v]
+        if s1 - s0 > 24:  # a high-degree vertex
+            keys[s0:s1] = np.sort(keys[s0:s1])
+        else:
+            for i in range(s0 + 1, s1):  # insertion sort
+                kv = keys[i]
+                j = i
+                while j > s0 and keys[j - 1] > kv:
+                    keys[j] = keys[j - 1]
+                    j -= 1
+                keys[j] = kv
+        i = s0
+        while i < s1:
+            o = keys[i] >> 1
+            j = i + 1
+            while j < s1 and keys[j] >> 1 == o:
+                j += 1
+            if j - i == 1:  # one half: a boundary edge
+                if keys[i] & 1:  # runs from o down to v
+                    out[nb] = np.int64(o) * KEY_SHIFT + v
+                else:
+                    out[nb] = np.int64(v) * KEY_SHIFT + o
+                nb += 1
+            elif j - i != 2 or keys[i] & 1 == keys[i + 1] & 1:
+                ok = False
+            i = j
+        s0 = s1
+    return out[:nb].copy(), ok
 
 
 @njit(cache=True, nogil=True)

@@ -63,10 +63,12 @@ from hammesh.verify.reference import (
     input_facts,
     undirected_keys,
 )
+from hammesh.verify.runs import infer_runs_and_pairing
 
 __all__ = [
     "verify",
     "verify_cycle_mesh",
+    "verify_stored_cycle_mesh",
     "certify",
     "claim_structure",
     "combine_rows",
@@ -214,6 +216,30 @@ def verify_cycle_mesh(
     return _certify(points, triangles, components, segments, facts, None, None, None, angle_ratio)
 
 
+def verify_stored_cycle_mesh(
+    points: np.ndarray, triangles: np.ndarray, segments: np.ndarray | None = None
+) -> tuple[np.ndarray, dict[str, Any], np.ndarray]:
+    """Items 1-4 for a mesh read from a file (``hammesh check``), one pairing for all.
+
+    The runs are inferred from the stored order (:func:`hammesh.verify.infer_runs`);
+    the half-edge pairing found there (the certificate's own kernel) serves the cycle
+    checks too, and is returned for the caller's overlap test
+    (``hammesh.planar_overlap.find_overlap(..., twin=)``).
+
+    Returns
+    -------
+    runs : (c,) int64
+    stats : dict
+        As :func:`verify_cycle_mesh`.
+    twin : (3 m,) int64
+        The half-edge pairing (-1 on the boundary).
+    """
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    runs, twin = infer_runs_and_pairing(tri, len(points))
+    stats = _certify(points, tri, runs, segments, None, None, None, None, 0.5, own_twin=twin)
+    return runs, stats, twin
+
+
 def verify(mesh: HamiltonianMesh, reference: Mesh | None = None, *, angle_ratio: float = 0.5) -> dict[str, Any]:
     """Certificate of a :class:`~hammesh.mesh.HamiltonianMesh` against its input mesh.
 
@@ -267,7 +293,10 @@ def _certify(
     rows: tuple[RowChecks, np.ndarray] | None,
     prepared: dict[str, Any] | None,
     angle_ratio: float,
+    own_twin: np.ndarray | None = None,
 ) -> dict[str, Any]:
+    """The certificate; ``own_twin``: the output's pairing as this package's
+    ``_kernels.half_edge_twins`` found it (never a construction's claim)."""
     pts = np.asarray(points, dtype=np.float64)
     tri = np.asarray(triangles)
     runs = np.asarray(components).reshape(-1)
@@ -346,7 +375,10 @@ def _certify(
         cross = rows.cross_run
     else:  # no (valid) claim: find the pairing, then check the runs with it
         prepared = None
-        twin, dup = _kernels.half_edge_twins(tri, n)
+        if own_twin is not None and np.shape(own_twin) == (3 * m,):
+            twin, dup = own_twin, -1
+        else:
+            twin, dup = _kernels.half_edge_twins(tri, n)
         cross = -1 if dup >= 0 else int(_kernels.first_cross_run_edge(twin, runs))
     if dup >= 0:
         t, k = divmod(int(dup), 3)

@@ -6,7 +6,9 @@ caller's mesh it takes a copy of the points and, with its own kernels
 (``hammesh.verify._kernels``) and the exact orientation predicate
 (``hammesh.predicates``), orients the rows, pairs their half-edges, and measures
 the smallest angle, the area, the used vertices, the boundary and the constrained
-edges. A construction bug in any of those steps therefore cannot reach the
+edges. It reads the caller's rows twice (a scan, then the bucket matching, with the
+orientation flips of the scan) and copies none of them: of the pairing it keeps only
+the boundary edges. A construction bug in any of those steps therefore cannot reach the
 certificate's side of the comparison.
 """
 
@@ -79,22 +81,30 @@ def input_facts(mesh: Mesh) -> InputFacts:
     if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0 or not np.issubdtype(tri.dtype, np.integer):
         _bad_input(f"triangles have shape {tri.shape} and dtype {tri.dtype}, not (m > 0, 3) integers")
     tri = np.ascontiguousarray(tri, dtype=np.int64)
-    n = len(pts)
+    n, m = len(pts), len(tri)
     if not np.isfinite(pts).all():
         _bad_input(f"point {int(np.argmin(np.isfinite(pts).all(axis=1)))} is not finite")
-    if tri.min() < 0 or tri.max() >= n:
-        t = int(np.argmax(((tri < 0) | (tri >= n)).any(axis=1)))
-        _bad_input(f"triangle {t} {tri[t].tolist()} references a vertex outside 0..{n - 1}")
-    ccw = np.empty_like(tri)
+    # one pass over the rows as given (no counter-clockwise copy: the pairing reads
+    # them again with the flips), then the bucket matching; both the certificate's own
+    flip = np.zeros(m, dtype=np.bool_)
     used = np.zeros(n, dtype=np.bool_)
-    measure = _kernels.orient_input_into(pts, tri, ccw, used)
-    if measure.bad >= 0:
-        t = measure.bad
+    start = np.zeros(n + 1, dtype=np.int64)
+    scan = _kernels.scan_input_into(pts, tri, flip, used, start)
+    if scan.bad_index >= 0:
+        t = scan.bad_index
+        _bad_input(f"triangle {t} {tri[t].tolist()} references a vertex outside 0..{n - 1}")
+    if scan.bad >= 0:
+        t = scan.bad
         _bad_input(f"triangle {t} {tri[t].tolist()} is degenerate (exact orientation test)")
-    if not (np.isfinite(measure.min_angle) and np.isfinite(measure.total_area)):
+    if not (np.isfinite(scan.min_angle) and np.isfinite(scan.total_area)):
         _bad_input("angles and areas are not finite (coordinates too large or too small)")
-    twin, dup = _kernels.half_edge_twins(ccw, n)
-    if dup >= 0:
+    keys = np.empty(3 * m, dtype=np.int32 if 2 * n + 1 < 2**31 else np.int64)
+    boundary, ok = _kernels.input_boundary_into(tri, flip, start, keys)
+    del keys
+    if not ok:  # name the edge: the rows counter-clockwise, paired with half-edge names
+        ccw = tri.copy()
+        ccw[flip] = ccw[flip][:, ::-1]
+        _, dup = _kernels.half_edge_twins(ccw, n)
         t, k = divmod(int(dup), 3)
         _bad_input(
             f"edge ({ccw[t, k]}, {ccw[t, (k + 1) % 3]}) of triangle {t} is shared by more than two "
@@ -111,7 +121,7 @@ def input_facts(mesh: Mesh) -> InputFacts:
             _bad_input(f"segment {s} {segs[s].tolist()} references a vertex outside 0..{n - 1}")
         keys = undirected_keys(segs, n)
         want = np.unique(keys)
-        found = _kernels.find_edges(ccw, n, want)[np.searchsorted(want, keys)]
+        found = _kernels.find_edges(tri, n, want)[np.searchsorted(want, keys)]  # undirected
         if not found.all():
             s = int(np.argmin(found))
             _bad_input(f"segment {s} {segs[s].tolist()} is not an edge of the mesh")
@@ -119,7 +129,7 @@ def input_facts(mesh: Mesh) -> InputFacts:
         points=pts,
         segments=segs,
         used=used,
-        min_angle=float(measure.min_angle),
-        area=float(measure.total_area),
-        boundary=boundary_keys(ccw, twin),
+        min_angle=float(scan.min_angle),
+        area=float(scan.total_area),
+        boundary=np.sort(boundary),
     )

@@ -15,7 +15,7 @@ from scipy.sparse.csgraph import connected_components
 from hammesh.errors import InvalidMeshError, VerificationError
 from hammesh.verify import _kernels
 
-__all__ = ["infer_runs"]
+__all__ = ["infer_runs", "infer_runs_and_pairing"]
 
 
 def infer_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
@@ -38,13 +38,23 @@ def infer_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
     InvalidMeshError
         The mesh is not edge-manifold.
     """
-    tri = np.asarray(triangles, dtype=np.int64)
+    return infer_runs_and_pairing(triangles, n_points)[0]
+
+
+def infer_runs_and_pairing(triangles: np.ndarray, n_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`infer_runs` and the half-edge pairing it found on the way.
+
+    The pairing is the certificate's own (``_kernels.half_edge_twins``): ``hammesh
+    check`` hands it on to the cycle checks and the overlap test instead of pairing
+    the half-edges twice more.
+    """
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
     m = len(tri)
     if m == 0:
         raise VerificationError("the mesh has no triangles")
     if tri.min() < 0 or tri.max() >= n_points:
         raise InvalidMeshError(f"triangles reference vertices outside 0..{n_points - 1}")
-    twin, bad = _kernels.half_edge_twins(np.ascontiguousarray(tri), int(n_points))  # the certificate's own
+    twin, bad = _kernels.half_edge_twins(tri, int(n_points))  # the certificate's own
     if bad >= 0:
         t, k = divmod(int(bad), 3)
         raise InvalidMeshError(
@@ -64,4 +74,4 @@ def infer_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
             f"connected piece of triangle {first_repeat} is not stored as one consecutive "
             "run of triangles (each piece must be one cycle)"
         )
-    return np.diff(np.r_[starts, m]).astype(np.int64)
+    return np.diff(np.r_[starts, m]).astype(np.int64), twin

@@ -83,3 +83,26 @@ def test_check_rejects_a_stored_segment_that_is_not_an_edge(tmp_path: Path, ham,
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert "verification failed" in err and f"[{a}, {b}]" in err and "not an edge" in err
+
+
+def test_check_pairs_the_half_edges_once(ham, tmp_path: Path, monkeypatch) -> None:
+    """``hammesh check`` finds the pairing once (the certificate's kernel) for the runs,
+    the cycle checks and the overlap test; a damaged file still fails."""
+    from hammesh.verify import _kernels as cert_kernels
+
+    path = tmp_path / "ham.vtu"
+    hammesh.write(ham, path)
+    real = cert_kernels.half_edge_twins
+    calls = []
+
+    def counted(tri, n_points):
+        calls.append(len(tri))
+        return real(tri, n_points)
+
+    monkeypatch.setattr(cert_kernels, "half_edge_twins", counted)
+    assert main(["check", str(path)]) == 0
+    assert calls == [ham.n_triangles]
+    swapped = ham.triangles.copy()
+    swapped[[0, len(swapped) // 2]] = swapped[[len(swapped) // 2, 0]]
+    hammesh.write(dataclasses.replace(ham, triangles=swapped), tmp_path / "bad.vtu")
+    assert main(["check", str(tmp_path / "bad.vtu")]) == 3

@@ -137,3 +137,57 @@ def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> N
     assert np.isclose(seen["min_angle"], stats.min_angle, rtol=1e-14, atol=0)  # arcsin: numpy vs numba
     assert np.isclose(seen["total"], stats.total_area, rtol=1e-14)
     np.testing.assert_array_equal(seen["used"], np.bincount(tri.ravel(), minlength=80) > 0)
+
+
+def test_counter_clockwise_rows_are_not_copied() -> None:
+    """Rows already counter-clockwise (Triangle's) are used as given, no 36 MB copy at
+    1.5 M triangles; a clockwise row makes a copy and leaves the caller's rows alone."""
+    rng = np.random.default_rng(3)
+    pts = rng.random((50, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    tri[signed_area_sign(pts, tri) < 0] = tri[signed_area_sign(pts, tri) < 0, ::-1]
+    o = _kernels.orient_ccw(pts, tri)
+    assert o.n_flipped == 0 and o.triangles is tri
+    cw = tri.copy()
+    cw[::4] = cw[::4, ::-1]
+    before = cw.copy()
+    o = _kernels.orient_ccw(pts, cw)
+    assert o.n_flipped == len(cw[::4]) and o.triangles is not cw
+    np.testing.assert_array_equal(o.triangles, tri)
+    np.testing.assert_array_equal(cw, before)
+
+
+def signed_area_sign(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    return np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+
+@pytest.mark.parametrize("mode", ["incircle", "sparse"])
+def test_hamiltonian_never_writes_the_callers_arrays(mode: str) -> None:
+    """The construction works on the caller's rows when they need no reversing: every
+    input array is left as it was (compared with a copy taken before)."""
+    m = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]],
+                                                         holes=[[[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.6]]]),
+                             min_angle=30, max_area=0.002, isolate=False)
+    arrays = {k: getattr(m, k) for k in ("points", "triangles", "neighbors", "segments", "segment_markers")}
+    before = {k: a.copy() for k, a in arrays.items()}
+    h = hammesh.hamiltonian(m, mode=mode)
+    assert h.report["verified"]
+    for k, a in arrays.items():
+        np.testing.assert_array_equal(a, before[k], err_msg=k)
+
+
+@pytest.mark.parametrize("bad", ["far", "negative", "self"])
+def test_neighbour_array_entries_out_of_place_are_not_trusted(bad: str) -> None:
+    """A neighbour index beyond the mesh, below -1, or naming the triangle itself makes
+    the construction pair the half-edges itself (the same twins as without it)."""
+    rng = np.random.default_rng(11)
+    pts = rng.random((40, 2))
+    d = Delaunay(pts)
+    tri = d.simplices.astype(np.int64)
+    nbr = d.neighbors[:, [2, 0, 1]].astype(np.int64)
+    t = int(np.argmax((nbr >= 0).all(axis=1)))
+    nbr[t, 0] = {"far": len(tri), "negative": -7, "self": t}[bad]
+    assert _kernels.twins_from_neighbors(tri, nbr)[1] >= 0
+    clean, he, _ = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri, neighbors=nbr))
+    np.testing.assert_array_equal(he.twin, half_edges(clean.triangles, len(pts)).twin)

@@ -222,3 +222,54 @@ def test_forest_searched_in_slabs(monkeypatch, n_loops: int, pieces: int, cores:
     h = hammesh.hamiltonian(m, mode="incircle")
     assert len(h.components) == pieces and h.report["midpoints"] == n_loops
     assert_certificate(m, h)
+
+
+@pytest.mark.parametrize("loops", [0, 1])
+def test_walk_reusing_the_input_pairing_arrays(loops: int) -> None:
+    """``incircle_streaming(..., reuse=True)`` makes ``parent`` and ``kind`` of the dead
+    pairing arrays when no constrained edge is split (``loops=0``), else allocates them;
+    either way the output equals the plain construction's."""
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess.incircle import incircle_streaming
+    from tests.helpers import plate
+
+    m = plate(loops, 1, max_area=0.01)
+    clean, he, is_con = prepare_mesh(m)
+    plain, claim, _ = incircle_streaming(clean, he, is_con, None)
+    clean, he, is_con = prepare_mesh(m)
+    twin = he.twin
+    got, claim2, _ = incircle_streaming(clean, he, is_con, None, reuse=True)
+    assert np.shares_memory(got.parent, twin) == (loops == 0)
+    assert (plain.report["midpoints"] == 0) == (loops == 0)
+    for k in ("triangles", "parent", "kind", "points", "components"):
+        np.testing.assert_array_equal(getattr(got, k), getattr(plain, k), err_msg=k)
+    np.testing.assert_array_equal(claim2, claim)
+    assert hammesh.verify(got, m)["min_angle_output_deg"] > 0
+
+
+@pytest.mark.parametrize("loops, pieces", [(0, 1), (0, 2), (1, 1)])
+def test_walk_with_arrays_made_ahead_on_the_side_thread(loops: int, pieces: int) -> None:
+    """``walk_arrays(..., n_points=n)`` made ahead (as ``hammesh.hamiltonian`` does on its
+    side thread) gives the output's points and positions where they fit (no midpoint,
+    one cycle) and is ignored where not; the output equals the plain construction's."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess.incircle import incircle_streaming, walk_arrays
+    from tests.helpers import plate
+
+    m = plate(loops, pieces, max_area=0.01)
+    plain, claim, _ = incircle_streaming(*prepare_mesh(m), None)
+    nh = 3 * m.n_triangles
+    with ThreadPoolExecutor(1) as side:
+        ready = side.submit(walk_arrays, nh, nh, False, m.n_points)
+        arrays = ready.result()
+        got, claim2, stream = incircle_streaming(*prepare_mesh(m), side, ready, reuse=True)
+        stream.join()
+    fits = loops == 0
+    assert np.shares_memory(got.points, arrays["points"]) == fits
+    assert np.shares_memory(got.position, arrays["position"]) == (fits and pieces == 1)
+    for k in ("triangles", "parent", "kind", "points", "components", "position"):
+        np.testing.assert_array_equal(getattr(got, k), getattr(plain, k), err_msg=k)
+    np.testing.assert_array_equal(claim2, claim)
+    assert hammesh.verify(got, m)["min_angle_output_deg"] > 0

@@ -138,3 +138,47 @@ def test_hull_chain_equals_the_point_sets_hull(n: int, seed: int, lattice: bool)
     i = int(np.argmin(got))  # same cyclic order
     j = int(np.argmin(want))
     np.testing.assert_array_equal(np.roll(got, -i), np.roll(want, -j))
+
+
+def boundary_by_dict(tri: np.ndarray) -> np.ndarray:
+    """Sorted directed boundary edge keys of counter-clockwise rows, by a dictionary."""
+    twin = dict_pairing(tri)
+    h = np.flatnonzero(twin < 0)
+    a, b = tri.ravel()[h], np.roll(tri, -1, axis=1).ravel()[h]
+    return np.sort(a * (1 << 32) + b)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([np.int32, np.int64]))
+def test_input_boundary_equals_a_dictionary_of_edges(seed: int, key_dtype) -> None:
+    """The input's bucket matching (rows read through the scan's flips, int32 or
+    int64 keys, a fan of 40 around one vertex sorted by np.sort) finds the boundary."""
+    rng = np.random.default_rng(seed)
+    k = 40
+    ang = np.sort(rng.random(k)) * 2 * np.pi
+    pts = np.r_[[[0.0, 0.0]], np.c_[np.cos(ang), np.sin(ang)], rng.random((30, 2)) * 0.2 + 3.0]
+    fan = np.array([[0, 1 + i, 1 + (i + 1) % k] for i in range(k)], np.int64)
+    far = Delaunay(pts[k + 1:]).simplices.astype(np.int64) + k + 1
+    ccw = np.r_[fan, np.where((signed_areas(pts, far) > 0)[:, None], far, far[:, ::-1])]
+    ccw = ccw[rng.permutation(len(ccw))]
+    flip = rng.random(len(ccw)) < 0.5
+    given_rows = ccw.copy()
+    given_rows[flip] = given_rows[flip][:, ::-1]
+    n = len(pts)
+    used = np.zeros(n, bool)
+    start = np.zeros(n + 1, np.int64)
+    seen = np.zeros(len(ccw), bool)
+    scan = _kernels.scan_input_into(pts, given_rows, seen, used, start)
+    np.testing.assert_array_equal(seen, flip)
+    assert scan.n_flipped == flip.sum() and scan.bad < 0 and scan.bad_index < 0
+    got, ok = _kernels.input_boundary_into(given_rows, seen, start, np.empty(3 * len(ccw), key_dtype))
+    assert ok
+    np.testing.assert_array_equal(np.sort(got), boundary_by_dict(ccw))
+
+
+@pytest.mark.parametrize("tri", BAD_EDGES)
+def test_input_boundary_refuses_a_bad_edge(tri) -> None:
+    tri = np.array(tri, np.int64)
+    start = np.r_[0, np.bincount(np.minimum(tri, np.roll(tri, -1, axis=1)).ravel(), minlength=5)].astype(np.int64)
+    _, ok = _kernels.input_boundary_into(tri, np.zeros(len(tri), bool), start, np.empty(tri.size, np.int32))
+    assert not ok
