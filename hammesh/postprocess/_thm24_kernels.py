@@ -191,8 +191,8 @@ def spanning_forest(tri, twin, is_con, points=None):
     order = np.empty(m, np.int64)
     firsts = np.empty(m, np.int64)
     flags = is_con.astype(np.uint8)  # CON_BIT; the search adds TREE_BIT
-    queue = np.empty((2, 3 * m), index_dtype(3 * m))  # the bucket queue's links and entries
-    pieces = _prim_into(twin, flags, qr, order, firsts, queue[0], queue[1])
+    queue = np.empty((3 * m, 2), index_dtype(3 * m))  # the bucket queue: (link, entry) pairs
+    pieces = _prim_into(twin, flags, qr, order, firsts, queue)
     tri_r = np.empty_like(tri)
     code = np.empty(3 * m, np.int64)
     run_all([(lambda a=a, b=b: _pack_code_into(tri, twin, flags, order, qr, tri_r, code, a, b)) for a, b in spans])
@@ -253,17 +253,18 @@ def edge_class(qa, qb):
 
 
 @njit(cache=True, nogil=True)
-def _prim_into(twin, flags, qr, order, firsts, nxt, item):
+def _prim_into(twin, flags, qr, order, firsts, queue):
     """Prim's search over the dual graph with a bucket queue of edge classes.
 
     ``qr[t]``: quadtree coordinates of triangle t and its new number (-1 on entry,
     set here).
     Fills ``order`` (visit order: new triangle i is input triangle ``order[i]``),
     ``TREE_BIT`` of ``flags`` on both halves of each tree edge, and ``firsts`` (new
-    number of each piece's first); returns the number of pieces. ``nxt`` and
-    ``item`` (3 m entries each) hold the queue. Stale entries (their triangle reached
-    meanwhile) are skipped when popped. A bucket is a stack (a linked list through
-    ``nxt``): the newest edge of a class goes first, so the search stays where it is.
+    number of each piece's first); returns the number of pieces. ``queue`` (3 m
+    rows) holds the queue's entries, each a link to the next entry of its class and
+    a half-edge into a triangle not reached when queued; stale entries (their
+    triangle reached meanwhile) are skipped when popped. A bucket is a stack: the
+    newest edge of a class goes first, so the search stays where it is.
     """
     m = qr.shape[0]
     con_class = N_CLASSES - 1
@@ -285,6 +286,7 @@ def _prim_into(twin, flags, qr, order, firsts, nxt, item):
             qt = qr[t, 0]
             best = N_CLASSES  # the lightest edge out of t goes next without queueing if
             best_g = -1  # nothing queued is lighter (most tree edges)
+            best_h = -1
             for kk in range(3):
                 h = 3 * t + kk
                 g = twin[h]
@@ -294,9 +296,10 @@ def _prim_into(twin, flags, qr, order, firsts, nxt, item):
                 if c < best:
                     c, best = best, c
                     g, best_g = best_g, g
+                    best_h = h
                 if g >= 0:
-                    item[n_push] = g
-                    nxt[n_push] = head[c]
+                    queue[n_push, 0] = head[c]
+                    queue[n_push, 1] = g
                     head[c] = n_push
                     n_push += 1
                     low = min(low, c)
@@ -304,11 +307,11 @@ def _prim_into(twin, flags, qr, order, firsts, nxt, item):
             if best_g >= 0 and best <= low:
                 t = best_g // 3
                 flags[best_g] |= TREE_BIT
-                flags[twin[best_g]] |= TREE_BIT
+                flags[best_h] |= TREE_BIT
                 continue
             if best_g >= 0:
-                item[n_push] = best_g
-                nxt[n_push] = head[best]
+                queue[n_push, 0] = head[best]
+                queue[n_push, 1] = best_g
                 head[best] = n_push
                 n_push += 1
                 low = min(low, best)
@@ -317,8 +320,8 @@ def _prim_into(twin, flags, qr, order, firsts, nxt, item):
                 if slot < 0:
                     low += 1
                     continue
-                head[low] = nxt[slot]
-                g = item[slot]
+                head[low] = queue[slot, 0]
+                g = queue[slot, 1]
                 if qr[g // 3, 1] < 0:
                     t = g // 3
                     flags[g] |= TREE_BIT
