@@ -112,7 +112,7 @@ CON_BIT = 1
 
 
 #: Bits per axis of the quadtree that orders the tree's edges (:func:`spanning_forest`).
-CELL_BITS = 16
+CELL_BITS = 15
 #: Distance classes per quadtree level: edges nearer a cell's centre are taken first.
 CENTRE_BINS = 16
 #: Edge classes: ``level * CENTRE_BINS + bin`` for free edges, then one for constrained ones.
@@ -179,7 +179,7 @@ def spanning_forest(tri, twin, is_con, points=None):
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
     # number, side by side: the search reads both of a neighbour at once
-    qr = np.empty((m, 2), np.int64)
+    qr = np.empty((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
     if points is None or not m:
         qr[:, 0] = 0
         qr[:, 1] = -1
@@ -218,14 +218,14 @@ def _bounds(points):
 @njit(cache=True, nogil=True)
 def _cell_coords_into(points, tri, x0, y0, scale, qr, lo, hi):
     """Quadtree coordinates (``CELL_BITS`` bits) of the centroids of triangles lo..hi,
-    packed ``x << 32 | y`` into ``qr[:, 0]``; ``qr[:, 1] = -1``."""
+    packed ``x << CELL_BITS | y`` into ``qr[:, 0]``; ``qr[:, 1] = -1``."""
     top = (1 << CELL_BITS) - 1
     for t in range(lo, hi):
         x = (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0
         y = (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0
         ix = min(max(int((x - x0) * scale), 0), top)
         iy = min(max(int((y - y0) * scale), 0), top)
-        qr[t, 0] = (ix << 32) | iy
+        qr[t, 0] = (ix << CELL_BITS) | iy
         qr[t, 1] = -1  # not reached yet (``_prim_into``)
 
 
@@ -236,10 +236,10 @@ def edge_class(qa, qb):
     differing bits (the smallest cell holding both); bin: L-infinity distance of the
     two centroids' midpoint from that cell's centre, in ``CENTRE_BINS`` steps of its
     half side."""
-    low = (1 << 32) - 1
-    ax = qa >> 32
+    low = (1 << CELL_BITS) - 1
+    ax = qa >> CELL_BITS
     ay = qa & low
-    bx = qb >> 32
+    bx = qb >> CELL_BITS
     by = qb & low
     level = math.frexp(float((ax ^ bx) | (ay ^ by)))[1]  # bit length (exact below 2**53)
     b = 0
@@ -261,7 +261,8 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
     Fills ``order`` (visit order: new triangle i is input triangle ``order[i]``),
     ``TREE_BIT`` of ``flags`` on both halves of each tree edge, and ``firsts`` (new
     number of each piece's first); returns the number of pieces. ``queue`` (3 m
-    rows) holds the queue's entries, each a link to the next entry of its class and
+    rows, of which only as many as are ever queued at once are touched: popped rows are
+    reused) holds the queue's entries, each a link to the next entry of its class and
     a half-edge into a triangle not reached when queued; stale entries (their
     triangle reached meanwhile) are skipped when popped. A bucket is a stack: the
     newest edge of a class goes first, so the search stays where it is.
@@ -269,6 +270,8 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
     m = qr.shape[0]
     con_class = N_CLASSES - 1
     head = np.full(N_CLASSES, -1, np.int64)
+    free = -1  # popped slots, linked through their first column
+    n_used = 0
     n_seen = 0
     pieces = 0
     for s in range(m):
@@ -276,7 +279,6 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
             continue
         firsts[pieces] = n_seen  # the lowest input triangle of its piece
         pieces += 1
-        n_push = 0
         low = N_CLASSES  # no class below it holds an entry
         t = s
         while t >= 0:
@@ -298,10 +300,15 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
                     g, best_g = best_g, g
                     best_h = h
                 if g >= 0:
-                    queue[n_push, 0] = head[c]
-                    queue[n_push, 1] = g
-                    head[c] = n_push
-                    n_push += 1
+                    slot = free
+                    if slot >= 0:
+                        free = queue[slot, 0]
+                    else:
+                        slot = n_used
+                        n_used += 1
+                    queue[slot, 0] = head[c]
+                    queue[slot, 1] = g
+                    head[c] = slot
                     low = min(low, c)
             t = -1
             if best_g >= 0 and best <= low:
@@ -310,10 +317,15 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
                 flags[best_h] |= TREE_BIT
                 continue
             if best_g >= 0:
-                queue[n_push, 0] = head[best]
-                queue[n_push, 1] = best_g
-                head[best] = n_push
-                n_push += 1
+                slot = free
+                if slot >= 0:
+                    free = queue[slot, 0]
+                else:
+                    slot = n_used
+                    n_used += 1
+                queue[slot, 0] = head[best]
+                queue[slot, 1] = best_g
+                head[best] = slot
                 low = min(low, best)
             while low < N_CLASSES:  # the lowest class edge to a triangle not reached
                 slot = head[low]
@@ -322,6 +334,8 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
                     continue
                 head[low] = queue[slot, 0]
                 g = queue[slot, 1]
+                queue[slot, 0] = free  # the slot is reused: the queue touches little memory
+                free = slot
                 if qr[g // 3, 1] < 0:
                     t = g // 3
                     flags[g] |= TREE_BIT

@@ -67,7 +67,7 @@ def _quadtree_coords(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
     scale = ((1 << K.CELL_BITS) - 1) / span
     c = points[tri].mean(axis=1)
     ij = np.clip(((c - lo) * scale).astype(np.int64), 0, (1 << K.CELL_BITS) - 1)
-    return (ij[:, 0] << 32) | ij[:, 1]
+    return (ij[:, 0] << K.CELL_BITS) | ij[:, 1]
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
