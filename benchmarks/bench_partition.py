@@ -19,10 +19,17 @@ adjacent across an edge):
 Targets: cycle cut / METIS cut <= 1.5 (goal 1.1), every part connected, exact
 balance, partition time <= 1/20 of pymetis's.
 
+Forest table (issue 14's cost): ``_thm24_kernels.spanning_forest`` (the compact tree)
+against a plain breadth-first spanning forest with the same output (renumbered
+triangles, packed half-edge codes; defined here, single-threaded), both on the input
+mesh of each incircle row, alternating, best of ``--repeat`` (at least 5), plus the
+first call of each in this process; target: compact / plain <= 1.2.
+
 Numbering table: bandwidth and profile of the output's vertex matrix as hammesh
 writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
 
     python benchmarks/bench_partition.py [--target 300000] [--repeat 3] [--quick]
+    python benchmarks/bench_partition.py --forest-only --forest-size 1500000   # the forest table alone
 """
 
 from __future__ import annotations
@@ -56,7 +63,95 @@ def _mesh(dom, area: float, target: int, mode: str):
     m_in = target / per_input
     # Triangle's triangles at min angle 30 average about 0.63 x max_area
     mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * m_in))
-    return hammesh.hamiltonian(mesh, mode=mode)
+    return hammesh.hamiltonian(mesh, mode=mode), mesh
+
+
+def _plain_forest_kernel():
+    from numba import njit
+
+    @njit(cache=True, nogil=True)
+    def bfs_forest(tri, twin, is_con, order, rank, via, tri_r, code):
+        """Breadth-first search over free edges from each unreached triangle (input
+        order), numbering triangles as reached, then the packed codes (tree bit on the
+        search's edges). Constrained edges are left out (the compact forest's extra
+        union-find over them is not charged to the peer)."""
+        m = tri.shape[0]
+        rank[:] = -1
+        n_seen = 0
+        head = 0
+        for s in range(m):
+            if rank[s] >= 0:
+                continue
+            rank[s] = n_seen
+            order[n_seen] = s
+            via[n_seen] = -1
+            n_seen += 1
+            while head < n_seen:
+                t = order[head]
+                head += 1
+                for kk in range(3):
+                    g = twin[3 * t + kk]
+                    if g < 0 or is_con[3 * t + kk]:
+                        continue
+                    u = g // 3
+                    if rank[u] < 0:
+                        rank[u] = n_seen
+                        order[n_seen] = u
+                        via[n_seen] = g
+                        n_seen += 1
+        for i in range(m):
+            t = order[i]
+            for kk in range(3):
+                h = 3 * t + kk
+                g = twin[h]
+                bits = 1 if is_con[h] else 0
+                tri_r[i, kk] = tri[t, kk]
+                if g < 0:
+                    code[3 * i + kk] = bits
+                    continue
+                u = g // 3
+                if via[i] == h or via[rank[u]] == g:
+                    bits |= 2
+                code[3 * i + kk] = ((3 * rank[u] + g - 3 * u + 1) << 2) | bits
+        return n_seen
+
+    def plain_forest(tri, twin, is_con):
+        m = len(tri)
+        order, rank, via = (np.empty(m, np.int64) for _ in range(3))
+        tri_r = np.empty_like(tri)
+        code = np.empty(3 * m, np.int64)
+        bfs_forest(tri, twin, is_con, order, rank, via, tri_r, code)
+        return tri_r, code, order
+
+    return plain_forest
+
+
+def _forest_row(name: str, mesh, repeat: int) -> dict:
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess._thm24_kernels import TREE_BIT, spanning_forest
+
+    clean, he, is_con = prepare_mesh(mesh)
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    plain = _plain_forest_kernel()
+    first = {}
+    t = time.perf_counter()
+    f = spanning_forest(tri, twin, is_con, pts)
+    first["compact"] = time.perf_counter() - t
+    t = time.perf_counter()
+    _, pcode, _ = plain(tri, twin, is_con)
+    first["plain"] = time.perf_counter() - t
+    m = len(tri)
+    pieces = len(f.firsts)
+    assert int(((f.code & TREE_BIT) != 0).sum()) == 2 * (m - pieces)  # both are spanning forests
+    best = {"compact": np.inf, "plain": np.inf}
+    for _ in range(max(repeat, 5)):
+        t = time.perf_counter()
+        spanning_forest(tri, twin, is_con, pts)
+        best["compact"] = min(best["compact"], time.perf_counter() - t)
+        t = time.perf_counter()
+        plain(tri, twin, is_con)
+        best["plain"] = min(best["plain"], time.perf_counter() - t)
+    return {"domain": name, "triangles": m, "first": first, "best": best}
 
 
 def _metis(k: int, xadj: np.ndarray, adjncy: np.ndarray, repeat: int) -> tuple[np.ndarray, float]:
@@ -139,14 +234,39 @@ def _numbering_rows(name, mode, h) -> list[str]:
     return rows
 
 
+def _print_forests(forests: list[dict]) -> None:
+    print("| input mesh | input triangles | compact forest s (first, best) | plain BFS forest s (first, best) "
+          "| compact / plain (best) |")
+    print("|---|---|---|---|---|")
+    for r in forests:
+        f, b = r["first"], r["best"]
+        print(f"| {r['domain']} | {r['triangles']:,} | {f['compact']:.4f}, {b['compact']:.4f} "
+              f"| {f['plain']:.4f}, {b['plain']:.4f} | {b['compact'] / b['plain']:.2f} |")
+    if forests:
+        worst = max(r["best"]["compact"] / r["best"]["plain"] for r in forests)
+        print(f"\nworst compact / plain forest time {worst:.2f} (target <= 1.2)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--target", type=int, default=300_000, help="triangles of each Hamiltonian mesh")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="30 000 triangles, one repeat (a smoke run)")
+    ap.add_argument("--forest-size", type=int, default=0,
+                    help="also time the forests on a unit square of about this many input triangles")
+    ap.add_argument("--forest-only", action="store_true", help="only the forest table")
     args = ap.parse_args()
     if args.quick:
         args.target, args.repeat = 30_000, 1
+    import hammesh
+
+    forests = []
+    if args.forest_size:
+        sq = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+        forests.append(_forest_row("unit square", hammesh.quality_mesh(sq, min_angle=30, max_area=1 / (0.63 * args.forest_size)), args.repeat))
+    if args.forest_only:
+        _print_forests(forests)
+        return
     from scipy.sparse import coo_matrix
 
     from hammesh.partition import dual_edges
@@ -154,7 +274,9 @@ def main() -> None:
     rows, numbering = [], []
     for name, dom, area in _domains():
         for mode in ("incircle", "sparse"):
-            h = _mesh(dom, area, args.target, mode)
+            h, mesh = _mesh(dom, area, args.target, mode)
+            if mode == "incircle":
+                forests.append(_forest_row(name, mesh, args.repeat))
             a, b = dual_edges(h.triangles)
             m = h.n_triangles
             g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
@@ -190,6 +312,8 @@ def main() -> None:
     ok = all(r["connected"] for r in rows) and all(r["imbalance"] <= 1 + 1.0 * r["k"] / r["triangles"] for r in rows)
     print(f"\nworst cut ratio {worst:.2f} (target <= 1.5, goal 1.1); all connected and balanced: {ok}; "
           f"smallest METIS / partition time {slow:.1f} (target >= 20)")
+    print()
+    _print_forests(forests)
     print()
     print("| domain | mode | numbering | bandwidth | profile | seconds |")
     print("|---|---|---|---|---|---|")

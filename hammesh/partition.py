@@ -33,13 +33,13 @@ import dataclasses
 import heapq
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from hammesh import params
-from hammesh.errors import InvalidMeshError
+from hammesh.errors import InvalidMeshError, VerificationError
 from hammesh.halfedge import half_edges
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 
@@ -143,20 +143,118 @@ def part_components(part: np.ndarray, k: int, a: np.ndarray, b: np.ndarray) -> n
     Union-find over the edges ``(a, b)`` inside a part; it shares nothing with how
     the parts were made.
     """
-    return _pieces_per_part(
+    return _check_parts(
         np.ascontiguousarray(part, dtype=np.int64), int(k), np.ascontiguousarray(a, dtype=np.int64),
         np.ascontiguousarray(b, dtype=np.int64),
-    )
+    ).components
+
+
+class _Stretches(NamedTuple):
+    """Result of :func:`_cut_cycles_into`."""
+
+    cut: int  #: dual edges between different parts (exact), -1: an edge joins two cycles
+    bad_edge: int  #: that edge's index (else -1)
 
 
 @njit(cache=True, nogil=True)
-def _pieces_per_part(part, k, a, b):
+def _cut_cycles_into(run_start, lengths, per, base, a, b, part, shifts, sizes):
+    """Cut every cycle into its stretches at the best shift, in one pass (all pieces).
+
+    Cycle r holds rows ``run_start[r] .. + lengths[r]`` and gets ``per[r]`` parts
+    numbered from ``base[r]``; stretch j of it starts at ``s + floor(j n / k)`` (n rows,
+    k parts, shift ``s < n // k``). An edge whose rows are ``x < y`` apart by ``d`` the
+    short way round is cut by a shift iff a start falls on that short side: never two
+    (starts are at least ``n // k`` apart) when ``d <= n // k``, always one when ``d``
+    is larger (they are at most ``ceil(n / k)`` apart), and the long side always holds
+    one. So a difference array over the short sides of the short edges gives, per
+    row, the edges a start there cuts, and the sum over the ``k`` starts of a shift is
+    that shift's exact cut, less the long edges: the best shift is exact, and its cut
+    is the partition's. Fills ``part``, ``shifts`` and ``sizes``.
+    """
+    m = part.shape[0]
+    n_runs = lengths.shape[0]
+    diff = np.zeros(m + 1, np.int64)
+    always = 0
+    for e in range(a.shape[0]):
+        x = min(a[e], b[e])
+        y = max(a[e], b[e])
+        r = 0
+        if n_runs > 1:
+            r = np.searchsorted(run_start, x, side="right") - 1
+            if y >= run_start[r] + lengths[r]:
+                return _Stretches(-1, e)
+        n = lengths[r]
+        k = per[r]
+        if k <= 1:
+            continue
+        s0 = run_start[r]
+        d = y - x
+        short = min(d, n - d)
+        if short > n // k:
+            always += 1
+        elif 2 * d <= n:  # rows x+1 .. y
+            diff[x + 1] += 1
+            diff[y + 1] -= 1
+        else:  # rows y+1 .. end and start .. x
+            diff[y + 1] += 1
+            diff[s0 + n] -= 1
+            diff[s0] += 1
+            diff[x + 1] -= 1
+    run = 0
+    for p in range(m):  # depth, in place: edges a start at row p would cut
+        run += diff[p]
+        diff[p] = run
+    cut = always
+    cost = np.empty(0, np.int64)
+    for r in range(n_runs):
+        n = lengths[r]
+        k = per[r]
+        s0 = run_start[r]
+        q = n // k
+        best = 0
+        if k > 1:
+            if cost.shape[0] < q:
+                cost = np.empty(q, np.int64)
+            cost[:q] = 0
+            for j in range(k):
+                at = s0 + (j * n) // k
+                for s in range(q):
+                    cost[s] += diff[at + s]
+            for s in range(1, q):
+                if cost[s] < cost[best]:
+                    best = s
+            cut += cost[best]
+        shifts[r] = best
+        for j in range(k):  # stretch j: shifted rows floor(j n / k) .. floor((j+1) n / k) - 1
+            lo = (j * n) // k
+            hi = ((j + 1) * n) // k
+            sizes[base[r] + j] = hi - lo
+            for pos in range(lo, hi):
+                p = pos + best
+                if p >= n:
+                    p -= n
+                part[s0 + p] = base[r] + j
+    return _Stretches(cut, -1)
+
+
+class _Check(NamedTuple):
+    """Result of :func:`_check_parts`."""
+
+    components: np.ndarray  #: (k,) edge-connected pieces of each part
+    cut: int  #: edges between different parts, counted
+
+
+@njit(cache=True, nogil=True)
+def _check_parts(part, k, a, b):
+    """Union-find over the edges inside each part, counting the others (the cut)."""
     m = part.shape[0]
     uf = np.arange(m)
+    cut = 0
     for e in range(a.shape[0]):
         x = a[e]
         y = b[e]
         if part[x] != part[y]:
+            cut += 1
             continue
         while uf[x] != x:  # path halving
             uf[x] = uf[uf[x]]
@@ -170,56 +268,7 @@ def _pieces_per_part(part, k, a, b):
     for t in range(m):
         if uf[t] == t:
             count[part[t]] += 1
-    return count
-
-
-@njit(cache=True, nogil=True)
-def _start_depth(n, x, y):
-    """Per cycle position p, the edges a stretch starting at p cuts (short side)."""
-    diff = np.zeros(2 * n + 1, np.int64)
-    for e in range(x.shape[0]):
-        d = y[e] - x[e]
-        if 2 * d > n:  # the short side goes round the cycle's end
-            diff[y[e] + 1] += 1
-            diff[x[e] + n + 1] -= 1
-        else:
-            diff[x[e] + 1] += 1
-            diff[y[e] + 1] -= 1
-    depth = np.zeros(n, np.int64)
-    run = 0
-    for p in range(2 * n):
-        run += diff[p]
-        depth[p % n] += run
-    return depth
-
-
-@njit(cache=True, nogil=True)
-def _shift_costs(depth, k):
-    """Estimated cut of every shift ``s < n // k``: sum of ``depth[s + floor(j n / k)]``."""
-    n = depth.shape[0]
-    q = n // k
-    cost = np.zeros(q, np.int64)
-    for j in range(k):
-        base = (j * n) // k
-        for s in range(q):
-            cost[s] += depth[(base + s) % n]
-    return cost
-
-
-@njit(cache=True, nogil=True)
-def _count_shift_cut(n, k, s, x, y):
-    """Exact cut of the stretches starting at ``s + floor(j n / k)`` (see ``_labels``)."""
-    c = 0
-    for e in range(x.shape[0]):
-        px = x[e] - s
-        if px < 0:
-            px += n
-        py = y[e] - s
-        if py < 0:
-            py += n
-        if ((px + 1) * k - 1) // n != ((py + 1) * k - 1) // n:
-            c += 1
-    return c
+    return _Check(count, cut)
 
 
 def cycle_runs(triangles: np.ndarray) -> np.ndarray:
@@ -264,38 +313,6 @@ def _spread(lengths: np.ndarray, k: int) -> np.ndarray:
     return per
 
 
-def _labels(n: int, k: int, s: int) -> np.ndarray:
-    """Stretch of each of ``n`` cycle positions when the ``k`` stretches start at
-    ``s + floor(j n / k)`` (positions before ``s`` belong to the last one).
-
-    Stretch ``j`` holds the shifted positions ``floor(j n / k) <= p < floor((j+1) n / k)``,
-    that is ``j = floor(((p + 1) k - 1) / n)``.
-    """
-    pos = np.arange(n, dtype=np.int64) - s
-    pos[pos < 0] += n
-    return ((pos + 1) * k - 1) // n
-
-
-def _best_shift(n: int, k: int, x: np.ndarray, y: np.ndarray, tries: int = 1) -> int:
-    """The shift ``s`` of the starts ``s + floor(j n / k)`` cutting the fewest edges.
-
-    ``x < y``: positions of the edges' rows along a cycle of ``n`` rows. The cut of
-    every shift is estimated at once (an edge is counted at each start on its short
-    side, a difference array; exact unless two starts are closer than the edge's
-    span); the ``tries`` best estimates and the shift 0 are then counted exactly, so
-    the result never cuts more than the plain starts.
-    """
-    if k <= 1 or n <= k:
-        return 0
-    cost = _shift_costs(_start_depth(n, x, y), k)
-    best, best_cut = 0, -1
-    for s in [0, *np.argsort(cost, kind="stable")[:tries].tolist()]:
-        cut = _count_shift_cut(n, k, int(s), x, y)
-        if best_cut < 0 or cut < best_cut:
-            best, best_cut = int(s), cut
-    return best
-
-
 def partition(
     h: HamiltonianMesh | Mesh, k: int, *, check: bool = True, edges: tuple[np.ndarray, np.ndarray] | None = None
 ) -> Partition:
@@ -338,40 +355,45 @@ def partition(
         raise InvalidMeshError("the mesh has no triangles to partition")
     lengths = np.asarray(h.components, dtype=np.int64) if isinstance(h, HamiltonianMesh) else cycle_runs(tri)
     a, b = _interior_edges(tri, len(h.points)) if edges is None else edges
-    run_start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    run_of = np.repeat(np.arange(len(lengths)), lengths)
-    if len(lengths) > 1 and (run_of[a] != run_of[b]).any():
-        raise InvalidMeshError(
-            "two cycles share an edge: the triangles are not in Hamiltonian cycle order (one cycle per piece)"
-        )
+    a = np.ascontiguousarray(a, dtype=np.int64)
+    b = np.ascontiguousarray(b, dtype=np.int64)
+    run_start = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
     part = np.empty(m, np.int64)
     shifts = np.zeros(len(lengths), np.int64)
-    if k >= len(lengths):
-        per = _spread(lengths, k)
-        base = np.concatenate([[0], np.cumsum(per)[:-1]])
-        if len(lengths) > 1:
-            order = np.argsort(run_of[a], kind="stable")
-            bounds = np.searchsorted(run_of[a][order], np.arange(len(lengths) + 1))
-        for r, (n, kr) in enumerate(zip(lengths.tolist(), per.tolist())):  # per piece, not per triangle
-            s0 = int(run_start[r])
-            if len(lengths) > 1:
-                sel = order[bounds[r] : bounds[r + 1]]
-                s = _best_shift(n, kr, a[sel] - s0, b[sel] - s0)
-            else:
-                s = _best_shift(n, kr, a, b)
-            shifts[r] = s
-            part[s0 : s0 + n] = base[r] + _labels(n, kr, s)
-    else:  # fewer parts than pieces: whole pieces, largest first onto the lightest part
-        per = np.zeros(len(lengths), np.int64)
+    sizes = np.zeros(k, np.int64)
+    fewer = k < len(lengths)  # fewer parts than pieces: whole pieces share parts
+    per = np.ones(len(lengths), np.int64) if fewer else _spread(lengths, k)
+    base = np.concatenate([[0], np.cumsum(per)[:-1]]).astype(np.int64)
+    cut, bad = _cut_cycles_into(
+        run_start, lengths, per, base, a, b, part, shifts, np.zeros(int(per.sum()), np.int64) if fewer else sizes
+    )
+    if cut < 0:
+        raise InvalidMeshError(
+            f"two cycles share an edge (triangles {int(a[bad])} and {int(b[bad])}): the triangles are not in "
+            "Hamiltonian cycle order (one cycle per piece)"
+        )
+    if fewer:  # largest piece first onto the lightest part (part = piece so far)
         load = [(0, j) for j in range(k)]
-        for r in np.argsort(-lengths, kind="stable").tolist():
+        owner = np.empty(len(lengths), np.int64)
+        for r in np.argsort(-lengths, kind="stable").tolist():  # per piece, not per triangle
             w, j = heapq.heappop(load)
-            part[run_start[r] : run_start[r] + lengths[r]] = j
+            owner[r] = j
             heapq.heappush(load, (w + int(lengths[r]), j))
+        part = owner[part]
+        sizes[:] = np.bincount(part, minlength=k)
+        per = np.zeros(len(lengths), np.int64)
+        cut = -1
     t1 = time.perf_counter()
-    sizes = np.bincount(part, minlength=k).astype(np.int64)
-    cut = edge_cut(part, a, b)
-    comps = part_components(part, k, a, b) if check else np.ones(k, np.int64)
+    if check or cut < 0:
+        comps, counted = _check_parts(part, k, a, b)
+        if check and cut >= 0 and counted != cut:
+            raise VerificationError(f"internal error: the parts cut {counted} edges, the shift's count said {cut}")
+        cut = int(counted)
+        if not check:
+            comps = np.ones(k, np.int64)
+    else:
+        comps = np.ones(k, np.int64)
+    cut = int(cut)
     t2 = time.perf_counter()
     report = {
         "k": int(k),
@@ -382,7 +404,7 @@ def partition(
         "connected": bool((comps == 1).all()) if check else None,
         "part_components_max": int(comps.max()),
         "pieces": int(len(lengths)),
-        "parts_per_piece": [int(x) for x in per] if k >= len(lengths) else [],
+        "parts_per_piece": [] if fewer else [int(x) for x in per],
         "shifts": [int(x) for x in shifts],
         "seconds": {"partition": t1 - t0, "check": t2 - t1},
     }

@@ -10,6 +10,7 @@ reported by return codes.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -111,37 +112,44 @@ CON_BIT = 1
 
 
 #: Bits per axis of the quadtree that orders the tree's edges (:func:`spanning_forest`).
-CELL_BITS = 16
+CELL_BITS = 15
 #: Distance classes per quadtree level: edges nearer a cell's centre are taken first.
 CENTRE_BINS = 16
+#: Edge classes: ``level * CENTRE_BINS + bin`` for free edges, then one for constrained ones.
+N_CLASSES = (CELL_BITS + 1) * CENTRE_BINS + 1
 
 
 def spanning_forest(tri, twin, is_con, points=None):
     """A compact spanning forest of the dual graph that crosses the fewest constrained edges.
 
-    Kruskal's algorithm over the dual edges, in the order of a quadtree of the
-    triangles' centroids (``CELL_BITS`` levels; issue 14): an edge's *level* is the
-    size of the smallest quadtree cell holding both its triangles, and edges are taken
-    level by level, smallest first, and inside a level nearest the centre of that cell
-    first (``CENTRE_BINS`` classes, a counting sort). So the triangles of every cell
-    whose dual is connected form one subtree, and a cell's four children hang together
-    at its centre: the Thm 2.4 walk around the tree then sweeps the domain cell by
-    cell, as a space-filling curve does, and any stretch of the cycle covers a
-    compact region (``hammesh.partition`` cuts the cycle into parts). The first idea,
-    edges ordered by Hilbert key alone, links sibling cells anywhere along their
-    shared side; the walk then goes out along one side of the chain of cells and
-    back along the other, and a stretch of the cycle is a thin strip (cuts 6-16x
-    METIS's instead of 1.5x).
+    Prim's algorithm with a bucket queue over edge *classes* (issue 14): a free dual
+    edge's class is its *level*, the size of the smallest cell of a quadtree of the
+    triangles' centroids (``CELL_BITS`` levels) holding both its triangles, refined by
+    how near the edge lies to the centre of that cell (``CENTRE_BINS`` steps); every
+    constrained edge is in the last class. The search always takes the lowest class
+    edge out of its tree, so the result is a minimum spanning forest for these
+    weights, and like every one of them it holds, for each class, a spanning forest
+    of the edges up to that class: the triangles of every quadtree cell whose dual is
+    connected form one subtree, and a cell's four children hang together near its
+    centre. The Thm 2.4 walk around the tree then sweeps the domain cell by cell like
+    a space-filling curve, and a stretch of the cycle covers a compact region
+    (``hammesh.partition`` cuts the cycle into parts). Constrained edges come last, so
+    the forest crosses exactly ``regions - pieces`` of them (a region is a piece of
+    the dual cut along every constrained edge), the fewest possible.
 
-    Constrained edges come after all free ones, each taken only if it joins two
-    trees: the forest crosses exactly ``regions - pieces`` of them (a region is a
-    piece of the dual cut along every constrained edge), the fewest possible.
+    Session 5 grew the same tree by Kruskal's algorithm (a counting sort of the edges
+    by class, a union-find); Prim's search needs neither, visits the triangles in
+    the order the walk will (cell by cell: the new numbering, so the walk reads memory
+    nearly in sequence) and costs about what a plain breadth-first search does
+    (``benchmarks/bench_partition.py`` measures both). The first idea, edges ordered
+    by Hilbert key alone, links sibling cells anywhere along their shared side; the
+    walk then goes out along one side of the chain of cells and back along the other,
+    and a stretch of the cycle is a thin strip (cuts 6-16x METIS's instead of 1.5x).
 
-    The triangles come back renumbered in the quadtree's Morton order (a counting
-    sort): the union-find and the walk, which sweeps cell by cell, then read memory
-    nearly in sequence; the half-edge data is packed into one array so that the walk
-    reads one word per half-edge. Without ``points`` the input order is kept and
-    the edges are taken in that order.
+    The search starts each piece at its lowest input triangle; the triangles come
+    back renumbered in the order it reached them, and the half-edge data is packed
+    into one array so that the walk reads one word per half-edge. Without
+    ``points`` every free edge is in one class (a plain search).
 
     Parameters
     ----------
@@ -169,242 +177,188 @@ def spanning_forest(tri, twin, is_con, points=None):
     """
     m = tri.shape[0]
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
-    qx = np.zeros(m, np.int64)
-    qy = np.zeros(m, np.int64)
-    if points is not None and m:
-        lo = points.min(axis=0)
-        span = float((points.max(axis=0) - lo).max())
+    # per input triangle: its quadtree coordinates and (-1 until reached) its new
+    # number, side by side: the search reads both of a neighbour at once
+    qr = np.empty((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
+    if points is None or not m:
+        qr[:, 0] = 0
+        qr[:, 1] = -1
+    else:
+        x0, y0, x1, y1 = _bounds(points)
+        span = max(x1 - x0, y1 - y0)
         scale = ((1 << CELL_BITS) - 1) / span if span > 0 else 0.0
-        run_all([
-            (lambda a=a, b=b: _cell_coords_into(points, tri, lo[0], lo[1], scale, qx, qy, a, b)) for a, b in spans
-        ])
-    # everything below runs in the quadtree's (Morton) order of the triangles: the
-    # union-find and the walk then read memory nearly in sequence
-    rank = np.empty(m, np.int64)
-    qr = np.empty(m, np.int64)  # coordinates in the new order, packed (x << 32 | y)
-    order, key = _morton_order(qx, qy, MORTON_BITS, rank, qr)
+        run_all([(lambda a=a, b=b: _cell_coords_into(points, tri, x0, y0, scale, qr, a, b)) for a, b in spans])
+    order = np.empty(m, np.int64)
+    firsts = np.empty(m, np.int64)
+    flags = is_con.astype(np.uint8)  # CON_BIT; the search adds TREE_BIT
+    queue = np.empty((3 * m, 2), index_dtype(3 * m))  # the bucket queue: (link, entry) pairs
+    pieces = _prim_into(twin, flags, qr, order, firsts, queue)
     tri_r = np.empty_like(tri)
     code = np.empty(3 * m, np.int64)
-    bucket = np.empty(3 * m, np.int16)
-    run_all([
-        (lambda a=a, b=b: _pack_code_into(tri, twin, is_con, order, rank, qr, tri_r, code, bucket, a, b))
-        for a, b in spans
-    ])
-    levels = CELL_BITS + 1
-    edges, group = _bucket_order(bucket, 2 * levels, CENTRE_BINS)
-    uf = np.arange(m)
-    kr = key[order]
-    if len(spans) > 1:
-        # below SPLIT_LEVEL an edge stays inside one cell of that level: the two halves
-        # of the Morton order, cut between two such cells, are joined in two threads
-        # (disjoint union-find entries); the coarse and the constrained edges after
-        shift = 2 * (SPLIT_LEVEL - (CELL_BITS - MORTON_BITS))
-        cut = int(np.searchsorted(kr >> shift, kr[m // 2] >> shift))
-        at = [np.searchsorted(edges[group[v] : group[v + 1]], 3 * cut) + group[v] for v in range(SPLIT_LEVEL)]
-        low = np.concatenate([edges[group[v] : at[v]] for v in range(SPLIT_LEVEL)])
-        high = np.concatenate([edges[at[v] : group[v + 1]] for v in range(SPLIT_LEVEL)])
-        run_all([(lambda e=e: _kruskal_into(code, e, bucket, kr, uf)) for e in (low, high)])
-        edges = edges[group[SPLIT_LEVEL] :]
-    _kruskal_into(code, edges, bucket, kr, uf)
-    firsts = _piece_firsts(uf, order, rank)
+    run_all([(lambda a=a, b=b: _pack_code_into(tri, twin, flags, order, qr, tri_r, code, a, b)) for a, b in spans])
     split = np.flatnonzero((code & 3) == 3).astype(np.int64)
-    return Forest(tri_r, code, order, firsts, split)
-
-
-#: Bits per axis of the Morton order the forest is built in (a counting sort).
-MORTON_BITS = 10
-#: Edges below this level are joined in two threads, one per half of the Morton order.
-SPLIT_LEVEL = 13
+    return Forest(tri_r, code, order, firsts[:pieces].copy(), split)
 
 
 @njit(cache=True, nogil=True)
-def _morton_order(qx, qy, bits, rank, qr):
-    """Triangles sorted by the Morton key of their top ``bits`` bits per axis (stable),
-    and the key of each triangle; ``rank`` gets each triangle's place, ``qr`` its
-    coordinates packed ``x << 32 | y`` at that place."""
-    m = qx.shape[0]
-    shift = CELL_BITS - bits
-    n_keys = 1 << (2 * bits)
-    key = np.empty(m, np.int64)
-    start = np.zeros(n_keys + 1, np.int64)
-    for t in range(m):
-        x = qx[t] >> shift
-        y = qy[t] >> shift
-        k = 0
-        for j in range(bits):
-            k |= ((x >> j) & 1) << (2 * j) | ((y >> j) & 1) << (2 * j + 1)
-        key[t] = k
-        start[k + 1] += 1
-    for k in range(n_keys):
-        start[k + 1] += start[k]
-    order = np.empty(m, np.int64)
-    for t in range(m):
-        k = key[t]
-        order[start[k]] = t
-        rank[t] = start[k]
-        qr[start[k]] = (qx[t] << 32) | qy[t]
-        start[k] += 1
-    return order, key
+def _bounds(points):
+    """``(x0, y0, x1, y1)``: the bounding box of the points, one pass."""
+    x0 = x1 = points[0, 0]
+    y0 = y1 = points[0, 1]
+    for i in range(1, points.shape[0]):
+        x = points[i, 0]
+        y = points[i, 1]
+        x0 = min(x0, x)
+        x1 = max(x1, x)
+        y0 = min(y0, y)
+        y1 = max(y1, y)
+    return x0, y0, x1, y1
 
 
 @njit(cache=True, nogil=True)
-def _pack_code_into(tri, twin, is_con, order, rank, qr, tri_r, code, bucket, lo, hi):
-    """Rows ``tri_r`` and ``code`` of new triangles lo..hi (tree bit clear), and the
-    Kruskal class of each dual edge from its lower half-edge (-1 on the others).
-
-    Class: ``level * CENTRE_BINS + bin`` (level: bit length of the two triangles'
-    differing coordinate bits; bin: L-infinity distance of the edge's midpoint from
-    the centre of that level's cell, in ``CENTRE_BINS`` steps of its half side), plus
-    ``(CELL_BITS + 1) * CENTRE_BINS`` for a constrained edge.
-    """
-    con_base = (CELL_BITS + 1) * CENTRE_BINS
-    low = (1 << 32) - 1
-    for i in range(lo, hi):
-        t = order[i]
-        ax = qr[i] >> 32
-        ay = qr[i] & low
-        for kk in range(3):
-            h = 3 * t + kk
-            j = 3 * i + kk
-            tri_r[i, kk] = tri[t, kk]
-            g = twin[h]
-            con = is_con[h]
-            if g < 0:
-                code[j] = CON_BIT if con else 0
-                bucket[j] = -1
-                continue
-            u = g // 3
-            gj = 3 * rank[u] + g - 3 * u
-            code[j] = ((gj + 1) << 2) | (CON_BIT if con else 0)
-            if gj < j:
-                bucket[j] = -1
-                continue
-            bx = qr[gj // 3] >> 32
-            by = qr[gj // 3] & low
-            diff = (ax ^ bx) | (ay ^ by)
-            level = 0
-            while diff > 0:
-                level += 1
-                diff >>= 1
-            b = 0
-            if level > 0:
-                # twice the midpoint against twice the centre of the level's cell
-                cx = ((ax >> level) << level) + (1 << (level - 1))
-                cy = ((ay >> level) << level) + (1 << (level - 1))
-                d = max(abs(ax + bx - 2 * cx), abs(ay + by - 2 * cy))  # <= 2 ** level
-                b = min(CENTRE_BINS - 1, (d * CENTRE_BINS) >> level)
-            c = level * CENTRE_BINS + b
-            if con:
-                c += con_base
-            bucket[j] = c
-
-
-@njit(cache=True, nogil=True)
-def _cell_coords_into(points, tri, x0, y0, scale, qx, qy, lo, hi):
-    """Quadtree coordinates (``CELL_BITS`` bits) of the centroids of triangles lo..hi."""
+def _cell_coords_into(points, tri, x0, y0, scale, qr, lo, hi):
+    """Quadtree coordinates (``CELL_BITS`` bits) of the centroids of triangles lo..hi,
+    packed ``x << CELL_BITS | y`` into ``qr[:, 0]``; ``qr[:, 1] = -1``."""
     top = (1 << CELL_BITS) - 1
     for t in range(lo, hi):
         x = (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0
         y = (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0
-        ix = int((x - x0) * scale)
-        iy = int((y - y0) * scale)
-        qx[t] = min(max(ix, 0), top)
-        qy[t] = min(max(iy, 0), top)
+        ix = min(max(int((x - x0) * scale), 0), top)
+        iy = min(max(int((y - y0) * scale), 0), top)
+        qr[t, 0] = (ix << CELL_BITS) | iy
+        qr[t, 1] = -1  # not reached yet (``_prim_into``)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def edge_class(qa, qb):
+    """Class of the free dual edge between triangles at packed quadtree coordinates
+    ``qa``, ``qb``: ``level * CENTRE_BINS + bin``. Level: bit length of the coordinates'
+    differing bits (the smallest cell holding both); bin: L-infinity distance of the
+    two centroids' midpoint from that cell's centre, in ``CENTRE_BINS`` steps of its
+    half side."""
+    low = (1 << CELL_BITS) - 1
+    ax = qa >> CELL_BITS
+    ay = qa & low
+    bx = qb >> CELL_BITS
+    by = qb & low
+    level = math.frexp(float((ax ^ bx) | (ay ^ by)))[1]  # bit length (exact below 2**53)
+    b = 0
+    if level > 0:
+        # twice the midpoint against twice the centre of the level's cell
+        cx = ((ax >> level) << level) + (1 << (level - 1))
+        cy = ((ay >> level) << level) + (1 << (level - 1))
+        d = max(abs(ax + bx - 2 * cx), abs(ay + by - 2 * cy))  # <= 2 ** level
+        b = min(CENTRE_BINS - 1, (d * CENTRE_BINS) >> level)
+    return level * CENTRE_BINS + b
 
 
 @njit(cache=True, nogil=True)
-def _bucket_order(bucket, n_bins, per_bin):
-    """The lower half-edges, sorted by ``bucket // per_bin`` (stable counting sort), and
-    where each class starts among them (``n_bins + 1`` offsets)."""
-    start = np.zeros(n_bins + 1, np.int64)
-    for h in range(bucket.shape[0]):
-        if bucket[h] >= 0:
-            start[bucket[h] // per_bin + 1] += 1
-    for b in range(n_bins):
-        start[b + 1] += start[b]
-    group = start.copy()
-    out = np.empty(start[n_bins], np.int64)
-    for h in range(bucket.shape[0]):
-        if bucket[h] >= 0:
-            b = bucket[h] // per_bin
-            out[start[b]] = h
-            start[b] += 1
-    return out, group
+def _prim_into(twin, flags, qr, order, firsts, queue):
+    """Prim's search over the dual graph with a bucket queue of edge classes.
 
-
-@njit(cache=True, nogil=True)
-def _cell_of(key, h, level):
-    """The quadtree cell at ``level`` of half-edge h's triangle (from its Morton key)."""
-    shift = 2 * (level - (CELL_BITS - MORTON_BITS))
-    return key[h // 3] >> shift if shift > 0 else key[h // 3]
-
-
-@njit(cache=True, nogil=True)
-def _kruskal_into(code, edges, bucket, key, uf):
-    """Kruskal over ``edges`` (grouped by level, Morton order inside a level): set the
-    tree bit of (both halves of) each edge that joins two trees of ``uf``.
-
-    A level's edges come cell by cell (a cell is a run of the Morton order), and
-    inside a cell by their centre class (a counting sort of the run): the same tree
-    as one global sort by class, since cells of one level share no triangle, but the
-    union-find's reads stay in one cell's stretch of memory.
+    ``qr[t]``: quadtree coordinates of triangle t and its new number (-1 on entry,
+    set here).
+    Fills ``order`` (visit order: new triangle i is input triangle ``order[i]``),
+    ``TREE_BIT`` of ``flags`` on both halves of each tree edge, and ``firsts`` (new
+    number of each piece's first); returns the number of pieces. ``queue`` (3 m
+    rows, of which only as many as are ever queued at once are touched: popped rows are
+    reused) holds the queue's entries, each a link to the next entry of its class and
+    a half-edge into a triangle not reached when queued; stale entries (their
+    triangle reached meanwhile) are skipped when popped. A bucket is a stack: the
+    newest edge of a class goes first, so the search stays where it is.
     """
-    n = edges.shape[0]
-    levels = CELL_BITS + 1
-    run = np.empty(n, np.int64)
-    count = np.zeros(CENTRE_BINS + 1, np.int64)
-    e = 0
-    while e < n:
-        lev = bucket[edges[e]] // CENTRE_BINS
-        level = lev % levels
-        cell = _cell_of(key, edges[e], level)
-        f = e + 1
-        while f < n and bucket[edges[f]] // CENTRE_BINS == lev and _cell_of(key, edges[f], level) == cell:
-            f += 1
-        count[:] = 0
-        for x in range(e, f):
-            count[bucket[edges[x]] % CENTRE_BINS + 1] += 1
-        for b in range(CENTRE_BINS):
-            count[b + 1] += count[b]
-        for x in range(e, f):
-            b = bucket[edges[x]] % CENTRE_BINS
-            run[count[b]] = edges[x]
-            count[b] += 1
-        for x in range(f - e):
-            h = run[x]
-            g = (code[h] >> 2) - 1
-            ra = h // 3
-            while uf[ra] != ra:  # path halving
-                uf[ra] = uf[uf[ra]]
-                ra = uf[ra]
-            rb = g // 3
-            while uf[rb] != rb:
-                uf[rb] = uf[uf[rb]]
-                rb = uf[rb]
-            if ra != rb:
-                if ra < rb:
-                    uf[rb] = ra
+    m = qr.shape[0]
+    con_class = N_CLASSES - 1
+    head = np.full(N_CLASSES, -1, np.int64)
+    free = -1  # popped slots, linked through their first column
+    n_used = 0
+    n_seen = 0
+    pieces = 0
+    for s in range(m):
+        if qr[s, 1] >= 0:
+            continue
+        firsts[pieces] = n_seen  # the lowest input triangle of its piece
+        pieces += 1
+        low = N_CLASSES  # no class below it holds an entry
+        t = s
+        while t >= 0:
+            qr[t, 1] = n_seen
+            order[n_seen] = t
+            n_seen += 1
+            qt = qr[t, 0]
+            best = N_CLASSES  # the lightest edge out of t goes next without queueing if
+            best_g = -1  # nothing queued is lighter (most tree edges)
+            best_h = -1
+            for kk in range(3):
+                h = 3 * t + kk
+                g = twin[h]
+                if g < 0 or qr[g // 3, 1] >= 0:
+                    continue
+                c = con_class if flags[h] & CON_BIT else edge_class(qt, qr[g // 3, 0])
+                if c < best:
+                    c, best = best, c
+                    g, best_g = best_g, g
+                    best_h = h
+                if g >= 0:
+                    slot = free
+                    if slot >= 0:
+                        free = queue[slot, 0]
+                    else:
+                        slot = n_used
+                        n_used += 1
+                    queue[slot, 0] = head[c]
+                    queue[slot, 1] = g
+                    head[c] = slot
+                    low = min(low, c)
+            t = -1
+            if best_g >= 0 and best <= low:
+                t = best_g // 3
+                flags[best_g] |= TREE_BIT
+                flags[best_h] |= TREE_BIT
+                continue
+            if best_g >= 0:
+                slot = free
+                if slot >= 0:
+                    free = queue[slot, 0]
                 else:
-                    uf[ra] = rb
-                code[h] |= TREE_BIT
-                code[g] |= TREE_BIT
-        e = f
+                    slot = n_used
+                    n_used += 1
+                queue[slot, 0] = head[best]
+                queue[slot, 1] = best_g
+                head[best] = slot
+                low = min(low, best)
+            while low < N_CLASSES:  # the lowest class edge to a triangle not reached
+                slot = head[low]
+                if slot < 0:
+                    low += 1
+                    continue
+                head[low] = queue[slot, 0]
+                g = queue[slot, 1]
+                queue[slot, 0] = free  # the slot is reused: the queue touches little memory
+                free = slot
+                if qr[g // 3, 1] < 0:
+                    t = g // 3
+                    flags[g] |= TREE_BIT
+                    flags[twin[g]] |= TREE_BIT
+                    break
+    return pieces
 
 
 @njit(cache=True, nogil=True)
-def _piece_firsts(uf, order, rank):
-    """Per piece (tree of ``uf``), its lowest input triangle's new number, the pieces
-    in that order."""
-    m = uf.shape[0]
-    low = np.full(m, m, np.int64)  # per root: lowest input triangle
-    for i in range(m):
-        r = find_root(uf, i)
-        if order[i] < low[r]:
-            low[r] = order[i]
-    firsts = np.sort(low[low < m])
-    for j in range(firsts.shape[0]):
-        firsts[j] = rank[firsts[j]]
-    return firsts
+def _pack_code_into(tri, twin, flags, order, qr, tri_r, code, lo, hi):
+    """Rows ``tri_r`` and ``code`` of new triangles lo..hi: twins renumbered
+    (``qr[:, 1]``), the constrained and tree bits from ``flags``."""
+    for i in range(lo, hi):
+        t = order[i]
+        for kk in range(3):
+            h = 3 * t + kk
+            tri_r[i, kk] = tri[t, kk]
+            g = twin[h]
+            if g < 0:
+                code[3 * i + kk] = flags[h]
+                continue
+            u = g // 3
+            code[3 * i + kk] = ((3 * qr[u, 1] + g - 3 * u + 1) << 2) | flags[h]
 
 
 def split_slots(tri, code, mid_h=None):

@@ -58,3 +58,54 @@ def test_forest_spans_each_piece_crossing_fewest_constrained_edges(dom, threads:
     assert ((f.code & 3) == 3).sum() == 2 * (regions - pieces)  # fewest crossings
     np.testing.assert_array_equal(f.split, np.flatnonzero((f.code & 3) == 3))
     assert len(f.firsts) == pieces
+
+
+def _quadtree_coords(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Packed quadtree coordinates of the centroids (numpy, as the forest defines them)."""
+    lo = points.min(axis=0)
+    span = float((points.max(axis=0) - lo).max())
+    scale = ((1 << K.CELL_BITS) - 1) / span
+    c = points[tri].mean(axis=1)
+    ij = np.clip(((c - lo) * scale).astype(np.int64), 0, (1 << K.CELL_BITS) - 1)
+    return (ij[:, 0] << K.CELL_BITS) | ij[:, 1]
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(dom=star_pslg(), area=st.sampled_from([0.003, 0.01, 0.03]))
+def test_forest_is_a_minimum_spanning_forest_of_the_edge_classes(dom, area: float) -> None:
+    """Prim's search is exact: the tree's total class equals a minimum spanning
+    forest's (networkx), constrained edges weighing more than any free one; each piece
+    starts at its lowest input triangle, pieces in that order."""
+    mesh = hammesh.quality_mesh(dom, min_angle=25, max_area=area)
+    clean, he, is_con = prepare_mesh(mesh)
+    f = K.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
+    q = _quadtree_coords(clean.points, clean.triangles)
+    m = clean.n_triangles
+    g = nx.Graph()
+    g.add_nodes_from(range(m))
+    for h in np.flatnonzero(he.twin > np.arange(3 * m)):
+        a, b = h // 3, he.twin[h] // 3
+        w = K.N_CLASSES - 1 if is_con[h] else K.edge_class(int(q[a]), int(q[b]))
+        g.add_edge(a, b, w=w)
+    best = sum(d["w"] for _, _, d in nx.minimum_spanning_edges(g, weight="w", data=True))
+    tw = (f.code >> 2) - 1
+    tree = np.flatnonzero(((f.code & K.TREE_BIT) != 0) & (np.arange(3 * m) < tw))
+    ours = sum(g.edges[f.order[h // 3], f.order[tw[h] // 3]]["w"] for h in tree)
+    assert ours == best
+    lowest = sorted(min(c) for c in nx.connected_components(g))
+    assert f.order[f.firsts].tolist() == lowest
+
+
+def test_forest_without_points_is_a_plain_spanning_forest() -> None:
+    mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [2, 0], [2, 1], [0, 1]]), min_angle=25,
+                                max_area=0.01)
+    clean, he, is_con = prepare_mesh(mesh)
+    f = K.spanning_forest(clean.triangles, he.twin, is_con)
+    m = clean.n_triangles
+    tw = (f.code >> 2) - 1
+    tree = np.flatnonzero((f.code & K.TREE_BIT) != 0)
+    t = nx.Graph()
+    t.add_nodes_from(range(m))
+    t.add_edges_from((h // 3, tw[h] // 3) for h in tree)
+    assert len(tree) == 2 * (m - 1) and nx.is_tree(t)
+    assert f.order[f.firsts].tolist() == [0]

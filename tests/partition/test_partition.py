@@ -95,6 +95,36 @@ def test_compact_cycle_cuts_few_edges(disc_incircle) -> None:
     assert p.edge_cut < 4.0 * np.sqrt(8 * h.n_triangles), (p.edge_cut, h.n_triangles, len(a))
 
 
+def _every_shift_cut(n: int, k: int, a: np.ndarray, b: np.ndarray) -> list[int]:
+    """Cut of the stretches starting at ``s + floor(j n / k)``, for every ``s < n // k``."""
+    cuts = []
+    for s in range(n // k):
+        starts = [s + (j * n) // k for j in range(k)]
+        label = np.empty(n, np.int64)
+        for j, lo in enumerate(starts):
+            hi = starts[j + 1] if j + 1 < k else n + s
+            label[np.arange(lo, hi) % n] = j
+        cuts.append(int((label[a] != label[b]).sum()))
+    return cuts
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(dom=star_pslg(), k=st.integers(2, 9), mode=st.sampled_from(["sparse", "incircle"]))
+def test_best_shift_is_the_best_of_all_shifts(dom, k: int, mode: str) -> None:
+    """The difference-array count is exact: the shift taken cuts as few edges as the
+    best of every shift relabelled and recounted by brute force, and the cut it
+    reports without the check is the recount."""
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=25, max_area=0.05), mode=mode)
+    if len(h.components) != 1 or h.n_triangles < 2 * k:
+        return
+    a, b = dual_edges(h.triangles)
+    every = _every_shift_cut(h.n_triangles, k, a, b)
+    p = partition(h, k, edges=(a, b), check=False)
+    assert p.edge_cut == min(every) == every[p.report["shifts"][0]]
+    assert p.edge_cut == int((p.part[a] != p.part[b]).sum())
+    assert p.report["connected"] is None
+
+
 def test_best_shift_never_worse_than_plain_starts(disc_incircle) -> None:
     h = disc_incircle
     m = h.n_triangles
@@ -102,6 +132,7 @@ def test_best_shift_never_worse_than_plain_starts(disc_incircle) -> None:
     for k in (3, 8, 20):
         plain = (np.arange(m) * k) // m
         assert partition(h, k).edge_cut <= int((plain[a] != plain[b]).sum())
+        assert partition(h, k, check=False).edge_cut == partition(h, k).edge_cut
 
 
 def test_mesh_read_back_from_a_file_is_partitioned(tmp_path, disc_incircle) -> None:
