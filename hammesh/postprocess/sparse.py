@@ -50,8 +50,8 @@ certificate as its pairing claim.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -64,6 +64,8 @@ from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
 from hammesh.halfedge import HalfEdges
+from hammesh import threads
+from hammesh.threads import row_ranges, run_all
 
 __all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "KEEP"]
 
@@ -79,6 +81,11 @@ PLACE_ITERS = 6
 PLACE_REACH_DEG = 10.0
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
+#: candidate joins per thread below which scoring runs in one call (a placement is
+#: ~100x the work of an angle row, so threads pay off far below THREAD_MIN_ROWS)
+SCORE_MIN_ROWS = 20_000
+#: edges per thread below which judging the edges for the cover runs in one call
+EDGE_MIN_ROWS = 50_000
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 
@@ -108,27 +115,37 @@ def _incenters(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
 
 def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Smallest and largest angle (radians) of every triangle (2D or 3D points)."""
+    lo, hi, _, _ = triangle_facts(points, triangles)
+    return lo, hi
+
+
+def triangle_facts(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
+    """Smallest and largest angle of every triangle, the worst radius ratio and its row.
+
+    One threaded pass (``_join_kernels.triangle_min_max_into``): the angles the local
+    rule needs and the report's worst circumradius / (2 x inradius) (``row`` -1 if
+    no triangle is worse than equilateral).
+    """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     lo = np.empty(len(tri))
     hi = np.empty(len(tri))
-    _j.triangle_min_max_into(pts, tri, lo, hi)
-    return lo, hi
+    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri))
+    worst, row = 1.0, -1
+    for a, w, r in parts:
+        if r >= 0 and w > worst:
+            worst, row = float(w), a + int(r)
+    return lo, hi, worst, row
 
 
-def _threaded(fill, n: int, min_rows: int = 20000) -> None:
-    """Run the ``_into`` kernel call ``fill(lo, hi)`` over ``[0, n)`` in two halves at once.
+def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
+    """``fill(lo, hi)`` over one contiguous row range per core, side by side (``hammesh.threads``).
 
-    The kernels are ``nogil``: two threads fill disjoint slices of the outputs.
+    The kernels are ``nogil`` and fill disjoint slices of their outputs; below
+    ``min_rows`` rows per thread (default ``hammesh.threads.THREAD_MIN_ROWS``) one call.
     """
-    if n < min_rows:
-        fill(0, n)
-        return
-    half = n // 2
-    with ThreadPoolExecutor(1) as pool:
-        other = pool.submit(fill, half, n)
-        fill(0, half)
-        other.result()
+    spans = row_ranges(n, threads.THREAD_MIN_ROWS if min_rows is None else min_rows)
+    return run_all([partial(fill, lo, hi) for lo, hi in spans])
 
 
 def _join_order(
@@ -269,7 +286,7 @@ def sparse_cycles(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     con = np.ascontiguousarray(is_con, dtype=np.bool_)
     n, m = len(pts), len(tri)
-    amin_t, amax_t = triangle_angles(pts, tri)
+    amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri)
     hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
@@ -279,12 +296,13 @@ def sparse_cycles(
         inner = np.flatnonzero(tw > np.arange(3 * m))
         g_ok = np.zeros(len(inner), np.bool_)
         if pts.shape[1] == 2:
-            _threaded(
+            _row_pass(
                 lambda lo, hi_: _j.good_edges_into(
                     pts, tri, tw, con, inner[lo:hi_], amin_t, float(keep), hi, bool(swaps), bool(edge_splits),
                     g_ok[lo:hi_],
                 ),
                 len(inner),
+                EDGE_MIN_ROWS,
             )
         else:
             g_kind = np.zeros(len(inner), np.int8)
@@ -303,7 +321,7 @@ def sparse_cycles(
     else:
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     n_unc0 = cover.n_uncovered
-    pts0, tri0, m0 = pts, tri, m
+    pts0, m0 = pts, m
     orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_fan = _fans(
@@ -316,13 +334,14 @@ def sparse_cycles(
     newmin = np.empty(len(cand))
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
-    _threaded(
+    _row_pass(
         lambda lo, hi_: _j.score_joins_into(
             pts, tri, tw, con, cand[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
             bool(edge_splits), int(place_iters), math.radians(PLACE_REACH_DEG), ckind[lo:hi_], slack[lo:hi_],
             newmin[lo:hi_], newmax[lo:hi_], point[lo:hi_],
         ),
         len(cand),
+        SCORE_MIN_ROWS,
     )
     t_of, u_of = cand // 3, tw[cand] // 3
     whole = (newmin >= keep * min_angle) & (newmax <= hi)
@@ -370,9 +389,12 @@ def sparse_cycles(
         out, claim, kind, pm, n_improve, n_moved = _improve(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi, n0_input, keep
         )
-    quality = local_quality(all_pts, out, pm, kind, keep, hi)
+    # the kept rows' worst radius ratio is the input's if its worst triangle is kept
+    kept = kind == 3
+    worst_kept = ratio_row >= 0 and bool((orig_of[parent[kept]] == ratio_row).any())
+    quality = local_quality(all_pts, out, pm, kind, keep, hi, ratio_in if worst_kept else None)
     quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
-    quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts0, tri0))
+    quality["radius_ratio_input"] = float(ratio_in)
     parent = orig_of[parent]
     counts_d = {
         "cycles_before_merging": int(cover.n_cycles),
@@ -415,6 +437,7 @@ def local_quality(
     kind: np.ndarray,
     keep: float,
     max_allowed: float,
+    kept_ratio: float | None = None,
 ) -> dict:
     """The local quality rule's counts over the output (issue 13, item 1).
 
@@ -422,10 +445,13 @@ def local_quality(
     smallest angle is under ``keep`` x ``parents_min`` (the smallest angle of the
     input triangles it replaces), *above the max rule* if its largest angle exceeds
     ``max_allowed`` (radians); both up to a relative 1e-9. Only the new rows are
-    measured (a kept row has its input triangle's angles).
+    measured (a kept row has its input triangle's angles); ``kept_ratio`` is the worst
+    radius ratio of the kept rows if the caller knows it (else measured here).
     """
     new = np.flatnonzero(kind != 3)
-    lo, hi = triangle_angles(points, triangles[new])
+    lo, hi, ratio, _ = triangle_facts(points, triangles[new])
+    if kept_ratio is None:
+        kept_ratio = triangle_facts(points, triangles[kind == 3])[2]
     pm = parents_min[new]
     below = lo < keep * pm * (1.0 - 1e-9)
     above = hi > max_allowed * (1.0 + 1e-9)
@@ -436,7 +462,7 @@ def local_quality(
         "worst_parent_ratio": float((lo / pm).min()) if len(new) else 1.0,
         "min_angle_new_deg": math.degrees(float(lo.min())) if len(new) else None,
         "max_angle_new_deg": math.degrees(float(hi.max())) if len(new) else None,
-        "radius_ratio_output": float(_j.worst_radius_ratio(points, triangles)),
+        "radius_ratio_output": float(max(ratio, kept_ratio)),
     }
 
 

@@ -1,0 +1,100 @@
+"""Sparse mode's fused and threaded passes (issue 13, speed) give what the plain ones gave."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+import hammesh
+from hammesh import threads
+from tests.helpers import bundled_domain
+
+
+def _reference_facts(pts: np.ndarray, tri: np.ndarray):
+    """Angles and R / 2r of every triangle by numpy alone (law of cosines, Heron-free)."""
+    p = pts[tri]
+    e = [p[:, (k + 2) % 3] - p[:, (k + 1) % 3] for k in range(3)]  # edge opposite corner k
+    ln = [np.linalg.norm(x, axis=1) for x in e]
+    ang = []
+    for k in range(3):
+        u = p[:, (k + 1) % 3] - p[:, k]
+        v = p[:, (k + 2) % 3] - p[:, k]
+        c = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+        ang.append(np.arccos(np.clip(c, -1, 1)))
+    ang = np.stack(ang, axis=1)
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    a16 = 4 * (np.einsum("ij,ij->i", u, u) * np.einsum("ij,ij->i", v, v) - np.einsum("ij,ij->i", u, v) ** 2)
+    ratio = ln[0] * ln[1] * ln[2] * (ln[0] + ln[1] + ln[2]) / a16
+    return ang.min(axis=1), ang.max(axis=1), ratio
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    pts=st.integers(2, 3).flatmap(
+        lambda d: arrays(np.float64, (24, d), elements=st.floats(-10, 10, allow_nan=False).map(lambda x: round(x, 3)))
+    ),
+    seed=st.integers(0, 2**16),
+    min_rows=st.sampled_from([1, 3, 1000]),
+)
+def test_triangle_facts_match_numpy(pts, seed, min_rows) -> None:
+    from hammesh.postprocess.sparse import triangle_facts
+
+    rng = np.random.default_rng(seed)
+    tri = np.array([rng.choice(len(pts), 3, replace=False) for _ in range(12)], dtype=np.int64)
+    p = pts[tri]
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    gram = np.einsum("ij,ij->i", u, u) * np.einsum("ij,ij->i", v, v) - np.einsum("ij,ij->i", u, v) ** 2
+    lens = np.linalg.norm(np.concatenate([u, v]), axis=1)
+    tri = tri[(gram > 1e-3 * lens.reshape(2, -1).max(axis=0) ** 4)]  # well away from degenerate
+    if len(tri) == 0:
+        return
+    old = threads.THREAD_MIN_ROWS
+    threads.THREAD_MIN_ROWS = min_rows  # several row ranges side by side, or one
+    try:
+        lo, hi, worst, row = triangle_facts(pts, tri)
+    finally:
+        threads.THREAD_MIN_ROWS = old
+    rlo, rhi, ratio = _reference_facts(pts, tri)
+    np.testing.assert_allclose(lo, rlo, atol=1e-7)
+    np.testing.assert_allclose(hi, rhi, atol=1e-7)
+    assert worst == pytest.approx(max(1.0, ratio.max()), rel=1e-6)
+    if row >= 0:
+        assert ratio[row] == pytest.approx(ratio.max(), rel=1e-6)
+
+
+def test_degenerate_row_has_infinite_ratio() -> None:
+    from hammesh.postprocess.sparse import triangle_facts
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [2.0, 0.0]])
+    lo, hi, worst, row = triangle_facts(pts, np.array([[0, 1, 2], [0, 1, 3]]))
+    assert worst == np.inf and row == 1
+
+
+@pytest.mark.parametrize("name", ["A", "square_circle_hole"])
+def test_report_ratio_equals_a_full_measure(name: str) -> None:
+    """The output's radius ratio (kept rows known from the input's worst) is the full one."""
+    from hammesh.postprocess._join_kernels import worst_radius_ratio
+
+    m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=None)
+    for keep in (0.9, 0.0):
+        h = hammesh.hamiltonian(m, keep=keep)
+        assert h.report["radius_ratio_output"] == pytest.approx(worst_radius_ratio(h.points, h.triangles), rel=1e-12)
+        assert h.report["radius_ratio_input"] == pytest.approx(worst_radius_ratio(m.points, m.triangles), rel=1e-12)
+
+
+def test_threaded_scoring_gives_the_same_mesh(monkeypatch) -> None:
+    """Scoring and judging in many row ranges side by side changes nothing."""
+    from hammesh.postprocess import sparse
+
+    m = hammesh.quality_mesh(bundled_domain("face"), min_angle=30, max_area=None)
+    one = hammesh.hamiltonian(m)
+    monkeypatch.setattr(sparse, "SCORE_MIN_ROWS", 7)
+    monkeypatch.setattr(sparse, "EDGE_MIN_ROWS", 11)
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 13)
+    many = hammesh.hamiltonian(m)
+    np.testing.assert_array_equal(one.triangles, many.triangles)
+    np.testing.assert_array_equal(one.points, many.points)
+    assert one.report["below_parent_rule"] == many.report["below_parent_rule"]
