@@ -387,7 +387,8 @@ def sparse_cycles(
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
         out, claim, kind, pm, n_improve, n_moved = _improve(
-            all_pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi, n0_input, keep
+            all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
+            n0_input, keep,
         )
     # the kept rows' worst radius ratio is the input's if its worst triangle is kept
     kept = kind == 3
@@ -466,38 +467,24 @@ def local_quality(
     }
 
 
-def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi, first_steiner, keep):
+def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, first_mid, hi,
+             first_steiner, keep):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
-    regions; ``con`` over ``tri``) or a half of one split at its midpoint.
+    regions; ``con`` over ``tri``) or a half of one split at its midpoint
+    (``_improve_kernels.pinned_output_edges``, from each row's parents).
     """
-    n_all = len(pts)
-    m = len(tri)
-    inner = np.flatnonzero(con & (tw >= 0))
-    a = tri.reshape(-1)[inner]
-    b = tri[np.arange(m).repeat(3).reshape(m, 3), (np.arange(3)[None, :] + 1) % 3].reshape(-1)[inner]
-    keys = [np.minimum(a, b) * n_all + np.maximum(a, b)]
-    if len(mid_a):
-        ma, mb = np.minimum(mid_a, mid_b), np.maximum(mid_a, mid_b)
-        split = np.isin(ma * n_all + mb, keys[0])
-        mv = first_mid + np.arange(len(mid_a))
-        for end in (ma, mb):
-            keys.append(np.minimum(end, mv)[split] * n_all + np.maximum(end, mv)[split])
-    pin_keys = np.concatenate(keys)
-    o0 = out.reshape(-1)
-    o1 = out[:, [1, 2, 0]].reshape(-1)
-    pinned = np.isin(np.minimum(o0, o1) * n_all + np.maximum(o0, o1), pin_keys)
+    pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
     out = np.ascontiguousarray(out, dtype=np.int64).copy()
     twin = np.ascontiguousarray(claim, dtype=np.int64).copy()
     kind = kind.copy()
     pm = np.ascontiguousarray(pm, dtype=np.float64).copy()
+    lengths = np.ascontiguousarray(lengths, dtype=np.int64)
     starts = np.cumsum(lengths) - lengths
-    run_start = np.repeat(starts, lengths).astype(np.int64)
-    run_len = np.repeat(lengths, lengths).astype(np.int64)
     n_flips = n_moved = 0
     for _ in range(IMPROVE_ROUNDS):
-        n_flips += _ik.improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, float(hi), 4 * len(out) + 16)
+        n_flips += _ik.improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16)
         if first_steiner >= len(pts):
             break
         moved = _ik.smooth_steiner(pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS)

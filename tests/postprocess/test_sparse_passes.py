@@ -10,7 +10,7 @@ from hypothesis.extra.numpy import arrays
 
 import hammesh
 from hammesh import threads
-from tests.helpers import bundled_domain
+from tests.helpers import bundled_domain, plate_with_loops, square
 
 
 def _reference_facts(pts: np.ndarray, tri: np.ndarray):
@@ -98,3 +98,54 @@ def test_threaded_scoring_gives_the_same_mesh(monkeypatch) -> None:
     np.testing.assert_array_equal(one.triangles, many.triangles)
     np.testing.assert_array_equal(one.points, many.points)
     assert one.report["below_parent_rule"] == many.report["below_parent_rule"]
+
+
+def _pinned_by_keys(out, tri, tw, con, mid_a, mid_b, first_mid, n_all):
+    """The output's pinned half-edges by vertex-pair keys (what sparse mode did before)."""
+    m = len(tri)
+    inner = np.flatnonzero(con & (tw >= 0))
+    a = tri.reshape(-1)[inner]
+    b = tri[:, [1, 2, 0]].reshape(-1)[inner]
+    keys = [np.minimum(a, b) * n_all + np.maximum(a, b)]
+    if len(mid_a):
+        ma, mb = np.minimum(mid_a, mid_b), np.maximum(mid_a, mid_b)
+        split = np.isin(ma * n_all + mb, keys[0])
+        mv = first_mid + np.arange(len(mid_a))
+        for end in (ma, mb):
+            keys.append(np.minimum(end, mv)[split] * n_all + np.maximum(end, mv)[split])
+    o0, o1 = out.reshape(-1), out[:, [1, 2, 0]].reshape(-1)
+    assert m == len(tri)
+    return np.isin(np.minimum(o0, o1) * n_all + np.maximum(o0, o1), np.concatenate(keys))
+
+
+@pytest.mark.parametrize("name", ["loops", "regions", "la"])
+def test_pinned_output_edges_from_parents_equal_the_key_search(name: str, monkeypatch) -> None:
+    from hammesh.postprocess import _improve_kernels as ik
+    from hammesh.postprocess import sparse
+
+    seen = []
+    real = ik.pinned_output_edges
+
+    def spy(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
+        got = real(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b)
+        seen.append((got.copy(), _pinned_by_keys(out, tri, twin, con, mid_a, mid_b, first_mid, int(out.max()) + 1)))
+        return got
+
+    monkeypatch.setattr(sparse._ik, "pinned_output_edges", spy)
+    if name == "loops":  # constrained loops inside a plate
+        dom = plate_with_loops(3)
+    elif name == "regions":  # edges between two regions are pinned too
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    else:
+        dom = bundled_domain(name)
+    scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
+    for area in (0.01 * scale, 0.002 * scale):
+        m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+        hammesh.hamiltonian(m)
+    assert seen
+    for got, want in seen:
+        np.testing.assert_array_equal(got, want)
+    if name != "la":
+        assert any(w.any() for _, w in seen)
