@@ -682,24 +682,89 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
 
 
 @njit(cache=True, nogil=True)
-def _corners_within(ax, ay, bx, by, cx, cy, cos_lo, cos_hi):
-    """Are all three angles of the planar triangle (a, b, c) within [lo, hi]?
+def _cos_at(ox, oy, qx, qy, rx, ry):
+    """Cosine of the angle at o of the planar triangle (o, q, r) (2 if degenerate)."""
+    ux = qx - ox
+    uy = qy - oy
+    vx = rx - ox
+    vy = ry - oy
+    nn = (ux * ux + uy * uy) * (vx * vx + vy * vy)
+    if nn <= 0.0:
+        return 2.0
+    return (ux * vx + uy * vy) / math.sqrt(nn)
 
-    By cosines, ``lo <= angle <= hi`` iff ``cos hi <= cos angle <= cos lo``: one
-    square root per corner instead of an arctangent, and the first corner out stops.
+
+@njit(cache=True, nogil=True)
+def _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
+    """Does the swap or the midpoint split over half-edge ``h`` meet the rule?
+
+    By corner cosines (``lo <= angle <= hi`` iff ``cos hi <= cos <= cos lo``), the
+    corners a join cuts first (they fail most often), and only the corners it
+    changes: in a midpoint split the corners at ``a`` and ``b`` are t's and u's own
+    (within the rule by definition) and the two angles at the midpoint on each side
+    are supplementary (cosines of opposite sign), so six square roots decide a split
+    instead of twelve.
     """
-    for k in range(3):
-        if k == 0:
-            ux, uy, vx, vy = bx - ax, by - ay, cx - ax, cy - ay
-        elif k == 1:
-            ux, uy, vx, vy = cx - bx, cy - by, ax - bx, ay - by
-        else:
-            ux, uy, vx, vy = ax - cx, ay - cy, bx - cx, by - cy
-        nn = math.sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy))
-        if nn <= 0.0:
+    t = h // 3
+    k = h - 3 * t
+    g = twin[h]
+    u = g // 3
+    kg = g - 3 * u
+    a = tri[t, k]
+    b = tri[t, (k + 1) % 3]
+    c = tri[t, (k + 2) % 3]
+    d = tri[u, (kg + 2) % 3]
+    cos_lo = math.cos(keep * min(amin[t], amin[u]))
+    ax = pts[a, 0]
+    ay = pts[a, 1]
+    bx = pts[b, 0]
+    by = pts[b, 1]
+    cx = pts[c, 0]
+    cy = pts[c, 1]
+    dx = pts[d, 0]
+    dy = pts[d, 1]
+    if swaps and not pinned[h]:
+        if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
+            # (a, d, c) and (d, b, c): the cut corners at c and d first, then the merged ones
+            ok = True
+            for j in range(6):
+                if j == 0:
+                    x = _cos_at(cx, cy, ax, ay, dx, dy)
+                elif j == 1:
+                    x = _cos_at(dx, dy, cx, cy, ax, ay)
+                elif j == 2:
+                    x = _cos_at(cx, cy, dx, dy, bx, by)
+                elif j == 3:
+                    x = _cos_at(dx, dy, bx, by, cx, cy)
+                elif j == 4:
+                    x = _cos_at(ax, ay, dx, dy, cx, cy)
+                else:
+                    x = _cos_at(bx, by, cx, cy, dx, dy)
+                if x > cos_lo or x < cos_hi:
+                    ok = False
+                    break
+            if ok:
+                return True
+    if not edge_splits:
+        return False
+    mx = 0.5 * (ax + bx)
+    my = 0.5 * (ay + by)
+    for j in range(6):
+        if j == 0:  # at c in (a, M, c), then in (M, b, c)
+            x = _cos_at(cx, cy, ax, ay, mx, my)
+        elif j == 1:
+            x = _cos_at(cx, cy, mx, my, bx, by)
+        elif j == 2:  # at d in (M, a, d), then in (b, M, d)
+            x = _cos_at(dx, dy, mx, my, ax, ay)
+        elif j == 3:
+            x = _cos_at(dx, dy, bx, by, mx, my)
+        elif j == 4:  # at M on t's side; (M, b, c) has its supplement
+            x = _cos_at(mx, my, cx, cy, ax, ay)
+        else:  # at M on u's side
+            x = _cos_at(mx, my, ax, ay, dx, dy)
+        if x > cos_lo or x < cos_hi:
             return False
-        c = (ux * vx + uy * vy) / nn
-        if c > cos_lo or c < cos_hi:
+        if j >= 4 and (-x > cos_lo or -x < cos_hi):
             return False
     return True
 
@@ -709,43 +774,24 @@ def good_edges_into(pts, tri, twin, pinned, he, amin, keep, hi, swaps, edge_spli
     """``good[i]``: does the swap or the midpoint split over half-edge ``he[i]`` meet the rule?
 
     Planar only; the yes/no of :func:`score_joins_into` without placement, by cosines
-    (``_corners_within``), for every edge of a mesh (the cover's matching prefers
-    these edges, see ``cycle_cover``).
+    (:func:`_edge_meets_rule`).
     """
     cos_hi = math.cos(hi)
     for i in range(he.shape[0]):
-        h = he[i]
-        t = h // 3
-        k = h - 3 * t
+        good[i] = _edge_meets_rule(pts, tri, twin, pinned, he[i], amin, keep, cos_hi, swaps, edge_splits)
+
+
+@njit(cache=True, nogil=True)
+def good_half_edges_into(pts, tri, twin, pinned, amin, keep, hi, swaps, edge_splits, lo, hi_h, good):
+    """:func:`good_edges_into` for every inner edge with a half-edge ``h`` in ``[lo, hi_h)``, ``h < twin[h]``.
+
+    Sets ``good[h]`` and ``good[twin[h]]`` (both halves; ``good`` starts all False): no
+    list of inner edges, no scatter afterwards. Threads may share ``good``: each edge
+    is judged (and its two bytes written) by the one thread holding its lower half.
+    """
+    cos_hi = math.cos(hi)
+    for h in range(lo, hi_h):
         g = twin[h]
-        u = g // 3
-        kg = g - 3 * u
-        a = tri[t, k]
-        b = tri[t, (k + 1) % 3]
-        c = tri[t, (k + 2) % 3]
-        d = tri[u, (kg + 2) % 3]
-        cos_lo = math.cos(keep * min(amin[t], amin[u]))
-        ax = pts[a, 0]
-        ay = pts[a, 1]
-        bx = pts[b, 0]
-        by = pts[b, 1]
-        cx = pts[c, 0]
-        cy = pts[c, 1]
-        dx = pts[d, 0]
-        dy = pts[d, 1]
-        ok = False
-        if swaps and not pinned[h]:
-            if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
-                ok = _corners_within(ax, ay, dx, dy, cx, cy, cos_lo, cos_hi) and _corners_within(
-                    dx, dy, bx, by, cx, cy, cos_lo, cos_hi
-                )
-        if not ok and edge_splits:
-            mx = 0.5 * (ax + bx)
-            my = 0.5 * (ay + by)
-            ok = (
-                _corners_within(ax, ay, mx, my, cx, cy, cos_lo, cos_hi)
-                and _corners_within(mx, my, bx, by, cx, cy, cos_lo, cos_hi)
-                and _corners_within(bx, by, mx, my, dx, dy, cos_lo, cos_hi)
-                and _corners_within(mx, my, ax, ay, dx, dy, cos_lo, cos_hi)
-            )
-        good[i] = ok
+        if g > h and _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
+            good[h] = True
+            good[g] = True

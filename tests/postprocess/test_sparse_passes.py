@@ -149,3 +149,50 @@ def test_pinned_output_edges_from_parents_equal_the_key_search(name: str, monkey
         np.testing.assert_array_equal(got, want)
     if name != "la":
         assert any(w.any() for _, w in seen)
+
+
+def _cross(u, v) -> float:
+    return float(u[0] * v[1] - u[1] * v[0])
+
+
+def _angles(p, q, r):
+    out = []
+    for o, u, v in ((p, q, r), (q, r, p), (r, p, q)):
+        cu, cv = u - o, v - o
+        out.append(np.arccos(np.clip(cu @ cv / np.linalg.norm(cu) / np.linalg.norm(cv), -1, 1)))
+    return out
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    c=st.tuples(st.floats(-1.5, 2.5), st.floats(0.1, 2.0)),
+    d=st.tuples(st.floats(-1.5, 2.5), st.floats(-2.0, -0.1)),
+    keep=st.floats(0.5, 1.0),
+    swaps=st.booleans(),
+)
+def test_edge_rule_by_cosines_equals_exact_angles(c, d, keep, swaps) -> None:
+    """The cover's yes/no per edge (six corner cosines per join) against all twelve angles."""
+    from hammesh.postprocess import _join_kernels as J
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], c, d])
+    a, b, c, d = pts
+    tri = np.array([[0, 1, 2], [1, 0, 3]])
+    twin = np.array([3, -1, -1, 0, -1, -1])
+    amin = np.array([min(_angles(a, b, c)), min(_angles(b, a, d))])
+    hi = np.radians(125)
+    lo = keep * amin.min()
+    margins = []
+    if swaps and _cross(d - a, c - a) > 0 and _cross(b - d, c - d) > 0:
+        sw = _angles(a, d, c) + _angles(d, b, c)
+        margins.append(min(min(sw) - lo, hi - max(sw)))
+    mid = 0.5 * (a + b)
+    sp = _angles(a, mid, c) + _angles(mid, b, c) + _angles(b, mid, d) + _angles(mid, a, d)
+    margins.append(min(min(sp) - lo, hi - max(sp)))
+    want = max(margins) >= 0
+    good = np.zeros(1, bool)
+    J.good_edges_into(pts, tri, twin, np.zeros(6, bool), np.array([0]), amin, keep, hi, swaps, True, good)
+    if abs(max(margins)) > 1e-9:
+        assert good[0] == want
+    half = np.zeros(6, bool)
+    J.good_half_edges_into(pts, tri, twin, np.zeros(6, bool), amin, keep, hi, swaps, True, 0, 6, half)
+    assert half[0] == half[3] == good[0] and not half[[1, 2, 4, 5]].any()
