@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammesh.postprocess._cover_kernels import _find
+from hammesh.postprocess._thm24_kernels import find_root as _find
 
 PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
 PLAIN, FLIP, MID = 0, 1, 2
@@ -49,6 +49,48 @@ def join_candidates(twin, cyc):
         out[n] = h
         n += 1
     return out[:n]
+
+
+@njit(cache=True, nogil=True)
+def open_candidates(twin, cyc, n_cyc, cand, meets):
+    """Which candidate joins could still be taken after every join that meets the rule?
+
+    ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
+    joins meeting it are taken as :func:`plan_merges` takes them (union-find over the
+    nodes, one join per triangle); a candidate that does not meet it is *open* if its
+    two triangles are still free and its nodes still apart. Only open candidates can
+    gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
+    other): Kruskal never reaches the rest.
+    """
+    m = cyc.shape[0]
+    uf = np.arange(n_cyc + m)
+    used = np.zeros(m, np.bool_)
+    for i in range(cand.shape[0]):
+        if not meets[i]:
+            continue
+        h = cand[i]
+        t = h // 3
+        u = twin[h] // 3
+        if used[t] or used[u]:
+            continue
+        rt = _find(uf, cyc[t])
+        ru = _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        if rt == ru:
+            continue
+        uf[rt] = ru
+        used[t] = True
+        used[u] = True
+    out = np.zeros(cand.shape[0], np.bool_)
+    for i in range(cand.shape[0]):
+        if meets[i]:
+            continue
+        h = cand[i]
+        t = h // 3
+        u = twin[h] // 3
+        if used[t] or used[u]:
+            continue
+        out[i] = _find(uf, cyc[t]) != _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+    return out
 
 
 @njit(cache=True, nogil=True)

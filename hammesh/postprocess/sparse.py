@@ -332,18 +332,35 @@ def sparse_cycles(
     newmin = np.empty(len(cand))
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
-    _row_pass(
-        lambda lo, hi_: _j.score_joins_into(
-            pts, tri, tw, con, cand[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
-            bool(edge_splits), int(place_iters), math.radians(PLACE_REACH_DEG), ckind[lo:hi_], slack[lo:hi_],
-            newmin[lo:hi_], newmax[lo:hi_], point[lo:hi_],
-        ),
-        len(cand),
-        SCORE_MIN_ROWS,
-    )
+    def score(rows: np.ndarray, iters: int) -> None:
+        c = cand[rows]
+        parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
+        _row_pass(
+            lambda lo, hi_: _j.score_joins_into(
+                pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
+                bool(edge_splits), iters, math.radians(PLACE_REACH_DEG), *(x[lo:hi_] for x in parts),
+            ),
+            len(c),
+            SCORE_MIN_ROWS,
+        )
+        ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
+
     t_of, u_of = cand // 3, tw[cand] // 3
+    pmin = np.minimum(amin_p[t_of], amin_p[u_of])
+    every = np.arange(len(cand))
+    # judge every candidate unplaced; place a split's point only where Kruskal can
+    # still use the join after all joins meeting the rule unplaced (``open_candidates``)
+    score(every, 0)
+    if place_iters > 0 and edge_splits and pts.shape[1] == 2 and len(cand):
+        whole = (newmin >= keep * min_angle) & (newmax <= hi)
+        order = _join_order(ckind, slack, newmin, pmin, whole)
+        rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
+        first = np.concatenate([order, rest])
+        open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
+        redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]
+        score(np.sort(redo), int(place_iters))
     whole = (newmin >= keep * min_angle) & (newmax <= hi)
-    order = _join_order(ckind, slack, newmin, np.minimum(amin_p[t_of], amin_p[u_of]), whole)
+    order = _join_order(ckind, slack, newmin, pmin, whole)
     no_absorb = np.zeros(m, np.bool_)
     for attempt in range(4):
         if attempt == 3:

@@ -196,3 +196,39 @@ def test_edge_rule_by_cosines_equals_exact_angles(c, d, keep, swaps) -> None:
     half = np.zeros(6, bool)
     J.good_half_edges_into(pts, tri, twin, np.zeros(6, bool), amin, keep, hi, swaps, True, 0, 6, half)
     assert half[0] == half[3] == good[0] and not half[[1, 2, 4, 5]].any()
+
+
+def test_open_candidates_are_those_kruskal_can_still_take() -> None:
+    from hammesh.postprocess._sparse_kernels import open_candidates
+
+    # t0, t1 on cycle 0; t2, t3 on cycle 1; t4 on cycle 2; t5 uncovered
+    cyc = np.array([0, 0, 1, 1, 2, -1])
+    twin = np.full(18, -1)
+    for h, g in [(0, 6), (3, 9), (10, 12), (7, 15)]:
+        twin[h], twin[g] = g, h
+    cand = np.array([0, 3, 10, 7])  # t0-t2 meets; t1-t3 same nodes by then; t3-t4 open; t2-t5: t2 taken
+    meets = np.array([True, False, False, False])
+    np.testing.assert_array_equal(open_candidates(twin, cyc, 3, cand, meets), [False, False, True, False])
+    # nothing meets: every candidate is open
+    assert open_candidates(twin, cyc, 3, cand, np.zeros(4, bool)).all()
+
+
+@pytest.mark.parametrize("name", ["face", "gear"])
+def test_placing_only_open_candidates_loses_nothing(name: str, monkeypatch) -> None:
+    """Placing every candidate's point (as before) gives no better mesh than placing the open ones."""
+    import sys
+    from pathlib import Path
+
+    from hammesh.postprocess import sparse
+
+    sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+    import bench_sparse
+
+    dom = dict(bench_sparse._domains())[name]
+    m = bench_sparse._mesh_at(dom, 4000)
+    lazy = hammesh.hamiltonian(m).report
+    monkeypatch.setattr(sparse._k, "open_candidates", lambda tw, cyc, n, cand, meets: ~meets)
+    every = hammesh.hamiltonian(m).report
+    assert lazy["steiner_points"] <= every["steiner_points"]
+    assert lazy["below_parent_rule"] <= every["below_parent_rule"] + 2
+    assert lazy["min_angle_output_deg"] >= every["min_angle_output_deg"] - 0.5
