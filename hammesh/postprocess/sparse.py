@@ -383,7 +383,7 @@ def sparse_cycles(
     placed = mid_t >= 0
     mids[placed] = point[order][join[mid_t[placed]]]
     all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), mids])
-    out_twin, dup = half_edge_twins(out, len(all_pts))
+    out_twin, dup = _k.output_twins(out, kind, parent, tw, len(all_pts))
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of row {int(dup) // 3} used twice")
     order_rows, lengths, bad = _k.walk_links(link, out_twin)

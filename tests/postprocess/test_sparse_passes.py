@@ -232,3 +232,46 @@ def test_placing_only_open_candidates_loses_nothing(name: str, monkeypatch) -> N
     assert lazy["steiner_points"] <= every["steiner_points"]
     assert lazy["below_parent_rule"] <= every["below_parent_rule"] + 2
     assert lazy["min_angle_output_deg"] >= every["min_angle_output_deg"] - 0.5
+
+
+@pytest.mark.parametrize("name", ["A", "la", "loops", "regions"])
+def test_output_twins_from_the_input_equal_a_full_matching(name: str, monkeypatch) -> None:
+    """Twins of kept rows taken from the input's, the rest matched by end points: as on the whole output."""
+    from hammesh.halfedge import half_edge_twins
+    from hammesh.postprocess import sparse
+
+    seen = []
+    real = sparse._k.output_twins
+
+    def spy(out, kind, parent, twin_in, n_points):
+        got = real(out, kind, parent, twin_in, n_points)
+        seen.append((got, half_edge_twins(out, n_points), (kind != 3).sum()))
+        return got
+
+    monkeypatch.setattr(sparse._k, "output_twins", spy)
+    if name == "loops":
+        dom = plate_with_loops(3)
+    elif name == "regions":
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    else:
+        dom = bundled_domain(name)
+    scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
+    for area in (None, 0.01 * scale, 0.002 * scale):
+        m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+        hammesh.hamiltonian(m)
+    for (tw, bad), (want, want_bad), n_new in seen:
+        assert bad == want_bad == -1 and n_new > 0
+        np.testing.assert_array_equal(tw, want)
+
+
+def test_output_twins_name_an_edge_used_twice() -> None:
+    from hammesh.postprocess._sparse_kernels import output_twins
+
+    out = np.array([[0, 1, 2], [0, 1, 3]])  # edge 0 -> 1 in both rows
+    tw, bad = output_twins(out, np.array([0, 0], np.int8), np.array([0, 1]), np.full(6, -1), 4)
+    assert bad in (0, 3)
+    out = np.array([[0, 1, 2], [1, 0, 3], [1, 0, 4]])  # three rows on edge 0-1
+    tw, bad = output_twins(out, np.array([0, 0, 0], np.int8), np.array([0, 1, 2]), np.full(9, -1), 5)
+    assert bad >= 0
