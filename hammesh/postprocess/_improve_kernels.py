@@ -106,6 +106,12 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     n_mid = mid_a.shape[0]
     pinned = np.zeros(3 * k_rows, np.bool_)
     for r in range(k_rows):
+        t = parent[r]
+        if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
+            for j in range(3):  # a row kept whole: its parent's edges, in order
+                h = 3 * t + j
+                pinned[3 * r + j] = con[h] and twin[h] >= 0
+            continue
         for j in range(3):
             x = out[r, j]
             y = out[r, (j + 1) % 3]
@@ -225,8 +231,8 @@ def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x):
 
 
 @njit(cache=True, nogil=True)
-def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_flips):
-    """Cycle-keeping Lawson flips around the rows with ``kind != 3`` (module docstring).
+def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_flips, rows):
+    """Cycle-keeping Lawson flips around ``rows`` (the new ones, ``kind != 3``; module docstring).
 
     ``starts``, ``lengths``: the runs (cycles) of rows. Modifies ``out``, ``twin`` (the
     output's half-edge twins), ``pinned``, ``pm`` (each row's parents' smallest angle:
@@ -234,17 +240,9 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
     place. Returns the number of flips. The work stack holds the new rows and grows
     with the flips (not sized for the whole mesh).
     """
-    k = out.shape[0]
-    top = 0
-    for r in range(k):
-        if kind[r] != 3:
-            top += 1
+    top = rows.shape[0]
     stack = np.empty(2 * top + 64, np.int64)
-    top = 0
-    for r in range(k):
-        if kind[r] != 3:
-            stack[top] = r
-            top += 1
+    stack[:top] = rows
     n = 0
     while top > 0 and n < max_flips:
         top -= 1
@@ -267,8 +265,11 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
 
 
 @njit(cache=True, nogil=True)
-def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows):
     """Move each free Steiner point to a better place in its star (in place).
+
+    ``new_rows``: every row that can hold a Steiner point (those of kind != 3; a row
+    kept whole has input corners only).
 
     Amenta, Bern & Eppstein's optimal point placement (see ``_join_kernels``):
     ``compass_search`` maximises the star's slack (smallest angle minus ``keep`` x its
@@ -281,9 +282,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
     point can move towards the whole angles. Returns the number of points moved.
     """
     n_pts = pts.shape[0]
-    k = out.shape[0]
     cnt = np.zeros(n_pts - first + 1, np.int64)
-    for r in range(k):
+    for r in new_rows:
         for j in range(3):
             v = out[r, j]
             if v >= first:
@@ -292,7 +292,7 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
         cnt[i] += cnt[i - 1]
     rows = np.empty(cnt[-1], np.int64)
     fill = cnt[:-1].copy()
-    for r in range(k):
+    for r in new_rows:
         for j in range(3):
             v = out[r, j]
             if v >= first:

@@ -505,10 +505,16 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     starts = np.cumsum(lengths) - lengths
     n_flips = n_moved = 0
     for _ in range(IMPROVE_ROUNDS):
-        n_flips += _ik.improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16)
+        new = np.flatnonzero(kind != 3)  # flips make kept rows new: taken again each round
+        n_flips += _ik.improve_flips(
+            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new
+        )
         if first_steiner >= len(pts):
             break
-        moved = _ik.smooth_steiner(pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS)
+        new = np.flatnonzero(kind != 3)
+        moved = _ik.smooth_steiner(
+            pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new
+        )
         n_moved += moved
         if moved == 0:
             break
