@@ -390,14 +390,16 @@ def sparse_cycles(
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
     # runs in the order of their lowest input triangle; twins renumbered as the claim
-    key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
-    order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, np.argsort(key, kind="stable"), out_twin)
-    out, parent, partner, kind = out[order_rows], parent[order_rows], partner[order_rows], kind[order_rows]
+    if len(lengths) > 1:
+        key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
+        run_order = np.argsort(key, kind="stable")
+    else:
+        run_order = np.zeros(len(lengths), np.int64)
+    order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, run_order, out_twin)
+    # rows in cycle order, with each row's parents' smallest angle (pm)
+    out, parent, partner, kind, pm = _k.rows_in_order(order_rows, out, parent, partner, kind, amin_p)
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
-    pm = amin_p[parent]  # each row's parents' smallest angle
-    has = partner >= 0
-    pm[has] = np.minimum(pm[has], amin_p[partner[has]])
     n_improve = n_moved = 0
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
