@@ -79,10 +79,79 @@ def _set_edge(twin, pinned, h, g, pin):
 
 
 @njit(cache=True, nogil=True)
-def _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x):
+def _input_edge(tri, t, x, y):
+    """Half-edge of input triangle ``t`` from ``x`` to ``y`` or back (-1 if none)."""
+    if t < 0:
+        return -1
+    for k in range(3):
+        a = tri[t, k]
+        b = tri[t, (k + 1) % 3]
+        if (a == x and b == y) or (a == y and b == x):
+            return 3 * t + k
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
+    """Which output half-edges lie on a pinned interior input edge (whole or a half)?
+
+    A pinned input edge (``con``: constrained, or between regions) with a triangle on
+    both sides stays where it is; in the output it is the same edge or, split at its
+    midpoint, its two halves. Every output row lies in its ``parent`` (or, a swapped
+    row, in ``parent`` and ``partner``), so an output edge on an input edge is an edge
+    of one of those two, and a half ends at a midpoint ``>= first_mid`` whose ends are
+    ``mid_a``, ``mid_b``: O(1) per half-edge, no search over the mesh.
+    """
+    k_rows = out.shape[0]
+    n_mid = mid_a.shape[0]
+    pinned = np.zeros(3 * k_rows, np.bool_)
+    for r in range(k_rows):
+        t = parent[r]
+        if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
+            for j in range(3):  # a row kept whole: its parent's edges, in order
+                h = 3 * t + j
+                pinned[3 * r + j] = con[h] and twin[h] >= 0
+            continue
+        for j in range(3):
+            x = out[r, j]
+            y = out[r, (j + 1) % 3]
+            ex = x
+            ey = y
+            if first_mid <= x < first_mid + n_mid:
+                i = x - first_mid
+                if y == mid_a[i]:
+                    ex = mid_b[i]
+                elif y == mid_b[i]:
+                    ex = mid_a[i]
+                else:
+                    continue
+            elif first_mid <= y < first_mid + n_mid:
+                i = y - first_mid
+                if x == mid_a[i]:
+                    ey = mid_b[i]
+                elif x == mid_b[i]:
+                    ey = mid_a[i]
+                else:
+                    continue
+            h = _input_edge(tri, parent[r], ex, ey)
+            if h < 0:
+                h = _input_edge(tri, partner[r], ex, ey)
+            if h >= 0 and con[h] and twin[h] >= 0:
+                pinned[3 * r + j] = True
+    return pinned
+
+
+@njit(cache=True, nogil=True)
+def _run_of(starts, lengths, x):
+    """(start, length) of the run (cycle) holding row ``x``: binary search over ``starts``."""
+    i = np.searchsorted(starts, x, side="right") - 1
+    return starts[i], lengths[i]
+
+
+@njit(cache=True, nogil=True)
+def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x):
     """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps."""
-    s = run_start[x]
-    ln = run_len[x]
+    s, ln = _run_of(starts, lengths, x)
     if ln < 4:
         return -1
     y = x + 1 if x + 1 < s + ln else s
@@ -162,30 +231,32 @@ def _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x):
 
 
 @njit(cache=True, nogil=True)
-def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, max_flips):
-    """Cycle-keeping Lawson flips around the rows with ``kind != 3`` (module docstring).
+def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_flips, rows):
+    """Cycle-keeping Lawson flips around ``rows`` (the new ones, ``kind != 3``; module docstring).
 
-    Modifies ``out``, ``twin`` (the output's half-edge twins), ``pinned``, ``pm`` (each
-    row's parents' smallest angle: a flipped pair gets the smaller of the two) and
-    ``kind`` (4 for a flipped row) in place. Returns the number of flips.
+    ``starts``, ``lengths``: the runs (cycles) of rows. Modifies ``out``, ``twin`` (the
+    output's half-edge twins), ``pinned``, ``pm`` (each row's parents' smallest angle:
+    a flipped pair gets the smaller of the two) and ``kind`` (4 for a flipped row) in
+    place. Returns the number of flips. The work stack holds the new rows and grows
+    with the flips (not sized for the whole mesh).
     """
-    k = out.shape[0]
-    stack = np.empty(k + 2 * max_flips + 4, np.int64)
-    top = 0
-    for r in range(k):
-        if kind[r] != 3:
-            stack[top] = r
-            top += 1
+    top = rows.shape[0]
+    stack = np.empty(2 * top + 64, np.int64)
+    stack[:top] = rows
     n = 0
     while top > 0 and n < max_flips:
         top -= 1
         r = stack[top]
-        s = run_start[r]
-        prev = r - 1 if r > s else s + run_len[r] - 1
+        s, ln = _run_of(starts, lengths, r)
+        prev = r - 1 if r > s else s + ln - 1
         for x in (r, prev):
-            y = _try_flip(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, x)
+            y = _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x)
             if y >= 0:
                 n += 1
+                if top + 2 > stack.shape[0]:
+                    grown = np.empty(2 * stack.shape[0], np.int64)
+                    grown[:top] = stack[:top]
+                    stack = grown
                 stack[top] = x
                 stack[top + 1] = y
                 top += 2
@@ -194,8 +265,11 @@ def improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, hi, max_
 
 
 @njit(cache=True, nogil=True)
-def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows):
     """Move each free Steiner point to a better place in its star (in place).
+
+    ``new_rows``: every row that can hold a Steiner point (those of kind != 3; a row
+    kept whole has input corners only).
 
     Amenta, Bern & Eppstein's optimal point placement (see ``_join_kernels``):
     ``compass_search`` maximises the star's slack (smallest angle minus ``keep`` x its
@@ -208,9 +282,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
     point can move towards the whole angles. Returns the number of points moved.
     """
     n_pts = pts.shape[0]
-    k = out.shape[0]
     cnt = np.zeros(n_pts - first + 1, np.int64)
-    for r in range(k):
+    for r in new_rows:
         for j in range(3):
             v = out[r, j]
             if v >= first:
@@ -219,7 +292,7 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters):
         cnt[i] += cnt[i - 1]
     rows = np.empty(cnt[-1], np.int64)
     fill = cnt[:-1].copy()
-    for r in range(k):
+    for r in new_rows:
         for j in range(3):
             v = out[r, j]
             if v >= first:

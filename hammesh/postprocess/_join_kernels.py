@@ -73,18 +73,58 @@ def _min_max(x, y, z):
 
 @njit(cache=True, nogil=True)
 def triangle_min_max_into(pts, tri, amin, amax):
-    """Fill ``amin[t]``, ``amax[t]`` with the smallest and largest angle of triangle t."""
+    """Fill ``amin[t]``, ``amax[t]`` with the smallest and largest angle of triangle t.
+
+    Returns ``(worst, row)``: the worst circumradius / (2 x inradius) of the rows (1
+    when equilateral, ``inf`` for a degenerate one; :func:`worst_radius_ratio`) and
+    the row that has it (-1 if none is worse than 1), so one pass over the rows gives
+    both the angles and the report's radius ratio.
+    """
     planar = pts.shape[1] == 2
+    worst = 1.0
+    arg = -1
     for t in range(tri.shape[0]):
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
         if planar:
-            lo, hi = _min_max2(pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
+            ax = pts[a, 0]
+            ay = pts[a, 1]
+            ux = pts[b, 0] - ax
+            uy = pts[b, 1] - ay
+            vx = pts[c, 0] - ax
+            vy = pts[c, 1] - ay
+            uu = ux * ux + uy * uy
+            vv = vx * vx + vy * vy
+            uv = ux * vx + uy * vy
+            cr = ux * vy - uy * vx
+            a16 = 4.0 * cr * cr
+            ww = (pts[c, 0] - pts[b, 0]) ** 2 + (pts[c, 1] - pts[b, 1]) ** 2
+            lo, hi = _min_max2(ax, ay, pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
         else:
+            uu = 0.0
+            vv = 0.0
+            uv = 0.0
+            ww = 0.0
+            for i in range(pts.shape[1]):
+                u = pts[b, i] - pts[a, i]
+                v = pts[c, i] - pts[a, i]
+                uu += u * u
+                vv += v * v
+                uv += u * v
+                ww += (pts[c, i] - pts[b, i]) ** 2
+            a16 = 4.0 * (uu * vv - uv * uv)
             lo, hi = _min_max(pts[a], pts[b], pts[c])
         amin[t] = lo
         amax[t] = hi
+        la = math.sqrt(uu)
+        lb = math.sqrt(vv)
+        lc = math.sqrt(ww)
+        x = np.inf if a16 <= 0.0 else la * lb * lc * (la + lb + lc) / a16
+        if x > worst:
+            worst = x
+            arg = t
+    return worst, arg
 
 
 @njit(cache=True, nogil=True)
@@ -162,40 +202,36 @@ def _star4(pa, pb, pc, pd, mm, lo, hi):
 def place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, iters):
     """Compass search for the Steiner point of a split (planar, free edge).
 
-    Starts at the midpoint of ``ab`` and maximises the slack of the four triangles
-    (module docstring); at most ``iters`` step halvings and ``4 x iters`` rounds.
-    Returns
+    The four triangles around the point are the fan over the quadrilateral
+    ``(a, d, b, c)``, so this is :func:`compass_search` (corner cosines, a trial stops
+    at the first corner that cannot beat the best so far: ~4x fewer arctangents than
+    judging every trial on exact angles) started at the midpoint of ``ab`` with step
+    ``|ab| / 4``, at most ``iters`` step halvings and ``4 x iters`` rounds. The result
+    is judged on exact angles and is never worse than the midpoint. Returns
     ``(x, y, slack, smallest angle, largest angle)``.
     """
     mx = 0.5 * (ax + bx)
     my = 0.5 * (ay + by)
-    best, bmin, bmax = _star4_2d(ax, ay, bx, by, cx, cy, dx, dy, mx, my, lo, hi)
+    s0, m0, x0 = _star4_2d(ax, ay, bx, by, cx, cy, dx, dy, mx, my, lo, hi)
+    quad = np.empty((4, 2))
+    quad[0, 0] = ax
+    quad[0, 1] = ay
+    quad[1, 0] = dx
+    quad[1, 1] = dy
+    quad[2, 0] = bx
+    quad[2, 1] = by
+    quad[3, 0] = cx
+    quad[3, 1] = cy
+    poly = np.arange(4)
     step = 0.25 * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
-    halvings = 0
-    rounds = 0
-    while halvings < iters and rounds < 4 * iters:
-        rounds += 1
-        moved = False
-        nx = mx
-        ny = my
-        for k in range(8):
-            tx = mx + step * _DIRS[k, 0]
-            ty = my + step * _DIRS[k, 1]
-            sl, lmin, lmax = _star4_2d(ax, ay, bx, by, cx, cy, dx, dy, tx, ty, lo, hi)
-            if sl > best:
-                best = sl
-                bmin = lmin
-                bmax = lmax
-                nx = tx
-                ny = ty
-                moved = True
-        if moved:
-            mx = nx
-            my = ny
-        else:
-            step *= 0.5
-            halvings += 1
-    return mx, my, best, bmin, bmax
+    px, py, s1, m1, x1 = compass_search(quad, poly, 4, mx, my, lo, hi, step, iters, 4 * iters)
+    if not s1 > s0:
+        return mx, my, s0, m0, x0
+    # the fan's strict-orientation test is per polygon edge; keep the split's own
+    s2, m2, x2 = _star4_2d(ax, ay, bx, by, cx, cy, dx, dy, px, py, lo, hi)
+    if not s2 > s0:
+        return mx, my, s0, m0, x0
+    return px, py, s2, m2, x2
 
 
 @njit(cache=True, nogil=True)
@@ -503,9 +539,8 @@ def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds):
         bx = mx
         by = my
         for k in range(8):
-            ang = 0.25 * math.pi * k
-            tx = mx + step * math.cos(ang)
-            ty = my + step * math.sin(ang)
+            tx = mx + step * _DIRS[k, 0]
+            ty = my + step * _DIRS[k, 1]
             sl = _fan_eval_fast(pts, poly, n, tx, ty, lo, hi, c_lo, c_hi)
             if sl > best:
                 best = sl
@@ -647,24 +682,89 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
 
 
 @njit(cache=True, nogil=True)
-def _corners_within(ax, ay, bx, by, cx, cy, cos_lo, cos_hi):
-    """Are all three angles of the planar triangle (a, b, c) within [lo, hi]?
+def _cos_at(ox, oy, qx, qy, rx, ry):
+    """Cosine of the angle at o of the planar triangle (o, q, r) (2 if degenerate)."""
+    ux = qx - ox
+    uy = qy - oy
+    vx = rx - ox
+    vy = ry - oy
+    nn = (ux * ux + uy * uy) * (vx * vx + vy * vy)
+    if nn <= 0.0:
+        return 2.0
+    return (ux * vx + uy * vy) / math.sqrt(nn)
 
-    By cosines, ``lo <= angle <= hi`` iff ``cos hi <= cos angle <= cos lo``: one
-    square root per corner instead of an arctangent, and the first corner out stops.
+
+@njit(cache=True, nogil=True)
+def _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
+    """Does the swap or the midpoint split over half-edge ``h`` meet the rule?
+
+    By corner cosines (``lo <= angle <= hi`` iff ``cos hi <= cos <= cos lo``), the
+    corners a join cuts first (they fail most often), and only the corners it
+    changes: in a midpoint split the corners at ``a`` and ``b`` are t's and u's own
+    (within the rule by definition) and the two angles at the midpoint on each side
+    are supplementary (cosines of opposite sign), so six square roots decide a split
+    instead of twelve.
     """
-    for k in range(3):
-        if k == 0:
-            ux, uy, vx, vy = bx - ax, by - ay, cx - ax, cy - ay
-        elif k == 1:
-            ux, uy, vx, vy = cx - bx, cy - by, ax - bx, ay - by
-        else:
-            ux, uy, vx, vy = ax - cx, ay - cy, bx - cx, by - cy
-        nn = math.sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy))
-        if nn <= 0.0:
+    t = h // 3
+    k = h - 3 * t
+    g = twin[h]
+    u = g // 3
+    kg = g - 3 * u
+    a = tri[t, k]
+    b = tri[t, (k + 1) % 3]
+    c = tri[t, (k + 2) % 3]
+    d = tri[u, (kg + 2) % 3]
+    cos_lo = math.cos(keep * min(amin[t], amin[u]))
+    ax = pts[a, 0]
+    ay = pts[a, 1]
+    bx = pts[b, 0]
+    by = pts[b, 1]
+    cx = pts[c, 0]
+    cy = pts[c, 1]
+    dx = pts[d, 0]
+    dy = pts[d, 1]
+    if swaps and not pinned[h]:
+        if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
+            # (a, d, c) and (d, b, c): the cut corners at c and d first, then the merged ones
+            ok = True
+            for j in range(6):
+                if j == 0:
+                    x = _cos_at(cx, cy, ax, ay, dx, dy)
+                elif j == 1:
+                    x = _cos_at(dx, dy, cx, cy, ax, ay)
+                elif j == 2:
+                    x = _cos_at(cx, cy, dx, dy, bx, by)
+                elif j == 3:
+                    x = _cos_at(dx, dy, bx, by, cx, cy)
+                elif j == 4:
+                    x = _cos_at(ax, ay, dx, dy, cx, cy)
+                else:
+                    x = _cos_at(bx, by, cx, cy, dx, dy)
+                if x > cos_lo or x < cos_hi:
+                    ok = False
+                    break
+            if ok:
+                return True
+    if not edge_splits:
+        return False
+    mx = 0.5 * (ax + bx)
+    my = 0.5 * (ay + by)
+    for j in range(6):
+        if j == 0:  # at c in (a, M, c), then in (M, b, c)
+            x = _cos_at(cx, cy, ax, ay, mx, my)
+        elif j == 1:
+            x = _cos_at(cx, cy, mx, my, bx, by)
+        elif j == 2:  # at d in (M, a, d), then in (b, M, d)
+            x = _cos_at(dx, dy, mx, my, ax, ay)
+        elif j == 3:
+            x = _cos_at(dx, dy, bx, by, mx, my)
+        elif j == 4:  # at M on t's side; (M, b, c) has its supplement
+            x = _cos_at(mx, my, cx, cy, ax, ay)
+        else:  # at M on u's side
+            x = _cos_at(mx, my, ax, ay, dx, dy)
+        if x > cos_lo or x < cos_hi:
             return False
-        c = (ux * vx + uy * vy) / nn
-        if c > cos_lo or c < cos_hi:
+        if j >= 4 and (-x > cos_lo or -x < cos_hi):
             return False
     return True
 
@@ -674,43 +774,24 @@ def good_edges_into(pts, tri, twin, pinned, he, amin, keep, hi, swaps, edge_spli
     """``good[i]``: does the swap or the midpoint split over half-edge ``he[i]`` meet the rule?
 
     Planar only; the yes/no of :func:`score_joins_into` without placement, by cosines
-    (``_corners_within``), for every edge of a mesh (the cover's matching prefers
-    these edges, see ``cycle_cover``).
+    (:func:`_edge_meets_rule`).
     """
     cos_hi = math.cos(hi)
     for i in range(he.shape[0]):
-        h = he[i]
-        t = h // 3
-        k = h - 3 * t
+        good[i] = _edge_meets_rule(pts, tri, twin, pinned, he[i], amin, keep, cos_hi, swaps, edge_splits)
+
+
+@njit(cache=True, nogil=True)
+def good_half_edges_into(pts, tri, twin, pinned, amin, keep, hi, swaps, edge_splits, lo, hi_h, good):
+    """:func:`good_edges_into` for every inner edge with a half-edge ``h`` in ``[lo, hi_h)``, ``h < twin[h]``.
+
+    Sets ``good[h]`` and ``good[twin[h]]`` (both halves; ``good`` starts all False): no
+    list of inner edges, no scatter afterwards. Threads may share ``good``: each edge
+    is judged (and its two bytes written) by the one thread holding its lower half.
+    """
+    cos_hi = math.cos(hi)
+    for h in range(lo, hi_h):
         g = twin[h]
-        u = g // 3
-        kg = g - 3 * u
-        a = tri[t, k]
-        b = tri[t, (k + 1) % 3]
-        c = tri[t, (k + 2) % 3]
-        d = tri[u, (kg + 2) % 3]
-        cos_lo = math.cos(keep * min(amin[t], amin[u]))
-        ax = pts[a, 0]
-        ay = pts[a, 1]
-        bx = pts[b, 0]
-        by = pts[b, 1]
-        cx = pts[c, 0]
-        cy = pts[c, 1]
-        dx = pts[d, 0]
-        dy = pts[d, 1]
-        ok = False
-        if swaps and not pinned[h]:
-            if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
-                ok = _corners_within(ax, ay, dx, dy, cx, cy, cos_lo, cos_hi) and _corners_within(
-                    dx, dy, bx, by, cx, cy, cos_lo, cos_hi
-                )
-        if not ok and edge_splits:
-            mx = 0.5 * (ax + bx)
-            my = 0.5 * (ay + by)
-            ok = (
-                _corners_within(ax, ay, mx, my, cx, cy, cos_lo, cos_hi)
-                and _corners_within(mx, my, bx, by, cx, cy, cos_lo, cos_hi)
-                and _corners_within(bx, by, mx, my, dx, dy, cos_lo, cos_hi)
-                and _corners_within(mx, my, ax, ay, dx, dy, cos_lo, cos_hi)
-            )
-        good[i] = ok
+        if g > h and _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
+            good[h] = True
+            good[g] = True

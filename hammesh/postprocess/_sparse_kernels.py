@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammesh.postprocess._cover_kernels import _find
+from hammesh.postprocess._thm24_kernels import find_root as _find
 
 PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
 PLAIN, FLIP, MID = 0, 1, 2
@@ -49,6 +49,48 @@ def join_candidates(twin, cyc):
         out[n] = h
         n += 1
     return out[:n]
+
+
+@njit(cache=True, nogil=True)
+def open_candidates(twin, cyc, n_cyc, cand, meets):
+    """Which candidate joins could still be taken after every join that meets the rule?
+
+    ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
+    joins meeting it are taken as :func:`plan_merges` takes them (union-find over the
+    nodes, one join per triangle); a candidate that does not meet it is *open* if its
+    two triangles are still free and its nodes still apart. Only open candidates can
+    gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
+    other): Kruskal never reaches the rest.
+    """
+    m = cyc.shape[0]
+    uf = np.arange(n_cyc + m)
+    used = np.zeros(m, np.bool_)
+    for i in range(cand.shape[0]):
+        if not meets[i]:
+            continue
+        h = cand[i]
+        t = h // 3
+        u = twin[h] // 3
+        if used[t] or used[u]:
+            continue
+        rt = _find(uf, cyc[t])
+        ru = _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        if rt == ru:
+            continue
+        uf[rt] = ru
+        used[t] = True
+        used[u] = True
+    out = np.zeros(cand.shape[0], np.bool_)
+    for i in range(cand.shape[0]):
+        if meets[i]:
+            continue
+        h = cand[i]
+        t = h // 3
+        u = twin[h] // 3
+        if used[t] or used[u]:
+            continue
+        out[i] = _find(uf, cyc[t]) != _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -429,6 +471,75 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
+@njit(cache=True, nogil=True)
+def output_twins(out, kind, parent, twin_in, n_points):
+    """Half-edge twins of the output rows, from the input's where rows are kept whole.
+
+    A row of kind 3 is its parent input triangle, same corners in the same order, so
+    its edge j is the parent's half-edge j and its twin is the input twin's row when
+    that triangle is kept too, -1 on the boundary (a kept triangle's edge is never
+    split). Only the other half-edges -- those of new rows, and kept ones facing a new
+    row, ~1 % of a Triangle mesh -- are matched by their end points (sorted keys).
+    What ``hammesh.halfedge.half_edge_twins`` gives on the whole output, at a fraction
+    of the passes. Returns ``(twin, bad)``: ``bad`` -1 or a half-edge whose edge is
+    used twice in one direction or by three rows.
+    """
+    k = out.shape[0]
+    m_in = twin_in.shape[0] // 3
+    row_of = np.full(m_in, -1, np.int64)
+    for r in range(k):
+        if kind[r] == 3:
+            row_of[parent[r]] = r
+    twin = np.empty(3 * k, np.int64)
+    rest = np.empty(3 * k, np.int64)
+    n = 0
+    for r in range(k):
+        if kind[r] == 3:
+            t = parent[r]
+            for j in range(3):
+                g = twin_in[3 * t + j]
+                if g < 0:
+                    twin[3 * r + j] = -1
+                    continue
+                ru = row_of[g // 3]
+                if ru >= 0:
+                    twin[3 * r + j] = 3 * ru + g % 3
+                else:
+                    rest[n] = 3 * r + j
+                    n += 1
+        else:
+            for j in range(3):
+                rest[n] = 3 * r + j
+                n += 1
+    keys = np.empty(n, np.int64)
+    for i in range(n):
+        h = rest[i]
+        r = h // 3
+        j = h - 3 * r
+        a = out[r, j]
+        b = out[r, (j + 1) % 3]
+        keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
+    srt = np.argsort(keys, kind="mergesort")
+    i = 0
+    while i < n:
+        e = i + 1
+        while e < n and keys[srt[e]] == keys[srt[i]]:
+            e += 1
+        h = rest[srt[i]]
+        if e - i == 1:
+            twin[h] = -1
+        elif e - i == 2:
+            g = rest[srt[i + 1]]
+            if out[h // 3, h % 3] == out[g // 3, g % 3]:
+                return twin, max(h, g)  # one edge twice in one direction
+            twin[h] = g
+            twin[g] = h
+        else:
+            return twin, rest[srt[i + 2]]
+        i = e
+    return twin, -1
+
+
 @njit(cache=True)
 def walk_links(link, out_twin):
     """Follow the links into cycles.
@@ -484,6 +595,37 @@ def walk_links(link, out_twin):
         lengths[n_c] = pos - start
         n_c += 1
     return order, lengths[:n_c], -1
+
+
+@njit(cache=True, nogil=True)
+def rows_in_order(rows, out, parent, partner, kind, amin):
+    """The output rows taken in the order ``rows``, in one pass.
+
+    Returns ``(out, parent, partner, kind, pm)`` reordered, ``pm[i]`` the smallest
+    angle of row i's parents (``amin`` of ``parent``, and of ``partner`` if any): what
+    four gathers and a masked minimum did in numpy.
+    """
+    k = rows.shape[0]
+    out2 = np.empty((k, 3), np.int64)
+    parent2 = np.empty(k, np.int64)
+    partner2 = np.empty(k, np.int64)
+    kind2 = np.empty(k, np.int8)
+    pm = np.empty(k, np.float64)
+    for i in range(k):
+        r = rows[i]
+        out2[i, 0] = out[r, 0]
+        out2[i, 1] = out[r, 1]
+        out2[i, 2] = out[r, 2]
+        p = parent[r]
+        q = partner[r]
+        parent2[i] = p
+        partner2[i] = q
+        kind2[i] = kind[r]
+        a = amin[p]
+        if q >= 0 and amin[q] < a:
+            a = amin[q]
+        pm[i] = a
+    return out2, parent2, partner2, kind2, pm
 
 
 @njit(cache=True)

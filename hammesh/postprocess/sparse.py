@@ -50,8 +50,8 @@ certificate as its pairing claim.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -64,6 +64,8 @@ from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover
 from hammesh.halfedge import HalfEdges
+from hammesh import threads
+from hammesh.threads import row_ranges, run_all
 
 __all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "KEEP"]
 
@@ -79,6 +81,11 @@ PLACE_ITERS = 6
 PLACE_REACH_DEG = 10.0
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
+#: candidate joins per thread below which scoring runs in one call (a placement is
+#: ~100x the work of an angle row, so threads pay off far below THREAD_MIN_ROWS)
+SCORE_MIN_ROWS = 20_000
+#: edges per thread below which judging the edges for the cover runs in one call
+EDGE_MIN_ROWS = 50_000
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 
@@ -108,27 +115,37 @@ def _incenters(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
 
 def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Smallest and largest angle (radians) of every triangle (2D or 3D points)."""
+    lo, hi, _, _ = triangle_facts(points, triangles)
+    return lo, hi
+
+
+def triangle_facts(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
+    """Smallest and largest angle of every triangle, the worst radius ratio and its row.
+
+    One threaded pass (``_join_kernels.triangle_min_max_into``): the angles the local
+    rule needs and the report's worst circumradius / (2 x inradius) (``row`` -1 if
+    no triangle is worse than equilateral).
+    """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     lo = np.empty(len(tri))
     hi = np.empty(len(tri))
-    _j.triangle_min_max_into(pts, tri, lo, hi)
-    return lo, hi
+    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri))
+    worst, row = 1.0, -1
+    for a, w, r in parts:
+        if r >= 0 and w > worst:
+            worst, row = float(w), a + int(r)
+    return lo, hi, worst, row
 
 
-def _threaded(fill, n: int, min_rows: int = 20000) -> None:
-    """Run the ``_into`` kernel call ``fill(lo, hi)`` over ``[0, n)`` in two halves at once.
+def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
+    """``fill(lo, hi)`` over one contiguous row range per core, side by side (``hammesh.threads``).
 
-    The kernels are ``nogil``: two threads fill disjoint slices of the outputs.
+    The kernels are ``nogil`` and fill disjoint slices of their outputs; below
+    ``min_rows`` rows per thread (default ``hammesh.threads.THREAD_MIN_ROWS``) one call.
     """
-    if n < min_rows:
-        fill(0, n)
-        return
-    half = n // 2
-    with ThreadPoolExecutor(1) as pool:
-        other = pool.submit(fill, half, n)
-        fill(0, half)
-        other.result()
+    spans = row_ranges(n, threads.THREAD_MIN_ROWS if min_rows is None else min_rows)
+    return run_all([partial(fill, lo, hi) for lo, hi in spans])
 
 
 def _join_order(
@@ -269,24 +286,24 @@ def sparse_cycles(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     con = np.ascontiguousarray(is_con, dtype=np.bool_)
     n, m = len(pts), len(tri)
-    amin_t, amax_t = triangle_angles(pts, tri)
+    amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri)
     hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
     if use_cover:
         # edges whose join (swap or midpoint split) keeps the rule: the cover's
         # matching prefers them as its non-cover edges, where cycles get joined
-        inner = np.flatnonzero(tw > np.arange(3 * m))
-        g_ok = np.zeros(len(inner), np.bool_)
         if pts.shape[1] == 2:
-            _threaded(
-                lambda lo, hi_: _j.good_edges_into(
-                    pts, tri, tw, con, inner[lo:hi_], amin_t, float(keep), hi, bool(swaps), bool(edge_splits),
-                    g_ok[lo:hi_],
+            good = np.zeros(3 * m, np.bool_)
+            _row_pass(
+                lambda lo, hi_: _j.good_half_edges_into(
+                    pts, tri, tw, con, amin_t, float(keep), hi, bool(swaps), bool(edge_splits), lo, hi_, good
                 ),
-                len(inner),
+                3 * m,
+                EDGE_MIN_ROWS,
             )
         else:
+            inner = np.flatnonzero(tw > np.arange(3 * m))
             g_kind = np.zeros(len(inner), np.int8)
             g_slack = np.empty(len(inner))
             _j.score_joins_into(
@@ -294,16 +311,15 @@ def sparse_cycles(
                 0, 0.0, g_kind, g_slack, np.empty(len(inner)), np.empty(len(inner)),
                 np.empty((len(inner), pts.shape[1])),
             )
-            g_ok = g_slack >= 0.0
-        good = np.zeros(3 * m, np.bool_)
-        ok = inner[g_ok]
-        good[ok] = True
-        good[tw[ok]] = True
+            good = np.zeros(3 * m, np.bool_)
+            ok = inner[g_slack >= 0.0]
+            good[ok] = True
+            good[tw[ok]] = True
         cover = cycle_cover(tri, tw, good=good)
     else:
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     n_unc0 = cover.n_uncovered
-    pts0, tri0, m0 = pts, tri, m
+    pts0, m0 = pts, m
     orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_fan = _fans(
@@ -316,17 +332,35 @@ def sparse_cycles(
     newmin = np.empty(len(cand))
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
-    _threaded(
-        lambda lo, hi_: _j.score_joins_into(
-            pts, tri, tw, con, cand[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
-            bool(edge_splits), int(place_iters), math.radians(PLACE_REACH_DEG), ckind[lo:hi_], slack[lo:hi_],
-            newmin[lo:hi_], newmax[lo:hi_], point[lo:hi_],
-        ),
-        len(cand),
-    )
+    def score(rows: np.ndarray, iters: int) -> None:
+        c = cand[rows]
+        parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
+        _row_pass(
+            lambda lo, hi_: _j.score_joins_into(
+                pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
+                bool(edge_splits), iters, math.radians(PLACE_REACH_DEG), *(x[lo:hi_] for x in parts),
+            ),
+            len(c),
+            SCORE_MIN_ROWS,
+        )
+        ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
+
     t_of, u_of = cand // 3, tw[cand] // 3
+    pmin = np.minimum(amin_p[t_of], amin_p[u_of])
+    every = np.arange(len(cand))
+    # judge every candidate unplaced; place a split's point only where Kruskal can
+    # still use the join after all joins meeting the rule unplaced (``open_candidates``)
+    score(every, 0)
+    if place_iters > 0 and edge_splits and pts.shape[1] == 2 and len(cand):
+        whole = (newmin >= keep * min_angle) & (newmax <= hi)
+        order = _join_order(ckind, slack, newmin, pmin, whole)
+        rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
+        first = np.concatenate([order, rest])
+        open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
+        redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]
+        score(np.sort(redo), int(place_iters))
     whole = (newmin >= keep * min_angle) & (newmax <= hi)
-    order = _join_order(ckind, slack, newmin, np.minimum(amin_p[t_of], amin_p[u_of]), whole)
+    order = _join_order(ckind, slack, newmin, pmin, whole)
     no_absorb = np.zeros(m, np.bool_)
     for attempt in range(4):
         if attempt == 3:
@@ -349,31 +383,42 @@ def sparse_cycles(
     placed = mid_t >= 0
     mids[placed] = point[order][join[mid_t[placed]]]
     all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), mids])
-    out_twin, dup = half_edge_twins(out, len(all_pts))
+    out_twin, dup = _k.output_twins(out, kind, parent, tw, len(all_pts))
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of row {int(dup) // 3} used twice")
     order_rows, lengths, bad = _k.walk_links(link, out_twin)
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
     # runs in the order of their lowest input triangle; twins renumbered as the claim
-    key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
-    order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, np.argsort(key, kind="stable"), out_twin)
-    out, parent, partner, kind = out[order_rows], parent[order_rows], partner[order_rows], kind[order_rows]
+    if len(lengths) > 1:
+        key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
+        run_order = np.argsort(key, kind="stable")
+    else:
+        run_order = np.zeros(len(lengths), np.int64)
+    order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, run_order, out_twin)
+    # rows in cycle order, with each row's parents' smallest angle (pm)
+    out, parent, partner, kind, pm = _k.rows_in_order(order_rows, out, parent, partner, kind, amin_p)
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
-    pm = amin_p[parent]  # each row's parents' smallest angle
-    has = partner >= 0
-    pm[has] = np.minimum(pm[has], amin_p[partner[has]])
     n_improve = n_moved = 0
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
         out, claim, kind, pm, n_improve, n_moved = _improve(
-            all_pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, n + n_split, hi, n0_input, keep
+            all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
+            n0_input, keep,
         )
-    quality = local_quality(all_pts, out, pm, kind, keep, hi)
+    # the kept rows' worst radius ratio is the input's if its worst triangle is kept
+    worst_kept = False
+    if ratio_row >= 0:
+        n_whole = len(orig_of) - int(is_fan.sum())  # rows not in a fan, in input order
+        r_now = np.searchsorted(orig_of[:n_whole], ratio_row)
+        if r_now < n_whole and orig_of[r_now] == ratio_row:
+            worst_kept = bool((kind[parent == r_now] == 3).any())
+    quality = local_quality(all_pts, out, pm, kind, keep, hi, ratio_in if worst_kept else None)
     quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
-    quality["radius_ratio_input"] = float(_j.worst_radius_ratio(pts0, tri0))
-    parent = orig_of[parent]
+    quality["radius_ratio_input"] = float(ratio_in)
+    if n_fan:
+        parent = orig_of[parent]
     counts_d = {
         "cycles_before_merging": int(cover.n_cycles),
         "cover_rotations": int(cover.n_rotations),
@@ -415,6 +460,7 @@ def local_quality(
     kind: np.ndarray,
     keep: float,
     max_allowed: float,
+    kept_ratio: float | None = None,
 ) -> dict:
     """The local quality rule's counts over the output (issue 13, item 1).
 
@@ -422,10 +468,13 @@ def local_quality(
     smallest angle is under ``keep`` x ``parents_min`` (the smallest angle of the
     input triangles it replaces), *above the max rule* if its largest angle exceeds
     ``max_allowed`` (radians); both up to a relative 1e-9. Only the new rows are
-    measured (a kept row has its input triangle's angles).
+    measured (a kept row has its input triangle's angles); ``kept_ratio`` is the worst
+    radius ratio of the kept rows if the caller knows it (else measured here).
     """
     new = np.flatnonzero(kind != 3)
-    lo, hi = triangle_angles(points, triangles[new])
+    lo, hi, ratio, _ = triangle_facts(points, triangles[new])
+    if kept_ratio is None:
+        kept_ratio = triangle_facts(points, triangles[kind == 3])[2]
     pm = parents_min[new]
     below = lo < keep * pm * (1.0 - 1e-9)
     above = hi > max_allowed * (1.0 + 1e-9)
@@ -436,45 +485,38 @@ def local_quality(
         "worst_parent_ratio": float((lo / pm).min()) if len(new) else 1.0,
         "min_angle_new_deg": math.degrees(float(lo.min())) if len(new) else None,
         "max_angle_new_deg": math.degrees(float(hi.max())) if len(new) else None,
-        "radius_ratio_output": float(_j.worst_radius_ratio(points, triangles)),
+        "radius_ratio_output": float(max(ratio, kept_ratio)),
     }
 
 
-def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, mid_a, mid_b, first_mid, hi, first_steiner, keep):
+def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, first_mid, hi,
+             first_steiner, keep):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
-    regions; ``con`` over ``tri``) or a half of one split at its midpoint.
+    regions; ``con`` over ``tri``) or a half of one split at its midpoint
+    (``_improve_kernels.pinned_output_edges``, from each row's parents).
     """
-    n_all = len(pts)
-    m = len(tri)
-    inner = np.flatnonzero(con & (tw >= 0))
-    a = tri.reshape(-1)[inner]
-    b = tri[np.arange(m).repeat(3).reshape(m, 3), (np.arange(3)[None, :] + 1) % 3].reshape(-1)[inner]
-    keys = [np.minimum(a, b) * n_all + np.maximum(a, b)]
-    if len(mid_a):
-        ma, mb = np.minimum(mid_a, mid_b), np.maximum(mid_a, mid_b)
-        split = np.isin(ma * n_all + mb, keys[0])
-        mv = first_mid + np.arange(len(mid_a))
-        for end in (ma, mb):
-            keys.append(np.minimum(end, mv)[split] * n_all + np.maximum(end, mv)[split])
-    pin_keys = np.concatenate(keys)
-    o0 = out.reshape(-1)
-    o1 = out[:, [1, 2, 0]].reshape(-1)
-    pinned = np.isin(np.minimum(o0, o1) * n_all + np.maximum(o0, o1), pin_keys)
-    out = np.ascontiguousarray(out, dtype=np.int64).copy()
-    twin = np.ascontiguousarray(claim, dtype=np.int64).copy()
-    kind = kind.copy()
-    pm = np.ascontiguousarray(pm, dtype=np.float64).copy()
+    pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
+    # the caller's rows, claim, kinds and parents' angles are its own fresh arrays:
+    # changed in place, not copied (4 x 1.5 M rows of fresh bytes saved)
+    out = np.ascontiguousarray(out, dtype=np.int64)
+    twin = np.ascontiguousarray(claim, dtype=np.int64)
+    pm = np.ascontiguousarray(pm, dtype=np.float64)
+    lengths = np.ascontiguousarray(lengths, dtype=np.int64)
     starts = np.cumsum(lengths) - lengths
-    run_start = np.repeat(starts, lengths).astype(np.int64)
-    run_len = np.repeat(lengths, lengths).astype(np.int64)
     n_flips = n_moved = 0
     for _ in range(IMPROVE_ROUNDS):
-        n_flips += _ik.improve_flips(pts, out, twin, pinned, run_start, run_len, pm, kind, float(hi), 4 * len(out) + 16)
+        new = np.flatnonzero(kind != 3)  # flips make kept rows new: taken again each round
+        n_flips += _ik.improve_flips(
+            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new
+        )
         if first_steiner >= len(pts):
             break
-        moved = _ik.smooth_steiner(pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS)
+        new = np.flatnonzero(kind != 3)
+        moved = _ik.smooth_steiner(
+            pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new
+        )
         n_moved += moved
         if moved == 0:
             break

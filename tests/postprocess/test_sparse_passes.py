@@ -1,0 +1,277 @@
+"""Sparse mode's fused and threaded passes (issue 13, speed) give what the plain ones gave."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+import hammesh
+from hammesh import threads
+from tests.helpers import bundled_domain, plate_with_loops, square
+
+
+def _reference_facts(pts: np.ndarray, tri: np.ndarray):
+    """Angles and R / 2r of every triangle by numpy alone (law of cosines, Heron-free)."""
+    p = pts[tri]
+    e = [p[:, (k + 2) % 3] - p[:, (k + 1) % 3] for k in range(3)]  # edge opposite corner k
+    ln = [np.linalg.norm(x, axis=1) for x in e]
+    ang = []
+    for k in range(3):
+        u = p[:, (k + 1) % 3] - p[:, k]
+        v = p[:, (k + 2) % 3] - p[:, k]
+        c = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+        ang.append(np.arccos(np.clip(c, -1, 1)))
+    ang = np.stack(ang, axis=1)
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    a16 = 4 * (np.einsum("ij,ij->i", u, u) * np.einsum("ij,ij->i", v, v) - np.einsum("ij,ij->i", u, v) ** 2)
+    ratio = ln[0] * ln[1] * ln[2] * (ln[0] + ln[1] + ln[2]) / a16
+    return ang.min(axis=1), ang.max(axis=1), ratio
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    pts=st.integers(2, 3).flatmap(
+        lambda d: arrays(np.float64, (24, d), elements=st.floats(-10, 10, allow_nan=False).map(lambda x: round(x, 3)))
+    ),
+    seed=st.integers(0, 2**16),
+    min_rows=st.sampled_from([1, 3, 1000]),
+)
+def test_triangle_facts_match_numpy(pts, seed, min_rows) -> None:
+    from hammesh.postprocess.sparse import triangle_facts
+
+    rng = np.random.default_rng(seed)
+    tri = np.array([rng.choice(len(pts), 3, replace=False) for _ in range(12)], dtype=np.int64)
+    p = pts[tri]
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    gram = np.einsum("ij,ij->i", u, u) * np.einsum("ij,ij->i", v, v) - np.einsum("ij,ij->i", u, v) ** 2
+    lens = np.linalg.norm(np.concatenate([u, v]), axis=1)
+    tri = tri[(gram > 1e-3 * lens.reshape(2, -1).max(axis=0) ** 4)]  # well away from degenerate
+    if len(tri) == 0:
+        return
+    old = threads.THREAD_MIN_ROWS
+    threads.THREAD_MIN_ROWS = min_rows  # several row ranges side by side, or one
+    try:
+        lo, hi, worst, row = triangle_facts(pts, tri)
+    finally:
+        threads.THREAD_MIN_ROWS = old
+    rlo, rhi, ratio = _reference_facts(pts, tri)
+    np.testing.assert_allclose(lo, rlo, atol=1e-7)
+    np.testing.assert_allclose(hi, rhi, atol=1e-7)
+    assert worst == pytest.approx(max(1.0, ratio.max()), rel=1e-6)
+    if row >= 0:
+        assert ratio[row] == pytest.approx(ratio.max(), rel=1e-6)
+
+
+def test_degenerate_row_has_infinite_ratio() -> None:
+    from hammesh.postprocess.sparse import triangle_facts
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [2.0, 0.0]])
+    lo, hi, worst, row = triangle_facts(pts, np.array([[0, 1, 2], [0, 1, 3]]))
+    assert worst == np.inf and row == 1
+
+
+@pytest.mark.parametrize("name", ["A", "square_circle_hole"])
+def test_report_ratio_equals_a_full_measure(name: str) -> None:
+    """The output's radius ratio (kept rows known from the input's worst) is the full one."""
+    from hammesh.postprocess._join_kernels import worst_radius_ratio
+
+    m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=None)
+    for keep in (0.9, 0.0):
+        h = hammesh.hamiltonian(m, keep=keep)
+        assert h.report["radius_ratio_output"] == pytest.approx(worst_radius_ratio(h.points, h.triangles), rel=1e-12)
+        assert h.report["radius_ratio_input"] == pytest.approx(worst_radius_ratio(m.points, m.triangles), rel=1e-12)
+
+
+def test_threaded_scoring_gives_the_same_mesh(monkeypatch) -> None:
+    """Scoring and judging in many row ranges side by side changes nothing."""
+    from hammesh.postprocess import sparse
+
+    m = hammesh.quality_mesh(bundled_domain("face"), min_angle=30, max_area=None)
+    one = hammesh.hamiltonian(m)
+    monkeypatch.setattr(sparse, "SCORE_MIN_ROWS", 7)
+    monkeypatch.setattr(sparse, "EDGE_MIN_ROWS", 11)
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 13)
+    many = hammesh.hamiltonian(m)
+    np.testing.assert_array_equal(one.triangles, many.triangles)
+    np.testing.assert_array_equal(one.points, many.points)
+    assert one.report["below_parent_rule"] == many.report["below_parent_rule"]
+
+
+def _pinned_by_keys(out, tri, tw, con, mid_a, mid_b, first_mid, n_all):
+    """The output's pinned half-edges by vertex-pair keys (what sparse mode did before)."""
+    m = len(tri)
+    inner = np.flatnonzero(con & (tw >= 0))
+    a = tri.reshape(-1)[inner]
+    b = tri[:, [1, 2, 0]].reshape(-1)[inner]
+    keys = [np.minimum(a, b) * n_all + np.maximum(a, b)]
+    if len(mid_a):
+        ma, mb = np.minimum(mid_a, mid_b), np.maximum(mid_a, mid_b)
+        split = np.isin(ma * n_all + mb, keys[0])
+        mv = first_mid + np.arange(len(mid_a))
+        for end in (ma, mb):
+            keys.append(np.minimum(end, mv)[split] * n_all + np.maximum(end, mv)[split])
+    o0, o1 = out.reshape(-1), out[:, [1, 2, 0]].reshape(-1)
+    assert m == len(tri)
+    return np.isin(np.minimum(o0, o1) * n_all + np.maximum(o0, o1), np.concatenate(keys))
+
+
+@pytest.mark.parametrize("name", ["loops", "regions", "la"])
+def test_pinned_output_edges_from_parents_equal_the_key_search(name: str, monkeypatch) -> None:
+    from hammesh.postprocess import _improve_kernels as ik
+    from hammesh.postprocess import sparse
+
+    seen = []
+    real = ik.pinned_output_edges
+
+    def spy(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
+        got = real(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b)
+        seen.append((got.copy(), _pinned_by_keys(out, tri, twin, con, mid_a, mid_b, first_mid, int(out.max()) + 1)))
+        return got
+
+    monkeypatch.setattr(sparse._ik, "pinned_output_edges", spy)
+    if name == "loops":  # constrained loops inside a plate
+        dom = plate_with_loops(3)
+    elif name == "regions":  # edges between two regions are pinned too
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    else:
+        dom = bundled_domain(name)
+    scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
+    for area in (0.01 * scale, 0.002 * scale):
+        m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+        hammesh.hamiltonian(m)
+    assert seen
+    for got, want in seen:
+        np.testing.assert_array_equal(got, want)
+    if name != "la":
+        assert any(w.any() for _, w in seen)
+
+
+def _cross(u, v) -> float:
+    return float(u[0] * v[1] - u[1] * v[0])
+
+
+def _angles(p, q, r):
+    out = []
+    for o, u, v in ((p, q, r), (q, r, p), (r, p, q)):
+        cu, cv = u - o, v - o
+        out.append(np.arccos(np.clip(cu @ cv / np.linalg.norm(cu) / np.linalg.norm(cv), -1, 1)))
+    return out
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    c=st.tuples(st.floats(-1.5, 2.5), st.floats(0.1, 2.0)),
+    d=st.tuples(st.floats(-1.5, 2.5), st.floats(-2.0, -0.1)),
+    keep=st.floats(0.5, 1.0),
+    swaps=st.booleans(),
+)
+def test_edge_rule_by_cosines_equals_exact_angles(c, d, keep, swaps) -> None:
+    """The cover's yes/no per edge (six corner cosines per join) against all twelve angles."""
+    from hammesh.postprocess import _join_kernels as J
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], c, d])
+    a, b, c, d = pts
+    tri = np.array([[0, 1, 2], [1, 0, 3]])
+    twin = np.array([3, -1, -1, 0, -1, -1])
+    amin = np.array([min(_angles(a, b, c)), min(_angles(b, a, d))])
+    hi = np.radians(125)
+    lo = keep * amin.min()
+    margins = []
+    if swaps and _cross(d - a, c - a) > 0 and _cross(b - d, c - d) > 0:
+        sw = _angles(a, d, c) + _angles(d, b, c)
+        margins.append(min(min(sw) - lo, hi - max(sw)))
+    mid = 0.5 * (a + b)
+    sp = _angles(a, mid, c) + _angles(mid, b, c) + _angles(b, mid, d) + _angles(mid, a, d)
+    margins.append(min(min(sp) - lo, hi - max(sp)))
+    want = max(margins) >= 0
+    good = np.zeros(1, bool)
+    J.good_edges_into(pts, tri, twin, np.zeros(6, bool), np.array([0]), amin, keep, hi, swaps, True, good)
+    if abs(max(margins)) > 1e-9:
+        assert good[0] == want
+    half = np.zeros(6, bool)
+    J.good_half_edges_into(pts, tri, twin, np.zeros(6, bool), amin, keep, hi, swaps, True, 0, 6, half)
+    assert half[0] == half[3] == good[0] and not half[[1, 2, 4, 5]].any()
+
+
+def test_open_candidates_are_those_kruskal_can_still_take() -> None:
+    from hammesh.postprocess._sparse_kernels import open_candidates
+
+    # t0, t1 on cycle 0; t2, t3 on cycle 1; t4 on cycle 2; t5 uncovered
+    cyc = np.array([0, 0, 1, 1, 2, -1])
+    twin = np.full(18, -1)
+    for h, g in [(0, 6), (3, 9), (10, 12), (7, 15)]:
+        twin[h], twin[g] = g, h
+    cand = np.array([0, 3, 10, 7])  # t0-t2 meets; t1-t3 same nodes by then; t3-t4 open; t2-t5: t2 taken
+    meets = np.array([True, False, False, False])
+    np.testing.assert_array_equal(open_candidates(twin, cyc, 3, cand, meets), [False, False, True, False])
+    # nothing meets: every candidate is open
+    assert open_candidates(twin, cyc, 3, cand, np.zeros(4, bool)).all()
+
+
+@pytest.mark.parametrize("name", ["face", "gear"])
+def test_placing_only_open_candidates_loses_nothing(name: str, monkeypatch) -> None:
+    """Placing every candidate's point (as before) gives no better mesh than placing the open ones."""
+    import sys
+    from pathlib import Path
+
+    from hammesh.postprocess import sparse
+
+    sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+    import bench_sparse
+
+    dom = dict(bench_sparse._domains())[name]
+    m = bench_sparse._mesh_at(dom, 4000)
+    lazy = hammesh.hamiltonian(m).report
+    monkeypatch.setattr(sparse._k, "open_candidates", lambda tw, cyc, n, cand, meets: ~meets)
+    every = hammesh.hamiltonian(m).report
+    assert lazy["steiner_points"] <= every["steiner_points"]
+    assert lazy["below_parent_rule"] <= every["below_parent_rule"] + 2
+    assert lazy["min_angle_output_deg"] >= every["min_angle_output_deg"] - 0.5
+
+
+@pytest.mark.parametrize("name", ["A", "la", "loops", "regions"])
+def test_output_twins_from_the_input_equal_a_full_matching(name: str, monkeypatch) -> None:
+    """Twins of kept rows taken from the input's, the rest matched by end points: as on the whole output."""
+    from hammesh.halfedge import half_edge_twins
+    from hammesh.postprocess import sparse
+
+    seen = []
+    real = sparse._k.output_twins
+
+    def spy(out, kind, parent, twin_in, n_points):
+        got = real(out, kind, parent, twin_in, n_points)
+        seen.append((got, half_edge_twins(out, n_points), (kind != 3).sum()))
+        return got
+
+    monkeypatch.setattr(sparse._k, "output_twins", spy)
+    if name == "loops":
+        dom = plate_with_loops(3)
+    elif name == "regions":
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    else:
+        dom = bundled_domain(name)
+    scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
+    for area in (None, 0.01 * scale, 0.002 * scale):
+        m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+        hammesh.hamiltonian(m)
+    for (tw, bad), (want, want_bad), n_new in seen:
+        assert bad == want_bad == -1 and n_new > 0
+        np.testing.assert_array_equal(tw, want)
+
+
+def test_output_twins_name_an_edge_used_twice() -> None:
+    from hammesh.postprocess._sparse_kernels import output_twins
+
+    out = np.array([[0, 1, 2], [0, 1, 3]])  # edge 0 -> 1 in both rows
+    tw, bad = output_twins(out, np.array([0, 0], np.int8), np.array([0, 1]), np.full(6, -1), 4)
+    assert bad in (0, 3)
+    out = np.array([[0, 1, 2], [1, 0, 3], [1, 0, 4]])  # three rows on edge 0-1
+    tw, bad = output_twins(out, np.array([0, 0, 0], np.int8), np.array([0, 1, 2]), np.full(9, -1), 5)
+    assert bad >= 0
