@@ -77,20 +77,29 @@ _VTK_TYPES = {"Float64": "f8", "Int64": "i8", "UInt8": "u1", "Int32": "i4", "Flo
 
 def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.ndarray, triangles: np.ndarray,
                 position: np.ndarray, cycle_id: np.ndarray, cycle_position: np.ndarray, parent: np.ndarray,
-                kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None) -> None:
-    """Write one piece: ``triangles`` in global point ids, rows in cycle order.
+                kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None,
+                local: bool = False) -> None:
+    """Write one piece: ``triangles`` in global point ids (``local``: indices into
+    ``point_ids``/``points`` already), rows in cycle order.
 
     ``part`` (optional): a ``part`` cell array (``--parts``). Written as raw appended
     binary (:func:`_raw_vtu`) into ``NAME.part`` and renamed: never a half-written piece.
     """
     path = Path(path)
     point_ids = np.asarray(point_ids, dtype=np.int64)
-    order = np.argsort(point_ids, kind="stable")
-    point_ids, points = point_ids[order], np.asarray(points)[order]
+    points = np.asarray(points)
     triangles = np.asarray(triangles, dtype=np.int64)
-    local = np.minimum(np.searchsorted(point_ids, triangles), max(len(point_ids) - 1, 0))
-    if len(point_ids) and not np.array_equal(point_ids[local], triangles):
-        raise FileFormatError(f"{path}: a triangle uses a point the piece does not hold")
+    if local:
+        if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(point_ids)):
+            raise FileFormatError(f"{path}: a triangle uses a point the piece does not hold")
+    else:
+        order = np.argsort(point_ids, kind="stable")
+        point_ids, points = point_ids[order], points[order]
+        at = np.minimum(np.searchsorted(point_ids, triangles), max(len(point_ids) - 1, 0))
+        if len(point_ids) and not np.array_equal(point_ids[at], triangles):
+            raise FileFormatError(f"{path}: a triangle uses a point the piece does not hold")
+        triangles = at
+    local = triangles
     m = len(triangles)
     pts3 = np.zeros((len(points), 3))
     pts3[:, :2] = points

@@ -83,7 +83,7 @@ def run_parallel(args: argparse.Namespace) -> int:
     source = load_input(args.input, strict=args.strict)
     if not isinstance(source, Domain):
         raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-    with runner_for(workers=args.workers, scheduler=args.scheduler) as (runner, n):
+    with runner_for(workers=args.workers, scheduler=args.scheduler, mode=args.mode) as (runner, n):
         h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
                                  client=None if args.workers is None and args.scheduler is None else runner,
                                  mode=args.mode, keep=args.keep, progress=progress)

@@ -96,8 +96,9 @@ def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
     rows, slot = [], []
     for s in range(3):
         a, b = tri[:, s], tri[:, (s + 1) % 3]
-        key = np.minimum(a, b) * n + np.maximum(a, b)
-        hit = np.flatnonzero(np.isin(key, key_sep))
+        near = np.flatnonzero((a < k) & (b < k))  # separator ends are the tile's own points
+        key = np.minimum(a[near], b[near]) * n + np.maximum(a[near], b[near])
+        hit = near[np.isin(key, key_sep)]
         rows.append(hit)
         slot.append(np.full(len(hit), s))
     rows = np.concatenate(rows)
@@ -417,10 +418,11 @@ def _check_join_triangles(tri, gid, points, joins, base, apex, floor, tile_index
 
 @dataclass(frozen=True, eq=False)
 class TilePiece:
-    """One tile's share of the output, in global numbering, rows in cycle order.
+    """One tile's share of the output, rows in cycle order.
 
-    ``point_ids`` / ``points``: the global points its triangles use; ``position``: the
-    global cycle position of each row.
+    ``point_ids`` / ``points``: the global id and coordinates of the points its
+    triangles use; ``triangles``: rows of indices into them (``point_ids[triangles]`` in
+    global numbering); ``position``: the global cycle position of each row.
     """
 
     tile: int
@@ -505,20 +507,8 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     if set(missing.tolist()) != removed:
         raise VerificationError(f"tile {tile_index}: the cycle plan does not cover its rows")
     keep = gpos >= 0
-    tri = gid[h.triangles[keep]]
-    pos = gpos[keep]
-    kind = np.asarray(h.kind)[keep].astype(np.int8)
-    parent = np.where(h.parent[keep] >= 0, triangle_offset + h.parent[keep], -1)
-    attr = attrs[keep]
-    if new_tri:
-        tri = np.concatenate([tri, np.asarray(new_tri, np.int64)])
-        pos = np.concatenate([pos, new_pos])
-        kind = np.concatenate([kind, np.asarray(new_kind, np.int8)])
-        parent = np.concatenate([parent, new_parent])
-        attr = np.concatenate([attr, np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])])
-    order = np.argsort(pos, kind="stable")
-    tri, pos, kind, parent, attr = tri[order], pos[order], kind[order], parent[order], attr[order]
-    # the points this piece uses: its own and the join points
+    # the points this piece uses: its own and the join points (a swap's apex d is the
+    # other tile's point: added unless this tile holds it too)
     jp_ids, jp_xy = [], []
     for j in joins:
         if j.swap:
@@ -529,13 +519,35 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
             continue
         jp_ids += [join_point_base + 2 * j.slot, join_point_base + 2 * j.slot + 1]
         jp_xy += [j.I_t, j.I_u]
-    ids = np.concatenate([gid, np.asarray(jp_ids, np.int64)])
-    xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)])
-    used = np.isin(ids, np.unique(tri))
+    jp_ids_a = np.asarray(jp_ids, np.int64)
+    fresh = ~np.isin(jp_ids_a, gid)
+    ids = np.concatenate([gid, jp_ids_a[fresh]])
+    xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)[fresh]])
+    local = h.triangles[keep]
+    if new_tri:
+        nt = np.asarray(new_tri, np.int64)
+        want = np.unique(nt)
+        at = np.flatnonzero(np.isin(ids, want))  # few: the join triangles' corners
+        order_at = np.argsort(ids[at])
+        local = np.concatenate([local, at[order_at][np.searchsorted(ids[at][order_at], nt)]])
+    used = np.zeros(len(ids), bool)
+    used[local.ravel()] = True
+    renum = np.cumsum(used) - 1
+    pos = gpos[keep]
+    kind = np.asarray(h.kind)[keep].astype(np.int8)
+    parent = np.where(h.parent[keep] >= 0, triangle_offset + h.parent[keep], -1)
+    attr = attrs[keep]
+    if new_tri:
+        pos = np.concatenate([pos, new_pos])
+        kind = np.concatenate([kind, np.asarray(new_kind, np.int8)])
+        parent = np.concatenate([parent, new_parent])
+        attr = np.concatenate([attr, np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])])
+    order = np.argsort(pos, kind="stable")
+    local, pos, kind, parent, attr = renum[local[order]], pos[order], kind[order], parent[order], attr[order]
     # constrained edges: the tile's, minus its separators (interior edges of the union)
     segs = gid[h.segments]
     keys = np.sort(segs, axis=1) @ np.array([n_global, 1])
     keep_s = ~np.isin(keys, separator_keys)
-    return TilePiece(tile=tile_index, point_ids=ids[used], points=xy[used], triangles=tri, position=pos,
+    return TilePiece(tile=tile_index, point_ids=ids[used], points=xy[used], triangles=local, position=pos,
                      kind=kind, parent=parent, triangle_attributes=attr, segments=segs[keep_s],
                      segment_markers=np.asarray(h.segment_markers)[keep_s])

@@ -101,7 +101,7 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     cpos = piece.position - (ends - components)[cid]
     part = None if parts is None else stretch_parts(piece.position, components, parts)
     write_piece(path, piece.point_ids, piece.points, piece.triangles, piece.position, cid, cpos, piece.parent,
-                piece.kind, piece.triangle_attributes, part=part)
+                piece.kind, piece.triangle_attributes, part=part, local=True)
     first = int(piece.position[0]) if len(piece.position) else -1
     width = piece.triangle_attributes.shape[1] if piece.triangle_attributes.ndim == 2 else 0
     sizes = None if part is None else np.bincount(part, minlength=parts)
@@ -158,7 +158,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     os.chmod(work, 0o777 & ~umask)  # mkdtemp's 0700 would become the output's mode
     spill = work / ".spill"
     try:
-        with runner_for(workers=workers, client=client, scheduler=scheduler) as (runner, n_workers):
+        with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode) as (runner, n_workers):
             if tiles is None:
                 tiles = default_tiles(decompose_estimate(domain, min_angle, max_area), n_workers)
             # a worker holding more than one tile keeps none in memory until the plan

@@ -293,7 +293,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
     from hammesh.parallel.cluster import runner_for
 
     t0 = time.perf_counter()
-    with runner_for(workers=workers, client=client) as (runner, n_workers):
+    with runner_for(workers=workers, client=client, mode=mode) as (runner, n_workers):
         if tiles is None:
             est = decompose_estimate(domain, min_angle, max_area)
             tiles = default_tiles(est, n_workers)
@@ -397,7 +397,7 @@ def _join_pieces(tiled: Tiled, pieces: list) -> HamiltonianMesh:
     order = np.argsort(pos, kind="stable")
     if not np.array_equal(pos[order], np.arange(len(pos))):
         raise InvalidOptionError("internal: the tiles' cycle positions do not cover 0..m-1")
-    tri = np.concatenate([p.triangles for p in pieces])[order]
+    tri = np.concatenate([p.point_ids[p.triangles] for p in pieces])[order]
     kind = np.concatenate([p.kind for p in pieces])[order]
     parent = np.concatenate([p.parent for p in pieces])[order]
     width = max(p.triangle_attributes.shape[1] if p.triangle_attributes.ndim == 2 else 0 for p in pieces)

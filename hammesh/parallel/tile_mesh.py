@@ -27,13 +27,21 @@ def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, nei
     from scipy.sparse.csgraph import connected_components
 
     m, n = len(triangles), len(points)
+    values = np.unique(tile.region_attribute)
+    if len(values) == 1:  # the tile lies in one region (or in none)
+        return np.full(m, values[0])
     seg_keys = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], np.int64))
+    on_any = np.zeros(n, bool)
+    on_any[segments.ravel()] = True
     rows, cols = [], []
     for s in range(3):  # neighbors[:, s] is across edge (s, s + 1)
         a, b = triangles[:, s], triangles[:, (s + 1) % 3]
-        key = np.minimum(a, b) * n + np.maximum(a, b)
-        at = np.minimum(np.searchsorted(seg_keys, key), max(len(seg_keys) - 1, 0))
-        on_seg = seg_keys[at] == key if len(seg_keys) else np.zeros(m, bool)
+        on_seg = np.zeros(m, bool)
+        near = np.flatnonzero(on_any[a] & on_any[b])  # only these edges can be segments
+        if len(seg_keys) and len(near):
+            key = np.minimum(a[near], b[near]) * n + np.maximum(a[near], b[near])
+            at = np.minimum(np.searchsorted(seg_keys, key), len(seg_keys) - 1)
+            on_seg[near] = seg_keys[at] == key
         nb = neighbors[:, s]
         keep = (nb > np.arange(m)) & ~on_seg
         rows.append(np.flatnonzero(keep))
