@@ -73,7 +73,10 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
     # one process per worker, one thread each: Triangle and the kernels hold their core;
     # Dask's shutdown chatter (nanny warnings) is not the user's business
     with dask.config.set({"distributed.worker.multiprocessing-method": method}):
+        # no dashboard; the scheduler's HTTP server on a free local port (its default,
+        # 8787, warns on stderr when another cluster has it)
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
+                                           dashboard_address=None, silence_logs=logging.ERROR,
+                                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     with cluster, distributed.Client(cluster) as c:
         yield c, workers
