@@ -1,26 +1,37 @@
 """Decoupled parallel meshing (issue 15): hammesh on tiles vs one raw Triangle call.
 
 For each size (estimated triangle count of a ``q30 a A`` Triangle run of the bundled
-demo plate: holes, a crack, two regions), in fresh processes, same run:
+demo plate: holes, a crack, two regions), every run a fresh process (so every figure
+is a first call: imports, Dask start, kernel loading included), same run:
 
 * raw: one ``triangle.triangulate(domain, "pq30a<A>")`` call (time of the call, peak
   RSS of its process, triangle count);
-* ``hammesh mesh demo.poly -q 30 -a A --workers N --partitioned -o DIR`` for N = 1, 2:
-  the whole command (Dask start, decomposition, tile meshing, per-tile Hamiltonian and
-  certificate, joins, pieces and index written) wall time, its ratio to the raw call,
-  the peak RSS of the driver and of each worker (from the report), and the
-  over-refinement: the tiles' triangles / the raw call's triangles - 1.
+* ``hammesh mesh demo.poly -q 30 -a A --workers N --partitioned -o DIR [--mode M]`` for
+  each N and mode: the whole command's wall time (Dask start, decomposition, tile
+  meshing, per-tile Hamiltonian and certificate, joins, pieces and index written), its
+  ratio to the raw call, the over-refinement (the tiles' triangles / the raw call's - 1),
+  the peak RSS of the driver and of every worker, and where the time went: the
+  driver's stages (``decompose``, ``tiles``: waiting for the tiles' tasks, ``plan``,
+  ``pieces``: the workers numbering and writing their pieces, ``other``: imports,
+  cluster start and stop, reading the domain) and the workers' summed time per step
+  (``mesh``: Triangle + regional attributes, ``ham``: ``hamiltonian()`` with its
+  certificate, ``border``, ``finish``, ``write``, ``spill``).
 
-Sizes default to 1.5M and 6M; ``--big`` adds 25M and 100M (memory: ~1.6 GB per 6M
-triangles for the raw call alone; run those only on a machine you have to yourself).
+``--partitioned-only`` skips the raw call at the given sizes (100M triangles need ~30
+GB in one Triangle run): the raw count is then extrapolated from two raw runs of the
+same domain at 0.4M and 1.5M triangles made in the same invocation (fitted as
+``c1 / A + c2 / sqrt(A)``: area term plus boundary band), and the time ratio is not
+printed. Tiles: ``--tiles`` (default: hammesh's, one per worker, more past 3M each).
 
-    python benchmarks/bench_scale.py [--sizes 1.5e6,6e6] [--workers 1,2] [--big] [--tiles T]
+    python benchmarks/bench_scale.py [--sizes 1.5e6,6e6] [--workers 1,2] [--modes sparse,incircle]
+    python benchmarks/bench_scale.py --sizes 1e8 --workers 2 --partitioned-only --tiles 64
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -64,43 +75,87 @@ def raw(area: float) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def ours(area: float, workers: int, tiles: int | None) -> dict:
-    with tempfile.TemporaryDirectory() as tmp:
+def extrapolated_count(area: float) -> tuple[float, str]:
+    """Raw triangle count at ``area`` from two raw runs (0.4M, 1.5M): ``c1/A + c2/sqrt(A)``."""
+    import numpy as np
+
+    pts = [(a, raw(a)["triangles"]) for a in (max_area_for(4e5), max_area_for(1.5e6))]
+    m = np.array([[1 / a, 1 / np.sqrt(a)] for a, _ in pts])
+    c = np.linalg.solve(m, np.array([n for _, n in pts], float))
+    note = ", ".join(f"{n:,} at a={a:.3g}" for a, n in pts)
+    return float(c[0] / area + c[1] / np.sqrt(area)), note
+
+
+def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None) -> dict:
+    tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
+    try:
         rep = Path(tmp) / "report.json"
-        cmd = [sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", repr(area),
+        cmd = [sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
         if tiles:
             cmd += ["--tiles", str(tiles)]
         t = time.perf_counter()
-        subprocess.run(cmd, check=True, capture_output=True, text=True)
+        done = subprocess.run(cmd, capture_output=True, text=True)
         sec = time.perf_counter() - t
+        if done.returncode != 0:
+            raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}):\n{done.stderr[-2000:]}")
         r = json.loads(rep.read_text())
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     r["wall"] = sec
     return r
+
+
+def stages(o: dict) -> str:
+    par = o["parallel"]
+    s = dict(par["seconds"])
+    other = o["wall"] - s.pop("total")
+    s.pop("index", None)
+    drv = " ".join(f"{k} {v:.1f}" for k, v in s.items()) + f" other {other:.1f}"
+    ts = dict(par.get("tile_seconds", {}))
+    ts["ham"] = ts.pop("hamiltonian", 0.0)
+    wrk = " ".join(f"{k} {ts[k]:.1f}" for k in ("mesh", "ham", "border", "spill", "finish", "write") if k in ts)
+    return f"driver s: {drv} | workers' s (sum): {wrk}"
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="1.5e6,6e6", help="estimated triangle counts, comma separated")
     ap.add_argument("--workers", default="1,2")
+    ap.add_argument("--modes", default="sparse", help="Hamiltonian modes, comma separated (sparse, incircle)")
     ap.add_argument("--tiles", type=int, help="tiles (default: hammesh's: one per worker, more past 3M)")
-    ap.add_argument("--big", action="store_true", help="also 25M and 100M (needs ~40 GB: not on a shared VM)")
+    ap.add_argument("--partitioned-only", action="store_true",
+                    help="no raw call at these sizes: its triangle count is extrapolated from 0.4M and 1.5M runs")
+    ap.add_argument("--out-dir", help="where the pieces go while a run lasts (default: the system's temp dir)")
+    ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
     a = ap.parse_args(argv)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
     workers = [int(w) for w in a.workers.split(",")]
-    print("size      raw s  raw MB  | workers  wall s  /raw   over-ref  driver MB  worker MB (max)  tiles joins")
+    modes = a.modes.split(",")
+    print("size    raw s  raw MB  | mode      workers  wall s  /raw  over-ref  driver MB  worker MB (each)  tiles joins")
+    sys.stdout.flush()
     for n in sizes:
         area = max_area_for(n)
-        r = raw(area)
-        print(f"{n / 1e6:5.1f}M  {r['seconds']:7.2f} {r['peak_rss_mb']:7.0f}  | {r['triangles']:,} triangles (raw)")
-        for w in workers:
-            o = ours(area, w, a.tiles)
-            par = o["parallel"]
-            over = par["mesh_triangles"] / r["triangles"] - 1
-            wrk = max(par["peak_rss_mb"]["workers"] or [0.0])
-            print(f"{'':17}|  {w:5d}  {o['wall']:7.2f} {o['wall'] / r['seconds']:5.2f}  {100 * over:+7.2f} % "
-                  f"{par['peak_rss_mb']['driver']:9.0f}  {wrk:10.0f}        {par['tiles']:5d} {par['joins']:5d}")
-            sys.stdout.flush()
+        if a.partitioned_only:
+            count, note = extrapolated_count(area)
+            r = {"seconds": float("nan"), "triangles": count, "peak_rss_mb": float("nan")}
+            print(f"{n / 1e6:5.1f}M   (no raw call) | raw count {count:,.0f} extrapolated from {note}")
+        else:
+            r = raw(area)
+            print(f"{n / 1e6:5.1f}M  {r['seconds']:6.2f} {r['peak_rss_mb']:7.0f}  | {r['triangles']:,} triangles (raw)")
+        sys.stdout.flush()
+        for mode in modes:
+            for w in workers:
+                o = ours(area, w, a.tiles, mode, a.out_dir)
+                par = o["parallel"]
+                over = par["mesh_triangles"] / r["triangles"] - 1
+                wrk = "/".join(f"{x:.0f}" for x in par["peak_rss_mb"]["workers"]) or "-"
+                ratio = o["wall"] / r["seconds"] if r["seconds"] == r["seconds"] else float("nan")
+                print(f"{'':22}| {mode:9} {w:5d}  {o['wall']:7.2f} {ratio:5.2f}  {100 * over:+6.2f} % "
+                      f"{par['peak_rss_mb']['driver']:9.0f}  {wrk:>16}  {par['tiles']:5d} {par['joins']:5d}")
+                print(f"{'':22}|   {stages(o)}  ({o['triangles']:,} output triangles, "
+                      f"{par['repair_rounds']} repair rounds)")
+                sys.stdout.flush()
     return 0
 
 

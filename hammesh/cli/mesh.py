@@ -57,13 +57,16 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--tiles", type=int, help="number of tiles (default: one per worker, more past 3M triangles)")
     g.add_argument("--partitioned", action="store_true",
                    help="-o is a directory: one .vtu per tile written by its worker + mesh.pvtu (cycle order)")
+    g.add_argument("--force", action="store_true",
+                   help="--partitioned: replace the content of an existing non-empty -o directory")
     p.add_argument("--strict", action="store_true",
                    help="refuse an input that needs repairs (quads, T-junctions, crossing segments...) "
                         "instead of repairing it; the report's 'repairs' lists what was repaired")
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.workers is not None or args.scheduler is not None or args.partitioned or args.tiles is not None:
+    if args.workers is not None or args.scheduler is not None or args.partitioned or args.tiles is not None \
+            or args.force:
         from hammesh.parallel.command import run_parallel
 
         return run_parallel(args)

@@ -37,10 +37,21 @@ def run_parallel(args: argparse.Namespace) -> int:
                                  "(no --backend, --conforming-delaunay, --max-steiner)")
     if args.png is not None or args.strip is not None:
         raise InvalidOptionError("--png and --strip need the whole mesh: not with parallel meshing")
+    if args.force and not args.partitioned:
+        raise InvalidOptionError("--force replaces an existing --partitioned -o DIRECTORY: give --partitioned")
+    if args.parts is not None:
+        params.integer("--parts", args.parts, low=1, what="number of parts")
     progress = sys.stderr.isatty()
     if args.partitioned:
         if args.output is None:
             raise InvalidOptionError("--partitioned needs -o DIRECTORY")
+        if args.renumber is not None:
+            raise InvalidOptionError("--renumber needs the whole mesh: not with --partitioned "
+                                     "(the pieces keep global ids in cycle order)")
+        from hammesh.parallel.partitioned import check_target
+
+        inputs = (args.input, args.input.with_suffix(".node"))
+        check_target(args.output, force=args.force, inputs=inputs)  # before any work
         from hammesh.io import write_report
         from hammesh.parallel.partitioned import write_partitioned
 
@@ -50,12 +61,17 @@ def run_parallel(args: argparse.Namespace) -> int:
             raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
         rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
                                 tiles=args.tiles, workers=args.workers, scheduler=args.scheduler, mode=args.mode,
-                                keep=args.keep, progress=progress)
+                                keep=args.keep, parts=args.parts, force=args.force, inputs=inputs,
+                                progress=progress)
         if args.report is not None:
             write_report(rep, args.report)
         par = rep["parallel"]
         print(f"{rep['triangles']:,} triangles in {len(rep['components'])} Hamiltonian cycle(s) over "
               f"{par['tiles']} tiles ({par['joins']} joins), verified per tile and across separators")
+        if args.parts is not None:
+            p = rep["partition"]
+            print(f"{p['k']} parts (cycle stretches): {p['size_min']:,}..{p['size_max']:,} triangles, "
+                  f"imbalance {p['imbalance']:.3f}")
         print(f"wrote index: {rep['index']} ({rep['pieces']} pieces)")
         return 0
     from hammesh.io import write, write_report
@@ -67,10 +83,14 @@ def run_parallel(args: argparse.Namespace) -> int:
     source = load_input(args.input, strict=args.strict)
     if not isinstance(source, Domain):
         raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-    with runner_for(workers=args.workers, scheduler=args.scheduler) as (runner, n):
+    with runner_for(workers=args.workers, scheduler=args.scheduler, mode=args.mode) as (runner, n):
         h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
                                  client=None if args.workers is None and args.scheduler is None else runner,
                                  mode=args.mode, keep=args.keep, progress=progress)
+    if args.parts is not None or args.renumber is not None:
+        from hammesh.partition import partitioned
+
+        h = partitioned(h, k=args.parts, renumber=args.renumber)  # the whole mesh is here: as without --workers
     if args.output is not None:
         write(h, args.output)
     if args.report is not None:

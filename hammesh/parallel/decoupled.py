@@ -33,8 +33,10 @@ def bad_corner_vertices(tile_vertex_ids: np.ndarray, n_input: int, mesh: Mesh, m
     without splitting a segment ``-Y`` protects."""
     if min_angle is None:
         return np.zeros(0, np.int64)
-    ang = min_angles_deg(mesh.points, mesh.triangles)
-    bad = mesh.triangles[ang < float(min_angle) * (1 - 1e-9)]
+    k = len(tile_vertex_ids)
+    near = mesh.triangles[(mesh.triangles < k).any(axis=1)]  # only these can have such a corner
+    ang = min_angles_deg(mesh.points, near)
+    bad = near[ang < float(min_angle) * (1 - 1e-9)]
     corners = np.unique(bad.ravel())
     corners = corners[corners < len(tile_vertex_ids)]
     ids = tile_vertex_ids[corners]

@@ -31,6 +31,7 @@ import numpy as np
 
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh
+from hammesh.parallel._kernels import area_sum
 from hammesh.parallel.tiles import Tile
 
 __all__ = ["BorderRows", "Join", "Plan", "border_rows", "plan_joins", "finish_tile", "TilePiece", "KIND_INPUT"]
@@ -96,8 +97,9 @@ def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
     rows, slot = [], []
     for s in range(3):
         a, b = tri[:, s], tri[:, (s + 1) % 3]
-        key = np.minimum(a, b) * n + np.maximum(a, b)
-        hit = np.flatnonzero(np.isin(key, key_sep))
+        near = np.flatnonzero((a < k) & (b < k))  # separator ends are the tile's own points
+        key = np.minimum(a[near], b[near]) * n + np.maximum(a[near], b[near])
+        hit = near[np.isin(key, key_sep)]
         rows.append(hit)
         slot.append(np.full(len(hit), s))
     rows = np.concatenate(rows)
@@ -127,13 +129,9 @@ def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
         run_length=L, after=after, before=before, kind=np.asarray(h.kind)[rows], xyz=xyz,
         min_angle=_min_angle_deg(xyz), run_starts=starts, n_points=n, n_triangles=len(tri),
         input_min_angle=float(h.report.get("min_angle_input_deg", 0.0)),
-        area=float(_areas(h.points, h.triangles).sum()),
+        area=float(area_sum(np.ascontiguousarray(h.points, dtype=np.float64),
+                            np.ascontiguousarray(h.triangles, dtype=np.int64))),
     )
-
-
-def _areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
-    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
 @dataclass(frozen=True)
@@ -199,18 +197,22 @@ class _UF:
         return True
 
 
-def _swap_min_angle(t_xyz: np.ndarray, d: np.ndarray) -> float:
-    """Smallest angle of ``adc, dbc`` after flipping ``ab`` of ``t = abc``, ``u = bad``;
-    0 if ``acbd`` is not strictly convex (the flip is not legal)."""
-    a, b, c = t_xyz
+def _swap_min_angles(t_xyz: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Smallest angle of ``adc, dbc`` after flipping ``ab`` of each ``t = abc``,
+    ``u = bad`` (``t_xyz (p, 3, 2)``, ``d (p, 2)``); 0 where ``acbd`` is not strictly
+    convex (the flip is not legal)."""
+    a, b, c = t_xyz[:, 0], t_xyz[:, 1], t_xyz[:, 2]
 
     def cross(o, p, q):
-        return (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0])
+        return (p[:, 0] - o[:, 0]) * (q[:, 1] - o[:, 1]) - (p[:, 1] - o[:, 1]) * (q[:, 0] - o[:, 0])
 
-    if not (cross(c, d, a) < 0 < cross(c, d, b)) and not (cross(c, d, b) < 0 < cross(c, d, a)):
-        return 0.0
-    tris = np.array([[a, d, c], [d, b, c]])
-    return float(_min_angle_deg(tris).min())
+    ca, cb = cross(c, d, a), cross(c, d, b)
+    legal = ((ca < 0) & (0 < cb)) | ((cb < 0) & (0 < ca))
+    if len(a) == 0:
+        return np.zeros(0)
+    tris = np.stack([np.stack([a, d, c], 1), np.stack([d, b, c], 1)], 1).reshape(-1, 3, 2)
+    low = _min_angle_deg(tris).reshape(-1, 2).min(axis=1)
+    return np.where(legal, low, 0.0)
 
 
 def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: float = 0.9,
@@ -248,48 +250,51 @@ def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: flo
             "exactly one triangle of one other tile, opposite: the tiles do not conform")
     if n_separators is not None and len(ent) != 2 * n_separators:
         raise VerificationError(f"{len(ent)} tile triangles hold the {n_separators} separator edges, not two each")
-    pairs = [(i, int(mate[i])) for i in np.flatnonzero(ok) if i < mate[i]]
-    uf_all = _UF(n_nodes)
-    cand = []
-    for i, j in pairs:
-        ti, ri = int(ent[i, 0]), int(ent[i, 1])
-        tj, rj = int(ent[j, 0]), int(ent[j, 1])
-        bi, bj = borders[ti], borders[tj]
-        ni = int(node_base[ti] + bi.run[ri])
-        nj = int(node_base[tj] + bj.run[rj])
-        uf_all.union(ni, nj)
-        usable = bi.run_length[ri] >= 3 and bj.run_length[rj] >= 3
-        usable = usable and bi.after[ri] >= 0 and bi.before[ri] >= 0 and bj.after[rj] >= 0 and bj.before[rj] >= 0
-        if not usable:
-            continue
-        whole = bi.kind[ri] == KIND_INPUT and bj.kind[rj] == KIND_INPUT
-        parents = min(bi.min_angle[ri], bj.min_angle[rj])
-        new = _swap_min_angle(bi.xyz[ri], bj.xyz[rj][2])
-        if new >= max(keep * parents, floor * (1 + SWAP_MARGIN)):
-            rank = 0  # a swap meeting the local quality rule: no Steiner point
-        elif whole:
-            rank = 1  # Thm 2.4's bridge, proven bound
-        elif new >= floor * (1 + SWAP_MARGIN):
-            rank = 2  # a swap keeping the certificate's bound
-        else:
-            rank = 3  # a bridge of triangles not kept whole: checked by the certificate only
-        cand.append((rank, -min(parents, new if rank in (0, 2) else parents), ti, ri, tj, rj, ni, nj))
-    cand.sort()
+    # every separator edge's two sides, as flat arrays in ``ent`` order
+    flat = {f: np.concatenate([getattr(b, f) for b in borders]) if borders else np.zeros(0)
+            for f in ("run", "run_length", "after", "before", "kind", "min_angle")}
+    xyz = np.concatenate([b.xyz for b in borders]) if borders else np.zeros((0, 3, 2))
+    i = np.flatnonzero(ok & (np.arange(len(ent)) < mate))
+    j = mate[i]
+    ni = node_base[ent[i, 0]] + flat["run"][i].astype(np.int64)
+    nj = node_base[ent[j, 0]] + flat["run"][j].astype(np.int64)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pieces, _ = connected_components(coo_matrix((np.ones(len(ni)), (ni, nj)), shape=(n_nodes, n_nodes)),
+                                     directed=False)
+    usable = ((flat["run_length"][i] >= 3) & (flat["run_length"][j] >= 3) & (flat["after"][i] >= 0)
+              & (flat["before"][i] >= 0) & (flat["after"][j] >= 0) & (flat["before"][j] >= 0))
+    i, j, ni, nj = i[usable], j[usable], ni[usable], nj[usable]
+    whole = (flat["kind"][i] == KIND_INPUT) & (flat["kind"][j] == KIND_INPUT)
+    parents = np.minimum(flat["min_angle"][i], flat["min_angle"][j])
+    new = _swap_min_angles(xyz[i], xyz[j][:, 2])
+    bound = floor * (1 + SWAP_MARGIN)
+    # 0: a swap meeting the local quality rule (no Steiner point); 1: Thm 2.4's bridge
+    # (proven bound); 2: a swap keeping the certificate's bound; 3: a bridge of triangles
+    # not kept whole (checked by the certificate only)
+    rank = np.where(new >= np.maximum(keep * parents, bound), 0, np.where(whole, 1, np.where(new >= bound, 2, 3)))
+    score = -np.minimum(parents, np.where((rank == 0) | (rank == 2), new, parents))
+    ti, ri, tj, rj = ent[i, 0], ent[i, 1], ent[j, 0], ent[j, 1]
+    order = np.lexsort((rj, tj, ri, ti, score, rank))  # best first, ties by tile and row
     uf = _UF(n_nodes)
     used: set[tuple[int, int]] = set()
     chosen = []
     fallback = 0
     swaps = {}
-    for rank, _, ti, ri, tj, rj, ni, nj in cand:
-        if (ti, ri) in used or (tj, rj) in used:
+    need = n_nodes - pieces
+    for q in order.tolist():
+        if len(chosen) == need:
+            break
+        a_, b_ = (int(ti[q]), int(ri[q])), (int(tj[q]), int(rj[q]))
+        if a_ in used or b_ in used:
             continue
-        if uf.union(ni, nj):
-            used.add((ti, ri))
-            used.add((tj, rj))
-            chosen.append((ti, ri, tj, rj, ni, nj))
-            swaps[(ti, ri)] = swaps[(tj, rj)] = rank in (0, 2)
-            fallback += int(rank == 3)
-    pieces = len({uf_all.find(i) for i in range(n_nodes)})
+        if uf.union(int(ni[q]), int(nj[q])):
+            used.add(a_)
+            used.add(b_)
+            chosen.append((a_[0], a_[1], b_[0], b_[1], int(ni[q]), int(nj[q])))
+            swaps[a_] = swaps[b_] = bool(rank[q] in (0, 2))
+            fallback += int(rank[q] == 3)
     if n_nodes - len(chosen) != pieces:
         raise VerificationError(
             f"could not join the tiles' {n_nodes} cycles into {pieces} (one per piece): "
@@ -417,10 +422,11 @@ def _check_join_triangles(tri, gid, points, joins, base, apex, floor, tile_index
 
 @dataclass(frozen=True, eq=False)
 class TilePiece:
-    """One tile's share of the output, in global numbering, rows in cycle order.
+    """One tile's share of the output, rows in cycle order.
 
-    ``point_ids`` / ``points``: the global points its triangles use; ``position``: the
-    global cycle position of each row.
+    ``point_ids`` / ``points``: the global id and coordinates of the points its
+    triangles use; ``triangles``: rows of indices into them (``point_ids[triangles]`` in
+    global numbering); ``position``: the global cycle position of each row.
     """
 
     tile: int
@@ -505,20 +511,8 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     if set(missing.tolist()) != removed:
         raise VerificationError(f"tile {tile_index}: the cycle plan does not cover its rows")
     keep = gpos >= 0
-    tri = gid[h.triangles[keep]]
-    pos = gpos[keep]
-    kind = np.asarray(h.kind)[keep].astype(np.int8)
-    parent = np.where(h.parent[keep] >= 0, triangle_offset + h.parent[keep], -1)
-    attr = attrs[keep]
-    if new_tri:
-        tri = np.concatenate([tri, np.asarray(new_tri, np.int64)])
-        pos = np.concatenate([pos, new_pos])
-        kind = np.concatenate([kind, np.asarray(new_kind, np.int8)])
-        parent = np.concatenate([parent, new_parent])
-        attr = np.concatenate([attr, np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])])
-    order = np.argsort(pos, kind="stable")
-    tri, pos, kind, parent, attr = tri[order], pos[order], kind[order], parent[order], attr[order]
-    # the points this piece uses: its own and the join points
+    # the points this piece uses: its own and the join points (a swap's apex d is the
+    # other tile's point: added unless this tile holds it too)
     jp_ids, jp_xy = [], []
     for j in joins:
         if j.swap:
@@ -529,13 +523,37 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
             continue
         jp_ids += [join_point_base + 2 * j.slot, join_point_base + 2 * j.slot + 1]
         jp_xy += [j.I_t, j.I_u]
-    ids = np.concatenate([gid, np.asarray(jp_ids, np.int64)])
-    xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)])
-    used = np.isin(ids, np.unique(tri))
+    jp_ids_a = np.asarray(jp_ids, np.int64)
+    # a swap's apex may be a prescribed point this tile holds too (its sorted vertex_ids)
+    at_v = np.minimum(np.searchsorted(tile.vertex_ids, jp_ids_a), max(k - 1, 0))
+    fresh = ~((tile.vertex_ids[at_v] == jp_ids_a) if k else np.zeros(len(jp_ids_a), bool))
+    ids = np.concatenate([gid, jp_ids_a[fresh]])
+    xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)[fresh]])
+    local = h.triangles[keep]
+    if new_tri:
+        nt = np.asarray(new_tri, np.int64)
+        want = np.unique(nt)
+        at = np.flatnonzero(np.isin(ids, want))  # few: the join triangles' corners
+        order_at = np.argsort(ids[at])
+        local = np.concatenate([local, at[order_at][np.searchsorted(ids[at][order_at], nt)]])
+    used = np.zeros(len(ids), bool)
+    used[local.ravel()] = True
+    renum = np.cumsum(used) - 1
+    pos = gpos[keep]
+    kind = np.asarray(h.kind)[keep].astype(np.int8)
+    parent = np.where(h.parent[keep] >= 0, triangle_offset + h.parent[keep], -1)
+    attr = attrs[keep]
+    if new_tri:
+        pos = np.concatenate([pos, new_pos])
+        kind = np.concatenate([kind, np.asarray(new_kind, np.int8)])
+        parent = np.concatenate([parent, new_parent])
+        attr = np.concatenate([attr, np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])])
+    order = np.argsort(pos, kind="stable")
+    local, pos, kind, parent, attr = renum[local[order]], pos[order], kind[order], parent[order], attr[order]
     # constrained edges: the tile's, minus its separators (interior edges of the union)
     segs = gid[h.segments]
     keys = np.sort(segs, axis=1) @ np.array([n_global, 1])
     keep_s = ~np.isin(keys, separator_keys)
-    return TilePiece(tile=tile_index, point_ids=ids[used], points=xy[used], triangles=tri, position=pos,
+    return TilePiece(tile=tile_index, point_ids=ids[used], points=xy[used], triangles=local, position=pos,
                      kind=kind, parent=parent, triangle_attributes=attr, segments=segs[keep_s],
                      segment_markers=np.asarray(h.segment_markers)[keep_s])

@@ -20,17 +20,21 @@ piece. ``hammesh check DIR/mesh.pvtu`` re-verifies the stitched mesh independent
 
 from __future__ import annotations
 
+import heapq
 import os
+import shutil
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
 from hammesh.domain import Domain
-from hammesh.errors import OutputError
-from hammesh.parallel.run import decompose_estimate, default_tiles, finish_all, run_tiles, progress_bar
+from hammesh.errors import InvalidOptionError, OutputError
+from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, progress_bar,
+                                  run_tiles)
 
-__all__ = ["write_partitioned", "INDEX_NAME", "piece_name"]
+__all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target"]
 
 INDEX_NAME = "mesh.pvtu"
 
@@ -39,24 +43,100 @@ def piece_name(tile: int) -> str:
     return f"piece_{tile:04d}.vtu"
 
 
-def _write_piece(piece, path: str, components: np.ndarray) -> tuple[str, int, int, int]:
+def parts_per_cycle(components: np.ndarray, k: int) -> np.ndarray:
+    """Parts given to each cycle: at least one each, the largest part as small as
+    possible (the rule of :func:`hammesh.partition.partition`); 0 for cycles that go
+    whole into a part when ``k`` is below the number of cycles (see :func:`stretch_parts`)."""
+    lengths = np.asarray(components, np.int64)
+    c = len(lengths)
+    if k < c:
+        return np.zeros(c, np.int64)
+    per = np.ones(c, np.int64)
+    heap = [(-int(n), i) for i, n in enumerate(lengths)]
+    heapq.heapify(heap)
+    for _ in range(k - c):
+        _, i = heapq.heappop(heap)
+        per[i] += 1
+        heapq.heappush(heap, ((-int(lengths[i])) // int(per[i]), i))  # -ceil(n / parts)
+    return per
+
+
+def stretch_parts(position: np.ndarray, components: np.ndarray, k: int) -> np.ndarray:
+    """Part of each row from its global cycle position alone: ``k`` balanced stretches
+    of the cycles (``--parts`` with ``--partitioned``; every worker labels its own rows).
+
+    A stretch of a Hamiltonian cycle is edge-connected, so every part is one connected
+    piece, sizes within one triangle of each other per cycle. The stretches start at
+    ``floor(j n / k)`` (what :func:`hammesh.partition.partition` does with shift 0: its
+    search for the shift cutting fewest edges needs the whole mesh). With fewer parts
+    than cycles, whole cycles go, largest first, to the lightest part.
+    """
+    lengths = np.asarray(components, np.int64)
+    ends = np.cumsum(lengths)
+    cyc = np.searchsorted(ends, position, side="right")
+    cpos = position - (ends - lengths)[cyc]
+    per = parts_per_cycle(lengths, k)
+    if k >= len(lengths):
+        base = np.concatenate([[0], np.cumsum(per)[:-1]])
+        return base[cyc] + ((cpos + 1) * per[cyc] - 1) // lengths[cyc]
+    owner = np.zeros(len(lengths), np.int64)
+    load = [(0, j) for j in range(k)]
+    for r in np.argsort(-lengths, kind="stable").tolist():
+        w, j = heapq.heappop(load)
+        owner[r] = j
+        heapq.heappush(load, (w + int(lengths[r]), j))
+    return owner[cyc]
+
+
+def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, parts: int | None):
+    """On the tile's worker: number its rows globally (its side of the joins), write its
+    piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``."""
     from hammesh.io.pvtu import write_piece
 
+    t0 = time.perf_counter()
+    piece = finish_outcome(outcome, *args)
+    t1 = time.perf_counter()
     ends = np.cumsum(components)
     cid = np.searchsorted(ends, piece.position, side="right")
     cpos = piece.position - (ends - components)[cid]
+    part = None if parts is None else stretch_parts(piece.position, components, parts)
     write_piece(path, piece.point_ids, piece.points, piece.triangles, piece.position, cid, cpos, piece.parent,
-                piece.kind, piece.triangle_attributes)
+                piece.kind, piece.triangle_attributes, part=part, local=True)
     first = int(piece.position[0]) if len(piece.position) else -1
     width = piece.triangle_attributes.shape[1] if piece.triangle_attributes.ndim == 2 else 0
-    return Path(path).name, len(piece.triangles), first, width
+    sizes = None if part is None else np.bincount(part, minlength=parts)
+    return (Path(path).name, len(piece.triangles), first, width, sizes,
+            {"finish": t1 - t0, "write": time.perf_counter() - t1})
+
+
+def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
+    """Refuse an output directory that is a file, holds an input, or is not empty
+    (unless ``force``: then its content is replaced once the new one is complete)."""
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"{out}: --partitioned writes a directory; this is a file")
+    target = out.resolve()
+    for p in inputs:
+        q = Path(p).resolve()
+        if q == target or target in q.parents:
+            raise OutputError(f"{out}: holds the input {p}; choose another output directory")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise OutputError(f"{out}: directory exists and is not empty (--force replaces its content)")
 
 
 def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_angle: float | None = None,
                       max_area: float, tiles: int | None = None, workers: int | None = None, client=None,
                       scheduler: str | None = None, mode: str = "sparse", keep: float = 0.9,
+                      parts: int | None = None, force: bool = False, inputs: tuple = (),
                       progress: bool = False) -> dict:
     """Mesh ``domain`` on the tiles and write ``DIRECTORY/mesh.pvtu`` + one ``.vtu`` per tile.
+
+    Everything is written into a fresh directory beside ``DIRECTORY`` and renamed onto it
+    when complete: a failed or interrupted run leaves nothing behind, and no stale piece
+    of an earlier run survives. An existing non-empty ``DIRECTORY`` is refused unless
+    ``force`` (then replaced); one holding an ``inputs`` path always.
+
+    ``parts``: a ``part`` cell array of ``parts`` balanced stretches of the cycle
+    (:func:`stretch_parts`); the report gains ``"partition"`` (sizes, imbalance).
 
     Returns the report (counts, seconds, ``index`` path). Pieces are written by the
     worker that made them; the index lists them in the order the cycle enters them.
@@ -65,49 +145,93 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     from hammesh.parallel.cluster import runner_for
 
     out = Path(directory)
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"{out}: --partitioned writes a directory; this is a file")
+    check_target(out, force=force, inputs=inputs)
+    if parts is not None and (isinstance(parts, bool) or not isinstance(parts, (int, np.integer)) or parts < 1):
+        raise InvalidOptionError(f"parts must be a positive integer, got {parts!r}")
     t0 = time.perf_counter()
-    written: list[Path] = []
-    created = not out.exists()
+    parent = out.absolute().parent
+    made = [d for d in [parent, *parent.parents] if not d.exists()]
+    parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=parent))
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(work, 0o777 & ~umask)  # mkdtemp's 0700 would become the output's mode
+    spill = work / ".spill"
     try:
-        with runner_for(workers=workers, client=client, scheduler=scheduler) as (runner, n_workers):
+        with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode) as (runner, n_workers):
             if tiles is None:
                 tiles = default_tiles(decompose_estimate(domain, min_angle, max_area), n_workers)
+            # a worker holding more than one tile keeps none in memory until the plan
+            spill_dir = None
+            if tiles > n_workers:
+                spill.mkdir()
+                spill_dir = spill
             tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
-                              mode=mode, keep=keep, progress=progress_bar(progress, 3))
-            out.mkdir(parents=True, exist_ok=True)
-            pieces = finish_all(tiled, runner)
-            paths = [out / piece_name(i) for i in range(len(pieces))]
-            written += paths
-            done = runner.gather([runner.submit(_write_piece, p, str(path), tiled.plan.components)
-                                  for p, path in zip(pieces, paths)])
+                              mode=mode, keep=keep, progress=progress_bar(progress, 2), spill_dir=spill_dir)
+            comps = tiled.plan.components
+            if parts is not None and parts > int(comps.sum()):
+                raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
+            t1 = time.perf_counter()
+            done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
+                                                pure=False)
+                                  for i, (h, a) in enumerate(zip(tiled.outcomes, finish_args(tiled)))])
+            t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
         order = sorted(range(len(done)), key=lambda i: done[i][2])
-        index = out / INDEX_NAME
-        written.append(index)
-        write_index(index, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done))
+        write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done))
+        for i, d in enumerate(done):
+            if d[1] == 0:
+                (work / d[0]).unlink()
+        if spill.exists():
+            shutil.rmtree(spill)
+        _replace_dir(work, out)
     except BaseException:
-        for p in written:
-            for q in (p, p.with_name(p.name + ".part")):
-                if q.exists():
-                    q.unlink()
-        if created and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()
+        shutil.rmtree(work, ignore_errors=True)
+        for d in made:  # parents this call created, innermost first
+            try:
+                d.rmdir()
+            except OSError:
+                break
         raise
-    t1 = time.perf_counter()
+    t3 = time.perf_counter()
     d = tiled.decomposition
-    return {
-        "index": str(index), "pieces": len(done), "triangles": int(sum(x[1] for x in done)),
-        "components": tiled.plan.components.tolist(), "verified": True,
+    report = {
+        "index": str(out / INDEX_NAME), "pieces": sum(x[1] > 0 for x in done), "triangles": int(sum(x[1] for x in done)),
+        "components": comps.tolist(), "verified": True,
         "parallel": {"tiles": d.n_tiles, "workers": n_workers, "repair_rounds": tiled.rounds,
                      "joins": len(tiled.plan.joins), "join_swaps": sum(j.swap for j in tiled.plan.joins),
                      "joins_not_whole": tiled.plan.fallback_joins, "tile_cycles": tiled.plan.nodes,
                      "pieces": tiled.plan.pieces, "estimate": d.estimate,
-                     "mesh_triangles": int(tiled.mesh_triangles.sum()),
-                     "seconds": {**tiled.seconds, "total": t1 - t0},
+                     "mesh_triangles": int(tiled.mesh_triangles.sum()), "spilled": spill_dir is not None,
+                     "seconds": {**tiled.seconds, "pieces": t2 - t1, "index": t3 - t2, "total": t3 - t0},
+                     "tile_seconds": {**tiled.tile_seconds,
+                                      "finish": sum(x[5]["finish"] for x in done),
+                                      "write": sum(x[5]["write"] for x in done)},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
+    if parts is not None:
+        sizes = np.sum([x[4] for x in done], axis=0)
+        report["partition"] = {"k": int(parts), "scheme": "cycle stretches (shift 0)",
+                               "size_min": int(sizes.min()), "size_max": int(sizes.max()),
+                               "imbalance": float(sizes.max() * parts / sizes.sum())}
+    return report
+
+
+def _replace_dir(work: Path, out: Path) -> None:
+    """Rename the finished ``work`` onto ``out``; an existing ``out`` (empty, or
+    ``--force``) is moved aside first and removed after."""
+    if not out.exists():
+        os.rename(work, out)
+        return
+    old = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".old", dir=work.parent))
+    old.rmdir()
+    os.rename(out, old)
+    try:
+        os.rename(work, out)
+    except BaseException:
+        os.rename(old, out)  # put the old content back
+        raise
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def peak_rss_mb() -> float:

@@ -8,8 +8,10 @@ Hamiltonian meshes stay where they were made (Dask futures on the workers). Only
 
 from __future__ import annotations
 
+import os
+import pickle
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -18,12 +20,13 @@ from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.parallel.decoupled import MAX_ROUNDS, bad_corner_vertices
-from hammesh.parallel.joins import Plan, border_rows, finish_tile, plan_joins
+from hammesh.parallel.joins import BorderRows, Plan, TilePiece, border_rows, finish_tile, plan_joins
 from hammesh.parallel.tile_mesh import mesh_tile
 from hammesh.parallel.tiles import Decomposition, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
-__all__ = ["LocalRunner", "Tiled", "run_tiles", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar"]
+__all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
+           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar"]
 
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
@@ -40,9 +43,12 @@ class _Done:
 class LocalRunner:
     """Runs every task at once in this process (the ``submit``/``gather`` of a Dask client)."""
 
+    #: Dask's scheduling keywords, meaningless here
+    DASK_KEYWORDS = frozenset({"pure", "workers", "allow_other_workers", "key", "priority", "resources", "retries"})
+
     def submit(self, fn: Callable, *args: Any, **kw: Any) -> _Done:
         args = tuple(a.value if isinstance(a, _Done) else a for a in args)
-        return _Done(fn(*args, **kw))
+        return _Done(fn(*args, **{k: v for k, v in kw.items() if k not in self.DASK_KEYWORDS}))
 
     def gather(self, futures: list) -> list:
         return [f.value for f in futures]
@@ -53,18 +59,78 @@ def default_tiles(estimate: float, workers: int) -> int:
     return max(int(workers), int(np.ceil(estimate / TRIANGLES_PER_TILE)))
 
 
-def _tile_stats(mesh: Mesh, vertex_ids: np.ndarray, n_input: int, min_angle):
-    return bad_corner_vertices(vertex_ids, n_input, mesh, min_angle), mesh.n_points, mesh.n_triangles
+@dataclass(frozen=True, eq=False)
+class TileOutcome:
+    """What one tile's task made: its Triangle mesh's counts, the bad corners that call
+    for a repair round (then nothing else), or its Hamiltonian mesh's border rows.
+
+    ``mesh`` / ``ham`` stay on the worker (a Dask future holds them) and are None in the
+    summary the driver gathers (:meth:`small`); ``spill`` names a file holding ``ham``
+    instead, when a worker would otherwise keep several tiles' meshes in memory until
+    the joins are planned. ``seconds``: the worker's time per step.
+    """
+
+    tile: int
+    bad: np.ndarray
+    n_mesh_points: int
+    n_mesh_triangles: int
+    border: BorderRows | None
+    seconds: dict
+    mesh: Mesh | None = None
+    ham: HamiltonianMesh | None = None
+    spill: str | None = None
+
+    def small(self) -> "TileOutcome":
+        return replace(self, mesh=None, ham=None)
 
 
-def _tile_hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
+def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode: str, keep: float,
+              keep_mesh: bool = False, spill: str | None = None, check: bool = True) -> TileOutcome:
+    """Mesh one tile, check its prescribed corners, make it Hamiltonian (certified), take
+    its border rows: one task, so a worker goes from Triangle to the cycle without
+    waiting for the other tiles (a repair round is rare: then only the mesh's counts
+    and the bad corners come back). ``check=False``: no repair check (last round)."""
     from hammesh.postprocess import hamiltonian
 
-    return hamiltonian(mesh, mode=mode, keep=keep)
+    t0 = time.perf_counter()
+    mesh = mesh_tile(tile, min_angle, max_area)
+    t1 = time.perf_counter()
+    bad = bad_corner_vertices(tile.vertex_ids, n_input, mesh, min_angle) if check else np.zeros(0, np.int64)
+    sec = {"mesh": t1 - t0}
+    if len(bad):
+        return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
+                           border=None, seconds=sec)
+    ham = hamiltonian(mesh, mode=mode, keep=keep)
+    t2 = time.perf_counter()
+    border = border_rows(ham, tile, tile.index)
+    t3 = time.perf_counter()
+    if spill is not None:
+        with open(spill, "wb") as f:  # read back by finish_outcome on a worker (our own file)
+            pickle.dump(ham, f, protocol=pickle.HIGHEST_PROTOCOL)
+        ham = None
+    sec.update(hamiltonian=t2 - t1, border=t3 - t2, spill=time.perf_counter() - t3)
+    return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
+                       border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill)
 
 
-def _n_points(h: HamiltonianMesh) -> int:
-    return len(h.points)
+def _small(outcome: TileOutcome) -> TileOutcome:
+    return outcome.small()
+
+
+def _outcome_mesh(outcome: TileOutcome) -> Mesh:
+    return outcome.mesh
+
+
+def outcome_hamiltonian(outcome: TileOutcome, drop_spill: bool = True) -> HamiltonianMesh:
+    """The tile's Hamiltonian mesh: held by the outcome, or read from its spill file
+    (removed after reading when ``drop_spill``)."""
+    if outcome.ham is not None:
+        return outcome.ham
+    with open(outcome.spill, "rb") as f:
+        h = pickle.load(f)
+    if drop_spill:
+        os.unlink(outcome.spill)
+    return h
 
 
 @dataclass
@@ -72,8 +138,7 @@ class Tiled:
     """What the driver knows after :func:`run_tiles`: the plan and handles to the tiles' results."""
 
     decomposition: Decomposition
-    meshes: list  # handles (futures) to the tile meshes
-    hams: list  # handles to the tile Hamiltonian meshes
+    outcomes: list  # handles (futures) to the tiles' TileOutcome (mesh / Hamiltonian mesh on the worker)
     plan: Plan
     mesh_points: np.ndarray
     mesh_triangles: np.ndarray
@@ -81,59 +146,67 @@ class Tiled:
     rounds: int
     seconds: dict
     borders: list
+    tile_seconds: dict
 
 
 def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles: int, runner=None,
-              mode: str = "sparse", keep: float = 0.9, progress: Callable[[str, int], None] | None = None) -> Tiled:
-    """Decompose, mesh every tile (with repair rounds), make each Hamiltonian, plan the joins."""
+              mode: str = "sparse", keep: float = 0.9, progress: Callable[[str, int], None] | None = None,
+              keep_meshes: bool = False, spill_dir: str | os.PathLike[str] | None = None) -> Tiled:
+    """Decompose, run every tile's task (mesh, repair check, Hamiltonian), repair, plan the joins.
+
+    ``keep_meshes``: the workers keep the tile meshes (for the union certificate);
+    ``spill_dir``: the workers write each tile's Hamiltonian mesh there instead of
+    keeping it in memory until the plan is made.
+    """
     run = runner or LocalRunner()
     note = progress or (lambda what, n: None)
     t0 = time.perf_counter()
-    warming = warm_workers(run)  # noqa: F841  (kept alive while the tiles run)
+    warming = warm_workers(run, mode)  # noqa: F841  (kept alive while the tiles run)
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
-    meshes = [run.submit(mesh_tile, t, min_angle, max_area) for t in decomp.tiles]
-    stats = [run.submit(_tile_stats, m, t.vertex_ids, decomp.n_input, min_angle) for m, t in zip(meshes, decomp.tiles)]
-    results = run.gather(stats)
-    note("meshed", len(results))
+
+    def submit(i: int, check: bool = True):
+        spill = None if spill_dir is None else os.path.join(str(spill_dir), f"tile_{i:06d}.pickle")
+        return run.submit(tile_task, decomp.tiles[i], decomp.n_input, min_angle, max_area, mode, keep, keep_meshes,
+                          spill, check, pure=False)
+
+    handles = [submit(i) for i in range(decomp.n_tiles)]
+    small = run.gather([run.submit(_small, h, pure=False) for h in handles])
     rounds = 0
-    while rounds < MAX_ROUNDS:
-        ids = np.unique(np.concatenate([r[0] for r in results]))
-        if len(ids) == 0:
-            break
+    while any(len(o.bad) for o in small):
+        ids = np.unique(np.concatenate([o.bad for o in small]))
         rows = np.flatnonzero(np.isin(decomp.segments, ids).any(axis=1))
         decomp, changed = split_segments(decomp, rows)
         rounds += 1
-        for i in changed.tolist():
-            meshes[i] = run.submit(mesh_tile, decomp.tiles[i], min_angle, max_area)
-        again = run.gather([run.submit(_tile_stats, meshes[i], decomp.tiles[i].vertex_ids, decomp.n_input, min_angle)
-                            for i in changed.tolist()])
-        results = list(results)
-        for i, r in zip(changed.tolist(), again):
-            results[i] = r
-        results = [r if i in set(changed.tolist()) else (np.zeros(0, np.int64),) + tuple(r[1:])
-                   for i, r in enumerate(results)]
+        redo = sorted(set(changed.tolist()) | {i for i, o in enumerate(small) if len(o.bad)})
+        for i in redo:
+            handles[i] = submit(i, check=rounds < MAX_ROUNDS)
+        again = run.gather([run.submit(_small, handles[i], pure=False) for i in redo])
+        for i, o in zip(redo, again):
+            small[i] = o
+    note("tiles", len(small))
     t2 = time.perf_counter()
-    hams = [run.submit(_tile_hamiltonian, m, mode, keep) for m in meshes]
-    borders = run.gather([run.submit(border_rows, h, t, i) for i, (h, t) in enumerate(zip(hams, decomp.tiles))])
-    note("hamiltonian", len(borders))
-    t3 = time.perf_counter()
+    borders = [o.border for o in small]
     plan = plan_joins(borders, len(decomp.vertices), keep=keep, n_separators=int(decomp.separator.sum()))
     area = sum(b.area for b in borders)
     if abs(area - decomp.area) > 1e-9 * abs(decomp.area) * max(1.0, np.sqrt(sum(b.n_triangles for b in borders))):
         raise VerificationError(f"the tiles' area {area!r} differs from the domain's {decomp.area!r}")
-    mesh_points = np.array([r[1] for r in results], np.int64)
-    mesh_triangles = np.array([r[2] for r in results], np.int64)
+    mesh_points = np.array([o.n_mesh_points for o in small], np.int64)
+    mesh_triangles = np.array([o.n_mesh_triangles for o in small], np.int64)
     ham_points = np.array([b.n_points for b in borders], np.int64)
-    t4 = time.perf_counter()
-    return Tiled(decomposition=decomp, meshes=meshes, hams=hams, plan=plan, mesh_points=mesh_points,
+    t3 = time.perf_counter()
+    tile_seconds: dict = {}
+    for o in small:
+        for k, v in o.seconds.items():
+            tile_seconds[k] = tile_seconds.get(k, 0.0) + v
+    return Tiled(decomposition=decomp, outcomes=handles, plan=plan, mesh_points=mesh_points,
                  mesh_triangles=mesh_triangles, ham_points=ham_points, rounds=rounds, borders=borders,
-                 seconds={"decompose": t1 - t0, "mesh": t2 - t1, "hamiltonian": t3 - t2, "plan": t4 - t3})
+                 seconds={"decompose": t1 - t0, "tiles": t2 - t1, "plan": t3 - t2}, tile_seconds=tile_seconds)
 
 
-def finish_all(tiled: Tiled, runner=None) -> list:
-    """Handles to every tile's :class:`~hammesh.parallel.joins.TilePiece` (global numbering)."""
-    run = runner or LocalRunner()
+def finish_args(tiled: Tiled) -> list[tuple]:
+    """Per tile, the arguments of :func:`~hammesh.parallel.joins.finish_tile` after its
+    Hamiltonian mesh (global numbering offsets, its blocks of the plan, its joins)."""
     d = tiled.decomposition
     k = np.array([len(t.vertex_ids) for t in d.tiles], np.int64)
     n0 = len(d.vertices)
@@ -161,16 +234,34 @@ def finish_all(tiled: Tiled, runner=None) -> list:
             r = int(np.flatnonzero(bu.row == j.u_row)[0])
             apex[j.index] = (global_id(j.u_tile, int(bu.z_local[r])), tuple(bu.xyz[r][2].tolist()))
     sep = np.sort(d.segments[d.separator], axis=1) @ np.array([n_global, 1])
-    pieces = []
+    floor = 0.5 * min(b.input_min_angle for b in tiled.borders)
+    blocks_of: dict[int, list] = {i: [] for i in range(d.n_tiles)}
+    starts_of: dict[int, list] = {i: [] for i in range(d.n_tiles)}
+    for bk, s in zip(tiled.plan.blocks, tiled.plan.start.tolist()):
+        blocks_of[bk[0]].append(bk)
+        starts_of[bk[0]].append(s)
+    joins_of: dict[int, list] = {i: [] for i in range(d.n_tiles)}
+    for j in tiled.plan.joins:
+        joins_of[j.t_tile].append(j)
+        if j.u_tile != j.t_tile:
+            joins_of[j.u_tile].append(j)
+    out = []
     for i, t in enumerate(d.tiles):
-        mine = [bk for bk in tiled.plan.blocks if bk[0] == i]
-        starts = np.array([s for bk, s in zip(tiled.plan.blocks, tiled.plan.start.tolist()) if bk[0] == i], np.int64)
-        joins = [j for j in tiled.plan.joins if i in (j.t_tile, j.u_tile)]
-        pieces.append(run.submit(finish_tile, tiled.hams[i], t, i, mine, starts, joins, int(mesh_off[i]),
-                                 int(tiled.mesh_points[i]), int(ham_off[i]), join_base, int(tri_off[i]), sep, n_global,
-                                 {ji: v for ji, v in apex.items() if tiled.plan.joins[ji].t_tile == i},
-                                 0.5 * min(b.input_min_angle for b in tiled.borders)))
-    return pieces
+        out.append((t, i, blocks_of[i], np.array(starts_of[i], np.int64), joins_of[i], int(mesh_off[i]),
+                    int(tiled.mesh_points[i]), int(ham_off[i]), join_base, int(tri_off[i]), sep, n_global,
+                    {ji: v for ji, v in apex.items() if tiled.plan.joins[ji].t_tile == i}, floor))
+    return out
+
+
+def finish_outcome(outcome: TileOutcome, *args) -> TilePiece:
+    """:func:`~hammesh.parallel.joins.finish_tile` of a tile's outcome (on its worker)."""
+    return finish_tile(outcome_hamiltonian(outcome), *args)
+
+
+def finish_all(tiled: Tiled, runner=None) -> list:
+    """Handles to every tile's :class:`~hammesh.parallel.joins.TilePiece` (global numbering)."""
+    run = runner or LocalRunner()
+    return [run.submit(finish_outcome, h, *a, pure=False) for h, a in zip(tiled.outcomes, finish_args(tiled))]
 
 
 def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_area: float, tiles: int | None = None,
@@ -202,15 +293,15 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
     from hammesh.parallel.cluster import runner_for
 
     t0 = time.perf_counter()
-    with runner_for(workers=workers, client=client) as (runner, n_workers):
+    with runner_for(workers=workers, client=client, mode=mode) as (runner, n_workers):
         if tiles is None:
             est = decompose_estimate(domain, min_angle, max_area)
             tiles = default_tiles(est, n_workers)
         tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
-                          mode=mode, keep=keep, progress=progress_bar(progress, 3))
+                          mode=mode, keep=keep, progress=progress_bar(progress, 1), keep_meshes=verify)
         t1 = time.perf_counter()
         pieces = runner.gather(finish_all(tiled, runner))
-        meshes = runner.gather(tiled.meshes) if verify else None
+        meshes = runner.gather([runner.submit(_outcome_mesh, h, pure=False) for h in tiled.outcomes]) if verify else None
     h = _join_pieces(tiled, pieces)
     t2 = time.perf_counter()
     report = dict(h.report)
@@ -233,6 +324,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
         "tile_cycles": tiled.plan.nodes, "pieces": tiled.plan.pieces,
         "estimate": tiled.decomposition.estimate, "mesh_triangles": int(tiled.mesh_triangles.sum()),
         "seconds": {**tiled.seconds, "finish": t2 - t1, "verify": t3 - t2, "total": t3 - t0},
+        "tile_seconds": tiled.tile_seconds,
     }
     report["triangles"] = int(len(h.triangles))
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,
@@ -259,19 +351,19 @@ def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
     return area / (AREA_FILL * float(max_area))
 
 
-def _warm() -> None:
+def _warm(mode: str) -> None:
     from hammesh.postprocess import load_kernels
 
-    load_kernels("sparse")
-    load_kernels("incircle")
+    load_kernels(mode)
 
 
-def warm_workers(runner) -> list:
-    """Load the compiled kernels on every Dask worker now, beside the decomposition."""
+def warm_workers(runner, mode: str = "sparse") -> list:
+    """Load the compiled kernels (of ``mode``) on every Dask worker now, beside the
+    decomposition on the driver."""
     info = getattr(runner, "scheduler_info", None)
     if info is None:
         return []
-    return [runner.submit(_warm, workers=[addr], pure=False, allow_other_workers=False)
+    return [runner.submit(_warm, mode, workers=[addr], pure=False, allow_other_workers=False)
             for addr in info().get("workers", {})]
 
 
@@ -305,7 +397,7 @@ def _join_pieces(tiled: Tiled, pieces: list) -> HamiltonianMesh:
     order = np.argsort(pos, kind="stable")
     if not np.array_equal(pos[order], np.arange(len(pos))):
         raise InvalidOptionError("internal: the tiles' cycle positions do not cover 0..m-1")
-    tri = np.concatenate([p.triangles for p in pieces])[order]
+    tri = np.concatenate([p.point_ids[p.triangles] for p in pieces])[order]
     kind = np.concatenate([p.kind for p in pieces])[order]
     parent = np.concatenate([p.parent for p in pieces])[order]
     width = max(p.triangle_attributes.shape[1] if p.triangle_attributes.ndim == 2 else 0 for p in pieces)

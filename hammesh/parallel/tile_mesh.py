@@ -9,26 +9,70 @@ from hammesh.mesh import Mesh
 from hammesh.meshing.options import format_number
 from hammesh.parallel.tiles import Tile
 
-__all__ = ["tile_switches", "mesh_tile", "region_attributes"]
+__all__ = ["tile_switches", "mesh_tile", "region_attributes", "locate_in_triangles"]
 
 
-def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Regional attribute of every triangle: that of the coarse triangle holding its centroid.
+def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,
+                      segments: np.ndarray) -> np.ndarray:
+    """Regional attribute of every triangle, read off the coarse mesh once per region piece.
 
     Triangle spreads a region's attribute from its point up to the segments around it;
-    a tile's part of a region need not hold the point, so the attribute is read off
-    the coarse mesh (which Triangle gave the attributes) instead. Region boundaries
-    are segments, so no tile triangle straddles two regions.
+    a tile's part of a region need not hold the point, so the attribute comes from the
+    coarse mesh (which Triangle gave the attributes). Region boundaries are segments, so
+    the tile's triangles fall into pieces (dual components, never crossing a segment)
+    that each lie in one region: one coarse point location per piece, not per
+    triangle (locating all of them cost ~1 s per 750k triangles plus the locator).
     """
-    from matplotlib.tri import Triangulation
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
 
-    rp = tile.region_points
-    finder = Triangulation(rp[:, 0], rp[:, 1], tile.region_triangles).get_trifinder()
-    c = points[triangles].mean(axis=1)
-    where = np.asarray(finder(c[:, 0], c[:, 1]))
+    m, n = len(triangles), len(points)
+    values = np.unique(tile.region_attribute)
+    if len(values) == 1:  # the tile lies in one region (or in none)
+        return np.full(m, values[0])
+    seg_keys = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], np.int64))
+    on_any = np.zeros(n, bool)
+    on_any[segments.ravel()] = True
+    rows, cols = [], []
+    for s in range(3):  # neighbors[:, s] is across edge (s, s + 1)
+        a, b = triangles[:, s], triangles[:, (s + 1) % 3]
+        on_seg = np.zeros(m, bool)
+        near = np.flatnonzero(on_any[a] & on_any[b])  # only these edges can be segments
+        if len(seg_keys) and len(near):
+            key = np.minimum(a[near], b[near]) * n + np.maximum(a[near], b[near])
+            at = np.minimum(np.searchsorted(seg_keys, key), len(seg_keys) - 1)
+            on_seg[near] = seg_keys[at] == key
+        nb = neighbors[:, s]
+        keep = (nb > np.arange(m)) & ~on_seg
+        rows.append(np.flatnonzero(keep))
+        cols.append(nb[keep])
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    graph = coo_matrix((np.ones(len(r), np.int8), (r, c)), shape=(m, m)).tocsr()
+    n_comp, label = connected_components(graph, directed=False)
+    _, first = np.unique(label, return_index=True)
+    where = locate_in_triangles(tile.region_points, tile.region_triangles, points[triangles[first]].mean(axis=1))
     if (where < 0).any():
         raise MeshingError(f"tile {tile.index}: a triangle lies outside the coarse mesh (regions)")
-    return tile.region_attribute[where]
+    return tile.region_attribute[where][label]
+
+
+def locate_in_triangles(p: np.ndarray, t: np.ndarray, q: np.ndarray, chunk: int = 64) -> np.ndarray:
+    """For each query point, the triangle of ``(p, t)`` holding it most deeply (largest
+    smallest barycentric coordinate), -1 if none holds it (tolerance 1e-9). Brute force
+    over the triangles, ``chunk`` points at a time: meant for few queries."""
+    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+    det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    det = np.where(det == 0, np.inf, det)
+    out = np.full(len(q), -1, np.int64)
+    for i in range(0, len(q), chunk):
+        x, y = q[i:i + chunk, 0:1], q[i:i + chunk, 1:2]
+        l1 = ((b[:, 0] - x) * (c[:, 1] - y) - (b[:, 1] - y) * (c[:, 0] - x)) / det
+        l2 = ((c[:, 0] - x) * (a[:, 1] - y) - (c[:, 1] - y) * (a[:, 0] - x)) / det
+        depth = np.minimum(np.minimum(l1, l2), 1 - l1 - l2)
+        best = depth.argmax(axis=1) if len(t) else np.zeros(len(x), np.int64)
+        ok = depth[np.arange(len(x)), best] >= -1e-9 if len(t) else np.zeros(len(x), bool)
+        out[i:i + chunk] = np.where(ok, best, -1)
+    return out
 
 
 def tile_switches(min_angle: float | None, max_area: float) -> str:
@@ -69,14 +113,15 @@ def mesh_tile(tile: Tile, min_angle: float | None, max_area: float) -> Mesh:
     pts = np.asarray(out["vertices"], dtype=np.float64)
     if len(pts) < len(tile.vertices) or not np.array_equal(pts[: len(tile.vertices)], tile.vertices):
         raise MeshingError(f"Triangle did not keep tile {tile.index}'s vertices in order")
+    segs = np.asarray(out.get("segments", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2)
     attrs = np.zeros((len(tri), 0))
     if len(tile.region_triangles):
-        attrs = region_attributes(tile, pts, tri)[:, None]
+        attrs = region_attributes(tile, pts, tri, nbr, segs)[:, None]
     return Mesh(
         points=pts,
         triangle_attributes=attrs,
         triangles=tri,
-        segments=np.asarray(out.get("segments", np.zeros((0, 2))), dtype=np.int64).reshape(-1, 2),
+        segments=segs,
         segment_markers=np.asarray(out.get("segment_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1),
         neighbors=nbr,
         info={"backend": "triangle", "switches": tile_switches(min_angle, max_area), "tile": tile.index},

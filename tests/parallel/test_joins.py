@@ -53,3 +53,14 @@ def test_one_tile_is_the_plain_pipeline():
     assert h.report["parallel"]["joins"] == 0
     assert len(h.components) == 1
     assert_cycles(h)
+
+
+def test_swap_min_angles_of_a_square_and_of_a_reflex_quad():
+    from hammesh.parallel.joins import _swap_min_angles
+
+    # t = a b c, u = b a d on the unit square's diagonal a-b: flipping gives two 45-45-90
+    t = np.array([[[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]],    # a, b, c
+                  [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]])
+    d = np.array([[1.0, 0.0], [3.0, 2.0]])  # second: reflex at b, the flip is not legal
+    got = _swap_min_angles(t, d)
+    assert np.isclose(got[0], 45.0) and got[1] == 0.0

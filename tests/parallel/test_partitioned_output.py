@@ -1,0 +1,201 @@
+"""``--partitioned -o DIR``: never into a non-empty DIR without ``--force``, never a stray
+or half-written file; ``--parts`` with the parallel path; the raw pieces (issue 15)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import hammesh
+from hammesh.cli import main
+from hammesh.errors import FileFormatError, OutputError
+from hammesh.io import pvtu
+from hammesh.parallel import partitioned as P
+from hammesh.parallel.tile_mesh import locate_in_triangles
+from tests.helpers import dual_pieces
+
+DEMO = str(Path(hammesh.__file__).parent / "data" / "demo.poly")
+ARGS = ["mesh", DEMO, "-q", "30", "-a", "4e-3"]
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    return err
+
+
+def test_non_empty_directory_is_refused_and_left_as_it_was(tmp_path, capsys):
+    out = tmp_path / "parts"
+    out.mkdir()
+    (out / "piece_0009.vtu").write_text("an earlier run's piece")
+    assert main([*ARGS, "--tiles", "2", "--partitioned", "-o", str(out)]) == 2
+    assert "not empty" in _one_line_error(capsys)
+    assert sorted(p.name for p in out.iterdir()) == ["piece_0009.vtu"]
+    assert (out / "piece_0009.vtu").read_text() == "an earlier run's piece"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["parts"]  # no temp directory beside it
+
+
+def test_force_replaces_the_content_no_stale_piece_survives(tmp_path, capsys):
+    out = tmp_path / "parts"
+    out.mkdir()
+    for name in ("piece_0000.vtu", "piece_0007.vtu", "notes.txt"):
+        (out / name).write_text("old")
+    assert main([*ARGS, "--tiles", "3", "--partitioned", "--force", "-o", str(out)]) == 0
+    capsys.readouterr()
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["mesh.pvtu", "piece_0000.vtu", "piece_0001.vtu", "piece_0002.vtu"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["parts"]
+    assert main(["check", str(out / "mesh.pvtu")]) == 0
+
+
+def test_an_empty_directory_is_used_without_force(tmp_path, capsys):
+    out = tmp_path / "empty"
+    out.mkdir()
+    assert main([*ARGS, "--tiles", "2", "--partitioned", "-o", str(out)]) == 0
+    assert (out / "mesh.pvtu").is_file()
+
+
+def test_directory_holding_the_input_is_refused_even_with_force(tmp_path, capsys):
+    src = tmp_path / "demo.poly"
+    src.write_bytes(Path(DEMO).read_bytes())
+    assert main(["mesh", str(src), "-q", "30", "-a", "4e-3", "--tiles", "2", "--partitioned", "--force",
+                 "-o", str(tmp_path)]) == 2
+    assert "input" in _one_line_error(capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.poly"]
+
+
+def test_a_failing_run_leaves_nothing_behind(tmp_path, monkeypatch):
+    calls = []
+    real = P._finish_and_write
+
+    def failing(outcome, args, path, components, parts):
+        calls.append(path)
+        if len(calls) == 2:  # the first piece is written, the second fails
+            raise OSError("disk full")
+        return real(outcome, args, path, components, parts)
+
+    monkeypatch.setattr(P, "_finish_and_write", failing)
+    out = tmp_path / "a" / "b" / "parts"
+    with pytest.raises(OSError, match="disk full"):
+        P.write_partitioned(hammesh.read_domain(DEMO), out, min_angle=30, max_area=4e-3, tiles=3)
+    assert len(calls) == 2 and Path(calls[0]).parent.name.endswith(".partial")
+    assert list(tmp_path.iterdir()) == []  # neither the pieces, the temp dir nor the parents it made
+
+
+def test_parts_with_partitioned_are_connected_balanced_stretches(tmp_path, capsys):
+    out = tmp_path / "parts"
+    rep = tmp_path / "r.json"
+    assert main([*ARGS, "--tiles", "3", "--partitioned", "--parts", "5", "-o", str(out), "--report", str(rep)]) == 0
+    assert "5 parts" in capsys.readouterr().out
+    part, pos = [], []
+    for piece in pvtu.read_pieces(out / "mesh.pvtu"):
+        m = meshio.read(piece)
+        part.append(m.cell_data["part"][0])
+        pos.append(m.cell_data["global_position"][0])
+    part = np.concatenate(part)[np.argsort(np.concatenate(pos))]
+    sizes = np.bincount(part, minlength=5)
+    assert len(sizes) == 5 and sizes.max() - sizes.min() <= 1
+    assert (np.diff(part) >= 0).all()  # one stretch of the (one) cycle each
+    mesh = hammesh.read_mesh(out / "mesh.pvtu")  # rows in cycle order
+    for k in range(5):
+        assert dual_pieces(mesh.triangles[part == k]) == 1
+    import json
+
+    rep = json.loads(rep.read_text())
+    assert rep["partition"]["k"] == 5
+    assert rep["parallel"]["spilled"]  # 3 tiles on one worker: the Hamiltonian meshes went to files, now gone
+
+
+def test_parts_with_tiles_in_one_file(tmp_path, capsys):
+    out = tmp_path / "w.vtu"
+    assert main([*ARGS, "--tiles", "2", "--parts", "3", "-o", str(out)]) == 0
+    capsys.readouterr()
+    part = meshio.read(out).cell_data["part"][0]
+    assert sorted(np.unique(part).tolist()) == [0, 1, 2]
+    assert main(["check", str(out)]) == 0
+
+
+@pytest.mark.parametrize("argv, what", [
+    (["--tiles", "2", "--partitioned", "--renumber", "rcm"], "--renumber"),
+    (["--tiles", "2", "--force"], "--force"),
+    (["--tiles", "2", "--parts", "0"], "parts"),
+])
+def test_parallel_options_that_cannot_work_exit_2(tmp_path, capsys, argv, what):
+    assert main([*ARGS, *argv, "-o", str(tmp_path / "o")]) == 2
+    assert what in _one_line_error(capsys)
+    assert list(tmp_path.iterdir()) == []
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(1, 40), min_size=1, max_size=5), st.integers(1, 60))
+def test_stretch_parts_balance_and_contiguity(lengths, k):
+    comps = np.array(lengths, np.int64)
+    k = min(k, int(comps.sum()))
+    part = P.stretch_parts(np.arange(comps.sum()), comps, k)
+    assert part.min() >= 0 and part.max() < k
+    starts = np.concatenate([[0], np.cumsum(comps)[:-1]])
+    if k >= len(comps):
+        assert len(np.unique(part)) == k  # every part used
+        per = P.parts_per_cycle(comps, k)
+        for s, n, kr in zip(starts, comps, per):
+            mine = part[s:s + n]
+            assert (np.diff(mine) >= 0).all() and len(np.unique(mine)) == kr  # stretches of this cycle only
+            sizes = np.bincount(mine - mine.min())
+            assert sizes.max() - sizes.min() <= 1
+    else:  # whole cycles
+        for s, n in zip(starts, comps):
+            assert len(np.unique(part[s:s + n])) == 1
+
+
+def test_raw_piece_round_trip_and_truncation(tmp_path):
+    rng = np.random.default_rng(3)
+    ids = rng.permutation(500)[:200]
+    pts = rng.random((200, 2))
+    tri = ids[rng.integers(0, 200, (300, 3))]
+    path = tmp_path / "p.vtu"
+    pvtu.write_piece(path, ids, pts, tri, np.arange(300), np.zeros(300), np.arange(300), np.full(300, -1),
+                     np.full(300, 3), rng.random((300, 1)))
+    m = meshio.read(path)  # another reader agrees
+    gid = m.point_data["global_id"]
+    assert np.array_equal(gid[m.cells[0].data], tri)
+    assert np.allclose(m.points[np.argsort(gid), :2], pts[np.argsort(ids)])
+    g, xy, t, gp, attr = pvtu._read_piece(path)
+    assert np.array_equal(g[t], tri) and np.array_equal(gp, np.arange(300))
+    assert np.allclose(attr[:, 0], m.cell_data["attribute_0"][0])
+    assert not list(tmp_path.glob("*.part"))
+    path.write_bytes(path.read_bytes()[:-2000] + b"\n</AppendedData>\n</VTKFile>\n")
+    with pytest.raises(FileFormatError):
+        pvtu._read_piece(path)
+
+
+def test_check_target_names_a_file(tmp_path):
+    f = tmp_path / "x"
+    f.write_text("")
+    with pytest.raises(OutputError, match="this is a file"):
+        P.check_target(f)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10_000))
+def test_locate_in_triangles_finds_the_holder(seed):
+    rng = np.random.default_rng(seed)
+    p = rng.random((30, 2))
+    from scipy.spatial import Delaunay
+
+    t = Delaunay(p).simplices
+    tri_idx = rng.integers(0, len(t), 10)
+    w = rng.dirichlet([1, 1, 1], 10)
+    q = (p[t[tri_idx]] * w[:, :, None]).sum(1)
+    where = locate_in_triangles(p, t, q)
+    a, b, c = (p[t[where, i]] for i in range(3))
+    # the found triangle holds the point (barycentric coordinates >= 0 up to rounding)
+    d = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    l1 = ((b[:, 0] - q[:, 0]) * (c[:, 1] - q[:, 1]) - (b[:, 1] - q[:, 1]) * (c[:, 0] - q[:, 0])) / d
+    l2 = ((c[:, 0] - q[:, 0]) * (a[:, 1] - q[:, 1]) - (c[:, 1] - q[:, 1]) * (a[:, 0] - q[:, 0])) / d
+    assert (np.minimum(np.minimum(l1, l2), 1 - l1 - l2) >= -1e-9).all()
+    assert (locate_in_triangles(p, t, np.array([[5.0, 5.0]])) == -1).all()
