@@ -15,7 +15,9 @@ from hammesh.strips.encode import encode, encode_generalized, greedy_paths
 from hammesh.strips.generalized import decode_generalized
 from hammesh.strips.gl import decode_gl_strip, verify_gl_strip
 
-from .conftest import delaunay_mesh, grid_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
+from tests.helpers import grid_mesh
+
+from .conftest import delaunay_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
 
 
 def assert_round_trip(mesh, strip):
