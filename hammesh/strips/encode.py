@@ -278,10 +278,15 @@ def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, 
 
 
 def _oriented_local(
-    mesh: MeshLike, method: str, cache: int | None = None, dual: DualMesh | None = None, rule: int = LONGEST_CHAIN
+    mesh: MeshLike,
+    method: str,
+    cache: int | None = None,
+    dual: DualMesh | None = None,
+    rule: int = LONGEST_CHAIN,
+    improve: bool = True,
 ):
     """:func:`_oriented_paths` in the numbering the paths were improved in (``rule``: which
-    swap-free chain ``method="zigzag"`` takes from each seed).
+    swap-free chain ``method="zigzag"`` takes from each seed; ``improve``: the end moves).
 
     Returns ``(dual, tri, twin, order, starts, ids)``: ``order`` refers to the rows of
     ``tri`` (``twin`` its pairing), ``ids[i]`` is the input triangle of row ``i``
@@ -306,7 +311,7 @@ def _oriented_local(
         order, starts = cycle_paths(dual, comps)
         tri, twin, ids = dual.triangles, dual.twin, None
     else:
-        tri, twin, order, starts, ids = _greedy_cover(dual, zigzag=zigzag)
+        tri, twin, order, starts, ids = _greedy_cover(dual, improve, zigzag)
     order, starts = check_starts(order, starts, dual.n_triangles)
     order, _ = orient_paths(tri, twin, order, starts)
     return dual, tri, twin, order, starts, ids
@@ -358,6 +363,7 @@ def encode(
     verify: bool = True,
     cache: int | None = None,
     reorder_vertices: bool = False,
+    fast: bool = False,
 ) -> GLStrip:
     """One GL_TRIANGLE_STRIP index buffer drawing every triangle of ``mesh`` once.
 
@@ -381,6 +387,11 @@ def encode(
         Renumber the vertices in order of first use (as meshoptimizer's
         ``optimizeVertexFetch``); the result's ``vertex_order`` says which old vertex
         each new one is (write ``points[vertex_order]``).
+    fast : bool
+        The greedy cover alone: no end moves, no second cover from the swap-free chains
+        (about half the time; on q30 planar meshes ~0.02-0.03 more indices per triangle,
+        ~1.30 instead of ~1.27, still fewer than vtkStripper's, NvTriStrip's or
+        meshoptimizer's).
 
     Returns
     -------
@@ -407,12 +418,15 @@ def encode(
     if cache is not None:
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
-    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache)
+    fast = params.flag("fast", fast)
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, improve=not fast)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
     few_swaps = strip.n_swaps <= max(_ZIGZAG_TRIGGER * (strip.n_strips - 1), _ZIGZAG_SWAP_RATE * strip.n_triangles)
     rules = ()
-    if method == "zigzag":
+    if fast:
+        pass
+    elif method == "zigzag":
         rules = (SHORTEST_CHAIN,)
     elif greedy and (few_swaps or strip.n_triangles <= _ZIGZAG_ALWAYS) and not is_forest(dual):
         # (a forest keeps Lemma 5.1's fewest strips) few swaps: a structured grid or a

@@ -387,3 +387,21 @@ def test_encoder_keeps_the_shorter_of_greedy_and_swap_free_chains(nu, nv):
     if (nu, nv) == (60, 40):
         assert few
         assert s.indices_per_triangle < 1.012
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(12, 120), st.booleans())
+@settings(max_examples=30, deadline=None)
+def test_fast_is_the_greedy_cover_alone(seed, n, lift):
+    """``fast=True``: the greedy cover without end moves or swap-free trials -- exactly the
+    buffer of :func:`greedy_paths` with ``improve=False``, never shorter than the default."""
+    from hammesh.strips.encode import orient_path_turns
+    from hammesh.strips.gl import RESTART_INDEX, gl_strip_from_turns
+
+    m = delaunay_mesh(seed, n, lift)
+    f = encode(m, fast=True)
+    assert_round_trip(m, f)
+    d = dual_mesh(m)
+    order, starts = greedy_paths(d, improve=False)
+    want = gl_strip_from_turns(orient_path_turns(d, order, starts), join="restart", restart_index=RESTART_INDEX)
+    assert len(f.indices) == len(want.indices)
+    assert len(encode(m).indices) <= len(f.indices)
