@@ -15,6 +15,7 @@ EXAMPLES = """examples:
   hammesh strip small.obj -o small.json --method christofides   # Thm 5.3, <= 5000 triangles
   hammesh strip plate.vtu -o plate.json --generalized    # IRIS GL: one vertex + one bit each
   hammesh strip plate.vtu -o plate.json --cache 32 --reorder-vertices   # for a 32-entry FIFO
+  hammesh strip big.vtu -o big.npz --fast                # greedy cover alone (no end moves)
 methods: auto (the shortest of greedy, zigzag and, for a file stored in Hamiltonian-cycle order
 as 'hammesh mesh' writes it, one strip per cycle), greedy, zigzag (from swap-free chains),
 order, christofides.
@@ -35,6 +36,8 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("GPU caches")
     g.add_argument("--cache", type=int, default=None, metavar="N",
                    help="lay strips for a FIFO vertex cache of N entries (typical 16-32)")
+    p.add_argument("--fast", action="store_true",
+                   help="the greedy cover alone, no end moves: faster, ~0.03 more indices per triangle")
     g.add_argument("--reorder-vertices", action="store_true",
                    help="renumber vertices in order of first use; the document lists vertex_order")
 
@@ -58,7 +61,8 @@ def run(args: argparse.Namespace) -> int:
         params.integer("--cache", args.cache, low=3, high=1 << 16, what="FIFO entries")
     mesh = read_mesh(args.mesh, dim=None)
     choice = choose_strip(mesh, method=args.method, join=args.join, restart_index=args.restart_index,
-                          generalized=args.generalized, cache=args.cache, reorder_vertices=args.reorder_vertices)
+                          generalized=args.generalized, cache=args.cache, reorder_vertices=args.reorder_vertices,
+                          fast=args.fast)
     repairs = mesh.info.get("repairs", [])
     extra = {**choice.extra, "repairs": list(repairs)}
     write_strip(choice.strip, args.output, extra)

@@ -24,10 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammesh.strips._cover_kernels import PathCover, take_triangle
+from hammesh.strips._cover_kernels import PathCover, free_step, pop_fewest_free, queue_free_degrees, take_triangle
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN
 from hammesh.strips._numba import carve, kernel, loop_helper
-from hammesh.strips._path_kernels import vertex_between
 
 __all__ = ["cache_path_cover", "vertex_triangles"]
 
@@ -96,14 +95,7 @@ def cache_path_cover(rec, n_points, cache_size, max_len, seed_order, w_miss=2, w
 @kernel
 def _cache_path_cover_into(rec, off, vt, C, max_len, w_miss, w_swap, w_deg, seed_order, bucket, order, starts, top, stamp, ring):
     m = rec.shape[0]
-    top[:] = 0
-    for t in range(m):
-        rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
-    for i in range(m):
-        t = seed_order[i]
-        d = rec[t, REC_SCRATCH]
-        bucket[d, top[d]] = t
-        top[d] += 1
+    queue_free_degrees(rec, seed_order, bucket, top)
     now = C + 1
     L = 0
     S = 0
@@ -132,15 +124,7 @@ def _cache_path_cover_into(rec, off, vt, C, max_len, w_miss, w_swap, w_deg, seed
             if seed >= 0 and best >= 16 - 3:
                 break  # two or three cached corners at the oldest vertex: take it
         if seed < 0:
-            for d in range(4):
-                while top[d] > 0:
-                    top[d] -= 1
-                    t = bucket[d, top[d]]
-                    if rec[t, REC_SCRATCH] == d:
-                        seed = t
-                        break
-                if seed >= 0:
-                    break
+            seed = pop_fewest_free(rec, bucket, top)
         take_triangle(seed, rec, bucket, top)
         order[L] = seed
         L += 1
@@ -153,23 +137,15 @@ def _cache_path_cover_into(rec, off, vt, C, max_len, w_miss, w_swap, w_deg, seed
             bscore = 1 << 30
             bpivot = -1
             for k in range(3):
-                if k == entry:
+                st = free_step(rec, cur, entry, k, prev_pivot)
+                if st.h < 0:
                     continue
-                h = rec[cur, REC_TWIN + k]
-                if h < 0:
-                    continue
-                u = h // 3
-                du = rec[u, REC_SCRATCH]
-                if du < 0:
-                    continue
-                pivot = rec[cur, k] if entry < 0 else vertex_between(rec, cur, entry, k)
-                swap = 1 if (prev_pivot >= 0 and pivot == prev_pivot) else 0
-                miss = 0 if _cached(stamp, now, C, _new_vertex(rec, h)) else 1
-                score = w_miss * miss + w_deg * du + w_swap * swap
+                miss = 0 if _cached(stamp, now, C, _new_vertex(rec, st.h)) else 1
+                score = w_miss * miss + w_deg * st.degree + w_swap * st.swap
                 if score < bscore:
                     bscore = score
                     bk = k
-                    bpivot = pivot
+                    bpivot = st.pivot
             if bk < 0:
                 break
             h = rec[cur, REC_TWIN + bk]

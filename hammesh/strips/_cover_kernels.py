@@ -15,7 +15,15 @@ from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN
 from hammesh.strips._numba import NEXT_CORNER, carve, kernel, loop_helper
 from hammesh.strips._path_kernels import vertex_between
 
-__all__ = ["PathCover", "greedy_path_cover", "zigzag_path_cover", "Renumbered", "renumber_in_path_order"]
+__all__ = [
+    "LONGEST_CHAIN",
+    "SHORTEST_CHAIN",
+    "queue_free_degrees",
+    "pop_fewest_free",
+    "Step",
+    "free_step",
+    "take_triangle",
+    "PathCover", "greedy_path_cover", "zigzag_path_cover", "Renumbered", "renumber_in_path_order"]
 
 #: A dual path cover: ``order`` every triangle once, path after path; ``starts`` the
 #: ``(S + 1,)`` path offsets.
@@ -24,6 +32,55 @@ PathCover = namedtuple("PathCover", ["order", "starts"])
 #: :func:`grow_path`'s result: triangles appended, the local edge the start was left by
 #: and the pivot there.
 GrownPath = namedtuple("GrownPath", ["count", "first_exit", "first_pivot"])
+
+
+@loop_helper
+def queue_free_degrees(rec, seed_order, bucket, top):
+    """Free degrees into the scratch column; every triangle queued in bucket ``d``, ``seed_order`` order."""
+    m = rec.shape[0]
+    top[:] = 0
+    for t in range(m):
+        rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
+    for i in range(m):
+        t = seed_order[i]
+        d = rec[t, REC_SCRATCH]
+        bucket[d, top[d]] = t
+        top[d] += 1
+
+
+@loop_helper
+def pop_fewest_free(rec, bucket, top):
+    """A free triangle with the fewest free neighbours (most recently queued first), or -1.
+
+    Stale entries (taken triangles, or degrees that dropped since) are discarded.
+    """
+    for d in range(4):
+        while top[d] > 0:
+            top[d] -= 1
+            t = bucket[d, top[d]]
+            if rec[t, REC_SCRATCH] == d:
+                return t
+    return -1
+
+
+#: :func:`free_step`'s result: the half-edge to a free neighbour (-1: none that way), the
+#: neighbour's free degree, the pivot of leaving by that edge and 1 if that is a swap.
+Step = namedtuple("Step", ["h", "degree", "pivot", "swap"])
+
+
+@loop_helper
+def free_step(rec, cur, entry, k, prev_pivot):
+    """Leaving ``cur`` (entered by local edge ``entry``, -1: the path's first) by edge ``k``: a :class:`Step`."""
+    h = rec[cur, REC_TWIN + k]
+    if k == entry or h < 0:
+        return Step(-1, -1, -1, 0)
+    u = h // 3
+    du = rec[u, REC_SCRATCH]
+    if du < 0:  # taken
+        return Step(-1, -1, -1, 0)
+    pivot = rec[cur, k] if entry < 0 else vertex_between(rec, cur, entry, k)
+    swap = 1 if (prev_pivot >= 0 and pivot == prev_pivot) else 0
+    return Step(np.int64(h), np.int64(du), np.int64(pivot), swap)  # one type for int32 and int64 records
 
 
 @loop_helper
@@ -59,22 +116,14 @@ def grow_path(cur, entry, prev_pivot, rec, bucket, top, out, w_swap):
         best_score = 1 << 30
         best_pivot = -1
         for k in range(3):
-            if k == entry:
+            st = free_step(rec, cur, entry, k, prev_pivot)
+            if st.h < 0:
                 continue
-            h = rec[cur, REC_TWIN + k]
-            if h < 0:
-                continue
-            u = h // 3
-            du = rec[u, REC_SCRATCH]
-            if du < 0:  # taken
-                continue
-            pivot = rec[cur, k] if entry < 0 else vertex_between(rec, cur, entry, k)
-            swap = 1 if (prev_pivot >= 0 and pivot == prev_pivot) else 0
-            score = 2 * du + w_swap * swap
+            score = 2 * st.degree + w_swap * st.swap
             if score < best_score:
                 best_score = score
                 best = k
-                best_pivot = pivot
+                best_pivot = st.pivot
         if best < 0:
             break
         if n == 0:
@@ -109,29 +158,12 @@ def greedy_path_cover(rec, w_swap, seed_order) -> PathCover:
 
 @kernel
 def _greedy_path_cover_into(rec, w_swap, seed_order, bucket, order, starts, fwd, bwd, top):
-    m = rec.shape[0]
-    top[:] = 0
-    for t in range(m):
-        rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
-    for i in range(m):
-        t = seed_order[i]
-        d = rec[t, REC_SCRATCH]
-        bucket[d, top[d]] = t
-        top[d] += 1
+    queue_free_degrees(rec, seed_order, bucket, top)
     L = 0
     S = 0
     starts[0] = 0
     while True:
-        seed = -1
-        for d in range(4):
-            while top[d] > 0:
-                top[d] -= 1
-                t = bucket[d, top[d]]
-                if rec[t, REC_SCRATCH] == d:
-                    seed = t
-                    break
-            if seed >= 0:
-                break
+        seed = pop_fewest_free(rec, bucket, top)
         if seed < 0:
             break
         take_triangle(seed, rec, bucket, top)
@@ -222,48 +254,43 @@ def _zigzag_step(rec, cur, kout, prev, stamp, mark):
     return u, NEXT_CORNER[k1], rec[u, kin]
 
 
-def zigzag_path_cover(rec, seed_order) -> PathCover:
+#: :func:`zigzag_path_cover`'s choice among a seed's chains: the longest, or the shortest
+#: non-empty one.
+LONGEST_CHAIN, SHORTEST_CHAIN = 0, 1
+
+
+def zigzag_path_cover(rec, seed_order, rule=LONGEST_CHAIN) -> PathCover:
     """Cover the dual graph with swap-free (alternating) chains, longest first from each seed.
 
     Seeds as in :func:`greedy_path_cover` (fewest free neighbours first); from a seed,
     each free neighbour starts a forced chain (Thm 4.3: in an alternating strip each
-    triangle fixes the next), the longest is taken.  On a structured grid (pyvista's
+    triangle fixes the next), the longest (``rule=LONGEST_CHAIN``) or the shortest
+    non-empty one (``SHORTEST_CHAIN``) is taken.  On a structured grid (pyvista's
     ``load_random_hills``, latitude-longitude spheres) these are its rows, which the
-    degree-first greedy cover bends into L shapes that each cost a swap.
+    degree-first greedy cover bends into L shapes that each cost a swap.  On a
+    latitude-longitude sphere the longest chain from a pole triangle is a staircase
+    spiralling round the sphere (111 triangles on pyvista's ``sphere.ply``), which
+    leaves triangular patches of ever shorter chains beside it; the shortest runs down a
+    meridian to the other pole, and the next seeds, beside it, take the parallel
+    meridians (``sphere.ply``: 1.150 -> 1.104 indices per triangle after the end moves,
+    NvTriStrip 1.120).
     """
     m = rec.shape[0]
     bucket, order, starts, top, stamp = carve(np.int64, (4, m), m, m + 1, 4, m)
-    S = _zigzag_path_cover_into(rec, seed_order, bucket, order, starts, top, stamp)
+    S = _zigzag_path_cover_into(rec, seed_order, rule, bucket, order, starts, top, stamp)
     return PathCover(order, starts[: S + 1].copy())
 
 
 @kernel
-def _zigzag_path_cover_into(rec, seed_order, bucket, order, starts, top, stamp):
-    m = rec.shape[0]
-    top[:] = 0
+def _zigzag_path_cover_into(rec, seed_order, rule, bucket, order, starts, top, stamp):
     stamp[:] = -1
-    for t in range(m):
-        rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
-    for i in range(m):
-        t = seed_order[i]
-        d = rec[t, REC_SCRATCH]
-        bucket[d, top[d]] = t
-        top[d] += 1
+    queue_free_degrees(rec, seed_order, bucket, top)
     L = 0
     S = 0
     mark = 0
     starts[0] = 0
     while True:
-        seed = -1
-        for d in range(4):
-            while top[d] > 0:
-                top[d] -= 1
-                t = bucket[d, top[d]]
-                if rec[t, REC_SCRATCH] == d:
-                    seed = t
-                    break
-            if seed >= 0:
-                break
+        seed = pop_fewest_free(rec, bucket, top)
         if seed < 0:
             break
         take_triangle(seed, rec, bucket, top)
@@ -283,7 +310,7 @@ def _zigzag_path_cover_into(rec, seed_order, bucket, order, starts, top, stamp):
                 stamp[u] = mark
                 n += 1
                 cur = u
-            if n > best_n:
+            if n > 0 and (best_k < 0 or (n < best_n if rule == SHORTEST_CHAIN else n > best_n)):
                 best_n = n
                 best_k = k0
         order[L] = seed

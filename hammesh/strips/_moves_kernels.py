@@ -147,6 +147,44 @@ def rotate_positions(lk, pid, ps, x, e, label, dxy, nseg, n):
 
 
 @loop_helper
+def link_ends(lk, le, nb, a, b):
+    """Link path ends ``a`` and ``b`` (tentatively: :func:`unlink_ends` undoes it)."""
+    relink(lk, le, nb, a, -1, b)
+    relink(lk, le, nb, b, -1, a)
+
+
+@loop_helper
+def unlink_ends(lk, le, nb, a, b):
+    """Undo :func:`link_ends`."""
+    relink(lk, le, nb, a, b, -1)
+    relink(lk, le, nb, b, a, -1)
+
+
+@loop_helper
+def commit_join(lk, pid, ps, pend, size, oth, a, b, ra, rb, na, nbb, fa, fb):
+    """Book a join of end ``a`` (path ``ra``, ``na`` triangles, other end ``fa``) to end ``b`` (``rb``, ``nbb``, ``fb``).
+
+    The links are already made; the smaller path is renumbered into the larger's
+    positions and label, the label left empty gets size 0.
+    """
+    if na < nbb:
+        d = outward_step(lk, ps, b, a)
+        renumber_positions(lk, pid, ps, a, b, rb, ps[b] + d, d, na)
+        keep = rb
+        gone = ra
+    else:
+        d = outward_step(lk, ps, a, b)
+        renumber_positions(lk, pid, ps, b, a, ra, ps[a] + d, d, nbb)
+        keep = ra
+        gone = rb
+    pend[keep] = fa
+    size[keep] = na + nbb
+    size[gone] = 0
+    oth[fa] = fb
+    oth[fb] = fa
+
+
+@loop_helper
 def mark_ends_near(nb, lk, dirty, c):
     """Ends whose moves may read the links of ``c``: its dual neighbours, those of its path
     neighbours and of theirs (pivots two links away enter a move's cost)."""
@@ -320,23 +358,10 @@ def _improve_cover_into(
                 C[1] = v
                 before = swaps_near(tri, lk, le, C, 2) + path_end_cost(tri, lk, le, e, f, nP)
                 before += path_end_cost(tri, lk, le, v, g, nQ)
-                relink(lk, le, nb, e, -1, v)
-                relink(lk, le, nb, v, -1, e)
+                link_ends(lk, le, nb, e, v)
                 after = swaps_near(tri, lk, le, C, 2) + path_end_cost(tri, lk, le, f, g, nP + nQ)
                 if after - before - 3 < 0:
-                    if nP < nQ:
-                        d = outward_step(lk, ps, v, e)
-                        renumber_positions(lk, pid, ps, e, v, rv, ps[v] + d, d, nP)
-                        keep, gone = rv, rp
-                    else:
-                        d = outward_step(lk, ps, e, v)
-                        renumber_positions(lk, pid, ps, v, e, rp, ps[e] + d, d, nQ)
-                        keep, gone = rp, rv
-                    pend[keep] = f
-                    size[keep] = nP + nQ
-                    size[gone] = 0
-                    oth[f] = g
-                    oth[g] = f
+                    commit_join(lk, pid, ps, pend, size, oth, e, v, rp, rv, nP, nQ, f, g)
                     T[0] = e
                     T[1] = v
                     T[2] = f
@@ -344,8 +369,7 @@ def _improve_cover_into(
                     nT = 4
                     done = True
                     break
-                relink(lk, le, nb, e, v, -1)
-                relink(lk, le, nb, v, e, -1)
+                unlink_ends(lk, le, nb, e, v)
             if done:
                 for i in range(nT):
                     mark_ends_near(nb, lk, dirty, T[i])
@@ -394,27 +418,14 @@ def _improve_cover_into(
                         C[3] = v
                         bj = swaps_near(tri, lk, le, C[1:], 1) + swaps_near(tri, lk, le, C[3:], 1)
                         bj += path_end_cost(tri, lk, le, v, g, nQ) + path_end_cost(tri, lk, le, y, f, nP)
-                        relink(lk, le, nb, y, -1, v)
-                        relink(lk, le, nb, v, -1, y)
+                        link_ends(lk, le, nb, y, v)
                         C[4] = y
                         aj = swaps_near(tri, lk, le, C[3:], 2) + path_end_cost(tri, lk, le, f, g, nP + nQ)
                         # bj counted y's and v's links apart; no link joined them before
                         total = (after - before) + (aj - bj) - 3
                         if total < 0:
                             rotate_positions(lk, pid, ps, x, e, rp, dxy, nseg, nP)
-                            if nP < nQ:
-                                d = outward_step(lk, ps, v, y)
-                                renumber_positions(lk, pid, ps, y, v, rv, ps[v] + d, d, nP)
-                                keep, gone = rv, rp
-                            else:
-                                d = outward_step(lk, ps, y, v)
-                                renumber_positions(lk, pid, ps, v, y, rp, ps[y] + d, d, nQ)
-                                keep, gone = rp, rv
-                            pend[keep] = f
-                            size[keep] = nP + nQ
-                            size[gone] = 0
-                            oth[f] = g
-                            oth[g] = f
+                            commit_join(lk, pid, ps, pend, size, oth, y, v, rp, rv, nP, nQ, f, g)
                             T[0] = x
                             T[1] = y
                             T[2] = e
@@ -424,8 +435,7 @@ def _improve_cover_into(
                             nT = 6
                             done = True
                             break
-                        relink(lk, le, nb, y, v, -1)
-                        relink(lk, le, nb, v, y, -1)
+                        unlink_ends(lk, le, nb, y, v)
                     if done:
                         break
                     relink(lk, le, nb, e, x, -1)
@@ -445,7 +455,6 @@ def _improve_cover_into(
                     n0 = abs(ps[end0] - ps[x])
                     n1 = abs(ps[end1] - ps[x])
                     for side in range(2):
-                        z = lk[x, side]
                         w = lk[x, 1 - side]
                         endB = end0 if side == 0 else end1
                         nB = n0 if side == 0 else n1
@@ -488,14 +497,12 @@ def _improve_cover_into(
                                 C[4] = v
                                 bj = swaps_near(tri, lk, le, C[3:], 2) + path_end_cost(tri, lk, le, v, g, nR)
                                 bj += path_end_cost(tri, lk, le, w, endA, nA)
-                                relink(lk, le, nb, w, -1, v)
-                                relink(lk, le, nb, v, -1, w)
+                                link_ends(lk, le, nb, w, v)
                                 aj = swaps_near(tri, lk, le, C[3:], 2) + path_end_cost(tri, lk, le, endA, g, nA + nR)
                                 if (after - before) + (aj - bj) - 3 < 0:
                                     ok = True
                                     break
-                                relink(lk, le, nb, w, v, -1)
-                                relink(lk, le, nb, v, w, -1)
+                                unlink_ends(lk, le, nb, w, v)
                                 rv = -1
                         if ok:
                             # labels: x and B join P (label rp); A keeps rq
@@ -511,19 +518,7 @@ def _improve_cover_into(
                                 oth[w] = endA
                                 oth[endA] = w
                             else:
-                                if nA < nR:
-                                    d = outward_step(lk, ps, v, w)
-                                    renumber_positions(lk, pid, ps, w, v, rv, ps[v] + d, d, nA)
-                                    keep, gone = rv, rq
-                                else:
-                                    d = outward_step(lk, ps, w, v)
-                                    renumber_positions(lk, pid, ps, v, w, rq, ps[w] + d, d, nR)
-                                    keep, gone = rq, rv
-                                pend[keep] = endA
-                                size[keep] = nA + nR
-                                size[gone] = 0
-                                oth[endA] = g
-                                oth[g] = endA
+                                commit_join(lk, pid, ps, pend, size, oth, w, v, rq, rv, nA, nR, endA, g)
                             T[0] = e
                             T[1] = x
                             T[2] = w

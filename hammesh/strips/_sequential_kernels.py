@@ -6,7 +6,7 @@ import numpy as np
 
 from hammesh.strips._numba import kernel, loop_helper
 
-__all__ = ["triangle_across", "sequential_chain"]
+__all__ = ["triangle_across", "follow_chain", "sequential_chain"]
 
 
 @loop_helper
@@ -24,6 +24,30 @@ def triangle_across(tri, twin, t, b, c):
     return -1, -1
 
 
+@loop_helper
+def follow_chain(tri, twin, t, x, y, seen, out_t, out_v):
+    """Follow the forced alternating chain from ``t`` across edge ``{x, y}``, then ``{y, z}``, ...
+
+    ``z`` being each new triangle's third vertex; stops at the boundary, at a triangle
+    already ``seen`` (marked on the way) or after ``m - 1`` steps.  Writes the triangles
+    and third vertices to ``out_t``, ``out_v``; returns how many.
+    """
+    m = tri.shape[0]
+    n = 0
+    while n < m - 1:
+        u, z = triangle_across(tri, twin, t, x, y)
+        if u < 0 or seen[u]:
+            break
+        seen[u] = True
+        out_t[n] = u
+        out_v[n] = z
+        n += 1
+        t = u
+        x = y
+        y = z
+    return n
+
+
 @kernel
 def sequential_chain(tri, twin, t0, a, b, c):
     """Forced alternating strip through triangle ``t0`` read as vertices ``a, b, c``.
@@ -39,45 +63,16 @@ def sequential_chain(tri, twin, t0, a, b, c):
     """
     m = tri.shape[0]
     seen = np.zeros(m, np.bool_)
-    # successors
     succ_t = np.empty(m, np.int64)
     succ_v = np.empty(m, np.int64)
-    ns = 0
     seen[t0] = True
-    t = t0
-    x = b
-    y = c
-    while ns < m - 1:
-        u, z = triangle_across(tri, twin, t, x, y)
-        if u < 0 or seen[u]:
-            break
-        seen[u] = True
-        succ_t[ns] = u
-        succ_v[ns] = z
-        ns += 1
-        t = u
-        x = y
-        y = z
+    ns = follow_chain(tri, twin, t0, b, c, seen, succ_t, succ_v)
     for i in range(ns):
         seen[succ_t[i]] = False
-    # predecessors
+    # predecessors: the same rule read backwards, across {a, b} first
     pred_t = np.empty(m, np.int64)
     pred_v = np.empty(m, np.int64)
-    npr = 0
-    t = t0
-    x = a
-    y = b
-    while npr < m - 1:
-        u, z = triangle_across(tri, twin, t, x, y)
-        if u < 0 or seen[u]:
-            break
-        seen[u] = True
-        pred_t[npr] = u
-        pred_v[npr] = z
-        npr += 1
-        t = u
-        y = x
-        x = z
+    npr = follow_chain(tri, twin, t0, b, a, seen, pred_t, pred_v)
     # chain: pred (reversed), t0, succ ; vertices: pred_v reversed, a, b, c, succ_v
     L = npr + 1 + ns
     chain = np.empty(L, np.int64)

@@ -62,6 +62,7 @@ def choose_strip(
     generalized: bool = False,
     cache: int | None = None,
     reorder_vertices: bool = False,
+    fast: bool = False,
 ) -> StripChoice:
     """Encode ``mesh`` as ``hammesh strip`` does (see the module docstring).
 
@@ -69,7 +70,8 @@ def choose_strip(
     ------
     InvalidOptionError
         An unknown method or join, a restart index outside ``[0, 2**32 - 1]``,
-        ``generalized`` with Christofides.
+        ``generalized`` with Christofides, ``fast`` with anything but a GL strip of
+        method auto or greedy without ``cache``.
     """
     from hammesh.strips.christofides import christofides_strip
     from hammesh.strips.encode import encode, encode_generalized
@@ -86,6 +88,9 @@ def choose_strip(
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
         if generalized or method not in ("auto", "greedy"):
             raise InvalidOptionError("a cache-aware encoding is a GL strip of its own paths: method auto or greedy only")
+    fast = params.flag("fast", fast)
+    if fast and (generalized or cache is not None or method not in ("auto", "greedy")):
+        raise InvalidOptionError("fast is the greedy cover alone: a GL strip of method auto or greedy, without cache")
     if reorder_vertices and (generalized or method == "christofides"):
         raise InvalidOptionError("reorder_vertices applies to GL strips of method auto, greedy or order")
     extra: dict[str, Any] = {}
@@ -110,6 +115,10 @@ def choose_strip(
     elif cache is not None:
         strip = encode(mesh, join=join, restart_index=restart_index, cache=cache, reorder_vertices=reorder_vertices)
         method = "cache"
+    elif fast:
+        strip = encode(mesh, method="greedy", join=join, restart_index=restart_index, reorder_vertices=reorder_vertices,
+                       fast=True)
+        method = "fast"
     elif method == "auto":
         kw = {"join": join, "restart_index": restart_index, "reorder_vertices": reorder_vertices}
         candidates = [("greedy", encode(mesh, method="greedy", **kw)), ("zigzag", encode(mesh, method="zigzag", **kw))]

@@ -14,6 +14,7 @@ nothing in OpenGL: they are dropped (``rows`` lists the kept ones) and counted.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Optional, Union
@@ -25,7 +26,11 @@ from hammesh.strips import _dual_kernels
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects, mesh_defects, proper_pairing
 from hammesh.halfedge import mesh_arrays
 
-__all__ = ["DualMesh", "dual_mesh", "oriented_key"]
+__all__ = ["DualMesh", "dual_mesh", "oriented_key", "CENSUS_BESIDE_PAIRING"]
+
+#: Triangles from which :func:`dual_mesh` runs the face census (repeated vertices, zero
+#: areas) on a second thread beside the pairing; below, a thread costs more than it saves.
+CENSUS_BESIDE_PAIRING = 50_000
 
 MeshLike = Union[Mesh, HamiltonianMesh]
 
@@ -129,14 +134,27 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
     n = len(pts)
     flags = np.empty(len(tri), np.int8)
-    n_rep, n_zero = _dual_kernels.face_flags(pts, tri, ZERO_AREA_RTOL, flags)
+    paired = False
+    if len(tri) >= CENSUS_BESIDE_PAIRING:
+        # the face census gathers the points at random (~10% of a large encoding): it
+        # runs on a second thread (nogil) while this one pairs the rows as if none
+        # repeated a vertex, which is redone below in the rare case that some do
+        with ThreadPoolExecutor(1) as pool:
+            census = pool.submit(_dual_kernels.face_flags, pts, tri, ZERO_AREA_RTOL, flags)
+            packed = _dual_kernels.mesh_records(tri, n)
+            n_rep, n_zero = census.result()
+        paired = True
+    else:
+        n_rep, n_zero = _dual_kernels.face_flags(pts, tri, ZERO_AREA_RTOL, flags)
     rows = None
     if n_rep:
         rows = np.flatnonzero(flags != _dual_kernels.FACE_REPEATED)
         if len(rows) == 0:
             raise InvalidMeshError(f"all {len(tri)} triangles repeat a vertex: nothing to draw")
         tri = np.ascontiguousarray(tri[rows])
-    packed = _dual_kernels.mesh_records(tri, n)
+        paired = False
+    if not paired:
+        packed = _dual_kernels.mesh_records(tri, n)
     if packed is not None:  # every edge proper or boundary: only pillows can be double-sided
         nb = packed[1].reshape(-1, 3) // 3
         pillows = int(np.count_nonzero((nb[:, 0] == nb[:, 1]) & (nb[:, 1] == nb[:, 2]) & (packed[1][::3] >= 0)))

@@ -32,7 +32,13 @@ from hammesh import params
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh
 from hammesh.strips._cache_cover_kernels import cache_path_cover
-from hammesh.strips._cover_kernels import greedy_path_cover, renumber_in_path_order, zigzag_path_cover
+from hammesh.strips._cover_kernels import (
+    LONGEST_CHAIN,
+    SHORTEST_CHAIN,
+    greedy_path_cover,
+    renumber_in_path_order,
+    zigzag_path_cover,
+)
 from hammesh.strips._emit_kernels import restart_buffer
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
@@ -122,7 +128,7 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     return (order if ids is None else ids[order]).astype(np.int64, copy=False), starts
 
 
-def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: bool = False):
+def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = None):
     """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
 
     The greedy pass reads the mesh's records (:attr:`DualMesh.records`, one half
@@ -137,13 +143,15 @@ def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: bool = False):
 
     Returns ``(tri, twin, order, starts, ids)``: the arrays the paths ``order`` refer
     to, and ``ids[i]`` the input triangle of row ``i`` (``None``: the input's own).
+    ``zigzag``: start from the swap-free chains, taking each seed's longest
+    (``LONGEST_CHAIN``) or shortest (``SHORTEST_CHAIN``) chain; ``None``: the greedy cover.
     """
     m = dual.n_triangles
     rec = dual.cover_records()
     if is_forest(dual):
         order, starts = forest_paths(dual)
-    elif zigzag:
-        order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1))
+    elif zigzag is not None:
+        order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1), zigzag)
     else:
         order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
     if not improve or len(starts) == 2:
@@ -269,8 +277,16 @@ def _oriented_paths(mesh: MeshLike, method: str) -> tuple[DualMesh, np.ndarray, 
     return dual, (order if ids is None else ids[order]), starts
 
 
-def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None, dual: DualMesh | None = None):
-    """:func:`_oriented_paths` in the numbering the paths were improved in.
+def _oriented_local(
+    mesh: MeshLike,
+    method: str,
+    cache: int | None = None,
+    dual: DualMesh | None = None,
+    rule: int = LONGEST_CHAIN,
+    improve: bool = True,
+):
+    """:func:`_oriented_paths` in the numbering the paths were improved in (``rule``: which
+    swap-free chain ``method="zigzag"`` takes from each seed; ``improve``: the end moves).
 
     Returns ``(dual, tri, twin, order, starts, ids)``: ``order`` refers to the rows of
     ``tri`` (``twin`` its pairing), ``ids[i]`` is the input triangle of row ``i``
@@ -278,7 +294,7 @@ def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None, dual:
     """
     if method not in METHODS:
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    zigzag = method == "zigzag"
+    zigzag = rule if method == "zigzag" else None
     dual = dual_mesh(mesh) if dual is None else dual
     if cache is not None:
         if method == "order":
@@ -295,7 +311,7 @@ def _oriented_local(mesh: MeshLike, method: str, cache: int | None = None, dual:
         order, starts = cycle_paths(dual, comps)
         tri, twin, ids = dual.triangles, dual.twin, None
     else:
-        tri, twin, order, starts, ids = _greedy_cover(dual, zigzag=zigzag)
+        tri, twin, order, starts, ids = _greedy_cover(dual, improve, zigzag)
     order, starts = check_starts(order, starts, dual.n_triangles)
     order, _ = orient_paths(tri, twin, order, starts)
     return dual, tri, twin, order, starts, ids
@@ -347,6 +363,7 @@ def encode(
     verify: bool = True,
     cache: int | None = None,
     reorder_vertices: bool = False,
+    fast: bool = False,
 ) -> GLStrip:
     """One GL_TRIANGLE_STRIP index buffer drawing every triangle of ``mesh`` once.
 
@@ -370,6 +387,11 @@ def encode(
         Renumber the vertices in order of first use (as meshoptimizer's
         ``optimizeVertexFetch``); the result's ``vertex_order`` says which old vertex
         each new one is (write ``points[vertex_order]``).
+    fast : bool
+        The greedy cover alone: no end moves, no second cover from the swap-free chains
+        (about half the time; on q30 planar meshes ~0.02-0.03 more indices per triangle,
+        ~1.30 instead of ~1.27, still fewer than vtkStripper's, NvTriStrip's or
+        meshoptimizer's).
 
     Returns
     -------
@@ -396,14 +418,24 @@ def encode(
     if cache is not None:
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
-    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache)
+    fast = params.flag("fast", fast)
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, improve=not fast)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
     few_swaps = strip.n_swaps <= max(_ZIGZAG_TRIGGER * (strip.n_strips - 1), _ZIGZAG_SWAP_RATE * strip.n_triangles)
-    if greedy and few_swaps and not is_forest(dual):  # a forest keeps Lemma 5.1's fewest strips
-        # few swaps: a structured grid or a smooth surface, whose swap-free rows the
-        # degree-first cover bends into L shapes (one swap each); try the rows, keep the shorter
-        alt, alt_order = _buffer(*_oriented_local(mesh, "zigzag", None, dual), join, restart_index)
+    rules = ()
+    if fast:
+        pass
+    elif method == "zigzag":
+        rules = (SHORTEST_CHAIN,)
+    elif greedy and (few_swaps or strip.n_triangles <= _ZIGZAG_ALWAYS) and not is_forest(dual):
+        # (a forest keeps Lemma 5.1's fewest strips) few swaps: a structured grid or a
+        # smooth surface, whose swap-free rows the degree-first cover bends into L shapes
+        # (one swap each); or a small mesh, where the two extra covers take ~1 ms: try the
+        # swap-free chains both ways, keep the shortest buffer
+        rules = (LONGEST_CHAIN, SHORTEST_CHAIN)
+    for rule in rules:
+        alt, alt_order = _buffer(*_oriented_local(mesh, "zigzag", None, dual, rule), join, restart_index)
         if len(alt.indices) < len(strip.indices):
             strip, order = alt, alt_order
     rows = dual.triangles
@@ -420,8 +452,13 @@ def encode(
 
 #: Swaps per path at or below which :func:`encode` also tries the swap-free chains
 #: (:func:`~hammesh.strips._cover_kernels.zigzag_path_cover`).  Structured grids and
-#: latitude-longitude spheres have ~1-2 (one per L-shaped path); quality meshes ~10.
-_ZIGZAG_TRIGGER = 2
+#: latitude-longitude spheres have ~1-3 (one per L-shaped path, some more at the poles:
+#: pyvista's ``sphere.ply`` 2.8); quality meshes ~10.
+_ZIGZAG_TRIGGER = 3
+
+#: Meshes of at most this many triangles always try the swap-free chains too (two more
+#: covers, ~1 ms): pyvista's ant 1.261 -> 1.243, nut 1.229 -> 1.222, globe 1.379 -> 1.358.
+_ZIGZAG_ALWAYS = 5000
 
 #: ... or at most this many swaps per triangle (smooth surfaces: a torus 0.025 and 0.006,
 #: where the chains joined by the end moves give 1.0083 and 1.0031 against the greedy

@@ -10,7 +10,7 @@ import pytest
 
 import hammesh
 from hammesh.mesh import Mesh
-from tests.helpers import grid_mesh  # noqa: F401  (shared; the strip tests import it from here)
+from tests.helpers import grid_mesh
 
 SQUARE = [[0, 0], [1, 0], [1, 1], [0, 1]]
 
@@ -69,6 +69,17 @@ def zigzag_mesh(k: int) -> Mesh:
             t = [i + 1, i, i + 2]
         tri.append(t)
     return Mesh(pts, np.array(tri, dtype=np.int64))
+
+
+#: Small meshes of every kind the round-trip tests draw from (planar quality, structured,
+#: lifted to 3D, closed surface, fan), built on demand.
+SMALL_MESHES = {
+    "square": lambda: square_mesh(),
+    "grid": lambda: grid_mesh(5, 4),
+    "surface": lambda: grid_mesh(4, 4, z=True),
+    "torus": lambda: torus_mesh(),
+    "fan": lambda: fan_mesh(7),
+}
 
 
 def oriented_set(tri) -> list[tuple[int, int, int]]:

@@ -17,5 +17,5 @@ def test_bench_strips_quick_runs():
         [sys.executable, str(BENCH), "--quick", "--repeat", "1"], capture_output=True, text=True, timeout=600
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    for needle in ("square a=1e-3", "Christofides (Thm 5.3)", "Lemma 5.1 (tree dual)", "Issue 16", "meshopt vcache"):
+    for needle in ("square a=1e-3", "Christofides (Thm 5.3)", "Lemma 5.1 (tree dual)", "Issue 16", "meshopt vcache", "cache target on", "in a fresh process"):
         assert needle in proc.stdout

@@ -14,7 +14,9 @@ from hammesh.strips.gl import decode_gl_strip
 
 from hammesh.mesh import Mesh
 
-from .conftest import delaunay_mesh, fan_mesh, grid_mesh, oriented_set, square_mesh, torus_mesh
+from tests.helpers import grid_mesh
+
+from .conftest import delaunay_mesh, fan_mesh, oriented_set, square_mesh, torus_mesh
 
 
 def check(mesh, enc):

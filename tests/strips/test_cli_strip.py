@@ -109,3 +109,21 @@ def test_errors(tmp_path, ham_file):
     run([bad, "-o", tmp_path / "x.json"])  # a non-manifold edge is cut, not refused
     doc = json.loads((tmp_path / "x.json").read_text())
     assert doc["defect_non_manifold_edges"] == 1 and doc["triangles"] == 3
+
+
+def test_fast_is_the_greedy_cover_alone(torus_file, tmp_path):
+    out = tmp_path / "f.json"
+    run([torus_file, "-o", out, "--fast"])
+    doc = json.loads(out.read_text())
+    assert doc["method"] == "fast"
+    assert oriented_set(decode_gl_strip(np.array(doc["indices"]), doc["restart_index"])) == oriented_set(
+        read_surface(torus_file).triangles
+    )
+    run([torus_file, "-o", tmp_path / "d.json"])
+    assert len(doc["indices"]) >= len(json.loads((tmp_path / "d.json").read_text())["indices"])
+    from hammesh.errors import InvalidOptionError
+
+    for bad in (["--cache", "16"], ["--generalized"], ["--method", "zigzag"]):
+        with pytest.raises(InvalidOptionError, match="fast"):
+            run([torus_file, "-o", tmp_path / "g.json", "--fast", *bad])
+        assert not (tmp_path / "g.json").exists()

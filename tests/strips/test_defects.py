@@ -145,3 +145,33 @@ def test_any_triangle_soup_round_trips(seed, m, n, join):
     if join == "restart":
         _crossed_edges_are_proper(want, s.indices, s.restart_index)
     assert s.defects.repeated_vertex == len(tri) - len(want)
+
+
+@pytest.mark.parametrize("name", sorted(ALL) + ["clean torus", "repeated rows"])
+def test_census_beside_the_pairing_gives_the_same_dual(name, monkeypatch):
+    """Large meshes run the face census on a second thread beside the pairing (which assumes
+    no repeated vertex and is redone when one shows up): the same DualMesh as in one thread."""
+    import hammesh.strips.dual as dual_module
+    from hammesh.surface import shapes
+
+    if name == "clean torus":
+        mesh = Mesh(*shapes.torus(12, 8))
+    elif name == "repeated rows":  # a clean torus with rows repeating a vertex: the pairing is redone
+        pts, tri = shapes.torus(12, 8)
+        mesh = Mesh(pts, np.r_[tri[:5], [[0, 0, 1], [3, 4, 3]], tri[5:]])
+    else:
+        pts, tri, _ = ALL[name]()
+        mesh = Mesh(pts, tri)
+    one = dual_mesh(mesh)
+    monkeypatch.setattr(dual_module, "CENSUS_BESIDE_PAIRING", 0)
+    two = dual_mesh(mesh)
+    assert np.array_equal(one.triangles, two.triangles) and np.array_equal(one.twin, two.twin)
+    assert one.defects == two.defects
+    assert (one.rows is None) == (two.rows is None) and (one.rows is None or np.array_equal(one.rows, two.rows))
+    assert (one.records is None) == (two.records is None)
+    if one.records is not None:
+        assert np.array_equal(one.records, two.records)
+    if name == "repeated rows":
+        assert two.defects.repeated_vertex == 2 and len(two.rows) == len(tri)
+    s = encode(mesh)
+    verify_gl_strip(one.triangles, s.indices, s.restart_index)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -15,7 +17,9 @@ from hammesh.strips.encode import encode, encode_generalized, greedy_paths
 from hammesh.strips.generalized import decode_generalized
 from hammesh.strips.gl import decode_gl_strip, verify_gl_strip
 
-from .conftest import delaunay_mesh, grid_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
+from tests.helpers import grid_mesh
+
+from .conftest import delaunay_mesh, oriented_set, square_hamiltonian, square_mesh, torus_mesh
 
 
 def assert_round_trip(mesh, strip):
@@ -290,14 +294,74 @@ def test_structured_grid_rows_are_swap_free():
     assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
     assert s.n_swaps == 0 and s.n_strips <= ny
     assert len(s.indices) <= m.n_triangles + 3 * ny - 1  # rows: T + 2 S + (S - 1) restarts
-    # the chains themselves: every consecutive pair of a chain shares an edge, every triangle once
+    # the chains themselves (either rule): every consecutive pair of a chain shares an edge,
+    # every triangle once, no swap inside a chain
+    from hammesh.strips._cover_kernels import LONGEST_CHAIN, SHORTEST_CHAIN
+    from hammesh.strips.paths import path_turns
+
     d = dual_mesh(m)
-    order, starts = zigzag_path_cover(d.records.copy(), np.arange(d.n_triangles - 1, -1, -1))
-    assert sorted(order.tolist()) == list(range(d.n_triangles))
     nb = d.neighbor_triangles
-    for a, b in zip(starts[:-1], starts[1:]):
-        for i in range(a, b - 1):
-            assert order[i + 1] in nb[order[i]]
+    for rule in (LONGEST_CHAIN, SHORTEST_CHAIN):
+        order, starts = zigzag_path_cover(d.records.copy(), np.arange(d.n_triangles - 1, -1, -1), rule)
+        assert sorted(order.tolist()) == list(range(d.n_triangles))
+        for a, b in zip(starts[:-1], starts[1:]):
+            for i in range(a, b - 1):
+                assert order[i + 1] in nb[order[i]]
+        turns = path_turns(d.triangles, d.twin, order.astype(np.int64), starts)
+        pos = np.arange(len(order)) - np.repeat(starts[:-1], np.diff(starts))  # position inside its chain
+        assert not turns.swap[pos >= 2].any()  # alternating: only the first turn depends on the direction
+
+
+def lat_long_sphere(n_theta: int, n_phi: int) -> Mesh:
+    """A UV sphere as pyvista builds it: two poles and ``n_phi - 2`` rings of ``n_theta`` vertices, outward."""
+    th = np.arange(n_theta) * 2 * np.pi / n_theta
+    ph = np.linspace(0, np.pi, n_phi)[1:-1]
+    ring = np.c_[(np.sin(ph)[:, None] * np.cos(th)).ravel(), (np.sin(ph)[:, None] * np.sin(th)).ravel(),
+                 np.repeat(np.cos(ph), n_theta)]
+    pts = np.r_[[[0, 0, 1.0]], ring, [[0, 0, -1.0]]]
+    v = lambda r, j: 1 + r * n_theta + j % n_theta  # noqa: E731
+    south = len(pts) - 1
+    tri = [[0, v(0, j), v(0, j + 1)] for j in range(n_theta)]
+    tri += [[south, v(n_phi - 3, j + 1), v(n_phi - 3, j)] for j in range(n_theta)]
+    for r in range(n_phi - 3):
+        for j in range(n_theta):
+            tri += [[v(r, j), v(r + 1, j), v(r + 1, j + 1)], [v(r, j), v(r + 1, j + 1), v(r, j + 1)]]
+    return Mesh(pts, np.array(tri, np.int64))
+
+
+def _candidate_lengths(m: Mesh) -> list[int]:
+    """Buffer lengths of the covers encode chooses from: greedy alone, swap-free chains (both rules)."""
+    from hammesh.strips._cover_kernels import LONGEST_CHAIN, SHORTEST_CHAIN
+
+    E = sys.modules["hammesh.strips.encode"]
+    out = []
+    for method, rule in (("greedy", LONGEST_CHAIN), ("zigzag", LONGEST_CHAIN), ("zigzag", SHORTEST_CHAIN)):
+        d, tri, twin, loc, st_, ids = E._oriented_local(m, method, None, None, rule)
+        out.append(len(E._buffer(d, tri, twin, loc, st_, ids, "restart", 0xFFFFFFFF)[0].indices))
+    return out
+
+
+@given(st.integers(6, 40), st.integers(4, 24))
+@settings(max_examples=25, deadline=None)
+def test_uv_spheres_keep_the_shortest_cover(n_theta, n_phi):
+    """Latitude-longitude spheres (few swaps per strip) try the swap-free chains both ways
+    (each seed's longest chain, and its shortest) and keep the shortest of the three buffers."""
+    m = lat_long_sphere(n_theta, n_phi)
+    s = encode(m)
+    assert_round_trip(m, s)
+    lengths = _candidate_lengths(m)
+    assert len(s.indices) == min(lengths)
+    assert encode(m, method="zigzag").indices.size == min(lengths[1:])
+
+
+def test_uv_sphere_of_sphere_ply_no_longer_than_meridian_strips():
+    """Issue 16: pyvista's sphere.ply (30 meridians, 16 rings with the poles; ours was 1.162
+    against NvTriStrip's 1.120) -- the same layout is never longer than one swap-free strip per
+    meridian column, pole to pole: ``T + 2 S + (S - 1)`` indices with ``S = 30`` (1.106)."""
+    m = lat_long_sphere(30, 16)
+    s = encode(m)
+    assert_round_trip(m, s)
+    assert len(s.indices) <= m.n_triangles + 3 * 30 - 1
 
 
 @pytest.mark.parametrize("nu,nv", [(60, 40), (24, 10)])
@@ -315,9 +379,29 @@ def test_encoder_keeps_the_shorter_of_greedy_and_swap_free_chains(nu, nv):
     assert_round_trip(m, z)
     s = encode(m)
     assert_round_trip(m, s)
-    few = greedy_only.n_swaps <= max(2 * (greedy_only.n_strips - 1), 0.03 * m.n_triangles)
+    E = sys.modules["hammesh.strips.encode"]
+    few = greedy_only.n_swaps <= max(E._ZIGZAG_TRIGGER * (greedy_only.n_strips - 1), E._ZIGZAG_SWAP_RATE * m.n_triangles)
+    few = few or m.n_triangles <= E._ZIGZAG_ALWAYS
     want = min(len(z.indices), len(greedy_only.indices)) if few else len(greedy_only.indices)
     assert len(s.indices) == want
     if (nu, nv) == (60, 40):
         assert few
         assert s.indices_per_triangle < 1.012
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(12, 120), st.booleans())
+@settings(max_examples=30, deadline=None)
+def test_fast_is_the_greedy_cover_alone(seed, n, lift):
+    """``fast=True``: the greedy cover without end moves or swap-free trials -- exactly the
+    buffer of :func:`greedy_paths` with ``improve=False``, never shorter than the default."""
+    from hammesh.strips.encode import orient_path_turns
+    from hammesh.strips.gl import RESTART_INDEX, gl_strip_from_turns
+
+    m = delaunay_mesh(seed, n, lift)
+    f = encode(m, fast=True)
+    assert_round_trip(m, f)
+    d = dual_mesh(m)
+    order, starts = greedy_paths(d, improve=False)
+    want = gl_strip_from_turns(orient_path_turns(d, order, starts), join="restart", restart_index=RESTART_INDEX)
+    assert len(f.indices) == len(want.indices)
+    assert len(encode(m).indices) <= len(f.indices)

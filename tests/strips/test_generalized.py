@@ -12,15 +12,9 @@ from hammesh.strips.dual import dual_mesh
 from hammesh.strips.generalized import GeneralizedStrips, decode_generalized, generalized_strips
 from hammesh.strips.gl import decode_gl_strip, gl_strip
 
-from .conftest import fan_mesh, grid_mesh, oriented_set, random_path_cover, square_mesh, torus_mesh, zigzag_mesh
+from .conftest import SMALL_MESHES, fan_mesh, oriented_set, random_path_cover, zigzag_mesh
 
-MESHES = {
-    "square": lambda: square_mesh(),
-    "grid": lambda: grid_mesh(5, 4),
-    "surface": lambda: grid_mesh(4, 4, z=True),
-    "torus": lambda: torus_mesh(),
-    "fan": lambda: fan_mesh(7),
-}
+MESHES = SMALL_MESHES
 
 
 @given(st.sampled_from(sorted(MESHES)), st.integers(0, 2**32 - 1))

@@ -11,13 +11,14 @@ from hammesh.errors import InvalidMeshError, InvalidOptionError, VerificationErr
 from hammesh.strips.dual import dual_mesh
 from hammesh.strips.gl import RESTART_INDEX, decode_gl_strip, gl_strip, verify_gl_strip
 
+from tests.helpers import grid_mesh
+
 from .conftest import (
+    SMALL_MESHES,
     fan_mesh,
     gl_decode_reference,
-    grid_mesh,
     oriented_set,
     random_path_cover,
-    square_mesh,
     torus_mesh,
     zigzag_mesh,
 )
@@ -97,13 +98,7 @@ def test_restart_and_stitch_costs():
 
 # --- round trips -----------------------------------------------------------------------
 
-MESHES = {
-    "square": lambda: square_mesh(),
-    "grid": lambda: grid_mesh(5, 4),
-    "surface": lambda: grid_mesh(4, 4, z=True),
-    "torus": lambda: torus_mesh(),
-    "fan": lambda: fan_mesh(7),
-}
+MESHES = SMALL_MESHES
 
 
 @given(st.sampled_from(sorted(MESHES)), st.integers(0, 2**32 - 1), st.sampled_from(["restart", "stitch"]))

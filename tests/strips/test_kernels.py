@@ -28,7 +28,9 @@ from hammesh.strips.dual import dual_mesh
 from hammesh.strips.encode import _greedy_cover, encode, greedy_paths
 from hammesh.strips.gl import decode_gl_strip
 
-from .conftest import delaunay_mesh, grid_mesh, oriented_set, square_mesh, torus_mesh
+from tests.helpers import grid_mesh
+
+from .conftest import delaunay_mesh, oriented_set, square_mesh, torus_mesh
 from .reference_cover import reference_greedy_cover
 
 _REJECT_NRT = {

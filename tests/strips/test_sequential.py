@@ -6,14 +6,15 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from scipy.spatial import Delaunay
 
 from hammesh.mesh import Mesh
 from hammesh.strips.dual import dual_mesh
 from hammesh.strips.gl import gl_strip, verify_gl_strip
 from hammesh.strips.sequential import sequential_order
 
-from .conftest import fan_mesh, grid_mesh, square_mesh, torus_mesh, zigzag_mesh
+from tests.helpers import grid_mesh
+
+from .conftest import delaunay_mesh, fan_mesh, square_mesh, torus_mesh, zigzag_mesh
 
 
 def _shared(t, u):
@@ -100,14 +101,8 @@ def test_real_meshes_are_not_sequential():
 
 @given(st.integers(0, 2**32 - 1), st.integers(4, 9))
 def test_matches_brute_force_on_random_delaunay(seed, n):
-    rng = np.random.default_rng(seed)
-    pts = rng.random((n, 2))
-    tri = Delaunay(pts).simplices.astype(np.int64)
-    # counter-clockwise rows
-    p = pts[tri]
-    cr = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0])
-    tri[cr < 0] = tri[cr < 0][:, ::-1]
-    mesh = Mesh(pts, tri)
+    mesh = delaunay_mesh(seed, n)  # counter-clockwise rows
+    tri = mesh.triangles
     res = sequential_order(mesh)
     assert (res is not None) == brute_force_sequential(tri)
     if res is not None:

@@ -53,3 +53,14 @@ def test_at_most_vtkstripper_with_windings_kept(name, load, found):
     assert len(s.indices) <= _vtk_indices(mesh)
     for key, value in found.items():
         assert getattr(s.defects, key) == value
+
+
+def test_sphere_ply_no_longer_than_nvtristrip():
+    """Issue 16's one miss: pyvista's bundled sphere.ply (840 triangles), where NvTriStrip
+    (pyffi's port, restart-joined, measured by benchmarks/bench_strips.py) needs 941 indices
+    (34 swap-free strips, 1.120 per triangle); ours had 976 (1.162)."""
+    mesh = _mesh(examples.load_sphere())
+    s = encode(mesh)
+    verify_gl_strip(mesh.triangles, s.indices, s.restart_index)
+    assert mesh.n_triangles == 840
+    assert len(s.indices) <= 941
