@@ -22,6 +22,12 @@ from hammesh.verify.stream import UNLINKED
 
 __all__ = [
     "Forest",
+    "quadtree_coords",
+    "edge_class",
+    "N_CLASSES",
+    "CELL_BITS",
+    "RANK_BINS",
+    "RANK_SAMPLE",
     "Slots",
     "incenters",
     "spanning_forest",
@@ -115,6 +121,10 @@ CON_BIT = 1
 CELL_BITS = 15
 #: Distance classes per quadtree level: edges nearer a cell's centre are taken first.
 CENTRE_BINS = 16
+#: Histogram bins per axis that turn coordinates into triangle counts (:func:`spanning_forest`).
+RANK_BINS = 1024
+#: Centroids sampled for those histograms (every ``m // RANK_SAMPLE``-th triangle).
+RANK_SAMPLE = 1 << 14
 #: Edge classes: ``level * CENTRE_BINS + bin`` for free edges, then one for constrained ones.
 N_CLASSES = (CELL_BITS + 1) * CENTRE_BINS + 1
 
@@ -184,10 +194,7 @@ def spanning_forest(tri, twin, is_con, points=None):
         qr[:, 0] = 0
         qr[:, 1] = -1
     else:
-        x0, y0, x1, y1 = _bounds(points)
-        span = max(x1 - x0, y1 - y0)
-        scale = ((1 << CELL_BITS) - 1) / span if span > 0 else 0.0
-        run_all([(lambda a=a, b=b: _cell_coords_into(points, tri, x0, y0, scale, qr, a, b)) for a, b in spans])
+        quadtree_coords(points, tri, qr, spans)
     order = np.empty(m, np.int64)
     firsts = np.empty(m, np.int64)
     flags = is_con.astype(np.uint8)  # CON_BIT; the search adds TREE_BIT
@@ -198,6 +205,47 @@ def spanning_forest(tri, twin, is_con, points=None):
     run_all([(lambda a=a, b=b: _pack_code_into(tri, twin, flags, order, qr, tri_r, code, a, b)) for a, b in spans])
     split = np.flatnonzero((code & 3) == 3).astype(np.int64)
     return Forest(tri_r, code, order, firsts[:pieces].copy(), split)
+
+
+def quadtree_coords(points, tri, out=None, spans=None):
+    """Quadtree coordinates of the triangles for :func:`spanning_forest`, as counts.
+
+    Each axis of a triangle's centroid is mapped to the number of centroids below it
+    (from a histogram of ``RANK_BINS`` bins per axis of every ``m // RANK_SAMPLE``-th
+    centroid, linear inside a bin; exact up to a bin below ``RANK_SAMPLE``
+    triangles), scaled to ``CELL_BITS`` bits times the bounding box's side over its
+    longer side: the quadtree's halvings then split the *triangles* (not the box) in halves along each
+    axis, so its cells hold nearly equal counts around holes and in graded meshes,
+    while the domain's aspect is kept.
+
+    Returns ``out`` ((m, 2) int32, or int64 from 2**31 triangles): column 0 the packed
+    ``x << CELL_BITS | y``, column 1 set to -1 (the search's "not reached").
+    """
+    m = tri.shape[0]
+    if out is None:
+        out = np.empty((m, 2), index_dtype(m))
+    if m == 0:
+        return out
+    if spans is None:
+        spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    x0, y0, x1, y1 = _bounds(points)
+    span = max(x1 - x0, y1 - y0)
+    # each axis is mapped through the cumulative histogram of a sample of the
+    # centroids (RANK_SAMPLE of them, every stride-th triangle), so that the quadtree
+    # halves the triangles, not the box
+    bx = RANK_BINS / (x1 - x0) if x1 > x0 else 0.0
+    by = RANK_BINS / (y1 - y0) if y1 > y0 else 0.0
+    stride = max(1, m // RANK_SAMPLE)
+    cum = np.zeros((2, RANK_BINS + 1), np.float64)
+    _sample_histogram_into(points, tri, x0, y0, bx, by, stride, cum)
+    top = (1 << CELL_BITS) - 1
+    n = cum[0, RANK_BINS]
+    fx = top * (x1 - x0) / span / n if span > 0 else 0.0  # the box's aspect is kept
+    fy = top * (y1 - y0) / span / n if span > 0 else 0.0
+    run_all([
+        (lambda a=a, b=b: _cell_coords_into(points, tri, x0, y0, bx, by, cum, fx, fy, out, a, b)) for a, b in spans
+    ])
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -216,16 +264,35 @@ def _bounds(points):
 
 
 @njit(cache=True, nogil=True)
-def _cell_coords_into(points, tri, x0, y0, scale, qr, lo, hi):
-    """Quadtree coordinates (``CELL_BITS`` bits) of the centroids of triangles lo..hi,
-    packed ``x << CELL_BITS | y`` into ``qr[:, 0]``; ``qr[:, 1] = -1``."""
-    top = (1 << CELL_BITS) - 1
-    for t in range(lo, hi):
+def _sample_histogram_into(points, tri, x0, y0, bx, by, stride, cum):
+    """Cumulative histograms (``cum[axis, b]``: sampled centroids in bins below b) of
+    the centroids of every ``stride``-th triangle, over the box (``bx``, ``by``: bins
+    per unit)."""
+    for t in range(0, tri.shape[0], stride):
         x = (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0
         y = (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0
-        ix = min(max(int((x - x0) * scale), 0), top)
-        iy = min(max(int((y - y0) * scale), 0), top)
-        qr[t, 0] = (ix << CELL_BITS) | iy
+        cum[0, min(max(int((x - x0) * bx), 0), RANK_BINS - 1) + 1] += 1
+        cum[1, min(max(int((y - y0) * by), 0), RANK_BINS - 1) + 1] += 1
+    for b in range(RANK_BINS):
+        cum[0, b + 1] += cum[0, b]
+        cum[1, b + 1] += cum[1, b]
+
+
+@njit(cache=True, nogil=True)
+def _cell_coords_into(points, tri, x0, y0, bx, by, cum, fx, fy, qr, lo, hi):
+    """Quadtree coordinates (``CELL_BITS`` bits) of triangles lo..hi: each axis of the
+    centroid is the number of sampled centroids below it (``cum``, linear inside a
+    bin) times ``fx``/``fy``; packed ``x << CELL_BITS | y`` into ``qr[:, 0]``;
+    ``qr[:, 1] = -1``."""
+    top = (1 << CELL_BITS) - 1
+    for t in range(lo, hi):
+        px = ((points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0 - x0) * bx
+        py = ((points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0 - y0) * by
+        i = min(max(int(px), 0), RANK_BINS - 1)
+        j = min(max(int(py), 0), RANK_BINS - 1)
+        rx = cum[0, i] + min(max(px - i, 0.0), 1.0) * (cum[0, i + 1] - cum[0, i])
+        ry = cum[1, j] + min(max(py - j, 0.0), 1.0) * (cum[1, j + 1] - cum[1, j])
+        qr[t, 0] = (min(int(rx * fx), top) << CELL_BITS) | min(int(ry * fy), top)
         qr[t, 1] = -1  # not reached yet (``_prim_into``)
 
 

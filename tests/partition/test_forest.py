@@ -60,14 +60,41 @@ def test_forest_spans_each_piece_crossing_fewest_constrained_edges(dom, threads:
     assert len(f.firsts) == pieces
 
 
-def _quadtree_coords(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Packed quadtree coordinates of the centroids (numpy, as the forest defines them)."""
-    lo = points.min(axis=0)
-    span = float((points.max(axis=0) - lo).max())
-    scale = ((1 << K.CELL_BITS) - 1) / span
-    c = points[tri].mean(axis=1)
-    ij = np.clip(((c - lo) * scale).astype(np.int64), 0, (1 << K.CELL_BITS) - 1)
-    return (ij[:, 0] << K.CELL_BITS) | ij[:, 1]
+@settings(max_examples=30, deadline=None)
+@given(
+    xy=st.lists(st.tuples(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3)), min_size=3, max_size=60, unique=True),
+    data=st.data(),
+)
+def test_quadtree_coords_count_the_triangles_below(xy, data) -> None:
+    """Each axis is monotone in the centroid's coordinate and about the number of
+    centroids below it (within a histogram bin's share), scaled by the box's aspect."""
+    pts = np.array(xy, float)
+    n = len(pts)
+    tri = np.array(data.draw(st.lists(st.permutations(range(n)).map(lambda p: p[:3]), min_size=1, max_size=40)))  # below RANK_SAMPLE: the histogram is exact
+    q = K.quadtree_coords(pts, tri)
+    assert (q[:, 1] == -1).all()
+    ix, iy = q[:, 0] >> K.CELL_BITS, q[:, 0] & ((1 << K.CELL_BITS) - 1)
+    c = pts[tri].mean(axis=1)
+    ext = pts.max(axis=0) - pts.min(axis=0)
+    top = (1 << K.CELL_BITS) - 1
+    m = len(tri)
+    for axis, v in ((0, ix), (1, iy)):
+        o = np.argsort(c[:, axis], kind="stable")
+        assert (np.diff(v[o]) >= 0).all() or np.ptp(c[:, axis]) < 1e-9 * max(1.0, float(np.abs(c).max()))
+        scale = top * ext[axis] / ext.max() / m if ext.max() > 0 else 0.0
+        below = (c[:, axis][None, :] < c[:, axis][:, None]).sum(axis=1)
+        at_most = (c[:, axis][None, :] <= c[:, axis][:, None]).sum(axis=1)
+        # the count below a centroid, up to the other centroids in its histogram bin
+        mates = _bin_mates(c[:, axis], pts[:, axis])
+        assert (v >= np.floor((below - mates) * scale) - 1).all()
+        assert (v <= np.ceil((at_most + mates) * scale) + 1).all()
+
+
+def _bin_mates(c: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Centroids sharing each centroid's histogram bin (``RANK_BINS`` over the points' span)."""
+    lo, hi = p.min(), p.max()
+    b = np.clip(((c - lo) * (K.RANK_BINS / (hi - lo)) if hi > lo else 0 * c).astype(np.int64), 0, K.RANK_BINS - 1)
+    return (b[None, :] == b[:, None]).sum(axis=1)
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -79,7 +106,7 @@ def test_forest_is_a_minimum_spanning_forest_of_the_edge_classes(dom, area: floa
     mesh = hammesh.quality_mesh(dom, min_angle=25, max_area=area)
     clean, he, is_con = prepare_mesh(mesh)
     f = K.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
-    q = _quadtree_coords(clean.points, clean.triangles)
+    q = K.quadtree_coords(clean.points, clean.triangles)[:, 0].astype(np.int64)
     m = clean.n_triangles
     g = nx.Graph()
     g.add_nodes_from(range(m))
