@@ -1,4 +1,12 @@
-"""The dual cycle cover: disjoint cycles, checked independently with networkx."""
+"""The dual cycle cover: disjoint cycles, checked independently with networkx.
+
+``oracle_check`` re-derives every property from the triangles alone, in plain
+Python (the dual edges from a dictionary of vertex pairs, not from the half-edge
+twins the cover was given), so a wrong twin array or a kernel bug cannot hide
+itself: every cover half-edge lies on a real dual edge and is paired with its
+opposite, each covered triangle has exactly two, the cover's components are single
+cycles (hence disjoint), and ``cycle``/``n_cycles``/``n_uncovered`` say so.
+"""
 
 from __future__ import annotations
 
@@ -35,7 +43,109 @@ def check_cover(tri: np.ndarray, n: int) -> tuple:
     for comp in comps:  # each a cycle with one id
         assert len({int(c.cycle[t]) for t in comp}) == 1
         assert all(d == 2 for _, d in g.degree(comp))
+    oracle_check(tri, c)
     return c
+
+
+def oracle_check(tri: np.ndarray, c) -> None:
+    """Brute-force re-check of a ``CycleCover`` from the triangles alone (no twins, no numba)."""
+    m = len(tri)
+    sides: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for t in range(m):
+        for k in range(3):
+            a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
+            sides.setdefault((min(a, b), max(a, b)), []).append((t, k))
+    cov = np.asarray(c.is_cov).reshape(m, 3)
+    adj: dict[int, list[int]] = {t: [] for t in range(m)}
+    for pair, owners in sides.items():
+        flags = [bool(cov[t, k]) for t, k in owners]
+        if len(owners) != 2:
+            assert not any(flags), f"cover half-edge on boundary edge {pair}"
+            continue
+        assert flags[0] == flags[1], f"cover edge {pair} marked on one side only"
+        if flags[0]:
+            (t, _), (u, _) = owners
+            assert t != u
+            adj[t].append(u)
+            adj[u].append(t)
+    for t in range(m):
+        d = len(adj[t])
+        assert d in (0, 2), f"triangle {t} has cover degree {d}"
+        assert (d == 0) == (int(c.cycle[t]) < 0), f"triangle {t}: cycle id {int(c.cycle[t])}, degree {d}"
+        n_nb = sum(len(sides[(min(a, b), max(a, b))]) - 1 for a, b in
+                   ((tri[t, k], tri[t, (k + 1) % 3]) for k in range(3)))
+        if n_nb <= 1:  # an ear (or a lone triangle) cannot lie on a cycle
+            assert d == 0
+    seen = np.zeros(m, bool)
+    n_cyc = 0
+    ids = set()
+    for s in range(m):
+        if seen[s] or not adj[s]:
+            continue
+        # walk the cycle through s: with degree 2 everywhere it must come back to s
+        prev, cur, comp = s, adj[s][0], [s]
+        seen[s] = True
+        while cur != s:
+            assert not seen[cur], f"triangle {cur} on two cycles"
+            seen[cur] = True
+            comp.append(cur)
+            nxt = adj[cur][0] if adj[cur][0] != prev else adj[cur][1]
+            prev, cur = cur, nxt
+        assert len(comp) >= 3
+        assert len({int(c.cycle[t]) for t in comp}) == 1, "one cycle, two ids"
+        ids.add(int(c.cycle[comp[0]]))
+        n_cyc += 1
+    assert len(ids) == n_cyc == c.n_cycles
+    assert int((~seen).sum()) == c.n_uncovered
+
+
+@st.composite
+def punched_delaunay(draw):
+    """A Delaunay triangulation of random points with some triangles removed (holes, ears, bridges)."""
+    seed = draw(st.integers(0, 2**31 - 1))
+    n = draw(st.integers(4, 160))
+    drop = draw(st.sampled_from([0.0, 0.05, 0.2, 0.4]))
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    tri = tri[rng.random(len(tri)) >= drop]
+    # keep only vertices still used, renumbered (the cover takes any triangle list)
+    used, tri = np.unique(tri, return_inverse=True)
+    return pts[used], tri.reshape(-1, 3).astype(np.int64), rng
+
+
+@given(case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans())
+def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool) -> None:
+    pts, tri, rng = case
+    if len(tri) == 0:
+        return
+    twin = half_edges(tri, len(pts)).twin
+    good = None
+    if use_good:  # any symmetric preference must leave the cover valid
+        g = rng.random(3 * len(tri)) < 0.5
+        inner = twin >= 0
+        g[inner] = g[inner] & g[twin[inner]]
+        good = g
+    c = cycle_cover(tri, twin, rotate=rotate, good=good)
+    oracle_check(tri, c)
+
+
+def test_oracle_catches_a_broken_cover() -> None:
+    # the oracle must fail on a cover with a triangle of degree 3 or a one-sided edge
+    pts, tri = icosphere(1)
+    twin = half_edges(tri, len(pts)).twin
+    c = cycle_cover(tri, twin)
+    oracle_check(tri, c)
+    bad = c.is_cov.copy()
+    h = int(np.flatnonzero(bad)[0])
+    bad[h] = False  # one side only
+    with pytest.raises(AssertionError):
+        oracle_check(tri, type(c)(bad, c.cycle, c.n_cycles, c.n_uncovered, c.n_unmatched))
+    bad2 = c.is_cov.copy()
+    h = int(np.flatnonzero(~bad2 & (twin >= 0))[0])
+    bad2[h] = bad2[twin[h]] = True  # a matching edge put back: two triangles of degree 3
+    with pytest.raises(AssertionError):
+        oracle_check(tri, type(c)(bad2, c.cycle, c.n_cycles, c.n_uncovered, c.n_unmatched))
 
 
 def icosphere(nsub: int) -> tuple[np.ndarray, np.ndarray]:
