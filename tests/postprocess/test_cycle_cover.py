@@ -23,9 +23,9 @@ from hammesh.halfedge import half_edges
 from tests.helpers import bundled_domain, hull_area
 
 
-def check_cover(tri: np.ndarray, n: int) -> tuple:
+def check_cover(tri: np.ndarray, n: int, online: int | None = None) -> tuple:
     twin = half_edges(tri, n).twin
-    c = cycle_cover(tri, twin)
+    c = cycle_cover(tri, twin, online=online)
     cov = c.is_cov
     m = len(tri)
     # symmetric, never on the boundary
@@ -114,8 +114,8 @@ def punched_delaunay(draw):
     return pts[used], tri.reshape(-1, 3).astype(np.int64), rng
 
 
-@given(case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans())
-def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool) -> None:
+@given(case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans(), online=st.sampled_from([0, 4, 256]))
+def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, online: int) -> None:
     pts, tri, rng = case
     if len(tri) == 0:
         return
@@ -126,7 +126,7 @@ def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool) ->
         inner = twin >= 0
         g[inner] = g[inner] & g[twin[inner]]
         good = g
-    c = cycle_cover(tri, twin, rotate=rotate, good=good)
+    c = cycle_cover(tri, twin, rotate=rotate, good=good, online=online)
     oracle_check(tri, c)
 
 
@@ -167,17 +167,43 @@ def test_ears_stay_uncovered() -> None:
     assert c.n_cycles == 0 and c.n_uncovered == 3
 
 
-def test_closed_surface_nearly_all_covered() -> None:
+@pytest.mark.parametrize("online", [0, 256])
+def test_closed_surface_nearly_all_covered(online: int) -> None:
     pts, tri = icosphere(4)  # dual cubic and bridgeless: a perfect matching exists
-    c = check_cover(tri, len(pts))
+    c = check_cover(tri, len(pts), online)
     assert c.n_uncovered == 0 and c.n_unmatched == 0
 
 
+def test_breadth_first_greedy_leaves_fewer_free() -> None:
+    # the sweep with online searches: on a 20k-triangle mesh far fewer degree-3
+    # triangles are left for the searches afterwards than by Triangle's numbering
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain("face")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 30000)
+    tri = m.triangles
+    nb = ck._neighbors(half_edges(tri, m.n_points).twin, len(tri))
+    alive, deg = ck._peel(nb, len(tri))
+    free = {}
+    for online in (0, 256):
+        k = len(tri)
+        work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
+                np.empty(k + 8, np.int64))
+        order = ck._bfs_order(nb, k) if online else np.arange(k)
+        active, mate, _ = ck._greedy_matching(nb, alive, deg, k, np.zeros((k, 3), np.bool_), order, online, *work)
+        paired = np.flatnonzero(mate >= 0)
+        assert (mate[mate[paired]] == paired).all() and active[paired].all()
+        assert all(mate[t] in nb[t] for t in paired)  # matched along dual edges only
+        free[online] = int((active & (mate < 0)).sum())
+    assert free[256] * 4 < max(free[0], 4)
+
+
+@pytest.mark.parametrize("online", [0, 256])
 @pytest.mark.parametrize("name", ["A", "face", "square_circle_hole"])
-def test_quality_meshes_nearly_all_covered(name: str) -> None:
+def test_quality_meshes_nearly_all_covered(name: str, online: int) -> None:
     dom = bundled_domain(name)
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
-    c = check_cover(m.triangles, m.n_points)
+    c = check_cover(m.triangles, m.n_points, online)
     assert c.n_uncovered <= 0.02 * m.n_triangles
     assert c.n_cycles <= 0.05 * m.n_triangles
 
