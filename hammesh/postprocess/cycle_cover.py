@@ -19,7 +19,14 @@ import numpy as np
 
 from hammesh.postprocess import _cover_kernels as _k
 
-__all__ = ["CycleCover", "cycle_cover"]
+__all__ = ["CycleCover", "cycle_cover", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES"]
+
+#: Triangles an augmenting search started by the greedy matching may label (``online``).
+ONLINE_BUDGET = 256
+#: Meshes from this size on use the breadth-first greedy with online searches by
+#: default; below it the searches cost little either way and the matching of
+#: Triangle's numbering is kept (the small meshes' figures stay as they were).
+ONLINE_MIN_TRIANGLES = 100_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,6 +61,7 @@ def cycle_cover(
     twin: np.ndarray,
     *,
     budget: int = 2000,
+    online: int | None = None,
     arc_limit: int | None = None,
     rotate: bool = True,
     good: np.ndarray | None = None,
@@ -67,6 +75,12 @@ def cycle_cover(
         Half-edge twins (``-1`` on the boundary), ``h = 3 t + k``.
     budget : int
         Triangles one augmenting search may label before it gives up.
+    online : int, optional
+        The greedy matching sweeps the dual graph breadth-first and starts an
+        augmenting search of at most this many triangles from each triangle it
+        strands, at once (``_cover_kernels._greedy_matching``); 0: Triangle's
+        numbering and the searches afterwards (the matching before session 6).
+        Default: ``ONLINE_BUDGET`` from ``ONLINE_MIN_TRIANGLES`` triangles on, else 0.
     arc_limit : int, optional
         Longest cover arc the repair may drop to fix a triangle left unmatched (default:
         any; the alternative, peeling, would drop whole cycles).
@@ -94,8 +108,10 @@ def cycle_cover(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     m = len(tw) // 3
     limit = m if arc_limit is None else int(arc_limit)
+    if online is None:
+        online = ONLINE_BUDGET if m >= ONLINE_MIN_TRIANGLES else 0
     g = np.zeros((m, 3), np.bool_) if good is None else np.ascontiguousarray(good, dtype=np.bool_).reshape(m, 3)
-    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g)
+    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g, int(online))
     cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:

@@ -1,4 +1,12 @@
-"""The dual cycle cover: disjoint cycles, checked independently with networkx."""
+"""The dual cycle cover: disjoint cycles, checked independently with networkx.
+
+``oracle_check`` re-derives every property from the triangles alone, in plain
+Python (the dual edges from a dictionary of vertex pairs, not from the half-edge
+twins the cover was given), so a wrong twin array or a kernel bug cannot hide
+itself: every cover half-edge lies on a real dual edge and is paired with its
+opposite, each covered triangle has exactly two, the cover's components are single
+cycles (hence disjoint), and ``cycle``/``n_cycles``/``n_uncovered`` say so.
+"""
 
 from __future__ import annotations
 
@@ -15,9 +23,9 @@ from hammesh.halfedge import half_edges
 from tests.helpers import bundled_domain, hull_area
 
 
-def check_cover(tri: np.ndarray, n: int) -> tuple:
+def check_cover(tri: np.ndarray, n: int, online: int | None = None) -> tuple:
     twin = half_edges(tri, n).twin
-    c = cycle_cover(tri, twin)
+    c = cycle_cover(tri, twin, online=online)
     cov = c.is_cov
     m = len(tri)
     # symmetric, never on the boundary
@@ -35,7 +43,109 @@ def check_cover(tri: np.ndarray, n: int) -> tuple:
     for comp in comps:  # each a cycle with one id
         assert len({int(c.cycle[t]) for t in comp}) == 1
         assert all(d == 2 for _, d in g.degree(comp))
+    oracle_check(tri, c)
     return c
+
+
+def oracle_check(tri: np.ndarray, c) -> None:
+    """Brute-force re-check of a ``CycleCover`` from the triangles alone (no twins, no numba)."""
+    m = len(tri)
+    sides: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for t in range(m):
+        for k in range(3):
+            a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
+            sides.setdefault((min(a, b), max(a, b)), []).append((t, k))
+    cov = np.asarray(c.is_cov).reshape(m, 3)
+    adj: dict[int, list[int]] = {t: [] for t in range(m)}
+    for pair, owners in sides.items():
+        flags = [bool(cov[t, k]) for t, k in owners]
+        if len(owners) != 2:
+            assert not any(flags), f"cover half-edge on boundary edge {pair}"
+            continue
+        assert flags[0] == flags[1], f"cover edge {pair} marked on one side only"
+        if flags[0]:
+            (t, _), (u, _) = owners
+            assert t != u
+            adj[t].append(u)
+            adj[u].append(t)
+    for t in range(m):
+        d = len(adj[t])
+        assert d in (0, 2), f"triangle {t} has cover degree {d}"
+        assert (d == 0) == (int(c.cycle[t]) < 0), f"triangle {t}: cycle id {int(c.cycle[t])}, degree {d}"
+        n_nb = sum(len(sides[(min(a, b), max(a, b))]) - 1 for a, b in
+                   ((tri[t, k], tri[t, (k + 1) % 3]) for k in range(3)))
+        if n_nb <= 1:  # an ear (or a lone triangle) cannot lie on a cycle
+            assert d == 0
+    seen = np.zeros(m, bool)
+    n_cyc = 0
+    ids = set()
+    for s in range(m):
+        if seen[s] or not adj[s]:
+            continue
+        # walk the cycle through s: with degree 2 everywhere it must come back to s
+        prev, cur, comp = s, adj[s][0], [s]
+        seen[s] = True
+        while cur != s:
+            assert not seen[cur], f"triangle {cur} on two cycles"
+            seen[cur] = True
+            comp.append(cur)
+            nxt = adj[cur][0] if adj[cur][0] != prev else adj[cur][1]
+            prev, cur = cur, nxt
+        assert len(comp) >= 3
+        assert len({int(c.cycle[t]) for t in comp}) == 1, "one cycle, two ids"
+        ids.add(int(c.cycle[comp[0]]))
+        n_cyc += 1
+    assert len(ids) == n_cyc == c.n_cycles
+    assert int((~seen).sum()) == c.n_uncovered
+
+
+@st.composite
+def punched_delaunay(draw):
+    """A Delaunay triangulation of random points with some triangles removed (holes, ears, bridges)."""
+    seed = draw(st.integers(0, 2**31 - 1))
+    n = draw(st.integers(4, 160))
+    drop = draw(st.sampled_from([0.0, 0.05, 0.2, 0.4]))
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    tri = tri[rng.random(len(tri)) >= drop]
+    # keep only vertices still used, renumbered (the cover takes any triangle list)
+    used, tri = np.unique(tri, return_inverse=True)
+    return pts[used], tri.reshape(-1, 3).astype(np.int64), rng
+
+
+@given(case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans(), online=st.sampled_from([0, 4, 256]))
+def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, online: int) -> None:
+    pts, tri, rng = case
+    if len(tri) == 0:
+        return
+    twin = half_edges(tri, len(pts)).twin
+    good = None
+    if use_good:  # any symmetric preference must leave the cover valid
+        g = rng.random(3 * len(tri)) < 0.5
+        inner = twin >= 0
+        g[inner] = g[inner] & g[twin[inner]]
+        good = g
+    c = cycle_cover(tri, twin, rotate=rotate, good=good, online=online)
+    oracle_check(tri, c)
+
+
+def test_oracle_catches_a_broken_cover() -> None:
+    # the oracle must fail on a cover with a triangle of degree 3 or a one-sided edge
+    pts, tri = icosphere(1)
+    twin = half_edges(tri, len(pts)).twin
+    c = cycle_cover(tri, twin)
+    oracle_check(tri, c)
+    bad = c.is_cov.copy()
+    h = int(np.flatnonzero(bad)[0])
+    bad[h] = False  # one side only
+    with pytest.raises(AssertionError):
+        oracle_check(tri, type(c)(bad, c.cycle, c.n_cycles, c.n_uncovered, c.n_unmatched))
+    bad2 = c.is_cov.copy()
+    h = int(np.flatnonzero(~bad2 & (twin >= 0))[0])
+    bad2[h] = bad2[twin[h]] = True  # a matching edge put back: two triangles of degree 3
+    with pytest.raises(AssertionError):
+        oracle_check(tri, type(c)(bad2, c.cycle, c.n_cycles, c.n_uncovered, c.n_unmatched))
 
 
 def icosphere(nsub: int) -> tuple[np.ndarray, np.ndarray]:
@@ -57,17 +167,43 @@ def test_ears_stay_uncovered() -> None:
     assert c.n_cycles == 0 and c.n_uncovered == 3
 
 
-def test_closed_surface_nearly_all_covered() -> None:
+@pytest.mark.parametrize("online", [0, 256])
+def test_closed_surface_nearly_all_covered(online: int) -> None:
     pts, tri = icosphere(4)  # dual cubic and bridgeless: a perfect matching exists
-    c = check_cover(tri, len(pts))
+    c = check_cover(tri, len(pts), online)
     assert c.n_uncovered == 0 and c.n_unmatched == 0
 
 
+def test_breadth_first_greedy_leaves_fewer_free() -> None:
+    # the sweep with online searches: on a 20k-triangle mesh far fewer degree-3
+    # triangles are left for the searches afterwards than by Triangle's numbering
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain("face")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 30000)
+    tri = m.triangles
+    nb = ck._neighbors(half_edges(tri, m.n_points).twin, len(tri))
+    alive, deg = ck._peel(nb, len(tri))
+    free = {}
+    for online in (0, 256):
+        k = len(tri)
+        work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
+                np.empty(k + 8, np.int64))
+        order = ck._bfs_order(nb, k) if online else np.arange(k)
+        active, mate, _ = ck._greedy_matching(nb, alive, deg, k, np.zeros((k, 3), np.bool_), order, online, *work)
+        paired = np.flatnonzero(mate >= 0)
+        assert (mate[mate[paired]] == paired).all() and active[paired].all()
+        assert all(mate[t] in nb[t] for t in paired)  # matched along dual edges only
+        free[online] = int((active & (mate < 0)).sum())
+    assert free[256] * 4 < max(free[0], 4)
+
+
+@pytest.mark.parametrize("online", [0, 256])
 @pytest.mark.parametrize("name", ["A", "face", "square_circle_hole"])
-def test_quality_meshes_nearly_all_covered(name: str) -> None:
+def test_quality_meshes_nearly_all_covered(name: str, online: int) -> None:
     dom = bundled_domain(name)
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
-    c = check_cover(m.triangles, m.n_points)
+    c = check_cover(m.triangles, m.n_points, online)
     assert c.n_uncovered <= 0.02 * m.n_triangles
     assert c.n_cycles <= 0.05 * m.n_triangles
 
