@@ -67,7 +67,9 @@ from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "KEEP"]
+__all__ = [
+    "sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "triangle_facts", "KEEP",
+]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
 SWAP_MARGIN = 1e-6
