@@ -76,9 +76,11 @@ def triangle_min_max_into(pts, tri, amin, amax):
     """Fill ``amin[t]``, ``amax[t]`` with the smallest and largest angle of triangle t.
 
     Returns ``(worst, row)``: the worst circumradius / (2 x inradius) of the rows (1
-    when equilateral, ``inf`` for a degenerate one; :func:`worst_radius_ratio`) and
-    the row that has it (-1 if none is worse than 1), so one pass over the rows gives
-    both the angles and the report's radius ratio.
+    when equilateral, ``inf`` for a degenerate one; ``R = abc / 4A`` and
+    ``r = 2A / (a + b + c)``, so ``R / 2r = abc (a + b + c) / 16 A^2`` with ``16 A^2``
+    from the cross product, in 3D the Gram form) and the row that has it (-1 if none
+    is worse than 1), so one pass over the rows gives both the angles and the
+    report's radius ratio.
     """
     planar = pts.shape[1] == 2
     worst = 1.0
@@ -368,42 +370,6 @@ def score_joins_into(
         slack[i] = best
         newmin[i] = bmin
         newmax[i] = bmax
-
-
-@njit(cache=True, nogil=True)
-def worst_radius_ratio(pts, tri):
-    """Largest circumradius / (2 x inradius) over the triangles (1 when equilateral).
-
-    ``R = abc / 4A`` and ``r = 2A / (a + b + c)``, so ``R / 2r = abc (a + b + c) / 16 A^2``
-    with ``16 A^2`` from the Gram form (any dimension).
-    """
-    worst = 1.0
-    for t in range(tri.shape[0]):
-        p = pts[tri[t, 0]]
-        q = pts[tri[t, 1]]
-        r = pts[tri[t, 2]]
-        uu = 0.0
-        vv = 0.0
-        uv = 0.0
-        ww = 0.0
-        for i in range(p.shape[0]):
-            u = q[i] - p[i]
-            v = r[i] - p[i]
-            w = r[i] - q[i]
-            uu += u * u
-            vv += v * v
-            uv += u * v
-            ww += w * w
-        a16 = 4.0 * (uu * vv - uv * uv)  # (2 x twice the area)^2 = 16 A^2
-        la = math.sqrt(uu)
-        lb = math.sqrt(vv)
-        lc = math.sqrt(ww)
-        if a16 <= 0.0:
-            return np.inf
-        x = la * lb * lc * (la + lb + lc) / a16
-        if x > worst:
-            worst = x
-    return worst
 
 
 @njit(cache=True, nogil=True)

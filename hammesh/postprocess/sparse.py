@@ -67,7 +67,9 @@ from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "KEEP"]
+__all__ = [
+    "sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "triangle_facts", "KEEP",
+]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
 SWAP_MARGIN = 1e-6
@@ -351,7 +353,7 @@ def sparse_cycles(
     # judge every candidate unplaced; place a split's point only where Kruskal can
     # still use the join after all joins meeting the rule unplaced (``open_candidates``)
     score(every, 0)
-    if place_iters > 0 and edge_splits and pts.shape[1] == 2 and len(cand):
+    if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole)
         rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
