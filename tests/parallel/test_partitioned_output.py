@@ -199,3 +199,14 @@ def test_locate_in_triangles_finds_the_holder(seed):
     l2 = ((c[:, 0] - q[:, 0]) * (a[:, 1] - q[:, 1]) - (c[:, 1] - q[:, 1]) * (a[:, 0] - q[:, 0])) / d
     assert (np.minimum(np.minimum(l1, l2), 1 - l1 - l2) >= -1e-9).all()
     assert (locate_in_triangles(p, t, np.array([[5.0, 5.0]])) == -1).all()
+
+
+@pytest.mark.parametrize("estimate, workers, tiles", [
+    (1e5, 2, 2), (6.1e6, 2, 2), (7.5e6, 2, 4), (6.1e6, 1, 2), (1e8, 2, 34), (3e6, 8, 8),
+])
+def test_default_tiles_are_a_multiple_of_the_workers(estimate, workers, tiles):
+    from hammesh.parallel.run import TRIANGLES_PER_TILE, default_tiles
+
+    got = default_tiles(estimate, workers)
+    assert got == tiles and got % workers == 0
+    assert estimate / got <= 1.2 * TRIANGLES_PER_TILE or got == workers
