@@ -31,8 +31,8 @@ import numpy as np
 
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
-from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, progress_bar,
-                                  run_tiles)
+from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, on_holder,
+                                  progress_bar, run_tiles)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target"]
 
@@ -174,7 +174,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                 raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
             t1 = time.perf_counter()
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                pure=False)
+                                                pure=False, **on_holder(runner, h))
                                   for i, (h, a) in enumerate(zip(tiled.outcomes, finish_args(tiled)))])
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)

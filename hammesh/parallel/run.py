@@ -119,6 +119,47 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
                        border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill)
 
 
+def _outcome_nbytes(outcome: TileOutcome) -> int:
+    """Bytes a tile's outcome holds (Dask's ``sizeof``: without it Dask takes the
+    dataclass for ~100 bytes and may run the next task on another worker, moving the
+    whole mesh there)."""
+    total = 1000
+    for m in (outcome.mesh, outcome.ham):
+        if m is not None:
+            total += sum(getattr(m, f).nbytes for f in ("points", "triangles", "position", "parent", "kind",
+                                                         "triangle_attributes", "neighbors") if hasattr(m, f))
+    return total
+
+
+try:  # Dask's size estimate of an outcome (the optional [dask] extra)
+    from dask.sizeof import sizeof as _dask_sizeof
+
+    _dask_sizeof.register(TileOutcome)(_outcome_nbytes)
+except ImportError:  # pragma: no cover - without Dask there is no scheduler to tell
+    pass
+
+
+def on_holder(runner, handle) -> dict:
+    """``submit`` keywords that run a task on the worker holding ``handle`` (a Dask
+    future): the tile's meshes stay where they were made. Nothing for the local runner."""
+    who_has = getattr(runner, "who_has", None)
+    if who_has is None or not hasattr(handle, "key"):
+        return {}
+    where = who_has([handle]).get(handle.key) or []
+    return {"workers": list(where), "allow_other_workers": True} if where else {}
+
+
+def wait_for(runner, handles: list) -> None:
+    """Wait until Dask futures are done (without moving their results); no-op locally."""
+    if hasattr(runner, "who_has"):
+        from distributed import wait
+
+        wait(handles)
+        bad = [h for h in handles if h.status == "error"]
+        if bad:
+            bad[0].result()  # raises the task's exception here
+
+
 def _small(outcome: TileOutcome) -> TileOutcome:
     return outcome.small()
 
@@ -177,7 +218,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                           spill, check, pure=False)
 
     handles = [submit(i) for i in range(decomp.n_tiles)]
-    small = run.gather([run.submit(_small, h, pure=False) for h in handles])
+    wait_for(run, handles)  # done: their holders are known
+    small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
     rounds = 0
     while any(len(o.bad) for o in small):
         ids = np.unique(np.concatenate([o.bad for o in small]))
@@ -187,7 +229,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
         redo = sorted(set(changed.tolist()) | {i for i, o in enumerate(small) if len(o.bad)})
         for i in redo:
             handles[i] = submit(i, check=rounds < MAX_ROUNDS)
-        again = run.gather([run.submit(_small, handles[i], pure=False) for i in redo])
+        wait_for(run, [handles[i] for i in redo])
+        again = run.gather([run.submit(_small, handles[i], pure=False, **on_holder(run, handles[i])) for i in redo])
         for i, o in zip(redo, again):
             small[i] = o
     note("tiles", len(small))
@@ -267,7 +310,8 @@ def finish_outcome(outcome: TileOutcome, *args) -> TilePiece:
 def finish_all(tiled: Tiled, runner=None) -> list:
     """Handles to every tile's :class:`~hammesh.parallel.joins.TilePiece` (global numbering)."""
     run = runner or LocalRunner()
-    return [run.submit(finish_outcome, h, *a, pure=False) for h, a in zip(tiled.outcomes, finish_args(tiled))]
+    return [run.submit(finish_outcome, h, *a, pure=False, **on_holder(run, h))
+            for h, a in zip(tiled.outcomes, finish_args(tiled))]
 
 
 def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_area: float, tiles: int | None = None,
@@ -307,7 +351,8 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
                           mode=mode, keep=keep, progress=progress_bar(progress, 1), keep_meshes=verify)
         t1 = time.perf_counter()
         pieces = runner.gather(finish_all(tiled, runner))
-        meshes = runner.gather([runner.submit(_outcome_mesh, h, pure=False) for h in tiled.outcomes]) if verify else None
+        meshes = runner.gather([runner.submit(_outcome_mesh, h, pure=False, **on_holder(runner, h))
+                                for h in tiled.outcomes]) if verify else None
     h = _join_pieces(tiled, pieces)
     t2 = time.perf_counter()
     report = dict(h.report)
