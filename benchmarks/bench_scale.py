@@ -50,10 +50,10 @@ dom = hammesh.read_domain(sys.argv[1])
 data = {"vertices": np.array(dom.vertices), "segments": np.array(dom.segments, dtype=np.int32),
         "holes": np.array(dom.holes)}
 reg = np.array(dom.regions); reg[:, 3] = -1.0; data["regions"] = reg
-t = time.perf_counter()
+t, c = time.perf_counter(), time.process_time()
 out = triangle.triangulate(data, "pq30Aa" + format_number(float(sys.argv[2])))
-sec = time.perf_counter() - t
-print(json.dumps({"seconds": sec, "triangles": int(len(out["triangles"])),
+sec, cpu = time.perf_counter() - t, time.process_time() - c
+print(json.dumps({"seconds": sec, "cpu_seconds": cpu, "triangles": int(len(out["triangles"])),
                   "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 """
 
@@ -106,16 +106,24 @@ def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str |
     return r
 
 
-def stages(o: dict) -> str:
+STEPS = ("mesh", "hamiltonian", "border", "spill", "finish", "write")
+
+
+def stages(o: dict, raw_cpu: float) -> str:
     par = o["parallel"]
     s = dict(par["seconds"])
     other = o["wall"] - s.pop("total")
     s.pop("index", None)
     drv = " ".join(f"{k} {v:.1f}" for k, v in s.items()) + f" other {other:.1f}"
     ts = dict(par.get("tile_seconds", {}))
-    ts["ham"] = ts.pop("hamiltonian", 0.0)
-    wrk = " ".join(f"{k} {ts[k]:.1f}" for k in ("mesh", "ham", "border", "spill", "finish", "write") if k in ts)
-    return f"driver s: {drv} | workers' s (sum): {wrk}"
+    wrk = " ".join(f"{k[:4]} {ts[k]:.1f}" for k in STEPS if k in ts)
+    line = f"driver s: {drv} | workers' wall s (sum): {wrk}"
+    if raw_cpu == raw_cpu and all(f"cpu_{k}" in ts for k in ("mesh", "hamiltonian")):
+        # CPU seconds / the raw call's CPU seconds: what load does not distort
+        cpu = " ".join(f"{k[:4]} {ts[f'cpu_{k}'] / raw_cpu:.2f}" for k in STEPS if f"cpu_{k}" in ts)
+        total = sum(ts[f"cpu_{k}"] for k in STEPS if f"cpu_{k}" in ts) / raw_cpu
+        line += f"\n{'':22}|   workers' CPU / raw CPU (sum over tiles): {cpu}; all steps {total:.2f}"
+    return line
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -138,11 +146,13 @@ def main(argv: list[str] | None = None) -> int:
         area = max_area_for(n)
         if a.partitioned_only:
             count, note = extrapolated_count(area)
-            r = {"seconds": float("nan"), "triangles": count, "peak_rss_mb": float("nan")}
+            r = {"seconds": float("nan"), "cpu_seconds": float("nan"), "triangles": count,
+                 "peak_rss_mb": float("nan")}
             print(f"{n / 1e6:5.1f}M   (no raw call) | raw count {count:,.0f} extrapolated from {note}")
         else:
             r = raw(area)
-            print(f"{n / 1e6:5.1f}M  {r['seconds']:6.2f} {r['peak_rss_mb']:7.0f}  | {r['triangles']:,} triangles (raw)")
+            print(f"{n / 1e6:5.1f}M  {r['seconds']:6.2f} {r['peak_rss_mb']:7.0f}  | {r['triangles']:,} triangles (raw), "
+                  f"CPU {r['cpu_seconds']:.2f} s")
         sys.stdout.flush()
         for mode in modes:
             for w in workers:
@@ -153,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
                 ratio = o["wall"] / r["seconds"] if r["seconds"] == r["seconds"] else float("nan")
                 print(f"{'':22}| {mode:9} {w:5d}  {o['wall']:7.2f} {ratio:5.2f}  {100 * over:+6.2f} % "
                       f"{par['peak_rss_mb']['driver']:9.0f}  {wrk:>16}  {par['tiles']:5d} {par['joins']:5d}")
-                print(f"{'':22}|   {stages(o)}  ({o['triangles']:,} output triangles, "
+                print(f"{'':22}|   {stages(o, r['cpu_seconds'])}\n{'':22}|   ({o['triangles']:,} output triangles, "
                       f"{par['repair_rounds']} repair rounds)")
                 sys.stdout.flush()
     return 0

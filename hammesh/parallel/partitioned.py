@@ -31,8 +31,8 @@ import numpy as np
 
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
-from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, progress_bar,
-                                  run_tiles)
+from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, on_holder,
+                                  progress_bar, run_tiles)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target"]
 
@@ -93,9 +93,9 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``."""
     from hammesh.io.pvtu import write_piece
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     piece = finish_outcome(outcome, *args)
-    t1 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
     ends = np.cumsum(components)
     cid = np.searchsorted(ends, piece.position, side="right")
     cpos = piece.position - (ends - components)[cid]
@@ -106,7 +106,8 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     width = piece.triangle_attributes.shape[1] if piece.triangle_attributes.ndim == 2 else 0
     sizes = None if part is None else np.bincount(part, minlength=parts)
     return (Path(path).name, len(piece.triangles), first, width, sizes,
-            {"finish": t1 - t0, "write": time.perf_counter() - t1})
+            {"finish": t1 - t0, "write": time.perf_counter() - t1, "cpu_finish": c1 - c0,
+             "cpu_write": time.process_time() - c1})
 
 
 def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
@@ -173,7 +174,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                 raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
             t1 = time.perf_counter()
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                pure=False)
+                                                pure=False, **on_holder(runner, h))
                                   for i, (h, a) in enumerate(zip(tiled.outcomes, finish_args(tiled)))])
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
@@ -205,8 +206,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                      "mesh_triangles": int(tiled.mesh_triangles.sum()), "spilled": spill_dir is not None,
                      "seconds": {**tiled.seconds, "pieces": t2 - t1, "index": t3 - t2, "total": t3 - t0},
                      "tile_seconds": {**tiled.tile_seconds,
-                                      "finish": sum(x[5]["finish"] for x in done),
-                                      "write": sum(x[5]["write"] for x in done)},
+                                      **{k: sum(x[5][k] for x in done)
+                                         for k in ("finish", "write", "cpu_finish", "cpu_write")}},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
     if parts is not None:

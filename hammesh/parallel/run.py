@@ -55,8 +55,11 @@ class LocalRunner:
 
 
 def default_tiles(estimate: float, workers: int) -> int:
-    """One tile per worker, more when a tile would exceed ``TRIANGLES_PER_TILE``."""
-    return max(int(workers), int(np.ceil(estimate / TRIANGLES_PER_TILE)))
+    """One tile per worker, more when a tile would exceed ``TRIANGLES_PER_TILE`` by
+    more than 20 %: then a multiple of the workers (3 tiles on 2 workers take as long
+    as 4; the 6M benchmark's estimate, 6.1M, got 3 tiles)."""
+    w = max(1, int(workers))
+    return w * max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,25 +95,69 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     and the bad corners come back). ``check=False``: no repair check (last round)."""
     from hammesh.postprocess import hamiltonian
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     mesh = mesh_tile(tile, min_angle, max_area)
-    t1 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
     bad = bad_corner_vertices(tile.vertex_ids, n_input, mesh, min_angle) if check else np.zeros(0, np.int64)
-    sec = {"mesh": t1 - t0}
+    # wall seconds per step, and this process's CPU seconds (what a loaded machine does
+    # not distort: the steps' cost against a raw Triangle call's CPU time)
+    sec = {"mesh": t1 - t0, "cpu_mesh": c1 - c0}
     if len(bad):
         return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
                            border=None, seconds=sec)
     ham = hamiltonian(mesh, mode=mode, keep=keep)
-    t2 = time.perf_counter()
+    t2, c2 = time.perf_counter(), time.process_time()
     border = border_rows(ham, tile, tile.index)
-    t3 = time.perf_counter()
+    t3, c3 = time.perf_counter(), time.process_time()
     if spill is not None:
         with open(spill, "wb") as f:  # read back by finish_outcome on a worker (our own file)
             pickle.dump(ham, f, protocol=pickle.HIGHEST_PROTOCOL)
         ham = None
-    sec.update(hamiltonian=t2 - t1, border=t3 - t2, spill=time.perf_counter() - t3)
+    sec.update(hamiltonian=t2 - t1, border=t3 - t2, spill=time.perf_counter() - t3,
+               cpu_hamiltonian=c2 - c1, cpu_border=c3 - c2, cpu_spill=time.process_time() - c3)
     return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
                        border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill)
+
+
+def _outcome_nbytes(outcome: TileOutcome) -> int:
+    """Bytes a tile's outcome holds (Dask's ``sizeof``: without it Dask takes the
+    dataclass for ~100 bytes and may run the next task on another worker, moving the
+    whole mesh there)."""
+    total = 1000
+    for m in (outcome.mesh, outcome.ham):
+        if m is not None:
+            total += sum(getattr(m, f).nbytes for f in ("points", "triangles", "position", "parent", "kind",
+                                                         "triangle_attributes", "neighbors") if hasattr(m, f))
+    return total
+
+
+try:  # Dask's size estimate of an outcome (the optional [dask] extra)
+    from dask.sizeof import sizeof as _dask_sizeof
+
+    _dask_sizeof.register(TileOutcome)(_outcome_nbytes)
+except ImportError:  # pragma: no cover - without Dask there is no scheduler to tell
+    pass
+
+
+def on_holder(runner, handle) -> dict:
+    """``submit`` keywords that run a task on the worker holding ``handle`` (a Dask
+    future): the tile's meshes stay where they were made. Nothing for the local runner."""
+    who_has = getattr(runner, "who_has", None)
+    if who_has is None or not hasattr(handle, "key"):
+        return {}
+    where = who_has([handle]).get(handle.key) or []
+    return {"workers": list(where), "allow_other_workers": True} if where else {}
+
+
+def wait_for(runner, handles: list) -> None:
+    """Wait until Dask futures are done (without moving their results); no-op locally."""
+    if hasattr(runner, "who_has"):
+        from distributed import wait
+
+        wait(handles)
+        bad = [h for h in handles if h.status == "error"]
+        if bad:
+            bad[0].result()  # raises the task's exception here
 
 
 def _small(outcome: TileOutcome) -> TileOutcome:
@@ -171,7 +218,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                           spill, check, pure=False)
 
     handles = [submit(i) for i in range(decomp.n_tiles)]
-    small = run.gather([run.submit(_small, h, pure=False) for h in handles])
+    wait_for(run, handles)  # done: their holders are known
+    small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
     rounds = 0
     while any(len(o.bad) for o in small):
         ids = np.unique(np.concatenate([o.bad for o in small]))
@@ -181,7 +229,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
         redo = sorted(set(changed.tolist()) | {i for i, o in enumerate(small) if len(o.bad)})
         for i in redo:
             handles[i] = submit(i, check=rounds < MAX_ROUNDS)
-        again = run.gather([run.submit(_small, handles[i], pure=False) for i in redo])
+        wait_for(run, [handles[i] for i in redo])
+        again = run.gather([run.submit(_small, handles[i], pure=False, **on_holder(run, handles[i])) for i in redo])
         for i, o in zip(redo, again):
             small[i] = o
     note("tiles", len(small))
@@ -261,7 +310,8 @@ def finish_outcome(outcome: TileOutcome, *args) -> TilePiece:
 def finish_all(tiled: Tiled, runner=None) -> list:
     """Handles to every tile's :class:`~hammesh.parallel.joins.TilePiece` (global numbering)."""
     run = runner or LocalRunner()
-    return [run.submit(finish_outcome, h, *a, pure=False) for h, a in zip(tiled.outcomes, finish_args(tiled))]
+    return [run.submit(finish_outcome, h, *a, pure=False, **on_holder(run, h))
+            for h, a in zip(tiled.outcomes, finish_args(tiled))]
 
 
 def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_area: float, tiles: int | None = None,
@@ -301,7 +351,8 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
                           mode=mode, keep=keep, progress=progress_bar(progress, 1), keep_meshes=verify)
         t1 = time.perf_counter()
         pieces = runner.gather(finish_all(tiled, runner))
-        meshes = runner.gather([runner.submit(_outcome_mesh, h, pure=False) for h in tiled.outcomes]) if verify else None
+        meshes = runner.gather([runner.submit(_outcome_mesh, h, pure=False, **on_holder(runner, h))
+                                for h in tiled.outcomes]) if verify else None
     h = _join_pieces(tiled, pieces)
     t2 = time.perf_counter()
     report = dict(h.report)

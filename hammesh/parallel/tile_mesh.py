@@ -23,33 +23,21 @@ def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, nei
     that each lie in one region: one coarse point location per piece, not per
     triangle (locating all of them cost ~1 s per 750k triangles plus the locator).
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from hammesh.parallel._kernels import label_pieces_into
 
     m, n = len(triangles), len(points)
     values = np.unique(tile.region_attribute)
     if len(values) == 1:  # the tile lies in one region (or in none)
         return np.full(m, values[0])
     seg_keys = np.unique(np.sort(segments, axis=1) @ np.array([n, 1], np.int64))
-    on_any = np.zeros(n, bool)
-    on_any[segments.ravel()] = True
-    rows, cols = [], []
-    for s in range(3):  # neighbors[:, s] is across edge (s, s + 1)
-        a, b = triangles[:, s], triangles[:, (s + 1) % 3]
-        on_seg = np.zeros(m, bool)
-        near = np.flatnonzero(on_any[a] & on_any[b])  # only these edges can be segments
-        if len(seg_keys) and len(near):
-            key = np.minimum(a[near], b[near]) * n + np.maximum(a[near], b[near])
-            at = np.minimum(np.searchsorted(seg_keys, key), len(seg_keys) - 1)
-            on_seg[near] = seg_keys[at] == key
-        nb = neighbors[:, s]
-        keep = (nb > np.arange(m)) & ~on_seg
-        rows.append(np.flatnonzero(keep))
-        cols.append(nb[keep])
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    graph = coo_matrix((np.ones(len(r), np.int8), (r, c)), shape=(m, m)).tocsr()
-    n_comp, label = connected_components(graph, directed=False)
-    _, first = np.unique(label, return_index=True)
+    on_seg = np.zeros(n, np.bool_)
+    on_seg[segments.ravel()] = True
+    label = np.empty(m, np.int64)
+    label_pieces_into(np.ascontiguousarray(triangles, dtype=np.int64), np.ascontiguousarray(neighbors, dtype=np.int64),
+                      seg_keys, on_seg, label)
+    # a piece's seed is its lowest triangle, and seeds are taken in order: where the
+    # running maximum of the labels steps up
+    first = np.flatnonzero(np.diff(np.maximum.accumulate(label), prepend=-1) > 0)
     where = locate_in_triangles(tile.region_points, tile.region_triangles, points[triangles[first]].mean(axis=1))
     if (where < 0).any():
         raise MeshingError(f"tile {tile.index}: a triangle lies outside the coarse mesh (regions)")

@@ -199,3 +199,60 @@ def test_locate_in_triangles_finds_the_holder(seed):
     l2 = ((c[:, 0] - q[:, 0]) * (a[:, 1] - q[:, 1]) - (c[:, 1] - q[:, 1]) * (a[:, 0] - q[:, 0])) / d
     assert (np.minimum(np.minimum(l1, l2), 1 - l1 - l2) >= -1e-9).all()
     assert (locate_in_triangles(p, t, np.array([[5.0, 5.0]])) == -1).all()
+
+
+@pytest.mark.parametrize("estimate, workers, tiles", [
+    (1e5, 2, 2), (6.1e6, 2, 2), (7.5e6, 2, 4), (6.1e6, 1, 2), (1e8, 2, 34), (3e6, 8, 8),
+])
+def test_default_tiles_are_a_multiple_of_the_workers(estimate, workers, tiles):
+    from hammesh.parallel.run import TRIANGLES_PER_TILE, default_tiles
+
+    got = default_tiles(estimate, workers)
+    assert got == tiles and got % workers == 0
+    assert estimate / got <= 1.2 * TRIANGLES_PER_TILE or got == workers
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.integers(0, 40))
+def test_label_pieces_matches_scipy_components(seed, n_cut):
+    """The flood fill of the regional attributes against scipy's components of the
+    dual graph with the segment edges removed."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from hammesh.parallel._kernels import label_pieces_into
+
+    rng = np.random.default_rng(seed)
+    m_ = hammesh.quality_mesh(hammesh.Domain(vertices=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]),
+                                             segments=np.array([[0, 1], [1, 2], [2, 3], [3, 0]])),
+                              max_area=0.01 + 0.02 * rng.random(), isolate=False)
+    tri, n = m_.triangles, len(m_.points)
+    from tests.helpers import dual_pieces  # noqa: F401  (the same dual graph notion)
+
+    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    cut = np.unique(edges, axis=0)[rng.permutation(len(np.unique(edges, axis=0)))[:n_cut]]
+    keys = np.unique(cut @ np.array([n, 1]))
+    on = np.zeros(n, bool)
+    on[cut.ravel()] = True
+    # neighbours across edge (s, s + 1), as mesh_tile stores them
+    key_of = {}
+    for t in range(len(tri)):
+        for s in range(3):
+            a, b = sorted((tri[t, s], tri[t, (s + 1) % 3]))
+            key_of.setdefault((a, b), []).append((t, s))
+    nbr = np.full((len(tri), 3), -1, np.int64)
+    r, c = [], []
+    for (a, b), sides in key_of.items():
+        if len(sides) == 2:
+            (t, s), (u, q) = sides
+            nbr[t, s], nbr[u, q] = u, t
+            if a * n + b not in set(keys.tolist()):
+                r.append(t)
+                c.append(u)
+    label = np.empty(len(tri), np.int64)
+    count = label_pieces_into(tri.astype(np.int64), nbr, keys.astype(np.int64), on, label)
+    k, ref = connected_components(coo_matrix((np.ones(len(r)), (r, c)), shape=(len(tri), len(tri))), directed=False)
+    assert count == k
+    # the same partition of the triangles (labels may differ by a renaming)
+    pairs = np.unique(np.stack([label, ref], 1), axis=0)
+    assert len(pairs) == k

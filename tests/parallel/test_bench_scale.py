@@ -1,0 +1,24 @@
+"""benchmarks/bench_scale.py keeps running (tiny sizes; nothing timed or compared)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).parents[2] / "benchmarks" / "bench_scale.py"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("extra, needle", [([], "triangles (raw), CPU"),
+                                           (["--partitioned-only"], "extrapolated from")])
+def test_bench_scale_runs(extra, needle):
+    pytest.importorskip("distributed")
+    proc = subprocess.run([sys.executable, str(BENCH), "--sizes", "3e4", "--workers", "1", "--modes", "sparse",
+                           *extra], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert needle in proc.stdout
+    assert "workers' CPU / raw CPU" in proc.stdout or "--partitioned-only" in extra
+    assert "sparse" in proc.stdout and "driver s:" in proc.stdout
