@@ -24,7 +24,7 @@ Format notes (meshio 5.3):
 
 * Points are always written with ``z = 0``: OBJ and PLY fail on 2D points and the
   others pad themselves while printing a warning.
-* ``.vtu`` is written by :mod:`hammesh.io.vtu_writer` (the same file, compressed 3x
+* ``.vtu`` is written by :mod:`hammesh.io.vtu` (the same file, compressed 3x
   faster); meshio reads it.
 * ``.msh`` is written as Gmsh 4.1 binary (meshio's default for ``.msh`` is ANSYS);
   read as Gmsh first, then ANSYS.  Gmsh stores cell data as float64.
@@ -65,7 +65,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
-from hammesh.io import tags, vtu_writer
+from hammesh.io import tags, vtu
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
@@ -144,7 +144,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     out = _as_meshio(mesh, suffix, path)
     with atomic_path(path) as tmp:
         if suffix == ".vtu":  # meshio's .vtu writer spends most of its time in zlib
-            vtu_writer.write(tmp, out)
+            vtu.write(tmp, out)
         else:
             meshio.write(tmp, out, file_format=file_format, **kwargs)
 

@@ -19,13 +19,13 @@ directly; pieces written by other tools are read by meshio.
 from __future__ import annotations
 
 import os
-import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from hammesh.errors import FileFormatError
+from hammesh.io import vtu
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 
 __all__ = ["read", "write", "write_piece", "write_index", "read_pieces", "PIECE_CELL_DATA"]
@@ -39,42 +39,6 @@ PIECE_CELL_DATA = {"global_position": "Int64", "cycle_id": "Int64", "cycle_posit
 VTK_TRIANGLE = 5
 
 
-def _raw_vtu(path: Path, arrays: list[tuple[str, str, str, np.ndarray, int]], n_points: int, n_cells: int) -> None:
-    """Write a ``.vtu`` whose arrays are raw little-endian bytes in ``<AppendedData encoding="raw">``.
-
-    ``arrays``: ``(section, name, vtk_type, data, components)`` with section one of
-    ``PointData``, ``CellData``, ``Points``, ``Cells``. Each block is an UInt64 byte count
-    and the bytes (VTK's ``header_type="UInt64"``); the XML header gives the offsets. A
-    worker's write is then a copy of its arrays to the file: no base64 or zlib (meshio's
-    writer spent ~3 s per 750k-triangle piece on its text encoding).
-    """
-    sections: dict[str, list[str]] = {"PointData": [], "CellData": [], "Points": [], "Cells": []}
-    blocks = []
-    offset = 0
-    for section, name, vtk_type, data, ncomp in arrays:
-        data = np.ascontiguousarray(data, dtype=np.dtype(_VTK_TYPES[vtk_type]).newbyteorder("<"))
-        attr = f' Name="{name}"' if name else ""
-        comp = f' NumberOfComponents="{ncomp}"' if ncomp > 1 else ""
-        sections[section].append(f'<DataArray type="{vtk_type}"{attr}{comp} format="appended" offset="{offset}"/>')
-        blocks.append(data)
-        offset += 8 + data.nbytes
-    head = ['<?xml version="1.0"?>',
-            '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
-            "<UnstructuredGrid>", f'<Piece NumberOfPoints="{n_points}" NumberOfCells="{n_cells}">']
-    for section in ("PointData", "CellData", "Points", "Cells"):
-        head += [f"<{section}>", *sections[section], f"</{section}>"]
-    head += ["</Piece>", "</UnstructuredGrid>", '<AppendedData encoding="raw">', "_"]
-    with open(path, "wb") as f:
-        f.write("\n".join(head[:-1]).encode() + b"\n_")
-        for data in blocks:
-            f.write(np.array([data.nbytes], dtype="<u8").tobytes())
-            f.write(memoryview(data).cast("B"))
-        f.write(b"\n</AppendedData>\n</VTKFile>\n")
-
-
-_VTK_TYPES = {"Float64": "f8", "Int64": "i8", "UInt8": "u1", "Int32": "i4", "Float32": "f4", "UInt64": "u8"}
-
-
 def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.ndarray, triangles: np.ndarray,
                 position: np.ndarray, cycle_id: np.ndarray, cycle_position: np.ndarray, parent: np.ndarray,
                 kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None,
@@ -83,7 +47,7 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     ``point_ids``/``points`` already), rows in cycle order.
 
     ``part`` (optional): a ``part`` cell array (``--parts``). Written as raw appended
-    binary (:func:`_raw_vtu`) into ``NAME.part`` and renamed: never a half-written piece.
+    binary (:func:`hammesh.io.vtu.write_raw`) into ``NAME.part`` and renamed: never a half-written piece.
     """
     path = Path(path)
     point_ids = np.asarray(point_ids, dtype=np.int64)
@@ -117,45 +81,11 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
                ("Cells", "types", "UInt8", np.full(m, VTK_TRIANGLE, np.uint8), 1)]
     tmp = path.with_name(path.name + ".part")
     try:
-        _raw_vtu(tmp, arrays, len(points), m)
+        vtu.write_raw(tmp, arrays, len(points), m)
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-
-
-def _read_raw_vtu(path: Path) -> dict | None:
-    """The arrays of a raw-appended ``.vtu`` as :func:`write_piece` writes it
-    (``{name: array}``, ``"points"``, ``"connectivity"``, ``"types"``), or None for any
-    other ``.vtu`` (read by meshio instead)."""
-    raw = path.read_bytes()
-    head_end = raw.find(b'<AppendedData encoding="raw">', 0, 1 << 20)
-    if head_end < 0:
-        return None
-    text = raw[:head_end].decode("utf-8", "replace")
-    if 'header_type="UInt64"' not in text or 'byte_order="LittleEndian"' not in text or "compressor" in text:
-        return None
-    start = raw.find(b"_", head_end)
-    if start < 0:
-        return None
-    base = start + 1
-    out = {}
-    for m in re.finditer(r"<(PointData|CellData|Points|Cells)>(.*?)</\1>", text, re.S):
-        for da in re.finditer(r"<DataArray ([^>]*)/>", m.group(2)):
-            attrs = dict(re.findall(r'(\w+)="([^"]*)"', da.group(1)))
-            if attrs.get("format") != "appended" or attrs.get("type") not in _VTK_TYPES:
-                return None
-            at = base + int(attrs["offset"])
-            dt = np.dtype(_VTK_TYPES[attrs["type"]]).newbyteorder("<")
-            nbytes = int(np.frombuffer(raw, "<u8", 1, at)[0]) if at + 8 <= len(raw) else -1
-            if nbytes < 0 or at + 8 + nbytes > len(raw) or nbytes % dt.itemsize:
-                raise FileFormatError(f"{path}: truncated (an array runs past the end of the file)")
-            data = np.frombuffer(raw, dt, nbytes // dt.itemsize, at + 8)
-            ncomp = int(attrs.get("NumberOfComponents", 1))
-            data = data.reshape(-1, ncomp) if ncomp > 1 else data
-            key = "points" if m.group(1) == "Points" else attrs.get("Name", "")
-            out[(m.group(1), key)] = data
-    return out
 
 
 def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: int = 0) -> None:
@@ -204,7 +134,7 @@ def _read_piece(piece: Path):
     of one piece, or None if it has no triangles. hammesh's own raw pieces are read
     directly (:func:`_read_raw_vtu`), any other ``.vtu`` by meshio."""
     try:
-        raw = _read_raw_vtu(piece)
+        raw = vtu.read_raw(piece)
     except (OSError, ValueError, KeyError) as exc:
         raise FileFormatError(f"{piece}: {exc}") from None
     if raw is not None:

@@ -16,7 +16,7 @@ import pytest
 
 import hammesh
 from hammesh.cli import main
-from hammesh.io import vtu_writer
+from hammesh.io import vtu
 
 SQUARE = "4 2 0 1\n1 0 0 1\n2 1 0 1\n3 1 1 1\n4 0 1 1\n4 1\n1 1 2 1\n2 2 3 1\n3 3 4 1\n4 4 1 1\n0\n"
 
@@ -183,14 +183,14 @@ def test_defect6_demo_bad_option_leaves_no_folder(tmp_path, capsys):
 
 
 def test_defect8_sigterm_during_a_write_removes_the_temp_file(tmp_path, sq, capsys, monkeypatch):
-    real_write = vtu_writer.write  # hammesh's own .vtu writer
+    real_write = vtu.write  # hammesh's own .vtu writer
 
     def write_then_terminated(path, *args, **kwargs):
         real_write(path, *args, **kwargs)  # a complete temp file exists now
         os.kill(os.getpid(), signal.SIGTERM)  # what `timeout` sends
         time.sleep(1)  # the handler raises here
 
-    monkeypatch.setattr(vtu_writer, "write", write_then_terminated)
+    monkeypatch.setattr(vtu, "write", write_then_terminated)
     code = main(["mesh", str(sq), "-o", str(tmp_path / "out.vtu")])
     assert code == 128 + signal.SIGTERM
     assert "terminated" in _one_error_line(capsys)
@@ -250,7 +250,7 @@ def test_defect9_full_disk_names_the_output(tmp_path, sq, capsys, monkeypatch):
         Path(path).write_bytes(b"half")
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr(vtu_writer, "write", no_space)  # hammesh's own .vtu writer
+    monkeypatch.setattr(vtu, "write", no_space)  # hammesh's own .vtu writer
     assert main(["mesh", str(sq), "-o", str(tmp_path / "out.vtu")]) == 2
     line = _one_error_line(capsys)
     assert line == f"hammesh: error: {tmp_path / 'out.vtu'}: cannot write (No space left on device)"

@@ -7,11 +7,10 @@ import stat
 import threading
 
 import meshio
-import numpy as np
 import pytest
 
 import hammesh.io as hio
-from hammesh.io import triangle_format, vtu_writer
+from hammesh.io import triangle_format, vtu
 from hammesh.io.atomic import atomic_path, atomic_paths, atomic_write_text
 
 
@@ -104,7 +103,7 @@ def _partial_then_raise(filename, mesh, *args, **kwargs):
 @pytest.mark.parametrize("suffix", [".vtu", ".msh", ".xdmf", ".obj", ".stl"])
 def test_meshio_crash_leaves_nothing(tmp_path, monkeypatch, hexagon, suffix):
     monkeypatch.setattr(meshio, "write", _partial_then_raise)
-    monkeypatch.setattr(vtu_writer, "write", _partial_then_raise)  # hammesh's own .vtu writer
+    monkeypatch.setattr(vtu, "write", _partial_then_raise)  # hammesh's own .vtu writer
     target = tmp_path / f"out{suffix}"
     with pytest.raises(OSError, match="simulated"):
         hio.write(hexagon, target)
@@ -115,7 +114,7 @@ def test_meshio_crash_keeps_previous_output(tmp_path, monkeypatch, hexagon, two_
     target = tmp_path / "out.vtu"
     hio.write(hexagon, target)
     before = target.read_bytes()
-    monkeypatch.setattr(vtu_writer, "write", _partial_then_raise)
+    monkeypatch.setattr(vtu, "write", _partial_then_raise)
     with pytest.raises(OSError):
         hio.write(two_cycles, target)
     assert target.read_bytes() == before

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import hammesh.io as hio
-from hammesh.io import vtu_writer
+from hammesh.io import vtu
 from hammesh.errors import FileFormatError, InvalidMeshError
 
 ALL = [".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off", ".ele", ".node", ".pvtu"]
@@ -92,7 +92,7 @@ def test_invalid_meshes_are_rejected_before_any_io(tmp_path, monkeypatch, hexago
         raise AssertionError("meshio.write called with an invalid mesh")
 
     monkeypatch.setattr(meshio, "write", never)
-    monkeypatch.setattr(vtu_writer, "write", never)
+    monkeypatch.setattr(vtu, "write", never)
     with pytest.raises(InvalidMeshError, match=pattern):
         hio.write(make(hexagon), tmp_path / f"m{suffix}")
     assert os.listdir(tmp_path) == []

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import hammesh.io as hio
-from hammesh.io import vtu_writer
+from hammesh.io import vtu
 from hammesh.io.meshio_format import as_meshio
 
 from tests.helpers import plate
@@ -35,13 +35,13 @@ def test_reads_back_like_meshios_own_file(tmp_path, threads):
 
     m = as_meshio(hammesh.hamiltonian(h), ".vtu")
     meshio.write(tmp_path / "meshio.vtu", m, file_format="vtu")
-    vtu_writer.write(tmp_path / "ours.vtu", m, threads=threads)
+    vtu.write(tmp_path / "ours.vtu", m, threads=threads)
     _assert_same(meshio.read(tmp_path / "meshio.vtu"), meshio.read(tmp_path / "ours.vtu"))
 
 
 @settings(max_examples=30, deadline=None)
 @given(
-    n=st.integers(1, 3 * vtu_writer.BLOCK_BYTES // 24 + 5),  # meshio reads no empty cell block
+    n=st.integers(1, 3 * vtu.BLOCK_BYTES // 24 + 5),  # meshio reads no empty cell block
     dtype=st.sampled_from([np.int8, np.uint8, np.int32, np.int64, np.float32, np.float64]),
     width=st.sampled_from([1, 3]),
     lines=st.booleans(),
@@ -61,7 +61,7 @@ def test_any_size_and_dtype_round_trips(tmp_path_factory, n, dtype, width, lines
         data.append(np.zeros((5, width) if width > 1 else 5, dtype))
     m = meshio.Mesh(points, cells, point_data={"marker": np.arange(n + 3)}, cell_data={"field": data})
     path = tmp_path_factory.mktemp("vtu") / "x.vtu"
-    vtu_writer.write(path, m, threads=2)
+    vtu.write(path, m, threads=2)
     back = meshio.read(path)
     assert np.array_equal(back.points, points)
     assert [c.type for c in back.cells] == [kind for kind, _ in cells]
@@ -91,4 +91,4 @@ def test_hammesh_write_uses_it_and_pyvista_reads_it(tmp_path):
 def test_unknown_cell_type_is_a_programming_error(tmp_path):
     m = meshio.Mesh(np.zeros((4, 3)), [("quad", np.array([[0, 1, 2, 3]]))])
     with pytest.raises(ValueError, match="quad"):
-        vtu_writer.write(tmp_path / "q.vtu", m)
+        vtu.write(tmp_path / "q.vtu", m)
