@@ -57,6 +57,7 @@ __all__ = [
     "mesh_paths",
     "encode",
     "encode_generalized",
+    "restart_strip",
     "cache_paths",
     "CACHE_STRIP_LENGTH",
     "orient_path_turns",
@@ -317,12 +318,8 @@ def _oriented_local(
     return dual, tri, twin, order, starts, ids
 
 
-def _restart_strip(dual: DualMesh, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
+def restart_strip(tri: np.ndarray, twin: np.ndarray, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
     """:func:`~hammesh.strips.gl.gl_strip` with restarts, in one compiled pass (no turn arrays)."""
-    return _restart_buffer(dual.triangles, dual.twin, order, starts, restart_index)
-
-
-def _restart_buffer(tri: np.ndarray, twin: np.ndarray, order: np.ndarray, starts: np.ndarray, restart_index: int) -> GLStrip:
     R = int(restart_index)
     out, n_swaps, top, err = restart_buffer(tri, twin, order, starts, R)
     S = len(starts) - 1
@@ -472,7 +469,7 @@ def _buffer(dual, tri, twin, local, starts, ids, join, restart_index) -> tuple[G
     """The GL buffer of paths ``local`` (rows of ``tri``) and the input rows in draw order."""
     order = local if ids is None else ids[local]
     if join == "restart" and restart_index is not None:
-        return _restart_buffer(tri, twin, local, starts, restart_index), order
+        return restart_strip(tri, twin, local, starts, restart_index), order
     turns = path_turns(dual.triangles, dual.twin, order, starts)
     return gl_strip_from_turns(turns, join=join, restart_index=restart_index), order
 

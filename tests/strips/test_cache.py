@@ -93,7 +93,10 @@ def test_reordered_vertices_draw_the_same_mesh():
 
 
 def test_cli_cache_and_reorder(tmp_path, capsys):
-    from .test_cli_strip import run
+    from hammesh.cli import main
+
+    def run(argv):
+        return main(["strip", *map(str, argv)])
 
     t = square_mesh(0.002)
     src = tmp_path / "sq.vtu"

@@ -218,7 +218,7 @@ def test_claimed_order_with_a_bad_claim_falls_back_to_naming_the_problem():
 @given(st.integers(0, 2**32 - 1), st.booleans())
 def test_one_pass_restart_encoder_equals_the_turn_arrays(seed, restart_is_vertex):
     """_emit_kernels.restart_buffer (encode's fast path) == path_turns + emission, index for index."""
-    from hammesh.strips.encode import _restart_strip
+    from hammesh.strips.encode import restart_strip
 
     m = grid_mesh(5, 3, z=True) if seed % 3 else torus_mesh(7, 5)
     d = dual_mesh(m)
@@ -227,24 +227,24 @@ def test_one_pass_restart_encoder_equals_the_turn_arrays(seed, restart_is_vertex
     R = 3 if restart_is_vertex else RESTART_INDEX
     if restart_is_vertex and len(starts) > 2:
         with pytest.raises(InvalidOptionError, match="restart index 3"):
-            _restart_strip(d, order, starts, R)
+            restart_strip(d.triangles, d.twin, order, starts, R)
         with pytest.raises(InvalidOptionError, match="restart index 3"):
             gl_strip(d.triangles, d.twin, order, starts, restart_index=R)
         return
     a = gl_strip(d.triangles, d.twin, order, starts, restart_index=R)
-    b = _restart_strip(d, order, starts, R)
+    b = restart_strip(d.triangles, d.twin, order, starts, R)
     assert a.indices.tolist() == b.indices.tolist()
     assert (a.n_swaps, a.n_strips, a.n_triangles) == (b.n_swaps, b.n_strips, b.n_triangles)
 
 
 def test_one_pass_restart_encoder_names_bad_paths():
-    from hammesh.strips.encode import _restart_strip
+    from hammesh.strips.encode import restart_strip
 
     m = grid_mesh(3, 3)
     d = dual_mesh(m)
     far = int(np.flatnonzero((d.neighbor_triangles != 0).all(axis=1))[-1])
     with pytest.raises(InvalidMeshError, match="share no edge"):
-        _restart_strip(d, np.array([0, far]), np.array([0, 2]), RESTART_INDEX)
+        restart_strip(d.triangles, d.twin, np.array([0, far]), np.array([0, 2]), RESTART_INDEX)
     u = int(d.neighbor_triangles[0][d.neighbor_triangles[0] >= 0][0])
     with pytest.raises(InvalidMeshError, match="turns back"):
-        _restart_strip(d, np.array([0, u, 0]), np.array([0, 3]), RESTART_INDEX)
+        restart_strip(d.triangles, d.twin, np.array([0, u, 0]), np.array([0, 3]), RESTART_INDEX)
