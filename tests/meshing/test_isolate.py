@@ -164,7 +164,9 @@ def test_nothing_is_left_behind_on_failure(func, timeout: float, error: str) -> 
         run_isolated(func, (), name="Triangle", timeout=timeout, alloc=True)
     assert "\n" not in str(info.value)
     gc.collect()
-    assert _fds() == fds
+    # no new descriptor (one another thread of this process closed meanwhile, e.g. a
+    # kernel-cache file a previous test's loading thread had open, is not a leak)
+    assert _fds() <= fds
     assert _dev_shm() == shm
     assert _memfd_mappings() == maps
 
