@@ -44,6 +44,7 @@ from hammesh.halfedge import half_edges
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 
 __all__ = [
+    "spread_parts",
     "Partition",
     "PartitionedMesh",
     "partition",
@@ -300,8 +301,9 @@ def cycle_runs(triangles: np.ndarray) -> np.ndarray:
     return lengths.astype(np.int64)
 
 
-def _spread(lengths: np.ndarray, k: int) -> np.ndarray:
-    """Parts per cycle: at least one each, the largest part as small as possible."""
+def spread_parts(lengths: np.ndarray, k: int) -> np.ndarray:
+    """Parts per cycle (``k >=`` the number of cycles): at least one each, the largest
+    part as small as possible."""
     c = len(lengths)
     per = np.ones(c, np.int64)
     heap = [(-int(n), i) for i, n in enumerate(lengths)]
@@ -362,7 +364,7 @@ def partition(
     shifts = np.zeros(len(lengths), np.int64)
     sizes = np.zeros(k, np.int64)
     fewer = k < len(lengths)  # fewer parts than pieces: whole pieces share parts
-    per = np.ones(len(lengths), np.int64) if fewer else _spread(lengths, k)
+    per = np.ones(len(lengths), np.int64) if fewer else spread_parts(lengths, k)
     base = np.concatenate([[0], np.cumsum(per)[:-1]]).astype(np.int64)
     cut, bad = _cut_cycles_into(
         run_start, lengths, per, base, a, b, part, shifts, np.zeros(int(per.sum()), np.int64) if fewer else sizes

@@ -31,6 +31,7 @@ import numpy as np
 
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
+from hammesh.partition import spread_parts
 from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, on_holder,
                                   progress_bar, run_tiles)
 
@@ -48,17 +49,9 @@ def parts_per_cycle(components: np.ndarray, k: int) -> np.ndarray:
     possible (the rule of :func:`hammesh.partition.partition`); 0 for cycles that go
     whole into a part when ``k`` is below the number of cycles (see :func:`stretch_parts`)."""
     lengths = np.asarray(components, np.int64)
-    c = len(lengths)
-    if k < c:
-        return np.zeros(c, np.int64)
-    per = np.ones(c, np.int64)
-    heap = [(-int(n), i) for i, n in enumerate(lengths)]
-    heapq.heapify(heap)
-    for _ in range(k - c):
-        _, i = heapq.heappop(heap)
-        per[i] += 1
-        heapq.heappush(heap, ((-int(lengths[i])) // int(per[i]), i))  # -ceil(n / parts)
-    return per
+    if k < len(lengths):
+        return np.zeros(len(lengths), np.int64)
+    return spread_parts(lengths, k)
 
 
 def stretch_parts(position: np.ndarray, components: np.ndarray, k: int) -> np.ndarray:
