@@ -34,30 +34,12 @@ import math
 import numpy as np
 from numba import njit
 
-from hammesh.postprocess._join_kernels import compass_search, fan_eval
-
-
-@njit(cache=True, nogil=True)
-def _corner(ox, oy, qx, qy, rx, ry):
-    ux = qx - ox
-    uy = qy - oy
-    vx = rx - ox
-    vy = ry - oy
-    return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+from hammesh.postprocess._join_kernels import compass_search, fan_eval, min_max_angles_2d
 
 
 @njit(cache=True, nogil=True)
 def _min_max(pts, a, b, c):
-    ax = pts[a, 0]
-    ay = pts[a, 1]
-    bx = pts[b, 0]
-    by = pts[b, 1]
-    cx = pts[c, 0]
-    cy = pts[c, 1]
-    a0 = _corner(ax, ay, bx, by, cx, cy)
-    a1 = _corner(bx, by, cx, cy, ax, ay)
-    a2 = math.pi - a0 - a1
-    return min(a0, min(a1, a2)), max(a0, max(a1, a2))
+    return min_max_angles_2d(pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
 
 
 @njit(cache=True, nogil=True)

@@ -102,7 +102,7 @@ def triangle_min_max_into(pts, tri, amin, amax):
             cr = ux * vy - uy * vx
             a16 = 4.0 * cr * cr
             ww = (pts[c, 0] - pts[b, 0]) ** 2 + (pts[c, 1] - pts[b, 1]) ** 2
-            lo, hi = _min_max2(ax, ay, pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
+            lo, hi = min_max_angles_2d(ax, ay, pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
         else:
             uu = 0.0
             vv = 0.0
@@ -145,7 +145,7 @@ def _corner2(ox, oy, qx, qy, rx, ry):
 
 
 @njit(cache=True, nogil=True)
-def _min_max2(ax, ay, bx, by, cx, cy):
+def min_max_angles_2d(ax, ay, bx, by, cx, cy):
     """(smallest, largest) angle of the planar triangle (a, b, c)."""
     a0 = _corner2(ax, ay, bx, by, cx, cy)
     a1 = _corner2(bx, by, cx, cy, ax, ay)
@@ -164,10 +164,10 @@ def _star4_2d(ax, ay, bx, by, cx, cy, dx, dy, mx, my, lo, hi):
         or (ax - mx) * (dy - my) - (ay - my) * (dx - mx) <= eps
     ):
         return -np.inf, 0.0, np.pi
-    l1, h1 = _min_max2(ax, ay, mx, my, cx, cy)
-    l2, h2 = _min_max2(mx, my, bx, by, cx, cy)
-    l3, h3 = _min_max2(bx, by, mx, my, dx, dy)
-    l4, h4 = _min_max2(mx, my, ax, ay, dx, dy)
+    l1, h1 = min_max_angles_2d(ax, ay, mx, my, cx, cy)
+    l2, h2 = min_max_angles_2d(mx, my, bx, by, cx, cy)
+    l3, h3 = min_max_angles_2d(bx, by, mx, my, dx, dy)
+    l4, h4 = min_max_angles_2d(mx, my, ax, ay, dx, dy)
     nmin = min(min(l1, l2), min(l3, l4))
     nmax = max(max(h1, h2), max(h3, h4))
     return min(nmin - lo, hi - nmax), nmin, nmax
@@ -237,6 +237,18 @@ def place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, iters):
 
 
 @njit(cache=True, nogil=True)
+def quad_corners(tri, twin, h):
+    """``(t, u, a, b, c, d)`` of the quad over half-edge ``h``: ``t = (a, b, c)`` owns ``h``
+    (from ``a`` to ``b``), ``u = (b, a, d)`` owns its twin."""
+    t = h // 3
+    k = h - 3 * t
+    g = twin[h]
+    u = g // 3
+    kg = g - 3 * u
+    return t, u, tri[t, k], tri[t, (k + 1) % 3], tri[t, (k + 2) % 3], tri[u, (kg + 2) % 3]
+
+
+@njit(cache=True, nogil=True)
 def _swap_geometry(pts, a, b, c, d, cos_fold):
     """Is the swap of ab into cd legal (strictly convex / folded at most max_fold)?"""
     if pts.shape[1] == 2:
@@ -297,15 +309,7 @@ def score_joins_into(
     planar = pts.shape[1] == 2
     for i in range(cand.shape[0]):
         h = cand[i]
-        t = h // 3
-        k = h - 3 * t
-        g = twin[h]
-        u = g // 3
-        kg = g - 3 * u
-        a = tri[t, k]
-        b = tri[t, (k + 1) % 3]
-        c = tri[t, (k + 2) % 3]
-        d = tri[u, (kg + 2) % 3]
+        t, u, a, b, c, d = quad_corners(tri, twin, h)
         lo = keep * min(amin[t], amin[u])
         best = -np.inf
         bkind = NO_JOIN
@@ -322,8 +326,8 @@ def score_joins_into(
             dy = pts[d, 1]
             if swaps and not pinned[h]:
                 if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
-                    l1, h1 = _min_max2(ax, ay, dx, dy, cx, cy)
-                    l2, h2 = _min_max2(dx, dy, bx, by, cx, cy)
+                    l1, h1 = min_max_angles_2d(ax, ay, dx, dy, cx, cy)
+                    l2, h2 = min_max_angles_2d(dx, dy, bx, by, cx, cy)
                     smin = min(l1, l2)
                     if smin >= floor:
                         best = min(smin - lo, hi - max(h1, h2))
@@ -390,7 +394,7 @@ def fan_eval(pts, poly, n, px, py, lo, hi):
         s2 = (bx - ax) ** 2 + (by - ay) ** 2
         if (ax - px) * (by - py) - (ay - py) * (bx - px) <= 1e-12 * s2:
             return -np.inf, 0.0, np.pi
-        l1, h1 = _min_max2(px, py, ax, ay, bx, by)
+        l1, h1 = min_max_angles_2d(px, py, ax, ay, bx, by)
         nmin = min(nmin, l1)
         nmax = max(nmax, h1)
     return min(nmin - lo, hi - nmax), nmin, nmax
@@ -671,15 +675,7 @@ def _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_
     are supplementary (cosines of opposite sign), so six square roots decide a split
     instead of twelve.
     """
-    t = h // 3
-    k = h - 3 * t
-    g = twin[h]
-    u = g // 3
-    kg = g - 3 * u
-    a = tri[t, k]
-    b = tri[t, (k + 1) % 3]
-    c = tri[t, (k + 2) % 3]
-    d = tri[u, (kg + 2) % 3]
+    t, u, a, b, c, d = quad_corners(tri, twin, h)
     cos_lo = math.cos(keep * min(amin[t], amin[u]))
     ax = pts[a, 0]
     ay = pts[a, 1]
