@@ -98,6 +98,23 @@ def _incenters_into(points, tri, out):
         out[t, 1] = (la * ay + lb * by + lc * cy) / s
 
 
+@njit(cache=True, nogil=True)
+def bucket_push(queue, head, free, n_used, c, g):
+    """Push half-edge ``g`` on bucket ``c`` of the forest's queue (rows are linked lists
+    ``queue[slot] = (next, half-edge)``; a popped row heads the ``free`` list and is
+    reused first). Returns the new ``(free, n_used)``."""
+    slot = free
+    if slot >= 0:
+        free = queue[slot, 0]
+    else:
+        slot = n_used
+        n_used += 1
+    queue[slot, 0] = head[c]
+    queue[slot, 1] = g
+    head[c] = slot
+    return free, n_used
+
+
 @njit(cache=True)
 def find_root(parent, x):
     """Root of ``x`` in the union-find forest ``parent`` (compressing the path)."""
@@ -367,15 +384,7 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
                     g, best_g = best_g, g
                     best_h = h
                 if g >= 0:
-                    slot = free
-                    if slot >= 0:
-                        free = queue[slot, 0]
-                    else:
-                        slot = n_used
-                        n_used += 1
-                    queue[slot, 0] = head[c]
-                    queue[slot, 1] = g
-                    head[c] = slot
+                    free, n_used = bucket_push(queue, head, free, n_used, c, g)
                     low = min(low, c)
             t = -1
             if best_g >= 0 and best <= low:
@@ -384,15 +393,7 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
                 flags[best_h] |= TREE_BIT
                 continue
             if best_g >= 0:
-                slot = free
-                if slot >= 0:
-                    free = queue[slot, 0]
-                else:
-                    slot = n_used
-                    n_used += 1
-                queue[slot, 0] = head[best]
-                queue[slot, 1] = best_g
-                head[best] = slot
+                free, n_used = bucket_push(queue, head, free, n_used, best, best_g)
                 low = min(low, best)
             while low < N_CLASSES:  # the lowest class edge to a triangle not reached
                 slot = head[low]
