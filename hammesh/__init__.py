@@ -15,8 +15,9 @@ from hammesh.numba_cache import ensure_cache
 
 ensure_cache()  # before any kernel is compiled (issue 12 #12)
 
-from hammesh import pointset, polygon, strips  # noqa: E402
-from hammesh.domain import Domain, read_domain  # noqa: E402
+import importlib  # noqa: E402
+import types  # noqa: E402
+
 from hammesh.errors import (  # noqa: E402
     FileFormatError,
     HammeshError,
@@ -28,13 +29,65 @@ from hammesh.errors import (  # noqa: E402
     OutputError,
     VerificationError,
 )
-from hammesh.io import read_mesh, write  # noqa: E402
-from hammesh.fem import dual_graph, to_meshio, to_pyvista, to_skfem  # noqa: E402
-from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh  # noqa: E402
-from hammesh.meshing import quality_mesh  # noqa: E402
-from hammesh.postprocess import hamiltonian  # noqa: E402
-from hammesh.partition import partition, partitioned  # noqa: E402  (the function shadows the module's name here)
-from hammesh.verify import verify  # noqa: E402
+
+# Everything else is imported on first use (PEP 562): ``import hammesh`` used to import
+# every subpackage, 2.5-2.9 s of CPU on a loaded machine (numba kernels declared, the
+# strips' compile probe run), paid by every CLI call, Dask worker and ``--help``.
+# ``hammesh.quality_mesh`` etc. behave as before; only their import moves to first use.
+_LAZY_NAMES = {
+    "Domain": "hammesh.domain",
+    "read_domain": "hammesh.domain",
+    "read_mesh": "hammesh.io",
+    "write": "hammesh.io",
+    "dual_graph": "hammesh.fem",
+    "to_meshio": "hammesh.fem",
+    "to_pyvista": "hammesh.fem",
+    "to_skfem": "hammesh.fem",
+    "KIND_NAMES": "hammesh.mesh",
+    "HamiltonianMesh": "hammesh.mesh",
+    "Mesh": "hammesh.mesh",
+    "quality_mesh": "hammesh.meshing",
+    "hamiltonian": "hammesh.postprocess",
+    "partition": "hammesh.partition",
+    "partitioned": "hammesh.partition",
+    "verify": "hammesh.verify",
+}
+_LAZY_SUBPACKAGES = ("strips", "polygon", "pointset")
+
+#: Public functions named like the subpackage that defines them (``hammesh.verify`` is
+#: the function, ``hammesh.partition`` too): the import system binds a subpackage to
+#: its parent's attribute when it is first imported, which must not replace them.
+_FUNCTIONS_NAMED_LIKE_MODULES = frozenset(("verify", "partition"))
+
+
+def __getattr__(name: str):
+    if name in _LAZY_SUBPACKAGES:
+        return importlib.import_module(f"hammesh.{name}")
+    module = _LAZY_NAMES.get(name)
+    if module is None:
+        raise AttributeError(f"module 'hammesh' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups are plain attribute reads
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+class _Package(types.ModuleType):
+    """hammesh's module type: keeps ``verify`` and ``partition`` the functions."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in _FUNCTIONS_NAMED_LIKE_MODULES and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+import sys  # noqa: E402
+
+sys.modules[__name__].__class__ = _Package
+del sys
 
 __version__ = "0.1.0"
 

@@ -1,0 +1,52 @@
+"""The package's top level: every public name resolves, and ``import hammesh`` is light."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import types
+
+import hammesh
+
+
+def test_every_public_name_resolves() -> None:
+    for name in hammesh.__all__:
+        value = getattr(hammesh, name)
+        assert value is not None, name
+    assert set(hammesh.__all__) <= set(dir(hammesh))
+
+
+def test_unknown_name_is_an_attribute_error() -> None:
+    try:
+        hammesh.no_such_name  # noqa: B018
+    except AttributeError as exc:
+        assert "no_such_name" in str(exc)
+    else:  # pragma: no cover - the assertion below reports it
+        raise AssertionError("hammesh.no_such_name did not raise AttributeError")
+
+
+def test_functions_named_like_their_subpackage_stay_functions() -> None:
+    # importing the subpackages (again) must not rebind hammesh.verify / .partition
+    import hammesh.partition  # noqa: F401
+    import hammesh.verify.certificate  # noqa: F401
+
+    assert callable(hammesh.verify) and not isinstance(hammesh.verify, types.ModuleType)
+    assert callable(hammesh.partition) and not isinstance(hammesh.partition, types.ModuleType)
+    assert hammesh.verify is sys.modules["hammesh.verify"].verify
+    assert hammesh.partition is sys.modules["hammesh.partition"].partition
+
+
+def test_import_loads_no_kernel_module() -> None:
+    # a fresh interpreter: `import hammesh` must not import the meshing, certificate or
+    # strips code (every CLI call and Dask worker paid for it); first use still works
+    code = (
+        "import sys, hammesh\n"
+        "loaded = sorted(m for m in sys.modules if m.startswith('hammesh.'))\n"
+        "print(','.join(loaded))\n"
+        "hammesh.strips\n"
+        "print('hammesh.strips' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    loaded = set(out[0].split(",")) - {""}
+    assert loaded <= {"hammesh.errors", "hammesh.numba_cache"}, loaded
+    assert out[1] == "True"
