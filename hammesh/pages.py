@@ -14,6 +14,15 @@ that cheaper, both measured there:
 
 Both are hints: where ``madvise`` is missing or refuses, the array is touched by
 writing it, as before.
+
+*A reserve faulted while the machine waits* (:func:`reserve`). ``quality_mesh`` runs
+Triangle in a child process and its parent only waits meanwhile: it loads the kernels
+``hamiltonian()`` needs next and then faults in a reserve of pages sized for the mesh
+it expects. :func:`fresh` takes its big arrays out of the reserve by ``mremap``, which
+moves the pages (already there, zeroed) to a mapping of the array's own: no fault, no
+copy, and each array still frees its memory when it dies, as any numpy array.
+``hamiltonian()`` drops what is left when it returns (:func:`release`), and a reserve
+nobody used is dropped after ``RESERVE_SECONDS``.
 """
 
 from __future__ import annotations
@@ -22,13 +31,23 @@ import ctypes
 import ctypes.util
 import mmap
 import sys
+import threading
+import weakref
 
 import numpy as np
 
-__all__ = ["fresh", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE"]
+__all__ = ["fresh", "reserve", "release", "reserved", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE",
+           "RESERVE_SECONDS", "RESERVE_MIN_ARRAY"]
 
 MADV_NOHUGEPAGE = 15
 MADV_POPULATE_WRITE = 23
+_MREMAP_MAYMOVE = 1
+_MAP_FAILED = ctypes.c_void_p(-1).value
+
+#: a reserve nobody takes from is dropped after this many seconds
+RESERVE_SECONDS = 60.0
+#: arrays below this many bytes are never taken from the reserve (one mapping each)
+RESERVE_MIN_ARRAY = 1 << 20
 
 _PAGE = mmap.PAGESIZE
 _libc = None
@@ -37,6 +56,13 @@ if sys.platform.startswith("linux"):  # (the advice numbers are Linux's)
         _libc = ctypes.CDLL(ctypes.util.find_library("c") or None, use_errno=True)
         _libc.madvise.argtypes = (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int)
         _libc.madvise.restype = ctypes.c_int
+        _libc.mmap.argtypes = (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int,
+                               ctypes.c_long)
+        _libc.mmap.restype = ctypes.c_void_p
+        _libc.munmap.argtypes = (ctypes.c_void_p, ctypes.c_size_t)
+        _libc.munmap.restype = ctypes.c_int
+        _libc.mremap.argtypes = (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_int)
+        _libc.mremap.restype = ctypes.c_void_p
     except (OSError, AttributeError):  # no libc madvise: plain writes
         _libc = None
 
@@ -51,8 +77,103 @@ def _advise(a: np.ndarray, advice: int) -> bool:
     return hi > lo and _libc.madvise(lo, hi - lo, advice) == 0
 
 
+class _Reserve:
+    """Pages mapped and faulted in ahead; arrays are moved out of it from the front."""
+
+    def __init__(self, addr: int, size: int) -> None:
+        self.addr = addr
+        self.size = size
+        self.taken = 0  # bytes moved out (the front); the rest is still mapped here
+
+    def take(self, nbytes: int) -> int | None:
+        """Address of a new mapping of ``nbytes`` (pages moved out of the reserve)."""
+        length = -(-nbytes // _PAGE) * _PAGE
+        if self.taken + length > self.size:
+            return None
+        new = _libc.mremap(self.addr + self.taken, length, length, _MREMAP_MAYMOVE)
+        if new is None or new == _MAP_FAILED:
+            return None
+        self.taken += length
+        return new
+
+    def drop(self) -> None:
+        """Unmap what is left (never the front: other mappings may live there now)."""
+        if self.taken < self.size:
+            _libc.munmap(self.addr + self.taken, self.size - self.taken)
+        self.taken = self.size
+
+
+_lock = threading.Lock()
+_reserve: _Reserve | None = None
+_timer: threading.Timer | None = None
+
+
+def reserve(nbytes: int) -> int:
+    """Map ``nbytes`` of pages and fault them in now, for :func:`fresh` to take from later.
+
+    Meant for a thread of a process that would otherwise only wait (``quality_mesh``
+    while Triangle runs in its child). Replaces any earlier reserve. Returns the bytes
+    reserved (0 where the system has no ``mremap``/``madvise``: nothing happens).
+    """
+    global _reserve, _timer
+    release()
+    if _libc is None or nbytes < RESERVE_MIN_ARRAY:
+        return 0
+    size = -(-int(nbytes) // _PAGE) * _PAGE
+    prot = mmap.PROT_READ | mmap.PROT_WRITE
+    addr = _libc.mmap(None, size, prot, mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS, -1, 0)
+    if addr is None or addr == _MAP_FAILED:
+        return 0
+    _libc.madvise(addr, size, MADV_NOHUGEPAGE)
+    if _libc.madvise(addr, size, MADV_POPULATE_WRITE) != 0:
+        ctypes.memset(addr, 0, size)  # (kernels before 5.14: fault by writing)
+    with _lock:
+        if _reserve is not None:  # another thread reserved meanwhile: keep one
+            _reserve.drop()
+        _reserve = _Reserve(addr, size)
+        _timer = threading.Timer(RESERVE_SECONDS, release)
+        _timer.daemon = True
+        _timer.start()
+    return size
+
+
+def release() -> None:
+    """Drop what is left of the reserve (arrays already taken from it stay valid)."""
+    global _reserve, _timer
+    with _lock:
+        if _reserve is not None:
+            _reserve.drop()
+        _reserve = None
+        if _timer is not None:
+            _timer.cancel()
+        _timer = None
+
+
+def reserved() -> int:
+    """Bytes still in the reserve."""
+    with _lock:
+        return 0 if _reserve is None else _reserve.size - _reserve.taken
+
+
+def _from_reserve(nbytes: int) -> np.ndarray | None:
+    """``nbytes`` of faulted, zeroed memory of its own mapping, or None."""
+    if nbytes < RESERVE_MIN_ARRAY:
+        return None
+    with _lock:
+        addr = None if _reserve is None else _reserve.take(nbytes)
+    if addr is None:
+        return None
+    length = -(-nbytes // _PAGE) * _PAGE
+    buf = (ctypes.c_char * length).from_address(addr)
+    weakref.finalize(buf, _libc.munmap, addr, length)  # the array's memory dies with it
+    return np.frombuffer(buf, np.uint8, nbytes)
+
+
 def fresh(shape: int | tuple[int, ...], dtype: type, fill: int | float | None = None) -> np.ndarray:
     """A new array with its pages faulted in now (e.g. on a thread that has time).
+
+    Taken from the reserve (:func:`reserve`) when there is one with room: then the
+    pages are there already.
 
     Parameters
     ----------
@@ -62,6 +183,14 @@ def fresh(shape: int | tuple[int, ...], dtype: type, fill: int | float | None = 
         Value for every entry; None leaves the contents unspecified (a kernel that
         writes every entry).
     """
+    dt = np.dtype(dtype)
+    count = int(np.prod(shape, dtype=np.int64))
+    raw = _from_reserve(count * dt.itemsize)
+    if raw is not None:
+        a = raw.view(dt).reshape(shape)
+        if fill is not None and fill != 0:  # (the reserve's pages are zeroed)
+            a.fill(fill)
+        return a
     a = np.empty(shape, dtype)
     _advise(a, MADV_NOHUGEPAGE)
     populated = _advise(a, MADV_POPULATE_WRITE)

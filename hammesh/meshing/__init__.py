@@ -6,10 +6,14 @@
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import replace
+from functools import partial
 
-from hammesh import params
+import numpy as np
+
+from hammesh import pages, params
 from hammesh.domain import Domain
 from hammesh.errors import InvalidDomainError, InvalidOptionError, MeshingError
 from hammesh.mesh import Mesh
@@ -25,24 +29,60 @@ __all__ = [
     "MAX_MIN_ANGLE",
     "format_number",
     "triangle_switches",
+    "expected_reserve",
 ]
 
 BACKENDS = {"triangle": mesh_with_triangle, "meshpy": mesh_with_meshpy}
 _NAMES = {"triangle": "Triangle", "meshpy": "meshpy"}
 
 
-def _load_kernels() -> None:
-    """While the mesher runs in its child, load what ``hamiltonian()`` runs next.
+#: Bytes ``hamiltonian(mode="incircle")`` takes through ``hammesh.pages.fresh`` per input
+#: triangle: the input pairing 24, output rows 72, the claimed pairing 36, the walk's
+#: slots 12, output points about 24.
+RESERVE_BYTES_PER_TRIANGLE = 168
+#: Triangle's triangle count per ``area / max_area`` at a quality bound (1.59 on the
+#: square with a hole at q30, 1e-6: 1.52 M triangles for an area of 0.96).
+TRIANGLES_PER_AREA = 1.6
+#: No reserve below this (small meshes fault their few pages quickly).
+RESERVE_MIN_BYTES = 64 << 20
 
-    The parent process only waits meanwhile; the first call of each compiled kernel
+
+def expected_reserve(domain: Domain, opts: MeshOptions) -> int:
+    """Bytes of pages to fault in while Triangle meshes ``domain`` (0: none).
+
+    From the bounding box's area over the global area bound (an upper estimate of
+    the domain's area), at most an eighth of the free memory.
+    """
+    if opts.max_area is None:
+        return 0
+    v = np.asarray(domain.vertices, dtype=np.float64)
+    ext = np.ptp(v, axis=0) if len(v) else np.zeros(2)
+    count = TRIANGLES_PER_AREA * float(ext[0] * ext[1]) / opts.max_area
+    try:
+        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # not POSIX: no reserve
+        return 0
+    nbytes = min(count * RESERVE_BYTES_PER_TRIANGLE, free / 8)
+    return int(nbytes) if nbytes >= RESERVE_MIN_BYTES else 0
+
+
+def _meanwhile(reserve_bytes: int = 0) -> None:
+    """While the mesher runs in its child, prepare what ``hamiltonian()`` needs next.
+
+    The parent process only waits meanwhile. The first call of each compiled kernel
     in a process loads its machine code from numba's cache (0.1-0.2 s in all), which
-    a ``quality_mesh`` -> ``hamiltonian`` pipeline (the CLI's) then no longer pays.
-    Both modes: the default (sparse) and Thm 2.4's incircle construction.
+    a ``quality_mesh`` -> ``hamiltonian`` pipeline (the CLI's) then no longer pays;
+    both modes: the default (sparse) and Thm 2.4's incircle construction. Then
+    ``reserve_bytes`` of memory are faulted in (``hammesh.pages.reserve``): on this
+    project's VM a fresh page costs a host fault besides its zeroing, a third of the
+    first big ``hamiltonian()``'s system time (docs/benchmarks.md).
     """
     from hammesh.postprocess import load_kernels
 
     load_kernels("sparse")
     load_kernels("incircle")
+    if reserve_bytes:
+        pages.reserve(reserve_bytes)
 
 
 def quality_mesh(
@@ -127,7 +167,8 @@ def quality_mesh(
     if isolate:
         # the child allocates its output arrays where this process maps them (no copy)
         mesh = run_isolated(
-            func, (domain, opts), name=_NAMES[backend], timeout=timeout, alloc=True, meanwhile=_load_kernels
+            func, (domain, opts), name=_NAMES[backend], timeout=timeout, alloc=True,
+            meanwhile=partial(_meanwhile, expected_reserve(domain, opts)),
         )
     else:
         mesh = func(domain, opts)

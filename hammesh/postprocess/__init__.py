@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from hammesh import params
+from hammesh import pages, params
 from hammesh.domain.resolution import check_resolution, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
@@ -115,6 +115,13 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
     VerificationError
         The output failed its certificate (never returned then).
     """
+    try:
+        return _hamiltonian(mesh, mode, keep)
+    finally:  # what quality_mesh faulted in ahead and this call did not take
+        pages.release()
+
+
+def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")

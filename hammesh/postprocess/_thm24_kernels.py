@@ -452,6 +452,21 @@ def split_slots(tri, code, mid_h=None):
 
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _find_sorted(a, x):
+    """Index of ``x`` in the sorted ``a`` (binary search; numpy's ``searchsorted`` inside
+    a kernel compiles its generic implementation with it)."""
+    lo = 0
+    hi = a.shape[0]
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
 #: State of a paused walk (:func:`emit_cycles_into`): piece, slot, first free row, row of
 #: the piece's start, the half-edge waiting for its link to the next row, first slot.
 WALK_STATE = 6
@@ -565,8 +580,8 @@ def emit_cycles_into(tri, code, firsts, order, n_points, mid_h, mid_id, out, par
                     if pos + 1 >= total:
                         state[2] = pos
                         return -1
-                    ih = np.searchsorted(mid_h, h)
-                    ig = np.searchsorted(mid_h, g)
+                    ih = _find_sorted(mid_h, h)
+                    ig = _find_sorted(mid_h, g)
                     mv = n_points + m + mid_id[ih]
                     out[pos, 0] = inc
                     out[pos, 1] = a

@@ -88,12 +88,13 @@ def incircle_hamiltonian(
 WALK_CHUNK = 1 << 18
 
 
-def _positions(total: int) -> np.ndarray:
-    """``arange(total)`` in fresh pages faulted ahead (by chunks: no second big array)."""
-    a = fresh(total, np.int64)
-    step = 1 << 20
-    for i in range(0, total, step):
-        a[i : i + step] = np.arange(i, min(total, i + step), dtype=np.int64)
+def _iota(a: np.ndarray) -> np.ndarray:
+    """``a[i] = i`` in place, by cache-sized chunks (no temporary as large as ``a``)."""
+    step = 1 << 16
+    base = np.arange(min(step, len(a)), dtype=a.dtype)
+    for lo in range(0, len(a), step):
+        k = min(step, len(a) - lo)
+        np.add(base[:k], lo, out=a[lo : lo + k])
     return a
 
 
@@ -108,8 +109,8 @@ def walk_arrays(total: int, nh: int, parent: bool = True, n_points: int | None =
     ``parent=False``: without ``parent`` and ``kind`` (``incircle_streaming(...,
     reuse=True)`` makes them of the input's dead pairing arrays when it can).
     ``n_points``: the input's point count; then also the output's ``points`` for no
-    midpoint (``n_points + nh / 3`` rows) and ``position`` for one cycle
-    (``arange(total)``), each used if it fits.
+    midpoint (``n_points + nh / 3`` rows), used if it fits. (The output's
+    ``position`` needs no fresh memory: the walk's ``code`` is dead when it is done.)
     """
     # (page faults taken here, beside other work, not in the walk; the walk writes
     # every row, so only the claim and prim need their starting values)
@@ -123,7 +124,6 @@ def walk_arrays(total: int, nh: int, parent: bool = True, n_points: int | None =
         arrays["kind"] = fresh(total, np.int8)
     if n_points is not None:
         arrays["points"] = fresh((n_points + nh // 3, 2), np.float64)
-        arrays["position"] = _positions(total)
     return arrays
 
 
@@ -134,8 +134,8 @@ def incircle_streaming(
     """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
 
     While the tree search runs, ``side`` allocates the walk's arrays (taking their
-    page faults; with ``walk_arrays(..., n_points=n)`` also those of the output's points and
-    positions); while the walk runs, it computes the incenters and then checks the
+    page faults; with ``walk_arrays(..., n_points=n)`` also those of the output's
+    points); while the walk runs, it computes the incenters and then checks the
     finished rows of the output (``hammesh.verify.stream.RowStream``), which is
     returned for the caller to finish (``stream.join()``, then ``stream.result``).
     Without ``side`` it is the plain serial construction and the stream is None.
@@ -213,8 +213,9 @@ def incircle_streaming(
         )
 
     segs, markers = split_segments(mesh.segments, mesh.segment_markers, mid_a, mid_b, n + m, len(points))
-    position = arrays.get("position")
-    if position is None or len(lengths) != 1 or len(position) != total:
+    if len(lengths) == 1 and code.shape == (total,) and code.dtype == np.int64 and code.flags.c_contiguous:
+        position = _iota(code)  # one cycle: positions 0..total-1, in the walk's dead code array
+    else:
         position = cycle_positions(lengths)
     report = {
         "triangles": int(len(out)),

@@ -27,6 +27,9 @@ __all__ = [
     "input_boundary_into",
     "find_edges",
     "hull_chain",
+    "sort_range",
+    "sort_pairs_range",
+    "lower_bound",
     "UNLINKED",
     "certify_row_range",
     "runs_close",
@@ -81,6 +84,91 @@ class AngleArea(NamedTuple):
     total_area: float
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _sift_down(a, lo, root, n):
+    """Heap step of :func:`sort_range` (a max-heap in ``a[lo:lo + n]``)."""
+    while True:
+        child = 2 * root + 1
+        if child >= n:
+            return
+        if child + 1 < n and a[lo + child] < a[lo + child + 1]:
+            child += 1
+        if a[lo + root] >= a[lo + child]:
+            return
+        a[lo + root], a[lo + child] = a[lo + child], a[lo + root]
+        root = child
+
+
+@njit(cache=True, nogil=True)
+def sort_range(a, lo, hi):
+    """Sort ``a[lo:hi]`` in place (heapsort, O(k log k)).
+
+    For the buckets of high-degree vertices (most buckets are a few keys and take an
+    insertion sort). numpy's sort inside a kernel would compile numba's generic
+    quicksort with it, 30-40 s of a fresh checkout's compile time for the two key
+    dtypes; this compiles in a fraction of that.
+    """
+    n = hi - lo
+    for root in range(n // 2 - 1, -1, -1):
+        _sift_down(a, lo, root, n)
+    for end in range(n - 1, 0, -1):
+        a[lo], a[lo + end] = a[lo + end], a[lo]
+        _sift_down(a, lo, 0, end)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _pair_less(key, half, i, j):
+    return key[i] < key[j] or (key[i] == key[j] and half[i] < half[j])
+
+
+@njit(cache=True, nogil=True)
+def sort_pairs_range(key, half, lo, hi):
+    """Sort the pairs ``(key, half)[lo:hi]`` in place, by key then half (heapsort)."""
+    n = hi - lo
+    for start in range(n // 2 - 1, -1, -1):
+        root = start
+        while True:
+            child = 2 * root + 1
+            if child >= n:
+                break
+            if child + 1 < n and _pair_less(key, half, lo + child, lo + child + 1):
+                child += 1
+            if not _pair_less(key, half, lo + root, lo + child):
+                break
+            key[lo + root], key[lo + child] = key[lo + child], key[lo + root]
+            half[lo + root], half[lo + child] = half[lo + child], half[lo + root]
+            root = child
+    for end in range(n - 1, 0, -1):
+        key[lo], key[lo + end] = key[lo + end], key[lo]
+        half[lo], half[lo + end] = half[lo + end], half[lo]
+        root = 0
+        while True:
+            child = 2 * root + 1
+            if child >= end:
+                break
+            if child + 1 < end and _pair_less(key, half, lo + child, lo + child + 1):
+                child += 1
+            if not _pair_less(key, half, lo + root, lo + child):
+                break
+            key[lo + root], key[lo + child] = key[lo + child], key[lo + root]
+            half[lo + root], half[lo + child] = half[lo + child], half[lo + root]
+            root = child
+
+
+@njit(cache=True, nogil=True, inline="always")
+def lower_bound(a, x):
+    """First index ``i`` with ``a[i] >= x`` in the sorted ``a`` (``len(a)`` if none)."""
+    lo = 0
+    hi = a.shape[0]
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
 @njit(cache=True, nogil=True)
 def half_edge_twins(tri, n_points):
     """The certificate's own half-edge pairing (``h = 3 t + k`` from ``tri[t, k]``).
@@ -89,7 +177,7 @@ def half_edge_twins(tri, n_points):
     method, so that one bug cannot make both wrong the same way: half-edges are
     bucketed by their lower vertex (counting sort), each bucket is sorted by its other
     vertex, then direction, then half-edge (insertion sort: a bucket holds about half a
-    vertex degree; a stable merge sort for a high-degree vertex), and an edge's halves
+    vertex degree; a heapsort, :func:`sort_range`, for a high-degree vertex), and an edge's halves
     are then neighbours in their bucket. Vertex indices must lie in
     ``0..n_points-1`` (checked by the caller).
 
@@ -128,7 +216,7 @@ def half_edge_twins(tri, n_points):
         s0 = start[v]
         s1 = start[v + 1]
         if s1 - s0 > 24:  # a high-degree vertex
-            key[s0:s1] = np.sort(key[s0:s1])
+            sort_range(key, s0, s1)
             continue
         for i in range(s0 + 1, s1):  # insertion sort
             kv = key[i]
@@ -186,10 +274,9 @@ def half_edge_twins_wide(tri, n_points, start, fill):
     for v in range(n_points):
         s0 = start[v]
         s1 = start[v + 1]
-        p = np.argsort(key[s0:s1], kind="mergesort")  # stable: h stays increasing
-        key[s0:s1] = key[s0:s1][p]
-        half[s0:s1] = half[s0:s1][p]
-    twin = np.full(nh, -1, np.int64)
+        sort_pairs_range(key, half, s0, s1)  # ties by h: the group's lowest first
+    twin = np.empty(nh, np.int64)
+    twin.fill(-1)
     bad = -1
     for v in range(n_points):
         i = start[v]
@@ -252,8 +339,12 @@ def _measures(points, p0, p1, p2):
     """``(cross, sin^2 of the smallest angle, cos of the largest)`` of one triangle.
 
     ``cross`` is twice the signed area. The smallest angle is opposite the shortest
-    side (at most 60 degrees: ``arcsin`` is well conditioned there), the largest
-    opposite the longest side (cosine law).
+    side (at most 60 degrees: ``arcsin`` is well conditioned there): its ``sin^2`` is
+    ``cross^2`` over the product of the two longer sides' squares, the largest of the
+    three products. The largest angle is opposite the longest side (cosine law): its
+    numerator is the smallest of the three, its denominator the smallest product.
+    Written with ``min``/``max`` rather than branches on which side is shortest (a
+    branch per row the processor cannot predict: 30 % of the row checks' time).
     """
     ax = points[p1, 0] - points[p0, 0]  # side opposite vertex 2
     ay = points[p1, 1] - points[p0, 1]
@@ -265,18 +356,12 @@ def _measures(points, p0, p1, p2):
     la = ax * ax + ay * ay
     lb = bx * bx + by * by
     lc = cx * cx + cy * cy
-    if la <= lb and la <= lc:
-        s2 = cr * cr / (lb * lc)
-    elif lb <= lc:
-        s2 = cr * cr / (la * lc)
-    else:
-        s2 = cr * cr / (la * lb)
-    if la >= lb and la >= lc:
-        c = (lb + lc - la) / (2.0 * np.sqrt(lb * lc))
-    elif lb >= lc:
-        c = (la + lc - lb) / (2.0 * np.sqrt(la * lc))
-    else:
-        c = (la + lb - lc) / (2.0 * np.sqrt(la * lb))
+    pab = la * lb
+    pbc = lb * lc
+    pca = lc * la
+    s2 = cr * cr / max(pab, max(pbc, pca))
+    num = min(lb + lc - la, min(lc + la - lb, la + lb - lc))
+    c = num / (2.0 * np.sqrt(min(pab, min(pbc, pca))))
     return cr, s2, c
 
 
@@ -655,7 +740,7 @@ def input_boundary_into(tri, flip, start, keys):
     its bucket sizes (``start[v + 1]``: edges whose lower vertex is ``v``) and is
     consumed. Each half-edge ``x -> y`` goes into the bucket of ``min(x, y)`` as the
     key ``2 max(x, y) + (x > y)`` (``keys``: ``3 m`` entries, int32 when ``2 n`` fits);
-    each bucket is sorted (insertion sort; ``np.sort`` for a high-degree vertex), so an
+    each bucket is sorted (insertion sort; :func:`sort_range` for a high-degree vertex), so an
     edge's halves are neighbours: one half alone is a boundary edge, one each way a
     pair, anything else an edge used twice in one direction or by three triangles.
     The halves' identities are not needed (no twin array): the boundary edge comes
@@ -700,7 +785,7 @@ def input_boundary_into(tri, flip, start, keys):
     for v in range(nv):
         s1 = start[v]
         if s1 - s0 > 24:  # a high-degree vertex
-            keys[s0:s1] = np.sort(keys[s0:s1])
+            sort_range(keys, s0, s1)
         else:
             for i in range(s0 + 1, s1):  # insertion sort
                 kv = keys[i]
@@ -748,7 +833,7 @@ def find_edges(tri, n_points, want):
             lo = min(a, b)
             if mark[lo]:
                 key = lo * n_points + max(a, b)
-                i = np.searchsorted(want, key)
+                i = lower_bound(want, key)
                 if i < want.shape[0] and want[i] == key:
                     found[i] = True
     return found

@@ -72,6 +72,7 @@ __all__ = [
     "certify",
     "claim_structure",
     "combine_rows",
+    "pair_dtype",
     "ANGLE_RTOL",
     "AREA_RTOL",
     "ROUNDING_RTOL_MAX",
@@ -149,6 +150,19 @@ def combine_rows(parts: list[RowChecks]) -> RowChecks:
     )
 
 
+def pair_dtype(m: int) -> type:
+    """The dtype the certificate checks a pairing of ``m`` rows in: int32 when ``3 m``
+    half-edge numbers fit (half the reads), else int64.
+
+    One dtype for every pairing (a construction's claim, incircle's int32 or sparse's
+    int64, and the certificate's own) means one compiled signature of each row
+    kernel: each compiles in 15-20 s on a fresh checkout. Narrowing a claim cannot
+    make a wrong one pass: the certificate checks the pairing it is given, whatever
+    the construction meant by it.
+    """
+    return np.int32 if 3 * m < 2**31 - 1 else np.int64
+
+
 def _wrap(x: int) -> int:
     """``x`` modulo 2**64 (digests are sums with wrapping arithmetic)."""
     return x % (1 << 64)
@@ -173,7 +187,7 @@ def claim_structure(triangles: np.ndarray, claim: np.ndarray) -> dict[str, Any]:
     computes this while its rows are checked.
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    return {"boundary": boundary_keys(tri, np.ascontiguousarray(claim))}
+    return {"boundary": boundary_keys(tri, np.ascontiguousarray(claim, dtype=pair_dtype(len(tri))))}
 
 
 def verify_cycle_mesh(
@@ -315,10 +329,10 @@ def _certify(
         _fail(f"components {runs.tolist()[:10]} are not positive run lengths summing to {m}")
 
     # a claimed pairing is only of use with the input's boundary (the tiling argument)
-    claim = np.empty(0, dtype=np.int64)
+    pdt = pair_dtype(m)
+    claim = np.empty(0, dtype=pdt)
     if twin_claim is not None and facts is not None and np.shape(twin_claim) == (3 * m,):
-        claim = np.asarray(twin_claim)  # int32 claims are checked as they are (no copy)
-        claim = np.ascontiguousarray(claim, dtype=claim.dtype if claim.dtype == np.int32 else np.int64)
+        claim = np.ascontiguousarray(twin_claim, dtype=pdt)  # (incircle's int32 claim: no copy)
     streamed = rows is not None
     if rows is None:
         used = np.zeros(n, dtype=np.bool_)
@@ -334,7 +348,7 @@ def _certify(
         and rows.unpaired == len(facts.boundary)
     )
     if streamed:  # what was checked is what is returned: nothing rewritten since
-        d_rows, d_pairs = _final_digests(tri, claim if claim_ok else np.empty(0, dtype=np.int64))
+        d_rows, d_pairs = _final_digests(tri, claim if claim_ok else np.empty(0, dtype=pdt))
         if d_rows != _wrap(rows.row_digest):
             _fail("the output rows changed after they were checked")
         if rows.points_digest != points_digest(pts):
@@ -379,6 +393,7 @@ def _certify(
             twin, dup = own_twin, -1
         else:
             twin, dup = _kernels.half_edge_twins(tri, n)
+        twin = twin.astype(pdt, copy=False)  # (one compiled signature of the kernels below)
         cross = -1 if dup >= 0 else int(_kernels.first_cross_run_edge(twin, runs))
     if dup >= 0:
         t, k = divmod(int(dup), 3)

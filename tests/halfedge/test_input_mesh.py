@@ -90,6 +90,10 @@ def test_segment_found_at_a_vertex_where_two_fans_touch() -> None:
     he = half_edges(tri, len(pts))
     _, found = he.mark(np.array([[0, 1], [0, 4], [3, 0], [1, 4]]))
     assert found.tolist() == [True, True, True, False]
+    # the same edge given twice (both directions), both off the first fan: both found
+    is_con, found = he.mark(np.array([[4, 0], [0, 4], [1, 4]]))
+    assert found.tolist() == [True, True, False]
+    assert np.flatnonzero(is_con).tolist() == [5]  # half-edge 4 -> 0 of triangle 1
 
 
 def test_infer_runs_from_pieces_in_order() -> None:

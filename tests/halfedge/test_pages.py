@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from hammesh import pages
 from hammesh.pages import fresh
 
 
@@ -47,3 +48,69 @@ def test_fresh_pages_are_small_and_resident_before_any_write() -> None:
     assert "nh" in vma["VmFlags"].split()
     assert int(vma["AnonHugePages"].split()[0]) == 0
     assert int(vma["Rss"].split()[0]) * 1024 >= 0.99 * a.nbytes
+
+
+@pytest.fixture
+def no_reserve():
+    pages.release()
+    yield
+    pages.release()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="mremap and /proc/self/smaps are Linux's")
+def test_fresh_takes_its_pages_from_the_reserve(no_reserve) -> None:
+    """Arrays taken from the reserve are its faulted pages moved out (resident, small
+    pages, a mapping of their own), filled as asked; small arrays never take from it."""
+    assert pages.reserve(32 << 20) == 32 << 20
+    small = fresh(100, np.int64, 3)
+    assert pages.reserved() == 32 << 20 and (small == 3).all()
+    a = fresh((1 << 20, 3), np.int32, -2)  # 12 MiB
+    b = fresh(1 << 20, np.float64)  # 8 MiB, unspecified contents
+    assert pages.reserved() == (32 - 20) << 20
+    assert a.shape == (1 << 20, 3) and a.dtype == np.int32 and (a == -2).all()
+    assert b.shape == (1 << 20,) and b.dtype == np.float64 and a.flags.c_contiguous and b.flags.writeable
+    vma = _vma(b.ctypes.data + b.nbytes // 2)
+    assert int(vma["Rss"].split()[0]) * 1024 >= b.nbytes  # there before any write
+    assert int(vma["AnonHugePages"].split()[0]) == 0
+    b[:] = 1.5
+    c = fresh(16 << 20, np.uint8)  # more than is left: an ordinary fresh array
+    assert c.nbytes == 16 << 20 and pages.reserved() == 12 << 20
+    pages.release()
+    assert pages.reserved() == 0
+    assert (a == -2).all() and (b == 1.5).all()  # arrays taken stay valid after the release
+    assert fresh(4 << 20, np.int8, 1).sum() == 4 << 20
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="mremap is Linux's")
+def test_an_array_from_the_reserve_frees_its_memory_when_it_dies(no_reserve) -> None:
+    import gc
+
+    pages.reserve(16 << 20)
+    a = fresh(8 << 20, np.uint8, 7)
+    addr = a.ctypes.data
+    assert _vma(addr)
+    del a
+    gc.collect()
+    assert not _vma(addr)  # unmapped (nothing else was mapped there meanwhile)
+
+
+def test_an_unused_reserve_is_dropped_after_a_while(no_reserve, monkeypatch) -> None:
+    import time
+
+    monkeypatch.setattr(pages, "RESERVE_SECONDS", 0.05)
+    if not pages.reserve(4 << 20):
+        pytest.skip("no mremap here")
+    deadline = time.monotonic() + 10
+    while pages.reserved() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert pages.reserved() == 0
+
+
+def test_hamiltonian_drops_the_reserve(no_reserve) -> None:
+    import hammesh
+    from tests.helpers import plate
+
+    m = plate(0, 1, max_area=0.01)
+    pages.reserve(8 << 20)
+    hammesh.hamiltonian(m, mode="incircle")
+    assert pages.reserved() == 0

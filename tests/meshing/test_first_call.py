@@ -107,3 +107,36 @@ def test_load_kernels_is_idempotent_and_harmless() -> None:
     dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
     h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=20, max_area=0.05))
     assert h.report["verified"] and np.sum(h.components) == h.n_triangles
+
+
+def test_expected_reserve_follows_the_area_bound() -> None:
+    """The pages faulted in while Triangle runs: about what incircle ``hamiltonian()``
+    takes through ``hammesh.pages.fresh`` for the expected triangle count; none for
+    small meshes or without an area bound."""
+    from hammesh.meshing import MeshOptions, expected_reserve
+
+    from hammesh import meshing
+
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]], holes=[[[0.4, 0.4], [0.6, 0.4], [0.6, 0.6]]])
+    big = expected_reserve(dom, MeshOptions(min_angle=30, max_area=1e-6))
+    assert big == 0 or 0.9 * 1.6e6 * meshing.RESERVE_BYTES_PER_TRIANGLE <= big <= 1.6e6 * meshing.RESERVE_BYTES_PER_TRIANGLE
+    assert expected_reserve(dom, MeshOptions(min_angle=30, max_area=1e-3)) == 0
+    assert expected_reserve(dom, MeshOptions(min_angle=30)) == 0
+
+
+def test_quality_mesh_faults_a_reserve_that_hamiltonian_takes(monkeypatch) -> None:
+    import threading
+
+    from hammesh import meshing, pages
+
+    monkeypatch.setattr(meshing, "RESERVE_MIN_BYTES", 1 << 20)
+    pages.release()
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=5e-5)  # isolated (default)
+    for t in threading.enumerate():
+        if t.name == "hammesh-meanwhile":
+            t.join(300)
+    if sys.platform.startswith("linux"):
+        assert pages.reserved() > 0
+    h = hammesh.hamiltonian(mesh, mode="incircle")
+    assert h.report["verified"] and pages.reserved() == 0

@@ -121,11 +121,34 @@ def test_wrong_orientation_pass_is_rejected(monkeypatch, mode: str) -> None:
         hammesh.hamiltonian(grid(3, 2), mode=mode)
 
 
-@pytest.mark.parametrize("mode, loops", [("incircle", (2, 0.01)), ("sparse", (2, 0.004))])
-def test_forgotten_constrained_edges_are_rejected(monkeypatch, mode: str, loops: tuple) -> None:
-    """The construction does not see the constrained edges: it flips one (incircle:
-    every tree edge; sparse: a swap across a loop on this plate)."""
-    m = plate(loops[0], 1, max_area=loops[1])
+def edges_changed(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> np.ndarray:
+    """Interior input edges ``(k, 2)`` that are not output edges (flipped or swapped away)."""
+    tri, out = m.triangles, h.triangles
+    ends = lambda t: np.sort(np.c_[t[:, [0, 1, 2]].reshape(-1, 1), t[:, [1, 2, 0]].reshape(-1, 1)], axis=1)  # noqa: E731
+    e_in, e_out = ends(tri), ends(out)
+    key = lambda e: e[:, 0] * len(h.points) + e[:, 1]  # noqa: E731
+    k_in, counts = np.unique(key(e_in), return_counts=True)
+    inner = k_in[counts == 2]  # shared by two input triangles
+    gone = np.setdiff1d(inner, key(e_out))
+    return np.c_[gone // len(h.points), gone % len(h.points)]
+
+
+@pytest.mark.parametrize("mode, max_area", [("incircle", 0.01), ("sparse", 0.004)])
+def test_forgotten_constrained_edges_are_rejected(monkeypatch, mode: str, max_area: float) -> None:
+    """The construction does not see the constrained edges (``mark_segments`` reports
+    none), on an input whose constrained edges include interior edges it changes.
+
+    Forced, not hoped for: a construction that sees no constrained edge does on this
+    input exactly what it does on the same mesh without segments (same triangles,
+    same pairing, every edge free), so the edges that run flips or swaps away are
+    found first and then declared constrained (any edge of a mesh may be one)."""
+    m = plate(2, 1, max_area=max_area)
+    free = hammesh.hamiltonian(replace(m, segments=np.zeros((0, 2), np.int64), segment_markers=np.zeros(0, np.int64)),
+                               mode=mode)
+    gone = edges_changed(m, free)
+    assert len(gone) > 0  # (incircle flips every tree edge; sparse joins its cover's cycles)
+    pinned = replace(m, segments=np.r_[m.segments, gone], segment_markers=np.r_[m.segment_markers, np.ones(len(gone), np.int64)])
+    hammesh.hamiltonian(pinned, mode=mode)  # seen, they are kept (or split at their midpoints)
     real = he_kernels.mark_segments
 
     def broken(tri, twin, vh, segments):
@@ -137,7 +160,7 @@ def test_forgotten_constrained_edges_are_rejected(monkeypatch, mode: str, loops:
         hammesh.VerificationError,
         match="constrained edge .* (is not an edge of the mesh|is neither an output edge nor split at its midpoint)",
     ):
-        hammesh.hamiltonian(m, mode=mode)
+        hammesh.hamiltonian(pinned, mode=mode)
 
 
 def test_incenter_outside_its_triangle_is_rejected(monkeypatch) -> None:

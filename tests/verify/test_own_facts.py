@@ -56,10 +56,39 @@ def test_pairing_around_a_vertex_of_high_degree() -> None:
     ang = np.linspace(0, 2 * np.pi, k, endpoint=False)
     pts = np.r_[[[0.0, 0.0]], np.c_[np.cos(ang), np.sin(ang)]]
     tri = np.array([[0, 1 + i, 1 + (i + 1) % k] for i in range(k)], np.int64)[::-1].copy()
-    twin, bad = _kernels.half_edge_twins(tri, len(pts))
-    assert bad == -1
-    np.testing.assert_array_equal(twin, dict_pairing(tri))
-    assert (twin < 0).sum() == k  # the rim
+    for twin, bad in (_kernels.half_edge_twins(tri, len(pts)), run_wide(tri, len(pts))):
+        assert bad == -1
+        np.testing.assert_array_equal(twin, dict_pairing(tri))
+        assert (twin < 0).sum() == k  # the rim
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(-(2**31), 2**31 - 1), max_size=300), st.sampled_from([np.int32, np.int64]),
+       st.integers(0, 5), st.integers(0, 5))
+def test_sort_range_sorts_exactly_the_range(values, dtype, pad_lo, pad_hi) -> None:
+    """The heapsort of high-degree buckets: sorted like numpy, outside the range untouched."""
+    a = np.array([7] * pad_lo + values + [-7] * pad_hi, dtype)
+    want = a.copy()
+    want[pad_lo:pad_lo + len(values)] = np.sort(want[pad_lo:pad_lo + len(values)])
+    _kernels.sort_range(a, pad_lo, pad_lo + len(values))
+    np.testing.assert_array_equal(a, want)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 2**40)), max_size=200), st.integers(0, 4))
+def test_sort_pairs_range_sorts_by_key_then_half(pairs, pad) -> None:
+    key = np.array([9] * pad + [p[0] for p in pairs], np.int64)
+    half = np.array([-1] * pad + [p[1] for p in pairs], np.int64)
+    _kernels.sort_pairs_range(key, half, pad, len(key))
+    assert list(zip(key[pad:].tolist(), half[pad:].tolist())) == sorted(pairs)
+    assert key[:pad].tolist() == [9] * pad and half[:pad].tolist() == [-1] * pad
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(-50, 50), max_size=40), st.integers(-60, 60))
+def test_lower_bound_is_numpys_left_search(values, x) -> None:
+    a = np.sort(np.array(values, np.int64))
+    assert _kernels.lower_bound(a, x) == np.searchsorted(a, x, side="left")
 
 
 @pytest.mark.parametrize("tri", BAD_EDGES)
@@ -152,7 +181,7 @@ def boundary_by_dict(tri: np.ndarray) -> np.ndarray:
 @given(st.integers(0, 2**32 - 1), st.sampled_from([np.int32, np.int64]))
 def test_input_boundary_equals_a_dictionary_of_edges(seed: int, key_dtype) -> None:
     """The input's bucket matching (rows read through the scan's flips, int32 or
-    int64 keys, a fan of 40 around one vertex sorted by np.sort) finds the boundary."""
+    int64 keys, a fan of 40 around one vertex heap-sorted) finds the boundary."""
     rng = np.random.default_rng(seed)
     k = 40
     ang = np.sort(rng.random(k)) * 2 * np.pi
