@@ -223,19 +223,28 @@ def spanning_forest(tri, twin, is_con, points=None):
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
     # number, side by side: the search reads both of a neighbour at once
     qr = pages.fresh((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
+    out = {}
+
+    def outputs() -> None:  # their pages faulted in beside the coordinates' pass
+        out["order"] = pages.fresh(m, np.int64)
+        out["tri_r"] = pages.fresh(tri.shape, tri.dtype)
+        out["code"] = pages.fresh(3 * m, np.int64)
+
     if points is None or not m:
         qr[:, 0] = 0
         qr[:, 1] = -1
+        outputs()
+    elif len(spans) > 1:
+        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)]), outputs])
     else:
         quadtree_coords(points, tri, qr, spans)
+        outputs()
+    order, tri_r, code = out["order"], out["tri_r"], out["code"]
     # the two halves of the top split of the longer axis hold half the triangles each
     # (the coordinates count them): one search per half, side by side
     nx, ny = _half_counts(qr) if m else (0, 0)
     hbit, n_hi = (2 * CELL_BITS - 1, nx) if abs(2 * nx - m) <= abs(2 * ny - m) else (CELL_BITS - 1, ny)
     n_lo = m - n_hi
-    order = pages.fresh(m, np.int64)
-    tri_r = pages.fresh(tri.shape, tri.dtype)
-    code = pages.fresh(3 * m, np.int64)
     starts = np.empty(m, np.int64)  # components' first new numbers: low half from 0, high from n_lo
     queue = np.empty((3 * m, 2), index_dtype(3 * m))  # each half's queue rows and cross edges
     halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
