@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit
 
 from hammesh import threads
+from hammesh import pages
 from hammesh.threads import row_ranges, run_all
 from hammesh.verify.stream import UNLINKED
 
@@ -144,6 +145,8 @@ RANK_BINS = 1024
 RANK_SAMPLE = 1 << 14
 #: Edge classes: ``level * CENTRE_BINS + bin`` for free edges, then one for constrained ones.
 N_CLASSES = (CELL_BITS + 1) * CENTRE_BINS + 1
+#: Classes of the free edges inside one top-level quadrant (levels below ``CELL_BITS``).
+QUAD_CLASSES = CELL_BITS * CENTRE_BINS
 
 
 def spanning_forest(tri, twin, is_con, points=None):
@@ -173,10 +176,23 @@ def spanning_forest(tri, twin, is_con, points=None):
     walk then goes out along one side of the chain of cells and back along the other,
     and a stretch of the cycle is a thin strip (cuts 6-16x METIS's instead of 1.5x).
 
-    The search starts each piece at its lowest input triangle; the triangles come
-    back renumbered in the order it reached them, and the half-edge data is packed
-    into one array so that the walk reads one word per half-edge. Without
-    ``points`` every free edge is in one class (a plain search).
+    **Two searches side by side.** The quadtree's coordinates count triangles, so the
+    top split of one axis halves them; every edge between the two halves (or between
+    any two top-level quadrants) is in the top level's classes, above every edge
+    inside a quadrant. So the minimum spanning forest is one of the edges inside the
+    quadrants, then joined over the top-level and constrained edges in class order
+    (Kruskal's rule over the few of them): :func:`_prim_half_into` runs once per half,
+    on its own thread (they share nothing they write), each search inside one
+    quadrant; :func:`_join_into` joins them. The searches also write the output
+    (``tri_r`` and the packed ``code``) as they go, each pair of half-edges when its
+    second triangle is reached, so no second pass over the triangles is needed. The
+    result does not depend on the number of threads.
+
+    Each search starts at its lowest input triangle not yet reached; the triangles
+    come back renumbered in the order they were reached (the low half first), and the
+    half-edge data is packed into one array so that the walk reads one word per
+    half-edge. ``firsts`` holds each piece's lowest input triangle. Without
+    ``points`` every free edge is in one class (a plain search, on one thread).
 
     Parameters
     ----------
@@ -206,22 +222,48 @@ def spanning_forest(tri, twin, is_con, points=None):
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
     # number, side by side: the search reads both of a neighbour at once
-    qr = np.empty((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
+    qr = pages.fresh((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
+    out = {}
+
+    def outputs() -> None:  # their pages faulted in beside the coordinates' pass
+        out["order"] = pages.fresh(m, np.int64)
+        out["tri_r"] = pages.fresh(tri.shape, tri.dtype)
+        out["code"] = pages.fresh(3 * m, np.int64)
+
     if points is None or not m:
         qr[:, 0] = 0
         qr[:, 1] = -1
+        outputs()
+    elif len(spans) > 1:
+        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)]), outputs])
     else:
         quadtree_coords(points, tri, qr, spans)
-    order = np.empty(m, np.int64)
-    firsts = np.empty(m, np.int64)
-    flags = is_con.astype(np.uint8)  # CON_BIT; the search adds TREE_BIT
-    queue = np.empty((3 * m, 2), index_dtype(3 * m))  # the bucket queue: (link, entry) pairs
-    pieces = _prim_into(twin, flags, qr, order, firsts, queue)
-    tri_r = np.empty_like(tri)
-    code = np.empty(3 * m, np.int64)
-    run_all([(lambda a=a, b=b: _pack_code_into(tri, twin, flags, order, qr, tri_r, code, a, b)) for a, b in spans])
-    split = np.flatnonzero((code & 3) == 3).astype(np.int64)
-    return Forest(tri_r, code, order, firsts[:pieces].copy(), split)
+        outputs()
+    order, tri_r, code = out["order"], out["tri_r"], out["code"]
+    # the two halves of the top split of the longer axis hold half the triangles each
+    # (the coordinates count them): one search per half, side by side
+    nx, ny = _half_counts(qr) if m else (0, 0)
+    hbit, n_hi = (2 * CELL_BITS - 1, nx) if abs(2 * nx - m) <= abs(2 * ny - m) else (CELL_BITS - 1, ny)
+    n_lo = m - n_hi
+    starts = np.empty(m, np.int64)  # components' first new numbers: low half from 0, high from n_lo
+    queue = np.empty((3 * m, 2), index_dtype(3 * m))  # each half's queue rows and cross edges
+    halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
+    calls = [
+        (lambda side=side, base=base, a=a, b=b: _prim_half_into(
+            tri, twin, is_con, qr, hbit, side, base, order, tri_r, code, starts[base:], queue, a, b))
+        for side, base, a, b in halves
+    ]
+    # on small meshes one thread runs both (same result: the halves share nothing)
+    found = run_all(calls) if len(spans) > 1 else [c() for c in calls]
+    (c_lo, x_lo), (c_hi, x_hi) = found
+    comp_starts = np.concatenate((starts[:c_lo], starts[n_lo : n_lo + c_hi]))
+    # the cross edges in the order they were listed (each half's from its top row down)
+    cross = np.concatenate((queue[3 * n_lo - x_lo : 3 * n_lo][::-1], queue[3 * m - x_hi :][::-1])).astype(np.int64)
+    parent = np.empty(len(comp_starts), np.int64)
+    split = np.empty(2 * len(cross), np.int64)
+    n_split = _join_into(twin, is_con, qr, order, code, comp_starts, cross, parent, split)
+    firsts = _piece_firsts(parent, comp_starts, order, qr)
+    return Forest(tri_r, code, order, firsts, np.sort(split[:n_split]))
 
 
 def quadtree_coords(points, tri, out=None, spans=None):
@@ -337,65 +379,103 @@ def edge_class(qa, qb):
 
 
 @njit(cache=True, nogil=True)
-def _prim_into(twin, flags, qr, order, firsts, queue):
-    """Prim's search over the dual graph with a bucket queue of edge classes.
+def _half_counts(qr):
+    """``(nx, ny)``: triangles whose quadtree x (y) coordinate has its top bit set."""
+    nx = 0
+    ny = 0
+    for t in range(qr.shape[0]):
+        nx += (qr[t, 0] >> (2 * CELL_BITS - 1)) & 1
+        ny += (qr[t, 0] >> (CELL_BITS - 1)) & 1
+    return nx, ny
 
-    ``qr[t]``: quadtree coordinates of triangle t and its new number (-1 on entry,
-    set here).
-    Fills ``order`` (visit order: new triangle i is input triangle ``order[i]``),
-    ``TREE_BIT`` of ``flags`` on both halves of each tree edge, and ``firsts`` (new
-    number of each piece's first); returns the number of pieces. ``queue`` (3 m
-    rows, of which only as many as are ever queued at once are touched: popped rows are
-    reused) holds the queue's entries, each a link to the next entry of its class and
-    a half-edge into a triangle not reached when queued; stale entries (their
-    triangle reached meanwhile) are skipped when popped. A bucket is a stack: the
-    newest edge of a class goes first, so the search stays where it is.
+
+@njit(cache=True, nogil=True)
+def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code, starts, queue, q_lo, q_hi):
+    """Prim's search with a bucket queue of edge classes over the triangles of one half.
+
+    The half: triangles whose packed quadtree coordinates have bit ``hbit`` equal to
+    ``side`` (the top bit of one axis). Only free edges inside a top-level quadrant
+    (class below ``QUAD_CLASSES``) are searched, so a search never reads a triangle
+    the other half's search is numbering: the two halves run side by side. Each
+    search (a *component*, inside one quadrant) starts at its lowest input triangle.
+
+    Numbers the half's triangles from ``base`` in the order they are reached: fills
+    ``qr[t, 1]`` (-1 on entry), ``order``, ``tri_r`` and ``starts`` (the new number of
+    each component's first triangle, ascending). Writes ``code`` of every half-edge of
+    a reached triangle except the *cross* edges (constrained, or between quadrants),
+    each pair when its second triangle is reached (tree bit on the edge it was
+    reached by). The cross edges are listed for :func:`_join_into`, once each (from
+    the lower half-edge), as rows ``(class, half-edge)`` of ``queue`` from ``q_hi``
+    down; the queue's entries go from ``q_lo`` up (each a link to the next entry of
+    its class and a half-edge into a triangle not reached when queued; popped rows
+    are reused; a visited triangle makes at most 3 rows of either kind, so
+    ``3 x`` its half's triangles rows suffice). A bucket is a stack: the newest edge
+    of a class goes first, so the search stays where it is.
+
+    Returns ``(components, cross edges)``.
     """
     m = qr.shape[0]
-    con_class = N_CLASSES - 1
-    head = np.full(N_CLASSES, -1, np.int64)
+    head = np.full(QUAD_CLASSES, -1, np.int64)
     free = -1  # popped slots, linked through their first column
-    n_used = 0
-    n_seen = 0
-    pieces = 0
+    n_used = q_lo
+    top = q_hi
+    n_seen = base
+    n_comp = 0
     for s in range(m):
-        if qr[s, 1] >= 0:
+        if ((qr[s, 0] >> hbit) & 1) != side or qr[s, 1] >= 0:
             continue
-        firsts[pieces] = n_seen  # the lowest input triangle of its piece
-        pieces += 1
-        low = N_CLASSES  # no class below it holds an entry
+        starts[n_comp] = n_seen
+        n_comp += 1
+        low = QUAD_CLASSES  # no class below it holds an entry
         t = s
+        via = -1  # the half-edge of t its tree edge enters by
         while t >= 0:
-            qr[t, 1] = n_seen
-            order[n_seen] = t
+            i = n_seen
+            qr[t, 1] = i
+            order[i] = t
             n_seen += 1
+            tri_r[i, 0] = tri[t, 0]
+            tri_r[i, 1] = tri[t, 1]
+            tri_r[i, 2] = tri[t, 2]
             qt = qr[t, 0]
-            best = N_CLASSES  # the lightest edge out of t goes next without queueing if
+            best = QUAD_CLASSES  # the lightest edge out of t goes next without queueing if
             best_g = -1  # nothing queued is lighter (most tree edges)
-            best_h = -1
             for kk in range(3):
                 h = 3 * t + kk
                 g = twin[h]
-                if g < 0 or qr[g // 3, 1] >= 0:
+                if g < 0:
+                    code[3 * i + kk] = CON_BIT if is_con[h] else 0
                     continue
-                c = con_class if flags[h] & CON_BIT else edge_class(qt, qr[g // 3, 0])
+                u = g // 3
+                c = QUAD_CLASSES if is_con[h] else edge_class(qt, qr[u, 0])
+                if c >= QUAD_CLASSES:  # the join's (``_join_into``)
+                    if h < g:
+                        top -= 1
+                        queue[top, 0] = N_CLASSES - 1 if is_con[h] else c
+                        queue[top, 1] = h
+                    continue
+                j = qr[u, 1]  # same quadrant: numbered by this search, if at all
+                if j >= 0:  # both halves of the edge, now that both numbers are known
+                    tb = TREE_BIT if h == via else 0
+                    kg = g - 3 * u
+                    code[3 * i + kk] = ((3 * j + kg + 1) << 2) | tb
+                    code[3 * j + kg] = ((3 * i + kk + 1) << 2) | tb
+                    continue
                 if c < best:
                     c, best = best, c
                     g, best_g = best_g, g
-                    best_h = h
                 if g >= 0:
                     free, n_used = bucket_push(queue, head, free, n_used, c, g)
                     low = min(low, c)
             t = -1
             if best_g >= 0 and best <= low:
                 t = best_g // 3
-                flags[best_g] |= TREE_BIT
-                flags[best_h] |= TREE_BIT
+                via = best_g
                 continue
             if best_g >= 0:
                 free, n_used = bucket_push(queue, head, free, n_used, best, best_g)
                 low = min(low, best)
-            while low < N_CLASSES:  # the lowest class edge to a triangle not reached
+            while low < QUAD_CLASSES:  # the lowest class edge to a triangle not reached
                 slot = head[low]
                 if slot < 0:
                     low += 1
@@ -406,27 +486,86 @@ def _prim_into(twin, flags, qr, order, firsts, queue):
                 free = slot
                 if qr[g // 3, 1] < 0:
                     t = g // 3
-                    flags[g] |= TREE_BIT
-                    flags[twin[g]] |= TREE_BIT
+                    via = g
                     break
-    return pieces
+    return n_comp, q_hi - top
 
 
 @njit(cache=True, nogil=True)
-def _pack_code_into(tri, twin, flags, order, qr, tri_r, code, lo, hi):
-    """Rows ``tri_r`` and ``code`` of new triangles lo..hi: twins renumbered
-    (``qr[:, 1]``), the constrained and tree bits from ``flags``."""
-    for i in range(lo, hi):
-        t = order[i]
-        for kk in range(3):
-            h = 3 * t + kk
-            tri_r[i, kk] = tri[t, kk]
-            g = twin[h]
-            if g < 0:
-                code[3 * i + kk] = flags[h]
-                continue
-            u = g // 3
-            code[3 * i + kk] = ((3 * qr[u, 1] + g - 3 * u + 1) << 2) | flags[h]
+def _component_of(starts, i):
+    """Component of new triangle ``i``: the last start at or below it."""
+    return np.searchsorted(starts, i, side="right") - 1
+
+
+@njit(cache=True, nogil=True)
+def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split):
+    """Kruskal's join of the components of :func:`_prim_half_into` (new-number
+    ``starts``, ascending) over the ``cross`` edges (rows ``(class, half-edge)``),
+    lightest class first (a counting sort; constrained edges last), in their order
+    inside a class. Writes both codes of every cross edge (tree bit where it joins two
+    trees), ``parent`` (a union-find over the components, each root its lowest
+    component) and ``split`` (the constrained tree edges, both new half-edges).
+    Returns the length of ``split``."""
+    n_comp = starts.shape[0]
+    for c in range(n_comp):
+        parent[c] = c
+    n_cross = cross.shape[0]
+    n_bins = N_CLASSES - QUAD_CLASSES
+    first = np.zeros(n_bins + 1, np.int64)
+    for e in range(n_cross):
+        first[cross[e, 0] - QUAD_CLASSES + 1] += 1
+    for b in range(n_bins):
+        first[b + 1] += first[b]
+    ranked = np.empty(n_cross, np.int64)
+    for e in range(n_cross):
+        b = cross[e, 0] - QUAD_CLASSES
+        ranked[first[b]] = e
+        first[b] += 1
+    n_split = 0
+    for r in range(n_cross):
+        h = cross[ranked[r], 1]
+        g = twin[h]
+        t = h // 3
+        u = g // 3
+        i = qr[t, 1]
+        j = qr[u, 1]
+        a = find_root(parent, _component_of(starts, i))
+        b = find_root(parent, _component_of(starts, j))
+        tb = 0
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+            tb = TREE_BIT
+        cb = CON_BIT if is_con[h] else 0
+        hk = 3 * i + h - 3 * t
+        gk = 3 * j + g - 3 * u
+        code[hk] = ((gk + 1) << 2) | tb | cb
+        code[gk] = ((hk + 1) << 2) | tb | cb
+        if tb and cb:
+            split[n_split] = hk
+            split[n_split + 1] = gk
+            n_split += 2
+    return n_split
+
+
+@njit(cache=True, nogil=True)
+def _piece_firsts(parent, starts, order, qr):
+    """New number of each piece's lowest input triangle, the pieces in that order
+    (a component starts at its lowest input triangle)."""
+    n_comp = starts.shape[0]
+    lowest = np.full(n_comp, qr.shape[0], np.int64)
+    for c in range(n_comp):
+        r = find_root(parent, c)
+        lowest[r] = min(lowest[r], order[starts[c]])
+    n_pieces = 0
+    for c in range(n_comp):
+        if parent[c] == c:
+            lowest[n_pieces] = lowest[c]
+            n_pieces += 1
+    keys = np.sort(lowest[:n_pieces])
+    firsts = np.empty(n_pieces, np.int64)
+    for p in range(n_pieces):
+        firsts[p] = qr[keys[p], 1]
+    return firsts
 
 
 def split_slots(tri, code, mid_h=None):

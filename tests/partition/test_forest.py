@@ -136,3 +136,51 @@ def test_forest_without_points_is_a_plain_spanning_forest() -> None:
     t.add_edges_from((h // 3, tw[h] // 3) for h in tree)
     assert len(tree) == 2 * (m - 1) and nx.is_tree(t)
     assert f.order[f.firsts].tolist() == [0]
+
+
+def test_two_searches_join_across_the_halves_as_one_search_would() -> None:
+    """The halves' searches (:func:`_prim_half_into`) see only the edges inside a
+    top-level quadrant; Kruskal's join over the rest must still give a minimum
+    spanning forest. A C-shaped domain whose two arms meet only in the other half
+    (each arm a separate component in its half), with a constrained loop across the
+    split and a second piece: the result is the same on one thread and on two, a
+    minimum spanning forest of the classes (constrained edges last), each piece
+    starting at its lowest input triangle."""
+    import hammesh.threads as row_threads
+
+    c_shape = [[0, 0], [3, 0], [3, 1], [1, 1], [1, 2], [3, 2], [3, 3], [0, 3]]
+    v = [list(p) for p in c_shape] + [[1.3, 0.2], [1.7, 0.2], [1.7, 0.8], [1.3, 0.8]] + \
+        [[4, 0], [5, 0], [5, 3], [4, 3]]
+    segs = [[i, (i + 1) % 8] for i in range(8)] + [[8 + i, 8 + (i + 1) % 4] for i in range(4)] + \
+           [[12 + i, 12 + (i + 1) % 4] for i in range(4)]
+    mesh = hammesh.quality_mesh(hammesh.Domain(vertices=v, segments=segs), min_angle=25, max_area=0.01)
+    clean, he, is_con = prepare_mesh(mesh)
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    old = row_threads.THREAD_MIN_ROWS
+    try:
+        row_threads.THREAD_MIN_ROWS = 10**9
+        one = K.spanning_forest(tri, twin, is_con, pts)
+        row_threads.THREAD_MIN_ROWS = 20
+        two = K.spanning_forest(tri, twin, is_con, pts)
+    finally:
+        row_threads.THREAD_MIN_ROWS = old
+    for a, b in zip(one, two):
+        np.testing.assert_array_equal(a, b)
+    q = K.quadtree_coords(pts, tri)[:, 0].astype(np.int64)
+    m = len(tri)
+    g = nx.Graph()
+    g.add_nodes_from(range(m))
+    for h in np.flatnonzero(twin > np.arange(3 * m)):
+        a, b = h // 3, twin[h] // 3
+        g.add_edge(a, b, w=K.N_CLASSES - 1 if is_con[h] else K.edge_class(int(q[a]), int(q[b])))
+    # the arms really are apart in their half (else the join is not exercised)
+    inside = nx.Graph([(a, b) for a, b, d in g.edges(data=True) if d["w"] < K.QUAD_CLASSES])
+    inside.add_nodes_from(range(m))
+    assert nx.number_connected_components(inside) > 4 + 1
+    tw = (two.code >> 2) - 1
+    tree = np.flatnonzero(((two.code & K.TREE_BIT) != 0) & (np.arange(3 * m) < tw))
+    assert len(tree) == m - 2
+    best = sum(d["w"] for _, _, d in nx.minimum_spanning_edges(g, weight="w", data=True))
+    assert sum(g.edges[two.order[h // 3], two.order[tw[h] // 3]]["w"] for h in tree) == best
+    assert two.order[two.firsts].tolist() == sorted(min(c) for c in nx.connected_components(g))
+    assert len(two.split) == 2  # the loop's region joins the rest by one constrained edge
