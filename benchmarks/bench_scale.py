@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -94,6 +95,7 @@ def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str |
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
         if tiles:
             cmd += ["--tiles", str(tiles)]
+        load = os.getloadavg()[0]
         t = time.perf_counter()
         done = subprocess.run(cmd, capture_output=True, text=True)
         sec = time.perf_counter() - t
@@ -103,6 +105,7 @@ def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str |
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     r["wall"] = sec
+    r["load"] = (load, os.getloadavg()[0])  # 1-minute load average before and after: "quiet" or "loaded"
     return r
 
 
@@ -124,6 +127,23 @@ def stages(o: dict, raw_cpu: float) -> str:
         total = sum(ts[f"cpu_{k}"] for k in STEPS if f"cpu_{k}" in ts) / raw_cpu
         line += f"\n{'':22}|   workers' CPU / raw CPU (sum over tiles): {cpu}; all steps {total:.2f}"
     return line
+
+
+def per_tile(o: dict) -> str:
+    """Each tile's ``hamiltonian()`` (with its certificate): CPU seconds, per million of
+    the tile's triangles, and its share of all the workers' CPU (issue 15 asks for it:
+    the per-tile Hamiltonian is issues 11/13's code, the rest is this path's)."""
+    steps = o["parallel"].get("tile_steps") or []
+    if not steps or "cpu_hamiltonian" not in steps[0]:
+        return ""
+    ham = [s["cpu_hamiltonian"] for s in steps]
+    tri = [s["cpu_mesh"] for s in steps]
+    per_m = [x / s["triangles"] * 1e6 for x, s in zip(ham, steps)]
+    every = sum(v for s in steps for k, v in s.items() if k.startswith("cpu_"))
+    return (f"per tile hamiltonian() CPU s {' / '.join(f'{x:.2f}' for x in ham)} "
+            f"({' / '.join(f'{x:.2f}' for x in per_m)} per 1M triangles; "
+            f"x{sum(ham) / max(sum(tri), 1e-9):.2f} the tiles' meshing), {100 * sum(ham) / max(every, 1e-9):.0f} % "
+            f"of the workers' CPU")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -164,7 +184,9 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{'':22}| {mode:9} {w:5d}  {o['wall']:7.2f} {ratio:5.2f}  {100 * over:+6.2f} % "
                       f"{par['peak_rss_mb']['driver']:9.0f}  {wrk:>16}  {par['tiles']:5d} {par['joins']:5d}")
                 print(f"{'':22}|   {stages(o, r['cpu_seconds'])}\n{'':22}|   ({o['triangles']:,} output triangles, "
-                      f"{par['repair_rounds']} repair rounds)")
+                      f"{par['repair_rounds']} repair rounds; load average {o['load'][0]:.1f} -> {o['load'][1]:.1f})")
+                if per_tile(o):
+                    print(f"{'':22}|   {per_tile(o)}")
                 sys.stdout.flush()
     return 0
 

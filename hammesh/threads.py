@@ -3,6 +3,14 @@
 The machine's cores share a pass over row ranges; a kernel call holds no Python
 state, so threads need no more than a pool. Below ``min_rows`` rows per thread the
 pass runs in the calling thread (thread start-up would cost more than it saves).
+
+How many threads: one per core (``os.cpu_count()``), at most :func:`limit`'s cap. A
+process that shares the machine with others doing the same work (the ``N`` workers
+of a local Dask cluster on ``C`` cores) caps itself at ``C // N``: ``N`` processes each
+starting ``C`` threads would run ``N x C`` threads on ``C`` cores, every threaded pass
+then paying for context switches and cache thrash instead of gaining. The
+``HAMMESH_THREADS`` environment variable sets the cap of a new process (workers of a
+cluster started elsewhere: ``HAMMESH_THREADS=1 dask worker ... --nworkers K``).
 """
 
 from __future__ import annotations
@@ -11,16 +19,43 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable
 
-__all__ = ["row_ranges", "run_all", "THREAD_MIN_ROWS"]
+__all__ = ["row_ranges", "run_all", "cores", "limit", "THREAD_MIN_ROWS"]
 
 #: Rows per thread below which a row pass runs in one call (tests lower it to exercise
 #: the threaded paths on small meshes).
 THREAD_MIN_ROWS = 200_000
 
 
+def _env_cap() -> int | None:
+    raw = os.environ.get("HAMMESH_THREADS", "").strip()
+    try:
+        value = int(raw)
+    except ValueError:  # unset or not a number: no cap (a bad value must not stop an import)
+        return None
+    return value if value >= 1 else None
+
+
+_cap: int | None = _env_cap()
+
+
+def limit(n: int | None) -> int | None:
+    """Cap this process's threads per pass at ``n`` (None: one per core); returns the old cap."""
+    global _cap
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+        raise ValueError(f"hammesh.threads.limit: a positive integer or None, got {n!r}")
+    old, _cap = _cap, n
+    return old
+
+
+def cores() -> int:
+    """Threads a pass may use: the machine's cores, at most the cap (:func:`limit`)."""
+    n = os.cpu_count() or 1
+    return n if _cap is None else max(1, min(n, _cap))
+
+
 def row_ranges(m: int, min_rows: int) -> list[tuple[int, int]]:
     """Split ``range(m)`` into one contiguous range per core, each >= ``min_rows``."""
-    k = max(1, min(os.cpu_count() or 1, m // max(1, min_rows)))
+    k = max(1, min(cores(), m // max(1, min_rows)))
     cuts = [m * i // k for i in range(k + 1)]
     return [(cuts[i], cuts[i + 1]) for i in range(k)]
 
@@ -29,5 +64,5 @@ def run_all(calls: list[Callable[[], Any]]) -> list[Any]:
     """Results of ``calls``, run side by side (in the caller's thread if just one)."""
     if len(calls) == 1:
         return [calls[0]()]
-    with ThreadPoolExecutor(min(len(calls), os.cpu_count() or 1)) as pool:
+    with ThreadPoolExecutor(min(len(calls), cores())) as pool:
         return [f.result() for f in [pool.submit(c) for c in calls]]

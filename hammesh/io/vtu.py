@@ -36,6 +36,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+from hammesh import threads as row_threads
 from hammesh.errors import FileFormatError
 
 __all__ = ["write", "write_raw", "read_raw", "VTK_CELL_TYPES", "BLOCK_BYTES", "LEVEL", "RAW_DTYPES"]
@@ -88,7 +89,7 @@ def write(path: str | os.PathLike[str], mesh: Any, threads: int | None = None) -
     n_cells = len(types)
     cell_data = {name: np.concatenate([np.asarray(a) for a in arrays]) for name, arrays in mesh.cell_data.items()}
 
-    workers = max(1, threads or os.cpu_count() or 1)
+    workers = max(1, threads or row_threads.cores())
     with ThreadPoolExecutor(workers) as pool, open(path, "wb") as fh:
         fh.write(b'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" '
                  b'byte_order="LittleEndian" header_type="UInt32" compressor="vtkZLibDataCompressor">\n'

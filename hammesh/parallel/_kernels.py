@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["area_sum", "label_pieces_into"]
+__all__ = ["area_sum", "label_pieces_into", "lattice_mark_inside_into", "lattice_clear_near_segments_into",
+           "lattice_clear_near_points_into"]
 
 
 @njit(cache=True, nogil=True)
@@ -58,3 +59,95 @@ def label_pieces_into(triangles: np.ndarray, neighbors: np.ndarray, segment_keys
                 top += 1
         count += 1
     return count
+
+
+# --- the triangular lattice of a tile's interior (tile_mesh.lattice_points) -----------
+# Point (i, j) of the lattice is (x0 + (i + (j & 1) / 2) h, y0 + j dy): rows dy apart,
+# every other row shifted by half a step (equilateral triangles when dy = h sqrt(3) / 2).
+
+
+@njit(cache=True, nogil=True)
+def _edge_span(px: float, py: float, qx: float, qy: float, y: float, xl: float, xr: float) -> tuple[float, float]:
+    """``[xl, xr]`` widened by where edge ``pq`` meets the line at height ``y`` (if it does)."""
+    if not ((py <= y <= qy) or (qy <= y <= py)):
+        return xl, xr
+    if py == qy:
+        return min(xl, min(px, qx)), max(xr, max(px, qx))
+    x = px + (y - py) * (qx - px) / (qy - py)
+    return min(xl, x), max(xr, x)
+
+
+@njit(cache=True, nogil=True)
+def lattice_mark_inside_into(x0: float, y0: float, h: float, dy: float, points: np.ndarray, triangles: np.ndarray,
+                             keep: np.ndarray) -> None:
+    """Set ``keep[j, i]`` for every lattice point inside (or on) one of the triangles:
+    each triangle's rows, the row's span inside the triangle by its three edges."""
+    ny, nx = keep.shape
+    for r in range(triangles.shape[0]):
+        ax, ay = points[triangles[r, 0], 0], points[triangles[r, 0], 1]
+        bx, by = points[triangles[r, 1], 0], points[triangles[r, 1], 1]
+        cx, cy = points[triangles[r, 2], 0], points[triangles[r, 2], 1]
+        lo_y = min(ay, min(by, cy))
+        hi_y = max(ay, max(by, cy))
+        j0 = max(0, int(np.ceil((lo_y - y0) / dy)))
+        j1 = min(ny - 1, int(np.floor((hi_y - y0) / dy)))
+        for j in range(j0, j1 + 1):
+            y = y0 + j * dy
+            xl, xr = _edge_span(ax, ay, bx, by, y, np.inf, -np.inf)
+            xl, xr = _edge_span(bx, by, cx, cy, y, xl, xr)
+            xl, xr = _edge_span(cx, cy, ax, ay, y, xl, xr)
+            if xl > xr:
+                continue
+            shift = x0 + 0.5 * h * (j & 1)
+            i0 = max(0, int(np.ceil((xl - shift) / h)))
+            i1 = min(nx - 1, int(np.floor((xr - shift) / h)))
+            for i in range(i0, i1 + 1):
+                keep[j, i] = True
+
+
+@njit(cache=True, nogil=True)
+def lattice_clear_near_segments_into(x0: float, y0: float, h: float, dy: float, points: np.ndarray,
+                                     segments: np.ndarray, radius: np.ndarray, keep: np.ndarray) -> None:
+    """Clear ``keep[j, i]`` for every lattice point closer than ``radius[s]`` to segment ``s``."""
+    ny, nx = keep.shape
+    for s in range(segments.shape[0]):
+        ax, ay = points[segments[s, 0], 0], points[segments[s, 0], 1]
+        bx, by = points[segments[s, 1], 0], points[segments[s, 1], 1]
+        r = radius[s]
+        ex, ey = bx - ax, by - ay
+        ll = ex * ex + ey * ey
+        j0 = max(0, int(np.floor((min(ay, by) - r - y0) / dy)))
+        j1 = min(ny - 1, int(np.ceil((max(ay, by) + r - y0) / dy)))
+        for j in range(j0, j1 + 1):
+            y = y0 + j * dy
+            shift = x0 + 0.5 * h * (j & 1)
+            i0 = max(0, int(np.floor((min(ax, bx) - r - shift) / h)))
+            i1 = min(nx - 1, int(np.ceil((max(ax, bx) + r - shift) / h)))
+            for i in range(i0, i1 + 1):
+                if not keep[j, i]:
+                    continue
+                x = shift + i * h
+                t = 0.0 if ll == 0.0 else min(1.0, max(0.0, ((x - ax) * ex + (y - ay) * ey) / ll))
+                dx, dyy = x - ax - t * ex, y - ay - t * ey
+                if dx * dx + dyy * dyy < r * r:
+                    keep[j, i] = False
+
+
+@njit(cache=True, nogil=True)
+def lattice_clear_near_points_into(x0: float, y0: float, h: float, dy: float, points: np.ndarray, radius: float,
+                                   keep: np.ndarray) -> None:
+    """Clear ``keep[j, i]`` for every lattice point closer than ``radius`` to one of ``points``."""
+    ny, nx = keep.shape
+    for s in range(points.shape[0]):
+        px, py = points[s, 0], points[s, 1]
+        j0 = max(0, int(np.floor((py - radius - y0) / dy)))
+        j1 = min(ny - 1, int(np.ceil((py + radius - y0) / dy)))
+        for j in range(j0, j1 + 1):
+            y = y0 + j * dy
+            shift = x0 + 0.5 * h * (j & 1)
+            i0 = max(0, int(np.floor((px - radius - shift) / h)))
+            i1 = min(nx - 1, int(np.ceil((px + radius - shift) / h)))
+            for i in range(i0, i1 + 1):
+                x = shift + i * h
+                if (x - px) ** 2 + (y - py) ** 2 < radius * radius:
+                    keep[j, i] = False

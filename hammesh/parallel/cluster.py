@@ -7,7 +7,7 @@ from typing import Iterator
 
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["runner_for", "start_method", "DASK_MISSING"]
+__all__ = ["runner_for", "start_method", "worker_threads", "DASK_MISSING"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
 
@@ -79,4 +79,16 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
                                            dashboard_address=None, silence_logs=logging.ERROR,
                                            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     with cluster, distributed.Client(cluster) as c:
+        # the workers share this machine's cores: each threaded pass of a worker gets its
+        # share, not every core (N workers x C threads on C cores only thrash)
+        from hammesh import threads
+
+        c.run(threads.limit, worker_threads(workers))
         yield c, workers
+
+
+def worker_threads(workers: int) -> int:
+    """Threads per pass for each of ``workers`` local worker processes: their share of the cores."""
+    import os
+
+    return max(1, (os.cpu_count() or 1) // max(1, workers))

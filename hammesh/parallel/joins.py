@@ -457,60 +457,69 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     gid = np.concatenate([tile.vertex_ids, mesh_offset + np.arange(n_mesh_points - k, dtype=np.int64),
                           ham_offset + np.arange(n - n_mesh_points, dtype=np.int64)])
     m = len(h.triangles)
-    gpos = np.full(m, -1, np.int64)
     ends = np.cumsum(h.components)
     starts = ends - h.components
-    new_tri, new_pos, new_kind, new_parent, new_attr = [], [], [], [], []
+    new_tri, new_at, new_kind, new_parent, new_attr = [], [], [], [], []
     jmap = {j.index: j for j in joins}
     # a swap's far apex d: (global id, coordinates), from the other tile via the driver
     h_other_apex = {ji: int(v[0]) for ji, v in (swap_apex or {}).items()}
     attrs = np.asarray(h.triangle_attributes)
-    for bk, g in zip(plan_blocks, plan_start.tolist()):
-        if bk[0] != tile_index:
-            continue
+    # the rows in cycle order, block by block (the blocks' positions are consecutive
+    # stretches, so no sort of the rows is needed): a run of a cycle, or a join triangle
+    mine = sorted((g, i) for i, (bk, g) in enumerate(zip(plan_blocks, plan_start.tolist())) if bk[0] == tile_index)
+    rows_parts, pos_parts, at = [], [], 0
+    for g, i in mine:
+        bk = plan_blocks[i]
         if bk[1] == "run":
             _, _, run, start, step, count = bk
             L = int(h.components[run])
-            rows = starts[run] + (start + step * np.arange(count)) % L
-            gpos[rows] = g + np.arange(count)
-        else:
-            _, _, ji, name = bk
-            j = jmap[ji]
-            It, Iu = join_point_base + 2 * j.slot, join_point_base + 2 * j.slot + 1
-            if name in T_NAMES:
-                row = j.t_row
-                t = h.triangles[row]
-                loc = {int(gid[v]): v for v in t}
-                c = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
-                del loc
-                if name in ("A1", "A2"):
-                    u = h_other_apex[j.index]
-                    tri = (j.a, u, c) if name == "A1" else (u, j.b, c)
-                else:
-                    tri = {"S_ca": (It, c, j.a), "F_a": (It, j.a, Iu), "F_b": (Iu, j.b, It), "S_bc": (It, j.b, c)}[name]
+            rows_parts.append(starts[run] + (start + step * np.arange(count, dtype=np.int64)) % L)
+            pos_parts.append(g + np.arange(count, dtype=np.int64))
+            at += count
+            continue
+        _, _, ji, name = bk
+        j = jmap[ji]
+        It, Iu = join_point_base + 2 * j.slot, join_point_base + 2 * j.slot + 1
+        if name in T_NAMES:
+            row = j.t_row
+            t = h.triangles[row]
+            c = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
+            if name in ("A1", "A2"):
+                u = h_other_apex[j.index]
+                tri = (j.a, u, c) if name == "A1" else (u, j.b, c)
             else:
-                row = j.u_row
-                t = h.triangles[row]
-                d = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
-                tri = {"S_ad": (Iu, j.a, d), "S_db": (Iu, d, j.b)}[name]
-            new_tri.append(tri)
-            new_pos.append(g)
-            new_kind.append(4 if name in ("A1", "A2") else (1 if name in ("F_a", "F_b") else 0))
-            new_parent.append(triangle_offset + int(h.parent[row]) if h.parent[row] >= 0 else -1)
-            new_attr.append(attrs[row] if attrs.shape[1] else np.zeros(0))
+                tri = {"S_ca": (It, c, j.a), "F_a": (It, j.a, Iu), "F_b": (Iu, j.b, It), "S_bc": (It, j.b, c)}[name]
+        else:
+            row = j.u_row
+            t = h.triangles[row]
+            d = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
+            tri = {"S_ad": (Iu, j.a, d), "S_db": (Iu, d, j.b)}[name]
+        new_tri.append(tri)
+        new_at.append(at)
+        new_kind.append(4 if name in ("A1", "A2") else (1 if name in ("F_a", "F_b") else 0))
+        new_parent.append(triangle_offset + int(h.parent[row]) if h.parent[row] >= 0 else -1)
+        new_attr.append(attrs[row] if attrs.shape[1] else np.zeros(0))
+        rows_parts.append(np.array([row], np.int64))  # a placeholder, replaced below
+        pos_parts.append(np.array([g], np.int64))
+        at += 1
     if new_tri:
         _check_join_triangles(np.asarray(new_tri, np.int64), gid, h.points, joins, join_point_base, swap_apex,
                               floor, tile_index)
+    rows = np.concatenate(rows_parts) if rows_parts else np.zeros(0, np.int64)
+    pos = np.concatenate(pos_parts) if pos_parts else np.zeros(0, np.int64)
+    new_at_a = np.asarray(new_at, np.int64)
+    # every row of the tile exactly once, but the ones its joins replace
     removed = set()
     for j in joins:
         if j.t_tile == tile_index:
             removed.add(j.t_row)
         if j.u_tile == tile_index:
             removed.add(j.u_row)
-    missing = np.flatnonzero(gpos < 0)
-    if set(missing.tolist()) != removed:
+    own = np.ones(len(rows), bool)
+    own[new_at_a] = False
+    seen = np.bincount(rows[own], minlength=m) if m else np.zeros(0, np.int64)
+    if len(seen) != m or seen.max(initial=0) > 1 or set(np.flatnonzero(seen == 0).tolist()) != removed:
         raise VerificationError(f"tile {tile_index}: the cycle plan does not cover its rows")
-    keep = gpos >= 0
     # the points this piece uses: its own and the join points (a swap's apex d is the
     # other tile's point: added unless this tile holds it too)
     jp_ids, jp_xy = [], []
@@ -529,27 +538,25 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     fresh = ~((tile.vertex_ids[at_v] == jp_ids_a) if k else np.zeros(len(jp_ids_a), bool))
     ids = np.concatenate([gid, jp_ids_a[fresh]])
     xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)[fresh]])
-    local = h.triangles[keep]
+    local = h.triangles[rows]
+    kind = np.asarray(h.kind)[rows].astype(np.int8)
+    parent = np.asarray(h.parent)[rows]
+    parent = np.where(parent >= 0, triangle_offset + parent, -1)
+    attr = attrs[rows]
     if new_tri:
         nt = np.asarray(new_tri, np.int64)
         want = np.unique(nt)
-        at = np.flatnonzero(np.isin(ids, want))  # few: the join triangles' corners
-        order_at = np.argsort(ids[at])
-        local = np.concatenate([local, at[order_at][np.searchsorted(ids[at][order_at], nt)]])
+        hold = np.flatnonzero(np.isin(ids, want))  # few: the join triangles' corners
+        order_at = np.argsort(ids[hold])
+        local[new_at_a] = hold[order_at][np.searchsorted(ids[hold][order_at], nt)]
+        kind[new_at_a] = new_kind
+        parent[new_at_a] = new_parent
+        attr[new_at_a] = np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])
     used = np.zeros(len(ids), bool)
     used[local.ravel()] = True
-    renum = np.cumsum(used) - 1
-    pos = gpos[keep]
-    kind = np.asarray(h.kind)[keep].astype(np.int8)
-    parent = np.where(h.parent[keep] >= 0, triangle_offset + h.parent[keep], -1)
-    attr = attrs[keep]
-    if new_tri:
-        pos = np.concatenate([pos, new_pos])
-        kind = np.concatenate([kind, np.asarray(new_kind, np.int8)])
-        parent = np.concatenate([parent, new_parent])
-        attr = np.concatenate([attr, np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])])
-    order = np.argsort(pos, kind="stable")
-    local, pos, kind, parent, attr = renum[local[order]], pos[order], kind[order], parent[order], attr[order]
+    if not used.all():  # (a join's corner points are new; the tile's own all used, as a rule)
+        renum = np.cumsum(used) - 1
+        local = renum[local]
     # constrained edges: the tile's, minus its separators (interior edges of the union)
     segs = gid[h.segments]
     keys = np.sort(segs, axis=1) @ np.array([n_global, 1])

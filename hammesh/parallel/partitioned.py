@@ -201,6 +201,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                      "tile_seconds": {**tiled.tile_seconds,
                                       **{k: sum(x[5][k] for x in done)
                                          for k in ("finish", "write", "cpu_finish", "cpu_write")}},
+                     "tile_steps": [{**st, **x[5]} for st, x in zip(tiled.tile_steps, done)],
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
     if parts is not None:

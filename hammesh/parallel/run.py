@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import pickle
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -194,6 +194,8 @@ class Tiled:
     seconds: dict
     borders: list
     tile_seconds: dict
+    #: per tile: its Triangle mesh's triangle count and its task's seconds per step
+    tile_steps: list = field(default_factory=list)
 
 
 def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles: int, runner=None,
@@ -250,7 +252,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
             tile_seconds[k] = tile_seconds.get(k, 0.0) + v
     return Tiled(decomposition=decomp, outcomes=handles, plan=plan, mesh_points=mesh_points,
                  mesh_triangles=mesh_triangles, ham_points=ham_points, rounds=rounds, borders=borders,
-                 seconds={"decompose": t1 - t0, "tiles": t2 - t1, "plan": t3 - t2}, tile_seconds=tile_seconds)
+                 seconds={"decompose": t1 - t0, "tiles": t2 - t1, "plan": t3 - t2}, tile_seconds=tile_seconds,
+                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds} for o in small])
 
 
 def finish_args(tiled: Tiled) -> list[tuple]:
@@ -375,7 +378,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
         "tile_cycles": tiled.plan.nodes, "pieces": tiled.plan.pieces,
         "estimate": tiled.decomposition.estimate, "mesh_triangles": int(tiled.mesh_triangles.sum()),
         "seconds": {**tiled.seconds, "finish": t2 - t1, "verify": t3 - t2, "total": t3 - t0},
-        "tile_seconds": tiled.tile_seconds,
+        "tile_seconds": tiled.tile_seconds, "tile_steps": tiled.tile_steps,
     }
     report["triangles"] = int(len(h.triangles))
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,

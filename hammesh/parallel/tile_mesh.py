@@ -9,7 +9,15 @@ from hammesh.mesh import Mesh
 from hammesh.meshing.options import format_number
 from hammesh.parallel.tiles import Tile
 
-__all__ = ["tile_switches", "mesh_tile", "region_attributes", "locate_in_triangles"]
+__all__ = ["tile_switches", "mesh_tile", "region_attributes", "locate_in_triangles", "lattice_points",
+           "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING"]
+
+#: lattice points keep this many lattice steps from every segment (Triangle fills the
+#: band between the segments' subsegments and the lattice, grading as it does)
+LATTICE_CLEARANCE = 1.5
+#: ... plus this many times the shortfall ``h - length`` of a subsegment shorter than the
+#: step ``h`` (the mesh grows from short subsegments to the lattice's size over that band)
+LATTICE_GRADING = 2.0
 
 
 def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,
@@ -63,6 +71,62 @@ def locate_in_triangles(p: np.ndarray, t: np.ndarray, q: np.ndarray, chunk: int 
     return out
 
 
+def lattice_spacing(max_area: float) -> float:
+    """Step ``h`` of the equilateral lattice whose triangles have area ``AREA_FILL x max_area``:
+    a ``q30 a A`` Triangle mesh's mean triangle, so the tile has as many triangles as one
+    Triangle run would make (``sqrt(3) / 4 h^2 = AREA_FILL A``)."""
+    from hammesh.parallel.sizing import AREA_FILL
+
+    return float(np.sqrt(4.0 * AREA_FILL * float(max_area) / np.sqrt(3.0)))
+
+
+def lattice_points(tile: Tile, max_area: float) -> np.ndarray:
+    """Points of an equilateral triangular lattice filling the tile's interior, to be
+    given to Triangle with the tile's PSLG: ``(n, 2)`` float64.
+
+    Why: Triangle's refinement inserts its Steiner points one at a time (find the
+    circumcentre, dig the cavity, re-queue the new triangles): about 2/3 of the CPU
+    of a ``q30 a A`` run. Input vertices go through its divide-and-conquer Delaunay
+    instead, and lattice triangles (60 degrees, area ``AREA_FILL x A`` <= A) already
+    meet the bounds, so Triangle refines only the band between the tile's segments and
+    the lattice (measured on a 1.5M-triangle square: 0.65x the CPU, +0.2 % triangles).
+    The idea is isosurface stuffing's (Labelle & Shewchuk, SIGGRAPH 2007: a lattice of
+    good elements fills the interior, only the layer at the boundary is special); here
+    Triangle makes that layer, so its guarantees hold unchanged: every triangle of the
+    output is Triangle's, at least ``min_angle``, at most ``max_area``.
+
+    A point is kept when it lies in the domain (one of the tile's coarse triangles,
+    holes and the outside are not), in the tile's box, at least ``LATTICE_CLEARANCE``
+    steps from every segment of the tile (more near subsegments shorter than a step,
+    ``LATTICE_GRADING``) and two steps from every vertex on no segment. No kept
+    point is near a separator, so neighbouring tiles never see each other's lattice.
+    """
+    from hammesh.parallel._kernels import (lattice_clear_near_points_into, lattice_clear_near_segments_into,
+                                           lattice_mark_inside_into)
+
+    h = lattice_spacing(max_area)
+    dy = h * np.sqrt(3.0) / 2.0
+    x0, x1, y0, y1 = (float(v) for v in tile.box)
+    x0, y0 = x0 + 0.5 * h, y0 + 0.5 * dy
+    nx, ny = int((x1 - x0) // h), int((y1 - y0) // dy)
+    if nx < 2 or ny < 2 or len(tile.coarse_triangles) == 0 or len(tile.segments) == 0:
+        return np.zeros((0, 2))
+    keep = np.zeros((ny, nx), np.bool_)
+    lattice_mark_inside_into(x0, y0, h, dy, np.ascontiguousarray(tile.coarse_points, dtype=np.float64),
+                             np.ascontiguousarray(tile.coarse_triangles, dtype=np.int64), keep)
+    v = np.ascontiguousarray(tile.vertices, dtype=np.float64)
+    seg = np.ascontiguousarray(tile.segments, dtype=np.int64)
+    length = np.linalg.norm(v[seg[:, 0]] - v[seg[:, 1]], axis=1)
+    radius = LATTICE_CLEARANCE * h + LATTICE_GRADING * np.maximum(0.0, h - length)
+    lattice_clear_near_segments_into(x0, y0, h, dy, v, seg, radius, keep)
+    on_seg = np.zeros(len(v), bool)
+    on_seg[seg.ravel()] = True
+    if not on_seg.all():
+        lattice_clear_near_points_into(x0, y0, h, dy, np.ascontiguousarray(v[~on_seg]), 2.0 * h, keep)
+    j, i = np.nonzero(keep)
+    return np.stack([x0 + (i + 0.5 * (j & 1)) * h, y0 + j * dy], axis=1)
+
+
 def tile_switches(min_angle: float | None, max_area: float) -> str:
     """Triangle's switches for a tile: ``-Y`` keeps every boundary segment unsplit.
 
@@ -77,16 +141,18 @@ def tile_switches(min_angle: float | None, max_area: float) -> str:
     return sw + "a" + format_number(max_area) + "YnQ"
 
 
-def mesh_tile(tile: Tile, min_angle: float | None, max_area: float) -> Mesh:
+def mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bool = True) -> Mesh:
     """Triangle mesh of one tile, in its local numbering.
 
-    The tile's vertices keep their order (points ``[:len(tile.vertex_ids)]``); Steiner
-    points follow. ``info["separator_subsegments"]`` counts the separator edges.
+    The tile's vertices keep their order (points ``[:len(tile.vertex_ids)]``); the
+    interior lattice (:func:`lattice_points`, unless ``lattice=False``) and Triangle's
+    Steiner points follow.
     """
     import triangle
 
+    extra = lattice_points(tile, max_area) if lattice else np.zeros((0, 2))
     data = {
-        "vertices": np.ascontiguousarray(tile.vertices, dtype=np.float64),
+        "vertices": np.ascontiguousarray(np.concatenate([tile.vertices, extra]), dtype=np.float64),
         "segments": np.ascontiguousarray(tile.segments, dtype=np.int32),
         "segment_markers": np.ascontiguousarray(tile.segment_markers, dtype=np.int32)[:, None],
     }

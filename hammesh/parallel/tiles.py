@@ -91,6 +91,9 @@ class Tile:
     region_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
     region_triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64), repr=False)
     region_attribute: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: coarse triangles over the box (the domain there: where the tile's lattice goes)
+    coarse_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+    coarse_triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64), repr=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -654,6 +657,7 @@ def _make_tiles(p, segments, is_sep, seg_marker, boxes, n_input, holes, ptsc, tr
     on_seg = np.zeros(len(p), bool)
     on_seg[segments.ravel()] = True
     lonely = np.flatnonzero(~on_seg[:n_input])  # the user's vertices on no segment
+    P = ptsc[tric]
     tiles = []
     for i, box in enumerate(boxes):
         sel = (mid[:, 0] >= box[0]) & (mid[:, 0] <= box[1]) & (mid[:, 1] >= box[2]) & (mid[:, 1] <= box[3])
@@ -662,15 +666,14 @@ def _make_tiles(p, segments, is_sep, seg_marker, boxes, n_input, holes, ptsc, tr
         local = np.searchsorted(ids, segments[sel])
         hsel = (holes[:, 0] >= box[0]) & (holes[:, 0] <= box[1]) & (holes[:, 1] >= box[2]) & (holes[:, 1] <= box[3])
         inb = (centroid[:, 0] > box[0]) & (centroid[:, 0] < box[1]) & (centroid[:, 1] > box[2]) & (centroid[:, 1] < box[3])
-        extra = {}
+        over = ((P[:, :, 0].max(axis=1) >= box[0]) & (P[:, :, 0].min(axis=1) <= box[1])
+                & (P[:, :, 1].max(axis=1) >= box[2]) & (P[:, :, 1].min(axis=1) <= box[3]))
+        used, inv = np.unique(tric[over], return_inverse=True)
+        extra = dict(coarse_points=ptsc[used], coarse_triangles=inv.reshape(-1, 3))
         if len(regions):
-            P = ptsc[tric]
-            over = ((P[:, :, 0].max(axis=1) >= box[0]) & (P[:, :, 0].min(axis=1) <= box[1])
-                    & (P[:, :, 1].max(axis=1) >= box[2]) & (P[:, :, 1].min(axis=1) <= box[3]))
-            rt = tric[over]
-            used, inv = np.unique(rt, return_inverse=True)
             attr = np.where(rowc[over] >= 0, regions[np.clip(rowc[over], 0, None), 2], 0.0)
-            extra = dict(region_points=ptsc[used], region_triangles=inv.reshape(-1, 3), region_attribute=attr)
+            extra.update(region_points=extra["coarse_points"], region_triangles=extra["coarse_triangles"],
+                         region_attribute=attr)
         tiles.append(Tile(
             index=i, box=box, vertex_ids=ids, vertices=p[ids], segments=local.astype(np.int64),
             segment_markers=seg_marker[sel], separator=is_sep[sel], holes=holes[hsel],

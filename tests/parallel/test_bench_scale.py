@@ -22,3 +22,4 @@ def test_bench_scale_runs(extra, needle):
     assert needle in proc.stdout
     assert "workers' CPU / raw CPU" in proc.stdout or "--partitioned-only" in extra
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
+    assert "load average" in proc.stdout and "per tile hamiltonian() CPU s" in proc.stdout

@@ -1,0 +1,79 @@
+"""hammesh.threads: the per-process cap, and the local cluster's workers sharing the cores."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from hammesh import threads
+
+
+@pytest.fixture
+def no_cap():
+    old = threads.limit(None)
+    yield
+    threads.limit(old)
+
+
+@pytest.mark.parametrize("cpus, cap, expect", [(8, None, 8), (8, 3, 3), (2, 5, 2), (1, 1, 1), (4, 1, 1)])
+def test_cores_is_the_machine_capped(monkeypatch, no_cap, cpus, cap, expect):
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: cpus)
+    threads.limit(cap)
+    assert threads.cores() == expect
+    # a pass over many rows gets exactly that many ranges, covering every row once
+    spans = threads.row_ranges(10_000, 10)
+    assert len(spans) == expect
+    assert spans[0][0] == 0 and spans[-1][1] == 10_000
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:]))
+
+
+def test_limit_returns_the_old_cap_and_refuses_nonsense(no_cap):
+    assert threads.limit(2) is None
+    assert threads.limit(None) == 2
+    for bad in (0, -1, 1.5, True, "2"):
+        with pytest.raises(ValueError):
+            threads.limit(bad)
+
+
+def test_run_all_never_runs_more_calls_at_once_than_the_cap(monkeypatch, no_cap):
+    import threading
+    import time
+
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 8)
+    threads.limit(2)
+    lock, now, peak = threading.Lock(), [0], [0]
+
+    def call():
+        with lock:
+            now[0] += 1
+            peak[0] = max(peak[0], now[0])
+        time.sleep(0.02)
+        with lock:
+            now[0] -= 1
+        return 1
+
+    assert threads.run_all([call] * 6) == [1] * 6
+    assert peak[0] == 2
+
+
+@pytest.mark.parametrize("value, capped", [("1", True), ("junk", False), ("0", False), ("", False)])
+def test_environment_sets_the_cap_of_a_new_process(value, capped):
+    env = {**os.environ, "HAMMESH_THREADS": value}
+    out = subprocess.run([sys.executable, "-c", "import os, hammesh.threads as t; print(t.cores(), os.cpu_count())"],
+                         env=env, capture_output=True, text=True, check=True)
+    got, cpus = map(int, out.stdout.split())
+    assert got == (1 if capped else cpus)
+
+
+@pytest.mark.slow
+def test_local_cluster_workers_share_the_cores():
+    pytest.importorskip("distributed")
+    from hammesh.parallel.cluster import runner_for, worker_threads
+
+    with runner_for(workers=2) as (client, n):
+        got = client.run(threads.cores)
+    assert n == 2 and len(got) == 2
+    assert set(got.values()) == {worker_threads(2)} == {max(1, (os.cpu_count() or 1) // 2)}
