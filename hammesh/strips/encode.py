@@ -40,6 +40,7 @@ from hammesh.strips._cover_kernels import (
     zigzag_path_cover,
 )
 from hammesh.strips._emit_kernels import restart_buffer
+from hammesh.strips._greedy_strip_kernels import greedy_strip_buffer
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
@@ -416,6 +417,11 @@ def encode(
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
     fast = params.flag("fast", fast)
+    if fast and cache is None and join == "restart" and restart_index is not None and method in ("auto", "greedy"):
+        if not isinstance(mesh, HamiltonianMesh):
+            dual = dual_mesh(mesh)
+            if not is_forest(dual):
+                return _greedy_in_one_pass(mesh, dual, int(restart_index), verify, reorder_vertices)
     dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, improve=not fast)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
@@ -437,11 +443,7 @@ def encode(
             strip, order = alt, alt_order
     rows = dual.triangles
     if reorder_vertices:
-        indices, vertex_order = _first_use_numbering(strip.indices, strip.restart_index, len(dual.points))
-        new_id = np.empty_like(vertex_order)
-        new_id[vertex_order] = np.arange(len(vertex_order))
-        rows = new_id[dual.triangles]
-        strip = replace(strip, indices=indices, vertex_order=vertex_order)
+        strip, rows = _renumbered(strip, dual)
     if verify:
         verify_gl_strip(rows, strip.indices, strip.restart_index, order=order)
     return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
@@ -463,6 +465,34 @@ _ZIGZAG_ALWAYS = 5000
 #: the time: they would give 1.2649 instead of 1.2733 at 100k for ~1.7x the time, see
 #: ``--method zigzag`` and the CLI's ``auto``).
 _ZIGZAG_SWAP_RATE = 0.03
+
+
+def _greedy_in_one_pass(mesh: MeshLike, dual: DualMesh, R: int, verify: bool, reorder: bool) -> GLStrip:
+    """``encode(fast=True)`` with restarts: the greedy cover written as it is grown
+    (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`), the proof in two
+    halves on two threads.  The same buffer as the three-pass path (a test compares)."""
+    m = dual.n_triangles
+    g = greedy_strip_buffer(dual.cover_records(), _SWAP_WEIGHT, np.arange(m - 1, -1, -1), R)
+    S = len(g.starts) - 1
+    if 0 <= R <= g.max_index and np.count_nonzero(g.indices == R) != S - 1:
+        raise InvalidOptionError(f"restart index {R} is a vertex index of the mesh")
+    strip = GLStrip(g.indices, R, m, S, g.n_swaps)
+    rows = dual.triangles
+    if reorder:
+        strip, rows = _renumbered(strip, dual)
+    if verify:
+        half = S // 2
+        split = (int(g.index_starts[half]), int(g.starts[half])) if half > 0 else None
+        verify_gl_strip(rows, strip.indices, R, order=g.order, split=split)
+    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+
+
+def _renumbered(strip: GLStrip, dual: DualMesh) -> tuple[GLStrip, np.ndarray]:
+    """``strip`` on vertices renumbered in order of first use, and the rows renumbered alike."""
+    indices, vertex_order = _first_use_numbering(strip.indices, strip.restart_index, len(dual.points))
+    new_id = np.empty_like(vertex_order)
+    new_id[vertex_order] = np.arange(len(vertex_order))
+    return replace(strip, indices=indices, vertex_order=vertex_order), new_id[dual.triangles]
 
 
 def _buffer(dual, tri, twin, local, starts, ids, join, restart_index) -> tuple[GLStrip, np.ndarray]:
