@@ -24,10 +24,10 @@ import numpy as np
 
 from hammesh.strips._cover_kernels import grow_path, pop_fewest_free, queue_free_degrees, take_triangle
 from hammesh.strips._dual_kernels import REC_TWIN
-from hammesh.strips._numba import NEXT_CORNER, carve, kernel, loop_helper
+from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper
 from hammesh.strips._path_kernels import vertex_between
 
-__all__ = ["GreedyStrip", "greedy_strip_buffer"]
+__all__ = ["GreedyStrip", "StripWork", "strip_work", "greedy_strip_buffer"]
 
 #: :func:`greedy_strip_buffer`'s result: the buffer ``indices``; the rows in draw order
 #: ``order`` with the path offsets ``starts``; ``index_starts[s]``, where path ``s``'s
@@ -97,23 +97,46 @@ def _write_path(rec, order, a, b, out, pos):
     return pos, swaps, mx
 
 
-def greedy_strip_buffer(rec, w_swap, seed_order, restart) -> GreedyStrip:
+#: :func:`strip_work`'s arrays: the bucket queue and the two growth buffers (the records'
+#: dtype), the draw order, path offsets and index offsets, the seed order (``m - 1``
+#: down to 0) and the index buffer.
+StripWork = namedtuple("StripWork", ["bucket", "fwd", "bwd", "top", "order", "starts", "index_starts", "seeds", "out"])
+
+
+def strip_work(m: int, dtype) -> StripWork:
+    """Work arrays of :func:`greedy_strip_buffer` for ``m`` triangles, pages faulted in now.
+
+    Made on a second thread while the first pairs the edges (``encode(fast=True)``):
+    ~15 bytes per triangle of new memory that the cover would otherwise fault in page by
+    page (:func:`hammesh.pages.fresh`).
+    """
+    from hammesh.pages import fresh
+
+    small = fresh(4 * m + 2 * m + 4, dtype)
+    bucket, fwd, bwd, top = small[: 4 * m].reshape(4, m), small[4 * m : 5 * m], small[5 * m : 6 * m], small[6 * m :]
+    big = fresh(4 * m + 3, np.int64)
+    order, starts, index_starts, seeds = big[:m], big[m : 2 * m + 1], big[2 * m + 1 : 3 * m + 2], big[3 * m + 2 :]
+    seeds[:m] = np.arange(m - 1, -1, -1)
+    # bound: a path of k >= 2 triangles writes at most 2 k indices (k + 2 and at most
+    # k - 2 swaps), one of 1 triangle 3; plus a restart before each path but the first
+    return StripWork(bucket, fwd, bwd, top, order, starts, index_starts, seeds[:m], fresh(4 * m, np.int64))
+
+
+def greedy_strip_buffer(rec, w_swap, restart, work: StripWork | None = None) -> GreedyStrip:
     """The greedy cover's restart-joined GL buffer in one pass (:class:`GreedyStrip`).
 
     Paths exactly as :func:`~hammesh.strips._cover_kernels.greedy_path_cover` makes them
-    (``rec``'s scratch column is overwritten), each reversed where
-    :func:`~hammesh.strips._path_kernels.orient_paths` would reverse it, written as
+    with seeds ``m - 1, ..., 0`` (``rec``'s scratch column is overwritten), each reversed
+    where :func:`~hammesh.strips._path_kernels.orient_paths` would reverse it, written as
     :func:`~hammesh.strips._emit_kernels.restart_buffer` writes it.  ``restart`` is
     written between paths; the caller checks it is no vertex index (``max_index``).
+    ``work``: :func:`strip_work` ``(m, rec.dtype)``, made here if not given.
     """
-    m = rec.shape[0]
-    bucket, fwd, bwd, top = carve(rec.dtype, (4, m), m, m, 4)
-    order, starts, index_starts = carve(np.int64, m, m + 1, m + 1)
-    # bound: a path of k >= 2 triangles writes at most 2 k indices (k + 2 and at most
-    # k - 2 swaps), one of 1 triangle 3; plus a restart before each path but the first
-    out = np.empty(4 * m, np.int64)
-    S, n, n_swaps, mx = _greedy_strip_into(rec, w_swap, seed_order, restart, bucket, fwd, bwd, top, order, starts, index_starts, out)
-    return GreedyStrip(out[:n], order, starts[: S + 1], index_starts[:S], int(n_swaps), int(mx))
+    w = strip_work(rec.shape[0], rec.dtype) if work is None else work
+    S, n, n_swaps, mx = _greedy_strip_into(
+        rec, w_swap, w.seeds, restart, w.bucket, w.fwd, w.bwd, w.top, w.order, w.starts, w.index_starts, w.out
+    )
+    return GreedyStrip(w.out[:n], w.order, w.starts[: S + 1], w.index_starts[:S], int(n_swaps), int(mx))
 
 
 @kernel

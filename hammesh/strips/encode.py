@@ -24,6 +24,7 @@ Cost of a buffer: ``T + 2 S + swaps`` plus ``S - 1`` restarts or ``2 (S - 1)`` s
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 
 import numpy as np
@@ -40,7 +41,8 @@ from hammesh.strips._cover_kernels import (
     zigzag_path_cover,
 )
 from hammesh.strips._emit_kernels import restart_buffer
-from hammesh.strips._greedy_strip_kernels import greedy_strip_buffer
+from hammesh.strips._dual_kernels import records_dtype
+from hammesh.strips._greedy_strip_kernels import greedy_strip_buffer, strip_work
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
@@ -417,12 +419,13 @@ def encode(
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
     fast = params.flag("fast", fast)
+    dual = None
     if fast and cache is None and join == "restart" and restart_index is not None and method in ("auto", "greedy"):
         if not isinstance(mesh, HamiltonianMesh):
-            dual = dual_mesh(mesh)
-            if not is_forest(dual):
-                return _greedy_in_one_pass(mesh, dual, int(restart_index), verify, reorder_vertices)
-    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, improve=not fast)
+            one_pass, dual = _greedy_in_one_pass(mesh, int(restart_index), verify, reorder_vertices)
+            if one_pass is not None:
+                return one_pass
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, dual=dual, improve=not fast)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
     few_swaps = strip.n_swaps <= max(_ZIGZAG_TRIGGER * (strip.n_strips - 1), _ZIGZAG_SWAP_RATE * strip.n_triangles)
@@ -467,16 +470,28 @@ _ZIGZAG_ALWAYS = 5000
 _ZIGZAG_SWAP_RATE = 0.03
 
 
-def _greedy_in_one_pass(mesh: MeshLike, dual: DualMesh, R: int, verify: bool, reorder: bool) -> GLStrip:
+def _greedy_in_one_pass(mesh: MeshLike, R: int, verify: bool, reorder: bool) -> tuple[GLStrip | None, DualMesh]:
     """``encode(fast=True)`` with restarts: the greedy cover written as it is grown
-    (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`), the proof in two
-    halves on two threads.  The same buffer as the three-pass path (a test compares)."""
-    m = dual.n_triangles
-    g = greedy_strip_buffer(dual.cover_records(), _SWAP_WEIGHT, np.arange(m - 1, -1, -1), R)
+    (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`), its work arrays
+    faulted in on a second thread while this one pairs the edges, the proof in two halves
+    on two threads.  The same buffer as the three-pass path (a test compares).  A dual
+    forest keeps Lemma 5.1's cover (``None``: take the three-pass path with ``dual``).
+    """
+    m = len(mesh.triangles)
+    with ThreadPoolExecutor(1) as pool:
+        work = pool.submit(strip_work, m, records_dtype(m, len(mesh.points))) if m >= _WORK_BESIDE_PAIRING else None
+        dual = dual_mesh(mesh)
+        work = None if work is None else work.result()
+    if is_forest(dual):
+        return None, dual
+    rec = dual.cover_records()
+    if work is None or len(work.order) != dual.n_triangles or work.bucket.dtype != rec.dtype:
+        work = None  # rows repeating a vertex were dropped: sizes differ
+    g = greedy_strip_buffer(rec, _SWAP_WEIGHT, R, work)
     S = len(g.starts) - 1
     if 0 <= R <= g.max_index and np.count_nonzero(g.indices == R) != S - 1:
         raise InvalidOptionError(f"restart index {R} is a vertex index of the mesh")
-    strip = GLStrip(g.indices, R, m, S, g.n_swaps)
+    strip = GLStrip(g.indices, R, dual.n_triangles, S, g.n_swaps)
     rows = dual.triangles
     if reorder:
         strip, rows = _renumbered(strip, dual)
@@ -484,7 +499,11 @@ def _greedy_in_one_pass(mesh: MeshLike, dual: DualMesh, R: int, verify: bool, re
         half = S // 2
         split = (int(g.index_starts[half]), int(g.starts[half])) if half > 0 else None
         verify_gl_strip(rows, strip.indices, R, order=g.order, split=split)
-    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual)), dual
+
+
+#: Triangles from which ``encode(fast=True)`` faults its work arrays in on a second thread.
+_WORK_BESIDE_PAIRING = 50_000
 
 
 def _renumbered(strip: GLStrip, dual: DualMesh) -> tuple[GLStrip, np.ndarray]:

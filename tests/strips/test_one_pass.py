@@ -25,7 +25,7 @@ def test_one_pass_equals_cover_then_direction_then_writer(seed, n, lift):
     d = dual_mesh(delaunay_mesh(seed, n, lift))
     m = d.n_triangles
     seeds = np.arange(m - 1, -1, -1)
-    g = greedy_strip_buffer(d.cover_records().copy(), 1, seeds, RESTART_INDEX)
+    g = greedy_strip_buffer(d.cover_records().copy(), 1, RESTART_INDEX)
     order, starts = greedy_path_cover(d.cover_records().copy(), 1, seeds)
     order, _ = orient_paths(d.triangles, d.twin, order.astype(np.int64), starts)
     want = restart_strip(d.triangles, d.twin, order, starts, RESTART_INDEX)
@@ -46,7 +46,7 @@ def test_fast_encode_is_the_one_pass_buffer_and_round_trips(seed, n):
     assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
     d = dual_mesh(m)
     if not is_forest(d):
-        g = greedy_strip_buffer(d.cover_records().copy(), 1, np.arange(d.n_triangles - 1, -1, -1), RESTART_INDEX)
+        g = greedy_strip_buffer(d.cover_records().copy(), 1, RESTART_INDEX)
         assert np.array_equal(s.indices, g.indices) and s.n_strips == len(g.starts) - 1
     r = encode(m, fast=True, reorder_vertices=True)
     assert oriented_set(r.vertex_order[decode_gl_strip(r.indices, r.restart_index)]) == oriented_set(m.triangles)
