@@ -6,6 +6,8 @@
     python benchmarks/bench_strips.py --peers        # issue 16's closing table only (meshopt, vtk, cache, targets,
                                                      # first call in a fresh process: the "Must show" command)
     python benchmarks/bench_strips.py --peers --quick  # the same on meshes up to ~20k triangles
+    python benchmarks/bench_strips.py --speed --repeat 5  # issue 16's speed target alone (q30 10k, 100k, 1M:
+                                                     # wall and CPU vs meshopt stripify, then fresh processes)
 
 Then Thm 5.3 (Christofides) at ~1,000 and ~3,000 triangles, Lemma 5.1 on triangulated
 polygons, and real-world surfaces (issue 12): pyvista's bundled airplane and globe, its
@@ -587,6 +589,55 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> dict[str, Mesh]:
     return meshes
 
 
+def speed_rows(quick: bool, repeat: int) -> dict[str, Mesh]:
+    """Issue 16's speed target alone: ours (default and ``fast=True``, verified) against meshopt stripify.
+
+    The three are called interleaved, ``repeat`` rounds per mesh; each call is timed in wall
+    time and in process CPU time (all threads: ours runs the face census, its work arrays
+    and half of the proof on a second thread).  On a loaded machine the wall times of both
+    sides stretch with the load; the CPU ratio is the steadier figure.
+    """
+    mo = _meshopt()
+    if mo is None:
+        print("speed rows: meshoptimizer is not installed (pip install meshoptimizer)")
+        return {}
+    names = SPEED_MESHES[:1] if quick else SPEED_MESHES
+    areas = {"q30 square 10k": 1.6e-4, "q30 square 100k": 1.6e-5, "q30 square 1M": 1.6e-6}
+    meshes = {k: planar(areas[k]) for k in names}
+    print()
+    print("Issue 16 speed target (encode, self-check included, <= 2x meshopt stripify), interleaved calls:")
+    head = (f"{'mesh':<18}{'m':>10}{'ipt':>7}{'fast ipt':>9}{'mo ipt':>8} | {'mo ms':>7}{'ours ms':>9}{'fast ms':>9}"
+            f"{'ratio':>7}{'fast':>6} | {'mo cpu':>7}{'ours cpu':>9}{'fast cpu':>9}{'ratio':>7}{'fast':>6}")
+    print(head)
+    print("-" * len(head))
+    for name, mesh in meshes.items():
+        n = len(mesh.points)
+        calls = {
+            "mo": lambda: meshopt_strip(mo, mesh.triangles, n, False),
+            "ours": lambda: encode(mesh),
+            "fast": lambda: encode(mesh, fast=True),
+        }
+        out = {k: f() for k, f in calls.items()}  # warm
+        wall = {k: [] for k in calls}
+        cpu = {k: [] for k in calls}
+        for _ in range(repeat):
+            for k, f in calls.items():
+                t, c = time.perf_counter(), time.process_time()
+                f()
+                wall[k].append(time.perf_counter() - t)
+                cpu[k].append(time.process_time() - c)
+        w = {k: min(v) for k, v in wall.items()}
+        c = {k: min(v) for k, v in cpu.items()}
+        m = mesh.n_triangles
+        mo_ipt = len(out["mo"]) / m
+        print(f"{name:<18}{m:>10,}{out['ours'].indices_per_triangle:>7.3f}{out['fast'].indices_per_triangle:>9.3f}{mo_ipt:>8.3f} | "
+              f"{1e3 * w['mo']:>7.1f}{1e3 * w['ours']:>9.1f}{1e3 * w['fast']:>9.1f}{w['ours'] / w['mo']:>7.2f}{w['fast'] / w['mo']:>6.2f} | "
+              f"{1e3 * c['mo']:>7.1f}{1e3 * c['ours']:>9.1f}{1e3 * c['fast']:>9.1f}{c['ours'] / c['mo']:>7.2f}{c['fast'] / c['mo']:>6.2f}")
+    print("ms: best of --repeat wall times; cpu: best process CPU times (ms); ratio: ours / meshopt stripify,")
+    print("fast: encode(fast=True) / meshopt stripify (target <= 2 for the mode that meets it).")
+    return meshes
+
+
 #: Run in a fresh interpreter by :func:`first_call_rows`: import, then the first call of
 #: each encoder (ours pays numba's load of its on-disk cache here), then the best of 3 warm.
 _FIRST_CALL = r"""
@@ -665,7 +716,15 @@ def main() -> None:
     ap.add_argument("--real-world", action="store_true", help="only the real-world surfaces section")
     ap.add_argument("--peers", action="store_true", help="only issue 16's table (meshopt, vtkStripper, cache mode)")
     ap.add_argument("--cache", type=int, default=16, help="FIFO size of the cache mode in the peers table (0: off)")
+    ap.add_argument("--speed", action="store_true",
+                    help="only issue 16's speed target: q30 10k/100k/1M, ours vs meshopt stripify, wall and CPU, fresh processes")
     args = ap.parse_args()
+    if args.speed:
+        encode(torus(8, 6))  # warm-up (numba)
+        encode(torus(8, 6), fast=True)
+        meshes = speed_rows(args.quick, args.repeat)
+        first_call_rows(meshes)
+        return
     if args.peers:
         encode(torus(8, 6))  # warm-up (numba)
         meshes = peer_rows(args.quick, args.repeat, args.cache or None)
