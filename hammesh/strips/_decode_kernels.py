@@ -9,7 +9,7 @@ import numpy as np
 
 from hammesh.strips._numba import kernel
 
-__all__ = ["decode_generalized_strips", "check_claimed_draws"]
+__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part"]
 
 
 @kernel
@@ -58,7 +58,6 @@ def _same_rotation(a, b, c, x, y, z):
     return ((a == x) & (b == y) & (c == z)) | ((a == y) & (b == z) & (c == x)) | ((a == z) & (b == x) & (c == y))
 
 
-@kernel
 def check_claimed_draws(tri, indices, restart, use_restart, order):
     """Decode ``indices`` with OpenGL's strip rules and compare with a claimed draw order.
 
@@ -71,12 +70,21 @@ def check_claimed_draws(tri, indices, restart, use_restart, order):
     m = tri.shape[0]
     if order.shape[0] != m:
         return 4, min(order.shape[0], m)
-    seen = np.zeros(m, np.bool_)
-    for k in range(m):
-        t = order[k]
-        if t < 0 or t >= m or seen[t]:
-            return 4, k
-        seen[t] = True
+    return check_claimed_part(tri, indices, restart, use_restart, order, np.zeros(m, np.bool_))
+
+
+@kernel
+def check_claimed_part(tri, indices, restart, use_restart, order, seen):
+    """:func:`check_claimed_draws` on a part of a buffer that starts a strip (at a restart).
+
+    ``indices`` must draw exactly the rows ``order``, in that order; each is marked in
+    ``seen`` (shared by the parts, so a row repeated *within* the part is status 4).  The
+    parts of one buffer cut just after restart indices decode as the whole does (a
+    restart resets the strip), so when every part returns 0, the claims add up to ``m``
+    rows and every row is in ``seen``, the buffer draws each row once with its winding.
+    """
+    m = tri.shape[0]
+    n = order.shape[0]
     L = indices.shape[0]
     pos = 0  # position inside the current strip
     k = 0
@@ -88,20 +96,21 @@ def check_claimed_draws(tri, indices, restart, use_restart, order):
         if pos >= 2:
             a = indices[i - 2]
             b = indices[i - 1]
-            # selects instead of branches: a degenerate window (a swap, ~1 in 5) or the
-            # window's parity would be mispredicted; the row read for a degenerate
-            # window is ignored, the two early exits almost never taken
-            drawn = (a != b) & (b != v) & (a != v)
-            if drawn & (k >= m):
-                return 2, k
-            t = order[min(k, m - 1)]
-            odd = pos % 2 == 1  # window starts at an odd position: drawn (b, a, v)
-            x = b if odd else a
-            y = a if odd else b
-            if drawn & (_same_rotation(x, y, v, tri[t, 0], tri[t, 1], tri[t, 2]) == False):  # noqa: E712
-                return 1, k
-            k += np.int64(drawn)
+            if (a != b) & (b != v) & (a != v):
+                if k >= n:
+                    return 2, k
+                t = order[k]
+                if t < 0 or t >= m or seen[t]:
+                    return 4, k
+                seen[t] = True
+                # selects instead of branches: the window's parity would be mispredicted
+                odd = pos % 2 == 1  # window starts at an odd position: drawn (b, a, v)
+                x = b if odd else a
+                y = a if odd else b
+                if not _same_rotation(x, y, v, tri[t, 0], tri[t, 1], tri[t, 2]):
+                    return 1, k
+                k += 1
         pos += 1
-    if k != m:
+    if k != n:
         return 3, k
     return 0, -1

@@ -271,6 +271,18 @@ def mesh_records(tri, n_points):
 
 
 @kernel
+def count_pillows(rec):
+    """Rows whose three edges all lead to one other triangle (a two-triangle closed piece)."""
+    c = 0
+    for t in range(rec.shape[0]):
+        h = rec[t, REC_TWIN]
+        if h >= 0:
+            u = h // 3
+            c += np.int64((rec[t, REC_TWIN + 1] // 3 == u) & (rec[t, REC_TWIN + 2] // 3 == u))
+    return c
+
+
+@kernel
 def records_from_twin(tri, twin, rec):
     """Fill ``rec`` (``(m, REC_WIDTH)``, any integer dtype) from rows and their pairing."""
     for t in range(tri.shape[0]):

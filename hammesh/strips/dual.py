@@ -156,8 +156,7 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     if not paired:
         packed = _dual_kernels.mesh_records(tri, n)
     if packed is not None:  # every edge proper or boundary: only pillows can be double-sided
-        nb = packed[1].reshape(-1, 3) // 3
-        pillows = int(np.count_nonzero((nb[:, 0] == nb[:, 1]) & (nb[:, 1] == nb[:, 2]) & (packed[1][::3] >= 0)))
+        pillows = int(_dual_kernels.count_pillows(packed[0]))
         found = MeshDefects(repeated_vertex=int(n_rep), zero_area=int(n_zero), double_sided=pillows // 2)
         return DualMesh(pts, tri, packed[1], packed[0], found, rows)
     pairing = proper_pairing(tri, n)

@@ -24,6 +24,7 @@ Cost of a buffer: ``T + 2 S + swaps`` plus ``S - 1`` restarts or ``2 (S - 1)`` s
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 
 import numpy as np
@@ -40,6 +41,8 @@ from hammesh.strips._cover_kernels import (
     zigzag_path_cover,
 )
 from hammesh.strips._emit_kernels import restart_buffer
+from hammesh.strips._dual_kernels import records_dtype
+from hammesh.strips._greedy_strip_kernels import greedy_strip_buffer, strip_work
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
@@ -61,6 +64,7 @@ __all__ = [
     "cache_paths",
     "CACHE_STRIP_LENGTH",
     "orient_path_turns",
+    "PROOF_IN_TWO_PARTS",
 ]
 
 #: How the dual paths are found: ``"auto"`` is ``"order"`` for a HamiltonianMesh and
@@ -416,7 +420,13 @@ def encode(
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
     fast = params.flag("fast", fast)
-    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, improve=not fast)
+    dual = None
+    if fast and cache is None and join == "restart" and restart_index is not None and method in ("auto", "greedy"):
+        if not isinstance(mesh, HamiltonianMesh):
+            one_pass, dual = _greedy_in_one_pass(mesh, int(restart_index), verify, reorder_vertices)
+            if one_pass is not None:
+                return one_pass
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, dual=dual, improve=not fast)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
     few_swaps = strip.n_swaps <= max(_ZIGZAG_TRIGGER * (strip.n_strips - 1), _ZIGZAG_SWAP_RATE * strip.n_triangles)
@@ -432,18 +442,15 @@ def encode(
         # swap-free chains both ways, keep the shortest buffer
         rules = (LONGEST_CHAIN, SHORTEST_CHAIN)
     for rule in rules:
-        alt, alt_order = _buffer(*_oriented_local(mesh, "zigzag", None, dual, rule), join, restart_index)
+        alt_paths = _oriented_local(mesh, "zigzag", None, dual, rule)
+        alt, alt_order = _buffer(*alt_paths, join, restart_index)
         if len(alt.indices) < len(strip.indices):
-            strip, order = alt, alt_order
+            strip, order, starts = alt, alt_order, alt_paths[4]
     rows = dual.triangles
     if reorder_vertices:
-        indices, vertex_order = _first_use_numbering(strip.indices, strip.restart_index, len(dual.points))
-        new_id = np.empty_like(vertex_order)
-        new_id[vertex_order] = np.arange(len(vertex_order))
-        rows = new_id[dual.triangles]
-        strip = replace(strip, indices=indices, vertex_order=vertex_order)
+        strip, rows = _renumbered(strip, dual)
     if verify:
-        verify_gl_strip(rows, strip.indices, strip.restart_index, order=order)
+        verify_gl_strip(rows, strip.indices, strip.restart_index, order=order, split=_middle_restart(strip, order, starts))
     return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
 
 
@@ -463,6 +470,72 @@ _ZIGZAG_ALWAYS = 5000
 #: the time: they would give 1.2649 instead of 1.2733 at 100k for ~1.7x the time, see
 #: ``--method zigzag`` and the CLI's ``auto``).
 _ZIGZAG_SWAP_RATE = 0.03
+
+
+def _greedy_in_one_pass(mesh: MeshLike, R: int, verify: bool, reorder: bool) -> tuple[GLStrip | None, DualMesh]:
+    """``encode(fast=True)`` with restarts: the greedy cover written as it is grown
+    (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`), its work arrays
+    faulted in on a second thread while this one pairs the edges, the proof in two halves
+    on two threads.  The same buffer as the three-pass path (a test compares).  A dual
+    forest keeps Lemma 5.1's cover (``None``: take the three-pass path with ``dual``).
+    """
+    m = len(mesh.triangles)
+    with ThreadPoolExecutor(1) as pool:
+        work = pool.submit(strip_work, m, records_dtype(m, len(mesh.points))) if m >= _WORK_BESIDE_PAIRING else None
+        dual = dual_mesh(mesh)
+        work = None if work is None else work.result()
+    if is_forest(dual):
+        return None, dual
+    rec = dual.cover_records()
+    if work is None or len(work.order) != dual.n_triangles or work.bucket.dtype != rec.dtype:
+        work = None  # rows repeating a vertex were dropped: sizes differ
+    g = greedy_strip_buffer(rec, _SWAP_WEIGHT, R, work)
+    S = len(g.starts) - 1
+    if 0 <= R <= g.max_index and np.count_nonzero(g.indices == R) != S - 1:
+        raise InvalidOptionError(f"restart index {R} is a vertex index of the mesh")
+    strip = GLStrip(g.indices, R, dual.n_triangles, S, g.n_swaps)
+    rows = dual.triangles
+    if reorder:
+        strip, rows = _renumbered(strip, dual)
+    if verify:
+        half = S // 2
+        split = (int(g.index_starts[half]), int(g.starts[half])) if half > 0 and m >= PROOF_IN_TWO_PARTS else None
+        verify_gl_strip(rows, strip.indices, R, order=g.order, split=split)
+    return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual)), dual
+
+
+#: Triangles from which the round-trip proof runs in two halves on two threads
+#: (:func:`~hammesh.strips.gl.verify_gl_strip`'s ``split``); below, a thread costs more
+#: than half the proof (~0.4 ms at 10k triangles).
+PROOF_IN_TWO_PARTS = 20_000
+
+
+def _middle_restart(strip: GLStrip, order: np.ndarray, starts: np.ndarray) -> tuple[int, int] | None:
+    """``(p, q)``: the buffer cut just after its middle restart index, and the rows drawn before it.
+
+    ``None`` (one piece) for small or stitched buffers.  Every occurrence of the restart
+    index is a restart for OpenGL, so the proof needs nothing else to decode the parts.
+    """
+    S = strip.n_strips
+    if strip.restart_index is None or strip.n_triangles < PROOF_IN_TWO_PARTS or S < 2 or len(starts) != S + 1:
+        return None
+    cuts = np.flatnonzero(strip.indices == strip.restart_index)
+    if len(cuts) != S - 1:
+        return None
+    half = S // 2
+    return int(cuts[half - 1]) + 1, int(starts[half])
+
+
+#: Triangles from which ``encode(fast=True)`` faults its work arrays in on a second thread.
+_WORK_BESIDE_PAIRING = 50_000
+
+
+def _renumbered(strip: GLStrip, dual: DualMesh) -> tuple[GLStrip, np.ndarray]:
+    """``strip`` on vertices renumbered in order of first use, and the rows renumbered alike."""
+    indices, vertex_order = _first_use_numbering(strip.indices, strip.restart_index, len(dual.points))
+    new_id = np.empty_like(vertex_order)
+    new_id[vertex_order] = np.arange(len(vertex_order))
+    return replace(strip, indices=indices, vertex_order=vertex_order), new_id[dual.triangles]
 
 
 def _buffer(dual, tri, twin, local, starts, ids, join, restart_index) -> tuple[GLStrip, np.ndarray]:

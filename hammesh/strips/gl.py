@@ -254,6 +254,33 @@ def decode_gl_strip(indices: np.ndarray, restart_index: int | None = None) -> np
     return tri[keep]
 
 
+def _can_split(split, idx: np.ndarray, r: int, use_r: bool, n: int) -> bool:
+    if split is None or not use_r:
+        return False
+    p, q = int(split[0]), int(split[1])
+    return 0 < p < len(idx) and 0 <= q <= n and int(idx[p - 1]) == r
+
+
+def _check_in_two_parts(tri: np.ndarray, idx: np.ndarray, r: int, claim: np.ndarray, split) -> bool:
+    """The claimed-order proof of both halves of a buffer cut after a restart, one on a second thread."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from hammesh.strips._decode_kernels import check_claimed_part
+
+    m = len(tri)
+    if len(claim) != m:
+        return False
+    p, q = int(split[0]), int(split[1])
+    seen = np.zeros(m, np.bool_)
+    with ThreadPoolExecutor(1) as pool:
+        second = pool.submit(check_claimed_part, tri, idx[p:], r, True, claim[q:], seen)
+        first = check_claimed_part(tri, idx[: p - 1], r, True, claim[:q], seen)
+        second = second.result()
+    # each part drew exactly its claim (q and m - q rows, none twice within a part): a row
+    # named in both parts would leave another unseen
+    return first[0] == 0 and second[0] == 0 and bool(seen.all())
+
+
 def verify_gl_strip(
     triangles: np.ndarray,
     indices: np.ndarray,
@@ -261,6 +288,7 @@ def verify_gl_strip(
     *,
     allow_redraw: bool = False,
     order: np.ndarray | None = None,
+    split: tuple[int, int] | None = None,
 ) -> None:
     """Prove that a buffer draws exactly ``triangles`` with their windings.
 
@@ -278,6 +306,13 @@ def verify_gl_strip(
         with OpenGL's rules, the ``k``-th triangle drawn is row ``order[k]`` with its
         winding, and ``order`` names every row once.  If that claim fails, the full
         O(m log m) comparison below decides (and names the problem).
+    split : (p, q), optional
+        With ``order``: check ``indices[:p - 1]`` against ``order[:q]`` and
+        ``indices[p:]`` against ``order[q:]`` on two threads
+        (:func:`~hammesh.strips._decode_kernels.check_claimed_part`).  Sound for any
+        ``(p, q)``: the cut is used only where ``indices[p - 1]`` is the restart index
+        (there OpenGL starts a new strip, so each part decodes as the whole does);
+        anywhere else the buffer is checked in one piece.
 
     Raises
     ------
@@ -288,11 +323,15 @@ def verify_gl_strip(
         tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
         idx = np.ascontiguousarray(indices, dtype=np.int64).reshape(-1)
         use_r = restart_index is not None
-        status, _ = check_claimed_draws(
-            tri, idx, int(restart_index) if use_r else -1, use_r, np.ascontiguousarray(order, dtype=np.int64)
-        )
-        if status == 0:
-            return
+        r = int(restart_index) if use_r else -1
+        claim = np.ascontiguousarray(order, dtype=np.int64)
+        if _can_split(split, idx, r, use_r, len(claim)):
+            if _check_in_two_parts(tri, idx, r, claim, split):
+                return
+        else:
+            status, _ = check_claimed_draws(tri, idx, r, use_r, claim)
+            if status == 0:
+                return
     want = oriented_key(triangles)
     got = oriented_key(decode_gl_strip(indices, restart_index))
     if allow_redraw:

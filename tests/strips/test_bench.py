@@ -22,3 +22,14 @@ def test_bench_strips_quick_runs():
         assert needle in proc.stdout
     if importlib.util.find_spec("meshoptimizer") is not None:  # the peer of the cache target
         assert "cache target on" in proc.stdout
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(importlib.util.find_spec("meshoptimizer") is None, reason="the speed target's peer is meshoptimizer")
+def test_bench_strips_speed_quick_runs():
+    proc = subprocess.run(
+        [sys.executable, str(BENCH), "--speed", "--quick", "--repeat", "1"], capture_output=True, text=True, timeout=900
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "q30 square 10k" in proc.stdout and "interleaved calls" in proc.stdout
+    assert "fast 1st" in proc.stdout and "failed" not in proc.stdout
