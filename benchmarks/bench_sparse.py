@@ -34,6 +34,13 @@ Surface rows: pyvista's icosphere (ours without pyvista), a torus and a noisy sp
     python benchmarks/bench_sparse.py [--repeat 3] [--target 16000] [--quick] [--big]
 
 One command for every figure the issue names: ``python benchmarks/bench_sparse.py --big``.
+
+Where the first call's time goes: ``python benchmarks/bench_sparse.py --breakdown
+[--max-area 1e-6]`` (its own fresh process): raw Triangle's first call, then the
+CLI's pipeline (``quality_mesh``, isolated, which loads the kernels while Triangle
+runs, then ``hamiltonian(mesh, mode="sparse")``), with the report's
+``step_seconds`` / ``step_cpu_seconds`` per step, wall and process CPU, each also as
+a fraction of raw Triangle's time in the same process.
 """
 
 from __future__ import annotations
@@ -181,6 +188,53 @@ def fem_row(area: float) -> float | None:
     return float(e_h[0] / e_t[0])
 
 
+def breakdown(area: float) -> None:
+    """The first call's time per step (this process must be fresh: run as its own command)."""
+    import resource
+
+    import triangle
+
+    import hammesh
+    from hammesh.meshing import MeshOptions, triangle_switches
+
+    def cpu() -> float:
+        r = resource.getrusage(resource.RUSAGE_SELF)
+        return r.ru_utime + r.ru_stime
+
+    dom = _square_hole()
+    data = {
+        "vertices": np.array(dom.vertices, dtype=np.float64),
+        "segments": np.array(dom.segments, dtype=np.int32),
+        "segment_markers": np.array(dom.segment_markers, dtype=np.int32)[:, None],
+        "holes": np.array(dom.holes, dtype=np.float64),
+    }
+    t, c = time.perf_counter(), cpu()
+    raw = triangle.triangulate(data, triangle_switches(dom, MeshOptions(min_angle=30, max_area=area)))
+    t_tri, c_tri = time.perf_counter() - t, cpu() - c
+    del raw
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)  # isolated: kernels load meanwhile
+    for th in __import__("threading").enumerate():
+        if th.name in ("hammesh-reap", "hammesh-meanwhile"):
+            th.join()
+    t, c = time.perf_counter(), cpu()
+    h = hammesh.hamiltonian(m, mode="sparse")
+    t_all, c_all = time.perf_counter() - t, cpu() - c
+    r = h.report
+    wall, pcpu = r["step_seconds"], r["step_cpu_seconds"]
+    sec = r["seconds"]
+    rows = [("validation + certificate input (before the steps)", sec["hamiltonian"] - sum(wall.values()), None)]
+    rows += [(k, wall[k], pcpu[k]) for k in wall]
+    rows += [("certificate", sec["verify"], None)]
+    print(f"first call, {m.n_triangles:,} -> {h.n_triangles:,} triangles; raw Triangle {t_tri:.3f} s "
+          f"({c_tri:.3f} s CPU), sparse hamiltonian {t_all:.3f} s ({c_all:.3f} s CPU) = "
+          f"{t_all / t_tri:.3f} x Triangle")
+    print(f"{'step':<52}{'wall s':>8}{'/Tri':>7}{'CPU s':>8}{'/Tri':>7}")
+    for name, w, c in rows:
+        cs = f"{c:>8.3f}{c / c_tri:>7.3f}" if c is not None else f"{'':>8}{'':>7}"
+        print(f"{name:<52}{w:>8.3f}{w / t_tri:>7.3f}{cs}")
+    print(f"BREAKDOWN_RATIO {t_all / t_tri:.4f}")
+
+
 def _square_hole():
     import hammesh
 
@@ -227,12 +281,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--target", type=int, default=16000, help="triangles per quality-table mesh")
     ap.add_argument("--quick", action="store_true", help="small sizes (smoke test)")
     ap.add_argument("--big", action="store_true", help="add the 1.5 M-triangle timing, first call in a fresh process")
+    ap.add_argument("--breakdown", action="store_true", help="first call's time per step (run as its own command)")
+    ap.add_argument("--max-area", type=float, default=1e-6, help="--breakdown's mesh (1e-6: about 1.5 M triangles)")
     ap.add_argument("--fresh", type=float, help=argparse.SUPPRESS)  # child: one first-call row at this area
     args = ap.parse_args(argv)
 
     import hammesh
     from hammesh.surface import icosphere, surface_hamiltonian
 
+    if args.breakdown:
+        breakdown(args.max_area)
+        return 0
     if args.fresh:
         # a fresh process: Triangle's first call, then sparse mode's (kernels loaded here)
         ratio = time_row(args.fresh, 1, "1.5M, first call")

@@ -540,28 +540,17 @@ def output_twins(out, kind, parent, twin_in, n_points):
     return twin, -1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def walk_links(link, out_twin):
-    """Follow the links into cycles.
+    """Follow the links into cycles, checking each row as the walk reaches it.
 
     Returns ``(order, lengths, bad)``: rows in cycle order, the cycle lengths, and
-    ``bad`` = -1 or the first row whose links are not two, or cross an edge whose
-    other side does not link back.
+    ``bad`` = -1 or the first row found whose links are not two, or that crosses an
+    edge whose other side does not link back. Every row is reached exactly once
+    (the outer loop starts a walk at each row not seen yet), so every row is checked,
+    in the same pass that orders them.
     """
     k_out = link.shape[0]
-    for x in range(k_out):
-        c = 0
-        for j in range(3):
-            if (link[x] >> j) & 1:
-                c += 1
-                g = out_twin[3 * x + j]
-                if g < 0:
-                    return np.empty(0, np.int64), np.empty(0, np.int64), x
-                y = g // 3
-                if not ((link[y] >> (g - 3 * y)) & 1):
-                    return np.empty(0, np.int64), np.empty(0, np.int64), x
-        if c != 2:
-            return np.empty(0, np.int64), np.empty(0, np.int64), x
     seen = np.zeros(k_out, np.bool_)
     order = np.empty(k_out, np.int64)
     lengths = np.empty(k_out, np.int64)
@@ -573,91 +562,93 @@ def walk_links(link, out_twin):
         start = pos
         x = s
         came = -1
-        for j in range(3):
-            if (link[s] >> j) & 1:
-                came = j
-                break
         while True:
             seen[x] = True
             order[pos] = x
             pos += 1
+            bits = link[x]
             nxt = -1
+            n_links = 0
             for j in range(3):
-                if j != came and (link[x] >> j) & 1:
+                if not (bits >> j) & 1:
+                    continue
+                n_links += 1
+                g = out_twin[3 * x + j]
+                if g < 0:
+                    return order, lengths, x
+                y = g // 3
+                if not ((link[y] >> (g - 3 * y)) & 1):
+                    return order, lengths, x
+                if came < 0 and x == s and j != came:
+                    came = j  # the walk leaves s by its other link and returns by this one
+                elif j != came:
                     nxt = j
-                    break
+            if n_links != 2 or nxt < 0:
+                return order, lengths, x
             g = out_twin[3 * x + nxt]
             y = g // 3
             came = g - 3 * y
-            x = y
-            if x == s:
+            if y == s:
                 break
+            if seen[y]:
+                return order, lengths, y
+            x = y
         lengths[n_c] = pos - start
         n_c += 1
     return order, lengths[:n_c], -1
 
 
 @njit(cache=True, nogil=True)
-def rows_in_order(rows, out, parent, partner, kind, amin):
-    """The output rows taken in the order ``rows``, in one pass.
+def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partner, kind, amin):
+    """The output rows, walked into ``order`` (:func:`walk_links`), taken across in one gather.
 
-    Returns ``(out, parent, partner, kind, pm)`` reordered, ``pm[i]`` the smallest
-    angle of row i's parents (``amin`` of ``parent``, and of ``partner`` if any): what
-    four gathers and a masked minimum did in numpy.
+    Runs go in the order ``run_order``; every row's corners, parents, kind, its
+    parents' smallest angle ``pm`` (``amin`` of ``parent``, and of ``partner`` if any)
+    and its pairing claim (``claim[3 i + j]``: the twin of edge j of final row i, -1
+    on the boundary, renumbered from ``out_twin``) are written in the same pass.
+    Returns ``(out, parent, partner, kind, pm, lengths, claim)``.
     """
-    k = rows.shape[0]
+    c = lengths.shape[0]
+    k = order.shape[0]
+    rows = order
+    new_len = lengths
+    if c > 1:
+        starts = np.empty(c, np.int64)
+        s = 0
+        for r in range(c):
+            starts[r] = s
+            s += lengths[r]
+        rows = np.empty(k, np.int64)
+        new_len = np.empty(c, np.int64)
+        p = 0
+        for q in range(c):
+            r = run_order[q]
+            new_len[q] = lengths[r]
+            for i in range(starts[r], starts[r] + lengths[r]):
+                rows[p] = order[i]
+                p += 1
+    pos = np.empty(k, np.int64)
+    for i in range(k):
+        pos[rows[i]] = i
     out2 = np.empty((k, 3), np.int64)
     parent2 = np.empty(k, np.int64)
     partner2 = np.empty(k, np.int64)
     kind2 = np.empty(k, np.int8)
     pm = np.empty(k, np.float64)
-    for i in range(k):
-        r = rows[i]
-        out2[i, 0] = out[r, 0]
-        out2[i, 1] = out[r, 1]
-        out2[i, 2] = out[r, 2]
-        p = parent[r]
-        q = partner[r]
-        parent2[i] = p
-        partner2[i] = q
-        kind2[i] = kind[r]
-        a = amin[p]
-        if q >= 0 and amin[q] < a:
-            a = amin[q]
-        pm[i] = a
-    return out2, parent2, partner2, kind2, pm
-
-
-@njit(cache=True)
-def reorder_runs(order, lengths, run_order, out_twin):
-    """Runs in the order ``run_order``; the half-edge twins renumbered to match.
-
-    Returns ``(rows, lengths, claim)``: output rows in final order, run lengths, and
-    ``claim[3 i + j]`` the twin of edge j of final row i (-1 on the boundary).
-    """
-    c = lengths.shape[0]
-    k = order.shape[0]
-    starts = np.empty(c, np.int64)
-    s = 0
-    for r in range(c):
-        starts[r] = s
-        s += lengths[r]
-    rows = np.empty(k, np.int64)
-    new_len = np.empty(c, np.int64)
-    p = 0
-    for q in range(c):
-        r = run_order[q]
-        new_len[q] = lengths[r]
-        for i in range(starts[r], starts[r] + lengths[r]):
-            rows[p] = order[i]
-            p += 1
-    pos = np.empty(k, np.int64)
-    for i in range(k):
-        pos[rows[i]] = i
     claim = np.empty(3 * k, np.int64)
     for i in range(k):
         x = rows[i]
         for j in range(3):
+            out2[i, j] = out[x, j]
             g = out_twin[3 * x + j]
             claim[3 * i + j] = -1 if g < 0 else 3 * pos[g // 3] + g % 3
-    return rows, new_len, claim
+        p = parent[x]
+        q = partner[x]
+        parent2[i] = p
+        partner2[i] = q
+        kind2[i] = kind[x]
+        a = amin[p]
+        if q >= 0 and amin[q] < a:
+            a = amin[q]
+        pm[i] = a
+    return out2, parent2, partner2, kind2, pm, new_len, claim

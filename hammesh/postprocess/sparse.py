@@ -50,6 +50,7 @@ certificate as its pairing claim.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from functools import partial
 
@@ -105,6 +106,24 @@ class SparseResult:
     mid_a: np.ndarray  # (q,) int64 edges split at midpoints
     mid_b: np.ndarray
     counts: dict
+
+
+class _Steps:
+    """Wall and process CPU seconds per step of the construction (the report's
+    ``step_seconds`` / ``step_cpu_seconds``): where a call's time goes, without a
+    profiler. Process CPU counts every thread (the threaded passes' helpers too)."""
+
+    def __init__(self) -> None:
+        self.wall: dict[str, float] = {}
+        self.cpu: dict[str, float] = {}
+        self._t, self._c = time.perf_counter(), time.process_time()
+
+    def done(self, step: str) -> None:
+        """The time since the last mark belongs to ``step`` (added up if it recurs)."""
+        t, c = time.perf_counter(), time.process_time()
+        self.wall[step] = self.wall.get(step, 0.0) + t - self._t
+        self.cpu[step] = self.cpu.get(step, 0.0) + c - self._c
+        self._t, self._c = t, c
 
 
 def _incenters(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
@@ -288,7 +307,9 @@ def sparse_cycles(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     con = np.ascontiguousarray(is_con, dtype=np.bool_)
     n, m = len(pts), len(tri)
+    steps = _Steps()
     amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri)
+    steps.done("input_angles")
     hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
@@ -317,9 +338,11 @@ def sparse_cycles(
             ok = inner[g_slack >= 0.0]
             good[ok] = True
             good[tw[ok]] = True
+        steps.done("judge_edges")
         cover = cycle_cover(tri, tw, good=good)
     else:
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
+    steps.done("cover")
     n_unc0 = cover.n_uncovered
     pts0, m0 = pts, m
     orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
@@ -328,6 +351,7 @@ def sparse_cycles(
             pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
         )
         n, m = len(pts), len(tri)
+    steps.done("fans")
     cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
     ckind = np.zeros(len(cand), np.int8)
     slack = np.empty(len(cand))
@@ -353,6 +377,7 @@ def sparse_cycles(
     # judge every candidate unplaced; place a split's point only where Kruskal can
     # still use the join after all joins meeting the rule unplaced (``open_candidates``)
     score(every, 0)
+    steps.done("score_joins")
     if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole)
@@ -363,6 +388,7 @@ def sparse_cycles(
         score(np.sort(redo), int(place_iters))
     whole = (newmin >= keep * min_angle) & (newmax <= hi)
     order = _join_order(ckind, slack, newmin, pmin, whole)
+    steps.done("place_splits")
     no_absorb = np.zeros(m, np.bool_)
     for attempt in range(4):
         if attempt == 3:
@@ -375,6 +401,7 @@ def sparse_cycles(
         no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
     if bad.any():
         raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+    steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
     out, link, parent, partner, kind, mid_a, mid_b, mid_t = _k.emit(
@@ -391,17 +418,19 @@ def sparse_cycles(
     order_rows, lengths, bad = _k.walk_links(link, out_twin)
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
-    # runs in the order of their lowest input triangle; twins renumbered as the claim
+    # runs in the order of their lowest input triangle; rows, their parents' smallest
+    # angle (pm) and the twins renumbered as the claim, in one gather
     if len(lengths) > 1:
         key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
         run_order = np.argsort(key, kind="stable")
     else:
         run_order = np.zeros(len(lengths), np.int64)
-    order_rows, lengths, claim = _k.reorder_runs(order_rows, lengths, run_order, out_twin)
-    # rows in cycle order, with each row's parents' smallest angle (pm)
-    out, parent, partner, kind, pm = _k.rows_in_order(order_rows, out, parent, partner, kind, amin_p)
+    out, parent, partner, kind, pm, lengths, claim = _k.rows_in_cycle_order(
+        order_rows, lengths, run_order, out_twin, out, parent, partner, kind, amin_p
+    )
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
+    steps.done("output_rows")
     n_improve = n_moved = 0
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
@@ -409,6 +438,7 @@ def sparse_cycles(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
             n0_input, keep,
         )
+    steps.done("improve")
     # the kept rows' worst radius ratio is the input's if its worst triangle is kept
     worst_kept = False
     if ratio_row >= 0:
@@ -442,6 +472,9 @@ def sparse_cycles(
         "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),
         **quality,
     }
+    steps.done("report")
+    counts_d["step_seconds"] = steps.wall
+    counts_d["step_cpu_seconds"] = steps.cpu
     return SparseResult(
         points=all_pts,
         triangles=out,

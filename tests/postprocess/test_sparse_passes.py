@@ -277,3 +277,74 @@ def test_output_twins_name_an_edge_used_twice() -> None:
     out = np.array([[0, 1, 2], [1, 0, 3], [1, 0, 4]])  # three rows on edge 0-1
     tw, bad = output_twins(out, np.array([0, 0, 0], np.int8), np.array([0, 1, 2]), np.full(9, -1), 5)
     assert bad >= 0
+
+
+def _shuffled_cycle_rows(h: hammesh.HamiltonianMesh, seed: int):
+    """``h``'s rows shuffled, with the link bits of each row (the edges its cycle crosses)."""
+    from hammesh.halfedge import half_edge_twins
+
+    tri = np.asarray(h.triangles, np.int64)
+    k = len(tri)
+    tw, _ = half_edge_twins(tri, h.n_points)
+    ends = np.cumsum(h.components)
+    nxt = np.arange(1, k + 1)
+    nxt[ends - 1] = ends - h.components  # each run closes on itself
+    link = np.zeros(k, np.uint8)
+    for r in range(k):  # (small meshes: a plain loop says what the kernel must find)
+        for j in range(3):
+            g = tw[3 * r + j]
+            if g >= 0 and (g // 3 == nxt[r] or nxt[g // 3] == r):
+                link[r] |= 1 << j
+    perm = np.random.default_rng(seed).permutation(k)
+    inv = np.argsort(perm)
+    shuffled = tri[perm]
+    return shuffled, link[perm], half_edge_twins(shuffled, h.n_points)[0], inv
+
+
+@pytest.mark.parametrize("name", ["A", "loops"])
+def test_walk_links_orders_every_cycle_and_the_gather_claims_its_twins(name: str) -> None:
+    """The one-pass walk finds each run again from shuffled rows; the gather's claim is the output's twins."""
+    from hammesh.halfedge import half_edge_twins
+    from hammesh.postprocess._sparse_kernels import rows_in_cycle_order, walk_links
+
+    dom = plate_with_loops(3) if name == "loops" else bundled_domain(name)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.003 * np.ptp(dom.vertices[:, 0]) ** 2)
+    h = hammesh.hamiltonian(m)
+    rows, link, tw, inv = _shuffled_cycle_rows(h, 7)
+    order, lengths, bad = walk_links(link, tw)
+    assert bad == -1
+    assert sorted(lengths) == sorted(h.components)
+    assert np.array_equal(np.sort(order), np.arange(len(rows)))
+    start = 0
+    for n in lengths:  # consecutive rows of a run share an edge, and the run closes
+        run = rows[order[start:start + n]]
+        for x, y in zip(run, np.roll(run, -1, axis=0)):
+            assert len(set(x) & set(y)) == 2
+        start += n
+    amin = np.linspace(0.1, 0.5, len(rows))
+    parent = np.arange(len(rows))
+    partner = np.where(parent % 5 == 0, (parent + 1) % len(rows), -1)
+    out, par, prt, kind, pm, new_len, claim = rows_in_cycle_order(
+        order, lengths, np.arange(len(lengths))[::-1].copy(), tw, rows, parent, partner, np.zeros(len(rows), np.int8),
+        amin,
+    )
+    np.testing.assert_array_equal(claim, half_edge_twins(out, h.n_points)[0])
+    np.testing.assert_array_equal(new_len, lengths[::-1])
+    np.testing.assert_array_equal(out, rows[par])
+    want = np.where(prt >= 0, np.minimum(amin[par], amin[np.maximum(prt, 0)]), amin[par])
+    np.testing.assert_array_equal(pm, want)
+    # a row with one link, and a link the other side does not return: named
+    for r in (0, len(rows) // 2):
+        broken = link.copy()
+        broken[r] &= broken[r] - 1  # drop its lowest link bit
+        assert walk_links(broken, tw)[2] >= 0
+
+
+def test_step_seconds_cover_the_construction_within_its_time() -> None:
+    """The report's per-step times (bench_sparse --breakdown) are each >= 0 and add up to at most the call."""
+    m = hammesh.quality_mesh(bundled_domain("face"), min_angle=30, max_area=None)
+    r = hammesh.hamiltonian(m).report
+    wall, cpu = r["step_seconds"], r["step_cpu_seconds"]
+    assert set(wall) == set(cpu) >= {"input_angles", "judge_edges", "cover", "plan_joins", "output_rows", "improve"}
+    assert all(v >= 0 for v in [*wall.values(), *cpu.values()])
+    assert sum(wall.values()) <= r["seconds"]["hamiltonian"]
