@@ -181,7 +181,10 @@ def test_large_mesh_renders_quickly(tmp_path, make_strip):
     import time
 
     mesh = make_strip(110_000)  # 220k triangles, above LARGE_MESH
-    start = time.perf_counter()
+    # CPU time of this process, not wall time: the rendering is single-threaded, and a
+    # loaded machine (CI, or tests run beside other work) stretched the wall time past
+    # the limit without the renderer getting any slower
+    start = time.process_time()
     hplot.plot_cycle(mesh, tmp_path / "large.png", dpi=100)
-    assert time.perf_counter() - start < 30
+    assert time.process_time() - start < 30
     assert _image(tmp_path / "large.png").std() > 0
