@@ -5,7 +5,8 @@ Meshes the unit square with a centred square hole (side 0.2) at ``max_area`` (de
 ``triangle.triangulate`` (same input, same switches) measured in the same run:
 
 * ``hammesh.quality_mesh`` with its default isolation (Triangle in a child process,
-  the arrays handed back through shared memory);
+  the arrays handed back through shared memory; meanwhile the parent loads the
+  kernels and faults in the pages ``hamiltonian`` will take, ``hammesh.pages.reserve``);
 * ``hammesh.hamiltonian`` (validation, Thm 2.4 construction and the full certificate).
 
 Two ways, both printed:
@@ -115,6 +116,9 @@ def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "
             if th.name in ("hammesh-reap", "hammesh-meanwhile"):
                 th.join()
         c_mesh += _cpu(resource.RUSAGE_CHILDREN) - cc
+        from hammesh import pages
+
+        reserve = pages.reserved()  # faulted in by quality_mesh while Triangle ran
         triangle.triangulate = real
         with open(inside) as f:
             t_inside = float(f.read())
@@ -126,7 +130,7 @@ def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "
                      segments=mesh.segments, segment_markers=mesh.segment_markers)
         return {"quality_mesh": t_mesh, "hamiltonian": t_ham, "triangle_inside": t_inside,
                 "quality_mesh_cpu": c_mesh, "hamiltonian_cpu": c_ham, "hamiltonian_sys": k_ham,
-                "triangles": mesh.n_triangles,
+                "triangles": mesh.n_triangles, "reserve_mib": reserve / 2**20,
                 "verified": bool(h.report["verified"])}
     if what == "file":  # hamiltonian on a mesh read from a file: kernels loaded cold
         with np.load(path) as f:
@@ -160,7 +164,8 @@ def first_calls(args: argparse.Namespace) -> None:
             assert pipe["verified"] and cold["verified"] and pipe["triangles"] == tri["triangles"]
             rows.append((tri["triangle"], pipe["quality_mesh"], pipe["hamiltonian"], cold["hamiltonian_cold"],
                          pipe["triangle_inside"]))
-            cpus.append((tri["triangle_cpu"], pipe["quality_mesh_cpu"], pipe["hamiltonian_cpu"], pipe["hamiltonian_sys"]))
+            cpus.append((tri["triangle_cpu"], pipe["quality_mesh_cpu"], pipe["hamiltonian_cpu"], pipe["hamiltonian_sys"],
+                         pipe["reserve_mib"]))
     hp = os.environ.get("NUMPY_MADVISE_HUGEPAGE", "numpy's default")
     print(f"first call in a fresh process, mode={args.mode}, NUMPY_MADVISE_HUGEPAGE={hp}, {args.fresh} runs")
     print("(each a new interpreter; seconds, and ratios to raw Triangle's first call")
@@ -180,9 +185,9 @@ def first_calls(args: argparse.Namespace) -> None:
     summary("hamiltonian after quality_mesh / Triangle inside quality_mesh", 2, 4, "")
     summary("hamiltonian on a mesh read from a file (kernels cold) / raw Triangle", 3, 0, "")
     print("first-call CPU seconds (all threads, and the meshing child): triangle / quality_mesh / hamiltonian"
-          " (of it system time)")
-    for i, (t, q, h, k) in enumerate(cpus):
-        print(f"  {i:>3}  {t:8.3f}  {q:8.3f} ({q / t:.3f})  {h:8.3f} ({h / t:.3f}; system {k:.3f})")
+          " (of it system time); the page reserve quality_mesh faulted in while Triangle ran (hammesh.pages)")
+    for i, (t, q, h, k, r) in enumerate(cpus):
+        print(f"  {i:>3}  {t:8.3f}  {q:8.3f} ({q / t:.3f})  {h:8.3f} ({h / t:.3f}; system {k:.3f})  reserve {r:.0f} MiB")
 
 
 def best_of(args: argparse.Namespace) -> None:

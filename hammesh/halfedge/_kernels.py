@@ -128,7 +128,9 @@ def _area_sin2(points, p0, p1, p2):
 
     The smallest angle lies opposite the shortest side and is at most 60 degrees, so
     its sine squared ``cross^2 / (|e|^2 |f|^2)`` over the two other sides is well
-    conditioned.
+    conditioned; their product is the largest of the three products of squared
+    sides (taken with ``max``: a branch on which side is shortest is one the
+    processor cannot predict).
     """
     ax = points[p1, 0] - points[p0, 0]
     ay = points[p1, 1] - points[p0, 1]
@@ -140,11 +142,7 @@ def _area_sin2(points, p0, p1, p2):
     la = ax * ax + ay * ay
     lb = bx * bx + by * by
     lc = cx * cx + cy * cy
-    if la <= lb and la <= lc:
-        return cr, cr * cr / (lb * lc)
-    if lb <= lc:
-        return cr, cr * cr / (la * lc)
-    return cr, cr * cr / (la * lb)
+    return cr, cr * cr / max(la * lb, max(lb * lc, lc * la))
 
 
 def twins_from_neighbors(tri, nbr):
