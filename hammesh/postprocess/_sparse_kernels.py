@@ -272,7 +272,13 @@ def _row(out, link, parent, partner, kind, pos, x, y, z, bits, par, prt, kd):
 
 @njit(cache=True)
 def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
-    """Output triangles, with the two edges the cycle crosses in each.
+    """The new output triangles, with the two edges the cycle crosses in each.
+
+    Only triangles a join changes get rows here: a triangle kept whole (status
+    ``PASS``) is its input row, with the links of its cover edges, and is read from
+    the input where needed (*virtual row* ``t``; the new rows are virtual rows
+    ``m + i``, see :func:`walk_links`): at 1.5 M triangles ~99 % of the rows are
+    never copied before the final gather.
 
     ``split_index[t]`` numbers the split triangles (incenter of t is vertex
     ``n_points + split_index[t]``); midpoints follow, in order of first emission.
@@ -285,7 +291,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     the triangle t whose split made midpoint j (-1 for a bridge's midpoint): the
     caller places those Steiner points.
 
-    Returns ``(out, link, parent, partner, kind, mid_a, mid_b, mid_t)``.
+    Returns ``(out, link, parent, partner, kind, mid_a, mid_b, mid_t)`` of the new rows.
     """
     m = tri.shape[0]
     n_split = 0
@@ -300,7 +306,11 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     for t in range(m):
         if status[t] == EDGE:
             n_edge += 1  # two rows each
-    total = m + 2 * n_split + n_midh + n_edge
+    n_pass = 0
+    for t in range(m):
+        if status[t] == PASS:
+            n_pass += 1
+    total = m - n_pass + 2 * n_split + n_midh + n_edge
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
@@ -317,17 +327,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     for t in range(m):
         st = status[t]
         if st == PASS:
-            out[pos, 0] = tri[t, 0]
-            out[pos, 1] = tri[t, 1]
-            out[pos, 2] = tri[t, 2]
-            bits = 0
-            for k in range(3):
-                if is_cov[3 * t + k]:
-                    bits |= 1 << k
-            link[pos] = bits
-            parent[pos] = t
-            kind[pos] = 3
-            pos += 1
+            continue
         elif st == SWAP:
             h = swap_he[t]
             g = twin[h]
@@ -472,52 +472,59 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
 
 
 @njit(cache=True, nogil=True)
-def output_twins(out, kind, parent, twin_in, n_points):
-    """Half-edge twins of the output rows, from the input's where rows are kept whole.
+def new_row_twins(out, tri, twin_in, status, n_points):
+    """Half-edge twins where the output differs from the input.
 
-    A row of kind 3 is its parent input triangle, same corners in the same order, so
-    its edge j is the parent's half-edge j and its twin is the input twin's row when
-    that triangle is kept too, -1 on the boundary (a kept triangle's edge is never
-    split). Only the other half-edges -- those of new rows, and kept ones facing a new
-    row, ~1 % of a Triangle mesh -- are matched by their end points (sorted keys).
-    What ``hammesh.halfedge.half_edge_twins`` gives on the whole output, at a fraction
-    of the passes. Returns ``(twin, bad)``: ``bad`` -1 or a half-edge whose edge is
-    used twice in one direction or by three rows.
+    Virtual rows (see :func:`emit`): ``t < m`` is input triangle t kept whole (its
+    half-edges are the input's ``3 t + j``), ``m + i`` is new row ``out[i]``. A kept
+    triangle's twin is the input's where the other side is kept too. Matched here by
+    their end points (sorted keys), over the non-kept triangles only: the new rows'
+    half-edges and the kept half-edges facing a non-kept triangle (~1 % of a Triangle
+    mesh). Returns ``(tw_new, changed, face_tw, bad)``: ``tw_new[3 i + j]`` the virtual
+    twin of new row i's edge j (-1 on the boundary); ``changed`` the non-kept input
+    triangles, ascending, and ``face_tw[3 r + k]`` the virtual twin of the kept
+    half-edge facing half-edge k of ``changed[r]`` (:func:`_faced` reads them);
+    ``bad`` -1 or a virtual half-edge whose edge is used twice in one direction or by
+    three rows. What ``hammesh.halfedge.half_edge_twins`` gives on the whole output,
+    at a fraction of the passes.
     """
+    m = tri.shape[0]
     k = out.shape[0]
-    m_in = twin_in.shape[0] // 3
-    row_of = np.full(m_in, -1, np.int64)
-    for r in range(k):
-        if kind[r] == 3:
-            row_of[parent[r]] = r
-    twin = np.empty(3 * k, np.int64)
-    rest = np.empty(3 * k, np.int64)
+    n_ch = 0
+    for t in range(m):
+        if status[t] != PASS:
+            n_ch += 1
+    changed = np.empty(n_ch, np.int64)
+    n_ch = 0
+    for t in range(m):
+        if status[t] != PASS:
+            changed[n_ch] = t
+            n_ch += 1
+    face_tw = np.full(3 * n_ch, -1, np.int64)
+    tw_new = np.empty(3 * k, np.int64)
+    rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
     n = 0
-    for r in range(k):
-        if kind[r] == 3:
-            t = parent[r]
-            for j in range(3):
-                g = twin_in[3 * t + j]
-                if g < 0:
-                    twin[3 * r + j] = -1
-                    continue
-                ru = row_of[g // 3]
-                if ru >= 0:
-                    twin[3 * r + j] = 3 * ru + g % 3
-                else:
-                    rest[n] = 3 * r + j
-                    n += 1
-        else:
-            for j in range(3):
-                rest[n] = 3 * r + j
+    for i in range(3 * k):
+        rest[n] = 3 * m + i
+        n += 1
+    for r in range(n_ch):
+        u = changed[r]
+        for j in range(3):
+            g = twin_in[3 * u + j]
+            if g >= 0 and status[g // 3] == PASS:
+                rest[n] = g
                 n += 1
     keys = np.empty(n, np.int64)
     for i in range(n):
         h = rest[i]
-        r = h // 3
-        j = h - 3 * r
-        a = out[r, j]
-        b = out[r, (j + 1) % 3]
+        x = h // 3
+        j = h - 3 * x
+        if x >= m:
+            a = out[x - m, j]
+            b = out[x - m, (j + 1) % 3]
+        else:
+            a = tri[x, j]
+            b = tri[x, (j + 1) % 3]
         keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
     srt = np.argsort(keys, kind="mergesort")
     i = 0
@@ -527,87 +534,147 @@ def output_twins(out, kind, parent, twin_in, n_points):
             e += 1
         h = rest[srt[i]]
         if e - i == 1:
-            twin[h] = -1
+            if h >= 3 * m:
+                tw_new[h - 3 * m] = -1
         elif e - i == 2:
             g = rest[srt[i + 1]]
-            if out[h // 3, h % 3] == out[g // 3, g % 3]:
-                return twin, max(h, g)  # one edge twice in one direction
-            twin[h] = g
-            twin[g] = h
+            if _start(out, tri, m, h) == _start(out, tri, m, g):
+                return tw_new, changed, face_tw, max(h, g)  # one edge twice in one direction
+            for x, y in ((h, g), (g, h)):
+                if x >= 3 * m:
+                    tw_new[x - 3 * m] = y
+                else:  # a kept half-edge: filed under the input half-edge it faces
+                    f = twin_in[x]
+                    r = _rank(changed, f // 3)
+                    face_tw[3 * r + f % 3] = y
         else:
-            return twin, rest[srt[i + 2]]
+            return tw_new, changed, face_tw, rest[srt[i + 2]]
         i = e
-    return twin, -1
+    return tw_new, changed, face_tw, -1
 
 
 @njit(cache=True, nogil=True)
-def walk_links(link, out_twin):
-    """Follow the links into cycles, checking each row as the walk reaches it.
+def _start(out, tri, m, h):
+    """First vertex of virtual half-edge ``h``."""
+    x = h // 3
+    if x >= m:
+        return out[x - m, h - 3 * x]
+    return tri[x, h - 3 * x]
 
-    Returns ``(order, lengths, bad)``: rows in cycle order, the cycle lengths, and
-    ``bad`` = -1 or the first row found whose links are not two, or that crosses an
-    edge whose other side does not link back. Every row is reached exactly once
-    (the outer loop starts a walk at each row not seen yet), so every row is checked,
-    in the same pass that orders them.
+
+@njit(cache=True, nogil=True)
+def _rank(sorted_, x):
+    """Index of ``x`` in the ascending array ``sorted_`` (it is there): a plain binary
+    search (numba's ``np.searchsorted`` on a scalar costs ~100 x more per call)."""
+    lo = 0
+    hi = sorted_.shape[0] - 1
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if sorted_[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def _faced(g, changed, face_tw):
+    """Twin of the kept half-edge facing input half-edge ``g`` of a changed triangle."""
+    return face_tw[3 * _rank(changed, g // 3) + g % 3]
+
+
+@njit(cache=True, nogil=True)
+def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw):
+    """Follow the links into cycles over the virtual rows, checking each row as the walk reaches it.
+
+    Virtual rows as in :func:`new_row_twins` (kept input triangles, then the new
+    rows). Returns ``(order, lengths, low, bad)``: virtual rows in cycle order, the
+    cycle lengths, each cycle's lowest parent (input triangle) and ``bad`` = -1 or
+    the first virtual row found whose links are not two, or that crosses an edge
+    whose other side does not link back. Every row is reached exactly once (the
+    outer loop starts a walk at each row not seen yet), so every row is checked, in
+    the same pass that orders them.
     """
-    k_out = link.shape[0]
-    seen = np.zeros(k_out, np.bool_)
-    order = np.empty(k_out, np.int64)
-    lengths = np.empty(k_out, np.int64)
+    m = status.shape[0]
+    n_v = m + link_new.shape[0]
+    seen = np.zeros(n_v, np.bool_)
+    n_rows = link_new.shape[0]
+    for t in range(m):
+        if status[t] == PASS:
+            n_rows += 1
+    order = np.empty(n_rows, np.int64)
+    lengths = np.empty(n_rows, np.int64)
+    low = np.empty(n_rows, np.int64)
     n_c = 0
     pos = 0
-    for s in range(k_out):
-        if seen[s]:
+    for s in range(n_v):
+        if seen[s] or (s < m and status[s] != PASS):
             continue
         start = pos
         x = s
         came = -1
+        lo = m
         while True:
             seen[x] = True
             order[pos] = x
             pos += 1
-            bits = link[x]
+            lo = min(lo, x if x < m else parent_new[x - m])
             nxt = -1
+            nxt_g = -1
             n_links = 0
             for j in range(3):
-                if not (bits >> j) & 1:
-                    continue
+                h = 3 * x + j
+                if x < m:  # a kept triangle: links on its cover edges, the input's twins
+                    if not is_cov[h]:
+                        continue
+                    g = twin_in[h]
+                    if g >= 0 and status[g // 3] != PASS:
+                        g = _faced(g, changed, face_tw)
+                else:
+                    if not (link_new[x - m] >> j) & 1:
+                        continue
+                    g = tw_new[h - 3 * m]
                 n_links += 1
-                g = out_twin[3 * x + j]
                 if g < 0:
-                    return order, lengths, x
+                    return order, lengths, low, x
                 y = g // 3
-                if not ((link[y] >> (g - 3 * y)) & 1):
-                    return order, lengths, x
-                if came < 0 and x == s and j != came:
+                back = is_cov[g] if y < m else (link_new[y - m] >> (g - 3 * y)) & 1
+                if not back:
+                    return order, lengths, low, x
+                if came < 0 and x == s:
                     came = j  # the walk leaves s by its other link and returns by this one
                 elif j != came:
                     nxt = j
+                    nxt_g = g
             if n_links != 2 or nxt < 0:
-                return order, lengths, x
-            g = out_twin[3 * x + nxt]
-            y = g // 3
-            came = g - 3 * y
+                return order, lengths, low, x
+            y = nxt_g // 3
+            came = nxt_g - 3 * y
             if y == s:
                 break
             if seen[y]:
-                return order, lengths, y
+                return order, lengths, low, y
             x = y
         lengths[n_c] = pos - start
+        low[n_c] = lo
         n_c += 1
-    return order, lengths[:n_c], -1
+    return order, lengths[:n_c], low[:n_c], -1
 
 
 @njit(cache=True, nogil=True)
-def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partner, kind, amin):
-    """The output rows, walked into ``order`` (:func:`walk_links`), taken across in one gather.
+def rows_in_cycle_order(
+    order, lengths, run_order, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed,
+    face_tw, amin,
+):
+    """The output rows, walked into ``order`` (:func:`walk_links`, virtual rows), taken across in one gather.
 
-    Runs go in the order ``run_order``; every row's corners, parents, kind, its
-    parents' smallest angle ``pm`` (``amin`` of ``parent``, and of ``partner`` if any)
-    and its pairing claim (``claim[3 i + j]``: the twin of edge j of final row i, -1
-    on the boundary, renumbered from ``out_twin``) are written in the same pass.
+    Runs go in the order ``run_order``; every row's corners, parents, kind (3 for a
+    kept triangle), its parents' smallest angle ``pm`` (``amin`` of ``parent``, and of
+    ``partner`` if any) and its pairing claim (``claim[3 i + j]``: the twin of edge j
+    of final row i, -1 on the boundary) are written in the same pass.
     Returns ``(out, parent, partner, kind, pm, lengths, claim)``.
     """
+    m = tri.shape[0]
     c = lengths.shape[0]
     k = order.shape[0]
     rows = order
@@ -627,7 +694,7 @@ def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partne
             for i in range(starts[r], starts[r] + lengths[r]):
                 rows[p] = order[i]
                 p += 1
-    pos = np.empty(k, np.int64)
+    pos = np.empty(m + out_new.shape[0], np.int64)
     for i in range(k):
         pos[rows[i]] = i
     out2 = np.empty((k, 3), np.int64)
@@ -639,14 +706,32 @@ def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partne
     for i in range(k):
         x = rows[i]
         for j in range(3):
-            out2[i, j] = out[x, j]
-            g = out_twin[3 * x + j]
+            h = 3 * x + j
+            if x < m:
+                g = twin_in[h]
+                if g >= 0 and status[g // 3] != PASS:
+                    g = _faced(g, changed, face_tw)
+            else:
+                g = tw_new[h - 3 * m]
             claim[3 * i + j] = -1 if g < 0 else 3 * pos[g // 3] + g % 3
-        p = parent[x]
-        q = partner[x]
+        if x < m:
+            out2[i, 0] = tri[x, 0]
+            out2[i, 1] = tri[x, 1]
+            out2[i, 2] = tri[x, 2]
+            parent2[i] = x
+            partner2[i] = -1
+            kind2[i] = 3
+            pm[i] = amin[x]
+            continue
+        r = x - m
+        out2[i, 0] = out_new[r, 0]
+        out2[i, 1] = out_new[r, 1]
+        out2[i, 2] = out_new[r, 2]
+        p = parent_new[r]
+        q = partner_new[r]
         parent2[i] = p
         partner2[i] = q
-        kind2[i] = kind[x]
+        kind2[i] = kind_new[r]
         a = amin[p]
         if q >= 0 and amin[q] < a:
             a = amin[q]
