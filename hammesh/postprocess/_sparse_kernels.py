@@ -21,10 +21,21 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh.postprocess._join_kernels import quad_corners
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
 PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
 PLAIN, FLIP, MID = 0, 1, 2
+
+
+@njit(cache=True, nogil=True)
+def _sides(twin, cyc, h):
+    """``(g, ct, cu)``: the twin of half-edge h and the cycles of its two triangles (-1:
+    uncovered); ``g`` -1 on the boundary (then the cycles are meaningless)."""
+    g = twin[h]
+    if g < 0:
+        return g, -1, -1
+    return g, cyc[h // 3], cyc[g // 3]
 
 
 @njit(cache=True, nogil=True)
@@ -39,16 +50,26 @@ def join_candidates(twin, cyc):
     out = np.empty(nh, np.int64)
     n = 0
     for h in range(nh):
-        g = twin[h]
-        if g < 0:
-            continue
-        ct = cyc[h // 3]
-        cu = cyc[g // 3]
-        if ct < 0 or ct == cu or (cu >= 0 and g < h):
+        g, ct, cu = _sides(twin, cyc, h)
+        if g < 0 or ct < 0 or ct == cu or (cu >= 0 and g < h):
             continue
         out[n] = h
         n += 1
     return out[:n]
+
+
+@njit(cache=True, nogil=True)
+def _node(cyc, n_cyc, t):
+    """Union-find node of triangle t: its cover cycle, or ``n_cyc + t`` if uncovered."""
+    return cyc[t] if cyc[t] >= 0 else n_cyc + t
+
+
+@njit(cache=True, nogil=True)
+def _free_pair(twin, used, h):
+    """``(t, u, free)``: the triangles on both sides of half-edge h, ``free`` if neither is in a join yet."""
+    t = h // 3
+    u = twin[h] // 3
+    return t, u, not (used[t] or used[u])
 
 
 @njit(cache=True, nogil=True)
@@ -68,13 +89,11 @@ def open_candidates(twin, cyc, n_cyc, cand, meets):
     for i in range(cand.shape[0]):
         if not meets[i]:
             continue
-        h = cand[i]
-        t = h // 3
-        u = twin[h] // 3
-        if used[t] or used[u]:
+        t, u, free = _free_pair(twin, used, cand[i])
+        if not free:
             continue
         rt = _find(uf, cyc[t])
-        ru = _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        ru = _find(uf, _node(cyc, n_cyc, u))
         if rt == ru:
             continue
         uf[rt] = ru
@@ -84,12 +103,9 @@ def open_candidates(twin, cyc, n_cyc, cand, meets):
     for i in range(cand.shape[0]):
         if meets[i]:
             continue
-        h = cand[i]
-        t = h // 3
-        u = twin[h] // 3
-        if used[t] or used[u]:
-            continue
-        out[i] = _find(uf, cyc[t]) != _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        t, u, free = _free_pair(twin, used, cand[i])
+        if free:
+            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, u))
     return out
 
 
@@ -135,12 +151,8 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     n_cross = 0
     cross = np.empty(nh, np.int64)
     for h in range(nh):
-        g = twin[h]
-        if g < 0:
-            continue
-        ct = cyc[h // 3]
-        cu = cyc[g // 3]
-        if ct < 0 or cu < 0 or ct != cu:
+        g, ct, cu = _sides(twin, cyc, h)
+        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
             cross[n_cross] = h
             n_cross += 1
     n_abs = 0
@@ -154,7 +166,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
         u = g // 3
         if swap_he[t] >= 0 or swap_he[u] >= 0 or (cyc[u] < 0 and no_absorb[u]):
             continue
-        nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+        nu = _node(cyc, n_cyc, u)
         rt = _find(uf, cyc[t])
         ru = _find(uf, nu)
         if rt == ru:
@@ -197,8 +209,8 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
                 continue
             if stage == 2 and (st or su):
                 continue
-            nt = cyc[t] if cyc[t] >= 0 else n_cyc + t
-            nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+            nt = _node(cyc, n_cyc, t)
+            nu = _node(cyc, n_cyc, u)
             rt = _find(uf, nt)
             ru = _find(uf, nu)
             if rt == ru:
@@ -218,8 +230,8 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
         h = cross[i]
         t = h // 3
         u = twin[h] // 3
-        a = _find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)
-        b = _find(pu, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        a = _find(pu, _node(cyc, n_cyc, t))
+        b = _find(pu, _node(cyc, n_cyc, u))
         if a != b:
             pu[a] = b
     piece_node = np.full(n_cyc + m, -1, np.int64)
@@ -247,20 +259,21 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
                 if g < 0:
                     continue
                 u = g // 3
-                nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+                nu = _node(cyc, n_cyc, u)
                 if _find(uf, nu) != rt:
                     bad[t] = True
                     n_bad += 1
                     break
         if n_bad == 0:  # should not happen: give up absorbing in those pieces
             for t in range(m):
-                bad[t] = piece_bad[_find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)]
+                bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, t))]
     counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
     return status, slot, swap_he, join, counts, bad
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _row(out, link, parent, partner, kind, pos, x, y, z, bits, par, prt, kd):
+    """Write output row ``pos``: corners, link bits, parent, partner, kind."""
     out[pos, 0] = x
     out[pos, 1] = y
     out[pos, 2] = z
@@ -268,6 +281,20 @@ def _row(out, link, parent, partner, kind, pos, x, y, z, bits, par, prt, kd):
     parent[pos] = par
     partner[pos] = prt
     kind[pos] = kd
+
+
+@njit(cache=True, nogil=True)
+def _swap_links(cov_1, cov_2, bit_1, bit_2, bit_diag):
+    """Link bits of a swapped row: its two outer edges where they are cover edges, the
+    diagonal where fewer than two are (the cycle crosses to the row's partner)."""
+    bits = 0
+    if cov_1:
+        bits |= bit_1
+    if cov_2:
+        bits |= bit_2
+    if not (cov_1 and cov_2):
+        bits |= bit_diag
+    return bits
 
 
 @njit(cache=True)
@@ -328,68 +355,23 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
         st = status[t]
         if st == PASS:
             continue
-        elif st == SWAP:
+        elif st == SWAP or st == EDGE:
             h = swap_he[t]
             g = twin[h]
             if g < h:
                 continue  # emitted with its partner
+            _, u, a, b, c, d = quad_corners(tri, twin, h)
             k = h - 3 * t
-            u = g // 3
             kg = g - 3 * u
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            c = tri[t, (k + 2) % 3]
-            d = tri[u, (kg + 2) % 3]
+        if st == SWAP:
             # (a, d, c): edges ad (u's), dc (diagonal), ca (t's)
-            out[pos, 0] = a
-            out[pos, 1] = d
-            out[pos, 2] = c
-            bits = 0
-            nb_ = 0
-            if is_cov[3 * u + (kg + 1) % 3]:
-                bits |= 1
-                nb_ += 1
-            if is_cov[3 * t + (k + 2) % 3]:
-                bits |= 4
-                nb_ += 1
-            if nb_ < 2:
-                bits |= 2
-            link[pos] = bits
-            parent[pos] = t
-            partner[pos] = u
-            kind[pos] = 4
-            pos += 1
+            bits = _swap_links(is_cov[3 * u + (kg + 1) % 3], is_cov[3 * t + (k + 2) % 3], 1, 4, 2)
+            _row(out, link, parent, partner, kind, pos, a, d, c, bits, t, u, 4)
             # (d, b, c): edges db (u's), bc (t's), cd (diagonal)
-            out[pos, 0] = d
-            out[pos, 1] = b
-            out[pos, 2] = c
-            bits = 0
-            nb_ = 0
-            if is_cov[3 * u + (kg + 2) % 3]:
-                bits |= 1
-                nb_ += 1
-            if is_cov[3 * t + (k + 1) % 3]:
-                bits |= 2
-                nb_ += 1
-            if nb_ < 2:
-                bits |= 4
-            link[pos] = bits
-            parent[pos] = u
-            partner[pos] = t
-            kind[pos] = 4
-            pos += 1
+            bits = _swap_links(is_cov[3 * u + (kg + 2) % 3], is_cov[3 * t + (k + 1) % 3], 1, 2, 4)
+            _row(out, link, parent, partner, kind, pos + 1, d, b, c, bits, u, t, 4)
+            pos += 2
         elif st == EDGE:
-            h = swap_he[t]
-            g = twin[h]
-            if g < h:
-                continue  # emitted with its partner
-            k = h - 3 * t
-            u = g // 3
-            kg = g - 3 * u
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            c = tri[t, (k + 2) % 3]
-            d = tri[u, (kg + 2) % 3]
             mv = n_all + n_mid
             mid_a[n_mid] = a
             mid_b[n_mid] = b
@@ -419,29 +401,12 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                 ring_next = not (is_cov[h] and is_cov[hn])
                 s = slot[h]
                 if s == PLAIN:
-                    out[pos, 0] = inc
-                    out[pos, 1] = a
-                    out[pos, 2] = b
-                    bits = 0
-                    if ring_prev:
-                        bits |= 1
-                    if is_cov[h]:
-                        bits |= 2
-                    if ring_next:
-                        bits |= 4
-                    link[pos] = bits
-                    parent[pos] = t
-                    kind[pos] = 0
+                    bits = (1 if ring_prev else 0) | (2 if is_cov[h] else 0) | (4 if ring_next else 0)
+                    _row(out, link, parent, partner, kind, pos, inc, a, b, bits, t, -1, 0)
                     pos += 1
                 elif s == FLIP:
                     u = twin[h] // 3
-                    out[pos, 0] = inc
-                    out[pos, 1] = a
-                    out[pos, 2] = n_points + split_index[u]
-                    link[pos] = 3
-                    parent[pos] = t
-                    partner[pos] = u
-                    kind[pos] = 1
+                    _row(out, link, parent, partner, kind, pos, inc, a, n_points + split_index[u], 3, t, u, 1)
                     pos += 1
                 else:
                     g = twin[h]
@@ -452,22 +417,9 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                         mid_b[n_mid] = b
                         n_mid += 1
                     mv = mid_of[h]
-                    out[pos, 0] = inc
-                    out[pos, 1] = a
-                    out[pos, 2] = mv
-                    link[pos] = 3
-                    parent[pos] = t
-                    partner[pos] = g // 3
-                    kind[pos] = 2
-                    pos += 1
-                    out[pos, 0] = inc
-                    out[pos, 1] = mv
-                    out[pos, 2] = b
-                    link[pos] = 6
-                    parent[pos] = t
-                    partner[pos] = g // 3
-                    kind[pos] = 2
-                    pos += 1
+                    _row(out, link, parent, partner, kind, pos, inc, a, mv, 3, t, g // 3, 2)
+                    _row(out, link, parent, partner, kind, pos + 1, inc, mv, b, 6, t, g // 3, 2)
+                    pos += 2
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 

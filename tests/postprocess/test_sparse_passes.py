@@ -31,6 +31,18 @@ def _reference_facts(pts: np.ndarray, tri: np.ndarray):
     return ang.min(axis=1), ang.max(axis=1), ratio
 
 
+def _pinning_domain(name: str) -> hammesh.Domain:
+    """A bundled domain, or constrained loops inside a plate, or two regions (whose shared
+    edges are pinned too)."""
+    if name == "loops":
+        return plate_with_loops(3)
+    if name == "regions":
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        return hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    return bundled_domain(name)
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     pts=st.integers(2, 3).flatmap(
@@ -134,14 +146,7 @@ def test_pinned_output_edges_from_parents_equal_the_key_search(name: str, monkey
         return got
 
     monkeypatch.setattr(sparse._ik, "pinned_output_edges", spy)
-    if name == "loops":  # constrained loops inside a plate
-        dom = plate_with_loops(3)
-    elif name == "regions":  # edges between two regions are pinned too
-        v = square(0, 0, 2) + square(0.5, 0.5, 1)
-        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
-        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
-    else:
-        dom = bundled_domain(name)
+    dom = _pinning_domain(name)
     scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
     for area in (0.01 * scale, 0.002 * scale):
         m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
@@ -253,14 +258,7 @@ def test_claim_from_the_input_twins_equals_a_full_matching(name: str, monkeypatc
         return got
 
     monkeypatch.setattr(sparse._k, "rows_in_cycle_order", spy)
-    if name == "loops":
-        dom = plate_with_loops(3)
-    elif name == "regions":
-        v = square(0, 0, 2) + square(0.5, 0.5, 1)
-        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
-        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
-    else:
-        dom = bundled_domain(name)
+    dom = _pinning_domain(name)
     scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
     for area in (None, 0.01 * scale, 0.002 * scale):
         m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
