@@ -371,3 +371,25 @@ def test_step_seconds_cover_the_construction_within_its_time() -> None:
     assert set(wall) == set(cpu) >= {"input_angles", "judge_edges", "cover", "plan_joins", "output_rows", "improve"}
     assert all(v >= 0 for v in [*wall.values(), *cpu.values()])
     assert sum(wall.values()) <= r["seconds"]["hamiltonian"]
+
+
+@pytest.mark.slow
+def test_bench_sparse_breakdown_prints_every_step() -> None:
+    """``bench_sparse.py --breakdown`` (a fresh process) prints each step's wall and CPU against raw Triangle."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bench = Path(__file__).parent.parent.parent / "benchmarks" / "bench_sparse.py"
+    proc = subprocess.run(
+        [sys.executable, str(bench), "--breakdown", "--max-area", "0.001"], capture_output=True, text=True,
+        timeout=1200,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    for step in ("input_angles", "judge_edges", "cover", "plan_joins", "output_rows", "improve", "certificate"):
+        row = next(x for x in lines if x.startswith(step + " "))
+        wall = float(row.split()[1])
+        assert wall >= 0
+    ratio = float(next(x for x in lines if x.startswith("BREAKDOWN_RATIO")).split()[1])
+    assert ratio > 0
