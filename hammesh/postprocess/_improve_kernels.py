@@ -74,6 +74,22 @@ def _input_edge(tri, t, x, y):
 
 
 @njit(cache=True, nogil=True)
+def _input_end(v, w, first_mid, mid_a, mid_b):
+    """The input vertex standing for ``v`` on the output edge ``(v, w)``: ``v`` itself, or
+    if ``v`` is the midpoint of input edge ``(p, q)`` and ``w`` one of its ends, the other
+    end. ``(vertex, ok)``; not ok if ``v`` is a midpoint and ``w`` no end of its edge (the
+    output edge lies on no input edge)."""
+    if first_mid <= v < first_mid + mid_a.shape[0]:
+        i = v - first_mid
+        if w == mid_a[i]:
+            return mid_b[i], True
+        if w == mid_b[i]:
+            return mid_a[i], True
+        return v, False
+    return v, True
+
+
+@njit(cache=True, nogil=True)
 def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
     """Which output half-edges lie on a pinned interior input edge (whole or a half)?
 
@@ -85,7 +101,6 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     ``mid_a``, ``mid_b``: O(1) per half-edge, no search over the mesh.
     """
     k_rows = out.shape[0]
-    n_mid = mid_a.shape[0]
     pinned = np.zeros(3 * k_rows, np.bool_)
     for r in range(k_rows):
         t = parent[r]
@@ -97,24 +112,12 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
         for j in range(3):
             x = out[r, j]
             y = out[r, (j + 1) % 3]
-            ex = x
+            ex, ok = _input_end(x, y, first_mid, mid_a, mid_b)
             ey = y
-            if first_mid <= x < first_mid + n_mid:
-                i = x - first_mid
-                if y == mid_a[i]:
-                    ex = mid_b[i]
-                elif y == mid_b[i]:
-                    ex = mid_a[i]
-                else:
-                    continue
-            elif first_mid <= y < first_mid + n_mid:
-                i = y - first_mid
-                if x == mid_a[i]:
-                    ey = mid_b[i]
-                elif x == mid_b[i]:
-                    ey = mid_a[i]
-                else:
-                    continue
+            if ok and ex == x:  # (x is no midpoint: y may be)
+                ey, ok = _input_end(y, x, first_mid, mid_a, mid_b)
+            if not ok:
+                continue
             h = _input_edge(tri, parent[r], ex, ey)
             if h < 0:
                 h = _input_edge(tri, partner[r], ex, ey)

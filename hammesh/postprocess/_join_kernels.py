@@ -135,12 +135,15 @@ def _orient(p, q, r):
 
 
 @njit(cache=True, nogil=True)
+def _spokes(ox, oy, qx, qy, rx, ry):
+    """The vectors ``q - o`` and ``r - o`` of the corner at o of (o, q, r): ``(ux, uy, vx, vy)``."""
+    return qx - ox, qy - oy, rx - ox, ry - oy
+
+
+@njit(cache=True, nogil=True)
 def _corner2(ox, oy, qx, qy, rx, ry):
     """Angle at o of the planar triangle (o, q, r), radians (scalars: no arrays)."""
-    ux = qx - ox
-    uy = qy - oy
-    vx = rx - ox
-    vy = ry - oy
+    ux, uy, vx, vy = _spokes(ox, oy, qx, qy, rx, ry)
     return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
 
 
@@ -249,6 +252,20 @@ def quad_corners(tri, twin, h):
 
 
 @njit(cache=True, nogil=True)
+def quad_xy(pts, a, b, c, d):
+    """Planar coordinates ``(ax, ay, bx, by, cx, cy, dx, dy)`` of the quad's corners (scalars
+    for the hot loops)."""
+    return pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1], pts[d, 0], pts[d, 1]
+
+
+@njit(cache=True, nogil=True)
+def swap_is_convex_2d(ax, ay, bx, by, cx, cy, dx, dy):
+    """Can ``ab`` of ``t = (a, b, c)``, ``u = (b, a, d)`` be flipped into ``cd``: are the new
+    triangles ``(a, d, c)`` and ``(d, b, c)`` strictly counter-clockwise?"""
+    return (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0
+
+
+@njit(cache=True, nogil=True)
 def _swap_geometry(pts, a, b, c, d, cos_fold):
     """Is the swap of ab into cd legal (strictly convex / folded at most max_fold)?"""
     if pts.shape[1] == 2:
@@ -289,6 +306,17 @@ def _swap_geometry(pts, a, b, c, d, cos_fold):
 
 
 @njit(cache=True, nogil=True)
+def _swap_score(l1, h1, l2, h2, floor, lo, hi):
+    """``(slack, kind, smallest, largest)`` of a swap whose new triangles have smallest and
+    largest angles ``l1, h1`` and ``l2, h2``; no join (``-inf``) below ``floor``."""
+    smin = min(l1, l2)
+    if smin < floor:
+        return -np.inf, NO_JOIN, 0.0, np.pi
+    smax = max(h1, h2)
+    return min(smin - lo, hi - smax), SWAP_JOIN, smin, smax
+
+
+@njit(cache=True, nogil=True)
 def score_joins_into(
     pts, tri, twin, pinned, cand, amin, keep, hi, floor, cos_fold, swaps, edge_splits, place_iters, reach,
     kind, slack, newmin, newmax, point,
@@ -316,24 +344,12 @@ def score_joins_into(
         bmin = 0.0
         bmax = np.pi
         if planar:
-            ax = pts[a, 0]
-            ay = pts[a, 1]
-            bx = pts[b, 0]
-            by = pts[b, 1]
-            cx = pts[c, 0]
-            cy = pts[c, 1]
-            dx = pts[d, 0]
-            dy = pts[d, 1]
+            ax, ay, bx, by, cx, cy, dx, dy = quad_xy(pts, a, b, c, d)
             if swaps and not pinned[h]:
-                if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
+                if swap_is_convex_2d(ax, ay, bx, by, cx, cy, dx, dy):
                     l1, h1 = min_max_angles_2d(ax, ay, dx, dy, cx, cy)
                     l2, h2 = min_max_angles_2d(dx, dy, bx, by, cx, cy)
-                    smin = min(l1, l2)
-                    if smin >= floor:
-                        best = min(smin - lo, hi - max(h1, h2))
-                        bkind = SWAP_JOIN
-                        bmin = smin
-                        bmax = max(h1, h2)
+                    best, bkind, bmin, bmax = _swap_score(l1, h1, l2, h2, floor, lo, hi)
             point[i, 0] = 0.5 * (ax + bx)
             point[i, 1] = 0.5 * (ay + by)
             if edge_splits and best < 0.0:
@@ -355,12 +371,7 @@ def score_joins_into(
             if swaps and not pinned[h] and _swap_geometry(pts, a, b, c, d, cos_fold):
                 l1, h1 = _min_max(pts[a], pts[d], pts[c])
                 l2, h2 = _min_max(pts[d], pts[b], pts[c])
-                smin = min(l1, l2)
-                if smin >= floor:
-                    best = min(smin - lo, hi - max(h1, h2))
-                    bkind = SWAP_JOIN
-                    bmin = smin
-                    bmax = max(h1, h2)
+                best, bkind, bmin, bmax = _swap_score(l1, h1, l2, h2, floor, lo, hi)
             for j in range(pts.shape[1]):
                 point[i, j] = 0.5 * (pts[a, j] + pts[b, j])
             if edge_splits and best < 0.0:
@@ -377,6 +388,20 @@ def score_joins_into(
 
 
 @njit(cache=True, nogil=True)
+def _fan_edge(pts, poly, n, i, px, py):
+    """Edge i of the fan over ``poly[:n]`` around ``p``: ``(ax, ay, bx, by, ok)``, ``ok`` if the
+    triangle ``(p, a, b)`` is counter-clockwise by more than a relative ``1e-12`` of ``|ab|^2``."""
+    a = poly[i]
+    b = poly[(i + 1) % n]
+    ax = pts[a, 0]
+    ay = pts[a, 1]
+    bx = pts[b, 0]
+    by = pts[b, 1]
+    s2 = (bx - ax) ** 2 + (by - ay) ** 2
+    return ax, ay, bx, by, (ax - px) * (by - py) - (ay - py) * (bx - px) > 1e-12 * s2
+
+
+@njit(cache=True, nogil=True)
 def fan_eval(pts, poly, n, px, py, lo, hi):
     """Slack, smallest and largest angle of the fan ``(p, poly[i], poly[i + 1])``.
 
@@ -385,14 +410,8 @@ def fan_eval(pts, poly, n, px, py, lo, hi):
     nmin = np.pi
     nmax = 0.0
     for i in range(n):
-        a = poly[i]
-        b = poly[(i + 1) % n]
-        ax = pts[a, 0]
-        ay = pts[a, 1]
-        bx = pts[b, 0]
-        by = pts[b, 1]
-        s2 = (bx - ax) ** 2 + (by - ay) ** 2
-        if (ax - px) * (by - py) - (ay - py) * (bx - px) <= 1e-12 * s2:
+        ax, ay, bx, by, ok = _fan_edge(pts, poly, n, i, px, py)
+        if not ok:
             return -np.inf, 0.0, np.pi
         l1, h1 = min_max_angles_2d(px, py, ax, ay, bx, by)
         nmin = min(nmin, l1)
@@ -415,14 +434,8 @@ def _fan_eval_fast(pts, poly, n, px, py, lo, hi, c_lo, c_hi):
     cmax = -1.0
     cmin = 1.0
     for i in range(n):
-        a = poly[i]
-        b = poly[(i + 1) % n]
-        ax = pts[a, 0]
-        ay = pts[a, 1]
-        bx = pts[b, 0]
-        by = pts[b, 1]
-        s2 = (bx - ax) ** 2 + (by - ay) ** 2
-        if (ax - px) * (by - py) - (ay - py) * (bx - px) <= 1e-12 * s2:
+        ax, ay, bx, by, ok = _fan_edge(pts, poly, n, i, px, py)
+        if not ok:
             return -np.inf
         for k in range(3):
             if k == 0:
@@ -654,10 +667,7 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
 @njit(cache=True, nogil=True)
 def _cos_at(ox, oy, qx, qy, rx, ry):
     """Cosine of the angle at o of the planar triangle (o, q, r) (2 if degenerate)."""
-    ux = qx - ox
-    uy = qy - oy
-    vx = rx - ox
-    vy = ry - oy
+    ux, uy, vx, vy = _spokes(ox, oy, qx, qy, rx, ry)
     nn = (ux * ux + uy * uy) * (vx * vx + vy * vy)
     if nn <= 0.0:
         return 2.0
@@ -677,16 +687,9 @@ def _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_
     """
     t, u, a, b, c, d = quad_corners(tri, twin, h)
     cos_lo = math.cos(keep * min(amin[t], amin[u]))
-    ax = pts[a, 0]
-    ay = pts[a, 1]
-    bx = pts[b, 0]
-    by = pts[b, 1]
-    cx = pts[c, 0]
-    cy = pts[c, 1]
-    dx = pts[d, 0]
-    dy = pts[d, 1]
+    ax, ay, bx, by, cx, cy, dx, dy = quad_xy(pts, a, b, c, d)
     if swaps and not pinned[h]:
-        if (dx - ax) * (cy - ay) - (dy - ay) * (cx - ax) > 0.0 and (bx - dx) * (cy - dy) - (by - dy) * (cx - dx) > 0.0:
+        if swap_is_convex_2d(ax, ay, bx, by, cx, cy, dx, dy):
             # (a, d, c) and (d, b, c): the cut corners at c and d first, then the merged ones
             ok = True
             for j in range(6):

@@ -21,10 +21,21 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh.postprocess._join_kernels import quad_corners
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
 PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
 PLAIN, FLIP, MID = 0, 1, 2
+
+
+@njit(cache=True, nogil=True)
+def _sides(twin, cyc, h):
+    """``(g, ct, cu)``: the twin of half-edge h and the cycles of its two triangles (-1:
+    uncovered); ``g`` -1 on the boundary (then the cycles are meaningless)."""
+    g = twin[h]
+    if g < 0:
+        return g, -1, -1
+    return g, cyc[h // 3], cyc[g // 3]
 
 
 @njit(cache=True, nogil=True)
@@ -39,16 +50,26 @@ def join_candidates(twin, cyc):
     out = np.empty(nh, np.int64)
     n = 0
     for h in range(nh):
-        g = twin[h]
-        if g < 0:
-            continue
-        ct = cyc[h // 3]
-        cu = cyc[g // 3]
-        if ct < 0 or ct == cu or (cu >= 0 and g < h):
+        g, ct, cu = _sides(twin, cyc, h)
+        if g < 0 or ct < 0 or ct == cu or (cu >= 0 and g < h):
             continue
         out[n] = h
         n += 1
     return out[:n]
+
+
+@njit(cache=True, nogil=True)
+def _node(cyc, n_cyc, t):
+    """Union-find node of triangle t: its cover cycle, or ``n_cyc + t`` if uncovered."""
+    return cyc[t] if cyc[t] >= 0 else n_cyc + t
+
+
+@njit(cache=True, nogil=True)
+def _free_pair(twin, used, h):
+    """``(t, u, free)``: the triangles on both sides of half-edge h, ``free`` if neither is in a join yet."""
+    t = h // 3
+    u = twin[h] // 3
+    return t, u, not (used[t] or used[u])
 
 
 @njit(cache=True, nogil=True)
@@ -68,13 +89,11 @@ def open_candidates(twin, cyc, n_cyc, cand, meets):
     for i in range(cand.shape[0]):
         if not meets[i]:
             continue
-        h = cand[i]
-        t = h // 3
-        u = twin[h] // 3
-        if used[t] or used[u]:
+        t, u, free = _free_pair(twin, used, cand[i])
+        if not free:
             continue
         rt = _find(uf, cyc[t])
-        ru = _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        ru = _find(uf, _node(cyc, n_cyc, u))
         if rt == ru:
             continue
         uf[rt] = ru
@@ -84,12 +103,9 @@ def open_candidates(twin, cyc, n_cyc, cand, meets):
     for i in range(cand.shape[0]):
         if meets[i]:
             continue
-        h = cand[i]
-        t = h // 3
-        u = twin[h] // 3
-        if used[t] or used[u]:
-            continue
-        out[i] = _find(uf, cyc[t]) != _find(uf, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        t, u, free = _free_pair(twin, used, cand[i])
+        if free:
+            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, u))
     return out
 
 
@@ -135,12 +151,8 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     n_cross = 0
     cross = np.empty(nh, np.int64)
     for h in range(nh):
-        g = twin[h]
-        if g < 0:
-            continue
-        ct = cyc[h // 3]
-        cu = cyc[g // 3]
-        if ct < 0 or cu < 0 or ct != cu:
+        g, ct, cu = _sides(twin, cyc, h)
+        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
             cross[n_cross] = h
             n_cross += 1
     n_abs = 0
@@ -154,7 +166,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
         u = g // 3
         if swap_he[t] >= 0 or swap_he[u] >= 0 or (cyc[u] < 0 and no_absorb[u]):
             continue
-        nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+        nu = _node(cyc, n_cyc, u)
         rt = _find(uf, cyc[t])
         ru = _find(uf, nu)
         if rt == ru:
@@ -197,8 +209,8 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
                 continue
             if stage == 2 and (st or su):
                 continue
-            nt = cyc[t] if cyc[t] >= 0 else n_cyc + t
-            nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+            nt = _node(cyc, n_cyc, t)
+            nu = _node(cyc, n_cyc, u)
             rt = _find(uf, nt)
             ru = _find(uf, nu)
             if rt == ru:
@@ -218,8 +230,8 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
         h = cross[i]
         t = h // 3
         u = twin[h] // 3
-        a = _find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)
-        b = _find(pu, cyc[u] if cyc[u] >= 0 else n_cyc + u)
+        a = _find(pu, _node(cyc, n_cyc, t))
+        b = _find(pu, _node(cyc, n_cyc, u))
         if a != b:
             pu[a] = b
     piece_node = np.full(n_cyc + m, -1, np.int64)
@@ -247,20 +259,21 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
                 if g < 0:
                     continue
                 u = g // 3
-                nu = cyc[u] if cyc[u] >= 0 else n_cyc + u
+                nu = _node(cyc, n_cyc, u)
                 if _find(uf, nu) != rt:
                     bad[t] = True
                     n_bad += 1
                     break
         if n_bad == 0:  # should not happen: give up absorbing in those pieces
             for t in range(m):
-                bad[t] = piece_bad[_find(pu, cyc[t] if cyc[t] >= 0 else n_cyc + t)]
+                bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, t))]
     counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
     return status, slot, swap_he, join, counts, bad
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _row(out, link, parent, partner, kind, pos, x, y, z, bits, par, prt, kd):
+    """Write output row ``pos``: corners, link bits, parent, partner, kind."""
     out[pos, 0] = x
     out[pos, 1] = y
     out[pos, 2] = z
@@ -270,9 +283,29 @@ def _row(out, link, parent, partner, kind, pos, x, y, z, bits, par, prt, kd):
     kind[pos] = kd
 
 
+@njit(cache=True, nogil=True)
+def _swap_links(cov_1, cov_2, bit_1, bit_2, bit_diag):
+    """Link bits of a swapped row: its two outer edges where they are cover edges, the
+    diagonal where fewer than two are (the cycle crosses to the row's partner)."""
+    bits = 0
+    if cov_1:
+        bits |= bit_1
+    if cov_2:
+        bits |= bit_2
+    if not (cov_1 and cov_2):
+        bits |= bit_diag
+    return bits
+
+
 @njit(cache=True)
 def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
-    """Output triangles, with the two edges the cycle crosses in each.
+    """The new output triangles, with the two edges the cycle crosses in each.
+
+    Only triangles a join changes get rows here: a triangle kept whole (status
+    ``PASS``) is its input row, with the links of its cover edges, and is read from
+    the input where needed (*virtual row* ``t``; the new rows are virtual rows
+    ``m + i``, see :func:`walk_links`): at 1.5 M triangles ~99 % of the rows are
+    never copied before the final gather.
 
     ``split_index[t]`` numbers the split triangles (incenter of t is vertex
     ``n_points + split_index[t]``); midpoints follow, in order of first emission.
@@ -285,7 +318,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     the triangle t whose split made midpoint j (-1 for a bridge's midpoint): the
     caller places those Steiner points.
 
-    Returns ``(out, link, parent, partner, kind, mid_a, mid_b, mid_t)``.
+    Returns ``(out, link, parent, partner, kind, mid_a, mid_b, mid_t)`` of the new rows.
     """
     m = tri.shape[0]
     n_split = 0
@@ -300,7 +333,11 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     for t in range(m):
         if status[t] == EDGE:
             n_edge += 1  # two rows each
-    total = m + 2 * n_split + n_midh + n_edge
+    n_pass = 0
+    for t in range(m):
+        if status[t] == PASS:
+            n_pass += 1
+    total = m - n_pass + 2 * n_split + n_midh + n_edge
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
@@ -317,79 +354,24 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     for t in range(m):
         st = status[t]
         if st == PASS:
-            out[pos, 0] = tri[t, 0]
-            out[pos, 1] = tri[t, 1]
-            out[pos, 2] = tri[t, 2]
-            bits = 0
-            for k in range(3):
-                if is_cov[3 * t + k]:
-                    bits |= 1 << k
-            link[pos] = bits
-            parent[pos] = t
-            kind[pos] = 3
-            pos += 1
-        elif st == SWAP:
+            continue
+        elif st == SWAP or st == EDGE:
             h = swap_he[t]
             g = twin[h]
             if g < h:
                 continue  # emitted with its partner
+            _, u, a, b, c, d = quad_corners(tri, twin, h)
             k = h - 3 * t
-            u = g // 3
             kg = g - 3 * u
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            c = tri[t, (k + 2) % 3]
-            d = tri[u, (kg + 2) % 3]
+        if st == SWAP:
             # (a, d, c): edges ad (u's), dc (diagonal), ca (t's)
-            out[pos, 0] = a
-            out[pos, 1] = d
-            out[pos, 2] = c
-            bits = 0
-            nb_ = 0
-            if is_cov[3 * u + (kg + 1) % 3]:
-                bits |= 1
-                nb_ += 1
-            if is_cov[3 * t + (k + 2) % 3]:
-                bits |= 4
-                nb_ += 1
-            if nb_ < 2:
-                bits |= 2
-            link[pos] = bits
-            parent[pos] = t
-            partner[pos] = u
-            kind[pos] = 4
-            pos += 1
+            bits = _swap_links(is_cov[3 * u + (kg + 1) % 3], is_cov[3 * t + (k + 2) % 3], 1, 4, 2)
+            _row(out, link, parent, partner, kind, pos, a, d, c, bits, t, u, 4)
             # (d, b, c): edges db (u's), bc (t's), cd (diagonal)
-            out[pos, 0] = d
-            out[pos, 1] = b
-            out[pos, 2] = c
-            bits = 0
-            nb_ = 0
-            if is_cov[3 * u + (kg + 2) % 3]:
-                bits |= 1
-                nb_ += 1
-            if is_cov[3 * t + (k + 1) % 3]:
-                bits |= 2
-                nb_ += 1
-            if nb_ < 2:
-                bits |= 4
-            link[pos] = bits
-            parent[pos] = u
-            partner[pos] = t
-            kind[pos] = 4
-            pos += 1
+            bits = _swap_links(is_cov[3 * u + (kg + 2) % 3], is_cov[3 * t + (k + 1) % 3], 1, 2, 4)
+            _row(out, link, parent, partner, kind, pos + 1, d, b, c, bits, u, t, 4)
+            pos += 2
         elif st == EDGE:
-            h = swap_he[t]
-            g = twin[h]
-            if g < h:
-                continue  # emitted with its partner
-            k = h - 3 * t
-            u = g // 3
-            kg = g - 3 * u
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            c = tri[t, (k + 2) % 3]
-            d = tri[u, (kg + 2) % 3]
             mv = n_all + n_mid
             mid_a[n_mid] = a
             mid_b[n_mid] = b
@@ -419,29 +401,12 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                 ring_next = not (is_cov[h] and is_cov[hn])
                 s = slot[h]
                 if s == PLAIN:
-                    out[pos, 0] = inc
-                    out[pos, 1] = a
-                    out[pos, 2] = b
-                    bits = 0
-                    if ring_prev:
-                        bits |= 1
-                    if is_cov[h]:
-                        bits |= 2
-                    if ring_next:
-                        bits |= 4
-                    link[pos] = bits
-                    parent[pos] = t
-                    kind[pos] = 0
+                    bits = (1 if ring_prev else 0) | (2 if is_cov[h] else 0) | (4 if ring_next else 0)
+                    _row(out, link, parent, partner, kind, pos, inc, a, b, bits, t, -1, 0)
                     pos += 1
                 elif s == FLIP:
                     u = twin[h] // 3
-                    out[pos, 0] = inc
-                    out[pos, 1] = a
-                    out[pos, 2] = n_points + split_index[u]
-                    link[pos] = 3
-                    parent[pos] = t
-                    partner[pos] = u
-                    kind[pos] = 1
+                    _row(out, link, parent, partner, kind, pos, inc, a, n_points + split_index[u], 3, t, u, 1)
                     pos += 1
                 else:
                     g = twin[h]
@@ -452,72 +417,66 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                         mid_b[n_mid] = b
                         n_mid += 1
                     mv = mid_of[h]
-                    out[pos, 0] = inc
-                    out[pos, 1] = a
-                    out[pos, 2] = mv
-                    link[pos] = 3
-                    parent[pos] = t
-                    partner[pos] = g // 3
-                    kind[pos] = 2
-                    pos += 1
-                    out[pos, 0] = inc
-                    out[pos, 1] = mv
-                    out[pos, 2] = b
-                    link[pos] = 6
-                    parent[pos] = t
-                    partner[pos] = g // 3
-                    kind[pos] = 2
-                    pos += 1
+                    _row(out, link, parent, partner, kind, pos, inc, a, mv, 3, t, g // 3, 2)
+                    _row(out, link, parent, partner, kind, pos + 1, inc, mv, b, 6, t, g // 3, 2)
+                    pos += 2
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
 @njit(cache=True, nogil=True)
-def output_twins(out, kind, parent, twin_in, n_points):
-    """Half-edge twins of the output rows, from the input's where rows are kept whole.
+def new_row_twins(out, tri, twin_in, status, n_points):
+    """Half-edge twins where the output differs from the input.
 
-    A row of kind 3 is its parent input triangle, same corners in the same order, so
-    its edge j is the parent's half-edge j and its twin is the input twin's row when
-    that triangle is kept too, -1 on the boundary (a kept triangle's edge is never
-    split). Only the other half-edges -- those of new rows, and kept ones facing a new
-    row, ~1 % of a Triangle mesh -- are matched by their end points (sorted keys).
-    What ``hammesh.halfedge.half_edge_twins`` gives on the whole output, at a fraction
-    of the passes. Returns ``(twin, bad)``: ``bad`` -1 or a half-edge whose edge is
-    used twice in one direction or by three rows.
+    Virtual rows (see :func:`emit`): ``t < m`` is input triangle t kept whole (its
+    half-edges are the input's ``3 t + j``), ``m + i`` is new row ``out[i]``. A kept
+    triangle's twin is the input's where the other side is kept too. Matched here by
+    their end points (sorted keys), over the non-kept triangles only: the new rows'
+    half-edges and the kept half-edges facing a non-kept triangle (~1 % of a Triangle
+    mesh). Returns ``(tw_new, changed, face_tw, bad)``: ``tw_new[3 i + j]`` the virtual
+    twin of new row i's edge j (-1 on the boundary); ``changed`` the non-kept input
+    triangles, ascending, and ``face_tw[3 r + k]`` the virtual twin of the kept
+    half-edge facing half-edge k of ``changed[r]`` (:func:`_faced` reads them);
+    ``bad`` -1 or a virtual half-edge whose edge is used twice in one direction or by
+    three rows. What ``hammesh.halfedge.half_edge_twins`` gives on the whole output,
+    at a fraction of the passes.
     """
+    m = tri.shape[0]
     k = out.shape[0]
-    m_in = twin_in.shape[0] // 3
-    row_of = np.full(m_in, -1, np.int64)
-    for r in range(k):
-        if kind[r] == 3:
-            row_of[parent[r]] = r
-    twin = np.empty(3 * k, np.int64)
-    rest = np.empty(3 * k, np.int64)
+    n_ch = 0
+    for t in range(m):
+        if status[t] != PASS:
+            n_ch += 1
+    changed = np.empty(n_ch, np.int64)
+    n_ch = 0
+    for t in range(m):
+        if status[t] != PASS:
+            changed[n_ch] = t
+            n_ch += 1
+    face_tw = np.full(3 * n_ch, -1, np.int64)
+    tw_new = np.empty(3 * k, np.int64)
+    rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
     n = 0
-    for r in range(k):
-        if kind[r] == 3:
-            t = parent[r]
-            for j in range(3):
-                g = twin_in[3 * t + j]
-                if g < 0:
-                    twin[3 * r + j] = -1
-                    continue
-                ru = row_of[g // 3]
-                if ru >= 0:
-                    twin[3 * r + j] = 3 * ru + g % 3
-                else:
-                    rest[n] = 3 * r + j
-                    n += 1
-        else:
-            for j in range(3):
-                rest[n] = 3 * r + j
+    for i in range(3 * k):
+        rest[n] = 3 * m + i
+        n += 1
+    for r in range(n_ch):
+        u = changed[r]
+        for j in range(3):
+            g = twin_in[3 * u + j]
+            if g >= 0 and status[g // 3] == PASS:
+                rest[n] = g
                 n += 1
     keys = np.empty(n, np.int64)
     for i in range(n):
         h = rest[i]
-        r = h // 3
-        j = h - 3 * r
-        a = out[r, j]
-        b = out[r, (j + 1) % 3]
+        x = h // 3
+        j = h - 3 * x
+        if x >= m:
+            a = out[x - m, j]
+            b = out[x - m, (j + 1) % 3]
+        else:
+            a = tri[x, j]
+            b = tri[x, (j + 1) % 3]
         keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
     srt = np.argsort(keys, kind="mergesort")
     i = 0
@@ -527,87 +486,147 @@ def output_twins(out, kind, parent, twin_in, n_points):
             e += 1
         h = rest[srt[i]]
         if e - i == 1:
-            twin[h] = -1
+            if h >= 3 * m:
+                tw_new[h - 3 * m] = -1
         elif e - i == 2:
             g = rest[srt[i + 1]]
-            if out[h // 3, h % 3] == out[g // 3, g % 3]:
-                return twin, max(h, g)  # one edge twice in one direction
-            twin[h] = g
-            twin[g] = h
+            if _start(out, tri, m, h) == _start(out, tri, m, g):
+                return tw_new, changed, face_tw, max(h, g)  # one edge twice in one direction
+            for x, y in ((h, g), (g, h)):
+                if x >= 3 * m:
+                    tw_new[x - 3 * m] = y
+                else:  # a kept half-edge: filed under the input half-edge it faces
+                    f = twin_in[x]
+                    r = _rank(changed, f // 3)
+                    face_tw[3 * r + f % 3] = y
         else:
-            return twin, rest[srt[i + 2]]
+            return tw_new, changed, face_tw, rest[srt[i + 2]]
         i = e
-    return twin, -1
+    return tw_new, changed, face_tw, -1
 
 
 @njit(cache=True, nogil=True)
-def walk_links(link, out_twin):
-    """Follow the links into cycles, checking each row as the walk reaches it.
+def _start(out, tri, m, h):
+    """First vertex of virtual half-edge ``h``."""
+    x = h // 3
+    if x >= m:
+        return out[x - m, h - 3 * x]
+    return tri[x, h - 3 * x]
 
-    Returns ``(order, lengths, bad)``: rows in cycle order, the cycle lengths, and
-    ``bad`` = -1 or the first row found whose links are not two, or that crosses an
-    edge whose other side does not link back. Every row is reached exactly once
-    (the outer loop starts a walk at each row not seen yet), so every row is checked,
-    in the same pass that orders them.
+
+@njit(cache=True, nogil=True)
+def _rank(sorted_, x):
+    """Index of ``x`` in the ascending array ``sorted_`` (it is there): a plain binary
+    search (numba's ``np.searchsorted`` on a scalar costs ~100 x more per call)."""
+    lo = 0
+    hi = sorted_.shape[0] - 1
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if sorted_[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def _faced(g, changed, face_tw):
+    """Twin of the kept half-edge facing input half-edge ``g`` of a changed triangle."""
+    return face_tw[3 * _rank(changed, g // 3) + g % 3]
+
+
+@njit(cache=True, nogil=True)
+def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw):
+    """Follow the links into cycles over the virtual rows, checking each row as the walk reaches it.
+
+    Virtual rows as in :func:`new_row_twins` (kept input triangles, then the new
+    rows). Returns ``(order, lengths, low, bad)``: virtual rows in cycle order, the
+    cycle lengths, each cycle's lowest parent (input triangle) and ``bad`` = -1 or
+    the first virtual row found whose links are not two, or that crosses an edge
+    whose other side does not link back. Every row is reached exactly once (the
+    outer loop starts a walk at each row not seen yet), so every row is checked, in
+    the same pass that orders them.
     """
-    k_out = link.shape[0]
-    seen = np.zeros(k_out, np.bool_)
-    order = np.empty(k_out, np.int64)
-    lengths = np.empty(k_out, np.int64)
+    m = status.shape[0]
+    n_v = m + link_new.shape[0]
+    seen = np.zeros(n_v, np.bool_)
+    n_rows = link_new.shape[0]
+    for t in range(m):
+        if status[t] == PASS:
+            n_rows += 1
+    order = np.empty(n_rows, np.int64)
+    lengths = np.empty(n_rows, np.int64)
+    low = np.empty(n_rows, np.int64)
     n_c = 0
     pos = 0
-    for s in range(k_out):
-        if seen[s]:
+    for s in range(n_v):
+        if seen[s] or (s < m and status[s] != PASS):
             continue
         start = pos
         x = s
         came = -1
+        lo = m
         while True:
             seen[x] = True
             order[pos] = x
             pos += 1
-            bits = link[x]
+            lo = min(lo, x if x < m else parent_new[x - m])
             nxt = -1
+            nxt_g = -1
             n_links = 0
             for j in range(3):
-                if not (bits >> j) & 1:
-                    continue
+                h = 3 * x + j
+                if x < m:  # a kept triangle: links on its cover edges, the input's twins
+                    if not is_cov[h]:
+                        continue
+                    g = twin_in[h]
+                    if g >= 0 and status[g // 3] != PASS:
+                        g = _faced(g, changed, face_tw)
+                else:
+                    if not (link_new[x - m] >> j) & 1:
+                        continue
+                    g = tw_new[h - 3 * m]
                 n_links += 1
-                g = out_twin[3 * x + j]
                 if g < 0:
-                    return order, lengths, x
+                    return order, lengths, low, x
                 y = g // 3
-                if not ((link[y] >> (g - 3 * y)) & 1):
-                    return order, lengths, x
-                if came < 0 and x == s and j != came:
+                back = is_cov[g] if y < m else (link_new[y - m] >> (g - 3 * y)) & 1
+                if not back:
+                    return order, lengths, low, x
+                if came < 0 and x == s:
                     came = j  # the walk leaves s by its other link and returns by this one
                 elif j != came:
                     nxt = j
+                    nxt_g = g
             if n_links != 2 or nxt < 0:
-                return order, lengths, x
-            g = out_twin[3 * x + nxt]
-            y = g // 3
-            came = g - 3 * y
+                return order, lengths, low, x
+            y = nxt_g // 3
+            came = nxt_g - 3 * y
             if y == s:
                 break
             if seen[y]:
-                return order, lengths, y
+                return order, lengths, low, y
             x = y
         lengths[n_c] = pos - start
+        low[n_c] = lo
         n_c += 1
-    return order, lengths[:n_c], -1
+    return order, lengths[:n_c], low[:n_c], -1
 
 
 @njit(cache=True, nogil=True)
-def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partner, kind, amin):
-    """The output rows, walked into ``order`` (:func:`walk_links`), taken across in one gather.
+def rows_in_cycle_order(
+    order, lengths, run_order, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed,
+    face_tw, amin,
+):
+    """The output rows, walked into ``order`` (:func:`walk_links`, virtual rows), taken across in one gather.
 
-    Runs go in the order ``run_order``; every row's corners, parents, kind, its
-    parents' smallest angle ``pm`` (``amin`` of ``parent``, and of ``partner`` if any)
-    and its pairing claim (``claim[3 i + j]``: the twin of edge j of final row i, -1
-    on the boundary, renumbered from ``out_twin``) are written in the same pass.
+    Runs go in the order ``run_order``; every row's corners, parents, kind (3 for a
+    kept triangle), its parents' smallest angle ``pm`` (``amin`` of ``parent``, and of
+    ``partner`` if any) and its pairing claim (``claim[3 i + j]``: the twin of edge j
+    of final row i, -1 on the boundary) are written in the same pass.
     Returns ``(out, parent, partner, kind, pm, lengths, claim)``.
     """
+    m = tri.shape[0]
     c = lengths.shape[0]
     k = order.shape[0]
     rows = order
@@ -627,7 +646,7 @@ def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partne
             for i in range(starts[r], starts[r] + lengths[r]):
                 rows[p] = order[i]
                 p += 1
-    pos = np.empty(k, np.int64)
+    pos = np.empty(m + out_new.shape[0], np.int64)
     for i in range(k):
         pos[rows[i]] = i
     out2 = np.empty((k, 3), np.int64)
@@ -639,14 +658,32 @@ def rows_in_cycle_order(order, lengths, run_order, out_twin, out, parent, partne
     for i in range(k):
         x = rows[i]
         for j in range(3):
-            out2[i, j] = out[x, j]
-            g = out_twin[3 * x + j]
+            h = 3 * x + j
+            if x < m:
+                g = twin_in[h]
+                if g >= 0 and status[g // 3] != PASS:
+                    g = _faced(g, changed, face_tw)
+            else:
+                g = tw_new[h - 3 * m]
             claim[3 * i + j] = -1 if g < 0 else 3 * pos[g // 3] + g % 3
-        p = parent[x]
-        q = partner[x]
+        if x < m:
+            out2[i, 0] = tri[x, 0]
+            out2[i, 1] = tri[x, 1]
+            out2[i, 2] = tri[x, 2]
+            parent2[i] = x
+            partner2[i] = -1
+            kind2[i] = 3
+            pm[i] = amin[x]
+            continue
+        r = x - m
+        out2[i, 0] = out_new[r, 0]
+        out2[i, 1] = out_new[r, 1]
+        out2[i, 2] = out_new[r, 2]
+        p = parent_new[r]
+        q = partner_new[r]
         parent2[i] = p
         partner2[i] = q
-        kind2[i] = kind[x]
+        kind2[i] = kind_new[r]
         a = amin[p]
         if q >= 0 and amin[q] < a:
             a = amin[q]

@@ -404,6 +404,7 @@ def sparse_cycles(
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
+    # new rows only; a triangle kept whole stays the input's row until the gather
     out, link, parent, partner, kind, mid_a, mid_b, mid_t = _k.emit(
         tri, tw, cover.is_cov, status, slot, swap_he, split_index, n
     )
@@ -412,21 +413,17 @@ def sparse_cycles(
     placed = mid_t >= 0
     mids[placed] = point[order][join[mid_t[placed]]]
     all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), mids])
-    out_twin, dup = _k.output_twins(out, kind, parent, tw, len(all_pts))
+    tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts))
     if dup >= 0:
-        raise VerificationError(f"internal error: output edge of row {int(dup) // 3} used twice")
-    order_rows, lengths, bad = _k.walk_links(link, out_twin)
+        raise VerificationError(f"internal error: output edge of virtual row {int(dup) // 3} used twice")
+    order_rows, lengths, low, bad = _k.walk_links(status, cover.is_cov, link, parent, tw, tw_new, changed, face_tw)
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
     # runs in the order of their lowest input triangle; rows, their parents' smallest
     # angle (pm) and the twins renumbered as the claim, in one gather
-    if len(lengths) > 1:
-        key = np.minimum.reduceat(parent[order_rows], np.cumsum(lengths) - lengths)
-        run_order = np.argsort(key, kind="stable")
-    else:
-        run_order = np.zeros(len(lengths), np.int64)
+    run_order = np.argsort(low, kind="stable") if len(lengths) > 1 else np.zeros(len(lengths), np.int64)
     out, parent, partner, kind, pm, lengths, claim = _k.rows_in_cycle_order(
-        order_rows, lengths, run_order, out_twin, out, parent, partner, kind, amin_p
+        order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p
     )
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point

@@ -31,6 +31,18 @@ def _reference_facts(pts: np.ndarray, tri: np.ndarray):
     return ang.min(axis=1), ang.max(axis=1), ratio
 
 
+def _pinning_domain(name: str) -> hammesh.Domain:
+    """A bundled domain, or constrained loops inside a plate, or two regions (whose shared
+    edges are pinned too)."""
+    if name == "loops":
+        return plate_with_loops(3)
+    if name == "regions":
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        return hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    return bundled_domain(name)
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     pts=st.integers(2, 3).flatmap(
@@ -134,14 +146,7 @@ def test_pinned_output_edges_from_parents_equal_the_key_search(name: str, monkey
         return got
 
     monkeypatch.setattr(sparse._ik, "pinned_output_edges", spy)
-    if name == "loops":  # constrained loops inside a plate
-        dom = plate_with_loops(3)
-    elif name == "regions":  # edges between two regions are pinned too
-        v = square(0, 0, 2) + square(0.5, 0.5, 1)
-        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
-        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
-    else:
-        dom = bundled_domain(name)
+    dom = _pinning_domain(name)
     scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
     for area in (0.01 * scale, 0.002 * scale):
         m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
@@ -237,47 +242,47 @@ def test_placing_only_open_candidates_loses_nothing(name: str, monkeypatch) -> N
 
 
 @pytest.mark.parametrize("name", ["A", "la", "loops", "regions"])
-def test_output_twins_from_the_input_equal_a_full_matching(name: str, monkeypatch) -> None:
+def test_claim_from_the_input_twins_equals_a_full_matching(name: str, monkeypatch) -> None:
     """Twins of kept rows taken from the input's, the rest matched by end points: as on the whole output."""
     from hammesh.halfedge import half_edge_twins
     from hammesh.postprocess import sparse
 
     seen = []
-    real = sparse._k.output_twins
+    real = sparse._k.rows_in_cycle_order
 
-    def spy(out, kind, parent, twin_in, n_points):
-        got = real(out, kind, parent, twin_in, n_points)
-        seen.append((got, half_edge_twins(out, n_points), (kind != 3).sum()))
+    def spy(*args):
+        got = real(*args)
+        out, kind, claim = got[0], got[3], got[6]
+        # (copied: the improvement flips change the rows and the claim in place afterwards)
+        seen.append((claim.copy(), half_edge_twins(out, int(out.max()) + 1), (kind != 3).sum()))
         return got
 
-    monkeypatch.setattr(sparse._k, "output_twins", spy)
-    if name == "loops":
-        dom = plate_with_loops(3)
-    elif name == "regions":
-        v = square(0, 0, 2) + square(0.5, 0.5, 1)
-        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
-        dom = hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
-    else:
-        dom = bundled_domain(name)
+    monkeypatch.setattr(sparse._k, "rows_in_cycle_order", spy)
+    dom = _pinning_domain(name)
     scale = np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1])
     for area in (None, 0.01 * scale, 0.002 * scale):
         m = hammesh.quality_mesh(dom, min_angle=30, max_area=area)
         hammesh.hamiltonian(m)
-    for (tw, bad), (want, want_bad), n_new in seen:
-        assert bad == want_bad == -1 and n_new > 0
-        np.testing.assert_array_equal(tw, want)
+    assert len(seen) >= 3  # (and the kernels' warm-up call, in a fresh process)
+    for claim, (want, want_bad), n_new in seen:
+        assert want_bad == -1 and n_new > 0
+        np.testing.assert_array_equal(claim, want)
 
 
-def test_output_twins_name_an_edge_used_twice() -> None:
-    from hammesh.postprocess._sparse_kernels import output_twins
+def test_new_row_twins_name_an_edge_used_twice() -> None:
+    from hammesh.postprocess._sparse_kernels import PASS, SWAP, new_row_twins
 
-    out = np.array([[0, 1, 2], [0, 1, 3]])  # edge 0 -> 1 in both rows
-    tw, bad = output_twins(out, np.array([0, 0], np.int8), np.array([0, 1]), np.full(6, -1), 4)
-    assert bad in (0, 3)
-    out = np.array([[0, 1, 2], [1, 0, 3], [1, 0, 4]])  # three rows on edge 0-1
-    tw, bad = output_twins(out, np.array([0, 0, 0], np.int8), np.array([0, 1, 2]), np.full(9, -1), 5)
-    assert bad >= 0
-
+    tri = np.array([[0, 1, 2], [1, 0, 3]])  # kept t0 faces the changed t1 across 0-1
+    twin_in = np.array([3, -1, -1, 0, -1, -1])
+    status = np.array([PASS, SWAP], np.int8)
+    ok = np.array([[1, 0, 4], [4, 0, 3], [1, 4, 3]])  # t1 replaced, edge 1 -> 0 kept
+    tw, changed, face_tw, bad = new_row_twins(ok, tri, twin_in, status, 5)
+    assert bad == -1 and list(changed) == [1]
+    assert tw[0] == 0 and face_tw[0] == 6  # kept 0 -> 1 pairs with new row 0's 1 -> 0 (virtual 3 x 2 + 0)
+    twice = np.array([[0, 1, 4]])  # 0 -> 1 again, in the kept row's direction
+    assert new_row_twins(twice, tri, twin_in, status, 5)[3] >= 0
+    three = np.array([[1, 0, 4], [1, 0, 3]])  # a third row on edge 0-1
+    assert new_row_twins(three, tri, twin_in, status, 5)[3] >= 0
 
 def _shuffled_cycle_rows(h: hammesh.HamiltonianMesh, seed: int):
     """``h``'s rows shuffled, with the link bits of each row (the edges its cycle crosses)."""
@@ -301,44 +306,62 @@ def _shuffled_cycle_rows(h: hammesh.HamiltonianMesh, seed: int):
     return shuffled, link[perm], half_edge_twins(shuffled, h.n_points)[0], inv
 
 
+@pytest.mark.parametrize("kept", [True, False])
 @pytest.mark.parametrize("name", ["A", "loops"])
-def test_walk_links_orders_every_cycle_and_the_gather_claims_its_twins(name: str) -> None:
-    """The one-pass walk finds each run again from shuffled rows; the gather's claim is the output's twins."""
+def test_walk_links_orders_every_cycle_and_the_gather_claims_its_twins(name: str, kept: bool) -> None:
+    """The one-pass walk finds each run again from shuffled rows, all kept (input rows and their cover
+    edges) or all new (own rows and links); the gather's claim is the output's twins."""
     from hammesh.halfedge import half_edge_twins
-    from hammesh.postprocess._sparse_kernels import rows_in_cycle_order, walk_links
+    from hammesh.postprocess._sparse_kernels import PASS, SPLIT, rows_in_cycle_order, walk_links
 
     dom = plate_with_loops(3) if name == "loops" else bundled_domain(name)
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.003 * np.ptp(dom.vertices[:, 0]) ** 2)
     h = hammesh.hamiltonian(m)
     rows, link, tw, inv = _shuffled_cycle_rows(h, 7)
-    order, lengths, bad = walk_links(link, tw)
+    k = len(rows)
+    none = np.zeros(0, np.int64)
+    parent = np.arange(k)
+    partner = np.where(parent % 5 == 0, (parent + 1) % k, -1)
+
+    def walk(link):
+        if kept:  # virtual rows 0..k-1 are input triangles kept whole, their links their cover edges
+            is_cov = ((link[:, None] >> np.arange(3)) & 1).astype(np.bool_).reshape(-1)
+            status = np.full(k, PASS, np.int8)
+            return walk_links(status, is_cov, np.zeros(0, np.uint8), none, tw, none, none, none), status
+        status = np.zeros(0, np.int8)  # no input: every row is a new one (virtual rows 0 + i)
+        return walk_links(status, np.zeros(0, np.bool_), link, parent, none, tw, none, none), status
+
+    (order, lengths, low, bad), status = walk(link)
     assert bad == -1
     assert sorted(lengths) == sorted(h.components)
-    assert np.array_equal(np.sort(order), np.arange(len(rows)))
+    assert np.array_equal(np.sort(order), np.arange(k))
     start = 0
-    for n in lengths:  # consecutive rows of a run share an edge, and the run closes
+    for n, lo in zip(lengths, low):  # consecutive rows of a run share an edge, and the run closes
         run = rows[order[start:start + n]]
         for x, y in zip(run, np.roll(run, -1, axis=0)):
             assert len(set(x) & set(y)) == 2
+        assert lo == order[start:start + n].min()  # (parent = row here)
         start += n
-    amin = np.linspace(0.1, 0.5, len(rows))
-    parent = np.arange(len(rows))
-    partner = np.where(parent % 5 == 0, (parent + 1) % len(rows), -1)
-    out, par, prt, kind, pm, new_len, claim = rows_in_cycle_order(
-        order, lengths, np.arange(len(lengths))[::-1].copy(), tw, rows, parent, partner, np.zeros(len(rows), np.int8),
-        amin,
-    )
+    amin = np.linspace(0.1, 0.5, k)
+    run_order = np.arange(len(lengths))[::-1].copy()
+    if kept:
+        got = rows_in_cycle_order(order, lengths, run_order, rows, tw, status, np.zeros((0, 3), np.int64), none,
+                                  none, np.zeros(0, np.int8), none, none, none, amin)
+    else:
+        got = rows_in_cycle_order(order, lengths, run_order, np.zeros((0, 3), np.int64), none, status, rows, parent,
+                                  partner, np.full(k, SPLIT, np.int8), tw, none, none, amin)
+    out, par, prt, kind, pm, new_len, claim = got
     np.testing.assert_array_equal(claim, half_edge_twins(out, h.n_points)[0])
     np.testing.assert_array_equal(new_len, lengths[::-1])
     np.testing.assert_array_equal(out, rows[par])
+    assert (kind == 3).all() == kept and (prt == -1).all() == kept
     want = np.where(prt >= 0, np.minimum(amin[par], amin[np.maximum(prt, 0)]), amin[par])
     np.testing.assert_array_equal(pm, want)
     # a row with one link, and a link the other side does not return: named
-    for r in (0, len(rows) // 2):
+    for r in (0, k // 2):
         broken = link.copy()
         broken[r] &= broken[r] - 1  # drop its lowest link bit
-        assert walk_links(broken, tw)[2] >= 0
-
+        assert walk(broken)[0][3] >= 0
 
 def test_step_seconds_cover_the_construction_within_its_time() -> None:
     """The report's per-step times (bench_sparse --breakdown) are each >= 0 and add up to at most the call."""
@@ -348,3 +371,25 @@ def test_step_seconds_cover_the_construction_within_its_time() -> None:
     assert set(wall) == set(cpu) >= {"input_angles", "judge_edges", "cover", "plan_joins", "output_rows", "improve"}
     assert all(v >= 0 for v in [*wall.values(), *cpu.values()])
     assert sum(wall.values()) <= r["seconds"]["hamiltonian"]
+
+
+@pytest.mark.slow
+def test_bench_sparse_breakdown_prints_every_step() -> None:
+    """``bench_sparse.py --breakdown`` (a fresh process) prints each step's wall and CPU against raw Triangle."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bench = Path(__file__).parent.parent.parent / "benchmarks" / "bench_sparse.py"
+    proc = subprocess.run(
+        [sys.executable, str(bench), "--breakdown", "--max-area", "0.001"], capture_output=True, text=True,
+        timeout=1200,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    for step in ("input_angles", "judge_edges", "cover", "plan_joins", "output_rows", "improve", "certificate"):
+        row = next(x for x in lines if x.startswith(step + " "))
+        wall = float(row.split()[1])
+        assert wall >= 0
+    ratio = float(next(x for x in lines if x.startswith("BREAKDOWN_RATIO")).split()[1])
+    assert ratio > 0
