@@ -11,6 +11,13 @@ triangles left free by the matching, and the largest cycle's share (a winding
 cover: issue 14).
 
     python benchmarks/bench_cover.py [--target 1500000] [--repeat 3]
+    python benchmarks/bench_cover.py --cells 0,1024,256 [--target 100000]
+
+``--cells``: the cover's cycles confined to quadtree cells of about S triangles
+(``cycle_cover.CELL_SIZE``; 0: unconfined, the default) on ``bench_partition.py``'s
+two domains: each mesh is made once, then for each S the sparse ``hamiltonian()``
+and the cycle cut of k = 8 and 64 pieces against one METIS call on the same output
+graph (issue 14's ratio), with the Steiner points and the uncovered triangles.
 """
 
 from __future__ import annotations
@@ -21,11 +28,62 @@ import time
 import numpy as np
 
 
+def cells_table(target: int, sizes: list[int]) -> None:
+    """Sparse cycle cut / METIS's with the cover confined to cells of each size (``--cells``)."""
+    import sys
+    import warnings
+    from pathlib import Path
+
+    import pymetis
+    from scipy.sparse import coo_matrix
+
+    import hammesh
+    import hammesh.postprocess.cycle_cover as cc
+    from hammesh.partition import dual_edges, edge_cut, partition
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_partition import _domains
+
+    keep = cc.CELL_SIZE
+    try:
+        for name, dom, area in _domains():
+            mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+            for size in sizes:
+                cc.CELL_SIZE = size
+                t = time.perf_counter()
+                h = hammesh.hamiltonian(mesh, mode="sparse")
+                dt = time.perf_counter() - t
+                r = h.report
+                a, b = dual_edges(h.triangles)
+                m = h.n_triangles
+                g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
+                g = (g + g.T).tocsr()
+                cuts = []
+                for k in (8, 64):
+                    p = partition(h, k)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        mp = np.asarray(pymetis.part_graph(k, xadj=g.indptr, adjncy=g.indices)[1])
+                    mc = edge_cut(mp, a, b)
+                    cuts.append(f"k={k} {p.edge_cut:,} / METIS {mc:,} = {p.edge_cut / mc:.2f}")
+                print(f"{name} ({mesh.n_triangles:,} input) cell_size {size}: {'; '.join(cuts)}; Steiner "
+                      f"{r['steiner_points']} ({100 * r['steiner_per_input_triangle']:.2f} %); cycles "
+                      f"{r['cycles_before_merging']:,}; uncovered {r['uncovered']:,}; hamiltonian {dt:.2f} s; "
+                      f"verified {r['verified']}", flush=True)
+    finally:
+        cc.CELL_SIZE = keep
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--target", type=int, default=1_500_000, help="triangles of the input mesh")
+    ap.add_argument("--target", type=int, default=None, help="triangles of the input mesh (1.5M; --cells: 100k)")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--cells", default=None, help="comma-separated cell sizes: the cut table instead (0: unconfined)")
     args = ap.parse_args()
+    if args.cells is not None:
+        cells_table(args.target or 100_000, [int(x) for x in args.cells.split(",")])
+        return
+    args.target = args.target or 1_500_000
     import hammesh
     from hammesh.halfedge import half_edges
     from hammesh.postprocess.cycle_cover import cycle_cover

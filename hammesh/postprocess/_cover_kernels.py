@@ -11,11 +11,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh.postprocess._thm24_kernels import edge_class as _edge_class
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
 
 @njit(cache=True)
-def _neighbors(twin, m):
+def neighbors(twin, m):
     nb = np.full((m, 3), -1, np.int64)
     for t in range(m):
         for k in range(3):
@@ -172,7 +173,7 @@ def _bfs_order(nb, m):
 
 
 @njit(cache=True)
-def _greedy_matching(nb, alive, deg, m, good, order, online, parent, fa, label, stamp, queue):
+def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stamp, queue, mate):
     """Karp-Sipser: match the degree-3 triangles among themselves, forced pairs first.
 
     Where a triangle has a choice, its partner is one across a ``good[t, k]`` edge if
@@ -185,22 +186,18 @@ def _greedy_matching(nb, alive, deg, m, good, order, online, parent, fa, label, 
     triangles just ahead; an augmenting search of at most ``online`` triangles from
     it, made at once, finds one a few steps away (measured at 1.5 M triangles: 9,980
     triangles left free in Triangle's numbering without these searches, about 20 with).
-    Returns ``(active, mate, next lca stamp)``.
+    ``active``: the triangles to match (alive, of degree 3; with cells, not the
+    pinned ones); ``mate`` is completed in place. Returns the next lca stamp.
     """
     stack = np.empty(3 * m + 16, np.int64)  # a triangle is pushed at most three times
     touched = np.empty(online + 16, np.int64)
     s = 0
-    # matching on alive triangles of (alive) degree 3, edges between them
-    active = np.zeros(m, np.bool_)
-    for t in range(m):
-        active[t] = alive[t] and deg[t] == 3
-    mate = np.full(m, -1, np.int64)
     hdeg = np.zeros(m, np.int64)
     for t in range(m):
-        if active[t]:
+        if active[t] and mate[t] < 0:
             for k in range(3):
                 u = nb[t, k]
-                if u >= 0 and active[u]:
+                if u >= 0 and active[u] and mate[u] < 0:
                     hdeg[t] += 1
     top = 0
     for t in range(m):
@@ -257,7 +254,7 @@ def _greedy_matching(nb, alive, deg, m, good, order, online, parent, fa, label, 
                     if hdeg[w] <= 1:
                         stack[top] = w
                         top += 1
-    return active, mate, s
+    return s
 
 
 @njit(cache=True)
@@ -436,7 +433,116 @@ def _final_peel(nb, twin, is_cov, cdeg, alive, m):
 
 
 @njit(cache=True)
-def dual_cover(twin, m, budget, arc_limit, good, online):
+def smooth_cells(nb, cell, quad, passes):
+    """Move a triangle into the cell of two of its neighbours, so that few triangles
+    have two dual edges across cell borders (each triangle has one matching edge,
+    and only a matched edge may cross a border); a moved triangle takes the
+    neighbour's quadtree coordinates ``quad`` too. In place, returns the moves."""
+    m = cell.shape[0]
+    moved = 0
+    for _ in range(passes):
+        changed = 0
+        for t in range(m):
+            c = cell[t]
+            for k in range(3):
+                u = nb[t, k]
+                if u < 0 or cell[u] == c:
+                    continue
+                cnt = 0
+                for j in range(3):
+                    w = nb[t, j]
+                    if w >= 0 and cell[w] == cell[u]:
+                        cnt += 1
+                if cnt >= 2:
+                    cell[t] = cell[u]
+                    quad[t] = quad[u]
+                    changed += 1
+                    break
+        moved += changed
+        if changed == 0:
+            break
+    return moved
+
+
+@njit(cache=True)
+def _pin_borders(nb, alive, deg, cell, mate, m):
+    """Match the dual edges across cell borders (both triangles of degree 3, free):
+    the cover's cycles then stay inside the cells. Returns the pairs pinned."""
+    n = 0
+    for t in range(m):
+        if not (alive[t] and deg[t] == 3) or mate[t] >= 0:
+            continue
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and alive[u] and deg[u] == 3 and mate[u] < 0 and cell[u] != cell[t]:
+                mate[t] = u
+                mate[u] = t
+                n += 1
+                break
+    return n
+
+
+@njit(cache=True)
+def cut_cell_borders(nb, cell):
+    """Remove from the dual graph (in place) the edges of triangles that could not
+    keep their cycle inside their cell: a triangle with two or three dual edges
+    across cell borders (a junction of cells; it has one matching edge), or with
+    two neighbours only and one of them across a border (both its edges would be
+    cover edges), and, as the peel does, every edge of a triangle left with one
+    neighbour. A worklist, O(m): afterwards every border edge joins two triangles
+    of degree 3 with one border edge each. A triangle cut off is left uncovered
+    (peeled) and joined later (an absorbing swap, a fan or its incenter).
+    Returns the number of edges cut."""
+    m = nb.shape[0]
+    n_cut = 0
+    stack = np.empty(m + 6 * m + 8, np.int64)  # m, then two pushes per edge cut
+    top = 0
+    for t in range(m):
+        stack[top] = t
+        top += 1
+    while top > 0:
+        top -= 1
+        t = stack[top]
+        nbrd = 0
+        d = 0
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0:
+                d += 1
+                if cell[u] != cell[t]:
+                    nbrd += 1
+        if d == 0 or (d == 3 and nbrd <= 1) or (d == 2 and nbrd == 0):
+            continue
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and (d == 1 or cell[u] != cell[t]):
+                nb[t, k] = -1
+                for j in range(3):
+                    if nb[u, j] == t:
+                        nb[u, j] = -1
+                n_cut += 1
+                stack[top] = u
+                top += 1
+        stack[top] = t  # left with one neighbour: peeled in turn
+        top += 1
+    return n_cut
+
+
+@njit(cache=True)
+def _cell_neighbors(nb, cell):
+    """``nb`` without the dual edges across cell borders."""
+    m = nb.shape[0]
+    out = nb.copy()
+    for t in range(m):
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and cell[u] != cell[t]:
+                out[t, k] = -1
+    return out
+
+
+@njit(cache=True)
+def dual_cover(twin, m, budget, arc_limit, good, online, cell):
     """Vertex-disjoint cycles of the dual graph covering most triangles.
 
     Gopi & Eppstein's observation, made to work with boundaries: in a graph of
@@ -445,27 +551,48 @@ def dual_cover(twin, m, budget, arc_limit, good, online):
 
     1. peel: a triangle with at most one (remaining) neighbour cannot lie on a cycle
        (ears, and what they leave behind) and is left uncovered;
-    2. match the degree-3 triangles: Karp-Sipser greedy (a triangle with a single
+    2. with cells (``cell`` (m,) int64, one id per triangle; empty: none): match
+       every dual edge across a cell border first (``_pin_borders``), so that the
+       cover's cycles stay inside the cells; then match inside each cell (greedy and
+       searches confined to the cell, so bounded by its size); what is left free
+       searches across borders (unpinning one border edge per path);
+    3. match the degree-3 triangles: Karp-Sipser greedy (a triangle with a single
        free candidate is matched first), then augmenting searches from each free one;
-    3. cover = the remaining dual edges not in the matching; a degree-3 triangle still
+    4. cover = the remaining dual edges not in the matching; a degree-3 triangle still
        free is repaired by dropping the shortest cover arc from it to another such
        triangle (its inner triangles are left uncovered);
-    4. peel again whatever still has cover degree other than 2.
+    5. peel again whatever still has cover degree other than 2.
 
     ``good`` (m, 3) bool steers the greedy matching's free choices (``_greedy_matching``).
 
     Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered)``.
     """
-    nb = _neighbors(twin, m)
+    nb = neighbors(twin, m)
+    if cell.shape[0] == m and m > 0:
+        cut_cell_borders(nb, cell)
     alive, deg = _peel(nb, m)
     parent = np.full(m, -1, np.int64)
     fa = np.arange(m)
     label = np.full(m, -1, np.int64)
     stamp = np.zeros(m, np.int64)
     queue = np.empty(m + 8, np.int64)
-    order = _bfs_order(nb, m) if online > 0 else np.arange(m)
-    active, mate, s = _greedy_matching(nb, alive, deg, m, good, order, online, parent, fa, label, stamp, queue)
+    mate = np.full(m, -1, np.int64)
     touched = np.empty(budget + 8, np.int64)
+    active = np.zeros(m, np.bool_)  # alive triangles of (alive) degree 3 are matched
+    for t in range(m):
+        active[t] = alive[t] and deg[t] == 3
+    if cell.shape[0] == m and m > 0:
+        _pin_borders(nb, alive, deg, cell, mate, m)
+        nbc = _cell_neighbors(nb, cell)
+        inner = active & (mate < 0)  # the pinned pairs stay out of the cell's searches
+        order = _bfs_order(nbc, m) if online > 0 else np.arange(m)
+        s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
+        for t in range(m):
+            if inner[t] and mate[t] < 0:
+                _, s = _augment(t, nbc, inner, mate, parent, fa, label, stamp, s, touched, queue, budget)
+    else:
+        order = _bfs_order(nb, m) if online > 0 else np.arange(m)
+        s = _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stamp, queue, mate)
     for t in range(m):
         if active[t] and mate[t] < 0:
             _, s = _augment(t, nb, active, mate, parent, fa, label, stamp, s, touched, queue, budget)
@@ -478,6 +605,13 @@ def dual_cover(twin, m, budget, arc_limit, good, online):
     _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m)
     n_unc = _final_peel(nb, twin, is_cov, cdeg, alive, m)
     return is_cov, n_free, n_unc
+
+
+@njit(cache=True)
+def edge_classes(qa, qb, out):
+    """``_thm24_kernels.edge_class`` of each pair of packed quadtree coordinates."""
+    for i in range(qa.shape[0]):
+        out[i] = _edge_class(qa[i], qb[i])
 
 
 @njit(cache=True)
@@ -514,7 +648,7 @@ def cycle_ids(twin, is_cov, m):
 
 
 @njit(cache=True)
-def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes):
+def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
     """Merge cover cycles for free by re-matching around vertices.
 
     Around an interior vertex of even degree 2k whose k spokes alternate matched /
@@ -522,6 +656,10 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes):
     triangle at cover degree 2 and the matching perfect; if the k cover spokes lie on
     k different cycles, the k cycles become one (remove one edge from each: k paths;
     the new spokes chain them around the vertex). No geometry changes.
+
+    With cells (``cell`` (m,) int64; empty: none) only vertices whose triangles all
+    lie in one cell are rotated: cycles are merged across cells by the joins, finest
+    cells first.
 
     Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
     returns the number of cycles merged away.
@@ -535,6 +673,7 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes):
     spokes = np.empty(32, np.int64)
     roots = np.empty(16, np.int64)
     merged = 0
+    use_cell = cell.shape[0] == m
     skip = np.zeros(n_points, np.bool_)
     for _ in range(passes):
         before = merged
@@ -559,7 +698,7 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes):
                 t = h // 3
                 p = 3 * t + (h - 3 * t + 2) % 3
                 q = twin[p]
-                if q < 0 or d >= 32 or cyc[t] < 0:
+                if q < 0 or d >= 32 or cyc[t] < 0 or (use_cell and cell[t] != cell[h0 // 3]):
                     ok = False
                     break
                 if d > 0 and is_cov[p] == is_cov[spokes[d - 1]]:

@@ -18,8 +18,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammesh.postprocess import _cover_kernels as _k
+from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 
-__all__ = ["CycleCover", "cycle_cover", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES"]
+__all__ = ["CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE"]
+
+#: Triangles per quadtree cell that the cover's cycles are confined to by default
+#: (``cycle_cover(..., points=)``); 0: not confined. Off by default: measured at
+#: 100k triangles (docs/sparse.md) confinement cut the sparse cycle's k = 64 edge cut
+#: from 2.1-2.2x METIS's to 1.8-2.0x only, for 1.1-1.6x the Steiner points.
+CELL_SIZE = 0
 
 #: Triangles an augmenting search started by the greedy matching may label (``online``).
 ONLINE_BUDGET = 256
@@ -46,6 +53,9 @@ class CycleCover:
         Degree-3 triangles the matching left free (before the local repair).
     n_rotations : int
         Cycles merged away by re-matching around vertices.
+    quad : (m,) int64 or None
+        Packed quadtree coordinates of each triangle (``_thm24_kernels.quadtree_coords``)
+        when the cycles were confined to cells: ``join_classes`` orders the joins by them.
     """
 
     is_cov: np.ndarray
@@ -54,6 +64,7 @@ class CycleCover:
     n_uncovered: int
     n_unmatched: int
     n_rotations: int = 0
+    quad: np.ndarray | None = None
 
 
 def cycle_cover(
@@ -65,6 +76,8 @@ def cycle_cover(
     arc_limit: int | None = None,
     rotate: bool = True,
     good: np.ndarray | None = None,
+    points: np.ndarray | None = None,
+    cell_size: int | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -91,6 +104,15 @@ def cycle_cover(
         Half-edges preferred as matching (non-cover) edges where the greedy matching
         has a choice: the non-cover edges are where cycles get joined, so sparse mode
         marks the edges whose join would keep its quality rule.
+    points : (n, 2) float64, optional
+        With points (planar) and ``cell_size > 0``, the cycles are confined to the
+        cells of a count-balanced quadtree of about ``cell_size`` triangles each: every
+        dual edge across a cell border is matched first, so no cover cycle crosses one
+        (up to the few the matching must unpin), and the joins can then go finest cell
+        first (``join_classes``) so that the final cycle sweeps the quadtree cell by
+        cell, as the incircle mode's compact tree does.
+    cell_size : int, optional
+        Default ``CELL_SIZE`` (read at call time).
 
     Returns
     -------
@@ -111,12 +133,18 @@ def cycle_cover(
     if online is None:
         online = ONLINE_BUDGET if m >= ONLINE_MIN_TRIANGLES else 0
     g = np.zeros((m, 3), np.bool_) if good is None else np.ascontiguousarray(good, dtype=np.bool_).reshape(m, 3)
-    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g, int(online))
+    quad = cell = None
+    if cell_size is None:
+        cell_size = CELL_SIZE
+    if points is not None and cell_size > 0 and m > 0 and np.shape(points)[1] == 2:
+        quad, cell = _cells(np.ascontiguousarray(points, dtype=np.float64), triangles, tw, m, int(cell_size))
+    no_cell = np.zeros(0, np.int64)
+    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g, int(online), no_cell if cell is None else cell)
     cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
-        n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, 2))
+        n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, 2, no_cell if cell is None else cell))
         n_cyc -= n_rot
     return CycleCover(
         is_cov=is_cov,
@@ -125,4 +153,29 @@ def cycle_cover(
         n_uncovered=int(n_unc),
         n_unmatched=int(n_free),
         n_rotations=n_rot,
+        quad=quad,
     )
+
+
+def _cells(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, m: int, size: int):
+    """Packed quadtree coordinates and cell ids of about ``size`` triangles per cell."""
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    quad = quadtree_coords(points, tri)[:, 0].astype(np.int64)
+    low = (1 << CELL_BITS) - 1
+    qx, qy = quad >> CELL_BITS, quad & low
+    area = float(qx.max() + 1) * float(qy.max() + 1)  # in finest cells
+    level = int(round(0.5 * np.log2(max(size * area / m, 1.0))))
+    cell = ((qx >> level) << 32) | (qy >> level)
+    _k.smooth_cells(_k.neighbors(twin, m), cell, quad, 4)
+    return quad, cell
+
+
+def join_classes(quad: np.ndarray, t: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Class of a join between triangles ``t`` and ``u`` (arrays): the level of the
+    smallest quadtree cell holding both, refined by how near the join lies to that
+    cell's centre (``_thm24_kernels.edge_class``). Joins taken in increasing class
+    join each cell's cycles before the cell is joined to its siblings, near its
+    centre: the final cycle sweeps the cells like the incircle tour."""
+    out = np.empty(len(t), np.int64)
+    _k.edge_classes(quad[t], quad[u], out)
+    return out

@@ -130,6 +130,82 @@ def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, on
     oracle_check(tri, c)
 
 
+@given(case=punched_delaunay(), rotate=st.booleans(), size=st.sampled_from([1, 4, 16, 64]))
+def test_cell_confined_cover_matches_oracle(case, rotate: bool, size: int) -> None:
+    # cycles confined to quadtree cells (edges cut at cell junctions, borders pinned
+    # into the matching, searches inside the cells first): still valid cycles
+    pts, tri, _ = case
+    if len(tri) == 0:
+        return
+    twin = half_edges(tri, len(pts)).twin
+    c = cycle_cover(tri, twin, rotate=rotate, points=pts, cell_size=size)
+    oracle_check(tri, c)
+    assert c.quad is not None and len(c.quad) == len(tri)
+
+
+@given(case=punched_delaunay(), size=st.sampled_from([1, 4, 16, 64]))
+def test_cut_cell_borders_leaves_only_pinnable_borders(case, size: int) -> None:
+    # after the cut every dual edge across a cell border joins two triangles of
+    # degree 3 with that one border edge each (so all borders can be matched), and
+    # every edge cut was a border edge or one of a triangle left with one neighbour
+    from hammesh.postprocess import _cover_kernels as ck
+    from hammesh.postprocess.cycle_cover import _cells
+
+    pts, tri, _ = case
+    m = len(tri)
+    if m == 0:
+        return
+    twin = half_edges(tri, len(pts)).twin
+    _, cell = _cells(pts, tri, twin, m, size)
+    nb0 = ck.neighbors(twin, m)
+    nb = nb0.copy()
+    ck.cut_cell_borders(nb, cell)
+    assert ((nb == nb0) | (nb == -1)).all()
+    for t in range(m):
+        d = int((nb[t] >= 0).sum())
+        assert d != 1
+        border = [u for u in nb[t] if u >= 0 and cell[u] != cell[t]]
+        if border:
+            assert d == 3 and len(border) == 1
+        for k in range(3):  # symmetric
+            u = nb[t, k]
+            if u >= 0:
+                assert t in nb[u]
+
+
+def test_cells_keep_cycles_inside() -> None:
+    # confined to cells of ~256 triangles, far fewer cover edges cross a cell border
+    # than in the unconfined cover (only where the matching had to search across)
+    from hammesh.postprocess.cycle_cover import _cells
+
+    dom = bundled_domain("face")
+    mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 8000)
+    tri = mesh.triangles
+    m = len(tri)
+    twin = half_edges(tri, mesh.n_points).twin
+    _, cell = _cells(mesh.points, tri, twin, m, 256)
+
+    def crossing(c) -> int:
+        h = np.flatnonzero(c.is_cov)
+        return int((cell[h // 3] != cell[twin[h] // 3]).sum() // 2)
+
+    free = cycle_cover(tri, twin)
+    inside = cycle_cover(tri, twin, points=mesh.points, cell_size=256)
+    oracle_check(tri, inside)
+    assert crossing(inside) * 4 < crossing(free)
+    assert inside.n_uncovered <= 0.03 * m
+
+
+def test_join_classes_are_quadtree_levels() -> None:
+    # two triangles of one finest cell join before two across the top split
+    from hammesh.postprocess.cycle_cover import join_classes
+
+    low = (1 << 15) - 1
+    quad = np.array([(5 << 15) | 7, (5 << 15) | 7, (low << 15) | 7, (0 << 15) | 7], np.int64)
+    c = join_classes(quad, np.array([0, 2]), np.array([1, 3]))
+    assert c[0] < c[1]
+
+
 def test_oracle_catches_a_broken_cover() -> None:
     # the oracle must fail on a cover with a triangle of degree 3 or a one-sided edge
     pts, tri = icosphere(1)
@@ -182,15 +258,17 @@ def test_breadth_first_greedy_leaves_fewer_free() -> None:
     dom = bundled_domain("face")
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 30000)
     tri = m.triangles
-    nb = ck._neighbors(half_edges(tri, m.n_points).twin, len(tri))
+    nb = ck.neighbors(half_edges(tri, m.n_points).twin, len(tri))
     alive, deg = ck._peel(nb, len(tri))
+    active = alive & (deg == 3)
     free = {}
     for online in (0, 256):
         k = len(tri)
         work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
                 np.empty(k + 8, np.int64))
         order = ck._bfs_order(nb, k) if online else np.arange(k)
-        active, mate, _ = ck._greedy_matching(nb, alive, deg, k, np.zeros((k, 3), np.bool_), order, online, *work)
+        mate = np.full(k, -1, np.int64)
+        ck._greedy_matching(nb, active, k, np.zeros((k, 3), np.bool_), order, online, *work, mate)
         paired = np.flatnonzero(mate >= 0)
         assert (mate[mate[paired]] == paired).all() and active[paired].all()
         assert all(mate[t] in nb[t] for t in paired)  # matched along dual edges only
