@@ -26,6 +26,7 @@ __all__ = [
     "quadtree_coords",
     "edge_class",
     "N_CLASSES",
+    "QUAD_CLASSES",
     "CELL_BITS",
     "RANK_BINS",
     "RANK_SAMPLE",
