@@ -23,6 +23,8 @@ __all__ = [
     "Step",
     "free_step",
     "take_triangle",
+    "grow_path",
+    "grow_both_ways",
     "PathCover", "greedy_path_cover", "zigzag_path_cover", "Renumbered", "renumber_in_path_order"]
 
 #: A dual path cover: ``order`` every triangle once, path after path; ``starts`` the
@@ -156,6 +158,40 @@ def greedy_path_cover(rec, w_swap, seed_order) -> PathCover:
     return PathCover(order, starts[: S + 1].astype(np.int64))
 
 
+@loop_helper
+def grow_both_ways(seed, rec, bucket, top, fwd, bwd, order, L, w_swap):
+    """Take ``seed``, grow a path from it forward, then backward through its other edges.
+
+    The path (backward part reversed, the seed, the forward part) is written at
+    ``order[L:]``; returns the new end ``L``.  The backward growth avoids a swap at the
+    seed: the triangle after the seed fixes the pivot the seed's turn must not repeat.
+    """
+    take_triangle(seed, rec, bucket, top)
+    fw = grow_path(seed, -1, -1, rec, bucket, top, fwd, w_swap)
+    nbk = 0
+    if fw.count > 0:
+        p1 = -1
+        if fw.count >= 2:
+            u = fwd[0]
+            ein = rec[seed, REC_TWIN + fw.first_exit] - 3 * u
+            eout = -1
+            for k in range(3):
+                h = rec[u, REC_TWIN + k]
+                if h >= 0 and h // 3 == fwd[1]:
+                    eout = k
+            p1 = vertex_between(rec, u, ein, eout)
+        nbk = grow_path(seed, fw.first_exit, p1, rec, bucket, top, bwd, w_swap).count
+    for i in range(nbk):
+        order[L] = bwd[nbk - 1 - i]
+        L += 1
+    order[L] = seed
+    L += 1
+    for i in range(fw.count):
+        order[L] = fwd[i]
+        L += 1
+    return L
+
+
 @kernel
 def _greedy_path_cover_into(rec, w_swap, seed_order, bucket, order, starts, fwd, bwd, top):
     queue_free_degrees(rec, seed_order, bucket, top)
@@ -166,30 +202,7 @@ def _greedy_path_cover_into(rec, w_swap, seed_order, bucket, order, starts, fwd,
         seed = pop_fewest_free(rec, bucket, top)
         if seed < 0:
             break
-        take_triangle(seed, rec, bucket, top)
-        fw = grow_path(seed, -1, -1, rec, bucket, top, fwd, w_swap)
-        nbk = 0
-        if fw.count > 0:
-            # the triangle after the seed: its pivot is what the seed's turn must avoid
-            p1 = -1
-            if fw.count >= 2:
-                u = fwd[0]
-                ein = rec[seed, REC_TWIN + fw.first_exit] - 3 * u
-                eout = -1
-                for k in range(3):
-                    h = rec[u, REC_TWIN + k]
-                    if h >= 0 and h // 3 == fwd[1]:
-                        eout = k
-                p1 = vertex_between(rec, u, ein, eout)
-            nbk = grow_path(seed, fw.first_exit, p1, rec, bucket, top, bwd, w_swap).count
-        for i in range(nbk):
-            order[L] = bwd[nbk - 1 - i]
-            L += 1
-        order[L] = seed
-        L += 1
-        for i in range(fw.count):
-            order[L] = fwd[i]
-            L += 1
+        L = grow_both_ways(seed, rec, bucket, top, fwd, bwd, order, L, w_swap)
         S += 1
         starts[S] = L
     return S

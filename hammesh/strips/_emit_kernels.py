@@ -10,10 +10,10 @@ from collections import namedtuple
 
 import numpy as np
 
-from hammesh.strips._numba import NEXT_CORNER, kernel
-from hammesh.strips._path_kernels import edge_towards
+from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper
+from hammesh.strips._path_kernels import edge_to_neighbour, edge_towards
 
-__all__ = ["stitch_strips", "emit_restart_joined", "RestartBuffer", "restart_buffer"]
+__all__ = ["stitch_strips", "emit_restart_joined", "RestartBuffer", "restart_buffer", "WrittenPath", "write_path"]
 
 
 @kernel
@@ -125,66 +125,86 @@ def restart_buffer(tri, twin, order, starts, restart) -> RestartBuffer:
     """The restart-joined GL buffer of flat dual paths in one pass, no per-position arrays.
 
     The same turns as :func:`~hammesh.strips._path_kernels.path_turns` +
-    :func:`emit_restart_joined` (head of each path: opposite vertex, then the exit
-    half-edge's tail and head; then one new vertex per triangle, preceded by the
-    previous pivot where two pivots coincide), computed on the fly: the encoder's fast
-    path.  The buffer is allocated by numpy at its bound ``2 L + 3 S`` and ``indices``
-    is its filled prefix (one pass instead of counting the swaps first).
+    :func:`emit_restart_joined` (each path written by :func:`write_path`), computed on
+    the fly: the encoder's fast path.  The buffer is allocated by numpy at its bound
+    ``2 L + 3 S`` and ``indices`` is its filled prefix (one pass instead of counting the
+    swaps first).
     """
     out = np.empty(2 * order.shape[0] + 3 * (starts.shape[0] - 1), np.int64)
-    n, n_swaps, mx, err = _restart_buffer_into(tri, twin, order, starts, restart, out)
+    n, n_swaps, mx, err = _restart_buffer_into(tri, twin.reshape(-1, 3), order, starts, restart, out)
     if err:
         return RestartBuffer(out[:0], 0, -1, err)
     return RestartBuffer(out[:n], n_swaps, mx, 0)
 
 
 @kernel
-def _restart_buffer_into(tri, twin, order, starts, restart, out):
+def _restart_buffer_into(tri, twin3, order, starts, restart, out):
     S = starts.shape[0] - 1
     n_swaps = 0
     pos = 0
     mx = -1
     for s in range(S):
-        a = starts[s]
-        b = starts[s + 1]
         if s > 0:
             out[pos] = restart
             pos += 1
-        t = order[a]
-        if b - a == 1:
-            for j in range(3):
-                out[pos] = tri[t, j]
-                pos += 1
-                mx = max(mx, tri[t, j])
-            continue
-        k = edge_towards(twin, t, order[a + 1])
-        if k < 0:
+        w = write_path(tri, twin3, order, starts[s], starts[s + 1], out, pos)
+        if w.err:
             return 0, 0, -1, 1
-        out[pos] = tri[t, (k + 2) % 3]
-        out[pos + 1] = tri[t, k]
-        out[pos + 2] = tri[t, (k + 1) % 3]
-        pos += 3
-        mx = max(mx, tri[t, 0], tri[t, 1], tri[t, 2])
-        prev_pivot = tri[t, k]
-        kprev = k
-        for i in range(a + 1, b):
-            t = order[i]
-            kin = twin[3 * order[i - 1] + kprev] - 3 * t
-            v = tri[t, (kin + 2) % 3]
-            if i < b - 1:
-                kout = edge_towards(twin, t, order[i + 1])
-                if kout < 0 or kout == kin:
-                    return 0, 0, -1, 1
-                p = tri[t, kout if kout == NEXT_CORNER[kin] else kin]
-                # a swap (two equal pivots) in ~1 of 5 positions: written always, kept
-                # by advancing or not (a branch here is mispredicted at every swap)
-                sw = np.int64(p == prev_pivot)
-                out[pos] = prev_pivot
-                pos += sw
-                n_swaps += sw
-                prev_pivot = p
-                kprev = kout
-            out[pos] = v
-            pos += 1
-            mx = max(mx, v)
+        pos = w.pos
+        n_swaps += w.swaps
+        mx = max(mx, w.max_index)
     return pos, n_swaps, mx, 0
+
+
+#: :func:`write_path`'s result: the position after the path, swaps written, the largest
+#: index written, and 1 if ``order[a:b]`` is not a dual path (then the rest is unset).
+WrittenPath = namedtuple("WrittenPath", ["pos", "swaps", "max_index", "err"])
+
+
+@loop_helper
+def write_path(tri, twin3, order, a, b, out, pos):
+    """Write the GL strip of dual path ``order[a:b]`` at ``out[pos]`` (:class:`WrittenPath`).
+
+    ``tri[t, :3]`` are row ``t``'s vertices, ``twin3[t, k]`` the half-edge across its edge
+    ``k`` (``twin.reshape(-1, 3)``, or a view of the records' twin columns).  Head: the
+    first triangle's vertex opposite its exit edge, then the exit half-edge's tail and
+    head (the first triangle keeps its winding at an even position); then one new vertex
+    per triangle, preceded by the previous pivot where two pivots coincide.
+    """
+    t = order[a]
+    mx = max(tri[t, 0], tri[t, 1], tri[t, 2])
+    if b - a == 1:
+        for j in range(3):
+            out[pos + j] = tri[t, j]
+        return WrittenPath(pos + 3, 0, mx, 0)
+    k = edge_to_neighbour(twin3, t, order[a + 1])
+    if k < 0:
+        return WrittenPath(pos, 0, mx, 1)
+    out[pos] = tri[t, (k + 2) % 3]
+    out[pos + 1] = tri[t, k]
+    out[pos + 2] = tri[t, NEXT_CORNER[k]]
+    pos += 3
+    prev_pivot = tri[t, k]
+    swaps = 0
+    for i in range(a + 1, b):
+        u = order[i]
+        kin = twin3[t, k] - 3 * u
+        v = tri[u, (kin + 2) % 3]
+        if i < b - 1:
+            kout = edge_to_neighbour(twin3, u, order[i + 1])
+            if kout < 0 or kout == kin:
+                return WrittenPath(pos, swaps, mx, 1)
+            p = tri[u, kout if kout == NEXT_CORNER[kin] else kin]
+            # a swap (two equal pivots) in ~1 of 5 positions: written always, kept by
+            # advancing or not (a branch here would be mispredicted at every swap)
+            sw = np.int64(p == prev_pivot)
+            out[pos] = prev_pivot
+            pos += sw
+            swaps += sw
+            prev_pivot = p
+            k = kout
+        out[pos] = v
+        pos += 1
+        mx = max(mx, v)
+        t = u
+    return WrittenPath(pos, swaps, mx, 0)

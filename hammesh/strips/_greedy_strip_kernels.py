@@ -22,10 +22,11 @@ from collections import namedtuple
 
 import numpy as np
 
-from hammesh.strips._cover_kernels import grow_path, pop_fewest_free, queue_free_degrees, take_triangle
+from hammesh.strips._cover_kernels import grow_both_ways, pop_fewest_free, queue_free_degrees
 from hammesh.strips._dual_kernels import REC_TWIN
-from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper
-from hammesh.strips._path_kernels import vertex_between
+from hammesh.strips._emit_kernels import write_path
+from hammesh.strips._numba import kernel
+from hammesh.strips._path_kernels import turn_path_if_better
 
 __all__ = ["GreedyStrip", "StripWork", "strip_work", "greedy_strip_buffer"]
 
@@ -34,67 +35,6 @@ __all__ = ["GreedyStrip", "StripWork", "strip_work", "greedy_strip_buffer"]
 #: first index is in ``indices`` (after its restart); swaps written; the largest vertex
 #: index written.
 GreedyStrip = namedtuple("GreedyStrip", ["indices", "order", "starts", "index_starts", "n_swaps", "max_index"])
-
-
-@loop_helper
-def _edge_to(rec, t, u):
-    """Local edge of ``t`` whose twin is in triangle ``u`` (records' twin columns), or -1."""
-    e0 = np.int64(rec[t, REC_TWIN] // 3 == u)  # a boundary's -1 // 3 is -1: never u
-    e1 = np.int64(rec[t, REC_TWIN + 1] // 3 == u)
-    e2 = np.int64(rec[t, REC_TWIN + 2] // 3 == u)
-    return (1 - e0) * (e1 + (1 - e1) * (3 * e2 - 1))
-
-
-@loop_helper
-def _swap_after_first(rec, a, b, c):
-    """Does a path starting ``a, b, c`` need a swap after ``a``?  (Its exit tail is ``b``'s pivot.)"""
-    kab = _edge_to(rec, a, b)
-    kba = _edge_to(rec, b, a)
-    kbc = _edge_to(rec, b, c)
-    return rec[a, kab] == vertex_between(rec, b, kba, kbc)
-
-
-@loop_helper
-def _write_path(rec, order, a, b, out, pos):
-    """Write path ``order[a:b]`` at ``out[pos]``; returns ``(new pos, swaps, largest index)``.
-
-    Head: the first triangle's vertex opposite its exit edge, then the exit half-edge's
-    tail and head (so the first triangle keeps its winding at an even position); then one
-    new vertex per triangle, preceded by the previous pivot where two pivots coincide.
-    """
-    t = order[a]
-    mx = max(rec[t, 0], rec[t, 1], rec[t, 2])
-    if b - a == 1:
-        for j in range(3):
-            out[pos + j] = rec[t, j]
-        return pos + 3, 0, mx
-    k = _edge_to(rec, t, order[a + 1])
-    out[pos] = rec[t, (k + 2) % 3]
-    out[pos + 1] = rec[t, k]
-    out[pos + 2] = rec[t, NEXT_CORNER[k]]
-    pos += 3
-    prev_pivot = rec[t, k]
-    swaps = 0
-    for i in range(a + 1, b):
-        u = order[i]
-        kin = rec[t, REC_TWIN + k] - 3 * u
-        v = rec[u, (kin + 2) % 3]
-        if i < b - 1:
-            kout = _edge_to(rec, u, order[i + 1])
-            p = rec[u, kout if kout == NEXT_CORNER[kin] else kin]
-            # a swap (two equal pivots) in ~1 of 5 positions: written always, kept by
-            # advancing or not (a branch here would be mispredicted at every swap)
-            sw = np.int64(p == prev_pivot)
-            out[pos] = prev_pivot
-            pos += sw
-            swaps += sw
-            prev_pivot = p
-            k = kout
-        out[pos] = v
-        pos += 1
-        mx = max(mx, v)
-        t = u
-    return pos, swaps, mx
 
 
 #: :func:`strip_work`'s arrays: the bucket queue and the two growth buffers (the records'
@@ -134,13 +74,13 @@ def greedy_strip_buffer(rec, w_swap, restart, work: StripWork | None = None) -> 
     """
     w = strip_work(rec.shape[0], rec.dtype) if work is None else work
     S, n, n_swaps, mx = _greedy_strip_into(
-        rec, w_swap, w.seeds, restart, w.bucket, w.fwd, w.bwd, w.top, w.order, w.starts, w.index_starts, w.out
+        rec, rec[:, REC_TWIN : REC_TWIN + 3], w_swap, w.seeds, restart, w.bucket, w.fwd, w.bwd, w.top, w.order, w.starts, w.index_starts, w.out
     )
     return GreedyStrip(w.out[:n], w.order, w.starts[: S + 1], w.index_starts[:S], int(n_swaps), int(mx))
 
 
 @kernel
-def _greedy_strip_into(rec, w_swap, seed_order, restart, bucket, fwd, bwd, top, order, starts, index_starts, out):
+def _greedy_strip_into(rec, twin3, w_swap, seed_order, restart, bucket, fwd, bwd, top, order, starts, index_starts, out):
     queue_free_degrees(rec, seed_order, bucket, top)
     L = 0
     S = 0
@@ -152,46 +92,17 @@ def _greedy_strip_into(rec, w_swap, seed_order, restart, bucket, fwd, bwd, top, 
         seed = pop_fewest_free(rec, bucket, top)
         if seed < 0:
             break
-        take_triangle(seed, rec, bucket, top)
         a = L
-        fw = grow_path(seed, -1, -1, rec, bucket, top, fwd, w_swap)
-        nbk = 0
-        if fw.count > 0:
-            # the triangle after the seed: its pivot is what the seed's turn must avoid
-            p1 = -1
-            if fw.count >= 2:
-                u = fwd[0]
-                ein = rec[seed, REC_TWIN + fw.first_exit] - 3 * u
-                eout = -1
-                for k in range(3):  # the last edge towards fwd[1], as the cover kernel finds it
-                    h = rec[u, REC_TWIN + k]
-                    if h >= 0 and h // 3 == fwd[1]:
-                        eout = k
-                p1 = vertex_between(rec, u, ein, eout)
-            nbk = grow_path(seed, fw.first_exit, p1, rec, bucket, top, bwd, w_swap).count
-        for i in range(nbk):
-            order[L] = bwd[nbk - 1 - i]
-            L += 1
-        order[L] = seed
-        L += 1
-        for i in range(fw.count):
-            order[L] = fwd[i]
-            L += 1
-        b = L - 1
-        # the better direction: only the swap after the first triangle depends on it
-        if b - a >= 2 and _swap_after_first(rec, order[a], order[a + 1], order[a + 2]):
-            if not _swap_after_first(rec, order[b], order[b - 1], order[b - 2]):
-                for i in range((b - a + 1) // 2):
-                    x = order[a + i]
-                    order[a + i] = order[b - i]
-                    order[b - i] = x
+        L = grow_both_ways(seed, rec, bucket, top, fwd, bwd, order, L, w_swap)
+        turn_path_if_better(rec, twin3, order, a, L - 1)
         if S > 0:
             out[pos] = restart
             pos += 1
         index_starts[S] = pos
-        pos, sw, top_v = _write_path(rec, order, a, L, out, pos)
-        n_swaps += sw
-        mx = max(mx, top_v)
+        w = write_path(rec, twin3, order, a, L, out, pos)
+        pos = w.pos
+        n_swaps += w.swaps
+        mx = max(mx, w.max_index)
         S += 1
         starts[S] = L
     return S, pos, n_swaps, mx

@@ -15,11 +15,14 @@ from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper
 
 __all__ = [
     "edge_towards",
+    "edge_to_neighbour",
     "slot_of",
     "vertex_between",
     "pivot_through",
     "TurnArrays",
     "path_turns",
+    "starts_with_swap",
+    "turn_path_if_better",
     "orient_paths",
 ]
 
@@ -34,6 +37,16 @@ def edge_towards(twin, t, u):
     e0 = np.int64(twin[3 * t] // 3 == u)  # a boundary's -1 // 3 is -1: never u
     e1 = np.int64(twin[3 * t + 1] // 3 == u)
     e2 = np.int64(twin[3 * t + 2] // 3 == u)
+    return (1 - e0) * (e1 + (1 - e1) * (3 * e2 - 1))
+
+
+@loop_helper
+def edge_to_neighbour(twin3, t, u):
+    """:func:`edge_towards` on twins shaped ``(m, 3)`` (``twin.reshape(-1, 3)``, or a view of
+    the records' twin columns): the local edge of ``t`` shared with ``u``, or -1."""
+    e0 = np.int64(twin3[t, 0] // 3 == u)
+    e1 = np.int64(twin3[t, 1] // 3 == u)
+    e2 = np.int64(twin3[t, 2] // 3 == u)
     return (1 - e0) * (e1 + (1 - e1) * (3 * e2 - 1))
 
 
@@ -120,9 +133,29 @@ def path_turns(tri, twin, order, starts):
 
 
 @loop_helper
-def _starts_with_swap(tri, twin, a, b, c):
-    """Does a path starting ``a, b, c`` need a swap after ``a``?  (Its exit tail is ``b``'s pivot.)"""
-    return tri[a, edge_towards(twin, a, b)] == pivot_through(tri, twin, a, b, c)
+def starts_with_swap(tri, twin3, a, b, c):
+    """Does a path starting ``a, b, c`` need a swap after ``a``?  (Its exit tail is ``b``'s pivot.)
+
+    ``twin3``: the pairing shaped ``(m, 3)`` (:func:`edge_to_neighbour`).
+    """
+    kb = edge_to_neighbour(twin3, b, a)
+    kc = edge_to_neighbour(twin3, b, c)
+    return tri[a, edge_to_neighbour(twin3, a, b)] == vertex_between(tri, b, kb, kc)
+
+
+@loop_helper
+def turn_path_if_better(tri, twin3, order, a, b):
+    """Reverse path ``order[a:b + 1]`` in place if that removes the swap after its first
+    triangle (interior swaps do not depend on the direction); returns whether it did."""
+    if b - a < 2 or not starts_with_swap(tri, twin3, order[a], order[a + 1], order[a + 2]):
+        return False
+    if starts_with_swap(tri, twin3, order[b], order[b - 1], order[b - 2]):
+        return False
+    for i in range((b - a + 1) // 2):
+        x = order[a + i]
+        order[a + i] = order[b - i]
+        order[b - i] = x
+    return True
 
 
 @kernel
@@ -134,16 +167,8 @@ def orient_paths(tri, twin, order, starts):
     Returns ``(order, any_reversed)``.
     """
     out = order.copy()
+    twin3 = twin.reshape((twin.shape[0] // 3, 3))
     flipped = False
     for s in range(starts.shape[0] - 1):
-        a = starts[s]
-        b = starts[s + 1] - 1
-        if b - a < 2:
-            continue
-        if not _starts_with_swap(tri, twin, order[a], order[a + 1], order[a + 2]):
-            continue
-        if not _starts_with_swap(tri, twin, order[b], order[b - 1], order[b - 2]):
-            flipped = True
-            for i in range(b - a + 1):
-                out[a + i] = order[b - i]
+        flipped |= turn_path_if_better(tri, twin3, out, starts[s], starts[s + 1] - 1)
     return out, flipped

@@ -142,3 +142,21 @@ def square():
 @pytest.fixture(scope="session")
 def square_ham():
     return square_hamiltonian()
+
+
+def corrupt_claim(idx, claim, corrupt, rng, n_points, restart):
+    """A strip buffer and draw claim with one fault (``corrupt``): 0 none, 1 a wrong index in
+    the buffer, 2 a wrong claim (reversed), 3 a triangle missing from the end, 4 one row
+    claimed twice and another never.  Returns new ``(idx, claim)``."""
+    idx, claim = idx.copy(), np.array(claim).copy()
+    if corrupt == 1:
+        i = int(rng.integers(len(idx)))
+        if idx[i] != restart:
+            idx[i] = (idx[i] + 1) % n_points
+    elif corrupt == 2:
+        claim = claim[::-1].copy()
+    elif corrupt == 3:
+        idx = idx[:-1]
+    elif corrupt == 4:
+        claim[0] = claim[-1]
+    return idx, claim

@@ -15,6 +15,7 @@ from tests.helpers import grid_mesh
 
 from .conftest import (
     SMALL_MESHES,
+    corrupt_claim,
     fan_mesh,
     gl_decode_reference,
     oriented_set,
@@ -180,16 +181,7 @@ def test_claimed_order_proof_agrees_with_the_full_comparison(seed, join, corrupt
     rng = np.random.default_rng(seed)
     order, starts = random_path_cover(d.neighbor_triangles, rng)
     s = gl_strip(d.triangles, d.twin, order, starts, join=join)
-    idx = s.indices.copy()
-    claim = np.array(order)
-    if corrupt == 1:  # a wrong index in the buffer
-        i = int(rng.integers(len(idx)))
-        if idx[i] != RESTART_INDEX:
-            idx[i] = (idx[i] + 1) % len(m.points)
-    elif corrupt == 2:  # a wrong claim, right buffer
-        claim = claim[::-1].copy()
-    elif corrupt == 3:  # a triangle missing from the end
-        idx = idx[:-1]
+    idx, claim = corrupt_claim(s.indices, order, corrupt, rng, len(m.points), RESTART_INDEX)
     use_r = s.restart_index is not None
     status, _ = check_claimed_draws(d.triangles, idx, s.restart_index if use_r else -1, use_r, claim)
     truth = oriented_set(decode_gl_strip(idx, s.restart_index)) == oriented_set(m.triangles)

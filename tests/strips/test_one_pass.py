@@ -15,7 +15,7 @@ from hammesh.strips._cover_kernels import greedy_path_cover
 from hammesh.strips._greedy_strip_kernels import greedy_strip_buffer
 from hammesh.strips._path_kernels import orient_paths
 
-from .conftest import delaunay_mesh, oriented_set, random_path_cover, torus_mesh
+from .conftest import corrupt_claim, delaunay_mesh, oriented_set, random_path_cover, torus_mesh
 
 
 @given(st.integers(0, 2**32 - 1), st.integers(8, 150), st.booleans())
@@ -62,22 +62,12 @@ def test_proof_in_two_parts_decides_as_the_full_comparison(seed, corrupt, at, sh
     rng = np.random.default_rng(seed)
     order, starts = random_path_cover(d.neighbor_triangles, rng)
     s = gl_strip(d.triangles, d.twin, order, starts, join="restart")
-    idx = s.indices.copy()
-    claim = np.array(order)
-    cuts = np.flatnonzero(idx == RESTART_INDEX) + 1
-    p = int(cuts[at % len(cuts)]) + shift if len(cuts) else at % len(idx)
+    cuts = np.flatnonzero(s.indices == RESTART_INDEX) + 1
+    p = int(cuts[at % len(cuts)]) + shift if len(cuts) else at % len(s.indices)
     q = int(starts[min(1 + at % max(len(cuts), 1), len(starts) - 1)])
-    if corrupt == 1:  # a wrong index in the buffer
-        i = int(rng.integers(len(idx)))
-        if idx[i] != RESTART_INDEX:
-            idx[i] = (idx[i] + 1) % len(m.points)
-    elif corrupt == 2:  # a wrong claim, right buffer
-        claim = claim[::-1].copy()
-    elif corrupt == 3:  # a triangle missing from the end
-        idx = idx[:-1]
-    elif corrupt == 4:  # a triangle drawn in both parts, another in none
-        claim[0] = claim[-1]
-    elif corrupt == 5:  # the cut's claim off by one
+    # 1 a wrong index, 2 a wrong claim, 3 a triangle missing, 4 a row claimed twice
+    idx, claim = corrupt_claim(s.indices, order, corrupt, rng, len(m.points), RESTART_INDEX)
+    if corrupt == 5:  # the cut's claim off by one
         q = max(q - 1, 0)
     truth = oriented_set(decode_gl_strip(idx, RESTART_INDEX)) == oriented_set(m.triangles)
     if truth:
