@@ -538,11 +538,13 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     fresh = ~((tile.vertex_ids[at_v] == jp_ids_a) if k else np.zeros(len(jp_ids_a), bool))
     ids = np.concatenate([gid, jp_ids_a[fresh]])
     xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)[fresh]])
-    local = h.triangles[rows]
-    kind = np.asarray(h.kind)[rows].astype(np.int8)
-    parent = np.asarray(h.parent)[rows]
-    parent = np.where(parent >= 0, triangle_offset + parent, -1)
-    attr = attrs[rows]
+    # np.take: ~2x numpy's fancy indexing of rows of a 2-D array
+    local = np.take(h.triangles, rows, axis=0)
+    kind = np.take(np.asarray(h.kind), rows).astype(np.int8, copy=False)
+    parent = np.take(np.asarray(h.parent, dtype=np.int64), rows)
+    parent += triangle_offset  # -1 (no parent) becomes triangle_offset - 1: back to -1
+    parent[parent < triangle_offset] = -1
+    attr = np.take(attrs, rows, axis=0)
     if new_tri:
         nt = np.asarray(new_tri, np.int64)
         want = np.unique(nt)

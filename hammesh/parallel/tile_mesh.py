@@ -10,7 +10,7 @@ from hammesh.meshing.options import format_number
 from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "region_attributes", "locate_in_triangles", "lattice_points",
-           "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING"]
+           "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -18,6 +18,9 @@ LATTICE_CLEARANCE = 1.5
 #: ... plus this many times the shortfall ``h - length`` of a subsegment shorter than the
 #: step ``h`` (the mesh grows from short subsegments to the lattice's size over that band)
 LATTICE_GRADING = 2.0
+#: no lattice when the tile's box holds more than this many lattice points per
+#: estimated triangle of the tile (about 0.5 of them are inside when the tile fills it)
+LATTICE_BOX_FILL = 8.0
 
 
 def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,
@@ -100,6 +103,8 @@ def lattice_points(tile: Tile, max_area: float) -> np.ndarray:
     steps from every segment of the tile (more near subsegments shorter than a step,
     ``LATTICE_GRADING``) and two steps from every vertex on no segment. No kept
     point is near a separator, so neighbouring tiles never see each other's lattice.
+    None when the domain fills less than about 1/16 of the tile's box
+    (``LATTICE_BOX_FILL``: the mask over the box would then cost more than it saves).
     """
     from hammesh.parallel._kernels import (lattice_clear_near_points_into, lattice_clear_near_segments_into,
                                            lattice_mark_inside_into)
@@ -110,6 +115,10 @@ def lattice_points(tile: Tile, max_area: float) -> np.ndarray:
     x0, y0 = x0 + 0.5 * h, y0 + 0.5 * dy
     nx, ny = int((x1 - x0) // h), int((y1 - y0) // dy)
     if nx < 2 or ny < 2 or len(tile.coarse_triangles) == 0 or len(tile.segments) == 0:
+        return np.zeros((0, 2))
+    if nx * ny > LATTICE_BOX_FILL * max(float(tile.estimate), 1e5):
+        # the domain fills little of the box (a thin slanted strip): a mask over the
+        # whole box would cost more than the lattice saves; Triangle alone then
         return np.zeros((0, 2))
     keep = np.zeros((ny, nx), np.bool_)
     lattice_mark_inside_into(x0, y0, h, dy, np.ascontiguousarray(tile.coarse_points, dtype=np.float64),

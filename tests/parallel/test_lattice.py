@@ -129,3 +129,16 @@ def test_inside_marking_matches_barycentric_coordinates(corners, h, ox, oy):
     depth = np.minimum(np.minimum(lam[0], lam[1]), lam[2])
     clear = np.abs(depth) > 1e-9  # points on an edge may go either way
     assert np.array_equal(keep[clear], (depth >= 0)[clear])
+
+
+def test_no_lattice_when_the_domain_fills_little_of_the_box():
+    """A thin slanted strip: its box is ~100x its area, the lattice is left out (the
+    mask over the box would cost more than it saves) and the tile is Triangle's alone."""
+    w = 0.005
+    dom = hammesh.Domain(vertices=[[0, 0], [w, 0], [1, 1 - w], [1, 1], [1 - w, 1], [0, w]],
+                         segments=[[i, (i + 1) % 6] for i in range(6)])
+    d = decompose(dom, min_angle=30, max_area=2e-7, n_tiles=1)
+    t = d.tiles[0]
+    assert lattice_points(t, 2e-7).shape == (0, 2)
+    m = mesh_tile(t, 30, 2e-7)
+    assert m.n_triangles == mesh_tile(t, 30, 2e-7, lattice=False).n_triangles
