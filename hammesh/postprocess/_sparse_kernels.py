@@ -23,6 +23,7 @@ from numba import njit
 
 from hammesh.postprocess._join_kernels import quad_corners
 from hammesh.postprocess._thm24_kernels import find_root as _find
+from hammesh.postprocess._thm24_kernels import lower_bound
 
 PASS, SPLIT, SWAP, EDGE = 0, 1, 2, 3
 PLAIN, FLIP, MID = 0, 1, 2
@@ -497,7 +498,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
                     tw_new[x - 3 * m] = y
                 else:  # a kept half-edge: filed under the input half-edge it faces
                     f = twin_in[x]
-                    r = _rank(changed, f // 3)
+                    r = lower_bound(changed, f // 3)
                     face_tw[3 * r + f % 3] = y
         else:
             return tw_new, changed, face_tw, rest[srt[i + 2]]
@@ -515,24 +516,9 @@ def _start(out, tri, m, h):
 
 
 @njit(cache=True, nogil=True)
-def _rank(sorted_, x):
-    """Index of ``x`` in the ascending array ``sorted_`` (it is there): a plain binary
-    search (numba's ``np.searchsorted`` on a scalar costs ~100 x more per call)."""
-    lo = 0
-    hi = sorted_.shape[0] - 1
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if sorted_[mid] < x:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@njit(cache=True, nogil=True)
 def _faced(g, changed, face_tw):
     """Twin of the kept half-edge facing input half-edge ``g`` of a changed triangle."""
-    return face_tw[3 * _rank(changed, g // 3) + g % 3]
+    return face_tw[3 * lower_bound(changed, g // 3) + g % 3]
 
 
 @njit(cache=True, nogil=True)

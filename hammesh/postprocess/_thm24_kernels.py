@@ -593,9 +593,10 @@ def split_slots(tri, code, mid_h=None):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _find_sorted(a, x):
-    """Index of ``x`` in the sorted ``a`` (binary search; numpy's ``searchsorted`` inside
-    a kernel compiles its generic implementation with it)."""
+def lower_bound(a, x):
+    """First index ``i`` with ``a[i] >= x`` in the sorted ``a`` (``len(a)`` if none): a
+    plain binary search. numpy's ``searchsorted`` inside a kernel compiles its generic
+    implementation with it, and numba's on a scalar costs ~100x more per call."""
     lo = 0
     hi = a.shape[0]
     while lo < hi:
@@ -720,8 +721,8 @@ def emit_cycles_into(tri, code, firsts, order, n_points, mid_h, mid_id, out, par
                     if pos + 1 >= total:
                         state[2] = pos
                         return -1
-                    ih = _find_sorted(mid_h, h)
-                    ig = _find_sorted(mid_h, g)
+                    ih = lower_bound(mid_h, h)
+                    ig = lower_bound(mid_h, g)
                     mv = n_points + m + mid_id[ih]
                     out[pos, 0] = inc
                     out[pos, 1] = a
