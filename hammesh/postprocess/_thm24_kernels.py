@@ -247,7 +247,9 @@ def spanning_forest(tri, twin, is_con, points=None):
     hbit, n_hi = (2 * CELL_BITS - 1, nx) if abs(2 * nx - m) <= abs(2 * ny - m) else (CELL_BITS - 1, ny)
     n_lo = m - n_hi
     starts = np.empty(m, np.int64)  # components' first new numbers: low half from 0, high from n_lo
-    queue = np.empty((3 * m, 2), index_dtype(3 * m))  # each half's queue rows and cross edges
+    # each half's queue rows and cross edges: most rows are written, so small pages
+    # faulted at once (or the reserve's) beat numpy's huge pages on first touch
+    queue = pages.fresh((3 * m, 2), index_dtype(3 * m))
     halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
     calls = [
         (lambda side=side, base=base, a=a, b=b: _prim_half_into(
