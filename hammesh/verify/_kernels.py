@@ -121,38 +121,32 @@ def _pair_less(key, half, i, j):
     return key[i] < key[j] or (key[i] == key[j] and half[i] < half[j])
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _sift_down_pairs(key, half, lo, root, n):
+    """Heap step of :func:`sort_pairs_range` (a max-heap of pairs in ``[lo, lo + n)``)."""
+    while True:
+        child = 2 * root + 1
+        if child >= n:
+            return
+        if child + 1 < n and _pair_less(key, half, lo + child, lo + child + 1):
+            child += 1
+        if not _pair_less(key, half, lo + root, lo + child):
+            return
+        key[lo + root], key[lo + child] = key[lo + child], key[lo + root]
+        half[lo + root], half[lo + child] = half[lo + child], half[lo + root]
+        root = child
+
+
 @njit(cache=True, nogil=True)
 def sort_pairs_range(key, half, lo, hi):
     """Sort the pairs ``(key, half)[lo:hi]`` in place, by key then half (heapsort)."""
     n = hi - lo
-    for start in range(n // 2 - 1, -1, -1):
-        root = start
-        while True:
-            child = 2 * root + 1
-            if child >= n:
-                break
-            if child + 1 < n and _pair_less(key, half, lo + child, lo + child + 1):
-                child += 1
-            if not _pair_less(key, half, lo + root, lo + child):
-                break
-            key[lo + root], key[lo + child] = key[lo + child], key[lo + root]
-            half[lo + root], half[lo + child] = half[lo + child], half[lo + root]
-            root = child
+    for root in range(n // 2 - 1, -1, -1):
+        _sift_down_pairs(key, half, lo, root, n)
     for end in range(n - 1, 0, -1):
         key[lo], key[lo + end] = key[lo + end], key[lo]
         half[lo], half[lo + end] = half[lo + end], half[lo]
-        root = 0
-        while True:
-            child = 2 * root + 1
-            if child >= end:
-                break
-            if child + 1 < end and _pair_less(key, half, lo + child, lo + child + 1):
-                child += 1
-            if not _pair_less(key, half, lo + root, lo + child):
-                break
-            key[lo + root], key[lo + child] = key[lo + child], key[lo + root]
-            half[lo + root], half[lo + child] = half[lo + child], half[lo + root]
-            root = child
+        _sift_down_pairs(key, half, lo, 0, end)
 
 
 @njit(cache=True, nogil=True, inline="always")
