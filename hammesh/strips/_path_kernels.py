@@ -18,7 +18,6 @@ __all__ = [
     "edge_to_neighbour",
     "slot_of",
     "vertex_between",
-    "pivot_through",
     "TurnArrays",
     "path_turns",
     "starts_with_swap",
@@ -63,12 +62,6 @@ def slot_of(table, t, u):
 def vertex_between(tri, t, k0, k1):
     """Vertex shared by the distinct local edges ``k0`` and ``k1`` of ``t`` (either order)."""
     return tri[t, k1 if k1 == NEXT_CORNER[k0] else k0]
-
-
-@loop_helper
-def pivot_through(tri, twin, prev, t, nxt):
-    """Pivot of ``t`` on a path ``prev, t, nxt`` (direction free)."""
-    return vertex_between(tri, t, edge_towards(twin, t, prev), edge_towards(twin, t, nxt))
 
 
 #: :func:`path_turns`'s arrays (see :class:`hammesh.strips.paths.PathTurns`); ``err`` 0,

@@ -20,8 +20,6 @@ from hammesh.predicates import orient_points
 __all__ = [
     "RowChecks",
     "AngleArea",
-    "InputMeasure",
-    "orient_input_into",
     "InputScan",
     "scan_input_into",
     "input_boundary_into",
@@ -616,56 +614,6 @@ def angle_area_stats(points, tri):
     min_ang = np.arcsin(np.sqrt(min(max(s2, 0.0), 1.0)))
     max_ang = np.arccos(min(max(c, -1.0), 1.0))
     return AngleArea(min_ang, a, max_ang, b, area, d, total)
-
-
-class InputMeasure(NamedTuple):
-    """Result of :func:`orient_input_into`."""
-
-    bad: int  # -1, or the first row that is degenerate by the exact predicate
-    n_flipped: int
-    min_angle: float  # radians, over all rows
-    total_area: float
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def orient_input_into(points, tri, out, used):
-    """The certificate's look at an input mesh: ``out`` = rows made counter-clockwise.
-
-    Orientation by the exact predicate (``hammesh.predicates``): a row with sign 0 is
-    degenerate (``bad``), a negative one is reversed. The smallest angle and the total
-    area come from the same pass, ``used[v]`` is set for every vertex of a row.
-    Indices must be in range (checked by the caller).
-    """
-    bad = -1
-    n_flipped = 0
-    best_s2 = np.inf
-    total = 0.0
-    for t in range(tri.shape[0]):
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        used[a] = True
-        used[b] = True
-        used[c] = True
-        s = orient_points(points, a, b, c)
-        if s == 0:
-            if bad < 0:
-                bad = t
-            out[t, 0] = a
-            out[t, 1] = b
-            out[t, 2] = c
-            continue
-        if s < 0:
-            a, c = c, a
-            n_flipped += 1
-        out[t, 0] = a
-        out[t, 1] = b
-        out[t, 2] = c
-        cr, s2, _ = _measures(points, a, b, c)
-        total += 0.5 * cr
-        if s2 < best_s2:
-            best_s2 = s2
-    return InputMeasure(bad, n_flipped, np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0))), total)
 
 
 class InputScan(NamedTuple):
