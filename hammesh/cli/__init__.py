@@ -12,6 +12,10 @@ turns every hammesh error into one line on stderr and an exit code:
 143   terminated (SIGTERM, e.g. by ``timeout``; 129 for SIGHUP)
 ====  =====================================================
 
+Only the chosen subcommand's options are built (:func:`build_parser`): its module
+imports the registries its choices come from, and the library is imported by ``run``,
+so ``hammesh --help`` or a usage error costs no kernel module (nor numba).
+
 Messages are one line: a newline or other control character in a file name is shown
 escaped.  ``SIGTERM`` and ``SIGHUP`` raise :class:`~hammesh.errors.Terminated` in the
 main thread, so every temporary file is removed and no target is half-written.
@@ -28,7 +32,7 @@ from collections.abc import Sequence
 from hammesh.cli import check, demo, mesh, partition, points, polygon, strip, surface
 from hammesh.errors import HammeshError, Terminated, VerificationError
 
-__all__ = ["main", "one_line", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
+__all__ = ["main", "build_parser", "chosen_command", "one_line", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 
@@ -42,7 +46,19 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, one_line(f"{self.prog}: error: {message}") + "\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def chosen_command(argv: Sequence[str] | None) -> str | None:
+    """The subcommand ``argv`` names (its first word not starting with ``-``), if any."""
+    words = sys.argv[1:] if argv is None else list(argv)
+    first = next((w for w in words if not w.startswith("-")), None)
+    return first if first in COMMANDS else None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``hammesh`` parser; only ``command``'s options are added (all if "all").
+
+    Every subcommand is listed with its help line; building the options of the one
+    that runs is enough to parse, and keeps the others' imports away from it.
+    """
     from hammesh import __version__
 
     parser = _Parser(
@@ -62,7 +78,8 @@ def build_parser() -> argparse.ArgumentParser:
             epilog=module.EXAMPLES,
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
-        module.add_args(p)
+        if command in (name, "all"):
+            module.add_args(p)
         p.set_defaults(_run=module.run)
     return parser
 
@@ -127,7 +144,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _main(argv: Sequence[str] | None) -> int:
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(chosen_command(argv)).parse_args(argv)
     except Terminated as exc:
         return 128 + exc.signum
     try:

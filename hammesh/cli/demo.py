@@ -6,9 +6,6 @@ import argparse
 from importlib import resources
 from pathlib import Path
 
-from hammesh.cli.pipeline import Outputs, run_pipeline, summary
-from hammesh.domain import read_domain
-
 HELP = "mesh the bundled demo plate; writes mesh.vtu, report.json and cycle.png"
 EXAMPLES = """examples:
   hammesh demo                      # writes hammesh-demo/{mesh.vtu,report.json,cycle.png}
@@ -28,6 +25,9 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from hammesh.cli.pipeline import Outputs, run_pipeline, summary
+    from hammesh.domain import read_domain
+
     domain = read_domain(demo_domain_path())
     outputs = Outputs(  # the folder is made only once the mesh is verified
         mesh=args.out / "mesh.vtu",

@@ -7,13 +7,7 @@ from functools import partial
 from pathlib import Path
 
 from hammesh import params
-from hammesh.cli.pipeline import Outputs, load_input, run_pipeline, summary
-from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError
-from hammesh.meshing import BACKENDS
-from hammesh.numbering import NUMBERINGS
-from hammesh.partition import partitioned
-from hammesh.postprocess import MODES
 
 HELP = "mesh a domain (or take a mesh file) and make it a verified Hamiltonian cycle mesh"
 EXAMPLES = """examples:
@@ -25,6 +19,10 @@ inputs: .poly/.node are domains (meshed first); .vtu .msh .xdmf .obj .ply .ele .
 
 
 def add_args(p: argparse.ArgumentParser) -> None:
+    from hammesh.meshing import BACKENDS  # the registries name the choices
+    from hammesh.numbering import NUMBERINGS
+    from hammesh.postprocess import MODES
+
     p.add_argument("input", type=Path, help="domain (.poly, .node) or triangle mesh file")
     p.add_argument("-o", "--output", type=Path, help="output mesh (.vtu .msh .xdmf .obj .ply .ele ...)")
     p.add_argument("--report", type=Path, help="write the report JSON here")
@@ -70,6 +68,10 @@ def run(args: argparse.Namespace) -> int:
         from hammesh.parallel.command import run_parallel
 
         return run_parallel(args)
+    from hammesh.cli.pipeline import Outputs, load_input, run_pipeline, summary
+    from hammesh.domain import Domain
+    from hammesh.partition import partitioned
+
     outputs = Outputs(mesh=args.output, report=args.report, png=args.png, strip=args.strip, inputs=(args.input,))
     outputs.check()  # before reading: a bad output path costs nothing
     if args.timeout is not None:

@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hammesh.io.points_text import read_points
-
 HELP = "triangulate a point set so that its triangles form one Hamiltonian cycle (Thm 3.1)"
 EXAMPLES = """examples:
   hammesh points cloud.node -o cloud.vtu --png cloud.png      # Thm 3.1, O(n log n)
@@ -30,6 +28,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hammesh import pointset
+    from hammesh.io.points_text import read_points
     from hammesh.errors import InvalidDomainError
 
     from hammesh import params

@@ -5,12 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
-
-from hammesh.errors import InvalidDomainError
-from hammesh.io import check_outputs
-from hammesh.io.polygon_files import read_polygon_rings, write_triangulation
 
 HELP = "triangulate a polygon (holes allowed) so that its triangles form one dual path (Thm 2.1-2.3, 4.4)"
 EXAMPLES = """examples:
@@ -39,8 +33,12 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hammesh import polygon
+    import numpy as np
 
+    from hammesh import polygon
+    from hammesh.errors import InvalidDomainError
+    from hammesh.io import check_outputs
+    from hammesh.io.polygon_files import read_polygon_rings, write_triangulation
     from hammesh.errors import FileFormatError
     from hammesh.io import supported_suffixes
 

@@ -366,7 +366,7 @@ def test_defect8_sigterm_inside_a_compiled_kernel_is_a_termination(monkeypatch, 
         def parse_args(self, argv):
             return argparse.Namespace(_run=run)
 
-    monkeypatch.setattr(cli, "build_parser", lambda: Parser())
+    monkeypatch.setattr(cli, "build_parser", lambda command=None: Parser())
     assert cli.main([]) == 143
     assert capsys.readouterr().err.strip() == "hammesh: terminated by signal 15"
 
