@@ -15,16 +15,29 @@ index written before a module moved names classes by their old module
 (``hammesh._kernels``): the unpickling raised ``ModuleNotFoundError`` on import
 although the index was stale anyway. An index (or cache entry) that cannot be read is
 now a cache miss: the kernel is compiled again and the index rewritten.
+
+Nothing here imports numba (~1 s): ``import hammesh`` runs :func:`ensure_cache`, and
+the guard is installed when numba's caching module is first imported (an import hook,
+:func:`guard_on_import`), so ``hammesh --help`` and a refused input pay no numba.
 """
 
 from __future__ import annotations
 
+import importlib.abc
+import importlib.machinery
 import os
+import sys
 import tempfile
+import threading
 import warnings
 from pathlib import Path
+from typing import Any
 
-__all__ = ["ensure_cache", "writable_dir", "guard_stale_indexes"]
+__all__ = ["ensure_cache", "writable_dir", "guard_stale_indexes", "guard_on_import", "CACHING_MODULE"]
+
+#: numba's module whose cache classes :func:`guard_stale_indexes` patches (imported by
+#: ``import numba`` itself)
+CACHING_MODULE = "numba.core.caching"
 
 
 def writable_dir(path: str | os.PathLike[str]) -> bool:
@@ -82,6 +95,71 @@ def guard_stale_indexes() -> bool:
     return True
 
 
+class _GuardOnImport(importlib.abc.MetaPathFinder):
+    """Finds nothing itself: hands numba's caching module to the usual finders and
+    patches it (:func:`guard_stale_indexes`) right after it has run, before any
+    kernel can be compiled or loaded; then leaves ``sys.meta_path``."""
+
+    def __init__(self) -> None:
+        self._busy = threading.local()
+
+    def find_spec(self, fullname: str, path: Any, target: Any = None) -> Any:
+        if fullname != CACHING_MODULE or getattr(self._busy, "on", False):
+            return None
+        self._busy.on = True
+        try:  # the spec the other finders give (this one skips itself meanwhile)
+            spec = importlib.machinery.PathFinder.find_spec(fullname, path, target)
+        finally:
+            self._busy.on = False
+        loader = getattr(spec, "loader", None)
+        if spec is None or not hasattr(loader, "exec_module"):
+            return spec  # (a loader of another kind: patched by a later ensure_cache)
+        spec.loader = _PatchAfter(loader)
+        return spec
+
+
+class _PatchAfter(importlib.abc.Loader):
+    """A module's own loader, then :func:`guard_stale_indexes`."""
+
+    def __init__(self, loader: Any) -> None:
+        self._loader = loader
+
+    def create_module(self, spec: Any) -> Any:
+        return self._loader.create_module(spec)
+
+    def exec_module(self, module: Any) -> None:
+        self._loader.exec_module(module)
+        _remove_hook()
+        guard_stale_indexes()
+
+    def __getattr__(self, name: str) -> Any:  # get_source, get_filename, ... as the loader's
+        return getattr(self._loader, name)
+
+
+_hook: _GuardOnImport | None = None
+
+
+def _remove_hook() -> None:
+    global _hook
+    if _hook is not None and _hook in sys.meta_path:
+        sys.meta_path.remove(_hook)
+    _hook = None
+
+
+def guard_on_import() -> bool:
+    """:func:`guard_stale_indexes` now if numba's caching module is imported already,
+    else as soon as it is (an import hook, removed once it has run). Never imports
+    numba. Returns True if the guard is in place now."""
+    global _hook
+    if CACHING_MODULE in sys.modules:
+        _remove_hook()
+        return guard_stale_indexes()
+    if _hook is None:
+        _hook = _GuardOnImport()
+        sys.meta_path.insert(0, _hook)
+    return False
+
+
 def ensure_cache(candidates: list[Path] | None = None) -> str | None:
     """Make numba's kernel cache usable; return the fallback directory if one was needed.
 
@@ -91,7 +169,7 @@ def ensure_cache(candidates: list[Path] | None = None) -> str | None:
         The directories numba would try (default: this package's ``__pycache__`` and
         the user cache directory).
     """
-    guard_stale_indexes()
+    guard_on_import()
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None  # the user chose; numba reports problems with it itself
     if candidates is None:
@@ -100,12 +178,9 @@ def ensure_cache(candidates: list[Path] | None = None) -> str | None:
         return None
     fallback = tempfile.mkdtemp(prefix="hammesh-numba-")
     os.environ["NUMBA_CACHE_DIR"] = fallback
-    try:  # numba may already be imported by the caller: its config is read once
-        import numba.core.config as config
-
+    config = sys.modules.get("numba.core.config")
+    if config is not None:  # numba imported by the caller already: its config is read once
         config.CACHE_DIR = fallback
-    except ImportError:  # pragma: no cover - numba is a dependency
-        pass
     warnings.warn(
         f"hammesh: no writable numba cache directory ({', '.join(map(str, candidates))}); "
         "compiled kernels are not kept after this process (set NUMBA_CACHE_DIR to keep them)",

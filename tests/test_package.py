@@ -50,3 +50,32 @@ def test_import_loads_no_kernel_module() -> None:
     loaded = set(out[0].split(",")) - {""}
     assert loaded <= {"hammesh.errors", "hammesh.numba_cache"}, loaded
     assert out[1] == "True"
+
+
+def test_import_does_not_import_numba_and_the_cache_guard_follows_it() -> None:
+    # `import hammesh` used to import numba (~1 s of every CLI call, `--help` and exit-2
+    # errors included) only to patch its cache classes; the patch now waits for numba's
+    # own import (an import hook) and is in place before any kernel can load
+    code = (
+        "import sys, hammesh\n"
+        "print('numba' in sys.modules)\n"
+        "import numba\n"
+        "from numba.core.caching import IndexDataCacheFile as F\n"
+        "print(getattr(F._load_index, '_hammesh_guard', False), getattr(F.load, '_hammesh_guard', False))\n"
+        "print(any(type(f).__name__ == '_GuardOnImport' for f in sys.meta_path))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0] == "False"
+    assert out[1] == "True True"
+    assert out[2] == "False"  # the hook leaves once it has run
+
+
+def test_cache_guard_is_in_place_when_numba_came_first() -> None:
+    code = (
+        "import numba, hammesh\n"
+        "from numba.core.caching import IndexDataCacheFile as F\n"
+        "print(getattr(F._load_index, '_hammesh_guard', False))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "True"
+

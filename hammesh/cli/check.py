@@ -7,10 +7,6 @@ from pathlib import Path
 
 from hammesh import params
 from hammesh.errors import FileFormatError, VerificationError
-from hammesh.io import check_outputs, read_mesh, write_report
-from hammesh.io.report import collect_repairs
-from hammesh.planar_overlap import find_overlap
-from hammesh.verify.certificate import verify_stored_cycle_mesh
 
 HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles"
 EXAMPLES = """examples:
@@ -31,6 +27,13 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # imported here, not with the CLI: ``hammesh --help`` and a refused option import
+    # neither the readers nor the certificate's kernels (numba)
+    from hammesh.io import check_outputs, read_mesh, write_report
+    from hammesh.io.report import collect_repairs
+    from hammesh.planar_overlap import find_overlap
+    from hammesh.verify.certificate import verify_stored_cycle_mesh
+
     if args.min_angle is not None:
         params.number("--min-angle", args.min_angle, low=0, high=60, what="degrees")
     if args.report is not None and args.report.suffix.lower() != ".json":

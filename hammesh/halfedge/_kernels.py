@@ -24,7 +24,10 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from hammesh import threads
 from hammesh.pages import fresh
@@ -145,6 +148,33 @@ def _area_sin2(points, p0, p1, p2):
     return cr, cr * cr / max(la * lb, max(lb * lc, lc * la))
 
 
+@intrinsic
+def _prefetch_row(typingctx, arr, i):
+    """Ask the processor to fetch the cache line of ``arr[i, 0]`` now (LLVM's
+    ``llvm.prefetch``: a read, kept in all cache levels). A hint: no effect on any
+    value; any layout (the address is numba's own item pointer)."""
+
+    def codegen(context, builder, signature, args):
+        aryty = signature.args[0]
+        arr = context.make_array(aryty)(context, builder, args[0])
+        zero = context.get_constant(types.intp, 0)
+        idx = context.cast(builder, args[1], signature.args[1], types.intp)
+        ptr = cgutils.get_item_pointer(context, builder, aryty, arr, [idx, zero], wraparound=False)
+        i8p = ir.IntType(8).as_pointer()
+        i32 = ir.IntType(32)
+        name = "llvm.prefetch.p0"
+        fn = builder.module.globals.get(name) or ir.Function(
+            builder.module, ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32]), name=name)
+        builder.call(fn, [builder.bitcast(ptr, i8p), ir.Constant(i32, 0), ir.Constant(i32, 3), ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+
+    return types.void(arr, i), codegen
+
+
+#: rows ahead whose neighbours' rows :func:`_twins_from_neighbors_into` prefetches
+PREFETCH_ROWS = 16
+
+
 def twins_from_neighbors(tri, nbr):
     """Half-edge twins from a neighbour array (``nbr[t, k]`` across edge ``(k, k+1)``).
 
@@ -171,9 +201,19 @@ def twins_from_neighbors(tri, nbr):
 def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
     # two random reads per pair (u's row of tri and of nbr): u's half-edge is the one
     # holding b -> a whose neighbour is t; it cannot be matched already (only t's
-    # row names it, and t's edges differ: a row with a repeated vertex is refused)
+    # row names it, and t's edges differ: a row with a repeated vertex is refused).
+    # A third of Triangle's neighbours lie far away in memory: the rows of the
+    # neighbours PREFETCH_ROWS rows ahead are asked for now (0.19 -> 0.12 s at 1.5 M
+    # triangles, one thread), so that several misses are under way at once
     m = tri.shape[0]
     for t in range(lo, hi):
+        ahead = t + PREFETCH_ROWS
+        if ahead < hi:
+            for k in range(3):
+                u = nbr[ahead, k]
+                if ahead < u < m:
+                    _prefetch_row(tri, u)
+                    _prefetch_row(nbr, u)
         if tri[t, 0] == tri[t, 1] or tri[t, 1] == tri[t, 2] or tri[t, 2] == tri[t, 0]:
             return 3 * t
         for k in range(3):

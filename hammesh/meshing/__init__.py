@@ -30,6 +30,7 @@ __all__ = [
     "format_number",
     "triangle_switches",
     "expected_reserve",
+    "expected_result",
 ]
 
 BACKENDS = {"triangle": mesh_with_triangle, "meshpy": mesh_with_meshpy}
@@ -46,10 +47,16 @@ RESERVE_BYTES_PER_TRIANGLE = 256
 TRIANGLES_PER_AREA = 1.6
 #: No reserve below this (small meshes fault their few pages quickly).
 RESERVE_MIN_BYTES = 64 << 20
+#: Bytes of Triangle's result per triangle as the isolated child hands it back (shared
+#: memory): triangles 24, neighbours 24, about 0.51 points per triangle at 16 bytes and
+#: their markers at 8, page rounding: 64.
+RESULT_BYTES_PER_TRIANGLE = 64
+#: No result file is allocated ahead below this.
+RESULT_MIN_BYTES = 8 << 20
 
 
-def expected_reserve(domain: Domain, opts: MeshOptions) -> int:
-    """Bytes of pages to fault in while Triangle meshes ``domain`` (0: none).
+def _expected_bytes(domain: Domain, opts: MeshOptions, per_triangle: int, at_least: int) -> int:
+    """``per_triangle`` x the triangles Triangle is expected to make, or 0 below ``at_least``.
 
     From the bounding box's area over the global area bound (an upper estimate of
     the domain's area), at most an eighth of the free memory.
@@ -61,10 +68,21 @@ def expected_reserve(domain: Domain, opts: MeshOptions) -> int:
     count = TRIANGLES_PER_AREA * float(ext[0] * ext[1]) / opts.max_area
     try:
         free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):  # not POSIX: no reserve
+    except (ValueError, OSError, AttributeError):  # not POSIX: nothing ahead
         return 0
-    nbytes = min(count * RESERVE_BYTES_PER_TRIANGLE, free / 8)
-    return int(nbytes) if nbytes >= RESERVE_MIN_BYTES else 0
+    nbytes = min(count * per_triangle, free / 8)
+    return int(nbytes) if nbytes >= at_least else 0
+
+
+def expected_reserve(domain: Domain, opts: MeshOptions) -> int:
+    """Bytes of pages to fault in while Triangle meshes ``domain`` (0: none)."""
+    return _expected_bytes(domain, opts, RESERVE_BYTES_PER_TRIANGLE, RESERVE_MIN_BYTES)
+
+
+def expected_result(domain: Domain, opts: MeshOptions) -> int:
+    """Bytes of the isolated mesher's result file to allocate ahead (0: none;
+    ``hammesh.meshing.isolate.run_isolated(prefault=)``)."""
+    return _expected_bytes(domain, opts, RESULT_BYTES_PER_TRIANGLE, RESULT_MIN_BYTES)
 
 
 def _meanwhile(reserve_bytes: int = 0) -> None:
@@ -170,6 +188,7 @@ def quality_mesh(
         mesh = run_isolated(
             func, (domain, opts), name=_NAMES[backend], timeout=timeout, alloc=True,
             meanwhile=partial(_meanwhile, expected_reserve(domain, opts)),
+            prefault=expected_result(domain, opts) if backend == "triangle" else 0,
         )
     else:
         mesh = func(domain, opts)

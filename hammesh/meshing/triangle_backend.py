@@ -72,6 +72,11 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
     raw_pts = np.asarray(out["vertices"], dtype=np.float64)
     points = alloc(raw_pts.shape, np.float64)
     points[...] = raw_pts
+    raw_vm = out.get("vertex_markers")
+    vmarks = np.zeros(len(points), np.int64)
+    if raw_vm is not None and np.size(raw_vm) == len(points):
+        vmarks = alloc(len(points), np.int64)  # (in the shared file: no copy to it later)
+        vmarks[...] = np.reshape(raw_vm, -1)
     attrs = np.asarray(out.get("triangle_attributes", np.zeros((m, 0))), dtype=np.float64)
     return Mesh(
         points=points,
@@ -80,5 +85,5 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
         segment_markers=np.asarray(out.get("segment_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1),
         triangle_attributes=attrs.reshape(m, -1) if m else np.zeros((0, 0)),
         neighbors=nbr,
-        vertex_markers=np.asarray(out.get("vertex_markers", np.zeros((0, 1))), dtype=np.int64).reshape(-1),
+        vertex_markers=vmarks,
     )

@@ -140,3 +140,20 @@ def test_quality_mesh_faults_a_reserve_that_hamiltonian_takes(monkeypatch) -> No
         assert pages.reserved() > 0
     h = hammesh.hamiltonian(mesh, mode="incircle")
     assert h.report["verified"] and pages.reserved() == 0
+
+
+def test_bench_core_child_leaves_no_file_behind(tmp_path) -> None:
+    """The fresh child of ``benchmarks/bench_core.py`` with ``--path ""`` (no mesh to save)
+    once wrote Triangle's time to ``.triangle`` in the working directory."""
+    from pathlib import Path
+    import json
+
+    bench = Path(__file__).parent.parent.parent / "benchmarks" / "bench_core.py"
+    proc = subprocess.run(
+        [sys.executable, str(bench), "--child", "pipeline", "--max-area", "0.01", "--path", "", "--mode", "incircle"],
+        capture_output=True, text=True, timeout=600, cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["verified"] and out["triangle_inside"] > 0
+    assert list(tmp_path.iterdir()) == []

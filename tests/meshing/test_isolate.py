@@ -171,6 +171,49 @@ def test_nothing_is_left_behind_on_failure(func, timeout: float, error: str) -> 
     assert _memfd_mappings() == maps
 
 
+def _result_file_sizes() -> list[tuple[int, int]]:
+    """``(size, allocated bytes)`` of each result file this process maps."""
+    out = []
+    with open("/proc/self/maps") as f:
+        for line in f:
+            if MEMFD_NAME in line:
+                st = os.stat(f"/proc/self/map_files/{line.split()[0]}")
+                out.append((st.st_size, st.st_blocks * 512))
+    return out
+
+
+@pytest.mark.skipif(not (LINUX and SHARED_MEMORY), reason="/proc is Linux; no memfd: nothing shared")
+def test_pages_allocated_ahead_beyond_the_result_are_given_back() -> None:
+    """``prefault``: the parent allocates the result file ahead while the child computes;
+    what the child did not use is cut off before the file is mapped (a mapping keeps
+    the whole file alive, as long as the mesh lives)."""
+    before = _result_file_sizes()
+    got = run_isolated(_arrays, (), name="test", timeout=60, alloc=True, prefault=64 << 20)
+    want = _expected()
+    for key in ("big", "view", "pts", "copied"):
+        np.testing.assert_array_equal(got[key], want[key])
+    after = _result_file_sizes()
+    assert len(after) == len(before) + 1
+    size, allocated = max(after)  # (the arrays above are larger than any other test's)
+    used = 300_000 * 3 * 8 + 100_000 * 2 * 8 + 60_000 * 8  # the three blocks, page-rounded below
+    assert used <= size < used + 3 * os.sysconf("SC_PAGE_SIZE")
+    assert allocated <= size  # nothing of the 64 MiB ahead is kept beyond it
+    del got
+    gc.collect()
+
+
+@pytest.mark.skipif(not LINUX, reason="/proc is Linux")
+@pytest.mark.parametrize("func, timeout, error", [(_crash_after_alloc, 60, "SIGKILL"), (_hang, 0.5, "within")])
+def test_nothing_is_left_behind_on_failure_with_pages_ahead(func, timeout: float, error: str) -> None:
+    fds, maps = _fds(), _memfd_mappings()
+    with pytest.raises(hammesh.HammeshError, match=error):
+        run_isolated(func, (), name="Triangle", timeout=timeout, alloc=True, prefault=32 << 20)
+    gc.collect()
+    assert _fds() <= fds
+    assert _memfd_mappings() == maps
+    assert not [t for t in threading.enumerate() if t.name == "hammesh-prefault"]
+
+
 @pytest.mark.skipif(not LINUX, reason="/proc is Linux")
 def test_nothing_is_left_behind_on_success() -> None:
     fds, shm = _fds(), _dev_shm()
