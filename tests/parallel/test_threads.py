@@ -77,3 +77,53 @@ def test_local_cluster_workers_share_the_cores():
         got = client.run(threads.cores)
     assert n == 2 and len(got) == 2
     assert set(got.values()) == {worker_threads(2)} == {max(1, (os.cpu_count() or 1) // 2)}
+
+
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_hamiltonian_side_thread_respects_the_cap(monkeypatch, no_cap, mode):
+    """Under a cap of one thread, ``hamiltonian()`` starts no thread (its certificate's
+    side work runs inline) and makes the same verified mesh as with its side thread."""
+    import threading
+
+    import numpy as np
+
+    import hammesh
+
+    mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [2, 0], [2, 1], [0, 1]]), min_angle=30,
+                                max_area=2e-3, isolate=False)
+    started = []
+    real_start = threading.Thread.start
+
+    def start(self):
+        started.append(self.name)
+        return real_start(self)
+
+    monkeypatch.setattr(threading.Thread, "start", start)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    threads.limit(1)
+    alone = hammesh.hamiltonian(mesh, mode=mode)
+    assert started == []
+    threads.limit(None)
+    beside = hammesh.hamiltonian(mesh, mode=mode)
+    assert len(started) >= 1  # the side thread, when two may run
+    assert alone.report["verified"] and beside.report["verified"]
+    assert np.array_equal(alone.triangles, beside.triangles) and np.array_equal(alone.points, beside.points)
+
+
+def test_inline_executor_keeps_errors_for_result():
+    with threads.InlineExecutor() as ex:
+        ok = ex.submit(lambda a, b=1: a + b, 2, b=3)
+        bad = ex.submit(lambda: 1 / 0)
+    assert ok.done() and ok.result() == 5
+    with pytest.raises(ZeroDivisionError):
+        bad.result()
+
+
+def test_side_executor_is_inline_under_a_cap_of_one(monkeypatch, no_cap):
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 4)
+    threads.limit(1)
+    assert isinstance(threads.side_executor(), threads.InlineExecutor)
+    threads.limit(2)
+    with threads.side_executor() as side:
+        assert not isinstance(side, threads.InlineExecutor)
+        assert side.submit(lambda: 7).result() == 7
