@@ -87,9 +87,10 @@ def run_parallel(args: argparse.Namespace) -> int:
     source = load_input(args.input, strict=args.strict)
     if not isinstance(source, Domain):
         raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-    with runner_for(workers=args.workers, scheduler=args.scheduler, mode=args.mode) as (runner, n):
+    # (a local cluster is started by parallel_hamiltonian, beside the decomposition)
+    with runner_for(scheduler=args.scheduler) as (runner, n):
         h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
-                                 client=None if args.workers is None and args.scheduler is None else runner,
+                                 workers=args.workers, client=None if args.scheduler is None else runner,
                                  mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
     if args.parts is not None or args.renumber is not None:
         from hammesh.partition import partitioned

@@ -236,7 +236,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     os.chmod(work, 0o777 & ~umask)  # mkdtemp's 0700 would become the output's mode
     spill = work / ".spill"
     try:
-        with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode) as (runner, n_workers):
+        with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode,
+                        background=True) as (runner, n_workers):
             if tiles is None:
                 tiles = default_tiles(decompose_estimate(domain, min_angle, max_area), n_workers)
             # a worker holding more than one tile keeps none in memory until the plan

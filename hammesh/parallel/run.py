@@ -214,10 +214,16 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     """
     run = runner or LocalRunner()
     note = progress or (lambda what, n: None)
+    from hammesh.parallel.cluster import Starting
+
     t0 = time.perf_counter()
-    warming = warm_workers(run, mode)  # noqa: F841  (kept alive while the tiles run)
+    starting = isinstance(run, Starting)  # (a local cluster starting beside the decomposition)
+    warming = [] if starting else warm_workers(run, mode)  # (kept alive while the tiles run)
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
+    if starting:
+        warming = warm_workers(run, mode)  # noqa: F841
+    t1b = time.perf_counter()
 
     def submit(i: int, check: bool = True):
         spill = None if spill_dir is None else os.path.join(str(spill_dir), f"tile_{i:06d}.pickle")
@@ -257,7 +263,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
             tile_seconds[k] = tile_seconds.get(k, 0.0) + v
     return Tiled(decomposition=decomp, outcomes=handles, plan=plan, mesh_points=mesh_points,
                  mesh_triangles=mesh_triangles, ham_points=ham_points, rounds=rounds, borders=borders,
-                 seconds={"decompose": t1 - t0, "tiles": t2 - t1, "plan": t3 - t2}, tile_seconds=tile_seconds,
+                 seconds={"decompose": t1 - t0, "start": t1b - t1, "tiles": t2 - t1b, "plan": t3 - t2},
+                 tile_seconds=tile_seconds,
                  tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds} for o in small])
 
 
@@ -357,7 +364,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
 
     lattice = params.flag("lattice", lattice)
     t0 = time.perf_counter()
-    with runner_for(workers=workers, client=client, mode=mode) as (runner, n_workers):
+    with runner_for(workers=workers, client=client, mode=mode, background=True) as (runner, n_workers):
         if tiles is None:
             est = decompose_estimate(domain, min_angle, max_area)
             tiles = default_tiles(est, n_workers)

@@ -127,3 +127,36 @@ def test_side_executor_is_inline_under_a_cap_of_one(monkeypatch, no_cap):
     with threads.side_executor() as side:
         assert not isinstance(side, threads.InlineExecutor)
         assert side.submit(lambda: 7).result() == 7
+
+
+@pytest.mark.slow
+def test_local_cluster_started_in_the_background():
+    """``background=True``: the caller goes on while the cluster starts; the first use
+    of the runner waits for it, the workers are capped, the cluster closes on exit."""
+    pytest.importorskip("distributed")
+    from hammesh.parallel.cluster import Starting, runner_for, worker_threads
+
+    with runner_for(workers=2, background=True) as (runner, n):
+        assert isinstance(runner, Starting) and n == 2  # known before the cluster is up
+        assert runner.submit(sum, [1, 2, 3]).result() == 6
+        got = runner.run(threads.cores)
+        address = runner.scheduler.address
+    assert set(got.values()) == {worker_threads(2)}
+    import distributed
+
+    with pytest.raises(OSError):  # closed: nothing listens there any more
+        distributed.Client(address, timeout="2s")
+
+
+@pytest.mark.slow
+def test_background_start_closes_the_cluster_when_the_caller_fails():
+    pytest.importorskip("distributed")
+    import threading
+
+    from hammesh.parallel.cluster import runner_for
+
+    before = {t.name for t in threading.enumerate()}
+    with pytest.raises(ZeroDivisionError):
+        with runner_for(workers=1, background=True):
+            1 / 0  # before the cluster is even used
+    assert not [t for t in threading.enumerate() if t.name.startswith("hammesh-cluster") and t.name not in before]
