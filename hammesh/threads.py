@@ -16,10 +16,10 @@ cluster started elsewhere: ``HAMMESH_THREADS=1 dask worker ... --nworkers K``).
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from typing import Any, Callable
 
-__all__ = ["row_ranges", "run_all", "cores", "limit", "THREAD_MIN_ROWS"]
+__all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "THREAD_MIN_ROWS"]
 
 #: Rows per thread below which a row pass runs in one call (tests lower it to exercise
 #: the threaded paths on small meshes).
@@ -66,3 +66,32 @@ def run_all(calls: list[Callable[[], Any]]) -> list[Any]:
         return [calls[0]()]
     with ThreadPoolExecutor(min(len(calls), cores())) as pool:
         return [f.result() for f in [pool.submit(c) for c in calls]]
+
+
+class InlineExecutor(Executor):
+    """An executor that runs every call at ``submit``, in the caller's thread.
+
+    Its futures are done when returned; an exception is kept in the future (raised by
+    ``result()``), as a pool thread's would be, so the caller sees its errors in the
+    same order as with a thread.
+    """
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:
+        f: Future = Future()
+        try:
+            f.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001  (handed to the caller through result())
+            f.set_exception(exc)
+        return f
+
+
+def side_executor() -> Executor:
+    """One thread for work beside the caller's (``hammesh()``'s certificate and page
+    faults), or, when this process may use one thread only (:func:`cores` is 1: one
+    core, or a cap of 1, e.g. a local cluster with a worker per core), an
+    :class:`InlineExecutor`: the side work then runs in the caller's thread and the
+    process never has two threads computing. Use it as a context manager, like a pool.
+    A caller whose side work waits for its own (a row stream) must check
+    ``isinstance(side, InlineExecutor)`` and run serially instead.
+    """
+    return ThreadPoolExecutor(1) if cores() > 1 else InlineExecutor()

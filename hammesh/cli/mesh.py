@@ -57,6 +57,8 @@ def add_args(p: argparse.ArgumentParser) -> None:
                    help="-o is a directory: one .vtu per tile written by its worker + mesh.pvtu (cycle order)")
     g.add_argument("--force", action="store_true",
                    help="--partitioned: replace the content of an existing non-empty -o directory")
+    g.add_argument("--no-lattice", action="store_true",
+                   help="mesh each tile by Triangle alone, without the interior lattice of points")
     p.add_argument("--strict", action="store_true",
                    help="refuse an input that needs repairs (quads, T-junctions, crossing segments...) "
                         "instead of repairing it; the report's 'repairs' lists what was repaired")
@@ -64,7 +66,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.workers is not None or args.scheduler is not None or args.partitioned or args.tiles is not None \
-            or args.force:
+            or args.force or args.no_lattice:
         from hammesh.parallel.command import run_parallel
 
         return run_parallel(args)

@@ -7,7 +7,7 @@ from typing import Iterator
 
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["runner_for", "start_method", "worker_threads", "DASK_MISSING"]
+__all__ = ["runner_for", "start_method", "worker_threads", "Starting", "DASK_MISSING"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
 
@@ -37,13 +37,17 @@ def start_method() -> str:
 
 @contextlib.contextmanager
 def runner_for(*, workers: int | None = None, client=None, scheduler: str | None = None,
-               mode: str | None = None) -> Iterator[tuple[object, int]]:
+               mode: str | None = None, background: bool = False) -> Iterator[tuple[object, int]]:
     """``(runner, n_workers)``: a Dask client (given, connected to ``scheduler``, or a
     local cluster of ``workers`` processes started here and closed on exit), or the
     in-process :class:`~hammesh.parallel.run.LocalRunner` when none is asked for.
 
     ``mode``: load that Hamiltonian mode's compiled kernels in this process before a
     local cluster forks its workers (:func:`start_method`), so they start with them.
+    ``background``: a local cluster starts in a thread of its own while the caller goes
+    on (reading and splitting the domain: the cluster's start, ~1 s, and the driver's
+    decomposition then overlap); the runner is then a :class:`Starting` handle whose
+    first use waits for the start.
     """
     from hammesh.parallel.run import LocalRunner
 
@@ -60,11 +64,39 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
         return
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InvalidOptionError(f"workers must be a positive integer, got {workers!r}")
-    distributed = _distributed()
+    _distributed()
+    if not background:
+        with contextlib.ExitStack() as stack:
+            yield _start_local(stack, workers, mode), workers
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    _hold_numba_lock_across_fork()
+    with contextlib.ExitStack() as stack, ThreadPoolExecutor(1, thread_name_prefix="hammesh-cluster") as pool:
+        started = pool.submit(_start_local, stack, workers, mode)
+        failed = False
+        try:
+            yield Starting(started), workers
+        except BaseException:
+            failed = True
+            raise
+        finally:
+            # the cluster is closed (by the stack) only once it is up; a start that
+            # failed is reported unless the caller's own error is on its way
+            try:
+                started.result()
+            except BaseException:
+                if not failed:
+                    raise
+
+
+def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None):
+    """Start a local cluster of ``workers`` processes and its client, both closed by ``stack``."""
     import logging
 
     import dask
 
+    distributed = _distributed()
     method = start_method()
     if mode is not None and method == "fork":
         from hammesh.postprocess import load_kernels
@@ -75,16 +107,54 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
     with dask.config.set({"distributed.worker.multiprocessing-method": method}):
         # no dashboard; the scheduler's HTTP server on a free local port (its default,
         # 8787, warns on stderr when another cluster has it)
-        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR,
-                                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
-    with cluster, distributed.Client(cluster) as c:
-        # the workers share this machine's cores: each threaded pass of a worker gets its
-        # share, not every core (N workers x C threads on C cores only thrash)
-        from hammesh import threads
+        cluster = stack.enter_context(distributed.LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+            silence_logs=logging.ERROR, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}))
+    # (closed by the stack, not entered as a context: a client entered in the starting
+    # thread could not be left in the caller's, its "current client" is per context)
+    c = distributed.Client(cluster)
+    stack.callback(c.close)
+    # the workers share this machine's cores: each threaded pass of a worker gets its
+    # share, not every core (N workers x C threads on C cores only thrash)
+    from hammesh import threads
 
-        c.run(threads.limit, worker_threads(workers))
-        yield c, workers
+    c.run(threads.limit, worker_threads(workers))
+    return c
+
+
+class Starting:
+    """A Dask client still starting in another thread: any use (``submit``,
+    ``gather``, ...) waits until it is up (or raises the start's error)."""
+
+    def __init__(self, future) -> None:
+        self._future = future
+
+    def __getattr__(self, name: str):
+        return getattr(self._future.result(), name)
+
+
+_fork_guarded = False
+
+
+def _hold_numba_lock_across_fork() -> None:
+    """Fork only while no thread is inside numba's compiler (``global_compiler_lock``).
+
+    A forked child has only the forking thread: a lock another thread held at the
+    fork stays held in the child forever, and numba takes that lock to compile or to
+    load a kernel from its cache. With the cluster starting in a thread while the
+    driver decomposes (and may load a kernel), the fork therefore waits for the lock
+    and the child releases its copy (the standard ``os.register_at_fork`` pattern).
+    """
+    global _fork_guarded
+    if _fork_guarded:
+        return
+    import os
+
+    from numba.core.compiler_lock import global_compiler_lock
+
+    os.register_at_fork(before=global_compiler_lock.acquire, after_in_parent=global_compiler_lock.release,
+                        after_in_child=global_compiler_lock.release)
+    _fork_guarded = True
 
 
 def worker_threads(workers: int) -> int:

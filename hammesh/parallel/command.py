@@ -37,6 +37,10 @@ def run_parallel(args: argparse.Namespace) -> int:
                                  "(no --backend, --conforming-delaunay, --max-steiner)")
     if args.png is not None or args.strip is not None:
         raise InvalidOptionError("--png and --strip need the whole mesh: not with parallel meshing")
+    if args.no_lattice and args.workers is None and args.scheduler is None and args.tiles is None \
+            and not args.partitioned:
+        raise InvalidOptionError("--no-lattice is for parallel meshing: give --workers, --scheduler, --tiles "
+                                 "or --partitioned")
     if args.force and not args.partitioned:
         raise InvalidOptionError("--force replaces an existing --partitioned -o DIRECTORY: give --partitioned")
     if args.parts is not None:
@@ -62,7 +66,7 @@ def run_parallel(args: argparse.Namespace) -> int:
         rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
                                 tiles=args.tiles, workers=args.workers, scheduler=args.scheduler, mode=args.mode,
                                 keep=args.keep, parts=args.parts, force=args.force, inputs=inputs,
-                                progress=progress)
+                                progress=progress, lattice=not args.no_lattice)
         if args.report is not None:
             write_report(rep, args.report)
         par = rep["parallel"]
@@ -83,10 +87,11 @@ def run_parallel(args: argparse.Namespace) -> int:
     source = load_input(args.input, strict=args.strict)
     if not isinstance(source, Domain):
         raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-    with runner_for(workers=args.workers, scheduler=args.scheduler, mode=args.mode) as (runner, n):
+    # (a local cluster is started by parallel_hamiltonian, beside the decomposition)
+    with runner_for(scheduler=args.scheduler) as (runner, n):
         h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
-                                 client=None if args.workers is None and args.scheduler is None else runner,
-                                 mode=args.mode, keep=args.keep, progress=progress)
+                                 workers=args.workers, client=None if args.scheduler is None else runner,
+                                 mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
     if args.parts is not None or args.renumber is not None:
         from hammesh.partition import partitioned
 

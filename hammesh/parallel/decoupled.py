@@ -43,8 +43,8 @@ def bad_corner_vertices(tile_vertex_ids: np.ndarray, n_input: int, mesh: Mesh, m
     return ids[ids >= n_input]
 
 
-def _mesh_and_check(tile, min_angle, max_area, n_input):
-    m = mesh_tile(tile, min_angle, max_area)
+def _mesh_and_check(tile, min_angle, max_area, n_input, lattice=True):
+    m = mesh_tile(tile, min_angle, max_area, lattice=lattice)
     return m, bad_corner_vertices(tile.vertex_ids, n_input, m, min_angle)
 
 
@@ -59,17 +59,18 @@ class DecoupledMesh:
 
 
 def mesh_decoupled(domain: Domain, *, min_angle: float | None, max_area: float, n_tiles: int,
-                   mapper: Mapper | None = None) -> DecoupledMesh:
+                   mapper: Mapper | None = None, lattice: bool = True) -> DecoupledMesh:
     """Decompose ``domain`` and mesh every tile alone (``mapper`` may run them anywhere).
 
     Where a tile has a triangle below ``min_angle`` at one of the prescribed vertices
     (the discretisation was too coarse for a nearby feature), the segments meeting
     that vertex are halved in the decomposition (both tiles of a separator get the same
     point) and the changed tiles are meshed again, at most ``MAX_ROUNDS`` times.
+    ``lattice=False``: no interior lattice (:func:`~hammesh.parallel.tile_mesh.mesh_tile`).
     """
     run = mapper or _serial
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=n_tiles)
-    results = run(_mesh_and_check, [(t, min_angle, max_area, decomp.n_input) for t in decomp.tiles])
+    results = run(_mesh_and_check, [(t, min_angle, max_area, decomp.n_input, lattice) for t in decomp.tiles])
     meshes = [r[0] for r in results]
     bad = [r[1] for r in results]
     rounds = split = 0
@@ -81,7 +82,8 @@ def mesh_decoupled(domain: Domain, *, min_angle: float | None, max_area: float, 
         decomp, changed = split_segments(decomp, rows)
         split += len(rows)
         rounds += 1
-        again = run(_mesh_and_check, [(decomp.tiles[i], min_angle, max_area, decomp.n_input) for i in changed])
+        again = run(_mesh_and_check, [(decomp.tiles[i], min_angle, max_area, decomp.n_input, lattice)
+                                      for i in changed])
         bad = []
         for i, (m, b) in zip(changed.tolist(), again):
             meshes[i] = m

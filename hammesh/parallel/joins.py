@@ -34,7 +34,8 @@ from hammesh.mesh import HamiltonianMesh
 from hammesh.parallel._kernels import area_sum
 from hammesh.parallel.tiles import Tile
 
-__all__ = ["BorderRows", "Join", "Plan", "border_rows", "plan_joins", "finish_tile", "TilePiece", "KIND_INPUT"]
+__all__ = ["BorderRows", "Join", "Plan", "border_rows", "plan_joins", "finish_tile", "TilePiece", "KIND_INPUT",
+           "PieceLayout", "piece_layout", "piece_parent", "CHUNK_ROWS"]
 
 #: ``HamiltonianMesh.kind`` of a triangle kept whole
 KIND_INPUT = 3
@@ -441,16 +442,75 @@ class TilePiece:
     segment_markers: np.ndarray
 
 
-def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: list, plan_start: np.ndarray,
-                joins: list[Join], mesh_offset: int, n_mesh_points: int, ham_offset: int, join_point_base: int,
-                triangle_offset: int, separator_keys: np.ndarray, n_global: int,
-                swap_apex: dict | None = None, floor: float = 0.0) -> TilePiece:
-    """Number a tile's rows and points globally and apply its side of the joins.
+#: rows per chunk when a piece is copied or written chunk by chunk (a few MB: the
+#: allocator reuses the buffer, so no fresh page is faulted per chunk)
+CHUNK_ROWS = 1 << 18
 
-    Global points: the decomposition's, then every tile's mesh Steiner points (tile
-    ``i``'s from ``mesh_offset``), then every tile's Hamiltonian Steiner points (from
-    ``ham_offset``), then the join points (``join_point_base``): so the union of the
-    tile meshes is a prefix of the output, as the certificate wants its input.
+
+@dataclass(frozen=True, eq=False)
+class PieceLayout:
+    """One tile's share of the output as a plan over its Hamiltonian mesh's rows: which
+    rows, in which order, and the joins' few new rows, with no row copied yet.
+
+    ``items``: in cycle order, ``(position, lo, count, step)``: the tile's rows ``lo,
+    lo + step, ...`` (``count`` of them, ``step`` +1 or -1) at global positions
+    ``position ...``; a join row ``k`` is ``(position, -1 - k, 1, 0)``. Point ``i`` of the
+    piece's point list (``point_ids``) is the tile's point ``i`` for ``i < n_own``, then
+    the join points (``join_points``); ``keep`` (None: all) marks the points some row
+    uses, when not all are. ``join_*``: the join rows' corners (indices into the point
+    list, before dropping the unused), kind, parent (global), attributes;
+    ``triangle_offset``: the tile's first triangle in the global parent numbering.
+    :meth:`chunks` walks the rows in order, :meth:`take` gathers an array by them.
+    """
+
+    tile: int
+    items: tuple
+    n_rows: int
+    n_own: int
+    point_ids: np.ndarray
+    join_points: np.ndarray
+    keep: np.ndarray | None
+    triangle_offset: int
+    join_triangles: np.ndarray
+    join_kind: np.ndarray
+    join_parent: np.ndarray
+    join_attributes: np.ndarray
+    segments: np.ndarray
+    segment_markers: np.ndarray
+
+    def chunks(self, chunk: int = CHUNK_ROWS):
+        """``(position, rows)`` in cycle order: ``rows`` a slice of the tile's rows (at
+        most ``chunk``, step +-1) or an int ``k`` (join row ``k``, one row)."""
+        for g, lo, count, step in self.items:
+            if lo < 0:
+                yield g, -1 - lo
+                continue
+            for a in range(0, count, chunk):
+                c = min(chunk, count - a)
+                s = lo + step * a
+                yield g + a, (slice(s, s + c) if step == 1 else slice(s, s - c if s >= c else None, -1))
+
+    def take(self, values: np.ndarray, joins: np.ndarray) -> np.ndarray:
+        """``values`` (one row per tile row) in the piece's row order, ``joins[k]`` for join row ``k``."""
+        parts = [values[r] if isinstance(r, slice) else joins[r:r + 1] for _, r in self.chunks(1 << 62)]
+        if not parts:
+            return np.zeros((0, *values.shape[1:]), values.dtype)
+        return np.concatenate(parts).astype(values.dtype, copy=False)
+
+    def positions(self) -> np.ndarray:
+        """The global position of each row of the piece."""
+        return np.concatenate([g + np.arange(c, dtype=np.int64) for g, _, c, _ in self.items]) \
+            if self.items else np.zeros(0, np.int64)
+
+
+def piece_layout(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: list, plan_start: np.ndarray,
+                 joins: list[Join], mesh_offset: int, n_mesh_points: int, ham_offset: int, join_point_base: int,
+                 triangle_offset: int, separator_keys: np.ndarray, n_global: int,
+                 swap_apex: dict | None = None, floor: float = 0.0) -> PieceLayout:
+    """Where a tile's rows go in the global cycle and what its side of the joins adds
+    (:class:`PieceLayout`), checked: the plan's runs and the joins cover every row of
+    the tile exactly once but the ones its joins replace, and every join triangle is
+    counter-clockwise with angles >= ``floor``. Arguments as :func:`finish_tile`.
     """
     k = len(tile.vertex_ids)
     n = len(h.points)
@@ -459,23 +519,28 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     m = len(h.triangles)
     ends = np.cumsum(h.components)
     starts = ends - h.components
-    new_tri, new_at, new_kind, new_parent, new_attr = [], [], [], [], []
+    new_tri, new_kind, new_parent, new_attr = [], [], [], []
     jmap = {j.index: j for j in joins}
     # a swap's far apex d: (global id, coordinates), from the other tile via the driver
     h_other_apex = {ji: int(v[0]) for ji, v in (swap_apex or {}).items()}
     attrs = np.asarray(h.triangle_attributes)
     # the rows in cycle order, block by block (the blocks' positions are consecutive
-    # stretches, so no sort of the rows is needed): a run of a cycle, or a join triangle
+    # stretches): a run of a cycle (at most two stretches of rows, forward or
+    # backward: no index array, no sort), or a join triangle
     mine = sorted((g, i) for i, (bk, g) in enumerate(zip(plan_blocks, plan_start.tolist())) if bk[0] == tile_index)
-    rows_parts, pos_parts, at = [], [], 0
+    items, spans, removed_rows = [], [], []
     for g, i in mine:
         bk = plan_blocks[i]
         if bk[1] == "run":
             _, _, run, start, step, count = bk
-            L = int(h.components[run])
-            rows_parts.append(starts[run] + (start + step * np.arange(count, dtype=np.int64)) % L)
-            pos_parts.append(g + np.arange(count, dtype=np.int64))
-            at += count
+            L, s0 = int(h.components[run]), int(starts[run])
+            if step not in (1, -1) or not (0 <= start < L) or not (0 <= count <= L):
+                raise VerificationError(f"tile {tile_index}: a block of the cycle plan is not a run of its cycle")
+            first = min(count, L - start) if step == 1 else min(count, start + 1)
+            for at, lo, c in ((0, s0 + start, first), (first, s0 + (0 if step == 1 else L - 1), count - first)):
+                if c > 0:
+                    items.append((g + at, lo, c, step))
+                    spans.append((lo, lo + c) if step == 1 else (lo - c + 1, lo + 1))
             continue
         _, _, ji, name = bk
         j = jmap[ji]
@@ -494,31 +559,29 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
             t = h.triangles[row]
             d = int(gid[[v for v in t if int(gid[v]) not in (j.a, j.b)][0]])
             tri = {"S_ad": (Iu, j.a, d), "S_db": (Iu, d, j.b)}[name]
+        items.append((g, -1 - len(new_tri), 1, 0))
         new_tri.append(tri)
-        new_at.append(at)
         new_kind.append(4 if name in ("A1", "A2") else (1 if name in ("F_a", "F_b") else 0))
         new_parent.append(triangle_offset + int(h.parent[row]) if h.parent[row] >= 0 else -1)
         new_attr.append(attrs[row] if attrs.shape[1] else np.zeros(0))
-        rows_parts.append(np.array([row], np.int64))  # a placeholder, replaced below
-        pos_parts.append(np.array([g], np.int64))
-        at += 1
     if new_tri:
         _check_join_triangles(np.asarray(new_tri, np.int64), gid, h.points, joins, join_point_base, swap_apex,
                               floor, tile_index)
-    rows = np.concatenate(rows_parts) if rows_parts else np.zeros(0, np.int64)
-    pos = np.concatenate(pos_parts) if pos_parts else np.zeros(0, np.int64)
-    new_at_a = np.asarray(new_at, np.int64)
-    # every row of the tile exactly once, but the ones its joins replace
+    # every row of the tile exactly once, but the ones its joins replace: the runs'
+    # stretches and those rows tile 0..m-1 without gap or overlap
     removed = set()
     for j in joins:
         if j.t_tile == tile_index:
             removed.add(j.t_row)
         if j.u_tile == tile_index:
             removed.add(j.u_row)
-    own = np.ones(len(rows), bool)
-    own[new_at_a] = False
-    seen = np.bincount(rows[own], minlength=m) if m else np.zeros(0, np.int64)
-    if len(seen) != m or seen.max(initial=0) > 1 or set(np.flatnonzero(seen == 0).tolist()) != removed:
+    cover = sorted(spans + [(r, r + 1) for r in removed])
+    at = 0
+    for lo, hi in cover:
+        if lo != at:
+            raise VerificationError(f"tile {tile_index}: the cycle plan does not cover its rows")
+        at = hi
+    if at != m:
         raise VerificationError(f"tile {tile_index}: the cycle plan does not cover its rows")
     # the points this piece uses: its own and the join points (a swap's apex d is the
     # other tile's point: added unless this tile holds it too)
@@ -537,32 +600,66 @@ def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: li
     at_v = np.minimum(np.searchsorted(tile.vertex_ids, jp_ids_a), max(k - 1, 0))
     fresh = ~((tile.vertex_ids[at_v] == jp_ids_a) if k else np.zeros(len(jp_ids_a), bool))
     ids = np.concatenate([gid, jp_ids_a[fresh]])
-    xy = np.concatenate([h.points, np.asarray(jp_xy, np.float64).reshape(-1, 2)[fresh]])
-    # np.take: ~2x numpy's fancy indexing of rows of a 2-D array
-    local = np.take(h.triangles, rows, axis=0)
-    kind = np.take(np.asarray(h.kind), rows).astype(np.int8, copy=False)
-    parent = np.take(np.asarray(h.parent, dtype=np.int64), rows)
-    parent += triangle_offset  # -1 (no parent) becomes triangle_offset - 1: back to -1
-    parent[parent < triangle_offset] = -1
-    attr = np.take(attrs, rows, axis=0)
-    if new_tri:
-        nt = np.asarray(new_tri, np.int64)
+    jxy = np.asarray(jp_xy, np.float64).reshape(-1, 2)[fresh]
+    nt = np.asarray(new_tri, np.int64).reshape(-1, 3)
+    if len(nt):
         want = np.unique(nt)
         hold = np.flatnonzero(np.isin(ids, want))  # few: the join triangles' corners
         order_at = np.argsort(ids[hold])
-        local[new_at_a] = hold[order_at][np.searchsorted(ids[hold][order_at], nt)]
-        kind[new_at_a] = new_kind
-        parent[new_at_a] = new_parent
-        attr[new_at_a] = np.asarray(new_attr).reshape(len(new_tri), attr.shape[1])
+        nt = hold[order_at][np.searchsorted(ids[hold][order_at], nt)]
+    # which points the rows use: the tile's (counted over its rows, less the replaced
+    # ones) and the join rows' corners
+    uses = np.bincount(np.asarray(h.triangles).ravel(), minlength=n) if m else np.zeros(n, np.int64)
+    if removed:
+        np.subtract.at(uses, np.asarray(h.triangles)[sorted(removed)].ravel(), 1)
     used = np.zeros(len(ids), bool)
-    used[local.ravel()] = True
-    if not used.all():  # (a join's corner points are new; the tile's own all used, as a rule)
-        renum = np.cumsum(used) - 1
-        local = renum[local]
+    used[:n] = uses > 0
+    used[nt.ravel()] = True
     # constrained edges: the tile's, minus its separators (interior edges of the union)
     segs = gid[h.segments]
     keys = np.sort(segs, axis=1) @ np.array([n_global, 1])
     keep_s = ~np.isin(keys, separator_keys)
-    return TilePiece(tile=tile_index, point_ids=ids[used], points=xy[used], triangles=local, position=pos,
-                     kind=kind, parent=parent, triangle_attributes=attr, segments=segs[keep_s],
-                     segment_markers=np.asarray(h.segment_markers)[keep_s])
+    width = attrs.shape[1] if attrs.ndim == 2 else 0
+    return PieceLayout(tile=tile_index, items=tuple(items), n_rows=m - len(removed) + len(nt), n_own=n,
+                       point_ids=ids, join_points=jxy, keep=None if used.all() else used,
+                       triangle_offset=int(triangle_offset), join_triangles=nt,
+                       join_kind=np.asarray(new_kind, np.int8), join_parent=np.asarray(new_parent, np.int64),
+                       join_attributes=np.asarray(new_attr, np.float64).reshape(len(nt), width),
+                       segments=segs[keep_s], segment_markers=np.asarray(h.segment_markers)[keep_s])
+
+
+def piece_parent(parent: np.ndarray, triangle_offset: int) -> np.ndarray:
+    """A tile's ``parent`` rows in global numbering (-1, no parent, stays -1)."""
+    out = np.asarray(parent, dtype=np.int64) + triangle_offset
+    out[out < triangle_offset] = -1
+    return out
+
+
+def finish_tile(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: list, plan_start: np.ndarray,
+                joins: list[Join], mesh_offset: int, n_mesh_points: int, ham_offset: int, join_point_base: int,
+                triangle_offset: int, separator_keys: np.ndarray, n_global: int,
+                swap_apex: dict | None = None, floor: float = 0.0) -> TilePiece:
+    """Number a tile's rows and points globally and apply its side of the joins.
+
+    Global points: the decomposition's, then every tile's mesh Steiner points (tile
+    ``i``'s from ``mesh_offset``), then every tile's Hamiltonian Steiner points (from
+    ``ham_offset``), then the join points (``join_point_base``): so the union of the
+    tile meshes is a prefix of the output, as the certificate wants its input.
+    (:func:`piece_layout`, gathered; the partitioned output writes the layout chunk
+    by chunk instead.)
+    """
+    lay = piece_layout(h, tile, tile_index, plan_blocks, plan_start, joins, mesh_offset, n_mesh_points, ham_offset,
+                       join_point_base, triangle_offset, separator_keys, n_global, swap_apex, floor)
+    local = lay.take(np.asarray(h.triangles, dtype=np.int64), lay.join_triangles)
+    ids = lay.point_ids
+    xy = np.concatenate([np.asarray(h.points, dtype=np.float64), lay.join_points])
+    if lay.keep is not None:  # (a join's corner points are new; the tile's own all used, as a rule)
+        local = (np.cumsum(lay.keep) - 1)[local]
+        ids, xy = ids[lay.keep], xy[lay.keep]
+    attrs = np.asarray(h.triangle_attributes)
+    attrs = attrs.reshape(len(attrs), lay.join_attributes.shape[1])
+    return TilePiece(tile=tile_index, point_ids=ids, points=xy, triangles=local, position=lay.positions(),
+                     kind=lay.take(np.asarray(h.kind).astype(np.int8, copy=False), lay.join_kind),
+                     parent=lay.take(piece_parent(h.parent, triangle_offset), lay.join_parent),
+                     triangle_attributes=lay.take(attrs, lay.join_attributes),
+                     segments=lay.segments, segment_markers=lay.segment_markers)

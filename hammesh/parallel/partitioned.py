@@ -29,10 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
+from hammesh import params
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
 from hammesh.partition import spread_parts
-from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, finish_outcome, on_holder,
+from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, on_holder, outcome_hamiltonian,
                                   progress_bar, run_tiles)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target"]
@@ -83,22 +84,102 @@ def stretch_parts(position: np.ndarray, components: np.ndarray, k: int) -> np.nd
 
 def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, parts: int | None):
     """On the tile's worker: number its rows globally (its side of the joins), write its
-    piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``."""
-    from hammesh.io.pvtu import write_piece
+    piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``.
+
+    The piece is written chunk by chunk straight from the tile's Hamiltonian mesh in
+    the order :func:`~hammesh.parallel.joins.piece_layout` plans (runs of its cycle,
+    forward or backward, and the join rows): no gathered copy of the rows is made
+    (at millions of rows such copies, fresh memory each, were most of the finish and
+    write steps). The bytes are :func:`~hammesh.io.pvtu.write_piece`'s.
+    """
+    from hammesh.io.pvtu import VTK_TRIANGLE, write_raw_chunks
+    from hammesh.parallel.joins import CHUNK_ROWS, piece_layout
 
     t0, c0 = time.perf_counter(), time.process_time()
-    piece = finish_outcome(outcome, *args)
+    h = outcome_hamiltonian(outcome)
+    lay = piece_layout(h, *args)
     t1, c1 = time.perf_counter(), time.process_time()
+    m, n, w = len(h.triangles), len(h.points), lay.join_attributes.shape[1]
+    tri = np.asarray(h.triangles, dtype=np.int64)
+    attrs = np.asarray(h.triangle_attributes, dtype=np.float64).reshape(m, w)
+    parent, kind, off = np.asarray(h.parent, dtype=np.int64), np.asarray(h.kind), lay.triangle_offset
+    renum = None if lay.keep is None else np.cumsum(lay.keep) - 1
+    spans = [(g, r, len(range(*r.indices(m))) if isinstance(r, slice) else 1) for g, r in lay.chunks()]
     ends = np.cumsum(components)
-    cid = np.searchsorted(ends, piece.position, side="right")
-    cpos = piece.position - (ends - components)[cid]
-    part = None if parts is None else stretch_parts(piece.position, components, parts)
-    write_piece(path, piece.point_ids, piece.points, piece.triangles, piece.position, cid, cpos, piece.parent,
-                piece.kind, piece.triangle_attributes, part=part, local=True)
-    first = int(piece.position[0]) if len(piece.position) else -1
-    width = piece.triangle_attributes.shape[1] if piece.triangle_attributes.ndim == 2 else 0
-    sizes = None if part is None else np.bincount(part, minlength=parts)
-    return (Path(path).name, len(piece.triangles), first, width, sizes,
+    sizes = None if parts is None else np.zeros(parts, np.int64)
+
+    def rows(values, joins, own=None, both=None):
+        """Chunks of a per-row array in piece order (``own`` applied to the tile's
+        rows, ``both`` to every chunk)."""
+        def gen():
+            for _, r, _ in spans:
+                c = (values[r] if own is None else own(values[r])) if isinstance(r, slice) else joins[r:r + 1]
+                yield c if both is None else both(c)
+        return gen
+
+    def by_position(fn):
+        def gen():
+            for g, _, c in spans:
+                yield fn(g + np.arange(c, dtype=np.int64))
+        return gen
+
+    def global_parent(p):
+        p = p + off
+        p[p < off] = -1  # -1 (no parent) stays -1
+        return p
+
+    def cycle_id(pos):
+        return np.searchsorted(ends, pos, side="right")
+
+    def cycle_position(pos):
+        return pos - (ends - components)[cycle_id(pos)]
+
+    def part_of(pos):
+        part = stretch_parts(pos, components, parts)
+        sizes[:] += np.bincount(part, minlength=parts)
+        return part
+
+    keep = lay.keep
+    n_points = len(lay.point_ids) if keep is None else int(keep.sum())
+
+    def points(ids: bool):
+        def gen():
+            for src, base in ((h.points, 0), (lay.join_points, n)):
+                for a in range(0, len(src), CHUNK_ROWS):
+                    b = min(a + CHUNK_ROWS, len(src))
+                    if ids:
+                        c = lay.point_ids[base + a:base + b]
+                    else:
+                        c = np.zeros((b - a, 3))
+                        c[:, :2] = src[a:b]
+                    yield c if keep is None else c[keep[base + a:base + b]]
+        return gen
+
+    def cells(fn):
+        def gen():
+            for a in range(0, lay.n_rows, CHUNK_ROWS):
+                yield fn(a, min(a + CHUNK_ROWS, lay.n_rows))
+        return gen
+
+    mr = lay.n_rows
+    arrays = [("PointData", "global_id", "Int64", 1, n_points, points(True)),
+              ("CellData", "global_position", "Int64", 1, mr, by_position(lambda pos: pos)),
+              ("CellData", "cycle_id", "Int64", 1, mr, by_position(cycle_id)),
+              ("CellData", "cycle_position", "Int64", 1, mr, by_position(cycle_position)),
+              ("CellData", "parent", "Int64", 1, mr, rows(parent, lay.join_parent, own=global_parent)),
+              ("CellData", "kind", "Int64", 1, mr, rows(kind, lay.join_kind))]
+    if parts is not None:
+        arrays.append(("CellData", "part", "Int64", 1, mr, by_position(part_of)))
+    arrays += [("CellData", f"attribute_{i}", "Float64", 1, mr, rows(attrs[:, i], lay.join_attributes[:, i]))
+               for i in range(w)]
+    arrays += [("Points", "", "Float64", 3, 3 * n_points, points(False)),
+               ("Cells", "connectivity", "Int64", 1, 3 * mr,
+                rows(tri, lay.join_triangles, both=None if renum is None else renum.__getitem__)),
+               ("Cells", "offsets", "Int64", 1, mr, cells(lambda a, b: 3 * np.arange(a + 1, b + 1, dtype=np.int64))),
+               ("Cells", "types", "UInt8", 1, mr, cells(lambda a, b: np.full(b - a, VTK_TRIANGLE, np.uint8)))]
+    write_raw_chunks(path, arrays, n_points, mr)
+    first = int(lay.items[0][0]) if lay.items else -1
+    return (Path(path).name, mr, first, w, sizes,
             {"finish": t1 - t0, "write": time.perf_counter() - t1, "cpu_finish": c1 - c0,
              "cpu_write": time.process_time() - c1})
 
@@ -121,7 +202,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                       max_area: float, tiles: int | None = None, workers: int | None = None, client=None,
                       scheduler: str | None = None, mode: str = "sparse", keep: float = 0.9,
                       parts: int | None = None, force: bool = False, inputs: tuple = (),
-                      progress: bool = False) -> dict:
+                      progress: bool = False, lattice: bool = True) -> dict:
     """Mesh ``domain`` on the tiles and write ``DIRECTORY/mesh.pvtu`` + one ``.vtu`` per tile.
 
     Everything is written into a fresh directory beside ``DIRECTORY`` and renamed onto it
@@ -131,6 +212,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
 
     ``parts``: a ``part`` cell array of ``parts`` balanced stretches of the cycle
     (:func:`stretch_parts`); the report gains ``"partition"`` (sizes, imbalance).
+    ``lattice``: as :func:`~hammesh.parallel.run.parallel_hamiltonian` (``False``: no
+    interior lattice, each tile Triangle's own run).
 
     Returns the report (counts, seconds, ``index`` path). Pieces are written by the
     worker that made them; the index lists them in the order the cycle enters them.
@@ -142,6 +225,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     check_target(out, force=force, inputs=inputs)
     if parts is not None and (isinstance(parts, bool) or not isinstance(parts, (int, np.integer)) or parts < 1):
         raise InvalidOptionError(f"parts must be a positive integer, got {parts!r}")
+    lattice = params.flag("lattice", lattice)
     t0 = time.perf_counter()
     parent = out.absolute().parent
     made = [d for d in [parent, *parent.parents] if not d.exists()]
@@ -152,7 +236,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     os.chmod(work, 0o777 & ~umask)  # mkdtemp's 0700 would become the output's mode
     spill = work / ".spill"
     try:
-        with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode) as (runner, n_workers):
+        with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode,
+                        background=True) as (runner, n_workers):
             if tiles is None:
                 tiles = default_tiles(decompose_estimate(domain, min_angle, max_area), n_workers)
             # a worker holding more than one tile keeps none in memory until the plan
@@ -161,7 +246,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                 spill.mkdir()
                 spill_dir = spill
             tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
-                              mode=mode, keep=keep, progress=progress_bar(progress, 2), spill_dir=spill_dir)
+                              mode=mode, keep=keep, progress=progress_bar(progress, 2), spill_dir=spill_dir,
+                              lattice=lattice)
             comps = tiled.plan.components
             if parts is not None and parts > int(comps.sum()):
                 raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
@@ -193,7 +279,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
         "index": str(out / INDEX_NAME), "pieces": sum(x[1] > 0 for x in done), "triangles": int(sum(x[1] for x in done)),
         "components": comps.tolist(), "verified": True,
         "parallel": {"tiles": d.n_tiles, "workers": n_workers, "repair_rounds": tiled.rounds,
-                     "joins": len(tiled.plan.joins), "join_swaps": sum(j.swap for j in tiled.plan.joins),
+                     "lattice": lattice, "joins": len(tiled.plan.joins),
+                     "join_swaps": sum(j.swap for j in tiled.plan.joins),
                      "joins_not_whole": tiled.plan.fallback_joins, "tile_cycles": tiled.plan.nodes,
                      "pieces": tiled.plan.pieces, "estimate": d.estimate,
                      "mesh_triangles": int(tiled.mesh_triangles.sum()), "spilled": spill_dir is not None,

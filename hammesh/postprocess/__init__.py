@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 
 import numpy as np
 
-from hammesh import pages, params
+from hammesh import pages, params, threads
 from hammesh.domain.resolution import check_resolution, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
@@ -131,7 +130,7 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
     # a second thread works beside the construction: the walk's arrays (while the
     # input is checked), the input's side of the certificate, and (incircle) the row
     # checks of the rows the walk has finished
-    with ThreadPoolExecutor(1) as side:
+    with threads.side_executor() as side:  # (inline when this process may use one thread)
         ready = None
         shape = np.shape(mesh.triangles)
         if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
@@ -143,13 +142,15 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
         clean, he, is_con = prepare_mesh(mesh)
         rows = prepared = None
         if mode == "incircle":
-            out, claim, stream = incircle_streaming(clean, he, is_con, side, ready, reuse=True)
+            serial = isinstance(side, threads.InlineExecutor)  # (no row stream then: its checker waits for rows)
+            out, claim, stream = incircle_streaming(clean, he, is_con, None if serial else side, ready, reuse=True)
             del he, is_con  # (their memory is the output's parent and kind now)
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows
             prepared = claim_structure(out.triangles, claim)
-            stream.join()  # then help with the row checks still to do
-            rows = (stream.result(out.components), stream.used)
+            if stream is not None:
+                stream.join()  # then help with the row checks still to do
+                rows = (stream.result(out.components), stream.used)
         else:
             out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep)
             t1 = time.perf_counter()

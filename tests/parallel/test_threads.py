@@ -77,3 +77,86 @@ def test_local_cluster_workers_share_the_cores():
         got = client.run(threads.cores)
     assert n == 2 and len(got) == 2
     assert set(got.values()) == {worker_threads(2)} == {max(1, (os.cpu_count() or 1) // 2)}
+
+
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_hamiltonian_side_thread_respects_the_cap(monkeypatch, no_cap, mode):
+    """Under a cap of one thread, ``hamiltonian()`` starts no thread (its certificate's
+    side work runs inline) and makes the same verified mesh as with its side thread."""
+    import threading
+
+    import numpy as np
+
+    import hammesh
+
+    mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [2, 0], [2, 1], [0, 1]]), min_angle=30,
+                                max_area=2e-3, isolate=False)
+    started = []
+    real_start = threading.Thread.start
+
+    def start(self):
+        started.append(self.name)
+        return real_start(self)
+
+    monkeypatch.setattr(threading.Thread, "start", start)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    threads.limit(1)
+    alone = hammesh.hamiltonian(mesh, mode=mode)
+    assert started == []
+    threads.limit(None)
+    beside = hammesh.hamiltonian(mesh, mode=mode)
+    assert len(started) >= 1  # the side thread, when two may run
+    assert alone.report["verified"] and beside.report["verified"]
+    assert np.array_equal(alone.triangles, beside.triangles) and np.array_equal(alone.points, beside.points)
+
+
+def test_inline_executor_keeps_errors_for_result():
+    with threads.InlineExecutor() as ex:
+        ok = ex.submit(lambda a, b=1: a + b, 2, b=3)
+        bad = ex.submit(lambda: 1 / 0)
+    assert ok.done() and ok.result() == 5
+    with pytest.raises(ZeroDivisionError):
+        bad.result()
+
+
+def test_side_executor_is_inline_under_a_cap_of_one(monkeypatch, no_cap):
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 4)
+    threads.limit(1)
+    assert isinstance(threads.side_executor(), threads.InlineExecutor)
+    threads.limit(2)
+    with threads.side_executor() as side:
+        assert not isinstance(side, threads.InlineExecutor)
+        assert side.submit(lambda: 7).result() == 7
+
+
+@pytest.mark.slow
+def test_local_cluster_started_in_the_background():
+    """``background=True``: the caller goes on while the cluster starts; the first use
+    of the runner waits for it, the workers are capped, the cluster closes on exit."""
+    pytest.importorskip("distributed")
+    from hammesh.parallel.cluster import Starting, runner_for, worker_threads
+
+    with runner_for(workers=2, background=True) as (runner, n):
+        assert isinstance(runner, Starting) and n == 2  # known before the cluster is up
+        assert runner.submit(sum, [1, 2, 3]).result() == 6
+        got = runner.run(threads.cores)
+        address = runner.scheduler.address
+    assert set(got.values()) == {worker_threads(2)}
+    import distributed
+
+    with pytest.raises(OSError):  # closed: nothing listens there any more
+        distributed.Client(address, timeout="2s")
+
+
+@pytest.mark.slow
+def test_background_start_closes_the_cluster_when_the_caller_fails():
+    pytest.importorskip("distributed")
+    import threading
+
+    from hammesh.parallel.cluster import runner_for
+
+    before = {t.name for t in threading.enumerate()}
+    with pytest.raises(ZeroDivisionError):
+        with runner_for(workers=1, background=True):
+            1 / 0  # before the cluster is even used
+    assert not [t for t in threading.enumerate() if t.name.startswith("hammesh-cluster") and t.name not in before]
