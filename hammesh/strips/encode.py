@@ -29,8 +29,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from hammesh import params
+from hammesh import params, threads
 from hammesh.errors import InvalidOptionError
+from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import HamiltonianMesh
 from hammesh.strips._cache_cover_kernels import cache_path_cover
 from hammesh.strips._cover_kernels import (
@@ -47,6 +48,7 @@ from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
 from hammesh.strips.cache import reorder_vertices as _first_use_numbering
+from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
@@ -423,6 +425,11 @@ def encode(
     dual = None
     if fast and cache is None and join == "restart" and restart_index is not None and method in ("auto", "greedy"):
         if not isinstance(mesh, HamiltonianMesh):
+            if not reorder_vertices and len(mesh.triangles) >= HALVES_FROM and threads.cores() >= 2:
+                pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
+                halves = encode_in_halves(pts, tri, int(restart_index), verify, _SWAP_WEIGHT)
+                if halves is not None:
+                    return halves
             one_pass, dual = _greedy_in_one_pass(mesh, int(restart_index), verify, reorder_vertices)
             if one_pass is not None:
                 return one_pass
