@@ -25,6 +25,7 @@ defects.
 
 from __future__ import annotations
 
+import time
 from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 
@@ -32,7 +33,7 @@ import numpy as np
 
 from hammesh.errors import InvalidOptionError
 from hammesh.strips._decode_kernels import check_claimed_part
-from hammesh.strips._dual_kernels import REC_WIDTH, count_pillows, face_flags, records_dtype
+from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
 from hammesh.strips._greedy_strip_kernels import StripWork, greedy_strip_buffer
 from hammesh.strips._halves_kernels import pair_records_into, rows_on_side_into, shared_edges
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
@@ -88,11 +89,24 @@ def _failed(reason: str) -> _Half:
     return _Half(reason, *([None] * (len(_Half._fields) - 1)))
 
 
-def _encode_half(pts, tri, vside, side, w_swap, restart, seen, stop, whole=None) -> _Half:
-    """One half: rows, census, pairing, greedy strips, proof of its part (``seen`` shared).
+def _timed_half(clock, key, *args):
+    """:func:`_encode_half`, its thread CPU seconds written to ``clock[key]`` (when a dict)."""
+    t = time.thread_time()
+    try:
+        return _encode_half(*args)
+    finally:
+        if clock is not None:
+            clock[key] = time.thread_time() - t
 
-    ``whole``: a list to receive the buffer of the whole mesh, whose head this half
-    writes (and proves) in place.
+
+def _encode_half(pts, tri, vside, side, w_swap, restart, seen, stop, finish=None, whole=None) -> _Half:
+    """One half: rows, census, pairing, strips, proof of its part (``seen`` shared).
+
+    ``finish``: ``None`` for the one-pass greedy strips, or the encoder
+    ``(points, rows, records, twin) -> (indices, order, n_strips, n_swaps)`` of the
+    default mode (:func:`hammesh.strips.encode.encode`'s cover, end moves and writer).
+    ``whole`` (one-pass only): a list to receive the buffer of the whole mesh, whose head
+    this half writes (and proves) in place.
     """
     m, n = len(tri), len(pts)
     rows = np.empty(m, np.int64)
@@ -116,20 +130,33 @@ def _encode_half(pts, tri, vside, side, w_swap, restart, seen, stop, whole=None)
         stop[0] = True
         return _failed("an edge is not proper")
     pillows = int(count_pillows(rec))
-    if whole is not None:
-        # bound of the whole buffer: this half's 4 k, a restart, the other half's 4 (m - k)
-        whole.append(np.empty(4 * m + 1, np.int64))
-    g = greedy_strip_buffer(rec, w_swap, restart, _half_work(k, None if whole is None else whole[0][: 4 * k]))
-    order = rows[g.order]
+    if finish is not None:
+        twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
+        indices, local, n_strips, n_swaps = finish(pts, part, rec, twin)
+        max_index = -1  # the writer checked the restart index itself
+    else:
+        if whole is not None:
+            # bound of the whole buffer: this half's 4 k, a restart, the other half's 4 (m - k)
+            whole.append(np.empty(4 * m + 1, np.int64))
+        g = greedy_strip_buffer(rec, w_swap, restart, _half_work(k, None if whole is None else whole[0][: 4 * k]))
+        indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
+    order = rows[local]
     proof = -1
     if seen is not None:
-        proof = int(check_claimed_part(tri, g.indices, restart, True, order, seen)[0])
-    return _Half(None, order, g.indices, len(g.starts) - 1, g.n_swaps, g.max_index, start, keys, loose,
+        proof = int(check_claimed_part(tri, indices, restart, True, order, seen)[0])
+    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
 
-def encode_in_halves(pts: np.ndarray, tri: np.ndarray, restart: int, verify: bool, w_swap: int) -> GLStrip | None:
-    """``encode(fast=True)``'s restart-joined buffer from two halves on two threads, or ``None``.
+def encode_in_halves(
+    pts: np.ndarray, tri: np.ndarray, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
+) -> GLStrip | None:
+    """A restart-joined buffer from two halves on two threads, or ``None``.
+
+    ``finish``: ``None`` for ``encode(fast=True)``'s one-pass greedy strips, else the
+    default mode's encoder of one half (see :func:`_encode_half`).  ``clock``: a dict
+    that receives each half's thread CPU seconds (``"first"`` on the calling thread,
+    ``"second"`` on the other), for benchmarks on a loaded machine.
 
     ``pts``, ``tri``: checked arrays (:func:`hammesh.halfedge.mesh_arrays`).  The buffer
     draws every row once with its winding; with ``verify`` each half's part is proved
@@ -146,8 +173,8 @@ def encode_in_halves(pts: np.ndarray, tri: np.ndarray, restart: int, verify: boo
     stop = np.zeros(1, np.bool_)
     whole: list[np.ndarray] = []
     with ThreadPoolExecutor(1) as pool:
-        second = pool.submit(_encode_half, pts, tri, vside, 1, w_swap, restart, seen, stop)
-        a = _encode_half(pts, tri, vside, 0, w_swap, restart, seen, stop, whole)
+        second = pool.submit(_timed_half, clock, "second", pts, tri, vside, 1, w_swap, restart, seen, stop, finish)
+        a = _timed_half(clock, "first", pts, tri, vside, 0, w_swap, restart, seen, stop, finish, None if finish else whole)
         b = second.result()
     if a.failed or b.failed:
         return None
@@ -156,15 +183,23 @@ def encode_in_halves(pts: np.ndarray, tri: np.ndarray, restart: int, verify: boo
     if not (ab.ok and ba.ok) or a.pairs + b.pairs + ab.proper < m:
         return None  # a defect across the cut, or maybe a dual forest: the one-thread path
     la, lb = len(a.indices), len(b.indices)
-    indices = whole[0][: la + lb + 1]  # the first half's part is in place
+    if whole:
+        indices = whole[0][: la + lb + 1]  # the first half's part is in place
+        in_place = True
+    else:
+        indices = np.empty(la + lb + 1, np.int64)
+        indices[:la] = a.indices
+        in_place = False
     indices[la] = restart
     indices[la + 1 :] = b.indices
     S = a.n_strips + b.n_strips
     if 0 <= restart <= max(a.max_index, b.max_index) and np.count_nonzero(indices == restart) != S - 1:
         raise InvalidOptionError(f"restart index {restart} is a vertex index of the mesh")
-    # the first half was proved in place; the second where it was written, so compare the copy
+    # each half was proved where it was written (the first in place with the one-pass
+    # writer): compare the copies
     proved = a.proof == 0 and b.proof == 0 and len(a.order) + len(b.order) == m and indices[la] == restart
-    if verify and not (proved and np.array_equal(indices[la + 1 :], b.indices) and seen.all()):
+    copied = np.array_equal(indices[la + 1 :], b.indices) and (in_place or np.array_equal(indices[:la], a.indices))
+    if verify and not (proved and copied and seen.all()):
         verify_gl_strip(tri, indices, restart)  # the claim failed: the full comparison names the problem
     defects = MeshDefects(repeated_vertex=0, zero_area=a.zero_area + b.zero_area, double_sided=(a.pillows + b.pillows) // 2)
     return GLStrip(indices, restart, m, S, a.n_swaps + b.n_swaps, defects=defects)

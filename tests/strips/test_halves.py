@@ -26,16 +26,17 @@ from .defect_meshes import ALL as DEFECT_MESHES
 _encode_module = sys.modules["hammesh.strips.encode"]
 
 
-def _halves(m: Mesh, verify: bool = True):
+def _halves(m: Mesh, verify: bool = True, fast: bool = True):
     pts, tri = mesh_arrays(m.points, m.triangles, dims=(2, 3))
-    return halves.encode_in_halves(pts, tri, RESTART_INDEX, verify, 1)
+    finish = None if fast else _encode_module.half_encoder(RESTART_INDEX)
+    return halves.encode_in_halves(pts, tri, RESTART_INDEX, verify, 1, finish)
 
 
-@given(st.integers(0, 2**32 - 1), st.integers(30, 300), st.booleans())
-@settings(max_examples=30, deadline=None)
-def test_halves_draw_every_row_once_with_its_winding(seed, n, lift):
+@given(st.integers(0, 2**32 - 1), st.integers(30, 300), st.booleans(), st.booleans())
+@settings(max_examples=40, deadline=None)
+def test_halves_draw_every_row_once_with_its_winding(seed, n, lift, fast):
     m = delaunay_mesh(seed, n, lift)
-    s = _halves(m)
+    s = _halves(m, fast=fast)
     assert s is not None  # a Delaunay mesh has interior vertices: more dual edges than triangles
     assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
     assert s.n_triangles == len(m.triangles)
@@ -46,22 +47,24 @@ def test_closed_surface_and_quality_mesh_cost_few_more_indices():
     """The cut ends a few more paths than one cover would: within 0.01 indices per triangle from
     ~25k triangles (+0.009 at 31k on the square, +0.004 at 100k: the cut grows as sqrt(m))."""
     for m in (torus_mesh(160, 80), square_mesh(5e-5)):
-        s = _halves(m)
-        one = encode(m, fast=True)  # below HALVES_FROM: the one-thread path
-        assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
-        assert s.indices_per_triangle <= one.indices_per_triangle + 0.01
+        for fast in (True, False):
+            s = _halves(m, fast=fast)
+            one = encode(m, fast=fast)  # below HALVES_FROM: the one-thread path
+            assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+            assert s.indices_per_triangle <= one.indices_per_triangle + 0.01
 
 
+@pytest.mark.parametrize("fast", [True, False])
 @pytest.mark.parametrize("name", sorted(DEFECT_MESHES))
-def test_defects_take_the_one_thread_path(name, monkeypatch):
+def test_defects_take_the_one_thread_path(name, fast, monkeypatch):
     """A mesh with a bad edge or a repeated-vertex row is left to the one-thread path, which reports it."""
     pts, tri, _ = DEFECT_MESHES[name]()
     m = Mesh(pts, tri)
-    want = encode(m, fast=True)
+    want = encode(m, fast=fast)
     if want.defects.non_manifold_edges or want.defects.flipped_neighbours or want.defects.repeated_vertex:
-        assert _halves(m) is None
+        assert _halves(m, fast=fast) is None
     monkeypatch.setattr(_encode_module, "HALVES_FROM", 0)
-    got = encode(m, fast=True)
+    got = encode(m, fast=fast)
     assert got.defects == want.defects and np.array_equal(got.dropped, want.dropped)
     assert oriented_set(decode_gl_strip(got.indices, got.restart_index)) == oriented_set(tri[got_rows(tri)])
 
@@ -94,6 +97,31 @@ def test_the_proof_catches_a_corrupted_half(monkeypatch):
     with pytest.raises(VerificationError):
         _halves(m)
     assert _halves(m, verify=False) is not None  # the proof is what catches it
+
+
+def test_the_proof_catches_a_corrupted_half_of_the_default_mode():
+    m = delaunay_mesh(4, 400)
+    real = _encode_module.half_encoder(RESTART_INDEX)
+
+    def corrupt(pts, part, rec, twin):
+        indices, order, n_strips, n_swaps = real(pts, part, rec, twin)
+        order = order.copy()
+        order[[0, 1]] = order[[1, 0]]  # a wrong claim: the first two rows swapped
+        return indices, order, n_strips, n_swaps
+
+    pts, tri = mesh_arrays(m.points, m.triangles, dims=(2, 3))
+    s = halves.encode_in_halves(pts, tri, RESTART_INDEX, True, 1, corrupt)
+    # the claim fails, the full comparison decides: the buffer itself is right
+    assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+
+    def corrupt_buffer(pts, part, rec, twin):
+        indices, order, n_strips, n_swaps = real(pts, part, rec, twin)
+        indices = indices.copy()
+        indices[2] = indices[0]  # the first triangle drawn degenerate: a row goes missing
+        return indices, order, n_strips, n_swaps
+
+    with pytest.raises(VerificationError):
+        halves.encode_in_halves(pts, tri, RESTART_INDEX, True, 1, corrupt_buffer)
 
 
 def test_one_thread_cap_keeps_the_one_thread_path(monkeypatch):
@@ -173,3 +201,15 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
     assert (ab.ok and ba.ok) == ok
     if ok:
         assert ab.proper == ba.proper == len(both)
+
+
+def test_structured_meshes_keep_the_one_thread_default(monkeypatch):
+    """Few swaps (a torus grid): the default mode's halves give way to the one-thread path, which
+    also tries the swap-free chains over the whole mesh."""
+    m = torus_mesh(60, 40)
+    monkeypatch.setattr(_encode_module, "HALVES_FROM", 10**12)
+    one = encode(m)
+    monkeypatch.setattr(_encode_module, "HALVES_FROM", 0)
+    got = encode(m)
+    assert np.array_equal(got.indices, one.indices)
+    assert _halves(m, fast=False).indices_per_triangle > one.indices_per_triangle  # what it avoids
