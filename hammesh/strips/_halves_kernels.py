@@ -1,0 +1,171 @@
+"""Compiled steps of ``encode(fast=True)`` in two halves on two threads.
+
+The mesh is cut by a plane through the median vertex (:mod:`hammesh.strips.halves`): a
+row goes to the side of its least vertex index.  Each thread copies its half's rows
+(:func:`rows_on_side_into`), pairs their edges into triangle records
+(:func:`pair_records_into`) and runs the one-pass greedy strips on them; an edge with
+triangles on both sides is a boundary inside each half.  What the halves cannot see
+alone, the edges they share, is settled afterwards from the half-edges each half left
+unpaired (:func:`shared_edges`): a shared edge with one triangle on each side and
+opposite directions is a proper dual edge the cover did not cross; anything else there
+(a third triangle, the same direction twice) is a defect, and the caller then encodes
+the whole mesh the ordinary way.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN, REC_WIDTH
+from hammesh.strips._numba import kernel
+
+__all__ = ["rows_on_side_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
+
+
+@kernel
+def rows_on_side_into(tri, vertex_side, side, rows, half):
+    """Copy the rows whose least vertex has ``vertex_side == side`` into ``half`` (and their
+    row numbers into ``rows``), in input order; returns how many.
+
+    The least vertex decides, so rows over the same three vertices (the two sides of a
+    double-sided face) stay together.
+    """
+    n = 0
+    for t in range(tri.shape[0]):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        if vertex_side[min(a, min(b, c))] == side:
+            rows[n] = t
+            half[n, 0] = a
+            half[n, 1] = b
+            half[n, 2] = c
+            n += 1
+    return n
+
+
+#: :func:`pair_records_into`'s result: proper edges paired (-1: an edge of this half is
+#: used by three triangles or twice in one direction) and how many half-edges were left
+#: unpaired (written to ``loose``).
+HalfPairing = namedtuple("HalfPairing", ["pairs", "n_loose"])
+
+
+@kernel
+def pair_records_into(tri, start, mark, keys, rec, loose):
+    """Triangle records of ``tri`` (:func:`hammesh.strips._dual_kernels.mesh_records`'s
+    layout) with the proper edges paired, in one counting sort of the half-edges.
+
+    Half-edges are bucketed by their lesser vertex; a key is ``other vertex << 33 |
+    (origin is the upper vertex) << 32 | h``; inside a bucket a mark per other vertex
+    pairs an edge's two halves in one read each (as
+    :func:`hammesh.halfedge.half_edge_twins_packed`, whose layout this keeps; here the
+    records are written directly, with no ``int64`` pairing array, and the buckets are
+    kept: afterwards bucket ``v`` is ``keys[start[v - 1]:start[v]]`` (``start[-1]`` read
+    as 0) for :func:`edge_users`).  ``start``: ``(n_points + 1,)``, ``mark``:
+    ``(n_points,)``, ``keys``: ``(3 m,)`` int64, ``rec``: ``(m, REC_WIDTH)``, ``loose``:
+    ``(3 m, 2)`` int64 receives ``(lesser vertex, key)`` of each unpaired half-edge.
+    Needs ``3 m < 2**32``.
+    """
+    m = tri.shape[0]
+    n_points = mark.shape[0]
+    for v in range(n_points + 1):
+        start[v] = 0
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        start[min(a, b) + 1] += 1
+        start[min(b, c) + 1] += 1
+        start[min(c, a) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+        mark[v] = -1
+    for t in range(m):  # afterwards start[v] is the end of bucket v
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            f = start[lo]
+            keys[f] = (np.int64(max(a, b)) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
+            start[lo] = f + 1
+            rec[t, k] = a
+            rec[t, REC_TWIN + k] = -1
+        rec[t, REC_SCRATCH] = 0
+        rec[t, REC_WIDTH - 1] = 0
+    mask = (np.int64(1) << 32) - 1
+    pairs = 0
+    n_loose = 0
+    s0 = 0
+    for v in range(n_points):
+        s1 = start[v]
+        for j in range(s0, s1):
+            kj = keys[j]
+            o = kj >> 33
+            p = mark[o]
+            if p == -1:  # first half of edge (v, o)
+                mark[o] = j
+            elif p >= 0:  # second half: must run the other way
+                kp = keys[p]
+                if ((kp ^ kj) >> 32) & 1 == 0:
+                    return HalfPairing(-1, n_loose)
+                hj = kj & mask
+                hp = kp & mask
+                rec[hj // 3, REC_TWIN + hj % 3] = hp
+                rec[hp // 3, REC_TWIN + hp % 3] = hj
+                mark[o] = -2
+                pairs += 1
+            else:  # a third triangle on the edge
+                return HalfPairing(-1, n_loose)
+        for j in range(s0, s1):
+            o = keys[j] >> 33
+            if mark[o] >= 0:  # alone on its edge in this half
+                loose[n_loose, 0] = v
+                loose[n_loose, 1] = keys[mark[o]]
+                n_loose += 1
+            mark[o] = -1
+        s0 = s1
+    return HalfPairing(pairs, n_loose)
+
+
+@kernel
+def edge_users(start, keys, lo, hi):
+    """``(users, last key)`` of edge ``(lo, hi)``, ``lo < hi``, in buckets of :func:`pair_records_into`."""
+    a = start[lo - 1] if lo > 0 else 0
+    users = 0
+    key = -1
+    for j in range(a, start[lo]):
+        if keys[j] >> 33 == hi:
+            users += 1
+            key = keys[j]
+    return users, key
+
+
+#: :func:`shared_edges`'s result: proper edges between the halves (each counted once) and
+#: ``ok`` (False: an edge with triangles on both sides is not a proper edge).
+SharedEdges = namedtuple("SharedEdges", ["proper", "ok"])
+
+
+@kernel
+def shared_edges(loose, n_loose, start, keys):
+    """Check one half's unpaired half-edges against the other half's buckets.
+
+    ``loose[:n_loose]``: ``(lesser vertex, key)`` of the half-edges this half left
+    unpaired (:func:`pair_records_into`); ``start``, ``keys``: the other half's buckets.
+    An unpaired edge is proper across the halves when the other half has exactly one
+    half-edge on it, running the other way; none: a boundary edge; anything else: not
+    proper (``ok`` False).  Run both ways, every proper edge between the halves is
+    counted once from each side.
+    """
+    proper = 0
+    for i in range(n_loose):
+        lo = loose[i, 0]
+        k = loose[i, 1]
+        users, other = edge_users(start, keys, lo, k >> 33)
+        if users == 0:
+            continue
+        if users > 1 or ((other ^ k) >> 32) & 1 == 0:
+            return SharedEdges(proper, False)
+        proper += 1
+    return SharedEdges(proper, True)

@@ -1,0 +1,205 @@
+"""``encode(fast=True)`` in two halves on two threads, each proved as soon as it is written.
+
+On one core the fast encoder's steps are serial and bound by cache misses in Triangle's
+scattered numbering: the edge pairing, the greedy cover and the proof each touch every
+triangle's neighbours at random.  Here the mesh is cut by a plane through the median
+vertex along its longest axis (a row goes to the side of its least vertex index), and
+each half runs on its own thread: its rows copied out, its face census, its edge pairing
+straight into triangle records (:func:`~hammesh.strips._halves_kernels.pair_records_into`),
+the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`)
+and the round-trip proof of its own part of the buffer against the input's rows
+(:func:`~hammesh.strips._decode_kernels.check_claimed_part`), so the proof of one half
+overlaps the encoding of the other.  The two buffers are joined by one restart index.
+
+A plane cuts few edges (0.18% of the dual edges of a q30 square at 100k triangles,
+0.06% at 1M), so the halves' covers end only a few more paths than one cover would
+(+0.001-0.002 indices per triangle; measured in ``docs/strips.md``).  The edges the
+halves share are settled afterwards from each half's unpaired half-edges
+(:func:`~hammesh.strips._halves_kernels.shared_edges`): if one is not a proper edge (a
+non-manifold or flipped edge across the cut), or a half has such an edge or a row
+repeating a vertex, or the dual graph may be a forest (fewer proper edges than
+triangles: Lemma 5.1's cover applies), :func:`encode_in_halves` returns ``None`` and
+:func:`~hammesh.strips.encode.encode` takes its one-thread path, which reports the
+defects.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import namedtuple
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from hammesh.errors import InvalidOptionError
+from hammesh.strips._decode_kernels import check_claimed_part
+from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
+from hammesh.strips._greedy_strip_kernels import StripWork, greedy_strip_buffer
+from hammesh.strips._halves_kernels import pair_records_into, rows_on_side_into, shared_edges
+from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
+from hammesh.strips.gl import GLStrip, verify_gl_strip
+
+__all__ = ["HALVES_FROM", "vertex_sides", "encode_in_halves"]
+
+#: Triangles from which ``encode(fast=True)`` runs in two halves on two threads (and
+#: ``hammesh.threads.cores()`` allows two); below, the copies and the second thread
+#: cost more than they save.
+HALVES_FROM = 50_000
+
+#: A half with fewer than this fraction of the rows (points piled on the median): the
+#: one-thread path instead.
+_SMALLEST_HALF = 1 / 8
+
+#: One half's result: its rows (input numbers) in draw order, its part of the buffer, the
+#: greedy strip's figures, and what the join needs (pairing buckets, unpaired half-edges,
+#: census counts, proof status).  ``failed``: a reason to take the one-thread path.
+_Half = namedtuple(
+    "_Half",
+    ["failed", "order", "indices", "n_strips", "n_swaps", "max_index", "start", "keys", "loose", "n_loose",
+     "pairs", "zero_area", "pillows", "proof"],
+)
+
+
+def vertex_sides(points: np.ndarray) -> np.ndarray:
+    """``(n,) uint8``: 1 for the vertices beyond the median along the longest axis.
+
+    Axis and median come from a sample of ~4,000 points (the split need not be exact).
+    """
+    n = len(points)
+    sample = points[:: max(1, n // 4096)]
+    axis = int(np.argmax(np.ptp(sample, axis=0)))
+    cut = np.median(sample[:, axis])
+    return (points[:, axis] > cut).view(np.uint8)
+
+
+def _half_work(k: int, out: np.ndarray | None) -> StripWork:
+    """:func:`~hammesh.strips._greedy_strip_kernels.strip_work` for a half, its pages left to
+    first use: a thread has no time to spare here, and numpy asks for huge pages on big
+    arrays (the bucket queue, path and index offsets and the buffer are sized for the
+    worst case; ~1/3 of them is written)."""
+    bucket = np.empty((4, k), np.int32)
+    grow = np.empty((2, k), np.int32)
+    big = np.empty(3 * k + 2, np.int64)
+    seeds = np.arange(k - 1, -1, -1, dtype=np.int64)
+    out = np.empty(4 * k, np.int64) if out is None else out
+    return StripWork(bucket, grow[0], grow[1], np.zeros(4, np.int32), big[:k], big[k : 2 * k + 1], big[2 * k + 1 :], seeds, out)
+
+
+def _failed(reason: str) -> _Half:
+    return _Half(reason, *([None] * (len(_Half._fields) - 1)))
+
+
+def _timed_half(clock, key, *args):
+    """:func:`_encode_half`, its thread CPU seconds written to ``clock[key]`` (when a dict)."""
+    t = time.thread_time()
+    try:
+        return _encode_half(*args)
+    finally:
+        if clock is not None:
+            clock[key] = time.thread_time() - t
+
+
+def _encode_half(pts, tri, vside, side, w_swap, restart, seen, stop, finish=None, whole=None) -> _Half:
+    """One half: rows, census, pairing, strips, proof of its part (``seen`` shared).
+
+    ``finish``: ``None`` for the one-pass greedy strips, or the encoder
+    ``(points, rows, records, twin) -> (indices, order, n_strips, n_swaps)`` of the
+    default mode (:func:`hammesh.strips.encode.encode`'s cover, end moves and writer).
+    ``whole`` (one-pass only): a list to receive the buffer of the whole mesh, whose head
+    this half writes (and proves) in place.
+    """
+    m, n = len(tri), len(pts)
+    rows = np.empty(m, np.int64)
+    part = np.empty((m, 3), np.int64)
+    k = int(rows_on_side_into(tri, vside, side, rows, part))
+    if k < _SMALLEST_HALF * m:
+        stop[0] = True
+        return _failed("unbalanced")
+    rows, part = rows[:k], part[:k]
+    flags = np.empty(k, np.int8)
+    n_rep, n_zero = face_flags(pts, part, ZERO_AREA_RTOL, flags)
+    if n_rep or stop[0]:
+        stop[0] = True
+        return _failed("a row repeats a vertex")
+    start = np.empty(n + 1, np.int32)
+    keys = np.empty(3 * k, np.int64)
+    rec = np.empty((k, REC_WIDTH), np.int32)
+    loose = np.empty((3 * k, 2), np.int64)
+    paired = pair_records_into(part, start, np.empty(n, np.int32), keys, rec, loose)
+    if paired.pairs < 0 or stop[0]:
+        stop[0] = True
+        return _failed("an edge is not proper")
+    pillows = int(count_pillows(rec))
+    if finish is not None:
+        twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
+        indices, local, n_strips, n_swaps = finish(pts, part, rec, twin)
+        max_index = -1  # the writer checked the restart index itself
+    else:
+        if whole is not None:
+            # bound of the whole buffer: this half's 4 k, a restart, the other half's 4 (m - k)
+            whole.append(np.empty(4 * m + 1, np.int64))
+        g = greedy_strip_buffer(rec, w_swap, restart, _half_work(k, None if whole is None else whole[0][: 4 * k]))
+        indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
+    order = rows[local]
+    proof = -1
+    if seen is not None:
+        proof = int(check_claimed_part(tri, indices, restart, True, order, seen)[0])
+    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
+                 int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
+
+
+def encode_in_halves(
+    pts: np.ndarray, tri: np.ndarray, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
+) -> GLStrip | None:
+    """A restart-joined buffer from two halves on two threads, or ``None``.
+
+    ``finish``: ``None`` for ``encode(fast=True)``'s one-pass greedy strips, else the
+    default mode's encoder of one half (see :func:`_encode_half`).  ``clock``: a dict
+    that receives each half's thread CPU seconds (``"first"`` on the calling thread,
+    ``"second"`` on the other), for benchmarks on a loaded machine.
+
+    ``pts``, ``tri``: checked arrays (:func:`hammesh.halfedge.mesh_arrays`).  The buffer
+    draws every row once with its winding; with ``verify`` each half's part is proved
+    against ``tri`` on its thread, and every row must be drawn by one of them (a failed
+    claim falls back to :func:`~hammesh.strips.gl.verify_gl_strip`'s full comparison,
+    which names the problem).  ``None`` when the one-thread path must decide (see the
+    module docstring).
+    """
+    m, n = len(tri), len(pts)
+    if records_dtype(m, n) is not np.int32:
+        return None
+    vside = vertex_sides(pts)
+    seen = np.zeros(m, np.bool_) if verify else None
+    stop = np.zeros(1, np.bool_)
+    whole: list[np.ndarray] = []
+    with ThreadPoolExecutor(1) as pool:
+        second = pool.submit(_timed_half, clock, "second", pts, tri, vside, 1, w_swap, restart, seen, stop, finish)
+        a = _timed_half(clock, "first", pts, tri, vside, 0, w_swap, restart, seen, stop, finish, None if finish else whole)
+        b = second.result()
+    if a.failed or b.failed:
+        return None
+    ab = shared_edges(a.loose, a.n_loose, b.start, b.keys)
+    ba = shared_edges(b.loose, b.n_loose, a.start, a.keys)
+    if not (ab.ok and ba.ok) or a.pairs + b.pairs + ab.proper < m:
+        return None  # a defect across the cut, or maybe a dual forest: the one-thread path
+    la, lb = len(a.indices), len(b.indices)
+    if whole:
+        indices = whole[0][: la + lb + 1]  # the first half's part is in place
+        in_place = True
+    else:
+        indices = np.empty(la + lb + 1, np.int64)
+        indices[:la] = a.indices
+        in_place = False
+    indices[la] = restart
+    indices[la + 1 :] = b.indices
+    S = a.n_strips + b.n_strips
+    if 0 <= restart <= max(a.max_index, b.max_index) and np.count_nonzero(indices == restart) != S - 1:
+        raise InvalidOptionError(f"restart index {restart} is a vertex index of the mesh")
+    # each half was proved where it was written (the first in place with the one-pass
+    # writer): compare the copies
+    proved = a.proof == 0 and b.proof == 0 and len(a.order) + len(b.order) == m and indices[la] == restart
+    copied = np.array_equal(indices[la + 1 :], b.indices) and (in_place or np.array_equal(indices[:la], a.indices))
+    if verify and not (proved and copied and seen.all()):
+        verify_gl_strip(tri, indices, restart)  # the claim failed: the full comparison names the problem
+    defects = MeshDefects(repeated_vertex=0, zero_area=a.zero_area + b.zero_area, double_sided=(a.pillows + b.pillows) // 2)
+    return GLStrip(indices, restart, m, S, a.n_swaps + b.n_swaps, defects=defects)
