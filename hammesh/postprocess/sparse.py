@@ -82,6 +82,8 @@ MAX_ANGLE_SLACK_DEG = 5.0
 PLACE_ITERS = 6
 #: a split is placed only if its midpoint misses the rule by less than this (degrees)
 PLACE_REACH_DEG = 10.0
+#: joins the plan took below the rule are placed again without a reach (``_place_taken``)
+PLACE_TAKEN = True
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
 #: candidate joins per thread below which scoring runs in one call (a placement is
@@ -252,6 +254,51 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     return pts2, tri2, tw2, con2.reshape(-1), cover2, amin2, orig_of, is_fan, n_fan
 
 
+def _place_taken(
+    score, order, join, cand, ckind, slack, newmin, newmax, point, global_lo: float, hi: float, con, tw, cycle, status,
+    counts, iters: int,
+) -> int:
+    """Place the Steiner points of the joins Kruskal took below the rule, with no reach.
+
+    Before the plan a split is placed only if its midpoint misses the rule by less
+    than ``PLACE_REACH_DEG``: placing further ones moves them ahead in Kruskal's
+    order and changes which joins the plan takes (measured: more Steiner points and
+    worse joins elsewhere). Once the plan is fixed, a join it took below the rule
+    (a free edge) is judged again with its point placed wherever the compass search
+    goes (``score``): the better of its swap and its placed split is kept, and the
+    pair's ``status`` and the plan's ``counts`` follow a change of kind. Returns the
+    number of joins improved.
+    """
+    taken = order[np.unique(join[join >= 0])]
+    low = taken[(slack[taken] < 0.0) & ~con[cand[taken]]]
+    if not len(low):
+        return 0
+    before = [x[low].copy() for x in (ckind, slack, newmin, newmax, point)]
+    score(low, iters, math.inf)
+    # better: a larger smallest angle, the largest no worse than allowed (the slack
+    # alone would trade a max angle above the rule for a larger min)
+    # and now meeting the rule, or newly reaching it against the input's minimum
+    # (``global_lo``): a placed split that fixes neither would turn a swap's two rows
+    # below the rule into four, or add a Steiner point for nothing the targets see
+    fixes = (slack[low] >= 0.0) | ((newmin[low] >= global_lo) & (before[2] < global_lo))
+    better = (
+        (slack[low] > before[1]) & (newmin[low] > before[2]) & fixes & (newmax[low] <= np.maximum(hi, before[3]))
+    )
+    for x, x0 in zip((ckind, slack, newmin, newmax, point), before):
+        x[low[~better]] = x0[~better]
+    k0 = before[0]
+    changed = low[better & (ckind[low] != k0)]
+    t, u = cand[changed] // 3, tw[cand[changed]] // 3
+    swap = ckind[changed] == _j.SWAP_JOIN
+    status[t] = np.where(swap, _k.SWAP, _k.EDGE)
+    status[u] = status[t]
+    absorb = cycle[u] < 0
+    counts[0] += int((swap & absorb).sum()) - int((~swap & absorb).sum())
+    counts[1] += int((swap & ~absorb).sum()) - int((~swap & ~absorb).sum())
+    counts[3] += int((~swap).sum()) - int(swap.sum())
+    return int(better.sum())
+
+
 def sparse_cycles(
     points: np.ndarray,
     triangles: np.ndarray,
@@ -369,13 +416,13 @@ def sparse_cycles(
     newmin = np.empty(len(cand))
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
-    def score(rows: np.ndarray, iters: int) -> None:
+    def score(rows: np.ndarray, iters: int, reach: float = math.radians(PLACE_REACH_DEG)) -> None:
         c = cand[rows]
         parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
         _row_pass(
             lambda lo, hi_: _j.score_joins_into(
                 pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
-                bool(edge_splits), iters, math.radians(PLACE_REACH_DEG), *(x[lo:hi_] for x in parts),
+                bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts),
             ),
             len(c),
             SCORE_MIN_ROWS,
@@ -413,6 +460,13 @@ def sparse_cycles(
         no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
     if bad.any():
         raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+    n_placed_late = 0
+    if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
+        n_placed_late = _place_taken(
+            score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
+            status, counts,
+            int(place_iters),
+        )
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
@@ -476,6 +530,7 @@ def sparse_cycles(
         "bridges": int(counts[2]),
         "flips": int((slot == _k.FLIP).sum() // 2),
         "retries": attempt,
+        "joins_placed_after_plan": int(n_placed_late),
         "improvement_flips": int(n_improve),
         "steiner_moved": int(n_moved),
         "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),
