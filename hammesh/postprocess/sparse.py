@@ -70,6 +70,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "triangle_facts", "KEEP",
+    "corner_bound", "join_bounds",
 ]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
@@ -254,6 +255,88 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     return pts2, tri2, tw2, con2.reshape(-1), cover2, amin2, orig_of, is_fan, n_fan
 
 
+def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Angle (radians) at corner ``k`` of triangles ``t`` (2D or 3D points)."""
+    p, q, r = pts[tri[t, k]], pts[tri[t, (k + 1) % 3]], pts[tri[t, (k + 2) % 3]]
+    u, v = q - p, r - p
+    if pts.shape[1] == 2:
+        cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    else:
+        cross = np.linalg.norm(np.cross(u, v), axis=1)
+    return np.arctan2(cross, (u * v).sum(axis=1))
+
+
+def corner_bound(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray) -> float:
+    """Half the smallest boundary corner: no Hamiltonian triangulation of the domain does better.
+
+    A corner of the boundary with interior angle theta (a wedge at a boundary vertex)
+    covered by a single triangle makes that triangle's two edges there boundary
+    edges: a leaf of the dual graph, which no Hamiltonian cycle passes (unless the
+    piece is that one triangle). So every corner holds two triangles or more and one
+    of them has an angle <= theta / 2 there, whatever the construction, as long as
+    the boundary is kept (the certificate checks that it is). Returns ``min theta / 2``
+    (radians) over the wedges; ``pi`` for a mesh without boundary. Walks each wedge
+    around its vertex from its incoming boundary edge (vectorised over the wedges,
+    one step per triangle of the widest wedge).
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.asarray(triangles, dtype=np.int64)
+    h = np.flatnonzero(np.asarray(twin) < 0)
+    if not len(h):
+        return math.pi
+    cur_t, cur_k = h // 3, (h % 3 + 1) % 3  # corner of the boundary edge's end b
+    theta = np.zeros(len(h))
+    idx = np.arange(len(h))
+    for _ in range(len(tri) + 1):  # a wedge has at most every triangle
+        if not len(idx):
+            break
+        t, k = cur_t[idx], cur_k[idx]
+        theta[idx] += _corner_at(pts, tri, t, k)
+        g = twin[3 * t + k]  # the edge leaving b in t, seen from the next triangle
+        go = g >= 0
+        idx, g = idx[go], g[go]
+        cur_t[idx], cur_k[idx] = g // 3, (g % 3 + 1) % 3
+    return 0.5 * float(theta.min())
+
+
+def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cycle: np.ndarray):
+    """What joins can keep at the triangles a cover leaves off, at best (issue 13).
+
+    An uncovered triangle ``t`` is absorbed by a join over one of its interior edges
+    ``e`` (a swap, or a split with its point placed anywhere in the quadrilateral) or
+    split at its incenter and bridged. A join over ``e`` divides the two corners
+    opposite ``e`` (t's and the neighbour u's: the swap's diagonal ends there, the
+    split's point is joined to them), so one of its angles is at most
+    ``min(t_opp, u_opp) / 2``; the incenter halves every corner of t. So no join keeps
+    more than ``max(max_e min(t_opp, u_opp) / 2, min angle of t / 2)`` there: on an
+    uncovered triangle with a boundary edge ``ab`` opposite a wide corner (e.g.
+    33/33/114 degrees) that is ~ half of t's corners at ``a`` and ``b``. Only a cover
+    that passes t keeps it whole.
+
+    Returns ``(rows, bound, boundary)``: the *isolated* uncovered triangles (every
+    neighbour covered; chains of uncovered triangles go to fans), each one's bound
+    (radians) and whether it has a boundary edge.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.asarray(triangles, dtype=np.int64)
+    unc = np.flatnonzero(cycle < 0)
+    he = 3 * unc[:, None] + np.arange(3)
+    g = twin[he]
+    inner = g >= 0
+    iso = np.where(inner, cycle[np.where(inner, g, 0) // 3] >= 0, True).all(axis=1)
+    unc, he, g, inner = unc[iso], he[iso], g[iso], inner[iso]
+    if not len(unc):
+        return unc, np.zeros(0), np.zeros(0, np.bool_)
+    ks = np.arange(3)
+    t_corner = np.stack([_corner_at(pts, tri, unc, np.full(len(unc), k)) for k in ks], axis=1)
+    gg = np.where(inner, g, 0)
+    u_opp = _corner_at(pts, tri, (gg // 3).ravel(), ((gg % 3 + 2) % 3).ravel()).reshape(gg.shape)
+    t_opp = t_corner[:, [2, 0, 1]]  # the corner opposite edge k (from corner k to k + 1) is k + 2
+    per_edge = np.where(inner, 0.5 * np.minimum(t_opp, u_opp), 0.0)
+    bound = np.maximum(per_edge.max(axis=1), 0.5 * t_corner.min(axis=1))
+    return unc, bound, ~inner.all(axis=1)
+
+
 def _place_taken(
     score, order, join, cand, ckind, slack, newmin, newmax, point, global_lo: float, hi: float, con, tw, cycle, status,
     counts, iters: int,
@@ -280,7 +363,10 @@ def _place_taken(
     # and now meeting the rule, or newly reaching it against the input's minimum
     # (``global_lo``): a placed split that fixes neither would turn a swap's two rows
     # below the rule into four, or add a Steiner point for nothing the targets see
-    fixes = (slack[low] >= 0.0) | ((newmin[low] >= global_lo) & (before[2] < global_lo))
+    # (a split placed anew in place of its midpoint costs nothing: taken if better)
+    fixes = (slack[low] >= 0.0) | ((newmin[low] >= global_lo) & (before[2] < global_lo)) | (
+        (before[0] == _j.SPLIT_JOIN) & (ckind[low] == _j.SPLIT_JOIN)
+    )
     better = (
         (slack[low] > before[1]) & (newmin[low] > before[2]) & fixes & (newmax[low] <= np.maximum(hi, before[3]))
     )
@@ -401,6 +487,12 @@ def sparse_cycles(
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     steps.done("cover")
     n_unc0 = cover.n_uncovered
+    # what the joins can keep at best where the cover leaves triangles off, and what
+    # no construction can beat at the boundary's corners (the report; few rows)
+    jb_rows, jb, jb_bnd = join_bounds(pts, tri, tw, cover.cycle)
+    unc_all = np.flatnonzero(cover.cycle < 0)
+    n_unc_bnd = int((tw[3 * unc_all[:, None] + np.arange(3)] < 0).any(axis=1).sum())
+    c_bound = corner_bound(pts, tri, tw)
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
     orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
@@ -531,6 +623,10 @@ def sparse_cycles(
         "flips": int((slot == _k.FLIP).sum() // 2),
         "retries": attempt,
         "joins_placed_after_plan": int(n_placed_late),
+        "uncovered_boundary": n_unc_bnd,
+        "join_bound_deg": math.degrees(float(jb.min())) if len(jb) else None,
+        "uncovered_below_target": int((jb < keep * min_angle * (1.0 - 1e-9)).sum()),
+        "corner_bound_deg": math.degrees(c_bound),
         "improvement_flips": int(n_improve),
         "steiner_moved": int(n_moved),
         "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),
