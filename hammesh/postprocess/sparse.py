@@ -493,6 +493,7 @@ def sparse_cycles(
     unc_all = np.flatnonzero(cover.cycle < 0)
     n_unc_bnd = int((tw[3 * unc_all[:, None] + np.arange(3)] < 0).any(axis=1).sum())
     c_bound = corner_bound(pts, tri, tw)
+    steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
     orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
