@@ -70,6 +70,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "triangle_angles", "triangle_facts", "KEEP",
+    "corner_bound", "join_bounds",
 ]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
@@ -82,6 +83,8 @@ MAX_ANGLE_SLACK_DEG = 5.0
 PLACE_ITERS = 6
 #: a split is placed only if its midpoint misses the rule by less than this (degrees)
 PLACE_REACH_DEG = 10.0
+#: joins the plan took below the rule are placed again without a reach (``_place_taken``)
+PLACE_TAKEN = True
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
 #: candidate joins per thread below which scoring runs in one call (a placement is
@@ -252,6 +255,136 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     return pts2, tri2, tw2, con2.reshape(-1), cover2, amin2, orig_of, is_fan, n_fan
 
 
+def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Angle (radians) at corner ``k`` of triangles ``t`` (2D or 3D points)."""
+    p, q, r = pts[tri[t, k]], pts[tri[t, (k + 1) % 3]], pts[tri[t, (k + 2) % 3]]
+    u, v = q - p, r - p
+    if pts.shape[1] == 2:
+        cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    else:
+        cross = np.linalg.norm(np.cross(u, v), axis=1)
+    return np.arctan2(cross, (u * v).sum(axis=1))
+
+
+def corner_bound(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray) -> float:
+    """Half the smallest boundary corner: no Hamiltonian triangulation of the domain does better.
+
+    A corner of the boundary with interior angle theta (a wedge at a boundary vertex)
+    covered by a single triangle makes that triangle's two edges there boundary
+    edges: a leaf of the dual graph, which no Hamiltonian cycle passes (unless the
+    piece is that one triangle). So every corner holds two triangles or more and one
+    of them has an angle <= theta / 2 there, whatever the construction, as long as
+    the boundary is kept (the certificate checks that it is). Returns ``min theta / 2``
+    (radians) over the wedges; ``pi`` for a mesh without boundary. Walks each wedge
+    around its vertex from its incoming boundary edge (vectorised over the wedges,
+    one step per triangle of the widest wedge).
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.asarray(triangles, dtype=np.int64)
+    h = np.flatnonzero(np.asarray(twin) < 0)
+    if not len(h):
+        return math.pi
+    cur_t, cur_k = h // 3, (h % 3 + 1) % 3  # corner of the boundary edge's end b
+    theta = np.zeros(len(h))
+    idx = np.arange(len(h))
+    for _ in range(len(tri) + 1):  # a wedge has at most every triangle
+        if not len(idx):
+            break
+        t, k = cur_t[idx], cur_k[idx]
+        theta[idx] += _corner_at(pts, tri, t, k)
+        g = twin[3 * t + k]  # the edge leaving b in t, seen from the next triangle
+        go = g >= 0
+        idx, g = idx[go], g[go]
+        cur_t[idx], cur_k[idx] = g // 3, (g % 3 + 1) % 3
+    return 0.5 * float(theta.min())
+
+
+def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cycle: np.ndarray):
+    """What joins can keep at the triangles a cover leaves off, at best (issue 13).
+
+    An uncovered triangle ``t`` is absorbed by a join over one of its interior edges
+    ``e`` (a swap, or a split with its point placed anywhere in the quadrilateral) or
+    split at its incenter and bridged. A join over ``e`` divides the two corners
+    opposite ``e`` (t's and the neighbour u's: the swap's diagonal ends there, the
+    split's point is joined to them), so one of its angles is at most
+    ``min(t_opp, u_opp) / 2``; the incenter halves every corner of t. So no join keeps
+    more than ``max(max_e min(t_opp, u_opp) / 2, min angle of t / 2)`` there: on an
+    uncovered triangle with a boundary edge ``ab`` opposite a wide corner (e.g.
+    33/33/114 degrees) that is ~ half of t's corners at ``a`` and ``b``. Only a cover
+    that passes t keeps it whole.
+
+    Returns ``(rows, bound, boundary)``: the *isolated* uncovered triangles (every
+    neighbour covered; chains of uncovered triangles go to fans), each one's bound
+    (radians) and whether it has a boundary edge.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.asarray(triangles, dtype=np.int64)
+    unc = np.flatnonzero(cycle < 0)
+    he = 3 * unc[:, None] + np.arange(3)
+    g = twin[he]
+    inner = g >= 0
+    iso = np.where(inner, cycle[np.where(inner, g, 0) // 3] >= 0, True).all(axis=1)
+    unc, he, g, inner = unc[iso], he[iso], g[iso], inner[iso]
+    if not len(unc):
+        return unc, np.zeros(0), np.zeros(0, np.bool_)
+    ks = np.arange(3)
+    t_corner = np.stack([_corner_at(pts, tri, unc, np.full(len(unc), k)) for k in ks], axis=1)
+    gg = np.where(inner, g, 0)
+    u_opp = _corner_at(pts, tri, (gg // 3).ravel(), ((gg % 3 + 2) % 3).ravel()).reshape(gg.shape)
+    t_opp = t_corner[:, [2, 0, 1]]  # the corner opposite edge k (from corner k to k + 1) is k + 2
+    per_edge = np.where(inner, 0.5 * np.minimum(t_opp, u_opp), 0.0)
+    bound = np.maximum(per_edge.max(axis=1), 0.5 * t_corner.min(axis=1))
+    return unc, bound, ~inner.all(axis=1)
+
+
+def _place_taken(
+    score, order, join, cand, ckind, slack, newmin, newmax, point, global_lo: float, hi: float, con, tw, cycle, status,
+    counts, iters: int,
+) -> int:
+    """Place the Steiner points of the joins Kruskal took below the rule, with no reach.
+
+    Before the plan a split is placed only if its midpoint misses the rule by less
+    than ``PLACE_REACH_DEG``: placing further ones moves them ahead in Kruskal's
+    order and changes which joins the plan takes (measured: more Steiner points and
+    worse joins elsewhere). Once the plan is fixed, a join it took below the rule
+    (a free edge) is judged again with its point placed wherever the compass search
+    goes (``score``): the better of its swap and its placed split is kept, and the
+    pair's ``status`` and the plan's ``counts`` follow a change of kind. Returns the
+    number of joins improved.
+    """
+    taken = order[np.unique(join[join >= 0])]
+    low = taken[(slack[taken] < 0.0) & ~con[cand[taken]]]
+    if not len(low):
+        return 0
+    before = [x[low].copy() for x in (ckind, slack, newmin, newmax, point)]
+    score(low, iters, math.inf)
+    # better: a larger smallest angle, the largest no worse than allowed (the slack
+    # alone would trade a max angle above the rule for a larger min)
+    # and now meeting the rule, or newly reaching it against the input's minimum
+    # (``global_lo``): a placed split that fixes neither would turn a swap's two rows
+    # below the rule into four, or add a Steiner point for nothing the targets see
+    # (a split placed anew in place of its midpoint costs nothing: taken if better)
+    fixes = (slack[low] >= 0.0) | ((newmin[low] >= global_lo) & (before[2] < global_lo)) | (
+        (before[0] == _j.SPLIT_JOIN) & (ckind[low] == _j.SPLIT_JOIN)
+    )
+    better = (
+        (slack[low] > before[1]) & (newmin[low] > before[2]) & fixes & (newmax[low] <= np.maximum(hi, before[3]))
+    )
+    for x, x0 in zip((ckind, slack, newmin, newmax, point), before):
+        x[low[~better]] = x0[~better]
+    k0 = before[0]
+    changed = low[better & (ckind[low] != k0)]
+    t, u = cand[changed] // 3, tw[cand[changed]] // 3
+    swap = ckind[changed] == _j.SWAP_JOIN
+    status[t] = np.where(swap, _k.SWAP, _k.EDGE)
+    status[u] = status[t]
+    absorb = cycle[u] < 0
+    counts[0] += int((swap & absorb).sum()) - int((~swap & absorb).sum())
+    counts[1] += int((swap & ~absorb).sum()) - int((~swap & ~absorb).sum())
+    counts[3] += int((~swap).sum()) - int(swap.sum())
+    return int(better.sum())
+
+
 def sparse_cycles(
     points: np.ndarray,
     triangles: np.ndarray,
@@ -354,6 +487,13 @@ def sparse_cycles(
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     steps.done("cover")
     n_unc0 = cover.n_uncovered
+    # what the joins can keep at best where the cover leaves triangles off, and what
+    # no construction can beat at the boundary's corners (the report; few rows)
+    jb_rows, jb, jb_bnd = join_bounds(pts, tri, tw, cover.cycle)
+    unc_all = np.flatnonzero(cover.cycle < 0)
+    n_unc_bnd = int((tw[3 * unc_all[:, None] + np.arange(3)] < 0).any(axis=1).sum())
+    c_bound = corner_bound(pts, tri, tw)
+    steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
     orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
@@ -369,13 +509,13 @@ def sparse_cycles(
     newmin = np.empty(len(cand))
     newmax = np.empty(len(cand))
     point = np.empty((len(cand), pts.shape[1]))
-    def score(rows: np.ndarray, iters: int) -> None:
+    def score(rows: np.ndarray, iters: int, reach: float = math.radians(PLACE_REACH_DEG)) -> None:
         c = cand[rows]
         parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
         _row_pass(
             lambda lo, hi_: _j.score_joins_into(
                 pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
-                bool(edge_splits), iters, math.radians(PLACE_REACH_DEG), *(x[lo:hi_] for x in parts),
+                bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts),
             ),
             len(c),
             SCORE_MIN_ROWS,
@@ -413,6 +553,13 @@ def sparse_cycles(
         no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
     if bad.any():
         raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+    n_placed_late = 0
+    if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
+        n_placed_late = _place_taken(
+            score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
+            status, counts,
+            int(place_iters),
+        )
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
@@ -476,6 +623,11 @@ def sparse_cycles(
         "bridges": int(counts[2]),
         "flips": int((slot == _k.FLIP).sum() // 2),
         "retries": attempt,
+        "joins_placed_after_plan": int(n_placed_late),
+        "uncovered_boundary": n_unc_bnd,
+        "join_bound_deg": math.degrees(float(jb.min())) if len(jb) else None,
+        "uncovered_below_target": int((jb < keep * min_angle * (1.0 - 1e-9)).sum()),
+        "corner_bound_deg": math.degrees(c_bound),
         "improvement_flips": int(n_improve),
         "steiner_moved": int(n_moved),
         "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),

@@ -401,3 +401,115 @@ def test_improvement_flips_keep_the_cycle_and_never_worsen(name: str) -> None:
     h = hammesh.hamiltonian(m)
     assert_sparse_certificate(m, h)
     assert_quality_report(m, h)
+
+
+def _interior_corners(domain: hammesh.Domain) -> np.ndarray:
+    """Interior angle (degrees) at every vertex of a star_pslg domain's outer polygon and
+    hole, from its vertex list alone (outer counter-clockwise; a hole's corners seen
+    from the domain)."""
+    v = np.asarray(domain.vertices, dtype=np.float64)
+    segs = np.asarray(domain.segments)
+    out = []
+    inner = segs[-1][1] != 0  # star_pslg's last loop closes at 0 unless it is the inner square
+    loops = [np.arange(len(v) - 4), np.arange(len(v) - 4, len(v))] if inner else [np.arange(len(v))]
+    for j, loop in enumerate(loops):
+        if j == 1 and not len(domain.holes):
+            continue  # an inner loop of constrained edges, not boundary
+        p = v[loop]
+        nxt, prv = np.roll(p, -1, axis=0) - p, np.roll(p, 1, axis=0) - p
+        ang = np.arctan2(prv[:, 1], prv[:, 0]) - np.arctan2(nxt[:, 1], nxt[:, 0])
+        out.append(np.degrees(np.mod(-ang if j == 1 else ang, 2 * np.pi)))
+    return np.concatenate(out)
+
+
+@given(dom=star_pslg())
+def test_corner_bound_is_half_the_smallest_corner(dom: hammesh.Domain) -> None:
+    """Half the smallest corner of the domain's boundary, found by walking the mesh's wedges."""
+    from hammesh.halfedge import half_edge_twins
+    from hammesh.postprocess.sparse import corner_bound
+
+    m = hammesh.quality_mesh(dom, min_angle=20, max_area=0.02)
+    tw, _ = half_edge_twins(np.asarray(m.triangles, dtype=np.int64), m.n_points)
+    expect = 0.5 * min(_interior_corners(dom).min(), 180.0)  # boundary points Triangle adds: 180
+    assert np.degrees(corner_bound(m.points, m.triangles, tw)) == pytest.approx(expect, abs=1e-7)
+    h = hammesh.hamiltonian(m)
+    assert h.report["corner_bound_deg"] == pytest.approx(expect, abs=1e-7)
+    assert h.report["min_angle_output_deg"] <= expect + 1e-7  # no construction beats it
+
+
+@given(
+    c=st.tuples(st.floats(-1.5, 1.5), st.floats(0.2, 2.0)),
+    d=st.tuples(st.floats(-1.5, 1.5), st.floats(-2.0, -0.2)),
+    lo_deg=st.floats(5, 40),
+)
+def test_no_join_keeps_more_than_half_the_opposite_corners(c, d, lo_deg) -> None:
+    """A swap or a split (point placed anywhere) over ab divides the corners at c and d."""
+    from hammesh.postprocess import _join_kernels as J
+
+    a, b = (0.0, 0.0), (1.0, 0.0)
+
+    def corner(o, p, q):
+        u, v = np.subtract(p, o), np.subtract(q, o)
+        return np.arccos(np.clip(u @ v / np.linalg.norm(u) / np.linalg.norm(v), -1, 1))
+
+    bound = 0.5 * min(corner(c, a, b), corner(d, b, a))
+    x, y, s, smin, smax = J.place_split(*a, *b, *c, *d, np.radians(lo_deg), np.radians(125), 6)
+    assert smin <= bound + 1e-12
+    if J.swap_is_convex_2d(*a, *b, *c, *d):
+        l1, _ = J.min_max_angles_2d(*a, *d, *c)
+        l2, _ = J.min_max_angles_2d(*d, *b, *c)
+        assert min(l1, l2) <= bound + 1e-12
+
+
+@pytest.mark.parametrize("name", ["A", "square_circle_hole"])
+def test_join_bounds_cap_every_join_of_an_uncovered_triangle(name: str, monkeypatch) -> None:
+    """join_bounds equals its definition by plain loops, and no scored join of an isolated
+    uncovered triangle (placed or swapped) beats it; the report carries its minimum."""
+    import math
+
+    from hammesh.halfedge import half_edge_twins
+    from hammesh.postprocess import _join_kernels as J
+    from hammesh.postprocess.cycle_cover import cycle_cover
+    from hammesh.postprocess.sparse import join_bounds, triangle_facts
+
+    dom = bundled_domain(name)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 2000)
+    pts, tri = np.asarray(m.points, dtype=np.float64), np.asarray(m.triangles, dtype=np.int64)
+    tw, _ = half_edge_twins(tri, len(pts))
+    cyc = cycle_cover(tri, tw).cycle
+    rows, bound, on_bnd = join_bounds(pts, tri, tw, cyc)
+    assert len(rows) >= 1
+    ang = np.radians(_angles(pts, tri))
+    amin = triangle_facts(pts, tri)[0]
+    for t, bd, ob in zip(rows, bound, on_bnd):
+        expect = 0.5 * ang[t].min()
+        for k in range(3):
+            g = tw[3 * t + k]
+            assert g < 0 or cyc[g // 3] >= 0  # isolated
+            if g >= 0:
+                expect = max(expect, 0.5 * min(ang[t, (k + 2) % 3], ang[g // 3, (g % 3 + 2) % 3]))
+                kind, slack, nmin, nmax = np.zeros(1, np.int8), np.empty(1), np.empty(1), np.empty(1)
+                J.score_joins_into(
+                    pts, tri, tw, np.zeros(3 * len(tri), np.bool_), np.array([g]), amin, 0.9, math.radians(125),
+                    0.0, -2.0, True, True, 6, math.inf, kind, slack, nmin, nmax, np.empty((1, 2)),
+                )
+                assert nmin[0] <= bd + 1e-12
+        assert bd == pytest.approx(expect, abs=1e-12)
+        assert ob == (tw[3 * t:3 * t + 3] < 0).any()
+    # the report's figures over the cover the construction made (recorded on its way)
+    from hammesh.postprocess import sparse
+
+    seen = []
+
+    def recording_cover(*args, **kwargs):
+        seen.append(cycle_cover(*args, **kwargs))
+        return seen[-1]
+
+    monkeypatch.setattr(sparse, "cycle_cover", recording_cover)
+    r = hammesh.hamiltonian(m).report
+    cyc = seen[0].cycle
+    rows, bound, on_bnd = join_bounds(pts, tri, tw, cyc)
+    assert r["uncovered"] == int((cyc < 0).sum())
+    assert r["uncovered_boundary"] == int(sum((tw[3 * t:3 * t + 3] < 0).any() for t in np.flatnonzero(cyc < 0)))
+    assert r["join_bound_deg"] == pytest.approx(np.degrees(bound.min()), abs=1e-9)
+    assert r["uncovered_below_target"] == int((bound < 0.9 * amin.min() * (1 - 1e-9)).sum())

@@ -393,3 +393,38 @@ def test_bench_sparse_breakdown_prints_every_step() -> None:
         assert wall >= 0
     ratio = float(next(x for x in lines if x.startswith("BREAKDOWN_RATIO")).split()[1])
     assert ratio > 0
+
+
+@pytest.mark.parametrize("name", ["A", "plate_2_holes"])
+def test_placing_taken_joins_after_the_plan_only_lifts_them(name: str, monkeypatch) -> None:
+    """Joins the plan took below the rule, placed again without a reach: fewer rows below
+    keep x the input's minimum, the plan itself (merges, bridges, incenters) unchanged."""
+    import importlib
+    from pathlib import Path
+
+    from hammesh.postprocess import sparse
+    from tests.postprocess.test_sparse import _angles, assert_sparse_certificate
+
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "benchmarks"))
+    bench_sparse = importlib.import_module("bench_sparse")
+    m = bench_sparse._mesh_at(dict(bench_sparse._domains())[name], 4000)
+    late = hammesh.hamiltonian(m)
+    monkeypatch.setattr(sparse, "PLACE_TAKEN", False)
+    plan_only = hammesh.hamiltonian(m)
+    assert late.report["joins_placed_after_plan"] >= 1
+    assert plan_only.report["joins_placed_after_plan"] == 0
+    assert_sparse_certificate(m, late)
+    for key in ("merges", "bridges", "incenters", "uncovered", "retries"):
+        assert late.report[key] == plan_only.report[key], key
+    # each one placed turned a swap or a midpoint into a placed split (one point each at most)
+    extra = late.report["steiner_points"] - plan_only.report["steiner_points"]
+    assert 0 <= extra <= late.report["joins_placed_after_plan"]
+    lo = 0.9 * _angles(m.points, m.triangles).min()
+
+    def below(h):
+        return int((_angles(h.points, h.triangles).min(axis=1) < lo).sum())
+
+    assert below(late) < below(plan_only)
+    assert late.report["max_angle_output_deg"] <= max(
+        plan_only.report["max_angle_output_deg"], late.report["max_angle_input_deg"] + 5
+    ) + 1e-9
