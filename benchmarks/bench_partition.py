@@ -31,6 +31,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
 
     python benchmarks/bench_partition.py [--target 300000] [--repeat 3] [--quick]
     python benchmarks/bench_partition.py --forest-only --forest-size 1500000   # the forest table alone
+    python benchmarks/bench_partition.py --domains square,rect_2x1 --modes incircle --ks 4,8,16,64   # controls
 """
 
 from __future__ import annotations
@@ -54,7 +55,11 @@ def _domains():
     r = np.where((k // 4) % 2 == 0, 1.0, 0.8)  # 12 teeth
     ang = 2 * np.pi * k / 96
     gear = hammesh.Domain.from_polygon(np.c_[r * np.cos(ang), r * np.sin(ang)], holes=[circ * 0.3])
-    return [("plate_2_holes", plate, 8.0 - np.pi * (0.45**2 + 0.3**2)), ("gear", gear, 2.62 - np.pi * 0.09)]
+    # hole-free controls (``--domains``): where the quadtree's hubs never fall in a hole
+    square = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    rect = hammesh.Domain.from_polygon([[0, 0], [2, 0], [2, 1], [0, 1]])
+    return [("plate_2_holes", plate, 8.0 - np.pi * (0.45**2 + 0.3**2)), ("gear", gear, 2.62 - np.pi * 0.09),
+            ("square", square, 1.0), ("rect_2x1", rect, 2.0)]
 
 
 def _mesh(dom, area: float, target: int, mode: str):
@@ -260,6 +265,10 @@ def main() -> None:
     ap.add_argument("--forest-size", type=int, default=0,
                     help="also time the forests on a unit square of about this many input triangles")
     ap.add_argument("--forest-only", action="store_true", help="only the forest table")
+    ap.add_argument("--domains", default="plate_2_holes,gear",
+                    help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
+    ap.add_argument("--modes", default="incircle,sparse", help="comma-separated: incircle, sparse")
+    ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
     args = ap.parse_args()
     if args.quick:
         args.target, args.repeat = 30_000, 1
@@ -277,8 +286,15 @@ def main() -> None:
     from hammesh.partition import dual_edges
 
     rows, numbering = [], []
-    for name, dom, area in _domains():
-        for mode in ("incircle", "sparse"):
+    chosen = args.domains.split(",")
+    known = [d[0] for d in _domains()]
+    if set(chosen) - set(known):
+        ap.error(f"--domains: unknown {sorted(set(chosen) - set(known))}; known: {known}")
+    if set(args.modes.split(",")) - {"incircle", "sparse"}:
+        ap.error("--modes: incircle and/or sparse")
+    ks = [int(k) for k in args.ks.split(",")]
+    for name, dom, area in (d for d in _domains() if d[0] in chosen):
+        for mode in args.modes.split(","):
             h, mesh = _mesh(dom, area, args.target, mode)
             if mode == "incircle":
                 forests.append(_forest_row(name, mesh, args.repeat))
@@ -287,7 +303,7 @@ def main() -> None:
             g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
             g = (g + g.T).tocsr()
             xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
-            for k in (8, 64):
+            for k in ks:
                 r = _row(name, mode, h, k, args.repeat, a, b, xadj, adjncy)
                 rows.append(r)
                 print(
