@@ -32,6 +32,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py [--target 300000] [--repeat 3] [--quick]
     python benchmarks/bench_partition.py --forest-only --forest-size 1500000   # the forest table alone
     python benchmarks/bench_partition.py --domains square,rect_2x1 --modes incircle --ks 4,8,16,64   # controls
+    python benchmarks/bench_partition.py --quick --modes incircle --plot parts/   # pictures of the parts
 """
 
 from __future__ import annotations
@@ -229,6 +230,27 @@ def _row(name, mode, h, k, repeat, a, b, xadj, adjncy) -> dict:
     }
 
 
+def _plot(h, k: int, path: str) -> None:
+    """The k parts, coloured, as a PNG (where the stretches go: bands and wedges show)."""
+    import os
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hammesh.partition import partition
+
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    part = partition(h, k).part
+    fig, ax = plt.subplots(figsize=(10, 10))
+    ax.tripcolor(h.points[:, 0], h.points[:, 1], h.triangles, facecolors=part % 20, cmap="tab20")
+    ax.set_aspect("equal")
+    ax.set_title(f"{h.n_triangles:,} triangles, k = {k}")
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
 def _numbering_rows(name, mode, h) -> list[str]:
     from hammesh.numbering import bandwidth_profile, renumber
 
@@ -269,6 +291,8 @@ def main() -> None:
                     help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
     ap.add_argument("--modes", default="incircle,sparse", help="comma-separated: incircle, sparse")
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
+    ap.add_argument("--plot", metavar="DIR", default="",
+                    help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
     if args.quick:
         args.target, args.repeat = 30_000, 1
@@ -306,6 +330,8 @@ def main() -> None:
             for k in ks:
                 r = _row(name, mode, h, k, args.repeat, a, b, xadj, adjncy)
                 rows.append(r)
+                if args.plot:
+                    _plot(h, k, f"{args.plot}/{name}_{mode}_{k}.png")
                 print(
                     f"{name:14s} {mode:8s} m={m:,} k={k:2d}: cut {r['cut']:,} / METIS {r['metis_cut']:,} = "
                     f"{r['cut_ratio']:.2f}; connected {r['connected']}; imbalance {r['imbalance']:.5f}; "
