@@ -31,6 +31,8 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
 
     python benchmarks/bench_partition.py [--target 300000] [--repeat 3] [--quick]
     python benchmarks/bench_partition.py --forest-only --forest-size 1500000   # the forest table alone
+    python benchmarks/bench_partition.py --domains square,rect_2x1 --modes incircle --ks 4,8,16,64   # controls
+    python benchmarks/bench_partition.py --quick --modes incircle --plot parts/   # pictures of the parts
 """
 
 from __future__ import annotations
@@ -54,7 +56,11 @@ def _domains():
     r = np.where((k // 4) % 2 == 0, 1.0, 0.8)  # 12 teeth
     ang = 2 * np.pi * k / 96
     gear = hammesh.Domain.from_polygon(np.c_[r * np.cos(ang), r * np.sin(ang)], holes=[circ * 0.3])
-    return [("plate_2_holes", plate, 8.0 - np.pi * (0.45**2 + 0.3**2)), ("gear", gear, 2.62 - np.pi * 0.09)]
+    # hole-free controls (``--domains``): where the quadtree's hubs never fall in a hole
+    square = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    rect = hammesh.Domain.from_polygon([[0, 0], [2, 0], [2, 1], [0, 1]])
+    return [("plate_2_holes", plate, 8.0 - np.pi * (0.45**2 + 0.3**2)), ("gear", gear, 2.62 - np.pi * 0.09),
+            ("square", square, 1.0), ("rect_2x1", rect, 2.0)]
 
 
 def _mesh(dom, area: float, target: int, mode: str):
@@ -224,6 +230,27 @@ def _row(name, mode, h, k, repeat, a, b, xadj, adjncy) -> dict:
     }
 
 
+def _plot(h, k: int, path: str) -> None:
+    """The k parts, coloured, as a PNG (where the stretches go: bands and wedges show)."""
+    import os
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hammesh.partition import partition
+
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    part = partition(h, k).part
+    fig, ax = plt.subplots(figsize=(10, 10))
+    ax.tripcolor(h.points[:, 0], h.points[:, 1], h.triangles, facecolors=part % 20, cmap="tab20")
+    ax.set_aspect("equal")
+    ax.set_title(f"{h.n_triangles:,} triangles, k = {k}")
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
 def _numbering_rows(name, mode, h) -> list[str]:
     from hammesh.numbering import bandwidth_profile, renumber
 
@@ -260,6 +287,12 @@ def main() -> None:
     ap.add_argument("--forest-size", type=int, default=0,
                     help="also time the forests on a unit square of about this many input triangles")
     ap.add_argument("--forest-only", action="store_true", help="only the forest table")
+    ap.add_argument("--domains", default="plate_2_holes,gear",
+                    help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
+    ap.add_argument("--modes", default="incircle,sparse", help="comma-separated: incircle, sparse")
+    ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
+    ap.add_argument("--plot", metavar="DIR", default="",
+                    help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
     if args.quick:
         args.target, args.repeat = 30_000, 1
@@ -277,8 +310,15 @@ def main() -> None:
     from hammesh.partition import dual_edges
 
     rows, numbering = [], []
-    for name, dom, area in _domains():
-        for mode in ("incircle", "sparse"):
+    chosen = args.domains.split(",")
+    known = [d[0] for d in _domains()]
+    if set(chosen) - set(known):
+        ap.error(f"--domains: unknown {sorted(set(chosen) - set(known))}; known: {known}")
+    if set(args.modes.split(",")) - {"incircle", "sparse"}:
+        ap.error("--modes: incircle and/or sparse")
+    ks = [int(k) for k in args.ks.split(",")]
+    for name, dom, area in (d for d in _domains() if d[0] in chosen):
+        for mode in args.modes.split(","):
             h, mesh = _mesh(dom, area, args.target, mode)
             if mode == "incircle":
                 forests.append(_forest_row(name, mesh, args.repeat))
@@ -287,9 +327,11 @@ def main() -> None:
             g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
             g = (g + g.T).tocsr()
             xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
-            for k in (8, 64):
+            for k in ks:
                 r = _row(name, mode, h, k, args.repeat, a, b, xadj, adjncy)
                 rows.append(r)
+                if args.plot:
+                    _plot(h, k, f"{args.plot}/{name}_{mode}_{k}.png")
                 print(
                     f"{name:14s} {mode:8s} m={m:,} k={k:2d}: cut {r['cut']:,} / METIS {r['metis_cut']:,} = "
                     f"{r['cut_ratio']:.2f}; connected {r['connected']}; imbalance {r['imbalance']:.5f}; "
