@@ -10,6 +10,7 @@ import pytest
 from hammesh.cli import points
 from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io import read_mesh
+from hammesh.io.points_text import read_points
 from hammesh.pointset import no_sequential_example, verify_point_triangulation
 
 
@@ -55,14 +56,14 @@ def test_sequential_and_none(tmp_path, capsys):
 
 def test_bad_files(tmp_path):
     with pytest.raises(FileFormatError, match="no such file"):
-        points.read_points(tmp_path / "missing.txt")
+        read_points(tmp_path / "missing.txt")
     f = tmp_path / "bad.txt"
     f.write_text("0 0\n1 2 3\n")
     with pytest.raises(FileFormatError, match="bad.txt:2"):
-        points.read_points(f)
+        read_points(f)
     np.save(tmp_path / "bad.npy", np.zeros((3, 3)))
     with pytest.raises(FileFormatError, match="shape"):
-        points.read_points(tmp_path / "bad.npy")
+        read_points(tmp_path / "bad.npy")
     dup = tmp_path / "dup.txt"
     dup.write_text("0 0\n1 0\n0 1\n1 0\n")
     with pytest.raises(InvalidDomainError, match="points 1 and 3"):
