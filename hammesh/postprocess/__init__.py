@@ -140,7 +140,7 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
         # the certificate's own look at the caller's input (never at the construction's
         # validated copy), beside the construction's validation
         facts = side.submit(input_facts, mesh)
-        clean, he, is_con = prepare_mesh(mesh)
+        clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle")  # (Thm 2.4 needs no angle)
         rows = prepared = None
         if mode == "incircle":
             out, claim, stream = incircle_streaming(clean, he, is_con, side, ready, reuse=True)
