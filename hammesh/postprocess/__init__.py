@@ -141,13 +141,15 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
         # validated copy), beside the construction's validation
         facts = side.submit(input_facts, mesh)
         clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle")  # (Thm 2.4 needs no angle)
-        rows = prepared = None
+        rows = prepared = vmarks = None
         if mode == "incircle":
             out, claim, stream = incircle_streaming(clean, he, is_con, side, ready, reuse=True)
             del he, is_con  # (their memory is the output's parent and kind now)
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows
             prepared = claim_structure(out.triangles, claim)
+            # (serial, so done while the other thread checks rows, not after them)
+            vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
             stream.join()  # then help with the row checks still to do
             rows = (stream.result(out.components), stream.used)
         else:
@@ -193,5 +195,6 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
             },
         }
     )
-    vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
+    if vmarks is None:  # (snapping moves points only: the markers stand)
+        vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
     return replace(out, report=report, vertex_markers=vmarks)
