@@ -19,10 +19,18 @@ from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
 from hammesh.halfedge import prepare_mesh
 
-__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels"]
+__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels",
+           "RESERVE_TAKEN"]
 
 #: Available constructions, by name (``hamiltonian(mesh, mode=...)``).
 MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
+
+#: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
+#: ``pages.fresh``); the rest of a reserve is given back as the call starts
+#: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
+#: sparse: the validation's half-edge twins (24), so far: its own arrays are made
+#: inside its kernels (a kernel handed ``pages.fresh`` arrays raises this).
+RESERVE_TAKEN = {"incircle": None, "sparse": 24}
 
 
 _loaded = threading.Lock()
@@ -128,6 +136,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
     if not (isinstance(keep, (int, float)) and 0.0 <= keep <= 1.0):
         raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
     t0 = time.perf_counter()
+    taken, shape = RESERVE_TAKEN.get(mode), np.shape(mesh.triangles)
+    if taken is not None and len(shape) == 2 and pages.reserved():  # pages it will not take: back now
+        pages.trim(taken * shape[0])
     # a second thread works beside the construction: the walk's arrays (while the
     # input is checked), the input's side of the certificate, and (incircle) the row
     # checks of the rows the walk has finished
