@@ -23,6 +23,14 @@ moves the pages (already there, zeroed) to a mapping of the array's own: no faul
 copy, and each array still frees its memory when it dies, as any numpy array.
 ``hamiltonian()`` drops what is left when it returns (:func:`release`), and a reserve
 nobody used is dropped after ``RESERVE_SECONDS``.
+
+*For a construction* (the API): allocate each big array with :func:`fresh` in Python
+(a numba kernel's own ``np.empty`` cannot take from the reserve: give the kernel its
+output arrays, an ``_into`` kernel) and keep the reserve to what the construction
+takes with :func:`trim` as it starts, so that pages it will not take are given back
+at once rather than held to its end. ``hammesh.postprocess.RESERVE_TAKEN`` holds each
+mode's bytes per input triangle (a mode that takes more arrays raises its entry; the
+reserve ``quality_mesh`` faults is ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``).
 """
 
 from __future__ import annotations
@@ -36,7 +44,7 @@ import weakref
 
 import numpy as np
 
-__all__ = ["fresh", "reserve", "release", "reserved", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE",
+__all__ = ["fresh", "reserve", "release", "reserved", "trim", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE",
            "RESERVE_SECONDS", "RESERVE_MIN_ARRAY"]
 
 MADV_NOHUGEPAGE = 15
@@ -96,6 +104,13 @@ class _Reserve:
         self.taken += length
         return new
 
+    def trim(self, keep: int) -> None:
+        """Unmap all but ``keep`` bytes (page-rounded) of what is left."""
+        keep = -(-max(int(keep), 0) // _PAGE) * _PAGE
+        if self.taken + keep < self.size:
+            _libc.munmap(self.addr + self.taken + keep, self.size - self.taken - keep)
+            self.size = self.taken + keep
+
     def drop(self) -> None:
         """Unmap what is left (never the front: other mappings may live there now)."""
         if self.taken < self.size:
@@ -147,6 +162,16 @@ def release() -> None:
         if _timer is not None:
             _timer.cancel()
         _timer = None
+
+
+def trim(nbytes: int) -> int:
+    """Keep at most ``nbytes`` of the reserve (those a construction will take), give the
+    rest back now; returns the bytes left in it. Arrays already taken stay valid."""
+    with _lock:
+        if _reserve is None:
+            return 0
+        _reserve.trim(nbytes)
+        return _reserve.size - _reserve.taken
 
 
 def reserved() -> int:

@@ -119,8 +119,11 @@ def mesh_arrays(
     return pts, tri
 
 
-def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
+def prepare_mesh(mesh: Mesh, *, measure: bool = True) -> tuple[Mesh, HalfEdges, np.ndarray]:
     """Check a planar mesh and return it counter-clockwise with its half-edges.
+
+    ``measure=False``: no ``info["validated"]`` (for a construction that needs none of
+    it: Thm 2.4's; the orientation pass then only orients and checks).
 
     Returns
     -------
@@ -132,7 +135,7 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
 
     The returned mesh's ``info["validated"]`` holds what the orientation pass found on
     the way: ``min_angle`` (radians), ``total`` (area) and ``used`` (bool per point),
-    which the certificate's comparison with this input reuses.
+    for a construction's own use (sparse mode's bound); the certificate never reads it.
 
     Raises
     ------
@@ -149,8 +152,8 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
             "(squared lengths would overflow)"
         )
     n = len(pts)
-    used = np.zeros(n, dtype=np.bool_)
-    tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(pts, tri, used)
+    used = np.zeros(n, dtype=np.bool_) if measure else None
+    tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(pts, tri, used, measure=measure)
     if bad_t >= 0:
         t = int(bad_t)
         row = np.asarray(mesh.triangles)[t].tolist()
@@ -186,7 +189,8 @@ def prepare_mesh(mesh: Mesh) -> tuple[Mesh, HalfEdges, np.ndarray]:
         segments=segs,
         segment_markers=np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1),
         triangle_attributes=attrs,
-        # found on the way, for the certificate's comparison with this input
-        info={**mesh.info, "validated": {"min_angle": min_angle, "total": area, "used": used}},
+        # found on the way, for a construction's bound (sparse mode's local rule)
+        info={**mesh.info, "validated": {"min_angle": min_angle, "total": area, "used": used}} if measure
+        else dict(mesh.info),
     )
     return clean, he, is_con

@@ -18,10 +18,18 @@ from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
 from hammesh.halfedge import prepare_mesh
 
-__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels"]
+__all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels",
+           "RESERVE_TAKEN"]
 
 #: Available constructions, by name (``hamiltonian(mesh, mode=...)``).
 MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
+
+#: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
+#: ``pages.fresh``); the rest of a reserve is given back as the call starts
+#: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
+#: sparse: the validation's half-edge twins (24), so far: its own arrays are made
+#: inside its kernels (a kernel handed ``pages.fresh`` arrays raises this).
+RESERVE_TAKEN = {"incircle": None, "sparse": 24}
 
 
 _loaded = threading.Lock()
@@ -127,6 +135,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
     if not (isinstance(keep, (int, float)) and 0.0 <= keep <= 1.0):
         raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
     t0 = time.perf_counter()
+    taken, shape = RESERVE_TAKEN.get(mode), np.shape(mesh.triangles)
+    if taken is not None and len(shape) == 2 and pages.reserved():  # pages it will not take: back now
+        pages.trim(taken * shape[0])
     # a second thread works beside the construction: the walk's arrays (while the
     # input is checked), the input's side of the certificate, and (incircle) the row
     # checks of the rows the walk has finished
@@ -139,8 +150,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
         # the certificate's own look at the caller's input (never at the construction's
         # validated copy), beside the construction's validation
         facts = side.submit(input_facts, mesh)
-        clean, he, is_con = prepare_mesh(mesh)
-        rows = prepared = None
+        clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle")  # (Thm 2.4 needs no angle)
+        rows = prepared = vmarks = None
         if mode == "incircle":
             serial = isinstance(side, threads.InlineExecutor)  # (no row stream then: its checker waits for rows)
             out, claim, stream = incircle_streaming(clean, he, is_con, None if serial else side, ready, reuse=True)
@@ -148,6 +159,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows
             prepared = claim_structure(out.triangles, claim)
+            # (serial, so done while the other thread checks rows, not after them)
+            vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
             if stream is not None:
                 stream.join()  # then help with the row checks still to do
                 rows = (stream.result(out.components), stream.used)
@@ -194,5 +207,6 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
             },
         }
     )
-    vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
+    if vmarks is None:  # (snapping moves points only: the markers stand)
+        vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
     return replace(out, report=report, vertex_markers=vmarks)

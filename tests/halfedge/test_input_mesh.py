@@ -143,6 +143,32 @@ def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> N
     np.testing.assert_array_equal(seen["used"], np.bincount(tri.ravel(), minlength=80) > 0)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_unmeasured_validation_orients_and_pairs_the_same(seed: int, monkeypatch) -> None:
+    """``prepare_mesh(measure=False)`` (Thm 2.4's: no angle needed) orients, pairs and
+    refuses exactly as the measured one; it only leaves out ``info["validated"]``."""
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 3)
+    rng = np.random.default_rng(seed)
+    pts = rng.random((80, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    tri[::3] = tri[::3, ::-1]  # some clockwise rows
+    m = hammesh.Mesh(points=pts, triangles=tri)
+    a, he_a, con_a = prepare_mesh(m)
+    b, he_b, con_b = prepare_mesh(m, measure=False)
+    np.testing.assert_array_equal(a.triangles, b.triangles)
+    np.testing.assert_array_equal(he_a.twin, he_b.twin)
+    np.testing.assert_array_equal(con_a, con_b)
+    assert "validated" in a.info and "validated" not in b.info
+    r = _kernels.orient_ccw(pts, tri, measure=False)
+    assert np.isnan(r.min_angle) and np.isnan(r.area) and r.n_flipped == len(tri[::3])
+    flat = tri.copy()
+    flat[5] = [flat[5, 0], flat[5, 1], flat[5, 1]]  # a repeated vertex: refused alike
+    for measure in (True, False):
+        with pytest.raises(hammesh.InvalidMeshError, match="triangle 5"):
+            prepare_mesh(hammesh.Mesh(points=pts, triangles=flat), measure=measure)
+
+
 def test_counter_clockwise_rows_are_not_copied() -> None:
     """Rows already counter-clockwise (Triangle's) are used as given, no 36 MB copy at
     1.5 M triangles; a clockwise row makes a copy and leaves the caller's rows alone."""

@@ -114,3 +114,44 @@ def test_hamiltonian_drops_the_reserve(no_reserve) -> None:
     pages.reserve(8 << 20)
     hammesh.hamiltonian(m, mode="incircle")
     assert pages.reserved() == 0
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="mremap is Linux's")
+def test_trim_gives_back_what_a_construction_will_not_take(no_reserve) -> None:
+    """``pages.trim``: the reserve keeps only what a construction will take; arrays taken
+    before stay valid, and what is trimmed is unmapped (not resident any more)."""
+    assert pages.reserve(32 << 20) == 32 << 20
+    a = fresh(4 << 20, np.uint8, 5)
+    r = pages._reserve
+    tail = r.addr + r.size - (1 << 20)  # inside the reserve's untaken rest
+    assert _vma(tail)
+    assert pages.trim(8 << 20) == 8 << 20
+    assert pages.reserved() == 8 << 20 and (a == 5).all()
+    assert not _vma(tail) or _vma(tail).get("Rss", "0 kB").split()[0] == "0"
+    b = fresh(8 << 20, np.uint8, 1)  # exactly what is left: taken from the reserve
+    assert pages.reserved() == 0 and b.sum() == 8 << 20
+    assert pages.trim(1 << 20) == 0  # (nothing left: nothing to do)
+
+
+def test_sparse_mode_keeps_only_its_share_of_the_reserve(no_reserve, monkeypatch) -> None:
+    """``hamiltonian(mode="sparse")`` trims the reserve to its share
+    (``postprocess.RESERVE_TAKEN``) before it validates: the rest is not held to its end."""
+    import hammesh
+    from hammesh import postprocess
+    from tests.helpers import plate
+
+    m = plate(0, 1, max_area=0.01)
+    if not pages.reserve(16 << 20):
+        pytest.skip("no mremap here")
+    seen = []
+    real = postprocess.prepare_mesh
+
+    def spy(*args, **kw):
+        seen.append(pages.reserved())
+        return real(*args, **kw)
+
+    monkeypatch.setattr(postprocess, "prepare_mesh", spy)
+    hammesh.hamiltonian(m, mode="sparse")
+    share = postprocess.RESERVE_TAKEN["sparse"] * m.n_triangles
+    assert seen and seen[0] <= max(share + pages._PAGE, 0) < 16 << 20
+    assert pages.reserved() == 0

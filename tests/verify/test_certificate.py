@@ -209,3 +209,21 @@ def test_degenerate_row_is_a_verification_error(pair) -> None:
         verify(replace(h, triangles=tri))
     res = certify_all(h.points, tri, h.components)
     assert res.bad_orientation == 5  # flagged by the exact orientation test
+
+
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_each_mode_hands_the_certificate_a_claim_it_accepts(monkeypatch, mode: str) -> None:
+    """Issue 13 item 3: both constructions hand the certificate their output pairing as a
+    claim, which it checks (one read per half-edge) instead of finding the pairing by
+    its own bucket matching; a claim that failed its checks would fall back to that."""
+    m = hammesh.quality_mesh(hammesh.Domain.from_polygon(square(0, 0, 1), holes=[square(0.4, 0.4, 0.2)]),
+                             min_angle=30, max_area=0.002)
+
+    def no_matching(*args):
+        raise AssertionError("the certificate matched the output's half-edges itself")
+
+    monkeypatch.setattr(_kernels, "half_edge_twins", no_matching)
+    h = hammesh.hamiltonian(m, mode=mode)
+    assert h.report["verified"] and h.n_triangles > m.n_triangles
+    with pytest.raises(AssertionError, match="matched the output's half-edges itself"):
+        verify(h, reference=m)  # the public entry takes no claim: it pairs by itself

@@ -112,8 +112,8 @@ def test_wrong_orientation_pass_is_rejected(monkeypatch, mode: str) -> None:
     """The construction's orientation pass turns every row clockwise."""
     real = he_kernels.orient_ccw
 
-    def broken(points, tri, used=None):
-        r = real(points, tri, used)
+    def broken(points, tri, used=None, measure=True):
+        r = real(points, tri, used, measure=measure)
         return r._replace(triangles=r.triangles[:, ::-1].copy())
 
     monkeypatch.setattr(he_kernels, "orient_ccw", broken)
@@ -236,9 +236,11 @@ def lie_about_the_angle(monkeypatch) -> None:
 
     real = post.prepare_mesh
 
-    def lying(mesh):
-        clean, he, is_con = real(mesh)
-        info = {**clean.info, "validated": {**clean.info["validated"], "min_angle": 1e-3}}
+    def lying(mesh, **kw):
+        clean, he, is_con = real(mesh, **kw)
+        # (incircle measures nothing in its validation: the lie is put where sparse's is)
+        seen = clean.info.get("validated") or {"total": 1.0, "used": np.ones(clean.n_points, bool)}
+        info = {**clean.info, "validated": {**seen, "min_angle": 1e-3}}
         return replace(clean, info=info), he, is_con
 
     monkeypatch.setattr(post, "prepare_mesh", lying)

@@ -118,11 +118,10 @@ def test_walk_resumes_where_it_paused(built) -> None:
 
     def walk(step: int) -> tuple[int, int, tuple]:
         """Walk with a pause every ``step`` rows: (status, pauses, arrays)."""
-        out = np.zeros((total, 3), np.int64)
-        parent = np.zeros(total, np.int64)
-        kind = np.zeros(total, np.int8)
-        c = np.full(3 * total, _kernels.UNLINKED, np.int64)
-        prim = np.full(len(code), -1, np.int64)
+        # the arrays (and dtypes: int32 claim and slots) hamiltonian() hands the walk, so
+        # that the suite compiles no second signature of it
+        arrays = incircle.walk_arrays(total, len(code))
+        out, parent, kind, c, prim = (arrays[k] for k in ("out", "parent", "kind", "claim", "prim"))
         lengths = np.zeros(len(firsts), np.int64)
         y2 = np.full(len(mid_h), -1, np.int64)
         state = np.zeros(_kernels.WALK_STATE, np.int64)
