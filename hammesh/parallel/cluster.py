@@ -88,7 +88,7 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
 
     _hold_numba_lock_across_fork()
     with contextlib.ExitStack() as stack, ThreadPoolExecutor(1, thread_name_prefix="hammesh-cluster") as pool:
-        started = pool.submit(_start_local, stack, workers, mode)
+        started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING)
         failed = False
         try:
             yield Starting(started), workers
@@ -105,9 +105,21 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
                     raise
 
 
-def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None):
-    """Start a local cluster of ``workers`` processes and its client, both closed by ``stack``."""
+#: modules the driver imports while it decomposes (scipy.spatial: its KD-tree): a
+#: cluster starting beside it imports them before it forks, so that no fork happens in
+#: the middle of the driver's import of one (a child would inherit that module half
+#: initialised, its import lock held by a thread the child does not have)
+FORK_AFTER_IMPORTING = ("scipy.spatial",)
+
+
+def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = ()):
+    """Start a local cluster of ``workers`` processes and its client, both closed by
+    ``stack`` (``modules`` imported first, see :data:`FORK_AFTER_IMPORTING`)."""
+    import importlib
     import logging
+
+    for name in modules:
+        importlib.import_module(name)
 
     import dask
 
