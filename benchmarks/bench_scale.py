@@ -140,10 +140,14 @@ def per_tile(o: dict) -> str:
     tri = [s["cpu_mesh"] for s in steps]
     per_m = [x / s["triangles"] * 1e6 for x, s in zip(ham, steps)]
     every = sum(v for s in steps for k, v in s.items() if k.startswith("cpu_"))
+    # each tile's task (mesh, repair check, hamiltonian, border rows) in wall seconds: the
+    # joins wait for the last, so a worker whose tiles are done earlier idles meanwhile
+    task = [sum(s.get(k, 0.0) for k in ("mesh", "hamiltonian", "border", "spill")) for s in steps]
     return (f"per tile hamiltonian() CPU s {' / '.join(f'{x:.2f}' for x in ham)} "
             f"({' / '.join(f'{x:.2f}' for x in per_m)} per 1M triangles; "
             f"x{sum(ham) / max(sum(tri), 1e-9):.2f} the tiles' meshing), {100 * sum(ham) / max(every, 1e-9):.0f} % "
-            f"of the workers' CPU")
+            f"of the workers' CPU; tile tasks wall s {' / '.join(f'{x:.1f}' for x in task)} "
+            f"(spread {max(task) - min(task):.1f})")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -23,9 +23,10 @@ def area_sum(points: np.ndarray, triangles: np.ndarray) -> float:
 
 @njit(cache=True, nogil=True)
 def label_pieces_into(triangles: np.ndarray, neighbors: np.ndarray, segment_keys: np.ndarray,
-                      on_segment: np.ndarray, label: np.ndarray) -> int:
+                      on_segment: np.ndarray, label: np.ndarray, seeds: np.ndarray) -> int:
     """Label the dual components of a mesh cut at its segments (flood fill); returns
-    their number. ``neighbors[:, s]`` is across edge ``(s, s + 1)`` (-1: none);
+    their number ``k``, ``seeds[:k]`` the lowest triangle of each (component ``i``
+    grows from ``seeds[i]``). ``neighbors[:, s]`` is across edge ``(s, s + 1)`` (-1: none);
     ``segment_keys``: sorted ``min * n + max`` of the segments' end points, ``n`` the
     number of points (``len(on_segment)``); only edges with both ends on a segment
     are looked up."""
@@ -38,6 +39,7 @@ def label_pieces_into(triangles: np.ndarray, neighbors: np.ndarray, segment_keys
         if label[seed] >= 0:
             continue
         label[seed] = count
+        seeds[count] = seed
         stack[0] = seed
         top = 1
         while top > 0:

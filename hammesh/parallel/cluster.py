@@ -7,7 +7,7 @@ from typing import Iterator
 
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["runner_for", "start_method", "worker_threads", "Starting", "DASK_MISSING"]
+__all__ = ["runner_for", "start_method", "worker_threads", "Starting", "dask_installed", "DASK_MISSING"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
 
@@ -18,6 +18,20 @@ def _distributed():
     except ImportError:
         raise InvalidOptionError(DASK_MISSING) from None
     return distributed
+
+
+def dask_installed() -> bool:
+    """Whether ``import distributed`` would find it, without importing it (~0.6 s:
+    a local cluster imports it in its starting thread, beside the driver's work)."""
+    import importlib.util
+    import sys
+
+    if "distributed" in sys.modules:
+        return sys.modules["distributed"] is not None
+    try:
+        return importlib.util.find_spec("distributed") is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def start_method() -> str:
@@ -64,7 +78,8 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
         return
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InvalidOptionError(f"workers must be a positive integer, got {workers!r}")
-    _distributed()
+    if not dask_installed():
+        raise InvalidOptionError(DASK_MISSING)
     if not background:
         with contextlib.ExitStack() as stack:
             yield _start_local(stack, workers, mode), workers
@@ -73,7 +88,7 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
 
     _hold_numba_lock_across_fork()
     with contextlib.ExitStack() as stack, ThreadPoolExecutor(1, thread_name_prefix="hammesh-cluster") as pool:
-        started = pool.submit(_start_local, stack, workers, mode)
+        started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING)
         failed = False
         try:
             yield Starting(started), workers
@@ -90,9 +105,21 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
                     raise
 
 
-def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None):
-    """Start a local cluster of ``workers`` processes and its client, both closed by ``stack``."""
+#: modules the driver imports while it decomposes (scipy.spatial: its KD-tree): a
+#: cluster starting beside it imports them before it forks, so that no fork happens in
+#: the middle of the driver's import of one (a child would inherit that module half
+#: initialised, its import lock held by a thread the child does not have)
+FORK_AFTER_IMPORTING = ("scipy.spatial",)
+
+
+def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = ()):
+    """Start a local cluster of ``workers`` processes and its client, both closed by
+    ``stack`` (``modules`` imported first, see :data:`FORK_AFTER_IMPORTING`)."""
+    import importlib
     import logging
+
+    for name in modules:
+        importlib.import_module(name)
 
     import dask
 

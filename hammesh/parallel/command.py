@@ -15,7 +15,7 @@ def run_parallel(args: argparse.Namespace) -> int:
     """Check the options, mesh on the tiles, write the outputs (one file or a directory)."""
     from hammesh.cli.pipeline import DOMAIN_SUFFIXES, Outputs, load_input
     from hammesh.domain import Domain
-    from hammesh.parallel.cluster import DASK_MISSING
+    from hammesh.parallel.cluster import DASK_MISSING, dask_installed
 
     if args.workers is not None:
         params.number("--workers", args.workers, low=1, high=4096, what="workers")
@@ -23,11 +23,8 @@ def run_parallel(args: argparse.Namespace) -> int:
         params.number("--tiles", args.tiles, low=1, high=1_000_000, what="tiles")
     if args.workers is not None and args.scheduler is not None:
         raise InvalidOptionError("--workers starts a local cluster, --scheduler uses a running one: give one")
-    if args.workers is not None or args.scheduler is not None:
-        try:
-            import distributed  # noqa: F401
-        except ImportError:
-            raise InvalidOptionError(DASK_MISSING) from None
+    if (args.workers is not None or args.scheduler is not None) and not dask_installed():
+        raise InvalidOptionError(DASK_MISSING)
     if args.input.suffix.lower() not in DOMAIN_SUFFIXES:
         raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain (.poly/.node), not a mesh")
     if args.max_area is None:

@@ -44,11 +44,10 @@ def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, nei
     on_seg = np.zeros(n, np.bool_)
     on_seg[segments.ravel()] = True
     label = np.empty(m, np.int64)
-    label_pieces_into(np.ascontiguousarray(triangles, dtype=np.int64), np.ascontiguousarray(neighbors, dtype=np.int64),
-                      seg_keys, on_seg, label)
-    # a piece's seed is its lowest triangle, and seeds are taken in order: where the
-    # running maximum of the labels steps up
-    first = np.flatnonzero(np.diff(np.maximum.accumulate(label), prepend=-1) > 0)
+    seeds = np.empty(m, np.int64)  # (only the first few entries are ever touched)
+    count = label_pieces_into(np.ascontiguousarray(triangles, dtype=np.int64),
+                              np.ascontiguousarray(neighbors, dtype=np.int64), seg_keys, on_seg, label, seeds)
+    first = seeds[:count]
     where = locate_in_triangles(tile.region_points, tile.region_triangles, points[triangles[first]].mean(axis=1))
     if (where < 0).any():
         raise MeshingError(f"tile {tile.index}: a triangle lies outside the coarse mesh (regions)")
@@ -171,8 +170,10 @@ def mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: boo
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(tri) == 0:
         raise MeshingError(f"Triangle produced no triangles for tile {tile.index}")
-    raw_nbr = np.asarray(out["neighbors"], dtype=np.int64).reshape(-1, 3)
-    nbr = np.stack([raw_nbr[:, 2], raw_nbr[:, 0], raw_nbr[:, 1]], axis=1)
+    # ours: neighbors[:, s] across edge (s, s + 1); Triangle's column s is opposite corner s
+    raw_nbr = np.asarray(out["neighbors"]).reshape(-1, 3)
+    nbr = np.empty(raw_nbr.shape, np.int64)  # (one pass from Triangle's int32 rows, no stacked copy)
+    nbr[:, 0], nbr[:, 1], nbr[:, 2] = raw_nbr[:, 2], raw_nbr[:, 0], raw_nbr[:, 1]
     pts = np.asarray(out["vertices"], dtype=np.float64)
     if len(pts) < len(tile.vertices) or not np.array_equal(pts[: len(tile.vertices)], tile.vertices):
         raise MeshingError(f"Triangle did not keep tile {tile.index}'s vertices in order")

@@ -23,3 +23,4 @@ def test_bench_scale_runs(extra, needle):
     assert "workers' CPU / raw CPU" in proc.stdout or "--partitioned-only" in extra
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
     assert "load average" in proc.stdout and "per tile hamiltonian() CPU s" in proc.stdout
+    assert "tile tasks wall s" in proc.stdout

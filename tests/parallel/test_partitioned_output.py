@@ -250,7 +250,10 @@ def test_label_pieces_matches_scipy_components(seed, n_cut):
                 r.append(t)
                 c.append(u)
     label = np.empty(len(tri), np.int64)
-    count = label_pieces_into(tri.astype(np.int64), nbr, keys.astype(np.int64), on, label)
+    seeds = np.empty(len(tri), np.int64)
+    count = label_pieces_into(tri.astype(np.int64), nbr, keys.astype(np.int64), on, label, seeds)
+    # each piece's seed is its lowest triangle, in label order
+    assert np.array_equal(seeds[:count], [np.flatnonzero(label == i)[0] for i in range(count)])
     k, ref = connected_components(coo_matrix((np.ones(len(r)), (r, c)), shape=(len(tri), len(tri))), directed=False)
     assert count == k
     # the same partition of the triangles (labels may differ by a renaming)
