@@ -165,10 +165,10 @@ def quality_table(target: int) -> dict:
             f"{r['uncovered_boundary']:>5}{r['uncovered_below_target']:>5}  {marks}"
         )
     print(
-        "corner: half the smallest boundary corner (no Hamiltonian triangulation keeping the boundary does better); "
-        "join: what joins can keep at the cover's isolated uncovered triangles, at best; unc: uncovered triangles "
-        "with a boundary edge; u<tg: uncovered triangles whose join bound is below 0.9 x min in (only the cover "
-        "can fix them). Bounds columns: out min >= min(0.9 x min in, corner)?, out min >= min(that, join)?"
+        "corner: half the smallest boundary corner (no Hamiltonian triangulation keeping the boundary beats it)\n"
+        "join: the best any join can keep at the cover's isolated uncovered triangles; unc: uncovered triangles\n"
+        "with a boundary edge; u<tg: those whose join bound is below 0.9 x min in (only a cover can fix them)\n"
+        "bounds marks: out min >= min(0.9 x min in, corner)?  out min >= min(that, join)?"
     )
     return rows
 

@@ -428,3 +428,36 @@ def test_placing_taken_joins_after_the_plan_only_lifts_them(name: str, monkeypat
     assert late.report["max_angle_output_deg"] <= max(
         plan_only.report["max_angle_output_deg"], late.report["max_angle_input_deg"] + 5
     ) + 1e-9
+
+
+@pytest.mark.slow
+def test_bench_sparse_angles_prints_the_bounds_and_checks_them() -> None:
+    """``bench_sparse.py --angles``: every domain's row with its corner and join bounds, which the
+    marks check against the printed minimum, and the closing target lines."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bench = Path(__file__).parent.parent.parent / "benchmarks" / "bench_sparse.py"
+    proc = subprocess.run(
+        [sys.executable, str(bench), "--angles", "--target", "1500"], capture_output=True, text=True, timeout=1200
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    names = ("A", "face", "double_hex", "gear", "la")
+    rows = [
+        x for x in lines
+        if len(x.split()) > 13 and x.split()[0] in names and x.split()[1].replace(",", "").isdigit()
+    ]
+    assert len(rows) >= 5
+    for row in rows:
+        f = row.split()
+        min_in, min_out, corner, join = float(f[3]), float(f[4]), float(f[11]), f[12]
+        bounds = row.split(";")[1].split()
+        goal = min(0.9 * min_in, corner)
+        assert (bounds[0] == "ok") == (min_out >= goal - 0.005)  # (printed to 2 decimals)
+        assert min_out <= corner + 0.005  # no construction beats the corner bound
+        if join != "-":
+            assert (bounds[1] == "ok") == (min_out >= min(goal, float(join)) - 0.005)
+    assert any(x.strip().startswith("... >= min(that, join bound)") for x in lines)
+    assert any(x.startswith("A at 87 triangles") for x in lines)
