@@ -95,15 +95,20 @@ def test_compact_cycle_cuts_few_edges(disc_incircle) -> None:
     assert p.edge_cut < 4.0 * np.sqrt(8 * h.n_triangles), (p.edge_cut, h.n_triangles, len(a))
 
 
+@pytest.fixture(scope="module")
+def square_incircle() -> hammesh.HamiltonianMesh:
+    dom = hammesh.Domain.from_polygon(square(0, 0, 1))
+    return hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=30, max_area=3e-4), mode="incircle")
+
+
 @pytest.mark.parametrize("k", [4, 16])
-def test_parts_of_a_square_are_its_quadtree_cells(k: int) -> None:
+def test_parts_of_a_square_are_its_quadtree_cells(square_incircle, k: int) -> None:
     """On a hole-free square the count quadtree's cells hold equal counts and the walk
     visits each whole (its children hang at its centre), so for k a power of 4 the
     stretches are the cells of a level: the cut is at most a straight grid's (the
     grid cut is counted on the same mesh; a tree whose stretches are strips or miss
     the cells cuts 1.3-1.7x more)."""
-    dom = hammesh.Domain.from_polygon(square(0, 0, 1))
-    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=30, max_area=3e-4), mode="incircle")
+    h = square_incircle
     p = partition(h, k)
     a, b = dual_edges(h.triangles)
     c = h.points[h.triangles].mean(axis=1)
