@@ -55,14 +55,135 @@ def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
     return tail
 
 
-@njit(cache=True)
-def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, budget):
+#: Kinds of augmenting search (``_augment``'s ``mode``).
+PLAIN = 0  # along dual edges between degree-3 triangles
+CHAIN = 1  # also through chains of degree-2 triangles (left uncovered when used)
+DROP = 2  # PLAIN, or drop one interior degree-3 triangle (left uncovered)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _chain_end(nb, active, alive, v, k):
+    """The degree-3 triangle reached from ``v`` across its side ``k`` through a chain
+    of degree-2 triangles (``(end, chain length)``; the neighbour itself, length 0,
+    if it has degree 3; end -1 if the chain dead-ends or comes back)."""
+    w = nb[v, k]
+    if w < 0 or not alive[w]:
+        return -1, 0
+    prev = v
+    cur = w
+    ln = 0
+    while not active[cur]:
+        nxt = -1
+        for j in range(3):
+            z = nb[cur, j]
+            if z >= 0 and alive[z] and z != prev:
+                nxt = z
+        prev = cur
+        cur = nxt
+        ln += 1
+        if cur < 0 or cur == w:
+            return -1, 0
+    if cur == v:
+        return -1, 0
+    return cur, ln
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _third(nb, u, a, b):
+    """The neighbour of ``u`` other than ``a`` and ``b`` (-1 unless exactly one)."""
+    z = -1
+    for k in range(3):
+        x = nb[u, k]
+        if x != a and x != b:
+            if z >= 0 or x < 0:
+                return -1
+            z = x
+    return z
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _log(log, nlog, i, mate, active, alive):
+    """Record triangle ``i``'s state before a change (``log`` rows ``(i, mate, active,
+    alive)``; ``nlog[0]`` rows used, past the end: no longer undoable)."""
+    n = nlog[0]
+    if n < log.shape[0]:
+        log[n, 0] = i
+        log[n, 1] = mate[i]
+        log[n, 2] = active[i]
+        log[n, 3] = alive[i]
+    nlog[0] = n + 1
+
+
+@njit(cache=True, nogil=True)
+def _undo(log, nlog, mate, active, alive):
+    """Restore the states recorded by ``_log``, newest first; False if it overflowed."""
+    n = nlog[0]
+    if n > log.shape[0]:
+        return False
+    for j in range(n - 1, -1, -1):
+        i = log[j, 0]
+        mate[i] = log[j, 1]
+        active[i] = log[j, 2] != 0
+        alive[i] = log[j, 3] != 0
+    nlog[0] = 0
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _drop(u, nb, active, alive, mate, log, nlog):
+    """Leave the degree-3 triangle ``u`` uncovered: it leaves the graph and its three
+    neighbours (all of degree 3) drop to degree 2, so none of them needs a matching
+    edge any more; the partner of a neighbour matched elsewhere is freed and
+    returned (-1 if none). Changes are logged (``_log``) when ``log`` has rows."""
+    keep = log.shape[0] > 0
+    if keep:
+        _log(log, nlog, u, mate, active, alive)
+    alive[u] = False
+    active[u] = False
+    mate[u] = -1
+    freed = -1
+    for k in range(3):
+        x = nb[u, k]
+        y = mate[x]
+        if keep:
+            _log(log, nlog, x, mate, active, alive)
+            if y >= 0 and y != u:
+                _log(log, nlog, y, mate, active, alive)
+        active[x] = False
+        if y >= 0:
+            mate[x] = -1
+            if y != u:
+                mate[y] = -1
+                freed = y
+    return freed
+
+
+@njit(cache=True, nogil=True)
+def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
+             nlog):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
     global (size m) but only the vertices this search touches are reset, so a search
     costs about what it explores. It gives up after ``budget`` touched vertices.
-    Returns ``(far end of the augmenting path or -1, next lca stamp)``.
+
+    ``mode``: ``PLAIN`` searches the dual edges between degree-3 (``active``)
+    triangles; ``CHAIN`` also steps through chains of degree-2 (``alive``, not
+    active) triangles to the degree-3 triangle at their far end (``_chain_end``,
+    found on the way: no chain graph is built); ``DROP`` searches like ``PLAIN``
+    and also stops at an odd (matched) vertex ``u`` reached from ``v`` whose third
+    neighbour ``z`` (neither ``v`` nor ``u``'s mate) is free: the path to ``v`` is
+    flipped (``r`` matched, ``v`` free) and ``u`` dropped (``_drop``: ``v``, ``u``'s
+    mate and ``z`` drop to degree 2 and need no partner), so one interior triangle
+    is left uncovered instead of a chain of boundary triangles. With ``take >= 0``
+    the search stops at ``u == take`` even if ``z`` is matched (its partner is
+    freed).
+
+    Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
+    applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
+    after a drop the partner freed (or -1); after a failed ``DROP`` search the first
+    odd vertex that ``take`` could drop (or -1). Every change is recorded in ``log``
+    (``_log``; an empty ``log``: not recorded).
     """
     n_t = 0
     head = 0
@@ -73,12 +194,17 @@ def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, 
     queue[tail] = r
     tail += 1
     found = -1
+    drop = False
+    extra = -1
     s = s0
     while head < tail and found < 0 and n_t < budget:
         v = queue[head]
         head += 1
         for k in range(3):
-            u = nb[v, k]
+            if mode == CHAIN:
+                u, _ = _chain_end(nb, active, alive, v, k)
+            else:
+                u = nb[v, k]
             if u < 0 or not active[u]:
                 continue
             if label[u] < 0:
@@ -90,6 +216,15 @@ def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, 
                     found = u
                     break
                 w = mate[u]
+                if mode == DROP:
+                    z = _third(nb, u, v, w)
+                    if z >= 0 and z != r and active[z]:
+                        if mate[z] < 0 or u == take:
+                            found = u
+                            drop = True
+                            break
+                        if extra < 0 and mate[z] != u:
+                            extra = u
                 label[w] = 0
                 touched[n_t] = w
                 n_t += 1
@@ -102,18 +237,23 @@ def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, 
                 tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail)
     if found >= 0:
         v = found
+        keep = log.shape[0] > 0
         while v >= 0:
             pv = parent[v]
             nv = mate[pv]
+            if keep:
+                _log(log, nlog, v, mate, active, alive)
+                _log(log, nlog, pv, mate, active, alive)
             mate[v] = pv
             mate[pv] = v
             v = nv
+        extra = _drop(found, nb, active, alive, mate, log, nlog) if drop else -1
     for i in range(n_t):
         x = touched[i]
         label[x] = -1
         parent[x] = -1
         fa[x] = x
-    return found, s
+    return found, s, extra
 
 
 @njit(cache=True)
@@ -191,6 +331,8 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     """
     stack = np.empty(3 * m + 16, np.int64)  # a triangle is pushed at most three times
     touched = np.empty(online + 16, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
     s = 0
     hdeg = np.zeros(m, np.int64)
     for t in range(m):
@@ -231,7 +373,8 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             hdeg[t] = 0
             if online <= 0:
                 continue
-            far, s = _augment(t, nb, active, mate, parent, fa, label, stamp, s, touched, queue, online)
+            far, s, _x = _augment(t, nb, active, active, mate, parent, fa, label, stamp, s, touched, queue, online,
+                                  PLAIN, -1, nolog, nonlog)
             if far < 0:
                 continue
             # t and the path's far end are newly matched (the path's inner triangles
@@ -257,80 +400,115 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     return s
 
 
-@njit(cache=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, m):
-    """Augment through chains of degree-2 triangles; a chain used is left uncovered."""
-    # phase 2: a chain of degree-2 triangles between two degree-3 ones x, y may serve
-    # as a matching edge x-y at the price of leaving the chain uncovered
-    nbx = np.full((m, 3), -1, np.int64)
-    clen = np.zeros((m, 3), np.int64)
-    n_free0 = 0
-    for x in range(m):
-        if active[x] and mate[x] < 0:
-            n_free0 += 1
-    if n_free0 > 0:
-        touched2 = np.empty(2 * m + 16, np.int64)
-        queue2 = np.empty(2 * m + 16, np.int64)
-        for x in range(m):
-            if not active[x]:
-                continue
-            for k in range(3):
-                w = nb[x, k]
-                if w < 0 or not alive[w]:
-                    continue
-                prev = x
-                cur = w
-                ln = 0
-                while not active[cur]:
-                    nxt = -1
-                    for j in range(3):
-                        z = nb[cur, j]
-                        if z >= 0 and alive[z] and z != prev:
-                            nxt = z
-                    prev = cur
-                    cur = nxt
-                    ln += 1
-                    if cur < 0 or cur == w:
-                        break
-                if cur < 0 or cur == x or not active[cur]:
-                    continue
-                nbx[x, k] = cur
-                clen[x, k] = ln
-            for k in range(3):  # a simple graph: keep the cheapest edge to each end
-                for j in range(3):
-                    if j != k and nbx[x, j] >= 0 and nbx[x, j] == nbx[x, k]:
-                        if clen[x, j] < clen[x, k] or (clen[x, j] == clen[x, k] and j < k):
-                            nbx[x, k] = -1
-                            break
-        for t in range(m):  # few free triangles are left: search as far as it takes
-            if active[t] and mate[t] < 0:
-                _, s = _augment(t, nbx, active, mate, parent, fa, label, stamp, s, touched2, queue2, 2 * m + 8)
-        # matched through a chain: the chain's triangles are left uncovered
-        for x in range(m):
-            y = mate[x]
-            if not active[x] or y < x:
-                continue
-            direct = False
-            for k in range(3):
-                if nb[x, k] == y:
-                    direct = True
-            if direct:
-                continue
-            kk = -1
-            for k in range(3):
-                if nbx[x, k] == y and (kk < 0 or clen[x, k] < clen[x, kk]):
-                    kk = k
-            prev = x
-            cur = nb[x, kk]
-            while cur != y:
-                nxt = -1
-                for j in range(3):
-                    z = nb[cur, j]
-                    if z >= 0 and alive[z] and z != prev:
-                        nxt = z
-                alive[cur] = False
-                prev = cur
-                cur = nxt
+@njit(cache=True, nogil=True)
+def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget, rounds):
+    """Fix free degree-3 triangles by leaving interior triangles uncovered (``DROP``).
+
+    A degree-3 triangle the matching cannot pair (a parity defect: typically two
+    triangles with a single degree-3 neighbour each, next to the boundary) costs
+    either a chain of degree-2 triangles (``_chain_matching``: boundary triangles,
+    whose incenter sectors are the sparse mode's worst angles) or one dropped
+    interior triangle. From each free triangle an augmenting search of ``budget``
+    triangles comes first, then a ``DROP`` search, which pairs it or drops the
+    nearest triangle whose third neighbour is free (two defects fixed by one
+    interior triangle); failing both, it drops the first triangle it can (the
+    defect moves: the partner freed is searched from in turn, at most ``rounds``
+    times). A sequence that ends with a triangle still free is undone (``_undo``):
+    drops that fix nothing would only add uncovered triangles.
+    Returns ``(next lca stamp, triangles dropped)``.
+    """
+    m = nb.shape[0]
+    n_drop = 0
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    log = np.empty(((2 * rounds + 4) * (budget + 16) + 64, 4), np.int64)
+    nlog = np.zeros(1, np.int64)
+    for t in range(m):
+        if not active[t] or mate[t] >= 0:
+            continue
+        r = t  # an augmenting path further away first: it leaves nothing uncovered
+        f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                             PLAIN, -1, nolog, nonlog)
+        if f0 >= 0:
+            continue
+        nlog[0] = 0
+        fixed = False
+        drops = 0
+        for it in range(rounds + 1):
+            found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                       budget, DROP, -1, log, nlog)
+            if found < 0:
+                if extra < 0 or it == rounds:
+                    break
+                found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
+                                           queue, budget, DROP, extra, log, nlog)
+                if found < 0:  # the same search again: it stops at the same triangle
+                    break
+            if not alive[found]:
+                drops += 1
+            if extra < 0:
+                fixed = True
+                break
+            r = extra  # freed by the drop: an augmenting path first, then drop again
+            f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                 budget, PLAIN, -1, log, nlog)
+            if f2 >= 0:
+                fixed = True
+                break
+        if fixed or not _undo(log, nlog, mate, active, alive):
+            n_drop += drops
+    return s, n_drop
+
+
+@njit(cache=True, nogil=True)
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget):
+    """Augment through chains of degree-2 triangles; a chain used is left uncovered.
+
+    A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
+    matching edge x-y at the price of leaving the chain uncovered: ``CHAIN``
+    searches from the triangles still free find the chains as they go. Afterwards
+    each pair matched across a chain drops its shortest chain between them.
+    Returns the next lca stamp.
+    """
+    m = nb.shape[0]
+    hit = False
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                budget, CHAIN, -1, nolog, nonlog)
+            hit = hit or f >= 0
+    if not hit:
+        return s
+    for x in range(m):  # matched across a chain: its triangles are left uncovered
+        y = mate[x]
+        if not active[x] or y < x:
+            continue
+        direct = False
+        for k in range(3):
+            if nb[x, k] == y:
+                direct = True
+        if direct:
+            continue
+        kk = -1
+        best = 0
+        for k in range(3):
+            e, ln = _chain_end(nb, active, alive, x, k)
+            if e == y and (kk < 0 or ln < best):
+                kk = k
+                best = ln
+        prev = x
+        cur = nb[x, kk]
+        while cur != y:
+            nxt = -1
+            for j in range(3):
+                z = nb[cur, j]
+                if z >= 0 and alive[z] and z != prev:
+                    nxt = z
+            alive[cur] = False
+            prev = cur
+            cur = nxt
     return s
 
 
@@ -542,7 +720,7 @@ def _cell_neighbors(nb, cell):
 
 
 @njit(cache=True)
-def dual_cover(twin, m, budget, arc_limit, good, online, cell):
+def dual_cover(twin, m, budget, arc_limit, good, online, cell, drop_budget, drop_rounds):
     """Vertex-disjoint cycles of the dual graph covering most triangles.
 
     Gopi & Eppstein's observation, made to work with boundaries: in a graph of
@@ -557,7 +735,12 @@ def dual_cover(twin, m, budget, arc_limit, good, online, cell):
        searches confined to the cell, so bounded by its size); what is left free
        searches across borders (unpinning one border edge per path);
     3. match the degree-3 triangles: Karp-Sipser greedy (a triangle with a single
-       free candidate is matched first), then augmenting searches from each free one;
+       free candidate is matched first), then augmenting searches from each free one
+       (``budget`` triangles each);
+    3b. the few still free (parity defects): longer searches, then drop interior
+       triangles (``_drop_matching``, ``drop_budget`` triangles a search, ``drop_rounds``
+       moves; ``drop_rounds < 0``: skipped), and only then chains of degree-2 triangles
+       (``_chain_matching``; boundary triangles, left uncovered);
     4. cover = the remaining dual edges not in the matching; a degree-3 triangle still
        free is repaired by dropping the shortest cover arc from it to another such
        triangle (its inner triangles are left uncovered);
@@ -565,7 +748,7 @@ def dual_cover(twin, m, budget, arc_limit, good, online, cell):
 
     ``good`` (m, 3) bool steers the greedy matching's free choices (``_greedy_matching``).
 
-    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered)``.
+    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered, n_dropped)``.
     """
     nb = neighbors(twin, m)
     if cell.shape[0] == m and m > 0:
@@ -578,6 +761,8 @@ def dual_cover(twin, m, budget, arc_limit, good, online, cell):
     queue = np.empty(m + 8, np.int64)
     mate = np.full(m, -1, np.int64)
     touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
     active = np.zeros(m, np.bool_)  # alive triangles of (alive) degree 3 are matched
     for t in range(m):
         active[t] = alive[t] and deg[t] == 3
@@ -589,14 +774,22 @@ def dual_cover(twin, m, budget, arc_limit, good, online, cell):
         s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
         for t in range(m):
             if inner[t] and mate[t] < 0:
-                _, s = _augment(t, nbc, inner, mate, parent, fa, label, stamp, s, touched, queue, budget)
+                _f, s, _x = _augment(t, nbc, inner, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                     PLAIN, -1, nolog, nonlog)
     else:
         order = _bfs_order(nb, m) if online > 0 else np.arange(m)
         s = _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stamp, queue, mate)
     for t in range(m):
         if active[t] and mate[t] < 0:
-            _, s = _augment(t, nb, active, mate, parent, fa, label, stamp, s, touched, queue, budget)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, m)
+            _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog)
+    n_drop = 0
+    if drop_rounds >= 0:
+        touched_d = np.empty(max(budget, drop_budget) + 16, np.int64)
+        s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
+                                   drop_budget, drop_rounds)
+    touched_c = np.empty(2 * m + 16, np.int64)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8)
     n_free = 0
     for t in range(m):
         if active[t] and mate[t] < 0:
@@ -604,7 +797,7 @@ def dual_cover(twin, m, budget, arc_limit, good, online, cell):
     is_cov, cdeg = _cover_edges(nb, alive, mate, m)
     _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m)
     n_unc = _final_peel(nb, twin, is_cov, cdeg, alive, m)
-    return is_cov, n_free, n_unc
+    return is_cov, n_free, n_unc, n_drop
 
 
 @njit(cache=True)

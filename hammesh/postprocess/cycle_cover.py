@@ -20,13 +20,19 @@ import numpy as np
 from hammesh.postprocess import _cover_kernels as _k
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 
-__all__ = ["CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE"]
+__all__ = ["CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE", "DROP_BUDGET", "DROP_ROUNDS"]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
 #: (``cycle_cover(..., points=)``); 0: not confined. Off by default: measured at
 #: 100k triangles (docs/sparse.md) confinement cut the sparse cycle's k = 64 edge cut
 #: from 2.1-2.2x METIS's to 1.8-2.0x only, for 1.1-1.6x the Steiner points.
 CELL_SIZE = 0
+
+#: Triangles a search may label when it fixes a free triangle by dropping an interior
+#: one (``_cover_kernels._drop_matching``), and how many times a defect it moves may
+#: be searched from again.
+DROP_BUDGET = 20_000
+DROP_ROUNDS = 2
 
 #: Triangles an augmenting search started by the greedy matching may label (``online``).
 ONLINE_BUDGET = 256
@@ -53,6 +59,9 @@ class CycleCover:
         Degree-3 triangles the matching left free (before the local repair).
     n_rotations : int
         Cycles merged away by re-matching around vertices.
+    n_dropped : int
+        Interior (degree-3) triangles left uncovered to fix the matching's parity
+        defects, instead of chains of boundary triangles (``drop``).
     quad : (m,) int64 or None
         Packed quadtree coordinates of each triangle (``_thm24_kernels.quadtree_coords``)
         when the cycles were confined to cells: ``join_classes`` orders the joins by them.
@@ -65,6 +74,7 @@ class CycleCover:
     n_unmatched: int
     n_rotations: int = 0
     quad: np.ndarray | None = None
+    n_dropped: int = 0
 
 
 def cycle_cover(
@@ -78,6 +88,7 @@ def cycle_cover(
     good: np.ndarray | None = None,
     points: np.ndarray | None = None,
     cell_size: int | None = None,
+    drop: bool = True,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -113,6 +124,12 @@ def cycle_cover(
         cell, as the incircle mode's compact tree does.
     cell_size : int, optional
         Default ``CELL_SIZE`` (read at call time).
+    drop : bool
+        Fix the degree-3 triangles no augmenting path can match by dropping interior
+        triangles (each leaves the cover, its three neighbours then need no matching
+        edge: ``_cover_kernels._drop_matching``) before chains of degree-2 triangles
+        are used: those are boundary triangles, whose incenter sectors cost the sparse
+        mode its worst angles. False: chains only (the cover before session 8).
 
     Returns
     -------
@@ -139,7 +156,10 @@ def cycle_cover(
     if points is not None and cell_size > 0 and m > 0 and np.shape(points)[1] == 2:
         quad, cell = _cells(np.ascontiguousarray(points, dtype=np.float64), triangles, tw, m, int(cell_size))
     no_cell = np.zeros(0, np.int64)
-    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g, int(online), no_cell if cell is None else cell)
+    is_cov, n_free, n_unc, n_drop = _k.dual_cover(
+        tw, m, int(budget), limit, g, int(online), no_cell if cell is None else cell, DROP_BUDGET,
+        DROP_ROUNDS if drop else -1,
+    )
     cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:
@@ -154,6 +174,7 @@ def cycle_cover(
         n_unmatched=int(n_free),
         n_rotations=n_rot,
         quad=quad,
+        n_dropped=int(n_drop),
     )
 
 
