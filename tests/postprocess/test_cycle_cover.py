@@ -116,9 +116,11 @@ def punched_delaunay(draw):
 
 @given(
     case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans(), online=st.sampled_from([0, 4, 256]),
-    drop=st.booleans(),
+    drop=st.booleans(), split=st.booleans(),
 )
-def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, online: int, drop: bool) -> None:
+def test_cover_matches_brute_force_oracle(
+    case, rotate: bool, use_good: bool, online: int, drop: bool, split: bool
+) -> None:
     pts, tri, rng = case
     if len(tri) == 0:
         return
@@ -129,7 +131,9 @@ def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, on
         inner = twin >= 0
         g[inner] = g[inner] & g[twin[inner]]
         good = g
-    c = cycle_cover(tri, twin, rotate=rotate, good=good, online=online, drop=drop)
+    # with points (and online > 0) the two halves of the quadtree's top split are matched
+    # apart, then joined across it
+    c = cycle_cover(tri, twin, rotate=rotate, good=good, online=online, drop=drop, points=pts if split else None)
     oracle_check(tri, c)
 
 
@@ -262,14 +266,14 @@ def test_breadth_first_greedy_leaves_fewer_free() -> None:
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 30000)
     tri = m.triangles
     nb = ck.neighbors(half_edges(tri, m.n_points).twin, len(tri))
-    alive, deg = ck._peel(nb, len(tri))
+    alive, deg = ck.peel(nb, len(tri))
     active = alive & (deg == 3)
     free = {}
     for online in (0, 256):
         k = len(tri)
         work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
                 np.empty(k + 8, np.int64))
-        order = ck._bfs_order(nb, k) if online else np.arange(k)
+        order = ck._bfs_order(nb, np.zeros(k, np.int8), 0) if online else np.arange(k)
         mate = np.full(k, -1, np.int64)
         ck._greedy_matching(nb, active, k, np.zeros((k, 3), np.bool_), order, online, *work, mate)
         paired = np.flatnonzero(mate >= 0)
@@ -355,3 +359,21 @@ def test_undo_restores_the_logged_state() -> None:
         np.testing.assert_array_equal(a, b)
     nlog[0] = len(log) + 1  # overflowed: cannot be undone, nothing touched
     assert not ck._undo(log, nlog, mate, active, alive)
+
+
+def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch) -> None:
+    # the two halves of the split share nothing they write: matched side by side on
+    # two threads or one after the other, the cover is the same
+    from hammesh import threads
+
+    dom = bundled_domain("face")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
+    tri = m.triangles
+    twin = half_edges(tri, m.n_points).twin
+    one = cycle_cover(tri, twin, points=m.points, online=256)
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 500)
+    two = cycle_cover(tri, twin, points=m.points, online=256)
+    oracle_check(tri, two)
+    np.testing.assert_array_equal(one.is_cov, two.is_cov)
+    np.testing.assert_array_equal(one.cycle, two.cycle)
+    assert two.n_uncovered <= 0.01 * len(tri)
