@@ -15,7 +15,7 @@ from hammesh.postprocess._thm24_kernels import edge_class as _edge_class
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def neighbors(twin, m):
     nb = np.full((m, 3), -1, np.int64)
     for t in range(m):
@@ -26,7 +26,7 @@ def neighbors(twin, m):
     return nb
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _lca(x, y, fa, mate, parent, stamp, s):
     while True:
         if x >= 0:
@@ -38,7 +38,7 @@ def _lca(x, y, fa, mate, parent, stamp, s):
         x, y = y, x
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
     while _find(fa, v) != a:
         parent[v] = w
@@ -55,14 +55,135 @@ def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
     return tail
 
 
-@njit(cache=True)
-def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, budget):
+#: Kinds of augmenting search (``_augment``'s ``mode``).
+PLAIN = 0  # along dual edges between degree-3 triangles
+CHAIN = 1  # also through chains of degree-2 triangles (left uncovered when used)
+DROP = 2  # PLAIN, or drop one interior degree-3 triangle (left uncovered)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _chain_end(nb, active, alive, v, k):
+    """The degree-3 triangle reached from ``v`` across its side ``k`` through a chain
+    of degree-2 triangles (``(end, chain length)``; the neighbour itself, length 0,
+    if it has degree 3; end -1 if the chain dead-ends or comes back)."""
+    w = nb[v, k]
+    if w < 0 or not alive[w]:
+        return -1, 0
+    prev = v
+    cur = w
+    ln = 0
+    while not active[cur]:
+        nxt = -1
+        for j in range(3):
+            z = nb[cur, j]
+            if z >= 0 and alive[z] and z != prev:
+                nxt = z
+        prev = cur
+        cur = nxt
+        ln += 1
+        if cur < 0 or cur == w:
+            return -1, 0
+    if cur == v:
+        return -1, 0
+    return cur, ln
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _third(nb, u, a, b):
+    """The neighbour of ``u`` other than ``a`` and ``b`` (-1 unless exactly one)."""
+    z = -1
+    for k in range(3):
+        x = nb[u, k]
+        if x != a and x != b:
+            if z >= 0 or x < 0:
+                return -1
+            z = x
+    return z
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _log(log, nlog, i, mate, active, alive):
+    """Record triangle ``i``'s state before a change (``log`` rows ``(i, mate, active,
+    alive)``; ``nlog[0]`` rows used, past the end: no longer undoable)."""
+    n = nlog[0]
+    if n < log.shape[0]:
+        log[n, 0] = i
+        log[n, 1] = mate[i]
+        log[n, 2] = active[i]
+        log[n, 3] = alive[i]
+    nlog[0] = n + 1
+
+
+@njit(cache=True, nogil=True)
+def _undo(log, nlog, mate, active, alive):
+    """Restore the states recorded by ``_log``, newest first; False if it overflowed."""
+    n = nlog[0]
+    if n > log.shape[0]:
+        return False
+    for j in range(n - 1, -1, -1):
+        i = log[j, 0]
+        mate[i] = log[j, 1]
+        active[i] = log[j, 2] != 0
+        alive[i] = log[j, 3] != 0
+    nlog[0] = 0
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _drop(u, nb, active, alive, mate, log, nlog):
+    """Leave the degree-3 triangle ``u`` uncovered: it leaves the graph and its three
+    neighbours (all of degree 3) drop to degree 2, so none of them needs a matching
+    edge any more; the partner of a neighbour matched elsewhere is freed and
+    returned (-1 if none). Changes are logged (``_log``) when ``log`` has rows."""
+    keep = log.shape[0] > 0
+    if keep:
+        _log(log, nlog, u, mate, active, alive)
+    alive[u] = False
+    active[u] = False
+    mate[u] = -1
+    freed = -1
+    for k in range(3):
+        x = nb[u, k]
+        y = mate[x]
+        if keep:
+            _log(log, nlog, x, mate, active, alive)
+            if y >= 0 and y != u:
+                _log(log, nlog, y, mate, active, alive)
+        active[x] = False
+        if y >= 0:
+            mate[x] = -1
+            if y != u:
+                mate[y] = -1
+                freed = y
+    return freed
+
+
+@njit(cache=True, nogil=True)
+def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
+             nlog):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
     global (size m) but only the vertices this search touches are reset, so a search
     costs about what it explores. It gives up after ``budget`` touched vertices.
-    Returns ``(far end of the augmenting path or -1, next lca stamp)``.
+
+    ``mode``: ``PLAIN`` searches the dual edges between degree-3 (``active``)
+    triangles; ``CHAIN`` also steps through chains of degree-2 (``alive``, not
+    active) triangles to the degree-3 triangle at their far end (``_chain_end``,
+    found on the way: no chain graph is built); ``DROP`` searches like ``PLAIN``
+    and also stops at an odd (matched) vertex ``u`` reached from ``v`` whose third
+    neighbour ``z`` (neither ``v`` nor ``u``'s mate) is free: the path to ``v`` is
+    flipped (``r`` matched, ``v`` free) and ``u`` dropped (``_drop``: ``v``, ``u``'s
+    mate and ``z`` drop to degree 2 and need no partner), so one interior triangle
+    is left uncovered instead of a chain of boundary triangles. With ``take >= 0``
+    the search stops at ``u == take`` even if ``z`` is matched (its partner is
+    freed).
+
+    Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
+    applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
+    after a drop the partner freed (or -1); after a failed ``DROP`` search the first
+    odd vertex that ``take`` could drop (or -1). Every change is recorded in ``log``
+    (``_log``; an empty ``log``: not recorded).
     """
     n_t = 0
     head = 0
@@ -73,12 +194,17 @@ def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, 
     queue[tail] = r
     tail += 1
     found = -1
+    drop = False
+    extra = -1
     s = s0
     while head < tail and found < 0 and n_t < budget:
         v = queue[head]
         head += 1
         for k in range(3):
-            u = nb[v, k]
+            if mode == CHAIN:
+                u, _ = _chain_end(nb, active, alive, v, k)
+            else:
+                u = nb[v, k]
             if u < 0 or not active[u]:
                 continue
             if label[u] < 0:
@@ -90,6 +216,15 @@ def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, 
                     found = u
                     break
                 w = mate[u]
+                if mode == DROP:
+                    z = _third(nb, u, v, w)
+                    if z >= 0 and z != r and active[z]:
+                        if mate[z] < 0 or u == take:
+                            found = u
+                            drop = True
+                            break
+                        if extra < 0 and mate[z] != u:
+                            extra = u
                 label[w] = 0
                 touched[n_t] = w
                 n_t += 1
@@ -102,22 +237,27 @@ def _augment(r, nb, active, mate, parent, fa, label, stamp, s0, touched, queue, 
                 tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail)
     if found >= 0:
         v = found
+        keep = log.shape[0] > 0
         while v >= 0:
             pv = parent[v]
             nv = mate[pv]
+            if keep:
+                _log(log, nlog, v, mate, active, alive)
+                _log(log, nlog, pv, mate, active, alive)
             mate[v] = pv
             mate[pv] = v
             v = nv
+        extra = _drop(found, nb, active, alive, mate, log, nlog) if drop else -1
     for i in range(n_t):
         x = touched[i]
         label[x] = -1
         parent[x] = -1
         fa[x] = x
-    return found, s
+    return found, s, extra
 
 
-@njit(cache=True)
-def _peel(nb, m):
+@njit(cache=True, nogil=True)
+def peel(nb, m):
     """Leave out triangles that cannot lie on a cycle (at most one neighbour left)."""
     alive = np.ones(m, np.bool_)
     deg = np.zeros(m, np.int64)
@@ -147,15 +287,21 @@ def _peel(nb, m):
     return alive, deg
 
 
-@njit(cache=True)
-def _bfs_order(nb, m):
-    """Triangles in breadth-first order over the dual graph (each piece in turn)."""
-    order = np.empty(m, np.int64)
+@njit(cache=True, nogil=True)
+def _bfs_order(nb, side, half):
+    """Triangles with ``side[t] == half`` in breadth-first order over the dual edges
+    between them (each piece in turn)."""
+    m = nb.shape[0]
+    n = 0
+    for t in range(m):
+        if side[t] == half:
+            n += 1
+    order = np.empty(n, np.int64)
     seen = np.zeros(m, np.bool_)
     head = 0
     tail = 0
     for s in range(m):
-        if seen[s]:
+        if seen[s] or side[s] != half:
             continue
         seen[s] = True
         order[tail] = s
@@ -165,14 +311,14 @@ def _bfs_order(nb, m):
             head += 1
             for k in range(3):
                 u = nb[t, k]
-                if u >= 0 and not seen[u]:
+                if u >= 0 and not seen[u] and side[u] == half:
                     seen[u] = True
                     order[tail] = u
                     tail += 1
     return order
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stamp, queue, mate):
     """Karp-Sipser: match the degree-3 triangles among themselves, forced pairs first.
 
@@ -187,20 +333,27 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     it, made at once, finds one a few steps away (measured at 1.5 M triangles: 9,980
     triangles left free in Triangle's numbering without these searches, about 20 with).
     ``active``: the triangles to match (alive, of degree 3; with cells, not the
-    pinned ones); ``mate`` is completed in place. Returns the next lca stamp.
+    pinned ones; of one half when two threads match one half each: ``order`` lists
+    the triangles this call may touch); ``mate`` is completed in place. Returns the
+    next lca stamp.
     """
-    stack = np.empty(3 * m + 16, np.int64)  # a triangle is pushed at most three times
+    n = order.shape[0]
+    stack = np.empty(3 * n + 16, np.int64)  # a triangle is pushed at most three times
     touched = np.empty(online + 16, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
     s = 0
     hdeg = np.zeros(m, np.int64)
-    for t in range(m):
+    for i in range(n):
+        t = order[i]
         if active[t] and mate[t] < 0:
             for k in range(3):
                 u = nb[t, k]
                 if u >= 0 and active[u] and mate[u] < 0:
                     hdeg[t] += 1
     top = 0
-    for t in range(m):
+    for i in range(n):
+        t = order[i]
         if active[t] and hdeg[t] == 1:
             stack[top] = t
             top += 1
@@ -212,9 +365,9 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             if mate[t] >= 0:
                 continue
         else:
-            while scan < m and not (active[order[scan]] and mate[order[scan]] < 0 and hdeg[order[scan]] > 0):
+            while scan < n and not (active[order[scan]] and mate[order[scan]] < 0 and hdeg[order[scan]] > 0):
                 scan += 1
-            if scan >= m:
+            if scan >= n:
                 break
             t = order[scan]
         # partner: a good edge first, then the fewest free candidates of its own
@@ -231,7 +384,8 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             hdeg[t] = 0
             if online <= 0:
                 continue
-            far, s = _augment(t, nb, active, mate, parent, fa, label, stamp, s, touched, queue, online)
+            far, s, _x = _augment(t, nb, active, active, mate, parent, fa, label, stamp, s, touched, queue, online,
+                                  PLAIN, -1, nolog, nonlog)
             if far < 0:
                 continue
             # t and the path's far end are newly matched (the path's inner triangles
@@ -257,84 +411,119 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     return s
 
 
-@njit(cache=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, m):
-    """Augment through chains of degree-2 triangles; a chain used is left uncovered."""
-    # phase 2: a chain of degree-2 triangles between two degree-3 ones x, y may serve
-    # as a matching edge x-y at the price of leaving the chain uncovered
-    nbx = np.full((m, 3), -1, np.int64)
-    clen = np.zeros((m, 3), np.int64)
-    n_free0 = 0
-    for x in range(m):
-        if active[x] and mate[x] < 0:
-            n_free0 += 1
-    if n_free0 > 0:
-        touched2 = np.empty(2 * m + 16, np.int64)
-        queue2 = np.empty(2 * m + 16, np.int64)
-        for x in range(m):
-            if not active[x]:
-                continue
-            for k in range(3):
-                w = nb[x, k]
-                if w < 0 or not alive[w]:
-                    continue
-                prev = x
-                cur = w
-                ln = 0
-                while not active[cur]:
-                    nxt = -1
-                    for j in range(3):
-                        z = nb[cur, j]
-                        if z >= 0 and alive[z] and z != prev:
-                            nxt = z
-                    prev = cur
-                    cur = nxt
-                    ln += 1
-                    if cur < 0 or cur == w:
-                        break
-                if cur < 0 or cur == x or not active[cur]:
-                    continue
-                nbx[x, k] = cur
-                clen[x, k] = ln
-            for k in range(3):  # a simple graph: keep the cheapest edge to each end
-                for j in range(3):
-                    if j != k and nbx[x, j] >= 0 and nbx[x, j] == nbx[x, k]:
-                        if clen[x, j] < clen[x, k] or (clen[x, j] == clen[x, k] and j < k):
-                            nbx[x, k] = -1
-                            break
-        for t in range(m):  # few free triangles are left: search as far as it takes
-            if active[t] and mate[t] < 0:
-                _, s = _augment(t, nbx, active, mate, parent, fa, label, stamp, s, touched2, queue2, 2 * m + 8)
-        # matched through a chain: the chain's triangles are left uncovered
-        for x in range(m):
-            y = mate[x]
-            if not active[x] or y < x:
-                continue
-            direct = False
-            for k in range(3):
-                if nb[x, k] == y:
-                    direct = True
-            if direct:
-                continue
-            kk = -1
-            for k in range(3):
-                if nbx[x, k] == y and (kk < 0 or clen[x, k] < clen[x, kk]):
-                    kk = k
-            prev = x
-            cur = nb[x, kk]
-            while cur != y:
-                nxt = -1
-                for j in range(3):
-                    z = nb[cur, j]
-                    if z >= 0 and alive[z] and z != prev:
-                        nxt = z
-                alive[cur] = False
-                prev = cur
-                cur = nxt
+@njit(cache=True, nogil=True)
+def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, plain_budget, budget,
+                   rounds):
+    """Fix free degree-3 triangles by leaving interior triangles uncovered (``DROP``).
+
+    A degree-3 triangle the matching cannot pair (a parity defect: typically two
+    triangles with a single degree-3 neighbour each, next to the boundary) costs
+    either a chain of degree-2 triangles (``_chain_matching``: boundary triangles,
+    whose incenter sectors are the sparse mode's worst angles) or one dropped
+    interior triangle. From each free triangle an augmenting search of
+    ``plain_budget`` triangles comes first, then a ``DROP`` search of ``budget``
+    triangles, which pairs it along an augmenting path or drops the nearest triangle whose
+    third neighbour is free (two defects fixed by one interior triangle), whichever
+    it meets first; failing both, it drops the first triangle it can (the
+    defect moves: the partner freed is searched from in turn, at most ``rounds``
+    times). A sequence that ends with a triangle still free is undone (``_undo``):
+    drops that fix nothing would only add uncovered triangles.
+    Returns ``(next lca stamp, triangles dropped)``.
+    """
+    m = nb.shape[0]
+    n_drop = 0
+    log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
+    nlog = np.zeros(1, np.int64)
+    for t in range(m):
+        if not active[t] or mate[t] >= 0:
+            continue
+        r = t  # a longer augmenting path first: it leaves nothing uncovered
+        f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                             plain_budget, PLAIN, -1, log, nlog)
+        if f0 >= 0:
+            continue
+        nlog[0] = 0
+        fixed = False
+        drops = 0
+        for it in range(rounds + 1):
+            found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                       budget, DROP, -1, log, nlog)
+            if found < 0:
+                if extra < 0 or it == rounds:
+                    break
+                found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
+                                           queue, budget, DROP, extra, log, nlog)
+                if found < 0:  # the same search again: it stops at the same triangle
+                    break
+            if not alive[found]:
+                drops += 1
+            if extra < 0:
+                fixed = True
+                break
+            r = extra  # freed by the drop: an augmenting path first, then drop again
+            f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                 budget, PLAIN, -1, log, nlog)
+            if f2 >= 0:
+                fixed = True
+                break
+        if fixed or not _undo(log, nlog, mate, active, alive):
+            n_drop += drops
+    return s, n_drop
+
+
+@njit(cache=True, nogil=True)
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget):
+    """Augment through chains of degree-2 triangles; a chain used is left uncovered.
+
+    A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
+    matching edge x-y at the price of leaving the chain uncovered: ``CHAIN``
+    searches from the triangles still free find the chains as they go. Afterwards
+    each pair matched across a chain drops its shortest chain between them.
+    Returns the next lca stamp.
+    """
+    m = nb.shape[0]
+    hit = False
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                budget, CHAIN, -1, nolog, nonlog)
+            hit = hit or f >= 0
+    if not hit:
+        return s
+    for x in range(m):  # matched across a chain: its triangles are left uncovered
+        y = mate[x]
+        if not active[x] or y < x:
+            continue
+        direct = False
+        for k in range(3):
+            if nb[x, k] == y:
+                direct = True
+        if direct:
+            continue
+        kk = -1
+        best = 0
+        for k in range(3):
+            e, ln = _chain_end(nb, active, alive, x, k)
+            if e == y and (kk < 0 or ln < best):
+                kk = k
+                best = ln
+        prev = x
+        cur = nb[x, kk]
+        while cur != y:
+            nxt = -1
+            for j in range(3):
+                z = nb[cur, j]
+                if z >= 0 and alive[z] and z != prev:
+                    nxt = z
+            alive[cur] = False
+            prev = cur
+            cur = nxt
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _cover_edges(nb, alive, mate, m):
     """Alive-alive dual edges that are not matching edges."""
     # the cover: alive-alive dual edges that are not matching edges
@@ -351,7 +540,7 @@ def _cover_edges(nb, alive, mate, m):
     return is_cov, cdeg
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
     """Drop the shortest cover arc between two free degree-3 triangles."""
     # repair: join two free degree-3 triangles by dropping the arc between them
@@ -398,7 +587,7 @@ def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
 
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _final_peel(nb, twin, is_cov, cdeg, alive, m):
     """Peel what still has cover degree other than 2."""
     stack = np.empty(m + 1, np.int64)
@@ -432,7 +621,7 @@ def _final_peel(nb, twin, is_cov, cdeg, alive, m):
     return n_unc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def smooth_cells(nb, cell, quad, passes):
     """Move a triangle into the cell of two of its neighbours, so that few triangles
     have two dual edges across cell borders (each triangle has one matching edge,
@@ -464,7 +653,7 @@ def smooth_cells(nb, cell, quad, passes):
     return moved
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _pin_borders(nb, alive, deg, cell, mate, m):
     """Match the dual edges across cell borders (both triangles of degree 3, free):
     the cover's cycles then stay inside the cells. Returns the pairs pinned."""
@@ -482,7 +671,7 @@ def _pin_borders(nb, alive, deg, cell, mate, m):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cut_cell_borders(nb, cell):
     """Remove from the dual graph (in place) the edges of triangles that could not
     keep their cycle inside their cell: a triangle with two or three dual edges
@@ -528,7 +717,7 @@ def cut_cell_borders(nb, cell):
     return n_cut
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _cell_neighbors(nb, cell):
     """``nb`` without the dual edges across cell borders."""
     m = nb.shape[0]
@@ -541,62 +730,112 @@ def _cell_neighbors(nb, cell):
     return out
 
 
-@njit(cache=True)
-def dual_cover(twin, m, budget, arc_limit, good, online, cell):
-    """Vertex-disjoint cycles of the dual graph covering most triangles.
+@njit(cache=True, nogil=True)
+def neighbors_into(twin, nb, lo, hi):
+    """``nb[t, k]``: the triangle across side k of t (-1 on the boundary), rows lo..hi."""
+    for t in range(lo, hi):
+        for k in range(3):
+            g = twin[3 * t + k]
+            nb[t, k] = g // 3 if g >= 0 else -1
 
-    Gopi & Eppstein's observation, made to work with boundaries: in a graph of
-    degrees 2 and 3 the edges *not* in a matching that pairs every degree-3 vertex
-    (with a degree-3 neighbour) form a 2-factor. Steps:
 
-    1. peel: a triangle with at most one (remaining) neighbour cannot lie on a cycle
-       (ears, and what they leave behind) and is left uncovered;
-    2. with cells (``cell`` (m,) int64, one id per triangle; empty: none): match
-       every dual edge across a cell border first (``_pin_borders``), so that the
-       cover's cycles stay inside the cells; then match inside each cell (greedy and
-       searches confined to the cell, so bounded by its size); what is left free
-       searches across borders (unpinning one border edge per path);
-    3. match the degree-3 triangles: Karp-Sipser greedy (a triangle with a single
-       free candidate is matched first), then augmenting searches from each free one;
-    4. cover = the remaining dual edges not in the matching; a degree-3 triangle still
-       free is repaired by dropping the shortest cover arc from it to another such
-       triangle (its inner triangles are left uncovered);
-    5. peel again whatever still has cover degree other than 2.
+@njit(cache=True, nogil=True)
+def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, label, stamp):
+    """Match the degree-3 triangles of one half (``side[t] == half``) among themselves.
 
-    ``good`` (m, 3) bool steers the greedy matching's free choices (``_greedy_matching``).
-
-    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered)``.
+    The greedy (``_greedy_matching``) sweeps the half breadth-first (with ``online``
+    searches; ``online == 0``: in triangle order, as before session 6), then an
+    augmenting search of ``budget`` triangles starts from each triangle still free.
+    Everything stays inside the half: the two halves of a split share no triangle
+    this writes, so they run on two threads side by side (the arrays are shared), and
+    the result does not depend on the number of threads. Returns the next lca stamp.
     """
-    nb = neighbors(twin, m)
-    if cell.shape[0] == m and m > 0:
-        cut_cell_borders(nb, cell)
-    alive, deg = _peel(nb, m)
-    parent = np.full(m, -1, np.int64)
-    fa = np.arange(m)
-    label = np.full(m, -1, np.int64)
-    stamp = np.zeros(m, np.int64)
-    queue = np.empty(m + 8, np.int64)
-    mate = np.full(m, -1, np.int64)
-    touched = np.empty(budget + 8, np.int64)
-    active = np.zeros(m, np.bool_)  # alive triangles of (alive) degree 3 are matched
+    m = nb.shape[0]
+    act = np.zeros(m, np.bool_)
     for t in range(m):
-        active[t] = alive[t] and deg[t] == 3
-    if cell.shape[0] == m and m > 0:
-        _pin_borders(nb, alive, deg, cell, mate, m)
-        nbc = _cell_neighbors(nb, cell)
-        inner = active & (mate < 0)  # the pinned pairs stay out of the cell's searches
-        order = _bfs_order(nbc, m) if online > 0 else np.arange(m)
-        s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
-        for t in range(m):
-            if inner[t] and mate[t] < 0:
-                _, s = _augment(t, nbc, inner, mate, parent, fa, label, stamp, s, touched, queue, budget)
+        act[t] = active[t] and side[t] == half
+    queue = np.empty(m + 8, np.int64)
+    if online > 0:
+        order = _bfs_order(nb, side, half)
     else:
-        order = _bfs_order(nb, m) if online > 0 else np.arange(m)
-        s = _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stamp, queue, mate)
+        n = 0
+        for t in range(m):
+            if act[t]:
+                n += 1
+        order = np.empty(n, np.int64)
+        n = 0
+        for t in range(m):
+            if act[t]:
+                order[n] = t
+                n += 1
+    s = _greedy_matching(nb, act, m, good, order, online, parent, fa, label, stamp, queue, mate)
+    touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for i in range(order.shape[0]):
+        t = order[i]
+        if act[t] and mate[t] < 0:
+            _f, s, _x = _augment(t, nb, act, act, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog)
+    return s
+
+
+@njit(cache=True, nogil=True)
+def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent, fa, label, stamp):
+    """The matching inside quadtree cells (``cycle_cover(..., cell_size=)``): every dual
+    edge across a cell border is matched first (``_pin_borders``), so that the cover's
+    cycles stay inside the cells; then the greedy and its searches run inside each cell
+    (bounded by its size). Returns the next lca stamp."""
+    m = nb.shape[0]
+    _pin_borders(nb, alive, deg, cell, mate, m)
+    nbc = _cell_neighbors(nb, cell)
+    inner = active & (mate < 0)  # the pinned pairs stay out of the cell's searches
+    one = np.zeros(m, np.int8)
+    order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m)
+    queue = np.empty(m + 8, np.int64)
+    s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
+    touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for t in range(m):
+        if inner[t] and mate[t] < 0:
+            _f, s, _x = _augment(t, nbc, inner, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog)
+    return s
+
+
+@njit(cache=True, nogil=True)
+def finish_cover(nb, twin, active, alive, mate, parent, fa, label, stamp, s, budget, arc_limit, plain_budget,
+                 drop_budget, drop_rounds):
+    """From the matchings of the halves (or cells) to the cover.
+
+    Searches of ``budget`` triangles over the whole graph from each triangle still
+    free (those left at the split between the halves, mostly: the join across it);
+    the parity defects (``_drop_matching``: searches of ``plain_budget``, then of
+    ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then
+    chains (``_chain_matching``); the cover is every alive dual edge not in the
+    matching; a degree-3 triangle still free is repaired by dropping the shortest
+    cover arc from it to another (``_repair``) and whatever still has cover degree
+    other than 2 is peeled (``_final_peel``).
+
+    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered, n_dropped)``.
+    """
+    m = nb.shape[0]
+    queue = np.empty(m + 8, np.int64)
+    touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
     for t in range(m):
         if active[t] and mate[t] < 0:
-            _, s = _augment(t, nb, active, mate, parent, fa, label, stamp, s, touched, queue, budget)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, m)
+            _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog)
+    n_drop = 0
+    if drop_rounds >= 0:
+        touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
+        s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
+                                   plain_budget, drop_budget, drop_rounds)
+    touched_c = np.empty(2 * m + 16, np.int64)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8)
     n_free = 0
     for t in range(m):
         if active[t] and mate[t] < 0:
@@ -604,17 +843,17 @@ def dual_cover(twin, m, budget, arc_limit, good, online, cell):
     is_cov, cdeg = _cover_edges(nb, alive, mate, m)
     _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m)
     n_unc = _final_peel(nb, twin, is_cov, cdeg, alive, m)
-    return is_cov, n_free, n_unc
+    return is_cov, n_free, n_unc, n_drop
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def edge_classes(qa, qb, out):
     """``_thm24_kernels.edge_class`` of each pair of packed quadtree coordinates."""
     for i in range(qa.shape[0]):
         out[i] = _edge_class(qa[i], qb[i])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cycle_ids(twin, is_cov, m):
     """Cycle id of each covered triangle (-1 if uncovered) and the number of cycles."""
     cyc = np.full(m, -1, np.int64)
@@ -647,7 +886,7 @@ def cycle_ids(twin, is_cov, m):
     return cyc, n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
     """Merge cover cycles for free by re-matching around vertices.
 

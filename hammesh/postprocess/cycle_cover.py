@@ -6,7 +6,7 @@ cycles through every vertex). The dual graph of a mesh with boundary has degrees
 here ears (and what peeling them leaves) stay uncovered, the degree-3 triangles are
 matched among themselves, the rest of the dual edges are the cover, and the few
 defects a maximum matching leaves are repaired locally (see
-``_sparse_kernels.dual_cover``). Everything is O(m) in numba; the augmenting searches
+``_cover_kernels.finish_cover``). Everything is O(m) in numba; the augmenting searches
 are bounded by ``budget`` labelled triangles each. Finally cycles are merged for free
 where the matching can be rotated around a vertex (``rotate``).
 """
@@ -14,19 +14,35 @@ where the matching can be rotated around a vertex (``rotate``).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
+from hammesh import threads
 from hammesh.postprocess import _cover_kernels as _k
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
+from hammesh.threads import row_ranges, run_all
 
-__all__ = ["CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE"]
+__all__ = [
+    "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
+    "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS",
+]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
 #: (``cycle_cover(..., points=)``); 0: not confined. Off by default: measured at
 #: 100k triangles (docs/sparse.md) confinement cut the sparse cycle's k = 64 edge cut
 #: from 2.1-2.2x METIS's to 1.8-2.0x only, for 1.1-1.6x the Steiner points.
 CELL_SIZE = 0
+
+#: Triangles the searches from a parity defect may label (``_cover_kernels._drop_matching``):
+#: a longer augmenting search first, then one that may drop an interior triangle; and
+#: how many times a defect a drop moves may be searched from again. Measured at 1.5 M
+#: triangles (32 defects; loaded): searches of 20 k / 20 k / 100 k triangles then drop
+#: searches of 20 k / 100 k / 100 k leave 122 / 34 / 12 triangles uncovered, the rest
+#: going to chains of boundary triangles; the searches cost ~0.35 s CPU at 100 k.
+DEFECT_SEARCH_BUDGET = 100_000
+DROP_BUDGET = 100_000
+DROP_ROUNDS = 2
 
 #: Triangles an augmenting search started by the greedy matching may label (``online``).
 ONLINE_BUDGET = 256
@@ -53,6 +69,9 @@ class CycleCover:
         Degree-3 triangles the matching left free (before the local repair).
     n_rotations : int
         Cycles merged away by re-matching around vertices.
+    n_dropped : int
+        Interior (degree-3) triangles left uncovered to fix the matching's parity
+        defects, instead of chains of boundary triangles (``drop``).
     quad : (m,) int64 or None
         Packed quadtree coordinates of each triangle (``_thm24_kernels.quadtree_coords``)
         when the cycles were confined to cells: ``join_classes`` orders the joins by them.
@@ -65,6 +84,7 @@ class CycleCover:
     n_unmatched: int
     n_rotations: int = 0
     quad: np.ndarray | None = None
+    n_dropped: int = 0
 
 
 def cycle_cover(
@@ -78,6 +98,7 @@ def cycle_cover(
     good: np.ndarray | None = None,
     points: np.ndarray | None = None,
     cell_size: int | None = None,
+    drop: bool = True,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -113,6 +134,12 @@ def cycle_cover(
         cell, as the incircle mode's compact tree does.
     cell_size : int, optional
         Default ``CELL_SIZE`` (read at call time).
+    drop : bool
+        Fix the degree-3 triangles no augmenting path can match by dropping interior
+        triangles (each leaves the cover, its three neighbours then need no matching
+        edge: ``_cover_kernels._drop_matching``) before chains of degree-2 triangles
+        are used: those are boundary triangles, whose incenter sectors cost the sparse
+        mode its worst angles. False: chains only (the cover before session 8).
 
     Returns
     -------
@@ -139,7 +166,29 @@ def cycle_cover(
     if points is not None and cell_size > 0 and m > 0 and np.shape(points)[1] == 2:
         quad, cell = _cells(np.ascontiguousarray(points, dtype=np.float64), triangles, tw, m, int(cell_size))
     no_cell = np.zeros(0, np.int64)
-    is_cov, n_free, n_unc = _k.dual_cover(tw, m, int(budget), limit, g, int(online), no_cell if cell is None else cell)
+    spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    nb = np.empty((m, 3), np.int64)
+    run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
+    if cell is not None:
+        _k.cut_cell_borders(nb, cell)
+    alive, deg = _k.peel(nb, m)
+    active = alive & (deg == 3)
+    mate = np.full(m, -1, np.int64)
+    work = (np.full(m, -1, np.int64), np.arange(m), np.full(m, -1, np.int64), np.zeros(m, np.int64))
+    if cell is not None:
+        s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
+    else:
+        # from ONLINE_MIN_TRIANGLES on (planar) the two halves of the count quadtree's
+        # top split are matched side by side, then joined across the split
+        split = online > 0 and points is not None and np.shape(points)[1] == 2
+        side = _halves(np.ascontiguousarray(points, dtype=np.float64), triangles, spans) if split else np.zeros(m, np.int8)
+        calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
+                 for half in ((0, 1) if split else (0,))]
+        s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
+    is_cov, n_free, n_unc, n_drop = _k.finish_cover(
+        nb, tw, active, alive, mate, *work, s, int(budget), limit, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
+        DROP_ROUNDS if drop else -1,
+    )
     cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:
@@ -154,7 +203,22 @@ def cycle_cover(
         n_unmatched=int(n_free),
         n_rotations=n_rot,
         quad=quad,
+        n_dropped=int(n_drop),
     )
+
+
+def _halves(points: np.ndarray, triangles: np.ndarray, spans: list) -> np.ndarray:
+    """Side (0 or 1, int8) of each triangle in the top split of the count quadtree
+    (``_thm24_kernels.quadtree_coords``): the axis whose top bit halves the triangles
+    more evenly, as the compact forest splits them."""
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    q = quadtree_coords(points, tri, spans=spans)[:, 0]
+    m = len(q)
+    bx, by = 2 * CELL_BITS - 1, CELL_BITS - 1
+    nx = int(np.count_nonzero(q & (1 << bx)))
+    ny = int(np.count_nonzero(q & (1 << by)))
+    bit = bx if abs(2 * nx - m) <= abs(2 * ny - m) else by
+    return ((q >> bit) & 1).astype(np.int8)
 
 
 def _cells(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, m: int, size: int):

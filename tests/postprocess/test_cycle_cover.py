@@ -114,8 +114,13 @@ def punched_delaunay(draw):
     return pts[used], tri.reshape(-1, 3).astype(np.int64), rng
 
 
-@given(case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans(), online=st.sampled_from([0, 4, 256]))
-def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, online: int) -> None:
+@given(
+    case=punched_delaunay(), rotate=st.booleans(), use_good=st.booleans(), online=st.sampled_from([0, 4, 256]),
+    drop=st.booleans(), split=st.booleans(),
+)
+def test_cover_matches_brute_force_oracle(
+    case, rotate: bool, use_good: bool, online: int, drop: bool, split: bool
+) -> None:
     pts, tri, rng = case
     if len(tri) == 0:
         return
@@ -126,7 +131,9 @@ def test_cover_matches_brute_force_oracle(case, rotate: bool, use_good: bool, on
         inner = twin >= 0
         g[inner] = g[inner] & g[twin[inner]]
         good = g
-    c = cycle_cover(tri, twin, rotate=rotate, good=good, online=online)
+    # with points (and online > 0) the two halves of the quadtree's top split are matched
+    # apart, then joined across it
+    c = cycle_cover(tri, twin, rotate=rotate, good=good, online=online, drop=drop, points=pts if split else None)
     oracle_check(tri, c)
 
 
@@ -259,14 +266,14 @@ def test_breadth_first_greedy_leaves_fewer_free() -> None:
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 30000)
     tri = m.triangles
     nb = ck.neighbors(half_edges(tri, m.n_points).twin, len(tri))
-    alive, deg = ck._peel(nb, len(tri))
+    alive, deg = ck.peel(nb, len(tri))
     active = alive & (deg == 3)
     free = {}
     for online in (0, 256):
         k = len(tri)
         work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
                 np.empty(k + 8, np.int64))
-        order = ck._bfs_order(nb, k) if online else np.arange(k)
+        order = ck._bfs_order(nb, np.zeros(k, np.int8), 0) if online else np.arange(k)
         mate = np.full(k, -1, np.int64)
         ck._greedy_matching(nb, active, k, np.zeros((k, 3), np.bool_), order, online, *work, mate)
         paired = np.flatnonzero(mate >= 0)
@@ -306,3 +313,67 @@ def test_matching_defects_are_repaired(seed: int) -> None:
     assert c.n_unmatched > 0
     h = hammesh.hamiltonian(hammesh.Mesh(points=pts, triangles=tri), mode="sparse")
     assert h.report["verified"] and h.report["unmatched"] > 0
+
+
+@pytest.mark.parametrize("name", ["face", "double_hex", "square_circle_hole"])
+def test_drops_leave_fewer_boundary_triangles_uncovered(name: str) -> None:
+    # parity defects fixed by longer augmenting searches, then by dropping interior
+    # triangles, before chains of boundary triangles: fewer boundary triangles off
+    # the cover, every dropped triangle an interior one (three neighbours), the
+    # cover still valid
+    dom = bundled_domain(name)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
+    tri = m.triangles
+    twin = half_edges(tri, m.n_points).twin
+    boundary = (twin.reshape(-1, 3) < 0).any(axis=1)
+    n_nb = (twin.reshape(-1, 3) >= 0).sum(axis=1)
+    chains = cycle_cover(tri, twin, drop=False)
+    drops = cycle_cover(tri, twin, drop=True)
+    oracle_check(tri, drops)
+    lost = {}
+    for key, c in (("chains", chains), ("drops", drops)):
+        lost[key] = int((boundary & (c.cycle < 0)).sum())
+    assert chains.n_dropped == 0
+    assert lost["drops"] < lost["chains"]
+    assert int(((c := drops).cycle < 0)[n_nb == 3].sum()) >= c.n_dropped
+
+
+def test_undo_restores_the_logged_state() -> None:
+    # a drop sequence that fixes nothing is undone: every logged triangle gets back
+    # its partner and flags, newest change first
+    from hammesh.postprocess import _cover_kernels as ck
+
+    rng = np.random.default_rng(5)
+    m = 40
+    mate = rng.integers(-1, m, m)
+    active = rng.random(m) < 0.5
+    alive = rng.random(m) < 0.5
+    before = (mate.copy(), active.copy(), alive.copy())
+    log = np.empty((64, 4), np.int64)
+    nlog = np.zeros(1, np.int64)
+    for i in rng.integers(0, m, 30):  # repeated triangles: the oldest record wins
+        ck._log(log, nlog, i, mate, active, alive)
+        mate[i], active[i], alive[i] = rng.integers(-1, m), not active[i], not alive[i]
+    assert ck._undo(log, nlog, mate, active, alive)
+    for a, b in zip((mate, active, alive), before):
+        np.testing.assert_array_equal(a, b)
+    nlog[0] = len(log) + 1  # overflowed: cannot be undone, nothing touched
+    assert not ck._undo(log, nlog, mate, active, alive)
+
+
+def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch) -> None:
+    # the two halves of the split share nothing they write: matched side by side on
+    # two threads or one after the other, the cover is the same
+    from hammesh import threads
+
+    dom = bundled_domain("face")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
+    tri = m.triangles
+    twin = half_edges(tri, m.n_points).twin
+    one = cycle_cover(tri, twin, points=m.points, online=256)
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 500)
+    two = cycle_cover(tri, twin, points=m.points, online=256)
+    oracle_check(tri, two)
+    np.testing.assert_array_equal(one.is_cov, two.is_cov)
+    np.testing.assert_array_equal(one.cycle, two.cycle)
+    assert two.n_uncovered <= 0.01 * len(tri)
