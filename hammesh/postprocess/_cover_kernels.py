@@ -748,7 +748,10 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     augmenting search of ``budget`` triangles starts from each triangle still free.
     Everything stays inside the half: the two halves of a split share no triangle
     this writes, so they run on two threads side by side (the arrays are shared), and
-    the result does not depend on the number of threads. Returns the next lca stamp.
+    the result does not depend on the number of threads. The parity defects are left
+    to ``finish_cover``: fixed inside the halves on two threads (tried) they cost
+    more, as the defects left at the split then go to chains. Returns the next lca
+    stamp.
     """
     m = nb.shape[0]
     act = np.zeros(m, np.bool_)
@@ -901,27 +904,28 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
     cells first.
 
     Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
-    returns the number of cycles merged away.
+    returns the number of cycles merged away. One pass merges what more would: on the
+    16k corpus and at 1.5 M triangles a second pass merged no cycle (it cost 0.06 s).
     """
     m = tri.shape[0]
     vh = np.full(n_points, -1, np.int64)
-    for t in range(m):
-        for k in range(3):
-            vh[tri[t, k]] = 3 * t + k
     uf = np.arange(max(n_cyc, 1))
     spokes = np.empty(32, np.int64)
     roots = np.empty(16, np.int64)
     merged = 0
     use_cell = cell.shape[0] == m
     skip = np.zeros(n_points, np.bool_)
-    for _ in range(passes):
+    for it in range(passes):
         before = merged
         # spokes alternate at v iff every triangle around v has its matched (non-cover)
         # edge at v, i.e. v is no triangle's apex (the corner opposite that edge):
-        # a cheap sequential prefilter before walking rings
+        # a cheap sequential prefilter before walking rings (in the same pass as each
+        # vertex's half-edge, the first time)
         skip[:] = False
         for t in range(m):
             for k in range(3):
+                if it == 0:
+                    vh[tri[t, k]] = 3 * t + k
                 if cyc[t] < 0:
                     skip[tri[t, k]] = True
                 elif not is_cov[3 * t + k]:

@@ -181,7 +181,9 @@ def cycle_cover(
         # from ONLINE_MIN_TRIANGLES on (planar) the two halves of the count quadtree's
         # top split are matched side by side, then joined across the split
         split = online > 0 and points is not None and np.shape(points)[1] == 2
-        side = _halves(np.ascontiguousarray(points, dtype=np.float64), triangles, spans) if split else np.zeros(m, np.int8)
+        side = np.zeros(m, np.int8)
+        if split:
+            side = _halves(np.ascontiguousarray(points, dtype=np.float64), triangles, spans)
         calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
@@ -193,7 +195,9 @@ def cycle_cover(
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
-        n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, 2, no_cell if cell is None else cell))
+        n_rot = int(
+            _k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, 1, no_cell if cell is None else cell)
+        )
         n_cyc -= n_rot
     return CycleCover(
         is_cov=is_cov,
