@@ -3,12 +3,13 @@
 Meshes the plate with two holes of ``bench_partition.py`` with Triangle (min angle
 30) at about ``--target`` triangles (default 1.5 M), timing Triangle (the peer, first
 call in this process), then times ``cycle_cover`` on it: the first call (kernels
-loaded from numba's cache), then ``--repeat`` rounds alternating the current cover
-with ``online=0`` (the matching before session 6: Triangle's numbering, augmenting
-searches afterwards), so both are measured under the same load. Prints each time,
-the ratios cover / Triangle, and the cover's shape: cycles, uncovered triangles,
-triangles left free by the matching, and the largest cycle's share (a winding
-cover: issue 14).
+loaded from numba's cache), then ``--repeat`` rounds of three settings under the same
+load: the current cover (the two halves of the quadtree's top split on two threads,
+parity defects fixed by dropped interior triangles), the same on one thread (no
+points: no split), and without drops (``drop=False``: chains of boundary triangles).
+Prints wall and process CPU seconds, the ratios to Triangle, and the cover's shape:
+cycles, uncovered triangles (those with a boundary edge, those dropped), and the
+largest cycle's share (a winding cover: issue 14).
 
     python benchmarks/bench_cover.py [--target 1500000] [--repeat 3]
     python benchmarks/bench_cover.py --cells 0,1024,256 [--target 100000]
@@ -100,27 +101,36 @@ def main() -> None:
     tri = mesh.triangles
     twin = half_edges(tri, mesh.n_points).twin
 
-    def run(online: int):
-        t = time.perf_counter()
-        c = cycle_cover(tri, twin, online=online)
-        dt = time.perf_counter() - t
-        big = np.bincount(c.cycle[c.cycle >= 0]).max() if c.n_cycles else 0
-        return dt, c, big / len(tri)
+    pts = mesh.points
+    boundary = (twin.reshape(-1, 3) < 0).any(axis=1)
+    variants = {  # name: cycle_cover's keywords
+        "current": dict(points=pts),  # two halves on two threads, parity defects fixed by drops
+        "one thread": dict(),  # no points: no split, the whole mesh in one call
+        "no drops": dict(points=pts, drop=False),  # parity defects through chains of boundary triangles
+    }
 
-    dt, c, share = run(256)
+    def run(kw: dict):
+        t, c0 = time.perf_counter(), time.process_time()
+        c = cycle_cover(tri, twin, online=256, **kw)
+        dt, cpu = time.perf_counter() - t, time.process_time() - c0
+        big = np.bincount(c.cycle[c.cycle >= 0]).max() if c.n_cycles else 0
+        return dt, cpu, c, big / len(tri)
+
+    def shape(c, share) -> str:
+        return (f"cycles {c.n_cycles:,}, uncovered {c.n_uncovered} ({int((boundary & (c.cycle < 0)).sum())} with a "
+                f"boundary edge, {c.n_dropped} dropped), largest cycle {share:.1%}")
+
+    dt, cpu, c, share = run(variants["current"])
     print(f"m = {len(tri):,}; Triangle (quality_mesh, first call) {t_tri:.3f} s")
-    print(f"cover, first call: {dt:.3f} s = {dt / t_tri:.3f} x Triangle; cycles {c.n_cycles:,}, "
-          f"uncovered {c.n_uncovered}, unmatched {c.n_unmatched}, largest cycle {share:.1%} of the triangles")
-    best = {256: np.inf, 0: np.inf}
+    print(f"cover, first call: {dt:.3f} s ({cpu:.3f} s CPU) = {dt / t_tri:.3f} x Triangle; {shape(c, share)}")
+    best = {k: (np.inf, np.inf) for k in variants}
     for _ in range(args.repeat):
-        for online in (0, 256):
-            dt, c, share = run(online)
-            best[online] = min(best[online], dt)
-            name = "current" if online else "online=0"
-            print(f"  {name:8s} {dt:.3f} s: cycles {c.n_cycles:,}, uncovered {c.n_uncovered}, "
-                  f"largest cycle {share:.1%}", flush=True)
-    print(f"best of {args.repeat}: current {best[256]:.3f} s = {best[256] / t_tri:.3f} x Triangle; "
-          f"online=0 {best[0]:.3f} s = {best[0] / t_tri:.3f} x Triangle; speed-up {best[0] / best[256]:.2f}x")
+        for name, kw in variants.items():
+            dt, cpu, c, share = run(kw)
+            best[name] = (min(best[name][0], dt), min(best[name][1], cpu))
+            print(f"  {name:10s} {dt:.3f} s, {cpu:.3f} s CPU: {shape(c, share)}", flush=True)
+    for name, (dt, cpu) in best.items():
+        print(f"best of {args.repeat}, {name:10s}: {dt:.3f} s = {dt / t_tri:.3f} x Triangle ({cpu:.3f} s CPU)")
 
 
 if __name__ == "__main__":
