@@ -6,9 +6,9 @@ rotations. The constructions run on these; the certificates (``hammesh.verify``)
 find the same facts with their own code.
 """
 
-from hammesh.halfedge._kernels import half_edge_twins, half_edge_twins_packed, orient_ccw
+from hammesh.halfedge._kernels import bucket_half_edges_into, half_edge_twins, half_edge_twins_packed, orient_ccw
 from hammesh.halfedge.input_mesh import HalfEdges, half_edges, mesh_arrays, prepare_mesh
 
 #: the kernels other packages call directly (strips' dual graph, sparse mode, point sets)
-__all__ = ["HalfEdges", "half_edges", "mesh_arrays", "prepare_mesh", "half_edge_twins", "half_edge_twins_packed",
+__all__ = ["HalfEdges", "half_edges", "mesh_arrays", "prepare_mesh", "half_edge_twins", "half_edge_twins_packed", "bucket_half_edges_into",
            "orient_ccw"]

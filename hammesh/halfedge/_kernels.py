@@ -277,6 +277,42 @@ def half_edge_twins(tri, n_points):
     return half_edge_twins_reference(tri, n_points)
 
 
+@njit(cache=True, nogil=True)
+def bucket_half_edges_into(tri, start, mark, keys):
+    """Counting sort of the half-edges ``h = 3 t + k`` of ``tri`` by their lesser vertex.
+
+    Key of a half-edge ``a -> b``: ``max(a, b) << 33 | (a > b) << 32 | h``. Afterwards
+    bucket ``v`` is ``keys[start[v - 1]:start[v]]`` (``start[-1]`` read as 0: each
+    ``start[v]`` is the end of bucket ``v``) and ``mark`` (one per vertex, any integer
+    dtype) is -1, ready for a pairing pass that marks the first half of each edge
+    (:func:`half_edge_twins_packed`; the strip encoder's records,
+    ``hammesh.strips._halves_kernels.pair_records_into``). ``start``: ``(n_points + 1,)``,
+    ``mark``: ``(n_points,)``, ``keys``: ``(3 m,)`` int64; needs ``3 m < 2**32``.
+    """
+    m = tri.shape[0]
+    n_points = mark.shape[0]
+    for v in range(n_points + 1):
+        start[v] = 0
+    for t in range(m):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        start[min(a, b) + 1] += 1
+        start[min(b, c) + 1] += 1
+        start[min(c, a) + 1] += 1
+    for v in range(n_points):
+        start[v + 1] += start[v]
+        mark[v] = -1
+    for t in range(m):  # afterwards start[v] is the end of bucket v (start[v + 1] before)
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            lo = min(a, b)
+            f = start[lo]
+            keys[f] = (np.int64(max(a, b)) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
+            start[lo] = f + 1
+
+
 @njit(cache=True)
 def half_edge_twins_packed(tri, n_points, twin, keys):
     """:func:`half_edge_twins` with packed keys; False on any problem.
@@ -290,26 +326,9 @@ def half_edge_twins_packed(tri, n_points, twin, keys):
     """
     m = tri.shape[0]
     nh = 3 * m
-    start = np.zeros(n_points + 1, np.int64)
-    for t in range(m):
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        start[min(a, b) + 1] += 1
-        start[min(b, c) + 1] += 1
-        start[min(c, a) + 1] += 1
+    start = np.empty(n_points + 1, np.int64)
     mark = np.empty(n_points, np.int64)
-    for v in range(n_points):
-        start[v + 1] += start[v]
-        mark[v] = -1
-    for t in range(m):  # afterwards start[v] is the end of bucket v (start[v + 1] before)
-        for k in range(3):
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            lo = min(a, b)
-            f = start[lo]
-            keys[f] = (max(a, b) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
-            start[lo] = f + 1
+    bucket_half_edges_into(tri, start, mark, keys)
     for h in range(nh):
         twin[h] = -1
     mask = (1 << 32) - 1

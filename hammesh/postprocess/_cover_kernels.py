@@ -784,6 +784,20 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
 
 
 @njit(cache=True, nogil=True)
+def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, queue, budget):
+    """A plain search of at most ``budget`` triangles (``_augment``) from every active
+    triangle still unmatched, in index order; returns the next lca stamp."""
+    touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for t in range(nb.shape[0]):
+        if active[t] and mate[t] < 0:
+            _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog)
+    return s
+
+
+@njit(cache=True, nogil=True)
 def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent, fa, label, stamp):
     """The matching inside quadtree cells (``cycle_cover(..., cell_size=)``): every dual
     edge across a cell border is matched first (``_pin_borders``), so that the cover's
@@ -797,14 +811,7 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
     order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m)
     queue = np.empty(m + 8, np.int64)
     s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
-    touched = np.empty(budget + 8, np.int64)
-    nolog = np.empty((0, 4), np.int64)
-    nonlog = np.zeros(1, np.int64)
-    for t in range(m):
-        if inner[t] and mate[t] < 0:
-            _f, s, _x = _augment(t, nbc, inner, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog)
-    return s
+    return _augment_every_free(nbc, inner, alive, mate, parent, fa, label, stamp, s, queue, budget)
 
 
 @njit(cache=True, nogil=True)
@@ -825,13 +832,7 @@ def finish_cover(nb, twin, active, alive, mate, parent, fa, label, stamp, s, bud
     """
     m = nb.shape[0]
     queue = np.empty(m + 8, np.int64)
-    touched = np.empty(budget + 8, np.int64)
-    nolog = np.empty((0, 4), np.int64)
-    nonlog = np.zeros(1, np.int64)
-    for t in range(m):
-        if active[t] and mate[t] < 0:
-            _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog)
+    s = _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, queue, budget)
     n_drop = 0
     if drop_rounds >= 0:
         touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)

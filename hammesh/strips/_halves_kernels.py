@@ -18,6 +18,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from hammesh.halfedge import bucket_half_edges_into
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN, REC_WIDTH
 from hammesh.strips._numba import kernel
 
@@ -59,8 +60,9 @@ def pair_records_into(tri, start, mark, keys, rec, loose):
 
     Half-edges are bucketed by their lesser vertex; a key is ``other vertex << 33 |
     (origin is the upper vertex) << 32 | h``; inside a bucket a mark per other vertex
-    pairs an edge's two halves in one read each (as
-    :func:`hammesh.halfedge.half_edge_twins_packed`, whose layout this keeps; here the
+    pairs an edge's two halves in one read each (the buckets are
+    :func:`hammesh.halfedge.bucket_half_edges_into`'s, as for
+    :func:`hammesh.halfedge.half_edge_twins_packed`; here the
     records are written directly, with no ``int64`` pairing array, and the buckets are
     kept: afterwards bucket ``v`` is ``keys[start[v - 1]:start[v]]`` (``start[-1]`` read
     as 0) for :func:`edge_users`).  ``start``: ``(n_points + 1,)``, ``mark``:
@@ -70,27 +72,10 @@ def pair_records_into(tri, start, mark, keys, rec, loose):
     """
     m = tri.shape[0]
     n_points = mark.shape[0]
-    for v in range(n_points + 1):
-        start[v] = 0
+    bucket_half_edges_into(tri, start, mark, keys)
     for t in range(m):
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        start[min(a, b) + 1] += 1
-        start[min(b, c) + 1] += 1
-        start[min(c, a) + 1] += 1
-    for v in range(n_points):
-        start[v + 1] += start[v]
-        mark[v] = -1
-    for t in range(m):  # afterwards start[v] is the end of bucket v
         for k in range(3):
-            a = tri[t, k]
-            b = tri[t, (k + 1) % 3]
-            lo = min(a, b)
-            f = start[lo]
-            keys[f] = (np.int64(max(a, b)) << 33) | (np.int64(a > b) << 32) | (3 * t + k)
-            start[lo] = f + 1
-            rec[t, k] = a
+            rec[t, k] = tri[t, k]
             rec[t, REC_TWIN + k] = -1
         rec[t, REC_SCRATCH] = 0
         rec[t, REC_WIDTH - 1] = 0
