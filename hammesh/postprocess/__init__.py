@@ -27,9 +27,12 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
 #: ``pages.fresh``); the rest of a reserve is given back as the call starts
 #: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
-#: sparse: the validation's half-edge twins (24), so far: its own arrays are made
-#: inside its kernels (a kernel handed ``pages.fresh`` arrays raises this).
-RESERVE_TAKEN = {"incircle": None, "sparse": 24}
+#: sparse: the validation's half-edge twins (24) and the output's big arrays, one
+#: row per input triangle and a little more: the walk's order (8), the gather's rows
+#: and its positions, parents, partners, kinds, angles and claim (24 + 8 + 8 + 8 + 1
+#: + 8 + 24) and the pinned edges (3), 120 with some room (the rest of its arrays are
+#: made inside its kernels: a kernel handed ``pages.fresh`` arrays raises this).
+RESERVE_TAKEN = {"incircle": None, "sparse": 120}
 
 
 _loaded = threading.Lock()
@@ -148,8 +151,17 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
             # (parent and kind: made of the input's pairing arrays once the forest is done)
             ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0], False, np.shape(mesh.points)[0])
         # the certificate's own look at the caller's input (never at the construction's
-        # validated copy), beside the construction's validation
-        facts = side.submit(input_facts, mesh)
+        # validated copy), beside the construction's validation (incircle) or beside
+        # sparse mode's cover, which leaves the other core idle most of its time (the
+        # validation and the passes before the cover use both)
+        facts = []
+
+        def start_facts() -> None:
+            if not facts:
+                facts.append(side.submit(input_facts, mesh))
+
+        if mode == "incircle":
+            start_facts()
         clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle")  # (Thm 2.4 needs no angle)
         rows = prepared = vmarks = None
         if mode == "incircle":
@@ -165,9 +177,10 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
                 stream.join()  # then help with the row checks still to do
                 rows = (stream.result(out.components), stream.used)
         else:
-            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep)
+            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=start_facts)
             t1 = time.perf_counter()
-        ref_facts = facts.result()
+        start_facts()  # (if the construction did not)
+        ref_facts = facts[0].result()
     snapped = 0
     try:
         stats = certify(out, ref_facts, claim=claim, rows=rows, prepared=prepared)

@@ -31,8 +31,14 @@ from __future__ import annotations
 
 import math
 
+from functools import partial
+
 import numpy as np
 from numba import njit
+
+from hammesh import threads
+from hammesh.pages import fresh
+from hammesh.threads import row_ranges, run_all
 
 from hammesh.postprocess._join_kernels import compass_search, fan_eval, min_max_angles_2d
 
@@ -89,7 +95,6 @@ def _input_end(v, w, first_mid, mid_a, mid_b):
     return v, True
 
 
-@njit(cache=True, nogil=True)
 def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
     """Which output half-edges lie on a pinned interior input edge (whole or a half)?
 
@@ -98,11 +103,22 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     midpoint, its two halves. Every output row lies in its ``parent`` (or, a swapped
     row, in ``parent`` and ``partner``), so an output edge on an input edge is an edge
     of one of those two, and a half ends at a midpoint ``>= first_mid`` whose ends are
-    ``mid_a``, ``mid_b``: O(1) per half-edge, no search over the mesh.
+    ``mid_a``, ``mid_b``: O(1) per half-edge, no search over the mesh; one row range per core
+    (:func:`_pinned_output_edges_into`), into an array from ``hammesh.pages``.
     """
     k_rows = out.shape[0]
-    pinned = np.zeros(3 * k_rows, np.bool_)
-    for r in range(k_rows):
+    pinned = fresh(3 * k_rows, np.bool_)
+    run_all([
+        partial(_pinned_output_edges_into, out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, lo, hi)
+        for lo, hi in row_ranges(k_rows, threads.THREAD_MIN_ROWS)
+    ])
+    return pinned
+
+
+@njit(cache=True, nogil=True)
+def _pinned_output_edges_into(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, lo, hi):
+    """Rows ``lo..hi`` of :func:`pinned_output_edges` (every entry of theirs written)."""
+    for r in range(lo, hi):
         t = parent[r]
         if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
             for j in range(3):  # a row kept whole: its parent's edges, in order
@@ -110,6 +126,7 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
                 pinned[3 * r + j] = con[h] and twin[h] >= 0
             continue
         for j in range(3):
+            pinned[3 * r + j] = False
             x = out[r, j]
             y = out[r, (j + 1) % 3]
             ex, ok = _input_end(x, y, first_mid, mid_a, mid_b)
@@ -123,7 +140,6 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
                 h = _input_edge(tri, partner[r], ex, ey)
             if h >= 0 and con[h] and twin[h] >= 0:
                 pinned[3 * r + j] = True
-    return pinned
 
 
 @njit(cache=True, nogil=True)
@@ -134,8 +150,14 @@ def _run_of(starts, lengths, x):
 
 
 @njit(cache=True, nogil=True)
-def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x):
-    """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps."""
+def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock):
+    """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps.
+
+    The decision reads rows ``x`` and its successor ``y`` only (their corners and their
+    points, twins, pinned edges; the neighbours by their place in the run): a flip
+    stamps the rows it changes (``x``, ``y`` and the four across its outer edges)
+    with the advanced ``clock`` in ``touched`` (see :func:`improve_flips`).
+    """
     s, ln = _run_of(starts, lengths, x)
     if ln < 4:
         return -1
@@ -207,6 +229,12 @@ def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x):
     _set_edge(twin, pinned, 3 * ry + 1, t_bc, p_bc)
     _set_edge(twin, pinned, 3 * rx + 1, 3 * ry + 2, False)
     pinned[3 * ry + 2] = False
+    clock[0] += 1
+    for f in (t_ad, t_db, t_bc, t_ca):  # rows whose twins changed
+        if f >= 0:
+            touched[f // 3] = clock[0]
+    touched[x] = clock[0]
+    touched[y] = clock[0]
     m = min(pm[x], pm[y])
     pm[x] = m
     pm[y] = m
@@ -216,7 +244,7 @@ def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x):
 
 
 @njit(cache=True, nogil=True)
-def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_flips, rows):
+def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_flips, rows, touched, failed, clock):
     """Cycle-keeping Lawson flips around ``rows`` (the new ones, ``kind != 3``; module docstring).
 
     ``starts``, ``lengths``: the runs (cycles) of rows. Modifies ``out``, ``twin`` (the
@@ -224,6 +252,15 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
     a flipped pair gets the smaller of the two) and ``kind`` (4 for a flipped row) in
     place. Returns the number of flips. The work stack holds the new rows and grows
     with the flips (not sized for the whole mesh).
+
+    A failed try changes nothing, so a try that failed at ``clock`` time
+    ``failed[x]`` is not made again while neither ``x`` nor its successor was
+    changed since (``touched``, stamped by each flip and by ``smooth_steiner`` for
+    the rows around a moved point; ``clock`` a one-entry array, the same across the
+    rounds): it would fail again. The same flips happen in the same order as
+    trying every row, at half the tries in the first round (each row is tried as
+    itself and as its successor's predecessor) and a few in the later ones.
+    ``touched`` (0) and ``failed`` (-1): one entry per row, made once for all rounds.
     """
     top = rows.shape[0]
     stack = np.empty(2 * top + 64, np.int64)
@@ -235,7 +272,12 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
         s, ln = _run_of(starts, lengths, r)
         prev = r - 1 if r > s else s + ln - 1
         for x in (r, prev):
-            y = _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x)
+            nx = x + 1 if x + 1 < s + ln else s
+            if failed[x] >= touched[x] and failed[x] >= touched[nx]:
+                continue  # tried since it or its successor last changed: fails again
+            y = _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock)
+            if y < 0:
+                failed[x] = clock[0]
             if y >= 0:
                 n += 1
                 if top + 2 > stack.shape[0]:
@@ -250,7 +292,7 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
 
 
 @njit(cache=True, nogil=True)
-def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows):
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows, touched, clock):
     """Move each free Steiner point to a better place in its star (in place).
 
     ``new_rows``: every row that can hold a Steiner point (those of kind != 3; a row
@@ -265,6 +307,8 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows)
     ``max(hi, its own)`` and its slack grows. An incenter's star, once improvement
     flips took its sectors' outer edges, is larger than the triangle it split: the
     point can move towards the whole angles. Returns the number of points moved.
+    The rows around a moved point are stamped in ``touched`` with the advanced
+    ``clock`` (:func:`improve_flips` tries them again).
     """
     n_pts = pts.shape[0]
     cnt = np.zeros(n_pts - first + 1, np.int64)
@@ -341,4 +385,7 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows)
             pts[v, 0] = px
             pts[v, 1] = py
             moved += 1
+            clock[0] += 1
+            for i in range(n):
+                touched[rows[a0 + i] // 3] = clock[0]
     return moved

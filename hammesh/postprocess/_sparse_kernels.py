@@ -1,8 +1,11 @@
 """Compiled loops (numba) of the sparse Hamiltonian construction (``sparse.py``).
 
-The cover's loops are in ``_cover_kernels.py``. Serial, nopython, ``cache=True``;
-every kernel is O(m) over plain int64/float64/bool arrays and reports problems by a
-return value, never by raising. Half-edge ``h = 3 t + k`` runs from ``tri[t, k]`` to
+The cover's loops are in ``_cover_kernels.py``. Nopython, ``cache=True``,
+``nogil``; every kernel is O(m) over plain int64/float64/bool arrays and reports
+problems by a return value, never by raising. The output's two big passes run on
+both cores behind thin Python wrappers: the walk (:func:`walk_links`, its first
+cycle from both ends) and the gather (:func:`rows_in_cycle_order`, one row range per
+thread, into arrays from ``hammesh.pages``). Half-edge ``h = 3 t + k`` runs from ``tri[t, k]`` to
 ``tri[t, (k + 1) % 3]``; ``twin[h]`` is the opposite half-edge or -1.
 
 Codes shared with ``sparse.py``:
@@ -18,8 +21,16 @@ Codes shared with ``sparse.py``:
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
+
+from hammesh import threads
+from hammesh.pages import fresh
+from hammesh.threads import row_ranges, run_all
 
 from hammesh.postprocess._join_kernels import quad_corners
 from hammesh.postprocess._thm24_kernels import find_root as _find
@@ -186,15 +197,35 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
                 n_join += 1
         else:
             n_edge += 1
+    # pieces (``pu``: components of the node graph over the crossing edges), and the
+    # crossing edges (one half each) whose nodes Kruskal left apart: union-find sets
+    # only grow, so the stages below can join no others, and they take these in
+    # the same order as all of them (a stage's pass over every crossing edge cost
+    # more than the plan's Kruskal). None left: one node per piece already
+    pu = np.arange(n_cyc + m)
+    n_apart = 0
+    for i in range(n_cross):
+        h = cross[i]
+        g = twin[h]
+        nt = _node(cyc, n_cyc, h // 3)
+        nu = _node(cyc, n_cyc, g // 3)
+        a = _find(pu, nt)
+        b = _find(pu, nu)
+        if a != b:
+            pu[a] = b
+        if g > h and _find(uf, nt) != _find(uf, nu):
+            cross[n_apart] = h  # (n_apart <= i: read already)
+            n_apart += 1
+    counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
+    if n_apart == 0:
+        return status, slot, swap_he, join, counts, np.zeros(m, np.bool_)
     is_split = np.zeros(m, np.bool_)
     for t in range(m):
         is_split[t] = status[t] == SPLIT
     for stage in range(4):
-        for i in range(n_cross):
+        for i in range(n_apart):
             h = cross[i]
             g = twin[h]
-            if g < h:
-                continue
             con = is_con[h]
             if (stage == 3) != con:
                 continue
@@ -225,16 +256,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
             status[t] = SPLIT
             status[u] = SPLIT
             n_merge += 1
-    # one node per piece? (pieces = components of the node graph)
-    pu = np.arange(n_cyc + m)
-    for i in range(n_cross):
-        h = cross[i]
-        t = h // 3
-        u = twin[h] // 3
-        a = _find(pu, _node(cyc, n_cyc, t))
-        b = _find(pu, _node(cyc, n_cyc, u))
-        if a != b:
-            pu[a] = b
+    # one node per piece?
     piece_node = np.full(n_cyc + m, -1, np.int64)
     piece_bad = np.zeros(n_cyc + m, np.bool_)
     ok = True
@@ -268,7 +290,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
         if n_bad == 0:  # should not happen: give up absorbing in those pieces
             for t in range(m):
                 bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, t))]
-    counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
+    counts[2] = n_merge
     return status, slot, swap_he, join, counts, bad
 
 
@@ -324,20 +346,19 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     m = tri.shape[0]
     n_split = 0
     n_midh = 0
-    for t in range(m):
-        if status[t] == SPLIT:
-            n_split += 1
-    n_edge = 0
-    for h in range(3 * m):
-        if slot[h] == MID:
-            n_midh += 1
-    for t in range(m):
-        if status[t] == EDGE:
-            n_edge += 1  # two rows each
+    n_edge = 0  # two rows each
     n_pass = 0
-    for t in range(m):
-        if status[t] == PASS:
+    for t in range(m):  # (one pass: a bridge's midpoint slots are a split triangle's)
+        st = status[t]
+        if st == PASS:
             n_pass += 1
+        elif st == EDGE:
+            n_edge += 1
+        elif st == SPLIT:
+            n_split += 1
+            for h in range(3 * t, 3 * t + 3):
+                if slot[h] == MID:
+                    n_midh += 1
     total = m - n_pass + 2 * n_split + n_midh + n_edge
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
@@ -521,127 +542,275 @@ def _faced(g, changed, face_tw):
     return face_tw[3 * lower_bound(changed, g // 3) + g % 3]
 
 
-@njit(cache=True, nogil=True)
-def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw):
+class Walk(NamedTuple):
+    """Result of :func:`walk_links`."""
+
+    order: np.ndarray  # (k,) int64 virtual rows in cycle order
+    lengths: np.ndarray  # (c,) int64 cycle lengths
+    low: np.ndarray  # (c,) int64 each cycle's lowest parent (input triangle)
+    bad: int  # -1, or the first virtual row found badly linked
+
+
+#: rows below which :func:`walk_links` walks its first cycle from one end only
+WALK_TWO_ENDS_MIN_ROWS = 400_000
+
+
+def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw) -> Walk:
     """Follow the links into cycles over the virtual rows, checking each row as the walk reaches it.
 
     Virtual rows as in :func:`new_row_twins` (kept input triangles, then the new
-    rows). Returns ``(order, lengths, low, bad)``: virtual rows in cycle order, the
-    cycle lengths, each cycle's lowest parent (input triangle) and ``bad`` = -1 or
-    the first virtual row found whose links are not two, or that crosses an edge
-    whose other side does not link back. Every row is reached exactly once (the
-    outer loop starts a walk at each row not seen yet), so every row is checked, in
-    the same pass that orders them.
+    rows). Returns a :class:`Walk`: virtual rows in cycle order, the cycle lengths,
+    each cycle's lowest parent (input triangle) and ``bad`` = -1 or the first virtual
+    row found whose links are not two, or that crosses an edge whose other side does
+    not link back. Every row is reached exactly once (the outer loop starts a walk at
+    each row not seen yet), so every row is checked, in the same pass that orders
+    them.
+
+    From ``WALK_TWO_ENDS_MIN_ROWS`` rows (and two cores) the first cycle, usually
+    all of the mesh, is walked from both ends at once: this thread forward from its
+    first row, a second one backward, each stopping where the other has been
+    (:func:`_walk_one_into`); the backward part, reversed, then follows the forward
+    one (rows both reached, near the meeting place, counted once), which is the
+    order one walk gives. Both walks check every row they reach. If either finds a
+    bad row, the one-thread walk runs again to name the same row as always.
     """
     m = status.shape[0]
     n_v = m + link_new.shape[0]
-    seen = np.zeros(n_v, np.bool_)
-    n_rows = link_new.shape[0]
-    for t in range(m):
-        if status[t] == PASS:
-            n_rows += 1
-    order = np.empty(n_rows, np.int64)
-    lengths = np.empty(n_rows, np.int64)
-    low = np.empty(n_rows, np.int64)
-    n_c = 0
-    pos = 0
-    for s in range(n_v):
-        if seen[s] or (s < m and status[s] != PASS):
-            continue
-        start = pos
-        x = s
-        came = -1
-        lo = m
-        while True:
-            seen[x] = True
-            order[pos] = x
-            pos += 1
-            lo = min(lo, x if x < m else parent_new[x - m])
-            nxt = -1
-            nxt_g = -1
-            n_links = 0
-            for j in range(3):
-                h = 3 * x + j
-                if x < m:  # a kept triangle: links on its cover edges, the input's twins
-                    if not is_cov[h]:
-                        continue
-                    g = twin_in[h]
-                    if g >= 0 and status[g // 3] != PASS:
-                        g = _faced(g, changed, face_tw)
-                else:
-                    if not (link_new[x - m] >> j) & 1:
-                        continue
-                    g = tw_new[h - 3 * m]
-                n_links += 1
-                if g < 0:
-                    return order, lengths, low, x
-                y = g // 3
-                back = is_cov[g] if y < m else (link_new[y - m] >> (g - 3 * y)) & 1
-                if not back:
-                    return order, lengths, low, x
-                if came < 0 and x == s:
-                    came = j  # the walk leaves s by its other link and returns by this one
-                elif j != came:
-                    nxt = j
-                    nxt_g = g
-            if n_links != 2 or nxt < 0:
-                return order, lengths, low, x
-            y = nxt_g // 3
-            came = nxt_g - 3 * y
-            if y == s:
-                break
-            if seen[y]:
-                return order, lengths, low, y
-            x = y
-        lengths[n_c] = pos - start
-        low[n_c] = lo
-        n_c += 1
-    return order, lengths[:n_c], low[:n_c], -1
+    n_rows = link_new.shape[0] + int(np.count_nonzero(status == PASS))
+    s0 = _first_start(status, n_v)
+    if n_rows < WALK_TWO_ENDS_MIN_ROWS or threads.cores() < 2 or s0 < 0:
+        return Walk(*_walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows))
+    fwd = np.zeros(n_v, np.bool_)
+    bwd = np.zeros(n_v, np.bool_)
+    order = fresh(n_rows, np.int64)
+    back = np.empty(n_rows, np.int64)
+    args = (status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, s0)
+    with ThreadPoolExecutor(1) as pool:
+        other = pool.submit(_walk_one_into, *args, False, bwd, fwd, back)
+        n_f, lo_f, bad_f = _walk_one_into(*args, True, fwd, bwd, order)
+        n_b, lo_b, bad_b = other.result()
+    if bad_f >= 0 or bad_b >= 0:
+        return Walk(*_walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows))
+    return Walk(*_walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, n_f,
+                            min(lo_f, lo_b), back, n_b, fwd, bwd))
 
 
 @njit(cache=True, nogil=True)
+def _first_start(status, n_v):
+    """The first virtual row a walk starts at (the first kept or new row), -1 if none."""
+    m = status.shape[0]
+    for s in range(n_v):
+        if s >= m or status[s] == PASS:
+            return s
+    return -1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _links(status, is_cov, link_new, twin_in, tw_new, changed, face_tw, x):
+    """``(ok, j1, g1, j2, g2)``: the two edges ``j1 < j2`` of virtual row ``x`` the cycle
+    crosses and their virtual twins; not ok unless exactly two, each linked back."""
+    m = status.shape[0]
+    n_links = 0
+    j1 = g1 = j2 = g2 = -1
+    for j in range(3):
+        h = 3 * x + j
+        if x < m:  # a kept triangle: links on its cover edges, the input's twins
+            if not is_cov[h]:
+                continue
+            g = twin_in[h]
+            if g >= 0 and status[g // 3] != PASS:
+                g = _faced(g, changed, face_tw)
+        else:
+            if not (link_new[x - m] >> j) & 1:
+                continue
+            g = tw_new[h - 3 * m]
+        n_links += 1
+        if g < 0:
+            return False, j1, g1, j2, g2
+        y = g // 3
+        back = is_cov[g] if y < m else (link_new[y - m] >> (g - 3 * y)) & 1
+        if not back:
+            return False, j1, g1, j2, g2
+        if j1 < 0:
+            j1 = j
+            g1 = g
+        else:
+            j2 = j
+            g2 = g
+    return n_links == 2, j1, g1, j2, g2
+
+
+@njit(cache=True, nogil=True)
+def _walk_one_into(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, s, forward, mine,
+                   theirs, buf):
+    """Walk the cycle through virtual row ``s`` into ``buf``, marking ``mine``.
+
+    ``forward``: leave ``s`` by its second link (as :func:`_walk_all`), else by its
+    first. Stops before a row ``theirs`` marks (another walk of the same cycle from
+    the other end has been there) or on returning to ``s``. Returns ``(count,
+    lowest parent, bad)``.
+    """
+    m = status.shape[0]
+    n = 0
+    x = s
+    came = -1
+    lo = m
+    while True:
+        mine[x] = True
+        buf[n] = x
+        n += 1
+        lo = min(lo, x if x < m else parent_new[x - m])
+        ok, j1, g1, j2, g2 = _links(status, is_cov, link_new, twin_in, tw_new, changed, face_tw, x)
+        if not ok:
+            return n, lo, x
+        if x == s and came < 0:
+            g = g2 if forward else g1
+        else:
+            g = g2 if j1 == came else g1
+        y = g // 3
+        came = g - 3 * y
+        if y == s:
+            return n, lo, -1
+        if mine[y]:  # (before theirs: one walk's marks are both in the one-thread walk)
+            return n, lo, y
+        if theirs[y]:
+            return n, lo, -1
+        x = y
+
+
+@njit(cache=True, nogil=True)
+def _walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows):
+    """:func:`walk_links` in one thread: ``(order, lengths, low, bad)``."""
+    m = status.shape[0]
+    n_v = m + link_new.shape[0]
+    seen = np.zeros(n_v, np.bool_)
+    order = np.empty(n_rows, np.int64)
+    return _walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, 0, m,
+                      np.empty(0, np.int64), 0, seen, seen)
+
+
+@njit(cache=True, nogil=True)
+def _walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, n_f, lo_first, back,
+               n_b, seen, seen_b):
+    """The walk's outer loop: ``order[:n_f]`` holds a first cycle walked forward (its
+    lowest parent ``lo_first``; none if ``n_f`` is 0) and ``back[:n_b]`` the same
+    cycle walked backward from the same row; the rows of ``back`` not in ``seen`` (the
+    forward walk's marks) follow it, reversed. Then a walk from every row neither
+    ``seen`` nor ``seen_b`` marks. Returns ``(order, lengths, low, bad)``."""
+    m = status.shape[0]
+    n_v = m + link_new.shape[0]
+    n_rows = order.shape[0]
+    lengths = np.empty(n_rows, np.int64)
+    low = np.empty(n_rows, np.int64)
+    n_c = 0
+    pos = n_f
+    if n_f > 0:
+        e = 1
+        while e < n_b and not seen[back[e]]:
+            e += 1
+        for i in range(e - 1, 0, -1):
+            order[pos] = back[i]
+            pos += 1
+        lengths[0] = pos
+        low[0] = lo_first
+        n_c = 1
+    for s in range(n_v):
+        if seen[s] or seen_b[s] or (s < m and status[s] != PASS):
+            continue
+        n, lo, bad = _walk_one_into(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, s, True,
+                                    seen, seen, order[pos:])
+        if bad >= 0:
+            return order, lengths, low, bad
+        lengths[n_c] = n
+        low[n_c] = lo
+        n_c += 1
+        pos += n
+    return order, lengths[:n_c], low[:n_c], -1
+
+
+class CycleRows(NamedTuple):
+    """Result of :func:`rows_in_cycle_order`: the output rows in cycle order."""
+
+    out: np.ndarray  # (k, 3) int64 corners
+    parent: np.ndarray  # (k,) int64 input triangle each row lies in
+    partner: np.ndarray  # (k,) int64 the other triangle a join replaced, or -1
+    kind: np.ndarray  # (k,) int8 (3: kept whole)
+    pm: np.ndarray  # (k,) float64 the parents' smallest angle
+    lengths: np.ndarray  # (c,) int64 run lengths in the new run order
+    claim: np.ndarray  # (3 k,) int64 half-edge twins of the rows (-1 boundary)
+
+
 def rows_in_cycle_order(
     order, lengths, run_order, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed,
     face_tw, amin,
-):
+) -> CycleRows:
     """The output rows, walked into ``order`` (:func:`walk_links`, virtual rows), taken across in one gather.
 
     Runs go in the order ``run_order``; every row's corners, parents, kind (3 for a
     kept triangle), its parents' smallest angle ``pm`` (``amin`` of ``parent``, and of
     ``partner`` if any) and its pairing claim (``claim[3 i + j]``: the twin of edge j
-    of final row i, -1 on the boundary) are written in the same pass.
-    Returns ``(out, parent, partner, kind, pm, lengths, claim)``.
+    of final row i, -1 on the boundary) are written in the same pass, over one row
+    range per core (:func:`_row_positions_into`, then :func:`_gather_rows_into`: each
+    row is written by one thread only). The big arrays come from ``hammesh.pages``
+    (the reserve ``quality_mesh`` faulted while Triangle ran, if any).
     """
     m = tri.shape[0]
-    c = lengths.shape[0]
     k = order.shape[0]
-    rows = order
-    new_len = lengths
-    if c > 1:
-        starts = np.empty(c, np.int64)
-        s = 0
-        for r in range(c):
-            starts[r] = s
-            s += lengths[r]
+    rows, new_len = order, lengths
+    if lengths.shape[0] > 1:
         rows = np.empty(k, np.int64)
-        new_len = np.empty(c, np.int64)
-        p = 0
-        for q in range(c):
-            r = run_order[q]
-            new_len[q] = lengths[r]
-            for i in range(starts[r], starts[r] + lengths[r]):
-                rows[p] = order[i]
-                p += 1
-    pos = np.empty(m + out_new.shape[0], np.int64)
-    for i in range(k):
+        new_len = np.empty(lengths.shape[0], np.int64)
+        _runs_in_order_into(order, lengths, run_order, rows, new_len)
+    spans = row_ranges(k, threads.THREAD_MIN_ROWS)
+    pos = fresh(m + out_new.shape[0], np.int64)  # (entries of rows not output: never read)
+    run_all([partial(_row_positions_into, rows, pos, lo, hi) for lo, hi in spans])
+    res = CycleRows(
+        fresh((k, 3), np.int64), fresh(k, np.int64), fresh(k, np.int64), fresh(k, np.int8), fresh(k, np.float64),
+        new_len, fresh(3 * k, np.int64),
+    )
+    run_all([
+        partial(
+            _gather_rows_into, rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new,
+            changed, face_tw, amin, res.out, res.parent, res.partner, res.kind, res.pm, res.claim, lo, hi,
+        )
+        for lo, hi in spans
+    ])
+    return res
+
+
+@njit(cache=True, nogil=True)
+def _runs_in_order_into(order, lengths, run_order, rows, new_len):
+    """``rows``: the runs of ``order`` (lengths ``lengths``) in the order ``run_order``."""
+    c = lengths.shape[0]
+    starts = np.empty(c, np.int64)
+    s = 0
+    for r in range(c):
+        starts[r] = s
+        s += lengths[r]
+    p = 0
+    for q in range(c):
+        r = run_order[q]
+        new_len[q] = lengths[r]
+        for i in range(starts[r], starts[r] + lengths[r]):
+            rows[p] = order[i]
+            p += 1
+
+
+@njit(cache=True, nogil=True)
+def _row_positions_into(rows, pos, lo, hi):
+    """``pos[rows[i]] = i`` for ``i`` in ``lo..hi`` (``rows`` holds each virtual row once)."""
+    for i in range(lo, hi):
         pos[rows[i]] = i
-    out2 = np.empty((k, 3), np.int64)
-    parent2 = np.empty(k, np.int64)
-    partner2 = np.empty(k, np.int64)
-    kind2 = np.empty(k, np.int8)
-    pm = np.empty(k, np.float64)
-    claim = np.empty(3 * k, np.int64)
-    for i in range(k):
+
+
+@njit(cache=True, nogil=True)
+def _gather_rows_into(
+    rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed, face_tw, amin,
+    out2, parent2, partner2, kind2, pm, claim, lo, hi,
+):
+    """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place)."""
+    m = tri.shape[0]
+    for i in range(lo, hi):
         x = rows[i]
         for j in range(3):
             h = 3 * x + j
@@ -674,4 +843,3 @@ def rows_in_cycle_order(
         if q >= 0 and amin[q] < a:
             a = amin[q]
         pm[i] = a
-    return out2, parent2, partner2, kind2, pm, new_len, claim

@@ -53,6 +53,7 @@ import math
 import time
 from dataclasses import dataclass
 from functools import partial
+from typing import Callable
 
 import numpy as np
 
@@ -401,6 +402,7 @@ def sparse_cycles(
     place_iters: int = PLACE_ITERS,
     fans: bool = True,
     improve: bool = True,
+    beside_cover: Callable[[], object] | None = None,
 ) -> SparseResult:
     """The sparse construction on arrays (unverified).
 
@@ -442,6 +444,11 @@ def sparse_cycles(
         Planar only: after the joins, flip edges the cycle crosses between two
         consecutive triangles where that keeps the cycle and raises the pair's
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
+    beside_cover : callable, optional
+        Called once as the cover starts, to hand work that needs nothing of the
+        construction to another thread (``hammesh()`` starts the certificate's look
+        at the input there): the cover is this call's longest step and most of it
+        runs on one core.
     """
     if not 0.0 <= keep <= 1.0:
         raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
@@ -482,8 +489,12 @@ def sparse_cycles(
             good[ok] = True
             good[tw[ok]] = True
         steps.done("judge_edges")
+        if beside_cover is not None:
+            beside_cover()
         cover = cycle_cover(tri, tw, good=good, points=pts)
     else:
+        if beside_cover is not None:
+            beside_cover()
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     steps.done("cover")
     n_unc0 = cover.n_uncovered
@@ -702,16 +713,24 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     lengths = np.ascontiguousarray(lengths, dtype=np.int64)
     starts = np.cumsum(lengths) - lengths
     n_flips = n_moved = 0
+    # which rows changed when, and when each try last failed: a try is not made again
+    # while its rows are as they were (``_improve_kernels.improve_flips``)
+    touched = np.zeros(len(out), np.int64)
+    failed = np.full(len(out), -1, np.int64)
+    clock = np.zeros(1, np.int64)
+    new = np.flatnonzero(kind != 3)
     for _ in range(IMPROVE_ROUNDS):
-        new = np.flatnonzero(kind != 3)  # flips make kept rows new: taken again each round
-        n_flips += _ik.improve_flips(
-            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new
+        flips = _ik.improve_flips(
+            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new, touched, failed,
+            clock,
         )
+        n_flips += flips
+        if flips:  # flips make kept rows new: taken again
+            new = np.flatnonzero(kind != 3)
         if first_steiner >= len(pts):
             break
-        new = np.flatnonzero(kind != 3)
         moved = _ik.smooth_steiner(
-            pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new
+            pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock
         )
         n_moved += moved
         if moved == 0:
@@ -736,7 +755,8 @@ def count_report(r: SparseResult, n: int, m: int) -> dict:
 
 
 def sparse_hamiltonian(
-    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, *, keep: float = KEEP
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, *, keep: float = KEEP,
+    beside_cover: Callable[[], object] | None = None,
 ) -> tuple[HamiltonianMesh, np.ndarray]:
     """Build the sparse Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
 
@@ -748,6 +768,8 @@ def sparse_hamiltonian(
     is_con : (3 m,) bool
     keep : float
         The local quality rule's factor (``sparse_cycles``).
+    beside_cover : callable, optional
+        Called as the cover starts (``sparse_cycles``).
 
     Returns
     -------
@@ -772,7 +794,7 @@ def sparse_hamiltonian(
         differ = np.zeros(3 * m, np.bool_)
         differ[inner] = (a2[np.arange(3 * m)[inner] // 3] != a2[tw[inner] // 3]).any(axis=1)
         pinned = is_con | differ
-    r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep)
+    r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)

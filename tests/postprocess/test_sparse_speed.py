@@ -1,0 +1,107 @@
+"""Sparse mode's threaded and fused passes give the output of the one-thread passes, array for array.
+
+Speed work must not change what sparse mode makes (issue 13: quality decides the
+output, speed only how fast it is made). Each test runs the same input through the
+one-thread path (``hammesh.threads.limit(1)``) and through the threaded one with its
+row thresholds lowered so that a small mesh takes it, and compares every array.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh import threads
+from hammesh.halfedge import half_edge_twins
+from hammesh.postprocess import _sparse_kernels as sk
+from tests.helpers import bundled_domain, plate_with_loops, square
+
+#: output arrays that must agree
+FIELDS = ("points", "triangles", "components", "position", "parent", "kind", "segments", "segment_markers",
+          "vertex_markers", "triangle_attributes")
+
+
+def _domain(name: str) -> hammesh.Domain:
+    if name == "loops":
+        return plate_with_loops(3)
+    if name == "regions":  # two regions: their shared edges are pinned
+        v = square(0, 0, 2) + square(0.5, 0.5, 1)
+        segs = [[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]]
+        return hammesh.Domain(vertices=v, segments=segs, regions=[[0.1, 0.1, 1, np.nan], [1, 1, 2, np.nan]])
+    return bundled_domain(name)
+
+
+def _report(h: hammesh.HamiltonianMesh) -> dict:
+    return {k: v for k, v in h.report.items() if k not in ("seconds", "step_seconds", "step_cpu_seconds")}
+
+
+@pytest.mark.parametrize("name", ["A", "la", "loops", "regions"])
+def test_threaded_passes_give_the_one_thread_output(name: str, monkeypatch) -> None:
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
+    old = threads.limit(1)
+    try:
+        one = hammesh.hamiltonian(m)
+    finally:
+        threads.limit(old)
+    if threads.cores() < 2:
+        pytest.skip("one core: the threaded passes cannot run")
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 37)
+    monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
+    two = hammesh.hamiltonian(m)
+    assert one.n_triangles > 500
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(two, f), getattr(one, f), err_msg=f)
+    assert _report(two) == _report(one)
+
+
+def _linked_rows(h: hammesh.HamiltonianMesh, seed: int):
+    """``h``'s rows shuffled, each with the bits of the edges its cycle crosses, and their twins."""
+    tri = np.asarray(h.triangles, np.int64)
+    k = len(tri)
+    tw, _ = half_edge_twins(tri, h.n_points)
+    ends = np.cumsum(h.components)
+    nxt = np.arange(1, k + 1)
+    nxt[ends - 1] = ends - h.components  # each run closes on itself
+    g = tw.reshape(k, 3)
+    rows = np.arange(k)[:, None]
+    crossed = (g >= 0) & ((g // 3 == nxt[rows]) | (nxt[np.maximum(g, 0) // 3] == rows))
+    link = (crossed * (1 << np.arange(3))).sum(axis=1).astype(np.uint8)
+    perm = np.random.default_rng(seed).permutation(k)
+    shuffled = tri[perm]
+    return shuffled, link[perm], half_edge_twins(shuffled, h.n_points)[0]
+
+
+def test_walk_from_both_ends_gives_the_one_thread_order_and_names_the_same_bad_row(monkeypatch) -> None:
+    """Several cycles (two pieces, each its own cycle; the walk's first cycle is walked from both ends)."""
+    if threads.cores() < 2:
+        pytest.skip("one core: the walk from both ends does not run")
+    dom = hammesh.Domain(vertices=square(0, 0, 1) + square(2, 0, 1),
+                         segments=[[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]])
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=30, max_area=0.002, isolate=False))
+    assert len(h.components) == 2
+    rows, link, tw = _linked_rows(h, 3)
+    k = len(rows)
+    none = np.zeros(0, np.int64)
+    parent = np.arange(k)
+
+    def walk(link):
+        return sk.walk_links(np.zeros(0, np.int8), np.zeros(0, np.bool_), link, parent, none, tw, none, none)
+
+    one = walk(link)
+    monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
+    two = walk(link)
+    assert one.bad == two.bad == -1
+    np.testing.assert_array_equal(two.order, one.order)
+    np.testing.assert_array_equal(two.lengths, one.lengths)
+    np.testing.assert_array_equal(two.low, one.low)
+    assert sorted(two.lengths) == sorted(h.components)
+    for r in (int(one.order[0]), int(one.order[k // 3]), int(one.order[-1])):
+        broken = link.copy()
+        broken[r] &= broken[r] - 1  # drop the row's lowest link bit
+        monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10**9)
+        want = walk(broken).bad
+        monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
+        assert want >= 0 and walk(broken).bad == want
