@@ -27,12 +27,15 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
 #: ``pages.fresh``); the rest of a reserve is given back as the call starts
 #: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
-#: sparse: the validation's half-edge twins (24) and the output's big arrays, one
-#: row per input triangle and a little more: the walk's order (8), the gather's rows
-#: and its positions, parents, partners, kinds, angles and claim (24 + 8 + 8 + 8 + 1
-#: + 8 + 24) and the pinned edges (3), 120 with some room (the rest of its arrays are
-#: made inside its kernels: a kernel handed ``pages.fresh`` arrays raises this).
-RESERVE_TAKEN = {"incircle": None, "sparse": 120}
+#: sparse: its arrays of one entry per input triangle, half-edge or output row (a
+#: few more rows than triangles): the validation's half-edge twins (24), the
+#: triangles' smallest and largest angles (16), the judged edges (3), the plan's
+#: status, slots, joins and union-finds (36), the walk's order (8), the gather's rows
+#: and its positions, parents, partners, kinds, angles and claim (81), the pinned
+#: edges (3), the improvement's stamps (16) and the certificate's narrowed claim
+#: (12): 199, 200 with some room (the rest are made inside kernels, or small: a
+#: kernel handed ``pages.fresh`` arrays raises this).
+RESERVE_TAKEN = {"incircle": None, "sparse": 200}
 
 
 _loaded = threading.Lock()
@@ -56,6 +59,10 @@ def load_kernels(mode: str = "sparse") -> None:
 
         square = Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
         hamiltonian(quality_mesh(square, min_angle=30, max_area=0.01, isolate=False), mode=mode)
+        if mode == "sparse":  # (and the paths only big outputs take)
+            from hammesh.postprocess._sparse_kernels import load_output_kernels
+
+            load_output_kernels()
         _loaded_modes.add(mode)
 
 

@@ -292,7 +292,7 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
 
 
 @njit(cache=True, nogil=True)
-def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows, touched, clock):
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows, touched, clock, judged):
     """Move each free Steiner point to a better place in its star (in place).
 
     ``new_rows``: every row that can hold a Steiner point (those of kind != 3; a row
@@ -308,7 +308,11 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows,
     flips took its sectors' outer edges, is larger than the triangle it split: the
     point can move towards the whole angles. Returns the number of points moved.
     The rows around a moved point are stamped in ``touched`` with the advanced
-    ``clock`` (:func:`improve_flips` tries them again).
+    ``clock`` (:func:`improve_flips` tries them again). ``judged[v - first]``: the
+    clock when point ``v`` was last judged and left where it was (-1: never); it is
+    not judged again while no row around it changed since (the same rows, corners,
+    parents' angles and points: the same outcome). A flip that takes a row out of
+    a star stamps the row it leaves there.
     """
     n_pts = pts.shape[0]
     cnt = np.zeros(n_pts - first + 1, np.int64)
@@ -336,6 +340,16 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows,
         a0 = cnt[v - first]
         a1 = cnt[v - first + 1]
         n = a1 - a0
+        last = judged[v - first]
+        if last >= 0:
+            same = True
+            for i in range(n):
+                if touched[rows[a0 + i] // 3] > last:
+                    same = False
+                    break
+            if same:
+                continue
+        judged[v - first] = clock[0]  # (unless moved below)
         if n < 3 or n > cap:
             continue
         ok = True
@@ -385,6 +399,7 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows,
             pts[v, 0] = px
             pts[v, 1] = py
             moved += 1
+            judged[v - first] = -1
             clock[0] += 1
             for i in range(n):
                 touched[rows[a0 + i] // 3] = clock[0]

@@ -121,8 +121,37 @@ def open_candidates(twin, cyc, n_cyc, cand, meets):
     return out
 
 
+class Plan(NamedTuple):
+    """Result of :func:`plan_merges`."""
+
+    status: np.ndarray  # (m,) int8
+    slot: np.ndarray  # (3 m,) int8
+    swap_he: np.ndarray  # (m,) int64
+    join: np.ndarray  # (m,) int64
+    counts: np.ndarray  # (4,) int64
+    bad: np.ndarray  # (m,) bool
+
+
+def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges) -> Plan:
+    """Join the cover cycles and the uncovered triangles into one cycle per piece
+    (:func:`_plan_merges_into`; its big arrays from ``hammesh.pages``: a first call
+    faults no pages for them where ``quality_mesh`` left a reserve)."""
+    m = tri.shape[0]
+    status = fresh(m, np.int8)
+    slot = fresh(3 * m, np.int8)
+    swap_he = fresh(m, np.int64)
+    join = fresh(m, np.int64)
+    uf = fresh(n_cyc + m, np.int64)
+    pu = fresh(n_cyc + m, np.int64)
+    counts, bad = _plan_merges_into(
+        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu
+    )
+    return Plan(status, slot, swap_he, join, counts, bad)
+
+
 @njit(cache=True, nogil=True)
-def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges):
+def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he,
+                      join, uf, pu):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
 
     Nodes are the cover cycles and the uncovered triangles; a dual edge between two
@@ -142,23 +171,25 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     A bridge over a free edge is a flip between the incenters (Thm 2.4) if
     ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
 
-    Returns ``(status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
-    int64, counts, bad)``: ``join[t]`` the index in ``cand`` of t's swap or split,
-    ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and ``bad`` flags
-    the triangles of connected pieces left as more than one node (an absorbed
-    triangle was some cycle's only way out): the caller retries without absorbing
-    there.
+    Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
+    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + m,)`` int64 scratch), any
+    contents, and returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
+    swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
+    ``bad`` flags the triangles of connected pieces left as more than one node (an
+    absorbed triangle was some cycle's only way out): the caller retries without
+    absorbing there.
     """
     m = tri.shape[0]
     nh = 3 * m
-    status = np.zeros(m, np.int8)
-    slot = np.zeros(nh, np.int8)
-    swap_he = np.full(m, -1, np.int64)
-    join = np.full(m, -1, np.int64)
-    uf = np.arange(n_cyc + m)
+    for h in range(nh):
+        slot[h] = PLAIN
     for t in range(m):
-        if cyc[t] < 0:
-            status[t] = SPLIT  # provisional: uncovered triangles are split unless absorbed
+        status[t] = SPLIT if cyc[t] < 0 else PASS  # uncovered triangles are split unless absorbed
+        swap_he[t] = -1
+        join[t] = -1
+    for x in range(n_cyc + m):
+        uf[x] = x
+        pu[x] = x
     # half-edges between two different nodes (both directions)
     n_cross = 0
     cross = np.empty(nh, np.int64)
@@ -202,7 +233,6 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     # only grow, so the stages below can join no others, and they take these in
     # the same order as all of them (a stage's pass over every crossing edge cost
     # more than the plan's Kruskal). None left: one node per piece already
-    pu = np.arange(n_cyc + m)
     n_apart = 0
     for i in range(n_cross):
         h = cross[i]
@@ -218,7 +248,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
             n_apart += 1
     counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
     if n_apart == 0:
-        return status, slot, swap_he, join, counts, np.zeros(m, np.bool_)
+        return counts, np.zeros(m, np.bool_)
     is_split = np.zeros(m, np.bool_)
     for t in range(m):
         is_split[t] = status[t] == SPLIT
@@ -291,7 +321,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
             for t in range(m):
                 bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, t))]
     counts[2] = n_merge
-    return status, slot, swap_he, join, counts, bad
+    return counts, bad
 
 
 @njit(cache=True, nogil=True)
@@ -366,7 +396,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     parent = np.empty(total, np.int64)
     partner = np.full(total, -1, np.int64)
     kind = np.empty(total, np.int8)
-    mid_of = np.full(3 * m, -1, np.int64)
+    mid_of = np.full(3 * m if n_midh else 0, -1, np.int64)  # (bridges' midpoints: rare; 24 B per row else)
     mid_a = np.empty(n_midh // 2, np.int64)
     mid_b = np.empty(n_midh // 2, np.int64)
     mid_t = np.full(n_midh // 2, -1, np.int64)
@@ -593,6 +623,27 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
         return Walk(*_walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows))
     return Walk(*_walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, n_f,
                             min(lo_f, lo_b), back, n_b, fwd, bwd))
+
+
+def load_output_kernels() -> None:
+    """Load (or compile) the kernels only big outputs reach: the walk from both ends and
+    the gather of several runs, on a fan of four new rows (two runs of it, one
+    walked from both ends): ``hammesh.postprocess.load_kernels`` warms them on its
+    small mesh, where those paths do not run."""
+    k = 4
+    r = np.arange(k)
+    tw = np.stack([np.full(k, -1), 3 * ((r + 1) % k) + 2, 3 * ((r - 1) % k) + 1], axis=1).reshape(-1)
+    status = np.zeros(0, np.int8)
+    none = np.zeros(0, np.int64)
+    link = np.full(k, 6, np.uint8)  # (each row crosses its two edges to the centre)
+    marks = (np.zeros(k, np.bool_), np.zeros(k, np.bool_))
+    args = (status, np.zeros(0, np.bool_), link, r.copy(), none, tw, none, none, 0)
+    order, back = np.empty(k, np.int64), np.empty(k, np.int64)
+    n_b, lo_b, _ = _walk_one_into(*args, False, marks[1], marks[0], back)
+    n_f, lo_f, _ = _walk_one_into(*args, True, marks[0], marks[1], order)
+    walk = _walk_rest(*args[:-1], order, n_f, min(lo_f, lo_b), back, n_b, marks[0], marks[1])
+    rows, lengths = np.empty(k, np.int64), np.empty(2, np.int64)
+    _runs_in_order_into(walk[0], np.array([2, 2]), np.array([1, 0]), rows, lengths)
 
 
 @njit(cache=True, nogil=True)

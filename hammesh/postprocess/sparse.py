@@ -60,6 +60,7 @@ import numpy as np
 from hammesh.halfedge import half_edge_twins, orient_ccw
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
+from hammesh.pages import fresh
 from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
@@ -153,8 +154,8 @@ def triangle_facts(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarra
     """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    lo = np.empty(len(tri))
-    hi = np.empty(len(tri))
+    lo = fresh(len(tri), np.float64)  # (from quality_mesh's reserve, if any: no page faults)
+    hi = fresh(len(tri), np.float64)
     parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri))
     worst, row = 1.0, -1
     for a, w, r in parts:
@@ -467,7 +468,7 @@ def sparse_cycles(
         # edges whose join (swap or midpoint split) keeps the rule: the cover's
         # matching prefers them as its non-cover edges, where cycles get joined
         if pts.shape[1] == 2:
-            good = np.zeros(3 * m, np.bool_)
+            good = fresh(3 * m, np.bool_, 0)
             _row_pass(
                 lambda lo, hi_: _j.good_half_edges_into(
                     pts, tri, tw, con, amin_t, float(keep), hi, bool(swaps), bool(edge_splits), lo, hi_, good
@@ -715,9 +716,10 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     n_flips = n_moved = 0
     # which rows changed when, and when each try last failed: a try is not made again
     # while its rows are as they were (``_improve_kernels.improve_flips``)
-    touched = np.zeros(len(out), np.int64)
-    failed = np.full(len(out), -1, np.int64)
+    touched = fresh(len(out), np.int64, 0)
+    failed = fresh(len(out), np.int64, -1)
     clock = np.zeros(1, np.int64)
+    judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
     new = np.flatnonzero(kind != 3)
     for _ in range(IMPROVE_ROUNDS):
         flips = _ik.improve_flips(
@@ -730,7 +732,8 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
         if first_steiner >= len(pts):
             break
         moved = _ik.smooth_steiner(
-            pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock
+            pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock,
+            judged,
         )
         n_moved += moved
         if moved == 0:

@@ -49,6 +49,7 @@ from typing import Any, Callable
 import numpy as np
 
 from hammesh import params, threads
+from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh
@@ -332,7 +333,10 @@ def _certify(
     pdt = pair_dtype(m)
     claim = np.empty(0, dtype=pdt)
     if twin_claim is not None and facts is not None and np.shape(twin_claim) == (3 * m,):
-        claim = np.ascontiguousarray(twin_claim, dtype=pdt)  # (incircle's int32 claim: no copy)
+        claim = np.asarray(twin_claim)
+        if claim.dtype != pdt or not claim.flags.c_contiguous:  # (incircle's int32 claim: no copy)
+            claim = fresh(claim.shape, pdt)  # (sparse's int64 claim, narrowed: a reserve's pages if any)
+            np.copyto(claim, twin_claim, casting="unsafe")
     streamed = rows is not None
     if rows is None:
         used = np.zeros(n, dtype=np.bool_)

@@ -105,3 +105,34 @@ def test_walk_from_both_ends_gives_the_one_thread_order_and_names_the_same_bad_r
         want = walk(broken).bad
         monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
         assert want >= 0 and walk(broken).bad == want
+
+
+def test_sparse_takes_its_big_arrays_from_the_reserve(monkeypatch) -> None:
+    """A first call after ``quality_mesh`` finds the pages of its big arrays faulted already:
+    it takes them from the reserve (``hammesh.pages``), within its share
+    (``postprocess.RESERVE_TAKEN``), and the output is the one made without a reserve."""
+    from hammesh import pages, postprocess
+
+    m = hammesh.quality_mesh(hammesh.Domain.from_polygon(square(0, 0, 1)), min_angle=30, max_area=2e-4, isolate=False)
+    plain = hammesh.hamiltonian(m)
+    monkeypatch.setattr(pages, "RESERVE_MIN_ARRAY", 4096)  # (every array of a row each: a small mesh)
+    assert m.n_triangles > 4096
+    share = postprocess.RESERVE_TAKEN["sparse"] * m.n_triangles
+    if not pages.reserve(2 * share):
+        pytest.skip("no mremap here")
+    taken = []
+    real = pages._from_reserve
+
+    def spy(nbytes):
+        got = real(nbytes)
+        if got is not None:
+            taken.append(nbytes)
+        return got
+
+    monkeypatch.setattr(pages, "_from_reserve", spy)
+    h = hammesh.hamiltonian(m)
+    assert pages.reserved() == 0  # (the rest given back)
+    # validation twins, angles, plan, walk, gather, pinned edges, stamps, claim: most of the share
+    assert 0.75 * share <= sum(taken) <= share
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(h, f), getattr(plain, f), err_msg=f)
