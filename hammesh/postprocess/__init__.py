@@ -29,13 +29,14 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
 #: sparse: its arrays of one entry per input triangle, half-edge or output row (a
 #: few more rows than triangles): the validation's half-edge twins (24), the
-#: triangles' smallest and largest angles (16), the judged edges (3), the plan's
-#: status, slots, joins and union-finds (36), the walk's order (8), the gather's rows
-#: and its positions, parents, partners, kinds, angles and claim (81), the pinned
-#: edges (3), the improvement's stamps (16) and the certificate's narrowed claim
-#: (12): 199, 200 with some room (the rest are made inside kernels, or small: a
-#: kernel handed ``pages.fresh`` arrays raises this).
-RESERVE_TAKEN = {"incircle": None, "sparse": 200}
+#: triangles' smallest and largest angles (16), the judged edges (3), the open
+#: candidates' union-find and marks (9), the plan's status, slots, joins and
+#: union-finds (36), the walk's order (8), the gather's rows and its positions,
+#: parents, partners, kinds, angles and claim (81), the pinned edges (3), the
+#: improvement's stamps (16) and the certificate's narrowed claim (12): 208, 210
+#: with some room (the rest are made inside kernels, or small: a kernel handed
+#: ``pages.fresh`` arrays raises this).
+RESERVE_TAKEN = {"incircle": None, "sparse": 210}
 
 
 _loaded = threading.Lock()

@@ -84,8 +84,14 @@ def _free_pair(twin, used, h):
     return t, u, not (used[t] or used[u])
 
 
-@njit(cache=True, nogil=True)
 def open_candidates(twin, cyc, n_cyc, cand, meets):
+    """:func:`_open_candidates_into` with its union-find and marks from ``hammesh.pages``."""
+    m = cyc.shape[0]
+    return _open_candidates_into(twin, cyc, n_cyc, cand, meets, fresh(n_cyc + m, np.int64), fresh(m, np.bool_))
+
+
+@njit(cache=True, nogil=True)
+def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
     """Which candidate joins could still be taken after every join that meets the rule?
 
     ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
@@ -93,11 +99,14 @@ def open_candidates(twin, cyc, n_cyc, cand, meets):
     nodes, one join per triangle); a candidate that does not meet it is *open* if its
     two triangles are still free and its nodes still apart. Only open candidates can
     gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
-    other): Kruskal never reaches the rest.
+    other): Kruskal never reaches the rest. ``uf`` (``(n_cyc + m,)`` int64) and
+    ``used`` (``(m,)`` bool): scratch, any contents.
     """
     m = cyc.shape[0]
-    uf = np.arange(n_cyc + m)
-    used = np.zeros(m, np.bool_)
+    for x in range(n_cyc + m):
+        uf[x] = x
+    for t in range(m):
+        used[t] = False
     for i in range(cand.shape[0]):
         if not meets[i]:
             continue
