@@ -194,13 +194,20 @@ def twins_from_neighbors(tri, nbr):
     """
     twin = fresh(3 * tri.shape[0], np.int64, -1)  # (small pages: see hammesh.pages)
     spans = row_ranges(tri.shape[0], threads.THREAD_MIN_ROWS)
-    for step in (_twins_from_neighbors_into, _unmatched_neighbor):
-        bads = [b for b in run_all([
-            (lambda lo=lo, hi=hi: step(tri, nbr, twin, lo, hi)) for lo, hi in spans
-        ]) if b >= 0]
-        if bads:
-            return twin, min(bads)
-    return twin, -1
+    parts = run_all([(lambda lo=lo, hi=hi: _twins_from_neighbors_into(tri, nbr, twin, lo, hi)) for lo, hi in spans])
+    bads = [b for b, _, _ in parts if b >= 0]
+    if bads:
+        return twin, min(bads)
+    # each match fills one half-edge whose neighbour is higher and one, in that row,
+    # whose neighbour is lower (a distinct one per match): as many matches as
+    # half-edges naming a lower neighbour means every one of those was matched
+    # (no second pass over the rows); else find the first that was not
+    if sum(p[1] for p in parts) == sum(p[2] for p in parts):
+        return twin, -1
+    bads = [b for b in run_all([
+        (lambda lo=lo, hi=hi: _unmatched_neighbor(tri, nbr, twin, lo, hi)) for lo, hi in spans
+    ]) if b >= 0]
+    return twin, (min(bads) if bads else -1)
 
 
 @njit(cache=True, nogil=True)
@@ -212,6 +219,8 @@ def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
     # neighbours PREFETCH_ROWS rows ahead are asked for now (0.14 -> 0.10 s at 1.5 M
     # triangles, one thread), so that several misses are under way at once
     m = tri.shape[0]
+    n_match = 0
+    n_lower = 0
     for t in range(lo, hi):
         ahead = t + PREFETCH_ROWS
         if ahead < hi:
@@ -221,16 +230,18 @@ def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
                     _prefetch_row(tri, u)
                     _prefetch_row(nbr, u)
         if tri[t, 0] == tri[t, 1] or tri[t, 1] == tri[t, 2] or tri[t, 2] == tri[t, 0]:
-            return 3 * t
+            return 3 * t, n_match, n_lower
         for k in range(3):
             u = nbr[t, k]
-            if u < t:  # boundary (-1), or matched from u (checked by _unmatched_neighbor)
+            if u < t:  # boundary (-1), or matched from u (counted: twins_from_neighbors)
                 if u < -1:
-                    return 3 * t + k
+                    return 3 * t + k, n_match, n_lower
+                if u >= 0:
+                    n_lower += 1
                 continue
             h = 3 * t + k
             if u >= m:
-                return h
+                return h, n_match, n_lower
             a = tri[t, k]
             b = tri[t, (k + 1) % 3]
             found = -1
@@ -238,10 +249,11 @@ def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
                 if tri[u, j] == b and tri[u, (j + 1) % 3] == a:
                     found = 3 * u + j
             if found < 0 or nbr[u, found - 3 * u] != t:
-                return h
+                return h, n_match, n_lower
             twin[h] = found
             twin[found] = h
-    return -1
+            n_match += 1
+    return -1, n_match, n_lower
 
 
 @njit(cache=True, nogil=True)

@@ -125,6 +125,28 @@ def test_twins_from_neighbours_in_threads(seed: int, monkeypatch) -> None:
     assert _kernels.twins_from_neighbors(tri, wrong)[1] >= 0
 
 
+@pytest.mark.parametrize("threaded", [False, True])
+def test_a_lower_neighbour_that_does_not_name_its_triangle_back_is_found(threaded: bool, monkeypatch) -> None:
+    """Every pair is matched from its lower triangle; a higher one naming a lower neighbour
+    that says boundary there is caught by counting (matches against lower neighbours named)."""
+    if threaded:
+        monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 5)
+        monkeypatch.setattr(threads.os, "cpu_count", lambda: 3)
+    rng = np.random.default_rng(5)
+    pts = rng.random((60, 2))
+    d = Delaunay(pts)
+    tri = d.simplices.astype(np.int64)
+    nbr = d.neighbors[:, [2, 0, 1]].astype(np.int64)
+    for t in (len(tri) - 1, len(tri) // 2):
+        u = int(nbr[t].max())  # (a neighbour of t; Delaunay numbers them either side of t)
+        row = int(max(t, u))
+        low = int(min(t, u))
+        wrong = nbr.copy()
+        wrong[low, int(np.argmax(wrong[low] == row))] = -1  # the lower one says boundary
+        twin, bad = _kernels.twins_from_neighbors(tri, wrong)
+        assert bad >= 0 and bad // 3 == row and wrong[row, bad % 3] == low
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_validated_facts_equal_the_certificates_own(seed: int, monkeypatch) -> None:
     """Angle, area and used vertices found while orienting (in threads) are what the
