@@ -59,6 +59,7 @@ def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
 PLAIN = 0  # along dual edges between degree-3 triangles
 CHAIN = 1  # also through chains of degree-2 triangles (left uncovered when used)
 DROP = 2  # PLAIN, or drop one interior degree-3 triangle (left uncovered)
+OBSERVE = 3  # PLAIN, noting where a DROP search of the same start would stop (``seen``)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -160,7 +161,7 @@ def _drop(u, nb, active, alive, mate, log, nlog):
 
 @njit(cache=True, nogil=True)
 def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
-             nlog):
+             nlog, seen):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
@@ -177,7 +178,14 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     mate and ``z`` drop to degree 2 and need no partner), so one interior triangle
     is left uncovered instead of a chain of boundary triangles. With ``take >= 0``
     the search stops at ``u == take`` even if ``z`` is matched (its partner is
-    freed).
+    freed). ``OBSERVE`` searches like ``PLAIN`` and notes in ``seen`` (4 int64) where
+    ``DROP`` from the same state would have stopped: ``seen[0]`` the first ``u`` with
+    a free ``z``, ``seen[2]`` the first with a matched one (the ``extra`` below), each
+    -1 if none, and ``seen[1]``, ``seen[3]`` the vertices touched when the expansion
+    that met it began (a ``DROP`` search of a smaller budget meets it iff less).
+    The two searches explore alike up to where ``DROP`` stops, so a failed
+    ``OBSERVE`` search answers the ``DROP`` search that would follow it
+    (``_drop_matching``) without exploring the same triangles again.
 
     Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
     applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
@@ -197,9 +205,13 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     drop = False
     extra = -1
     s = s0
+    if mode == OBSERVE:
+        seen[0] = -1
+        seen[2] = -1
     while head < tail and found < 0 and n_t < budget:
         v = queue[head]
         head += 1
+        n_v = n_t
         for k in range(3):
             if mode == CHAIN:
                 u, _ = _chain_end(nb, active, alive, v, k)
@@ -225,6 +237,16 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
                             break
                         if extra < 0 and mate[z] != u:
                             extra = u
+                elif mode == OBSERVE:
+                    z = _third(nb, u, v, w)
+                    if z >= 0 and z != r and active[z]:
+                        if mate[z] < 0:
+                            if seen[0] < 0:
+                                seen[0] = u
+                                seen[1] = n_v
+                        elif seen[2] < 0 and mate[z] != u:
+                            seen[2] = u
+                            seen[3] = n_v
                 label[w] = 0
                 touched[n_t] = w
                 n_t += 1
@@ -338,7 +360,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     next lca stamp.
     """
     n = order.shape[0]
-    stack = np.empty(3 * n + 16, np.int64)  # a triangle is pushed at most three times
+    stack = np.empty(4 * n + 16, np.int64)  # a triangle is pushed once, then once per neighbour matched
     touched = np.empty(online + 16, np.int64)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
@@ -385,7 +407,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             if online <= 0:
                 continue
             far, s, _x = _augment(t, nb, active, active, mate, parent, fa, label, stamp, s, touched, queue, online,
-                                  PLAIN, -1, nolog, nonlog)
+                                  PLAIN, -1, nolog, nonlog, nonlog)
             if far < 0:
                 continue
             # t and the path's far end are newly matched (the path's inner triangles
@@ -434,25 +456,37 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     n_drop = 0
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
+    seen = np.empty(4, np.int64)
     for t in range(m):
         if not active[t] or mate[t] >= 0:
             continue
         r = t  # a longer augmenting path first: it leaves nothing uncovered
         f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                             plain_budget, PLAIN, -1, log, nlog)
+                             plain_budget, OBSERVE, -1, log, nlog, seen)
         if f0 >= 0:
             continue
         nlog[0] = 0
         fixed = False
         drops = 0
+        known = plain_budget >= budget  # the failed search answers the DROP search
         for it in range(rounds + 1):
-            found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                       budget, DROP, -1, log, nlog)
+            # a DROP search from r: pairs r along an augmenting path or stops at the
+            # first drop; after a failed OBSERVE search of at least its budget from
+            # the same state neither exists but the drop it saw, if any
+            if known:
+                found = -1
+                extra = seen[2] if seen[2] >= 0 and seen[3] < budget else -1
+                if seen[0] >= 0 and seen[1] < budget:  # the search stops there
+                    found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
+                                               queue, budget, DROP, -1, log, nlog, seen)
+            else:
+                found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                           budget, DROP, -1, log, nlog, seen)
             if found < 0:
                 if extra < 0 or it == rounds:
                     break
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                           queue, budget, DROP, extra, log, nlog)
+                                           queue, budget, DROP, extra, log, nlog, seen)
                 if found < 0:  # the same search again: it stops at the same triangle
                     break
             if not alive[found]:
@@ -462,10 +496,11 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 break
             r = extra  # freed by the drop: an augmenting path first, then drop again
             f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                 budget, PLAIN, -1, log, nlog)
+                                 budget, OBSERVE, -1, log, nlog, seen)
             if f2 >= 0:
                 fixed = True
                 break
+            known = True
         if fixed or not _undo(log, nlog, mate, active, alive):
             n_drop += drops
     return s, n_drop
@@ -488,7 +523,7 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touche
     for t in range(m):
         if active[t] and mate[t] < 0:
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                budget, CHAIN, -1, nolog, nonlog)
+                                budget, CHAIN, -1, nolog, nonlog, nonlog)
             hit = hit or f >= 0
     if not hit:
         return s
@@ -779,7 +814,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
         t = order[i]
         if act[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, act, act, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog)
     return s
 
 
@@ -793,7 +828,7 @@ def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, qu
     for t in range(nb.shape[0]):
         if active[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog)
     return s
 
 

@@ -377,3 +377,52 @@ def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch) -> None:
     np.testing.assert_array_equal(one.is_cov, two.is_cov)
     np.testing.assert_array_equal(one.cycle, two.cycle)
     assert two.n_uncovered <= 0.01 * len(tri)
+
+
+@pytest.mark.parametrize("name", ["face", "double_hex", "square_circle_hole", "A"])
+def test_observed_search_answers_the_drop_search(name: str) -> None:
+    # _drop_matching skips the DROP search after a failed OBSERVE search of at least
+    # its budget: from the same state, DROP must stop at the first drop OBSERVE saw
+    # (free third neighbour) within its budget, or fail with the first ``extra`` it
+    # saw; checked from every defect the matching leaves, for two budgets each
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain(name)
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
+    tri = msh.triangles
+    m = len(tri)
+    nb = ck.neighbors(half_edges(tri, msh.n_points).twin, m)
+    alive, deg = ck.peel(nb, m)
+    active = alive & (deg == 3)
+    mate = np.full(m, -1, np.int64)
+    parent, fa, label, stamp = np.full(m, -1, np.int64), np.arange(m), np.full(m, -1, np.int64), np.zeros(m, np.int64)
+    g = np.zeros((m, 3), np.bool_)
+    s = ck.match_half(nb, active, np.zeros(m, np.int8), 0, g, 0, 2000, mate, parent, fa, label, stamp)
+    touched, queue = np.empty(m + 16, np.int64), np.empty(m + 16, np.int64)
+    log, nlog = np.empty((8 * m + 64, 4), np.int64), np.zeros(1, np.int64)
+    seen, dummy = np.empty(4, np.int64), np.empty(4, np.int64)
+    outcomes = set()
+    for r in np.flatnonzero(active & (mate < 0)):
+        for budget in (m, 40):
+            nlog[0] = 0
+            f, s, _ = ck._augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                  ck.OBSERVE, -1, log, nlog, seen)
+            if f >= 0:  # an augmenting path: applied; put the state back
+                assert ck._undo(log, nlog, mate, active, alive)
+                outcomes.add("path")
+                continue
+            assert nlog[0] == 0  # a failed search changes nothing
+            for b in (budget, budget // 2):
+                stop = seen[0] if seen[0] >= 0 and seen[1] < b else -1
+                first = seen[2] if seen[2] >= 0 and seen[3] < b else -1
+                found, s, extra = ck._augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                              b, ck.DROP, -1, log, nlog, dummy)
+                assert found == stop
+                if found < 0:
+                    assert extra == first
+                    outcomes.add("extra" if first >= 0 else "none")
+                else:
+                    assert not alive[found]  # dropped
+                    outcomes.add("drop")
+                assert ck._undo(log, nlog, mate, active, alive)
+    assert "drop" in outcomes or "extra" in outcomes  # the comparison met a drop
