@@ -17,7 +17,8 @@ from hammesh.postprocess._thm24_kernels import find_root as _find
 
 @njit(cache=True, nogil=True)
 def neighbors(twin, m):
-    nb = np.full((m, 3), -1, np.int64)
+    """``nb[t, k]`` (int32): the triangle across side k of t, -1 on the boundary."""
+    nb = np.full((m, 3), -1, np.int32)
     for t in range(m):
         for k in range(3):
             g = twin[3 * t + k]
@@ -165,8 +166,11 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
-    global (size m) but only the vertices this search touches are reset, so a search
-    costs about what it explores. It gives up after ``budget`` touched vertices.
+    global (size m) but only the vertices this search touches are set and reset, so a
+    search costs about what it explores: ``label`` (int8) must start -1 everywhere,
+    ``parent`` and ``fa`` may start empty (never read before a search sets them).
+    It gives up after ``budget`` touched vertices (``touched`` and ``queue`` hold
+    ``budget + 8``).
 
     ``mode``: ``PLAIN`` searches the dual edges between degree-3 (``active``)
     triangles; ``CHAIN`` also steps through chains of degree-2 (``alive``, not
@@ -197,6 +201,7 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     head = 0
     tail = 0
     label[r] = 0
+    fa[r] = r  # the union-find is set up as triangles are touched (fa may start empty)
     touched[n_t] = r
     n_t += 1
     queue[tail] = r
@@ -222,6 +227,7 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
             if label[u] < 0:
                 parent[u] = v
                 label[u] = 1
+                fa[u] = u
                 touched[n_t] = u
                 n_t += 1
                 if mate[u] < 0:
@@ -248,6 +254,7 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
                             seen[2] = u
                             seen[3] = n_v
                 label[w] = 0
+                fa[w] = w
                 touched[n_t] = w
                 n_t += 1
                 queue[tail] = w
@@ -365,7 +372,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     s = 0
-    hdeg = np.zeros(m, np.int64)
+    hdeg = np.zeros(m, np.int8)  # free candidates, 0-3
     for i in range(n):
         t = order[i]
         if active[t] and mate[t] < 0:
@@ -792,7 +799,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     act = np.zeros(m, np.bool_)
     for t in range(m):
         act[t] = active[t] and side[t] == half
-    queue = np.empty(m + 8, np.int64)
+    queue = np.empty(max(online, budget) + 16, np.int64)  # a search enqueues what it touches
     if online > 0:
         order = _bfs_order(nb, side, half)
     else:
@@ -1024,3 +1031,102 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
             if cyc[t] >= 0:
                 cyc[t] = new_id[_find(uf, cyc[t])]
     return merged
+
+
+@njit(cache=True, nogil=True)
+def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
+    """The cover cycles cut at the split into runs inside one half (``side == half``).
+
+    Triangles are taken in index order; each one not yet on a run starts one and walks
+    its cycle both ways while it stays in the half. ``cyc[t]``: the run's number (in
+    this half, in order of the runs' first triangles), ``smin[i]`` its smallest
+    triangle, ``send[i, 0:2]`` the triangles of the other half its two ends lead to
+    (-1, -1: a whole cycle inside the half). The two halves write disjoint triangles
+    of ``cyc``: they run side by side, and ``link_segments`` joins the runs.
+    Returns the number of runs.
+    """
+    m = cyc.shape[0]
+    n = 0
+    for s in range(m):
+        if side[s] != half or cyc[s] >= 0:
+            continue
+        k1 = -1
+        k2 = -1
+        for k in range(3):
+            if is_cov[3 * s + k]:
+                if k1 < 0:
+                    k1 = k
+                else:
+                    k2 = k
+        if k1 < 0:
+            continue
+        cyc[s] = n
+        lo = s
+        send[n, 0] = -1
+        send[n, 1] = -1
+        for d in range(2):
+            prev = s
+            cur = twin[3 * s + (k1 if d == 0 else k2)] // 3
+            while cur != s and side[cur] == half:
+                cyc[cur] = n
+                lo = min(lo, cur)
+                nxt = -1
+                for k in range(3):
+                    h = 3 * cur + k
+                    if is_cov[h] and twin[h] // 3 != prev:
+                        nxt = twin[h] // 3
+                prev = cur
+                cur = nxt
+            if cur == s:  # closed inside the half
+                break
+            send[n, d] = cur
+        smin[n] = lo
+        n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def link_segments(cyc, side, n0, smin0, send0, n1, smin1, send1):
+    """Cycle id of each run of ``cycle_segments_into`` (runs of half 0 first, then of
+    half 1): runs whose ends meet are one cycle, and cycles are numbered in order of
+    their smallest triangle, as ``cycle_ids`` numbers them. Returns ``(ids, n)``."""
+    total = n0 + n1
+    uf = np.arange(max(total, 1))
+    for i in range(total):
+        for d in range(2):
+            o = send0[i, d] if i < n0 else send1[i - n0, d]
+            if o >= 0:
+                j = cyc[o] + (n0 if side[o] == 1 else 0)
+                a = _find(uf, i)
+                b = _find(uf, j)
+                if a != b:
+                    uf[a] = b
+    low = np.full(max(total, 1), -1, np.int64)  # each root: its cycle's smallest triangle
+    for i in range(total):
+        r = _find(uf, i)
+        lo = smin0[i] if i < n0 else smin1[i - n0]
+        if low[r] < 0 or lo < low[r]:
+            low[r] = lo
+    roots = np.empty(total, np.int64)
+    n = 0
+    for i in range(total):
+        if uf[i] == i:
+            roots[n] = i
+            n += 1
+    order = np.argsort(low[roots[:n]])
+    rank = np.empty(max(total, 1), np.int64)
+    for j in range(n):
+        rank[roots[order[j]]] = j
+    ids = np.empty(max(total, 1), np.int64)
+    for i in range(total):
+        ids[i] = rank[_find(uf, i)]
+    return ids, n
+
+
+@njit(cache=True, nogil=True)
+def relabel_segments_into(cyc, side, n0, ids, lo, hi):
+    """``cyc[t]``: from run number (per half) to cycle id, rows lo..hi."""
+    for t in range(lo, hi):
+        c = cyc[t]
+        if c >= 0:
+            cyc[t] = ids[c + (n0 if side[t] == 1 else 0)]

@@ -168,14 +168,17 @@ def cycle_cover(
         quad, cell = _cells(np.ascontiguousarray(points, dtype=np.float64), triangles, tw, m, int(cell_size))
     no_cell = np.zeros(0, np.int64)
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
-    nb = np.empty((m, 3), np.int64)
+    nb = np.empty((m, 3), np.int32)
     run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
     if cell is not None:
         _k.cut_cell_borders(nb, cell)
     alive, deg = _k.peel(nb, m)
     active = alive & (deg == 3)
     mate = np.full(m, -1, np.int64)
-    work = (np.full(m, -1, np.int64), np.arange(m), np.full(m, -1, np.int64), np.zeros(m, np.int64))
+    # the searches' parent, union-find, label (-1: none) and lca stamps: each search
+    # sets what it touches, so only label is written ahead (int8; stamp's zeros are
+    # lazy pages)
+    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     if cell is not None:
         s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
     else:
@@ -192,7 +195,10 @@ def cycle_cover(
         nb, tw, active, alive, mate, *work, s, int(budget), limit, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
         DROP_ROUNDS if drop else -1,
     )
-    cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
+    if cell is None and split and len(spans) > 1:
+        cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans)
+    else:
+        cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
@@ -210,6 +216,18 @@ def cycle_cover(
         quad=quad,
         n_dropped=int(n_drop),
     )
+
+
+def _cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray, spans: list):
+    """``_cover_kernels.cycle_ids`` on two threads: each half's runs of the cycles
+    (``cycle_segments_into``), joined where they cross the split, then relabelled."""
+    m = len(side)
+    cyc = np.full(m, -1, np.int64)
+    runs = [(np.empty(m, np.int64), np.empty((m, 2), np.int64)) for _ in range(2)]  # pages touched as used
+    n0, n1 = run_all([partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)])
+    ids, n = _k.link_segments(cyc, side, n0, *runs[0], n1, *runs[1])
+    run_all([partial(_k.relabel_segments_into, cyc, side, n0, ids, lo, hi) for lo, hi in spans])
+    return cyc, n
 
 
 def _halves(points: np.ndarray, triangles: np.ndarray, spans: list) -> np.ndarray:

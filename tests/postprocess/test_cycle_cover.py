@@ -271,7 +271,7 @@ def test_breadth_first_greedy_leaves_fewer_free() -> None:
     free = {}
     for online in (0, 256):
         k = len(tri)
-        work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
+        work = (np.empty(k, np.int64), np.empty(k, np.int64), np.full(k, -1, np.int8), np.zeros(k, np.int64),
                 np.empty(k + 8, np.int64))
         order = ck._bfs_order(nb, np.zeros(k, np.int8), 0) if online else np.arange(k)
         mate = np.full(k, -1, np.int64)
@@ -395,7 +395,7 @@ def test_observed_search_answers_the_drop_search(name: str) -> None:
     alive, deg = ck.peel(nb, m)
     active = alive & (deg == 3)
     mate = np.full(m, -1, np.int64)
-    parent, fa, label, stamp = np.full(m, -1, np.int64), np.arange(m), np.full(m, -1, np.int64), np.zeros(m, np.int64)
+    parent, fa, label, stamp = np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64)
     g = np.zeros((m, 3), np.bool_)
     s = ck.match_half(nb, active, np.zeros(m, np.int8), 0, g, 0, 2000, mate, parent, fa, label, stamp)
     touched, queue = np.empty(m + 16, np.int64), np.empty(m + 16, np.int64)
@@ -426,3 +426,23 @@ def test_observed_search_answers_the_drop_search(name: str) -> None:
                     outcomes.add("drop")
                 assert ck._undo(log, nlog, mate, active, alive)
     assert "drop" in outcomes or "extra" in outcomes  # the comparison met a drop
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(4, 400), p=st.floats(0.0, 1.0))
+def test_cycle_ids_by_halves_match_the_serial_walk(seed: int, n: int, p: float) -> None:
+    # runs of the cycles inside each half joined across the split: the same ids as
+    # one walk in index order, whatever the halves (here random, so cycles cross the
+    # split many times)
+    from hammesh.postprocess import _cover_kernels as ck
+    from hammesh.postprocess.cycle_cover import _cycle_ids_by_halves
+
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    twin = half_edges(tri, n).twin
+    c = cycle_cover(tri, twin, rotate=False)
+    side = (rng.random(len(tri)) < p).astype(np.int8)
+    want, n_want = ck.cycle_ids(twin, c.is_cov, len(tri))
+    got, n_got = _cycle_ids_by_halves(twin, c.is_cov, side, [(0, len(tri) // 2), (len(tri) // 2, len(tri))])
+    assert n_got == n_want == c.n_cycles
+    np.testing.assert_array_equal(got, want)
