@@ -442,7 +442,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
 
 @njit(cache=True, nogil=True)
 def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, plain_budget, budget,
-                   rounds):
+                   rounds, frees):
     """Fix free degree-3 triangles by leaving interior triangles uncovered (``DROP``).
 
     A degree-3 triangle the matching cannot pair (a parity defect: typically two
@@ -464,7 +464,7 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
     seen = np.empty(4, np.int64)
-    for t in range(m):
+    for t in frees:  # the free triangles, in index order (the list only shrinks)
         if not active[t] or mate[t] >= 0:
             continue
         r = t  # a longer augmenting path first: it leaves nothing uncovered
@@ -514,7 +514,7 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
 
 
 @njit(cache=True, nogil=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget):
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget, frees):
     """Augment through chains of degree-2 triangles; a chain used is left uncovered.
 
     A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
@@ -527,7 +527,7 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touche
     hit = False
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
-    for t in range(m):
+    for t in frees:
         if active[t] and mate[t] < 0:
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
                                 budget, CHAIN, -1, nolog, nonlog, nonlog)
@@ -566,27 +566,24 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touche
 
 
 @njit(cache=True, nogil=True)
-def _cover_edges(nb, alive, mate, m):
-    """Alive-alive dual edges that are not matching edges."""
-    # the cover: alive-alive dual edges that are not matching edges
-    is_cov = np.zeros(3 * m, np.bool_)
-    cdeg = np.zeros(m, np.int64)
-    for t in range(m):
-        if not alive[t]:
-            continue
+def cover_edges_into(nb, alive, mate, is_cov, cdeg, lo, hi):
+    """The cover, rows lo..hi: ``is_cov`` on the alive-alive dual edges that are not
+    matching edges, ``cdeg`` (int8) each triangle's count of them."""
+    for t in range(lo, hi):
+        c = 0
         for k in range(3):
             u = nb[t, k]
-            if u >= 0 and alive[u] and mate[t] != u:
-                is_cov[3 * t + k] = True
-                cdeg[t] += 1
-    return is_cov, cdeg
+            on = alive[t] and u >= 0 and alive[u] and mate[t] != u
+            is_cov[3 * t + k] = on
+            c += on
+        cdeg[t] = c
 
 
 @njit(cache=True, nogil=True)
-def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
-    """Drop the shortest cover arc between two free degree-3 triangles."""
+def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, odd):
+    """Drop the shortest cover arc between two free degree-3 triangles (among ``odd``)."""
     # repair: join two free degree-3 triangles by dropping the arc between them
-    for t in range(m):
+    for t in odd:
         if not (alive[t] and cdeg[t] == 3):
             continue
         best_len = arc_limit + 1
@@ -630,12 +627,15 @@ def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
 
 
 @njit(cache=True, nogil=True)
-def _final_peel(nb, twin, is_cov, cdeg, alive, m):
-    """Peel what still has cover degree other than 2."""
+def _final_peel(nb, twin, is_cov, cdeg, alive, odd):
+    """Peel what still has cover degree other than 2 (from ``odd``, the triangles
+    that had it before the repair, which only gives such triangles degree 2 or kills
+    them)."""
+    m = cdeg.shape[0]
     stack = np.empty(m + 1, np.int64)
     # final peel: cover degree must be exactly 2
     top = 0
-    for t in range(m):
+    for t in odd:
         if alive[t] and cdeg[t] != 2:
             stack[top] = t
             top += 1
@@ -656,11 +656,6 @@ def _final_peel(nb, twin, is_cov, cdeg, alive, m):
                     stack[top] = u
                     top += 1
         cdeg[t] = 0
-    n_unc = 0
-    for t in range(m):
-        if cdeg[t] != 2:
-            n_unc += 1
-    return n_unc
 
 
 @njit(cache=True, nogil=True)
@@ -791,7 +786,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     Everything stays inside the half: the two halves of a split share no triangle
     this writes, so they run on two threads side by side (the arrays are shared), and
     the result does not depend on the number of threads. The parity defects are left
-    to ``finish_cover``: fixed inside the halves on two threads (tried) they cost
+    to ``finish_matching``: fixed inside the halves on two threads (tried) they cost
     more, as the defects left at the split then go to chains. Returns the next lca
     stamp.
     """
@@ -857,39 +852,76 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
 
 
 @njit(cache=True, nogil=True)
-def finish_cover(nb, twin, active, alive, mate, parent, fa, label, stamp, s, budget, arc_limit, plain_budget,
-                 drop_budget, drop_rounds):
-    """From the matchings of the halves (or cells) to the cover.
+def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget, plain_budget, drop_budget,
+                    drop_rounds):
+    """From the matchings of the halves (or cells) to the matching the cover complements.
 
     Searches of ``budget`` triangles over the whole graph from each triangle still
     free (those left at the split between the halves, mostly: the join across it);
     the parity defects (``_drop_matching``: searches of ``plain_budget``, then of
-    ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then
-    chains (``_chain_matching``); the cover is every alive dual edge not in the
-    matching; a degree-3 triangle still free is repaired by dropping the shortest
-    cover arc from it to another (``_repair``) and whatever still has cover degree
-    other than 2 is peeled (``_final_peel``).
+    ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then chains
+    (``_chain_matching``). The free triangles are listed once (the phases only
+    match them; a drop sequence that frees another either matches it or is undone).
+    Then ``cover_edges_into`` (rows on threads) and ``settle_cover``.
 
-    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered, n_dropped)``.
+    Returns ``(n_free_after_matching, n_dropped)``.
     """
     m = nb.shape[0]
+    n = 0
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            n += 1
+    frees = np.empty(n, np.int64)
+    n = 0
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            frees[n] = t
+            n += 1
     queue = np.empty(m + 8, np.int64)
-    s = _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, queue, budget)
+    touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for t in frees:
+        if mate[t] < 0:
+            _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog, nonlog)
     n_drop = 0
     if drop_rounds >= 0:
         touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
         s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
-                                   plain_budget, drop_budget, drop_rounds)
+                                   plain_budget, drop_budget, drop_rounds, frees)
     touched_c = np.empty(2 * m + 16, np.int64)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8, frees)
     n_free = 0
-    for t in range(m):
+    for t in frees:
         if active[t] and mate[t] < 0:
             n_free += 1
-    is_cov, cdeg = _cover_edges(nb, alive, mate, m)
-    _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m)
-    n_unc = _final_peel(nb, twin, is_cov, cdeg, alive, m)
-    return is_cov, n_free, n_unc, n_drop
+    return n_free, n_drop
+
+
+@njit(cache=True, nogil=True)
+def settle_cover(nb, twin, is_cov, cdeg, alive, arc_limit):
+    """After ``cover_edges_into``: a degree-3 triangle still free is repaired by dropping
+    the shortest cover arc from it to another (``_repair``), and whatever still has
+    cover degree other than 2 is peeled (``_final_peel``). Returns the uncovered count."""
+    m = cdeg.shape[0]
+    n = 0
+    for t in range(m):
+        if alive[t] and cdeg[t] != 2:
+            n += 1
+    odd = np.empty(n, np.int64)
+    n = 0
+    for t in range(m):
+        if alive[t] and cdeg[t] != 2:
+            odd[n] = t
+            n += 1
+    _repair(nb, twin, is_cov, cdeg, alive, arc_limit, odd)
+    _final_peel(nb, twin, is_cov, cdeg, alive, odd)
+    n_unc = 0
+    for t in range(m):
+        if cdeg[t] != 2:
+            n_unc += 1
+    return n_unc
 
 
 @njit(cache=True, nogil=True)

@@ -6,7 +6,7 @@ cycles through every vertex). The dual graph of a mesh with boundary has degrees
 here ears (and what peeling them leaves) stay uncovered, the degree-3 triangles are
 matched among themselves, the rest of the dual edges are the cover, and the few
 defects a maximum matching leaves are repaired locally (see
-``_cover_kernels.finish_cover``). Everything is O(m) in numba; the augmenting searches
+``_cover_kernels.finish_matching``, ``settle_cover``). Everything is O(m) in numba; the augmenting searches
 are bounded by ``budget`` labelled triangles each. Finally cycles are merged for free
 where the matching can be rotated around a vertex (``rotate``).
 """
@@ -191,10 +191,13 @@ def cycle_cover(
         calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
-    is_cov, n_free, n_unc, n_drop = _k.finish_cover(
-        nb, tw, active, alive, mate, *work, s, int(budget), limit, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
-        DROP_ROUNDS if drop else -1,
+    n_free, n_drop = _k.finish_matching(
+        nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1
     )
+    is_cov = np.empty(3 * m, np.bool_)
+    cdeg = np.empty(m, np.int8)
+    run_all([partial(_k.cover_edges_into, nb, alive, mate, is_cov, cdeg, lo, hi) for lo, hi in spans])
+    n_unc = _k.settle_cover(nb, tw, is_cov, cdeg, alive, limit)
     if cell is None and split and len(spans) > 1:
         cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans)
     else:
