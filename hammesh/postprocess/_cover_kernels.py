@@ -965,91 +965,110 @@ def cycle_ids(twin, is_cov, m):
 
 
 @njit(cache=True, nogil=True)
-def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
-    """Merge cover cycles for free by re-matching around vertices.
+def star_prefilter_into(tri, is_cov, vh, skip, lo, hi):
+    """For ``rotate_stars``, rows lo..hi: ``vh[v]`` a half-edge leaving each vertex,
+    ``skip[v]`` set where v cannot be rotated: it is the apex (the corner opposite
+    the matched, non-cover edge) of some triangle, or a corner of an uncovered one.
+    Elsewhere every triangle around v has its matched edge at v, so v's spokes
+    alternate matched / cover. Two row ranges may run side by side: ``skip`` is only
+    ever set, and any half-edge leaving v serves as ``vh[v]``."""
+    for t in range(lo, hi):
+        cov = is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]
+        for k in range(3):
+            vh[tri[t, k]] = 3 * t + k
+            if not cov:
+                skip[tri[t, k]] = True
+            elif not is_cov[3 * t + k]:
+                skip[tri[t, (k + 2) % 3]] = True
 
-    Around an interior vertex of even degree 2k whose k spokes alternate matched /
-    cover (the dual edges crossing the spokes), swapping the two roles keeps every
-    triangle at cover degree 2 and the matching perfect; if the k cover spokes lie on
-    k different cycles, the k cycles become one (remove one edge from each: k paths;
-    the new spokes chain them around the vertex). No geometry changes.
 
-    With cells (``cell`` (m,) int64; empty: none) only vertices whose triangles all
-    lie in one cell are rotated: cycles are merged across cells by the joins, finest
-    cells first.
+@njit(cache=True, nogil=True, inline="always")
+def _star_spokes(twin, is_cov, cyc, h0, cell, spokes):
+    """The spokes around the vertex ``h0`` leaves (``spokes[:d]``, the half-edges of
+    the edges at v, one per triangle around it), d if they alternate matched / cover
+    around an interior vertex of even degree 4..30 whose triangles are covered (and
+    in one cell if ``cell`` has m rows), else -1."""
+    use_cell = cell.shape[0] == cyc.shape[0]
+    d = 0
+    h = h0
+    while True:  # h leaves v in triangle t; spoke p = edge (w, v) of t
+        t = h // 3
+        p = 3 * t + (h - 3 * t + 2) % 3
+        q = twin[p]
+        if q < 0 or d >= 32 or cyc[t] < 0 or (use_cell and cell[t] != cell[h0 // 3]):
+            return -1
+        if d > 0 and is_cov[p] == is_cov[spokes[d - 1]]:
+            return -1  # not alternating
+        spokes[d] = p
+        d += 1
+        h = q
+        if h == h0:
+            break
+    if d < 4 or d % 2 == 1:
+        return -1
+    return d
 
-    Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
-    returns the number of cycles merged away. One pass merges what more would: on the
-    16k corpus and at 1.5 M triangles a second pass merged no cycle (it cost 0.06 s).
-    """
-    m = tri.shape[0]
-    vh = np.full(n_points, -1, np.int64)
+
+@njit(cache=True, nogil=True)
+def star_candidates_into(twin, is_cov, cyc, vh, skip, cell, cand, lo, hi):
+    """``cand[v]`` for vertices lo..hi: v not skipped (``star_prefilter_into``), its
+    spokes alternate (``_star_spokes``) and its cover spokes lie on distinct cycles.
+    Read-only but ``cand``: two vertex ranges run side by side. The rotations
+    themselves (``rotate_candidates``) only ever remove candidates."""
+    spokes = np.empty(32, np.int64)
+    for v in range(lo, hi):
+        cand[v] = False
+        h0 = vh[v]
+        if h0 < 0 or skip[v]:
+            continue
+        d = _star_spokes(twin, is_cov, cyc, h0, cell, spokes)
+        if d < 0:
+            continue
+        ok = True
+        for i in range(d):
+            if is_cov[spokes[i]]:
+                for j in range(i):
+                    if is_cov[spokes[j]] and cyc[spokes[j] // 3] == cyc[spokes[i] // 3]:
+                        ok = False
+        cand[v] = ok
+
+
+@njit(cache=True, nogil=True)
+def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
+    """Rotate the candidate vertices (``star_candidates_into``) in vertex order, each
+    checked again against the rotations before it (alternation, distinct merged
+    cycles); then renumber ``cyc``. Returns the number of cycles merged away."""
+    m = cyc.shape[0]
     uf = np.arange(max(n_cyc, 1))
     spokes = np.empty(32, np.int64)
     roots = np.empty(16, np.int64)
     merged = 0
-    use_cell = cell.shape[0] == m
-    skip = np.zeros(n_points, np.bool_)
-    for it in range(passes):
-        before = merged
-        # spokes alternate at v iff every triangle around v has its matched (non-cover)
-        # edge at v, i.e. v is no triangle's apex (the corner opposite that edge):
-        # a cheap sequential prefilter before walking rings (in the same pass as each
-        # vertex's half-edge, the first time)
-        skip[:] = False
-        for t in range(m):
-            for k in range(3):
-                if it == 0:
-                    vh[tri[t, k]] = 3 * t + k
-                if cyc[t] < 0:
-                    skip[tri[t, k]] = True
-                elif not is_cov[3 * t + k]:
-                    skip[tri[t, (k + 2) % 3]] = True
-        for v in range(n_points):
-            h0 = vh[v]
-            if h0 < 0 or skip[v]:
-                continue
-            d = 0
-            h = h0
-            ok = True
-            while True:  # h leaves v in triangle t; spoke p = edge (w, v) of t
-                t = h // 3
-                p = 3 * t + (h - 3 * t + 2) % 3
-                q = twin[p]
-                if q < 0 or d >= 32 or cyc[t] < 0 or (use_cell and cell[t] != cell[h0 // 3]):
-                    ok = False
-                    break
-                if d > 0 and is_cov[p] == is_cov[spokes[d - 1]]:
-                    ok = False  # not alternating: most vertices stop here
-                    break
-                spokes[d] = p
-                d += 1
-                h = q
-                if h == h0:
-                    break
-            if not ok or d < 4 or d % 2 == 1:
-                continue
-            nr = 0
-            for i in range(d):
-                if is_cov[spokes[i]]:
-                    r = _find(uf, cyc[spokes[i] // 3])
-                    for j in range(nr):
-                        if roots[j] == r:
-                            ok = False
-                    roots[nr] = r
-                    nr += 1
-            if not ok:
-                continue
-            for i in range(d):
-                p = spokes[i]
-                c = not is_cov[p]
-                is_cov[p] = c
-                is_cov[twin[p]] = c
-            for j in range(1, nr):
-                uf[_find(uf, roots[j])] = _find(uf, roots[0])
-            merged += nr - 1
-        if merged == before:
-            break
+    for v in range(cand.shape[0]):
+        if not cand[v]:
+            continue
+        d = _star_spokes(twin, is_cov, cyc, vh[v], cell, spokes)
+        if d < 0:
+            continue
+        nr = 0
+        ok = True
+        for i in range(d):
+            if is_cov[spokes[i]]:
+                r = _find(uf, cyc[spokes[i] // 3])
+                for j in range(nr):
+                    if roots[j] == r:
+                        ok = False
+                roots[nr] = r
+                nr += 1
+        if not ok:
+            continue
+        for i in range(d):
+            p = spokes[i]
+            c = not is_cov[p]
+            is_cov[p] = c
+            is_cov[twin[p]] = c
+        for j in range(1, nr):
+            uf[_find(uf, roots[j])] = _find(uf, roots[0])
+        merged += nr - 1
     # cycle ids after the merges: the union-find roots, renumbered
     if merged > 0:
         new_id = np.full(max(n_cyc, 1), -1, np.int64)
@@ -1063,6 +1082,34 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
             if cyc[t] >= 0:
                 cyc[t] = new_id[_find(uf, cyc[t])]
     return merged
+
+
+@njit(cache=True, nogil=True)
+def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, cell):
+    """Merge cover cycles for free by re-matching around vertices.
+
+    Around an interior vertex of even degree 2k whose k spokes alternate matched /
+    cover (the dual edges crossing the spokes), swapping the two roles keeps every
+    triangle at cover degree 2 and the matching perfect; if the k cover spokes lie on
+    k different cycles, the k cycles become one (remove one edge from each: k paths;
+    the new spokes chain them around the vertex). No geometry changes.
+
+    With cells (``cell`` (m,) int64; empty: none) only vertices whose triangles all
+    lie in one cell are rotated: cycles are merged across cells by the joins, finest
+    cells first.
+
+    Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
+    returns the number of cycles merged away. One pass (on the 16k corpus and at
+    1.5 M triangles a second merged no cycle). The three steps run on two threads
+    from ``cycle_cover`` (``star_prefilter_into``, ``star_candidates_into``, then
+    ``rotate_candidates``); this is them in one call.
+    """
+    vh = np.full(n_points, -1, np.int64)
+    skip = np.zeros(n_points, np.bool_)
+    cand = np.empty(n_points, np.bool_)
+    star_prefilter_into(tri, is_cov, vh, skip, 0, tri.shape[0])
+    star_candidates_into(twin, is_cov, cyc, vh, skip, cell, cand, 0, n_points)
+    return rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell)
 
 
 @njit(cache=True, nogil=True)

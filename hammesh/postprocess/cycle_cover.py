@@ -120,7 +120,7 @@ def cycle_cover(
         Longest cover arc the repair may drop to fix a triangle left unmatched (default:
         any; the alternative, peeling, would drop whole cycles).
     rotate : bool
-        Merge cycles by re-matching around vertices (``_sparse_kernels.rotate_stars``):
+        Merge cycles by re-matching around vertices (``_cover_kernels.rotate_stars``):
         fewer cycles, same geometry.
     good : (3 m,) bool, optional
         Half-edges preferred as matching (non-cover) edges where the greedy matching
@@ -205,9 +205,18 @@ def cycle_cover(
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
-        n_rot = int(
-            _k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, 1, no_cell if cell is None else cell)
-        )
+        n_pts = int(tri.max()) + 1
+        cl = no_cell if cell is None else cell
+        if len(spans) > 1:  # the prefilter and the candidates on two threads, the rotations on one
+            vh = np.full(n_pts, -1, np.int64)
+            skip = np.zeros(n_pts, np.bool_)
+            cand = np.empty(n_pts, np.bool_)
+            run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
+            run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
+                     for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
+            n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
+        else:
+            n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, n_pts, cl))
         n_cyc -= n_rot
     return CycleCover(
         is_cov=is_cov,

@@ -446,3 +446,31 @@ def test_cycle_ids_by_halves_match_the_serial_walk(seed: int, n: int, p: float) 
     got, n_got = _cycle_ids_by_halves(twin, c.is_cov, side, [(0, len(tri) // 2), (len(tri) // 2, len(tri))])
     assert n_got == n_want == c.n_cycles
     np.testing.assert_array_equal(got, want)
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(4, 400))
+def test_rotations_from_candidates_match_the_serial_pass(seed: int, n: int) -> None:
+    # the prefilter and the candidates on two row ranges each, then the rotations:
+    # the same flips and cycle ids as the one-call pass (random Delaunay meshes:
+    # nearly all of them have cycles to merge)
+    from hammesh.postprocess import _cover_kernels as ck
+
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    twin = half_edges(tri, n).twin
+    c = cycle_cover(tri, twin, rotate=False)
+    cell = np.zeros(0, np.int64)
+    want_cov, want_cyc = c.is_cov.copy(), c.cycle.copy()
+    want = ck.rotate_stars(tri, twin, want_cov, want_cyc, c.n_cycles, n, cell)
+    got_cov, got_cyc = c.is_cov.copy(), c.cycle.copy()
+    vh, skip, cand = np.full(n, -1, np.int64), np.zeros(n, np.bool_), np.empty(n, np.bool_)
+    m = len(tri)
+    for lo, hi in ((m // 3, m), (0, m // 3)):
+        ck.star_prefilter_into(tri, got_cov, vh, skip, lo, hi)
+    for lo, hi in ((0, n // 2), (n // 2, n)):
+        ck.star_candidates_into(twin, got_cov, got_cyc, vh, skip, cell, cand, lo, hi)
+    got = ck.rotate_candidates(twin, got_cov, got_cyc, c.n_cycles, vh, cand, cell)
+    assert got == want
+    np.testing.assert_array_equal(got_cov, want_cov)
+    np.testing.assert_array_equal(got_cyc, want_cyc)
