@@ -191,32 +191,34 @@ def cycle_cover(
         calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
-    n_free, n_drop = _k.finish_matching(
-        nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1
+    finish = partial(
+        _k.finish_matching,
+        nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1,
     )
-    is_cov = np.empty(3 * m, np.bool_)
-    cdeg = np.empty(m, np.int8)
+    if len(spans) > 1:  # the defects' searches are serial: the other core faults in the arrays used next
+        (n_free, n_drop), later = run_all([finish, partial(_Later, m, triangles, rotate)])
+    else:
+        (n_free, n_drop), later = finish(), None
+    is_cov = np.empty(3 * m, np.bool_) if later is None else later.is_cov
+    cdeg = np.empty(m, np.int8) if later is None else later.cdeg
     run_all([partial(_k.cover_edges_into, nb, alive, mate, is_cov, cdeg, lo, hi) for lo, hi in spans])
     n_unc = _k.settle_cover(nb, tw, is_cov, cdeg, alive, limit)
     if cell is None and split and len(spans) > 1:
-        cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans)
+        cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
     else:
         cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
-        n_pts = int(tri.max()) + 1
         cl = no_cell if cell is None else cell
-        if len(spans) > 1:  # the prefilter and the candidates on two threads, the rotations on one
-            vh = np.full(n_pts, -1, np.int64)
-            skip = np.zeros(n_pts, np.bool_)
-            cand = np.empty(n_pts, np.bool_)
+        if later is not None:  # the prefilter and the candidates on two threads, the rotations on one
+            n_pts, vh, skip, cand = later.n_pts, later.vh, later.skip, later.cand
             run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
             run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
                      for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
             n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
         else:
-            n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, n_pts, cl))
+            n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, cl))
         n_cyc -= n_rot
     return CycleCover(
         is_cov=is_cov,
@@ -230,11 +232,30 @@ def cycle_cover(
     )
 
 
-def _cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray, spans: list):
+class _Later:
+    """The big arrays the cover's last steps write, their pages faulted in on the
+    second core while the first runs the (serial) searches from the defects: the
+    cover (``is_cov``, ``cdeg``), the cycle ids (``cyc``: -1) and the rotations'
+    vertex arrays (``vh``: -1, ``skip``: False, ``cand``), over the vertex count
+    ``n_pts``."""
+
+    def __init__(self, m: int, triangles: np.ndarray, rotate: bool) -> None:
+        self.is_cov = np.full(3 * m, False)
+        self.cdeg = np.full(m, 0, np.int8)
+        self.cyc = np.full(m, -1, np.int64)
+        self.n_pts = int(np.max(triangles)) + 1 if rotate and m else 0
+        self.vh = np.full(self.n_pts, -1, np.int64)
+        self.skip = np.full(self.n_pts, False)
+        self.cand = np.full(self.n_pts, False)
+
+
+def _cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray, spans: list,
+                         cyc: np.ndarray | None = None):
     """``_cover_kernels.cycle_ids`` on two threads: each half's runs of the cycles
-    (``cycle_segments_into``), joined where they cross the split, then relabelled."""
+    (``cycle_segments_into``), joined where they cross the split, then relabelled
+    (into ``cyc``, all -1, if given)."""
     m = len(side)
-    cyc = np.full(m, -1, np.int64)
+    cyc = np.full(m, -1, np.int64) if cyc is None else cyc
     runs = [(np.empty(m, np.int64), np.empty((m, 2), np.int64)) for _ in range(2)]  # pages touched as used
     n0, n1 = run_all([partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)])
     ids, n = _k.link_segments(cyc, side, n0, *runs[0], n1, *runs[1])
