@@ -17,7 +17,8 @@ from hammesh.postprocess._thm24_kernels import find_root as _find
 
 @njit(cache=True, nogil=True)
 def neighbors(twin, m):
-    nb = np.full((m, 3), -1, np.int64)
+    """``nb[t, k]`` (int32): the triangle across side k of t, -1 on the boundary."""
+    nb = np.full((m, 3), -1, np.int32)
     for t in range(m):
         for k in range(3):
             g = twin[3 * t + k]
@@ -59,6 +60,7 @@ def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
 PLAIN = 0  # along dual edges between degree-3 triangles
 CHAIN = 1  # also through chains of degree-2 triangles (left uncovered when used)
 DROP = 2  # PLAIN, or drop one interior degree-3 triangle (left uncovered)
+OBSERVE = 3  # PLAIN, noting where a DROP search of the same start would stop (``seen``)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -160,12 +162,15 @@ def _drop(u, nb, active, alive, mate, log, nlog):
 
 @njit(cache=True, nogil=True)
 def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
-             nlog):
+             nlog, seen):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
-    global (size m) but only the vertices this search touches are reset, so a search
-    costs about what it explores. It gives up after ``budget`` touched vertices.
+    global (size m) but only the vertices this search touches are set and reset, so a
+    search costs about what it explores: ``label`` (int8) must start -1 everywhere,
+    ``parent`` and ``fa`` may start empty (never read before a search sets them).
+    It gives up after ``budget`` touched vertices (``touched`` and ``queue`` hold
+    ``budget + 8``).
 
     ``mode``: ``PLAIN`` searches the dual edges between degree-3 (``active``)
     triangles; ``CHAIN`` also steps through chains of degree-2 (``alive``, not
@@ -177,7 +182,14 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     mate and ``z`` drop to degree 2 and need no partner), so one interior triangle
     is left uncovered instead of a chain of boundary triangles. With ``take >= 0``
     the search stops at ``u == take`` even if ``z`` is matched (its partner is
-    freed).
+    freed). ``OBSERVE`` searches like ``PLAIN`` and notes in ``seen`` (4 int64) where
+    ``DROP`` from the same state would have stopped: ``seen[0]`` the first ``u`` with
+    a free ``z``, ``seen[2]`` the first with a matched one (the ``extra`` below), each
+    -1 if none, and ``seen[1]``, ``seen[3]`` the vertices touched when the expansion
+    that met it began (a ``DROP`` search of a smaller budget meets it iff less).
+    The two searches explore alike up to where ``DROP`` stops, so a failed
+    ``OBSERVE`` search answers the ``DROP`` search that would follow it
+    (``_drop_matching``) without exploring the same triangles again.
 
     Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
     applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
@@ -189,6 +201,7 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     head = 0
     tail = 0
     label[r] = 0
+    fa[r] = r  # the union-find is set up as triangles are touched (fa may start empty)
     touched[n_t] = r
     n_t += 1
     queue[tail] = r
@@ -197,9 +210,13 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     drop = False
     extra = -1
     s = s0
+    if mode == OBSERVE:
+        seen[0] = -1
+        seen[2] = -1
     while head < tail and found < 0 and n_t < budget:
         v = queue[head]
         head += 1
+        n_v = n_t
         for k in range(3):
             if mode == CHAIN:
                 u, _ = _chain_end(nb, active, alive, v, k)
@@ -210,6 +227,7 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
             if label[u] < 0:
                 parent[u] = v
                 label[u] = 1
+                fa[u] = u
                 touched[n_t] = u
                 n_t += 1
                 if mate[u] < 0:
@@ -225,7 +243,18 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
                             break
                         if extra < 0 and mate[z] != u:
                             extra = u
+                elif mode == OBSERVE:
+                    z = _third(nb, u, v, w)
+                    if z >= 0 and z != r and active[z]:
+                        if mate[z] < 0:
+                            if seen[0] < 0:
+                                seen[0] = u
+                                seen[1] = n_v
+                        elif seen[2] < 0 and mate[z] != u:
+                            seen[2] = u
+                            seen[3] = n_v
                 label[w] = 0
+                fa[w] = w
                 touched[n_t] = w
                 n_t += 1
                 queue[tail] = w
@@ -338,12 +367,12 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     next lca stamp.
     """
     n = order.shape[0]
-    stack = np.empty(3 * n + 16, np.int64)  # a triangle is pushed at most three times
+    stack = np.empty(4 * n + 16, np.int64)  # a triangle is pushed once, then once per neighbour matched
     touched = np.empty(online + 16, np.int64)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     s = 0
-    hdeg = np.zeros(m, np.int64)
+    hdeg = np.zeros(m, np.int8)  # free candidates, 0-3
     for i in range(n):
         t = order[i]
         if active[t] and mate[t] < 0:
@@ -385,7 +414,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             if online <= 0:
                 continue
             far, s, _x = _augment(t, nb, active, active, mate, parent, fa, label, stamp, s, touched, queue, online,
-                                  PLAIN, -1, nolog, nonlog)
+                                  PLAIN, -1, nolog, nonlog, nonlog)
             if far < 0:
                 continue
             # t and the path's far end are newly matched (the path's inner triangles
@@ -413,7 +442,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
 
 @njit(cache=True, nogil=True)
 def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, plain_budget, budget,
-                   rounds):
+                   rounds, frees):
     """Fix free degree-3 triangles by leaving interior triangles uncovered (``DROP``).
 
     A degree-3 triangle the matching cannot pair (a parity defect: typically two
@@ -434,25 +463,37 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     n_drop = 0
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
-    for t in range(m):
+    seen = np.empty(4, np.int64)
+    for t in frees:  # the free triangles, in index order (the list only shrinks)
         if not active[t] or mate[t] >= 0:
             continue
         r = t  # a longer augmenting path first: it leaves nothing uncovered
         f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                             plain_budget, PLAIN, -1, log, nlog)
+                             plain_budget, OBSERVE, -1, log, nlog, seen)
         if f0 >= 0:
             continue
         nlog[0] = 0
         fixed = False
         drops = 0
+        known = plain_budget >= budget  # the failed search answers the DROP search
         for it in range(rounds + 1):
-            found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                       budget, DROP, -1, log, nlog)
+            # a DROP search from r: pairs r along an augmenting path or stops at the
+            # first drop; after a failed OBSERVE search of at least its budget from
+            # the same state neither exists but the drop it saw, if any
+            if known:
+                found = -1
+                extra = seen[2] if seen[2] >= 0 and seen[3] < budget else -1
+                if seen[0] >= 0 and seen[1] < budget:  # the search stops there
+                    found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
+                                               queue, budget, DROP, -1, log, nlog, seen)
+            else:
+                found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                           budget, DROP, -1, log, nlog, seen)
             if found < 0:
                 if extra < 0 or it == rounds:
                     break
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                           queue, budget, DROP, extra, log, nlog)
+                                           queue, budget, DROP, extra, log, nlog, seen)
                 if found < 0:  # the same search again: it stops at the same triangle
                     break
             if not alive[found]:
@@ -462,17 +503,18 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 break
             r = extra  # freed by the drop: an augmenting path first, then drop again
             f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                 budget, PLAIN, -1, log, nlog)
+                                 budget, OBSERVE, -1, log, nlog, seen)
             if f2 >= 0:
                 fixed = True
                 break
+            known = True
         if fixed or not _undo(log, nlog, mate, active, alive):
             n_drop += drops
     return s, n_drop
 
 
 @njit(cache=True, nogil=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget):
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget, frees):
     """Augment through chains of degree-2 triangles; a chain used is left uncovered.
 
     A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
@@ -485,10 +527,10 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touche
     hit = False
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
-    for t in range(m):
+    for t in frees:
         if active[t] and mate[t] < 0:
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                budget, CHAIN, -1, nolog, nonlog)
+                                budget, CHAIN, -1, nolog, nonlog, nonlog)
             hit = hit or f >= 0
     if not hit:
         return s
@@ -524,27 +566,24 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touche
 
 
 @njit(cache=True, nogil=True)
-def _cover_edges(nb, alive, mate, m):
-    """Alive-alive dual edges that are not matching edges."""
-    # the cover: alive-alive dual edges that are not matching edges
-    is_cov = np.zeros(3 * m, np.bool_)
-    cdeg = np.zeros(m, np.int64)
-    for t in range(m):
-        if not alive[t]:
-            continue
+def cover_edges_into(nb, alive, mate, is_cov, cdeg, lo, hi):
+    """The cover, rows lo..hi: ``is_cov`` on the alive-alive dual edges that are not
+    matching edges, ``cdeg`` (int8) each triangle's count of them."""
+    for t in range(lo, hi):
+        c = 0
         for k in range(3):
             u = nb[t, k]
-            if u >= 0 and alive[u] and mate[t] != u:
-                is_cov[3 * t + k] = True
-                cdeg[t] += 1
-    return is_cov, cdeg
+            on = alive[t] and u >= 0 and alive[u] and mate[t] != u
+            is_cov[3 * t + k] = on
+            c += on
+        cdeg[t] = c
 
 
 @njit(cache=True, nogil=True)
-def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
-    """Drop the shortest cover arc between two free degree-3 triangles."""
+def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, odd):
+    """Drop the shortest cover arc between two free degree-3 triangles (among ``odd``)."""
     # repair: join two free degree-3 triangles by dropping the arc between them
-    for t in range(m):
+    for t in odd:
         if not (alive[t] and cdeg[t] == 3):
             continue
         best_len = arc_limit + 1
@@ -588,12 +627,15 @@ def _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m):
 
 
 @njit(cache=True, nogil=True)
-def _final_peel(nb, twin, is_cov, cdeg, alive, m):
-    """Peel what still has cover degree other than 2."""
+def _final_peel(nb, twin, is_cov, cdeg, alive, odd):
+    """Peel what still has cover degree other than 2 (from ``odd``, the triangles
+    that had it before the repair, which only gives such triangles degree 2 or kills
+    them)."""
+    m = cdeg.shape[0]
     stack = np.empty(m + 1, np.int64)
     # final peel: cover degree must be exactly 2
     top = 0
-    for t in range(m):
+    for t in odd:
         if alive[t] and cdeg[t] != 2:
             stack[top] = t
             top += 1
@@ -614,11 +656,6 @@ def _final_peel(nb, twin, is_cov, cdeg, alive, m):
                     stack[top] = u
                     top += 1
         cdeg[t] = 0
-    n_unc = 0
-    for t in range(m):
-        if cdeg[t] != 2:
-            n_unc += 1
-    return n_unc
 
 
 @njit(cache=True, nogil=True)
@@ -749,7 +786,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     Everything stays inside the half: the two halves of a split share no triangle
     this writes, so they run on two threads side by side (the arrays are shared), and
     the result does not depend on the number of threads. The parity defects are left
-    to ``finish_cover``: fixed inside the halves on two threads (tried) they cost
+    to ``finish_matching``: fixed inside the halves on two threads (tried) they cost
     more, as the defects left at the split then go to chains. Returns the next lca
     stamp.
     """
@@ -757,7 +794,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     act = np.zeros(m, np.bool_)
     for t in range(m):
         act[t] = active[t] and side[t] == half
-    queue = np.empty(m + 8, np.int64)
+    queue = np.empty(max(online, budget) + 16, np.int64)  # a search enqueues what it touches
     if online > 0:
         order = _bfs_order(nb, side, half)
     else:
@@ -779,7 +816,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
         t = order[i]
         if act[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, act, act, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog)
     return s
 
 
@@ -793,7 +830,7 @@ def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, qu
     for t in range(nb.shape[0]):
         if active[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog)
     return s
 
 
@@ -815,39 +852,76 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
 
 
 @njit(cache=True, nogil=True)
-def finish_cover(nb, twin, active, alive, mate, parent, fa, label, stamp, s, budget, arc_limit, plain_budget,
-                 drop_budget, drop_rounds):
-    """From the matchings of the halves (or cells) to the cover.
+def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget, plain_budget, drop_budget,
+                    drop_rounds):
+    """From the matchings of the halves (or cells) to the matching the cover complements.
 
     Searches of ``budget`` triangles over the whole graph from each triangle still
     free (those left at the split between the halves, mostly: the join across it);
     the parity defects (``_drop_matching``: searches of ``plain_budget``, then of
-    ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then
-    chains (``_chain_matching``); the cover is every alive dual edge not in the
-    matching; a degree-3 triangle still free is repaired by dropping the shortest
-    cover arc from it to another (``_repair``) and whatever still has cover degree
-    other than 2 is peeled (``_final_peel``).
+    ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then chains
+    (``_chain_matching``). The free triangles are listed once (the phases only
+    match them; a drop sequence that frees another either matches it or is undone).
+    Then ``cover_edges_into`` (rows on threads) and ``settle_cover``.
 
-    Returns ``(is_cov (3m,) bool, n_free_after_matching, n_uncovered, n_dropped)``.
+    Returns ``(n_free_after_matching, n_dropped)``.
     """
     m = nb.shape[0]
+    n = 0
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            n += 1
+    frees = np.empty(n, np.int64)
+    n = 0
+    for t in range(m):
+        if active[t] and mate[t] < 0:
+            frees[n] = t
+            n += 1
     queue = np.empty(m + 8, np.int64)
-    s = _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, queue, budget)
+    touched = np.empty(budget + 8, np.int64)
+    nolog = np.empty((0, 4), np.int64)
+    nonlog = np.zeros(1, np.int64)
+    for t in frees:
+        if mate[t] < 0:
+            _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                 PLAIN, -1, nolog, nonlog, nonlog)
     n_drop = 0
     if drop_rounds >= 0:
         touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
         s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
-                                   plain_budget, drop_budget, drop_rounds)
+                                   plain_budget, drop_budget, drop_rounds, frees)
     touched_c = np.empty(2 * m + 16, np.int64)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8, frees)
     n_free = 0
-    for t in range(m):
+    for t in frees:
         if active[t] and mate[t] < 0:
             n_free += 1
-    is_cov, cdeg = _cover_edges(nb, alive, mate, m)
-    _repair(nb, twin, is_cov, cdeg, alive, arc_limit, m)
-    n_unc = _final_peel(nb, twin, is_cov, cdeg, alive, m)
-    return is_cov, n_free, n_unc, n_drop
+    return n_free, n_drop
+
+
+@njit(cache=True, nogil=True)
+def settle_cover(nb, twin, is_cov, cdeg, alive, arc_limit):
+    """After ``cover_edges_into``: a degree-3 triangle still free is repaired by dropping
+    the shortest cover arc from it to another (``_repair``), and whatever still has
+    cover degree other than 2 is peeled (``_final_peel``). Returns the uncovered count."""
+    m = cdeg.shape[0]
+    n = 0
+    for t in range(m):
+        if alive[t] and cdeg[t] != 2:
+            n += 1
+    odd = np.empty(n, np.int64)
+    n = 0
+    for t in range(m):
+        if alive[t] and cdeg[t] != 2:
+            odd[n] = t
+            n += 1
+    _repair(nb, twin, is_cov, cdeg, alive, arc_limit, odd)
+    _final_peel(nb, twin, is_cov, cdeg, alive, odd)
+    n_unc = 0
+    for t in range(m):
+        if cdeg[t] != 2:
+            n_unc += 1
+    return n_unc
 
 
 @njit(cache=True, nogil=True)
@@ -891,91 +965,110 @@ def cycle_ids(twin, is_cov, m):
 
 
 @njit(cache=True, nogil=True)
-def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
-    """Merge cover cycles for free by re-matching around vertices.
+def star_prefilter_into(tri, is_cov, vh, skip, lo, hi):
+    """For ``rotate_stars``, rows lo..hi: ``vh[v]`` a half-edge leaving each vertex,
+    ``skip[v]`` set where v cannot be rotated: it is the apex (the corner opposite
+    the matched, non-cover edge) of some triangle, or a corner of an uncovered one.
+    Elsewhere every triangle around v has its matched edge at v, so v's spokes
+    alternate matched / cover. Two row ranges may run side by side: ``skip`` is only
+    ever set, and any half-edge leaving v serves as ``vh[v]``."""
+    for t in range(lo, hi):
+        cov = is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]
+        for k in range(3):
+            vh[tri[t, k]] = 3 * t + k
+            if not cov:
+                skip[tri[t, k]] = True
+            elif not is_cov[3 * t + k]:
+                skip[tri[t, (k + 2) % 3]] = True
 
-    Around an interior vertex of even degree 2k whose k spokes alternate matched /
-    cover (the dual edges crossing the spokes), swapping the two roles keeps every
-    triangle at cover degree 2 and the matching perfect; if the k cover spokes lie on
-    k different cycles, the k cycles become one (remove one edge from each: k paths;
-    the new spokes chain them around the vertex). No geometry changes.
 
-    With cells (``cell`` (m,) int64; empty: none) only vertices whose triangles all
-    lie in one cell are rotated: cycles are merged across cells by the joins, finest
-    cells first.
+@njit(cache=True, nogil=True, inline="always")
+def _star_spokes(twin, is_cov, cyc, h0, cell, spokes):
+    """The spokes around the vertex ``h0`` leaves (``spokes[:d]``, the half-edges of
+    the edges at v, one per triangle around it), d if they alternate matched / cover
+    around an interior vertex of even degree 4..30 whose triangles are covered (and
+    in one cell if ``cell`` has m rows), else -1."""
+    use_cell = cell.shape[0] == cyc.shape[0]
+    d = 0
+    h = h0
+    while True:  # h leaves v in triangle t; spoke p = edge (w, v) of t
+        t = h // 3
+        p = 3 * t + (h - 3 * t + 2) % 3
+        q = twin[p]
+        if q < 0 or d >= 32 or cyc[t] < 0 or (use_cell and cell[t] != cell[h0 // 3]):
+            return -1
+        if d > 0 and is_cov[p] == is_cov[spokes[d - 1]]:
+            return -1  # not alternating
+        spokes[d] = p
+        d += 1
+        h = q
+        if h == h0:
+            break
+    if d < 4 or d % 2 == 1:
+        return -1
+    return d
 
-    Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
-    returns the number of cycles merged away. One pass merges what more would: on the
-    16k corpus and at 1.5 M triangles a second pass merged no cycle (it cost 0.06 s).
-    """
-    m = tri.shape[0]
-    vh = np.full(n_points, -1, np.int64)
+
+@njit(cache=True, nogil=True)
+def star_candidates_into(twin, is_cov, cyc, vh, skip, cell, cand, lo, hi):
+    """``cand[v]`` for vertices lo..hi: v not skipped (``star_prefilter_into``), its
+    spokes alternate (``_star_spokes``) and its cover spokes lie on distinct cycles.
+    Read-only but ``cand``: two vertex ranges run side by side. The rotations
+    themselves (``rotate_candidates``) only ever remove candidates."""
+    spokes = np.empty(32, np.int64)
+    for v in range(lo, hi):
+        cand[v] = False
+        h0 = vh[v]
+        if h0 < 0 or skip[v]:
+            continue
+        d = _star_spokes(twin, is_cov, cyc, h0, cell, spokes)
+        if d < 0:
+            continue
+        ok = True
+        for i in range(d):
+            if is_cov[spokes[i]]:
+                for j in range(i):
+                    if is_cov[spokes[j]] and cyc[spokes[j] // 3] == cyc[spokes[i] // 3]:
+                        ok = False
+        cand[v] = ok
+
+
+@njit(cache=True, nogil=True)
+def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
+    """Rotate the candidate vertices (``star_candidates_into``) in vertex order, each
+    checked again against the rotations before it (alternation, distinct merged
+    cycles); then renumber ``cyc``. Returns the number of cycles merged away."""
+    m = cyc.shape[0]
     uf = np.arange(max(n_cyc, 1))
     spokes = np.empty(32, np.int64)
     roots = np.empty(16, np.int64)
     merged = 0
-    use_cell = cell.shape[0] == m
-    skip = np.zeros(n_points, np.bool_)
-    for it in range(passes):
-        before = merged
-        # spokes alternate at v iff every triangle around v has its matched (non-cover)
-        # edge at v, i.e. v is no triangle's apex (the corner opposite that edge):
-        # a cheap sequential prefilter before walking rings (in the same pass as each
-        # vertex's half-edge, the first time)
-        skip[:] = False
-        for t in range(m):
-            for k in range(3):
-                if it == 0:
-                    vh[tri[t, k]] = 3 * t + k
-                if cyc[t] < 0:
-                    skip[tri[t, k]] = True
-                elif not is_cov[3 * t + k]:
-                    skip[tri[t, (k + 2) % 3]] = True
-        for v in range(n_points):
-            h0 = vh[v]
-            if h0 < 0 or skip[v]:
-                continue
-            d = 0
-            h = h0
-            ok = True
-            while True:  # h leaves v in triangle t; spoke p = edge (w, v) of t
-                t = h // 3
-                p = 3 * t + (h - 3 * t + 2) % 3
-                q = twin[p]
-                if q < 0 or d >= 32 or cyc[t] < 0 or (use_cell and cell[t] != cell[h0 // 3]):
-                    ok = False
-                    break
-                if d > 0 and is_cov[p] == is_cov[spokes[d - 1]]:
-                    ok = False  # not alternating: most vertices stop here
-                    break
-                spokes[d] = p
-                d += 1
-                h = q
-                if h == h0:
-                    break
-            if not ok or d < 4 or d % 2 == 1:
-                continue
-            nr = 0
-            for i in range(d):
-                if is_cov[spokes[i]]:
-                    r = _find(uf, cyc[spokes[i] // 3])
-                    for j in range(nr):
-                        if roots[j] == r:
-                            ok = False
-                    roots[nr] = r
-                    nr += 1
-            if not ok:
-                continue
-            for i in range(d):
-                p = spokes[i]
-                c = not is_cov[p]
-                is_cov[p] = c
-                is_cov[twin[p]] = c
-            for j in range(1, nr):
-                uf[_find(uf, roots[j])] = _find(uf, roots[0])
-            merged += nr - 1
-        if merged == before:
-            break
+    for v in range(cand.shape[0]):
+        if not cand[v]:
+            continue
+        d = _star_spokes(twin, is_cov, cyc, vh[v], cell, spokes)
+        if d < 0:
+            continue
+        nr = 0
+        ok = True
+        for i in range(d):
+            if is_cov[spokes[i]]:
+                r = _find(uf, cyc[spokes[i] // 3])
+                for j in range(nr):
+                    if roots[j] == r:
+                        ok = False
+                roots[nr] = r
+                nr += 1
+        if not ok:
+            continue
+        for i in range(d):
+            p = spokes[i]
+            c = not is_cov[p]
+            is_cov[p] = c
+            is_cov[twin[p]] = c
+        for j in range(1, nr):
+            uf[_find(uf, roots[j])] = _find(uf, roots[0])
+        merged += nr - 1
     # cycle ids after the merges: the union-find roots, renumbered
     if merged > 0:
         new_id = np.full(max(n_cyc, 1), -1, np.int64)
@@ -989,3 +1082,130 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, passes, cell):
             if cyc[t] >= 0:
                 cyc[t] = new_id[_find(uf, cyc[t])]
     return merged
+
+
+@njit(cache=True, nogil=True)
+def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, cell):
+    """Merge cover cycles for free by re-matching around vertices.
+
+    Around an interior vertex of even degree 2k whose k spokes alternate matched /
+    cover (the dual edges crossing the spokes), swapping the two roles keeps every
+    triangle at cover degree 2 and the matching perfect; if the k cover spokes lie on
+    k different cycles, the k cycles become one (remove one edge from each: k paths;
+    the new spokes chain them around the vertex). No geometry changes.
+
+    With cells (``cell`` (m,) int64; empty: none) only vertices whose triangles all
+    lie in one cell are rotated: cycles are merged across cells by the joins, finest
+    cells first.
+
+    Modifies ``is_cov`` and ``cyc`` (renumbered 0..n_cyc - merged - 1) in place;
+    returns the number of cycles merged away. One pass (on the 16k corpus and at
+    1.5 M triangles a second merged no cycle). The three steps run on two threads
+    from ``cycle_cover`` (``star_prefilter_into``, ``star_candidates_into``, then
+    ``rotate_candidates``); this is them in one call.
+    """
+    vh = np.full(n_points, -1, np.int64)
+    skip = np.zeros(n_points, np.bool_)
+    cand = np.empty(n_points, np.bool_)
+    star_prefilter_into(tri, is_cov, vh, skip, 0, tri.shape[0])
+    star_candidates_into(twin, is_cov, cyc, vh, skip, cell, cand, 0, n_points)
+    return rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell)
+
+
+@njit(cache=True, nogil=True)
+def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
+    """The cover cycles cut at the split into runs inside one half (``side == half``).
+
+    Triangles are taken in index order; each one not yet on a run starts one and walks
+    its cycle both ways while it stays in the half. ``cyc[t]``: the run's number (in
+    this half, in order of the runs' first triangles), ``smin[i]`` its smallest
+    triangle, ``send[i, 0:2]`` the triangles of the other half its two ends lead to
+    (-1, -1: a whole cycle inside the half). The two halves write disjoint triangles
+    of ``cyc``: they run side by side, and ``link_segments`` joins the runs.
+    Returns the number of runs.
+    """
+    m = cyc.shape[0]
+    n = 0
+    for s in range(m):
+        if side[s] != half or cyc[s] >= 0:
+            continue
+        k1 = -1
+        k2 = -1
+        for k in range(3):
+            if is_cov[3 * s + k]:
+                if k1 < 0:
+                    k1 = k
+                else:
+                    k2 = k
+        if k1 < 0:
+            continue
+        cyc[s] = n
+        lo = s
+        send[n, 0] = -1
+        send[n, 1] = -1
+        for d in range(2):
+            prev = s
+            cur = twin[3 * s + (k1 if d == 0 else k2)] // 3
+            while cur != s and side[cur] == half:
+                cyc[cur] = n
+                lo = min(lo, cur)
+                nxt = -1
+                for k in range(3):
+                    h = 3 * cur + k
+                    if is_cov[h] and twin[h] // 3 != prev:
+                        nxt = twin[h] // 3
+                prev = cur
+                cur = nxt
+            if cur == s:  # closed inside the half
+                break
+            send[n, d] = cur
+        smin[n] = lo
+        n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def link_segments(cyc, side, n0, smin0, send0, n1, smin1, send1):
+    """Cycle id of each run of ``cycle_segments_into`` (runs of half 0 first, then of
+    half 1): runs whose ends meet are one cycle, and cycles are numbered in order of
+    their smallest triangle, as ``cycle_ids`` numbers them. Returns ``(ids, n)``."""
+    total = n0 + n1
+    uf = np.arange(max(total, 1))
+    for i in range(total):
+        for d in range(2):
+            o = send0[i, d] if i < n0 else send1[i - n0, d]
+            if o >= 0:
+                j = cyc[o] + (n0 if side[o] == 1 else 0)
+                a = _find(uf, i)
+                b = _find(uf, j)
+                if a != b:
+                    uf[a] = b
+    low = np.full(max(total, 1), -1, np.int64)  # each root: its cycle's smallest triangle
+    for i in range(total):
+        r = _find(uf, i)
+        lo = smin0[i] if i < n0 else smin1[i - n0]
+        if low[r] < 0 or lo < low[r]:
+            low[r] = lo
+    roots = np.empty(total, np.int64)
+    n = 0
+    for i in range(total):
+        if uf[i] == i:
+            roots[n] = i
+            n += 1
+    order = np.argsort(low[roots[:n]])
+    rank = np.empty(max(total, 1), np.int64)
+    for j in range(n):
+        rank[roots[order[j]]] = j
+    ids = np.empty(max(total, 1), np.int64)
+    for i in range(total):
+        ids[i] = rank[_find(uf, i)]
+    return ids, n
+
+
+@njit(cache=True, nogil=True)
+def relabel_segments_into(cyc, side, n0, ids, lo, hi):
+    """``cyc[t]``: from run number (per half) to cycle id, rows lo..hi."""
+    for t in range(lo, hi):
+        c = cyc[t]
+        if c >= 0:
+            cyc[t] = ids[c + (n0 if side[t] == 1 else 0)]

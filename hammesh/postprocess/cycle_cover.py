@@ -6,7 +6,7 @@ cycles through every vertex). The dual graph of a mesh with boundary has degrees
 here ears (and what peeling them leaves) stay uncovered, the degree-3 triangles are
 matched among themselves, the rest of the dual edges are the cover, and the few
 defects a maximum matching leaves are repaired locally (see
-``_cover_kernels.finish_cover``). Everything is O(m) in numba; the augmenting searches
+``_cover_kernels.finish_matching``, ``settle_cover``). Everything is O(m) in numba; the augmenting searches
 are bounded by ``budget`` labelled triangles each. Finally cycles are merged for free
 where the matching can be rotated around a vertex (``rotate``).
 """
@@ -39,10 +39,11 @@ CELL_SIZE = 0
 #: how many times a defect a drop moves may be searched from again. Measured at 1.5 M
 #: triangles (32 defects; loaded): searches of 20 k / 20 k / 100 k triangles then drop
 #: searches of 20 k / 100 k / 100 k leave 122 / 34 / 12 triangles uncovered, the rest
-#: going to chains of boundary triangles; the searches cost ~0.35 s CPU at 100 k.
+#: going to chains of boundary triangles. One round fixes what two did (the 16k corpus
+#: and 1.5 M: the same cover; round 0 alone leaves 82 uncovered on the corpus, not 62).
 DEFECT_SEARCH_BUDGET = 100_000
 DROP_BUDGET = 100_000
-DROP_ROUNDS = 2
+DROP_ROUNDS = 1
 
 #: Triangles an augmenting search started by the greedy matching may label (``online``).
 ONLINE_BUDGET = 256
@@ -119,7 +120,7 @@ def cycle_cover(
         Longest cover arc the repair may drop to fix a triangle left unmatched (default:
         any; the alternative, peeling, would drop whole cycles).
     rotate : bool
-        Merge cycles by re-matching around vertices (``_sparse_kernels.rotate_stars``):
+        Merge cycles by re-matching around vertices (``_cover_kernels.rotate_stars``):
         fewer cycles, same geometry.
     good : (3 m,) bool, optional
         Half-edges preferred as matching (non-cover) edges where the greedy matching
@@ -167,14 +168,17 @@ def cycle_cover(
         quad, cell = _cells(np.ascontiguousarray(points, dtype=np.float64), triangles, tw, m, int(cell_size))
     no_cell = np.zeros(0, np.int64)
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
-    nb = np.empty((m, 3), np.int64)
+    nb = np.empty((m, 3), np.int32)
     run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
     if cell is not None:
         _k.cut_cell_borders(nb, cell)
     alive, deg = _k.peel(nb, m)
     active = alive & (deg == 3)
     mate = np.full(m, -1, np.int64)
-    work = (np.full(m, -1, np.int64), np.arange(m), np.full(m, -1, np.int64), np.zeros(m, np.int64))
+    # the searches' parent, union-find, label (-1: none) and lca stamps: each search
+    # sets what it touches, so only label is written ahead (int8; stamp's zeros are
+    # lazy pages)
+    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     if cell is not None:
         s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
     else:
@@ -187,17 +191,34 @@ def cycle_cover(
         calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
-    is_cov, n_free, n_unc, n_drop = _k.finish_cover(
-        nb, tw, active, alive, mate, *work, s, int(budget), limit, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
-        DROP_ROUNDS if drop else -1,
+    finish = partial(
+        _k.finish_matching,
+        nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1,
     )
-    cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
+    if len(spans) > 1:  # the defects' searches are serial: the other core faults in the arrays used next
+        (n_free, n_drop), later = run_all([finish, partial(_Later, m, triangles, rotate)])
+    else:
+        (n_free, n_drop), later = finish(), None
+    is_cov = np.empty(3 * m, np.bool_) if later is None else later.is_cov
+    cdeg = np.empty(m, np.int8) if later is None else later.cdeg
+    run_all([partial(_k.cover_edges_into, nb, alive, mate, is_cov, cdeg, lo, hi) for lo, hi in spans])
+    n_unc = _k.settle_cover(nb, tw, is_cov, cdeg, alive, limit)
+    if cell is None and split and len(spans) > 1:
+        cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
+    else:
+        cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
-        n_rot = int(
-            _k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, 1, no_cell if cell is None else cell)
-        )
+        cl = no_cell if cell is None else cell
+        if later is not None:  # the prefilter and the candidates on two threads, the rotations on one
+            n_pts, vh, skip, cand = later.n_pts, later.vh, later.skip, later.cand
+            run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
+            run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
+                     for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
+            n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
+        else:
+            n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, cl))
         n_cyc -= n_rot
     return CycleCover(
         is_cov=is_cov,
@@ -209,6 +230,37 @@ def cycle_cover(
         quad=quad,
         n_dropped=int(n_drop),
     )
+
+
+class _Later:
+    """The big arrays the cover's last steps write, their pages faulted in on the
+    second core while the first runs the (serial) searches from the defects: the
+    cover (``is_cov``, ``cdeg``), the cycle ids (``cyc``: -1) and the rotations'
+    vertex arrays (``vh``: -1, ``skip``: False, ``cand``), over the vertex count
+    ``n_pts``."""
+
+    def __init__(self, m: int, triangles: np.ndarray, rotate: bool) -> None:
+        self.is_cov = np.full(3 * m, False)
+        self.cdeg = np.full(m, 0, np.int8)
+        self.cyc = np.full(m, -1, np.int64)
+        self.n_pts = int(np.max(triangles)) + 1 if rotate and m else 0
+        self.vh = np.full(self.n_pts, -1, np.int64)
+        self.skip = np.full(self.n_pts, False)
+        self.cand = np.full(self.n_pts, False)
+
+
+def _cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray, spans: list,
+                         cyc: np.ndarray | None = None):
+    """``_cover_kernels.cycle_ids`` on two threads: each half's runs of the cycles
+    (``cycle_segments_into``), joined where they cross the split, then relabelled
+    (into ``cyc``, all -1, if given)."""
+    m = len(side)
+    cyc = np.full(m, -1, np.int64) if cyc is None else cyc
+    runs = [(np.empty(m, np.int64), np.empty((m, 2), np.int64)) for _ in range(2)]  # pages touched as used
+    n0, n1 = run_all([partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)])
+    ids, n = _k.link_segments(cyc, side, n0, *runs[0], n1, *runs[1])
+    run_all([partial(_k.relabel_segments_into, cyc, side, n0, ids, lo, hi) for lo, hi in spans])
+    return cyc, n
 
 
 def _halves(points: np.ndarray, triangles: np.ndarray, spans: list) -> np.ndarray:

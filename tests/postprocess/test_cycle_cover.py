@@ -271,7 +271,7 @@ def test_breadth_first_greedy_leaves_fewer_free() -> None:
     free = {}
     for online in (0, 256):
         k = len(tri)
-        work = (np.full(k, -1, np.int64), np.arange(k), np.full(k, -1, np.int64), np.zeros(k, np.int64),
+        work = (np.empty(k, np.int64), np.empty(k, np.int64), np.full(k, -1, np.int8), np.zeros(k, np.int64),
                 np.empty(k + 8, np.int64))
         order = ck._bfs_order(nb, np.zeros(k, np.int8), 0) if online else np.arange(k)
         mate = np.full(k, -1, np.int64)
@@ -377,3 +377,100 @@ def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch) -> None:
     np.testing.assert_array_equal(one.is_cov, two.is_cov)
     np.testing.assert_array_equal(one.cycle, two.cycle)
     assert two.n_uncovered <= 0.01 * len(tri)
+
+
+@pytest.mark.parametrize("name", ["face", "double_hex", "square_circle_hole", "A"])
+def test_observed_search_answers_the_drop_search(name: str) -> None:
+    # _drop_matching skips the DROP search after a failed OBSERVE search of at least
+    # its budget: from the same state, DROP must stop at the first drop OBSERVE saw
+    # (free third neighbour) within its budget, or fail with the first ``extra`` it
+    # saw; checked from every defect the matching leaves, for two budgets each
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain(name)
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
+    tri = msh.triangles
+    m = len(tri)
+    nb = ck.neighbors(half_edges(tri, msh.n_points).twin, m)
+    alive, deg = ck.peel(nb, m)
+    active = alive & (deg == 3)
+    mate = np.full(m, -1, np.int64)
+    parent, fa, label, stamp = np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64)
+    g = np.zeros((m, 3), np.bool_)
+    s = ck.match_half(nb, active, np.zeros(m, np.int8), 0, g, 0, 2000, mate, parent, fa, label, stamp)
+    touched, queue = np.empty(m + 16, np.int64), np.empty(m + 16, np.int64)
+    log, nlog = np.empty((8 * m + 64, 4), np.int64), np.zeros(1, np.int64)
+    seen, dummy = np.empty(4, np.int64), np.empty(4, np.int64)
+    outcomes = set()
+    for r in np.flatnonzero(active & (mate < 0)):
+        for budget in (m, 40):
+            nlog[0] = 0
+            f, s, _ = ck._augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
+                                  ck.OBSERVE, -1, log, nlog, seen)
+            if f >= 0:  # an augmenting path: applied; put the state back
+                assert ck._undo(log, nlog, mate, active, alive)
+                outcomes.add("path")
+                continue
+            assert nlog[0] == 0  # a failed search changes nothing
+            for b in (budget, budget // 2):
+                stop = seen[0] if seen[0] >= 0 and seen[1] < b else -1
+                first = seen[2] if seen[2] >= 0 and seen[3] < b else -1
+                found, s, extra = ck._augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                              b, ck.DROP, -1, log, nlog, dummy)
+                assert found == stop
+                if found < 0:
+                    assert extra == first
+                    outcomes.add("extra" if first >= 0 else "none")
+                else:
+                    assert not alive[found]  # dropped
+                    outcomes.add("drop")
+                assert ck._undo(log, nlog, mate, active, alive)
+    assert "drop" in outcomes or "extra" in outcomes  # the comparison met a drop
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(4, 400), p=st.floats(0.0, 1.0))
+def test_cycle_ids_by_halves_match_the_serial_walk(seed: int, n: int, p: float) -> None:
+    # runs of the cycles inside each half joined across the split: the same ids as
+    # one walk in index order, whatever the halves (here random, so cycles cross the
+    # split many times)
+    from hammesh.postprocess import _cover_kernels as ck
+    from hammesh.postprocess.cycle_cover import _cycle_ids_by_halves
+
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    twin = half_edges(tri, n).twin
+    c = cycle_cover(tri, twin, rotate=False)
+    side = (rng.random(len(tri)) < p).astype(np.int8)
+    want, n_want = ck.cycle_ids(twin, c.is_cov, len(tri))
+    got, n_got = _cycle_ids_by_halves(twin, c.is_cov, side, [(0, len(tri) // 2), (len(tri) // 2, len(tri))])
+    assert n_got == n_want == c.n_cycles
+    np.testing.assert_array_equal(got, want)
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(4, 400))
+def test_rotations_from_candidates_match_the_serial_pass(seed: int, n: int) -> None:
+    # the prefilter and the candidates on two row ranges each, then the rotations:
+    # the same flips and cycle ids as the one-call pass (random Delaunay meshes:
+    # nearly all of them have cycles to merge)
+    from hammesh.postprocess import _cover_kernels as ck
+
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    twin = half_edges(tri, n).twin
+    c = cycle_cover(tri, twin, rotate=False)
+    cell = np.zeros(0, np.int64)
+    want_cov, want_cyc = c.is_cov.copy(), c.cycle.copy()
+    want = ck.rotate_stars(tri, twin, want_cov, want_cyc, c.n_cycles, n, cell)
+    got_cov, got_cyc = c.is_cov.copy(), c.cycle.copy()
+    vh, skip, cand = np.full(n, -1, np.int64), np.zeros(n, np.bool_), np.empty(n, np.bool_)
+    m = len(tri)
+    for lo, hi in ((m // 3, m), (0, m // 3)):
+        ck.star_prefilter_into(tri, got_cov, vh, skip, lo, hi)
+    for lo, hi in ((0, n // 2), (n // 2, n)):
+        ck.star_candidates_into(twin, got_cov, got_cyc, vh, skip, cell, cand, lo, hi)
+    got = ck.rotate_candidates(twin, got_cov, got_cyc, c.n_cycles, vh, cand, cell)
+    assert got == want
+    np.testing.assert_array_equal(got_cov, want_cov)
+    np.testing.assert_array_equal(got_cyc, want_cyc)
