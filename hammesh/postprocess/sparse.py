@@ -63,6 +63,7 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
+from hammesh.postprocess import _cover_kernels as _ck
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, join_classes
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
@@ -253,6 +254,188 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     is_fan = np.zeros(m2, np.bool_)
     is_fan[len(kept):] = True
     return pts2, tri2, tw2, con2.reshape(-1), cover2, amin2, orig_of, is_fan, n_fan
+
+
+#: most triangles one ring fan (an uncovered triangle and covered neighbours) may replace
+RING_MAX = 4
+
+
+def _union_polygon(tri: np.ndarray, tw: np.ndarray, members: list[int]):
+    """Counter-clockwise corners and outer half-edges of a group's union, or None.
+
+    None unless the union is a disc whose every corner is on its boundary (a dual
+    tree: ``len(members) + 2`` outer edges in one closed loop), so that a fan over it
+    keeps every vertex.
+    """
+    ms = set(members)
+    nxt: dict[int, tuple[int, int]] = {}
+    for x in members:
+        for k in range(3):
+            h = 3 * x + k
+            g = tw[h]
+            if g >= 0 and g // 3 in ms:
+                continue
+            a = int(tri[x, k])
+            if a in nxt:
+                return None
+            nxt[a] = (int(tri[x, (k + 1) % 3]), h)
+    if len(nxt) != len(members) + 2:
+        return None
+    start = next(iter(nxt))
+    poly, hes, v = [], [], start
+    for _ in range(len(nxt)):
+        if v not in nxt:
+            return None
+        poly.append(v)
+        v, h = nxt[v]
+        hes.append(h)
+    return (poly, hes) if v == start else None
+
+
+def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
+    """Which spokes of a ring fan over a group carry the cycles that crossed it, or None.
+
+    The group's covered triangles were entered and left by cover edges across its
+    outer edges (*links*, an even number). In the ring (one fan triangle per outer
+    edge, in order) every link must end an *arc* of consecutive fan triangles, the
+    arcs pairing the links in ring order and leaving no fan triangle between two
+    arcs: then every fan triangle has two cover edges and every outside triangle
+    keeps its own. Returns the boolean ``spoke[i]`` (spoke i at corner i, between fan
+    triangles i - 1 and i, is a cover edge) or None if neither pairing fits.
+    """
+    n = len(hes)
+    links = [i for i, h in enumerate(hes) if tw[h] >= 0 and is_cov[h]]
+    spoke = np.ones(n, np.bool_)
+    if not links:
+        return spoke  # the ring is a cycle of its own
+    if len(links) % 2:
+        return None
+    for shift in (0, 1):
+        ends = [links[(shift + 2 * k + 1) % len(links)] for k in range(len(links) // 2)]
+        starts = [links[(shift + 2 * k + 2) % len(links)] for k in range(len(links) // 2)]
+        if all((b - a) % n == 1 for a, b in zip(ends, starts)):
+            spoke[[b for b in starts]] = False
+            return spoke
+    return None
+
+
+def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo: float, hi: float, floor2: float):
+    """Absorb isolated uncovered triangles that no join can keep at ``lo`` by *ring fans*.
+
+    A join over an edge of an uncovered triangle ``t`` divides the two corners
+    opposite it (``join_bounds``), so where those are small no join meets issue 13's
+    target. A fan around one Steiner point ``P`` over ``t`` *and some covered
+    neighbours* (at most ``RING_MAX`` triangles: a disc, so every vertex stays)
+    divides only the group's polygon corners, which gather several input angles,
+    and its ``k + 2`` triangles keep every cycle that crossed the group (``_ring_links``:
+    the cycles are re-routed around ``P``; they may merge or split, the joins take
+    it from there). ``P`` is placed by ``_join_kernels.place_fan`` (the best of the
+    members' centroids, then compass search); a group is taken only if every fan
+    angle is ``>= max(lo, floor2)`` and ``<= hi`` (``floor2``: the input's minimum, so
+    a later Thm 2.4 bridge that splits a fan triangle still keeps the proven floor);
+    the best slack wins, then the smaller group. One Steiner point, as the incenter
+    it replaces. Uncovered triangles next to a fan are left alone.
+
+    Returns the arrays of ``_fans`` (and ``orig_of``, ``is_fan`` composed) plus the
+    number of ring fans.
+    """
+    m = len(tri)
+    rows, bound, _ = join_bounds(pts, tri, tw, cover.cycle)
+    rows = rows[bound < lo]
+    if not len(rows) or pts.shape[1] != 2:
+        return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
+    taken: list[tuple[list[int], list[int], list[int], np.ndarray, float, float]] = []
+    used = np.zeros(m, np.bool_)
+    for t in rows.tolist():
+        best = None
+        seen: set[frozenset] = set()
+        stack = [[t]]
+        while stack:
+            members = stack.pop()
+            key = frozenset(members)
+            if key in seen:
+                continue
+            seen.add(key)
+            if len(members) > 1:
+                pp = _union_polygon(tri, tw, members)
+                spoke = None if pp is None else _ring_links(tw, cover.is_cov, pp[1])
+                if spoke is not None:
+                    poly = np.asarray(pp[0], np.int64)
+                    starts = np.array([pts[tri[x]].mean(axis=0) for x in members])
+                    step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
+                    x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo, hi, step,
+                                                        PLACE_ITERS + 2)
+                    ok = sl > -math.inf and nmin >= max(lo, floor2) and nmax <= hi
+                    if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
+                        best = (sl, members, pp, spoke, x, y)
+            if len(members) >= RING_MAX:
+                continue
+            for x in members:
+                for k in range(3):
+                    g = tw[3 * x + k]
+                    if g < 0 or con[3 * x + k]:
+                        continue
+                    y = g // 3
+                    if y in members or used[y] or is_fan[y] or cover.cycle[y] < 0:
+                        continue
+                    stack.append(members + [int(y)])
+        if best is None:
+            continue
+        _, members, (poly, hes), spoke, x, y = best
+        near = [tw[h] // 3 for h in hes if tw[h] >= 0]
+        if used[members].any() or used[near].any():
+            continue
+        used[members] = True
+        taken.append((members, poly, hes, spoke, x, y))
+    if not taken:
+        return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
+    # rebuild: kept rows in order, then the fans' rows; twins mapped, not re-derived
+    dead = np.zeros(m, np.bool_)
+    for members, *_ in taken:
+        dead[members] = True
+    kept = np.flatnonzero(~dead)
+    new_of = np.full(m, -1, np.int64)
+    new_of[kept] = np.arange(len(kept))
+    n_pts = len(pts)
+    f_tri, f_tw, f_con, f_cov, f_min, f_orig, f_pts = [], [], [], [], [], [], []
+    he_to = {}  # outer half-edge of a group -> the fan row's outer half-edge
+    base = len(kept)
+    for j, (members, poly, hes, spoke, x, y) in enumerate(taken):
+        k = len(poly)
+        for i in range(k):
+            r = base + i
+            f_tri.append((n_pts + j, poly[i], poly[(i + 1) % k]))
+            he_to[hes[i]] = 3 * r + 1
+            f_tw.append((3 * (base + (i - 1) % k) + 2, -1, 3 * (base + (i + 1) % k)))
+            f_con.append((False, bool(con[hes[i]]), False))
+            link = tw[hes[i]] >= 0 and bool(cover.is_cov[hes[i]])
+            f_cov.append((bool(spoke[i]), link, bool(spoke[(i + 1) % k])))
+            f_orig.append(orig_of[hes[i] // 3])
+        f_min.extend([float(amin_t[members].min())] * k)
+        f_pts.append((x, y))
+        base += k
+    h_old = (3 * kept[:, None] + np.arange(3)).ravel()
+    g = tw[h_old]
+    tw_k = np.where(g >= 0, 3 * new_of[np.maximum(g, 0) // 3] + g % 3, -1)
+    tri2 = np.concatenate([tri[kept], np.asarray(f_tri, np.int64)])
+    tw2 = np.concatenate([tw_k, np.asarray(f_tw, np.int64).ravel()])
+    for h, r1 in he_to.items():  # both sides of every group's outer edge
+        o = tw[h]
+        if o >= 0:
+            tw2[r1] = 3 * new_of[o // 3] + o % 3
+            tw2[3 * new_of[o // 3] + o % 3] = r1
+    con2 = np.concatenate([con.reshape(m, 3)[kept].ravel(), np.asarray(f_con, np.bool_).ravel()])
+    is_cov2 = np.concatenate([cover.is_cov.reshape(m, 3)[kept].ravel(), np.asarray(f_cov, np.bool_).ravel()])
+    cyc2, n_cyc2 = _ck.cycle_ids(tw2, is_cov2, len(tri2))
+    cover2 = CycleCover(
+        is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
+        n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
+    )
+    amin2 = np.concatenate([amin_t[kept], np.asarray(f_min)])
+    orig2 = np.concatenate([orig_of[kept], np.asarray(f_orig, np.int64)])
+    fan2 = np.concatenate([is_fan[kept], np.ones(len(f_tri), np.bool_)])
+    pts2 = np.concatenate([pts, np.asarray(f_pts, np.float64)])
+    return pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2, len(taken)
 
 
 def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -502,6 +685,12 @@ def sparse_cycles(
             pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
         )
         n, m = len(pts), len(tri)
+    n_ring = 0
+    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:
+        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
+            pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
+        )
+        n, m, n_fan = len(pts), len(tri), n_fan + n_ring
     steps.done("fans")
     cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
     ckind = np.zeros(len(cand), np.int8)
@@ -592,7 +781,7 @@ def sparse_cycles(
     if improve and pts.shape[1] == 2 and len(out):
         out, claim, kind, pm, n_improve, n_moved = _improve(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
-            n0_input, keep,
+            n0_input, keep, keep * min_angle, floor,
         )
     steps.done("improve")
     # the kept rows' worst radius ratio is the input's if its worst triangle is kept
@@ -612,6 +801,7 @@ def sparse_cycles(
         "cover_rotations": int(cover.n_rotations),
         "uncovered": int(n_unc0),
         "fans": int(n_fan),
+        "ring_fans": int(n_ring),
         "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,
@@ -686,7 +876,7 @@ def local_quality(
 
 
 def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, first_mid, hi,
-             first_steiner, keep):
+             first_steiner, keep, lo_global, floor):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
@@ -716,7 +906,36 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
         n_moved += moved
         if moved == 0:
             break
+    n_moved += _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
     return out, twin, kind, pm, int(n_flips), int(n_moved)
+
+
+def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float) -> int:
+    """Move the Steiner points of rows that miss issue 13's absolute targets (in place).
+
+    After the improvement step, the new rows with an angle below ``lo`` (``keep`` x
+    the input's smallest) or above ``hi`` (its largest + 5 degrees) are few (none on
+    most meshes); each free Steiner point among their corners is moved for the
+    global targets (``_join_kernels.move_to_targets``), up to ``IMPROVE_ROUNDS``
+    rounds. Returns the number of moves.
+    """
+    new = np.flatnonzero(kind != 3)
+    if not len(new) or first_steiner >= len(pts):
+        return 0
+    moved = 0
+    for _ in range(IMPROVE_ROUNDS):
+        a_lo, a_hi, _, _ = triangle_facts(pts, out[new])
+        miss = new[(a_lo < lo) | (a_hi > hi)]
+        rc = np.argwhere(out[miss] >= first_steiner)
+        if not len(rc):
+            break
+        hs = 3 * miss[rc[:, 0]] + rc[:, 1]
+        _, first_h = np.unique(out[miss[rc[:, 0]], rc[:, 1]], return_index=True)
+        n = _j.move_to_targets(pts, out, twin, pinned, hs[first_h], float(lo), float(hi), float(floor), PLACE_ITERS)
+        moved += n
+        if n == 0:
+            break
+    return moved
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
