@@ -319,6 +319,209 @@ def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
     return None
 
 
+def _missing_targets(pts, tri, tw, con, cycle, amin_t, lo: float, hi: float, floor: float) -> np.ndarray:
+    """Isolated uncovered triangles no join can absorb within the absolute targets.
+
+    ``join_bounds`` gives the isolated uncovered triangles (few); each inner edge's
+    join is judged as the plan would (``_join_kernels.score_joins_into``, split
+    placed without a reach) against the *global* targets: smallest new angle >= ``lo``,
+    largest <= ``hi``. Returns the rows where no edge's join meets both (e.g. the
+    join bound below ``lo``, or a swap whose largest angle is over ``hi``).
+    """
+    rows, bound, _ = join_bounds(pts, tri, tw, cycle)
+    out = []
+    one = [np.zeros(1, np.int8), np.empty(1), np.empty(1), np.empty(1), np.empty((1, 2))]
+    for t, b in zip(rows.tolist(), bound.tolist()):
+        ok = False
+        if b >= lo:
+            for k in range(3):
+                g = tw[3 * t + k]
+                if g < 0:
+                    continue
+                pm = min(amin_t[t], amin_t[g // 3])
+                _j.score_joins_into(
+                    pts, tri, tw, con, np.array([g]), amin_t, lo / pm, hi, floor, -2.0, True, True,
+                    PLACE_ITERS, math.inf, *one,
+                )
+                if one[0][0] != _j.NO_JOIN and one[2][0] >= lo and one[3][0] <= hi:
+                    ok = True
+                    break
+        if not ok:
+            out.append(t)
+    return np.asarray(out, np.int64)
+
+
+def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t: int, lo: float, hi: float, floor2: float):
+    """The best ring fan over the uncovered triangle ``t`` and covered neighbours, or None.
+
+    Every connected group of ``t`` and up to ``RING_MAX - 1`` covered triangles (not
+    ``blocked``, across free edges) whose union is a disc (``_union_polygon``) and
+    whose links pair into arcs (``_ring_links``) gets its fan point placed
+    (``_join_kernels.place_fan``); a group qualifies if every fan angle is
+    ``>= max(lo, floor2)`` and ``<= hi``. Returns ``(slack, members, (polygon,
+    half-edges), spoke, x, y)`` of the largest slack (then the smaller group).
+    """
+    best = None
+    seen: set[frozenset] = set()
+    stack = [[t]]
+    while stack:
+        members = stack.pop()
+        key = frozenset(members)
+        if key in seen:
+            continue
+        seen.add(key)
+        if len(members) > 1:
+            pp = _union_polygon(tri, tw, members)
+            spoke = None if pp is None else _ring_links(tw, is_cov, pp[1])
+            if spoke is not None:
+                poly = np.asarray(pp[0], np.int64)
+                starts = np.array([pts[tri[x]].mean(axis=0) for x in members])
+                step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
+                x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo, hi, step,
+                                                    PLACE_ITERS + 2)
+                ok = sl > -math.inf and nmin >= max(lo, floor2) and nmax <= hi
+                if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
+                    best = (sl, members, pp, spoke, x, y)
+        if len(members) >= RING_MAX:
+            continue
+        for x in members:
+            for k in range(3):
+                g = tw[3 * x + k]
+                if g < 0 or con[3 * x + k]:
+                    continue
+                y = int(g // 3)
+                if y in members or blocked[y] or cycle[y] < 0:
+                    continue
+                stack.append(members + [y])
+    return best
+
+
+#: removals along each alternating path a re-route may take (``_reroute``)
+REROUTE_DEPTH = 4
+
+
+def _alternating_paths(tw, is_cov, cycle, start: int, avoid: set, depth: int, stop: int = -1):
+    """Alternating paths of the cover from ``start``, which gained a cover edge.
+
+    ``start`` gives up one of its cover edges (to ``y``), ``y`` then takes its
+    non-cover edge (to a covered ``x``), ``x`` gives up one of its other cover edges,
+    and so on (at most ``depth`` give-ups). Yields ``(y, nodes, flips)`` after each
+    give-up: ``y`` is one cover edge short there, ``nodes`` the path, ``flips`` the
+    half-edges whose cover state changes (one per edge). A path reaching ``stop``
+    ends there.
+    """
+    todo = [(start, [start], [])]
+    while todo:
+        x, nodes, flips = todo.pop()
+        for k in range(3):
+            h = 3 * x + k
+            g = tw[h]
+            if g < 0 or not is_cov[h]:
+                continue
+            y = int(g // 3)
+            if y in nodes or y in avoid:
+                continue
+            path = nodes + [y]
+            yield y, path, flips + [h]
+            if y == stop or (len(flips) + 1) // 2 + 1 > depth:
+                continue
+            for j in range(3):
+                f = 3 * y + j
+                e = tw[f]
+                if e < 0 or is_cov[f]:
+                    continue
+                x2 = int(e // 3)
+                if cycle[x2] >= 0 and x2 not in path and x2 not in avoid:
+                    todo.append((x2, path + [x2], flips + [h, f]))
+
+
+def _flip_cover(tw, is_cov, flips) -> None:
+    for h in flips:
+        is_cov[h] = not is_cov[h]
+        is_cov[tw[h]] = is_cov[h]
+
+
+def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi: float, floor2: float):
+    """Re-route the cover through uncovered triangles that neither a join nor a ring fan can keep.
+
+    For such a triangle ``t`` (on the boundary, typically: its corners at the
+    boundary edge are single input angles, so every join and every fan over it
+    halves one) with covered neighbours ``u``, ``w``: give ``t`` the cover edges
+    ``t-u``, ``t-w`` and restore the degrees by two alternating paths
+    (``_alternating_paths``) from ``u`` and ``w`` that end at one triangle ``z``
+    losing both its cover edges (``z`` is left off instead of ``t``), or by one path
+    from ``u`` that ends at ``w`` (nothing left off). ``z`` is taken only if a ring
+    fan over it meets the targets (``_best_ring``); the cover's cycles may merge or
+    split (the joins take it from there). Returns the new cover and the number of
+    triangles re-routed.
+    """
+    m = len(tri)
+    rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
+    if not len(rows):
+        return cover, 0
+    is_cov = cover.is_cov.copy()
+    cycle = cover.cycle.copy()
+    touched = np.zeros(m, np.bool_)
+    done = 0
+    for t in rows.tolist():
+        if _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan, t, lo, hi, floor2) is not None:
+            continue  # a ring fan takes it
+        nbs = [int(tw[3 * t + k] // 3) for k in range(3) if tw[3 * t + k] >= 0]
+        t_he = {int(tw[3 * t + k] // 3): 3 * t + k for k in range(3) if tw[3 * t + k] >= 0}
+        best = None
+        for i in range(len(nbs)):
+            for j in range(len(nbs)):
+                u, w = nbs[i], nbs[j]
+                if i == j or cycle[u] < 0 or cycle[w] < 0 or touched[u] or touched[w]:
+                    continue
+                avoid = {t} | {int(x) for x in np.flatnonzero(touched)}
+                from_w: dict[int, list] = {}
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, REROUTE_DEPTH):
+                    from_w.setdefault(y, []).append((nodes, flips))
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, u, avoid, REROUTE_DEPTH, w):
+                    cands = []
+                    if y == w:  # the path ends at w, which gave t its edge: nothing left off
+                        if best is None or best[3] >= 0 or len(flips) < best[0]:
+                            best = (len(flips), [t_he[u], t_he[w]] + flips, nodes, -1)
+                        continue
+                    if best is not None and best[3] < 0:
+                        continue
+                    if y in from_w and not is_fan[y]:
+                        for nodes2, flips2 in from_w[y]:
+                            if set(nodes).isdisjoint(nodes2[:-1]) and tw[flips[-1]] != tw[flips2[-1]]:
+                                cands.append((nodes + nodes2, flips + flips2, y))
+                    for nodes_all, flips_all, z in cands:
+                        cost = len(flips_all)
+                        if best is not None and cost >= best[0]:
+                            continue
+                        add = [t_he[u], t_he[w]]
+                        _flip_cover(tw, is_cov, add + flips_all)
+                        c_t, c_z = cycle[t], cycle[z]
+                        cycle[t], cycle[z] = cycle[u], -1
+                        ring = _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan | touched, z, lo, hi, floor2)
+                        _flip_cover(tw, is_cov, add + flips_all)
+                        cycle[t], cycle[z] = c_t, c_z
+                        if ring is not None:
+                            best = (cost, add + flips_all, nodes_all, z)
+        if best is None:
+            continue
+        _, flips, nodes, z = best
+        _flip_cover(tw, is_cov, flips)
+        cycle[t] = cycle[nodes[0]]
+        if z >= 0:
+            cycle[z] = -1
+        touched[nodes] = True
+        touched[t] = True
+        done += 1
+    if not done:
+        return cover, 0
+    cyc2, n_cyc2 = _ck.cycle_ids(tw, is_cov, m)
+    return CycleCover(
+        is_cov=is_cov, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
+        n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
+    ), done
+
+
 def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo: float, hi: float, floor2: float):
     """Absorb isolated uncovered triangles that no join can keep at ``lo`` by *ring fans*.
 
@@ -340,45 +543,13 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
     number of ring fans.
     """
     m = len(tri)
-    rows, bound, _ = join_bounds(pts, tri, tw, cover.cycle)
-    rows = rows[bound < lo]
+    rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows) or pts.shape[1] != 2:
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
     taken: list[tuple[list[int], list[int], list[int], np.ndarray, float, float]] = []
     used = np.zeros(m, np.bool_)
     for t in rows.tolist():
-        best = None
-        seen: set[frozenset] = set()
-        stack = [[t]]
-        while stack:
-            members = stack.pop()
-            key = frozenset(members)
-            if key in seen:
-                continue
-            seen.add(key)
-            if len(members) > 1:
-                pp = _union_polygon(tri, tw, members)
-                spoke = None if pp is None else _ring_links(tw, cover.is_cov, pp[1])
-                if spoke is not None:
-                    poly = np.asarray(pp[0], np.int64)
-                    starts = np.array([pts[tri[x]].mean(axis=0) for x in members])
-                    step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
-                    x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo, hi, step,
-                                                        PLACE_ITERS + 2)
-                    ok = sl > -math.inf and nmin >= max(lo, floor2) and nmax <= hi
-                    if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
-                        best = (sl, members, pp, spoke, x, y)
-            if len(members) >= RING_MAX:
-                continue
-            for x in members:
-                for k in range(3):
-                    g = tw[3 * x + k]
-                    if g < 0 or con[3 * x + k]:
-                        continue
-                    y = g // 3
-                    if y in members or used[y] or is_fan[y] or cover.cycle[y] < 0:
-                        continue
-                    stack.append(members + [int(y)])
+        best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
         if best is None:
             continue
         _, members, (poly, hes), spoke, x, y = best
@@ -547,12 +718,17 @@ def _place_taken(
     # (``global_lo``): a placed split that fixes neither would turn a swap's two rows
     # below the rule into four, or add a Steiner point for nothing the targets see
     # (a split placed anew in place of its midpoint costs nothing: taken if better)
+    glob_now = (newmin[low] >= global_lo) & (newmax[low] <= hi)
+    glob_before = (before[2] >= global_lo) & (before[3] <= hi)
     fixes = (slack[low] >= 0.0) | ((newmin[low] >= global_lo) & (before[2] < global_lo)) | (
         (before[0] == _j.SPLIT_JOIN) & (ckind[low] == _j.SPLIT_JOIN)
     )
     better = (
         (slack[low] > before[1]) & (newmin[low] > before[2]) & fixes & (newmax[low] <= np.maximum(hi, before[3]))
     )
+    # or newly within both absolute targets (issue 13's min and max), e.g. a swap whose
+    # largest angle is over the input's + 5 degrees replaced by a placed split
+    better |= glob_now & ~glob_before
     for x, x0 in zip((ckind, slack, newmin, newmax, point), before):
         x[low[~better]] = x0[~better]
     k0 = before[0]
@@ -685,8 +861,9 @@ def sparse_cycles(
             pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
         )
         n, m = len(pts), len(tri)
-    n_ring = 0
+    n_ring = n_reroute = 0
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:
+        cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor)
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
             pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
         )
@@ -802,6 +979,7 @@ def sparse_cycles(
         "uncovered": int(n_unc0),
         "fans": int(n_fan),
         "ring_fans": int(n_ring),
+        "rerouted": int(n_reroute),
         "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,
