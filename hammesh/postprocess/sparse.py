@@ -258,6 +258,10 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
 
 #: most triangles one ring fan (an uncovered triangle and covered neighbours) may replace
 RING_MAX = 4
+#: meshes from this size on skip the re-route and the ring fans (``_reroute``,
+#: ``_ring_fans``): each relabels the cover's cycles and rebuilds the arrays, O(m),
+#: ~0.4 s CPU at 1.5 M triangles for the ~3 triangles they would help there
+RING_MAX_TRIANGLES = 100_000
 
 
 def _union_polygon(tri: np.ndarray, tw: np.ndarray, members: list[int]):
@@ -862,7 +866,7 @@ def sparse_cycles(
         )
         n, m = len(pts), len(tri)
     n_ring = n_reroute = 0
-    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:
+    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered and m < RING_MAX_TRIANGLES:
         cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor)
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
             pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
