@@ -264,12 +264,13 @@ RING_MAX = 4
 RING_MAX_TRIANGLES = 100_000
 
 
-def _union_polygon(tri: np.ndarray, tw: np.ndarray, members: list[int]):
+def _union_polygon(tri: np.ndarray, tw: np.ndarray, con: np.ndarray, members: list[int]):
     """Counter-clockwise corners and outer half-edges of a group's union, or None.
 
     None unless the union is a disc whose every corner is on its boundary (a dual
     tree: ``len(members) + 2`` outer edges in one closed loop), so that a fan over it
-    keeps every vertex.
+    keeps every vertex, and no edge inside it is pinned (a constrained edge, or one
+    between regions, must stay).
     """
     ms = set(members)
     nxt: dict[int, tuple[int, int]] = {}
@@ -278,6 +279,8 @@ def _union_polygon(tri: np.ndarray, tw: np.ndarray, members: list[int]):
             h = 3 * x + k
             g = tw[h]
             if g >= 0 and g // 3 in ms:
+                if con[h]:
+                    return None
                 continue
             a = int(tri[x, k])
             if a in nxt:
@@ -305,22 +308,31 @@ def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
     arcs pairing the links in ring order and leaving no fan triangle between two
     arcs: then every fan triangle has two cover edges and every outside triangle
     keeps its own. Returns the boolean ``spoke[i]`` (spoke i at corner i, between fan
-    triangles i - 1 and i, is a cover edge) or None if neither pairing fits.
+    triangles i - 1 and i, is a cover edge) of the first pairing that fits
+    (``_ring_link_options`` gives both), or None if neither does.
     """
+    options = _ring_link_options(tw, is_cov, hes)
+    return options[0] if options else None
+
+
+def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> list[np.ndarray]:
+    """Every pairing of a ring's links into arcs that fits (``_ring_links``): zero to two."""
     n = len(hes)
     links = [i for i, h in enumerate(hes) if tw[h] >= 0 and is_cov[h]]
-    spoke = np.ones(n, np.bool_)
     if not links:
-        return spoke  # the ring is a cycle of its own
+        return [np.ones(n, np.bool_)]  # the ring is a cycle of its own
     if len(links) % 2:
-        return None
+        return []
+    out = []
     for shift in (0, 1):
         ends = [links[(shift + 2 * k + 1) % len(links)] for k in range(len(links) // 2)]
         starts = [links[(shift + 2 * k + 2) % len(links)] for k in range(len(links) // 2)]
         if all((b - a) % n == 1 for a, b in zip(ends, starts)):
-            spoke[[b for b in starts]] = False
-            return spoke
-    return None
+            spoke = np.ones(n, np.bool_)
+            spoke[starts] = False
+            if not any((spoke == o).all() for o in out):
+                out.append(spoke)
+    return out
 
 
 def _missing_targets(pts, tri, tw, con, cycle, amin_t, lo: float, hi: float, floor: float) -> np.ndarray:
@@ -355,19 +367,22 @@ def _missing_targets(pts, tri, tw, con, cycle, amin_t, lo: float, hi: float, flo
     return np.asarray(out, np.int64)
 
 
-def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t: int, lo: float, hi: float, floor2: float):
+def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: float, floor2: float,
+               amin=None, keep: float = 0.0, accept=None):
     """The best ring fan over the uncovered triangle ``t`` and covered neighbours, or None.
 
-    Every connected group of ``t`` and up to ``RING_MAX - 1`` covered triangles (not
-    ``blocked``, across free edges) whose union is a disc (``_union_polygon``) and
-    whose links pair into arcs (``_ring_links``) gets its fan point placed
-    (``_join_kernels.place_fan``); a group qualifies if every fan angle is
-    ``>= max(lo, floor2)`` and ``<= hi``. Returns ``(slack, members, (polygon,
+    Every connected group of ``t`` (an int, or a list of triangles to start from) and
+    up to ``RING_MAX`` triangles in all, the others covered (not ``blocked``, across
+    free edges), whose union is a disc (``_union_polygon``) and whose links pair into
+    arcs (``_ring_links``) gets its fan point placed (``_join_kernels.place_fan``); a
+    group qualifies if every fan angle is ``>= max(lo, floor2)`` (with ``amin``: and
+    ``>= keep`` x its members' smallest angle, the local rule) and ``<= hi``, and
+    ``accept(members, hes, spoke)`` if given. Returns ``(slack, members, (polygon,
     half-edges), spoke, x, y)`` of the largest slack (then the smaller group).
     """
     best = None
     seen: set[frozenset] = set()
-    stack = [[t]]
+    stack = [[t] if isinstance(t, int) else list(t)]
     while stack:
         members = stack.pop()
         key = frozenset(members)
@@ -375,17 +390,21 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t: int, lo: float, hi:
             continue
         seen.add(key)
         if len(members) > 1:
-            pp = _union_polygon(tri, tw, members)
-            spoke = None if pp is None else _ring_links(tw, is_cov, pp[1])
-            if spoke is not None:
+            pp = _union_polygon(tri, tw, con, members)
+            options = [] if pp is None else _ring_link_options(tw, is_cov, pp[1])
+            if options:
                 poly = np.asarray(pp[0], np.int64)
-                starts = np.array([pts[tri[x]].mean(axis=0) for x in members])
+                lo_g = lo if amin is None else max(lo, keep * float(amin[members].min()))
+                starts = pts[tri[members]].mean(axis=1)
                 step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
-                x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo, hi, step,
+                x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, hi, step,
                                                     PLACE_ITERS + 2)
-                ok = sl > -math.inf and nmin >= max(lo, floor2) and nmax <= hi
+                ok = sl > -math.inf and nmin >= max(lo_g, floor2) and nmax <= hi
                 if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
-                    best = (sl, members, pp, spoke, x, y)
+                    if accept is not None:  # the costlier check last, only for a better fan
+                        options = [o for o in options if accept(members, pp[1], o)]
+                    if options:
+                        best = (sl, members, pp, options[0], x, y)
         if len(members) >= RING_MAX:
             continue
         for x in members:
@@ -526,6 +545,117 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     ), done
 
 
+#: below-rule joins one call tries to replace by ring joins (``_ring_joins``), worst first
+RING_JOIN_TRIES = 32
+#: rounds of ring joins, each followed by a new plan
+RING_JOIN_PASSES = 1
+
+
+def _ring_pairs(tw, is_cov, members, hes, spoke):
+    """How a ring fan re-pairs the cycles crossing its group.
+
+    Returns ``(links, old, new)``: the ring positions with a link, and for each the
+    link it was joined to through the group (following cover edges inside it) and
+    the one its arc joins it to now.
+    """
+    mset = set(members)
+    n = len(hes)
+    links = [i for i in range(n) if tw[hes[i]] >= 0 and is_cov[hes[i]]]
+    pos = {hes[i]: i for i in links}
+    old_link = set(links)
+    old, new = {}, {}
+    for i in links:
+        came = hes[i]
+        while True:
+            x = came // 3
+            f = next(3 * x + k for k in range(3) if 3 * x + k != came and is_cov[3 * x + k])
+            g = tw[f]
+            if g >= 0 and g // 3 in mset:
+                came = g
+                continue
+            old[i] = pos[f]
+            break
+        d = 1 if spoke[(i + 1) % n] else -1  # row i's cover spoke leads along its arc
+        j = (i + d) % n
+        while j not in old_link:
+            j = (j + d) % n
+        new[i] = j
+    return links, old, new
+
+
+def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool:
+    """Does the ring fan join the cycles of triangles ``a`` and ``b`` and split none?
+
+    Each cycle crossing the group must cross it once (its two links joined inside the
+    group): then outside the group it is one path between those links, and the new
+    cycles are the components of old pairs (outside) and new pairs (the arcs), each a
+    union of old cycles. Without labelling the cycles anew (``_ring_pairs``).
+    """
+    links, old, new = _ring_pairs(tw, is_cov, members, hes, spoke)
+    ids = {i: int(cycle[hes[i] // 3]) for i in links}
+    if len({ids[i] for i in links}) * 2 != len(links):
+        return False  # a cycle crosses twice: the outside order would matter
+    root = {i: i for i in links}
+
+    def find(i):
+        while root[i] != i:
+            root[i] = root[root[i]]
+            i = root[i]
+        return i
+
+    for i in links:
+        for j in (old[i], new[i]):
+            root[find(i)] = find(j)
+    comp = {ids[i]: find(i) for i in links}
+    ca, cb = int(cycle[a]), int(cycle[b])
+    return ca in comp and cb in comp and comp[ca] == comp[cb]
+
+
+def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, keep: float,
+                lo: float, hi: float, floor2: float):
+    """Ring fans in place of the joins the plan took below the local rule (issue 13).
+
+    A swap or split over ``ab`` of ``t = abc``, ``u = bad`` divides the corners ``c``
+    and ``d``, each a single input angle; where those are small no such join meets
+    ``keep`` x the pair's smallest angle. A fan around one point over ``t``, ``u`` and
+    one or two covered neighbours (``_best_ring``, local rule against all its
+    members) divides only its polygon's corners, which gather several input angles,
+    and re-routes the cycles crossing it: taken where that joins ``t``'s and ``u``'s
+    cycles and splits none (``_ring_merges``). The worst ``RING_JOIN_TRIES`` joins
+    below the rule between two cycles are tried; the caller plans the joins again on
+    the new mesh. Returns ``_apply_rings``'s arrays and the number of ring joins, or
+    None.
+    """
+    taken = order[np.unique(join[join >= 0])]
+    low = taken[slack[taken] < 0.0]
+    t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
+    low = low[(cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)]
+    low = low[np.argsort(slack[low], kind="stable")][:RING_JOIN_TRIES]
+    if not len(low):
+        return None
+    used = np.zeros(len(tri), np.bool_)
+    rings = []
+    for i in low.tolist():
+        t, u = int(cand[i] // 3), int(tw[cand[i]] // 3)
+        if used[t] or used[u] or is_fan[t] or is_fan[u]:
+            continue
+        best = _best_ring(
+            pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2, amin=amin_t,
+            keep=keep, accept=lambda ms, hes, sp: _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u),
+        )
+        if best is None:
+            continue
+        _, members, (poly, hes), spoke, x, y = best
+        near = [tw[h] // 3 for h in hes if tw[h] >= 0]
+        if used[members].any() or used[near].any():
+            continue
+        used[members] = True
+        rings.append((members, poly, hes, spoke, x, y))
+    if not rings:
+        return None
+    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings), len(rings))
+
+
 def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo: float, hi: float, floor2: float):
     """Absorb isolated uncovered triangles that no join can keep at ``lo`` by *ring fans*.
 
@@ -564,6 +694,19 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
         taken.append((members, poly, hes, spoke, x, y))
     if not taken:
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
+    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken), len(taken))
+
+
+def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken):
+    """Replace each ring fan's members by its ``k + 2`` rows (``_ring_fans``, ``_ring_joins``).
+
+    ``taken``: ``(members, polygon, outer half-edges, spoke, x, y)`` per fan, no two
+    adjacent. Returns the new ``(points, triangles, twin, pinned, cover, parent_min,
+    orig_of, is_fan)``: kept rows in order, then the fans' rows (``orig_of``: the input
+    triangle holding the fan row's outer edge; ``parent_min``: the members' smallest
+    angle); the fans' points follow the points; the cycles are labelled anew.
+    """
+    m = len(tri)
     # rebuild: kept rows in order, then the fans' rows; twins mapped, not re-derived
     dead = np.zeros(m, np.bool_)
     for members, *_ in taken:
@@ -610,7 +753,7 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
     orig2 = np.concatenate([orig_of[kept], np.asarray(f_orig, np.int64)])
     fan2 = np.concatenate([is_fan[kept], np.ones(len(f_tri), np.bool_)])
     pts2 = np.concatenate([pts, np.asarray(f_pts, np.float64)])
-    return pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2, len(taken)
+    return pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2
 
 
 def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -873,63 +1016,74 @@ def sparse_cycles(
         )
         n, m, n_fan = len(pts), len(tri), n_fan + n_ring
     steps.done("fans")
-    cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
-    ckind = np.zeros(len(cand), np.int8)
-    slack = np.empty(len(cand))
-    newmin = np.empty(len(cand))
-    newmax = np.empty(len(cand))
-    point = np.empty((len(cand), pts.shape[1]))
-    def score(rows: np.ndarray, iters: int, reach: float = math.radians(PLACE_REACH_DEG)) -> None:
-        c = cand[rows]
-        parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
-        _row_pass(
-            lambda lo, hi_: _j.score_joins_into(
-                pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
-                bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts),
-            ),
-            len(c),
-            SCORE_MIN_ROWS,
-        )
-        ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
+    n_ring_join = 0
+    for ring_pass in range(RING_JOIN_PASSES + 1):  # plans again after ring joins (``_ring_joins``)
+        cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
+        ckind = np.zeros(len(cand), np.int8)
+        slack = np.empty(len(cand))
+        newmin = np.empty(len(cand))
+        newmax = np.empty(len(cand))
+        point = np.empty((len(cand), pts.shape[1]))
+        def score(rows: np.ndarray, iters: int, reach: float = math.radians(PLACE_REACH_DEG)) -> None:
+            c = cand[rows]
+            parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
+            _row_pass(
+                lambda lo, hi_: _j.score_joins_into(
+                    pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
+                    bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts),
+                ),
+                len(c),
+                SCORE_MIN_ROWS,
+            )
+            ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
 
-    t_of, u_of = cand // 3, tw[cand] // 3
-    pmin = np.minimum(amin_p[t_of], amin_p[u_of])
-    cls = None if quad0 is None else join_classes(quad0, orig_of[t_of], orig_of[u_of])
-    every = np.arange(len(cand))
-    # judge every candidate unplaced; place a split's point only where Kruskal can
-    # still use the join after all joins meeting the rule unplaced (``open_candidates``)
-    score(every, 0)
-    steps.done("score_joins")
-    if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
+        t_of, u_of = cand // 3, tw[cand] // 3
+        pmin = np.minimum(amin_p[t_of], amin_p[u_of])
+        cls = None if quad0 is None else join_classes(quad0, orig_of[t_of], orig_of[u_of])
+        every = np.arange(len(cand))
+        # judge every candidate unplaced; place a split's point only where Kruskal can
+        # still use the join after all joins meeting the rule unplaced (``open_candidates``)
+        score(every, 0)
+        steps.done("score_joins")
+        if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
+            whole = (newmin >= keep * min_angle) & (newmax <= hi)
+            order = _join_order(ckind, slack, newmin, pmin, whole, cls)
+            rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
+            first = np.concatenate([order, rest])
+            open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
+            redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]
+            score(np.sort(redo), int(place_iters))
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls)
-        rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
-        first = np.concatenate([order, rest])
-        open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
-        redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]
-        score(np.sort(redo), int(place_iters))
-    whole = (newmin >= keep * min_angle) & (newmax <= hi)
-    order = _join_order(ckind, slack, newmin, pmin, whole, cls)
-    steps.done("place_splits")
-    no_absorb = np.zeros(m, np.bool_)
-    for attempt in range(4):
-        if attempt == 3:
-            no_absorb[:] = True
-        status, slot, swap_he, join, counts, bad = _k.plan_merges(
-            tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges
-        )
-        if not bad.any():
+        steps.done("place_splits")
+        no_absorb = np.zeros(m, np.bool_)
+        for attempt in range(4):
+            if attempt == 3:
+                no_absorb[:] = True
+            status, slot, swap_he, join, counts, bad = _k.plan_merges(
+                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges
+            )
+            if not bad.any():
+                break
+            no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
+        if bad.any():
+            raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+        n_placed_late = 0
+        if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
+            n_placed_late = _place_taken(
+                score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
+                status, counts,
+                int(place_iters),
+            )
+        if ring_pass == RING_JOIN_PASSES or not (use_cover and fans and pts.shape[1] == 2 and m < RING_MAX_TRIANGLES):
             break
-        no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
-    if bad.any():
-        raise VerificationError("internal error: the sparse merge left a piece with two cycles")
-    n_placed_late = 0
-    if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
-        n_placed_late = _place_taken(
-            score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
-            status, counts,
-            int(place_iters),
-        )
+        rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, keep,
+                            keep * min_angle, hi, 2.0 * floor)
+        if rings is None:
+            break
+        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_rj = rings
+        n_ring_join += n_rj
+        n, m, n_fan = len(pts), len(tri), n_fan + n_rj
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
@@ -984,6 +1138,7 @@ def sparse_cycles(
         "fans": int(n_fan),
         "ring_fans": int(n_ring),
         "rerouted": int(n_reroute),
+        "ring_joins": int(n_ring_join),
         "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,

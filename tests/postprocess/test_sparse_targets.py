@@ -229,3 +229,71 @@ def test_alternating_paths_keep_every_degree() -> None:
             assert len(set(nodes)) == len(nodes)
             n_paths += 1
     assert n_paths > 100
+
+
+def test_ring_joins_replace_joins_below_the_rule_on_la(monkeypatch) -> None:
+    """Triangle's ``la`` (~16k triangles): joins the plan takes below the local rule are
+    replaced by ring fans that meet it and join the same two cycles; the new plan
+    has fewer joins below the rule and fewer rows below it, and passes the certificate.
+    ``RING_JOIN_PASSES = 0`` is the plan without them."""
+    from tests.helpers import bundled_domain
+
+    m = hammesh.quality_mesh(bundled_domain("la"), min_angle=30, max_area=0.04800456831496649, isolate=False)
+    assert 10_000 < m.n_triangles < 25_000
+    on = hammesh.hamiltonian(m)
+    monkeypatch.setattr(S, "RING_JOIN_PASSES", 0)
+    off = hammesh.hamiltonian(m)
+    assert on.report["ring_joins"] >= 1 and off.report["ring_joins"] == 0
+    assert on.report["joins_below_rule"] < off.report["joins_below_rule"]
+    assert on.report["below_parent_rule"] < off.report["below_parent_rule"]
+    assert on.report["steiner_points"] <= 0.01 * m.n_triangles
+    assert_sparse_certificate(m, on)
+    verify(on, reference=m)
+
+
+def test_ring_merges_agrees_with_relabelled_cycles() -> None:
+    """``_ring_merges`` (which decides without labelling the cycles anew) against the
+    cover's own ``cycle_ids`` on the re-routed cover (``_apply_rings``): for rings over
+    two adjacent triangles of different cycles of a small mesh's cover, True exactly
+    when the two cycles end up as one and no cycle is split."""
+    from hammesh.postprocess.cycle_cover import cycle_cover
+
+    m = hammesh.quality_mesh(_own_domains()["plate_2_holes"], min_angle=30, max_area=0.01, isolate=False)
+    pts = np.asarray(m.points, np.float64)
+    tri = np.asarray(m.triangles, np.int64)
+    tw = hammesh.halfedge.half_edge_twins(tri, m.n_points)[0]
+    con = tw < 0
+    cover = cycle_cover(tri, tw, rotate=False)  # many short cycles
+    n_mt = len(tri)
+    amin = np.full(n_mt, 0.5)
+    n_true = n_false = 0
+    for h in np.flatnonzero(tw > np.arange(len(tw)))[:600].tolist():
+        a, b = h // 3, tw[h] // 3
+        if cover.cycle[a] < 0 or cover.cycle[b] < 0 or cover.cycle[a] == cover.cycle[b]:
+            continue
+        pp = S._union_polygon(tri, tw, con, [a, b])
+        if pp is None:
+            continue
+        for spoke in S._ring_link_options(tw, cover.is_cov, pp[1]):
+            ans = S._ring_merges(tw, cover.is_cov, cover.cycle, [a, b], pp[1], spoke, a, b)
+            x, y = pts[tri[[a, b]]].reshape(-1, 2).mean(axis=0)
+            out = S._apply_rings(
+                pts, tri, tw, con, cover, amin, np.arange(n_mt), np.zeros(n_mt, np.bool_),
+                [([a, b], pp[0], pp[1], spoke, x, y)],
+            )
+            cyc2 = out[4].cycle
+            kept = np.setdiff1d(np.arange(n_mt), [a, b])
+            old = cover.cycle[kept]
+            new = cyc2[: len(kept)]
+            crossing = {int(cover.cycle[g // 3]) for g in tw[pp[1]] if g >= 0}
+            split = any(len(np.unique(new[old == c])) > 1 for c in crossing)
+            joined = np.intersect1d(new[old == cover.cycle[a]], new[old == cover.cycle[b]]).size > 0
+            if ans:
+                assert joined and not split
+                n_true += 1
+            else:
+                n_false += 1
+                once = len(crossing) * 2 == sum(1 for hh in pp[1] if tw[hh] >= 0 and cover.is_cov[hh])
+                if once:  # each crossing cycle crosses once: the answer is exact
+                    assert not (joined and not split)
+    assert n_true > 5 and n_false > 0
