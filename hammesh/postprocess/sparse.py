@@ -611,9 +611,9 @@ def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool
     return ca in comp and cb in comp and comp[ca] == comp[cb]
 
 
-def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, keep: float,
-                lo: float, hi: float, floor2: float):
-    """Ring fans in place of the joins the plan took below the local rule (issue 13).
+def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
+                newmax, status, slot, keep: float, lo: float, hi: float, floor2: float):
+    """Ring fans in place of the joins the plan took below the local rule or the targets (issue 13).
 
     A swap or split over ``ab`` of ``t = abc``, ``u = bad`` divides the corners ``c``
     and ``d``, each a single input angle; where those are small no such join meets
@@ -621,28 +621,51 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     one or two covered neighbours (``_best_ring``, local rule against all its
     members) divides only its polygon's corners, which gather several input angles,
     and re-routes the cycles crossing it: taken where that joins ``t``'s and ``u``'s
-    cycles and splits none (``_ring_merges``). The worst ``RING_JOIN_TRIES`` joins
-    below the rule between two cycles are tried; the caller plans the joins again on
-    the new mesh. Returns ``_apply_rings``'s arrays and the number of ring joins, or
-    None.
+    cycles and splits none (``_ring_merges``). Tried, up to ``RING_JOIN_TRIES``:
+    the joins between two cycles below the rule, the Thm 2.4 bridges between two
+    cycles (both triangles split at their incenters) and the uncovered triangles the
+    plan split at their incenters (a ring fan over them, ``_ring_fans``' test) —
+    first those whose rows miss the absolute targets (``lo``: ``keep`` x the input's
+    smallest angle; ``hi``), then by the local rule's slack. The caller plans the
+    joins again on the new mesh. Returns ``_apply_rings``'s arrays and the number of
+    rings, or None.
     """
+    tasks = []  # (misses the targets, slack, t, u or -1)
     taken = order[np.unique(join[join >= 0])]
     low = taken[slack[taken] < 0.0]
     t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
-    low = low[(cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)]
-    low = low[np.argsort(slack[low], kind="stable")][:RING_JOIN_TRIES]
-    if not len(low):
+    both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
+    for i, t, u in zip(low[both].tolist(), t_of[both].tolist(), u_of[both].tolist()):
+        tasks.append((not (newmin[i] >= lo and newmax[i] <= hi), float(slack[i]), t, u))
+    bridged = np.flatnonzero((slot != _k.PLAIN) & (tw > np.arange(len(tw))))
+    split_unc = np.flatnonzero((status == _k.SPLIT) & (cover.cycle < 0))
+    rows = np.unique(np.concatenate([bridged // 3, tw[bridged] // 3, split_unc]))
+    a_lo, a_hi = triangle_angles(pts, tri[rows]) if len(rows) else (np.zeros(0), np.zeros(0))
+    # an incenter's sectors: half of each corner; 90 degrees + half a corner at the incenter
+    miss = dict(zip(rows.tolist(), ((0.5 * a_lo < lo) | (0.5 * math.pi + 0.5 * a_hi > hi)).tolist()))
+    half = dict(zip(rows.tolist(), (0.5 * a_lo - keep * amin_t[rows]).tolist()))
+    for h in bridged.tolist():
+        t, u = h // 3, int(tw[h] // 3)
+        if cover.cycle[t] >= 0 and cover.cycle[u] >= 0:
+            tasks.append((miss[t] or miss[u], min(half[t], half[u]), t, u))
+    for t in split_unc.tolist():
+        tasks.append((miss[t], half[t], t, -1))
+    if not tasks:
         return None
+    tasks.sort(key=lambda x: (not x[0], x[1]))
     used = np.zeros(len(tri), np.bool_)
     rings = []
-    for i in low.tolist():
-        t, u = int(cand[i] // 3), int(tw[cand[i]] // 3)
-        if used[t] or used[u] or is_fan[t] or is_fan[u]:
+    for missing, _, t, u in tasks[:RING_JOIN_TRIES]:
+        if used[t] or is_fan[t] or (u >= 0 and (used[u] or is_fan[u])):
             continue
-        best = _best_ring(
-            pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2, amin=amin_t,
-            keep=keep, accept=lambda ms, hes, sp: _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u),
-        )
+        if u < 0:  # an uncovered triangle: a ring fan (no cycle of its own to join)
+            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+        else:  # a join missing the targets: any ring within them; else one meeting the rule
+            best = _best_ring(
+                pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2,
+                amin=None if missing else amin_t, keep=keep,
+                accept=lambda ms, hes, sp: _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u),
+            )
         if best is None:
             continue
         _, members, (poly, hes), spoke, x, y = best
@@ -1077,8 +1100,8 @@ def sparse_cycles(
             )
         if ring_pass == RING_JOIN_PASSES or not (use_cover and fans and pts.shape[1] == 2 and m < RING_MAX_TRIANGLES):
             break
-        rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, keep,
-                            keep * min_angle, hi, 2.0 * floor)
+        rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
+                            newmax, status, slot, keep, keep * min_angle, hi, 2.0 * floor)
         if rings is None:
             break
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_rj = rings
