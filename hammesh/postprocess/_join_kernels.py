@@ -776,3 +776,72 @@ def good_half_edges_into(pts, tri, twin, pinned, amin, keep, hi, swaps, edge_spl
         if g > h and _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
             good[h] = True
             good[g] = True
+
+
+@njit(cache=True, nogil=True)
+def star_polygon(out, twin, pinned, h, poly):
+    """The link polygon of the vertex at half-edge ``h = 3 r + j`` (``out[r, j]``), counter-clockwise.
+
+    Walks the star from row ``r`` across the twins of the edges into the vertex.
+    Fills ``poly`` and returns its length; 0 if the star is open (a boundary edge),
+    touches a pinned edge or holds more than ``poly`` can.
+    """
+    v = out[h // 3, h % 3]
+    cur = h
+    n = 0
+    while True:
+        r = cur // 3
+        j = cur - 3 * r
+        e_out = 3 * r + j
+        e_in = 3 * r + (j + 2) % 3
+        if twin[e_out] < 0 or twin[e_in] < 0 or pinned[e_out] or pinned[e_in] or n >= poly.shape[0]:
+            return 0
+        poly[n] = out[r, (j + 1) % 3]
+        n += 1
+        g = twin[e_in]  # v -> w in the next row counter-clockwise around v
+        if out[g // 3, g % 3] != v:
+            return 0
+        cur = g
+        if cur == h:
+            return n
+
+
+@njit(cache=True, nogil=True)
+def move_to_targets(pts, out, twin, pinned, hs, lo, hi, floor, iters):
+    """Move the Steiner points at half-edges ``hs`` towards the *global* targets (in place).
+
+    The improvement step moves a point for the local rule (its star's slack against
+    ``keep`` x its parents' smallest angle) and never lets the star's smallest angle
+    drop. Where a star misses issue 13's absolute targets — an angle below
+    ``lo`` (``keep`` x the input's smallest) or above ``hi`` (its largest + 5 degrees) —
+    this compass search (Amenta-Bern-Eppstein's placement, see the module docstring)
+    maximises ``min(smallest - lo, hi - largest)`` instead: e.g. an incenter sector of
+    90 + 35.3 degrees over a boundary edge, whose two 27.4-degree half corners can give
+    a little to bring it under the largest angle allowed. A point is moved only if
+    that slack grows and the star's smallest angle stays >= ``min(its own, lo)``
+    (a star below the target may trade its largest angle only against the target's
+    margin, never against its own smallest) and >= ``floor`` (the proven floor).
+    Returns the number of points moved.
+    """
+    poly = np.empty(64, np.int64)
+    moved = 0
+    for i in range(hs.shape[0]):
+        h = hs[i]
+        n = star_polygon(out, twin, pinned, h, poly)
+        if n < 3:
+            continue
+        v = out[h // 3, h % 3]
+        vx = pts[v, 0]
+        vy = pts[v, 1]
+        s0, n0, x0 = fan_eval(pts, poly, n, vx, vy, lo, hi)
+        if s0 == -np.inf or s0 >= 0.0:
+            continue
+        d2 = np.inf
+        for k in range(n):
+            d2 = min(d2, (pts[poly[k], 0] - vx) ** 2 + (pts[poly[k], 1] - vy) ** 2)
+        px, py, s1, n1, x1 = compass_search(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters, 4 * iters)
+        if s1 > s0 + 1e-12 and n1 >= min(n0, lo) and n1 >= floor:
+            pts[v, 0] = px
+            pts[v, 1] = py
+            moved += 1
+    return moved

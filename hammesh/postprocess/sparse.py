@@ -65,6 +65,7 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
+from hammesh.postprocess import _cover_kernels as _ck
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, join_classes
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
@@ -257,6 +258,529 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     return pts2, tri2, tw2, con2.reshape(-1), cover2, amin2, orig_of, is_fan, n_fan
 
 
+#: most triangles one ring fan (an uncovered triangle and covered neighbours) may replace
+RING_MAX = 4
+#: meshes from this size on skip the re-route and the ring fans (``_reroute``,
+#: ``_ring_fans``): each relabels the cover's cycles and rebuilds the arrays, O(m),
+#: ~0.4 s CPU at 1.5 M triangles for the ~3 triangles they would help there
+RING_MAX_TRIANGLES = 100_000
+
+
+def _union_polygon(tri: np.ndarray, tw: np.ndarray, con: np.ndarray, members: list[int]):
+    """Counter-clockwise corners and outer half-edges of a group's union, or None.
+
+    None unless the union is a disc whose every corner is on its boundary (a dual
+    tree: ``len(members) + 2`` outer edges in one closed loop), so that a fan over it
+    keeps every vertex, and no edge inside it is pinned (a constrained edge, or one
+    between regions, must stay).
+    """
+    ms = set(members)
+    nxt: dict[int, tuple[int, int]] = {}
+    for x in members:
+        for k in range(3):
+            h = 3 * x + k
+            g = tw[h]
+            if g >= 0 and g // 3 in ms:
+                if con[h]:
+                    return None
+                continue
+            a = int(tri[x, k])
+            if a in nxt:
+                return None
+            nxt[a] = (int(tri[x, (k + 1) % 3]), h)
+    if len(nxt) != len(members) + 2:
+        return None
+    start = next(iter(nxt))
+    poly, hes, v = [], [], start
+    for _ in range(len(nxt)):
+        if v not in nxt:
+            return None
+        poly.append(v)
+        v, h = nxt[v]
+        hes.append(h)
+    return (poly, hes) if v == start else None
+
+
+def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
+    """Which spokes of a ring fan over a group carry the cycles that crossed it, or None.
+
+    The group's covered triangles were entered and left by cover edges across its
+    outer edges (*links*, an even number). In the ring (one fan triangle per outer
+    edge, in order) every link must end an *arc* of consecutive fan triangles, the
+    arcs pairing the links in ring order and leaving no fan triangle between two
+    arcs: then every fan triangle has two cover edges and every outside triangle
+    keeps its own. Returns the boolean ``spoke[i]`` (spoke i at corner i, between fan
+    triangles i - 1 and i, is a cover edge) of the first pairing that fits
+    (``_ring_link_options`` gives both), or None if neither does.
+    """
+    options = _ring_link_options(tw, is_cov, hes)
+    return options[0] if options else None
+
+
+def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> list[np.ndarray]:
+    """Every pairing of a ring's links into arcs that fits (``_ring_links``): zero to two."""
+    n = len(hes)
+    links = [i for i, h in enumerate(hes) if tw[h] >= 0 and is_cov[h]]
+    if not links:
+        return [np.ones(n, np.bool_)]  # the ring is a cycle of its own
+    if len(links) % 2:
+        return []
+    out = []
+    for shift in (0, 1):
+        ends = [links[(shift + 2 * k + 1) % len(links)] for k in range(len(links) // 2)]
+        starts = [links[(shift + 2 * k + 2) % len(links)] for k in range(len(links) // 2)]
+        if all((b - a) % n == 1 for a, b in zip(ends, starts)):
+            spoke = np.ones(n, np.bool_)
+            spoke[starts] = False
+            if not any((spoke == o).all() for o in out):
+                out.append(spoke)
+    return out
+
+
+def _missing_targets(pts, tri, tw, con, cycle, amin_t, lo: float, hi: float, floor: float) -> np.ndarray:
+    """Isolated uncovered triangles no join can absorb within the absolute targets.
+
+    ``join_bounds`` gives the isolated uncovered triangles (few); each inner edge's
+    join is judged as the plan would (``_join_kernels.score_joins_into``, split
+    placed without a reach) against the *global* targets: smallest new angle >= ``lo``,
+    largest <= ``hi``. Returns the rows where no edge's join meets both (e.g. the
+    join bound below ``lo``, or a swap whose largest angle is over ``hi``).
+    """
+    rows, bound, _ = join_bounds(pts, tri, tw, cycle)
+    out = []
+    one = [np.zeros(1, np.int8), np.empty(1), np.empty(1), np.empty(1), np.empty((1, 2))]
+    for t, b in zip(rows.tolist(), bound.tolist()):
+        ok = False
+        if b >= lo:
+            for k in range(3):
+                g = tw[3 * t + k]
+                if g < 0:
+                    continue
+                pm = min(amin_t[t], amin_t[g // 3])
+                _j.score_joins_into(
+                    pts, tri, tw, con, np.array([g]), amin_t, lo / pm, hi, floor, -2.0, True, True,
+                    PLACE_ITERS, math.inf, *one,
+                )
+                if one[0][0] != _j.NO_JOIN and one[2][0] >= lo and one[3][0] <= hi:
+                    ok = True
+                    break
+        if not ok:
+            out.append(t)
+    return np.asarray(out, np.int64)
+
+
+def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: float, floor2: float,
+               amin=None, keep: float = 0.0, accept=None):
+    """The best ring fan over the uncovered triangle ``t`` and covered neighbours, or None.
+
+    Every connected group of ``t`` (an int, or a list of triangles to start from) and
+    up to ``RING_MAX`` triangles in all, the others covered (not ``blocked``, across
+    free edges), whose union is a disc (``_union_polygon``) and whose links pair into
+    arcs (``_ring_links``) gets its fan point placed (``_join_kernels.place_fan``); a
+    group qualifies if every fan angle is ``>= max(lo, floor2)`` (with ``amin``: and
+    ``>= keep`` x its members' smallest angle, the local rule) and ``<= hi``, and
+    ``accept(members, hes, spoke)`` if given. Returns ``(slack, members, (polygon,
+    half-edges), spoke, x, y)`` of the largest slack (then the smaller group).
+    """
+    best = None
+    seen: set[frozenset] = set()
+    stack = [[t] if isinstance(t, int) else list(t)]
+    while stack:
+        members = stack.pop()
+        key = frozenset(members)
+        if key in seen:
+            continue
+        seen.add(key)
+        if len(members) > 1:
+            pp = _union_polygon(tri, tw, con, members)
+            options = [] if pp is None else _ring_link_options(tw, is_cov, pp[1])
+            if options:
+                poly = np.asarray(pp[0], np.int64)
+                lo_g = lo if amin is None else max(lo, keep * float(amin[members].min()))
+                starts = pts[tri[members]].mean(axis=1)
+                step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
+                x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, hi, step,
+                                                    PLACE_ITERS + 2)
+                ok = sl > -math.inf and nmin >= max(lo_g, floor2) and nmax <= hi
+                if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
+                    if accept is not None:  # the costlier check last, only for a better fan
+                        options = [o for o in options if accept(members, pp[1], o)]
+                    if options:
+                        best = (sl, members, pp, options[0], x, y)
+        if len(members) >= RING_MAX:
+            continue
+        for x in members:
+            for k in range(3):
+                g = tw[3 * x + k]
+                if g < 0 or con[3 * x + k]:
+                    continue
+                y = int(g // 3)
+                if y in members or blocked[y] or cycle[y] < 0:
+                    continue
+                stack.append(members + [y])
+    return best
+
+
+#: removals along each alternating path a re-route may take (``_reroute``)
+REROUTE_DEPTH = 4
+
+
+def _alternating_paths(tw, is_cov, cycle, start: int, avoid: set, depth: int, stop: int = -1):
+    """Alternating paths of the cover from ``start``, which gained a cover edge.
+
+    ``start`` gives up one of its cover edges (to ``y``), ``y`` then takes its
+    non-cover edge (to a covered ``x``), ``x`` gives up one of its other cover edges,
+    and so on (at most ``depth`` give-ups). Yields ``(y, nodes, flips)`` after each
+    give-up: ``y`` is one cover edge short there, ``nodes`` the path, ``flips`` the
+    half-edges whose cover state changes (one per edge). A path reaching ``stop``
+    ends there.
+    """
+    todo = [(start, [start], [])]
+    while todo:
+        x, nodes, flips = todo.pop()
+        for k in range(3):
+            h = 3 * x + k
+            g = tw[h]
+            if g < 0 or not is_cov[h]:
+                continue
+            y = int(g // 3)
+            if y in nodes or y in avoid:
+                continue
+            path = nodes + [y]
+            yield y, path, flips + [h]
+            if y == stop or (len(flips) + 1) // 2 + 1 > depth:
+                continue
+            for j in range(3):
+                f = 3 * y + j
+                e = tw[f]
+                if e < 0 or is_cov[f]:
+                    continue
+                x2 = int(e // 3)
+                if cycle[x2] >= 0 and x2 not in path and x2 not in avoid:
+                    todo.append((x2, path + [x2], flips + [h, f]))
+
+
+def _flip_cover(tw, is_cov, flips) -> None:
+    for h in flips:
+        is_cov[h] = not is_cov[h]
+        is_cov[tw[h]] = is_cov[h]
+
+
+def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi: float, floor2: float):
+    """Re-route the cover through uncovered triangles that neither a join nor a ring fan can keep.
+
+    For such a triangle ``t`` (on the boundary, typically: its corners at the
+    boundary edge are single input angles, so every join and every fan over it
+    halves one) with covered neighbours ``u``, ``w``: give ``t`` the cover edges
+    ``t-u``, ``t-w`` and restore the degrees by two alternating paths
+    (``_alternating_paths``) from ``u`` and ``w`` that end at one triangle ``z``
+    losing both its cover edges (``z`` is left off instead of ``t``), or by one path
+    from ``u`` that ends at ``w`` (nothing left off). ``z`` is taken only if a ring
+    fan over it meets the targets (``_best_ring``); the cover's cycles may merge or
+    split (the joins take it from there). Returns the new cover and the number of
+    triangles re-routed.
+    """
+    m = len(tri)
+    rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
+    if not len(rows):
+        return cover, 0
+    is_cov = cover.is_cov.copy()
+    cycle = cover.cycle.copy()
+    touched = np.zeros(m, np.bool_)
+    done = 0
+    for t in rows.tolist():
+        if _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan, t, lo, hi, floor2) is not None:
+            continue  # a ring fan takes it
+        nbs = [int(tw[3 * t + k] // 3) for k in range(3) if tw[3 * t + k] >= 0]
+        t_he = {int(tw[3 * t + k] // 3): 3 * t + k for k in range(3) if tw[3 * t + k] >= 0}
+        best = None
+        for i in range(len(nbs)):
+            for j in range(len(nbs)):
+                u, w = nbs[i], nbs[j]
+                if i == j or cycle[u] < 0 or cycle[w] < 0 or touched[u] or touched[w]:
+                    continue
+                avoid = {t} | {int(x) for x in np.flatnonzero(touched)}
+                from_w: dict[int, list] = {}
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, REROUTE_DEPTH):
+                    from_w.setdefault(y, []).append((nodes, flips))
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, u, avoid, REROUTE_DEPTH, w):
+                    cands = []
+                    if y == w:  # the path ends at w, which gave t its edge: nothing left off
+                        if best is None or best[3] >= 0 or len(flips) < best[0]:
+                            best = (len(flips), [t_he[u], t_he[w]] + flips, nodes, -1)
+                        continue
+                    if best is not None and best[3] < 0:
+                        continue
+                    if y in from_w and not is_fan[y]:
+                        for nodes2, flips2 in from_w[y]:
+                            if set(nodes).isdisjoint(nodes2[:-1]) and tw[flips[-1]] != tw[flips2[-1]]:
+                                cands.append((nodes + nodes2, flips + flips2, y))
+                    for nodes_all, flips_all, z in cands:
+                        cost = len(flips_all)
+                        if best is not None and cost >= best[0]:
+                            continue
+                        add = [t_he[u], t_he[w]]
+                        _flip_cover(tw, is_cov, add + flips_all)
+                        c_t, c_z = cycle[t], cycle[z]
+                        cycle[t], cycle[z] = cycle[u], -1
+                        ring = _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan | touched, z, lo, hi, floor2)
+                        _flip_cover(tw, is_cov, add + flips_all)
+                        cycle[t], cycle[z] = c_t, c_z
+                        if ring is not None:
+                            best = (cost, add + flips_all, nodes_all, z)
+        if best is None:
+            continue
+        _, flips, nodes, z = best
+        _flip_cover(tw, is_cov, flips)
+        cycle[t] = cycle[nodes[0]]
+        if z >= 0:
+            cycle[z] = -1
+        touched[nodes] = True
+        touched[t] = True
+        done += 1
+    if not done:
+        return cover, 0
+    cyc2, n_cyc2 = _ck.cycle_ids(tw, is_cov, m)
+    return CycleCover(
+        is_cov=is_cov, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
+        n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
+    ), done
+
+
+#: below-rule joins one call tries to replace by ring joins (``_ring_joins``), worst first
+RING_JOIN_TRIES = 32
+#: rounds of ring joins, each followed by a new plan
+RING_JOIN_PASSES = 1
+
+
+def _ring_pairs(tw, is_cov, members, hes, spoke):
+    """How a ring fan re-pairs the cycles crossing its group.
+
+    Returns ``(links, old, new)``: the ring positions with a link, and for each the
+    link it was joined to through the group (following cover edges inside it) and
+    the one its arc joins it to now.
+    """
+    mset = set(members)
+    n = len(hes)
+    links = [i for i in range(n) if tw[hes[i]] >= 0 and is_cov[hes[i]]]
+    pos = {hes[i]: i for i in links}
+    old_link = set(links)
+    old, new = {}, {}
+    for i in links:
+        came = hes[i]
+        while True:
+            x = came // 3
+            f = next(3 * x + k for k in range(3) if 3 * x + k != came and is_cov[3 * x + k])
+            g = tw[f]
+            if g >= 0 and g // 3 in mset:
+                came = g
+                continue
+            old[i] = pos[f]
+            break
+        d = 1 if spoke[(i + 1) % n] else -1  # row i's cover spoke leads along its arc
+        j = (i + d) % n
+        while j not in old_link:
+            j = (j + d) % n
+        new[i] = j
+    return links, old, new
+
+
+def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool:
+    """Does the ring fan join the cycles of triangles ``a`` and ``b`` and split none?
+
+    Each cycle crossing the group must cross it once (its two links joined inside the
+    group): then outside the group it is one path between those links, and the new
+    cycles are the components of old pairs (outside) and new pairs (the arcs), each a
+    union of old cycles. Without labelling the cycles anew (``_ring_pairs``).
+    """
+    links, old, new = _ring_pairs(tw, is_cov, members, hes, spoke)
+    ids = {i: int(cycle[hes[i] // 3]) for i in links}
+    if len({ids[i] for i in links}) * 2 != len(links):
+        return False  # a cycle crosses twice: the outside order would matter
+    root = {i: i for i in links}
+
+    def find(i):
+        while root[i] != i:
+            root[i] = root[root[i]]
+            i = root[i]
+        return i
+
+    for i in links:
+        for j in (old[i], new[i]):
+            root[find(i)] = find(j)
+    comp = {ids[i]: find(i) for i in links}
+    ca, cb = int(cycle[a]), int(cycle[b])
+    return ca in comp and cb in comp and comp[ca] == comp[cb]
+
+
+def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
+                newmax, status, slot, keep: float, lo: float, hi: float, floor2: float):
+    """Ring fans in place of the joins the plan took below the local rule or the targets (issue 13).
+
+    A swap or split over ``ab`` of ``t = abc``, ``u = bad`` divides the corners ``c``
+    and ``d``, each a single input angle; where those are small no such join meets
+    ``keep`` x the pair's smallest angle. A fan around one point over ``t``, ``u`` and
+    one or two covered neighbours (``_best_ring``, local rule against all its
+    members) divides only its polygon's corners, which gather several input angles,
+    and re-routes the cycles crossing it: taken where that joins ``t``'s and ``u``'s
+    cycles and splits none (``_ring_merges``). Tried, up to ``RING_JOIN_TRIES``:
+    the joins between two cycles below the rule, the Thm 2.4 bridges between two
+    cycles (both triangles split at their incenters) and the uncovered triangles the
+    plan split at their incenters (a ring fan over them, ``_ring_fans``' test) —
+    first those whose rows miss the absolute targets (``lo``: ``keep`` x the input's
+    smallest angle; ``hi``), then by the local rule's slack. The caller plans the
+    joins again on the new mesh. Returns ``_apply_rings``'s arrays and the number of
+    rings, or None.
+    """
+    tasks = []  # (misses the targets, slack, t, u or -1)
+    taken = order[np.unique(join[join >= 0])]
+    low = taken[slack[taken] < 0.0]
+    t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
+    both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
+    for i, t, u in zip(low[both].tolist(), t_of[both].tolist(), u_of[both].tolist()):
+        tasks.append((not (newmin[i] >= lo and newmax[i] <= hi), float(slack[i]), t, u))
+    bridged = np.flatnonzero((slot != _k.PLAIN) & (tw > np.arange(len(tw))))
+    split_unc = np.flatnonzero((status == _k.SPLIT) & (cover.cycle < 0))
+    rows = np.unique(np.concatenate([bridged // 3, tw[bridged] // 3, split_unc]))
+    a_lo, a_hi = triangle_angles(pts, tri[rows]) if len(rows) else (np.zeros(0), np.zeros(0))
+    # an incenter's sectors: half of each corner; 90 degrees + half a corner at the incenter
+    miss = dict(zip(rows.tolist(), ((0.5 * a_lo < lo) | (0.5 * math.pi + 0.5 * a_hi > hi)).tolist()))
+    half = dict(zip(rows.tolist(), (0.5 * a_lo - keep * amin_t[rows]).tolist()))
+    for h in bridged.tolist():
+        t, u = h // 3, int(tw[h] // 3)
+        if cover.cycle[t] >= 0 and cover.cycle[u] >= 0:
+            tasks.append((miss[t] or miss[u], min(half[t], half[u]), t, u))
+    for t in split_unc.tolist():
+        tasks.append((miss[t], half[t], t, -1))
+    if not tasks:
+        return None
+    tasks.sort(key=lambda x: (not x[0], x[1]))
+    used = np.zeros(len(tri), np.bool_)
+    rings = []
+    for missing, _, t, u in tasks[:RING_JOIN_TRIES]:
+        if used[t] or is_fan[t] or (u >= 0 and (used[u] or is_fan[u])):
+            continue
+        if u < 0:  # an uncovered triangle: a ring fan (no cycle of its own to join)
+            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+        else:  # a join missing the targets: any ring within them; else one meeting the rule
+            best = _best_ring(
+                pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2,
+                amin=None if missing else amin_t, keep=keep,
+                accept=lambda ms, hes, sp: _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u),
+            )
+        if best is None:
+            continue
+        _, members, (poly, hes), spoke, x, y = best
+        near = [tw[h] // 3 for h in hes if tw[h] >= 0]
+        if used[members].any() or used[near].any():
+            continue
+        used[members] = True
+        rings.append((members, poly, hes, spoke, x, y))
+    if not rings:
+        return None
+    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings), len(rings))
+
+
+def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo: float, hi: float, floor2: float):
+    """Absorb isolated uncovered triangles that no join can keep at ``lo`` by *ring fans*.
+
+    A join over an edge of an uncovered triangle ``t`` divides the two corners
+    opposite it (``join_bounds``), so where those are small no join meets issue 13's
+    target. A fan around one Steiner point ``P`` over ``t`` *and some covered
+    neighbours* (at most ``RING_MAX`` triangles: a disc, so every vertex stays)
+    divides only the group's polygon corners, which gather several input angles,
+    and its ``k + 2`` triangles keep every cycle that crossed the group (``_ring_links``:
+    the cycles are re-routed around ``P``; they may merge or split, the joins take
+    it from there). ``P`` is placed by ``_join_kernels.place_fan`` (the best of the
+    members' centroids, then compass search); a group is taken only if every fan
+    angle is ``>= max(lo, floor2)`` and ``<= hi`` (``floor2``: the input's minimum, so
+    a later Thm 2.4 bridge that splits a fan triangle still keeps the proven floor);
+    the best slack wins, then the smaller group. One Steiner point, as the incenter
+    it replaces. Uncovered triangles next to a fan are left alone.
+
+    Returns the arrays of ``_fans`` (and ``orig_of``, ``is_fan`` composed) plus the
+    number of ring fans.
+    """
+    m = len(tri)
+    rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
+    if not len(rows) or pts.shape[1] != 2:
+        return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
+    taken: list[tuple[list[int], list[int], list[int], np.ndarray, float, float]] = []
+    used = np.zeros(m, np.bool_)
+    for t in rows.tolist():
+        best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+        if best is None:
+            continue
+        _, members, (poly, hes), spoke, x, y = best
+        near = [tw[h] // 3 for h in hes if tw[h] >= 0]
+        if used[members].any() or used[near].any():
+            continue
+        used[members] = True
+        taken.append((members, poly, hes, spoke, x, y))
+    if not taken:
+        return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
+    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken), len(taken))
+
+
+def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken):
+    """Replace each ring fan's members by its ``k + 2`` rows (``_ring_fans``, ``_ring_joins``).
+
+    ``taken``: ``(members, polygon, outer half-edges, spoke, x, y)`` per fan, no two
+    adjacent. Returns the new ``(points, triangles, twin, pinned, cover, parent_min,
+    orig_of, is_fan)``: kept rows in order, then the fans' rows (``orig_of``: the input
+    triangle holding the fan row's outer edge; ``parent_min``: the members' smallest
+    angle); the fans' points follow the points; the cycles are labelled anew.
+    """
+    m = len(tri)
+    # rebuild: kept rows in order, then the fans' rows; twins mapped, not re-derived
+    dead = np.zeros(m, np.bool_)
+    for members, *_ in taken:
+        dead[members] = True
+    kept = np.flatnonzero(~dead)
+    new_of = np.full(m, -1, np.int64)
+    new_of[kept] = np.arange(len(kept))
+    n_pts = len(pts)
+    f_tri, f_tw, f_con, f_cov, f_min, f_orig, f_pts = [], [], [], [], [], [], []
+    he_to = {}  # outer half-edge of a group -> the fan row's outer half-edge
+    base = len(kept)
+    for j, (members, poly, hes, spoke, x, y) in enumerate(taken):
+        k = len(poly)
+        for i in range(k):
+            r = base + i
+            f_tri.append((n_pts + j, poly[i], poly[(i + 1) % k]))
+            he_to[hes[i]] = 3 * r + 1
+            f_tw.append((3 * (base + (i - 1) % k) + 2, -1, 3 * (base + (i + 1) % k)))
+            f_con.append((False, bool(con[hes[i]]), False))
+            link = tw[hes[i]] >= 0 and bool(cover.is_cov[hes[i]])
+            f_cov.append((bool(spoke[i]), link, bool(spoke[(i + 1) % k])))
+            f_orig.append(orig_of[hes[i] // 3])
+        f_min.extend([float(amin_t[members].min())] * k)
+        f_pts.append((x, y))
+        base += k
+    h_old = (3 * kept[:, None] + np.arange(3)).ravel()
+    g = tw[h_old]
+    tw_k = np.where(g >= 0, 3 * new_of[np.maximum(g, 0) // 3] + g % 3, -1)
+    tri2 = np.concatenate([tri[kept], np.asarray(f_tri, np.int64)])
+    tw2 = np.concatenate([tw_k, np.asarray(f_tw, np.int64).ravel()])
+    for h, r1 in he_to.items():  # both sides of every group's outer edge
+        o = tw[h]
+        if o >= 0:
+            tw2[r1] = 3 * new_of[o // 3] + o % 3
+            tw2[3 * new_of[o // 3] + o % 3] = r1
+    con2 = np.concatenate([con.reshape(m, 3)[kept].ravel(), np.asarray(f_con, np.bool_).ravel()])
+    is_cov2 = np.concatenate([cover.is_cov.reshape(m, 3)[kept].ravel(), np.asarray(f_cov, np.bool_).ravel()])
+    cyc2, n_cyc2 = _ck.cycle_ids(tw2, is_cov2, len(tri2))
+    cover2 = CycleCover(
+        is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
+        n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
+    )
+    amin2 = np.concatenate([amin_t[kept], np.asarray(f_min)])
+    orig2 = np.concatenate([orig_of[kept], np.asarray(f_orig, np.int64)])
+    fan2 = np.concatenate([is_fan[kept], np.ones(len(f_tri), np.bool_)])
+    pts2 = np.concatenate([pts, np.asarray(f_pts, np.float64)])
+    return pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2
+
+
 def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
     """Angle (radians) at corner ``k`` of triangles ``t`` (2D or 3D points)."""
     p, q, r = pts[tri[t, k]], pts[tri[t, (k + 1) % 3]], pts[tri[t, (k + 2) % 3]]
@@ -366,12 +890,17 @@ def _place_taken(
     # (``global_lo``): a placed split that fixes neither would turn a swap's two rows
     # below the rule into four, or add a Steiner point for nothing the targets see
     # (a split placed anew in place of its midpoint costs nothing: taken if better)
+    glob_now = (newmin[low] >= global_lo) & (newmax[low] <= hi)
+    glob_before = (before[2] >= global_lo) & (before[3] <= hi)
     fixes = (slack[low] >= 0.0) | ((newmin[low] >= global_lo) & (before[2] < global_lo)) | (
         (before[0] == _j.SPLIT_JOIN) & (ckind[low] == _j.SPLIT_JOIN)
     )
     better = (
         (slack[low] > before[1]) & (newmin[low] > before[2]) & fixes & (newmax[low] <= np.maximum(hi, before[3]))
     )
+    # or newly within both absolute targets (issue 13's min and max), e.g. a swap whose
+    # largest angle is over the input's + 5 degrees replaced by a placed split
+    better |= glob_now & ~glob_before
     for x, x0 in zip((ckind, slack, newmin, newmax, point), before):
         x[low[~better]] = x0[~better]
     k0 = before[0]
@@ -514,64 +1043,82 @@ def sparse_cycles(
             pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
         )
         n, m = len(pts), len(tri)
-    steps.done("fans")
-    cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
-    ckind = np.zeros(len(cand), np.int8)
-    slack = np.empty(len(cand))
-    newmin = np.empty(len(cand))
-    newmax = np.empty(len(cand))
-    point = np.empty((len(cand), pts.shape[1]))
-    def score(rows: np.ndarray, iters: int, reach: float = math.radians(PLACE_REACH_DEG)) -> None:
-        c = cand[rows]
-        parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
-        _row_pass(
-            lambda lo, hi_: _j.score_joins_into(
-                pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
-                bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts),
-            ),
-            len(c),
-            SCORE_MIN_ROWS,
+    n_ring = n_reroute = 0
+    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered and m < RING_MAX_TRIANGLES:
+        cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor)
+        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
+            pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
         )
-        ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
+        n, m, n_fan = len(pts), len(tri), n_fan + n_ring
+    steps.done("fans")
+    n_ring_join = 0
+    for ring_pass in range(RING_JOIN_PASSES + 1):  # plans again after ring joins (``_ring_joins``)
+        cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
+        ckind = np.zeros(len(cand), np.int8)
+        slack = np.empty(len(cand))
+        newmin = np.empty(len(cand))
+        newmax = np.empty(len(cand))
+        point = np.empty((len(cand), pts.shape[1]))
+        def score(rows: np.ndarray, iters: int, reach: float = math.radians(PLACE_REACH_DEG)) -> None:
+            c = cand[rows]
+            parts = (ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows])
+            _row_pass(
+                lambda lo, hi_: _j.score_joins_into(
+                    pts, tri, tw, con, c[lo:hi_], amin_p, float(keep), hi, floor, cos_fold, bool(swaps),
+                    bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts),
+                ),
+                len(c),
+                SCORE_MIN_ROWS,
+            )
+            ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
 
-    t_of, u_of = cand // 3, tw[cand] // 3
-    pmin = np.minimum(amin_p[t_of], amin_p[u_of])
-    cls = None if quad0 is None else join_classes(quad0, orig_of[t_of], orig_of[u_of])
-    every = np.arange(len(cand))
-    # judge every candidate unplaced; place a split's point only where Kruskal can
-    # still use the join after all joins meeting the rule unplaced (``open_candidates``)
-    score(every, 0)
-    steps.done("score_joins")
-    if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
+        t_of, u_of = cand // 3, tw[cand] // 3
+        pmin = np.minimum(amin_p[t_of], amin_p[u_of])
+        cls = None if quad0 is None else join_classes(quad0, orig_of[t_of], orig_of[u_of])
+        every = np.arange(len(cand))
+        # judge every candidate unplaced; place a split's point only where Kruskal can
+        # still use the join after all joins meeting the rule unplaced (``open_candidates``)
+        score(every, 0)
+        steps.done("score_joins")
+        if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
+            whole = (newmin >= keep * min_angle) & (newmax <= hi)
+            order = _join_order(ckind, slack, newmin, pmin, whole, cls)
+            rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
+            first = np.concatenate([order, rest])
+            open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
+            redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]
+            score(np.sort(redo), int(place_iters))
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls)
-        rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
-        first = np.concatenate([order, rest])
-        open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
-        redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]
-        score(np.sort(redo), int(place_iters))
-    whole = (newmin >= keep * min_angle) & (newmax <= hi)
-    order = _join_order(ckind, slack, newmin, pmin, whole, cls)
-    steps.done("place_splits")
-    no_absorb = np.zeros(m, np.bool_)
-    for attempt in range(4):
-        if attempt == 3:
-            no_absorb[:] = True
-        status, slot, swap_he, join, counts, bad = _k.plan_merges(
-            tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges
-        )
-        if not bad.any():
+        steps.done("place_splits")
+        no_absorb = np.zeros(m, np.bool_)
+        for attempt in range(4):
+            if attempt == 3:
+                no_absorb[:] = True
+            status, slot, swap_he, join, counts, bad = _k.plan_merges(
+                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges
+            )
+            if not bad.any():
+                break
+            no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
+        if bad.any():
+            raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+        n_placed_late = 0
+        if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
+            n_placed_late = _place_taken(
+                score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
+                status, counts,
+                int(place_iters),
+            )
+        if ring_pass == RING_JOIN_PASSES or not (use_cover and fans and pts.shape[1] == 2 and m < RING_MAX_TRIANGLES):
             break
-        no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
-    if bad.any():
-        raise VerificationError("internal error: the sparse merge left a piece with two cycles")
-    n_placed_late = 0
-    if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
-        n_placed_late = _place_taken(
-            score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
-            status, counts,
-            int(place_iters),
-        )
+        rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
+                            newmax, status, slot, keep, keep * min_angle, hi, 2.0 * floor)
+        if rings is None:
+            break
+        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_rj = rings
+        n_ring_join += n_rj
+        n, m, n_fan = len(pts), len(tri), n_fan + n_rj
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
@@ -604,7 +1151,7 @@ def sparse_cycles(
     if improve and pts.shape[1] == 2 and len(out):
         out, claim, kind, pm, n_improve, n_moved = _improve(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
-            n0_input, keep,
+            n0_input, keep, keep * min_angle, floor,
         )
     steps.done("improve")
     # the kept rows' worst radius ratio is the input's if its worst triangle is kept
@@ -624,6 +1171,9 @@ def sparse_cycles(
         "cover_rotations": int(cover.n_rotations),
         "uncovered": int(n_unc0),
         "fans": int(n_fan),
+        "ring_fans": int(n_ring),
+        "rerouted": int(n_reroute),
+        "ring_joins": int(n_ring_join),
         "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,
@@ -698,7 +1248,7 @@ def local_quality(
 
 
 def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, first_mid, hi,
-             first_steiner, keep):
+             first_steiner, keep, lo_global, floor):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
@@ -738,7 +1288,36 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
         n_moved += moved
         if moved == 0:
             break
+    n_moved += _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
     return out, twin, kind, pm, int(n_flips), int(n_moved)
+
+
+def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float) -> int:
+    """Move the Steiner points of rows that miss issue 13's absolute targets (in place).
+
+    After the improvement step, the new rows with an angle below ``lo`` (``keep`` x
+    the input's smallest) or above ``hi`` (its largest + 5 degrees) are few (none on
+    most meshes); each free Steiner point among their corners is moved for the
+    global targets (``_join_kernels.move_to_targets``), up to ``IMPROVE_ROUNDS``
+    rounds. Returns the number of moves.
+    """
+    new = np.flatnonzero(kind != 3)
+    if not len(new) or first_steiner >= len(pts):
+        return 0
+    moved = 0
+    for _ in range(IMPROVE_ROUNDS):
+        a_lo, a_hi, _, _ = triangle_facts(pts, out[new])
+        miss = new[(a_lo < lo) | (a_hi > hi)]
+        rc = np.argwhere(out[miss] >= first_steiner)
+        if not len(rc):
+            break
+        hs = 3 * miss[rc[:, 0]] + rc[:, 1]
+        _, first_h = np.unique(out[miss[rc[:, 0]], rc[:, 1]], return_index=True)
+        n = _j.move_to_targets(pts, out, twin, pinned, hs[first_h], float(lo), float(hi), float(floor), PLACE_ITERS)
+        moved += n
+        if n == 0:
+            break
+    return moved
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
