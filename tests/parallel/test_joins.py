@@ -99,3 +99,18 @@ def test_edges_within_match_numpy_masks():
         assert np.array_equal(np.lexsort((slots, rows)), np.arange(count))  # row by row
 
     check()
+
+
+def test_outcome_size_computes_nothing():
+    """Dask's size of a tile's outcome counts the arrays held and never computes the
+    Hamiltonian mesh's neighbours (a cached property: 1.3 s per 9M rows, unused)."""
+    from hammesh.parallel.run import _outcome_nbytes, tile_task
+    from hammesh.parallel.tiles import decompose
+
+    d = decompose(hammesh.read_domain("hammesh/data/demo.poly"), min_angle=30, max_area=4e-3, n_tiles=2)
+    out = tile_task(d.tiles[0], d.n_input, 30, 4e-3, "incircle", 0.9, keep_mesh=True)
+    size = _outcome_nbytes(out)
+    assert "neighbors" not in vars(out.ham)
+    held = sum(a.nbytes for m in (out.mesh, out.ham) for a in vars(m).values() if isinstance(a, np.ndarray))
+    assert size <= 1000 + held
+    assert size >= out.ham.triangles.nbytes + out.mesh.triangles.nbytes + out.mesh.neighbors.nbytes
