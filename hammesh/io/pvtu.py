@@ -5,8 +5,11 @@ write its tile's piece (:func:`write_piece`); the driver writes the index
 (:func:`write_index`), pieces listed in the order the cycle first enters them. Each
 piece stores its points with point data ``global_id`` (a point shared by two pieces
 has one id) and its triangles in cycle order with cell data ``global_position``
-(place in the whole output), ``cycle_id``, ``cycle_position``, ``parent``, ``kind``
-and the regional attributes.
+(place in the whole output), ``parent``, ``kind``, the regional attributes and, when
+the output has more than one cycle, ``cycle_id`` and ``cycle_position`` (with one
+cycle they would be all zeros and ``global_position`` again: 16 of ~80 bytes per
+row, not written; :data:`CYCLE_CELL_DATA`), ``part`` with ``--parts``. The index
+lists exactly the arrays its pieces hold.
 
 :func:`read` stitches the pieces back into one mesh in cycle order (``hammesh check
 index.pvtu`` re-verifies it like any mesh file); :func:`write` writes any mesh as a
@@ -29,11 +32,12 @@ from hammesh.io import vtu
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 
 __all__ = ["read", "write", "write_piece", "write_raw_chunks", "write_index", "read_pieces", "PIECE_CELL_DATA",
-           "VTK_TRIANGLE"]
+           "CYCLE_CELL_DATA", "VTK_TRIANGLE"]
 
 #: cell data of every piece (name -> VTK type)
-PIECE_CELL_DATA = {"global_position": "Int64", "cycle_id": "Int64", "cycle_position": "Int64",
-                   "parent": "Int64", "kind": "Int64"}
+PIECE_CELL_DATA = {"global_position": "Int64", "parent": "Int64", "kind": "Int64"}
+#: cell data of the pieces of an output with more than one cycle
+CYCLE_CELL_DATA = {"cycle_id": "Int64", "cycle_position": "Int64"}
 
 
 #: VTK cell type of a triangle
@@ -41,11 +45,13 @@ VTK_TRIANGLE = 5
 
 
 def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.ndarray, triangles: np.ndarray,
-                position: np.ndarray, cycle_id: np.ndarray, cycle_position: np.ndarray, parent: np.ndarray,
-                kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None,
+                position: np.ndarray, cycle_id: np.ndarray | None, cycle_position: np.ndarray | None,
+                parent: np.ndarray, kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None,
                 local: bool = False) -> None:
     """Write one piece: ``triangles`` in global point ids (``local``: indices into
     ``point_ids``/``points`` already), rows in cycle order.
+
+    ``cycle_id`` / ``cycle_position`` None: not written (an output of one cycle).
 
     ``part`` (optional): a ``part`` cell array (``--parts``). Written as raw appended
     binary (:func:`hammesh.io.vtu.write_raw`) into ``NAME.part`` and renamed: never a half-written piece.
@@ -69,8 +75,9 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     pts3 = np.zeros((len(points), 3))
     pts3[:, :2] = points
     arrays = [("PointData", "global_id", "Int64", point_ids, 1)]
-    cell = {"global_position": position, "cycle_id": cycle_id, "cycle_position": cycle_position,
-            "parent": parent, "kind": kind}
+    cell = {"global_position": position, "parent": parent, "kind": kind}
+    if cycle_id is not None or cycle_position is not None:
+        cell["cycle_id"], cell["cycle_position"] = cycle_id, cycle_position
     if part is not None:
         cell["part"] = part
     arrays += [("CellData", k, "Int64", np.asarray(v), 1) for k, v in cell.items()]
@@ -133,8 +140,14 @@ def write_raw_chunks(path: str | os.PathLike[str], arrays: list[tuple], n_points
         raise
 
 
-def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: int = 0) -> None:
-    """Write the ``.pvtu`` index listing ``pieces`` (file names relative to it), in order."""
+def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: int = 0, *, cycles: bool = True,
+                part: bool = False) -> None:
+    """Write the ``.pvtu`` index listing ``pieces`` (file names relative to it), in order.
+
+    Its cell data are the pieces': :data:`PIECE_CELL_DATA`, :data:`CYCLE_CELL_DATA`
+    when ``cycles`` (more than one cycle), ``part`` when ``part``, ``n_attributes``
+    regional attributes (a reader such as ParaView shows only the arrays listed here).
+    """
     path = Path(path)
     root = ET.Element("VTKFile", type="PUnstructuredGrid", version="1.0", byte_order="LittleEndian",
                       header_type="UInt64")
@@ -142,7 +155,8 @@ def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: i
     pd = ET.SubElement(grid, "PPointData")
     ET.SubElement(pd, "PDataArray", type="Int64", Name="global_id")
     cd = ET.SubElement(grid, "PCellData")
-    for name, typ in PIECE_CELL_DATA.items():
+    names = {**PIECE_CELL_DATA, **(CYCLE_CELL_DATA if cycles else {}), **({"part": "Int64"} if part else {})}
+    for name, typ in names.items():
         ET.SubElement(cd, "PDataArray", type=typ, Name=name)
     for i in range(n_attributes):
         ET.SubElement(cd, "PDataArray", type="Float64", Name=f"attribute_{i}")
@@ -262,14 +276,16 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     """Write any mesh as a one-piece index (``NAME.pvtu`` + ``NAME.0.vtu`` beside it)."""
     path = Path(path)
     m = len(mesh.triangles)
+    cid = cpos = None  # (one cycle, or none: global_position says it all)
     if isinstance(mesh, HamiltonianMesh):
         comps = np.asarray(mesh.components, np.int64)
-        cid = np.repeat(np.arange(len(comps)), comps)
-        cpos, parent, kind = cycle_positions(comps), mesh.parent, mesh.kind
+        if len(comps) > 1:
+            cid, cpos = np.repeat(np.arange(len(comps)), comps), cycle_positions(comps)
+        parent, kind = mesh.parent, mesh.kind
     else:
-        cid = np.zeros(m, np.int64)
-        cpos, parent, kind = np.arange(m), np.full(m, -1), np.zeros(m)
+        parent, kind = np.full(m, -1), np.zeros(m)
     piece = path.with_name(path.stem + ".0.vtu")
     write_piece(piece, np.arange(len(mesh.points)), mesh.points[:, :2], mesh.triangles, np.arange(m), cid, cpos,
                 parent, kind, np.asarray(mesh.triangle_attributes).reshape(m, -1))
-    write_index(path, [piece.name], np.asarray(mesh.triangle_attributes).reshape(m, -1).shape[1])
+    write_index(path, [piece.name], np.asarray(mesh.triangle_attributes).reshape(m, -1).shape[1],
+                cycles=cid is not None)

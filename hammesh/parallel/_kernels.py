@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["area_sum", "label_pieces_into", "lattice_mark_inside_into", "lattice_clear_near_segments_into",
+__all__ = ["area_sum", "edges_within_into", "label_pieces_into", "lattice_mark_inside_into", "lattice_clear_near_segments_into",
            "lattice_clear_near_points_into"]
 
 
@@ -19,6 +19,24 @@ def area_sum(points: np.ndarray, triangles: np.ndarray) -> float:
         total += (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1]) \
             - (points[b, 1] - points[a, 1]) * (points[c, 0] - points[a, 0])
     return 0.5 * total
+
+
+@njit(cache=True, nogil=True)
+def edges_within_into(triangles: np.ndarray, k: int, rows: np.ndarray, slots: np.ndarray) -> int:
+    """Every row and slot ``s`` whose edge ``(s, s + 1)`` joins two points below ``k``
+    (a tile's own points: its separator edges are among these), row by row; returns
+    their number, ``rows``/``slots`` filled up to their length (the points below
+    ``k`` span a planar graph: at most ``6 k`` such rows and slots). One pass over the
+    rows instead of numpy's column copies and masks (~0.2 s per 9M-row incircle tile)."""
+    count = 0
+    for r in range(triangles.shape[0]):
+        for s in range(3):
+            if triangles[r, s] < k and triangles[r, (s + 1) % 3] < k:
+                if count < rows.shape[0]:
+                    rows[count] = r
+                    slots[count] = s
+                count += 1
+    return count
 
 
 @njit(cache=True, nogil=True)

@@ -31,7 +31,7 @@ import numpy as np
 
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh
-from hammesh.parallel._kernels import area_sum
+from hammesh.parallel._kernels import area_sum, edges_within_into
 from hammesh.parallel.tiles import Tile
 
 __all__ = ["BorderRows", "Join", "Plan", "border_rows", "plan_joins", "finish_tile", "TilePiece", "KIND_INPUT",
@@ -94,17 +94,20 @@ def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
     sep = tile.segments[tile.separator]
     n = len(h.points)
     key_sep = np.sort(sep, axis=1) @ np.array([n, 1])
-    tri = h.triangles
-    rows, slot = [], []
-    for s in range(3):
-        a, b = tri[:, s], tri[:, (s + 1) % 3]
-        near = np.flatnonzero((a < k) & (b < k))  # separator ends are the tile's own points
-        key = np.minimum(a[near], b[near]) * n + np.maximum(a[near], b[near])
-        hit = near[np.isin(key, key_sep)]
-        rows.append(hit)
-        slot.append(np.full(len(hit), s))
-    rows = np.concatenate(rows)
-    slot = np.concatenate(slot)
+    tri = np.ascontiguousarray(h.triangles, dtype=np.int64)
+    # separator ends are the tile's own points: the edges between two of them, then
+    # those that are separator edges
+    cap = 6 * k + 6  # (a planar graph's edges, each in two rows at most)
+    rows, slot = np.empty(cap, np.int64), np.empty(cap, np.int64)
+    near = edges_within_into(tri, k, rows, slot)
+    if near > cap:  # (not planar: then count first)
+        rows, slot = np.empty(near, np.int64), np.empty(near, np.int64)
+        edges_within_into(tri, k, rows, slot)
+    by_slot = np.argsort(slot[:near], kind="stable")  # slot by slot, rows ascending
+    rows, slot = rows[by_slot], slot[by_slot]
+    a, b = tri[rows, slot], tri[rows, (slot + 1) % 3]
+    hit = np.isin(np.minimum(a, b) * n + np.maximum(a, b), key_sep)
+    rows, slot = rows[hit], slot[hit]
     x = tri[rows, slot]
     y = tri[rows, (slot + 1) % 3]
     z = tri[rows, (slot + 2) % 3]

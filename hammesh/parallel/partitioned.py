@@ -164,10 +164,11 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     mr = lay.n_rows
     arrays = [("PointData", "global_id", "Int64", 1, n_points, points(True)),
               ("CellData", "global_position", "Int64", 1, mr, by_position(lambda pos: pos)),
-              ("CellData", "cycle_id", "Int64", 1, mr, by_position(cycle_id)),
-              ("CellData", "cycle_position", "Int64", 1, mr, by_position(cycle_position)),
               ("CellData", "parent", "Int64", 1, mr, rows(parent, lay.join_parent, own=global_parent)),
               ("CellData", "kind", "Int64", 1, mr, rows(kind, lay.join_kind))]
+    if len(components) > 1:  # (one cycle: all zeros and global_position again, not written)
+        arrays[2:2] = [("CellData", "cycle_id", "Int64", 1, mr, by_position(cycle_id)),
+                       ("CellData", "cycle_position", "Int64", 1, mr, by_position(cycle_position))]
     if parts is not None:
         arrays.append(("CellData", "part", "Int64", 1, mr, by_position(part_of)))
     arrays += [("CellData", f"attribute_{i}", "Float64", 1, mr, rows(attrs[:, i], lay.join_attributes[:, i]))
@@ -258,7 +259,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
         order = sorted(range(len(done)), key=lambda i: done[i][2])
-        write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done))
+        write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done),
+                    cycles=len(comps) > 1, part=parts is not None)
         for i, d in enumerate(done):
             if d[1] == 0:
                 (work / d[0]).unlink()

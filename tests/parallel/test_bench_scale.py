@@ -21,6 +21,7 @@ def test_bench_scale_runs(extra, needle):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert needle in proc.stdout
     assert "workers' CPU / raw CPU" in proc.stdout or "--partitioned-only" in extra
+    assert "whole command's CPU" in proc.stdout or "--partitioned-only" in extra
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
     assert "load average" in proc.stdout and "per tile hamiltonian() CPU s" in proc.stdout
     assert "tile tasks wall s" in proc.stdout

@@ -64,3 +64,53 @@ def test_swap_min_angles_of_a_square_and_of_a_reflex_quad():
     d = np.array([[1.0, 0.0], [3.0, 2.0]])  # second: reflex at b, the flip is not legal
     got = _swap_min_angles(t, d)
     assert np.isclose(got[0], 45.0) and got[1] == 0.0
+
+
+def _edges_within_numpy(tri, k):
+    rows, slots = [], []
+    for s in range(3):
+        a, b = tri[:, s], tri[:, (s + 1) % 3]
+        near = np.flatnonzero((a < k) & (b < k))
+        rows.append(near)
+        slots.append(np.full(len(near), s))
+    return np.concatenate(rows), np.concatenate(slots)
+
+
+def test_edges_within_match_numpy_masks():
+    """``edges_within_into`` finds the same rows and slots as numpy's masks over the
+    columns (row by row; ``border_rows`` sorts them slot by slot), and counts them
+    when its arrays are too short."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from hammesh.parallel._kernels import edges_within_into
+
+    @settings(max_examples=60, deadline=None)
+    @given(st.integers(0, 400), st.integers(1, 60), st.integers(0, 2**31 - 1))
+    def check(m, n, seed):
+        tri = np.random.default_rng(seed).integers(0, n, (m, 3)).astype(np.int64)
+        k = int(np.random.default_rng(seed + 1).integers(0, n + 1))
+        count = edges_within_into(tri, k, np.zeros(0, np.int64), np.zeros(0, np.int64))
+        rows, slots = np.empty(count, np.int64), np.empty(count, np.int64)
+        assert edges_within_into(tri, k, rows, slots) == count
+        order = np.argsort(slots, kind="stable")
+        want_rows, want_slots = _edges_within_numpy(tri, k)
+        assert np.array_equal(rows[order], want_rows) and np.array_equal(slots[order], want_slots)
+        assert np.array_equal(np.lexsort((slots, rows)), np.arange(count))  # row by row
+
+    check()
+
+
+def test_outcome_size_computes_nothing():
+    """Dask's size of a tile's outcome counts the arrays held and never computes the
+    Hamiltonian mesh's neighbours (a cached property: 1.3 s per 9M rows, unused)."""
+    from hammesh.parallel.run import _outcome_nbytes, tile_task
+    from hammesh.parallel.tiles import decompose
+
+    d = decompose(hammesh.read_domain("hammesh/data/demo.poly"), min_angle=30, max_area=4e-3, n_tiles=2)
+    out = tile_task(d.tiles[0], d.n_input, 30, 4e-3, "incircle", 0.9, keep_mesh=True)
+    size = _outcome_nbytes(out)
+    assert "neighbors" not in vars(out.ham)
+    held = sum(a.nbytes for m in (out.mesh, out.ham) for a in vars(m).values() if isinstance(a, np.ndarray))
+    assert size <= 1000 + held
+    assert size >= out.ham.triangles.nbytes + out.mesh.triangles.nbytes + out.mesh.neighbors.nbytes

@@ -259,3 +259,59 @@ def test_label_pieces_matches_scipy_components(seed, n_cut):
     # the same partition of the triangles (labels may differ by a renaming)
     pairs = np.unique(np.stack([label, ref], 1), axis=0)
     assert len(pairs) == k
+
+
+def _index_cell_names(index: Path) -> list[str]:
+    import xml.etree.ElementTree as ET
+
+    grid = ET.parse(index).getroot().find("PUnstructuredGrid")
+    return sorted(a.get("Name") for a in grid.find("PCellData"))
+
+
+@pytest.mark.parametrize("pieces_domain, parts", [(False, None), (False, 3), (True, None)])
+def test_index_lists_exactly_the_pieces_cell_data(tmp_path, capsys, pieces_domain, parts):
+    """One cycle: no ``cycle_id``/``cycle_position`` (all zeros and ``global_position``
+    again); several cycles: both, right; ``part`` listed in the index when written
+    (ParaView shows only the arrays the index lists)."""
+    from tests.parallel.test_tiles import _pieces_domain
+
+    out = tmp_path / "o"
+    if pieces_domain:  # (two plates: two cycles)
+        P.write_partitioned(_pieces_domain(), out, min_angle=28, max_area=4e-3, tiles=3, parts=parts)
+    else:
+        argv = [*ARGS, "--tiles", "2", "--partitioned", "-o", str(out)]
+        assert main([*argv, *(["--parts", str(parts)] if parts else [])]) == 0
+        capsys.readouterr()
+    listed = _index_cell_names(out / "mesh.pvtu")
+    pos, cid, cpos = [], [], []
+    for piece in pvtu.read_pieces(out / "mesh.pvtu"):
+        m = meshio.read(piece)
+        assert sorted(m.cell_data) == listed
+        pos.append(m.cell_data["global_position"][0])
+        if pieces_domain:
+            cid.append(m.cell_data["cycle_id"][0])
+            cpos.append(m.cell_data["cycle_position"][0])
+    assert ("cycle_id" in listed) == ("cycle_position" in listed) == pieces_domain
+    assert ("part" in listed) == (parts is not None)
+    mesh = hammesh.read_mesh(out / "mesh.pvtu")
+    assert main(["check", str(out / "mesh.pvtu")]) == 0
+    if pieces_domain:  # the columns say which cycle and where in it, from the rows' order
+        order = np.argsort(np.concatenate(pos))
+        cid, cpos = np.concatenate(cid)[order], np.concatenate(cpos)[order]
+        comps = np.bincount(cid)
+        assert len(comps) == 2 == dual_pieces(mesh.triangles)
+        assert np.array_equal(cpos, np.concatenate([np.arange(n) for n in comps]))
+        for k in range(2):
+            assert dual_pieces(mesh.triangles[cid == k]) == 1
+
+
+def test_one_file_index_of_one_cycle_has_no_cycle_columns(tmp_path):
+    h = hammesh.hamiltonian(hammesh.quality_mesh(hammesh.read_domain(DEMO), min_angle=30, max_area=4e-3,
+                                                 isolate=False), mode="incircle")
+    assert len(h.components) == 1
+    pvtu.write(h, tmp_path / "one.pvtu")
+    m = meshio.read(tmp_path / "one.0.vtu")
+    assert "cycle_id" not in m.cell_data and "cycle_position" not in m.cell_data
+    assert sorted(m.cell_data) == _index_cell_names(tmp_path / "one.pvtu")
+    back = hammesh.read_mesh(tmp_path / "one.pvtu")
+    assert np.array_equal(back.triangles, h.triangles)

@@ -21,6 +21,8 @@ def _gathered_piece(outcome, args, path, components, parts):
     ends = np.cumsum(components)
     cid = np.searchsorted(ends, piece.position, side="right")
     cpos = piece.position - (ends - components)[cid]
+    if len(components) == 1:  # (one cycle: no cycle_id / cycle_position columns)
+        cid = cpos = None
     part = None if parts is None else stretch_parts(piece.position, components, parts)
     write_piece(path, piece.point_ids, piece.points, piece.triangles, piece.position, cid, cpos, piece.parent,
                 piece.kind, piece.triangle_attributes, part=part, local=True)
