@@ -67,7 +67,8 @@ _Half = namedtuple(
 #: Triangle's order; larger cells cost fewer index gaps in the second pass of the copy.
 CELL_TRIANGLES = 16_384
 
-#: :func:`vertex_cells`'s result: each vertex's cell ``label`` (``(n,) int32``), the first
+#: :func:`vertex_cells`'s result: each vertex's cell ``label`` (``(n,) uint16``, ``int32``
+#: beyond 65,535 cells: half the bytes for the rows pass to look up), the first
 #: label of side 1 (``split``) and the number of cells.
 VertexCells = namedtuple("VertexCells", ["label", "split", "cells"])
 
@@ -93,7 +94,7 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     n0 = max(1, int(np.ceil((cut - lo[a]) / h)))
     n1 = max(1, int(np.ceil((lo[a] + ext[a] - cut) / h)))
     ny = max(1, int(np.ceil(ext[b] / h)))
-    label = np.empty(n, np.int32)
+    label = np.empty(n, np.uint16 if (n0 + n1) * ny <= 0xFFFF else np.int32)
     vertex_cells_into(points, a, b, cut, float(lo[a]), float(lo[b]), h, n0, n1, ny, label)
     return VertexCells(label, n0 * ny, (n0 + n1) * ny)
 
@@ -137,8 +138,8 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
     m, n = len(tri), len(pts)
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
     rows = np.empty(m, np.int64)
-    part = np.empty((m, 3), np.int64)
-    k = int(rows_of_cells_into(tri, cells.label, first, last, np.empty(m, np.int64), np.empty(m, np.int32),
+    part = np.empty((m, 3), np.int32)  # the records are int32 here (checked by the caller): half the bytes
+    k = int(rows_of_cells_into(tri, cells.label, first, last, np.empty(m, np.int64), np.empty(m, cells.label.dtype),
                                np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True
@@ -159,7 +160,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
     pillows = int(count_pillows(rec))
     if finish is not None:
         twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
-        indices, local, n_strips, n_swaps = finish(pts, part, rec, twin)
+        indices, local, n_strips, n_swaps = finish(pts, part.astype(np.int64), rec, twin)
         max_index = -1  # the writer checked the restart index itself
     else:
         if whole is not None:
