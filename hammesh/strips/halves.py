@@ -36,7 +36,7 @@ import numpy as np
 from hammesh.errors import InvalidOptionError
 from hammesh.strips._decode_kernels import check_claimed_part
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
-from hammesh.strips._greedy_strip_kernels import StripWork, greedy_strip_buffer
+from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
 from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
 from hammesh.strips.gl import GLStrip, verify_gl_strip
@@ -73,12 +73,13 @@ CELL_TRIANGLES = 16_384
 VertexCells = namedtuple("VertexCells", ["label", "split", "cells"])
 
 
-def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CELL_TRIANGLES) -> VertexCells:
+def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CELL_TRIANGLES, pool=None) -> VertexCells:
     """The cut and the cells: side 1 beyond the median along the longest axis, each side a grid of
     square cells of ~``cell_triangles`` triangles (:func:`~hammesh.strips._halves_kernels.vertex_cells_into`).
 
     Axes, extents and the median come from a sample of ~4,000 points (neither the split
     nor the grid need be exact: points outside the sample's box go to the nearest cell).
+    ``pool``: an executor whose thread labels the second half of the points meanwhile.
     """
     n = len(points)
     sample = points[:: max(1, n // 4096)]
@@ -95,7 +96,14 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     n1 = max(1, int(np.ceil((lo[a] + ext[a] - cut) / h)))
     ny = max(1, int(np.ceil(ext[b] / h)))
     label = np.empty(n, np.uint16 if (n0 + n1) * ny <= 0xFFFF else np.int32)
-    vertex_cells_into(points, a, b, cut, float(lo[a]), float(lo[b]), h, n0, n1, ny, label)
+    args = (a, b, cut, float(lo[a]), float(lo[b]), h, n0, n1, ny)
+    if pool is None:
+        vertex_cells_into(points, *args, label)
+    else:
+        mid = n // 2
+        other = pool.submit(vertex_cells_into, points[mid:], *args, label[mid:])
+        vertex_cells_into(points[:mid], *args, label[:mid])
+        other.result()
     return VertexCells(label, n0 * ny, (n0 + n1) * ny)
 
 
@@ -107,9 +115,8 @@ def _half_work(k: int, out: np.ndarray | None) -> StripWork:
     bucket = np.empty((4, k), np.int32)
     grow = np.empty((2, k), np.int32)
     big = np.empty(3 * k + 2, np.int64)
-    seeds = np.arange(k - 1, -1, -1, dtype=np.int64)
     out = np.empty(4 * k, np.int64) if out is None else out
-    return StripWork(bucket, grow[0], grow[1], np.zeros(4, np.int32), big[:k], big[k : 2 * k + 1], big[2 * k + 1 :], seeds, out)
+    return StripWork(bucket, grow[0], grow[1], np.zeros(4, np.int32), big[:k], big[k : 2 * k + 1], big[2 * k + 1 :], NO_SEED_ORDER, out)
 
 
 def _failed(reason: str) -> _Half:
@@ -196,11 +203,11 @@ def encode_in_halves(
     m, n = len(tri), len(pts)
     if records_dtype(m, n) is not np.int32:
         return None
-    cells = vertex_cells(pts, m)
     seen = np.zeros(m, np.bool_) if verify else None
     stop = np.zeros(1, np.bool_)
     whole: list[np.ndarray] = []
     with ThreadPoolExecutor(1) as pool:
+        cells = vertex_cells(pts, m, pool=pool)
         second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, finish)
         a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, finish, None if finish else whole)
         b = second.result()
