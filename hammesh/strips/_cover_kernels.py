@@ -149,7 +149,7 @@ def greedy_path_cover(rec, w_swap, seed_order) -> PathCover:
 
     Seeds are taken with the fewest free neighbours (a bucket queue, most recent
     first, so new paths start along the previous ones; ties at the start broken by
-    ``seed_order``, last first); each path is grown forward from its seed, then
+    ``seed_order``, last first; empty: ``m - 1, ..., 0``); each path is grown forward from its seed, then
     backward through the seed's remaining edges, turn-aware.  Overwrites the records'
     scratch column (free degrees).  ``order`` is a view into the work buffer (of the
     records' dtype: half the bytes of the bucket queue when ``int32``).
