@@ -38,13 +38,15 @@ GrownPath = namedtuple("GrownPath", ["count", "first_exit", "first_pivot"])
 
 @loop_helper
 def queue_free_degrees(rec, seed_order, bucket, top):
-    """Free degrees into the scratch column; every triangle queued in bucket ``d``, ``seed_order`` order."""
+    """Free degrees into the scratch column; every triangle queued in bucket ``d``, ``seed_order`` order
+    (empty: ``m - 1, ..., 0``, with no array of ``m`` to fill and read)."""
     m = rec.shape[0]
     top[:] = 0
     for t in range(m):
         rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
+    given = seed_order.shape[0] > 0
     for i in range(m):
-        t = seed_order[i]
+        t = seed_order[i] if given else m - 1 - i
         d = rec[t, REC_SCRATCH]
         bucket[d, top[d]] = t
         top[d] += 1
@@ -147,7 +149,7 @@ def greedy_path_cover(rec, w_swap, seed_order) -> PathCover:
 
     Seeds are taken with the fewest free neighbours (a bucket queue, most recent
     first, so new paths start along the previous ones; ties at the start broken by
-    ``seed_order``, last first); each path is grown forward from its seed, then
+    ``seed_order``, last first; empty: ``m - 1, ..., 0``); each path is grown forward from its seed, then
     backward through the seed's remaining edges, turn-aware.  Overwrites the records'
     scratch column (free degrees).  ``order`` is a view into the work buffer (of the
     records' dtype: half the bytes of the bucket queue when ``int32``).

@@ -12,12 +12,13 @@ from collections import namedtuple
 import numpy as np
 
 from hammesh.halfedge import half_edge_twins_packed
-from hammesh.strips._numba import kernel
+from hammesh.strips._numba import kernel, loop_helper
 
 __all__ = [
     "FACE_OK",
     "FACE_REPEATED",
     "FACE_ZERO_AREA",
+    "is_zero_area",
     "face_flags",
     "proper_twins_into",
     "orientation_count",
@@ -35,19 +36,68 @@ __all__ = [
 FACE_OK, FACE_REPEATED, FACE_ZERO_AREA = 0, 1, 2
 
 
+@loop_helper
+def is_zero_area(pts, a, b, c, rtol):
+    """Whether triangle ``(a, b, c)`` (distinct indices) has zero area.
+
+    Twice the area is at most ``rtol`` times the longest side squared, the cross product
+    taken at the vertex opposite the longest side (exact differences for a sliver's
+    short side); the definition of :mod:`hammesh.strips.defects`.  Of equally long
+    sides the one with the least sum of its two vertex indices counts as the longest,
+    so the answer is the same bit for bit for every rotation of the row and for the
+    reversed row (each side's vector is then negated, exactly).  A filter decides most
+    rows with one cross product (see below; it assumes ``rtol >= 1e-14``, far above
+    the rounding of a cross product); it changes no answer.
+    """
+    three = pts.shape[1] > 2
+    # the sides as vectors: ab = b - a, bc = c - b, ca = a - c
+    abx = pts[b, 0] - pts[a, 0]
+    aby = pts[b, 1] - pts[a, 1]
+    abz = (pts[b, 2] - pts[a, 2]) if three else 0.0
+    bcx = pts[c, 0] - pts[b, 0]
+    bcy = pts[c, 1] - pts[b, 1]
+    bcz = (pts[c, 2] - pts[b, 2]) if three else 0.0
+    cax = pts[a, 0] - pts[c, 0]
+    cay = pts[a, 1] - pts[c, 1]
+    caz = (pts[a, 2] - pts[c, 2]) if three else 0.0
+    s_ab = abx * abx + aby * aby + abz * abz
+    s_bc = bcx * bcx + bcy * bcy + bcz * bcz
+    s_ca = cax * cax + cay * cay + caz * caz
+    # a filter first: the cross product at any vertex is twice the area up to a few
+    # ulps of the longest side squared, far below rtol (1e-13) times it; so twice that
+    # bound exceeded at vertex b means the exact test below would say no too
+    longest = max(s_ab, max(s_bc, s_ca))
+    fx = aby * bcz - abz * bcy
+    fy = abz * bcx - abx * bcz
+    fz = abx * bcy - aby * bcx
+    lim = 2.0 * rtol * longest
+    if rtol >= 1e-14 and fx * fx + fy * fy + fz * fz > lim * lim:
+        return False
+    # the longest side; at its apex the side leaving it and the side arriving
+    # (ab: apex c, bc then ca; bc: apex a, ca then ab; ca: apex b, ab then bc)
+    best = s_ab
+    key = a + b
+    ux, uy, uz, vx, vy, vz = bcx, bcy, bcz, cax, cay, caz
+    if s_bc > best or (s_bc == best and b + c < key):
+        best = s_bc
+        key = b + c
+        ux, uy, uz, vx, vy, vz = cax, cay, caz, abx, aby, abz
+    if s_ca > best or (s_ca == best and c + a < key):
+        best = s_ca
+        ux, uy, uz, vx, vy, vz = abx, aby, abz, bcx, bcy, bcz
+    cx = uy * vz - uz * vy
+    cy = uz * vx - ux * vz
+    cz = ux * vy - uy * vx
+    return best == 0.0 or np.sqrt(cx * cx + cy * cy + cz * cz) <= rtol * best
+
+
 @kernel
 def face_flags(pts, tri, rtol, flags):
-    """Fill ``flags[t]``: 1 repeated vertex, 2 zero area, 0 otherwise; return both counts.
-
-    Zero area: twice the area is at most ``rtol`` times the longest side squared, the
-    cross product taken at the vertex opposite the longest side (exact differences for
-    a sliver's short side); the definition of :mod:`hammesh.strips.defects`.
-    """
+    """Fill ``flags[t]``: 1 repeated vertex, 2 zero area (:func:`is_zero_area`), 0
+    otherwise; return both counts."""
     m = tri.shape[0]
-    d = pts.shape[1]
     n_rep = 0
     n_zero = 0
-    e = np.empty((3, 3), np.float64)
     for t in range(m):
         a = tri[t, 0]
         b = tri[t, 1]
@@ -55,26 +105,7 @@ def face_flags(pts, tri, rtol, flags):
         if a == b or b == c or c == a:
             flags[t] = FACE_REPEATED
             n_rep += 1
-            continue
-        best = 0.0
-        kb = 0
-        for k in range(3):
-            p = tri[t, k]
-            q = tri[t, (k + 1) % 3]
-            s = 0.0
-            for j in range(3):
-                e[k, j] = (pts[q, j] - pts[p, j]) if j < d else 0.0
-                s += e[k, j] * e[k, j]
-            if s > best:
-                best = s
-                kb = k
-        # edges at the apex (vertex kb + 2): -e[kb + 1] and e[kb + 2]
-        u = e[(kb + 1) % 3]
-        v = e[(kb + 2) % 3]
-        cx = u[1] * v[2] - u[2] * v[1]
-        cy = u[2] * v[0] - u[0] * v[2]
-        cz = u[0] * v[1] - u[1] * v[0]
-        if best == 0.0 or np.sqrt(cx * cx + cy * cy + cz * cz) <= rtol * best:
+        elif is_zero_area(pts, a, b, c, rtol):
             flags[t] = FACE_ZERO_AREA
             n_zero += 1
         else:

@@ -28,7 +28,10 @@ from hammesh.strips._emit_kernels import write_path
 from hammesh.strips._numba import kernel
 from hammesh.strips._path_kernels import turn_path_if_better
 
-__all__ = ["GreedyStrip", "StripWork", "strip_work", "greedy_strip_buffer"]
+__all__ = ["GreedyStrip", "StripWork", "NO_SEED_ORDER", "strip_work", "greedy_strip_buffer"]
+
+#: The greedy strips' seed order: empty, read as ``m - 1, ..., 0``.
+NO_SEED_ORDER = np.empty(0, np.int64)
 
 #: :func:`greedy_strip_buffer`'s result: the buffer ``indices``; the rows in draw order
 #: ``order`` with the path offsets ``starts``; ``index_starts[s]``, where path ``s``'s
@@ -38,8 +41,9 @@ GreedyStrip = namedtuple("GreedyStrip", ["indices", "order", "starts", "index_st
 
 
 #: :func:`strip_work`'s arrays: the bucket queue and the two growth buffers (the records'
-#: dtype), the draw order, path offsets and index offsets, the seed order (``m - 1``
-#: down to 0) and the index buffer.
+#: dtype), the draw order, path offsets and index offsets, the seed order (empty:
+#: ``m - 1`` down to 0, :func:`~hammesh.strips._cover_kernels.queue_free_degrees`) and the
+#: index buffer.
 StripWork = namedtuple("StripWork", ["bucket", "fwd", "bwd", "top", "order", "starts", "index_starts", "seeds", "out"])
 
 
@@ -54,12 +58,11 @@ def strip_work(m: int, dtype) -> StripWork:
 
     small = fresh(4 * m + 2 * m + 4, dtype)
     bucket, fwd, bwd, top = small[: 4 * m].reshape(4, m), small[4 * m : 5 * m], small[5 * m : 6 * m], small[6 * m :]
-    big = fresh(4 * m + 3, np.int64)
-    order, starts, index_starts, seeds = big[:m], big[m : 2 * m + 1], big[2 * m + 1 : 3 * m + 2], big[3 * m + 2 :]
-    seeds[:m] = np.arange(m - 1, -1, -1)
+    big = fresh(3 * m + 2, np.int64)
+    order, starts, index_starts = big[:m], big[m : 2 * m + 1], big[2 * m + 1 :]
     # bound: a path of k >= 2 triangles writes at most 2 k indices (k + 2 and at most
     # k - 2 swaps), one of 1 triangle 3; plus a restart before each path but the first
-    return StripWork(bucket, fwd, bwd, top, order, starts, index_starts, seeds[:m], fresh(4 * m, np.int64))
+    return StripWork(bucket, fwd, bwd, top, order, starts, index_starts, NO_SEED_ORDER, fresh(4 * m, np.int64))
 
 
 def greedy_strip_buffer(rec, w_swap, restart, work: StripWork | None = None) -> GreedyStrip:

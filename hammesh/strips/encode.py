@@ -45,7 +45,7 @@ from hammesh.strips._cover_kernels import (
 )
 from hammesh.strips._emit_kernels import restart_buffer
 from hammesh.strips._dual_kernels import records_dtype
-from hammesh.strips._greedy_strip_kernels import greedy_strip_buffer, strip_work
+from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, greedy_strip_buffer, strip_work
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
@@ -163,7 +163,7 @@ def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = Non
     elif zigzag is not None:
         order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1), zigzag)
     else:
-        order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, np.arange(m - 1, -1, -1))
+        order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, NO_SEED_ORDER)  # seeds m - 1, ..., 0
     if not improve or len(starts) == 2:
         # one path (a closed surface often is one): no join or tunnel exists, and the
         # rotations could only move a swap or two at its ends; not worth O(m) set-up

@@ -175,3 +175,45 @@ def test_census_beside_the_pairing_gives_the_same_dual(name, monkeypatch):
         assert two.defects.repeated_vertex == 2 and len(two.rows) == len(tri)
     s = encode(mesh)
     verify_gl_strip(one.triangles, s.indices, s.restart_index)
+
+
+def _zero_area_reference(p: np.ndarray, row) -> bool:
+    """The zero-area rule without the filter: cross product at the vertex opposite the longest
+    side (ties: the side with the least sum of vertex indices), twice the area <= rtol x side^2."""
+    from hammesh.strips.defects import ZERO_AREA_RTOL
+
+    a, b, c = row
+    sides = [(a, b, c), (b, c, a), (c, a, b)]  # side p -> q, apex r
+    length = [float(np.sum((p[q_] - p[p_]) ** 2)) for p_, q_, _ in sides]
+    best = max(range(3), key=lambda k: (length[k], -(sides[k][0] + sides[k][1])))
+    p_, q_, r_ = sides[best]
+    u, v = p[r_] - p[q_], p[p_] - p[r_]
+    u3, v3 = np.r_[u, [0.0] * (3 - len(u))], np.r_[v, [0.0] * (3 - len(v))]
+    cx = u3[1] * v3[2] - u3[2] * v3[1]
+    cy = u3[2] * v3[0] - u3[0] * v3[2]
+    cz = u3[0] * v3[1] - u3[1] * v3[0]
+    return length[best] == 0.0 or float(np.sqrt(cx * cx + cy * cy + cz * cz)) <= ZERO_AREA_RTOL * length[best]
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from([2, 3]), st.sampled_from([0.0, 1e-16, 1e-14, 1e-13, 1e-12, 1e-8, 1.0]))
+@settings(max_examples=200, deadline=None)
+def test_zero_area_rule_is_one_answer_for_every_rotation_and_the_reversed_row(seed, d, lift):
+    """The face census's filter (one cross product) changes no answer of the plain rule, and the
+    answer does not depend on where a row starts or which way it is listed (a strip draws a row
+    in some rotation, odd windows reversed in the buffer)."""
+    rng = np.random.default_rng(seed)
+    scale = 10.0 ** rng.integers(-6, 9)
+    base = rng.normal(size=(2, d)) * scale
+    # a third point near the line through the first two (off it by `lift` of the side's
+    # length), sometimes on a vertex, or isosceles so that two sides tie
+    t = rng.choice([rng.uniform(-1, 2), 0.0, 0.5])
+    normal = rng.normal(size=d)
+    third = base[0] + t * (base[1] - base[0]) + lift * np.linalg.norm(base[1] - base[0]) * normal
+    pts = np.vstack([base, third])
+    ids = rng.permutation(10)[:3]
+    p = np.zeros((10, d))
+    p[ids] = pts
+    rows = [ids[[0, 1, 2]], ids[[1, 2, 0]], ids[[2, 0, 1]], ids[[2, 1, 0]], ids[[1, 0, 2]], ids[[0, 2, 1]]]
+    got = zero_area_rows(p, np.array(rows)).tolist()
+    assert got == [_zero_area_reference(p, r) for r in rows]
+    assert len(set(got)) == 1

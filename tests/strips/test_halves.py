@@ -18,7 +18,7 @@ from hammesh.strips import halves
 from hammesh.strips.encode import encode
 from hammesh.strips.gl import RESTART_INDEX, decode_gl_strip
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH
-from hammesh.strips._halves_kernels import pair_records_into, rows_on_side_into, shared_edges
+from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges
 
 from .conftest import delaunay_mesh, oriented_set, square_mesh, torus_mesh
 from .defect_meshes import ALL as DEFECT_MESHES
@@ -160,13 +160,18 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
     rng = np.random.default_rng(seed)
     m = _with_defects(delaunay_mesh(seed % 997, n), rng, kind)
     tri = m.triangles
-    vside = rng.integers(0, 2, len(m.points)).astype(np.uint8)
+    label = rng.integers(0, 6, len(m.points)).astype(np.int32)  # cells 0-2: side 0, 3-5: side 1
     parts = []
-    for side in (0, 1):
+    for first, last in ((0, 3), (3, 6)):
         rows = np.empty(len(tri), np.int64)
         part = np.empty((len(tri), 3), np.int64)
-        k = rows_on_side_into(tri, vside, side, rows, part)
-        assert np.array_equal(rows[:k], np.flatnonzero(vside[tri.min(1)] == side))
+        count = np.zeros(last - first + 1, np.int64)
+        k = rows_of_cells_into(tri, label, first, last, np.empty(len(tri), np.int64), np.empty(len(tri), np.int32), count, rows, part)
+        # the rows of these cells, cell after cell, in input order inside a cell
+        cell = label[tri.min(1)]
+        mine = np.flatnonzero((cell >= first) & (cell < last))
+        assert np.array_equal(rows[:k], mine[np.argsort(cell[mine], kind="stable")])
+        assert np.array_equal(part[:k], tri[rows[:k]])
         part = part[:k]
         start = np.empty(len(m.points) + 1, np.int32)
         keys = np.empty(3 * k, np.int64)
@@ -213,3 +218,21 @@ def test_structured_meshes_keep_the_one_thread_default(monkeypatch):
     got = encode(m)
     assert np.array_equal(got.indices, one.indices)
     assert _halves(m, fast=False).indices_per_triangle > one.indices_per_triangle  # what it avoids
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(3, 400), st.sampled_from([2, 3]), st.integers(1, 64))
+@settings(max_examples=60, deadline=None)
+def test_vertex_cells_split_at_the_median_and_cover_the_grid(seed, n, d, per_cell):
+    """Side 0 is exactly the points up to the sample's median along the longest axis; every label
+    is a cell of the grid (points outside the sample's box clamped to the nearest cell)."""
+    rng = np.random.default_rng(seed)
+    pts = rng.normal(size=(n, d)) * rng.uniform(0.1, 10, d)
+    if seed % 5 == 0:
+        pts[:, 0] = 1.0  # flat along one axis
+    cells = halves.vertex_cells(pts, 4 * n, per_cell)
+    sample = pts[:: max(1, n // 4096)]
+    axis = int(np.argsort(np.ptp(sample, axis=0), kind="stable")[::-1][0])
+    side0 = pts[:, axis] <= np.median(sample[:, axis])
+    assert np.array_equal(cells.label < cells.split, side0)
+    assert cells.label.min() >= 0 and cells.label.max() < cells.cells
+    assert 0 < cells.split < cells.cells
