@@ -585,18 +585,19 @@ def _ring_pairs(tw, is_cov, members, hes, spoke):
     return links, old, new
 
 
-def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool:
+def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool | None:
     """Does the ring fan join the cycles of triangles ``a`` and ``b`` and split none?
 
     Each cycle crossing the group must cross it once (its two links joined inside the
     group): then outside the group it is one path between those links, and the new
     cycles are the components of old pairs (outside) and new pairs (the arcs), each a
-    union of old cycles. Without labelling the cycles anew (``_ring_pairs``).
+    union of old cycles. Without labelling the cycles anew (``_ring_pairs``). None
+    where a cycle crosses the group twice (``_ring_merges_relabelled`` decides).
     """
     links, old, new = _ring_pairs(tw, is_cov, members, hes, spoke)
     ids = {i: int(cycle[hes[i] // 3]) for i in links}
     if len({ids[i] for i in links}) * 2 != len(links):
-        return False  # a cycle crosses twice: the outside order would matter
+        return None  # a cycle crosses twice: the outside order matters (``_ring_merges_relabelled``)
     root = {i: i for i in links}
 
     def find(i):
@@ -611,6 +612,28 @@ def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool
     comp = {ids[i]: find(i) for i in links}
     ca, cb = int(cycle[a]), int(cycle[b])
     return ca in comp and cb in comp and comp[ca] == comp[cb]
+
+
+def _ring_merges_relabelled(pts, tri, tw, con, cover: CycleCover, members, poly, hes, spoke, a: int, b: int) -> bool:
+    """``_ring_merges`` by labelling the cycles of the re-routed cover anew (O(m): small meshes only).
+
+    The ring applied on its own (``_apply_rings``), ``_cover_kernels.cycle_ids`` on
+    the result: True if every cycle that crossed the group lies on one new cycle
+    outside it (none split) and ``a``'s and ``b``'s cycles on the same one.
+    """
+    m = len(tri)
+    x, y = pts[tri[members]].reshape(-1, pts.shape[1]).mean(axis=0)
+    out = _apply_rings(pts, tri, tw, con, cover, np.zeros(m), np.arange(m), np.zeros(m, np.bool_),
+                       [(members, poly, hes, spoke, x, y)])
+    kept = np.setdiff1d(np.arange(m), members)
+    old = cover.cycle[kept]
+    new = out[4].cycle[: len(kept)]
+    near = np.unique(old[np.isin(kept, tw[np.asarray(hes)[tw[np.asarray(hes)] >= 0]] // 3)])
+    for c in near[near >= 0].tolist():
+        if len(np.unique(new[old == c])) > 1:
+            return False
+    na, nb = new[old == cover.cycle[a]], new[old == cover.cycle[b]]
+    return bool(len(na) and len(nb) and na[0] == nb[0])
 
 
 def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
@@ -657,6 +680,14 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     tasks.sort(key=lambda x: (not x[0], x[1]))
     used = np.zeros(len(tri), np.bool_)
     rings = []
+
+    def _merges(ms, hes, sp, t, u):
+        ok = _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u)
+        if ok is None:
+            poly = _union_polygon(tri, tw, con, ms)[0]
+            ok = _ring_merges_relabelled(pts, tri, tw, con, cover, ms, poly, hes, sp, t, u)
+        return ok
+
     for missing, _, t, u in tasks[:RING_JOIN_TRIES]:
         if used[t] or is_fan[t] or (u >= 0 and (used[u] or is_fan[u])):
             continue
@@ -666,7 +697,7 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
             best = _best_ring(
                 pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2,
                 amin=None if missing else amin_t, keep=keep,
-                accept=lambda ms, hes, sp: _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u),
+                accept=lambda ms, hes, sp: _merges(ms, hes, sp, t, u),
             )
         if best is None:
             continue

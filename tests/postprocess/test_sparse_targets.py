@@ -252,10 +252,11 @@ def test_ring_joins_replace_joins_below_the_rule_on_la(monkeypatch) -> None:
 
 
 def test_ring_merges_agrees_with_relabelled_cycles() -> None:
-    """``_ring_merges`` (which decides without labelling the cycles anew) against the
-    cover's own ``cycle_ids`` on the re-routed cover (``_apply_rings``): for rings over
-    two adjacent triangles of different cycles of a small mesh's cover, True exactly
-    when the two cycles end up as one and no cycle is split."""
+    """``_ring_merges`` (which decides without labelling the cycles anew, None where a
+    cycle crosses twice) and ``_ring_merges_relabelled`` against the cover's own
+    ``cycle_ids`` on the re-routed cover (``_apply_rings``): for rings over two
+    adjacent triangles of different cycles of a small mesh's cover, True exactly when
+    the two cycles end up as one and no cycle is split."""
     from hammesh.postprocess.cycle_cover import cycle_cover
 
     m = hammesh.quality_mesh(_own_domains()["plate_2_holes"], min_angle=30, max_area=0.01, isolate=False)
@@ -266,7 +267,7 @@ def test_ring_merges_agrees_with_relabelled_cycles() -> None:
     cover = cycle_cover(tri, tw, rotate=False)  # many short cycles
     n_mt = len(tri)
     amin = np.full(n_mt, 0.5)
-    n_true = n_false = 0
+    n_true = n_false = n_twice = 0
     for h in np.flatnonzero(tw > np.arange(len(tw)))[:600].tolist():
         a, b = h // 3, tw[h] // 3
         if cover.cycle[a] < 0 or cover.cycle[b] < 0 or cover.cycle[a] == cover.cycle[b]:
@@ -288,12 +289,12 @@ def test_ring_merges_agrees_with_relabelled_cycles() -> None:
             crossing = {int(cover.cycle[g // 3]) for g in tw[pp[1]] if g >= 0}
             split = any(len(np.unique(new[old == c])) > 1 for c in crossing)
             joined = np.intersect1d(new[old == cover.cycle[a]], new[old == cover.cycle[b]]).size > 0
-            if ans:
-                assert joined and not split
-                n_true += 1
-            else:
-                n_false += 1
-                once = len(crossing) * 2 == sum(1 for hh in pp[1] if tw[hh] >= 0 and cover.is_cov[hh])
-                if once:  # each crossing cycle crosses once: the answer is exact
-                    assert not (joined and not split)
+            exact = S._ring_merges_relabelled(pts, tri, tw, con, cover, [a, b], pp[0], pp[1], spoke, a, b)
+            assert exact == (joined and not split)
+            if ans is None:  # a cycle crosses twice: only the relabelled answer decides
+                n_twice += 1
+                continue
+            assert ans == exact
+            n_true += ans
+            n_false += not ans
     assert n_true > 5 and n_false > 0
