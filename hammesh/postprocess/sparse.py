@@ -447,7 +447,7 @@ def sparse_cycles(
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
     beside_cover : callable, optional
         Called once as the cover starts, to hand work that needs nothing of the
-        construction to another thread (``hammesh()`` starts the certificate's look
+        construction to another thread (``hammesh.hamiltonian`` starts the certificate's look
         at the input there): the cover is this call's longest step and most of it
         runs on one core.
     """
