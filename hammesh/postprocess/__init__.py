@@ -19,7 +19,7 @@ from hammesh.verify.reference import input_facts
 from hammesh.halfedge import prepare_mesh
 
 __all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels",
-           "RESERVE_TAKEN"]
+           "RESERVE_TAKEN", "RESERVE_AFTER_COVER"]
 
 #: Available constructions, by name (``hamiltonian(mesh, mode=...)``).
 MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
@@ -37,6 +37,15 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: with some room (the rest are made inside kernels, or small: a kernel handed
 #: ``pages.fresh`` arrays raises this).
 RESERVE_TAKEN = {"incircle": None, "sparse": 210}
+
+#: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
+#: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,
+#: the stamps 16, the certificate's claim 12): without a reserve (a mesh read from a
+#: file, or made by ``quality_mesh(isolate=False)``) the second thread faults in a
+#: reserve of this size while the cover runs, mostly on one core.
+RESERVE_AFTER_COVER = 165
+#: triangles below which sparse mode makes no reserve of its own (few pages to fault)
+SIDE_RESERVE_MIN_TRIANGLES = 200_000
 
 
 _loaded = threading.Lock()
@@ -168,6 +177,14 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
             if not facts:
                 facts.append(side.submit(input_facts, mesh))
 
+        def beside_cover() -> None:  # (sparse: the other core is mostly idle during the cover)
+            start_facts()
+            m = shape[0] if len(shape) == 2 else 0
+            if m >= SIDE_RESERVE_MIN_TRIANGLES and not pages.reserved() and not isinstance(
+                side, threads.InlineExecutor
+            ):
+                side.submit(pages.reserve, RESERVE_AFTER_COVER * m)
+
         if mode == "incircle":
             start_facts()
         clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle")  # (Thm 2.4 needs no angle)
@@ -185,7 +202,7 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
                 stream.join()  # then help with the row checks still to do
                 rows = (stream.result(out.components), stream.used)
         else:
-            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=start_facts)
+            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover)
             t1 = time.perf_counter()
         start_facts()  # (if the construction did not)
         ref_facts = facts[0].result()

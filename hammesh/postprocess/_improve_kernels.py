@@ -109,7 +109,9 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     k_rows = out.shape[0]
     pinned = fresh(3 * k_rows, np.bool_)
     run_all([
-        partial(_pinned_output_edges_into, out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, lo, hi)
+        partial(
+            _pinned_output_edges_into, out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, lo, hi
+        )
         for lo, hi in row_ranges(k_rows, threads.THREAD_MIN_ROWS)
     ])
     return pinned

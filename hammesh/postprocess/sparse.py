@@ -1007,7 +1007,7 @@ def sparse_cycles(
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
     beside_cover : callable, optional
         Called once as the cover starts, to hand work that needs nothing of the
-        construction to another thread (``hammesh()`` starts the certificate's look
+        construction to another thread (``hammesh.hamiltonian`` starts the certificate's look
         at the input there): the cover is this call's longest step and most of it
         runs on one core.
     """
@@ -1114,7 +1114,9 @@ def sparse_cycles(
         if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
             whole = (newmin >= keep * min_angle) & (newmax <= hi)
             order = _join_order(ckind, slack, newmin, pmin, whole, cls)
-            rest = np.setdiff1d(every, order, assume_unique=True)  # dropped: a bridge did better
+            dropped = np.ones(len(cand), np.bool_)  # dropped: a bridge did better
+            dropped[order] = False
+            rest = np.flatnonzero(dropped)  # (as setdiff1d of every and order, without its sort)
             first = np.concatenate([order, rest])
             open_ = _k.open_candidates(tw, cover.cycle, cover.n_cycles, cand[first], slack[first] >= 0.0)
             redo = first[open_ & (slack[first] >= -math.radians(PLACE_REACH_DEG)) & ~con[cand[first]]]

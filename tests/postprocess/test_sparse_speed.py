@@ -136,3 +136,44 @@ def test_sparse_takes_its_big_arrays_from_the_reserve(monkeypatch) -> None:
     assert 0.75 * share <= sum(taken) <= share
     for f in FIELDS:
         np.testing.assert_array_equal(getattr(h, f), getattr(plain, f), err_msg=f)
+
+
+def test_without_a_reserve_the_second_thread_faults_one_beside_the_cover(monkeypatch) -> None:
+    """A mesh not made by an isolated ``quality_mesh`` (read from a file): the pages of the
+    arrays after the cover are faulted on the other thread while the cover runs
+    (``postprocess.RESERVE_AFTER_COVER``); the output is the same."""
+    import time
+
+    from hammesh import pages, postprocess
+    from hammesh.postprocess import sparse
+
+    if threads.cores() < 2:
+        pytest.skip("one core: no second thread")
+    m = hammesh.quality_mesh(hammesh.Domain.from_polygon(square(0, 0, 1)), min_angle=30, max_area=2e-4, isolate=False)
+    pages.release()
+    plain = hammesh.hamiltonian(m)
+    monkeypatch.setattr(pages, "RESERVE_MIN_ARRAY", 4096)
+    monkeypatch.setattr(postprocess, "SIDE_RESERVE_MIN_TRIANGLES", 1000)
+    real_cover, real_take = sparse.cycle_cover, pages._from_reserve
+    taken = []
+
+    def cover(*args, **kw):  # (the reserve is ready before the cover ends: no race in the test)
+        t0 = time.monotonic()
+        while not pages.reserved() and time.monotonic() < t0 + 10:
+            time.sleep(0.001)
+        return real_cover(*args, **kw)
+
+    def take(nbytes):
+        got = real_take(nbytes)
+        if got is not None:
+            taken.append(nbytes)
+        return got
+
+    monkeypatch.setattr(sparse, "cycle_cover", cover)
+    monkeypatch.setattr(pages, "_from_reserve", take)
+    h = hammesh.hamiltonian(m)
+    assert pages.reserved() == 0
+    assert 0.5 * postprocess.RESERVE_AFTER_COVER * m.n_triangles <= sum(taken)
+    assert sum(taken) <= postprocess.RESERVE_AFTER_COVER * m.n_triangles + 16 * pages._PAGE
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(h, f), getattr(plain, f), err_msg=f)
