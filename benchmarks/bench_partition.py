@@ -33,6 +33,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --forest-only --forest-size 1500000   # the forest table alone
     python benchmarks/bench_partition.py --domains square,rect_2x1 --modes incircle --ks 4,8,16,64   # controls
     python benchmarks/bench_partition.py --quick --modes incircle --plot parts/   # pictures of the parts
+    python benchmarks/bench_partition.py --trees --target 100000   # other spanning trees (partition_trees.py)
 """
 
 from __future__ import annotations
@@ -291,6 +292,42 @@ def _print_forests(forests: list[dict]) -> None:
               "two halves on two threads, the plain one on one: CPU is the last column)")
 
 
+def _print_trees(domains, target: int, ks: list[int]) -> None:
+    """Incircle cycle cut / METIS cut of each tree scheme of ``partition_trees.SCHEMES``
+    (METIS run on each scheme's own output: the outputs differ by their flips)."""
+    import os
+    import sys
+
+    import hammesh
+    from scipy.sparse import coo_matrix
+
+    from hammesh.partition import dual_edges, edge_cut, partition
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from partition_trees import SCHEMES, tree
+
+    print("| domain | tree | triangles | " + " | ".join(f"k = {k}" for k in ks) + " | tree s |")
+    print("|---|---|---|" + "---|" * len(ks) + "---|")
+    for name, dom, area in domains:
+        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target / 3.0))
+        for scheme, weights in SCHEMES.items():
+            t = time.perf_counter()
+            with tree(weights):
+                h = hammesh.hamiltonian(mesh, mode="incircle")
+            dt = time.perf_counter() - t
+            a, b = dual_edges(h.triangles)
+            m = h.n_triangles
+            g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
+            g = (g + g.T).tocsr()
+            xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
+            cells = []
+            for k in ks:
+                p = partition(h, k)
+                mparts, _ = _metis(k, xadj, adjncy, 1)
+                cells.append(f"{p.edge_cut / edge_cut(mparts, a, b):.2f}" + ("" if p.connected else " (disconnected)"))
+            print(f"| {name} | {scheme} | {m:,} | " + " | ".join(cells) + f" | {dt:.1f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--target", type=int, default=300_000, help="triangles of each Hamiltonian mesh")
@@ -303,6 +340,8 @@ def main() -> None:
                     help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
     ap.add_argument("--modes", default="incircle,sparse", help="comma-separated: incircle, sparse")
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
+    ap.add_argument("--trees", action="store_true",
+                    help="only the incircle cut of other spanning trees (benchmarks/partition_trees.py) vs METIS")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -329,6 +368,9 @@ def main() -> None:
     if set(args.modes.split(",")) - {"incircle", "sparse"}:
         ap.error("--modes: incircle and/or sparse")
     ks = [int(k) for k in args.ks.split(",")]
+    if args.trees:
+        _print_trees([d for d in _domains() if d[0] in chosen], args.target, ks)
+        return
     for name, dom, area in (d for d in _domains() if d[0] in chosen):
         for mode in args.modes.split(","):
             h, mesh = _mesh(dom, area, args.target, mode)

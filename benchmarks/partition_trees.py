@@ -1,0 +1,304 @@
+"""Other spanning trees for the incircle cycle, to measure their cycle cut (issue 14).
+
+Thm 2.4's cycle is the walk around a spanning tree of the dual graph, and the cut of
+its stretches is decided by that tree (docs/partition.md). The shipped tree is a
+minimum spanning forest for edge classes from a count quadtree
+(``_thm24_kernels.spanning_forest``, Prim's search in numba). Here any other class
+scheme is tried the slow way: an edge weight per dual edge, scipy's minimum spanning
+tree, and the result handed to the incircle construction in place of the shipped
+forest (:func:`tree`), so that the output is built, verified and partitioned as
+usual. ``bench_partition.py --trees`` prints the cut of each scheme against METIS's.
+
+Schemes (weights: lower is taken first; every scheme ranks constrained edges last):
+
+* ``quadtree``: the shipped classes (``edge_class``) through scipy's tree: the control
+  (the same classes, the tree differing only inside a class);
+* ``bisection``: recursive bisection, each cell cut where its triangles' centroids
+  are halved by count along the direction (of 16) that crosses the fewest dual edges;
+  two levels form one class level (a cell and its four grandchildren, as in the
+  quadtree), ranked by distance from the *junction* (the edge of the cell's line
+  nearest both children's lines); below ``depth`` the quadtree classes;
+* ``cross``: four-way cells cut by an *equipartition cross* (Courant and Robbins: two
+  lines cut any planar mass into four equal parts): for each of 8 directions the
+  first line halves the cell by count, the second is the ham-sandwich cut of the two
+  halves (the direction whose bisector of one half also bisects the other; each half
+  then split at its own median along it, so the counts are exact); the cross that
+  crosses the fewest dual edges is kept, and the edges between the four children
+  rank by distance from the crossing (moved to the nearest of those edges, so into
+  the material); ``levels`` such levels, then the quadtree classes.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import numpy as np
+
+__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "SCHEMES"]
+
+#: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
+CON_WEIGHT = 1e9
+#: Offset of the hierarchy's classes above the quadtree's (``N_CLASSES`` < 300).
+LEVEL_BASE = 1000.0
+
+
+def forest_from_weights(tri: np.ndarray, twin: np.ndarray, is_con: np.ndarray, weight: np.ndarray):
+    """A minimum spanning forest of the dual graph for ``weight`` (one per half-edge,
+    the same on both halves), as ``_thm24_kernels.Forest`` in the input numbering."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
+
+    from hammesh.postprocess._thm24_kernels import CON_BIT, TREE_BIT, Forest
+
+    m = len(tri)
+    h = np.arange(3 * m)
+    inner = np.flatnonzero(twin > h)
+    a, b = inner // 3, twin[inner] // 3
+    # scipy drops explicit zeros: every weight is made positive
+    g = coo_matrix((weight[inner] - weight[inner].min() + 1.0, (a, b)), shape=(m, m)).tocsr()
+    t = minimum_spanning_tree(g).tocoo()
+    key = np.minimum(a, b) * m + np.maximum(a, b)
+    o = np.argsort(key)
+    r, s = t.row.astype(np.int64), t.col.astype(np.int64)  # scipy's int32 would overflow the key
+    at = np.searchsorted(key[o], np.minimum(r, s) * m + np.maximum(r, s))
+    picked = inner[o[at]]
+    assert len(picked) == len(r) and np.array_equal(key[o][at], np.minimum(r, s) * m + np.maximum(r, s))
+    in_tree = np.zeros(3 * m, bool)
+    in_tree[picked] = True
+    in_tree[twin[picked]] = True
+    code = ((twin + 1) << 2) | (in_tree.astype(np.int64) * TREE_BIT) | (is_con.astype(np.int64) * CON_BIT)
+    n_comp, comp = connected_components(t + t.T, directed=False)
+    lowest = np.full(n_comp, m)
+    np.minimum.at(lowest, comp, np.arange(m))
+    split = np.flatnonzero(in_tree & is_con)
+    return Forest(tri.copy(), code.astype(np.int64), np.arange(m), np.sort(lowest), split)
+
+
+@contextmanager
+def tree(weights):
+    """Inside the block, ``hammesh.hamiltonian(mode="incircle")`` walks the minimum
+    spanning forest of ``weights(points, tri, twin, is_con)`` instead of the shipped
+    tree (``None``: the shipped tree)."""
+    from hammesh.postprocess import _thm24_kernels, incircle
+
+    if weights is not None:
+        def forest(tri, twin, is_con, points=None):
+            return forest_from_weights(tri, twin, is_con, weights(points, tri, twin, is_con))
+
+        incircle._kernels = _Kernels(_thm24_kernels, forest)
+    try:
+        yield
+    finally:
+        incircle._kernels = _thm24_kernels
+
+
+class _Kernels:
+    """``_thm24_kernels`` with another ``spanning_forest`` (the module is left alone)."""
+
+    def __init__(self, module, forest) -> None:
+        self._module = module
+        self.spanning_forest = forest
+
+    def __getattr__(self, name: str):
+        return getattr(self._module, name)
+
+
+def _edges(tri: np.ndarray, twin: np.ndarray):
+    m = len(tri)
+    h = np.arange(3 * m)
+    g = np.where(twin >= 0, twin, h)
+    return h // 3, g // 3, twin > h
+
+
+def quadtree_weights(points, tri, twin, is_con) -> np.ndarray:
+    """The shipped classes (``_thm24_kernels.edge_class`` of the count quadtree)."""
+    from hammesh.postprocess._cover_kernels import edge_classes
+    from hammesh.postprocess._thm24_kernels import quadtree_coords
+
+    a, b, _ = _edges(tri, twin)
+    q = quadtree_coords(points, tri)[:, 0].astype(np.int64)
+    w = np.empty(len(a), np.int64)
+    edge_classes(q[a], q[b], w)
+    w = w.astype(np.float64)
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+def _median_split(c: np.ndarray, lab: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Per cell (``lab``), True for the upper half by count along ``direction``."""
+    m = len(c)
+    cnt = np.bincount(lab)
+    o = np.lexsort((c @ direction, lab))
+    start = np.r_[0, np.cumsum(cnt)][lab[o]]
+    side = np.empty(m, bool)
+    side[o] = np.arange(m) - start >= cnt[lab[o]] // 2
+    return side
+
+
+def bisection_labels(c: np.ndarray, a: np.ndarray, b: np.ndarray, depth: int, directions: int = 16) -> np.ndarray:
+    """Cell of each triangle after ``depth`` count-halving cuts (bits, top cut first),
+    each cell cut along the direction (of ``directions``) crossing the fewest of the
+    dual edges ``a``-``b`` inside it."""
+    m = len(c)
+    lab = np.zeros(m, np.int64)
+    ang = np.pi * np.arange(directions) / directions
+    for _ in range(depth):
+        n_cells = int(lab.max()) + 1
+        same = lab[a] == lab[b]
+        sides = [_median_split(c, lab, np.array([np.cos(t), np.sin(t)])) for t in ang]
+        costs = np.stack([np.bincount(lab[a][same & (s[a] != s[b])], minlength=n_cells) for s in sides])
+        best = np.argmin(costs, axis=0)
+        lab = 2 * lab + np.stack(sides)[best[lab], np.arange(m)]
+    return lab
+
+
+def _hub_distances(mid, c, lab, cell_of_edge, sel, hub_of) -> np.ndarray:
+    """Distance of each selected edge's midpoint from its cell's hub, over the cell's radius."""
+    dist = np.zeros(len(mid))
+    for cid in np.unique(cell_of_edge[sel]):
+        s = sel & (cell_of_edge == cid)
+        hub, members = hub_of(cid, s)
+        r = np.sqrt(((c[members] - hub) ** 2).sum(1)).max() + 1e-300
+        dist[s] = np.sqrt(((mid[s] - hub) ** 2).sum(1)) / r
+    return dist
+
+
+def bisection_weights(points, tri, twin, is_con, depth: int = 12, directions: int = 16) -> np.ndarray:
+    """Recursive best-direction bisection, two levels a class level, junction hubs."""
+    from scipy.spatial import cKDTree
+
+    a, b, inner = _edges(tri, twin)
+    c = points[tri].mean(axis=1)
+    lab = bisection_labels(c, a[inner], b[inner], depth, directions)
+    w = quadtree_weights(points, tri, twin, is_con)
+    x = lab[a] ^ lab[b]
+    diff = x != 0
+    bl = np.zeros(len(a), np.int64)
+    bl[diff] = np.floor(np.log2(x[diff])).astype(np.int64) + 1
+    cut_depth = depth - bl  # depth of the cell whose line separates the two triangles
+    top = 2 * (cut_depth // 2)  # its class level's top cell
+    mid = 0.5 * (c[a] + c[b])
+    dist = np.zeros(len(a))
+    for d in np.unique(top[diff]):
+        sel = diff & (top == d)
+        cell = lab[a] >> (depth - d)
+
+        def hub_of(cid, s, d=d):
+            e = np.flatnonzero(s & inner)
+            line = e[cut_depth[e] == d]
+            below = e[cut_depth[e] != d]
+            members = np.flatnonzero((lab >> (depth - d)) == cid)
+            if not len(line) or not len(below):
+                return mid[e].mean(axis=0), members
+            side = (lab[a[below]] >> (depth - d - 1)) & 1
+            near = sum(cKDTree(mid[below[side == k]]).query(mid[line])[0] for k in (0, 1) if (side == k).any())
+            return mid[line[np.argmin(near)]], members
+
+        dist += _hub_distances(mid, c, lab, cell, sel, hub_of)
+    levels = int(top.max()) // 2 + 1 if diff.any() else 1
+    w[diff] = LEVEL_BASE + (levels - top[diff] // 2) * 20 + 16 * np.minimum(dist[diff], 1.0)
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+def _cross(c: np.ndarray, ea: np.ndarray, eb: np.ndarray, directions: int, steps: int = 64):
+    """The equipartition cross of points ``c`` crossing the fewest edges ``ea``-``eb``:
+    ``(quadrant 0..3 of each point, crossing point)``."""
+    best = None
+    n = len(c)
+    for t in np.pi * np.arange(directions) / directions:
+        d1 = np.array([np.cos(t), np.sin(t)])
+        s1 = c @ d1
+        o1 = np.median(s1)
+        up = s1 >= o1
+        lo_, hi_ = c[~up], c[up]
+        if len(lo_) < 2 or len(hi_) < 2:
+            continue
+        # ham-sandwich direction: the bisector of one half that halves the other
+        phis = np.pi * np.arange(steps) / steps
+        dirs = np.c_[np.cos(phis), np.sin(phis)]
+        off = np.median(lo_ @ dirs.T, axis=0)
+        miss = np.abs((hi_ @ dirs.T >= off).mean(axis=0) - 0.5)
+        j = int(np.argmin(miss))
+        d2 = dirs[j]
+        s2 = c @ d2
+        right = np.zeros(n, bool)
+        for half in (~up, up):  # each half split at its own median: exact counts
+            idx = np.flatnonzero(half)
+            right[idx[np.argsort(s2[idx], kind="stable")[len(idx) // 2:]]] = True
+        quad = 2 * up + right
+        cost = np.count_nonzero(quad[ea] != quad[eb])
+        if best is None or cost < best[0]:
+            try:
+                hub = np.linalg.solve(np.array([d1, d2]), np.array([o1, off[j]]))
+            except np.linalg.LinAlgError:
+                hub = c.mean(axis=0)
+            best = (cost, quad, hub)
+    if best is None:
+        return np.zeros(n, np.int64), c.mean(axis=0)
+    return best[1].astype(np.int64), best[2]
+
+
+def cross_labels(c: np.ndarray, a: np.ndarray, b: np.ndarray, levels: int, directions: int = 8):
+    """Cell of each triangle after ``levels`` equipartition crosses (two bits a level),
+    and the crossing point of each cell's cross, ``hubs[(level, cell)]``."""
+    m = len(c)
+    lab = np.zeros(m, np.int64)
+    hubs = {}
+    for level in range(levels):
+        new = 4 * lab
+        o = np.argsort(lab, kind="stable")
+        starts = np.r_[0, np.flatnonzero(np.diff(lab[o])) + 1, m]
+        inside = lab[a] == lab[b]
+        local = np.full(m, -1)
+        for s0, s1 in zip(starts[:-1], starts[1:]):
+            idx = o[s0:s1]
+            cid = int(lab[idx[0]])
+            if len(idx) < 8:
+                hubs[(level, cid)] = c[idx].mean(axis=0)
+                continue
+            local[idx] = np.arange(len(idx))
+            sel = inside & (lab[a] == cid)
+            quad, hubs[(level, cid)] = _cross(c[idx], local[a[sel]], local[b[sel]], directions)
+            new[idx] += quad
+        lab = new
+    return lab, hubs
+
+
+def cross_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
+    """Equipartition crosses, ``levels`` levels, then the quadtree classes."""
+    a, b, inner = _edges(tri, twin)
+    c = points[tri].mean(axis=1)
+    lab, hubs = cross_labels(c, a[inner], b[inner], levels, directions)
+    w = quadtree_weights(points, tri, twin, is_con)
+    x = lab[a] ^ lab[b]
+    diff = x != 0
+    digit = np.zeros(len(a), np.int64)
+    digit[diff] = np.floor(np.log2(x[diff])).astype(np.int64) // 2 + 1
+    level = levels - digit  # level of the cross that separates the two triangles
+    mid = 0.5 * (c[a] + c[b])
+    dist = np.zeros(len(a))
+    for lv in range(levels):
+        sel = diff & (level == lv)
+        if not sel.any():
+            continue
+        cell = lab[a] >> (2 * (levels - lv))
+
+        def hub_of(cid, s, lv=lv):
+            e = np.flatnonzero(s)  # the crossing moved onto the nearest edge of the cross
+            hub = mid[e[np.argmin(((mid[e] - hubs[(lv, int(cid))]) ** 2).sum(1))]]
+            return hub, np.flatnonzero((lab >> (2 * (levels - lv))) == cid)
+
+        dist += _hub_distances(mid, c, lab, cell, sel, hub_of)
+    w[diff] = LEVEL_BASE + (levels - level[diff]) * 20 + 16 * np.minimum(dist[diff], 1.0)
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+#: ``--trees`` schemes: name -> weights function (None: the shipped numba forest).
+SCHEMES = {
+    "shipped": None,
+    "quadtree": quadtree_weights,
+    "bisection": bisection_weights,
+    "cross": cross_weights,
+}

@@ -1,0 +1,79 @@
+"""The tree schemes of ``benchmarks/partition_trees.py`` (issue 14 experiments): each is a
+spanning forest the incircle construction accepts, and the cells they are built from
+have the counts they claim."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.halfedge import prepare_mesh
+from hammesh.partition import partition
+from hammesh.postprocess import _thm24_kernels as K
+
+_spec = importlib.util.spec_from_file_location(
+    "partition_trees", Path(__file__).parents[2] / "benchmarks" / "partition_trees.py"
+)
+trees = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(trees)
+
+
+def _plate():
+    a = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    hole = np.c_[np.cos(a), np.sin(a)] * 0.3 + [1.0, 0.5]
+    dom = hammesh.Domain.from_polygon([[0, 0], [2, 0], [2, 1], [0, 1]], holes=[hole])
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=0.002)
+
+
+@pytest.mark.parametrize("scheme", ["quadtree", "bisection", "cross"])
+def test_scheme_gives_a_minimum_spanning_forest_the_walk_accepts(scheme: str) -> None:
+    mesh = _plate()
+    clean, he, is_con = prepare_mesh(mesh)
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    w = trees.SCHEMES[scheme](pts, tri, twin, is_con)
+    assert np.array_equal(w, w[np.where(twin >= 0, twin, np.arange(len(twin)))])  # one weight per edge
+    f = trees.forest_from_weights(tri, twin, is_con, w)
+    m = len(tri)
+    tree = (f.code & K.TREE_BIT) != 0
+    assert tree.sum() == 2 * (m - 1) and (tree[twin[tree]]).all()
+    g = nx.Graph()
+    g.add_nodes_from(range(m))
+    for h in np.flatnonzero(twin > np.arange(3 * m)):
+        g.add_edge(h // 3, twin[h] // 3, weight=float(w[h]))
+    t = nx.Graph()
+    t.add_nodes_from(range(m))
+    t.add_edges_from((h // 3, twin[h] // 3) for h in np.flatnonzero(tree))
+    assert nx.is_tree(t)
+    best = nx.minimum_spanning_tree(g).size(weight="weight")
+    assert sum(g.edges[e]["weight"] for e in t.edges) == pytest.approx(best)
+    with trees.tree(trees.SCHEMES[scheme]):
+        h = hammesh.hamiltonian(mesh, mode="incircle")  # verified by its certificate
+    assert h.n_triangles == 3 * m and len(h.components) == 1
+    p = partition(h, 8)
+    assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+    # and the shipped tree is back after the block
+    assert hammesh.postprocess.incircle._kernels is K
+
+
+def test_cross_cells_hold_equal_counts() -> None:
+    rng = np.random.default_rng(3)
+    c = rng.random((4096, 2)) * [3.0, 1.0]
+    lab, hubs = trees.cross_labels(c, np.zeros(0, np.int64), np.zeros(0, np.int64), 3)
+    sizes = np.bincount(lab, minlength=64)
+    assert sizes.min() == sizes.max() == 64  # 4096 / 4**3, exactly
+    # a cell's four quadrants meet at its hub: each lies in one quadrant of the cross
+    # around the hub, so the hub is inside the cell's bounding box
+    top = hubs[(0, 0)]
+    assert (c.min(axis=0) < top).all() and (top < c.max(axis=0)).all()
+
+
+def test_bisection_cells_halve_counts() -> None:
+    rng = np.random.default_rng(4)
+    c = rng.random((1024, 2))
+    lab = trees.bisection_labels(c, np.zeros(0, np.int64), np.zeros(0, np.int64), 4)
+    assert (np.bincount(lab, minlength=16) == 64).all()
