@@ -24,6 +24,10 @@ from hammesh.verify.stream import UNLINKED
 __all__ = [
     "Forest",
     "quadtree_coords",
+    "top_cross_angle",
+    "CROSS_ANGLES",
+    "CROSS_GAIN",
+    "CROSS_SAMPLE",
     "edge_class",
     "N_CLASSES",
     "QUAD_CLASSES",
@@ -144,6 +148,13 @@ CENTRE_BINS = 16
 RANK_BINS = 1024
 #: Centroids sampled for those histograms (every ``m // RANK_SAMPLE``-th triangle).
 RANK_SAMPLE = 1 << 14
+#: Rotations of the quadtree tried (``top_cross_angle``): ``i * 90 / CROSS_ANGLES`` degrees.
+CROSS_ANGLES = 8
+#: Triangles sampled to judge the rotations (every ``m // CROSS_SAMPLE``-th).
+CROSS_SAMPLE = 1 << 12
+#: A rotation is taken only if its top cross crosses at most this share of the dual
+#: edges the unrotated one crosses (the estimate comes from a sample: no change on noise).
+CROSS_GAIN = 0.9
 #: Edge classes: ``level * CENTRE_BINS + bin`` for free edges, then one for constrained ones.
 N_CLASSES = (CELL_BITS + 1) * CENTRE_BINS + 1
 #: Classes of the free edges inside one top-level quadrant (levels below ``CELL_BITS``).
@@ -235,10 +246,10 @@ def spanning_forest(tri, twin, is_con, points=None):
         qr[:, 0] = 0
         qr[:, 1] = -1
         outputs()
-    elif len(spans) > 1:
-        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)]), outputs])
+    elif len(spans) > 1:  # the rotation is chosen on this thread while the other faults pages
+        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)], top_cross_angle(points, tri, twin)), outputs])
     else:
-        quadtree_coords(points, tri, qr, spans)
+        quadtree_coords(points, tri, qr, spans, top_cross_angle(points, tri, twin))
         outputs()
     order, tri_r, code = out["order"], out["tri_r"], out["code"]
     # the two halves of the top split of the longer axis hold half the triangles each
@@ -269,7 +280,57 @@ def spanning_forest(tri, twin, is_con, points=None):
     return Forest(tri_r, code, order, firsts, np.sort(split[:n_split]))
 
 
-def quadtree_coords(points, tri, out=None, spans=None):
+def top_cross_angle(points, tri, twin, sample=None):
+    """The rotation of the count quadtree (radians, ``[0, pi / 2)``) whose top cells
+    cut the fewest dual edges (session 9, issue 14).
+
+    A cell's four children ring whatever lies at its centre: on a gear with a hole,
+    turning the quadtree so that its top lines run through the notches between
+    teeth, not along them, cut 9-13 % less at k = 8 (docs/partition.md). Each of
+    ``CROSS_ANGLES`` rotations is judged on a sample of the triangles (every
+    ``m // CROSS_SAMPLE``-th), with the quadtree's own coordinates
+    (the sample's ranks along each turned axis, scaled by the turned box's aspect):
+    the sampled dual edges between different cells of the top two levels (4 and 16
+    cells), each level counted. The unrotated quadtree is kept unless a rotation cuts
+    at most ``CROSS_GAIN`` of its count.
+    """
+    m = tri.shape[0]
+    if m < 2 or CROSS_ANGLES < 2:
+        return 0.0
+    if sample is None:
+        sample = np.arange(0, m, max(1, m // CROSS_SAMPLE))
+    g = np.asarray(twin)[(3 * sample[:, None] + np.arange(3)).ravel()]
+    inner = g >= 0
+    if not inner.any():
+        return 0.0
+
+    def centroids(ts):
+        return (points[tri[ts, 0]] + points[tri[ts, 1]] + points[tri[ts, 2]]) / 3.0
+
+    angles = 0.5 * math.pi * np.arange(CROSS_ANGLES) / CROSS_ANGLES
+    # both turned axes of every rotation at once: columns x'_0, y'_0, x'_1, ...
+    turn = np.stack([np.c_[np.cos(angles), -np.sin(angles)], np.c_[np.sin(angles), np.cos(angles)]], axis=1)
+    turn = turn.transpose(1, 0, 2).reshape(2, 2 * CROSS_ANGLES)
+    p = centroids(sample) @ turn
+    order = np.argsort(p, axis=0, kind="stable")
+    pu = centroids(g[inner] // 3) @ turn
+    n = len(sample)
+    ext = (p[order[-1], np.arange(2 * CROSS_ANGLES)] - p[order[0], np.arange(2 * CROSS_ANGLES)])
+    ext = ext.reshape(CROSS_ANGLES, 2)
+    aspect = (ext / np.maximum(ext.max(axis=1, keepdims=True), 1e-300)).ravel()
+    cuts = np.zeros(CROSS_ANGLES, np.int64)
+    rank = np.empty(n, np.int64)
+    for j in range(2 * CROSS_ANGLES):  # quadtree coordinates in [0, aspect): ranks
+        rank[order[:, j]] = np.arange(n)
+        ct = np.repeat(rank, 3)[inner] * (aspect[j] / n)
+        cu = np.searchsorted(p[order[:, j], j], pu[:, j]) * (aspect[j] / n)
+        for depth in (2, 4):  # 4 and 16 cells: halves, then quarters of each axis
+            cuts[j // 2] += np.count_nonzero(np.floor(ct * depth) != np.floor(cu * depth))
+    i = int(np.argmin(cuts))
+    return float(angles[i]) if cuts[i] <= CROSS_GAIN * cuts[0] and cuts[i] < cuts[0] else 0.0
+
+
+def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
     """Quadtree coordinates of the triangles for :func:`spanning_forest`, as counts.
 
     Each axis of a triangle's centroid is mapped to the number of centroids below it
@@ -279,6 +340,9 @@ def quadtree_coords(points, tri, out=None, spans=None):
     longer side: the quadtree's halvings then split the *triangles* (not the box) in halves along each
     axis, so its cells hold nearly equal counts around holes and in graded meshes,
     while the domain's aspect is kept.
+
+    ``angle`` turns the axes counter-clockwise by that many radians first
+    (:func:`top_cross_angle`); 0 leaves the coordinates exactly as they are.
 
     Returns ``out`` ((m, 2) int32, or int64 from 2**31 triangles): column 0 the packed
     ``x << CELL_BITS | y``, column 1 set to -1 (the search's "not reached").
@@ -290,7 +354,8 @@ def quadtree_coords(points, tri, out=None, spans=None):
         return out
     if spans is None:
         spans = row_ranges(m, threads.THREAD_MIN_ROWS)
-    x0, y0, x1, y1 = _bounds(points)
+    ca, sa = math.cos(angle), math.sin(angle)  # exactly 1 and 0 for angle 0
+    x0, y0, x1, y1 = _bounds(points, ca, sa)
     span = max(x1 - x0, y1 - y0)
     # each axis is mapped through the cumulative histogram of a sample of the
     # centroids (RANK_SAMPLE of them, every stride-th triangle), so that the quadtree
@@ -299,25 +364,26 @@ def quadtree_coords(points, tri, out=None, spans=None):
     by = RANK_BINS / (y1 - y0) if y1 > y0 else 0.0
     stride = max(1, m // RANK_SAMPLE)
     cum = np.zeros((2, RANK_BINS + 1), np.float64)
-    _sample_histogram_into(points, tri, x0, y0, bx, by, stride, cum)
+    _sample_histogram_into(points, tri, ca, sa, x0, y0, bx, by, stride, cum)
     top = (1 << CELL_BITS) - 1
     n = cum[0, RANK_BINS]
     fx = top * (x1 - x0) / span / n if span > 0 else 0.0  # the box's aspect is kept
     fy = top * (y1 - y0) / span / n if span > 0 else 0.0
     run_all([
-        (lambda a=a, b=b: _cell_coords_into(points, tri, x0, y0, bx, by, cum, fx, fy, out, a, b)) for a, b in spans
+        (lambda a=a, b=b: _cell_coords_into(points, tri, ca, sa, x0, y0, bx, by, cum, fx, fy, out, a, b))
+        for a, b in spans
     ])
     return out
 
 
 @njit(cache=True, nogil=True)
-def _bounds(points):
-    """``(x0, y0, x1, y1)``: the bounding box of the points, one pass."""
-    x0 = x1 = points[0, 0]
-    y0 = y1 = points[0, 1]
+def _bounds(points, ca, sa):
+    """``(x0, y0, x1, y1)``: the bounding box of the points in the axes turned by the
+    angle of cosine ``ca`` and sine ``sa`` (:func:`_turned`), one pass."""
+    x0, y0 = _turned(points[0, 0], points[0, 1], ca, sa)
+    x1, y1 = x0, y0
     for i in range(1, points.shape[0]):
-        x = points[i, 0]
-        y = points[i, 1]
+        x, y = _turned(points[i, 0], points[i, 1], ca, sa)
         x0 = min(x0, x)
         x1 = max(x1, x)
         y0 = min(y0, y)
@@ -325,14 +391,26 @@ def _bounds(points):
     return x0, y0, x1, y1
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _turned(x, y, ca, sa):
+    """``(x, y)`` in axes turned counter-clockwise by the angle of cosine ``ca``, sine
+    ``sa``: ``(ca x + sa y, ca y - sa x)`` (exactly ``(x, y)`` for ``ca = 1, sa = 0``)."""
+    if sa == 0.0 and ca == 1.0:
+        return x, y
+    return ca * x + sa * y, ca * y - sa * x
+
+
 @njit(cache=True, nogil=True)
-def _sample_histogram_into(points, tri, x0, y0, bx, by, stride, cum):
+def _sample_histogram_into(points, tri, ca, sa, x0, y0, bx, by, stride, cum):
     """Cumulative histograms (``cum[axis, b]``: sampled centroids in bins below b) of
     the centroids of every ``stride``-th triangle, over the box (``bx``, ``by``: bins
     per unit)."""
     for t in range(0, tri.shape[0], stride):
-        x = (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0
-        y = (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0
+        x, y = _turned(
+            (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0,
+            (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0,
+            ca, sa,
+        )
         cum[0, min(max(int((x - x0) * bx), 0), RANK_BINS - 1) + 1] += 1
         cum[1, min(max(int((y - y0) * by), 0), RANK_BINS - 1) + 1] += 1
     for b in range(RANK_BINS):
@@ -341,15 +419,20 @@ def _sample_histogram_into(points, tri, x0, y0, bx, by, stride, cum):
 
 
 @njit(cache=True, nogil=True)
-def _cell_coords_into(points, tri, x0, y0, bx, by, cum, fx, fy, qr, lo, hi):
+def _cell_coords_into(points, tri, ca, sa, x0, y0, bx, by, cum, fx, fy, qr, lo, hi):
     """Quadtree coordinates (``CELL_BITS`` bits) of triangles lo..hi: each axis of the
     centroid is the number of sampled centroids below it (``cum``, linear inside a
     bin) times ``fx``/``fy``; packed ``x << CELL_BITS | y`` into ``qr[:, 0]``;
     ``qr[:, 1] = -1``."""
     top = (1 << CELL_BITS) - 1
     for t in range(lo, hi):
-        px = ((points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0 - x0) * bx
-        py = ((points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0 - y0) * by
+        x, y = _turned(
+            (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0,
+            (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0,
+            ca, sa,
+        )
+        px = (x - x0) * bx
+        py = (y - y0) * by
         i = min(max(int(px), 0), RANK_BINS - 1)
         j = min(max(int(py), 0), RANK_BINS - 1)
         rx = cum[0, i] + min(max(px - i, 0.0), 1.0) * (cum[0, i + 1] - cum[0, i])

@@ -106,7 +106,8 @@ def test_forest_is_a_minimum_spanning_forest_of_the_edge_classes(dom, area: floa
     mesh = hammesh.quality_mesh(dom, min_angle=25, max_area=area)
     clean, he, is_con = prepare_mesh(mesh)
     f = K.spanning_forest(clean.triangles, he.twin, is_con, clean.points)
-    q = K.quadtree_coords(clean.points, clean.triangles)[:, 0].astype(np.int64)
+    angle = K.top_cross_angle(clean.points, clean.triangles, he.twin)  # the forest's rotation
+    q = K.quadtree_coords(clean.points, clean.triangles, angle=angle)[:, 0].astype(np.int64)
     m = clean.n_triangles
     g = nx.Graph()
     g.add_nodes_from(range(m))
@@ -166,7 +167,7 @@ def test_two_searches_join_across_the_halves_as_one_search_would() -> None:
         row_threads.THREAD_MIN_ROWS = old
     for a, b in zip(one, two):
         np.testing.assert_array_equal(a, b)
-    q = K.quadtree_coords(pts, tri)[:, 0].astype(np.int64)
+    q = K.quadtree_coords(pts, tri, angle=K.top_cross_angle(pts, tri, twin))[:, 0].astype(np.int64)
     m = len(tri)
     g = nx.Graph()
     g.add_nodes_from(range(m))
@@ -184,3 +185,75 @@ def test_two_searches_join_across_the_halves_as_one_search_would() -> None:
     assert sum(g.edges[two.order[h // 3], two.order[tw[h] // 3]]["w"] for h in tree) == best
     assert two.order[two.firsts].tolist() == sorted(min(c) for c in nx.connected_components(g))
     assert len(two.split) == 2  # the loop's region joins the rest by one constrained edge
+
+
+def _gear(area: float):
+    k = np.arange(96)
+    r = np.where((k // 4) % 2 == 0, 1.0, 0.8)  # 12 teeth, as in bench_partition
+    ang = 2 * np.pi * k / 96
+    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    dom = hammesh.Domain.from_polygon(np.c_[r * np.cos(ang), r * np.sin(ang)],
+                                      holes=[np.c_[np.cos(a), np.sin(a)] * 0.3])
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+
+
+def _top_cells_cut(pts, tri, twin, angle: float) -> int:
+    """Dual edges between different cells of the quadtree's top two levels, turned by
+    ``angle`` (counted on every triangle, not the forest's sample)."""
+    q = K.quadtree_coords(pts, tri, angle=angle)[:, 0].astype(np.int64)
+    x, y = q >> K.CELL_BITS, q & ((1 << K.CELL_BITS) - 1)
+    h = np.flatnonzero(twin > np.arange(len(twin)))
+    a, b = h // 3, twin[h] // 3
+    return sum(int(np.count_nonzero((v[a] >> s) != (v[b] >> s))) for v in (x, y)
+               for s in (K.CELL_BITS - 1, K.CELL_BITS - 2))
+
+
+def test_quadtree_turns_off_the_gear_teeth_and_stays_put_on_boxes() -> None:
+    """The forest's rotation (:func:`top_cross_angle`, judged on a sample) is one whose
+    top cells cut fewer dual edges than the unrotated quadtree's, counted on the whole
+    mesh; on a square and a 2:1 box the axes are best and are kept; and on the gear
+    the cycle cut falls (k = 8 and 64)."""
+    for dom in ([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 0], [2, 0], [2, 1], [0, 1]]):
+        mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon(dom), min_angle=30, max_area=2e-4)
+        clean, he, _ = prepare_mesh(mesh)
+        assert K.top_cross_angle(clean.points, clean.triangles, he.twin) == 0.0
+    mesh = _gear(2.4 / 10_000)
+    clean, he, _ = prepare_mesh(mesh)
+    pts, tri, twin = clean.points, clean.triangles, he.twin
+    angle = K.top_cross_angle(pts, tri, twin)
+    assert 0.0 < angle < np.pi / 2
+    assert _top_cells_cut(pts, tri, twin, angle) < K.CROSS_GAIN * _top_cells_cut(pts, tri, twin, 0.0)
+    cuts = {}
+    old = K.CROSS_ANGLES
+    try:
+        for n in (1, old):  # one angle: the unrotated quadtree
+            K.CROSS_ANGLES = n
+            h = hammesh.hamiltonian(mesh, mode="incircle")
+            cuts[n] = [hammesh.partition(h, k).edge_cut for k in (8, 64)]
+    finally:
+        K.CROSS_ANGLES = old
+    assert all(c < c1 for c, c1 in zip(cuts[old], cuts[1])), cuts
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    xy=st.lists(st.tuples(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3)), min_size=3, max_size=40, unique=True),
+    turn=st.integers(0, 7),
+    data=st.data(),
+)
+def test_turned_quadtree_coords_follow_the_turned_axes(xy, turn: int, data) -> None:
+    """With ``angle``, each coordinate is monotone in the centroid's coordinate along
+    the axis turned by that angle (``x cos + y sin``, ``y cos - x sin``)."""
+    pts = np.array(xy, float)
+    n = len(pts)
+    tri = np.array(data.draw(st.lists(st.permutations(range(n)).map(lambda p: p[:3]), min_size=1, max_size=30)))
+    angle = 0.5 * np.pi * turn / 8
+    q = K.quadtree_coords(pts, tri, angle=angle)
+    c = pts[tri].mean(axis=1)
+    ca, sa = np.cos(angle), np.sin(angle)
+    turned = np.c_[ca * c[:, 0] + sa * c[:, 1], ca * c[:, 1] - sa * c[:, 0]]
+    for axis, v in ((0, q[:, 0] >> K.CELL_BITS), (1, q[:, 0] & ((1 << K.CELL_BITS) - 1))):
+        o = np.argsort(turned[:, axis], kind="stable")
+        gaps = np.diff(turned[o, axis])
+        # monotone, except between centroids closer than rounding (ties in the turned axis)
+        assert ((np.diff(v[o]) >= 0) | (gaps <= 1e-9 * max(1.0, float(np.abs(c).max())))).all()
