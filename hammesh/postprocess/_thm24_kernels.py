@@ -311,21 +311,21 @@ def top_cross_angle(points, tri, twin, sample=None):
     # both turned axes of every rotation at once: columns x'_0, y'_0, x'_1, ...
     turn = np.stack([np.c_[np.cos(angles), -np.sin(angles)], np.c_[np.sin(angles), np.cos(angles)]], axis=1)
     turn = turn.transpose(1, 0, 2).reshape(2, 2 * CROSS_ANGLES)
-    p = centroids(sample) @ turn
-    order = np.argsort(p, axis=0, kind="stable")
+    p = centroids(sample) @ turn  # (n, 2 K): the sample along every turned axis
+    pt = np.repeat(p, 3, axis=0)[inner]  # each sampled edge's two ends
     pu = centroids(g[inner] // 3) @ turn
-    n = len(sample)
-    ext = (p[order[-1], np.arange(2 * CROSS_ANGLES)] - p[order[0], np.arange(2 * CROSS_ANGLES)])
-    ext = ext.reshape(CROSS_ANGLES, 2)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    ext = (hi - lo).reshape(CROSS_ANGLES, 2)
     aspect = (ext / np.maximum(ext.max(axis=1, keepdims=True), 1e-300)).ravel()
     cuts = np.zeros(CROSS_ANGLES, np.int64)
-    rank = np.empty(n, np.int64)
-    for j in range(2 * CROSS_ANGLES):  # quadtree coordinates in [0, aspect): ranks
-        rank[order[:, j]] = np.arange(n)
-        ct = np.repeat(rank, 3)[inner] * (aspect[j] / n)
-        cu = np.searchsorted(p[order[:, j], j], pu[:, j]) * (aspect[j] / n)
-        for depth in (2, 4):  # 4 and 16 cells: halves, then quarters of each axis
-            cuts[j // 2] += np.count_nonzero(np.floor(ct * depth) != np.floor(cu * depth))
+    for j in range(2 * CROSS_ANGLES):
+        # a cell's border along this axis is a count quantile: the quadtree's
+        # coordinate (rank x aspect) crosses a multiple of 1/2 (4 cells) or 1/4 (16)
+        qs = [k / (aspect[j] * d) for d in (2, 4) for k in range(1, d) if k < aspect[j] * d]
+        if not qs:
+            continue
+        for v in np.quantile(p[:, j], qs):
+            cuts[j // 2] += np.count_nonzero((pt[:, j] >= v) != (pu[:, j] >= v))
     i = int(np.argmin(cuts))
     return float(angles[i]) if cuts[i] <= CROSS_GAIN * cuts[0] and cuts[i] < cuts[0] else 0.0
 
