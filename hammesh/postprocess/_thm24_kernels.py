@@ -314,18 +314,24 @@ def top_cross_angle(points, tri, twin, sample=None):
     p = centroids(sample) @ turn  # (n, 2 K): the sample along every turned axis
     pt = np.repeat(p, 3, axis=0)[inner]  # each sampled edge's two ends
     pu = centroids(g[inner] // 3) @ turn
-    lo, hi = p.min(axis=0), p.max(axis=0)
-    ext = (hi - lo).reshape(CROSS_ANGLES, 2)
+    srt = np.sort(p, axis=0)
+    n = len(sample)
+    ext = (srt[-1] - srt[0]).reshape(CROSS_ANGLES, 2)
     aspect = (ext / np.maximum(ext.max(axis=1, keepdims=True), 1e-300)).ravel()
-    cuts = np.zeros(CROSS_ANGLES, np.int64)
+    # a cell's border along an axis is a count quantile: the quadtree's coordinate
+    # (rank / n x aspect) crosses a multiple of 1/2 (4 cells) or 1/4 (16 cells);
+    # each border of each axis as one column (the median twice: both levels)
+    cols, ranks = [], []
     for j in range(2 * CROSS_ANGLES):
-        # a cell's border along this axis is a count quantile: the quadtree's
-        # coordinate (rank x aspect) crosses a multiple of 1/2 (4 cells) or 1/4 (16)
-        qs = [k / (aspect[j] * d) for d in (2, 4) for k in range(1, d) if k < aspect[j] * d]
-        if not qs:
-            continue
-        for v in np.quantile(p[:, j], qs):
-            cuts[j // 2] += np.count_nonzero((pt[:, j] >= v) != (pu[:, j] >= v))
+        for d in (2, 4):
+            for k in range(1, d):
+                if k < aspect[j] * d:
+                    cols.append(j)
+                    ranks.append(min(n - 1, int(n * k / (aspect[j] * d))))
+    cols, ranks = np.array(cols, np.int64), np.array(ranks, np.int64)
+    thr = srt[ranks, cols]
+    crossed = np.count_nonzero((pt[:, cols] >= thr) != (pu[:, cols] >= thr), axis=0)
+    cuts = np.bincount(cols // 2, weights=crossed, minlength=CROSS_ANGLES)
     i = int(np.argmin(cuts))
     return float(angles[i]) if cuts[i] <= CROSS_GAIN * cuts[0] and cuts[i] < cuts[0] else 0.0
 
