@@ -304,16 +304,18 @@ def top_cross_angle(points, tri, twin, sample=None):
     if not inner.any():
         return 0.0
 
-    def centroids(ts):
-        return (points[tri[ts, 0]] + points[tri[ts, 1]] + points[tri[ts, 2]]) / 3.0
+    def along(ts):  # the centroids of triangles ts along every turned axis
+        c = (points[tri[ts, 0]] + points[tri[ts, 1]] + points[tri[ts, 2]]) / 3.0
+        # by hand, not ``c @ turn``: a BLAS call would wake its thread pool beside the searches
+        return c[:, :1] * turn[0] + c[:, 1:] * turn[1]
 
     angles = 0.5 * math.pi * np.arange(CROSS_ANGLES) / CROSS_ANGLES
     # both turned axes of every rotation at once: columns x'_0, y'_0, x'_1, ...
     turn = np.stack([np.c_[np.cos(angles), -np.sin(angles)], np.c_[np.sin(angles), np.cos(angles)]], axis=1)
     turn = turn.transpose(1, 0, 2).reshape(2, 2 * CROSS_ANGLES)
-    p = centroids(sample) @ turn  # (n, 2 K): the sample along every turned axis
+    p = along(sample)  # (n, 2 K)
     pt = np.repeat(p, 3, axis=0)[inner]  # each sampled edge's two ends
-    pu = centroids(g[inner] // 3) @ turn
+    pu = along(g[inner] // 3)
     srt = np.sort(p, axis=0)
     n = len(sample)
     ext = (srt[-1] - srt[0]).reshape(CROSS_ANGLES, 2)
