@@ -13,6 +13,15 @@ largest cycle's share (a winding cover: issue 14).
 
     python benchmarks/bench_cover.py [--target 1500000] [--repeat 3]
     python benchmarks/bench_cover.py --cells 0,1024,256 [--target 100000]
+    python benchmarks/bench_cover.py --corpus      # uncovered triangles, the 16k corpus
+    python benchmarks/bench_cover.py --compile     # first cycle_cover with an empty numba cache
+
+``--corpus``: the sparse ``hamiltonian()`` on the ~16k-triangle q30 meshes of
+``bench_sparse.py`` (8 domains): the cover's uncovered triangles per mesh and in all,
+and those with a boundary edge (``report["uncovered"]``, ``["uncovered_boundary"]``);
+session 8 left 62 / 43. ``--compile``: a child process with a new, empty
+``NUMBA_CACHE_DIR`` compiles what the quadtree needs first, then times its first
+``cycle_cover`` call (the cover's kernels compiled) in wall and CPU seconds.
 
 ``--cells``: the cover's cycles confined to quadtree cells of about S triangles
 (``cycle_cover.CELL_SIZE``; 0: unconfined, the default) on ``bench_partition.py``'s
@@ -75,12 +84,77 @@ def cells_table(target: int, sizes: list[int]) -> None:
         cc.CELL_SIZE = keep
 
 
+def corpus_table() -> None:
+    """Uncovered triangles of the sparse cover on bench_sparse.py's 16k corpus (``--corpus``)."""
+    import sys
+    import warnings
+    from pathlib import Path
+
+    import hammesh
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_sparse import _domains, _mesh_at
+
+    tot = [0, 0]
+    for name, dom in _domains():
+        m = _mesh_at(dom, 16_000)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = hammesh.hamiltonian(m, mode="sparse").report
+        tot[0] += r["uncovered"]
+        tot[1] += r["uncovered_boundary"]
+        print(f"{name:<20}{m.n_triangles:>8,} triangles: uncovered {r['uncovered']:>3}, with a boundary edge "
+              f"{r['uncovered_boundary']:>3}", flush=True)
+    print(f"CORPUS_UNCOVERED {tot[0]} with a boundary edge {tot[1]}")
+
+
+_COMPILE_CHILD = """
+import resource, time
+import numpy as np
+from hammesh.halfedge import half_edges
+from hammesh.postprocess._thm24_kernels import quadtree_coords
+from hammesh.postprocess.cycle_cover import cycle_cover
+g = np.mgrid[0:60, 0:60].reshape(2, -1).T.astype(float)
+pts = g + 0.01 * np.random.default_rng(1).random(g.shape)
+from scipy.spatial import Delaunay
+tri = Delaunay(pts).simplices.astype(np.int64)
+tw = half_edges(tri, len(pts)).twin
+quadtree_coords(pts, tri)
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+t, c = time.perf_counter(), cpu()
+cycle_cover(tri, tw, points=pts, online=256, good=np.zeros(3 * len(tri), bool))
+print(f"COMPILE first cycle_cover {time.perf_counter() - t:.1f} s wall, {cpu() - c:.1f} s CPU")
+"""
+
+
+def compile_time() -> None:
+    """The cover's kernels compiled from nothing, in a child with an empty numba cache (``--compile``)."""
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        subprocess.run([sys.executable, "-c", _COMPILE_CHILD], env=env, check=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--target", type=int, default=None, help="triangles of the input mesh (1.5M; --cells: 100k)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cells", default=None, help="comma-separated cell sizes: the cut table instead (0: unconfined)")
+    ap.add_argument("--corpus", action="store_true", help="uncovered triangles on the 16k corpus instead")
+    ap.add_argument("--compile", action="store_true", help="first cycle_cover with an empty numba cache instead")
     args = ap.parse_args()
+    if args.corpus:
+        corpus_table()
+        return
+    if args.compile:
+        compile_time()
+        return
     if args.cells is not None:
         cells_table(args.target or 100_000, [int(x) for x in args.cells.split(",")])
         return

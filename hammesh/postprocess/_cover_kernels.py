@@ -289,7 +289,7 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
 def peel(nb, m):
     """Leave out triangles that cannot lie on a cycle (at most one neighbour left)."""
     alive = np.ones(m, np.bool_)
-    deg = np.zeros(m, np.int64)
+    deg = np.zeros(m, np.int8)  # dual degree, 0-3
     for t in range(m):
         for k in range(3):
             if nb[t, k] >= 0:

@@ -198,27 +198,25 @@ def cycle_cover(
     if len(spans) > 1:  # the defects' searches are serial: the other core faults in the arrays used next
         (n_free, n_drop), later = run_all([finish, partial(_Later, m, triangles, rotate)])
     else:
-        (n_free, n_drop), later = finish(), None
-    is_cov = np.empty(3 * m, np.bool_) if later is None else later.is_cov
-    cdeg = np.empty(m, np.int8) if later is None else later.cdeg
+        (n_free, n_drop), later = finish(), _Later(m, triangles, rotate)
+    # one path for every size (one thread below THREAD_MIN_ROWS rows), so a small
+    # mesh compiles the kernels a big one uses
+    is_cov, cdeg = later.is_cov, later.cdeg
     run_all([partial(_k.cover_edges_into, nb, alive, mate, is_cov, cdeg, lo, hi) for lo, hi in spans])
     n_unc = _k.settle_cover(nb, tw, is_cov, cdeg, alive, limit)
-    if cell is None and split and len(spans) > 1:
-        cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
-    else:
-        cyc, n_cyc = _k.cycle_ids(tw, is_cov, m)
+    if cell is not None:
+        side = np.zeros(m, np.int8)  # one half (as without the split): runs are whole cycles
+    cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
         cl = no_cell if cell is None else cell
-        if later is not None:  # the prefilter and the candidates on two threads, the rotations on one
-            n_pts, vh, skip, cand = later.n_pts, later.vh, later.skip, later.cand
-            run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
-            run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
-                     for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
-            n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
-        else:
-            n_rot = int(_k.rotate_stars(tri, tw, is_cov, cyc, n_cyc, int(tri.max()) + 1, cl))
+        # the prefilter and the candidates on two threads, the rotations on one
+        n_pts, vh, skip, cand = later.n_pts, later.vh, later.skip, later.cand
+        run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
+        run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
+                 for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
+        n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
         n_cyc -= n_rot
     return CycleCover(
         is_cov=is_cov,
@@ -257,7 +255,8 @@ def _cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray,
     m = len(side)
     cyc = np.full(m, -1, np.int64) if cyc is None else cyc
     runs = [(np.empty(m, np.int64), np.empty((m, 2), np.int64)) for _ in range(2)]  # pages touched as used
-    n0, n1 = run_all([partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)])
+    calls = [partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)]
+    n0, n1 = run_all(calls) if len(spans) > 1 else [c() for c in calls]
     ids, n = _k.link_segments(cyc, side, n0, *runs[0], n1, *runs[1])
     run_all([partial(_k.relabel_segments_into, cyc, side, n0, ids, lo, hi) for lo, hi in spans])
     return cyc, n
