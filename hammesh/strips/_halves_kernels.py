@@ -20,7 +20,7 @@ import numpy as np
 
 from hammesh.halfedge import bucket_half_edges_into
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN, REC_WIDTH
-from hammesh.strips._numba import kernel
+from hammesh.strips._numba import kernel, loop_helper
 
 __all__ = ["vertex_cells_into", "rows_of_cells_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
 
@@ -134,6 +134,17 @@ def shared_edges(loose, n_loose, start, keys):
     return SharedEdges(proper, True)
 
 
+@loop_helper
+def _grid_step(q, k):
+    """``int(q)`` clamped to ``[0, k)``, clamped as a float first (a difference of huge
+    coordinates may be infinite, their quotient NaN)."""
+    if not q >= 0.0:
+        return 0
+    if q >= k:
+        return k - 1
+    return int(q)
+
+
 @kernel
 def vertex_cells_into(pts, axis, other, cut, lo_a, lo_b, h, n0, n1, ny, label):
     """Cell of each vertex in a grid of square cells of side ``h``, sides of the cut first.
@@ -148,10 +159,10 @@ def vertex_cells_into(pts, axis, other, cut, lo_a, lo_b, h, n0, n1, ny, label):
         x = pts[v, axis]
         y = pts[v, other]
         if x <= cut:
-            c = min(max(int((x - lo_a) / h), 0), n0 - 1)
+            c = _grid_step((x - lo_a) / h, n0)
         else:
-            c = n0 + min(max(int((x - cut) / h), 0), n1 - 1)
-        r = min(max(int((y - lo_b) / h), 0), ny - 1)
+            c = n0 + _grid_step((x - cut) / h, n1)
+        r = _grid_step((y - lo_b) / h, ny)
         if c % 2 == 1:
             r = ny - 1 - r
         label[v] = c * ny + r

@@ -84,17 +84,18 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     n = len(points)
     sample = points[:: max(1, n // 4096)]
     lo = sample.min(axis=0)
-    ext = sample.max(axis=0) - lo
-    axes = np.argsort(ext, kind="stable")[::-1]
-    a, b = int(axes[0]), int(axes[1])
-    cut = float(np.median(sample[:, a]))
-    cells = max(2, n_triangles // cell_triangles)
-    h = max(float(np.sqrt(ext[a] * ext[b] / cells)), float(ext[a]) / cells)
-    if not h > 0:
-        h = 1.0  # the sample is one point: one cell a side (and an unbalanced cut)
-    n0 = max(1, int(np.ceil((cut - lo[a]) / h)))
-    n1 = max(1, int(np.ceil((lo[a] + ext[a] - cut) / h)))
-    ny = max(1, int(np.ceil(ext[b] / h)))
+    with np.errstate(over="ignore", invalid="ignore"):
+        ext = sample.max(axis=0) - lo
+        axes = np.argsort(ext, kind="stable")[::-1]
+        a, b = int(axes[0]), int(axes[1])
+        cut = float(np.median(sample[:, a]))
+        cells = max(2, n_triangles // cell_triangles)
+        h = max(float(np.sqrt(ext[a] * ext[b] / cells)), float(ext[a]) / cells)
+        sizes = ((cut - lo[a]) / h, (lo[a] + ext[a] - cut) / h, ext[b] / h)
+    if not (0 < h < np.inf and np.isfinite(sizes).all()):
+        # one point, or coordinates whose differences overflow: one cell a side
+        h, sizes = np.inf, (1, 1, 1)
+    n0, n1, ny = (max(1, int(np.ceil(x))) for x in sizes)
     label = np.empty(n, np.uint16 if (n0 + n1) * ny <= 0xFFFF else np.int32)
     args = (a, b, cut, float(lo[a]), float(lo[b]), h, n0, n1, ny)
     if pool is None:

@@ -236,3 +236,15 @@ def test_vertex_cells_split_at_the_median_and_cover_the_grid(seed, n, d, per_cel
     assert np.array_equal(cells.label < cells.split, side0)
     assert cells.label.min() >= 0 and cells.label.max() < cells.cells
     assert 0 < cells.split < cells.cells
+
+
+def test_coordinates_whose_differences_overflow_still_split(monkeypatch):
+    """Points spread over the whole float range (differences overflow to inf): one cell a side,
+    no error, every row drawn once with its winding."""
+    assert halves.vertex_cells(np.array([[-1.7e308, 0.0], [1.7e308, 1.0], [0.0, 2.0], [1.0, -1e308]]), 100).cells == 2
+    m = delaunay_mesh(3, 200)
+    huge = Mesh(np.sign(m.points - 0.5) * 1.7e308 * np.abs(m.points - 0.5) * 2, m.triangles)
+    monkeypatch.setattr(_encode_module, "HALVES_FROM", 0)
+    for fast in (True, False):
+        s = encode(huge, fast=fast)
+        assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
