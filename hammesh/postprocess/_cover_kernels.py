@@ -1146,7 +1146,7 @@ def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
         for d in range(2):
             prev = s
             cur = twin[3 * s + (k1 if d == 0 else k2)] // 3
-            while cur != s and side[cur] == half:
+            while cur >= 0 and cur != s and side[cur] == half:
                 cyc[cur] = n
                 lo = min(lo, cur)
                 nxt = -1
@@ -1158,6 +1158,8 @@ def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
                 cur = nxt
             if cur == s:  # closed inside the half
                 break
+            if cur < 0:  # a broken chain (a surface whose two cover edges lead to one
+                break  # neighbour): ends there, as in ``cycle_ids``
             send[n, d] = cur
         smin[n] = lo
         n += 1

@@ -474,3 +474,20 @@ def test_rotations_from_candidates_match_the_serial_pass(seed: int, n: int) -> N
     assert got == want
     np.testing.assert_array_equal(got_cov, want_cov)
     np.testing.assert_array_equal(got_cyc, want_cyc)
+
+
+@pytest.mark.parametrize("side", [[0, 0, 0], [0, 1, 1], [1, 1, 0]])
+def test_cycle_ids_by_halves_stop_at_a_broken_chain(side: list) -> None:
+    """Two triangles glued along two edges (a surface soup can give that): both cover
+    edges of one lead to the same neighbour, so the walk finds no next triangle. The
+    runs end there as the serial walk does, instead of walking on from index -1 (into
+    the last triangle, 2, which is on no cycle: that looped for ever)."""
+    from hammesh.postprocess import _cover_kernels as k
+    from hammesh.postprocess.cycle_cover import _cycle_ids_by_halves
+
+    twin = np.array([3, 4, -1, 0, 1, -1, -1, -1, -1], np.int64)
+    is_cov = np.array([True, True, False, True, True, False, False, False, False])
+    want, n_want = k.cycle_ids(twin, is_cov, 3)
+    assert (n_want, list(want)) == (1, [0, 0, -1])
+    got, n_got = _cycle_ids_by_halves(twin, is_cov, np.array(side, np.int8), [(0, 2), (2, 3)])
+    assert (n_got, list(got)) == (n_want, list(want))
