@@ -699,17 +699,24 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
                 amin=None if missing else amin_t, keep=keep,
                 accept=lambda ms, hes, sp: _merges(ms, hes, sp, t, u),
             )
-        if best is None:
-            continue
-        _, members, (poly, hes), spoke, x, y = best
-        near = [tw[h] // 3 for h in hes if tw[h] >= 0]
-        if used[members].any() or used[near].any():
-            continue
-        used[members] = True
-        rings.append((members, poly, hes, spoke, x, y))
+        _take_ring(best, tw, used, rings)
     if not rings:
         return None
     return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings), len(rings))
+
+
+def _take_ring(best, tw: np.ndarray, used: np.ndarray, taken: list) -> None:
+    """Append ``_best_ring``'s ring (``None``: nothing) to ``taken`` unless one of its
+    members or a triangle beside it is already in a taken ring (no two rings adjacent);
+    marks its members ``used``."""
+    if best is None:
+        return
+    _, members, (poly, hes), spoke, x, y = best
+    near = [tw[h] // 3 for h in hes if tw[h] >= 0]
+    if used[members].any() or used[near].any():
+        return
+    used[members] = True
+    taken.append((members, poly, hes, spoke, x, y))
 
 
 def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo: float, hi: float, floor2: float):
@@ -740,14 +747,7 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
     used = np.zeros(m, np.bool_)
     for t in rows.tolist():
         best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
-        if best is None:
-            continue
-        _, members, (poly, hes), spoke, x, y = best
-        near = [tw[h] // 3 for h in hes if tw[h] >= 0]
-        if used[members].any() or used[near].any():
-            continue
-        used[members] = True
-        taken.append((members, poly, hes, spoke, x, y))
+        _take_ring(best, tw, used, taken)
     if not taken:
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
     return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken), len(taken))
