@@ -73,11 +73,6 @@ def load_kernels(mode: str = "sparse") -> None:
             from hammesh.postprocess._sparse_kernels import load_output_kernels
 
             load_output_kernels()
-            # the cover's serial cycle numbering: sparse's re-route and ring joins on
-            # meshes with uncovered triangles run it (the square has none)
-            from hammesh.postprocess._cover_kernels import cycle_ids
-
-            cycle_ids(np.full(3, -1, np.int64), np.zeros(3, np.bool_), 1)
         _loaded_modes.add(mode)
 
 

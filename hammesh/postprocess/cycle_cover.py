@@ -25,7 +25,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
-    "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS",
+    "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -206,7 +206,7 @@ def cycle_cover(
     n_unc = _k.settle_cover(nb, tw, is_cov, cdeg, alive, limit)
     if cell is not None:
         side = np.zeros(m, np.int8)  # one half (as without the split): runs are whole cycles
-    cyc, n_cyc = _cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
+    cyc, n_cyc = cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
@@ -247,12 +247,17 @@ class _Later:
         self.cand = np.full(self.n_pts, False)
 
 
-def _cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray, spans: list,
-                         cyc: np.ndarray | None = None):
-    """``_cover_kernels.cycle_ids`` on two threads: each half's runs of the cycles
-    (``cycle_segments_into``), joined where they cross the split, then relabelled
-    (into ``cyc``, all -1, if given)."""
-    m = len(side)
+def cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray | None = None,
+                        spans: list | None = None, cyc: np.ndarray | None = None):
+    """Cycle id of each covered triangle (-1: uncovered) and the number of cycles, as
+    ``_cover_kernels.cycle_ids`` numbers them, on two threads: each half's runs of the
+    cycles (``cycle_segments_into``), joined where they cross the split, then
+    relabelled (into ``cyc``, all -1, if given). ``side`` (int8, 0 or 1 per triangle;
+    default: one half) and ``spans`` (row ranges; default ``row_ranges``) choose the
+    split and the threads."""
+    m = len(twin) // 3
+    side = np.zeros(m, np.int8) if side is None else side
+    spans = row_ranges(m, threads.THREAD_MIN_ROWS) if spans is None else spans
     cyc = np.full(m, -1, np.int64) if cyc is None else cyc
     runs = [(np.empty(m, np.int64), np.empty((m, 2), np.int64)) for _ in range(2)]  # pages touched as used
     calls = [partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)]

@@ -65,8 +65,7 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
-from hammesh.postprocess import _cover_kernels as _ck
-from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, join_classes
+from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, cycle_ids_by_halves, join_classes
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
@@ -540,7 +539,7 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
         done += 1
     if not done:
         return cover, 0
-    cyc2, n_cyc2 = _ck.cycle_ids(tw, is_cov, m)
+    cyc2, n_cyc2 = cycle_ids_by_halves(tw, is_cov)
     return CycleCover(
         is_cov=is_cov, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
@@ -617,7 +616,7 @@ def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool
 def _ring_merges_relabelled(pts, tri, tw, con, cover: CycleCover, members, poly, hes, spoke, a: int, b: int) -> bool:
     """``_ring_merges`` by labelling the cycles of the re-routed cover anew (O(m): small meshes only).
 
-    The ring applied on its own (``_apply_rings``), ``_cover_kernels.cycle_ids`` on
+    The ring applied on its own (``_apply_rings``), ``cycle_cover.cycle_ids_by_halves`` on
     the result: True if every cycle that crossed the group lies on one new cycle
     outside it (none split) and ``a``'s and ``b``'s cycles on the same one.
     """
@@ -800,7 +799,7 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
             tw2[3 * new_of[o // 3] + o % 3] = r1
     con2 = np.concatenate([con.reshape(m, 3)[kept].ravel(), np.asarray(f_con, np.bool_).ravel()])
     is_cov2 = np.concatenate([cover.is_cov.reshape(m, 3)[kept].ravel(), np.asarray(f_cov, np.bool_).ravel()])
-    cyc2, n_cyc2 = _ck.cycle_ids(tw2, is_cov2, len(tri2))
+    cyc2, n_cyc2 = cycle_ids_by_halves(tw2, is_cov2)
     cover2 = CycleCover(
         is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,

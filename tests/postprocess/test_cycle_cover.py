@@ -434,7 +434,7 @@ def test_cycle_ids_by_halves_match_the_serial_walk(seed: int, n: int, p: float) 
     # one walk in index order, whatever the halves (here random, so cycles cross the
     # split many times)
     from hammesh.postprocess import _cover_kernels as ck
-    from hammesh.postprocess.cycle_cover import _cycle_ids_by_halves
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
 
     rng = np.random.default_rng(seed)
     pts = rng.random((n, 2))
@@ -443,7 +443,7 @@ def test_cycle_ids_by_halves_match_the_serial_walk(seed: int, n: int, p: float) 
     c = cycle_cover(tri, twin, rotate=False)
     side = (rng.random(len(tri)) < p).astype(np.int8)
     want, n_want = ck.cycle_ids(twin, c.is_cov, len(tri))
-    got, n_got = _cycle_ids_by_halves(twin, c.is_cov, side, [(0, len(tri) // 2), (len(tri) // 2, len(tri))])
+    got, n_got = cycle_ids_by_halves(twin, c.is_cov, side, [(0, len(tri) // 2), (len(tri) // 2, len(tri))])
     assert n_got == n_want == c.n_cycles
     np.testing.assert_array_equal(got, want)
 
@@ -483,11 +483,11 @@ def test_cycle_ids_by_halves_stop_at_a_broken_chain(side: list) -> None:
     runs end there as the serial walk does, instead of walking on from index -1 (into
     the last triangle, 2, which is on no cycle: that looped for ever)."""
     from hammesh.postprocess import _cover_kernels as k
-    from hammesh.postprocess.cycle_cover import _cycle_ids_by_halves
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
 
     twin = np.array([3, 4, -1, 0, 1, -1, -1, -1, -1], np.int64)
     is_cov = np.array([True, True, False, True, True, False, False, False, False])
     want, n_want = k.cycle_ids(twin, is_cov, 3)
     assert (n_want, list(want)) == (1, [0, 0, -1])
-    got, n_got = _cycle_ids_by_halves(twin, is_cov, np.array(side, np.int8), [(0, 2), (2, 3)])
+    got, n_got = cycle_ids_by_halves(twin, is_cov, np.array(side, np.int8), [(0, 2), (2, 3)])
     assert (n_got, list(got)) == (n_want, list(want))
