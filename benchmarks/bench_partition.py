@@ -34,6 +34,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --domains square,rect_2x1 --modes incircle --ks 4,8,16,64   # controls
     python benchmarks/bench_partition.py --quick --modes incircle --plot parts/   # pictures of the parts
     python benchmarks/bench_partition.py --trees --target 100000   # other spanning trees (partition_trees.py)
+    python benchmarks/bench_partition.py --sparse-cells 0,1024,4096 --target 100000   # sparse: cell-confined covers
 """
 
 from __future__ import annotations
@@ -292,7 +293,7 @@ def _print_forests(forests: list[dict]) -> None:
               "two halves on two threads, the plain one on one: CPU is the last column)")
 
 
-def _print_trees(domains, target: int, ks: list[int]) -> None:
+def _print_trees(domains, target: int, ks: list[int], schemes: list[str] | None = None) -> None:
     """Incircle cycle cut / METIS cut of each tree scheme of ``partition_trees.SCHEMES``
     (METIS run on each scheme's own output: the outputs differ by their flips)."""
     import os
@@ -311,6 +312,8 @@ def _print_trees(domains, target: int, ks: list[int]) -> None:
     for name, dom, area in domains:
         mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target / 3.0))
         for scheme, weights in SCHEMES.items():
+            if schemes and scheme not in schemes:
+                continue
             t = time.perf_counter()
             with tree(weights):
                 h = hammesh.hamiltonian(mesh, mode="incircle")
@@ -328,6 +331,92 @@ def _print_trees(domains, target: int, ks: list[int]) -> None:
             print(f"| {name} | {scheme} | {m:,} | " + " | ".join(cells) + f" | {dt:.1f} |", flush=True)
 
 
+#: ``--sparse-cells`` join orders (benchmark only: ``sparse._join_order`` is replaced inside the run).
+#: ``tiers``: the shipped order (tier, kind, class, slack); ``levels``: first the quadtree
+#: level *above the cover's cells* (joins inside a cell all in level 0), then the shipped
+#: order, so that cells are joined to their siblings only once each is one cycle, while a
+#: cell's own joins keep the best-slack order; ``classes``: the class first (every level).
+SPARSE_ORDERS = ("tiers", "levels", "classes")
+
+
+def _sparse_order(order: str, cell_level: list):
+    """A ``_join_order`` for ``--sparse-cells`` (see ``SPARSE_ORDERS``)."""
+    from hammesh.postprocess import sparse
+    from hammesh.postprocess._thm24_kernels import CENTRE_BINS
+
+    shipped = sparse._join_order
+
+    def join_order(kind, slack, newmin, pmin, whole, cls=None):
+        if cls is None or order == "tiers":
+            return shipped(kind, slack, newmin, pmin, whole, cls)
+        meets = slack >= 0.0
+        usable = (kind != sparse._j.NO_JOIN) & (meets | (newmin >= 0.5 * pmin))
+        idx = np.flatnonzero(usable)
+        kk = np.where(meets[idx], kind[idx], 0)
+        tier = np.where(meets[idx], 0, np.where(whole[idx], 1, 2))
+        c = cls[idx]
+        if order == "classes":
+            return idx[np.lexsort((-slack[idx], kk, tier, c))]
+        above = np.maximum(c // CENTRE_BINS - cell_level[0], 0)  # 0: inside one cell
+        return idx[np.lexsort((-slack[idx], np.where(above > 0, c, 0), kk, tier, above))]
+
+    return join_order
+
+
+def _print_sparse_cells(domains, target: int, ks: list[int], sizes: list[int], orders: list[str]) -> None:
+    """Sparse cycle cut / METIS cut with the cover confined to quadtree cells of about
+    ``size`` triangles (``cycle_cover.CELL_SIZE``; 0: not confined, the shipped cover)
+    and the joins in each order of ``SPARSE_ORDERS``; Steiner points per output
+    triangle and the ``hamiltonian`` call's wall and process CPU time (METIS run on each
+    output)."""
+    from unittest import mock
+
+    import hammesh
+    from scipy.sparse import coo_matrix
+
+    from hammesh.partition import dual_edges, edge_cut, partition
+    from hammesh.postprocess import cycle_cover, sparse
+
+    cell_level = [0]
+    cells = cycle_cover._cells
+
+    def recording_cells(points, triangles, twin, m, size):  # the level ``_cells`` picks, kept
+        quad, cell = cells(points, triangles, twin, m, size)
+        low = (1 << cycle_cover.CELL_BITS) - 1
+        area = float((quad >> cycle_cover.CELL_BITS).max() + 1) * float((quad & low).max() + 1)
+        cell_level[0] = int(round(0.5 * np.log2(max(size * area / m, 1.0))))
+        return quad, cell
+
+    print("| domain | cells of | join order | triangles | Steiner points | " + " | ".join(f"k = {k}" for k in ks)
+          + " | min / max angle | rows below the parent rule | hamiltonian s (wall, CPU) |")
+    print("|---|---|---|---|---|" + "---|" * len(ks) + "---|---|---|")
+    for name, dom, area in domains:
+        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+        for size in sizes:
+            for order in (orders if size else ["tiers"]):
+                with mock.patch.object(cycle_cover, "CELL_SIZE", size), \
+                        mock.patch.object(cycle_cover, "_cells", recording_cells), \
+                        mock.patch.object(sparse, "_join_order", _sparse_order(order, cell_level)):
+                    t, c = time.perf_counter(), time.process_time()
+                    h = hammesh.hamiltonian(mesh, mode="sparse")
+                    dt, dc = time.perf_counter() - t, time.process_time() - c
+                a, b = dual_edges(h.triangles)
+                m = h.n_triangles
+                g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
+                g = (g + g.T).tocsr()
+                xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
+                out = []
+                for k in ks:
+                    p = partition(h, k)
+                    mparts, _ = _metis(k, xadj, adjncy, 1)
+                    out.append(f"{p.edge_cut / edge_cut(mparts, a, b):.2f}" + ("" if p.connected else " (disconnected)"))
+                r = h.report
+                st = r["steiner_points"]
+                print(f"| {name} | {size or 'not confined'} | {order if size else '-'} | {m:,} | {st:,} ({st / m:.2%}) | "
+                      + " | ".join(out) + f" | {r['min_angle_output_deg']:.1f} / {r['max_angle_output_deg']:.1f} "
+                      f"| {r['below_parent_rule']:,} | {dt:.2f}, {dc:.2f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--target", type=int, default=300_000, help="triangles of each Hamiltonian mesh")
@@ -342,6 +431,11 @@ def main() -> None:
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
     ap.add_argument("--trees", action="store_true",
                     help="only the incircle cut of other spanning trees (benchmarks/partition_trees.py) vs METIS")
+    ap.add_argument("--schemes", default="", help="--trees' schemes (comma-separated; default: all)")
+    ap.add_argument("--sparse-cells", metavar="SIZES", default="",
+                    help="only the sparse cut with the cover confined to cells of these sizes (0: not), "
+                         "comma-separated, each join order of SPARSE_ORDERS (--orders)")
+    ap.add_argument("--orders", default=",".join(SPARSE_ORDERS), help="--sparse-cells' join orders")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -368,8 +462,13 @@ def main() -> None:
     if set(args.modes.split(",")) - {"incircle", "sparse"}:
         ap.error("--modes: incircle and/or sparse")
     ks = [int(k) for k in args.ks.split(",")]
+    if args.sparse_cells:
+        _print_sparse_cells([d for d in _domains() if d[0] in chosen], args.target, ks,
+                            [int(x) for x in args.sparse_cells.split(",")], args.orders.split(","))
+        return
     if args.trees:
-        _print_trees([d for d in _domains() if d[0] in chosen], args.target, ks)
+        _print_trees([d for d in _domains() if d[0] in chosen], args.target, ks,
+                     args.schemes.split(",") if args.schemes else None)
         return
     for name, dom, area in (d for d in _domains() if d[0] in chosen):
         for mode in args.modes.split(","):

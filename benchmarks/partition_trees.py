@@ -25,16 +25,23 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   then split at its own median along it, so the counts are exact); the cross that
   crosses the fewest dual edges is kept, and the edges between the four children
   rank by distance from the crossing (moved to the nearest of those edges, so into
-  the material); ``levels`` such levels, then the quadtree classes.
+  the material); ``levels`` such levels, then the quadtree classes;
+* ``cross_sampled``, ``cross_exact``, ``cross_exact64`` (and ``_l3``, ``_l4``: fewer
+  levels): the crosses as a numba port would cut them (session 10), through a sample
+  of the centroids, judged on the sampled triangles' dual edges, every triangle then
+  placed by descending the crosses (:func:`cross_labels_sampled`); ``exact`` moves
+  each line to its cell's median of all triangles; ``cross_unsampled`` is the same
+  rules with every triangle sampled (the control).
 """
 
 from __future__ import annotations
 
 from contextlib import contextmanager
+from functools import partial
 
 import numpy as np
 
-__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "SCHEMES"]
+__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights", "SCHEMES"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -265,11 +272,15 @@ def cross_labels(c: np.ndarray, a: np.ndarray, b: np.ndarray, levels: int, direc
     return lab, hubs
 
 
-def cross_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
-    """Equipartition crosses, ``levels`` levels, then the quadtree classes."""
+def cross_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8, labels=None) -> np.ndarray:
+    """Equipartition crosses, ``levels`` levels, then the quadtree classes (``labels``:
+    :func:`cross_labels_sampled` cuts them on a sample)."""
     a, b, inner = _edges(tri, twin)
     c = points[tri].mean(axis=1)
-    lab, hubs = cross_labels(c, a[inner], b[inner], levels, directions)
+    if labels is None:
+        lab, hubs = cross_labels(c, a[inner], b[inner], levels, directions)
+    else:
+        lab, hubs = labels(c, np.asarray(twin), levels, directions)
     w = quadtree_weights(points, tri, twin, is_con)
     x = lab[a] ^ lab[b]
     diff = x != 0
@@ -295,10 +306,136 @@ def cross_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 
     return w
 
 
+def _cross_params(c: np.ndarray, ea: np.ndarray, eb: np.ndarray, n_own: int, directions: int, steps: int):
+    """:func:`_cross` judged on a sample: the cross is cut through the first ``n_own``
+    points of ``c`` (the sampled centroids of one cell); the edges ``ea``-``eb`` (into
+    ``c``, whose other points are the sampled triangles' neighbours in the cell) count
+    its crossings. Returns ``(d1, o1, d2, o_lo, o_hi, hub)``: a point ``x`` is in quadrant
+    ``2 (x.d1 >= o1) + (x.d2 >= (o_hi if x.d1 >= o1 else o_lo))``; None below 8 points."""
+    own = c[:n_own]
+    if n_own < 8:
+        return None
+    best = None
+    phis = np.pi * np.arange(steps) / steps
+    dirs = np.c_[np.cos(phis), np.sin(phis)]
+    for t in np.pi * np.arange(directions) / directions:
+        d1 = np.array([np.cos(t), np.sin(t)])
+        s1 = own @ d1
+        o1 = np.sort(s1)[n_own // 2]  # the upper half holds ceil(n / 2) of the sample
+        up = s1 >= o1
+        lo_, hi_ = own[~up], own[up]
+        if len(lo_) < 2 or len(hi_) < 2:
+            continue
+        off = np.median(lo_ @ dirs.T, axis=0)
+        miss = np.abs((hi_ @ dirs.T >= off).mean(axis=0) - 0.5)
+        d2 = dirs[int(np.argmin(miss))]
+        o_lo = np.sort(lo_ @ d2)[len(lo_) // 2]
+        o_hi = np.sort(hi_ @ d2)[len(hi_) // 2]
+        cu = c @ d1 >= o1
+        quad = 2 * cu + (c @ d2 >= np.where(cu, o_hi, o_lo))
+        cost = np.count_nonzero(quad[ea] != quad[eb])
+        if best is None or cost < best[0]:
+            try:
+                hub = np.linalg.solve(np.array([d1, d2]), np.array([o1, 0.5 * (o_lo + o_hi)]))
+            except np.linalg.LinAlgError:
+                hub = own.mean(axis=0)
+            best = (cost, (d1, o1, d2, o_lo, o_hi, hub))
+    return None if best is None else best[1]
+
+
+def cross_labels_sampled(c: np.ndarray, twin: np.ndarray, levels: int, directions: int = 8, steps: int = 16,
+                         sample: int = 1 << 14, exact: bool = False):
+    """:func:`cross_labels` as a numba port would do it: every cross is cut through a
+    sample of the centroids (every ``m // sample``-th triangle) and judged on the
+    sampled triangles' dual edges; then every triangle is placed by descending the
+    crosses (two dot products a level). ``exact``: the lines keep the sample's
+    directions but move to the medians of all the cell's triangles (exact counts, as
+    :func:`cross_labels`: one selection per cell and line). Returns ``(labels, hubs)``."""
+    m = len(c)
+    s = np.arange(0, m, max(1, m // sample))
+    nb = twin.reshape(m, 3)[s]
+    has = nb >= 0
+    ns = len(s)
+    probe = np.r_[s, nb[has] // 3]  # the sample, then each sampled edge's far triangle
+    ea = np.repeat(np.arange(ns), 3)[has.ravel()]
+    eb = ns + np.arange(int(has.sum()))
+    lab_all = np.zeros(m, np.int64)
+    lab = np.zeros(len(probe), np.int64)
+    hubs = {}
+    for level in range(levels):
+        new_all, new = 4 * lab_all, 4 * lab
+        for cid in np.unique(lab[:ns]):
+            own = np.flatnonzero(lab[:ns] == cid)
+            far = ns + np.flatnonzero(lab[ns:] == cid)
+            pts = np.r_[own, far]
+            pos = np.full(len(probe), -1)
+            pos[pts] = np.arange(len(pts))
+            keep = (pos[ea] >= 0) & (pos[eb] >= 0)
+            prm = _cross_params(c[probe[pts]], pos[ea[keep]], pos[eb[keep]], len(own), directions, steps)
+            cell_all = np.flatnonzero(lab_all == cid)
+            if prm is None:
+                hubs[(level, int(cid))] = c[cell_all].mean(axis=0)
+                continue
+            d1, o1, d2, o_lo, o_hi, hubs[(level, int(cid))] = prm
+            if exact:
+                x = c[cell_all]
+                s1 = x @ d1
+                o1 = np.sort(s1)[len(x) // 2]
+                up = s1 >= o1
+                s2 = x @ d2
+                o_lo = np.sort(s2[~up])[int((~up).sum()) // 2]
+                o_hi = np.sort(s2[up])[int(up.sum()) // 2]
+                try:  # where the first line meets the second (as :func:`_cross`)
+                    hubs[(level, int(cid))] = np.linalg.solve(np.array([d1, d2]), np.array([o1, o_lo]))
+                except np.linalg.LinAlgError:
+                    pass
+            for idx, x, out in ((pts, c[probe[pts]], new), (cell_all, c[cell_all], new_all)):
+                up = x @ d1 >= o1
+                out[idx] += 2 * up + (x @ d2 >= np.where(up, o_hi, o_lo))
+        lab_all, lab = new_all, new
+    return lab_all, hubs
+
+
+def cross_sampled_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
+    """:func:`cross_weights` with the crosses cut on a sample (:func:`cross_labels_sampled`)."""
+    return cross_weights(points, tri, twin, is_con, levels, directions, labels=cross_labels_sampled)
+
+
+def cross_exact_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
+    """:func:`cross_sampled_weights` with each line moved to its exact median (``exact``)."""
+    def labels(c, tw, lv, dirs):
+        return cross_labels_sampled(c, tw, lv, dirs, steps=16, exact=True)
+
+    return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels)
+
+
+def cross_exact64_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
+    """:func:`cross_exact_weights` with 64 ham-sandwich directions (as :func:`cross_weights`)."""
+    def labels(c, tw, lv, dirs):
+        return cross_labels_sampled(c, tw, lv, dirs, steps=64, exact=True)
+
+    return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels)
+
+
+def cross_unsampled_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
+    """:func:`cross_exact64_weights` with every triangle in the "sample": the control that
+    tells what the sampling costs from what the port's other choices do."""
+    def labels(c, tw, lv, dirs):
+        return cross_labels_sampled(c, tw, lv, dirs, steps=64, sample=1 << 40, exact=True)
+
+    return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels)
+
+
 #: ``--trees`` schemes: name -> weights function (None: the shipped numba forest).
 SCHEMES = {
     "shipped": None,
     "quadtree": quadtree_weights,
     "bisection": bisection_weights,
     "cross": cross_weights,
+    "cross_sampled": cross_sampled_weights,
+    "cross_exact": cross_exact_weights,
+    "cross_exact64": cross_exact64_weights,
+    "cross_exact64_l3": partial(cross_exact64_weights, levels=3),
+    "cross_exact64_l4": partial(cross_exact64_weights, levels=4),
+    "cross_unsampled": cross_unsampled_weights,
 }

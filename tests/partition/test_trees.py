@@ -30,7 +30,7 @@ def _plate():
     return hammesh.quality_mesh(dom, min_angle=30, max_area=0.002)
 
 
-@pytest.mark.parametrize("scheme", ["quadtree", "bisection", "cross"])
+@pytest.mark.parametrize("scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3"])
 def test_scheme_gives_a_minimum_spanning_forest_the_walk_accepts(scheme: str) -> None:
     mesh = _plate()
     clean, he, is_con = prepare_mesh(mesh)
@@ -70,6 +70,18 @@ def test_cross_cells_hold_equal_counts() -> None:
     # around the hub, so the hub is inside the cell's bounding box
     top = hubs[(0, 0)]
     assert (c.min(axis=0) < top).all() and (top < c.max(axis=0)).all()
+
+
+def test_sampled_cross_cells_hold_equal_counts_once_moved_to_exact_medians() -> None:
+    rng = np.random.default_rng(5)
+    c = rng.random((4096, 2)) * [1.0, 2.0]
+    no_edges = np.full(3 * len(c), -1, np.int64)
+    lab, _ = trees.cross_labels_sampled(c, no_edges, 3, sample=512, exact=True)
+    assert (np.bincount(lab, minlength=64) == 64).all()  # the sample only picks the directions
+    # without ``exact`` the lines sit at the sample's medians: the counts are off
+    lab, _ = trees.cross_labels_sampled(c, no_edges, 3, sample=512)
+    sizes = np.bincount(lab, minlength=64)
+    assert sizes.sum() == 4096 and sizes.max() > sizes.min()
 
 
 def test_bisection_cells_halve_counts() -> None:
