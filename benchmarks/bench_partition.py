@@ -335,8 +335,11 @@ def _print_trees(domains, target: int, ks: list[int], schemes: list[str] | None 
 #: ``tiers``: the shipped order (tier, kind, class, slack); ``levels``: first the quadtree
 #: level *above the cover's cells* (joins inside a cell all in level 0), then the shipped
 #: order, so that cells are joined to their siblings only once each is one cycle, while a
-#: cell's own joins keep the best-slack order; ``classes``: the class first (every level).
-SPARSE_ORDERS = ("tiers", "levels", "classes")
+#: cell's own joins keep the best-slack order; ``classes``: the class first (every level);
+#: ``hilbert``: joins inside a cell first, then between cells consecutive along a Hilbert
+#: curve through the cells (a chain of cells), then the rest by class, each in the
+#: shipped order (tier, kind, slack).
+SPARSE_ORDERS = ("tiers", "levels", "classes", "hilbert")
 
 
 def _sparse_order(order: str, cell_level: list):
@@ -357,10 +360,31 @@ def _sparse_order(order: str, cell_level: list):
         c = cls[idx]
         if order == "classes":
             return idx[np.lexsort((-slack[idx], kk, tier, c))]
+        if order == "hilbert":  # ``cls`` is ``_hilbert_classes``'
+            return idx[np.lexsort((-slack[idx], kk, tier, c))]
         above = np.maximum(c // CENTRE_BINS - cell_level[0], 0)  # 0: inside one cell
         return idx[np.lexsort((-slack[idx], np.where(above > 0, c, 0), kk, tier, above))]
 
     return join_order
+
+
+def _hilbert_classes(cell_level: list):
+    """A ``join_classes`` for the ``hilbert`` order: 0 inside a cell (the quadtree's
+    cell of the cover's level), 1 between cells consecutive along a Hilbert curve
+    through the cells, else 2 + the shipped class."""
+    from hammesh.numbering import hilbert_keys
+    from hammesh.postprocess import cycle_cover
+
+    def classes(quad, t, u):
+        low = (1 << cycle_cover.CELL_BITS) - 1
+        lv = cell_level[0]
+        side = 1 << (cycle_cover.CELL_BITS - lv)
+        cells = np.c_[(quad >> cycle_cover.CELL_BITS) >> lv, (quad & low) >> lv] + 0.5
+        key = hilbert_keys(np.r_[cells, [[0.0, 0.0], [side, side]]], cycle_cover.CELL_BITS - lv)[:-2]
+        gap = np.abs(key[t] - key[u])
+        return np.where(gap == 0, 0, np.where(gap == 1, 1, 2 + cycle_cover.join_classes(quad, t, u)))
+
+    return classes
 
 
 def _print_sparse_cells(domains, target: int, ks: list[int], sizes: list[int], orders: list[str]) -> None:
@@ -396,7 +420,9 @@ def _print_sparse_cells(domains, target: int, ks: list[int], sizes: list[int], o
             for order in (orders if size else ["tiers"]):
                 with mock.patch.object(cycle_cover, "CELL_SIZE", size), \
                         mock.patch.object(cycle_cover, "_cells", recording_cells), \
-                        mock.patch.object(sparse, "_join_order", _sparse_order(order, cell_level)):
+                        mock.patch.object(sparse, "_join_order", _sparse_order(order, cell_level)), \
+                        mock.patch.object(sparse, "join_classes",
+                                          _hilbert_classes(cell_level) if order == "hilbert" else sparse.join_classes):
                     t, c = time.perf_counter(), time.process_time()
                     h = hammesh.hamiltonian(mesh, mode="sparse")
                     dt, dc = time.perf_counter() - t, time.process_time() - c
