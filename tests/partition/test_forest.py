@@ -257,3 +257,59 @@ def test_turned_quadtree_coords_follow_the_turned_axes(xy, turn: int, data) -> N
         gaps = np.diff(turned[o, axis])
         # monotone, except between centroids closer than rounding (ties in the turned axis)
         assert ((np.diff(v[o]) >= 0) | (gaps <= 1e-9 * max(1.0, float(np.abs(c).max())))).all()
+
+
+def _numpy_top_cross_counts(points, tri, twin, sample, angles) -> np.ndarray:
+    """Session 9's numpy count of :func:`K.top_cross_angle` (the reference the numba
+    kernel must match): per rotation, the sampled dual edges crossing a border of the
+    turned count quadtree's top two levels."""
+    g = np.asarray(twin)[(3 * sample[:, None] + np.arange(3)).ravel()]
+    inner = g >= 0
+    n_ang = len(angles)
+    turn = np.stack([np.c_[np.cos(angles), -np.sin(angles)], np.c_[np.sin(angles), np.cos(angles)]], axis=1)
+    turn = turn.transpose(1, 0, 2).reshape(2, 2 * n_ang)
+
+    def along(ts):
+        c = (points[tri[ts, 0]] + points[tri[ts, 1]] + points[tri[ts, 2]]) / 3.0
+        return c[:, :1] * turn[0] + c[:, 1:] * turn[1]
+
+    p = along(sample)
+    pt = np.repeat(p, 3, axis=0)[inner]
+    pu = along(g[inner] // 3)
+    srt = np.sort(p, axis=0)
+    n = len(sample)
+    ext = (srt[-1] - srt[0]).reshape(n_ang, 2)
+    aspect = (ext / np.maximum(ext.max(axis=1, keepdims=True), 1e-300)).ravel()
+    cols, ranks = [], []
+    for j in range(2 * n_ang):
+        for d in (2, 4):
+            for k in range(1, d):
+                if k < aspect[j] * d:
+                    cols.append(j)
+                    ranks.append(min(n - 1, int(n * k / (aspect[j] * d))))
+    cols, ranks = np.array(cols, np.int64), np.array(ranks, np.int64)
+    crossed = np.count_nonzero((pt[:, cols] >= srt[ranks, cols]) != (pu[:, cols] >= srt[ranks, cols]), axis=0)
+    return np.bincount(cols // 2, weights=crossed, minlength=n_ang).astype(np.int64)
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(dom=st.sampled_from(["square", "rect", "gear", "star"]), stride=st.integers(1, 7), star=star_pslg())
+def test_top_cross_counts_match_the_numpy_count(dom: str, stride: int, star) -> None:
+    """The numba count behind the rotation (``_top_cross_counts_into``) gives session 9's
+    numpy counts exactly, so the forest's rotation (and tree) is the same."""
+    if dom == "gear":
+        mesh = _gear(2.4 / 3000)
+    elif dom == "star":
+        mesh = hammesh.quality_mesh(star, min_angle=25, max_area=0.01)
+    else:
+        box = [[0, 0], [1, 0], [1, 1], [0, 1]] if dom == "square" else [[0, 0], [2, 0], [2, 1], [0, 1]]
+        mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon(box), min_angle=30, max_area=1e-3)
+    clean, he, _ = prepare_mesh(mesh)
+    pts, tri, twin = clean.points, clean.triangles, he.twin
+    sample = np.arange(0, len(tri), stride)
+    angles = 0.5 * np.pi * np.arange(K.CROSS_ANGLES) / K.CROSS_ANGLES
+    cuts = np.zeros(K.CROSS_ANGLES, np.int64)
+    has_edges = K._top_cross_counts_into(pts, tri, twin, sample, np.cos(angles), np.sin(angles), cuts)
+    assert has_edges == bool((twin[(3 * sample[:, None] + np.arange(3)).ravel()] >= 0).any())
+    if has_edges:
+        np.testing.assert_array_equal(cuts, _numpy_top_cross_counts(pts, tri, twin, sample, angles))
