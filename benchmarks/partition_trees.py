@@ -31,7 +31,9 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   of the centroids, judged on the sampled triangles' dual edges, every triangle then
   placed by descending the crosses (:func:`cross_labels_sampled`); ``exact`` moves
   each line to its cell's median of all triangles; ``cross_unsampled`` is the same
-  rules with every triangle sampled (the control).
+  rules with every triangle sampled (the control); ``cross_local_l2``, ``_l3``: that
+  many levels of them, then a count quadtree of each cross cell of its own
+  (:func:`local_quadtree_weights`), and ``quadtree_local_l0`` its control (one cell).
 """
 
 from __future__ import annotations
@@ -272,16 +274,51 @@ def cross_labels(c: np.ndarray, a: np.ndarray, b: np.ndarray, levels: int, direc
     return lab, hubs
 
 
-def cross_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8, labels=None) -> np.ndarray:
+def local_quadtree_weights(points, tri, twin, is_con, lab: np.ndarray) -> np.ndarray:
+    """The quadtree classes of a count quadtree of each cell ``lab`` of its own (ranks
+    inside the cell along x and y, the cell's box aspect kept), so that its cells nest
+    in the cell; edges between cells get a class too (the caller overrides them)."""
+    from hammesh.postprocess._cover_kernels import edge_classes
+    from hammesh.postprocess._thm24_kernels import CELL_BITS
+
+    a, b, _ = _edges(tri, twin)
+    c = points[tri].mean(axis=1)
+    top = (1 << CELL_BITS) - 1
+    q = np.zeros(len(c), np.int64)
+    o = np.argsort(lab, kind="stable")
+    starts = np.r_[0, np.flatnonzero(np.diff(lab[o])) + 1, len(c)]
+    for s0, s1 in zip(starts[:-1], starts[1:]):
+        idx = o[s0:s1]
+        n = len(idx)
+        ext = c[idx].max(axis=0) - c[idx].min(axis=0)
+        f = top * ext / max(float(ext.max()), 1e-300) / n
+        rank = np.empty((n, 2))
+        for ax in (0, 1):
+            rank[np.argsort(c[idx, ax], kind="stable"), ax] = np.arange(n)
+        qx, qy = np.minimum((rank * f).astype(np.int64), top).T
+        q[idx] = (qx << CELL_BITS) | qy
+    w = np.empty(len(a), np.int64)
+    edge_classes(q[a], q[b], w)
+    w = w.astype(np.float64)
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+def cross_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8, labels=None,
+                  local: bool = False) -> np.ndarray:
     """Equipartition crosses, ``levels`` levels, then the quadtree classes (``labels``:
-    :func:`cross_labels_sampled` cuts them on a sample)."""
+    :func:`cross_labels_sampled` cuts them on a sample; ``local``: each cross cell gets
+    a count quadtree of its own, :func:`local_quadtree_weights`, not the global one)."""
     a, b, inner = _edges(tri, twin)
     c = points[tri].mean(axis=1)
     if labels is None:
         lab, hubs = cross_labels(c, a[inner], b[inner], levels, directions)
     else:
         lab, hubs = labels(c, np.asarray(twin), levels, directions)
-    w = quadtree_weights(points, tri, twin, is_con)
+    if local:
+        w = local_quadtree_weights(points, tri, twin, is_con, lab)
+    else:
+        w = quadtree_weights(points, tri, twin, is_con)
     x = lab[a] ^ lab[b]
     diff = x != 0
     digit = np.zeros(len(a), np.int64)
@@ -417,6 +454,17 @@ def cross_exact64_weights(points, tri, twin, is_con, levels: int = 6, directions
     return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels)
 
 
+def cross_local_weights(points, tri, twin, is_con, levels: int = 3, directions: int = 8) -> np.ndarray:
+    """``levels`` levels of crosses cut on a sample (:func:`cross_exact64_weights`'
+    rules, each cell's lines at its exact medians), then a count quadtree inside each
+    cross cell (``local``): the top levels, where a sample of 16 384 holds hundreds of
+    triangles a cell, from the crosses; the rest nested in them."""
+    def labels(c, tw, lv, dirs):
+        return cross_labels_sampled(c, tw, lv, dirs, steps=64, exact=True)
+
+    return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels, local=True)
+
+
 def cross_unsampled_weights(points, tri, twin, is_con, levels: int = 6, directions: int = 8) -> np.ndarray:
     """:func:`cross_exact64_weights` with every triangle in the "sample": the control that
     tells what the sampling costs from what the port's other choices do."""
@@ -438,4 +486,7 @@ SCHEMES = {
     "cross_exact64_l3": partial(cross_exact64_weights, levels=3),
     "cross_exact64_l4": partial(cross_exact64_weights, levels=4),
     "cross_unsampled": cross_unsampled_weights,
+    "cross_local_l2": partial(cross_local_weights, levels=2),
+    "cross_local_l3": cross_local_weights,
+    "quadtree_local_l0": partial(cross_local_weights, levels=0),
 }

@@ -30,7 +30,7 @@ def _plate():
     return hammesh.quality_mesh(dom, min_angle=30, max_area=0.002)
 
 
-@pytest.mark.parametrize("scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3"])
+@pytest.mark.parametrize("scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3", "cross_local_l3"])
 def test_scheme_gives_a_minimum_spanning_forest_the_walk_accepts(scheme: str) -> None:
     mesh = _plate()
     clean, he, is_con = prepare_mesh(mesh)
@@ -82,6 +82,28 @@ def test_sampled_cross_cells_hold_equal_counts_once_moved_to_exact_medians() -> 
     lab, _ = trees.cross_labels_sampled(c, no_edges, 3, sample=512)
     sizes = np.bincount(lab, minlength=64)
     assert sizes.sum() == 4096 and sizes.max() > sizes.min()
+
+
+def test_local_quadtree_nests_in_its_cells() -> None:
+    """``local_quadtree_weights``: a cell's inside edges rank by its own triangles only
+    (cutting another cell in two leaves them alone), and its own quadtree's top split
+    (the cell's median) is crossed by its edges."""
+    mesh = _plate()
+    clean, he, is_con = prepare_mesh(mesh)
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    c = pts[tri].mean(axis=1)
+    lab = (c[:, 0] > np.median(c[:, 0])).astype(np.int64)  # two cells: the halves
+    finer = 2 * lab + ((lab == 1) & (c[:, 1] > 0.5))  # the right half cut again
+    w = trees.local_quadtree_weights(pts, tri, twin, is_con, lab)
+    w2 = trees.local_quadtree_weights(pts, tri, twin, is_con, finer)
+    h = np.flatnonzero((twin > np.arange(len(twin))) & ~is_con)
+    a, b = h // 3, twin[h] // 3
+    left = (lab[a] == 0) & (lab[b] == 0)
+    np.testing.assert_array_equal(w[h][left], w2[h][left])
+    right = (lab[a] == 1) & (lab[b] == 1) & (finer[a] == finer[b])
+    assert not np.array_equal(w[h][right], w2[h][right])  # the cut cell's own ranks did change
+    levels = w[h][left].astype(np.int64) // K.CENTRE_BINS
+    assert levels.max() == K.CELL_BITS
 
 
 def test_bisection_cells_halve_counts() -> None:
