@@ -658,11 +658,10 @@ def _critical_path_cpu(mesh: Mesh, mo, repeat: int):
     """``(meshopt CPU, (default, first, second), (fast, first, second))`` in thread CPU seconds, or
     ``None`` below :data:`hammesh.strips.halves.HALVES_FROM`.
 
-    Ours: the checked arrays, then :func:`hammesh.strips.halves.encode_in_halves` (what
-    ``encode`` runs from that size on two cores); its calling thread's CPU time with its own
-    half's replaced by the longer half's.
+    Ours: :func:`hammesh.strips.halves.encode_in_halves` on the mesh's arrays (what
+    ``encode`` runs from that size on two cores; its kernels check the input); its calling
+    thread's CPU time with its own half's replaced by the longer half's.
     """
-    from hammesh.halfedge import mesh_arrays
     from hammesh.strips.encode import half_encoder
     from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 
@@ -677,8 +676,7 @@ def _critical_path_cpu(mesh: Mesh, mo, repeat: int):
         for key, finish in (("ours", half_encoder(R32)), ("fast", None)):
             clock: dict = {}
             t = time.thread_time()
-            pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
-            if encode_in_halves(pts, tri, R32, True, 1, finish, clock) is None:
+            if encode_in_halves(mesh.points, mesh.triangles, R32, True, 1, finish, clock) is None:
                 return None
             main = time.thread_time() - t
             crit = main - clock["first"] + max(clock["first"], clock["second"])

@@ -194,9 +194,16 @@ def vertex_cells_into(pts, axis, other, cut, lo_a, lo_b, h, n0, n1, ny, label):
     columns from ``cut``, each of ``ny`` cells from ``lo_b`` along ``other``; columns run
     along ``axis`` and the cells of a column alternate direction (a serpentine), so
     consecutive labels are neighbouring cells.  Labels below ``n0 * ny`` are side 0.
-    Points outside the grid (it is sized from a sample) go to the nearest cell.
+    Points outside the grid (it is sized from a sample) go to the nearest cell.  Returns
+    True when every coordinate is finite (every one is read here, so the input check
+    costs no pass of its own: the sum of ``0 * x`` over the coordinates stays 0 unless
+    one is infinite or NaN).
     """
+    d = pts.shape[1]
+    zero = 0.0
     for v in range(pts.shape[0]):
+        for j in range(d):
+            zero += 0.0 * pts[v, j]
         x = pts[v, axis]
         y = pts[v, other]
         if x <= cut:
@@ -207,14 +214,16 @@ def vertex_cells_into(pts, axis, other, cut, lo_a, lo_b, h, n0, n1, ny, label):
         if c % 2 == 1:
             r = ny - 1 - r
         label[v] = c * ny + r
+    return zero == 0.0
 
 
 @kernel
 def rows_of_cells_into(tri, label, first, last, stash, lab, count, rows, half):
     """Copy the rows whose least vertex has a cell label in ``[first, last)`` into ``half``
     (their row numbers into ``rows``), cell after cell, in input order inside a cell;
-    returns how many, or -1 if one of them repeats a vertex (``stash[0]`` is then that
-    row).
+    returns how many, or -1 if one of them repeats a vertex, -2 if a row has a vertex
+    index outside ``[0, len(label))`` (``stash[0]`` is then that row; every index is
+    checked before it is used, so the caller needs no range pass of its own).
 
     The least vertex decides, so rows over the same three vertices (the two sides of a
     double-sided face) stay together.  A counting sort: one pass finds the rows and
@@ -225,10 +234,14 @@ def rows_of_cells_into(tri, label, first, last, stash, lab, count, rows, half):
     greedy strips ~20% faster, more than the second pass costs).
     """
     k = 0
+    n = label.shape[0]
     for t in range(tri.shape[0]):
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
+        if (a < 0) | (a >= n) | (b < 0) | (b >= n) | (c < 0) | (c >= n):
+            stash[0] = t
+            return -2
         if a == b or b == c or c == a:
             stash[0] = t
             return -1

@@ -77,8 +77,9 @@ CELL_TRIANGLES = 16_384
 
 #: :func:`vertex_cells`'s result: each vertex's cell ``label`` (``(n,) uint16``, ``int32``
 #: beyond 65,535 cells: half the bytes for the rows pass to look up), the first
-#: label of side 1 (``split``) and the number of cells.
-VertexCells = namedtuple("VertexCells", ["label", "split", "cells"])
+#: label of side 1 (``split``), the number of cells and whether every coordinate is
+#: finite (``finite``; if not, the labels mean nothing).
+VertexCells = namedtuple("VertexCells", ["label", "split", "cells", "finite"])
 
 
 def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CELL_TRIANGLES, pool=None) -> VertexCells:
@@ -107,13 +108,13 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     label = np.empty(n, np.uint16 if (n0 + n1) * ny <= 0xFFFF else np.int32)
     args = (a, b, cut, float(lo[a]), float(lo[b]), h, n0, n1, ny)
     if pool is None:
-        vertex_cells_into(points, *args, label)
+        finite = vertex_cells_into(points, *args, label)
     else:
         mid = n // 2
         other = pool.submit(vertex_cells_into, points[mid:], *args, label[mid:])
-        vertex_cells_into(points[:mid], *args, label[:mid])
-        other.result()
-    return VertexCells(label, n0 * ny, (n0 + n1) * ny)
+        finite = vertex_cells_into(points[:mid], *args, label[:mid])
+        finite = other.result() and finite
+    return VertexCells(label, n0 * ny, (n0 + n1) * ny, bool(finite))
 
 
 def _half_work(k: int, out: np.ndarray | None) -> StripWork:
@@ -159,7 +160,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
                                np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True
-        return _failed("a row repeats a vertex")
+        return _failed("a vertex index out of range" if k == -2 else "a row repeats a vertex")
     if k < _SMALLEST_HALF * m:
         stop[0] = True
         return _failed("unbalanced")
@@ -198,8 +199,21 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
                  local_of, vertex_of, int(paired.pairs), int(n_zero), pillows, proof)
 
 
+def _plain_arrays(points, triangles) -> tuple[np.ndarray, np.ndarray] | None:
+    """``float64`` ``(n, 2 | 3)`` points and ``int64`` ``(m, 3)`` rows, C-contiguous (copied
+    only if they are not), or ``None`` for anything else (the one-thread path's checks
+    then name it).  Finite coordinates and indices in range are checked by the kernels."""
+    pts = np.asarray(points)
+    tri = np.asarray(triangles)
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
+        return None
+    if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0 or not np.issubdtype(tri.dtype, np.integer):
+        return None
+    return np.ascontiguousarray(pts, dtype=np.float64), np.ascontiguousarray(tri, dtype=np.int64)
+
+
 def encode_in_halves(
-    pts: np.ndarray, tri: np.ndarray, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
+    points, triangles, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
 ) -> GLStrip | None:
     """A restart-joined buffer from two halves on two threads, or ``None``.
 
@@ -208,13 +222,24 @@ def encode_in_halves(
     that receives each half's thread CPU seconds (``"first"`` on the calling thread,
     ``"second"`` on the other), for benchmarks on a loaded machine.
 
-    ``pts``, ``tri``: checked arrays (:func:`hammesh.halfedge.mesh_arrays`).  The buffer
-    draws every row once with its winding; with ``verify`` each half's part is proved
-    against ``tri`` on its thread, and every row must be drawn by one of them (a failed
-    claim falls back to :func:`~hammesh.strips.gl.verify_gl_strip`'s full comparison,
-    which names the problem).  ``None`` when the one-thread path must decide (see the
-    module docstring).
+    ``points``, ``triangles``: the mesh's arrays as given.  Only the cheap checks run
+    here (shapes, integer rows; ``float64`` / ``int64`` contiguous copies where needed);
+    the kernels that first read every point and row check that the coordinates are
+    finite (:func:`~hammesh.strips._halves_kernels.vertex_cells_into`) and that every
+    index is in range (:func:`~hammesh.strips._halves_kernels.rows_of_cells_into`, before
+    it uses one): the passes :func:`hammesh.halfedge.mesh_arrays` would spend on them
+    (~5 ms at 1M triangles, on the critical path) are saved.  Anything wrong gives
+    ``None``, and the one-thread path's :func:`~hammesh.halfedge.mesh_arrays` names the
+    problem.  The buffer draws every row once with its winding; with ``verify`` each
+    half's part is proved against the rows on its thread, and every row must be drawn by
+    one of them (a failed claim falls back to :func:`~hammesh.strips.gl.verify_gl_strip`'s
+    full comparison, which names the problem).  ``None`` when the one-thread path must
+    decide (see the module docstring).
     """
+    arrays = _plain_arrays(points, triangles)
+    if arrays is None:
+        return None
+    pts, tri = arrays
     m, n = len(tri), len(pts)
     if records_dtype(m, n) is not np.int32:
         return None
@@ -223,6 +248,8 @@ def encode_in_halves(
     whole: list[np.ndarray] = []
     with ThreadPoolExecutor(1) as pool:
         cells = vertex_cells(pts, m, pool=pool)
+        if not cells.finite:
+            return None
         second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, finish)
         a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, finish, None if finish else whole)
         b = second.result()

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh import threads
-from hammesh.errors import VerificationError
+from hammesh.errors import InvalidMeshError, VerificationError
 from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import Mesh
 from hammesh.strips import halves
@@ -122,6 +122,42 @@ def test_the_proof_catches_a_corrupted_half_of_the_default_mode():
 
     with pytest.raises(VerificationError):
         halves.encode_in_halves(pts, tri, RESTART_INDEX, True, 1, corrupt_buffer)
+
+
+@pytest.mark.parametrize("fast", [True, False])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        ("nan", "non-finite"), ("inf", "non-finite"), ("nan z", "non-finite"),
+        ("negative", "references vertex -1"), ("too large", "references vertex"),
+    ],
+)
+def test_bad_input_is_checked_by_the_kernels_and_named_by_the_one_thread_path(bad, match, fast, monkeypatch):
+    """The halves take the arrays unchecked: a non-finite coordinate (any of them) or an index
+    out of range is found by the kernel that first reads it (no out-of-range read), the halves
+    give way, and ``encode`` raises the one-thread path's named error."""
+    m = delaunay_mesh(11, 300, lift=bad == "nan z")
+    pts, tri = m.points.copy(), m.triangles.copy()
+    t = len(tri) // 2
+    if bad in ("nan", "inf", "nan z"):
+        pts[tri[t, 1], 2 if bad == "nan z" else 0] = np.nan if bad != "inf" else np.inf
+    else:
+        tri[t, 2] = -1 if bad == "negative" else len(pts) + 7
+    finish = None if fast else _encode_module.half_encoder(RESTART_INDEX)
+    assert halves.encode_in_halves(pts, tri, RESTART_INDEX, True, 1, finish) is None
+    monkeypatch.setattr(_encode_module, "HALVES_FROM", 0)
+    with pytest.raises(InvalidMeshError, match=match):
+        encode(Mesh(pts, tri), fast=fast)
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from([2, 3]), st.sampled_from([np.nan, np.inf, -np.inf, 1e308, -1e308, 0.0]))
+@settings(max_examples=40, deadline=None)
+def test_vertex_cells_find_a_non_finite_coordinate(seed, d, x):
+    """Any one coordinate infinite or NaN, anywhere, is found; huge finite ones are not flagged."""
+    rng = np.random.default_rng(seed)
+    pts = rng.random((int(rng.integers(1, 400)), d)) * 10.0 ** rng.integers(-5, 5)
+    pts[rng.integers(len(pts)), rng.integers(d)] = x
+    assert halves.vertex_cells(pts, 1000).finite == bool(np.isfinite(x))
 
 
 def test_one_thread_cap_keeps_the_one_thread_path(monkeypatch):
