@@ -8,6 +8,7 @@
     python benchmarks/bench_strips.py --peers --quick  # the same on meshes up to ~20k triangles
     python benchmarks/bench_strips.py --speed --repeat 5  # issue 16's speed target alone (q30 10k, 100k, 1M:
                                                      # wall and CPU vs meshopt stripify, then fresh processes)
+    python benchmarks/bench_strips.py --cache-bound  # issue 16's cache target against strip layouts (grids, swap rates)
 
 Then Thm 5.3 (Christofides) at ~1,000 and ~3,000 triangles, Lemma 5.1 on triangulated
 polygons, and real-world surfaces (issue 12): pyvista's bundled airplane and globe, its
@@ -658,11 +659,10 @@ def _critical_path_cpu(mesh: Mesh, mo, repeat: int):
     """``(meshopt CPU, (default, first, second), (fast, first, second))`` in thread CPU seconds, or
     ``None`` below :data:`hammesh.strips.halves.HALVES_FROM`.
 
-    Ours: the checked arrays, then :func:`hammesh.strips.halves.encode_in_halves` (what
-    ``encode`` runs from that size on two cores); its calling thread's CPU time with its own
-    half's replaced by the longer half's.
+    Ours: :func:`hammesh.strips.halves.encode_in_halves` on the mesh's arrays (what
+    ``encode`` runs from that size on two cores; its kernels check the input); its calling
+    thread's CPU time with its own half's replaced by the longer half's.
     """
-    from hammesh.halfedge import mesh_arrays
     from hammesh.strips.encode import half_encoder
     from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 
@@ -677,8 +677,7 @@ def _critical_path_cpu(mesh: Mesh, mo, repeat: int):
         for key, finish in (("ours", half_encoder(R32)), ("fast", None)):
             clock: dict = {}
             t = time.thread_time()
-            pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
-            if encode_in_halves(pts, tri, R32, True, 1, finish, clock) is None:
+            if encode_in_halves(mesh.points, mesh.triangles, R32, True, 1, finish, clock) is None:
                 return None
             main = time.thread_time() - t
             crit = main - clock["first"] + max(clock["first"], clock["second"])
@@ -768,6 +767,101 @@ def first_call_rows(meshes: dict[str, Mesh]) -> list[tuple[str, dict]]:
     return rows
 
 
+def _quad_grid(nq: int, alternate: bool) -> tuple[Mesh, dict]:
+    """``nq`` x ``nq`` unit quads, two counter-clockwise triangles each: every diagonal from
+    the lower left (``alternate=False``), or from the lower right in even rows and the lower
+    left in odd rows.  Also returns ``(i, j, part) -> row``."""
+    vid = lambda i, j: j * (nq + 1) + i  # noqa: E731
+    pts = np.array([(i, j) for j in range(nq + 1) for i in range(nq + 1)], float)
+    rows: list = []
+    where: dict = {}
+    for j in range(nq):
+        for i in range(nq):
+            a, b, c, d = vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)
+            if alternate and j % 2 == 0:  # diagonal b-d: lower-left, then upper-right triangle
+                parts = (("lo", (a, b, d)), ("hi", (b, c, d)))
+            else:  # diagonal a-c: lower-right, then upper-left triangle
+                parts = (("lo", (a, b, c)), ("hi", (a, c, d)))
+            for part, t in parts:
+                where[i, j, part] = len(rows)
+                rows.append(t)
+    return Mesh(pts, np.array(rows, np.int64)), where
+
+
+def cache_bound_rows(quick: bool) -> None:
+    """Issue 16's cache target against strips and a 16-entry FIFO: can any strip layout reach
+    ACMR <= 0.711 at <= 1.30 indices per triangle?  (docs/strips.md, GPU caches.)
+
+    1. A structured grid, strips laid as rows in column bands of ``w`` quads: same-direction
+       rows (restart-joined; the first row of a band loads both of its sides) and a snake
+       (one strip per band, turning at the band's ends; grid with alternating diagonals so
+       the turns exist), each buffer proved by the decoder.
+    2. The q30 square: swaps per triangle and strip length of each of our covers (the
+       inputs of the row arithmetic), and the swap-free chains' strips re-ordered greedily
+       for the FIFO.
+    """
+    from hammesh.strips import dual_mesh, vertex_cache_stats
+    from hammesh.strips.encode import restart_strip
+
+    N = 16
+    nq = 64 if quick else 224
+    print()
+    print(f"Issue 16 cache target vs strip layouts (FIFO {N}; target ACMR <= 0.711 at ipt <= 1.30):")
+    mesh, _ = _quad_grid(nq, alternate=False)
+    tri = mesh.triangles
+    vid = lambda i, j: j * (nq + 1) + i  # noqa: E731
+    for w in (4, 5, 6, 7, 8, 10, 14):
+        out: list = []
+        for i0 in range(0, nq, w):
+            for j in range(nq):
+                if out:
+                    out.append(R32)
+                for i in range(i0, min(i0 + w, nq) + 1):
+                    out += [vid(i, j + 1), vid(i, j)]
+        idx = np.array(out, np.int64)
+        verify_gl_strip(tri, idx, R32)
+        c = vertex_cache_stats(idx, R32, len(tri), N)
+        print(f"  grid {nq}x{nq} quads, same-direction rows of {w:>2} quads ({2 * w:>2} triangles): "
+              f"ipt {len(idx) / len(tri):.3f} ACMR {c.acmr:.3f}")
+    mesh, where = _quad_grid(nq, alternate=True)
+    dual = dual_mesh(mesh)
+    for w in (4, 5, 6, 7, 8, 10, 12):
+        order: list = []
+        starts = [0]
+        for i0 in range(0, nq, w):
+            cols = list(range(i0, min(i0 + w, nq)))
+            for j in range(nq):
+                if j % 2 == 0:  # left to right: lower-left, upper-right; leaves upwards at the right end
+                    order += [where[i, j, p] for i in cols for p in ("lo", "hi")]
+                else:  # right to left: lower-right, upper-left; leaves upwards at the left end
+                    order += [where[i, j, p] for i in cols[::-1] for p in ("lo", "hi")]
+            starts.append(len(order))
+        s = restart_strip(dual.triangles, dual.twin, np.array(order, np.int64), np.array(starts, np.int64), R32)
+        verify_gl_strip(mesh.triangles, s.indices, R32)
+        c = vertex_cache_stats(s.indices, R32, len(mesh.triangles), N)
+        turns = (len(starts) - 1) * (nq - 1)
+        print(f"  grid {nq}x{nq} quads (alternating diagonals), snake in bands of {w:>2} quads: "
+              f"ipt {s.indices_per_triangle:.3f} ACMR {c.acmr:.3f} swaps per turn {s.n_swaps / turns:.2f}")
+    mo = _meshopt()
+    peers = [("meshopt vcache+stripify", meshopt_strip(mo, mesh.triangles, len(mesh.points), True), R32)] if mo else []
+    for label, kw in (("hammesh default", {}), ("hammesh --cache 16", {"cache": N})):
+        g = encode(mesh, **kw)
+        peers.append((label, g.indices, g.restart_index))
+    for label, idx, r in peers:
+        c = vertex_cache_stats(idx, r, len(mesh.triangles), N)
+        print(f"  grid (alternating diagonals), {label}: ipt {len(idx) / len(mesh.triangles):.3f} ACMR {c.acmr:.3f}")
+    sq = planar(1.6e-4)
+    m = sq.n_triangles
+    for label, kw in (("default", {}), ("fast=True", {"fast": True}), ("method=zigzag", {"method": "zigzag"}),
+                      ("cache=16", {"cache": N})):
+        g = encode(sq, **kw)
+        c = vertex_cache_stats(g.indices, g.restart_index, m, N)
+        print(f"  q30 square {m:,}, {label:<14}: ipt {g.indices_per_triangle:.4f} swaps per triangle "
+              f"{g.n_swaps / m:.3f} triangles per strip {m / g.n_strips:5.1f} ACMR {c.acmr:.3f}")
+    print("  row arithmetic (docs/strips.md): rows of L triangles with s swaps per triangle cost 1 + s + 3/L")
+    print("  indices per triangle; same-direction rows reuse the previous row's far side only while L/2 + 1 <= N - 1.")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
@@ -775,9 +869,14 @@ def main() -> None:
     ap.add_argument("--real-world", action="store_true", help="only the real-world surfaces section")
     ap.add_argument("--peers", action="store_true", help="only issue 16's table (meshopt, vtkStripper, cache mode)")
     ap.add_argument("--cache", type=int, default=16, help="FIFO size of the cache mode in the peers table (0: off)")
+    ap.add_argument("--cache-bound", action="store_true",
+                    help="only the cache target against strip layouts (grid rows and snakes, q30 swap rates)")
     ap.add_argument("--speed", action="store_true",
                     help="only issue 16's speed target: q30 10k/100k/1M, ours vs meshopt stripify, wall and CPU, fresh processes")
     args = ap.parse_args()
+    if args.cache_bound:
+        cache_bound_rows(args.quick)
+        return
     if args.speed:
         encode(torus(8, 6))  # warm-up (numba)
         encode(torus(8, 6), fast=True)

@@ -33,7 +33,6 @@ import numpy as np
 
 from hammesh import params, threads
 from hammesh.errors import InvalidOptionError
-from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import HamiltonianMesh
 from hammesh.strips._cache_cover_kernels import cache_path_cover
 from hammesh.strips._cover_kernels import (
@@ -436,9 +435,9 @@ def encode(
     if cache is None and join == "restart" and restart_index is not None and method in ("auto", "greedy"):
         if not isinstance(mesh, HamiltonianMesh) and not reorder_vertices:
             if len(mesh.triangles) >= HALVES_FROM and threads.cores() >= 2:
-                pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
+                # the arrays as given: the halves' kernels check them as they first read them
                 finish = None if fast else half_encoder(int(restart_index))
-                halves = encode_in_halves(pts, tri, int(restart_index), verify, _SWAP_WEIGHT, finish)
+                halves = encode_in_halves(mesh.points, mesh.triangles, int(restart_index), verify, _SWAP_WEIGHT, finish)
                 # few swaps (a structured grid, a smooth surface): the one-thread path
                 # also tries the swap-free chains over the whole mesh (a 100k torus:
                 # 1.0031 in one strip against the halves' 1.0063)

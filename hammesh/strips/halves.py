@@ -6,8 +6,10 @@ triangle's neighbours at random.  Here the mesh is cut by a plane through the me
 vertex along its longest axis (a row goes to the side of its least vertex index), and
 each half runs on its own thread: its rows copied out cell by cell of a grid
 (:func:`vertex_cells`: neighbouring triangles near each other in memory, which the
-pairing and the greedy strips read at random), its face census, its edge pairing
-straight into triangle records (:func:`~hammesh.strips._halves_kernels.pair_records_into`),
+pairing and the greedy strips read at random), its face census, its vertices numbered
+by first use in that order (:func:`~hammesh.strips._halves_kernels.number_by_first_use_into`),
+its edge pairing in those numbers straight into triangle records
+(:func:`~hammesh.strips._halves_kernels.pair_records_into`),
 the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`)
 and the round-trip proof of its own part of the buffer against the input's rows
 (:func:`~hammesh.strips._decode_kernels.check_claimed_part`), so the proof of one half
@@ -37,7 +39,13 @@ from hammesh.errors import InvalidOptionError
 from hammesh.strips._decode_kernels import check_claimed_part
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
 from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
-from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
+from hammesh.strips._halves_kernels import (
+    number_by_first_use_into,
+    pair_records_into,
+    rows_of_cells_into,
+    shared_edges,
+    vertex_cells_into,
+)
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
 from hammesh.strips.gl import GLStrip, verify_gl_strip
 
@@ -58,7 +66,7 @@ _SMALLEST_HALF = 1 / 8
 _Half = namedtuple(
     "_Half",
     ["failed", "order", "indices", "n_strips", "n_swaps", "max_index", "start", "keys", "loose", "n_loose",
-     "pairs", "zero_area", "pillows", "proof"],
+     "local_of", "vertex_of", "pairs", "zero_area", "pillows", "proof"],
 )
 
 
@@ -69,8 +77,9 @@ CELL_TRIANGLES = 16_384
 
 #: :func:`vertex_cells`'s result: each vertex's cell ``label`` (``(n,) uint16``, ``int32``
 #: beyond 65,535 cells: half the bytes for the rows pass to look up), the first
-#: label of side 1 (``split``) and the number of cells.
-VertexCells = namedtuple("VertexCells", ["label", "split", "cells"])
+#: label of side 1 (``split``), the number of cells and whether every coordinate is
+#: finite (``finite``; if not, the labels mean nothing).
+VertexCells = namedtuple("VertexCells", ["label", "split", "cells", "finite"])
 
 
 def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CELL_TRIANGLES, pool=None) -> VertexCells:
@@ -99,13 +108,13 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     label = np.empty(n, np.uint16 if (n0 + n1) * ny <= 0xFFFF else np.int32)
     args = (a, b, cut, float(lo[a]), float(lo[b]), h, n0, n1, ny)
     if pool is None:
-        vertex_cells_into(points, *args, label)
+        finite = vertex_cells_into(points, *args, label)
     else:
         mid = n // 2
         other = pool.submit(vertex_cells_into, points[mid:], *args, label[mid:])
-        vertex_cells_into(points[:mid], *args, label[:mid])
-        other.result()
-    return VertexCells(label, n0 * ny, (n0 + n1) * ny)
+        finite = vertex_cells_into(points[:mid], *args, label[:mid])
+        finite = other.result() and finite
+    return VertexCells(label, n0 * ny, (n0 + n1) * ny, bool(finite))
 
 
 def _half_work(k: int, out: np.ndarray | None) -> StripWork:
@@ -151,17 +160,23 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
                                np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True
-        return _failed("a row repeats a vertex")
+        return _failed("a vertex index out of range" if k == -2 else "a row repeats a vertex")
     if k < _SMALLEST_HALF * m:
         stop[0] = True
         return _failed("unbalanced")
     rows, part = rows[:k], part[:k]
     n_zero = face_flags(pts, part, ZERO_AREA_RTOL, np.empty(k, np.int8))[1]
-    start = np.empty(n + 1, np.int32)
+    # the vertices numbered by first use in cell order: the pairing's buckets and marks
+    # are then written and read almost in order (measured in docs/strips.md, session 10)
+    local_of = np.full(n, -1, np.int32)
+    local = np.empty((k, 3), np.int32)
+    vertex_of = np.empty(min(n, 3 * k), np.int32)
+    n_local = int(number_by_first_use_into(part, local_of, local, vertex_of))
+    start = np.empty(n_local + 1, np.int32)
     keys = np.empty(3 * k, np.int64)
     rec = np.empty((k, REC_WIDTH), np.int32)
     loose = np.empty((3 * k, 2), np.int64)
-    paired = pair_records_into(part, start, np.empty(n, np.int32), keys, rec, loose)
+    paired = pair_records_into(local, part, start, np.empty(n_local, np.int32), keys, rec, loose)
     if paired.pairs < 0 or stop[0]:
         stop[0] = True
         return _failed("an edge is not proper")
@@ -180,12 +195,25 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
     proof = -1
     if seen is not None:
         proof = int(check_claimed_part(tri, indices, restart, True, order, seen)[0])
-    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
-                 int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
+    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose, int(paired.n_loose),
+                 local_of, vertex_of, int(paired.pairs), int(n_zero), pillows, proof)
+
+
+def _plain_arrays(points, triangles) -> tuple[np.ndarray, np.ndarray] | None:
+    """``float64`` ``(n, 2 | 3)`` points and ``int64`` ``(m, 3)`` rows, C-contiguous (copied
+    only if they are not), or ``None`` for anything else (the one-thread path's checks
+    then name it).  Finite coordinates and indices in range are checked by the kernels."""
+    pts = np.asarray(points)
+    tri = np.asarray(triangles)
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
+        return None
+    if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0 or not np.issubdtype(tri.dtype, np.integer):
+        return None
+    return np.ascontiguousarray(pts, dtype=np.float64), np.ascontiguousarray(tri, dtype=np.int64)
 
 
 def encode_in_halves(
-    pts: np.ndarray, tri: np.ndarray, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
+    points, triangles, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
 ) -> GLStrip | None:
     """A restart-joined buffer from two halves on two threads, or ``None``.
 
@@ -194,13 +222,24 @@ def encode_in_halves(
     that receives each half's thread CPU seconds (``"first"`` on the calling thread,
     ``"second"`` on the other), for benchmarks on a loaded machine.
 
-    ``pts``, ``tri``: checked arrays (:func:`hammesh.halfedge.mesh_arrays`).  The buffer
-    draws every row once with its winding; with ``verify`` each half's part is proved
-    against ``tri`` on its thread, and every row must be drawn by one of them (a failed
-    claim falls back to :func:`~hammesh.strips.gl.verify_gl_strip`'s full comparison,
-    which names the problem).  ``None`` when the one-thread path must decide (see the
-    module docstring).
+    ``points``, ``triangles``: the mesh's arrays as given.  Only the cheap checks run
+    here (shapes, integer rows; ``float64`` / ``int64`` contiguous copies where needed);
+    the kernels that first read every point and row check that the coordinates are
+    finite (:func:`~hammesh.strips._halves_kernels.vertex_cells_into`) and that every
+    index is in range (:func:`~hammesh.strips._halves_kernels.rows_of_cells_into`, before
+    it uses one): the passes :func:`hammesh.halfedge.mesh_arrays` would spend on them
+    (~5 ms at 1M triangles, on the critical path) are saved.  Anything wrong gives
+    ``None``, and the one-thread path's :func:`~hammesh.halfedge.mesh_arrays` names the
+    problem.  The buffer draws every row once with its winding; with ``verify`` each
+    half's part is proved against the rows on its thread, and every row must be drawn by
+    one of them (a failed claim falls back to :func:`~hammesh.strips.gl.verify_gl_strip`'s
+    full comparison, which names the problem).  ``None`` when the one-thread path must
+    decide (see the module docstring).
     """
+    arrays = _plain_arrays(points, triangles)
+    if arrays is None:
+        return None
+    pts, tri = arrays
     m, n = len(tri), len(pts)
     if records_dtype(m, n) is not np.int32:
         return None
@@ -209,13 +248,15 @@ def encode_in_halves(
     whole: list[np.ndarray] = []
     with ThreadPoolExecutor(1) as pool:
         cells = vertex_cells(pts, m, pool=pool)
+        if not cells.finite:
+            return None
         second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, finish)
         a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, finish, None if finish else whole)
         b = second.result()
     if a.failed or b.failed:
         return None
-    ab = shared_edges(a.loose, a.n_loose, b.start, b.keys)
-    ba = shared_edges(b.loose, b.n_loose, a.start, a.keys)
+    ab = shared_edges(a.loose, a.n_loose, a.vertex_of, b.start, b.keys, b.local_of)
+    ba = shared_edges(b.loose, b.n_loose, b.vertex_of, a.start, a.keys, a.local_of)
     if not (ab.ok and ba.ok) or a.pairs + b.pairs + ab.proper < m:
         return None  # a defect across the cut, or maybe a dual forest: the one-thread path
     la, lb = len(a.indices), len(b.indices)

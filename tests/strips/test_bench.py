@@ -36,3 +36,13 @@ def test_bench_strips_speed_quick_runs():
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "q30 square 10k" in proc.stdout and "interleaved calls" in proc.stdout
     assert "fast 1st" in proc.stdout and "failed" not in proc.stdout
+
+
+@pytest.mark.slow
+def test_bench_strips_cache_bound_quick_runs():
+    proc = subprocess.run(
+        [sys.executable, str(BENCH), "--cache-bound", "--quick"], capture_output=True, text=True, timeout=1800
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "same-direction rows of  6 quads" in proc.stdout and "snake in bands of  7 quads" in proc.stdout
+    assert "method=zigzag" in proc.stdout

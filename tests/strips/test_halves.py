@@ -11,14 +11,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hammesh import threads
-from hammesh.errors import VerificationError
+from hammesh.errors import InvalidMeshError, VerificationError
 from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import Mesh
 from hammesh.strips import halves
 from hammesh.strips.encode import encode
 from hammesh.strips.gl import RESTART_INDEX, decode_gl_strip
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH
-from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges
+from hammesh.strips._halves_kernels import number_by_first_use_into, pair_records_into, rows_of_cells_into, shared_edges
 
 from .conftest import delaunay_mesh, oriented_set, square_mesh, torus_mesh
 from .defect_meshes import ALL as DEFECT_MESHES
@@ -124,6 +124,42 @@ def test_the_proof_catches_a_corrupted_half_of_the_default_mode():
         halves.encode_in_halves(pts, tri, RESTART_INDEX, True, 1, corrupt_buffer)
 
 
+@pytest.mark.parametrize("fast", [True, False])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        ("nan", "non-finite"), ("inf", "non-finite"), ("nan z", "non-finite"),
+        ("negative", "references vertex -1"), ("too large", "references vertex"),
+    ],
+)
+def test_bad_input_is_checked_by_the_kernels_and_named_by_the_one_thread_path(bad, match, fast, monkeypatch):
+    """The halves take the arrays unchecked: a non-finite coordinate (any of them) or an index
+    out of range is found by the kernel that first reads it (no out-of-range read), the halves
+    give way, and ``encode`` raises the one-thread path's named error."""
+    m = delaunay_mesh(11, 300, lift=bad == "nan z")
+    pts, tri = m.points.copy(), m.triangles.copy()
+    t = len(tri) // 2
+    if bad in ("nan", "inf", "nan z"):
+        pts[tri[t, 1], 2 if bad == "nan z" else 0] = np.nan if bad != "inf" else np.inf
+    else:
+        tri[t, 2] = -1 if bad == "negative" else len(pts) + 7
+    finish = None if fast else _encode_module.half_encoder(RESTART_INDEX)
+    assert halves.encode_in_halves(pts, tri, RESTART_INDEX, True, 1, finish) is None
+    monkeypatch.setattr(_encode_module, "HALVES_FROM", 0)
+    with pytest.raises(InvalidMeshError, match=match):
+        encode(Mesh(pts, tri), fast=fast)
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from([2, 3]), st.sampled_from([np.nan, np.inf, -np.inf, 1e308, -1e308, 0.0]))
+@settings(max_examples=40, deadline=None)
+def test_vertex_cells_find_a_non_finite_coordinate(seed, d, x):
+    """Any one coordinate infinite or NaN, anywhere, is found; huge finite ones are not flagged."""
+    rng = np.random.default_rng(seed)
+    pts = rng.random((int(rng.integers(1, 400)), d)) * 10.0 ** rng.integers(-5, 5)
+    pts[rng.integers(len(pts)), rng.integers(d)] = x
+    assert halves.vertex_cells(pts, 1000).finite == bool(np.isfinite(x))
+
+
 def test_one_thread_cap_keeps_the_one_thread_path(monkeypatch):
     def refuse(*a, **k):
         raise AssertionError("encode_in_halves called under a one-thread cap")
@@ -173,11 +209,16 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
         assert np.array_equal(rows[:k], mine[np.argsort(cell[mine], kind="stable")])
         assert np.array_equal(part[:k], tri[rows[:k]])
         part = part[:k]
-        start = np.empty(len(m.points) + 1, np.int32)
+        local_of = np.full(len(m.points), -1, np.int32)
+        local = np.empty((k, 3), np.int32)
+        vertex_of = np.empty(min(len(m.points), 3 * k), np.int32)
+        nl = number_by_first_use_into(part, local_of, local, vertex_of)
+        start = np.empty(nl + 1, np.int32)
         keys = np.empty(3 * k, np.int64)
         rec = np.empty((k, REC_WIDTH), np.int32)
         loose = np.empty((3 * k, 2), np.int64)
-        hp = pair_records_into(part, start, np.empty(len(m.points), np.int32), keys, rec, loose)
+        hp = pair_records_into(local, part, start, np.empty(nl, np.int32), keys, rec, loose)
+        assert np.array_equal(rec[:, :3], part)  # the records keep the mesh's vertex numbers
         # brute force: directed uses of each undirected edge in this half
         uses: dict = {}
         for t, row in enumerate(part.tolist()):
@@ -195,17 +236,36 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
                 else:
                     assert twin[u[0][0]] == -1
             assert hp.n_loose == sum(len(u) == 1 for u in uses.values())
-        parts.append((hp, start, keys, loose, Counter({e: len(u) for e, u in uses.items()}), uses))
+        parts.append((hp, start, keys, loose, Counter({e: len(u) for e, u in uses.items()}), uses, vertex_of, local_of))
     if any(p[0].pairs < 0 for p in parts):
         return
-    (ha, sa, ka, la, ca, ua), (hb, sb, kb, lb, cb, ub) = parts
+    (ha, sa, ka, la, ca, ua, va, oa), (hb, sb, kb, lb, cb, ub, vb, ob) = parts
     both = set(ca) & set(cb)
     ok = all(ca[e] == 1 and cb[e] == 1 and ua[e][0][1] != ub[e][0][1] for e in both)
-    ab = shared_edges(la, ha.n_loose, sb, kb)
-    ba = shared_edges(lb, hb.n_loose, sa, ka)
+    ab = shared_edges(la, ha.n_loose, va, sb, kb, ob)
+    ba = shared_edges(lb, hb.n_loose, vb, sa, ka, oa)
     assert (ab.ok and ba.ok) == ok
     if ok:
         assert ab.proper == ba.proper == len(both)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 60), st.integers(3, 40))
+@settings(max_examples=40, deadline=None)
+def test_first_use_numbering(seed, m, n):
+    """The numbers map back to the rows' vertices, each vertex gets one, in order of first use."""
+    rng = np.random.default_rng(seed)
+    verts = rng.integers(0, n, (m, 3)).astype(np.int32)
+    local_of = np.full(n, -1, np.int32)
+    local = np.empty((m, 3), np.int32)
+    vertex_of = np.empty(min(n, 3 * m), np.int32)
+    nl = number_by_first_use_into(verts, local_of, local, vertex_of)
+    used, first = np.unique(verts.ravel(), return_index=True)
+    assert nl == len(used)
+    assert np.array_equal(vertex_of[local], verts)
+    assert np.array_equal(local_of[vertex_of[:nl]], np.arange(nl))
+    assert np.count_nonzero(local_of >= 0) == nl
+    # number i is the i-th distinct vertex met reading the rows in order
+    assert np.array_equal(vertex_of[:nl], verts.ravel()[np.sort(first)])
 
 
 def test_structured_meshes_keep_the_one_thread_default(monkeypatch):
