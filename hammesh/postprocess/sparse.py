@@ -486,6 +486,8 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     is_cov = cover.is_cov.copy()
     cycle = cover.cycle.copy()
     touched = np.zeros(m, np.bool_)
+    fan_or_touched = is_fan.copy()  # is_fan | touched, and touched as a set: no O(m) pass per pair
+    touched_set: set[int] = set()
     done = 0
     for t in rows.tolist():
         if _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan, t, lo, hi, floor2) is not None:
@@ -498,7 +500,7 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                 u, w = nbs[i], nbs[j]
                 if i == j or cycle[u] < 0 or cycle[w] < 0 or touched[u] or touched[w]:
                     continue
-                avoid = {t} | {int(x) for x in np.flatnonzero(touched)}
+                avoid = {t} | touched_set
                 from_w: dict[int, list] = {}
                 for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, REROUTE_DEPTH):
                     from_w.setdefault(y, []).append((nodes, flips))
@@ -522,7 +524,7 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                         _flip_cover(tw, is_cov, add + flips_all)
                         c_t, c_z = cycle[t], cycle[z]
                         cycle[t], cycle[z] = cycle[u], -1
-                        ring = _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan | touched, z, lo, hi, floor2)
+                        ring = _best_ring(pts, tri, tw, con, is_cov, cycle, fan_or_touched, z, lo, hi, floor2)
                         _flip_cover(tw, is_cov, add + flips_all)
                         cycle[t], cycle[z] = c_t, c_z
                         if ring is not None:
@@ -536,6 +538,10 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
             cycle[z] = -1
         touched[nodes] = True
         touched[t] = True
+        fan_or_touched[nodes] = True
+        fan_or_touched[t] = True
+        touched_set.update(int(x) for x in nodes)
+        touched_set.add(int(t))
         done += 1
     if not done:
         return cover, 0
@@ -584,19 +590,70 @@ def _ring_pairs(tw, is_cov, members, hes, spoke):
     return links, old, new
 
 
-def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool | None:
-    """Does the ring fan join the cycles of triangles ``a`` and ``b`` and split none?
+#: most steps the outside walks of one ring may take (``_ring_outcome``); undecided rings are not taken
+RING_WALK_BUDGET = 20_000
 
-    Each cycle crossing the group must cross it once (its two links joined inside the
-    group): then outside the group it is one path between those links, and the new
-    cycles are the components of old pairs (outside) and new pairs (the arcs), each a
-    union of old cycles. Without labelling the cycles anew (``_ring_pairs``). None
-    where a cycle crosses the group twice (``_ring_merges_relabelled`` decides).
+
+@dataclass(frozen=True)
+class RingOutcome:
+    """What a ring fan does to the cycles crossing its group (``_ring_outcome``).
+
+    ``links``: ring positions with a link; ``old_id[i]``: the cycle link ``i`` is on;
+    ``comp[i]``: the new cycle link ``i`` is on (a representative link position);
+    ``split``: some old cycle is spread over two new ones.
     """
-    links, old, new = _ring_pairs(tw, is_cov, members, hes, spoke)
-    ids = {i: int(cycle[hes[i] // 3]) for i in links}
-    if len({ids[i] for i in links}) * 2 != len(links):
-        return None  # a cycle crosses twice: the outside order matters (``_ring_merges_relabelled``)
+
+    links: list
+    old_id: dict
+    comp: dict
+    split: bool
+
+    def merges(self, ca: int, cb: int) -> bool:
+        """Do the old cycles ``ca`` and ``cb`` end on one new cycle, and none split?"""
+        if self.split:
+            return False
+        at = {self.old_id[i]: self.comp[i] for i in self.links}
+        return ca in at and cb in at and at[ca] == at[cb]
+
+    def only_merges(self, ca: int, cb: int) -> bool:
+        """``merges(ca, cb)``, and every other crossing cycle stays a cycle of its own."""
+        if not self.merges(ca, cb):
+            return False
+        by_comp: dict[int, set] = {}
+        for i in self.links:
+            by_comp.setdefault(self.comp[i], set()).add(self.old_id[i])
+        return all(len(ids) == 1 or ids == {ca, cb} for ids in by_comp.values())
+
+
+def _ring_outcome(tw, is_cov, cycle, members, hes, spoke, find=None) -> RingOutcome | None:
+    """The new cycles through a ring fan's group, decided locally (no relabelling).
+
+    Inside the group the old cover joined the links in pairs (``_ring_pairs``' ``old``),
+    the fan's arcs join them in new pairs (``new``); outside, each cycle joins its
+    links in pairs too: a cycle crossing the group once joins its two links, one
+    crossing it more often is walked outwards from its links
+    (``_join_kernels.ring_outside_pairs``, lock-step, so the longest outside path is
+    never walked). The new cycles are the components of outside and new pairs.
+    None if the walks exceed ``RING_WALK_BUDGET`` (the ring is then not used as a
+    join). ``find`` maps a cycle id to the one it was merged into (``_apply_rings``).
+    """
+    links, _, new = _ring_pairs(tw, is_cov, members, hes, spoke)
+    old_id = {i: int(cycle[tw[hes[i]] // 3]) for i in links}
+    if find is not None:
+        old_id = {i: find(c) for i, c in old_id.items()}
+    by_id: dict[int, list] = {}
+    for i in links:
+        by_id.setdefault(old_id[i], []).append(i)
+    outside = {}
+    for ids in by_id.values():
+        if len(ids) == 2:
+            outside[ids[0]], outside[ids[1]] = ids[1], ids[0]
+            continue
+        pair = _j.ring_outside_pairs(tw, is_cov, np.asarray([hes[i] for i in ids], np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for i, j in zip(ids, pair.tolist()):
+            outside[i] = ids[j]
     root = {i: i for i in links}
 
     def find(i):
@@ -606,33 +663,11 @@ def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool
         return i
 
     for i in links:
-        for j in (old[i], new[i]):
+        for j in (outside[i], new[i]):
             root[find(i)] = find(j)
-    comp = {ids[i]: find(i) for i in links}
-    ca, cb = int(cycle[a]), int(cycle[b])
-    return ca in comp and cb in comp and comp[ca] == comp[cb]
-
-
-def _ring_merges_relabelled(pts, tri, tw, con, cover: CycleCover, members, poly, hes, spoke, a: int, b: int) -> bool:
-    """``_ring_merges`` by labelling the cycles of the re-routed cover anew (O(m): small meshes only).
-
-    The ring applied on its own (``_apply_rings``), ``cycle_cover.cycle_ids_by_halves`` on
-    the result: True if every cycle that crossed the group lies on one new cycle
-    outside it (none split) and ``a``'s and ``b``'s cycles on the same one.
-    """
-    m = len(tri)
-    x, y = pts[tri[members]].reshape(-1, pts.shape[1]).mean(axis=0)
-    out = _apply_rings(pts, tri, tw, con, cover, np.zeros(m), np.arange(m), np.zeros(m, np.bool_),
-                       [(members, poly, hes, spoke, x, y)])
-    kept = np.setdiff1d(np.arange(m), members)
-    old = cover.cycle[kept]
-    new = out[4].cycle[: len(kept)]
-    near = np.unique(old[np.isin(kept, tw[np.asarray(hes)[tw[np.asarray(hes)] >= 0]] // 3)])
-    for c in near[near >= 0].tolist():
-        if len(np.unique(new[old == c])) > 1:
-            return False
-    na, nb = new[old == cover.cycle[a]], new[old == cover.cycle[b]]
-    return bool(len(na) and len(nb) and na[0] == nb[0])
+    comp = {i: find(i) for i in links}
+    split = any(len({comp[i] for i in ids}) > 1 for ids in by_id.values())
+    return RingOutcome(links, old_id, comp, split)
 
 
 def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
@@ -645,7 +680,7 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     one or two covered neighbours (``_best_ring``, local rule against all its
     members) divides only its polygon's corners, which gather several input angles,
     and re-routes the cycles crossing it: taken where that joins ``t``'s and ``u``'s
-    cycles and splits none (``_ring_merges``). Tried, up to ``RING_JOIN_TRIES``:
+    cycles and splits none (``_ring_outcome``). Tried, up to ``RING_JOIN_TRIES``:
     the joins between two cycles below the rule, the Thm 2.4 bridges between two
     cycles (both triangles split at their incenters) and the uncovered triangles the
     plan split at their incenters (a ring fan over them, ``_ring_fans``' test) —
@@ -678,30 +713,32 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
         return None
     tasks.sort(key=lambda x: (not x[0], x[1]))
     used = np.zeros(len(tri), np.bool_)
+    blocked = is_fan.copy()  # is_fan | used, kept up to date (no O(m) pass per task)
     rings = []
 
     def _merges(ms, hes, sp, t, u):
-        ok = _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u)
-        if ok is None:
-            poly = _union_polygon(tri, tw, con, ms)[0]
-            ok = _ring_merges_relabelled(pts, tri, tw, con, cover, ms, poly, hes, sp, t, u)
-        return ok
+        out = _ring_outcome(tw, cover.is_cov, cover.cycle, ms, hes, sp)
+        return out is not None and out.merges(int(cover.cycle[t]), int(cover.cycle[u]))
 
     for missing, _, t, u in tasks[:RING_JOIN_TRIES]:
-        if used[t] or is_fan[t] or (u >= 0 and (used[u] or is_fan[u])):
+        if blocked[t] or (u >= 0 and blocked[u]):
             continue
         if u < 0:  # an uncovered triangle: a ring fan (no cycle of its own to join)
-            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, t, lo, hi, floor2)
         else:  # a join missing the targets: any ring within them; else one meeting the rule
             best = _best_ring(
-                pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2,
+                pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, [t, u], lo, hi, floor2,
                 amin=None if missing else amin_t, keep=keep,
                 accept=lambda ms, hes, sp: _merges(ms, hes, sp, t, u),
             )
+        n_before = len(rings)
         _take_ring(best, tw, used, rings)
+        if len(rings) > n_before:
+            blocked[rings[-1][0]] = True
     if not rings:
         return None
-    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings), len(rings))
+    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings)
+    return (*arrays, len(applied))
 
 
 def _take_ring(best, tw: np.ndarray, used: np.ndarray, taken: list) -> None:
@@ -744,71 +781,135 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
     taken: list[tuple[list[int], list[int], list[int], np.ndarray, float, float]] = []
     used = np.zeros(m, np.bool_)
+    blocked = is_fan.copy()  # is_fan | used, kept up to date
     for t in rows.tolist():
-        best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+        best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, t, lo, hi, floor2)
+        n_before = len(taken)
         _take_ring(best, tw, used, taken)
+        if len(taken) > n_before:
+            blocked[taken[-1][0]] = True
     if not taken:
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
-    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken), len(taken))
+    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken)
+    return (*arrays, len(applied))
 
 
-def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken):
+def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken, accept=None):
     """Replace each ring fan's members by its ``k + 2`` rows (``_ring_fans``, ``_ring_joins``).
 
     ``taken``: ``(members, polygon, outer half-edges, spoke, x, y)`` per fan, no two
-    adjacent. Returns the new ``(points, triangles, twin, pinned, cover, parent_min,
-    orig_of, is_fan)``: kept rows in order, then the fans' rows (``orig_of``: the input
-    triangle holding the fan row's outer edge; ``parent_min``: the members' smallest
-    angle); the fans' points follow the points; the cycles are labelled anew.
+    adjacent, applied in order. A fan's first rows take its members' rows, its last
+    two are appended, so every other row and half-edge keeps its index: only the
+    fans' own twins and the twins facing them are written (no O(m) renumbering).
+    Each fan's effect on the cycles (``_ring_outcome``) is decided on the cover as
+    the fans before it left it; with ``accept(index in taken, outcome)`` a fan whose
+    outcome it refuses is left out. The cycles are relabelled by those outcomes
+    (old cycles merged by a union-find over cycle ids, O(m) only as one gather) and
+    anew (``cycle_ids_by_halves``) only where a fan split a cycle or its outcome
+    was not decided.
+
+    Returns the new ``(points, triangles, twin, pinned, cover, parent_min, orig_of,
+    is_fan)`` (``orig_of``: the input triangle holding a fan row's outer edge;
+    ``parent_min``: the members' smallest angle; the fans' points follow the
+    points) and the indices in ``taken`` of the fans applied.
     """
     m = len(tri)
-    # rebuild: kept rows in order, then the fans' rows; twins mapped, not re-derived
-    dead = np.zeros(m, np.bool_)
-    for members, *_ in taken:
-        dead[members] = True
-    kept = np.flatnonzero(~dead)
-    new_of = np.full(m, -1, np.int64)
-    new_of[kept] = np.arange(len(kept))
+    extra = 2 * len(taken)
+    tri2 = np.concatenate([tri, np.empty((extra, 3), np.int64)])
+    tw2 = np.concatenate([tw, np.empty(3 * extra, np.int64)])
+    con2 = np.concatenate([con, np.empty(3 * extra, np.bool_)])
+    is_cov2 = np.concatenate([cover.is_cov, np.empty(3 * extra, np.bool_)])
+    cyc2 = np.concatenate([cover.cycle, np.empty(extra, np.int64)])
+    amin2 = np.concatenate([amin_t, np.empty(extra)])
+    orig2 = np.concatenate([orig_of, np.empty(extra, np.int64)])
+    fan2 = np.concatenate([is_fan, np.ones(extra, np.bool_)])
     n_pts = len(pts)
-    f_tri, f_tw, f_con, f_cov, f_min, f_orig, f_pts = [], [], [], [], [], [], []
-    he_to = {}  # outer half-edge of a group -> the fan row's outer half-edge
-    base = len(kept)
+    n_cyc = cover.n_cycles
+    up: dict[int, int] = {}  # union-find over cycle ids: merged cycles point to a smaller id
+
+    def find(c: int) -> int:
+        while c in up:
+            c = up[c]
+        return c
+
+    relabel_all = False
+    applied, new_pts = [], []
     for j, (members, poly, hes, spoke, x, y) in enumerate(taken):
         k = len(poly)
+        outcome = None
+        if not relabel_all or accept is not None:
+            outcome = _ring_outcome(tw2, is_cov2, cyc2, members, hes, spoke, find)
+            if accept is not None and not accept(j, outcome):
+                continue
+            if outcome is None or outcome.split:
+                relabel_all = True
+        base = m + 2 * len(applied)
+        rows = list(members) + [base, base + 1]
+        v = n_pts + len(applied)
+        applied.append(j)
+        new_pts.append((x, y))
+        # every value read from the arrays before any row of this fan is written
+        outer = [int(tw2[h]) for h in hes]
+        f_con = [bool(con2[h]) for h in hes]
+        f_link = [outer[i] >= 0 and bool(is_cov2[hes[i]]) for i in range(k)]
+        f_orig = [int(orig2[h // 3]) for h in hes]
+        f_min = float(amin2[members].min())
         for i in range(k):
-            r = base + i
-            f_tri.append((n_pts + j, poly[i], poly[(i + 1) % k]))
-            he_to[hes[i]] = 3 * r + 1
-            f_tw.append((3 * (base + (i - 1) % k) + 2, -1, 3 * (base + (i + 1) % k)))
-            f_con.append((False, bool(con[hes[i]]), False))
-            link = tw[hes[i]] >= 0 and bool(cover.is_cov[hes[i]])
-            f_cov.append((bool(spoke[i]), link, bool(spoke[(i + 1) % k])))
-            f_orig.append(orig_of[hes[i] // 3])
-        f_min.extend([float(amin_t[members].min())] * k)
-        f_pts.append((x, y))
-        base += k
-    h_old = (3 * kept[:, None] + np.arange(3)).ravel()
-    g = tw[h_old]
-    tw_k = np.where(g >= 0, 3 * new_of[np.maximum(g, 0) // 3] + g % 3, -1)
-    tri2 = np.concatenate([tri[kept], np.asarray(f_tri, np.int64)])
-    tw2 = np.concatenate([tw_k, np.asarray(f_tw, np.int64).ravel()])
-    for h, r1 in he_to.items():  # both sides of every group's outer edge
-        o = tw[h]
-        if o >= 0:
-            tw2[r1] = 3 * new_of[o // 3] + o % 3
-            tw2[3 * new_of[o // 3] + o % 3] = r1
-    con2 = np.concatenate([con.reshape(m, 3)[kept].ravel(), np.asarray(f_con, np.bool_).ravel()])
-    is_cov2 = np.concatenate([cover.is_cov.reshape(m, 3)[kept].ravel(), np.asarray(f_cov, np.bool_).ravel()])
-    cyc2, n_cyc2 = cycle_ids_by_halves(tw2, is_cov2)
+            r = rows[i]
+            tri2[r] = (v, poly[i], poly[(i + 1) % k])
+            tw2[3 * r] = 3 * rows[(i - 1) % k] + 2
+            tw2[3 * r + 1] = outer[i]
+            tw2[3 * r + 2] = 3 * rows[(i + 1) % k]
+            if outer[i] >= 0:
+                tw2[outer[i]] = 3 * r + 1
+            con2[3 * r: 3 * r + 3] = (False, f_con[i], False)
+            is_cov2[3 * r: 3 * r + 3] = (bool(spoke[i]), f_link[i], bool(spoke[(i + 1) % k]))
+            amin2[r] = f_min
+            orig2[r] = f_orig[i]
+            fan2[r] = True
+        if relabel_all:
+            continue
+        # the fan rows' cycles: each arc (rows between two consecutive links along
+        # the cover spokes) is on its link's new cycle; a ring without links is one
+        comp = outcome.comp
+        if not outcome.links:
+            cyc2[rows] = n_cyc
+            n_cyc += 1
+            continue
+        rep: dict[int, int] = {}  # new cycle (a representative link) -> its id: the smallest old id in it
+        for i in outcome.links:
+            c = comp[i]
+            rep[c] = min(rep.get(c, outcome.old_id[i]), outcome.old_id[i])
+        for i in outcome.links:
+            if rep[comp[i]] != outcome.old_id[i]:
+                up[outcome.old_id[i]] = rep[comp[i]]
+        for i in range(k):  # row i lies on the arc of the link its cover spokes lead to
+            d = i
+            while d not in comp:
+                d = (d + 1) % k  # a row without a link has both spokes on the cover
+            cyc2[rows[i]] = rep[comp[d]]
+    used = m + 2 * len(applied)
+    tri2, tw2, con2, is_cov2 = tri2[:used], tw2[: 3 * used], con2[: 3 * used], is_cov2[: 3 * used]
+    cyc2, amin2, orig2, fan2 = cyc2[:used], amin2[:used], orig2[:used], fan2[:used]
+    if relabel_all:
+        cyc2, n_cyc2 = cycle_ids_by_halves(tw2, is_cov2)
+    else:
+        n_cyc2 = n_cyc
+        if up:  # merged ids resolved, then made contiguous again (one gather)
+            lut = np.arange(n_cyc, dtype=np.int64)
+            for c in up:
+                lut[c] = find(c)
+            alive = np.zeros(n_cyc, np.bool_)
+            alive[lut] = True
+            rank = np.cumsum(alive) - 1
+            n_cyc2 = int(alive.sum())
+            _j.relabel_cycles_into(cyc2, rank[lut])
     cover2 = CycleCover(
         is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
     )
-    amin2 = np.concatenate([amin_t[kept], np.asarray(f_min)])
-    orig2 = np.concatenate([orig_of[kept], np.asarray(f_orig, np.int64)])
-    fan2 = np.concatenate([is_fan[kept], np.ones(len(f_tri), np.bool_)])
-    pts2 = np.concatenate([pts, np.asarray(f_pts, np.float64)])
-    return pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2
+    pts2 = np.concatenate([pts, np.asarray(new_pts, np.float64).reshape(-1, pts.shape[1])])
+    return (pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2), applied
 
 
 def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
