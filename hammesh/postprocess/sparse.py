@@ -554,7 +554,7 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
 
 #: below-rule joins one call tries to replace by ring joins (``_ring_joins``), worst first
 RING_JOIN_TRIES = 32
-#: rounds of ring joins, each followed by a new plan
+#: rounds of ring joins, each patching the plan (0: none)
 RING_JOIN_PASSES = 1
 
 
@@ -615,6 +615,16 @@ class RingOutcome:
         at = {self.old_id[i]: self.comp[i] for i in self.links}
         return ca in at and cb in at and at[ca] == at[cb]
 
+    def keeps_all(self) -> bool:
+        """Every crossing cycle stays one cycle of its own (none merged, none split)."""
+        if self.split:
+            return False
+        ids: dict[int, int] = {}
+        for i in self.links:
+            if ids.setdefault(self.comp[i], self.old_id[i]) != self.old_id[i]:
+                return False
+        return True
+
     def only_merges(self, ca: int, cb: int) -> bool:
         """``merges(ca, cb)``, and every other crossing cycle stays a cycle of its own."""
         if not self.merges(ca, cb):
@@ -671,7 +681,7 @@ def _ring_outcome(tw, is_cov, cycle, members, hes, spoke, find=None) -> RingOutc
 
 
 def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
-                newmax, status, slot, keep: float, lo: float, hi: float, floor2: float):
+                newmax, status, slot, swap_he, counts, keep: float, lo: float, hi: float, floor2: float):
     """Ring fans in place of the joins the plan took below the local rule or the targets (issue 13).
 
     A swap or split over ``ab`` of ``t = abc``, ``u = bad`` divides the corners ``c``
@@ -679,15 +689,22 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     ``keep`` x the pair's smallest angle. A fan around one point over ``t``, ``u`` and
     one or two covered neighbours (``_best_ring``, local rule against all its
     members) divides only its polygon's corners, which gather several input angles,
-    and re-routes the cycles crossing it: taken where that joins ``t``'s and ``u``'s
-    cycles and splits none (``_ring_outcome``). Tried, up to ``RING_JOIN_TRIES``:
+    and re-routes the cycles crossing it. Tried, up to ``RING_JOIN_TRIES``:
     the joins between two cycles below the rule, the Thm 2.4 bridges between two
     cycles (both triangles split at their incenters) and the uncovered triangles the
-    plan split at their incenters (a ring fan over them, ``_ring_fans``' test) —
-    first those whose rows miss the absolute targets (``lo``: ``keep`` x the input's
-    smallest angle; ``hi``), then by the local rule's slack. The caller plans the
-    joins again on the new mesh. Returns ``_apply_rings``'s arrays and the number of
-    rings, or None.
+    plan split at their incenters and bridged once (a ring fan over them,
+    ``_ring_fans``' test) — first those whose rows miss the absolute targets (``lo``:
+    ``keep`` x the input's smallest angle; ``hi``), then by the local rule's slack.
+
+    The plan is *patched*, not made again: a ring is taken only where it does
+    exactly what the plan's step did (``_ring_outcome``: it joins ``t``'s and
+    ``u``'s cycles and leaves every other cycle crossing it as it was; over an
+    uncovered triangle, a leaf of the plan's tree, it merges and splits nothing),
+    its other members take part in no join, and only the replaced step is undone
+    (its statuses, slots and counts). So Kruskal's tree stays a tree and no re-plan
+    (candidates, scores, placements, Kruskal: O(m)) is needed. Returns
+    ``_apply_rings``' arrays, the patched ``(status, slot, swap_he, join)`` and the
+    number of rings, or None; ``counts`` is updated in place.
     """
     tasks = []  # (misses the targets, slack, t, u or -1)
     taken = order[np.unique(join[join >= 0])]
@@ -696,8 +713,10 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
     for i, t, u in zip(low[both].tolist(), t_of[both].tolist(), u_of[both].tolist()):
         tasks.append((not (newmin[i] >= lo and newmax[i] <= hi), float(slack[i]), t, u))
-    bridged = np.flatnonzero((slot != _k.PLAIN) & (tw > np.arange(len(tw))))
-    split_unc = np.flatnonzero((status == _k.SPLIT) & (cover.cycle < 0))
+    bridged = np.flatnonzero(slot != _k.PLAIN)
+    bridged = bridged[tw[bridged] > bridged]
+    split_unc = np.flatnonzero(status == _k.SPLIT)
+    split_unc = split_unc[cover.cycle[split_unc] < 0]
     rows = np.unique(np.concatenate([bridged // 3, tw[bridged] // 3, split_unc]))
     a_lo, a_hi = triangle_angles(pts, tri[rows]) if len(rows) else (np.zeros(0), np.zeros(0))
     # an incenter's sectors: half of each corner; 90 degrees + half a corner at the incenter
@@ -712,33 +731,89 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     if not tasks:
         return None
     tasks.sort(key=lambda x: (not x[0], x[1]))
+
+    def slots_of(x: int) -> list[int]:
+        return [3 * x + k for k in range(3) if slot[3 * x + k] != _k.PLAIN]
+
+    def free(x: int, allowed: tuple = ()) -> bool:
+        """In no step of the plan (or only in the one being replaced)."""
+        return (status[x] == _k.PASS or x in allowed) and all(tw[h] // 3 in allowed for h in slots_of(x))
+
     used = np.zeros(len(tri), np.bool_)
     blocked = is_fan.copy()  # is_fan | used, kept up to date (no O(m) pass per task)
-    rings = []
+    rings, steps = [], []  # steps: what each ring replaces, (t, u, bridge partner or -1)
 
-    def _merges(ms, hes, sp, t, u):
+    def fits(ms, hes, sp, t, u, x):
+        if not all(free(y, (t, u, x)) for y in ms):
+            return False
         out = _ring_outcome(tw, cover.is_cov, cover.cycle, ms, hes, sp)
-        return out is not None and out.merges(int(cover.cycle[t]), int(cover.cycle[u]))
+        if out is None:
+            return False
+        if u < 0:
+            return out.keeps_all()
+        return out.only_merges(int(cover.cycle[t]), int(cover.cycle[u]))
 
     for missing, _, t, u in tasks[:RING_JOIN_TRIES]:
         if blocked[t] or (u >= 0 and blocked[u]):
             continue
+        x = -1
         if u < 0:  # an uncovered triangle: a ring fan (no cycle of its own to join)
-            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, t, lo, hi, floor2)
+            br = slots_of(t)
+            if len(br) != 1:  # bridged more than once: not a leaf of the plan's tree
+                continue
+            x = int(tw[br[0]] // 3)
+            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, t, lo, hi, floor2,
+                              accept=lambda ms, hes, sp: fits(ms, hes, sp, t, -1, x))
         else:  # a join missing the targets: any ring within them; else one meeting the rule
+            if status[t] == _k.SPLIT and (len(slots_of(t)) != 1 or len(slots_of(u)) != 1):
+                continue  # a bridge: only if it is the one step of both triangles
             best = _best_ring(
                 pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, [t, u], lo, hi, floor2,
                 amin=None if missing else amin_t, keep=keep,
-                accept=lambda ms, hes, sp: _merges(ms, hes, sp, t, u),
+                accept=lambda ms, hes, sp: fits(ms, hes, sp, t, u, -1),
             )
         n_before = len(rings)
         _take_ring(best, tw, used, rings)
         if len(rings) > n_before:
             blocked[rings[-1][0]] = True
+            steps.append((t, u, x))
     if not rings:
         return None
-    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings)
-    return (*arrays, len(applied))
+
+    def still_fits(j: int, outcome, find) -> bool:
+        # on the cover as the rings before it left it (a cycle may cross two of them)
+        t, u, _ = steps[j]
+        if outcome is None:
+            return False
+        if u < 0:
+            return outcome.keeps_all()
+        return outcome.only_merges(find(int(cover.cycle[t])), find(int(cover.cycle[u])))
+
+    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings, accept=still_fits)
+    if not applied:
+        return None
+    # undo the replaced steps, then the fans' rows take part in no step (one copy of
+    # each array, which the fans' two rows each lengthen)
+    extra = 2 * len(applied)
+    status, slot = _longer(status, extra, _k.PASS), _longer(slot, 3 * extra, _k.PLAIN)
+    swap_he, join = _longer(swap_he, extra, -1), _longer(join, extra, -1)
+    for j in applied:
+        t, u, x = steps[j]
+        if u >= 0 and status[t] in (_k.SWAP, _k.EDGE):
+            counts[1 if status[t] == _k.SWAP else 3] -= 1
+        else:  # a bridge (t, u covered) or an uncovered t's one bridge (to x)
+            h = slots_of(t)[0]
+            g = int(tw[h])
+            slot[h] = slot[g] = _k.PLAIN
+            counts[2] -= 1
+            y = g // 3
+            if y not in rings[j][0] and cover.cycle[y] >= 0 and not slots_of(y):
+                status[y] = _k.PASS  # a cover triangle split only for that bridge
+        for y in rings[j][0]:
+            status[y] = _k.PASS
+            swap_he[y] = join[y] = -1
+            slot[3 * y: 3 * y + 3] = _k.PLAIN
+    return arrays, (status, slot, swap_he, join), len(applied)
 
 
 def _take_ring(best, tw: np.ndarray, used: np.ndarray, taken: list) -> None:
@@ -794,6 +869,18 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
     return (*arrays, len(applied))
 
 
+def _longer(a: np.ndarray, extra: int, fill=None) -> np.ndarray:
+    """``a`` with ``extra`` more rows (``fill`` or unspecified): one copy into a
+    ``hammesh.pages.fresh`` array (small pages faulted in one call, or the reserve's),
+    not ``np.concatenate``'s fresh ``np.empty`` (at 1.5 M rows the page faults cost
+    more than the copy)."""
+    out = fresh((len(a) + extra,) + a.shape[1:], a.dtype)
+    out[: len(a)] = a
+    if fill is not None:
+        out[len(a):] = fill
+    return out
+
+
 def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken, accept=None):
     """Replace each ring fan's members by its ``k + 2`` rows (``_ring_fans``, ``_ring_joins``).
 
@@ -802,7 +889,8 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
     two are appended, so every other row and half-edge keeps its index: only the
     fans' own twins and the twins facing them are written (no O(m) renumbering).
     Each fan's effect on the cycles (``_ring_outcome``) is decided on the cover as
-    the fans before it left it; with ``accept(index in taken, outcome)`` a fan whose
+    the fans before it left it; with ``accept(index in taken, outcome, find)`` (``find``:
+    a cycle id to the one it was merged into) a fan whose
     outcome it refuses is left out. The cycles are relabelled by those outcomes
     (old cycles merged by a union-find over cycle ids, O(m) only as one gather) and
     anew (``cycle_ids_by_halves``) only where a fan split a cycle or its outcome
@@ -815,14 +903,9 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
     """
     m = len(tri)
     extra = 2 * len(taken)
-    tri2 = np.concatenate([tri, np.empty((extra, 3), np.int64)])
-    tw2 = np.concatenate([tw, np.empty(3 * extra, np.int64)])
-    con2 = np.concatenate([con, np.empty(3 * extra, np.bool_)])
-    is_cov2 = np.concatenate([cover.is_cov, np.empty(3 * extra, np.bool_)])
-    cyc2 = np.concatenate([cover.cycle, np.empty(extra, np.int64)])
-    amin2 = np.concatenate([amin_t, np.empty(extra)])
-    orig2 = np.concatenate([orig_of, np.empty(extra, np.int64)])
-    fan2 = np.concatenate([is_fan, np.ones(extra, np.bool_)])
+    tri2, tw2, con2 = _longer(tri, extra), _longer(tw, 3 * extra), _longer(con, 3 * extra)
+    is_cov2, cyc2 = _longer(cover.is_cov, 3 * extra), _longer(cover.cycle, extra)
+    amin2, orig2, fan2 = _longer(amin_t, extra), _longer(orig_of, extra), _longer(is_fan, extra, True)
     n_pts = len(pts)
     n_cyc = cover.n_cycles
     up: dict[int, int] = {}  # union-find over cycle ids: merged cycles point to a smaller id
@@ -839,7 +922,7 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
         outcome = None
         if not relabel_all or accept is not None:
             outcome = _ring_outcome(tw2, is_cov2, cyc2, members, hes, spoke, find)
-            if accept is not None and not accept(j, outcome):
+            if accept is not None and not accept(j, outcome, find):
                 continue
             if outcome is None or outcome.split:
                 relabel_all = True
@@ -1183,7 +1266,7 @@ def sparse_cycles(
         n, m, n_fan = len(pts), len(tri), n_fan + n_ring
     steps.done("fans")
     n_ring_join = 0
-    for ring_pass in range(RING_JOIN_PASSES + 1):  # plans again after ring joins (``_ring_joins``)
+    for ring_pass in range(1):  # (one plan: the ring joins patch it, ``_ring_joins``)
         cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
         ckind = np.zeros(len(cand), np.int8)
         slack = np.empty(len(cand))
@@ -1243,15 +1326,15 @@ def sparse_cycles(
                 status, counts,
                 int(place_iters),
             )
-        if ring_pass == RING_JOIN_PASSES or not (use_cover and fans and pts.shape[1] == 2 and m < RING_MAX_TRIANGLES):
-            break
-        rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
-                            newmax, status, slot, keep, keep * min_angle, hi, 2.0 * floor)
-        if rings is None:
-            break
-        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_rj = rings
-        n_ring_join += n_rj
-        n, m, n_fan = len(pts), len(tri), n_fan + n_rj
+        for _ in range(RING_JOIN_PASSES if use_cover and fans and pts.shape[1] == 2 else 0):
+            rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
+                                newmax, status, slot, swap_he, counts, keep, keep * min_angle, hi, 2.0 * floor)
+            if rings is None:
+                break
+            (pts, tri, tw, con, cover, amin_p, orig_of, is_fan), (status, slot, swap_he, join), n_rj = rings
+            n_ring_join += n_rj
+            n, m, n_fan = len(pts), len(tri), n_fan + n_rj
+        break  # the ring joins patch the plan (``_ring_joins``): it is not made again
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1
