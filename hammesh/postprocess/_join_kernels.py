@@ -869,11 +869,13 @@ def ring_outside_pairs(twin, is_cov, links, budget):
     walking the longest (a cycle around the whole mesh costs nothing). Local where
     ``cycle_ids`` would relabel every triangle (``sparse._ring_outcome``).
 
-    Returns ``pair`` (int64, one per link; -1 where ``budget`` steps in all did not
-    decide it).
+    Returns ``(pair, deduced)``: ``pair`` (int64, one per link; -1 where ``budget``
+    steps in all did not decide it) and the link of the pair found without walking
+    its path (-1 if every path was walked).
     """
     n = links.shape[0]
     pair = np.full(n, -1, np.int64)
+    deduced = -1
     cur = links.copy()  # the half-edge each walk last crossed, on the side it came from
     left = n
     steps = 0
@@ -891,7 +893,7 @@ def ring_outside_pairs(twin, is_cov, links, budget):
                     break
             steps += 1
             if f < 0 or twin[f] < 0:
-                return np.full(n, -1, np.int64)  # not a closed cycle: undecided
+                return np.full(n, -1, np.int64), -1  # not a closed cycle: undecided
             j = _link_index(links, twin[f])
             if j >= 0:
                 if j != i and pair[j] < 0:
@@ -899,7 +901,7 @@ def ring_outside_pairs(twin, is_cov, links, budget):
                     pair[j] = i
                     left -= 2
                 else:
-                    return np.full(n, -1, np.int64)
+                    return np.full(n, -1, np.int64), -1
             else:
                 cur[i] = f
     if left == 2:
@@ -911,7 +913,33 @@ def ring_outside_pairs(twin, is_cov, links, budget):
                 else:
                     pair[a] = i
                     pair[i] = a
-    return pair
+                    deduced = a
+    return pair, deduced
+
+
+@njit(cache=True, nogil=True)
+def label_outside_into(twin, is_cov, start, links, out, value):
+    """``out[x] = value`` for every triangle on the cover's path from link ``start``
+    outwards until it re-enters the group by one of ``links`` (as
+    ``ring_outside_pairs`` walks it): a piece of a cycle the group split off.
+    Returns the link index it re-entered by (-1: not a closed path)."""
+    cur = start
+    while True:
+        e = twin[cur]
+        x = e // 3
+        out[x] = value
+        f = -1
+        for k in range(3):
+            h = 3 * x + k
+            if h != e and is_cov[h]:
+                f = h
+                break
+        if f < 0 or twin[f] < 0:
+            return -1
+        j = _link_index(links, twin[f])
+        if j >= 0:
+            return j
+        cur = f
 
 
 @njit(cache=True, nogil=True)

@@ -259,10 +259,6 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
 
 #: most triangles one ring fan (an uncovered triangle and covered neighbours) may replace
 RING_MAX = 4
-#: meshes from this size on skip the re-route and the ring fans (``_reroute``,
-#: ``_ring_fans``): each relabels the cover's cycles and rebuilds the arrays, O(m),
-#: ~0.4 s CPU at 1.5 M triangles for the ~3 triangles they would help there
-RING_MAX_TRIANGLES = 100_000
 
 
 def _union_polygon(tri: np.ndarray, tw: np.ndarray, con: np.ndarray, members: list[int]):
@@ -545,11 +541,132 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
         done += 1
     if not done:
         return cover, 0
-    cyc2, n_cyc2 = cycle_ids_by_halves(tw, is_cov)
+    local = _relabel_group(tw, cover.is_cov, is_cov, cover.cycle, cover.n_cycles, touched_set)
+    cyc2, n_cyc2 = local if local is not None else cycle_ids_by_halves(tw, is_cov)
     return CycleCover(
         is_cov=is_cov, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
     ), done
+
+
+def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
+    """The cover's cycle ids after its edges changed only *inside* ``group`` (``_reroute``), or None.
+
+    Outside the group every cover edge is as it was, so each cycle crossing the group
+    still joins its *links* (cover edges across the group's border) in pairs outside
+    it (a cycle crossing once: its two links; more often: walked outwards,
+    ``_join_kernels.ring_outside_pairs``, lock-step); inside, the new cover joins
+    them in new pairs (walked here, through the group's few triangles). The new
+    cycles are the components of both pairings, plus cycles now wholly inside the
+    group. Old ids merge by a union-find (one O(m) gather); a cycle the group
+    splits keeps its id on the piece holding the one outside path not walked, and
+    the walked paths of its other pieces are labelled by walking them again
+    (``label_outside_into``; within the walks' budget). None (the caller labels the
+    cover anew) where a walk is undecided.
+    """
+    links = [3 * x + k for x in sorted(group) for k in range(3)
+             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and old_cov[3 * x + k]]
+    old_id = {h: int(cycle[tw[h] // 3]) for h in links}
+    by_id: dict[int, list] = {}
+    for h in links:
+        by_id.setdefault(old_id[h], []).append(h)
+    outside, unwalked = {}, set()
+    for hs in by_id.values():
+        if len(hs) == 2:
+            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
+            unwalked.add(hs[0])
+            continue
+        pair, deduced = _j.ring_outside_pairs(tw, old_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for h, j in zip(hs, pair.tolist()):
+            outside[h] = hs[j]
+        unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
+    inside, on_path = {}, {}
+    for h in links:  # the new cover inside the group, from each link to the next
+        if h in inside:
+            continue
+        came, path = h, []
+        while True:
+            x = came // 3
+            path.append(x)
+            f = [3 * x + k for k in range(3) if 3 * x + k != came and new_cov[3 * x + k]]
+            if len(f) != 1:
+                return None
+            f = f[0]
+            if tw[f] // 3 not in group:
+                break
+            came = int(tw[f])
+        inside[h], inside[f] = f, h
+        for x in path:
+            on_path[x] = h
+    root = {h: h for h in links}
+
+    def find(h):
+        while root[h] != h:
+            root[h] = root[root[h]]
+            h = root[h]
+        return h
+
+    for h in links:
+        root[find(h)] = find(outside[h])
+        root[find(h)] = find(inside[h])
+    # each new cycle's id: the smallest old id whose far (unwalked) part it holds, else a new one
+    holds: dict[int, int] = {}
+    for h in links:
+        if h in unwalked or outside[h] in unwalked:
+            r = find(h)
+            holds[r] = min(holds.get(r, old_id[h]), old_id[h])
+    comps = sorted({find(h) for h in links})
+    n_new = n_cycles
+    rep = {}
+    for r in comps:
+        if r in holds:
+            rep[r] = holds[r]
+        else:
+            rep[r] = n_new
+            n_new += 1
+    out = cycle.copy()
+    lut = np.arange(n_cycles + len(group) + len(links), dtype=np.int64)
+    alive = np.zeros(len(lut), np.bool_)
+    alive[:n_cycles] = True
+    for x in group:  # cycles wholly inside the group before: gone
+        if cycle[x] >= 0 and cycle[x] not in by_id:
+            alive[cycle[x]] = False
+    links_arr = np.asarray(links, np.int64)
+    for h in links:
+        r = find(h)
+        if h in unwalked or outside[h] in unwalked:
+            lut[old_id[h]] = rep[r]  # its far part stays where it is: relabelled by the gather
+            if rep[r] != old_id[h]:
+                alive[old_id[h]] = False
+        elif h < outside[h]:  # a walked path of a split piece: label it now
+            _j.label_outside_into(tw, old_cov, h, links_arr, out, rep[r])
+    alive[n_cycles:n_new] = True
+    for x in sorted(group):
+        if x in on_path:
+            out[x] = rep[find(on_path[x])]
+        elif not any(new_cov[3 * x + k] for k in range(3)):
+            out[x] = -1
+        else:
+            out[x] = -2  # on a cycle wholly inside the group (below)
+    for x in sorted(group):  # cycles now wholly inside the group: new ids
+        if out[x] != -2:
+            continue
+        stack = [x]
+        while stack:
+            y = stack.pop()
+            if out[y] != -2:
+                continue
+            out[y] = n_new
+            stack += [int(tw[3 * y + k] // 3) for k in range(3) if new_cov[3 * y + k]]
+        alive[n_new] = True
+        n_new += 1
+    # labels written above are final ids already: the gather maps ids through lut,
+    # which leaves every id in use as a final id (lut[id] = id) and merges the rest
+    rank = np.cumsum(alive[:n_new]) - 1
+    _j.relabel_cycles_into(out, rank[lut[:n_new]])
+    return out, int(alive[:n_new].sum())
 
 
 #: below-rule joins one call tries to replace by ring joins (``_ring_joins``), worst first
@@ -659,7 +776,7 @@ def _ring_outcome(tw, is_cov, cycle, members, hes, spoke, find=None) -> RingOutc
         if len(ids) == 2:
             outside[ids[0]], outside[ids[1]] = ids[1], ids[0]
             continue
-        pair = _j.ring_outside_pairs(tw, is_cov, np.asarray([hes[i] for i in ids], np.int64), RING_WALK_BUDGET)
+        pair, _ = _j.ring_outside_pairs(tw, is_cov, np.asarray([hes[i] for i in ids], np.int64), RING_WALK_BUDGET)
         if (pair < 0).any():
             return None
         for i, j in zip(ids, pair.tolist()):
@@ -1258,7 +1375,7 @@ def sparse_cycles(
         )
         n, m = len(pts), len(tri)
     n_ring = n_reroute = 0
-    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered and m < RING_MAX_TRIANGLES:
+    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:  # (every size: session 10)
         cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor)
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
             pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor

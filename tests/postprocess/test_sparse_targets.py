@@ -179,21 +179,37 @@ def test_reroute_covers_boundary_triangles_no_join_can_keep(max_area: float, mon
     re-route gives them cover edges by alternating paths, leaving off nothing or a
     triangle a ring fan takes instead. Its cover is a valid cover with the same
     number of triangles left off or fewer, and the output passes the certificate."""
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
     from tests.helpers import bundled_domain
 
     m = hammesh.quality_mesh(bundled_domain("A"), min_angle=30, max_area=max_area, isolate=False)
     seen = []
     real = S._reroute
 
+    local = []
+    real_relabel = S._relabel_group
+
+    def spy_relabel(*args):
+        out = real_relabel(*args)
+        local.append(out is not None)
+        return out
+
     def spy(pts, tri, tw, con, cover, *args):
         new, n = real(pts, tri, tw, con, cover, *args)
         seen.append((n, cover.n_uncovered, new.n_uncovered))
         _assert_valid_cover(tw, new)
+        # labelled locally (``_relabel_group``): the partition and count of the full relabelling
+        truth, n_truth = cycle_ids_by_halves(tw, new.is_cov)
+        assert new.n_cycles == n_truth and new.cycle.max() == n_truth - 1
+        pairs = np.unique(np.c_[truth, new.cycle], axis=0)
+        assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
         return new, n
 
     monkeypatch.setattr(S, "_reroute", spy)
+    monkeypatch.setattr(S, "_relabel_group", spy_relabel)
     h = hammesh.hamiltonian(m)
     r = h.report
+    assert local == [True]  # no cycle split there: no relabelling of the whole cover
     assert len(seen) == 1 and seen[0][0] == r["rerouted"] >= 1
     assert seen[0][2] <= seen[0][1]
     assert_sparse_certificate(m, h)
@@ -229,6 +245,43 @@ def test_alternating_paths_keep_every_degree() -> None:
             assert len(set(nodes)) == len(nodes)
             n_paths += 1
     assert n_paths > 100
+
+
+def test_relabel_group_agrees_with_cycle_ids() -> None:
+    """``_relabel_group`` (new cycle ids after cover edges changed inside a group,
+    decided from the group's links: outside pairs, inside walks, split pieces walked)
+    against ``cycle_ids_by_halves`` on the whole changed cover: every alternating
+    cycle of depth <= 3 (an alternating path from ``s`` whose end ``y`` shares a
+    non-cover edge with ``s``, flipped with that edge: a valid cover again) on two
+    small meshes' covers (long cycles, and rotate=False's short ones) gives the same
+    partition into cycles and the same count; merges and splits both occur."""
+    from hammesh.postprocess.cycle_cover import cycle_cover, cycle_ids_by_halves
+
+    n_case = n_merge = n_split = 0
+    for name, rotate in (("gear", True), ("plate_2_holes", False)):
+        m = hammesh.quality_mesh(_own_domains()[name], min_angle=30, max_area=0.01, isolate=False)
+        tri = np.asarray(m.triangles, np.int64)
+        tw = hammesh.halfedge.half_edge_twins(tri, m.n_points)[0]
+        cover = cycle_cover(tri, tw, rotate=rotate)
+        for s in np.flatnonzero(cover.cycle >= 0).tolist():
+            for y, nodes, flips in S._alternating_paths(tw, cover.is_cov, cover.cycle, s, set(), 3):
+                close = [3 * s + k for k in range(3)
+                         if tw[3 * s + k] >= 0 and tw[3 * s + k] // 3 == y and not cover.is_cov[3 * s + k]]
+                if not close or len(nodes) < 3:
+                    continue
+                is_cov = cover.is_cov.copy()
+                S._flip_cover(tw, is_cov, flips + close[:1])
+                got = S._relabel_group(tw, cover.is_cov, is_cov, cover.cycle, cover.n_cycles, set(nodes))
+                assert got is not None  # small meshes: every walk within the budget
+                truth, n_truth = cycle_ids_by_halves(tw, is_cov)
+                assert got[1] == n_truth and got[0].max() == n_truth - 1
+                np.testing.assert_array_equal(got[0] < 0, truth < 0)
+                pairs = np.unique(np.c_[truth, got[0]], axis=0)
+                assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
+                n_case += 1
+                n_merge += n_truth < cover.n_cycles
+                n_split += n_truth > cover.n_cycles
+    assert n_case > 200 and n_merge > 20 and n_split > 50  # (302, 34, 108 when written)
 
 
 def test_ring_joins_replace_joins_below_the_rule_on_la(monkeypatch) -> None:
