@@ -950,3 +950,17 @@ def relabel_cycles_into(cycle, lut):
         c = cycle[t]
         if c >= 0:
             cycle[t] = lut[c]
+
+
+def load_ring_kernels() -> None:
+    """Load (or compile) the kernels only ring fans, ring joins and re-routes reach
+    (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``), on two
+    triangles: ``hammesh.postprocess.load_kernels``' small mesh leaves no triangle
+    off its cover, so those steps do not run there."""
+    twin = np.array([3, 4, -1, 0, 1, -1], np.int64)
+    is_cov = np.array([True, True, False, True, True, False])
+    links = np.array([0, 1], np.int64)
+    ring_outside_pairs(twin, is_cov, links, 0)
+    out = np.zeros(2, np.int64)
+    label_outside_into(twin, is_cov, 0, links, out, 0)
+    relabel_cycles_into(out, np.zeros(1, np.int64))
