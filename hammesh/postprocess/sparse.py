@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from dataclasses import dataclass
 from functools import partial
 from typing import Callable
@@ -893,13 +894,14 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
         _take_ring(best, tw, used, rings)
         if len(rings) > n_before:
             blocked[rings[-1][0]] = True
-            steps.append((t, u, x))
+            h = slots_of(t)[0] if status[t] == _k.SPLIT else -1  # the bridge to undo (read now:
+            steps.append((t, u, x, h, int(tw[h]) if h >= 0 else -1))  # the fans may reuse tw's rows)
     if not rings:
         return None
 
     def still_fits(j: int, outcome, find) -> bool:
         # on the cover as the rings before it left it (a cycle may cross two of them)
-        t, u, _ = steps[j]
+        t, u = steps[j][:2]
         if outcome is None:
             return False
         if u < 0:
@@ -915,12 +917,10 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     status, slot = _longer(status, extra, _k.PASS), _longer(slot, 3 * extra, _k.PLAIN)
     swap_he, join = _longer(swap_he, extra, -1), _longer(join, extra, -1)
     for j in applied:
-        t, u, x = steps[j]
-        if u >= 0 and status[t] in (_k.SWAP, _k.EDGE):
+        t, u, x, h, g = steps[j]
+        if h < 0:  # a swap or split between two cycles
             counts[1 if status[t] == _k.SWAP else 3] -= 1
         else:  # a bridge (t, u covered) or an uncovered t's one bridge (to x)
-            h = slots_of(t)[0]
-            g = int(tw[h])
             slot[h] = slot[g] = _k.PLAIN
             counts[2] -= 1
             y = g // 3
@@ -982,23 +982,42 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
             blocked[taken[-1][0]] = True
     if not taken:
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
-    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken)
+    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken,
+                                   spare=2 * RING_JOIN_TRIES * RING_JOIN_PASSES)
     return (*arrays, len(applied))
 
 
-def _longer(a: np.ndarray, extra: int, fill=None) -> np.ndarray:
-    """``a`` with ``extra`` more rows (``fill`` or unspecified): one copy into a
-    ``hammesh.pages.fresh`` array (small pages faulted in one call, or the reserve's),
-    not ``np.concatenate``'s fresh ``np.empty`` (at 1.5 M rows the page faults cost
-    more than the copy)."""
-    out = fresh((len(a) + extra,) + a.shape[1:], a.dtype)
-    out[: len(a)] = a
+#: buffers ``_longer`` made with rows to spare, by data address: a later ``_longer``
+#: of a prefix of one grows into them without a copy
+_ROOMY: "weakref.WeakValueDictionary[int, np.ndarray]" = weakref.WeakValueDictionary()
+
+
+def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
+    """``a`` with ``extra`` more rows (``fill`` or unspecified).
+
+    Where ``a`` is a prefix of a buffer an earlier call made with ``spare`` rows, the
+    result is a longer prefix of that buffer (no copy: ``a``'s rows are shared, so
+    the caller must not need ``a`` unchanged). Else one copy into a
+    ``hammesh.pages.fresh`` array (small pages faulted in one call, or the
+    reserve's; not ``np.concatenate``'s ``np.empty``: at 1.5 M rows the page faults
+    cost more than the copy) with ``spare`` rows of room after it.
+    """
+    n = len(a)
+    buf = _ROOMY.get(a.ctypes.data) if a.flags.c_contiguous and n else None
+    if buf is not None and buf.dtype == a.dtype and buf.shape[1:] == a.shape[1:] and len(buf) >= n + extra:
+        out = buf[: n + extra]
+    else:
+        buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
+        if spare and n:
+            _ROOMY[buf.ctypes.data] = buf
+        out = buf[: n + extra]
+        out[:n] = a
     if fill is not None:
-        out[len(a):] = fill
+        out[n:] = fill
     return out
 
 
-def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken, accept=None):
+def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken, accept=None, spare: int = 0):
     """Replace each ring fan's members by its ``k + 2`` rows (``_ring_fans``, ``_ring_joins``).
 
     ``taken``: ``(members, polygon, outer half-edges, spoke, x, y)`` per fan, no two
@@ -1020,9 +1039,12 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
     """
     m = len(tri)
     extra = 2 * len(taken)
-    tri2, tw2, con2 = _longer(tri, extra), _longer(tw, 3 * extra), _longer(con, 3 * extra)
-    is_cov2, cyc2 = _longer(cover.is_cov, 3 * extra), _longer(cover.cycle, extra)
-    amin2, orig2, fan2 = _longer(amin_t, extra), _longer(orig_of, extra), _longer(is_fan, extra, True)
+    # (``spare`` rows of room: the ring joins' rows, later, without a copy)
+    tri2, tw2, con2 = _longer(tri, extra, None, spare), _longer(tw, 3 * extra, None, 3 * spare), _longer(
+        con, 3 * extra, None, 3 * spare)
+    is_cov2, cyc2 = _longer(cover.is_cov, 3 * extra, None, 3 * spare), _longer(cover.cycle, extra, None, spare)
+    amin2, orig2 = _longer(amin_t, extra, None, spare), _longer(orig_of, extra, None, spare)
+    fan2 = _longer(is_fan, extra, True, spare)
     n_pts = len(pts)
     n_cyc = cover.n_cycles
     up: dict[int, int] = {}  # union-find over cycle ids: merged cycles point to a smaller id
@@ -1108,7 +1130,8 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
         is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
     )
-    pts2 = np.concatenate([pts, np.asarray(new_pts, np.float64).reshape(-1, pts.shape[1])])
+    pts2 = _longer(pts, len(new_pts), None, spare // 2)  # (a ring join: one point, two rows)
+    pts2[n_pts:] = np.asarray(new_pts, np.float64).reshape(-1, pts.shape[1])
     return (pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2), applied
 
 

@@ -378,3 +378,22 @@ def _check_ring_outcomes(pts, tri, tw, con, cover, amin, counts):
             n_true += ans
             n_false += not ans
     return n_true, n_false, n_twice, n_split
+
+
+def test_longer_grows_into_its_spare_rows_and_copies_otherwise() -> None:
+    """``_longer``: a copy with the new rows filled; with ``spare`` rows, a later call on
+    the result (or a prefix of it) grows into them without a copy and keeps its rows;
+    an array it did not make is never written."""
+    a = np.arange(12, dtype=np.int64).reshape(4, 3)
+    b = S._longer(a, 2, -1, spare=3)
+    assert b.shape == (6, 3) and not np.shares_memory(a, b)
+    np.testing.assert_array_equal(b[:4], a)
+    assert (b[4:] == -1).all()
+    c = S._longer(b[:5], 3, 7)  # a prefix of the roomy buffer: within its spare rows
+    assert c.shape == (8, 3) and np.shares_memory(b, c)
+    np.testing.assert_array_equal(c[:4], a)
+    assert (c[4] == -1).all() and (c[5:] == 7).all()
+    d = S._longer(c, 2, 0)  # past the spare rows: a copy
+    assert d.shape == (10, 3) and not np.shares_memory(c, d)
+    np.testing.assert_array_equal(d[:8], c)
+    np.testing.assert_array_equal(a, np.arange(12).reshape(4, 3))
