@@ -44,7 +44,7 @@ input's minimum (only a cover passing them can fix those); the last two marks ch
 ``out min >= min(0.9 x in min, corner)`` and ``out min >= min(that, join)``; ``rf/rr/rj``
 the report's ``ring_fans``, ``rerouted`` and ``ring_joins`` (session 9: the join stage's
 answers where no join over an uncovered triangle's edges keeps the targets, and ring
-fans in place of joins below the local rule; below 100k triangles).
+fans in place of joins below the local rule; at every size since session 10).
 
 One command for every figure the issue names: ``python benchmarks/bench_sparse.py --big``.
 

@@ -70,9 +70,11 @@ def load_kernels(mode: str = "sparse") -> None:
         square = Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
         hamiltonian(quality_mesh(square, min_angle=30, max_area=0.01, isolate=False), mode=mode)
         if mode == "sparse":  # (and the paths only big outputs take)
+            from hammesh.postprocess._join_kernels import load_ring_kernels
             from hammesh.postprocess._sparse_kernels import load_output_kernels
 
             load_output_kernels()
+            load_ring_kernels()
         _loaded_modes.add(mode)
 
 

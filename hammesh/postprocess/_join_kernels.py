@@ -845,3 +845,122 @@ def move_to_targets(pts, out, twin, pinned, hs, lo, hi, floor, iters):
             pts[v, 1] = py
             moved += 1
     return moved
+
+
+@njit(cache=True, nogil=True)
+def _link_index(links, g):
+    """Index of half-edge ``g`` in ``links`` (a ring's few links), -1 if absent."""
+    for i in range(links.shape[0]):
+        if links[i] == g:
+            return i
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def ring_outside_pairs(twin, is_cov, links, budget):
+    """Which links of a ring fan's group the cover cycles join *outside* the group.
+
+    ``links`` are the group's outer half-edges (member side) that carry a cover edge;
+    each is followed outwards along its cycle (through covered triangles, by the
+    cover edge other than the one it came in by) until the cycle re-enters the group
+    by another link. All walks advance in lock-step and a walk stops when its path is
+    found from its other end, so the cost is about the links times the *second*
+    longest outside path: the last two links left pair with each other without
+    walking the longest (a cycle around the whole mesh costs nothing). Local where
+    ``cycle_ids`` would relabel every triangle (``sparse._ring_outcome``).
+
+    Returns ``(pair, deduced)``: ``pair`` (int64, one per link; -1 where ``budget``
+    steps in all did not decide it) and the link of the pair found without walking
+    its path (-1 if every path was walked).
+    """
+    n = links.shape[0]
+    pair = np.full(n, -1, np.int64)
+    deduced = -1
+    cur = links.copy()  # the half-edge each walk last crossed, on the side it came from
+    left = n
+    steps = 0
+    while left > 2 and steps < budget:
+        for i in range(n):
+            if pair[i] >= 0:
+                continue
+            e = twin[cur[i]]
+            x = e // 3
+            f = -1
+            for k in range(3):
+                h = 3 * x + k
+                if h != e and is_cov[h]:
+                    f = h
+                    break
+            steps += 1
+            if f < 0 or twin[f] < 0:
+                return np.full(n, -1, np.int64), -1  # not a closed cycle: undecided
+            j = _link_index(links, twin[f])
+            if j >= 0:
+                if j != i and pair[j] < 0:
+                    pair[i] = j
+                    pair[j] = i
+                    left -= 2
+                else:
+                    return np.full(n, -1, np.int64), -1
+            else:
+                cur[i] = f
+    if left == 2:
+        a = -1
+        for i in range(n):
+            if pair[i] < 0:
+                if a < 0:
+                    a = i
+                else:
+                    pair[a] = i
+                    pair[i] = a
+                    deduced = a
+    return pair, deduced
+
+
+@njit(cache=True, nogil=True)
+def label_outside_into(twin, is_cov, start, links, out, value):
+    """``out[x] = value`` for every triangle on the cover's path from link ``start``
+    outwards until it re-enters the group by one of ``links`` (as
+    ``ring_outside_pairs`` walks it): a piece of a cycle the group split off.
+    Returns the link index it re-entered by (-1: not a closed path)."""
+    cur = start
+    while True:
+        e = twin[cur]
+        x = e // 3
+        out[x] = value
+        f = -1
+        for k in range(3):
+            h = 3 * x + k
+            if h != e and is_cov[h]:
+                f = h
+                break
+        if f < 0 or twin[f] < 0:
+            return -1
+        j = _link_index(links, twin[f])
+        if j >= 0:
+            return j
+        cur = f
+
+
+@njit(cache=True, nogil=True)
+def relabel_cycles_into(cycle, lut):
+    """``cycle[t] = lut[cycle[t]]`` for covered triangles (in place): new cycle ids after
+    ring fans merged some (``sparse._apply_rings``)."""
+    for t in range(cycle.shape[0]):
+        c = cycle[t]
+        if c >= 0:
+            cycle[t] = lut[c]
+
+
+def load_ring_kernels() -> None:
+    """Load (or compile) the kernels only ring fans, ring joins and re-routes reach
+    (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``), on two
+    triangles: ``hammesh.postprocess.load_kernels``' small mesh leaves no triangle
+    off its cover, so those steps do not run there."""
+    twin = np.array([3, 4, -1, 0, 1, -1], np.int64)
+    is_cov = np.array([True, True, False, True, True, False])
+    links = np.array([0, 1], np.int64)
+    ring_outside_pairs(twin, is_cov, links, 0)
+    out = np.zeros(2, np.int64)
+    label_outside_into(twin, is_cov, 0, links, out, 0)
+    relabel_cycles_into(out, np.zeros(1, np.int64))

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from dataclasses import dataclass
 from functools import partial
 from typing import Callable
@@ -259,10 +260,6 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
 
 #: most triangles one ring fan (an uncovered triangle and covered neighbours) may replace
 RING_MAX = 4
-#: meshes from this size on skip the re-route and the ring fans (``_reroute``,
-#: ``_ring_fans``): each relabels the cover's cycles and rebuilds the arrays, O(m),
-#: ~0.4 s CPU at 1.5 M triangles for the ~3 triangles they would help there
-RING_MAX_TRIANGLES = 100_000
 
 
 def _union_polygon(tri: np.ndarray, tw: np.ndarray, con: np.ndarray, members: list[int]):
@@ -486,6 +483,8 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     is_cov = cover.is_cov.copy()
     cycle = cover.cycle.copy()
     touched = np.zeros(m, np.bool_)
+    fan_or_touched = is_fan.copy()  # is_fan | touched, and touched as a set: no O(m) pass per pair
+    touched_set: set[int] = set()
     done = 0
     for t in rows.tolist():
         if _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan, t, lo, hi, floor2) is not None:
@@ -498,7 +497,7 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                 u, w = nbs[i], nbs[j]
                 if i == j or cycle[u] < 0 or cycle[w] < 0 or touched[u] or touched[w]:
                     continue
-                avoid = {t} | {int(x) for x in np.flatnonzero(touched)}
+                avoid = {t} | touched_set
                 from_w: dict[int, list] = {}
                 for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, REROUTE_DEPTH):
                     from_w.setdefault(y, []).append((nodes, flips))
@@ -522,7 +521,7 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                         _flip_cover(tw, is_cov, add + flips_all)
                         c_t, c_z = cycle[t], cycle[z]
                         cycle[t], cycle[z] = cycle[u], -1
-                        ring = _best_ring(pts, tri, tw, con, is_cov, cycle, is_fan | touched, z, lo, hi, floor2)
+                        ring = _best_ring(pts, tri, tw, con, is_cov, cycle, fan_or_touched, z, lo, hi, floor2)
                         _flip_cover(tw, is_cov, add + flips_all)
                         cycle[t], cycle[z] = c_t, c_z
                         if ring is not None:
@@ -536,19 +535,144 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
             cycle[z] = -1
         touched[nodes] = True
         touched[t] = True
+        fan_or_touched[nodes] = True
+        fan_or_touched[t] = True
+        touched_set.update(int(x) for x in nodes)
+        touched_set.add(int(t))
         done += 1
     if not done:
         return cover, 0
-    cyc2, n_cyc2 = cycle_ids_by_halves(tw, is_cov)
+    local = _relabel_group(tw, cover.is_cov, is_cov, cover.cycle, cover.n_cycles, touched_set)
+    cyc2, n_cyc2 = local if local is not None else cycle_ids_by_halves(tw, is_cov)
     return CycleCover(
         is_cov=is_cov, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
     ), done
 
 
+def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
+    """The cover's cycle ids after its edges changed only *inside* ``group`` (``_reroute``), or None.
+
+    Outside the group every cover edge is as it was, so each cycle crossing the group
+    still joins its *links* (cover edges across the group's border) in pairs outside
+    it (a cycle crossing once: its two links; more often: walked outwards,
+    ``_join_kernels.ring_outside_pairs``, lock-step); inside, the new cover joins
+    them in new pairs (walked here, through the group's few triangles). The new
+    cycles are the components of both pairings, plus cycles now wholly inside the
+    group. Old ids merge by a union-find (one O(m) gather); a cycle the group
+    splits keeps its id on the piece holding the one outside path not walked, and
+    the walked paths of its other pieces are labelled by walking them again
+    (``label_outside_into``; within the walks' budget). None (the caller labels the
+    cover anew) where a walk is undecided.
+    """
+    links = [3 * x + k for x in sorted(group) for k in range(3)
+             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and old_cov[3 * x + k]]
+    old_id = {h: int(cycle[tw[h] // 3]) for h in links}
+    by_id: dict[int, list] = {}
+    for h in links:
+        by_id.setdefault(old_id[h], []).append(h)
+    outside, unwalked = {}, set()
+    for hs in by_id.values():
+        if len(hs) == 2:
+            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
+            unwalked.add(hs[0])
+            continue
+        pair, deduced = _j.ring_outside_pairs(tw, old_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for h, j in zip(hs, pair.tolist()):
+            outside[h] = hs[j]
+        unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
+    inside, on_path = {}, {}
+    for h in links:  # the new cover inside the group, from each link to the next
+        if h in inside:
+            continue
+        came, path = h, []
+        while True:
+            x = came // 3
+            path.append(x)
+            f = [3 * x + k for k in range(3) if 3 * x + k != came and new_cov[3 * x + k]]
+            if len(f) != 1:
+                return None
+            f = f[0]
+            if tw[f] // 3 not in group:
+                break
+            came = int(tw[f])
+        inside[h], inside[f] = f, h
+        for x in path:
+            on_path[x] = h
+    root = {h: h for h in links}
+
+    def find(h):
+        while root[h] != h:
+            root[h] = root[root[h]]
+            h = root[h]
+        return h
+
+    for h in links:
+        root[find(h)] = find(outside[h])
+        root[find(h)] = find(inside[h])
+    # each new cycle's id: the smallest old id whose far (unwalked) part it holds, else a new one
+    holds: dict[int, int] = {}
+    for h in links:
+        if h in unwalked or outside[h] in unwalked:
+            r = find(h)
+            holds[r] = min(holds.get(r, old_id[h]), old_id[h])
+    comps = sorted({find(h) for h in links})
+    n_new = n_cycles
+    rep = {}
+    for r in comps:
+        if r in holds:
+            rep[r] = holds[r]
+        else:
+            rep[r] = n_new
+            n_new += 1
+    out = cycle.copy()
+    lut = np.arange(n_cycles + len(group) + len(links), dtype=np.int64)
+    alive = np.zeros(len(lut), np.bool_)
+    alive[:n_cycles] = True
+    for x in group:  # cycles wholly inside the group before: gone
+        if cycle[x] >= 0 and cycle[x] not in by_id:
+            alive[cycle[x]] = False
+    links_arr = np.asarray(links, np.int64)
+    for h in links:
+        r = find(h)
+        if h in unwalked or outside[h] in unwalked:
+            lut[old_id[h]] = rep[r]  # its far part stays where it is: relabelled by the gather
+            if rep[r] != old_id[h]:
+                alive[old_id[h]] = False
+        elif h < outside[h]:  # a walked path of a split piece: label it now
+            _j.label_outside_into(tw, old_cov, h, links_arr, out, rep[r])
+    alive[n_cycles:n_new] = True
+    for x in sorted(group):
+        if x in on_path:
+            out[x] = rep[find(on_path[x])]
+        elif not any(new_cov[3 * x + k] for k in range(3)):
+            out[x] = -1
+        else:
+            out[x] = -2  # on a cycle wholly inside the group (below)
+    for x in sorted(group):  # cycles now wholly inside the group: new ids
+        if out[x] != -2:
+            continue
+        stack = [x]
+        while stack:
+            y = stack.pop()
+            if out[y] != -2:
+                continue
+            out[y] = n_new
+            stack += [int(tw[3 * y + k] // 3) for k in range(3) if new_cov[3 * y + k]]
+        alive[n_new] = True
+        n_new += 1
+    # labels written above are final ids already: the gather maps ids through lut,
+    # which leaves every id in use as a final id (lut[id] = id) and merges the rest
+    rank = np.cumsum(alive[:n_new]) - 1
+    _j.relabel_cycles_into(out, rank[lut[:n_new]])
+    return out, int(alive[:n_new].sum())
+
+
 #: below-rule joins one call tries to replace by ring joins (``_ring_joins``), worst first
 RING_JOIN_TRIES = 32
-#: rounds of ring joins, each followed by a new plan
+#: rounds of ring joins, each patching the plan (0: none)
 RING_JOIN_PASSES = 1
 
 
@@ -584,19 +708,80 @@ def _ring_pairs(tw, is_cov, members, hes, spoke):
     return links, old, new
 
 
-def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool | None:
-    """Does the ring fan join the cycles of triangles ``a`` and ``b`` and split none?
+#: most steps the outside walks of one ring may take (``_ring_outcome``); undecided rings are not taken
+RING_WALK_BUDGET = 20_000
 
-    Each cycle crossing the group must cross it once (its two links joined inside the
-    group): then outside the group it is one path between those links, and the new
-    cycles are the components of old pairs (outside) and new pairs (the arcs), each a
-    union of old cycles. Without labelling the cycles anew (``_ring_pairs``). None
-    where a cycle crosses the group twice (``_ring_merges_relabelled`` decides).
+
+@dataclass(frozen=True)
+class RingOutcome:
+    """What a ring fan does to the cycles crossing its group (``_ring_outcome``).
+
+    ``links``: ring positions with a link; ``old_id[i]``: the cycle link ``i`` is on;
+    ``comp[i]``: the new cycle link ``i`` is on (a representative link position);
+    ``split``: some old cycle is spread over two new ones.
     """
-    links, old, new = _ring_pairs(tw, is_cov, members, hes, spoke)
-    ids = {i: int(cycle[hes[i] // 3]) for i in links}
-    if len({ids[i] for i in links}) * 2 != len(links):
-        return None  # a cycle crosses twice: the outside order matters (``_ring_merges_relabelled``)
+
+    links: list
+    old_id: dict
+    comp: dict
+    split: bool
+
+    def merges(self, ca: int, cb: int) -> bool:
+        """Do the old cycles ``ca`` and ``cb`` end on one new cycle, and none split?"""
+        if self.split:
+            return False
+        at = {self.old_id[i]: self.comp[i] for i in self.links}
+        return ca in at and cb in at and at[ca] == at[cb]
+
+    def keeps_all(self) -> bool:
+        """Every crossing cycle stays one cycle of its own (none merged, none split)."""
+        if self.split:
+            return False
+        ids: dict[int, int] = {}
+        for i in self.links:
+            if ids.setdefault(self.comp[i], self.old_id[i]) != self.old_id[i]:
+                return False
+        return True
+
+    def only_merges(self, ca: int, cb: int) -> bool:
+        """``merges(ca, cb)``, and every other crossing cycle stays a cycle of its own."""
+        if not self.merges(ca, cb):
+            return False
+        by_comp: dict[int, set] = {}
+        for i in self.links:
+            by_comp.setdefault(self.comp[i], set()).add(self.old_id[i])
+        return all(len(ids) == 1 or ids == {ca, cb} for ids in by_comp.values())
+
+
+def _ring_outcome(tw, is_cov, cycle, members, hes, spoke, find=None) -> RingOutcome | None:
+    """The new cycles through a ring fan's group, decided locally (no relabelling).
+
+    Inside the group the old cover joined the links in pairs (``_ring_pairs``' ``old``),
+    the fan's arcs join them in new pairs (``new``); outside, each cycle joins its
+    links in pairs too: a cycle crossing the group once joins its two links, one
+    crossing it more often is walked outwards from its links
+    (``_join_kernels.ring_outside_pairs``, lock-step, so the longest outside path is
+    never walked). The new cycles are the components of outside and new pairs.
+    None if the walks exceed ``RING_WALK_BUDGET`` (the ring is then not used as a
+    join). ``find`` maps a cycle id to the one it was merged into (``_apply_rings``).
+    """
+    links, _, new = _ring_pairs(tw, is_cov, members, hes, spoke)
+    old_id = {i: int(cycle[tw[hes[i]] // 3]) for i in links}
+    if find is not None:
+        old_id = {i: find(c) for i, c in old_id.items()}
+    by_id: dict[int, list] = {}
+    for i in links:
+        by_id.setdefault(old_id[i], []).append(i)
+    outside = {}
+    for ids in by_id.values():
+        if len(ids) == 2:
+            outside[ids[0]], outside[ids[1]] = ids[1], ids[0]
+            continue
+        pair, _ = _j.ring_outside_pairs(tw, is_cov, np.asarray([hes[i] for i in ids], np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for i, j in zip(ids, pair.tolist()):
+            outside[i] = ids[j]
     root = {i: i for i in links}
 
     def find(i):
@@ -606,37 +791,15 @@ def _ring_merges(tw, is_cov, cycle, members, hes, spoke, a: int, b: int) -> bool
         return i
 
     for i in links:
-        for j in (old[i], new[i]):
+        for j in (outside[i], new[i]):
             root[find(i)] = find(j)
-    comp = {ids[i]: find(i) for i in links}
-    ca, cb = int(cycle[a]), int(cycle[b])
-    return ca in comp and cb in comp and comp[ca] == comp[cb]
-
-
-def _ring_merges_relabelled(pts, tri, tw, con, cover: CycleCover, members, poly, hes, spoke, a: int, b: int) -> bool:
-    """``_ring_merges`` by labelling the cycles of the re-routed cover anew (O(m): small meshes only).
-
-    The ring applied on its own (``_apply_rings``), ``cycle_cover.cycle_ids_by_halves`` on
-    the result: True if every cycle that crossed the group lies on one new cycle
-    outside it (none split) and ``a``'s and ``b``'s cycles on the same one.
-    """
-    m = len(tri)
-    x, y = pts[tri[members]].reshape(-1, pts.shape[1]).mean(axis=0)
-    out = _apply_rings(pts, tri, tw, con, cover, np.zeros(m), np.arange(m), np.zeros(m, np.bool_),
-                       [(members, poly, hes, spoke, x, y)])
-    kept = np.setdiff1d(np.arange(m), members)
-    old = cover.cycle[kept]
-    new = out[4].cycle[: len(kept)]
-    near = np.unique(old[np.isin(kept, tw[np.asarray(hes)[tw[np.asarray(hes)] >= 0]] // 3)])
-    for c in near[near >= 0].tolist():
-        if len(np.unique(new[old == c])) > 1:
-            return False
-    na, nb = new[old == cover.cycle[a]], new[old == cover.cycle[b]]
-    return bool(len(na) and len(nb) and na[0] == nb[0])
+    comp = {i: find(i) for i in links}
+    split = any(len({comp[i] for i in ids}) > 1 for ids in by_id.values())
+    return RingOutcome(links, old_id, comp, split)
 
 
 def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
-                newmax, status, slot, keep: float, lo: float, hi: float, floor2: float):
+                newmax, status, slot, swap_he, counts, keep: float, lo: float, hi: float, floor2: float):
     """Ring fans in place of the joins the plan took below the local rule or the targets (issue 13).
 
     A swap or split over ``ab`` of ``t = abc``, ``u = bad`` divides the corners ``c``
@@ -644,15 +807,22 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     ``keep`` x the pair's smallest angle. A fan around one point over ``t``, ``u`` and
     one or two covered neighbours (``_best_ring``, local rule against all its
     members) divides only its polygon's corners, which gather several input angles,
-    and re-routes the cycles crossing it: taken where that joins ``t``'s and ``u``'s
-    cycles and splits none (``_ring_merges``). Tried, up to ``RING_JOIN_TRIES``:
+    and re-routes the cycles crossing it. Tried, up to ``RING_JOIN_TRIES``:
     the joins between two cycles below the rule, the Thm 2.4 bridges between two
     cycles (both triangles split at their incenters) and the uncovered triangles the
-    plan split at their incenters (a ring fan over them, ``_ring_fans``' test) —
-    first those whose rows miss the absolute targets (``lo``: ``keep`` x the input's
-    smallest angle; ``hi``), then by the local rule's slack. The caller plans the
-    joins again on the new mesh. Returns ``_apply_rings``'s arrays and the number of
-    rings, or None.
+    plan split at their incenters and bridged once (a ring fan over them,
+    ``_ring_fans``' test) — first those whose rows miss the absolute targets (``lo``:
+    ``keep`` x the input's smallest angle; ``hi``), then by the local rule's slack.
+
+    The plan is *patched*, not made again: a ring is taken only where it does
+    exactly what the plan's step did (``_ring_outcome``: it joins ``t``'s and
+    ``u``'s cycles and leaves every other cycle crossing it as it was; over an
+    uncovered triangle, a leaf of the plan's tree, it merges and splits nothing),
+    its other members take part in no join, and only the replaced step is undone
+    (its statuses, slots and counts). So Kruskal's tree stays a tree and no re-plan
+    (candidates, scores, placements, Kruskal: O(m)) is needed. Returns
+    ``_apply_rings``' arrays, the patched ``(status, slot, swap_he, join)`` and the
+    number of rings, or None; ``counts`` is updated in place.
     """
     tasks = []  # (misses the targets, slack, t, u or -1)
     taken = order[np.unique(join[join >= 0])]
@@ -661,8 +831,10 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
     for i, t, u in zip(low[both].tolist(), t_of[both].tolist(), u_of[both].tolist()):
         tasks.append((not (newmin[i] >= lo and newmax[i] <= hi), float(slack[i]), t, u))
-    bridged = np.flatnonzero((slot != _k.PLAIN) & (tw > np.arange(len(tw))))
-    split_unc = np.flatnonzero((status == _k.SPLIT) & (cover.cycle < 0))
+    bridged = np.flatnonzero(slot != _k.PLAIN)
+    bridged = bridged[tw[bridged] > bridged]
+    split_unc = np.flatnonzero(status == _k.SPLIT)
+    split_unc = split_unc[cover.cycle[split_unc] < 0]
     rows = np.unique(np.concatenate([bridged // 3, tw[bridged] // 3, split_unc]))
     a_lo, a_hi = triangle_angles(pts, tri[rows]) if len(rows) else (np.zeros(0), np.zeros(0))
     # an incenter's sectors: half of each corner; 90 degrees + half a corner at the incenter
@@ -677,31 +849,88 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     if not tasks:
         return None
     tasks.sort(key=lambda x: (not x[0], x[1]))
-    used = np.zeros(len(tri), np.bool_)
-    rings = []
 
-    def _merges(ms, hes, sp, t, u):
-        ok = _ring_merges(tw, cover.is_cov, cover.cycle, ms, hes, sp, t, u)
-        if ok is None:
-            poly = _union_polygon(tri, tw, con, ms)[0]
-            ok = _ring_merges_relabelled(pts, tri, tw, con, cover, ms, poly, hes, sp, t, u)
-        return ok
+    def slots_of(x: int) -> list[int]:
+        return [3 * x + k for k in range(3) if slot[3 * x + k] != _k.PLAIN]
+
+    def free(x: int, allowed: tuple = ()) -> bool:
+        """In no step of the plan (or only in the one being replaced)."""
+        return (status[x] == _k.PASS or x in allowed) and all(tw[h] // 3 in allowed for h in slots_of(x))
+
+    used = np.zeros(len(tri), np.bool_)
+    blocked = is_fan.copy()  # is_fan | used, kept up to date (no O(m) pass per task)
+    rings, steps = [], []  # steps: what each ring replaces, (t, u, bridge partner or -1)
+
+    def fits(ms, hes, sp, t, u, x):
+        if not all(free(y, (t, u, x)) for y in ms):
+            return False
+        out = _ring_outcome(tw, cover.is_cov, cover.cycle, ms, hes, sp)
+        if out is None:
+            return False
+        if u < 0:
+            return out.keeps_all()
+        return out.only_merges(int(cover.cycle[t]), int(cover.cycle[u]))
 
     for missing, _, t, u in tasks[:RING_JOIN_TRIES]:
-        if used[t] or is_fan[t] or (u >= 0 and (used[u] or is_fan[u])):
+        if blocked[t] or (u >= 0 and blocked[u]):
             continue
+        x = -1
         if u < 0:  # an uncovered triangle: a ring fan (no cycle of its own to join)
-            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+            br = slots_of(t)
+            if len(br) != 1:  # bridged more than once: not a leaf of the plan's tree
+                continue
+            x = int(tw[br[0]] // 3)
+            best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, t, lo, hi, floor2,
+                              accept=lambda ms, hes, sp: fits(ms, hes, sp, t, -1, x))
         else:  # a join missing the targets: any ring within them; else one meeting the rule
+            if status[t] == _k.SPLIT and (len(slots_of(t)) != 1 or len(slots_of(u)) != 1):
+                continue  # a bridge: only if it is the one step of both triangles
             best = _best_ring(
-                pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, [t, u], lo, hi, floor2,
+                pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, [t, u], lo, hi, floor2,
                 amin=None if missing else amin_t, keep=keep,
-                accept=lambda ms, hes, sp: _merges(ms, hes, sp, t, u),
+                accept=lambda ms, hes, sp: fits(ms, hes, sp, t, u, -1),
             )
+        n_before = len(rings)
         _take_ring(best, tw, used, rings)
+        if len(rings) > n_before:
+            blocked[rings[-1][0]] = True
+            h = slots_of(t)[0] if status[t] == _k.SPLIT else -1  # the bridge to undo (read now:
+            steps.append((t, u, x, h, int(tw[h]) if h >= 0 else -1))  # the fans may reuse tw's rows)
     if not rings:
         return None
-    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings), len(rings))
+
+    def still_fits(j: int, outcome, find) -> bool:
+        # on the cover as the rings before it left it (a cycle may cross two of them)
+        t, u = steps[j][:2]
+        if outcome is None:
+            return False
+        if u < 0:
+            return outcome.keeps_all()
+        return outcome.only_merges(find(int(cover.cycle[t])), find(int(cover.cycle[u])))
+
+    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, rings, accept=still_fits)
+    if not applied:
+        return None
+    # undo the replaced steps, then the fans' rows take part in no step (one copy of
+    # each array, which the fans' two rows each lengthen)
+    extra = 2 * len(applied)
+    status, slot = _longer(status, extra, _k.PASS), _longer(slot, 3 * extra, _k.PLAIN)
+    swap_he, join = _longer(swap_he, extra, -1), _longer(join, extra, -1)
+    for j in applied:
+        t, u, x, h, g = steps[j]
+        if h < 0:  # a swap or split between two cycles
+            counts[1 if status[t] == _k.SWAP else 3] -= 1
+        else:  # a bridge (t, u covered) or an uncovered t's one bridge (to x)
+            slot[h] = slot[g] = _k.PLAIN
+            counts[2] -= 1
+            y = g // 3
+            if y not in rings[j][0] and cover.cycle[y] >= 0 and not slots_of(y):
+                status[y] = _k.PASS  # a cover triangle split only for that bridge
+        for y in rings[j][0]:
+            status[y] = _k.PASS
+            swap_he[y] = join[y] = -1
+            slot[3 * y: 3 * y + 3] = _k.PLAIN
+    return arrays, (status, slot, swap_he, join), len(applied)
 
 
 def _take_ring(best, tw: np.ndarray, used: np.ndarray, taken: list) -> None:
@@ -744,71 +973,166 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
     taken: list[tuple[list[int], list[int], list[int], np.ndarray, float, float]] = []
     used = np.zeros(m, np.bool_)
+    blocked = is_fan.copy()  # is_fan | used, kept up to date
     for t in rows.tolist():
-        best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, is_fan | used, t, lo, hi, floor2)
+        best = _best_ring(pts, tri, tw, con, cover.is_cov, cover.cycle, blocked, t, lo, hi, floor2)
+        n_before = len(taken)
         _take_ring(best, tw, used, taken)
+        if len(taken) > n_before:
+            blocked[taken[-1][0]] = True
     if not taken:
         return pts, tri, tw, con, cover, amin_t, orig_of, is_fan, 0
-    return (*_apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken), len(taken))
+    arrays, applied = _apply_rings(pts, tri, tw, con, cover, amin_t, orig_of, is_fan, taken,
+                                   spare=2 * RING_JOIN_TRIES * RING_JOIN_PASSES)
+    return (*arrays, len(applied))
 
 
-def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken):
+#: buffers ``_longer`` made with rows to spare, by data address: a later ``_longer``
+#: of a prefix of one grows into them without a copy
+_ROOMY: "weakref.WeakValueDictionary[int, np.ndarray]" = weakref.WeakValueDictionary()
+
+
+def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
+    """``a`` with ``extra`` more rows (``fill`` or unspecified).
+
+    Where ``a`` is a prefix of a buffer an earlier call made with ``spare`` rows, the
+    result is a longer prefix of that buffer (no copy: ``a``'s rows are shared, so
+    the caller must not need ``a`` unchanged). Else one copy into a
+    ``hammesh.pages.fresh`` array (small pages faulted in one call, or the
+    reserve's; not ``np.concatenate``'s ``np.empty``: at 1.5 M rows the page faults
+    cost more than the copy) with ``spare`` rows of room after it.
+    """
+    n = len(a)
+    buf = _ROOMY.get(a.ctypes.data) if a.flags.c_contiguous and n else None
+    if buf is not None and buf.dtype == a.dtype and buf.shape[1:] == a.shape[1:] and len(buf) >= n + extra:
+        out = buf[: n + extra]
+    else:
+        buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
+        if spare and n:
+            _ROOMY[buf.ctypes.data] = buf
+        out = buf[: n + extra]
+        out[:n] = a
+    if fill is not None:
+        out[n:] = fill
+    return out
+
+
+def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken, accept=None, spare: int = 0):
     """Replace each ring fan's members by its ``k + 2`` rows (``_ring_fans``, ``_ring_joins``).
 
     ``taken``: ``(members, polygon, outer half-edges, spoke, x, y)`` per fan, no two
-    adjacent. Returns the new ``(points, triangles, twin, pinned, cover, parent_min,
-    orig_of, is_fan)``: kept rows in order, then the fans' rows (``orig_of``: the input
-    triangle holding the fan row's outer edge; ``parent_min``: the members' smallest
-    angle); the fans' points follow the points; the cycles are labelled anew.
+    adjacent, applied in order. A fan's first rows take its members' rows, its last
+    two are appended, so every other row and half-edge keeps its index: only the
+    fans' own twins and the twins facing them are written (no O(m) renumbering).
+    Each fan's effect on the cycles (``_ring_outcome``) is decided on the cover as
+    the fans before it left it; with ``accept(index in taken, outcome, find)`` (``find``:
+    a cycle id to the one it was merged into) a fan whose
+    outcome it refuses is left out. The cycles are relabelled by those outcomes
+    (old cycles merged by a union-find over cycle ids, O(m) only as one gather) and
+    anew (``cycle_ids_by_halves``) only where a fan split a cycle or its outcome
+    was not decided.
+
+    Returns the new ``(points, triangles, twin, pinned, cover, parent_min, orig_of,
+    is_fan)`` (``orig_of``: the input triangle holding a fan row's outer edge;
+    ``parent_min``: the members' smallest angle; the fans' points follow the
+    points) and the indices in ``taken`` of the fans applied.
     """
     m = len(tri)
-    # rebuild: kept rows in order, then the fans' rows; twins mapped, not re-derived
-    dead = np.zeros(m, np.bool_)
-    for members, *_ in taken:
-        dead[members] = True
-    kept = np.flatnonzero(~dead)
-    new_of = np.full(m, -1, np.int64)
-    new_of[kept] = np.arange(len(kept))
+    extra = 2 * len(taken)
+    # (``spare`` rows of room: the ring joins' rows, later, without a copy)
+    tri2, tw2, con2 = _longer(tri, extra, None, spare), _longer(tw, 3 * extra, None, 3 * spare), _longer(
+        con, 3 * extra, None, 3 * spare)
+    is_cov2, cyc2 = _longer(cover.is_cov, 3 * extra, None, 3 * spare), _longer(cover.cycle, extra, None, spare)
+    amin2, orig2 = _longer(amin_t, extra, None, spare), _longer(orig_of, extra, None, spare)
+    fan2 = _longer(is_fan, extra, True, spare)
     n_pts = len(pts)
-    f_tri, f_tw, f_con, f_cov, f_min, f_orig, f_pts = [], [], [], [], [], [], []
-    he_to = {}  # outer half-edge of a group -> the fan row's outer half-edge
-    base = len(kept)
+    n_cyc = cover.n_cycles
+    up: dict[int, int] = {}  # union-find over cycle ids: merged cycles point to a smaller id
+
+    def find(c: int) -> int:
+        while c in up:
+            c = up[c]
+        return c
+
+    relabel_all = False
+    applied, new_pts = [], []
     for j, (members, poly, hes, spoke, x, y) in enumerate(taken):
         k = len(poly)
+        outcome = None
+        if not relabel_all or accept is not None:
+            outcome = _ring_outcome(tw2, is_cov2, cyc2, members, hes, spoke, find)
+            if accept is not None and not accept(j, outcome, find):
+                continue
+            if outcome is None or outcome.split:
+                relabel_all = True
+        base = m + 2 * len(applied)
+        rows = list(members) + [base, base + 1]
+        v = n_pts + len(applied)
+        applied.append(j)
+        new_pts.append((x, y))
+        # every value read from the arrays before any row of this fan is written
+        outer = [int(tw2[h]) for h in hes]
+        f_con = [bool(con2[h]) for h in hes]
+        f_link = [outer[i] >= 0 and bool(is_cov2[hes[i]]) for i in range(k)]
+        f_orig = [int(orig2[h // 3]) for h in hes]
+        f_min = float(amin2[members].min())
         for i in range(k):
-            r = base + i
-            f_tri.append((n_pts + j, poly[i], poly[(i + 1) % k]))
-            he_to[hes[i]] = 3 * r + 1
-            f_tw.append((3 * (base + (i - 1) % k) + 2, -1, 3 * (base + (i + 1) % k)))
-            f_con.append((False, bool(con[hes[i]]), False))
-            link = tw[hes[i]] >= 0 and bool(cover.is_cov[hes[i]])
-            f_cov.append((bool(spoke[i]), link, bool(spoke[(i + 1) % k])))
-            f_orig.append(orig_of[hes[i] // 3])
-        f_min.extend([float(amin_t[members].min())] * k)
-        f_pts.append((x, y))
-        base += k
-    h_old = (3 * kept[:, None] + np.arange(3)).ravel()
-    g = tw[h_old]
-    tw_k = np.where(g >= 0, 3 * new_of[np.maximum(g, 0) // 3] + g % 3, -1)
-    tri2 = np.concatenate([tri[kept], np.asarray(f_tri, np.int64)])
-    tw2 = np.concatenate([tw_k, np.asarray(f_tw, np.int64).ravel()])
-    for h, r1 in he_to.items():  # both sides of every group's outer edge
-        o = tw[h]
-        if o >= 0:
-            tw2[r1] = 3 * new_of[o // 3] + o % 3
-            tw2[3 * new_of[o // 3] + o % 3] = r1
-    con2 = np.concatenate([con.reshape(m, 3)[kept].ravel(), np.asarray(f_con, np.bool_).ravel()])
-    is_cov2 = np.concatenate([cover.is_cov.reshape(m, 3)[kept].ravel(), np.asarray(f_cov, np.bool_).ravel()])
-    cyc2, n_cyc2 = cycle_ids_by_halves(tw2, is_cov2)
+            r = rows[i]
+            tri2[r] = (v, poly[i], poly[(i + 1) % k])
+            tw2[3 * r] = 3 * rows[(i - 1) % k] + 2
+            tw2[3 * r + 1] = outer[i]
+            tw2[3 * r + 2] = 3 * rows[(i + 1) % k]
+            if outer[i] >= 0:
+                tw2[outer[i]] = 3 * r + 1
+            con2[3 * r: 3 * r + 3] = (False, f_con[i], False)
+            is_cov2[3 * r: 3 * r + 3] = (bool(spoke[i]), f_link[i], bool(spoke[(i + 1) % k]))
+            amin2[r] = f_min
+            orig2[r] = f_orig[i]
+            fan2[r] = True
+        if relabel_all:
+            continue
+        # the fan rows' cycles: each arc (rows between two consecutive links along
+        # the cover spokes) is on its link's new cycle; a ring without links is one
+        comp = outcome.comp
+        if not outcome.links:
+            cyc2[rows] = n_cyc
+            n_cyc += 1
+            continue
+        rep: dict[int, int] = {}  # new cycle (a representative link) -> its id: the smallest old id in it
+        for i in outcome.links:
+            c = comp[i]
+            rep[c] = min(rep.get(c, outcome.old_id[i]), outcome.old_id[i])
+        for i in outcome.links:
+            if rep[comp[i]] != outcome.old_id[i]:
+                up[outcome.old_id[i]] = rep[comp[i]]
+        for i in range(k):  # row i lies on the arc of the link its cover spokes lead to
+            d = i
+            while d not in comp:
+                d = (d + 1) % k  # a row without a link has both spokes on the cover
+            cyc2[rows[i]] = rep[comp[d]]
+    used = m + 2 * len(applied)
+    tri2, tw2, con2, is_cov2 = tri2[:used], tw2[: 3 * used], con2[: 3 * used], is_cov2[: 3 * used]
+    cyc2, amin2, orig2, fan2 = cyc2[:used], amin2[:used], orig2[:used], fan2[:used]
+    if relabel_all:
+        cyc2, n_cyc2 = cycle_ids_by_halves(tw2, is_cov2)
+    else:
+        n_cyc2 = n_cyc
+        if up:  # merged ids resolved, then made contiguous again (one gather)
+            lut = np.arange(n_cyc, dtype=np.int64)
+            for c in up:
+                lut[c] = find(c)
+            alive = np.zeros(n_cyc, np.bool_)
+            alive[lut] = True
+            rank = np.cumsum(alive) - 1
+            n_cyc2 = int(alive.sum())
+            _j.relabel_cycles_into(cyc2, rank[lut])
     cover2 = CycleCover(
         is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
     )
-    amin2 = np.concatenate([amin_t[kept], np.asarray(f_min)])
-    orig2 = np.concatenate([orig_of[kept], np.asarray(f_orig, np.int64)])
-    fan2 = np.concatenate([is_fan[kept], np.ones(len(f_tri), np.bool_)])
-    pts2 = np.concatenate([pts, np.asarray(f_pts, np.float64)])
-    return pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2
+    pts2 = _longer(pts, len(new_pts), None, spare // 2)  # (a ring join: one point, two rows)
+    pts2[n_pts:] = np.asarray(new_pts, np.float64).reshape(-1, pts.shape[1])
+    return (pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2), applied
 
 
 def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -1074,7 +1398,7 @@ def sparse_cycles(
         )
         n, m = len(pts), len(tri)
     n_ring = n_reroute = 0
-    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered and m < RING_MAX_TRIANGLES:
+    if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:  # (every size: session 10)
         cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor)
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
             pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
@@ -1082,7 +1406,7 @@ def sparse_cycles(
         n, m, n_fan = len(pts), len(tri), n_fan + n_ring
     steps.done("fans")
     n_ring_join = 0
-    for ring_pass in range(RING_JOIN_PASSES + 1):  # plans again after ring joins (``_ring_joins``)
+    for ring_pass in range(1):  # (one plan: the ring joins patch it, ``_ring_joins``)
         cand = _k.join_candidates(tw, cover.cycle) if use_cover else np.zeros(0, np.int64)
         ckind = np.zeros(len(cand), np.int8)
         slack = np.empty(len(cand))
@@ -1142,15 +1466,15 @@ def sparse_cycles(
                 status, counts,
                 int(place_iters),
             )
-        if ring_pass == RING_JOIN_PASSES or not (use_cover and fans and pts.shape[1] == 2 and m < RING_MAX_TRIANGLES):
-            break
-        rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
-                            newmax, status, slot, keep, keep * min_angle, hi, 2.0 * floor)
-        if rings is None:
-            break
-        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_rj = rings
-        n_ring_join += n_rj
-        n, m, n_fan = len(pts), len(tri), n_fan + n_rj
+        for _ in range(RING_JOIN_PASSES if use_cover and fans and pts.shape[1] == 2 else 0):
+            rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
+                                newmax, status, slot, swap_he, counts, keep, keep * min_angle, hi, 2.0 * floor)
+            if rings is None:
+                break
+            (pts, tri, tw, con, cover, amin_p, orig_of, is_fan), (status, slot, swap_he, join), n_rj = rings
+            n_ring_join += n_rj
+            n, m, n_fan = len(pts), len(tri), n_fan + n_rj
+        break  # the ring joins patch the plan (``_ring_joins``): it is not made again
     steps.done("plan_joins")
     is_split = status == _k.SPLIT
     split_index = np.cumsum(is_split) - 1

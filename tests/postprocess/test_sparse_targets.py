@@ -179,21 +179,37 @@ def test_reroute_covers_boundary_triangles_no_join_can_keep(max_area: float, mon
     re-route gives them cover edges by alternating paths, leaving off nothing or a
     triangle a ring fan takes instead. Its cover is a valid cover with the same
     number of triangles left off or fewer, and the output passes the certificate."""
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
     from tests.helpers import bundled_domain
 
     m = hammesh.quality_mesh(bundled_domain("A"), min_angle=30, max_area=max_area, isolate=False)
     seen = []
     real = S._reroute
 
+    local = []
+    real_relabel = S._relabel_group
+
+    def spy_relabel(*args):
+        out = real_relabel(*args)
+        local.append(out is not None)
+        return out
+
     def spy(pts, tri, tw, con, cover, *args):
         new, n = real(pts, tri, tw, con, cover, *args)
         seen.append((n, cover.n_uncovered, new.n_uncovered))
         _assert_valid_cover(tw, new)
+        # labelled locally (``_relabel_group``): the partition and count of the full relabelling
+        truth, n_truth = cycle_ids_by_halves(tw, new.is_cov)
+        assert new.n_cycles == n_truth and new.cycle.max() == n_truth - 1
+        pairs = np.unique(np.c_[truth, new.cycle], axis=0)
+        assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
         return new, n
 
     monkeypatch.setattr(S, "_reroute", spy)
+    monkeypatch.setattr(S, "_relabel_group", spy_relabel)
     h = hammesh.hamiltonian(m)
     r = h.report
+    assert local == [True]  # no cycle split there: no relabelling of the whole cover
     assert len(seen) == 1 and seen[0][0] == r["rerouted"] >= 1
     assert seen[0][2] <= seen[0][1]
     assert_sparse_certificate(m, h)
@@ -231,6 +247,43 @@ def test_alternating_paths_keep_every_degree() -> None:
     assert n_paths > 100
 
 
+def test_relabel_group_agrees_with_cycle_ids() -> None:
+    """``_relabel_group`` (new cycle ids after cover edges changed inside a group,
+    decided from the group's links: outside pairs, inside walks, split pieces walked)
+    against ``cycle_ids_by_halves`` on the whole changed cover: every alternating
+    cycle of depth <= 3 (an alternating path from ``s`` whose end ``y`` shares a
+    non-cover edge with ``s``, flipped with that edge: a valid cover again) on two
+    small meshes' covers (long cycles, and rotate=False's short ones) gives the same
+    partition into cycles and the same count; merges and splits both occur."""
+    from hammesh.postprocess.cycle_cover import cycle_cover, cycle_ids_by_halves
+
+    n_case = n_merge = n_split = 0
+    for name, rotate in (("gear", True), ("plate_2_holes", False)):
+        m = hammesh.quality_mesh(_own_domains()[name], min_angle=30, max_area=0.01, isolate=False)
+        tri = np.asarray(m.triangles, np.int64)
+        tw = hammesh.halfedge.half_edge_twins(tri, m.n_points)[0]
+        cover = cycle_cover(tri, tw, rotate=rotate)
+        for s in np.flatnonzero(cover.cycle >= 0).tolist():
+            for y, nodes, flips in S._alternating_paths(tw, cover.is_cov, cover.cycle, s, set(), 3):
+                close = [3 * s + k for k in range(3)
+                         if tw[3 * s + k] >= 0 and tw[3 * s + k] // 3 == y and not cover.is_cov[3 * s + k]]
+                if not close or len(nodes) < 3:
+                    continue
+                is_cov = cover.is_cov.copy()
+                S._flip_cover(tw, is_cov, flips + close[:1])
+                got = S._relabel_group(tw, cover.is_cov, is_cov, cover.cycle, cover.n_cycles, set(nodes))
+                assert got is not None  # small meshes: every walk within the budget
+                truth, n_truth = cycle_ids_by_halves(tw, is_cov)
+                assert got[1] == n_truth and got[0].max() == n_truth - 1
+                np.testing.assert_array_equal(got[0] < 0, truth < 0)
+                pairs = np.unique(np.c_[truth, got[0]], axis=0)
+                assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
+                n_case += 1
+                n_merge += n_truth < cover.n_cycles
+                n_split += n_truth > cover.n_cycles
+    assert n_case > 200 and n_merge > 20 and n_split > 50  # (302, 34, 108 when written)
+
+
 def test_ring_joins_replace_joins_below_the_rule_on_la(monkeypatch) -> None:
     """Triangle's ``la`` (~16k triangles): joins the plan takes below the local rule are
     replaced by ring fans that meet it and join the same two cycles; the new plan
@@ -251,12 +304,15 @@ def test_ring_joins_replace_joins_below_the_rule_on_la(monkeypatch) -> None:
     verify(on, reference=m)
 
 
-def test_ring_merges_agrees_with_relabelled_cycles() -> None:
-    """``_ring_merges`` (which decides without labelling the cycles anew, None where a
-    cycle crosses twice) and ``_ring_merges_relabelled`` against the cover's own
-    ``cycle_ids`` on the re-routed cover (``_apply_rings``): for rings over two
-    adjacent triangles of different cycles of a small mesh's cover, True exactly when
-    the two cycles end up as one and no cycle is split."""
+def test_ring_outcome_agrees_with_relabelled_cycles() -> None:
+    """``_ring_outcome`` (which decides locally: outside walks only for cycles that
+    cross the group more than once) and ``_apply_rings``' cycle ids (union-find over
+    the old ids) against the cover's own ``cycle_ids_by_halves`` on the re-routed
+    cover: for rings over two adjacent covered triangles (and one or two neighbours)
+    of a small mesh's covers, ``merges`` is True exactly when the two triangles'
+    cycles end up as one and no cycle is split (also where a cycle crosses the group
+    twice, so that its outside walks decide), and the labels partition the triangles
+    as the full relabelling does."""
     from hammesh.postprocess.cycle_cover import cycle_cover
 
     m = hammesh.quality_mesh(_own_domains()["plate_2_holes"], min_angle=30, max_area=0.01, isolate=False)
@@ -264,37 +320,80 @@ def test_ring_merges_agrees_with_relabelled_cycles() -> None:
     tri = np.asarray(m.triangles, np.int64)
     tw = hammesh.halfedge.half_edge_twins(tri, m.n_points)[0]
     con = tw < 0
-    cover = cycle_cover(tri, tw, rotate=False)  # many short cycles
     n_mt = len(tri)
     amin = np.full(n_mt, 0.5)
-    n_true = n_false = n_twice = 0
+    n_true = n_false = n_twice = n_split = 0
+    for cover in (cycle_cover(tri, tw, rotate=False), cycle_cover(tri, tw)):  # many short cycles; few long ones
+        n_true, n_false, n_twice, n_split = _check_ring_outcomes(
+            pts, tri, tw, con, cover, amin, (n_true, n_false, n_twice, n_split)
+        )
+    assert n_true > 5 and n_false > 0 and n_twice > 0 and n_split > 0
+
+
+def _check_ring_outcomes(pts, tri, tw, con, cover, amin, counts):
+    """``test_ring_outcome_agrees_with_relabelled_cycles`` on one cover; the counts so far in, updated out."""
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
+
+    n_mt = len(tri)
+    n_true, n_false, n_twice, n_split = counts
+    groups = []  # two adjacent covered triangles, and with one or two neighbours more
     for h in np.flatnonzero(tw > np.arange(len(tw)))[:600].tolist():
-        a, b = h // 3, tw[h] // 3
-        if cover.cycle[a] < 0 or cover.cycle[b] < 0 or cover.cycle[a] == cover.cycle[b]:
+        a, b = h // 3, int(tw[h] // 3)
+        if cover.cycle[a] < 0 or cover.cycle[b] < 0:
             continue
-        pp = S._union_polygon(tri, tw, con, [a, b])
-        if pp is None:
+        groups.append([a, b])
+        nb = [int(g // 3) for g in tw[3 * b: 3 * b + 3] if g >= 0 and g // 3 != a]
+        groups += [[a, b, c] for c in nb] + [[a, b] + nb] * (len(nb) == 2)
+    for members in groups:
+        a, b = members[:2]
+        pp = S._union_polygon(tri, tw, con, members)
+        if pp is None or (cover.cycle[members] < 0).any():
             continue
         for spoke in S._ring_link_options(tw, cover.is_cov, pp[1]):
-            ans = S._ring_merges(tw, cover.is_cov, cover.cycle, [a, b], pp[1], spoke, a, b)
-            x, y = pts[tri[[a, b]]].reshape(-1, 2).mean(axis=0)
-            out = S._apply_rings(
+            res = S._ring_outcome(tw, cover.is_cov, cover.cycle, members, pp[1], spoke)
+            assert res is not None  # a small mesh: every walk is within the budget
+            ans = res.merges(int(cover.cycle[a]), int(cover.cycle[b]))
+            x, y = pts[tri[members]].reshape(-1, 2).mean(axis=0)
+            arrays, applied = S._apply_rings(
                 pts, tri, tw, con, cover, amin, np.arange(n_mt), np.zeros(n_mt, np.bool_),
-                [([a, b], pp[0], pp[1], spoke, x, y)],
+                [(members, pp[0], pp[1], spoke, x, y)],
             )
-            cyc2 = out[4].cycle
-            kept = np.setdiff1d(np.arange(n_mt), [a, b])
-            old = cover.cycle[kept]
-            new = cyc2[: len(kept)]
+            assert applied == [0]
+            tw2, cov2 = arrays[2], arrays[4]
+            truth, n_truth = cycle_ids_by_halves(tw2, cov2.is_cov)
+            # the same partition into cycles, and the same count
+            assert cov2.n_cycles == n_truth
+            pairs = np.unique(np.c_[truth, cov2.cycle], axis=0)
+            assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
+            # the truth, from the old and new labels of the rows kept whole
+            kept = np.setdiff1d(np.arange(n_mt), members)
+            old, new = cover.cycle[kept], truth[kept]
             crossing = {int(cover.cycle[g // 3]) for g in tw[pp[1]] if g >= 0}
             split = any(len(np.unique(new[old == c])) > 1 for c in crossing)
             joined = np.intersect1d(new[old == cover.cycle[a]], new[old == cover.cycle[b]]).size > 0
-            exact = S._ring_merges_relabelled(pts, tri, tw, con, cover, [a, b], pp[0], pp[1], spoke, a, b)
-            assert exact == (joined and not split)
-            if ans is None:  # a cycle crosses twice: only the relabelled answer decides
-                n_twice += 1
-                continue
-            assert ans == exact
+            assert res.split == split
+            assert ans == (joined and not split)
+            n_twice += len(set(res.old_id.values())) * 2 < len(res.links)
+            n_split += split
             n_true += ans
             n_false += not ans
-    assert n_true > 5 and n_false > 0
+    return n_true, n_false, n_twice, n_split
+
+
+def test_longer_grows_into_its_spare_rows_and_copies_otherwise() -> None:
+    """``_longer``: a copy with the new rows filled; with ``spare`` rows, a later call on
+    the result (or a prefix of it) grows into them without a copy and keeps its rows;
+    an array it did not make is never written."""
+    a = np.arange(12, dtype=np.int64).reshape(4, 3)
+    b = S._longer(a, 2, -1, spare=3)
+    assert b.shape == (6, 3) and not np.shares_memory(a, b)
+    np.testing.assert_array_equal(b[:4], a)
+    assert (b[4:] == -1).all()
+    c = S._longer(b[:5], 3, 7)  # a prefix of the roomy buffer: within its spare rows
+    assert c.shape == (8, 3) and np.shares_memory(b, c)
+    np.testing.assert_array_equal(c[:4], a)
+    assert (c[4] == -1).all() and (c[5:] == 7).all()
+    d = S._longer(c, 2, 0)  # past the spare rows: a copy
+    assert d.shape == (10, 3) and not np.shares_memory(c, d)
+    np.testing.assert_array_equal(d[:8], c)
+    np.testing.assert_array_equal(a, np.arange(12).reshape(4, 3))
