@@ -544,3 +544,131 @@ def vertex_neighbors(tri, twin, vh, a):
         out[2 * i + 1] = tri[t, (k + 2) % 3]
     return out
 
+
+
+# --- locality: triangles (and vertices) renumbered along a space-filling curve ---
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _hilbert_key(x, y, bits):
+    """Position of cell ``(x, y)`` (each ``< 2**bits``) along the Hilbert curve of that
+    grid (the iterative ``xy2d`` of Hamilton, *Compact Hilbert indices*, 2006, in the
+    form of Wikipedia's "Hilbert curve": each level rotates the quadrant's frame)."""
+    d = 0
+    s = 1 << (bits - 1)
+    while s > 0:
+        rx = 1 if (x & s) > 0 else 0
+        ry = 1 if (y & s) > 0 else 0
+        d += s * s * ((3 * rx) ^ ry)
+        if ry == 0:  # rotate the quadrant so that the curve enters and leaves it alike
+            if rx == 1:
+                x = s - 1 - x
+                y = s - 1 - y
+            x, y = y, x
+        x &= s - 1
+        y &= s - 1
+        s >>= 1
+    return d
+
+
+@njit(cache=True, nogil=True)
+def hilbert_table_into(bits, table, lo, hi):
+    """``table[x << bits | y]``: the Hilbert key of cell ``(x, y)``, for ``x`` in ``lo..hi``.
+
+    A table, not a key per triangle: the key's levels form a chain of dependent
+    steps (0.11 s at 1.5 M triangles against 0.025 s for the lookup and 0.008 s for
+    the table of 512 x 512 cells)."""
+    for x in range(lo, hi):
+        for y in range(1 << bits):
+            table[(x << bits) | y] = _hilbert_key(x, y, bits)
+
+
+@njit(cache=True, nogil=True)
+def cell_keys_into(points, tri, x0, y0, scale, bits, table, key, count, lo, hi):
+    """Rows ``lo..hi``: ``key[t]``, the Hilbert key (``table``) of the grid cell holding
+    triangle ``t``'s centroid (``scale`` cells per unit from ``(x0, y0)``, ``2**bits``
+    a side), and ``count[k]`` += 1 for each (this range's own histogram)."""
+    top = (1 << bits) - 1
+    for t in range(lo, hi):
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        cx = (points[a, 0] + points[b, 0] + points[c, 0]) / 3.0
+        cy = (points[a, 1] + points[b, 1] + points[c, 1]) / 3.0
+        ix = min(max(int((cx - x0) * scale), 0), top)
+        iy = min(max(int((cy - y0) * scale), 0), top)
+        k = table[(ix << bits) | iy]
+        key[t] = k
+        count[k] += 1
+
+
+@njit(cache=True, nogil=True)
+def scatter_by_key_into(key, place, order, lo, hi):
+    """Rows ``lo..hi`` of a counting sort: ``order[place[key[t]]++] = t``, and ``key[t]``
+    overwritten by that place (the inverse: the keys are not needed after it);
+    ``place``: this range's own first slot of each key, so the sort is stable."""
+    for t in range(lo, hi):
+        k = key[t]
+        i = place[k]
+        place[k] = i + 1
+        order[i] = t
+        key[t] = i
+
+
+@njit(cache=True, nogil=True)
+def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_new):
+    """Vertices numbered by first use along the new rows (``tri[order]``), then the
+    unused ones in their old order: ``vertex_order[j]`` is old vertex of new ``j``,
+    ``vertex_new`` the inverse (-1 on entry); ``tri_new`` the new rows in new numbers.
+    One serial pass (each first use takes the next number)."""
+    nxt = 0
+    for i in range(order.shape[0]):
+        t = order[i]
+        for k in range(3):
+            v = tri[t, k]
+            j = vertex_new[v]
+            if j < 0:
+                j = nxt
+                vertex_new[v] = j
+                vertex_order[j] = v
+                nxt += 1
+            tri_new[i, k] = j
+    for v in range(n_points):
+        if vertex_new[v] < 0:
+            vertex_new[v] = nxt
+            vertex_order[nxt] = v
+            nxt += 1
+
+
+@njit(cache=True, nogil=True)
+def renumber_half_edges_into(twin, marks, order, inverse, twin_new, marks_new, lo, hi):
+    """New rows ``lo..hi``: the twins in the new numbering (-1 stays) and the per
+    half-edge ``marks`` carried along (none if ``marks`` is empty)."""
+    carry = marks.shape[0] == twin.shape[0]
+    for i in range(lo, hi):
+        t = order[i]
+        for k in range(3):
+            g = twin[3 * t + k]
+            twin_new[3 * i + k] = -1 if g < 0 else 3 * inverse[g // 3] + g % 3
+            if carry:
+                marks_new[3 * i + k] = marks[3 * t + k]
+
+
+@njit(cache=True, nogil=True)
+def gather_points_into(points, vertex_order, out, lo, hi):
+    """``out[j] = points[vertex_order[j]]`` for ``j`` in ``lo..hi``."""
+    for j in range(lo, hi):
+        v = vertex_order[j]
+        for d in range(points.shape[1]):
+            out[j, d] = points[v, d]
+
+
+@njit(cache=True, nogil=True)
+def restore_vertices_into(rows, vertex_order, n_points, lo, hi):
+    """Rows ``lo..hi`` of an output in place: vertex numbers below ``n_points`` back to
+    the old numbering (``vertex_order``); later ones (Steiner points) stay."""
+    for i in range(lo, hi):
+        for k in range(3):
+            v = rows[i, k]
+            if v < n_points:
+                rows[i, k] = vertex_order[v]

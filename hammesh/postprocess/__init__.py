@@ -70,9 +70,13 @@ def load_kernels(mode: str = "sparse") -> None:
         square = Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
         hamiltonian(quality_mesh(square, min_angle=30, max_area=0.01, isolate=False), mode=mode)
         if mode == "sparse":  # (and the paths only big outputs take)
+            from hammesh.halfedge import half_edge_twins, renumber_local, restore_vertices
             from hammesh.postprocess._sparse_kernels import load_output_kernels
 
             load_output_kernels()
+            m = quality_mesh(square, min_angle=30, max_area=0.05, isolate=False)  # (the renumbering, from
+            tw = half_edge_twins(m.triangles, m.n_points)[0]  # sparse.LOCAL_MIN_TRIANGLES triangles)
+            restore_vertices(renumber_local(m.points, m.triangles, tw, tw < 0).triangles, np.arange(m.n_points))
         _loaded_modes.add(mode)
 
 
