@@ -77,6 +77,10 @@ def load_kernels(mode: str = "sparse") -> None:
             m = quality_mesh(square, min_angle=30, max_area=0.05, isolate=False)  # (the renumbering, from
             tw = half_edge_twins(m.triangles, m.n_points)[0]  # sparse.LOCAL_MIN_TRIANGLES triangles)
             restore_vertices(renumber_local(m.points, m.triangles, tw, tw < 0).triangles, np.arange(m.n_points))
+            from hammesh.postprocess.sparse import kept_radius_ratio  # (when the worst input triangle is joined)
+
+            kept_radius_ratio(m.points, m.triangles, np.full(m.n_triangles, 3, np.int8), np.arange(m.n_triangles),
+                              np.zeros(m.n_triangles))
         _loaded_modes.add(mode)
 
 

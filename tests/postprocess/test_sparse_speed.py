@@ -226,3 +226,24 @@ def _on_segment(p: np.ndarray, a: int, b: int, s: tuple[int, int]) -> bool:
         if not (-1e-9 <= t <= 1 + 1e-9) or abs(d[0] * (q - u)[1] - d[1] * (q - u)[0]) > 1e-9 * L2:
             return False
     return True
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_kept_radius_ratio_is_the_worst_of_every_kept_row(seed: int, monkeypatch) -> None:
+    """``sparse.kept_radius_ratio`` measures only the kept rows whose smallest angle allows a
+    ratio above its sample's worst: the same maximum as measuring them all, whichever rows
+    are kept (the worst ones too, or not)."""
+    from hammesh.postprocess import sparse
+
+    dom = bundled_domain("A") if seed == 2 else hammesh.Domain.from_polygon(square(0, 0, 1))
+    m = hammesh.quality_mesh(dom, min_angle=(25, 30, 20)[seed], max_area=0.001 if seed < 2 else 0.5, isolate=False)
+    lo, _, worst, row = sparse.triangle_facts(m.points, m.triangles)
+    rng = np.random.default_rng(seed)
+    monkeypatch.setattr(sparse, "KEPT_RATIO_STRIDE", 7)
+    for trial in range(40):
+        kind = np.where(rng.random(m.n_triangles) < rng.uniform(0.05, 1.0), 3, 0).astype(np.int8)
+        if trial % 3 == 0:
+            kind[row] = 0  # the input's worst joined: the case that measures
+        kept = kind == 3
+        want = sparse.triangle_facts(m.points, m.triangles[kept])[2] if kept.any() else 1.0
+        assert sparse.kept_radius_ratio(m.points, m.triangles, kind, np.arange(m.n_triangles), lo) == want
