@@ -27,7 +27,8 @@ from hammesh.halfedge import _kernels
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["Renumbered", "renumber_local", "cell_order", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
+__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "cell_order", "cell_grid", "cell_keys",
+           "empty_cell_keys", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
 
 #: average triangles per grid cell of the order (a cell's triangles keep their order)
 TRIANGLES_PER_CELL = 4
@@ -53,36 +54,79 @@ def cell_bits(m: int) -> int:
     return int(min(MAX_CELL_BITS, max(1, math.floor(0.5 * math.log2(cells)))))
 
 
-def cell_order(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+class CellGrid(NamedTuple):
+    """The grid of :func:`cell_order`: cells of ``1 / scale`` from ``(x0, y0)``, ``2**bits``
+    a side, ``table[x << bits | y]`` the Hilbert key of cell ``(x, y)``."""
+
+    x0: float
+    y0: float
+    scale: float
+    bits: int
+    table: np.ndarray
+
+
+class CellKeys(NamedTuple):
+    """Each triangle's cell key and the keys' histogram per row range (:func:`cell_keys`)."""
+
+    key: np.ndarray  # (m,) int64; :func:`cell_order` overwrites it with the inverse order
+    count: np.ndarray  # (ranges, 4**bits) int64
+    spans: list  # the row ranges, [(lo, hi), ...]
+
+
+def cell_grid(points: np.ndarray, m: int) -> CellGrid:
+    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`)."""
+    pts = np.asarray(points)
+    bits = cell_bits(m)
+    x0, y0 = float(pts[:, 0].min()), float(pts[:, 1].min())
+    side = max(float(pts[:, 0].max()) - x0, float(pts[:, 1].max()) - y0)
+    table = np.empty(1 << (2 * bits), np.int64)
+    run_all([
+        (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
+        for lo, hi in row_ranges(1 << bits, max(1, threads.THREAD_MIN_ROWS >> bits))
+    ])
+    return CellGrid(x0, y0, (1 << bits) / side if side > 0 else 0.0, bits, table)
+
+
+def empty_cell_keys(grid: CellGrid, m: int) -> CellKeys:
+    """Arrays for the keys of ``m`` triangles on ``grid``, over this process's row ranges
+    (to be filled by a pass that reads the corners anyway: ``orient_ccw(cells=...)``)."""
+    spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    return CellKeys(fresh(m, np.int64), np.zeros((len(spans), len(grid.table)), np.int64), spans)
+
+
+def cell_keys(points: np.ndarray, triangles: np.ndarray, grid: CellGrid | None = None) -> CellKeys:
+    """Every triangle's cell key (its centroid's cell on ``grid``, default :func:`cell_grid`)."""
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    g = cell_grid(pts, len(tri)) if grid is None else grid
+    keys = empty_cell_keys(g, len(tri))
+    run_all([
+        (lambda r=r, lo=lo, hi=hi: _kernels.cell_keys_into(
+            pts, tri, g.x0, g.y0, g.scale, g.bits, g.table, keys.key, keys.count[r], lo, hi))
+        for r, (lo, hi) in enumerate(keys.spans)
+    ])
+    return keys
+
+
+def cell_order(
+    points: np.ndarray, triangles: np.ndarray, keys: CellKeys | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Triangles in Hilbert order of the grid cell of their centroid: ``(order, inverse)``.
 
     ``order[i]`` is the triangle taking place ``i``; ``inverse[t]`` the place of ``t``.
     A counting sort by cell (each thread counts and places its own row range, so the
     order inside a cell is the input's whatever the number of threads). Planar
-    (``points`` (n, 2)); the centroid's first two coordinates otherwise.
+    (``points`` (n, 2)); the centroid's first two coordinates otherwise. ``keys``:
+    the keys found already (:func:`cell_keys` or a pass that filled
+    :func:`empty_cell_keys`); their ``key`` array becomes ``inverse``.
     """
-    pts = np.ascontiguousarray(points, dtype=np.float64)
-    tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    m = len(tri)
+    m = len(triangles)
     order = fresh(m, np.int64)
     if m == 0:
         return order, np.zeros(0, np.int64)
-    bits = cell_bits(m)
-    x0, y0 = pts[:, 0].min(), pts[:, 1].min()
-    side = max(pts[:, 0].max() - x0, pts[:, 1].max() - y0)
-    scale = (1 << bits) / side if side > 0 else 0.0
-    spans = row_ranges(m, threads.THREAD_MIN_ROWS)
-    table = np.empty(1 << (2 * bits), np.int64)
-    run_all([
-        (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
-        for lo, hi in row_ranges(1 << bits, max(1, (threads.THREAD_MIN_ROWS >> bits)))
-    ])
-    key = fresh(m, np.int64)
-    count = np.zeros((len(spans), 1 << (2 * bits)), np.int64)
-    run_all([
-        (lambda r=r, lo=lo, hi=hi: _kernels.cell_keys_into(pts, tri, x0, y0, scale, bits, table, key, count[r], lo, hi))
-        for r, (lo, hi) in enumerate(spans)
-    ])
+    if keys is None:
+        keys = cell_keys(points, triangles)
+    key, count, spans = keys
     # each range's first slot of each key: keys in order, ranges in order inside a key
     flat = count.T.ravel()
     place = (np.cumsum(flat) - flat).reshape(count.shape[1], len(spans)).T.copy()
@@ -94,7 +138,8 @@ def cell_order(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, n
 
 
 def renumber_local(
-    points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, marks: np.ndarray | None = None
+    points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, marks: np.ndarray | None = None,
+    keys: CellKeys | None = None,
 ) -> Renumbered:
     """The mesh renumbered for locality: rows in :func:`cell_order`, vertices by first use.
 
@@ -106,6 +151,9 @@ def renumber_local(
         Half-edge twins (``h = 3 t + k``), -1 on the boundary.
     marks : (3 m,) bool, optional
         Per half-edge flags to carry along (constrained edges).
+    keys : CellKeys, optional
+        The triangles' cell keys if a pass found them already (``prepare_mesh(...,
+        cells=True)``: ``info["validated"]["cells"]``); consumed.
 
     Returns
     -------
@@ -119,7 +167,7 @@ def renumber_local(
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     mk = np.zeros(0, np.bool_) if marks is None else np.ascontiguousarray(marks, dtype=np.bool_)
     m, n = len(tri), len(pts)
-    order, inverse = cell_order(pts, tri)
+    order, inverse = cell_order(pts, tri, keys)
     tri_new = fresh((m, 3), np.int64)
     vertex_new = np.full(n, -1, np.int64)
     vertex_order = np.empty(n, np.int64)

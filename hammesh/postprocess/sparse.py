@@ -1466,7 +1466,9 @@ def sparse_hamiltonian(
         pinned = is_con | differ
     if m >= LOCAL_MIN_TRIANGLES and pts.shape[1] == 2:
         t0, c0 = time.perf_counter(), time.process_time()
-        loc = renumber_local(pts, tri, he.twin, pinned)
+        # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
+        keys = seen.pop("cells", None) if seen else None
+        loc = renumber_local(pts, tri, he.twin, pinned, keys)
         r = sparse_cycles(loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover)
         r = _numbered_back(r, loc, pts, (t0, c0))
     else:

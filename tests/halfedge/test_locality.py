@@ -115,3 +115,23 @@ def test_hilbert_table_is_a_curve(bits: int) -> None:
     xy = np.empty((side * side, 2), np.int64)
     xy[table] = np.stack(np.divmod(np.arange(side * side), side), axis=1)
     assert (np.abs(np.diff(xy, axis=0)).sum(axis=1) == 1).all()
+
+
+def test_keys_found_by_the_validation_give_the_same_renumbering(monkeypatch) -> None:
+    """``prepare_mesh(cells=True)`` finds the cell keys in its orientation pass (rows given
+    clockwise too: the keys are the centroids', whatever the orientation)."""
+    from hammesh.halfedge import prepare_mesh
+
+    pts, tri = _delaunay(11, 2500)
+    tri[::3] = tri[::3, ::-1]  # some rows clockwise: the orientation pass writes a copy
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 300)
+    clean, he, con = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri), cells=True)
+    keys = clean.info["validated"]["cells"]
+    assert len(keys.spans) > 1
+    fused = renumber_local(clean.points, clean.triangles, he.twin, con, keys)
+    alone = renumber_local(clean.points, clean.triangles, he.twin, con)
+    for a, b in zip(fused, alone):
+        np.testing.assert_array_equal(a, b)
+    plain, _, _ = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri))
+    assert plain.info["validated"]["cells"] is None
+    np.testing.assert_array_equal(plain.triangles, clean.triangles)
