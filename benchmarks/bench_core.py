@@ -93,9 +93,20 @@ def _raw_triangle_input(dom, min_angle: float, max_area: float) -> tuple[dict, s
     return data, triangle_switches(dom, MeshOptions(min_angle=min_angle, max_area=max_area))
 
 
-def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "incircle") -> dict:
+def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "incircle",
+          cross_angles: int | None = None, local_min: int | None = None) -> dict:
     """One first-call measurement in this (fresh) interpreter."""
     import hammesh
+
+    if local_min is not None:  # (sparse mode renumbers its input from this many triangles)
+        from hammesh.postprocess import sparse
+
+        sparse.LOCAL_MIN_TRIANGLES = local_min
+
+    if cross_angles is not None:  # (the incircle forest's quadtree rotations tried: 1 = none)
+        from hammesh.postprocess import _thm24_kernels
+
+        _thm24_kernels.CROSS_ANGLES = cross_angles
 
     dom = _domain()
     if what == "triangle":
@@ -178,6 +189,10 @@ def _pipeline(dom, quality_mesh, min_angle: float, max_area: float, path: str, m
 def _fresh(what: str, args: argparse.Namespace, path: str = "") -> dict:
     cmd = [sys.executable, os.path.abspath(__file__), "--child", what, "--max-area", repr(args.max_area),
            "--min-angle", repr(args.min_angle), "--path", path, "--mode", args.mode]
+    if args.cross_angles is not None:
+        cmd += ["--cross-angles", str(args.cross_angles)]
+    if args.local_min is not None:
+        cmd += ["--local-min", str(args.local_min)]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -339,13 +354,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mode", default="incircle", choices=["incircle", "sparse"],
                     help="hamiltonian() mode; incircle (Thm 2.4) is what the issue-2/11 targets are about, "
                     "sparse (the default of hamiltonian()) is measured by bench_sparse.py")
+    ap.add_argument("--cross-angles", type=int, help="first calls: the incircle forest tries this many quadtree "
+                    "rotations (_thm24_kernels.CROSS_ANGLES; 1: none, the A/B of session 10)")
+    ap.add_argument("--local-min", type=int, help="first calls: sparse.LOCAL_MIN_TRIANGLES (a huge value: no "
+                    "renumbering, the A/B of session 10)")
     ap.add_argument("--ab", choices=["locality", "output-threads"], help="a same-run A/B of sparse mode (see above)")
     ap.add_argument("--rounds", type=int, default=6, help="--ab: rounds, each arm once a round")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--path", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        print(json.dumps(child(args.child, args.min_angle, args.max_area, args.path, args.mode)))
+        print(json.dumps(child(args.child, args.min_angle, args.max_area, args.path, args.mode, args.cross_angles,
+                                     args.local_min)))
         return 0
 
     if args.ab:
