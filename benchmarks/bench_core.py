@@ -21,6 +21,19 @@ Two ways, both printed:
 
     python benchmarks/bench_core.py [--max-area 1e-6] [--repeat 5] [--fresh 3] [--mode incircle|sparse]
 
+**Same-run A/Bs** of sparse mode (session 10; wall times on a loaded machine mean
+little, so each arm alternates with the other in one process and the report's
+per-step process CPU is compared, median of ``--rounds``):
+
+    python benchmarks/bench_core.py --ab locality [--rounds 6]       # renumbering off / on
+    python benchmarks/bench_core.py --ab output-threads [--rounds 6] # walk + gather: 1 / 2 threads
+
+``locality`` calls ``hamiltonian`` with ``sparse.LOCAL_MIN_TRIANGLES`` above the mesh
+(off) and at its default (on); the cover's step CPU holds the certificate's look at
+the input and the page reserve, made beside it on the other thread (both arms alike).
+``output-threads`` calls ``hamiltonian`` with the walk from both ends, the gather and
+the pinned edges on two threads (default) or on one.
+
 The children inherit the environment: ``NUMPY_MADVISE_HUGEPAGE=0 python
 benchmarks/bench_core.py`` measures without numpy's transparent-huge-page advice.
 
@@ -80,9 +93,20 @@ def _raw_triangle_input(dom, min_angle: float, max_area: float) -> tuple[dict, s
     return data, triangle_switches(dom, MeshOptions(min_angle=min_angle, max_area=max_area))
 
 
-def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "incircle") -> dict:
+def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "incircle",
+          cross_angles: int | None = None, local_min: int | None = None) -> dict:
     """One first-call measurement in this (fresh) interpreter."""
     import hammesh
+
+    if local_min is not None:  # (sparse mode renumbers its input from this many triangles)
+        from hammesh.postprocess import sparse
+
+        sparse.LOCAL_MIN_TRIANGLES = local_min
+
+    if cross_angles is not None:  # (the incircle forest's quadtree rotations tried: 1 = none)
+        from hammesh.postprocess import _thm24_kernels
+
+        _thm24_kernels.CROSS_ANGLES = cross_angles
 
     dom = _domain()
     if what == "triangle":
@@ -165,6 +189,10 @@ def _pipeline(dom, quality_mesh, min_angle: float, max_area: float, path: str, m
 def _fresh(what: str, args: argparse.Namespace, path: str = "") -> dict:
     cmd = [sys.executable, os.path.abspath(__file__), "--child", what, "--max-area", repr(args.max_area),
            "--min-angle", repr(args.min_angle), "--path", path, "--mode", args.mode]
+    if args.cross_angles is not None:
+        cmd += ["--cross-angles", str(args.cross_angles)]
+    if args.local_min is not None:
+        cmd += ["--local-min", str(args.local_min)]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -260,6 +288,63 @@ def best_of(args: argparse.Namespace) -> None:
     print(f"min angle in / out     {rep['min_angle_input_deg']:.3f} / {rep['min_angle_output_deg']:.3f} deg")
 
 
+def same_run_ab(args: argparse.Namespace) -> None:
+    """``--ab``: two arms alternating in this process, per-step process CPU medians."""
+    import hammesh
+    from hammesh.postprocess import _improve_kernels, _sparse_kernels, load_kernels, sparse
+
+    load_kernels("sparse")
+    mesh = hammesh.quality_mesh(_domain(), min_angle=args.min_angle, max_area=args.max_area, isolate=False)
+    if args.ab == "locality":
+        default = sparse.LOCAL_MIN_TRIANGLES
+
+        def arm(on: bool):
+            sparse.LOCAL_MIN_TRIANGLES = default if on else 1 << 62
+            try:
+                return hammesh.hamiltonian(mesh)
+            finally:
+                sparse.LOCAL_MIN_TRIANGLES = default
+
+        names = ("input order", "renumbered")
+    else:
+        orig = (_sparse_kernels.WALK_TWO_ENDS_MIN_ROWS, _sparse_kernels.row_ranges, _improve_kernels.row_ranges)
+
+        def arm(two: bool):
+            if two:
+                _sparse_kernels.WALK_TWO_ENDS_MIN_ROWS, _sparse_kernels.row_ranges, _improve_kernels.row_ranges = orig
+            else:
+                one = lambda m, _: [(0, m)]  # noqa: E731
+                _sparse_kernels.WALK_TWO_ENDS_MIN_ROWS, _sparse_kernels.row_ranges, _improve_kernels.row_ranges = (
+                    1 << 62, one, one)
+            try:
+                return hammesh.hamiltonian(mesh)
+            finally:
+                (_sparse_kernels.WALK_TWO_ENDS_MIN_ROWS, _sparse_kernels.row_ranges,
+                 _improve_kernels.row_ranges) = orig
+
+        names = ("one thread", "two threads")
+    rows: dict[bool, list[dict]] = {False: [], True: []}
+    for i in range(args.rounds):
+        for on in ((False, True) if i % 2 == 0 else (True, False)):
+            t, c = time.perf_counter(), time.process_time()
+            h = arm(on)
+            r = h.report
+            row = {f"{k} (CPU)": v for k, v in r["step_cpu_seconds"].items()}
+            sec = r["seconds"]
+            row["validation etc. (wall)"] = sec["hamiltonian"] - sum(r["step_seconds"].values())
+            row["certificate (wall)"] = sec["verify"]
+            row.update({f"{k} (wall)": r["step_seconds"][k] for k in ("output_rows", "improve") if k in r["step_seconds"]})
+            row["whole call (wall)"], row["whole call (CPU)"] = time.perf_counter() - t, time.process_time() - c
+            rows[on].append(row)
+            print(f"  {names[on]:>12}: {row['whole call (wall)']:.3f} s wall, {row['whole call (CPU)']:.3f} s CPU, "
+                  f"{r['steiner_points']} Steiner points, load {os.getloadavg()[0]:.1f}", flush=True)
+    keys = list(dict.fromkeys(k for arm_rows in rows.values() for row in arm_rows for k in row))
+    print(f"{mesh.n_triangles:,} triangles, median of {args.rounds} rounds (s)")
+    print(f"  {'step':<28}{names[0]:>14}{names[1]:>14}")
+    for k in keys:
+        print(f"  {k:<28}" + "".join(f"{statistics.median(r.get(k, 0.0) for r in rows[on]):>14.3f}" for on in (False, True)))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--max-area", type=float, default=1e-6)
@@ -269,13 +354,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mode", default="incircle", choices=["incircle", "sparse"],
                     help="hamiltonian() mode; incircle (Thm 2.4) is what the issue-2/11 targets are about, "
                     "sparse (the default of hamiltonian()) is measured by bench_sparse.py")
+    ap.add_argument("--cross-angles", type=int, help="first calls: the incircle forest tries this many quadtree "
+                    "rotations (_thm24_kernels.CROSS_ANGLES; 1: none, the A/B of session 10)")
+    ap.add_argument("--local-min", type=int, help="first calls: sparse.LOCAL_MIN_TRIANGLES (a huge value: no "
+                    "renumbering, the A/B of session 10)")
+    ap.add_argument("--ab", choices=["locality", "output-threads"], help="a same-run A/B of sparse mode (see above)")
+    ap.add_argument("--rounds", type=int, default=6, help="--ab: rounds, each arm once a round")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--path", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        print(json.dumps(child(args.child, args.min_angle, args.max_area, args.path, args.mode)))
+        print(json.dumps(child(args.child, args.min_angle, args.max_area, args.path, args.mode, args.cross_angles,
+                                     args.local_min)))
         return 0
 
+    if args.ab:
+        same_run_ab(args)
+        return 0
     # numba cold start: compile (or load the cache) in a fresh interpreter, measured
     cold = time.perf_counter()
     subprocess.run([sys.executable, "-c", f"from hammesh.postprocess import load_kernels; load_kernels({args.mode!r})"], check=True)

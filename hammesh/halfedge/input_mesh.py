@@ -6,7 +6,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hammesh.halfedge import _kernels
+from hammesh.halfedge import _kernels, locality
 from hammesh.domain.validate import MAX_ABS_COORDINATE
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
@@ -119,11 +119,14 @@ def mesh_arrays(
     return pts, tri
 
 
-def prepare_mesh(mesh: Mesh, *, measure: bool = True) -> tuple[Mesh, HalfEdges, np.ndarray]:
+def prepare_mesh(mesh: Mesh, *, measure: bool = True, cells: bool = False) -> tuple[Mesh, HalfEdges, np.ndarray]:
     """Check a planar mesh and return it counter-clockwise with its half-edges.
 
     ``measure=False``: no ``info["validated"]`` (for a construction that needs none of
     it: Thm 2.4's; the orientation pass then only orients and checks).
+    ``cells=True`` (with ``measure``): the orientation pass also finds every
+    triangle's cell key for ``hammesh.halfedge.renumber_local`` (``info["validated"]
+    ["cells"]``, a ``locality.CellKeys``, consumed by the renumbering).
 
     Returns
     -------
@@ -153,7 +156,13 @@ def prepare_mesh(mesh: Mesh, *, measure: bool = True) -> tuple[Mesh, HalfEdges, 
         )
     n = len(pts)
     used = np.zeros(n, dtype=np.bool_) if measure else None
-    tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(pts, tri, used, measure=measure)
+    keys = None
+    if cells and measure:  # (the bounding box only of finite points, checked above)
+        grid = locality.cell_grid(pts, len(tri))
+        keys = locality.empty_cell_keys(grid, len(tri))
+    tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(
+        pts, tri, used, measure=measure, cells=None if keys is None else (grid, keys)
+    )
     if bad_t >= 0:
         t = int(bad_t)
         row = np.asarray(mesh.triangles)[t].tolist()
@@ -190,7 +199,8 @@ def prepare_mesh(mesh: Mesh, *, measure: bool = True) -> tuple[Mesh, HalfEdges, 
         segment_markers=np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1),
         triangle_attributes=attrs,
         # found on the way, for a construction's bound (sparse mode's local rule)
-        info={**mesh.info, "validated": {"min_angle": min_angle, "total": area, "used": used}} if measure
+        info={**mesh.info, "validated": {"min_angle": min_angle, "total": area, "used": used, "cells": keys}}
+        if measure
         else dict(mesh.info),
     )
     return clean, he, is_con

@@ -13,6 +13,7 @@ from hammesh.domain.resolution import check_resolution, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
+from hammesh.postprocess import sparse as sparse_module
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
@@ -33,10 +34,12 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: candidates' union-find and marks (9), the plan's status, slots, joins and
 #: union-finds (36), the walk's order (8), the gather's rows and its positions,
 #: parents, partners, kinds, angles and claim (81), the pinned edges (3), the
-#: improvement's stamps (16) and the certificate's narrowed claim (12): 208, 210
-#: with some room (the rest are made inside kernels, or small: a kernel handed
-#: ``pages.fresh`` arrays raises this).
-RESERVE_TAKEN = {"incircle": None, "sparse": 210}
+#: improvement's stamps (16) and the certificate's narrowed claim (12): 208; from
+#: ``sparse.LOCAL_MIN_TRIANGLES`` the renumbering's too (cell keys 8, order 8, rows
+#: 24, twins 24, pinned marks 3, points ~8: 75), 283 in all: so all of the 256 that
+#: ``quality_mesh`` faults (the rest are made inside kernels, or small: a kernel
+#: handed ``pages.fresh`` arrays raises this).
+RESERVE_TAKEN = {"incircle": None, "sparse": 256}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
 #: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,
@@ -70,11 +73,20 @@ def load_kernels(mode: str = "sparse") -> None:
         square = Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
         hamiltonian(quality_mesh(square, min_angle=30, max_area=0.01, isolate=False), mode=mode)
         if mode == "sparse":  # (and the paths only big outputs take)
-            from hammesh.postprocess._join_kernels import load_ring_kernels
+            from hammesh.halfedge import half_edge_twins, renumber_local, restore_vertices
             from hammesh.postprocess._sparse_kernels import load_output_kernels
 
             load_output_kernels()
+            from hammesh.postprocess._join_kernels import load_ring_kernels
+
             load_ring_kernels()
+            m = quality_mesh(square, min_angle=30, max_area=0.05, isolate=False)  # (the renumbering, from
+            tw = half_edge_twins(m.triangles, m.n_points)[0]  # sparse.LOCAL_MIN_TRIANGLES triangles)
+            restore_vertices(renumber_local(m.points, m.triangles, tw, tw < 0).triangles, np.arange(m.n_points))
+            from hammesh.postprocess.sparse import kept_radius_ratio  # (when the worst input triangle is joined)
+
+            kept_radius_ratio(m.points, m.triangles, np.full(m.n_triangles, 3, np.int8), np.arange(m.n_triangles),
+                              np.zeros(m.n_triangles))
         _loaded_modes.add(mode)
 
 
@@ -189,7 +201,10 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
 
         if mode == "incircle":
             start_facts()
-        clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle")  # (Thm 2.4 needs no angle)
+        # (Thm 2.4 needs no angle; sparse mode renumbers big meshes by the cells the
+        # orientation pass finds: sparse.LOCAL_MIN_TRIANGLES)
+        local = mode == "sparse" and len(shape) == 2 and shape[0] >= sparse_module.LOCAL_MIN_TRIANGLES
+        clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle", cells=local)
         rows = prepared = vmarks = None
         if mode == "incircle":
             serial = isinstance(side, threads.InlineExecutor)  # (no row stream then: its checker waits for rows)

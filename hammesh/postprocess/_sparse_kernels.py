@@ -839,6 +839,19 @@ def rows_in_cycle_order(
 
 
 @njit(cache=True, nogil=True)
+def kept_below(kind, parent, parent_min, bound, out):
+    """Rows kept whole (``kind`` 3) whose parent's smallest angle is at most ``bound``,
+    into ``out``; returns their count (``sparse.kept_radius_ratio``: one pass, no
+    gathered copies of the 1.5 M rows)."""
+    k = 0
+    for i in range(kind.shape[0]):
+        if kind[i] == 3 and parent_min[parent[i]] <= bound:
+            out[k] = i
+            k += 1
+    return k
+
+
+@njit(cache=True, nogil=True)
 def _runs_in_order_into(order, lengths, run_order, rows, new_len):
     """``rows``: the runs of ``order`` (lengths ``lengths``) in the order ``run_order``."""
     c = lengths.shape[0]

@@ -177,3 +177,73 @@ def test_without_a_reserve_the_second_thread_faults_one_beside_the_cover(monkeyp
     assert sum(taken) <= postprocess.RESERVE_AFTER_COVER * m.n_triangles + 16 * pages._PAGE
     for f in FIELDS:
         np.testing.assert_array_equal(getattr(h, f), getattr(plain, f), err_msg=f)
+
+
+@pytest.mark.parametrize("name", ["loops", "regions", "la"])
+def test_renumbered_input_maps_back(name: str, monkeypatch) -> None:
+    """From ``sparse.LOCAL_MIN_TRIANGLES`` the input is renumbered along a Hilbert curve
+    (``hammesh.halfedge.renumber_local``); the output (certified) must speak of the
+    caller's mesh: its points first and unmoved, kept rows equal to their parents,
+    every row inside its parent's region (attributes), split segments on the input's."""
+    from hammesh.postprocess import sparse
+
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
+    monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", 10**12)
+    plain = hammesh.hamiltonian(m)
+    monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", 100)
+    h = hammesh.hamiltonian(m)  # (certified, or it raises)
+    assert "locality" in h.report["step_seconds"] and "locality" not in plain.report["step_seconds"]
+    n = m.n_points
+    np.testing.assert_array_equal(h.points[:n], m.points)
+    kept = h.kind == 3
+    np.testing.assert_array_equal(np.sort(h.triangles[kept], axis=1), np.sort(m.triangles[h.parent[kept]], axis=1))
+    np.testing.assert_array_equal(h.triangle_attributes, m.triangle_attributes[h.parent])
+    if name == "regions":  # every row in its parent's region: the inner square is region 2
+        c = h.points[h.triangles].mean(axis=1)
+        inner = ((c > 0.5) & (c < 1.5)).all(axis=1)
+        np.testing.assert_array_equal(h.triangle_attributes[:, 0] == 2, inner)
+        assert inner.any() and not inner.all()
+    # constrained edges: every output segment lies on an input segment with its marker
+    seg_in = {tuple(sorted(s)): k for s, k in zip(m.segments.tolist(), m.segment_markers.tolist())}
+    p = h.points
+    for (a, b), k in zip(h.segments.tolist(), h.segment_markers.tolist()):
+        hit = [s for s in seg_in if _on_segment(p, a, b, s)]
+        assert hit and seg_in[hit[0]] == k
+    np.testing.assert_array_equal(h.vertex_markers[:n], plain.vertex_markers[:n])
+    # the same construction, other numbering: counts of the same order
+    assert abs(h.report["steiner_points"] - plain.report["steiner_points"]) <= 0.5 * plain.report["steiner_points"] + 5
+
+
+def _on_segment(p: np.ndarray, a: int, b: int, s: tuple[int, int]) -> bool:
+    """Output edge ``a b`` lies on input segment ``s`` (both ends on it, within rounding)."""
+    u, v = p[s[0]], p[s[1]]
+    d = v - u
+    L2 = float(d @ d)
+    for q in (p[a], p[b]):
+        t = float((q - u) @ d) / L2
+        if not (-1e-9 <= t <= 1 + 1e-9) or abs(d[0] * (q - u)[1] - d[1] * (q - u)[0]) > 1e-9 * L2:
+            return False
+    return True
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_kept_radius_ratio_is_the_worst_of_every_kept_row(seed: int, monkeypatch) -> None:
+    """``sparse.kept_radius_ratio`` measures only the kept rows whose smallest angle allows a
+    ratio above its sample's worst: the same maximum as measuring them all, whichever rows
+    are kept (the worst ones too, or not)."""
+    from hammesh.postprocess import sparse
+
+    dom = bundled_domain("A") if seed == 2 else hammesh.Domain.from_polygon(square(0, 0, 1))
+    m = hammesh.quality_mesh(dom, min_angle=(25, 30, 20)[seed], max_area=0.001 if seed < 2 else 0.5, isolate=False)
+    lo, _, worst, row = sparse.triangle_facts(m.points, m.triangles)
+    rng = np.random.default_rng(seed)
+    monkeypatch.setattr(sparse, "KEPT_RATIO_STRIDE", 7)
+    for trial in range(40):
+        kind = np.where(rng.random(m.n_triangles) < rng.uniform(0.05, 1.0), 3, 0).astype(np.int8)
+        if trial % 3 == 0:
+            kind[row] = 0  # the input's worst joined: the case that measures
+        kept = kind == 3
+        want = sparse.triangle_facts(m.points, m.triangles[kept])[2] if kept.any() else 1.0
+        assert sparse.kept_radius_ratio(m.points, m.triangles, kind, np.arange(m.n_triangles), lo) == want

@@ -112,8 +112,8 @@ def test_wrong_orientation_pass_is_rejected(monkeypatch, mode: str) -> None:
     """The construction's orientation pass turns every row clockwise."""
     real = he_kernels.orient_ccw
 
-    def broken(points, tri, used=None, measure=True):
-        r = real(points, tri, used, measure=measure)
+    def broken(points, tri, used=None, measure=True, **kw):
+        r = real(points, tri, used, measure=measure, **kw)
         return r._replace(triangles=r.triangles[:, ::-1].copy())
 
     monkeypatch.setattr(he_kernels, "orient_ccw", broken)
