@@ -28,6 +28,14 @@ printed. Tiles: ``--tiles`` (default: hammesh's, one per worker, more past 3M ea
 
     python benchmarks/bench_scale.py [--sizes 1.5e6,6e6] [--workers 1,2] [--modes sparse,incircle]
     python benchmarks/bench_scale.py --sizes 1e8 --workers 2 --partitioned-only --tiles 64
+
+``--startup R``: the driver's start, A/B: ``R`` rounds of two fresh processes each,
+alternating, the local cluster started before reading the domain
+(``hammesh.parallel.command.EARLY_START``, the default) or after; per run the seconds
+from the process's start to the tiles' submission and to their end, the wall time
+and the whole command's CPU (first size, first mode, first worker count).
+
+    python benchmarks/bench_scale.py --sizes 1.5e6 --workers 2 --startup 3
 """
 
 from __future__ import annotations
@@ -90,11 +98,18 @@ def extrapolated_count(area: float) -> tuple[float, str]:
     return float(c[0] / area + c[1] / np.sqrt(area)), note
 
 
-def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None) -> dict:
+#: ``python -c`` running the command with ``EARLY_START`` set (argv[1]: 0 or 1)
+EARLY = ("import sys; import hammesh.parallel.command as c; c.EARLY_START = bool(int(sys.argv[1])); "
+         "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
+
+
+def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
+         early: bool | None = None) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
-        cmd = [sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
+        head = [sys.executable, "-m", "hammesh"] if early is None else [sys.executable, "-c", EARLY, str(int(early))]
+        cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
         if tiles:
             cmd += ["--tiles", str(tiles)]
@@ -166,7 +181,11 @@ def main(argv: list[str] | None = None) -> int:
                     help="no raw call at these sizes: its triangle count is extrapolated from 0.4M and 1.5M runs")
     ap.add_argument("--out-dir", help="where the pieces go while a run lasts (default: the system's temp dir)")
     ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
+    ap.add_argument("--startup", type=int, metavar="ROUNDS",
+                    help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
     a = ap.parse_args(argv)
+    if a.startup:
+        return startup_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
     workers = [int(w) for w in a.workers.split(",")]
     modes = a.modes.split(",")
@@ -201,6 +220,30 @@ def main(argv: list[str] | None = None) -> int:
                 if per_tile(o):
                     print(f"{'':22}|   {per_tile(o)}")
                 sys.stdout.flush()
+    return 0
+
+
+def startup_ab(a) -> int:
+    """``--startup``: interleaved fresh processes, early cluster start on / off."""
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
+    got: dict = {True: [], False: []}
+    for r in range(a.startup):
+        for early in ((True, False) if r % 2 == 0 else (False, True)):
+            o = ours(area, w, a.tiles, mode, a.out_dir, early=early)
+            s = o["parallel"]["since_start"]
+            got[early].append(o)
+            print(f"round {r} early={int(early)}: submitted {s['submitted']:.2f} s after the start "
+                  f"(decomposition from {s['decompose']:.2f}), tiles done {s['tiles_done']:.2f}, "
+                  f"end {s['end']:.2f}, wall {o['wall']:.2f}, whole CPU {o['tree_cpu']:.2f} s, "
+                  f"load {o['load'][0]:.1f}")
+            sys.stdout.flush()
+    for early in (True, False):
+        sub = sorted(o["parallel"]["since_start"]["submitted"] for o in got[early])
+        cpu = sorted(o["tree_cpu"] for o in got[early])
+        wall = sorted(o["wall"] for o in got[early])
+        print(f"early={int(early)}: submitted median {sub[len(sub) // 2]:.2f} s, wall median {wall[len(wall) // 2]:.2f}, "
+              f"whole CPU median {cpu[len(cpu) // 2]:.2f}")
     return 0
 
 
