@@ -36,6 +36,15 @@ from the process's start to the tiles' submission and to their end, the wall tim
 and the whole command's CPU (first size, first mode, first worker count).
 
     python benchmarks/bench_scale.py --sizes 1.5e6 --workers 2 --startup 3
+
+``--tile-ab R``: one tile's work in this process, A/B: the first tile of the first
+size's decomposition (``--tiles``, default 2) meshed ``R`` times each way, alternating,
+with the lattice's own triangles and Triangle on the band only
+(``tile_mesh.LATTICE_BAND``, the default) or Triangle on the lattice's points, then
+``hamiltonian()`` of each mesh per mode: process CPU seconds per step, triangles,
+min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores).
+
+    python benchmarks/bench_scale.py --sizes 6e6 --tile-ab 3 --modes incircle,sparse
 """
 
 from __future__ import annotations
@@ -183,7 +192,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
     ap.add_argument("--startup", type=int, metavar="ROUNDS",
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
+    ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
+                    help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
     a = ap.parse_args(argv)
+    if a.tile_ab:
+        return tile_ab(a)
     if a.startup:
         return startup_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
@@ -220,6 +233,48 @@ def main(argv: list[str] | None = None) -> int:
                 if per_tile(o):
                     print(f"{'':22}|   {per_tile(o)}")
                 sys.stdout.flush()
+    return 0
+
+
+def tile_ab(a) -> int:
+    """``--tile-ab``: the band mesh against Triangle on the lattice's points, one tile, same process."""
+    import numpy as np
+
+    import hammesh
+    import hammesh.parallel.tile_mesh as tm
+    from hammesh import threads
+    from hammesh.parallel.tiles import decompose
+    from hammesh.parallel.union import min_angles_deg
+    from hammesh.postprocess import hamiltonian, load_kernels
+
+    threads.limit(1)
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    d = decompose(hammesh.read_domain(DEMO), min_angle=30, max_area=area, n_tiles=a.tiles or 2)
+    tile, modes = d.tiles[0], a.modes.split(",")
+    for mode in modes:
+        load_kernels(mode)
+    tm.mesh_tile(tile, 30, area)  # (kernels loaded: not the A/B's business)
+    cpu: dict = {}
+    for r in range(a.tile_ab):
+        for band in ((True, False) if r % 2 == 0 else (False, True)):
+            tm.LATTICE_BAND = band
+            c = time.process_time()
+            m = tm.mesh_tile(tile, 30, area)
+            row = {"mesh": time.process_time() - c}
+            for mode in modes:
+                c = time.process_time()
+                hamiltonian(m, mode=mode)
+                row[mode] = time.process_time() - c
+            for k, v in row.items():
+                cpu.setdefault((band, k), []).append(v)
+            print(f"round {r} band={int(band)}: {m.n_triangles:,} triangles, min angle "
+                  f"{min_angles_deg(m.points, m.triangles).min():.3f}; CPU s "
+                  + ", ".join(f"{k} {v:.3f}" for k, v in row.items()) + f" (load {os.getloadavg()[0]:.1f})")
+            sys.stdout.flush()
+    tm.LATTICE_BAND = True
+    for k in ["mesh", *modes]:
+        on, off = (float(np.median(cpu[(b, k)])) for b in (True, False))
+        print(f"{k}: band {on:.3f} s, lattice points {off:.3f} s (medians), band / points {on / off:.2f}")
     return 0
 
 
