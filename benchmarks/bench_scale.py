@@ -28,6 +28,23 @@ printed. Tiles: ``--tiles`` (default: hammesh's, one per worker, more past 3M ea
 
     python benchmarks/bench_scale.py [--sizes 1.5e6,6e6] [--workers 1,2] [--modes sparse,incircle]
     python benchmarks/bench_scale.py --sizes 1e8 --workers 2 --partitioned-only --tiles 64
+
+``--startup R``: the driver's start, A/B: ``R`` rounds of two fresh processes each,
+alternating, the local cluster started before reading the domain
+(``hammesh.parallel.command.EARLY_START``, the default) or after; per run the seconds
+from the process's start to the tiles' submission and to their end, the wall time
+and the whole command's CPU (first size, first mode, first worker count).
+
+    python benchmarks/bench_scale.py --sizes 1.5e6 --workers 2 --startup 3
+
+``--tile-ab R``: one tile's work in this process, A/B: the first tile of the first
+size's decomposition (``--tiles``, default 2) meshed ``R`` times each way, alternating,
+with the lattice's own triangles and Triangle on the band only
+(``tile_mesh.LATTICE_BAND``, the default) or Triangle on the lattice's points, then
+``hamiltonian()`` of each mesh per mode: process CPU seconds per step, triangles,
+min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores).
+
+    python benchmarks/bench_scale.py --sizes 6e6 --tile-ab 3 --modes incircle,sparse
 """
 
 from __future__ import annotations
@@ -90,11 +107,18 @@ def extrapolated_count(area: float) -> tuple[float, str]:
     return float(c[0] / area + c[1] / np.sqrt(area)), note
 
 
-def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None) -> dict:
+#: ``python -c`` running the command with ``EARLY_START`` set (argv[1]: 0 or 1)
+EARLY = ("import sys; import hammesh.parallel.command as c; c.EARLY_START = bool(int(sys.argv[1])); "
+         "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
+
+
+def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
+         early: bool | None = None) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
-        cmd = [sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
+        head = [sys.executable, "-m", "hammesh"] if early is None else [sys.executable, "-c", EARLY, str(int(early))]
+        cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
         if tiles:
             cmd += ["--tiles", str(tiles)]
@@ -166,7 +190,15 @@ def main(argv: list[str] | None = None) -> int:
                     help="no raw call at these sizes: its triangle count is extrapolated from 0.4M and 1.5M runs")
     ap.add_argument("--out-dir", help="where the pieces go while a run lasts (default: the system's temp dir)")
     ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
+    ap.add_argument("--startup", type=int, metavar="ROUNDS",
+                    help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
+    ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
+                    help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
     a = ap.parse_args(argv)
+    if a.tile_ab:
+        return tile_ab(a)
+    if a.startup:
+        return startup_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
     workers = [int(w) for w in a.workers.split(",")]
     modes = a.modes.split(",")
@@ -201,6 +233,72 @@ def main(argv: list[str] | None = None) -> int:
                 if per_tile(o):
                     print(f"{'':22}|   {per_tile(o)}")
                 sys.stdout.flush()
+    return 0
+
+
+def tile_ab(a) -> int:
+    """``--tile-ab``: the band mesh against Triangle on the lattice's points, one tile, same process."""
+    import numpy as np
+
+    import hammesh
+    import hammesh.parallel.tile_mesh as tm
+    from hammesh import threads
+    from hammesh.parallel.tiles import decompose
+    from hammesh.parallel.union import min_angles_deg
+    from hammesh.postprocess import hamiltonian, load_kernels
+
+    threads.limit(1)
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    d = decompose(hammesh.read_domain(DEMO), min_angle=30, max_area=area, n_tiles=a.tiles or 2)
+    tile, modes = d.tiles[0], a.modes.split(",")
+    for mode in modes:
+        load_kernels(mode)
+    tm.mesh_tile(tile, 30, area)  # (kernels loaded: not the A/B's business)
+    cpu: dict = {}
+    for r in range(a.tile_ab):
+        for band in ((True, False) if r % 2 == 0 else (False, True)):
+            tm.LATTICE_BAND = band
+            c = time.process_time()
+            m = tm.mesh_tile(tile, 30, area)
+            row = {"mesh": time.process_time() - c}
+            for mode in modes:
+                c = time.process_time()
+                hamiltonian(m, mode=mode)
+                row[mode] = time.process_time() - c
+            for k, v in row.items():
+                cpu.setdefault((band, k), []).append(v)
+            print(f"round {r} band={int(band)}: {m.n_triangles:,} triangles, min angle "
+                  f"{min_angles_deg(m.points, m.triangles).min():.3f}; CPU s "
+                  + ", ".join(f"{k} {v:.3f}" for k, v in row.items()) + f" (load {os.getloadavg()[0]:.1f})")
+            sys.stdout.flush()
+    tm.LATTICE_BAND = True
+    for k in ["mesh", *modes]:
+        on, off = (float(np.median(cpu[(b, k)])) for b in (True, False))
+        print(f"{k}: band {on:.3f} s, lattice points {off:.3f} s (medians), band / points {on / off:.2f}")
+    return 0
+
+
+def startup_ab(a) -> int:
+    """``--startup``: interleaved fresh processes, early cluster start on / off."""
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
+    got: dict = {True: [], False: []}
+    for r in range(a.startup):
+        for early in ((True, False) if r % 2 == 0 else (False, True)):
+            o = ours(area, w, a.tiles, mode, a.out_dir, early=early)
+            s = o["parallel"]["since_start"]
+            got[early].append(o)
+            print(f"round {r} early={int(early)}: submitted {s['submitted']:.2f} s after the start "
+                  f"(decomposition from {s['decompose']:.2f}), tiles done {s['tiles_done']:.2f}, "
+                  f"end {s['end']:.2f}, wall {o['wall']:.2f}, whole CPU {o['tree_cpu']:.2f} s, "
+                  f"load {o['load'][0]:.1f}")
+            sys.stdout.flush()
+    for early in (True, False):
+        sub = sorted(o["parallel"]["since_start"]["submitted"] for o in got[early])
+        cpu = sorted(o["tree_cpu"] for o in got[early])
+        wall = sorted(o["wall"] for o in got[early])
+        print(f"early={int(early)}: submitted median {sub[len(sub) // 2]:.2f} s, wall median {wall[len(wall) // 2]:.2f}, "
+              f"whole CPU median {cpu[len(cpu) // 2]:.2f}")
     return 0
 
 

@@ -23,8 +23,6 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from hammesh import params
 from hammesh.mesh import HamiltonianMesh, Mesh
@@ -104,6 +102,11 @@ def vertex_order(mesh: Mesh | HamiltonianMesh, method: str) -> np.ndarray:
         return np.argsort(first, kind="stable")
     if method == "hilbert":
         return np.argsort(hilbert_keys(mesh.points), kind="stable")
+    # (imported here: ``hammesh mesh`` imports this module to build its options, and
+    # scipy.sparse costs ~0.3-0.6 s of every command's start; only "rcm" needs it)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
     u, v = _edges(tri)
     graph = coo_matrix((np.ones(len(u), np.int8), (u, v)), shape=(n, n)).tocsr()
     graph = (graph + graph.T).tocsr()

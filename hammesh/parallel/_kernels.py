@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["area_sum", "edges_within_into", "label_pieces_into", "lattice_mark_inside_into", "lattice_clear_near_segments_into",
-           "lattice_clear_near_points_into"]
+           "lattice_clear_near_points_into", "lattice_triangles_into", "lattice_mesh_into"]
 
 
 @njit(cache=True, nogil=True)
@@ -171,3 +171,76 @@ def lattice_clear_near_points_into(x0: float, y0: float, h: float, dy: float, po
                 x = shift + i * h
                 if (x - px) ** 2 + (y - py) ** 2 < radius * radius:
                     keep[j, i] = False
+
+
+# --- the lattice's own triangles (tile_mesh: Triangle meshes only the band) ------------
+# Strip j lies between rows j and j + 1; with o = j & 1 its cell i holds an "up"
+# triangle (i, j), (i + 1, j), (i + o, j + 1) and a "down" triangle (i + 1 - o, j),
+# (i + 1, j + 1), (i, j + 1), both counter-clockwise, each equilateral.
+
+
+@njit(cache=True, nogil=True)
+def lattice_triangles_into(keep: np.ndarray, index: np.ndarray) -> int:
+    """Number the lattice triangles whose three corners are kept, strip by strip:
+    ``index[j, 2 i]`` (up) and ``index[j, 2 i + 1]`` (down) of strip ``j`` cell ``i``,
+    -1 where a corner is not kept; returns their number."""
+    ny, nx = keep.shape
+    count = 0
+    for j in range(ny - 1):
+        o = j & 1
+        for i in range(nx - 1):
+            if keep[j, i] and keep[j, i + 1] and keep[j + 1, i + o]:
+                index[j, 2 * i] = count
+                count += 1
+            else:
+                index[j, 2 * i] = -1
+            if keep[j, i + 1 - o] and keep[j + 1, i + 1] and keep[j + 1, i]:
+                index[j, 2 * i + 1] = count
+                count += 1
+            else:
+                index[j, 2 * i + 1] = -1
+    return count
+
+
+@njit(cache=True, nogil=True)
+def _lattice_at(index: np.ndarray, j: int, c: int) -> int:
+    if j < 0 or j >= index.shape[0] or c < 0 or c >= index.shape[1]:
+        return -1
+    return index[j, c]
+
+
+@njit(cache=True, nogil=True)
+def lattice_mesh_into(index: np.ndarray, nx: int, corners: np.ndarray, neighbors: np.ndarray,
+                      incident: np.ndarray) -> None:
+    """The numbered lattice triangles (:func:`lattice_triangles_into`): their corners as
+    grid ids ``j nx + i``, their neighbours among themselves (``neighbors[t, s]`` across
+    edge ``(s, s + 1)``, -1 on the lattice's outline) and, per grid point, the number
+    of triangles meeting it (6: an interior point).
+
+    Neighbours, by the strip layout above: up ``s0`` -> down of strip ``j - 1`` cell
+    ``i``, ``s1`` -> down ``(j, i + o)``, ``s2`` -> down ``(j, i - 1 + o)``; down ``s0`` ->
+    up ``(j, i + 1 - o)``, ``s1`` -> up ``(j + 1, i)``, ``s2`` -> up ``(j, i - o)``."""
+    incident[:] = 0
+    for j in range(index.shape[0]):
+        o = j & 1
+        for i in range(index.shape[1] // 2):
+            t = index[j, 2 * i]
+            if t >= 0:
+                a, b, c = j * nx + i, j * nx + i + 1, (j + 1) * nx + i + o
+                corners[t, 0], corners[t, 1], corners[t, 2] = a, b, c
+                incident[a] += 1
+                incident[b] += 1
+                incident[c] += 1
+                neighbors[t, 0] = _lattice_at(index, j - 1, 2 * i + 1)
+                neighbors[t, 1] = _lattice_at(index, j, 2 * (i + o) + 1)
+                neighbors[t, 2] = _lattice_at(index, j, 2 * (i - 1 + o) + 1)
+            t = index[j, 2 * i + 1]
+            if t >= 0:
+                a, b, c = j * nx + i + 1 - o, (j + 1) * nx + i + 1, (j + 1) * nx + i
+                corners[t, 0], corners[t, 1], corners[t, 2] = a, b, c
+                incident[a] += 1
+                incident[b] += 1
+                incident[c] += 1
+                neighbors[t, 0] = _lattice_at(index, j, 2 * (i + 1 - o))
+                neighbors[t, 1] = _lattice_at(index, j + 1, 2 * i)
+                neighbors[t, 2] = _lattice_at(index, j, 2 * (i - o))

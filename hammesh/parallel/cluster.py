@@ -66,6 +66,9 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
     """
     from hammesh.parallel.run import LocalRunner
 
+    if isinstance(client, Starting):  # a local cluster the caller started in the background
+        yield client, client.n_workers
+        return
     if client is not None:
         yield client, max(1, len(client.scheduler_info().get("workers", {})))
         return
@@ -92,7 +95,7 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
         started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING)
         failed = False
         try:
-            yield Starting(started), workers
+            yield Starting(started, workers), workers
         except BaseException:
             failed = True
             raise
@@ -109,7 +112,10 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
 #: modules the driver imports while it decomposes (scipy.spatial: its KD-tree): a
 #: cluster starting beside it imports them before it forks, so that no fork happens in
 #: the middle of the driver's import of one (a child would inherit that module half
-#: initialised, its import lock held by a thread the child does not have)
+#: initialised, its import lock held by a thread the child does not have). (``hammesh
+#: mesh`` also reads the domain meanwhile: it imports what that needs first, and the
+#: reading's own imports are numba's, made under its compiler lock, which the fork
+#: holds: :func:`_hold_numba_lock_across_fork`.)
 FORK_AFTER_IMPORTING = ("scipy.spatial",)
 
 
@@ -214,10 +220,12 @@ def retain_freed_memory() -> bool:
 
 class Starting:
     """A Dask client still starting in another thread: any use (``submit``,
-    ``gather``, ...) waits until it is up (or raises the start's error)."""
+    ``gather``, ...) waits until it is up (or raises the start's error).
+    ``n_workers``: the workers it starts, known at once."""
 
-    def __init__(self, future) -> None:
+    def __init__(self, future, n_workers: int) -> None:
         self._future = future
+        self.n_workers = n_workers
 
     def __getattr__(self, name: str):
         return getattr(self._future.result(), name)
@@ -234,6 +242,7 @@ def _hold_numba_lock_across_fork() -> None:
     load a kernel from its cache. With the cluster starting in a thread while the
     driver decomposes (and may load a kernel), the fork therefore waits for the lock
     and the child releases its copy (the standard ``os.register_at_fork`` pattern).
+    Logging's handlers likewise (:func:`_take_log_handlers`).
     """
     global _fork_guarded
     if _fork_guarded:
@@ -244,7 +253,37 @@ def _hold_numba_lock_across_fork() -> None:
 
     os.register_at_fork(before=global_compiler_lock.acquire, after_in_parent=global_compiler_lock.release,
                         after_in_child=global_compiler_lock.release)
+    os.register_at_fork(before=_take_log_handlers, after_in_parent=_give_log_handlers,
+                        after_in_child=_give_log_handlers)
     _fork_guarded = True
+
+
+_held_handlers: list = []
+
+
+def _take_log_handlers() -> None:
+    """Before a fork: take every logging handler's lock, so that no thread is in the
+    middle of writing a record. Dask forks its workers from a thread of its own while
+    the scheduler's thread logs; logging renews its handlers' locks in the child, but
+    not the lock of the stream a handler was writing to (a file's buffer): a child
+    forked mid-write hangs at its first log line (seen under pytest, whose handlers
+    take every record). A thread emits through one handler at a time, so taking them
+    in turn cannot deadlock."""
+    import logging
+
+    for ref in list(getattr(logging, "_handlerList", [])):
+        h = ref()
+        if h is not None and getattr(h, "lock", None) is not None:
+            h.lock.acquire()
+            _held_handlers.append(h)
+
+
+def _give_log_handlers() -> None:
+    while _held_handlers:
+        try:
+            _held_handlers.pop().lock.release()
+        except RuntimeError:  # (a child: logging renewed that lock already)
+            pass
 
 
 def worker_threads(workers: int) -> int:

@@ -4,13 +4,19 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import contextlib
 import gc
 import sys
 
 from hammesh import params
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["run_parallel", "freeze_at_exit"]
+__all__ = ["run_parallel", "freeze_at_exit", "early_cluster", "EARLY_START"]
+
+#: ``--workers N`` starts its local cluster before the domain is read (in a thread of
+#: its own: importing Dask, forking the workers), not after; False: after (the order
+#: before session 10, kept for the A/B in ``benchmarks/bench_scale.py --startup``)
+EARLY_START = True
 
 _freezing = False
 
@@ -32,6 +38,27 @@ def freeze_at_exit() -> None:
     if not _freezing:
         atexit.register(gc.freeze)
         _freezing = True
+
+
+@contextlib.contextmanager
+def early_cluster(args: argparse.Namespace):
+    """The local cluster of ``--workers N``, starting in the background from here on
+    (:func:`~hammesh.parallel.cluster.runner_for`), or None (no ``--workers``, a
+    ``--scheduler``'s cluster, or :data:`EARLY_START` off).
+
+    Why: the driver's start is serial up to the tiles' submission. The cluster's start
+    (importing ``distributed``, ~0.6 s quiet, the scheduler, forking the workers with
+    the mode's kernels loaded) used to begin only when the meshing did, after the
+    command had read the domain and estimated its size; begun first, it runs beside
+    them. Closed (with the workers) when the command is done.
+    """
+    if not EARLY_START or args.workers is None:
+        yield None
+        return
+    from hammesh.parallel.cluster import runner_for
+
+    with runner_for(workers=args.workers, mode=args.mode, background=True) as (runner, _):
+        yield runner
 
 
 def run_parallel(args: argparse.Namespace) -> int:
@@ -81,13 +108,15 @@ def run_parallel(args: argparse.Namespace) -> int:
         from hammesh.parallel.partitioned import write_partitioned
 
         Outputs(report=args.report, inputs=(args.input,)).check()
-        source = load_input(args.input, strict=args.strict)
-        if not isinstance(source, Domain):
-            raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-        rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
-                                tiles=args.tiles, workers=args.workers, scheduler=args.scheduler, mode=args.mode,
-                                keep=args.keep, parts=args.parts, force=args.force, inputs=inputs,
-                                progress=progress, lattice=not args.no_lattice)
+        with early_cluster(args) as started:
+            source = load_input(args.input, strict=args.strict)
+            if not isinstance(source, Domain):
+                raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
+            rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
+                                    tiles=args.tiles, workers=None if started else args.workers, client=started,
+                                    scheduler=args.scheduler, mode=args.mode, keep=args.keep, parts=args.parts,
+                                    force=args.force, inputs=inputs, progress=progress,
+                                    lattice=not args.no_lattice)
         if args.report is not None:
             write_report(rep, args.report)
         par = rep["parallel"]
@@ -105,13 +134,14 @@ def run_parallel(args: argparse.Namespace) -> int:
 
     outputs = Outputs(mesh=args.output, report=args.report, inputs=(args.input,))
     outputs.check()
-    source = load_input(args.input, strict=args.strict)
-    if not isinstance(source, Domain):
-        raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-    # (a local cluster is started by parallel_hamiltonian, beside the decomposition)
-    with runner_for(scheduler=args.scheduler) as (runner, n):
+    # (a local cluster starts here, beside reading the domain: early_cluster)
+    with early_cluster(args) as started, runner_for(scheduler=args.scheduler) as (runner, n):
+        source = load_input(args.input, strict=args.strict)
+        if not isinstance(source, Domain):
+            raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
+        client = started if started is not None else None if args.scheduler is None else runner
         h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
-                                 workers=args.workers, client=None if args.scheduler is None else runner,
+                                 workers=None if client is not None else args.workers, client=client,
                                  mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
     if args.parts is not None or args.renumber is not None:
         from hammesh.partition import partitioned

@@ -34,7 +34,7 @@ from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
 from hammesh.partition import spread_parts
 from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, on_holder, outcome_hamiltonian,
-                                  progress_bar, run_tiles)
+                                  progress_bar, run_tiles, since_start)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target"]
 
@@ -291,6 +291,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                                       **{k: sum(x[5][k] for x in done)
                                          for k in ("finish", "write", "cpu_finish", "cpu_write")}},
                      "tile_steps": [{**st, **x[5]} for st, x in zip(tiled.tile_steps, done)],
+                     "since_start": {**tiled.since_start, "end": since_start()},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
     if parts is not None:

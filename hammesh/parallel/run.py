@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import sys
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
@@ -27,7 +28,8 @@ from hammesh.parallel.tiles import Decomposition, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
-           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar"]
+           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
+           "register_sizeof"]
 
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
@@ -98,6 +100,7 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     ``lattice=False``: Triangle alone, no interior lattice (:func:`mesh_tile`)."""
     from hammesh.postprocess import hamiltonian
 
+    register_sizeof()
     t0, c0 = time.perf_counter(), time.process_time()
     mesh = mesh_tile(tile, min_angle, max_area, lattice=lattice)
     t1, c1 = time.perf_counter(), time.process_time()
@@ -140,12 +143,28 @@ def _outcome_nbytes(outcome: TileOutcome) -> int:
     return total
 
 
-try:  # Dask's size estimate of an outcome (the optional [dask] extra)
-    from dask.sizeof import sizeof as _dask_sizeof
+_sizeof_registered = False
 
+
+def register_sizeof() -> None:
+    """Tell Dask an outcome's size (:func:`_outcome_nbytes`), once per process; a no-op
+    without Dask. Called by every tile's task, in the process that holds its outcome
+    (where Dask asks), and at import where Dask is already loaded (a worker): not at
+    the driver's import, where ``dask`` would cost ~0.2-0.4 s of the command's serial
+    start (it imports jinja2 among others); a local cluster imports it in its own thread."""
+    global _sizeof_registered
+    if _sizeof_registered or "dask" not in sys.modules:  # (no Dask here: nobody asks)
+        return
+    try:
+        from dask.sizeof import sizeof as _dask_sizeof
+    except ImportError:  # pragma: no cover - without Dask there is no scheduler to tell
+        return
     _dask_sizeof.register(TileOutcome)(_outcome_nbytes)
-except ImportError:  # pragma: no cover - without Dask there is no scheduler to tell
-    pass
+    _sizeof_registered = True
+
+
+if "dask" in sys.modules:
+    register_sizeof()
 
 
 def on_holder(runner, handle) -> dict:
@@ -205,6 +224,20 @@ class Tiled:
     tile_seconds: dict
     #: per tile: its Triangle mesh's triangle count and its task's seconds per step
     tile_steps: list = field(default_factory=list)
+    #: seconds from this process's start to the decomposition's start, the tiles'
+    #: submission and their end (:func:`since_start`): the driver's serial start
+    since_start: dict = field(default_factory=dict)
+
+
+def since_start() -> float:
+    """Wall seconds since this process started (NaN where unknown): the driver's
+    timeline in the report, imports and reading the domain included."""
+    try:
+        import psutil  # (a dependency of Dask's distributed)
+
+        return time.time() - psutil.Process().create_time()
+    except Exception:  # pragma: no cover - no psutil, or no such process information
+        return float("nan")
 
 
 def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles: int, runner=None,
@@ -222,7 +255,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     note = progress or (lambda what, n: None)
     from hammesh.parallel.cluster import Starting
 
-    t0 = time.perf_counter()
+    t0, s0 = time.perf_counter(), since_start()
     starting = isinstance(run, Starting)  # (a local cluster starting beside the decomposition)
     warming = [] if starting else warm_workers(run, mode)  # (kept alive while the tiles run)
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
@@ -237,6 +270,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                           spill, check, lattice, pure=False)
 
     handles = [submit(i) for i in range(decomp.n_tiles)]
+    s1 = since_start()
     wait_for(run, handles)  # done: their holders are known
     small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
     rounds = 0
@@ -271,7 +305,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                  mesh_triangles=mesh_triangles, ham_points=ham_points, rounds=rounds, borders=borders,
                  seconds={"decompose": t1 - t0, "start": t1b - t1, "tiles": t2 - t1b, "plan": t3 - t2},
                  tile_seconds=tile_seconds,
-                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds} for o in small])
+                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds} for o in small],
+                 since_start={"decompose": s0, "submitted": s1, "tiles_done": s0 + (t2 - t0)})
 
 
 def finish_args(tiled: Tiled) -> list[tuple]:
@@ -403,7 +438,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
         "tile_cycles": tiled.plan.nodes, "pieces": tiled.plan.pieces,
         "estimate": tiled.decomposition.estimate, "mesh_triangles": int(tiled.mesh_triangles.sum()),
         "seconds": {**tiled.seconds, "finish": t2 - t1, "verify": t3 - t2, "total": t3 - t0},
-        "tile_seconds": tiled.tile_seconds, "tile_steps": tiled.tile_steps,
+        "tile_seconds": tiled.tile_seconds, "tile_steps": tiled.tile_steps, "since_start": tiled.since_start,
     }
     report["triangles"] = int(len(h.triangles))
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,

@@ -1,0 +1,82 @@
+"""The parallel command's start: what the driver imports and when the cluster starts."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.cli import main
+
+DEMO = "hammesh/data/demo.poly"
+
+
+def test_building_the_command_imports_neither_dask_nor_scipy_sparse():
+    """``hammesh mesh``'s options and the parallel path's modules load without Dask
+    (a local cluster imports it in its own thread) and without scipy.sparse (only
+    ``--renumber rcm`` needs it): both were on the command's serial start."""
+    code = ("import sys; from hammesh.cli import build_parser; import hammesh.parallel.command, hammesh.numbering; "
+            "build_parser(); "
+            "print(sorted(m for m in ('dask', 'distributed', 'scipy.sparse') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_rcm_numbering_still_works_without_the_module_level_import():
+    from hammesh.numbering import bandwidth_profile, renumber
+
+    h = hammesh.hamiltonian(hammesh.quality_mesh(hammesh.read_domain(DEMO), min_angle=30, max_area=5e-3))
+    r, _ = renumber(h, "rcm")
+    assert np.array_equal(np.sort(r.points, axis=0), np.sort(h.points, axis=0))  # the same points, renamed
+    assert bandwidth_profile(r.triangles, len(r.points))[0] < bandwidth_profile(h.triangles, len(h.points))[0]
+
+
+def test_outcome_size_is_registered_by_the_task_where_dask_runs():
+    """The task registers the outcome's size with Dask in its own process (a worker
+    imports Dask before any task), so Dask's ``sizeof`` counts the meshes held."""
+    sizeof = pytest.importorskip("dask.sizeof").sizeof
+    from hammesh.parallel.run import _outcome_nbytes, tile_task
+    from hammesh.parallel.tiles import decompose
+
+    d = decompose(hammesh.read_domain(DEMO), min_angle=30, max_area=4e-3, n_tiles=2)
+    out = tile_task(d.tiles[0], d.n_input, 30, 4e-3, "sparse", 0.9)
+    assert sizeof(out) == _outcome_nbytes(out) > out.ham.triangles.nbytes
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("partitioned", [True, False])
+def test_early_cluster_start_runs_and_reports_the_driver_timeline(tmp_path, capsys, partitioned):
+    """``--workers``: the cluster starts before the domain is read; the output is the
+    same checked mesh, and the report's timeline is in order."""
+    pytest.importorskip("distributed")
+    out = tmp_path / ("parts" if partitioned else "o.vtu")
+    rep = tmp_path / "r.json"
+    argv = ["mesh", DEMO, "-q", "30", "-a", "2e-3", "--workers", "2", "-o", str(out), "--report", str(rep)]
+    assert main(argv + (["--partitioned"] if partitioned else [])) == 0
+    assert capsys.readouterr().err == ""
+    s = json.loads(rep.read_text())["parallel"]["since_start"]
+    assert 0 < s["decompose"] <= s["submitted"] <= s["tiles_done"]
+    if partitioned:
+        assert s["tiles_done"] <= s["end"]
+    assert main(["check", str(out / "mesh.pvtu" if partitioned else out)]) == 0
+    assert not [t for t in threading.enumerate() if t.name.startswith("hammesh-cluster")]
+
+
+@pytest.mark.slow
+def test_bad_domain_with_an_early_cluster_exits_2_and_closes_it(tmp_path, capsys):
+    """A domain that cannot be read, found while the cluster starts: one line, exit 2,
+    the cluster closed (no thread of its start left)."""
+    pytest.importorskip("distributed")
+    bad = tmp_path / "bad.poly"
+    bad.write_text("3 2 0 0\n1 0 0\n2 1 0\n")  # promises 3 vertices, gives 2
+    assert main(["mesh", str(bad), "-q", "30", "-a", "1e-2", "--workers", "1", "--partitioned",
+                 "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "bad.poly" in err
+    assert not (tmp_path / "o").exists()
+    assert not [t for t in threading.enumerate() if t.name.startswith("hammesh-cluster")]
