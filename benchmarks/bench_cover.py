@@ -15,6 +15,7 @@ largest cycle's share (a winding cover: issue 14).
     python benchmarks/bench_cover.py --cells 0,1024,256 [--target 100000]
     python benchmarks/bench_cover.py --corpus      # uncovered triangles, the 16k corpus
     python benchmarks/bench_cover.py --compile     # first cycle_cover with an empty numba cache
+    python benchmarks/bench_cover.py --steps [--target 1500000] [--repeat 5]
 
 ``--corpus``: the sparse ``hamiltonian()`` on the ~16k-triangle q30 meshes of
 ``bench_sparse.py`` (8 domains): the cover's uncovered triangles per mesh and in all,
@@ -22,6 +23,13 @@ and those with a boundary edge (``report["uncovered"]``, ``["uncovered_boundary"
 session 8 left 62 / 43. ``--compile``: a child process with a new, empty
 ``NUMBA_CACHE_DIR`` compiles what the quadtree needs first, then times its first
 ``cycle_cover`` call (the cover's kernels compiled) in wall and CPU seconds.
+
+``--steps``: process CPU (and wall) seconds per step of ``cycle_cover``
+(``cycle_cover(..., clock=)``) on the plate as Triangle numbers it and on the same
+mesh with its triangles renumbered in Morton or Hilbert order of their centroids
+(``local_order`` here; the vertices renumbered by first use too: "+v"), the
+variants alternating in one process for ``--repeat`` rounds (median per step), with
+each variant's cycles and uncovered triangles: what a local numbering buys the cover.
 
 ``--cells``: the cover's cycles confined to quadtree cells of about S triangles
 (``cycle_cover.CELL_SIZE``; 0: unconfined, the default) on ``bench_partition.py``'s
@@ -141,6 +149,120 @@ def compile_time() -> None:
         subprocess.run([sys.executable, "-c", _COMPILE_CHILD], env=env, check=True)
 
 
+def plate_mesh(target: int):
+    """The plate with two holes meshed by Triangle (min angle 30) at about ``target``
+    triangles, and Triangle's first-call seconds."""
+    import hammesh
+
+    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    circ = np.c_[np.cos(a), np.sin(a)]
+    plate = hammesh.Domain.from_polygon(
+        [[0, 0], [4, 0], [4, 2], [0, 2]], holes=[circ * 0.45 + [1, 1], circ * 0.3 + [3, 1]]
+    )
+    area = 8.0 - np.pi * (0.45**2 + 0.3**2)
+    t = time.perf_counter()
+    mesh = hammesh.quality_mesh(plate, min_angle=30, max_area=area / (0.63 * target))
+    return mesh, time.perf_counter() - t
+
+
+def _hilbert_d(x: np.ndarray, y: np.ndarray, bits: int) -> np.ndarray:
+    """Hilbert index of integer points in a ``2**bits`` square (the classic xy2d loop,
+    vectorized over the points; Wikipedia, "Hilbert curve")."""
+    x, y = x.astype(np.int64).copy(), y.astype(np.int64).copy()
+    d = np.zeros(len(x), np.int64)
+    n = 1 << bits
+    s = n >> 1
+    while s > 0:
+        rx = ((x & s) > 0).astype(np.int64)
+        ry = ((y & s) > 0).astype(np.int64)
+        d += s * s * ((3 * rx) ^ ry)
+        # rotate the quadrant
+        flip = ry == 0
+        swap_x = flip & (rx == 1)
+        x[swap_x] = n - 1 - x[swap_x]
+        y[swap_x] = n - 1 - y[swap_x]
+        x[flip], y[flip] = y[flip], x[flip].copy()
+        s >>= 1
+    return d
+
+
+def local_order(points: np.ndarray, tri: np.ndarray, curve: str = "morton", bits: int = 16) -> np.ndarray:
+    """Rows of ``tri`` sorted by the Morton (Z) or Hilbert index of their centroids on a
+    ``2**bits`` grid over the bounding box (a benchmark's stand-in for the renumbering
+    the sparse pipeline is to do at its start)."""
+    c = points[tri].mean(axis=1)
+    lo, hi = c.min(axis=0), c.max(axis=0)
+    q = ((c - lo) / max(float((hi - lo).max()), 1e-300) * ((1 << bits) - 1)).astype(np.int64)
+    if curve == "hilbert":
+        key = _hilbert_d(q[:, 0], q[:, 1], bits)
+    else:
+        key = np.zeros(len(q), np.int64)
+        for b in range(bits):
+            key |= ((q[:, 0] >> b) & 1) << (2 * b + 1) | ((q[:, 1] >> b) & 1) << (2 * b)
+    return np.argsort(key, kind="stable")
+
+
+def renumbered(points: np.ndarray, tri: np.ndarray, perm: np.ndarray, vertices: bool):
+    """The mesh with triangle ``perm[i]`` as row i (and the vertices numbered by first
+    use in the new rows if ``vertices``)."""
+    t2 = tri[perm]
+    if not vertices:
+        return points, t2
+    flat = t2.ravel()
+    first = np.full(len(points), len(flat), np.int64)
+    np.minimum.at(first, flat, np.arange(len(flat)))
+    vorder = np.argsort(first, kind="stable")
+    new_id = np.empty(len(points), np.int64)
+    new_id[vorder] = np.arange(len(points))
+    return points[vorder], new_id[t2]
+
+
+def steps_table(target: int, repeat: int) -> None:
+    """Process CPU per cover step, Triangle's numbering vs local ones (``--steps``)."""
+    import os
+
+    from hammesh.halfedge import half_edges
+    from hammesh.postprocess.cycle_cover import cycle_cover
+
+    cache = os.environ.get("HAMMESH_BENCH_MESH")  # an .npz of points/triangles to skip Triangle
+    if cache and os.path.exists(cache):
+        z = np.load(cache)
+        pts, tri = z["points"], z["triangles"].astype(np.int64)
+    else:
+        mesh, _ = plate_mesh(target)
+        pts, tri = mesh.points, mesh.triangles.astype(np.int64)
+    variants = {"triangle": (pts, tri)}
+    for curve in ("morton", "hilbert"):
+        perm = local_order(pts, tri, curve)
+        variants[curve] = renumbered(pts, tri, perm, False)
+        variants[curve + "+v"] = renumbered(pts, tri, perm, True)
+    data = {k: (p, t, half_edges(t, len(p)).twin) for k, (p, t) in variants.items()}
+    for k, (p, t, tw) in data.items():
+        a, b = np.repeat(np.arange(len(t)), 3)[tw >= 0], tw[tw >= 0] // 3
+        print(f"{k:10s} median |t - neighbour| {np.median(np.abs(a - b)):,.0f} rows", flush=True)
+    cpu: dict = {k: {} for k in data}
+    wall: dict = {k: [] for k in data}
+    for r in range(repeat):
+        for k, (p, t, tw) in data.items():
+            clock: dict = {}
+            t0 = time.perf_counter()
+            c = cycle_cover(t, tw, points=p, good=np.zeros(3 * len(t), bool), clock=clock)
+            wall[k].append(time.perf_counter() - t0)
+            for step, (_, cs) in clock.items():
+                cpu[k].setdefault(step, []).append(cs)
+            if r == 0:
+                print(f"{k:10s} m = {len(t):,}: cycles {c.n_cycles:,}, uncovered {c.n_uncovered}, dropped "
+                      f"{c.n_dropped}, unmatched {c.n_unmatched}", flush=True)
+    steps = list(cpu["triangle"])
+    print(f"median of {repeat} rounds, process CPU s per step:")
+    print(f"{'step':16s}" + "".join(f"{k:>11s}" for k in data))
+    for step in steps + ["total"]:
+        row = [np.median(np.sum(list(cpu[k].values()), axis=0)) if step == "total" else np.median(cpu[k][step])
+               for k in data]
+        print(f"{step:16s}" + "".join(f"{v:11.3f}" for v in row))
+    print(f"{'wall':16s}" + "".join(f"{np.median(wall[k]):11.3f}" for k in data))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--target", type=int, default=None, help="triangles of the input mesh (1.5M; --cells: 100k)")
@@ -148,7 +270,11 @@ def main() -> None:
     ap.add_argument("--cells", default=None, help="comma-separated cell sizes: the cut table instead (0: unconfined)")
     ap.add_argument("--corpus", action="store_true", help="uncovered triangles on the 16k corpus instead")
     ap.add_argument("--compile", action="store_true", help="first cycle_cover with an empty numba cache instead")
+    ap.add_argument("--steps", action="store_true", help="CPU per cover step, Triangle's vs local numberings")
     args = ap.parse_args()
+    if args.steps:
+        steps_table(args.target or 1_500_000, args.repeat)
+        return
     if args.corpus:
         corpus_table()
         return

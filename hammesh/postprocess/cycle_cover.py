@@ -13,6 +13,7 @@ where the matching can be rotated around a vertex (``rotate``).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from functools import partial
 
@@ -100,6 +101,7 @@ def cycle_cover(
     points: np.ndarray | None = None,
     cell_size: int | None = None,
     drop: bool = True,
+    clock: dict | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -141,6 +143,9 @@ def cycle_cover(
         edge: ``_cover_kernels._drop_matching``) before chains of degree-2 triangles
         are used: those are boundary triangles, whose incenter sectors cost the sparse
         mode its worst angles. False: chains only (the cover before session 8).
+    clock : dict, optional
+        Filled with ``step: (wall, process CPU)`` seconds per step of the cover
+        (``benchmarks/bench_cover.py --steps``); process CPU counts every thread.
 
     Returns
     -------
@@ -155,6 +160,7 @@ def cycle_cover(
     >>> c.n_cycles, c.n_uncovered
     (1, 0)
     """
+    mark = _Clock(clock)
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     m = len(tw) // 3
     limit = m if arc_limit is None else int(arc_limit)
@@ -170,9 +176,11 @@ def cycle_cover(
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     nb = np.empty((m, 3), np.int32)
     run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
+    mark("neighbors")
     if cell is not None:
         _k.cut_cell_borders(nb, cell)
     alive, deg = _k.peel(nb, m)
+    mark("peel")
     active = alive & (deg == 3)
     mate = np.full(m, -1, np.int64)
     # the searches' parent, union-find, label (-1: none) and lca stamps: each search
@@ -188,9 +196,11 @@ def cycle_cover(
         side = np.zeros(m, np.int8)
         if split:
             side = _halves(np.ascontiguousarray(points, dtype=np.float64), triangles, spans)
+        mark("halves")
         calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
+    mark("match_halves")
     finish = partial(
         _k.finish_matching,
         nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1,
@@ -199,14 +209,18 @@ def cycle_cover(
         (n_free, n_drop), later = run_all([finish, partial(_Later, m, triangles, rotate)])
     else:
         (n_free, n_drop), later = finish(), _Later(m, triangles, rotate)
+    mark("finish_matching")
     # one path for every size (one thread below THREAD_MIN_ROWS rows), so a small
     # mesh compiles the kernels a big one uses
     is_cov, cdeg = later.is_cov, later.cdeg
     run_all([partial(_k.cover_edges_into, nb, alive, mate, is_cov, cdeg, lo, hi) for lo, hi in spans])
+    mark("cover_edges")
     n_unc = _k.settle_cover(nb, tw, is_cov, cdeg, alive, limit)
+    mark("settle_cover")
     if cell is not None:
         side = np.zeros(m, np.int8)  # one half (as without the split): runs are whole cycles
     cyc, n_cyc = cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
+    mark("cycle_ids")
     n_rot = 0
     if rotate and n_cyc > 1:
         tri = np.ascontiguousarray(triangles, dtype=np.int64)
@@ -218,6 +232,7 @@ def cycle_cover(
                  for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
         n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
         n_cyc -= n_rot
+    mark("rotate")
     return CycleCover(
         is_cov=is_cov,
         cycle=cyc,
@@ -228,6 +243,23 @@ def cycle_cover(
         quad=quad,
         n_dropped=int(n_drop),
     )
+
+
+class _Clock:
+    """``clock[step] = (wall, process CPU)`` seconds since the last mark (nothing
+    without a dict): the cover's steps for ``bench_cover.py --steps``."""
+
+    def __init__(self, clock: dict | None) -> None:
+        self.clock = clock
+        self.t, self.c = time.perf_counter(), time.process_time()
+
+    def __call__(self, step: str) -> None:
+        if self.clock is None:
+            return
+        t, c = time.perf_counter(), time.process_time()
+        w0, c0 = self.clock.get(step, (0.0, 0.0))
+        self.clock[step] = (w0 + t - self.t, c0 + c - self.c)
+        self.t, self.c = t, c
 
 
 class _Later:

@@ -491,3 +491,18 @@ def test_cycle_ids_by_halves_stop_at_a_broken_chain(side: list) -> None:
     assert (n_want, list(want)) == (1, [0, 0, -1])
     got, n_got = cycle_ids_by_halves(twin, is_cov, np.array(side, np.int8), [(0, 2), (2, 3)])
     assert (n_got, list(got)) == (n_want, list(want))
+
+
+def test_clock_times_the_steps_and_changes_nothing() -> None:
+    # cycle_cover(..., clock=) records each step's wall and CPU seconds (bench_cover.py
+    # --steps) and must leave the cover exactly as without it
+    dom = bundled_domain("face")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
+    twin = half_edges(m.triangles, m.n_points).twin
+    clock: dict = {}
+    a = cycle_cover(m.triangles, twin, points=m.points, online=256, clock=clock)
+    b = cycle_cover(m.triangles, twin, points=m.points, online=256)
+    np.testing.assert_array_equal(a.is_cov, b.is_cov)
+    np.testing.assert_array_equal(a.cycle, b.cycle)
+    assert {"neighbors", "peel", "match_halves", "finish_matching", "cycle_ids", "rotate"} <= set(clock)
+    assert all(w >= 0 and c >= 0 for w, c in clock.values())
