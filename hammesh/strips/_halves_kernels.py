@@ -22,7 +22,7 @@ from hammesh.halfedge import bucket_half_edges_into
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN, REC_WIDTH
 from hammesh.strips._numba import kernel, loop_helper
 
-__all__ = ["vertex_cells_into", "rows_of_cells_into", "number_by_first_use_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
+__all__ = ["vertex_cells_into", "rows_of_cells_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
 
 
 #: :func:`pair_records_into`'s result: proper edges paired (-1: an edge of this half is
@@ -32,33 +32,28 @@ HalfPairing = namedtuple("HalfPairing", ["pairs", "n_loose"])
 
 
 @kernel
-def pair_records_into(tri, verts, start, mark, keys, rec, loose):
-    """Triangle records of ``verts`` (:func:`hammesh.strips._dual_kernels.mesh_records`'s
-    layout) with the proper edges paired, in one counting sort of the half-edges of ``tri``.
+def pair_records_into(tri, start, mark, keys, rec, loose):
+    """Triangle records of ``tri`` (:func:`hammesh.strips._dual_kernels.mesh_records`'s
+    layout) with the proper edges paired, in one counting sort of the half-edges.
 
-    ``tri`` is ``verts`` with the vertices numbered by first use
-    (:func:`number_by_first_use_into`): the buckets, marks and keys are then written and
-    read nearly in order (in the input's scattered vertex numbers the counting sort and
-    the marks missed the cache at almost every half-edge: at 1M triangles the half's
-    pairing 33-36 -> ~25 ms).  The records keep the vertices of ``verts`` (the mesh's
-    own numbers, which the strips write).  Half-edges are bucketed by their lesser
-    vertex of ``tri``; a key is ``other vertex << 33 | (origin is the upper vertex) << 32
-    | h``; inside a bucket a mark per other vertex pairs an edge's two halves in one read
-    each (the buckets are :func:`hammesh.halfedge.bucket_half_edges_into`'s, as for
-    :func:`hammesh.halfedge.half_edge_twins_packed`; here the records are written
-    directly, with no ``int64`` pairing array, and the buckets are kept: afterwards
-    bucket ``v`` is ``keys[start[v - 1]:start[v]]`` (``start[-1]`` read as 0) for
-    :func:`edge_users`).  ``start``: ``(n_local + 1,)``, ``mark``: ``(n_local,)``
-    (``n_local``: the vertices ``tri`` uses), ``keys``: ``(3 m,)`` int64, ``rec``:
-    ``(m, REC_WIDTH)``, ``loose``: ``(3 m, 2)`` int64 receives ``(lesser vertex, key)``
-    of each unpaired half-edge, in ``tri``'s numbers.  Needs ``3 m < 2**32``.
+    Half-edges are bucketed by their lesser vertex; a key is ``other vertex << 33 |
+    (origin is the upper vertex) << 32 | h``; inside a bucket a mark per other vertex
+    pairs an edge's two halves in one read each (the buckets are
+    :func:`hammesh.halfedge.bucket_half_edges_into`'s, as for
+    :func:`hammesh.halfedge.half_edge_twins_packed`; here the
+    records are written directly, with no ``int64`` pairing array, and the buckets are
+    kept: afterwards bucket ``v`` is ``keys[start[v - 1]:start[v]]`` (``start[-1]`` read
+    as 0) for :func:`edge_users`).  ``start``: ``(n_points + 1,)``, ``mark``:
+    ``(n_points,)``, ``keys``: ``(3 m,)`` int64, ``rec``: ``(m, REC_WIDTH)``, ``loose``:
+    ``(3 m, 2)`` int64 receives ``(lesser vertex, key)`` of each unpaired half-edge.
+    Needs ``3 m < 2**32``.
     """
     m = tri.shape[0]
     n_points = mark.shape[0]
     bucket_half_edges_into(tri, start, mark, keys)
     for t in range(m):
         for k in range(3):
-            rec[t, k] = verts[t, k]
+            rec[t, k] = tri[t, k]
             rec[t, REC_TWIN + k] = -1
         rec[t, REC_SCRATCH] = 0
         rec[t, REC_WIDTH - 1] = 0
@@ -116,63 +111,27 @@ SharedEdges = namedtuple("SharedEdges", ["proper", "ok"])
 
 
 @kernel
-def shared_edges(loose, n_loose, vertex_of, start, keys, local_of):
+def shared_edges(loose, n_loose, start, keys):
     """Check one half's unpaired half-edges against the other half's buckets.
 
     ``loose[:n_loose]``: ``(lesser vertex, key)`` of the half-edges this half left
-    unpaired (:func:`pair_records_into`), in this half's first-use numbers, which
-    ``vertex_of`` maps to the mesh's; ``start``, ``keys``: the other half's buckets, in
-    its own numbers (``local_of``: mesh vertex -> that number, -1 where the other half
-    has no such vertex).  An unpaired edge is proper across the halves when the other
-    half has exactly one half-edge on it, running the other way; none: a boundary edge;
-    anything else: not proper (``ok`` False).  Run both ways, every proper edge between
-    the halves is counted once from each side.
+    unpaired (:func:`pair_records_into`); ``start``, ``keys``: the other half's buckets.
+    An unpaired edge is proper across the halves when the other half has exactly one
+    half-edge on it, running the other way; none: a boundary edge; anything else: not
+    proper (``ok`` False).  Run both ways, every proper edge between the halves is
+    counted once from each side.
     """
     proper = 0
     for i in range(n_loose):
+        lo = loose[i, 0]
         k = loose[i, 1]
-        a = vertex_of[loose[i, 0]]
-        b = vertex_of[k >> 33]
-        up = (k >> 32) & 1  # origin is b, the upper vertex in this half's numbers
-        la = local_of[a]
-        lb = local_of[b]
-        if la < 0 or lb < 0:
-            continue  # a vertex the other half does not use: no triangle there
-        lo = min(la, lb)
-        users, other = edge_users(start, keys, lo, max(la, lb))
+        users, other = edge_users(start, keys, lo, k >> 33)
         if users == 0:
             continue
-        # in the other half's numbers the origin is its upper vertex when
-        # (origin is b) == (b is the upper there); the other half-edge must run the other way
-        origin_up = (up == 1) == (lb > la)
-        if users > 1 or (((other >> 32) & 1) == 1) == origin_up:
+        if users > 1 or ((other ^ k) >> 32) & 1 == 0:
             return SharedEdges(proper, False)
         proper += 1
     return SharedEdges(proper, True)
-
-
-@kernel
-def number_by_first_use_into(verts, local_of, local, vertex_of):
-    """Number the vertices of ``verts`` in order of first use: ``local`` is ``verts`` in
-    those numbers; returns how many vertices are used.
-
-    ``local_of``: ``(n_points,)`` all -1 on entry, afterwards mesh vertex -> its number
-    (-1: unused); ``vertex_of``: at least ``(min(n_points, 3 m),)``, receives number ->
-    mesh vertex.  The rows come in cell order, so the pairing's counting sort
-    (:func:`pair_records_into`) then writes its buckets and marks almost in order.
-    """
-    n_local = 0
-    for t in range(verts.shape[0]):
-        for k in range(3):
-            v = verts[t, k]
-            l = local_of[v]
-            if l < 0:
-                l = n_local
-                local_of[v] = l
-                vertex_of[l] = v
-                n_local += 1
-            local[t, k] = l
-    return n_local
 
 
 @loop_helper

@@ -6,10 +6,8 @@ triangle's neighbours at random.  Here the mesh is cut by a plane through the me
 vertex along its longest axis (a row goes to the side of its least vertex index), and
 each half runs on its own thread: its rows copied out cell by cell of a grid
 (:func:`vertex_cells`: neighbouring triangles near each other in memory, which the
-pairing and the greedy strips read at random), its face census, its vertices numbered
-by first use in that order (:func:`~hammesh.strips._halves_kernels.number_by_first_use_into`),
-its edge pairing in those numbers straight into triangle records
-(:func:`~hammesh.strips._halves_kernels.pair_records_into`),
+pairing and the greedy strips read at random), its face census, its edge pairing
+straight into triangle records (:func:`~hammesh.strips._halves_kernels.pair_records_into`),
 the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`)
 and the round-trip proof of its own part of the buffer against the input's rows
 (:func:`~hammesh.strips._decode_kernels.check_claimed_part`), so the proof of one half
@@ -39,13 +37,7 @@ from hammesh.errors import InvalidOptionError
 from hammesh.strips._decode_kernels import check_claimed_part
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
 from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
-from hammesh.strips._halves_kernels import (
-    number_by_first_use_into,
-    pair_records_into,
-    rows_of_cells_into,
-    shared_edges,
-    vertex_cells_into,
-)
+from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
 from hammesh.strips.gl import GLStrip, verify_gl_strip
 
@@ -66,7 +58,7 @@ _SMALLEST_HALF = 1 / 8
 _Half = namedtuple(
     "_Half",
     ["failed", "order", "indices", "n_strips", "n_swaps", "max_index", "start", "keys", "loose", "n_loose",
-     "local_of", "vertex_of", "pairs", "zero_area", "pillows", "proof"],
+     "pairs", "zero_area", "pillows", "proof"],
 )
 
 
@@ -166,17 +158,11 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         return _failed("unbalanced")
     rows, part = rows[:k], part[:k]
     n_zero = face_flags(pts, part, ZERO_AREA_RTOL, np.empty(k, np.int8))[1]
-    # the vertices numbered by first use in cell order: the pairing's buckets and marks
-    # are then written and read almost in order (measured in docs/strips.md, session 10)
-    local_of = np.full(n, -1, np.int32)
-    local = np.empty((k, 3), np.int32)
-    vertex_of = np.empty(min(n, 3 * k), np.int32)
-    n_local = int(number_by_first_use_into(part, local_of, local, vertex_of))
-    start = np.empty(n_local + 1, np.int32)
+    start = np.empty(n + 1, np.int32)
     keys = np.empty(3 * k, np.int64)
     rec = np.empty((k, REC_WIDTH), np.int32)
     loose = np.empty((3 * k, 2), np.int64)
-    paired = pair_records_into(local, part, start, np.empty(n_local, np.int32), keys, rec, loose)
+    paired = pair_records_into(part, start, np.empty(n, np.int32), keys, rec, loose)
     if paired.pairs < 0 or stop[0]:
         stop[0] = True
         return _failed("an edge is not proper")
@@ -195,8 +181,8 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
     proof = -1
     if seen is not None:
         proof = int(check_claimed_part(tri, indices, restart, True, order, seen)[0])
-    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose, int(paired.n_loose),
-                 local_of, vertex_of, int(paired.pairs), int(n_zero), pillows, proof)
+    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
+                 int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
 
 def _plain_arrays(points, triangles) -> tuple[np.ndarray, np.ndarray] | None:
@@ -255,8 +241,8 @@ def encode_in_halves(
         b = second.result()
     if a.failed or b.failed:
         return None
-    ab = shared_edges(a.loose, a.n_loose, a.vertex_of, b.start, b.keys, b.local_of)
-    ba = shared_edges(b.loose, b.n_loose, b.vertex_of, a.start, a.keys, a.local_of)
+    ab = shared_edges(a.loose, a.n_loose, b.start, b.keys)
+    ba = shared_edges(b.loose, b.n_loose, a.start, a.keys)
     if not (ab.ok and ba.ok) or a.pairs + b.pairs + ab.proper < m:
         return None  # a defect across the cut, or maybe a dual forest: the one-thread path
     la, lb = len(a.indices), len(b.indices)

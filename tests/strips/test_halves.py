@@ -18,7 +18,7 @@ from hammesh.strips import halves
 from hammesh.strips.encode import encode
 from hammesh.strips.gl import RESTART_INDEX, decode_gl_strip
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH
-from hammesh.strips._halves_kernels import number_by_first_use_into, pair_records_into, rows_of_cells_into, shared_edges
+from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges
 
 from .conftest import delaunay_mesh, oriented_set, square_mesh, torus_mesh
 from .defect_meshes import ALL as DEFECT_MESHES
@@ -209,16 +209,11 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
         assert np.array_equal(rows[:k], mine[np.argsort(cell[mine], kind="stable")])
         assert np.array_equal(part[:k], tri[rows[:k]])
         part = part[:k]
-        local_of = np.full(len(m.points), -1, np.int32)
-        local = np.empty((k, 3), np.int32)
-        vertex_of = np.empty(min(len(m.points), 3 * k), np.int32)
-        nl = number_by_first_use_into(part, local_of, local, vertex_of)
-        start = np.empty(nl + 1, np.int32)
+        start = np.empty(len(m.points) + 1, np.int32)
         keys = np.empty(3 * k, np.int64)
         rec = np.empty((k, REC_WIDTH), np.int32)
         loose = np.empty((3 * k, 2), np.int64)
-        hp = pair_records_into(local, part, start, np.empty(nl, np.int32), keys, rec, loose)
-        assert np.array_equal(rec[:, :3], part)  # the records keep the mesh's vertex numbers
+        hp = pair_records_into(part, start, np.empty(len(m.points), np.int32), keys, rec, loose)
         # brute force: directed uses of each undirected edge in this half
         uses: dict = {}
         for t, row in enumerate(part.tolist()):
@@ -236,36 +231,17 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
                 else:
                     assert twin[u[0][0]] == -1
             assert hp.n_loose == sum(len(u) == 1 for u in uses.values())
-        parts.append((hp, start, keys, loose, Counter({e: len(u) for e, u in uses.items()}), uses, vertex_of, local_of))
+        parts.append((hp, start, keys, loose, Counter({e: len(u) for e, u in uses.items()}), uses))
     if any(p[0].pairs < 0 for p in parts):
         return
-    (ha, sa, ka, la, ca, ua, va, oa), (hb, sb, kb, lb, cb, ub, vb, ob) = parts
+    (ha, sa, ka, la, ca, ua), (hb, sb, kb, lb, cb, ub) = parts
     both = set(ca) & set(cb)
     ok = all(ca[e] == 1 and cb[e] == 1 and ua[e][0][1] != ub[e][0][1] for e in both)
-    ab = shared_edges(la, ha.n_loose, va, sb, kb, ob)
-    ba = shared_edges(lb, hb.n_loose, vb, sa, ka, oa)
+    ab = shared_edges(la, ha.n_loose, sb, kb)
+    ba = shared_edges(lb, hb.n_loose, sa, ka)
     assert (ab.ok and ba.ok) == ok
     if ok:
         assert ab.proper == ba.proper == len(both)
-
-
-@given(st.integers(0, 2**32 - 1), st.integers(1, 60), st.integers(3, 40))
-@settings(max_examples=40, deadline=None)
-def test_first_use_numbering(seed, m, n):
-    """The numbers map back to the rows' vertices, each vertex gets one, in order of first use."""
-    rng = np.random.default_rng(seed)
-    verts = rng.integers(0, n, (m, 3)).astype(np.int32)
-    local_of = np.full(n, -1, np.int32)
-    local = np.empty((m, 3), np.int32)
-    vertex_of = np.empty(min(n, 3 * m), np.int32)
-    nl = number_by_first_use_into(verts, local_of, local, vertex_of)
-    used, first = np.unique(verts.ravel(), return_index=True)
-    assert nl == len(used)
-    assert np.array_equal(vertex_of[local], verts)
-    assert np.array_equal(local_of[vertex_of[:nl]], np.arange(nl))
-    assert np.count_nonzero(local_of >= 0) == nl
-    # number i is the i-th distinct vertex met reading the rows in order
-    assert np.array_equal(vertex_of[:nl], verts.ravel()[np.sort(first)])
 
 
 def test_structured_meshes_keep_the_one_thread_default(monkeypatch):
