@@ -310,15 +310,16 @@ def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
     (``_ring_link_options`` gives both), or None if neither does.
     """
     options = _ring_link_options(tw, is_cov, hes)
-    return options[0] if options else None
+    return np.asarray(options[0], np.bool_) if options else None
 
 
-def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> list[np.ndarray]:
-    """Every pairing of a ring's links into arcs that fits (``_ring_links``): zero to two."""
+def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> list[tuple]:
+    """Every pairing of a ring's links into arcs that fits (``_ring_links``): zero to two
+    (each a tuple of bools, ``spoke[i]``; plain Python: a few entries, called per group)."""
     n = len(hes)
     links = [i for i, h in enumerate(hes) if tw[h] >= 0 and is_cov[h]]
     if not links:
-        return [np.ones(n, np.bool_)]  # the ring is a cycle of its own
+        return [(True,) * n]  # the ring is a cycle of its own
     if len(links) % 2:
         return []
     out = []
@@ -326,9 +327,9 @@ def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> li
         ends = [links[(shift + 2 * k + 1) % len(links)] for k in range(len(links) // 2)]
         starts = [links[(shift + 2 * k + 2) % len(links)] for k in range(len(links) // 2)]
         if all((b - a) % n == 1 for a, b in zip(ends, starts)):
-            spoke = np.ones(n, np.bool_)
-            spoke[starts] = False
-            if not any((spoke == o).all() for o in out):
+            off = set(starts)
+            spoke = tuple(i not in off for i in range(n))
+            if spoke not in out:
                 out.append(spoke)
     return out
 
@@ -393,7 +394,7 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
             if options:
                 poly = np.asarray(pp[0], np.int64)
                 lo_g = lo if amin is None else max(lo, keep * float(amin[members].min()))
-                starts = pts[tri[members]].mean(axis=1)
+                starts = pts[tri[members]].sum(axis=1) / 3.0  # (centroids; np.mean costs more here)
                 step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
                 x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, hi, step,
                                                     PLACE_ITERS + 2)
