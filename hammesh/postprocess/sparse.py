@@ -317,15 +317,16 @@ def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
     (``_ring_link_options`` gives both), or None if neither does.
     """
     options = _ring_link_options(tw, is_cov, hes)
-    return options[0] if options else None
+    return np.asarray(options[0], np.bool_) if options else None
 
 
-def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> list[np.ndarray]:
-    """Every pairing of a ring's links into arcs that fits (``_ring_links``): zero to two."""
+def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> list[tuple]:
+    """Every pairing of a ring's links into arcs that fits (``_ring_links``): zero to two
+    (each a tuple of bools, ``spoke[i]``; plain Python: a few entries, called per group)."""
     n = len(hes)
     links = [i for i, h in enumerate(hes) if tw[h] >= 0 and is_cov[h]]
     if not links:
-        return [np.ones(n, np.bool_)]  # the ring is a cycle of its own
+        return [(True,) * n]  # the ring is a cycle of its own
     if len(links) % 2:
         return []
     out = []
@@ -333,9 +334,9 @@ def _ring_link_options(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]) -> li
         ends = [links[(shift + 2 * k + 1) % len(links)] for k in range(len(links) // 2)]
         starts = [links[(shift + 2 * k + 2) % len(links)] for k in range(len(links) // 2)]
         if all((b - a) % n == 1 for a, b in zip(ends, starts)):
-            spoke = np.ones(n, np.bool_)
-            spoke[starts] = False
-            if not any((spoke == o).all() for o in out):
+            off = set(starts)
+            spoke = tuple(i not in off for i in range(n))
+            if spoke not in out:
                 out.append(spoke)
     return out
 
@@ -400,7 +401,7 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
             if options:
                 poly = np.asarray(pp[0], np.int64)
                 lo_g = lo if amin is None else max(lo, keep * float(amin[members].min()))
-                starts = pts[tri[members]].mean(axis=1)
+                starts = pts[tri[members]].sum(axis=1) / 3.0  # (centroids; np.mean costs more here)
                 step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
                 x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, hi, step,
                                                     PLACE_ITERS + 2)
@@ -994,9 +995,16 @@ def _ring_fans(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, lo
     return (*arrays, len(applied))
 
 
-#: buffers ``_longer`` made with rows to spare, by data address: a later ``_longer``
-#: of a prefix of one grows into them without a copy
-_ROOMY: "weakref.WeakValueDictionary[int, np.ndarray]" = weakref.WeakValueDictionary()
+#: buffers ``_longer`` made with rows to spare, by data address: (weak reference to
+#: the object owning the memory, rows, dtype, row shape). A later ``_longer`` of a
+#: prefix of one grows into its spare rows without a copy
+_ROOMY: dict[int, tuple] = {}
+
+
+def _memory_owner(a: np.ndarray):
+    """The object that keeps ``a``'s memory alive (numpy collapses view chains to it:
+    an ndarray that owns its data, or e.g. ``hammesh.pages``' mapping)."""
+    return a if a.base is None else a.base
 
 
 def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
@@ -1004,23 +1012,34 @@ def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
 
     Where ``a`` is a prefix of a buffer an earlier call made with ``spare`` rows, the
     result is a longer prefix of that buffer (no copy: ``a``'s rows are shared, so
-    the caller must not need ``a`` unchanged). Else one copy into a
-    ``hammesh.pages.fresh`` array (small pages faulted in one call, or the
-    reserve's; not ``np.concatenate``'s ``np.empty``: at 1.5 M rows the page faults
-    cost more than the copy) with ``spare`` rows of room after it.
+    the caller must not need ``a`` unchanged, nor grow the same prefix twice). Else
+    one copy into a ``hammesh.pages.fresh`` array (small pages faulted in one call,
+    or the reserve's; not ``np.concatenate``'s ``np.empty``: at 1.5 M rows the page
+    faults cost more than the copy) with ``spare`` rows of room after it.
     """
     n = len(a)
-    buf = _ROOMY.get(a.ctypes.data) if a.flags.c_contiguous and n else None
-    if buf is not None and buf.dtype == a.dtype and buf.shape[1:] == a.shape[1:] and len(buf) >= n + extra:
-        out = buf[: n + extra]
-    else:
-        buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
-        if spare and n:
-            _ROOMY[buf.ctypes.data] = buf
-        out = buf[: n + extra]
-        out[:n] = a
+    entry = _ROOMY.get(a.ctypes.data) if n and a.flags.c_contiguous else None
+    if entry is not None:
+        ref, rows, dtype, tail = entry
+        if ref() is _memory_owner(a) and dtype == a.dtype and tail == a.shape[1:] and rows >= n + extra:
+            # the buffer's rows past ``a`` exist (its owner is alive): a view over them
+            full = np.lib.stride_tricks.as_strided(a, shape=(rows,) + tail, strides=a.strides, writeable=True)
+            out = full[: n + extra]
+            if fill is not None:
+                out[n:] = fill
+            return out
+    buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
+    out = buf[: n + extra]
+    out[:n] = a
     if fill is not None:
         out[n:] = fill
+    if spare and n:
+        addr = buf.ctypes.data
+        try:
+            ref = weakref.ref(_memory_owner(buf), lambda _r, addr=addr: _ROOMY.pop(addr, None))
+        except TypeError:  # an owner without weak references: no room kept
+            return out
+        _ROOMY[addr] = (ref, len(buf), buf.dtype, buf.shape[1:])
     return out
 
 
