@@ -32,7 +32,8 @@ per-step process CPU is compared, median of ``--rounds``):
 (off) and at its default (on); the cover's step CPU holds the certificate's look at
 the input and the page reserve, made beside it on the other thread (both arms alike).
 ``output-threads`` calls ``hamiltonian`` with the walk from both ends, the gather and
-the pinned edges on two threads (default) or on one.
+the pinned edges on two threads (default) or on one, and prints each phase's critical
+path (the busiest thread's ``time.thread_time`` in its compiled calls).
 
 The children inherit the environment: ``NUMPY_MADVISE_HUGEPAGE=0 python
 benchmarks/bench_core.py`` measures without numpy's transparent-huge-page advice.
@@ -308,6 +309,24 @@ def same_run_ab(args: argparse.Namespace) -> None:
         names = ("input order", "renumbered")
     else:
         orig = (_sparse_kernels.WALK_TWO_ENDS_MIN_ROWS, _sparse_kernels.row_ranges, _improve_kernels.row_ranges)
+        # the critical path: each compiled call of the walk, the gather and the pinned
+        # edges timed in the thread that runs it (time.thread_time), per phase the
+        # busiest thread's sum (the one-thread walk calls _walk_all, the two-ended one
+        # _walk_one_into and _walk_rest from Python)
+        spent: dict = {}
+        phases = [(_sparse_kernels, n, "walk") for n in ("_walk_all", "_walk_one_into", "_walk_rest")]
+        phases += [(_sparse_kernels, n, "gather") for n in ("_runs_in_order_into", "_row_positions_into",
+                                                             "_gather_rows_into")]
+        phases += [(_improve_kernels, "_pinned_output_edges_into", "pinned")]
+        for mod, name, phase in phases:
+            def timed(*a, _real=getattr(mod, name), _phase=phase):
+                c = time.thread_time()
+                out = _real(*a)
+                key = (_phase, threading.get_ident())
+                spent[key] = spent.get(key, 0.0) + time.thread_time() - c
+                return out
+
+            setattr(mod, name, timed)
 
         def arm(two: bool):
             if two:
@@ -316,6 +335,7 @@ def same_run_ab(args: argparse.Namespace) -> None:
                 one = lambda m, _: [(0, m)]  # noqa: E731
                 _sparse_kernels.WALK_TWO_ENDS_MIN_ROWS, _sparse_kernels.row_ranges, _improve_kernels.row_ranges = (
                     1 << 62, one, one)
+            spent.clear()
             try:
                 return hammesh.hamiltonian(mesh)
             finally:
@@ -335,6 +355,11 @@ def same_run_ab(args: argparse.Namespace) -> None:
             row["certificate (wall)"] = sec["verify"]
             row.update({f"{k} (wall)": r["step_seconds"][k] for k in ("output_rows", "improve") if k in r["step_seconds"]})
             row["whole call (wall)"], row["whole call (CPU)"] = time.perf_counter() - t, time.process_time() - c
+            if args.ab == "output-threads":
+                for phase in ("walk", "gather", "pinned"):
+                    mine = [v for (ph, _), v in spent.items() if ph == phase]
+                    row[f"{phase}: critical path"] = max(mine, default=0.0)
+                row["3 phases: all threads"] = sum(spent.values())
             rows[on].append(row)
             print(f"  {names[on]:>12}: {row['whole call (wall)']:.3f} s wall, {row['whole call (CPU)']:.3f} s CPU, "
                   f"{r['steiner_points']} Steiner points, load {os.getloadavg()[0]:.1f}", flush=True)

@@ -2,9 +2,9 @@
 
 ``prepare_mesh`` checks a planar input and orients it counter-clockwise;
 ``half_edges`` pairs its half-edges; ``HalfEdges`` holds the pairing and the vertex
-rotations; ``renumber_local``
-renumbers a mesh along a space-filling curve (locality). The constructions run on these; the certificates (``hammesh.verify``)
-find the same facts with their own code.
+rotations; ``renumber_local`` renumbers a mesh along a Hilbert curve so that
+neighbours sit near each other in memory (``locality``). The constructions run on
+these; the certificates (``hammesh.verify``) find the same facts with their own code.
 """
 
 from hammesh.halfedge._kernels import bucket_half_edges_into, half_edge_twins, half_edge_twins_packed, orient_ccw
