@@ -22,7 +22,8 @@ largest cycle's share (a winding cover: issue 14).
 and those with a boundary edge (``report["uncovered"]``, ``["uncovered_boundary"]``);
 session 8 left 62 / 43. ``--compile``: a child process with a new, empty
 ``NUMBA_CACHE_DIR`` compiles what the quadtree needs first, then times its first
-``cycle_cover`` call (the cover's kernels compiled) in wall and CPU seconds.
+``cycle_cover`` call (the cover's kernels compiled) in wall and CPU seconds, and
+the CPU seconds of each step (``cycle_cover(..., clock=)``: where the compile goes).
 
 ``--steps``: process CPU (and wall) seconds per step of ``cycle_cover``
 (``cycle_cover(..., clock=)``) on the plate as Triangle numbers it and on the same
@@ -132,8 +133,11 @@ def cpu():
     r = resource.getrusage(resource.RUSAGE_SELF)
     return r.ru_utime + r.ru_stime
 t, c = time.perf_counter(), cpu()
-cycle_cover(tri, tw, points=pts, online=256, good=np.zeros(3 * len(tri), bool))
+clock = {}
+cycle_cover(tri, tw, points=pts, online=256, good=np.zeros(3 * len(tri), bool), clock=clock)
 print(f"COMPILE first cycle_cover {time.perf_counter() - t:.1f} s wall, {cpu() - c:.1f} s CPU")
+for step, (w, cs) in clock.items():
+    print(f"  {step:16s} {cs:6.1f} s CPU")
 """
 
 
