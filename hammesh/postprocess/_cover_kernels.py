@@ -1,7 +1,11 @@
 """Compiled loops (numba) of the dual cycle cover (``cycle_cover.py``).
 
 Serial, nopython, ``cache=True``; O(m) over plain arrays (the augmenting searches are
-bounded by a budget), problems reported by return values, never raised. Half-edge
+bounded by a budget), problems reported by return values, never raised. Small
+helpers are left to LLVM's inliner, not numba's ``inline="always"``, which types
+and compiles every call site anew (the cover's first compile: ~29 s CPU with
+``_chain_end``, ``_third`` and ``_log`` so inlined, ~23 s without, the same speed;
+docs/sparse.md, Cold start). Half-edge
 ``h = 3 t + k`` runs from ``tri[t, k]`` to ``tri[t, (k + 1) % 3]``; ``twin[h]`` is the
 opposite half-edge or -1.
 """
@@ -63,7 +67,7 @@ DROP = 2  # PLAIN, or drop one interior degree-3 triangle (left uncovered)
 OBSERVE = 3  # PLAIN, noting where a DROP search of the same start would stop (``seen``)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _chain_end(nb, active, alive, v, k):
     """The degree-3 triangle reached from ``v`` across its side ``k`` through a chain
     of degree-2 triangles (``(end, chain length)``; the neighbour itself, length 0,
@@ -90,7 +94,7 @@ def _chain_end(nb, active, alive, v, k):
     return cur, ln
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _third(nb, u, a, b):
     """The neighbour of ``u`` other than ``a`` and ``b`` (-1 unless exactly one)."""
     z = -1
@@ -103,7 +107,7 @@ def _third(nb, u, a, b):
     return z
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _log(log, nlog, i, mate, active, alive):
     """Record triangle ``i``'s state before a change (``log`` rows ``(i, mate, active,
     alive)``; ``nlog[0]`` rows used, past the end: no longer undoable)."""
