@@ -31,6 +31,8 @@ mesh with its triangles renumbered in Morton or Hilbert order of their centroids
 (``local_order`` here; the vertices renumbered by first use too: "+v"), the
 variants alternating in one process for ``--repeat`` rounds (median per step), with
 each variant's cycles and uncovered triangles: what a local numbering buys the cover.
+``HAMMESH_BENCH_MESH=plate.npz`` (arrays ``points``, ``triangles``) uses that mesh
+instead of meshing the plate with Triangle.
 
 ``--cells``: the cover's cycles confined to quadtree cells of about S triangles
 (``cycle_cover.CELL_SIZE``; 0: unconfined, the default) on ``bench_partition.py``'s
