@@ -22,7 +22,8 @@ largest cycle's share (a winding cover: issue 14).
 and those with a boundary edge (``report["uncovered"]``, ``["uncovered_boundary"]``);
 session 8 left 62 / 43. ``--compile``: a child process with a new, empty
 ``NUMBA_CACHE_DIR`` compiles what the quadtree needs first, then times its first
-``cycle_cover`` call (the cover's kernels compiled) in wall and CPU seconds.
+``cycle_cover`` call (the cover's kernels compiled) in wall and CPU seconds, and
+the CPU seconds of each step (``cycle_cover(..., clock=)``: where the compile goes).
 
 ``--steps``: process CPU (and wall) seconds per step of ``cycle_cover``
 (``cycle_cover(..., clock=)``) on the plate as Triangle numbers it and on the same
@@ -30,6 +31,8 @@ mesh with its triangles renumbered in Morton or Hilbert order of their centroids
 (``local_order`` here; the vertices renumbered by first use too: "+v"), the
 variants alternating in one process for ``--repeat`` rounds (median per step), with
 each variant's cycles and uncovered triangles: what a local numbering buys the cover.
+``HAMMESH_BENCH_MESH=plate.npz`` (arrays ``points``, ``triangles``) uses that mesh
+instead of meshing the plate with Triangle.
 
 ``--cells``: the cover's cycles confined to quadtree cells of about S triangles
 (``cycle_cover.CELL_SIZE``; 0: unconfined, the default) on ``bench_partition.py``'s
@@ -132,8 +135,11 @@ def cpu():
     r = resource.getrusage(resource.RUSAGE_SELF)
     return r.ru_utime + r.ru_stime
 t, c = time.perf_counter(), cpu()
-cycle_cover(tri, tw, points=pts, online=256, good=np.zeros(3 * len(tri), bool))
+clock = {}
+cycle_cover(tri, tw, points=pts, online=256, good=np.zeros(3 * len(tri), bool), clock=clock)
 print(f"COMPILE first cycle_cover {time.perf_counter() - t:.1f} s wall, {cpu() - c:.1f} s CPU")
+for step, (w, cs) in clock.items():
+    print(f"  {step:16s} {cs:6.1f} s CPU")
 """
 
 

@@ -1,7 +1,11 @@
 """Compiled loops (numba) of the dual cycle cover (``cycle_cover.py``).
 
 Serial, nopython, ``cache=True``; O(m) over plain arrays (the augmenting searches are
-bounded by a budget), problems reported by return values, never raised. Half-edge
+bounded by a budget), problems reported by return values, never raised. Small
+helpers are left to LLVM's inliner, not numba's ``inline="always"``, which types
+and compiles every call site anew (the cover's first compile: ~29 s CPU with
+``_chain_end``, ``_third`` and ``_log`` so inlined, ~23 s without, the same speed;
+docs/sparse.md, Cold start). Half-edge
 ``h = 3 t + k`` runs from ``tri[t, k]`` to ``tri[t, (k + 1) % 3]``; ``twin[h]`` is the
 opposite half-edge or -1.
 """
@@ -63,7 +67,7 @@ DROP = 2  # PLAIN, or drop one interior degree-3 triangle (left uncovered)
 OBSERVE = 3  # PLAIN, noting where a DROP search of the same start would stop (``seen``)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _chain_end(nb, active, alive, v, k):
     """The degree-3 triangle reached from ``v`` across its side ``k`` through a chain
     of degree-2 triangles (``(end, chain length)``; the neighbour itself, length 0,
@@ -90,7 +94,7 @@ def _chain_end(nb, active, alive, v, k):
     return cur, ln
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _third(nb, u, a, b):
     """The neighbour of ``u`` other than ``a`` and ``b`` (-1 unless exactly one)."""
     z = -1
@@ -103,7 +107,7 @@ def _third(nb, u, a, b):
     return z
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _log(log, nlog, i, mate, active, alive):
     """Record triangle ``i``'s state before a change (``log`` rows ``(i, mate, active,
     alive)``; ``nlog[0]`` rows used, past the end: no longer undoable)."""
@@ -514,24 +518,41 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
 
 
 @njit(cache=True, nogil=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget, frees):
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees):
     """Augment through chains of degree-2 triangles; a chain used is left uncovered.
 
     A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
     matching edge x-y at the price of leaving the chain uncovered: ``CHAIN``
-    searches from the triangles still free find the chains as they go. Afterwards
-    each pair matched across a chain drops its shortest chain between them.
-    Returns the next lca stamp.
+    searches (unbounded) from the triangles still free find the chains as they go;
+    none is made when fewer than two are free (an augmenting path joins two free
+    triangles: the search from a lone one would explore the whole mesh to fail).
+    Afterwards each pair matched across a chain drops its shortest chain between
+    them. Returns the next lca stamp.
+
+    Tried in session 10: growing the search from every free triangle at once
+    (Edmonds' forest: a path closes where two trees meet, about half way) took
+    0.064 / 0.145 s thread CPU at 1.5 M (Hilbert order / Triangle's) against 0.032 /
+    0.108 s one root at a time, and its paths ran through chains (5 / 30 boundary
+    triangles left uncovered, against none): not kept.
     """
     m = nb.shape[0]
     hit = False
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    n = 0
     for t in frees:
         if active[t] and mate[t] < 0:
+            n += 1
+    touched = np.empty(m + 16 if n >= 2 else 0, np.int64)  # a search touches a triangle once
+    for t in frees:
+        if n < 2:
+            break
+        if active[t] and mate[t] < 0:
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                budget, CHAIN, -1, nolog, nonlog, nonlog)
-            hit = hit or f >= 0
+                                m + 8, CHAIN, -1, nolog, nonlog, nonlog)
+            if f >= 0:
+                hit = True
+                n -= 2
     if not hit:
         return s
     for x in range(m):  # matched across a chain: its triangles are left uncovered
@@ -795,7 +816,9 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     for t in range(m):
         act[t] = active[t] and side[t] == half
     queue = np.empty(max(online, budget) + 16, np.int64)  # a search enqueues what it touches
-    if online > 0:
+    if online > 0:  # breadth-first even in a local row order (session 10, 1.5 M in
+        # Hilbert order: sweeping rows left 13,152 cycles instead of 11,954 and cost
+        # more in finish_matching than the breadth-first order saves)
         order = _bfs_order(nb, side, half)
     else:
         n = 0
@@ -890,8 +913,7 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
         touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
         s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
                                    plain_budget, drop_budget, drop_rounds, frees)
-    touched_c = np.empty(2 * m + 16, np.int64)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_c, queue, 2 * m + 8, frees)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees)
     n_free = 0
     for t in frees:
         if active[t] and mate[t] < 0:

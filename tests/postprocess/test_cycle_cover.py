@@ -506,3 +506,51 @@ def test_clock_times_the_steps_and_changes_nothing() -> None:
     np.testing.assert_array_equal(a.cycle, b.cycle)
     assert {"neighbors", "peel", "match_halves", "finish_matching", "cycle_ids", "rotate"} <= set(clock)
     assert all(w >= 0 and c >= 0 for w, c in clock.values())
+
+
+@pytest.mark.parametrize("name", ["face", "double_hex", "square_circle_hole", "A", "la"])
+def test_chain_phase_pairs_what_unbounded_searches_pair(name: str) -> None:
+    # the chain phase (_chain_matching) skips the search when fewer than two
+    # triangles are free (no augmenting path can exist); otherwise it is one
+    # unbounded CHAIN search from each free triangle: the same matching as those
+    # searches made here, valid (partners mutual, across a dual edge or a chain of
+    # degree-2 triangles), leaving fewer free (at most one: the meshes are connected)
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain(name)
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
+    tri = msh.triangles
+    m = len(tri)
+    nb = ck.neighbors(half_edges(tri, msh.n_points).twin, m)
+    alive, deg = ck.peel(nb, m)
+    active = alive & (deg == 3)
+    mate = np.full(m, -1, np.int64)
+    # a greedy matching in a shuffled order, no searches: many triangles left free
+    order = np.random.default_rng(5).permutation(np.flatnonzero(active))
+    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    queue = np.empty(m + 16, np.int64)
+    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, queue, mate)
+    frees = np.flatnonzero(active & (mate < 0))
+    assert len(frees) >= 2
+    one = mate.copy()
+    touched = np.empty(m + 16, np.int64)
+    nolog, nonlog = np.empty((0, 4), np.int64), np.zeros(1, np.int64)
+    s1 = s
+    for t in frees:
+        if one[t] < 0:
+            _f, s1, _x = ck._augment(t, nb, active, alive, one, *work, s1, touched, queue, m + 8, ck.CHAIN, -1,
+                                     nolog, nonlog, nonlog)
+    got = mate.copy()
+    alive2 = alive.copy()
+    ck._chain_matching(nb, active, alive2, got, *work, s1, queue, frees)  # s1: stamps above any used
+    n_one = int((active & (one < 0)).sum())
+    n_got = int((active & (got < 0)).sum())
+    np.testing.assert_array_equal(got, one)
+    assert n_got == n_one <= 1 < len(frees)
+    matched = np.flatnonzero(active & (got >= 0))
+    np.testing.assert_array_equal(got[got[matched]], matched)
+    for x in matched:  # across a dual edge, or a chain (its triangles now not alive)
+        y = got[x]
+        ends = [ck._chain_end(nb, active, alive, x, k)[0] for k in range(3)]
+        assert y in nb[x] or y in ends
+    assert (work[2] == -1).all()  # every label reset
