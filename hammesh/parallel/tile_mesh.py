@@ -297,7 +297,14 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
     segs, marks = segs[user], marks[user]
     attrs = np.zeros((len(tri), 0))
     if len(tile.region_triangles):
-        attrs = region_attributes(tile, points, tri, nbr, segs)[:, None]
+        # each piece of the lattice lies in one region (no segment comes near it): one
+        # location per piece; the band's own pieces (its neighbours stop at the
+        # outline) by the flood fill, over the band only (not the whole tile's rows)
+        inside = region_attributes(tile, bp, bt, bnbr, segs)
+        where = locate_in_triangles(tile.region_points, tile.region_triangles, hole_xy)
+        if (where < 0).any():
+            raise MeshingError(f"tile {tile.index}: a piece of the lattice lies outside the coarse mesh (regions)")
+        attrs = np.concatenate([inside, tile.region_attribute[where][label]])[:, None]
     return Mesh(points=points, triangle_attributes=attrs, triangles=tri, segments=segs, segment_markers=marks,
                 neighbors=nbr, info={"backend": "triangle", "switches": tile_switches(min_angle, max_area),
                                      "tile": tile.index, "lattice": "band"})

@@ -94,6 +94,11 @@ def test_band_mesh_keeps_the_bounds_conforms_and_counts_as_triangles_own(a, n_ti
         seg = lambda h: {tuple(sorted(map(tuple, h.points[e].tolist()))) for e in h.segments}  # noqa: E731
         assert seg(m) == seg(plain)
         assert np.array_equal(np.unique(m.triangle_attributes), np.unique(plain.triangle_attributes))
+        # every triangle's regional attribute is that of the plain run's triangle under its centroid
+        rows = np.random.default_rng(0).choice(m.n_triangles, min(m.n_triangles, 400), replace=False)
+        under = tm.locate_in_triangles(plain.points, plain.triangles, m.points[m.triangles[rows]].mean(axis=1))
+        assert (under >= 0).all()
+        assert np.array_equal(m.triangle_attributes[rows], plain.triangle_attributes[under])
         assert abs(m.n_triangles / plain.n_triangles - 1) <= 0.01
 
 
