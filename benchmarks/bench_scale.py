@@ -46,6 +46,11 @@ min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores)
 
     python benchmarks/bench_scale.py --sizes 6e6 --tile-ab 3 --modes incircle,sparse
 
+``--write-ab R``: one tile's piece (first mode) written ``R`` times each way, with the
+32-bit integer arrays (``partitioned.piece_types``) or all 64-bit; CPU and size.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --write-ab 3 --modes incircle
+
 ``--ab R``: the whole command against one raw call, ``R`` rounds per mode of fresh
 processes alternating session 10's switches on / off (the early cluster start and
 the band tiles; the import changes cannot be switched off).
@@ -204,6 +209,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
     ap.add_argument("--ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
+    ap.add_argument("--write-ab", type=int, metavar="ROUNDS",
+                    help="A/B of one piece written with 32-bit / 64-bit integer arrays")
     ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
                     help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
     a = ap.parse_args(argv)
@@ -211,6 +218,8 @@ def main(argv: list[str] | None = None) -> int:
         return tile_ab(a)
     if a.ab:
         return whole_ab(a)
+    if a.write_ab:
+        return write_ab(a)
     if a.startup:
         return startup_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
@@ -289,6 +298,41 @@ def tile_ab(a) -> int:
     for k in ["mesh", *modes]:
         on, off = (float(np.median(cpu[(b, k)])) for b in (True, False))
         print(f"{k}: band {on:.3f} s, lattice points {off:.3f} s (medians), band / points {on / off:.2f}")
+    return 0
+
+
+def write_ab(a) -> int:
+    """``--write-ab``: the first tile's piece (first mode) written ``R`` times each way,
+    alternating, with ``partitioned.piece_types`` (32-bit integers, ``kind`` one byte)
+    or all 64-bit: process CPU seconds of the finish + write step and the file's size."""
+    import hammesh
+    from hammesh import threads
+    from hammesh.parallel.partitioned import _finish_and_write, piece_types
+    from hammesh.parallel.run import finish_args, run_tiles
+
+    threads.limit(1)
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    tiled = run_tiles(hammesh.read_domain(DEMO), min_angle=30, max_area=area, tiles=a.tiles or 2,
+                      mode=a.modes.split(",")[0])
+    comps, fargs = tiled.plan.components, finish_args(tiled)
+    types = piece_types(max(x[11] for x in fargs), int(comps.sum()), int(tiled.mesh_triangles.sum()))
+    outcome = tiled.outcomes[0].value
+    tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=a.out_dir)
+    cpu: dict = {True: [], False: []}
+    try:
+        for r in range(a.write_ab):
+            for narrow in ((True, False) if r % 2 == 0 else (False, True)):
+                path = Path(tmp) / f"piece_{int(narrow)}.vtu"
+                c = time.process_time()
+                _finish_and_write(outcome, fargs[0], str(path), comps, None, types if narrow else None)
+                cpu[narrow].append(time.process_time() - c)
+                print(f"round {r} 32-bit={int(narrow)}: CPU {cpu[narrow][-1]:.3f} s, {path.stat().st_size / 2**20:.0f} MB "
+                      f"(load {os.getloadavg()[0]:.1f})")
+                sys.stdout.flush()
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    on, off = statistics.median(cpu[True]), statistics.median(cpu[False])
+    print(f"piece write: 32-bit {on:.3f} s, 64-bit {off:.3f} s CPU (medians), ratio {on / off:.2f}")
     return 0
 
 
