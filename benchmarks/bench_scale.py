@@ -45,6 +45,17 @@ with the lattice's own triangles and Triangle on the band only
 min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores).
 
     python benchmarks/bench_scale.py --sizes 6e6 --tile-ab 3 --modes incircle,sparse
+
+``--write-ab R``: one tile's piece (first mode) written ``R`` times each way, with the
+32-bit integer arrays (``partitioned.piece_types``) or all 64-bit; CPU and size.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --write-ab 3 --modes incircle
+
+``--ab R``: the whole command against one raw call, ``R`` rounds per mode of fresh
+processes alternating session 10's switches on / off (the early cluster start and
+the band tiles; the import changes cannot be switched off).
+
+    python benchmarks/bench_scale.py --sizes 6e6 --workers 2 --ab 2 --modes incircle,sparse
 """
 
 from __future__ import annotations
@@ -53,6 +64,7 @@ import argparse
 import json
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -107,17 +119,20 @@ def extrapolated_count(area: float) -> tuple[float, str]:
     return float(c[0] / area + c[1] / np.sqrt(area)), note
 
 
-#: ``python -c`` running the command with ``EARLY_START`` set (argv[1]: 0 or 1)
-EARLY = ("import sys; import hammesh.parallel.command as c; c.EARLY_START = bool(int(sys.argv[1])); "
-         "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
+#: ``python -c`` running the command with ``EARLY_START`` (argv[1]) and
+#: ``tile_mesh.LATTICE_BAND`` (argv[2]) set, 0 or 1 (forked workers inherit both)
+EARLY = ("import sys; import hammesh.parallel.command as c, hammesh.parallel.tile_mesh as tm; "
+         "c.EARLY_START = bool(int(sys.argv[1])); tm.LATTICE_BAND = bool(int(sys.argv[2])); "
+         "from hammesh.cli import main; sys.exit(main(sys.argv[3:]))")
 
 
 def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
-         early: bool | None = None) -> dict:
+         early: bool | None = None, band: bool = True) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
-        head = [sys.executable, "-m", "hammesh"] if early is None else [sys.executable, "-c", EARLY, str(int(early))]
+        head = ([sys.executable, "-m", "hammesh"] if early is None else
+                [sys.executable, "-c", EARLY, str(int(early)), str(int(band))])
         cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
         if tiles:
@@ -192,11 +207,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
     ap.add_argument("--startup", type=int, metavar="ROUNDS",
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
+    ap.add_argument("--ab", type=int, metavar="ROUNDS",
+                    help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
+    ap.add_argument("--write-ab", type=int, metavar="ROUNDS",
+                    help="A/B of one piece written with 32-bit / 64-bit integer arrays")
     ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
                     help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
     a = ap.parse_args(argv)
     if a.tile_ab:
         return tile_ab(a)
+    if a.ab:
+        return whole_ab(a)
+    if a.write_ab:
+        return write_ab(a)
     if a.startup:
         return startup_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
@@ -278,6 +301,69 @@ def tile_ab(a) -> int:
     return 0
 
 
+def write_ab(a) -> int:
+    """``--write-ab``: the first tile's piece (first mode) written ``R`` times each way,
+    alternating, with ``partitioned.piece_types`` (32-bit integers, ``kind`` one byte)
+    or all 64-bit: process CPU seconds of the finish + write step and the file's size."""
+    import hammesh
+    from hammesh import threads
+    from hammesh.parallel.partitioned import _finish_and_write, piece_types
+    from hammesh.parallel.run import finish_args, run_tiles
+
+    threads.limit(1)
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    tiled = run_tiles(hammesh.read_domain(DEMO), min_angle=30, max_area=area, tiles=a.tiles or 2,
+                      mode=a.modes.split(",")[0])
+    comps, fargs = tiled.plan.components, finish_args(tiled)
+    types = piece_types(max(x[11] for x in fargs), int(comps.sum()), int(tiled.mesh_triangles.sum()))
+    outcome = tiled.outcomes[0].value
+    tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=a.out_dir)
+    cpu: dict = {True: [], False: []}
+    try:
+        for r in range(a.write_ab):
+            for narrow in ((True, False) if r % 2 == 0 else (False, True)):
+                path = Path(tmp) / f"piece_{int(narrow)}.vtu"
+                c = time.process_time()
+                _finish_and_write(outcome, fargs[0], str(path), comps, None, types if narrow else None)
+                cpu[narrow].append(time.process_time() - c)
+                print(f"round {r} 32-bit={int(narrow)}: CPU {cpu[narrow][-1]:.3f} s, {path.stat().st_size / 2**20:.0f} MB "
+                      f"(load {os.getloadavg()[0]:.1f})")
+                sys.stdout.flush()
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    on, off = statistics.median(cpu[True]), statistics.median(cpu[False])
+    print(f"piece write: 32-bit {on:.3f} s, 64-bit {off:.3f} s CPU (medians), ratio {on / off:.2f}")
+    return 0
+
+
+def whole_ab(a) -> int:
+    """``--ab``: one raw call, then per mode ``R`` rounds of the command with session
+    10's switches on and off (``EARLY_START``, ``LATTICE_BAND``), alternating."""
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    w = int(a.workers.split(",")[0])
+    r = raw(area)
+    print(f"raw: {r['seconds']:.2f} s wall, {r['cpu_seconds']:.2f} s CPU, {r['triangles']:,} triangles "
+          f"(load {os.getloadavg()[0]:.1f})")
+    for mode in a.modes.split(","):
+        got: dict = {True: [], False: []}
+        for k in range(a.ab):
+            for on in ((True, False) if k % 2 == 0 else (False, True)):
+                o = ours(area, w, a.tiles, mode, a.out_dir, early=on, band=on)
+                got[on].append(o)
+                ts = o["parallel"]["tile_seconds"]
+                print(f"{mode} round {k} new={int(on)}: wall {o['wall']:.2f} s ({o['wall'] / r['seconds']:.2f} x raw), "
+                      f"whole CPU {o['tree_cpu']:.2f} s ({o['tree_cpu'] / r['cpu_seconds']:.2f} x raw CPU), "
+                      f"workers' mesh CPU {ts['cpu_mesh']:.2f} s, hamiltonian {ts['cpu_hamiltonian']:.2f} s, "
+                      f"{o['triangles']:,} triangles, load {o['load'][0]:.1f} -> {o['load'][1]:.1f}")
+                sys.stdout.flush()
+        for on in (True, False):
+            cpu = statistics.median(o["tree_cpu"] for o in got[on])
+            wall = statistics.median(o["wall"] for o in got[on])
+            print(f"{mode} new={int(on)}: whole CPU / raw CPU median {cpu / r['cpu_seconds']:.2f}, "
+                  f"wall / raw median {wall / r['seconds']:.2f} (the first round may include numba's compile)")
+    return 0
+
+
 def startup_ab(a) -> int:
     """``--startup``: interleaved fresh processes, early cluster start on / off."""
     area = max_area_for(float(a.sizes.split(",")[0]))
@@ -285,7 +371,7 @@ def startup_ab(a) -> int:
     got: dict = {True: [], False: []}
     for r in range(a.startup):
         for early in ((True, False) if r % 2 == 0 else (False, True)):
-            o = ours(area, w, a.tiles, mode, a.out_dir, early=early)
+            o = ours(area, w, a.tiles, mode, a.out_dir, early=early, band=True)
             s = o["parallel"]["since_start"]
             got[early].append(o)
             print(f"round {r} early={int(early)}: submitted {s['submitted']:.2f} s after the start "
@@ -294,11 +380,10 @@ def startup_ab(a) -> int:
                   f"load {o['load'][0]:.1f}")
             sys.stdout.flush()
     for early in (True, False):
-        sub = sorted(o["parallel"]["since_start"]["submitted"] for o in got[early])
-        cpu = sorted(o["tree_cpu"] for o in got[early])
-        wall = sorted(o["wall"] for o in got[early])
-        print(f"early={int(early)}: submitted median {sub[len(sub) // 2]:.2f} s, wall median {wall[len(wall) // 2]:.2f}, "
-              f"whole CPU median {cpu[len(cpu) // 2]:.2f}")
+        sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[early])
+        cpu = statistics.median(o["tree_cpu"] for o in got[early])
+        wall = statistics.median(o["wall"] for o in got[early])
+        print(f"early={int(early)}: submitted median {sub:.2f} s, wall median {wall:.2f}, whole CPU median {cpu:.2f}")
     return 0
 
 

@@ -141,23 +141,26 @@ def write_raw_chunks(path: str | os.PathLike[str], arrays: list[tuple], n_points
 
 
 def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: int = 0, *, cycles: bool = True,
-                part: bool = False) -> None:
+                part: bool = False, types: dict[str, str] | None = None) -> None:
     """Write the ``.pvtu`` index listing ``pieces`` (file names relative to it), in order.
 
     Its cell data are the pieces': :data:`PIECE_CELL_DATA`, :data:`CYCLE_CELL_DATA`
     when ``cycles`` (more than one cycle), ``part`` when ``part``, ``n_attributes``
     regional attributes (a reader such as ParaView shows only the arrays listed here).
+    ``types``: VTK type by array name where the pieces use another than these
+    defaults (``global_id`` included), e.g. ``Int32`` (they must agree with the pieces).
     """
+    types = types or {}
     path = Path(path)
     root = ET.Element("VTKFile", type="PUnstructuredGrid", version="1.0", byte_order="LittleEndian",
                       header_type="UInt64")
     grid = ET.SubElement(root, "PUnstructuredGrid", GhostLevel="0")
     pd = ET.SubElement(grid, "PPointData")
-    ET.SubElement(pd, "PDataArray", type="Int64", Name="global_id")
+    ET.SubElement(pd, "PDataArray", type=types.get("global_id", "Int64"), Name="global_id")
     cd = ET.SubElement(grid, "PCellData")
     names = {**PIECE_CELL_DATA, **(CYCLE_CELL_DATA if cycles else {}), **({"part": "Int64"} if part else {})}
     for name, typ in names.items():
-        ET.SubElement(cd, "PDataArray", type=typ, Name=name)
+        ET.SubElement(cd, "PDataArray", type=types.get(name, typ), Name=name)
     for i in range(n_attributes):
         ET.SubElement(cd, "PDataArray", type="Float64", Name=f"attribute_{i}")
     pp = ET.SubElement(grid, "PPoints")

@@ -36,13 +36,32 @@ from hammesh.partition import spread_parts
 from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, on_holder, outcome_hamiltonian,
                                   progress_bar, run_tiles, since_start)
 
-__all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target"]
+__all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target",
+           "piece_types", "int_type"]
 
 INDEX_NAME = "mesh.pvtu"
 
 
 def piece_name(tile: int) -> str:
     return f"piece_{tile:04d}.vtu"
+
+
+def int_type(bound: int) -> str:
+    """``Int32`` when every value is in ``[-1, bound)`` and ``bound`` fits, else ``Int64``."""
+    return "Int32" if int(bound) < 2**31 else "Int64"
+
+
+def piece_types(n_points: int, n_rows: int, n_parents: int) -> dict[str, str]:
+    """VTK type of the pieces' integer point and cell data, the same in every piece
+    (the index lists one type per array): 32-bit while the whole output's point ids,
+    rows and parent rows fit, ``kind`` one byte (an index into ``KIND_NAMES``).
+
+    Why: the pieces are our own format (``hammesh.read_mesh``/``hammesh check`` read
+    any integer type) and their bytes are the write step's cost: with every integer
+    array 64-bit an incircle row took ~81 bytes, with these ~52."""
+    rows = int_type(n_rows)
+    return {"global_id": int_type(n_points), "global_position": rows, "cycle_id": rows, "cycle_position": rows,
+            "part": rows, "parent": int_type(n_parents), "kind": "UInt8"}
 
 
 def parts_per_cycle(components: np.ndarray, k: int) -> np.ndarray:
@@ -82,7 +101,8 @@ def stretch_parts(position: np.ndarray, components: np.ndarray, k: int) -> np.nd
     return owner[cyc]
 
 
-def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, parts: int | None):
+def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, parts: int | None,
+                      types: dict[str, str] | None = None):
     """On the tile's worker: number its rows globally (its side of the joins), write its
     piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``.
 
@@ -162,21 +182,25 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
         return gen
 
     mr = lay.n_rows
-    arrays = [("PointData", "global_id", "Int64", 1, n_points, points(True)),
-              ("CellData", "global_position", "Int64", 1, mr, by_position(lambda pos: pos)),
-              ("CellData", "parent", "Int64", 1, mr, rows(parent, lay.join_parent, own=global_parent)),
-              ("CellData", "kind", "Int64", 1, mr, rows(kind, lay.join_kind))]
+    ty = types or {}
+    # (the piece's own point indices and offsets; without ``types`` all Int64, write_piece's bytes)
+    local = int_type(max(n_points, 3 * mr + 1)) if types else "Int64"
+    arrays = [("PointData", "global_id", ty.get("global_id", "Int64"), 1, n_points, points(True)),
+              ("CellData", "global_position", ty.get("global_position", "Int64"), 1, mr, by_position(lambda pos: pos)),
+              ("CellData", "parent", ty.get("parent", "Int64"), 1, mr, rows(parent, lay.join_parent, own=global_parent)),
+              ("CellData", "kind", ty.get("kind", "Int64"), 1, mr, rows(kind, lay.join_kind))]
     if len(components) > 1:  # (one cycle: all zeros and global_position again, not written)
-        arrays[2:2] = [("CellData", "cycle_id", "Int64", 1, mr, by_position(cycle_id)),
-                       ("CellData", "cycle_position", "Int64", 1, mr, by_position(cycle_position))]
+        arrays[2:2] = [("CellData", "cycle_id", ty.get("cycle_id", "Int64"), 1, mr, by_position(cycle_id)),
+                       ("CellData", "cycle_position", ty.get("cycle_position", "Int64"), 1, mr,
+                        by_position(cycle_position))]
     if parts is not None:
-        arrays.append(("CellData", "part", "Int64", 1, mr, by_position(part_of)))
+        arrays.append(("CellData", "part", ty.get("part", "Int64"), 1, mr, by_position(part_of)))
     arrays += [("CellData", f"attribute_{i}", "Float64", 1, mr, rows(attrs[:, i], lay.join_attributes[:, i]))
                for i in range(w)]
     arrays += [("Points", "", "Float64", 3, 3 * n_points, points(False)),
-               ("Cells", "connectivity", "Int64", 1, 3 * mr,
+               ("Cells", "connectivity", local, 1, 3 * mr,
                 rows(tri, lay.join_triangles, both=None if renum is None else renum.__getitem__)),
-               ("Cells", "offsets", "Int64", 1, mr, cells(lambda a, b: 3 * np.arange(a + 1, b + 1, dtype=np.int64))),
+               ("Cells", "offsets", local, 1, mr, cells(lambda a, b: 3 * np.arange(a + 1, b + 1, dtype=np.int64))),
                ("Cells", "types", "UInt8", 1, mr, cells(lambda a, b: np.full(b - a, VTK_TRIANGLE, np.uint8)))]
     write_raw_chunks(path, arrays, n_points, mr)
     first = int(lay.items[0][0]) if lay.items else -1
@@ -253,14 +277,17 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             if parts is not None and parts > int(comps.sum()):
                 raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
             t1 = time.perf_counter()
+            fargs = finish_args(tiled)
+            types = piece_types(max((a[11] for a in fargs), default=0), int(comps.sum()),
+                                int(tiled.mesh_triangles.sum()))
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                pure=False, **on_holder(runner, h))
-                                  for i, (h, a) in enumerate(zip(tiled.outcomes, finish_args(tiled)))])
+                                                types, pure=False, **on_holder(runner, h))
+                                  for i, (h, a) in enumerate(zip(tiled.outcomes, fargs))])
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
         order = sorted(range(len(done)), key=lambda i: done[i][2])
         write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done),
-                    cycles=len(comps) > 1, part=parts is not None)
+                    cycles=len(comps) > 1, part=parts is not None, types=types)
         for i, d in enumerate(done):
             if d[1] == 0:
                 (work / d[0]).unlink()

@@ -13,7 +13,7 @@ from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
-           "LATTICE_BAND"]
+           "LATTICE_BAND", "LATTICE_BLOCK", "lattice_blocks"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -25,6 +25,9 @@ LATTICE_GRADING = 2.0
 #: triangles are made here (:func:`mesh_band`); False: Triangle gets the lattice's
 #: points and triangulates them too (the order before session 10, kept for the A/B)
 LATTICE_BAND = True
+#: the lattice's triangles are numbered in blocks of this many strips and cells
+#: (:func:`~hammesh.parallel._kernels.lattice_triangles_into`: neighbours close in memory)
+LATTICE_BLOCK = 2
 #: no lattice when the tile's box holds more than this many lattice points per
 #: estimated triangle of the tile (about 0.5 of them are inside when the tile fills it)
 LATTICE_BOX_FILL = 8.0
@@ -179,6 +182,18 @@ def tile_switches(min_angle: float | None, max_area: float) -> str:
     return sw + "a" + format_number(max_area) + "YnQ"
 
 
+def lattice_blocks(strips: int, cells: int, block: int) -> np.ndarray:
+    """``(k, 2)`` block row and column of every ``block`` x ``block`` block of a
+    ``strips`` x ``cells`` grid, in a Hilbert order of the blocks' centres (the order
+    :func:`~hammesh.parallel._kernels.lattice_triangles_into` numbers them in)."""
+    from hammesh.numbering import hilbert_keys
+
+    bj, bi = np.divmod(np.arange(-(-strips // block) * -(-cells // block)), -(-cells // block))
+    # (centres in the plane: a strip is sqrt(3)/2 of a cell high)
+    order = np.argsort(hilbert_keys(np.stack([bi, bj * (np.sqrt(3.0) / 2.0)], axis=1)), kind="stable")
+    return np.ascontiguousarray(np.stack([bj, bi], axis=1)[order], dtype=np.int64)
+
+
 def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: float) -> Mesh | None:
     """The tile's mesh made of the lattice's own triangles inside and Triangle's mesh
     of the band between them and the tile's segments; None when that band mesh is not
@@ -209,7 +224,7 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
     keep = grid.keep
     ny, nx = keep.shape
     index = np.empty((ny - 1, 2 * (nx - 1)), np.int64)
-    count = lattice_triangles_into(keep, index)
+    count = lattice_triangles_into(keep, LATTICE_BLOCK, lattice_blocks(ny - 1, nx - 1, LATTICE_BLOCK), index)
     if count == 0:
         return None
     corners = np.empty((count, 3), np.int64)
@@ -282,7 +297,14 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
     segs, marks = segs[user], marks[user]
     attrs = np.zeros((len(tri), 0))
     if len(tile.region_triangles):
-        attrs = region_attributes(tile, points, tri, nbr, segs)[:, None]
+        # each piece of the lattice lies in one region (no segment comes near it): one
+        # location per piece; the band's own pieces (its neighbours stop at the
+        # outline) by the flood fill, over the band only (not the whole tile's rows)
+        inside = region_attributes(tile, bp, bt, bnbr, segs)
+        where = locate_in_triangles(tile.region_points, tile.region_triangles, hole_xy)
+        if (where < 0).any():
+            raise MeshingError(f"tile {tile.index}: a piece of the lattice lies outside the coarse mesh (regions)")
+        attrs = np.concatenate([inside, tile.region_attribute[where][label]])[:, None]
     return Mesh(points=points, triangle_attributes=attrs, triangles=tri, segments=segs, segment_markers=marks,
                 neighbors=nbr, info={"backend": "triangle", "switches": tile_switches(min_angle, max_area),
                                      "tile": tile.index, "lattice": "band"})

@@ -32,11 +32,17 @@ def _check_neighbors(t: np.ndarray, nbr: np.ndarray) -> None:
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(ny=st.integers(2, 9), nx=st.integers(2, 9), seed=st.integers(0, 2**32 - 1), fill=st.floats(0.3, 1.0))
-def test_lattice_triangles_are_equilateral_ccw_with_their_neighbours(ny, nx, seed, fill):
+@given(ny=st.integers(2, 9), nx=st.integers(2, 9), seed=st.integers(0, 2**32 - 1), fill=st.floats(0.3, 1.0),
+       block=st.integers(1, 4))
+def test_lattice_triangles_are_equilateral_ccw_with_their_neighbours(ny, nx, seed, fill, block):
     keep = np.random.default_rng(seed).random((ny, nx)) < fill
     index = np.empty((ny - 1, 2 * (nx - 1)), np.int64)
-    count = lattice_triangles_into(keep, index)
+    from hammesh.parallel.tile_mesh import lattice_blocks
+
+    blocks = lattice_blocks(ny - 1, nx - 1, block)
+    assert len(np.unique(blocks, axis=0)) == len(blocks) == -(-(ny - 1) // block) * -(-(nx - 1) // block)
+    count = lattice_triangles_into(keep, block, blocks, index)
+    assert np.array_equal(np.sort(index[index >= 0]), np.arange(count))  # numbered 0..count-1
     corners, nbr, inc = np.empty((count, 3), np.int64), np.empty((count, 3), np.int64), np.empty(nx * ny, np.int64)
     lattice_mesh_into(index, nx, corners, nbr, inc)
     j, i = np.divmod(np.arange(nx * ny), nx)
@@ -88,6 +94,11 @@ def test_band_mesh_keeps_the_bounds_conforms_and_counts_as_triangles_own(a, n_ti
         seg = lambda h: {tuple(sorted(map(tuple, h.points[e].tolist()))) for e in h.segments}  # noqa: E731
         assert seg(m) == seg(plain)
         assert np.array_equal(np.unique(m.triangle_attributes), np.unique(plain.triangle_attributes))
+        # every triangle's regional attribute is that of the plain run's triangle under its centroid
+        rows = np.random.default_rng(0).choice(m.n_triangles, min(m.n_triangles, 400), replace=False)
+        under = tm.locate_in_triangles(plain.points, plain.triangles, m.points[m.triangles[rows]].mean(axis=1))
+        assert (under >= 0).all()
+        assert np.array_equal(m.triangle_attributes[rows], plain.triangle_attributes[under])
         assert abs(m.n_triangles / plain.n_triangles - 1) <= 0.01
 
 

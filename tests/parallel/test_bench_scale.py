@@ -25,3 +25,18 @@ def test_bench_scale_runs(extra, needle):
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
     assert "load average" in proc.stdout and "per tile hamiltonian() CPU s" in proc.stdout
     assert "tile tasks wall s" in proc.stdout
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("extra, needles", [
+    (["--startup", "1"], ["early=1: submitted median", "early=0: submitted median"]),
+    (["--ab", "1"], ["raw:", "sparse new=1: whole CPU / raw CPU median", "sparse new=0: whole CPU / raw CPU median"]),
+    (["--tile-ab", "1"], ["mesh: band", "sparse: band"])])
+def test_bench_scale_ab_modes_run(extra, needles):
+    """The A/B modes (session 10's switches on / off) keep running at a tiny size."""
+    pytest.importorskip("distributed")
+    proc = subprocess.run([sys.executable, str(BENCH), "--sizes", "3e4", "--workers", "1", "--modes", "sparse",
+                           *extra], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    for needle in needles:
+        assert needle in proc.stdout

@@ -60,3 +60,38 @@ def test_layout_refuses_a_plan_that_misses_rows():
     a[2] = blocks
     with pytest.raises(hammesh.VerificationError, match="does not cover"):
         joins.piece_layout(h.value.ham, *a)
+
+
+@pytest.mark.parametrize("tiles, mode, parts", [(3, "sparse", None), (4, "incircle", 3)])
+def test_typed_pieces_hold_the_same_values_in_fewer_bytes(tmp_path, tiles, mode, parts):
+    """With ``piece_types`` (what ``write_partitioned`` passes) the integer arrays are
+    32-bit (``kind`` one byte): the same values as the 64-bit piece, fewer bytes, and
+    the index lists the types the pieces use."""
+    import re
+    import xml.etree.ElementTree as ET
+
+    from hammesh.io import vtu
+    from hammesh.io.pvtu import write_index
+    from hammesh.parallel.partitioned import piece_types
+
+    tiled = run_tiles(hammesh.read_domain(DEMO), min_angle=30, max_area=1e-3, tiles=tiles, mode=mode)
+    comps = tiled.plan.components
+    fargs = finish_args(tiled)
+    types = piece_types(max(a[11] for a in fargs), int(comps.sum()), int(tiled.mesh_triangles.sum()))
+    assert types["kind"] == "UInt8" and set(types.values()) == {"Int32", "UInt8"}
+    for i, (h, a) in enumerate(zip(tiled.outcomes, fargs)):
+        _finish_and_write(h.value, a, str(tmp_path / f"wide{i}.vtu"), comps, parts)
+        _finish_and_write(h.value, a, str(tmp_path / f"narrow{i}.vtu"), comps, parts, types)
+        wide, narrow = vtu.read_raw(tmp_path / f"wide{i}.vtu"), vtu.read_raw(tmp_path / f"narrow{i}.vtu")
+        assert wide.keys() == narrow.keys()
+        for key, w in wide.items():
+            assert np.array_equal(narrow[key], w)  # the same values
+            if key[0] != "Points" and key[1] not in ("types",) and not key[1].startswith("attribute_"):
+                assert narrow[key].dtype.itemsize < w.dtype.itemsize, key
+        assert (tmp_path / f"narrow{i}.vtu").stat().st_size < 0.8 * (tmp_path / f"wide{i}.vtu").stat().st_size
+        head = (tmp_path / f"narrow{i}.vtu").read_bytes().split(b"<AppendedData")[0].decode()
+        got = {n: t for t, n in re.findall(r'<DataArray type="(\w+)" Name="(\w+)"', head) if n in types}
+        assert got and all(types[k] == v for k, v in got.items())
+    write_index(tmp_path / "i.pvtu", ["narrow0.vtu"], cycles=len(comps) > 1, part=parts is not None, types=types)
+    listed = {e.get("Name"): e.get("type") for e in ET.parse(tmp_path / "i.pvtu").getroot().iter("PDataArray")}
+    assert all(listed[k] == types[k] for k in listed if k in types) and listed["global_id"] == types["global_id"]
