@@ -16,6 +16,20 @@ def test_every_public_name_resolves() -> None:
     assert set(hammesh.__all__) <= set(dir(hammesh))
 
 
+def test_every_module_defines_what_its_all_lists() -> None:
+    # a name in a module's __all__ that it does not define breaks `from module import *`
+    import importlib
+    import pkgutil
+
+    missing = []
+    for info in pkgutil.walk_packages(hammesh.__path__, "hammesh."):
+        if info.name == "hammesh.__main__":  # (runs the command line)
+            continue
+        module = importlib.import_module(info.name)
+        missing += [f"{info.name}.{name}" for name in getattr(module, "__all__", ()) if not hasattr(module, name)]
+    assert missing == []
+
+
 def test_unknown_name_is_an_attribute_error() -> None:
     try:
         hammesh.no_such_name  # noqa: B018

@@ -37,7 +37,6 @@ from hammesh.pointset.validate import as_points, convex_hull
 from hammesh.pointset.verify import verify_point_triangulation
 
 __all__ = [
-    "sequential_triangulation",
     "search_sequential",
     "strip_search",
     "strip_triangles",
