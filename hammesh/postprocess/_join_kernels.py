@@ -857,6 +857,20 @@ def _link_index(links, g):
 
 
 @njit(cache=True, nogil=True)
+def cover_exit(twin, is_cov, e):
+    """The cover edge by which a cycle leaves the triangle it entered by half-edge
+    ``twin[e]`` (the covered half-edge of ``twin[e] // 3`` other than ``twin[e]``),
+    -1 where the cycle does not go on: no other cover edge, or it lies on the boundary."""
+    g = twin[e]
+    x = g // 3
+    for k in range(3):
+        h = 3 * x + k
+        if h != g and is_cov[h]:
+            return h if twin[h] >= 0 else -1
+    return -1
+
+
+@njit(cache=True, nogil=True)
 def ring_outside_pairs(twin, is_cov, links, budget):
     """Which links of a ring fan's group the cover cycles join *outside* the group.
 
@@ -883,16 +897,9 @@ def ring_outside_pairs(twin, is_cov, links, budget):
         for i in range(n):
             if pair[i] >= 0:
                 continue
-            e = twin[cur[i]]
-            x = e // 3
-            f = -1
-            for k in range(3):
-                h = 3 * x + k
-                if h != e and is_cov[h]:
-                    f = h
-                    break
+            f = cover_exit(twin, is_cov, cur[i])
             steps += 1
-            if f < 0 or twin[f] < 0:
+            if f < 0:
                 return np.full(n, -1, np.int64), -1  # not a closed cycle: undecided
             j = _link_index(links, twin[f])
             if j >= 0:
@@ -925,16 +932,9 @@ def label_outside_into(twin, is_cov, start, links, out, value):
     Returns the link index it re-entered by (-1: not a closed path)."""
     cur = start
     while True:
-        e = twin[cur]
-        x = e // 3
-        out[x] = value
-        f = -1
-        for k in range(3):
-            h = 3 * x + k
-            if h != e and is_cov[h]:
-                f = h
-                break
-        if f < 0 or twin[f] < 0:
+        out[twin[cur] // 3] = value
+        f = cover_exit(twin, is_cov, cur)
+        if f < 0:
             return -1
         j = _link_index(links, twin[f])
         if j >= 0:
