@@ -16,6 +16,7 @@ largest cycle's share (a winding cover: issue 14).
     python benchmarks/bench_cover.py --corpus      # uncovered triangles, the 16k corpus
     python benchmarks/bench_cover.py --compile     # first cycle_cover with an empty numba cache
     python benchmarks/bench_cover.py --steps [--target 1500000] [--repeat 5]
+    python benchmarks/bench_cover.py --steps --local [--target 1500000] [--repeat 5]
 
 ``--corpus``: the sparse ``hamiltonian()`` on the ~16k-triangle q30 meshes of
 ``bench_sparse.py`` (8 domains): the cover's uncovered triangles per mesh and in all,
@@ -31,7 +32,11 @@ mesh with its triangles renumbered in Morton or Hilbert order of their centroids
 (``local_order`` here; the vertices renumbered by first use too: "+v"), the
 variants alternating in one process for ``--repeat`` rounds (median per step), with
 each variant's cycles and uncovered triangles: what a local numbering buys the cover.
-``HAMMESH_BENCH_MESH=plate.npz`` (arrays ``points``, ``triangles``) uses that mesh
+With ``--local`` the mesh is renumbered by ``hammesh.halfedge.renumber_local`` (as sparse
+mode hands it to the cover from 100k triangles on) and the variants are the cover's
+two halves: the count quadtree's top split (``points=``) against a quadrant border of the renumbering
+(``local=True``), alternating in one process, with each variant's cycles and uncovered
+triangles. ``HAMMESH_BENCH_MESH=plate.npz`` (arrays ``points``, ``triangles``) uses that mesh
 instead of meshing the plate with Triangle.
 
 ``--cells``: the cover's cycles confined to quadtree cells of about S triangles
@@ -223,11 +228,12 @@ def renumbered(points: np.ndarray, tri: np.ndarray, perm: np.ndarray, vertices: 
     return points[vorder], new_id[t2]
 
 
-def steps_table(target: int, repeat: int) -> None:
-    """Process CPU per cover step, Triangle's numbering vs local ones (``--steps``)."""
+def steps_table(target: int, repeat: int, local: bool = False) -> None:
+    """Process CPU per cover step, Triangle's numbering vs local ones (``--steps``), or
+    on the renumbered mesh the quadtree's halves vs the row halves (``--local``)."""
     import os
 
-    from hammesh.halfedge import half_edges
+    from hammesh.halfedge import half_edges, renumber_local
     from hammesh.postprocess.cycle_cover import cycle_cover
 
     cache = os.environ.get("HAMMESH_BENCH_MESH")  # an .npz of points/triangles to skip Triangle
@@ -237,12 +243,18 @@ def steps_table(target: int, repeat: int) -> None:
     else:
         mesh, _ = plate_mesh(target)
         pts, tri = mesh.points, mesh.triangles.astype(np.int64)
-    variants = {"triangle": (pts, tri)}
-    for curve in ("morton", "hilbert"):
-        perm = local_order(pts, tri, curve)
-        variants[curve] = renumbered(pts, tri, perm, False)
-        variants[curve + "+v"] = renumbered(pts, tri, perm, True)
-    data = {k: (p, t, half_edges(t, len(p)).twin) for k, (p, t) in variants.items()}
+    keywords: dict = {}
+    if local:
+        loc = renumber_local(pts, tri, half_edges(tri, len(pts)).twin)
+        data = {"quadtree": (loc.points, loc.triangles, loc.twin), "quadrant": (loc.points, loc.triangles, loc.twin)}
+        keywords = {"quadrant": {"local": True}}
+    else:
+        variants = {"triangle": (pts, tri)}
+        for curve in ("morton", "hilbert"):
+            perm = local_order(pts, tri, curve)
+            variants[curve] = renumbered(pts, tri, perm, False)
+            variants[curve + "+v"] = renumbered(pts, tri, perm, True)
+        data = {k: (p, t, half_edges(t, len(p)).twin) for k, (p, t) in variants.items()}
     for k, (p, t, tw) in data.items():
         a, b = np.repeat(np.arange(len(t)), 3)[tw >= 0], tw[tw >= 0] // 3
         print(f"{k:10s} median |t - neighbour| {np.median(np.abs(a - b)):,.0f} rows", flush=True)
@@ -252,14 +264,14 @@ def steps_table(target: int, repeat: int) -> None:
         for k, (p, t, tw) in data.items():
             clock: dict = {}
             t0 = time.perf_counter()
-            c = cycle_cover(t, tw, points=p, good=np.zeros(3 * len(t), bool), clock=clock)
+            c = cycle_cover(t, tw, points=p, good=np.zeros(3 * len(t), bool), clock=clock, **keywords.get(k, {}))
             wall[k].append(time.perf_counter() - t0)
             for step, (_, cs) in clock.items():
                 cpu[k].setdefault(step, []).append(cs)
             if r == 0:
                 print(f"{k:10s} m = {len(t):,}: cycles {c.n_cycles:,}, uncovered {c.n_uncovered}, dropped "
                       f"{c.n_dropped}, unmatched {c.n_unmatched}", flush=True)
-    steps = list(cpu["triangle"])
+    steps = list(cpu[next(iter(data))])
     print(f"median of {repeat} rounds, process CPU s per step:")
     print(f"{'step':16s}" + "".join(f"{k:>11s}" for k in data))
     for step in steps + ["total"]:
@@ -277,9 +289,10 @@ def main() -> None:
     ap.add_argument("--corpus", action="store_true", help="uncovered triangles on the 16k corpus instead")
     ap.add_argument("--compile", action="store_true", help="first cycle_cover with an empty numba cache instead")
     ap.add_argument("--steps", action="store_true", help="CPU per cover step, Triangle's vs local numberings")
+    ap.add_argument("--local", action="store_true", help="--steps on renumber_local's mesh: quadtree vs quadrant halves")
     args = ap.parse_args()
     if args.steps:
-        steps_table(args.target or 1_500_000, args.repeat)
+        steps_table(args.target or 1_500_000, args.repeat, args.local)
         return
     if args.corpus:
         corpus_table()

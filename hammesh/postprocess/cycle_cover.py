@@ -20,6 +20,7 @@ from functools import partial
 import numpy as np
 
 from hammesh import threads
+from hammesh.halfedge.locality import cell_bits
 from hammesh.postprocess import _cover_kernels as _k
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 from hammesh.threads import row_ranges, run_all
@@ -101,6 +102,7 @@ def cycle_cover(
     points: np.ndarray | None = None,
     cell_size: int | None = None,
     drop: bool = True,
+    local: bool = False,
     clock: dict | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
@@ -143,6 +145,12 @@ def cycle_cover(
         edge: ``_cover_kernels._drop_matching``) before chains of degree-2 triangles
         are used: those are boundary triangles, whose incenter sectors cost the sparse
         mode its worst angles. False: chains only (the cover before session 8).
+    local : bool
+        The rows are in a space-filling-curve order (``hammesh.halfedge.renumber_local``,
+        as sparse mode hands them over from ``LOCAL_MIN_TRIANGLES`` on): the two halves
+        matched side by side are then the two row halves (each a compact region), not
+        the count quadtree's top split (``_quadrant_cut``: a quadrant border of that
+        order found by binary search, not a pass over every row).
     clock : dict, optional
         Filled with ``step: (wall, process CPU)`` seconds per step of the cover
         (``benchmarks/bench_cover.py --steps``); process CPU counts every thread.
@@ -191,10 +199,13 @@ def cycle_cover(
         s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
     else:
         # from ONLINE_MIN_TRIANGLES on (planar) the two halves of the count quadtree's
-        # top split are matched side by side, then joined across the split
+        # top split (in a local row order: the row halves) are matched side by side,
+        # then joined across the split
         split = online > 0 and points is not None and np.shape(points)[1] == 2
         side = np.zeros(m, np.int8)
-        if split:
+        if split and local:
+            side[_quadrant_cut(np.asarray(points, dtype=np.float64), np.asarray(triangles), m):] = 1
+        elif split:
             side = _halves(np.ascontiguousarray(points, dtype=np.float64), triangles, spans)
         mark("halves")
         calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
@@ -311,6 +322,57 @@ def _halves(points: np.ndarray, triangles: np.ndarray, spans: list) -> np.ndarra
     ny = int(np.count_nonzero(q & (1 << by)))
     bit = bx if abs(2 * nx - m) <= abs(2 * ny - m) else by
     return ((q >> bit) & 1).astype(np.int8)
+
+
+def _quadrant_cut(points: np.ndarray, triangles: np.ndarray, m: int) -> int:
+    """First row of the second half when the rows are in ``renumber_local``'s order (a
+    Hilbert curve over a grid of cells; any quadtree order of the same grid does):
+    the start or end of the block of rows in the middle row's quadrant, at the
+    coarsest quadtree level where one lies within ``m / 8`` rows of the middle, the
+    one nearer to it. A quadrant's border is a short cut (at level 1 a straight line
+    through the grid's middle or an L of two half lines), as the count quadtree's top
+    split is; it is found by binary searches over the rows (a few dozen centroids)
+    instead of the quadtree's pass over every row. Any cut is a valid split (the
+    halves only share out the matching): rows in another order merely cut longer."""
+    if m < 2:
+        return m
+    # the grid of hammesh.halfedge.locality.cell_grid (its cell coordinates; the
+    # Hilbert table is not needed: the curve keeps every quadrant's rows together)
+    bits = cell_bits(m)
+    top = (1 << bits) - 1
+    x, y = points[:, 0], points[:, 1]
+    x0, y0 = float(x.min()), float(y.min())
+    side = max(float(x.max()) - x0, float(y.max()) - y0)
+    scale = (1 << bits) / side if side > 0 else 0.0
+
+    def cell(t: int) -> tuple[int, int]:  # the cell of row t's centroid (cell_key's arithmetic)
+        a, b, c = triangles[t]
+        ix = min(max(int(((points[a, 0] + points[b, 0] + points[c, 0]) / 3.0 - x0) * scale), 0), top)
+        iy = min(max(int(((points[a, 1] + points[b, 1] + points[c, 1]) / 3.0 - y0) * scale), 0), top)
+        return ix, iy
+
+    def first(lo: int, hi: int, inside, q, sh: int) -> int:  # first row in lo..hi where inside flips
+        while lo < hi:
+            mid = (lo + hi) // 2
+            cx, cy = cell(mid)
+            if ((cx >> sh, cy >> sh) == q) == inside:
+                hi = mid
+            else:
+                lo = mid + 1
+        return lo
+
+    middle = m // 2
+    mx, my = cell(middle)
+    best = middle
+    for level in range(1, bits + 1):
+        sh = bits - level
+        q = (mx >> sh, my >> sh)
+        rows = [r for r in (first(0, middle, True, q, sh), first(middle, m, False, q, sh)) if 0 < r < m]
+        if rows:
+            best = min(rows, key=lambda r: abs(r - middle))
+            if 8 * abs(best - middle) <= m:
+                return best
+    return best
 
 
 def _cells(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, m: int, size: int):

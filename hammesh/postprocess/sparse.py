@@ -1313,6 +1313,7 @@ def sparse_cycles(
     fans: bool = True,
     improve: bool = True,
     beside_cover: Callable[[], object] | None = None,
+    local: bool = False,
 ) -> SparseResult:
     """The sparse construction on arrays (unverified).
 
@@ -1359,6 +1360,10 @@ def sparse_cycles(
         construction to another thread (``hammesh.hamiltonian`` starts the certificate's look
         at the input there): the cover is this call's longest step and most of it
         runs on one core.
+    local : bool
+        The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
+        ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
+        order (``cycle_cover(..., local=True)``).
     """
     if not 0.0 <= keep <= 1.0:
         raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
@@ -1401,7 +1406,7 @@ def sparse_cycles(
         steps.done("judge_edges")
         if beside_cover is not None:
             beside_cover()
-        cover = cycle_cover(tri, tw, good=good, points=pts)
+        cover = cycle_cover(tri, tw, good=good, points=pts, local=local)
     else:
         if beside_cover is not None:
             beside_cover()
@@ -1812,7 +1817,9 @@ def sparse_hamiltonian(
         # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
         keys = seen.pop("cells", None) if seen else None
         loc = renumber_local(pts, tri, he.twin, pinned, keys)
-        r = sparse_cycles(loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover)
+        r = sparse_cycles(
+            loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True
+        )
         r = _numbered_back(r, loc, pts, (t0, c0))
     else:
         r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover)

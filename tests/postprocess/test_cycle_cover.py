@@ -554,3 +554,41 @@ def test_chain_phase_pairs_what_unbounded_searches_pair(name: str) -> None:
         ends = [ck._chain_end(nb, active, alive, x, k)[0] for k in range(3)]
         assert y in nb[x] or y in ends
     assert (work[2] == -1).all()  # every label reset
+
+
+@given(case=punched_delaunay(), rotate=st.booleans(), drop=st.booleans())
+def test_local_split_at_a_quadrant_border(case, rotate: bool, drop: bool) -> None:
+    # rows in renumber_local's order (as sparse mode hands them over): the halves are
+    # the rows before and after a border between quadrants of that order's grid at
+    # some level (no quadrant has rows on both sides), and the cover stays valid
+    from hammesh.halfedge import renumber_local
+    from hammesh.halfedge.locality import cell_bits
+    from hammesh.postprocess.cycle_cover import _quadrant_cut
+
+    pts, tri, _ = case
+    m = len(tri)
+    if m < 2:
+        return
+    loc = renumber_local(pts, tri, half_edges(tri, len(pts)).twin)
+    r = _quadrant_cut(loc.points, loc.triangles, m)
+    assert 0 < r < m
+    bits = cell_bits(m)
+    lo, hi = loc.points.min(axis=0), loc.points.max(axis=0)
+    side = float((hi - lo).max())
+    c = loc.points[loc.triangles].sum(axis=1) / 3.0
+    cell = np.clip(((c - lo) * ((1 << bits) / side)).astype(np.int64), 0, (1 << bits) - 1)
+    borders = [level for level in range(1, bits + 1)
+               if not set(map(tuple, cell[:r] >> (bits - level))) & set(map(tuple, cell[r:] >> (bits - level)))]
+    # (all rows in one cell: no border anywhere, the middle row then)
+    assert borders or len(np.unique(cell, axis=0)) == 1, "the cut splits a quadrant at every level"
+    # the coarsest level with a quadrant border within m / 8 rows of the middle row
+    # gives the cut (brute force: every row where the quadrant changes)
+    for level in range(1, bits + 1):
+        q = cell >> (bits - level)
+        change = np.nonzero((q[1:] != q[:-1]).any(axis=1))[0] + 1
+        near = change[8 * np.abs(change - m // 2) <= m]
+        if len(near):
+            assert r in near and level in borders
+            break
+    cov = cycle_cover(loc.triangles, loc.twin, rotate=rotate, online=4, drop=drop, points=loc.points, local=True)
+    oracle_check(loc.triangles, cov)
