@@ -361,18 +361,24 @@ def test_undo_restores_the_logged_state() -> None:
     assert not ck._undo(log, nlog, mate, active, alive)
 
 
-def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch) -> None:
+@pytest.mark.parametrize("local", [False, True])
+def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch, local: bool) -> None:
     # the two halves of the split share nothing they write: matched side by side on
-    # two threads or one after the other, the cover is the same
+    # two threads or one after the other, the cover is the same (local: the rows
+    # renumbered as sparse mode hands them over, cut at a quadrant border)
     from hammesh import threads
+    from hammesh.halfedge import renumber_local
 
     dom = bundled_domain("face")
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
-    tri = m.triangles
+    tri, pts = m.triangles, m.points
     twin = half_edges(tri, m.n_points).twin
-    one = cycle_cover(tri, twin, points=m.points, online=256)
+    if local:
+        loc = renumber_local(pts, tri, twin)
+        tri, pts, twin = loc.triangles, loc.points, loc.twin
+    one = cycle_cover(tri, twin, points=pts, online=256, local=local)
     monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 500)
-    two = cycle_cover(tri, twin, points=m.points, online=256)
+    two = cycle_cover(tri, twin, points=pts, online=256, local=local)
     oracle_check(tri, two)
     np.testing.assert_array_equal(one.is_cov, two.is_cov)
     np.testing.assert_array_equal(one.cycle, two.cycle)
