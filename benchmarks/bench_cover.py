@@ -289,7 +289,7 @@ def main() -> None:
     ap.add_argument("--corpus", action="store_true", help="uncovered triangles on the 16k corpus instead")
     ap.add_argument("--compile", action="store_true", help="first cycle_cover with an empty numba cache instead")
     ap.add_argument("--steps", action="store_true", help="CPU per cover step, Triangle's vs local numberings")
-    ap.add_argument("--local", action="store_true", help="--steps on renumber_local's mesh: quadtree vs quadrant halves")
+    ap.add_argument("--local", action="store_true", help="--steps, renumber_local: quadtree vs quadrant halves")
     args = ap.parse_args()
     if args.steps:
         steps_table(args.target or 1_500_000, args.repeat, args.local)
