@@ -13,7 +13,7 @@ from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
-           "LATTICE_BAND", "LATTICE_BLOCK", "lattice_blocks"]
+           "LATTICE_BAND", "LATTICE_BLOCK", "lattice_blocks", "load_tile_kernels"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -356,3 +356,23 @@ def mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: boo
         neighbors=nbr,
         info={"backend": "triangle", "switches": tile_switches(min_angle, max_area), "tile": tile.index},
     )
+
+
+def load_tile_kernels() -> Mesh:
+    """Load (or, with a stale numba cache, compile) the compiled kernels of a tile's
+    mesh with its lattice into this process: :func:`mesh_tile` of a small square
+    (~2k triangles, the band path); returns that mesh.
+
+    Why: a local cluster's workers are forked after the driver has loaded the
+    Hamiltonian mode's kernels (:func:`hammesh.parallel.cluster.start_method`), but
+    the lattice's kernels were loaded by each worker in its first tile, inside the
+    tile's measured mesh step, and compiled there by every worker at once after an
+    edit or an install had made numba's cache stale. Loaded in the driver before the
+    fork, the workers start with them.
+    """
+    from hammesh.domain import Domain
+    from hammesh.parallel.tiles import decompose
+
+    area = 1e-3
+    d = decompose(Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30, max_area=area, n_tiles=1)
+    return mesh_tile(d.tiles[0], 30, area)

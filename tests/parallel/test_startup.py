@@ -80,3 +80,55 @@ def test_bad_domain_with_an_early_cluster_exits_2_and_closes_it(tmp_path, capsys
     assert len(err.splitlines()) == 1 and "bad.poly" in err
     assert not (tmp_path / "o").exists()
     assert not [t for t in threading.enumerate() if t.name.startswith("hammesh-cluster")]
+
+
+#: a fresh driver starts a one-worker local cluster and asks the worker which of the
+#: lattice's kernels it holds compiled (before any tile ran there) and whether numpy
+#: still advised huge pages there (switching the advice off answers its former state)
+FORKED_WORKER = """
+import json
+from hammesh.parallel.cluster import runner_for, start_method
+
+def held():
+    from hammesh.parallel import _kernels as k
+    from hammesh.parallel.cluster import no_hugepage_advice
+    names = ("lattice_mark_inside_into", "lattice_clear_near_segments_into", "lattice_triangles_into",
+             "lattice_mesh_into", "label_pieces_into")
+    return {"kernels": {n: len(getattr(k, n).signatures) for n in names}, "advice_was_on": no_hugepage_advice()}
+
+if __name__ == "__main__":
+    from hammesh.parallel.cluster import no_hugepage_advice
+    with runner_for(workers=1, mode="incircle") as (c, _):
+        worker = list(c.run(held).values())[0]
+    print(json.dumps({"method": start_method(), "driver_advice_was_on": no_hugepage_advice(), **worker}))
+"""
+
+
+@pytest.fixture(scope="module")
+def forked_worker(tmp_path_factory):
+    pytest.importorskip("distributed")
+    script = tmp_path_factory.mktemp("forked") / "held.py"
+    script.write_text(FORKED_WORKER)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=600, check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    if got["method"] != "fork":
+        pytest.skip("spawned workers (not Linux) import and load everything themselves")
+    return got
+
+
+def test_forked_workers_start_with_the_lattice_kernels_loaded(forked_worker):
+    """The driver loads the tile mesh's kernels before the fork (``load_tile_kernels``):
+    each worker used to load them (~0.25 s CPU) or, with a stale cache, compile them
+    inside its first tile's measured mesh step."""
+    held = forked_worker["kernels"]
+    assert held and all(v >= 1 for v in held.values()), held
+
+
+def test_workers_do_not_advise_huge_pages_but_the_driver_still_does(forked_worker):
+    """``worker_setup`` switches numpy's huge page advice off in the workers only
+    (their fresh arrays' first touches cost 2-3x the system time with it here); the
+    driver's process keeps numpy's default."""
+    default = subprocess.run([sys.executable, "-c", "from hammesh.parallel.cluster import no_hugepage_advice as f; "
+                              "print(f())"], capture_output=True, text=True, check=True).stdout.strip()
+    assert forked_worker["advice_was_on"] is False
+    assert str(forked_worker["driver_advice_was_on"]) == default  # (numpy's default: on for Linux >= 4.6)
