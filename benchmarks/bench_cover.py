@@ -304,19 +304,10 @@ def main() -> None:
         cells_table(args.target or 100_000, [int(x) for x in args.cells.split(",")])
         return
     args.target = args.target or 1_500_000
-    import hammesh
     from hammesh.halfedge import half_edges
     from hammesh.postprocess.cycle_cover import cycle_cover
 
-    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    circ = np.c_[np.cos(a), np.sin(a)]
-    plate = hammesh.Domain.from_polygon(
-        [[0, 0], [4, 0], [4, 2], [0, 2]], holes=[circ * 0.45 + [1, 1], circ * 0.3 + [3, 1]]
-    )
-    area = 8.0 - np.pi * (0.45**2 + 0.3**2)
-    t = time.perf_counter()
-    mesh = hammesh.quality_mesh(plate, min_angle=30, max_area=area / (0.63 * args.target))
-    t_tri = time.perf_counter() - t
+    mesh, t_tri = plate_mesh(args.target)
     tri = mesh.triangles
     twin = half_edges(tri, mesh.n_points).twin
 

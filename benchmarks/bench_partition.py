@@ -293,6 +293,26 @@ def _print_forests(forests: list[dict]) -> None:
               "two halves on two threads, the plain one on one: CPU is the last column)")
 
 
+def cut_ratio_cells(h, ks: list[int]) -> list[str]:
+    """Cycle cut / METIS cut of ``h`` for each ``k`` in ``ks``, as table cells (METIS
+    run once on ``h``'s own dual graph; "(disconnected)" marks a part in pieces)."""
+    from scipy.sparse import coo_matrix
+
+    from hammesh.partition import dual_edges, edge_cut, partition
+
+    a, b = dual_edges(h.triangles)
+    m = h.n_triangles
+    g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
+    g = (g + g.T).tocsr()
+    xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
+    cells = []
+    for k in ks:
+        p = partition(h, k)
+        mparts, _ = _metis(k, xadj, adjncy, 1)
+        cells.append(f"{p.edge_cut / edge_cut(mparts, a, b):.2f}" + ("" if p.connected else " (disconnected)"))
+    return cells
+
+
 def _print_trees(domains, target: int, ks: list[int], schemes: list[str] | None = None) -> None:
     """Incircle cycle cut / METIS cut of each tree scheme of ``partition_trees.SCHEMES``
     (METIS run on each scheme's own output: the outputs differ by their flips)."""
@@ -300,9 +320,6 @@ def _print_trees(domains, target: int, ks: list[int], schemes: list[str] | None 
     import sys
 
     import hammesh
-    from scipy.sparse import coo_matrix
-
-    from hammesh.partition import dual_edges, edge_cut, partition
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from partition_trees import SCHEMES, tree
@@ -318,16 +335,8 @@ def _print_trees(domains, target: int, ks: list[int], schemes: list[str] | None 
             with tree(weights):
                 h = hammesh.hamiltonian(mesh, mode="incircle")
             dt = time.perf_counter() - t
-            a, b = dual_edges(h.triangles)
             m = h.n_triangles
-            g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
-            g = (g + g.T).tocsr()
-            xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
-            cells = []
-            for k in ks:
-                p = partition(h, k)
-                mparts, _ = _metis(k, xadj, adjncy, 1)
-                cells.append(f"{p.edge_cut / edge_cut(mparts, a, b):.2f}" + ("" if p.connected else " (disconnected)"))
+            cells = cut_ratio_cells(h, ks)
             print(f"| {name} | {scheme} | {m:,} | " + " | ".join(cells) + f" | {dt:.1f} |", flush=True)
 
 
@@ -396,9 +405,6 @@ def _print_sparse_cells(domains, target: int, ks: list[int], sizes: list[int], o
     from unittest import mock
 
     import hammesh
-    from scipy.sparse import coo_matrix
-
-    from hammesh.partition import dual_edges, edge_cut, partition
     from hammesh.postprocess import cycle_cover, sparse
 
     cell_level = [0]
@@ -426,16 +432,8 @@ def _print_sparse_cells(domains, target: int, ks: list[int], sizes: list[int], o
                     t, c = time.perf_counter(), time.process_time()
                     h = hammesh.hamiltonian(mesh, mode="sparse")
                     dt, dc = time.perf_counter() - t, time.process_time() - c
-                a, b = dual_edges(h.triangles)
                 m = h.n_triangles
-                g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
-                g = (g + g.T).tocsr()
-                xadj, adjncy = g.indptr.astype(np.int64), g.indices.astype(np.int64)
-                out = []
-                for k in ks:
-                    p = partition(h, k)
-                    mparts, _ = _metis(k, xadj, adjncy, 1)
-                    out.append(f"{p.edge_cut / edge_cut(mparts, a, b):.2f}" + ("" if p.connected else " (disconnected)"))
+                out = cut_ratio_cells(h, ks)
                 r = h.report
                 st = r["steiner_points"]
                 print(f"| {name} | {size or 'not confined'} | {order if size else '-'} | {m:,} | {st:,} ({st / m:.2%}) | "

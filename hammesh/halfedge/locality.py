@@ -37,7 +37,7 @@ from hammesh.halfedge import _kernels
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "cell_order", "cell_grid", "cell_keys",
+__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "cell_order", "cell_grid", "grid_frame", "cell_keys",
            "empty_cell_keys", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
 
 #: average triangles per grid cell of the order (a cell's triangles keep their order)
@@ -83,18 +83,26 @@ class CellKeys(NamedTuple):
     spans: list  # the row ranges, [(lo, hi), ...]
 
 
-def cell_grid(points: np.ndarray, m: int) -> CellGrid:
-    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`)."""
+def grid_frame(points: np.ndarray, m: int) -> tuple[float, float, float, int]:
+    """``(x0, y0, scale, bits)`` of :func:`cell_grid` without its Hilbert table: cell
+    ``(int((x - x0) * scale), int((y - y0) * scale))`` (clamped to ``2**bits - 1``) of a
+    point, for code that needs only the cells (the cover's quadrant cut)."""
     pts = np.asarray(points)
     bits = cell_bits(m)
     x0, y0 = float(pts[:, 0].min()), float(pts[:, 1].min())
     side = max(float(pts[:, 0].max()) - x0, float(pts[:, 1].max()) - y0)
+    return x0, y0, (1 << bits) / side if side > 0 else 0.0, bits
+
+
+def cell_grid(points: np.ndarray, m: int) -> CellGrid:
+    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`)."""
+    x0, y0, scale, bits = grid_frame(points, m)
     table = np.empty(1 << (2 * bits), np.int64)
     run_all([
         (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
         for lo, hi in row_ranges(1 << bits, max(1, threads.THREAD_MIN_ROWS >> bits))
     ])
-    return CellGrid(x0, y0, (1 << bits) / side if side > 0 else 0.0, bits, table)
+    return CellGrid(x0, y0, scale, bits, table)
 
 
 def empty_cell_keys(grid: CellGrid, m: int) -> CellKeys:

@@ -20,7 +20,7 @@ from functools import partial
 import numpy as np
 
 from hammesh import threads
-from hammesh.halfedge.locality import cell_bits
+from hammesh.halfedge.locality import grid_frame
 from hammesh.postprocess import _cover_kernels as _k
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 from hammesh.threads import row_ranges, run_all
@@ -336,14 +336,10 @@ def _quadrant_cut(points: np.ndarray, triangles: np.ndarray, m: int) -> int:
     halves only share out the matching): rows in another order merely cut longer."""
     if m < 2:
         return m
-    # the grid of hammesh.halfedge.locality.cell_grid (its cell coordinates; the
-    # Hilbert table is not needed: the curve keeps every quadrant's rows together)
-    bits = cell_bits(m)
+    # the cells of hammesh.halfedge.locality's grid (the Hilbert table is not needed:
+    # the curve keeps every quadrant's rows together)
+    x0, y0, scale, bits = grid_frame(points, m)
     top = (1 << bits) - 1
-    x, y = points[:, 0], points[:, 1]
-    x0, y0 = float(x.min()), float(y.min())
-    side = max(float(x.max()) - x0, float(y.max()) - y0)
-    scale = (1 << bits) / side if side > 0 else 0.0
 
     def cell(t: int) -> tuple[int, int]:  # the cell of row t's centroid (cell_key's arithmetic)
         a, b, c = triangles[t]

@@ -558,6 +558,24 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     ), done
 
 
+def _link_components(links, *partners: dict) -> dict:
+    """Each link's component (a representative link) when every link is joined to its
+    partner in each of ``partners`` (link -> link maps): which links one cycle passes
+    after a ring or re-route rewired them. Union-find with path halving."""
+    root = {h: h for h in links}
+
+    def find(h):
+        while root[h] != h:
+            root[h] = root[root[h]]
+            h = root[h]
+        return h
+
+    for h in links:
+        for partner in partners:
+            root[find(h)] = find(partner[h])
+    return {h: find(h) for h in links}
+
+
 def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     """The cover's cycle ids after its edges changed only *inside* ``group`` (``_reroute``), or None.
 
@@ -609,24 +627,14 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
         inside[h], inside[f] = f, h
         for x in path:
             on_path[x] = h
-    root = {h: h for h in links}
-
-    def find(h):
-        while root[h] != h:
-            root[h] = root[root[h]]
-            h = root[h]
-        return h
-
-    for h in links:
-        root[find(h)] = find(outside[h])
-        root[find(h)] = find(inside[h])
+    comp = _link_components(links, outside, inside)
     # each new cycle's id: the smallest old id whose far (unwalked) part it holds, else a new one
     holds: dict[int, int] = {}
     for h in links:
         if h in unwalked or outside[h] in unwalked:
-            r = find(h)
+            r = comp[h]
             holds[r] = min(holds.get(r, old_id[h]), old_id[h])
-    comps = sorted({find(h) for h in links})
+    comps = sorted(set(comp.values()))
     n_new = n_cycles
     rep = {}
     for r in comps:
@@ -644,7 +652,7 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
             alive[cycle[x]] = False
     links_arr = np.asarray(links, np.int64)
     for h in links:
-        r = find(h)
+        r = comp[h]
         if h in unwalked or outside[h] in unwalked:
             lut[old_id[h]] = rep[r]  # its far part stays where it is: relabelled by the gather
             if rep[r] != old_id[h]:
@@ -654,7 +662,7 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     alive[n_cycles:n_new] = True
     for x in sorted(group):
         if x in on_path:
-            out[x] = rep[find(on_path[x])]
+            out[x] = rep[comp[on_path[x]]]
         elif not any(new_cov[3 * x + k] for k in range(3)):
             out[x] = -1
         else:
@@ -790,18 +798,7 @@ def _ring_outcome(tw, is_cov, cycle, members, hes, spoke, find=None) -> RingOutc
             return None
         for i, j in zip(ids, pair.tolist()):
             outside[i] = ids[j]
-    root = {i: i for i in links}
-
-    def find(i):
-        while root[i] != i:
-            root[i] = root[root[i]]
-            i = root[i]
-        return i
-
-    for i in links:
-        for j in (outside[i], new[i]):
-            root[find(i)] = find(j)
-    comp = {i: find(i) for i in links}
+    comp = _link_components(links, outside, new)
     split = any(len({comp[i] for i in ids}) > 1 for ids in by_id.values())
     return RingOutcome(links, old_id, comp, split)
 
