@@ -24,7 +24,7 @@ from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.parallel.decoupled import MAX_ROUNDS, bad_corner_vertices
 from hammesh.parallel.joins import BorderRows, Plan, TilePiece, border_rows, finish_tile, plan_joins
 from hammesh.parallel.tile_mesh import mesh_tile
-from hammesh.parallel.tiles import Decomposition, decompose, split_segments
+from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
@@ -451,6 +451,8 @@ def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
     """Estimated triangle count of a Triangle run: the domain's area (one constrained
     triangulation, no refinement) over ``AREA_FILL x max_area``."""
     import triangle
+
+    check_bounds(min_angle, max_area)  # (before the estimate divides by it)
 
     from hammesh.parallel.sizing import AREA_FILL
 

@@ -32,10 +32,10 @@ import numpy as np
 
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError
-from hammesh.meshing.options import MAX_MIN_ANGLE, format_number
+from hammesh.meshing.options import MeshOptions, format_number
 from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points_many
 
-__all__ = ["Tile", "Decomposition", "decompose", "split_segments", "COARSE_TRIANGLES"]
+__all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "COARSE_TRIANGLES"]
 
 #: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
 COARSE_TRIANGLES = 20_000
@@ -530,6 +530,15 @@ def _commit(b: _Builder, segs: np.ndarray, plans: list[np.ndarray]) -> tuple[np.
 # ---------------------------------------------------------------------------- decompose
 
 
+def check_bounds(min_angle: float | None, max_area: float | None) -> None:
+    """The quality bounds of parallel meshing checked as :func:`hammesh.quality_mesh`
+    checks them (``MeshOptions``: finite numbers, ``0 <= min_angle <= MAX_MIN_ANGLE``,
+    ``max_area > 0``), and ``max_area`` required: it sets the separators' spacing."""
+    if max_area is None:
+        raise InvalidOptionError("parallel meshing needs max_area (-a): it sets the separators' spacing")
+    MeshOptions(min_angle=min_angle, max_area=max_area)
+
+
 def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_tiles: int) -> Decomposition:
     """Cut ``domain`` into ``n_tiles`` tiles that Triangle meshes alone into a conforming union.
 
@@ -552,10 +561,7 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     InvalidOptionError
         No ``max_area``, or regional area bounds (not supported by the tiles yet).
     """
-    if max_area is None:
-        raise InvalidOptionError("parallel meshing needs max_area (-a): it sets the separators' spacing")
-    if min_angle is not None and not 0 <= float(min_angle) <= MAX_MIN_ANGLE:
-        raise InvalidOptionError(f"min_angle must be between 0 and {MAX_MIN_ANGLE} degrees, got {min_angle!r}")
+    check_bounds(min_angle, max_area)
     if not (isinstance(n_tiles, (int, np.integer)) and n_tiles >= 1):
         raise InvalidOptionError(f"tiles must be a positive integer, got {n_tiles!r}")
     regions = np.asarray(domain.regions, dtype=np.float64).reshape(-1, 4)

@@ -126,11 +126,21 @@ def test_check_union_finds_a_missing_triangle_and_a_split_separator():
 
 
 def test_bad_options_are_refused():
+    from hammesh.parallel.run import decompose_estimate
+
     dom = hammesh.read_domain("hammesh/data/demo.poly")
     with pytest.raises(InvalidOptionError, match="max_area"):
         decompose(dom, min_angle=30, max_area=None, n_tiles=2)
     with pytest.raises(InvalidOptionError, match="tiles"):
         decompose(dom, min_angle=30, max_area=1e-3, n_tiles=0)
+    # the bounds as quality_mesh checks them, before anything divides by max_area
+    for bad in (-1.0, 0.0, float("nan"), float("inf")):
+        with pytest.raises(InvalidOptionError, match="max_area"):
+            decompose(dom, min_angle=30, max_area=bad, n_tiles=2)
+        with pytest.raises(InvalidOptionError, match="max_area"):
+            decompose_estimate(dom, 30, bad)
+    with pytest.raises(InvalidOptionError, match="min_angle"):
+        decompose(dom, min_angle=float("nan"), max_area=1e-3, n_tiles=2)
     bounded = hammesh.Domain(vertices=dom.vertices, segments=dom.segments, holes=dom.holes,
                              regions=[[0.2, 1.0, 1.0, 1e-3]])
     with pytest.raises(InvalidOptionError, match="regional area"):
