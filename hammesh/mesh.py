@@ -23,7 +23,7 @@ import numpy as np
 from hammesh.errors import InvalidMeshError
 
 __all__ = ["Mesh", "HamiltonianMesh", "KIND_NAMES", "cycle_positions", "triangle_neighbors",
-           "output_vertex_markers"]
+           "output_vertex_markers", "attribute_name"]
 
 #: Meaning of :attr:`HamiltonianMesh.kind`: how each output triangle was made.
 #: 0: an input triangle's side joined to its incenter; 1: a flipped triangle
@@ -55,6 +55,46 @@ def _empty_i(shape: tuple[int, ...]) -> np.ndarray:
     return np.zeros(shape, dtype=np.int64)
 
 
+def attribute_name(names: tuple[str, ...], i: int) -> str:
+    """Name of column ``i`` of ``triangle_attributes``: ``names[i]`` if given, else
+    ``attribute_<i>`` (Triangle's regional attributes have no names).
+
+    >>> attribute_name(("region",), 0), attribute_name((), 1)
+    ('region', 'attribute_1')
+    """
+    return names[i] if i < len(names) and names[i] else f"attribute_{i}"
+
+
+def _fit_names(obj: Any) -> None:
+    """``obj.attribute_names`` as a tuple of str, one per attribute column or empty."""
+    names = tuple(str(x) for x in (obj.attribute_names or ()))
+    k = obj.triangle_attributes.shape[1] if np.ndim(obj.triangle_attributes) == 2 else 0
+    object.__setattr__(obj, "attribute_names", names if len(names) == k else ())
+
+
+def _fit_point_data(obj: Any) -> None:
+    """``obj.point_data`` as a dict of numeric arrays with one row per point; anything
+    else raises :class:`~hammesh.errors.InvalidMeshError` (a caller's bug, never
+    silently dropped)."""
+    data = obj.point_data
+    if data is None:
+        object.__setattr__(obj, "point_data", {})
+        return
+    if not isinstance(data, dict):
+        raise InvalidMeshError(f"point_data must be a dict of arrays, got {type(data).__name__}")
+    n = len(obj.points)
+    fitted = {}
+    for name, values in data.items():
+        arr = np.asarray(values)
+        if arr.ndim not in (1, 2) or len(arr) != n or arr.dtype.kind not in "biuf":
+            raise InvalidMeshError(
+                f"point_data[{name!r}] must be numbers with one row per point ({n}), got shape "
+                f"{arr.shape} dtype {arr.dtype}"
+            )
+        fitted[str(name)] = arr
+    object.__setattr__(obj, "point_data", fitted)
+
+
 @dataclass(frozen=True, eq=False)
 class Mesh:
     """A planar triangle mesh with constrained edges.
@@ -76,6 +116,13 @@ class Mesh:
         Provenance: backend, switches, meshing seconds (``quality_mesh`` fills it).
     vertex_markers : (n,) int64
         Boundary marker of each point (Triangle's ``pointmarkers``; zeros if unknown).
+    attribute_names : tuple of str
+        Name of each ``triangle_attributes`` column (a mesh file's cell data names);
+        empty: ``attribute_<i>`` (:func:`attribute_name`).
+    point_data : dict of str to (n,) or (n, c) arrays
+        Per-point values read from a mesh file (other than ``vertex_marker``), carried
+        to the output: input points keep theirs, new points are interpolated
+        (:func:`hammesh.point_data.carry_point_data`).
     """
 
     points: np.ndarray
@@ -86,6 +133,8 @@ class Mesh:
     neighbors: np.ndarray | None = None
     info: dict[str, Any] = field(default_factory=dict)
     vertex_markers: np.ndarray = field(default_factory=lambda: _empty_i((0,)))
+    attribute_names: tuple[str, ...] = ()
+    point_data: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("points", "triangles", "segments", "segment_markers", "triangle_attributes",
@@ -105,6 +154,8 @@ class Mesh:
                 self, "segment_markers", np.zeros(len(self.segments), dtype=np.int64)
             )
         _fit_vertex_markers(self)
+        _fit_names(self)
+        _fit_point_data(self)
 
     @property
     def n_points(self) -> int:
@@ -157,6 +208,10 @@ class HamiltonianMesh:
         The input's point markers at their indices; a Steiner point on a constrained
         edge gets the edge's marker, any other Steiner point 0
         (:func:`output_vertex_markers`).
+    attribute_names : tuple of str
+        Names of the ``triangle_attributes`` columns (see :class:`Mesh`).
+    point_data : dict of str to (n,) or (n, c) arrays
+        The input's per-point values; Steiner points interpolated (see :class:`Mesh`).
     neighbors : (m, 3) int64
         Computed on first use (:func:`triangle_neighbors`), then kept.
     """
@@ -172,11 +227,15 @@ class HamiltonianMesh:
     triangle_attributes: np.ndarray
     report: dict[str, Any] = field(default_factory=dict)
     vertex_markers: np.ndarray | None = None
+    attribute_names: tuple[str, ...] = ()
+    point_data: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.vertex_markers is not None:
             _coerce(self, "vertex_markers")
         _fit_vertex_markers(self)
+        _fit_names(self)
+        _fit_point_data(self)
 
     @property
     def n_points(self) -> int:
@@ -222,6 +281,8 @@ class HamiltonianMesh:
             segment_markers=self.segment_markers,
             triangle_attributes=self.triangle_attributes,
             vertex_markers=self.vertex_markers,
+            attribute_names=self.attribute_names,
+            point_data=self.point_data,
         )
 
 

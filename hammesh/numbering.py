@@ -127,6 +127,8 @@ def _renumbered(mesh: Any, order: np.ndarray) -> Any:
         value = getattr(mesh, f.name)
         if f.name.startswith("vertex_") and isinstance(value, np.ndarray) and len(value) == n:
             changes[f.name] = value[order]
+    if getattr(mesh, "point_data", None):  # the input's per-point values move with the points
+        changes["point_data"] = {k: np.asarray(v)[order] for k, v in mesh.point_data.items()}
     if isinstance(mesh, Mesh):
         changes["neighbors"] = mesh.neighbors  # rows keep their order
     return dataclasses.replace(mesh, **changes)

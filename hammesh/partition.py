@@ -439,6 +439,8 @@ def as_cycle_mesh(mesh: Mesh | HamiltonianMesh) -> HamiltonianMesh:
         "components": runs,
         "position": cycle_positions(runs) if m else np.zeros(0, np.int64),
         "triangle_attributes": np.asarray(mesh.triangle_attributes, dtype=np.float64).reshape(m, -1),
+        "attribute_names": tuple(getattr(mesh, "attribute_names", ())),  # (never lose a file's data)
+        "point_data": dict(getattr(mesh, "point_data", {})),
     }
     if hasattr(mesh, "vertex_markers") and "vertex_markers" in {f.name for f in dataclasses.fields(h)}:
         changes["vertex_markers"] = mesh.vertex_markers

@@ -19,7 +19,7 @@ from typing import Any
 
 from hammesh.domain import Domain, read_domain
 from hammesh.errors import FileFormatError, InvalidDomainError
-from hammesh.io import check_outputs, read_mesh, supported_suffixes, write, write_report
+from hammesh.io import check_outputs, read_mesh, supported_suffixes, unwritten_data, write, write_report
 from hammesh.io.guard import reading
 from hammesh.io.paths import written_files
 from hammesh.io.report import collect_repairs
@@ -146,6 +146,12 @@ def run_pipeline(
         h = hamiltonian(mesh, mode=mode, keep=keep)
         steps.done()
         h.report["repairs"] = collect_repairs(source, mesh, h)
+        # never in silence: what the input brought that the output will not hold
+        not_carried = list(getattr(source, "info", {}).get("not_carried", []))
+        if outputs.mesh is not None:
+            not_carried += [f"not written: {x}" for x in unwritten_data(h, outputs.mesh)]
+        if not_carried:
+            h.report["not_carried"] = not_carried
         if strict and h.report["repairs"]:
             first = h.report["repairs"][0]
             more = len(h.report["repairs"]) - 1
@@ -232,4 +238,5 @@ def summary(h: HamiltonianMesh) -> str:
             f"{k} {v:.3f}" for k, v in (("mesh", mesh_s), ("hamiltonian", sec.get("hamiltonian")), ("verify", sec.get("verify"))) if v is not None
         ),
     ]
+    lines += [f"note: {x}" for x in r.get("not_carried", [])]
     return "\n".join(lines)

@@ -55,7 +55,7 @@ from hammesh.io.paths import check_outputs
 from hammesh.io.points_text import read_points
 from hammesh.io.polygon_files import read_polygon
 from hammesh.io.report import write_report
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
 __all__ = [
     "FORMATS",
@@ -66,6 +66,8 @@ __all__ = [
     "write_report",
     "check_outputs",
     "supported_suffixes",
+    "DATA_SUFFIXES",
+    "unwritten_data",
 ]
 
 Reader = Callable[[str | os.PathLike[str]], Mesh]
@@ -85,6 +87,40 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
     ".node": (triangle_format.read_ele, triangle_format.write),
     ".pvtu": (pvtu.read, pvtu.write),  # partitioned VTK: an index of .vtu pieces (issue 15)
 }
+
+
+#: Suffixes whose files hold the triangles' attributes and the points' data (the other
+#: formats hold geometry, and ``.pvtu`` pieces hold the attributes unnamed).
+DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf", ".ele", ".node"})
+
+
+def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> list[str]:
+    """What of ``mesh``'s own data a file ``path`` cannot hold, one line each.
+
+    Every format keeps the triangles and their order; only :data:`DATA_SUFFIXES` keep
+    the per-triangle attributes and the per-point data (a file read in brought them:
+    ``attribute_names``, ``point_data``).  A command reports these lines instead of
+    dropping the data in silence.
+
+    >>> m = Mesh(np.zeros((3, 2)), np.array([[0, 1, 2]]), triangle_attributes=np.ones((1, 1)),
+    ...          attribute_names=("region",))
+    >>> unwritten_data(m, "out.obj"), unwritten_data(m, "out.vtu")
+    (["cell data 'region' (.obj holds geometry only)"], [])
+    """
+    suffix = Path(path).suffix.lower()
+    attrs = np.asarray(mesh.triangle_attributes)
+    k = attrs.shape[1] if attrs.ndim == 2 else 0
+    names = [attribute_name(tuple(getattr(mesh, "attribute_names", ())), j) for j in range(k)]
+    names = list(dict.fromkeys(x.partition("[")[0] if x.endswith("]") else x for x in names))  # v[0], v[1]: v
+    points = list(getattr(mesh, "point_data", {}))
+    if suffix == ".pvtu":
+        named = [x for x in names if not x.startswith("attribute_")]
+        return [f"cell data {x!r} (.pvtu pieces name attributes attribute_<i>)" for x in named] + [
+            f"point data {x!r} (.pvtu pieces hold no point data)" for x in points]
+    if suffix in DATA_SUFFIXES:
+        return []
+    return [f"cell data {x!r} ({suffix} holds geometry only)" for x in names] + [
+        f"point data {x!r} ({suffix} holds geometry only)" for x in points]
 
 
 def supported_suffixes() -> tuple[str, ...]:

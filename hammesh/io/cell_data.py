@@ -7,11 +7,13 @@ read back by hammesh shows the same fields.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
-__all__ = ["cycle_ids", "triangle_cell_data", "ATTRIBUTE_PREFIX"]
+__all__ = ["cycle_ids", "triangle_cell_data", "ATTRIBUTE_PREFIX", "split_components", "join_components"]
 
 #: Cell-data name of column ``i`` of ``triangle_attributes`` is ``f"attribute_{i}"``.
 ATTRIBUTE_PREFIX = "attribute_"
@@ -42,8 +44,10 @@ def triangle_cell_data(mesh: Mesh | HamiltonianMesh) -> dict[str, np.ndarray]:
     """Per-triangle arrays, in triangle (cycle) order, keyed by their file name.
 
     For a :class:`HamiltonianMesh`: ``cycle_position``, ``cycle_id``, ``parent``,
-    ``kind`` (all ``(m,) int64``); for any mesh: ``attribute_<i>`` ``(m,) float64``
-    for each column of ``triangle_attributes``.
+    ``kind`` (all ``(m,) int64``); for any mesh: each column of
+    ``triangle_attributes`` ``(m,) float64`` under its name (``attribute_names``, a
+    mesh file's field names, else ``attribute_<i>``); columns named ``v[0]``,
+    ``v[1]``, ... are one ``(m, c)`` field ``v``, as they were read.
     """
     data: dict[str, np.ndarray] = {}
     if isinstance(mesh, HamiltonianMesh):
@@ -54,6 +58,69 @@ def triangle_cell_data(mesh: Mesh | HamiltonianMesh) -> dict[str, np.ndarray]:
     if getattr(mesh, "part", None) is not None:  # hammesh.partition.PartitionedMesh
         data["part"] = np.asarray(mesh.part, dtype=np.int64)
     attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64)
-    for i in range(attrs.shape[1] if attrs.ndim == 2 else 0):
-        data[f"{ATTRIBUTE_PREFIX}{i}"] = np.ascontiguousarray(attrs[:, i])
+    names = tuple(getattr(mesh, "attribute_names", ()))
+    k = attrs.shape[1] if attrs.ndim == 2 else 0
+    i = 0
+    while i < k:
+        name = attribute_name(names, i)
+        base, index = _component(name)
+        if index == 0:  # columns base[0], base[1], ...: one array of that many components
+            c = 1
+            while i + c < k and _component(attribute_name(names, i + c)) == (base, c):
+                c += 1
+            data[base] = np.ascontiguousarray(attrs[:, i:i + c])
+            i += c
+            continue
+        data[name] = np.ascontiguousarray(attrs[:, i])
+        i += 1
     return data
+
+
+_COMPONENT_RE = re.compile(r"^(.*)\[(\d+)\]$")
+
+
+def _component(name: str) -> tuple[str, int | None]:
+    """``("v", 2)`` for a column named ``v[2]`` (a component of the vector field ``v``),
+    ``(name, None)`` otherwise."""
+    match = _COMPONENT_RE.match(name)
+    return (match.group(1), int(match.group(2))) if match else (name, None)
+
+
+def split_components(data: dict[str, np.ndarray], allowed: tuple[int, ...]) -> dict[str, np.ndarray]:
+    """``data`` with each ``(k, c)`` array whose ``c`` is not in ``allowed`` split into
+    scalar arrays ``name[0]``, ``name[1]``, ... (Gmsh stores 1, 3 or 9 components only);
+    :func:`join_components` undoes it.
+
+    >>> sorted(split_components({"v": np.zeros((4, 2)), "s": np.zeros(4)}, (1, 3, 9)))
+    ['s', 'v[0]', 'v[1]']
+    """
+    out: dict[str, np.ndarray] = {}
+    for name, values in data.items():
+        values = np.asarray(values)
+        if values.ndim == 2 and values.shape[1] not in allowed:
+            out.update({f"{name}[{j}]": np.ascontiguousarray(values[:, j]) for j in range(values.shape[1])})
+        else:
+            out[name] = values
+    return out
+
+
+def join_components(data: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Scalar arrays ``v[0]``, ``v[1]``, ... (consecutive, from 0) as one ``(k, c)`` array ``v``.
+
+    >>> {k: v.shape for k, v in join_components({"v[0]": np.zeros(4), "v[1]": np.ones(4)}).items()}
+    {'v': (4, 2)}
+    """
+    names = list(data)
+    out: dict[str, np.ndarray] = {}
+    j = 0
+    while j < len(names):
+        base, index = _component(names[j])
+        c = 1
+        if index == 0 and np.ndim(data[names[j]]) == 1:
+            while j + c < len(names) and _component(names[j + c]) == (base, c) and np.ndim(data[names[j + c]]) == 1:
+                c += 1
+            out[base] = np.column_stack([data[names[j + i]] for i in range(c)])
+        else:
+            out[names[j]] = data[names[j]]
+        j += c
+    return out

@@ -66,7 +66,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
 from hammesh.io import tags, vtu
-from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
+from hammesh.io.cell_data import ATTRIBUTE_PREFIX, join_components, split_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
@@ -97,6 +97,11 @@ SEGMENT_MARKER = "segment_marker"
 NODE_ENTITY = "gmsh_node_entity"
 
 _GMSH_TAGS = ("gmsh:physical", "gmsh:geometrical")
+#: A Gmsh file's own tags, carried as these attribute columns (``gmsh:`` names are
+#: Gmsh's; a ``.msh`` output derives its own from the first column).
+_GMSH_COLUMNS = {"gmsh:physical": "physical", "gmsh:geometrical": "geometrical"}
+#: Components a Gmsh data field may have (other vectors are written as ``v[j]`` scalars).
+_GMSH_COMPONENTS = (1, 3, 9)
 
 _ATTRIBUTE_RE = re.compile(rf"^{ATTRIBUTE_PREFIX}(\d+)$")
 
@@ -190,6 +195,12 @@ def _as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str, path: Path) -> Any:
         vertex_markers = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64)
         if vertex_markers.shape == (len(points),) and vertex_markers.any():
             point_data[tags.VERTEX_MARKER] = vertex_markers
+        carried = dict(getattr(mesh, "point_data", {}))  # the input's
+        if suffix == ".msh":
+            carried = split_components(carried, _GMSH_COMPONENTS)
+        for name, values in carried.items():
+            if name not in point_data:
+                point_data[name] = np.asarray(values)
     return meshio.Mesh(points3, cells, point_data=point_data, cell_data=cell_data, field_data=field_data)
 
 
@@ -222,9 +233,10 @@ def _segment_markers(mesh: Mesh | HamiltonianMesh) -> np.ndarray:
 
 def _fill(like: np.ndarray, count: int) -> np.ndarray:
     """``count`` filler values of ``like``'s kind: -1 for integers, NaN for floats."""
+    shape = (count, *np.shape(like)[1:])  # (a vector field's filler is a vector)
     if np.issubdtype(like.dtype, np.integer):
-        return np.full(count, -1, dtype=like.dtype)
-    return np.full(count, np.nan, dtype=np.float64)
+        return np.full(shape, -1, dtype=like.dtype)
+    return np.full(shape, np.nan, dtype=np.float64)
 
 
 def _with_line_block(
@@ -297,7 +309,9 @@ def _gmsh_blocks(
     if len(tri_runs) + len(line_groups) > n:
         line_groups, marker_names = [order], {}
 
-    tri_data = triangle_cell_data(mesh)
+    # (Gmsh's own tags are re-derived here from the first attribute: not written twice)
+    tri_data = split_components({k: v for k, v in triangle_cell_data(mesh).items() if k not in _GMSH_TAGS},
+                                _GMSH_COMPONENTS)
     with_lines = bool(line_groups)
     keys = [*tri_data, *([SEGMENT_MARKER] if with_lines else []), *_GMSH_TAGS]
     cells: list[tuple[str, np.ndarray]] = []
@@ -534,17 +548,9 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
     triangles = np.concatenate(tri_blocks)
     segments = np.concatenate(seg_blocks) if seg_blocks else np.zeros((0, 2), np.int64)
 
-    columns: dict[int, np.ndarray] = {}
-    for key, per_block in raw.cell_data.items():
-        match = _ATTRIBUTE_RE.match(key)
-        column = None if match is None else _origin_column(per_block, tri_origin, len(triangles))
-        if column is not None:
-            columns[int(match.group(1))] = column
-    keys = sorted(columns)
-    if keys and keys == list(range(len(keys))):
-        attributes = np.column_stack([columns[k] for k in keys])
-    else:
-        attributes = np.zeros((len(triangles), 0), dtype=np.float64)
+    not_carried: list[str] = []
+    attributes, names = _attribute_columns(raw.cell_data, tri_origin, len(triangles), not_carried)
+    point_data = _point_data(raw.point_data, to_original, n, not_carried)
 
     markers = np.zeros(len(segments), dtype=np.int64)
     for key in (SEGMENT_MARKER, "gmsh:physical"):
@@ -557,15 +563,118 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
         if from_fields is not None:
             segments, markers = from_fields
 
+    info: dict[str, Any] = {"repairs": repairs} if repairs else {}
+    if not_carried:
+        info["not_carried"] = not_carried
     return Mesh(
         points=points,
         triangles=np.ascontiguousarray(triangles),
         segments=np.ascontiguousarray(segments),
         segment_markers=markers,
         triangle_attributes=attributes,
-        info={"repairs": repairs} if repairs else {},
+        info=info,
         vertex_markers=_vertex_markers(raw.point_data, to_original, n),
+        attribute_names=names,
+        point_data=point_data,
     )
+
+
+#: Cell data that hammesh writes about its own output (re-derived on every write, so
+#: never read back as the user's data); ``attribute_<i>`` are read as attributes.
+_OWN_CELL_DATA = frozenset({"cycle_position", "cycle_id", "parent", "kind", "part", SEGMENT_MARKER,
+                            tags.SEGMENT_EDGES, tags.EDGE_MARKER})
+#: Point data hammesh writes about its own output (``vertex_marker`` is read as markers).
+_OWN_POINT_DATA = frozenset({tags.VERTEX_MARKER, NODE_ENTITY, "gmsh:dim_tags"})
+
+
+def _attribute_columns(
+    cell_data: Any, origin: list[tuple[int, np.ndarray]], m: int, not_carried: list[str]
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Every numeric per-triangle cell data array as ``triangle_attributes`` columns.
+
+    ``attribute_<i>`` (hammesh's and Triangle's unnamed attributes) come first, in
+    order; then every other field in file order under its own name (a field of ``c``
+    components gives columns ``name[0]`` ... ``name[c-1]``).  hammesh's own output
+    fields (:data:`_OWN_CELL_DATA`, ``skfem:``) are skipped, and so are Gmsh's tags in
+    a Hamiltonian mesh or attribute-carrying file hammesh wrote (it derives them); in any
+    other Gmsh file the physical and elementary tags are kept as the columns
+    ``physical`` and ``geometrical`` (:data:`_GMSH_COLUMNS`); ``physical``, first, is
+    written back as the physical tags of a ``.msh`` output (:func:`_triangle_physical`).
+    A field that is not numbers is listed in ``not_carried``.
+    """
+    numbered: dict[int, np.ndarray] = {}
+    named: list[tuple[str, np.ndarray]] = []
+    # hammesh's .msh files: the entity tags are runs of rows, and the physical tags
+    # repeat the first attribute when there is one
+    ours = "cycle_position" in cell_data or any(_ATTRIBUTE_RE.match(k) for k in cell_data)
+    for key, per_block in cell_data.items():
+        if key in _OWN_CELL_DATA or key.startswith("skfem:") or (ours and key in _GMSH_TAGS):
+            continue
+        values = _origin_values(per_block, origin, m)
+        if values is None:
+            not_carried.append(f"cell data {key!r} (not one number or vector per triangle)")
+            continue
+        match = _ATTRIBUTE_RE.match(key)
+        key = _GMSH_COLUMNS.get(key, key)
+        if match is not None and values.ndim == 1:
+            numbered[int(match.group(1))] = values
+        elif values.ndim == 1:
+            named.append((key, values))
+        else:
+            named += [(f"{key}[{j}]", values[:, j]) for j in range(values.shape[1])]
+    # Gmsh's tags carry information only if they vary and repeat no other column (a
+    # hammesh .msh derives them from the first column, or writes 1 without attributes)
+    others = [v for name, v in named if name not in _GMSH_COLUMNS.values()] + list(numbered.values())
+    named = [(name, v) for name, v in named if name not in _GMSH_COLUMNS.values() or not (
+        np.all(v == v[0]) or any(np.array_equal(v, o) for o in others))]
+    keys = sorted(numbered)
+    if keys != list(range(len(keys))):  # a gap: keep them all, by name
+        named = [(f"{ATTRIBUTE_PREFIX}{k}", numbered[k]) for k in keys] + named
+        keys = []
+    columns = [numbered[k] for k in keys] + [v for _, v in named]
+    if not columns:
+        return np.zeros((m, 0), dtype=np.float64), ()
+    names = tuple(f"{ATTRIBUTE_PREFIX}{k}" for k in keys) + tuple(name for name, _ in named)
+    return np.column_stack(columns).astype(np.float64), names if named else ()
+
+
+def _origin_values(per_block: Any, origin: list[tuple[int, np.ndarray]], m: int) -> np.ndarray | None:
+    """``(m,)`` or ``(m, c)`` float64 values of the triangle-making blocks (a split
+    polygon's value repeated); None if not numbers or not one row per cell."""
+    if per_block is None or not origin:
+        return None
+    try:
+        parts = []
+        for b, rows in origin:
+            block = np.asarray(per_block[b])
+            if block.dtype.kind not in "biuf" or block.ndim == 0:
+                return None
+            parts.append(block.reshape(len(block), -1)[rows].astype(np.float64))
+        values = np.concatenate(parts)
+    except (IndexError, ValueError, TypeError):
+        return None
+    if len(values) != m or values.shape[1] == 0:
+        return None
+    return values[:, 0] if values.shape[1] == 1 else values
+
+
+def _point_data(point_data: Any, to_original: np.ndarray | None, n: int, not_carried: list[str]) -> dict[str, np.ndarray]:
+    """The file's point data (in point order) other than hammesh's own fields."""
+    data: dict[str, np.ndarray] = {}
+    for key, values in (point_data or {}).items():
+        if key in _OWN_POINT_DATA:
+            continue
+        arr = np.asarray(values)
+        if arr.dtype.kind not in "biuf" or arr.ndim == 0 or len(arr) != n:
+            not_carried.append(f"point data {key!r} (not one number or vector per point)")
+            continue
+        arr = arr.reshape(n, -1) if arr.ndim > 2 else arr
+        if to_original is not None:
+            restored = np.empty_like(arr)
+            restored[to_original] = arr
+            arr = restored
+        data[key] = arr
+    return join_components(data)
 
 
 def _vertex_markers(point_data: Any, to_original: np.ndarray | None, n: int) -> np.ndarray:
@@ -607,19 +716,6 @@ def _edge_field_segments(
     if not (np.all(flags == np.round(flags)) and np.all(marks == np.round(marks))):
         return None
     return tags.segments_from_edge_fields(triangles, flags.astype(np.int64), marks.astype(np.int64))
-
-
-def _origin_column(per_block: Any, origin: list[tuple[int, np.ndarray]], length: int) -> np.ndarray | None:
-    """Cell data of the triangle-making blocks, one value per triangle (a split polygon's
-    value repeated for each of its triangles); None if missing or malformed."""
-    if per_block is None or not origin:
-        return None
-    try:
-        parts = [np.asarray(per_block[b], dtype=np.float64).reshape(-1)[rows] for b, rows in origin]
-    except (IndexError, ValueError, TypeError):
-        return None
-    column = np.concatenate(parts)
-    return column if len(column) == length else None
 
 
 def _block_column(per_block: Any, block_ids: list[int], length: int) -> np.ndarray | None:

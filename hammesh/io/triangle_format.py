@@ -17,8 +17,12 @@ temporary sibling; the targets are replaced only once all three are complete):
 Reading follows Triangle's rules: ``#`` starts a comment, blank lines are skipped, the
 first vertex number in ``.node`` (0 or 1) fixes the numbering of every file.  A
 ``.poly`` next to the ``.ele`` is optional; if present its segments are read.  When the
-``# attributes:`` comment is present only the ``attribute_<i>`` columns become
-``triangle_attributes``; otherwise every attribute column does.
+``# attributes:`` comment is present it names the columns (``attribute_names``) and the
+cycle fields are left out of ``triangle_attributes``; otherwise every attribute column
+is an attribute.  The ``.node`` file's vertex attributes are the mesh's ``point_data``
+(written back the same way, named by a ``# attributes:`` comment of the ``.node`` file;
+a vector field ``v`` is the columns ``v[0]``, ``v[1]``, ...).  Names are one token:
+white space in a name is written as ``_``.
 
 Reference: https://www.cs.cmu.edu/~quake/triangle.node.html (and ``.ele``, ``.poly``).
 """
@@ -35,7 +39,7 @@ from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
 from hammesh.io.validate import validate_mesh
-from hammesh.mesh import HamiltonianMesh, Mesh
+from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
 __all__ = ["read_ele", "write", "SUFFIXES"]
 
@@ -85,22 +89,35 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     n, m, s = len(points), len(triangles), len(segments)
 
     data = triangle_cell_data(mesh)
-    names = [k for k in data if k.startswith(ATTRIBUTE_PREFIX)]
+    attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64).reshape(m, -1)
+    given = tuple(getattr(mesh, "attribute_names", ()))
+    names = [_token(attribute_name(given, j)) for j in range(attrs.shape[1])]
+    columns = [attrs[:, j] for j in range(attrs.shape[1])]
     if isinstance(mesh, HamiltonianMesh):
         names += list(_CYCLE_FIELDS)
+        columns += [data[k] for k in _CYCLE_FIELDS]
+    point_names, point_columns = [], []
+    for name, values in getattr(mesh, "point_data", {}).items():
+        values = np.asarray(values, dtype=np.float64).reshape(n, -1)
+        one = values.shape[1] == 1
+        point_names += [_token(name if one else f"{name}[{j}]") for j in range(values.shape[1])]
+        point_columns += [values[:, j] for j in range(values.shape[1])]
     kind = "Hamiltonian mesh (triangles in cycle order)" if isinstance(mesh, HamiltonianMesh) else "mesh"
 
     with atomic_paths([node_path, poly_path, ele_path]) as (tmp_node, tmp_poly, tmp_ele):
         with open(tmp_node, "w", encoding="ascii", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .node file, zero-based\n")
+            if point_names:
+                f.write(f"{_ATTRIBUTES_COMMENT} {' '.join(point_names)}\n")
             f.write("# <# of vertices> <dimension> <# of attributes> <# of boundary markers>\n")
-            f.write(f"{n} 2 0 1\n")
-            f.write("# <vertex #> <x> <y> <boundary marker>\n")
+            f.write(f"{n} 2 {len(point_names)} 1\n")
+            f.write("# <vertex #> <x> <y> <attributes> <boundary marker>\n")
             vmarks = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64).reshape(-1)
             if len(vmarks) != n:
                 vmarks = np.zeros(n, dtype=np.int64)
-            rows = np.column_stack([np.arange(n, dtype=np.float64), points, vmarks.astype(np.float64)])
-            _savetxt(f, rows, ["%d", "%.17g", "%.17g", "%d"])
+            rows = np.column_stack([np.arange(n, dtype=np.float64), points, *point_columns,
+                                    vmarks.astype(np.float64)])
+            _savetxt(f, rows, ["%d", "%.17g", "%.17g", *["%.17g"] * len(point_names), "%d"])
 
         with open(tmp_poly, "w", encoding="ascii", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .poly file, zero-based; vertices in {node_path.name}\n")
@@ -119,9 +136,8 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
             f.write(f"{m} 3 {len(names)}\n")
             f.write("# <triangle #> <node> <node> <node> <attributes>\n")
             if names:
-                attrs = np.column_stack([data[k].astype(np.float64) for k in names])
-                rows = np.column_stack([np.arange(m), triangles, attrs])
-                fmt = ["%d"] * 4 + ["%.17g" if k.startswith(ATTRIBUTE_PREFIX) else "%d" for k in names]
+                rows = np.column_stack([np.arange(m), triangles, *[np.asarray(c, np.float64) for c in columns]])
+                fmt = ["%d"] * 4 + ["%d" if k in _CYCLE_FIELDS else "%.17g" for k in names]
                 _savetxt(f, rows, fmt)
             else:
                 rows = np.column_stack([np.arange(m), triangles])
@@ -205,6 +221,7 @@ def _read_node(path: Path) -> tuple[np.ndarray, int, np.ndarray]:
     tok.check_count(n, "vertices")
     points = np.empty((n, 2), dtype=np.float64)
     vmarks = np.zeros(n, dtype=np.int64)
+    values = np.empty((n, n_attr), dtype=np.float64)
     base = 0
     for i in range(n):
         row = tok.row(f"vertex {i + 1} of {n}", 3 + n_attr + n_mark)
@@ -219,9 +236,43 @@ def _read_node(path: Path) -> tuple[np.ndarray, int, np.ndarray]:
         if not (np.isfinite(x) and np.isfinite(y)):
             raise tok.error(f"vertex {number} is not finite")
         points[i] = x, y
+        for j in range(n_attr):
+            values[i, j] = tok.as_float(row[3 + j], f"attribute {j + 1}")
         if n_mark:
             vmarks[i] = tok.as_int(row[3 + n_attr], "boundary marker")
-    return points, base, vmarks
+    names = _comment_names(tok, n_attr) or [f"{ATTRIBUTE_PREFIX}{j}" for j in range(n_attr)]
+    return points, base, vmarks, _grouped(names, values)
+
+
+def _token(name: str) -> str:
+    """``name`` as one token of an ``# attributes:`` comment (white space -> ``_``)."""
+    return "_".join(str(name).split()) or "_"
+
+
+def _comment_names(tok: "_Tokens", k: int) -> list[str] | None:
+    """The names of the last ``# attributes:`` comment, if it names ``k`` columns."""
+    names = None
+    for comment in tok.comments:
+        if comment.startswith(_ATTRIBUTES_COMMENT):
+            names = comment[len(_ATTRIBUTES_COMMENT):].split()
+    return names if names is not None and len(names) == k else None
+
+
+def _grouped(names: list[str], values: np.ndarray) -> dict[str, np.ndarray]:
+    """Point data from named columns; ``v[0]``, ``v[1]``... become one ``(n, c)`` array ``v``."""
+    data: dict[str, np.ndarray] = {}
+    j = 0
+    while j < len(names):
+        base, _, rest = names[j].partition("[")
+        c = 1
+        if rest == "0]":
+            while j + c < len(names) and names[j + c] == f"{base}[{c}]":
+                c += 1
+            data[base] = np.ascontiguousarray(values[:, j:j + c])
+        else:
+            data[names[j]] = np.ascontiguousarray(values[:, j])
+        j += c
+    return data
 
 
 def _vertex(tok: _Tokens, token: str, base: int, n: int) -> int:
@@ -282,7 +333,7 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         raise FileFormatError(f"{ele_path}: file not found")
     if not node_path.is_file():
         raise FileFormatError(f"{node_path}: file not found (needed by {ele_path.name})")
-    points, base, vmarks = _read_node(node_path)
+    points, base, vmarks, point_data = _read_node(node_path)
     n = len(points)
 
     tok = _Tokens(ele_path)
@@ -306,12 +357,12 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         for j in range(k):
             attrs[i, j] = tok.as_float(row[1 + per + j], f"attribute {j + 1}")
 
-    names = None
-    for comment in tok.comments:
-        if comment.startswith(_ATTRIBUTES_COMMENT):
-            names = comment[len(_ATTRIBUTES_COMMENT):].split()
-    if names is not None and len(names) == k:
-        attrs = attrs[:, [j for j, name in enumerate(names) if name.startswith(ATTRIBUTE_PREFIX)]]
+    names = _comment_names(tok, k)
+    attribute_names: tuple[str, ...] = ()
+    if names is not None:  # hammesh's: the cycle fields are the output's, not attributes
+        kept = [j for j, name in enumerate(names) if name not in _CYCLE_FIELDS]
+        attrs = attrs[:, kept]
+        attribute_names = tuple(names[j] for j in kept)
 
     segments = np.zeros((0, 2), dtype=np.int64)
     markers = np.zeros(0, dtype=np.int64)
@@ -325,4 +376,6 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         segment_markers=markers,
         triangle_attributes=np.ascontiguousarray(attrs),
         vertex_markers=vmarks,
+        attribute_names=attribute_names,
+        point_data=point_data,
     )

@@ -12,6 +12,7 @@ from hammesh import pages, params, threads
 from hammesh.domain.resolution import check_resolution, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
+from hammesh.point_data import carry_point_data
 from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
@@ -264,4 +265,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
     )
     if vmarks is None:  # (snapping moves points only: the markers stand)
         vmarks = output_vertex_markers(mesh.vertex_markers, out.n_points, out.segments, out.segment_markers)
-    return replace(out, report=report, vertex_markers=vmarks)
+    # never lose data: the input's names and per-point values go with it (parent carries
+    # the per-triangle values; Steiner points get interpolated point values)
+    point_data = carry_point_data(mesh.point_data, mesh.points, mesh.triangles, out.points, out.triangles,
+                                  out.parent, out.kind)
+    return replace(out, report=report, vertex_markers=vmarks, attribute_names=mesh.attribute_names,
+                   point_data=point_data)

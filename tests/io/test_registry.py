@@ -23,8 +23,9 @@ def test_registry_is_explicit_and_complete():
         assert callable(reader) and callable(writer)
     assert hio.__all__ == [
         "FORMATS", "read_mesh", "read_points", "read_polygon", "write", "write_report", "check_outputs",
-        "supported_suffixes",
+        "supported_suffixes", "DATA_SUFFIXES", "unwritten_data",
     ]
+    assert hio.DATA_SUFFIXES <= set(ALL)
     assert hio.supported_suffixes() == tuple(ALL)
 
 
