@@ -147,7 +147,7 @@ def run_pipeline(
         steps.done()
         h.report["repairs"] = collect_repairs(source, mesh, h)
         # never in silence: what the input brought that the output will not hold
-        not_carried = list(getattr(source, "info", {}).get("not_carried", []))
+        not_carried = list(mesh.info.get("not_carried", []))
         if outputs.mesh is not None:
             not_carried += [f"not written: {x}" for x in unwritten_data(h, outputs.mesh)]
         if not_carried:

@@ -44,6 +44,11 @@ class Domain:
         Boundary markers of the segments; default ones (Triangle's "boundary").
     vertex_markers : (n,) int64, optional
         Boundary markers of the vertices; default zeros.
+    vertex_attributes : (n, k) float64, optional
+        Triangle's vertex attributes (a ``.node`` file's columns after x and y): the
+        mesher interpolates them at the points it inserts; the mesh has them as
+        ``point_data["attribute_<j>"]``.  Default ``(n, 0)``.  A vertex a repair adds
+        (a crossing) gets them interpolated along a crossing segment.
 
     strict : bool, optional
         Refuse (raise) instead of repairing duplicate vertices, zero-length or repeated
@@ -79,6 +84,7 @@ class Domain:
     regions: np.ndarray = field(default_factory=_empty(4, np.float64))
     segment_markers: np.ndarray | None = None
     vertex_markers: np.ndarray | None = None
+    vertex_attributes: np.ndarray | None = None
     strict: InitVar[bool] = False
     repairs: tuple[Repair, ...] = field(default=(), init=False)
 
@@ -99,15 +105,20 @@ class Domain:
             if len(marks) and (marks.min() < -2**31 or marks.max() >= 2**31):  # issue 12 #4
                 raise InvalidDomainError(f"{name}: {int(marks[np.argmax(np.abs(marks))])} does not fit "
                                          "the 32-bit markers of Triangle and Gmsh")
+        attributes = _vertex_attributes(self.vertex_attributes, len(vertices))
         values = dict(vertices=vertices, segments=segments, holes=holes, regions=regions,
-                      segment_markers=segment_markers, vertex_markers=vertex_markers)
+                      segment_markers=segment_markers, vertex_markers=vertex_markers,
+                      vertex_attributes=attributes)
         for name, value in values.items():
             object.__setattr__(self, name, value)
         check_fields(self)
         graph = repair_graph(vertices, segments, segment_markers, vertex_markers,
                              strict=bool(strict))
+        if graph.repairs and attributes.shape[1]:
+            attributes = carry_vertex_attributes(vertices, segments, attributes, graph.vertices)
         values.update(vertices=graph.vertices, segments=graph.segments,
-                      segment_markers=graph.segment_markers, vertex_markers=graph.vertex_markers)
+                      segment_markers=graph.segment_markers, vertex_markers=graph.vertex_markers,
+                      vertex_attributes=attributes)
         for name, value in values.items():
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -227,6 +238,58 @@ class Domain:
 
 
 # ----------------------------------------------------------------------------- conversion
+
+def _vertex_attributes(value, n: int) -> np.ndarray:
+    """``(n, k) float64`` vertex attributes (``(n, 0)`` for None)."""
+    if value is None:
+        return np.zeros((n, 0), np.float64)
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidDomainError(f"vertex_attributes must be numbers ({exc})") from None
+    if arr.ndim == 1 and len(arr) == n:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[0] != n:
+        raise InvalidDomainError(f"vertex_attributes must have shape ({n}, k), got {arr.shape}")
+    return arr  # (data, not geometry: NaN is carried as NaN, as Triangle does)
+
+
+def carry_vertex_attributes(vertices: np.ndarray, segments: np.ndarray, attributes: np.ndarray,
+                            repaired: np.ndarray) -> np.ndarray:
+    """Vertex attributes of a repaired graph's vertices.
+
+    A kept vertex has its own (a merged duplicate: the first's); a crossing vertex the
+    repair added gets them interpolated linearly along the original segment it lies
+    nearest to (it lies on two of them; Triangle would interpolate the same way along
+    the segment it splits).
+
+    >>> carry_vertex_attributes(np.array([[0., 0], [2, 0], [1, -1], [1, 1]]),
+    ...                         np.array([[0, 1], [2, 3]]), np.array([[0.], [4], [0], [0]]),
+    ...                         np.array([[0., 0], [2, 0], [1, -1], [1, 1], [1, 0]])).ravel().tolist()
+    [0.0, 4.0, 0.0, 0.0, 2.0]
+    """
+    lookup: dict[tuple[float, float], int] = {}
+    for i, p in enumerate(np.asarray(vertices).tolist()):
+        lookup.setdefault((p[0], p[1]), i)
+    out = np.empty((len(repaired), attributes.shape[1]), np.float64)
+    new = []
+    for i, p in enumerate(np.asarray(repaired).tolist()):
+        j = lookup.get((p[0], p[1]))
+        if j is None:
+            new.append(i)
+        else:
+            out[i] = attributes[j]
+    if new:
+        a, b = vertices[segments[:, 0]], vertices[segments[:, 1]]
+        d = b - a
+        length2 = np.maximum((d * d).sum(axis=1), np.finfo(float).tiny)
+        for i in new:  # (crossings: few)
+            t = np.clip(((repaired[i] - a) * d).sum(axis=1) / length2, 0.0, 1.0)
+            gap = np.hypot(*(a + t[:, None] * d - repaired[i]).T)
+            k = int(np.argmin(gap))
+            out[i] = (1 - t[k]) * attributes[segments[k, 0]] + t[k] * attributes[segments[k, 1]]
+    return out
+
 
 def _side_markers(markers, sides, name, default):
     """One ``(sides[i],) int64`` array per ring / polyline from ``markers`` (see

@@ -16,7 +16,8 @@ are ignored, every record is one line; trailing header fields may be omitted (di
 2, no attributes, no markers); vertices are numbered consecutively from 0 or 1 and the
 segments use the same base (we shift everything to zero-based); a region line with a
 single value after x, y uses it both as attribute and max area; a max area <= 0 means
-"no limit" (stored as NaN).  Vertex attributes are read and checked but not kept.
+"no limit" (stored as NaN).  Vertex attributes are kept (``Domain.vertex_attributes``):
+Triangle interpolates them at the points it inserts.
 This reader is stricter than Triangle in one way: a record with the wrong number of
 fields, or data after the last section, is an error instead of being ignored.
 """
@@ -111,7 +112,8 @@ def _zero_or_one(lines, line, value, what):
 
 
 def _read_vertices(lines):
-    """Read a node section; returns ``(vertices, markers, base, count)`` (count may be 0)."""
+    """Read a node section; returns ``(vertices, markers, base, count, attributes)``
+    (count may be 0; ``attributes (n, k)``)."""
     line, (n, dim, nattr, nmark) = lines.header(
         "vertex", ["number of vertices", "dimension", "number of attributes",
                    "number of boundary markers"], [2, 0, 0])
@@ -124,6 +126,7 @@ def _read_vertices(lines):
     _zero_or_one(lines, line, nmark, "vertex boundary markers")
     vertices = np.empty((n, 2), np.float64)
     markers = np.zeros(n, np.int64)
+    attributes = np.empty((n, nattr), np.float64)
     base = 0
     for i in range(n):
         line, tok = lines.record(3 + nattr + nmark, f"vertex {i + 1} of {n}")
@@ -136,11 +139,11 @@ def _read_vertices(lines):
             raise lines.error(line, f"vertex index {index} out of sequence, expected {base + i}")
         vertices[i, 0] = lines.float(line, tok[1], "x coordinate")
         vertices[i, 1] = lines.float(line, tok[2], "y coordinate")
-        for t in tok[3:3 + nattr]:
-            lines.float(line, t, "vertex attribute")
+        for j, t in enumerate(tok[3:3 + nattr]):
+            attributes[i, j] = lines.float(line, t, "vertex attribute")
         if nmark:
             markers[i] = lines.int(line, tok[-1], "boundary marker")
-    return vertices, markers, base, n
+    return vertices, markers, base, n, attributes
 
 
 def _expect_end(lines, section):
@@ -181,9 +184,10 @@ def read_node(path, *, strict: bool = False) -> Domain:
     """
     path = Path(path)
     lines = _Lines(path)
-    vertices, markers, base, _ = _read_vertices(lines)
+    vertices, markers, base, _, attributes = _read_vertices(lines)
     _expect_end(lines, "vertex")
-    return _make_domain(path.name, base, strict, vertices=vertices, vertex_markers=markers)
+    return _make_domain(path.name, base, strict, vertices=vertices, vertex_markers=markers,
+                        vertex_attributes=attributes)
 
 
 def read_poly(path, *, strict: bool = False) -> Domain:
@@ -222,14 +226,14 @@ def read_poly(path, *, strict: bool = False) -> Domain:
     path = Path(path)
     lines = _Lines(path)
     node_line = lines.rows[0][0]
-    vertices, vmarkers, base, n = _read_vertices(lines)
+    vertices, vmarkers, base, n, attributes = _read_vertices(lines)
     if n == 0:
         node_path = path.with_suffix(".node")
         if not node_path.exists():
             raise lines.error(node_line, f"0 vertices declared but {node_path.name} "
                                          "(where they should be) does not exist")
         node_lines = _Lines(node_path)
-        vertices, vmarkers, base, _ = _read_vertices(node_lines)
+        vertices, vmarkers, base, _, attributes = _read_vertices(node_lines)
         _expect_end(node_lines, "vertex")
 
     line, (s, smark) = lines.header("segment", ["number of segments",
@@ -276,7 +280,8 @@ def read_poly(path, *, strict: bool = False) -> Domain:
     _expect_end(lines, "region")
 
     return _make_domain(path.name, base, strict, vertices=vertices, segments=segments, holes=holes,
-                        regions=regions, segment_markers=smarkers, vertex_markers=vmarkers)
+                        regions=regions, segment_markers=smarkers, vertex_markers=vmarkers,
+                        vertex_attributes=attributes)
 
 
 def write_poly(domain: Domain, path) -> None:

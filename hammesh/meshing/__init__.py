@@ -201,4 +201,8 @@ def quality_mesh(
             "repairs": [r.to_dict() for r in domain.repairs]}
     if backend == "triangle":
         info["switches"] = triangle_switches(domain, opts)
+    k = np.shape(getattr(domain, "vertex_attributes", np.zeros((0, 0))))[-1]
+    if k and not mesh.point_data:  # (meshpy's build takes no vertex attributes)
+        info["not_carried"] = [f"vertex attributes ({k} per vertex): the {backend} backend does not "
+                               "interpolate them (backend='triangle' does)"]
     return replace(mesh, info=info)

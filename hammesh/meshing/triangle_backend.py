@@ -46,6 +46,9 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
     # Triangle keeps the input's point markers and gives a point it inserts on a
     # segment (and an input point of marker 0 on one) the segment's marker
     data["vertex_markers"] = np.array(domain.vertex_markers, dtype=np.int32)[:, None]
+    attributes = getattr(domain, "vertex_attributes", None)
+    if attributes is not None and attributes.shape[1]:  # Triangle interpolates them
+        data["vertex_attributes"] = np.array(attributes, dtype=np.float64)
     if len(domain.segments):
         data["segments"] = np.array(domain.segments, dtype=np.int32)
         data["segment_markers"] = np.array(domain.segment_markers, dtype=np.int32)[:, None]
@@ -78,6 +81,10 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
         vmarks = alloc(len(points), np.int64)  # (in the shared file: no copy to it later)
         vmarks[...] = np.reshape(raw_vm, -1)
     attrs = np.asarray(out.get("triangle_attributes", np.zeros((m, 0))), dtype=np.float64)
+    point_data = {}
+    if "vertex_attributes" in data:
+        raw_va = np.asarray(out["vertex_attributes"], dtype=np.float64).reshape(len(points), -1)
+        point_data = {f"attribute_{j}": np.ascontiguousarray(raw_va[:, j]) for j in range(raw_va.shape[1])}
     return Mesh(
         points=points,
         triangles=tri,
@@ -86,4 +93,5 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
         triangle_attributes=attrs.reshape(m, -1) if m else np.zeros((0, 0)),
         neighbors=nbr,
         vertex_markers=vmarks,
+        point_data=point_data,
     )
