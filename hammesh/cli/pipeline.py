@@ -12,7 +12,7 @@ import contextlib
 import os
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -51,6 +51,11 @@ class Outputs:
         """Fail before any work if an output cannot be written in the asked format, or
         would overwrite an input, or names the same file as another output."""
         if self.mesh is not None and self.mesh.suffix.lower() not in supported_suffixes():
+            if self.mesh.suffix.lower() == ".poly":  # (a domain, not a mesh: hammesh.domain.write_poly)
+                raise FileFormatError(
+                    f"{self.mesh}: .poly is a domain (input) format; write the mesh as one of "
+                    f"{' '.join(supported_suffixes())} (.ele writes .node/.poly/.ele)"
+                )
             raise FileFormatError(
                 f"{self.mesh}: unknown output format; supported: {' '.join(supported_suffixes())}"
             )

@@ -208,7 +208,6 @@ def read_polydata(path: str | Path) -> RawMesh:
             elif key == "TRIANGLE_STRIPS":
                 blocks.append(CellBlock("triangle", _strip_triangles(offsets, conn)))
             elif key == "LINES":
-                sizes = np.diff(offsets)
                 pairs = [np.stack([conn[a:b - 1], conn[a + 1:b]], axis=1)
                          for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()) if b - a >= 2]
                 if pairs:

@@ -16,7 +16,7 @@ from itertools import permutations
 import numpy as np
 from numba import njit
 
-from hammesh.predicates import orient, orient_points
+from hammesh.predicates import orient_points
 
 __all__ = ["hull_boundary", "all_collinear", "fan_locate", "insert_points", "cycle_order",
            "OK", "STUCK", "BROKEN"]

@@ -146,3 +146,10 @@ def test_mesh_strip_is_one_strip_that_decodes_to_the_mesh(tmp_path: Path) -> Non
         return tuple(np.roll(t, -i).tolist())
 
     assert sorted(canon(t) for t in tris) == sorted(canon(t) for t in m.triangles)
+
+
+def test_poly_output_is_explained_not_just_unknown(tmp_path: Path) -> None:
+    out = run_cli("mesh", str(DATA / "A.poly"), "-q", "30", "-o", str(tmp_path / "A.poly"))
+    assert out.returncode == 2
+    assert ".poly is a domain (input) format" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "A.poly").exists()
