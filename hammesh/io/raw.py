@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CellBlock", "RawMesh", "polygon_blocks"]
+__all__ = ["CellBlock", "RawMesh", "polygon_blocks", "polygon_block_rows"]
 
 
 @dataclass(frozen=True)
@@ -50,3 +50,19 @@ def polygon_blocks(offsets: np.ndarray, connectivity: np.ndarray) -> list[CellBl
         data = connectivity[offsets[a]:offsets[b]].reshape(b - a, c)
         blocks.append(CellBlock(names.get(c, "polygon"), data.astype(np.int64)))
     return blocks
+
+
+def polygon_block_rows(offsets: np.ndarray) -> list[np.ndarray]:
+    """The polygon numbers (rows of ``offsets``) of each block :func:`polygon_blocks`
+    makes, in the same order: how per-polygon data follows its polygons.
+
+    >>> [r.tolist() for r in polygon_block_rows(np.array([0, 3, 6, 10]))]
+    [[0, 1], [2]]
+    """
+    sizes = np.diff(offsets)
+    if len(sizes) == 0:
+        return []
+    cuts = np.flatnonzero(np.diff(sizes)) + 1
+    starts = np.concatenate([[0], cuts])
+    ends = np.concatenate([cuts, [len(sizes)]])
+    return [np.arange(a, b, dtype=np.int64) for a, b in zip(starts.tolist(), ends.tolist()) if sizes[a] != 0]

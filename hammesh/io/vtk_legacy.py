@@ -5,9 +5,12 @@ both layouts: the classic one (``POLYGONS n size`` then ``n`` lists ``k i0 .. ik
 and that of file version 5.1 (``POLYGONS n+1 size`` then ``OFFSETS`` and
 ``CONNECTIVITY`` arrays).  Binary data is big-endian, as the format says.  ``LINES``
 become segments (a polyline: its consecutive pairs); triangle strips are decoded with
-alternating winding (VTK's ``vtkTriangleStrip`` rule); ``POINT_DATA``/``CELL_DATA``
-and ``METADATA`` end the read (hammesh keeps no fields of foreign files).  Other
-datasets (``UNSTRUCTURED_GRID``, as meshio and hammesh write) are left to meshio.
+alternating winding (VTK's ``vtkTriangleStrip`` rule).  ``POINT_DATA`` and
+``CELL_DATA`` arrays (``SCALARS``, ``VECTORS``, ``NORMALS``, ``TENSORS``,
+``TEXTURE_COORDINATES``, ``COLOR_SCALARS``, ``GLOBAL_IDS``, ``PEDIGREE_IDS`` and
+``FIELD`` arrays) are read as point and cell data (a strip's or polyline's value goes
+to each of its triangles or segments), so a file's fields reach the output (never
+lost); ``LOOKUP_TABLE`` definitions and ``METADATA`` are skipped.  Other datasets (``UNSTRUCTURED_GRID``, as meshio and hammesh write) are left to meshio.
 
 Reference: "VTK File Formats", legacy format, Dataset format POLYDATA
 (https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html).
@@ -20,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from hammesh.errors import FileFormatError
-from hammesh.io.raw import CellBlock, RawMesh, polygon_blocks
+from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
 
 __all__ = ["read_polydata", "dataset_type"]
 
@@ -175,6 +178,12 @@ def read_polydata(path: str | Path) -> RawMesh:
         raise r.error("not a POLYDATA dataset")
     points = None
     blocks: list[CellBlock] = []
+    origins: list[np.ndarray] = []  # each block's cells' numbers in the file's cell order
+    n_cells = 0
+    point_data: dict[str, np.ndarray] = {}
+    cell_data_all: dict[str, np.ndarray] = {}
+    target: dict[str, np.ndarray] | None = None  # the POINT_DATA or CELL_DATA section read now
+    tuples = 0
     while True:
         words = r.line()
         if words is None:
@@ -203,22 +212,101 @@ def read_polydata(path: str | Path) -> RawMesh:
             else:
                 r.pos = mark
                 offsets, conn = _cells_classic(r, n, size, key)
+            cells = len(offsets) - 1  # (5.1 files count the offsets, classic ones the cells)
             if key == "POLYGONS":
                 blocks.extend(polygon_blocks(offsets, conn))
+                origins.extend(n_cells + rows for rows in polygon_block_rows(offsets))
             elif key == "TRIANGLE_STRIPS":
                 blocks.append(CellBlock("triangle", _strip_triangles(offsets, conn)))
+                origins.append(n_cells + np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 2, 0)))
             elif key == "LINES":
                 pairs = [np.stack([conn[a:b - 1], conn[a + 1:b]], axis=1)
                          for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()) if b - a >= 2]
                 if pairs:
                     blocks.append(CellBlock("line", np.concatenate(pairs)))
-                del sizes
+                    origins.append(n_cells + np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 1, 0)))
+            n_cells += cells
         elif key == "METADATA":  # text up to a blank line (file versions >= 4.2)
             r.skip_to_blank_line()
-        elif key in ("POINT_DATA", "CELL_DATA", "FIELD"):
-            break
+        elif key in ("POINT_DATA", "CELL_DATA"):
+            if len(words) < 2:
+                raise r.error(f"{key} needs a count")
+            tuples = r.count(words[1], f"{key} count")
+            target = point_data if key == "POINT_DATA" else cell_data_all
+        elif target is not None and key in _ARRAYS:
+            _read_array(r, words, tuples, target)
         else:
             raise r.error(f"unexpected section {words[0]!r}")
     if points is None:
         raise r.error("no POINTS section")
-    return RawMesh(points, blocks)
+    cell_data: dict[str, list[np.ndarray]] = {}
+    for name, values in cell_data_all.items():
+        if len(values) != n_cells:
+            raise r.error(f"cell data {name!r} has {len(values)} values for {n_cells} cells")
+        cell_data[name] = [values[o] for o in origins]
+    for name, values in point_data.items():
+        if len(values) != len(points):
+            raise r.error(f"point data {name!r} has {len(values)} values for {len(points)} points")
+    return RawMesh(points, blocks, cell_data=cell_data, point_data=point_data)
+
+
+#: Attribute arrays of a POINT_DATA / CELL_DATA section (``LOOKUP_TABLE`` and
+#: ``FIELD`` included: read or skipped by :func:`_read_array`).
+_ARRAYS = ("SCALARS", "VECTORS", "NORMALS", "TENSORS", "TEXTURE_COORDINATES", "COLOR_SCALARS",
+           "LOOKUP_TABLE", "GLOBAL_IDS", "PEDIGREE_IDS", "FIELD")
+
+
+def _read_array(r: _Reader, words: list[str], tuples: int, into: dict[str, np.ndarray]) -> None:
+    """Read one attribute array (its header ``words`` already read) into ``into``."""
+    key = words[0].upper()
+
+    def need(k: int) -> None:
+        if len(words) < k:
+            raise r.error(f"{key} needs {k - 1} fields after it, got {' '.join(words[1:])!r}")
+
+    def put(name: str, values: np.ndarray, c: int) -> None:
+        into[name] = values.reshape(tuples, c) if c > 1 else values.reshape(tuples)
+
+    if key == "SCALARS":
+        need(3)
+        c = r.count(words[3], "SCALARS components") if len(words) > 3 else 1
+        mark = r.pos
+        nxt = r.line()
+        if nxt is None or nxt[0].upper() != "LOOKUP_TABLE":
+            r.pos = mark  # (the table line is optional in practice)
+        put(words[1], r.numbers(tuples * c, words[2], f"SCALARS {words[1]}"), c)
+    elif key in ("VECTORS", "NORMALS"):
+        need(3)
+        put(words[1], r.numbers(3 * tuples, words[2], f"{key} {words[1]}"), 3)
+    elif key == "TENSORS":
+        need(3)
+        put(words[1], r.numbers(9 * tuples, words[2], f"TENSORS {words[1]}"), 9)
+    elif key == "TEXTURE_COORDINATES":
+        need(4)
+        c = r.count(words[2], "texture dimension")
+        put(words[1], r.numbers(c * tuples, words[3], f"TEXTURE_COORDINATES {words[1]}"), c)
+    elif key in ("GLOBAL_IDS", "PEDIGREE_IDS"):
+        need(3)
+        put(words[1], r.numbers(tuples, words[2], f"{key} {words[1]}"), 1)
+    elif key == "COLOR_SCALARS":  # binary: unsigned char; ASCII: floats in [0, 1]
+        need(3)
+        c = r.count(words[2], "COLOR_SCALARS components")
+        put(words[1], r.numbers(c * tuples, "unsigned_char" if r.binary else "float", f"COLOR_SCALARS {words[1]}"), c)
+    elif key == "LOOKUP_TABLE":  # a table's definition: RGBA per entry, not data of the mesh
+        need(3)
+        size = r.count(words[2], "LOOKUP_TABLE size")
+        r.numbers(4 * size, "unsigned_char" if r.binary else "float", f"LOOKUP_TABLE {words[1]}")
+    else:  # FIELD name count, then per array: name components tuples type, values
+        need(3)
+        for _ in range(r.count(words[2], "FIELD array count")):
+            head = r.line()
+            if head is not None and head[0].upper() == "METADATA":
+                r.skip_to_blank_line()
+                head = r.line()
+            if head is None or len(head) < 4:
+                raise r.error(f"FIELD {words[1]}: array header 'name components tuples type' expected")
+            c = r.count(head[1], "FIELD array components")
+            k = r.count(head[2], "FIELD array tuples")
+            values = r.numbers(c * k, head[3], f"FIELD array {head[0]}")
+            if k == tuples:
+                put(head[0], values, c)
