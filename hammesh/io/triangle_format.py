@@ -37,7 +37,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
-from hammesh.io.cell_data import ATTRIBUTE_PREFIX, triangle_cell_data
+from hammesh.io.cell_data import ATTRIBUTE_PREFIX, join_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
@@ -241,7 +241,7 @@ def _read_node(path: Path) -> tuple[np.ndarray, int, np.ndarray]:
         if n_mark:
             vmarks[i] = tok.as_int(row[3 + n_attr], "boundary marker")
     names = _comment_names(tok, n_attr) or [f"{ATTRIBUTE_PREFIX}{j}" for j in range(n_attr)]
-    return points, base, vmarks, _grouped(names, values)
+    return points, base, vmarks, join_components({name: values[:, j] for j, name in enumerate(names)})
 
 
 def _token(name: str) -> str:
@@ -256,23 +256,6 @@ def _comment_names(tok: "_Tokens", k: int) -> list[str] | None:
         if comment.startswith(_ATTRIBUTES_COMMENT):
             names = comment[len(_ATTRIBUTES_COMMENT):].split()
     return names if names is not None and len(names) == k else None
-
-
-def _grouped(names: list[str], values: np.ndarray) -> dict[str, np.ndarray]:
-    """Point data from named columns; ``v[0]``, ``v[1]``... become one ``(n, c)`` array ``v``."""
-    data: dict[str, np.ndarray] = {}
-    j = 0
-    while j < len(names):
-        base, _, rest = names[j].partition("[")
-        c = 1
-        if rest == "0]":
-            while j + c < len(names) and names[j + c] == f"{base}[{c}]":
-                c += 1
-            data[base] = np.ascontiguousarray(values[:, j:j + c])
-        else:
-            data[names[j]] = np.ascontiguousarray(values[:, j])
-        j += c
-    return data
 
 
 def _vertex(tok: _Tokens, token: str, base: int, n: int) -> int:
