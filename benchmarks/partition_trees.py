@@ -33,17 +33,22 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   each line to its cell's median of all triangles; ``cross_unsampled`` is the same
   rules with every triangle sampled (the control); ``cross_local_l2``, ``_l3``: that
   many levels of them, then a count quadtree of each cross cell of its own
-  (:func:`local_quadtree_weights`), and ``quadtree_local_l0`` its control (one cell).
+  (:func:`local_quadtree_weights`), and ``quadtree_local_l0`` its control (one cell);
+* ``fishbone_x``, ``fishbone_y`` (session 11): every child pendant from its parent's
+  spine (:func:`fishbone_weights`), the top spine along x or y; :func:`runs_of_cells`
+  gives the cut its cells would have if their counts matched the stretches exactly.
 """
 
 from __future__ import annotations
 
 from contextlib import contextmanager
 from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights", "SCHEMES"]
+__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
+           "fishbone_labels", "fishbone_weights", "runs_of_cells", "Fishbone", "SCHEMES"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -474,6 +479,129 @@ def cross_unsampled_weights(points, tri, twin, is_con, levels: int = 6, directio
     return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels)
 
 
+def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int) -> np.ndarray:
+    """Per cell id (``cell`` >= 0), the value at rank ``count // 2`` of its members
+    (so that the upper side, ``value >= median``, holds ``ceil(count / 2)`` of distinct
+    values); NaN for an empty cell."""
+    o = np.lexsort((value, cell))
+    cnt = np.bincount(cell, minlength=n_cells)
+    start = np.r_[0, np.cumsum(cnt)[:-1]]
+    med = np.full(n_cells, np.nan)
+    full = cnt > 0
+    med[full] = value[o][start[full] + cnt[full] // 2]
+    return med
+
+
+class Fishbone(NamedTuple):
+    """Cells of :func:`fishbone_labels`."""
+
+    #: ``labels[l]``: the cell (0 .. 4**l - 1) of each triangle at level ``l``, -1 once
+    #: the triangle has been taken into a spine above
+    labels: list
+    #: level at which each triangle is in its cell's spine, -1 for none
+    spine_level: np.ndarray
+    #: ``lines[l]``: each level-``l`` cell's spine line (a coordinate across its axis)
+    lines: list
+    #: axis (0: x, 1: y) along which the top cell's spine runs; level ``l``'s is ``(axis + l) % 2``
+    axis: int
+
+
+def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell: int = 8) -> Fishbone:
+    """Cells of a *fishbone* hierarchy (session 11). Each cell has a spine: the
+    triangles its count-median line crosses (the line runs along ``axis`` at the top,
+    and each level turns it by 90 degrees). The other triangles fall into four
+    children: the two sides of the line, each halved by count along the line. So a
+    child's own spine starts on its parent's spine, where the child hangs from it, and
+    the children with the spine triangles on their side hold equal counts (within one).
+    Levels until cells hold about ``min_cell`` triangles."""
+    c = points[tri].mean(axis=1)
+    lo, hi = points[tri].min(axis=1), points[tri].max(axis=1)
+    m = len(c)
+    depth = max(1, int(np.log(max(m / min_cell, 1.0)) / np.log(4.0)))
+    labels, lines = [], []
+    spine_level = np.full(m, -1)
+    lab = np.zeros(m, np.int64)
+    for level in range(depth + 1):
+        labels.append(lab)
+        along = (axis + level) % 2
+        across = 1 - along
+        idx = np.flatnonzero(lab >= 0)
+        line = _cell_medians(lab[idx], c[idx, across], 4**level)
+        lines.append(line)
+        if level == depth:
+            break
+        at = line[lab[idx]]
+        spine = (lo[idx, across] <= at) & (at <= hi[idx, across])
+        side = 2 * lab[idx] + (c[idx, across] >= at)
+        far = c[idx, along] >= _cell_medians(side, c[idx, along], 2 * 4**level)[side]
+        lab = np.full(m, -1)
+        lab[idx] = 2 * side + far
+        lab[idx[spine]] = -1
+        spine_level[idx[spine]] = level
+    return Fishbone(labels, spine_level, lines, axis)
+
+
+def fishbone_weights(points, tri, twin, is_con, axis: int = 0) -> np.ndarray:
+    """The fishbone tree (:func:`fishbone_labels`): inside each cell, the spine's own
+    edges first, then each child hangs from the spine by the edge nearest the point
+    where the child's spine line meets it, then the edges between children (walls,
+    taken only where a hole cuts a spine); deeper cells before their parents. The walk
+    then visits each child whole (every child is pendant): a cell is walked as
+    near-left, far-left, far-right, near-right child, so that for ``k = 4^j`` the
+    stretches are cells and for ``k = 2 * 4^j`` halves of cells split by their spine,
+    with no offset at any level (the quadtree's entry child is split, docs/partition.md)."""
+    fb = fishbone_labels(points, tri, axis)
+    c = points[tri].mean(axis=1)
+    a, b, _ = _edges(tri, twin)
+    depth = len(fb.labels) - 1
+    mid = 0.5 * (c[a] + c[b])
+    scale = 2.0 * float(np.ptp(c, axis=0).max()) + 1e-300  # distances below 1/2
+    deepest = np.full(len(a), -1)  # the deepest cell holding both triangles
+    for level, lab in enumerate(fb.labels):
+        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    w = np.zeros(len(a))
+    for level in range(depth + 1):
+        sel = deepest == level
+        base = 10.0 * (depth - level)
+        if level == depth:
+            w[sel] = base
+            continue
+        along = (axis + level) % 2
+        sa, sb = fb.spine_level[a] == level, fb.spine_level[b] == level
+        w[sel & sa & sb] = base
+        hang = np.flatnonzero(sel & (sa ^ sb))
+        child = fb.labels[level + 1][np.where(sa, b, a)[hang]]
+        target = np.empty((len(hang), 2))
+        target[:, along] = fb.lines[level + 1][child]  # the child's spine line
+        target[:, 1 - along] = fb.lines[level][fb.labels[level][a[hang]]]  # meets the parent's
+        w[hang] = base + 1.0 + np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
+        walls = np.flatnonzero(sel & ~sa & ~sb)
+        line = fb.lines[level][fb.labels[level][a[walls]]]
+        w[walls] = base + 5.0 + np.abs(mid[walls, 1 - along] - line) / scale
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+def runs_of_cells(parent: np.ndarray, cell: np.ndarray) -> np.ndarray:
+    """Cut a cycle (output rows in order, ``parent``: each row's input triangle) where
+    a cell (``cell``: one per input triangle, -1 for none) is first reached, counting
+    from the first row of the cell reached second (so that the cell the cycle starts
+    in is not split; rows of no cell go with the run before them). Returns each row's
+    run: what the stretches would be if every cell's count matched the stretch size
+    exactly (the cells' own cut, unbalanced)."""
+    m = len(parent)
+    lab = cell[parent]
+    rows = np.flatnonzero(lab >= 0)
+    first = np.full(int(lab.max()) + 1, m)
+    np.minimum.at(first, lab[rows], rows)
+    reached = np.sort(first[first < m])
+    pos = (np.arange(m) - (reached[1] if len(reached) > 1 else 0)) % m
+    first[:] = m  # again from there: the cell the cycle starts in is now in one piece
+    np.minimum.at(first, lab[rows], pos[rows])
+    starts = np.sort(first[first < m])
+    return np.searchsorted(starts, pos, side="right") - 1
+
+
 #: ``--trees`` schemes: name -> weights function (None: the shipped numba forest).
 SCHEMES = {
     "shipped": None,
@@ -489,4 +617,6 @@ SCHEMES = {
     "cross_local_l2": partial(cross_local_weights, levels=2),
     "cross_local_l3": cross_local_weights,
     "quadtree_local_l0": partial(cross_local_weights, levels=0),
+    "fishbone_x": fishbone_weights,
+    "fishbone_y": partial(fishbone_weights, axis=1),
 }
