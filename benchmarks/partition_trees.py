@@ -502,6 +502,8 @@ class Fishbone(NamedTuple):
     spine_level: np.ndarray
     #: ``lines[l]``: each level-``l`` cell's spine line (a coordinate across its axis)
     lines: list
+    #: ``regions[l]``: the level-``l`` cell each triangle counts in, spine triangles included
+    regions: list
     #: axis (0: x, 1: y) along which the top cell's spine runs; level ``l``'s is ``(axis + l) % 2``
     axis: int
 
@@ -511,34 +513,39 @@ def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell
     triangles its count-median line crosses (the line runs along ``axis`` at the top,
     and each level turns it by 90 degrees). The other triangles fall into four
     children: the two sides of the line, each halved by count along the line. So a
-    child's own spine starts on its parent's spine, where the child hangs from it, and
-    the children with the spine triangles on their side hold equal counts (within one).
+    child's own spine starts on its parent's spine, where the child hangs from it. The
+    lines are medians of every triangle of the cell's region, its own and its
+    ancestors' spine triangles included (on their centroid's side), so the regions hold
+    equal counts (within one).
     Levels until cells hold about ``min_cell`` triangles."""
     c = points[tri].mean(axis=1)
     lo, hi = points[tri].min(axis=1), points[tri].max(axis=1)
     m = len(c)
     depth = max(1, int(np.log(max(m / min_cell, 1.0)) / np.log(4.0)))
-    labels, lines = [], []
+    labels, lines, regions = [], [], []
     spine_level = np.full(m, -1)
     lab = np.zeros(m, np.int64)
+    # the cell a triangle counts in, spines included: a spine's rows are walked
+    # just before or after the cells beside it (the first and last children of the
+    # cell below, which hangs from it), so they count in those cells' medians
+    region = np.zeros(m, np.int64)
     for level in range(depth + 1):
         labels.append(lab)
+        regions.append(region)
         along = (axis + level) % 2
         across = 1 - along
-        idx = np.flatnonzero(lab >= 0)
-        line = _cell_medians(lab[idx], c[idx, across], 4**level)
+        line = _cell_medians(region, c[:, across], 4**level)
         lines.append(line)
         if level == depth:
             break
-        at = line[lab[idx]]
-        spine = (lo[idx, across] <= at) & (at <= hi[idx, across])
-        side = 2 * lab[idx] + (c[idx, across] >= at)
-        far = c[idx, along] >= _cell_medians(side, c[idx, along], 2 * 4**level)[side]
-        lab = np.full(m, -1)
-        lab[idx] = 2 * side + far
-        lab[idx[spine]] = -1
-        spine_level[idx[spine]] = level
-    return Fishbone(labels, spine_level, lines, axis)
+        at = line[region]
+        side = 2 * region + (c[:, across] >= at)
+        far = c[:, along] >= _cell_medians(side, c[:, along], 2 * 4**level)[side]
+        region = 2 * side + far
+        spine = (lab >= 0) & (lo[:, across] <= at) & (at <= hi[:, across])
+        lab = np.where((lab >= 0) & ~spine, region, -1)
+        spine_level[spine] = level
+    return Fishbone(labels, spine_level, lines, regions, axis)
 
 
 def fishbone_weights(points, tri, twin, is_con, axis: int = 0) -> np.ndarray:
@@ -570,11 +577,15 @@ def fishbone_weights(points, tri, twin, is_con, axis: int = 0) -> np.ndarray:
         sa, sb = fb.spine_level[a] == level, fb.spine_level[b] == level
         w[sel & sa & sb] = base
         hang = np.flatnonzero(sel & (sa ^ sb))
-        child = fb.labels[level + 1][np.where(sa, b, a)[hang]]
+        kid = np.where(sa, b, a)[hang]
+        child = fb.labels[level + 1][kid]
         target = np.empty((len(hang), 2))
         target[:, along] = fb.lines[level + 1][child]  # the child's spine line
         target[:, 1 - along] = fb.lines[level][fb.labels[level][a[hang]]]  # meets the parent's
-        w[hang] = base + 1.0 + np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
+        # a child hangs by its own spine's end: hung by another of its triangles, the
+        # walk would enter a grandchild first and split it in two runs
+        off_spine = 2.0 * (fb.spine_level[kid] != level + 1)
+        w[hang] = base + 1.0 + off_spine + np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
         walls = np.flatnonzero(sel & ~sa & ~sb)
         line = fb.lines[level][fb.labels[level][a[walls]]]
         w[walls] = base + 5.0 + np.abs(mid[walls, 1 - along] - line) / scale

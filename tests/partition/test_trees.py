@@ -129,27 +129,31 @@ def _square_mesh():
 
 
 def test_fishbone_children_split_each_cell_in_equal_quarters() -> None:
-    """With its own spine triangles counted on their centroid's side, each cell's four
-    children hold equal counts (within one): the lines are the cell's medians."""
+    """Each cell's region (spine triangles counted on their centroid's side) is cut in
+    four equal counts (within one) by its spine line and each side's median along it;
+    its children are those regions without the spine triangles."""
     mesh = _square_mesh()
     c = mesh.points[mesh.triangles].mean(axis=1)
     fb = trees.fishbone_labels(mesh.points, mesh.triangles)
-    for level in range(2):
+    for level in range(3):
         along = (fb.axis + level) % 2
-        lab = fb.labels[level]
         for cell in range(4**level):
-            own = np.flatnonzero(lab == cell)
+            own = np.flatnonzero(fb.regions[level] == cell)
             side = c[own, 1 - along] >= fb.lines[level][cell]
+            assert abs(2 * int(side.sum()) - len(own)) <= 1
             counts = []
             for s in (False, True):
                 x = np.sort(c[own[side == s], along])
                 far = x >= x[len(x) // 2]
                 counts += [int((~far).sum()), int(far.sum())]
             assert max(counts) - min(counts) <= 1
-            # and the children are what is left once the spine is taken out
+            quarters = np.bincount(fb.regions[level + 1][own] - 4 * cell, minlength=4)
+            assert len(quarters) == 4 and sorted(quarters) == sorted(counts)
             kids = fb.labels[level + 1][own]
             spine = fb.spine_level[own] == level
-            assert (kids[spine] == -1).all() and set(kids[~spine]) <= set(range(4 * cell, 4 * cell + 4))
+            assert (kids[spine] == -1).all()
+            member = fb.labels[level][own] == cell
+            np.testing.assert_array_equal(kids[member & ~spine], fb.regions[level + 1][own][member & ~spine])
 
 
 def test_fishbone_children_are_runs_of_the_cycle() -> None:
