@@ -326,8 +326,9 @@ def _print_trees(domains, targets: list[int], ks: list[int], schemes: list[str] 
     import hammesh
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from partition_trees import SCHEMES, fishbone_labels, runs_of_cells, tree
+    from partition_trees import SCHEMES, fishbone_of, runs_of_cells, tree
 
+    from hammesh.halfedge import prepare_mesh
     from hammesh.partition import dual_edges, edge_cut, partition
 
     print("| domain | tree | triangles | " + " | ".join(f"k = {k}" for k in ks) + " | tree s |")
@@ -348,7 +349,8 @@ def _print_trees(domains, targets: list[int], ks: list[int], schemes: list[str] 
                 ratios.setdefault((name, scheme), []).append([float(x.split()[0]) for x in cells])
                 extra = ""
                 if scheme.startswith("fishbone"):
-                    fb = fishbone_labels(mesh.points, mesh.triangles, 1 if scheme.endswith("_y") else 0)
+                    twin = prepare_mesh(mesh)[1].twin
+                    fb = fishbone_of(mesh.points, mesh.triangles, twin, **getattr(weights, "keywords", {}))
                     a, b = dual_edges(h.triangles)
                     mine = []
                     for k in ks:

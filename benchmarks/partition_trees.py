@@ -48,7 +48,7 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
-           "fishbone_labels", "fishbone_weights", "runs_of_cells", "Fishbone", "SCHEMES"]
+           "fishbone_labels", "fishbone_of", "fishbone_weights", "runs_of_cells", "Fishbone", "SCHEMES"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -508,7 +508,8 @@ class Fishbone(NamedTuple):
     axis: int
 
 
-def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell: int = 8) -> Fishbone:
+def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell: int = 8,
+                    twin: np.ndarray | None = None, gap_levels: int = 99) -> Fishbone:
     """Cells of a *fishbone* hierarchy (session 11). Each cell has a spine: the
     triangles its count-median line crosses (the line runs along ``axis`` at the top,
     and each level turns it by 90 degrees). The other triangles fall into four
@@ -516,7 +517,10 @@ def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell
     child's own spine starts on its parent's spine, where the child hangs from it. The
     lines are medians of every triangle of the cell's region, its own and its
     ancestors' spine triangles included (on their centroid's side), so the regions hold
-    equal counts (within one).
+    equal counts (within one). With ``twin`` (half-edge twins, -1 on the boundary), a
+    line that leaves the domain and comes back (a hole, a notch) is joined round the
+    gap by the triangles touching the boundary there, on its lower side: the spine
+    stays one path, so the children hang from it as on a domain without holes.
     Levels until cells hold about ``min_cell`` triangles."""
     c = points[tri].mean(axis=1)
     lo, hi = points[tri].min(axis=1), points[tri].max(axis=1)
@@ -543,12 +547,72 @@ def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell
         far = c[:, along] >= _cell_medians(side, c[:, along], 2 * 4**level)[side]
         region = 2 * side + far
         spine = (lab >= 0) & (lo[:, across] <= at) & (at <= hi[:, across])
+        if twin is not None and level < gap_levels:
+            _join_round_gaps(spine, lab, c, at, along, twin, tri)
         lab = np.where((lab >= 0) & ~spine, region, -1)
         spine_level[spine] = level
     return Fishbone(labels, spine_level, lines, regions, axis)
 
 
-def fishbone_weights(points, tri, twin, is_con, axis: int = 0) -> np.ndarray:
+def _join_round_gaps(spine: np.ndarray, lab: np.ndarray, c: np.ndarray, at: np.ndarray, along: int,
+                     twin: np.ndarray, tri: np.ndarray) -> None:
+    """Add to ``spine`` (in place), for each cell whose spine has a gap along its line
+    (the line crosses a hole or runs outside the domain), the triangles with a vertex on
+    the boundary that lie in the gap below the line and connect its two ends."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = len(c)
+    across = 1 - along
+    on_rim = np.zeros(int(tri.max()) + 1, bool)
+    on_rim[tri.ravel()[twin < 0]] = True
+    rim = on_rim[tri].any(axis=1)
+    idx = np.flatnonzero(spine)
+    idx = idx[np.lexsort((c[idx, along], lab[idx]))]
+    step = np.diff(c[idx, along])
+    same = lab[idx[1:]] == lab[idx[:-1]]
+    if not same.any():
+        return
+    typical = np.median(step[same])
+    for g in np.flatnonzero(same & (step > 6.0 * typical)):
+        t0, t1 = idx[g], idx[g + 1]
+        cell = lab[t0]
+        slack = 4.0 * typical
+        cand = np.flatnonzero((lab == cell) & rim & ~spine & (c[:, along] > c[t0, along] - slack)
+                              & (c[:, along] < c[t1, along] + slack) & (c[:, across] < at))
+        if not len(cand):
+            continue
+        line_own = idx[lab[idx] == cell]
+        line_own = line_own[(line_own != t0) & (line_own != t1)]
+        nodes = np.r_[t0, t1, cand, line_own]  # the line's own triangles: the ends' neighbours
+        pos = np.full(m, -1)
+        pos[nodes] = np.arange(len(nodes))
+        h = (3 * nodes[:, None] + np.arange(3)).ravel()
+        nb = np.where(twin[h] >= 0, pos[np.maximum(twin[h], 0) // 3], -1)
+        src = np.repeat(np.arange(len(nodes)), 3)
+        ok = nb >= 0
+        g_ = coo_matrix((np.ones(ok.sum()), (src[ok], nb[ok])), shape=(len(nodes), len(nodes)))
+        _, comp = connected_components(g_, directed=False)
+        if comp[0] == comp[1]:  # a path round the gap from one end to the other
+            spine[cand[comp[2:2 + len(cand)] == comp[0]]] = True
+
+
+def _turned(points: np.ndarray, angle: float) -> np.ndarray:
+    """``points`` in axes turned counter-clockwise by ``angle`` degrees."""
+    if not angle:
+        return points
+    t = np.radians(angle)
+    return points @ np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+
+
+def fishbone_of(points, tri, twin, axis: int = 0, holes: bool = True, angle: float = 0.0,
+                gap_levels: int = 99) -> Fishbone:
+    """The cells :func:`fishbone_weights` builds its tree from (same arguments)."""
+    return fishbone_labels(_turned(points, angle), tri, axis, twin=twin if holes else None, gap_levels=gap_levels)
+
+
+def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = True, angle: float = 0.0,
+                     gap_levels: int = 99) -> np.ndarray:
     """The fishbone tree (:func:`fishbone_labels`): inside each cell, the spine's own
     edges first, then each child hangs from the spine by the edge nearest the point
     where the child's spine line meets it, then the edges between children (walls,
@@ -557,7 +621,8 @@ def fishbone_weights(points, tri, twin, is_con, axis: int = 0) -> np.ndarray:
     near-left, far-left, far-right, near-right child, so that for ``k = 4^j`` the
     stretches are cells and for ``k = 2 * 4^j`` halves of cells split by their spine,
     with no offset at any level (the quadtree's entry child is split, docs/partition.md)."""
-    fb = fishbone_labels(points, tri, axis)
+    fb = fishbone_of(points, tri, twin, axis, holes, angle, gap_levels)
+    points = _turned(points, angle)
     c = points[tri].mean(axis=1)
     a, b, _ = _edges(tri, twin)
     depth = len(fb.labels) - 1
@@ -630,4 +695,8 @@ SCHEMES = {
     "quadtree_local_l0": partial(cross_local_weights, levels=0),
     "fishbone_x": fishbone_weights,
     "fishbone_y": partial(fishbone_weights, axis=1),
+    "fishbone_x_plain": partial(fishbone_weights, holes=False),
+    "fishbone_y_plain": partial(fishbone_weights, axis=1, holes=False),
+    **{f"fishbone_y_{a}": partial(fishbone_weights, axis=1, angle=a) for a in (15, 30, 45, 60, 75)},
+    **{f"fishbone_y_{a}_g{g}": partial(fishbone_weights, axis=1, angle=a, gap_levels=g) for a in (0, 15, 75) for g in (1, 2, 3)},
 }
