@@ -48,7 +48,7 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
-           "fishbone_labels", "fishbone_of", "fishbone_weights", "runs_of_cells", "Fishbone", "SCHEMES"]
+           "fishbone_labels", "fishbone_of", "fishbone_weights", "fishbone_auto", "runs_of_cells", "Fishbone", "SCHEMES"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -658,6 +658,22 @@ def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = Tru
     return w
 
 
+#: Turns :func:`fishbone_auto` tries (degrees; the lines repeat every 90, the axes every 180).
+AUTO_ANGLES = tuple(range(0, 180, 15))
+
+
+def fishbone_auto(points, tri, twin, is_con, levels: int = 3) -> np.ndarray:
+    """:func:`fishbone_weights` with the top axis turned by the angle (of
+    ``AUTO_ANGLES``) whose spines of the top ``levels`` levels hold the fewest
+    triangles: those spines are the cuts between the stretches at k = 8 (two levels)
+    and k = 64 (three), the walls between them cost about the same at every angle."""
+    cost = []
+    for a in AUTO_ANGLES:
+        fb = fishbone_of(points, tri, twin, 0, True, a)
+        cost.append(int(np.count_nonzero((fb.spine_level >= 0) & (fb.spine_level < levels))))
+    return fishbone_weights(points, tri, twin, is_con, angle=AUTO_ANGLES[int(np.argmin(cost))])
+
+
 def runs_of_cells(parent: np.ndarray, cell: np.ndarray) -> np.ndarray:
     """Cut a cycle (output rows in order, ``parent``: each row's input triangle) where
     a cell (``cell``: one per input triangle, -1 for none) is first reached, counting
@@ -695,6 +711,7 @@ SCHEMES = {
     "quadtree_local_l0": partial(cross_local_weights, levels=0),
     "fishbone_x": fishbone_weights,
     "fishbone_y": partial(fishbone_weights, axis=1),
+    "fishbone_auto": fishbone_auto,
     "fishbone_x_plain": partial(fishbone_weights, holes=False),
     "fishbone_y_plain": partial(fishbone_weights, axis=1, holes=False),
     **{f"fishbone_y_{a}": partial(fishbone_weights, axis=1, angle=a) for a in (15, 30, 45, 60, 75)},
