@@ -35,8 +35,11 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   many levels of them, then a count quadtree of each cross cell of its own
   (:func:`local_quadtree_weights`), and ``quadtree_local_l0`` its control (one cell);
 * ``fishbone_x``, ``fishbone_y`` (session 11): every child pendant from its parent's
-  spine (:func:`fishbone_weights`), the top spine along x or y; :func:`runs_of_cells`
-  gives the cut its cells would have if their counts matched the stretches exactly.
+  spine (:func:`fishbone_weights`), the top spine along x or y, a line's gaps joined
+  round the boundary (``_plain``: not joined); ``fishbone_y_15`` ... ``_75``: the axes
+  turned by that many degrees; ``fishbone_auto``: the turn whose top spines are
+  smallest (:func:`fishbone_auto`); :func:`runs_of_cells` gives the cut its cells
+  would have if their counts matched the stretches exactly.
 """
 
 from __future__ import annotations
@@ -48,7 +51,8 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
-           "fishbone_labels", "fishbone_of", "fishbone_weights", "fishbone_auto", "runs_of_cells", "Fishbone", "SCHEMES"]
+           "fishbone_labels", "fishbone_of", "fishbone_weights", "fishbone_auto", "runs_of_cells", "Fishbone",
+           "AUTO_ANGLES", "SCHEMES"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -715,5 +719,4 @@ SCHEMES = {
     "fishbone_x_plain": partial(fishbone_weights, holes=False),
     "fishbone_y_plain": partial(fishbone_weights, axis=1, holes=False),
     **{f"fishbone_y_{a}": partial(fishbone_weights, axis=1, angle=a) for a in (15, 30, 45, 60, 75)},
-    **{f"fishbone_y_{a}_g{g}": partial(fishbone_weights, axis=1, angle=a, gap_levels=g) for a in (0, 15, 75) for g in (1, 2, 3)},
 }
