@@ -171,3 +171,31 @@ def test_fishbone_children_are_runs_of_the_cycle() -> None:
     run = trees.runs_of_cells(h.parent, fb.labels[1])
     sizes = np.bincount(run)
     assert len(sizes) == 4 and sizes.max() - sizes.min() <= 0.02 * h.n_triangles
+
+
+def test_fishbone_spine_is_joined_round_a_hole() -> None:
+    """The plate's top line (along x, through its hole) leaves two pieces of spine;
+    with the twins the gap is joined round the hole's rim, so the spine is one path."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    mesh = _plate()  # 2 x 1, a hole of radius 0.3 at its centre
+    clean, he, _ = prepare_mesh(mesh)
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    m = len(tri)
+    h = np.flatnonzero(twin >= 0)
+
+    def pieces(spine: np.ndarray) -> int:
+        a, b = h // 3, twin[h] // 3
+        keep = spine[a] & spine[b]
+        g = coo_matrix((np.ones(int(keep.sum())), (a[keep], b[keep])), shape=(m, m))
+        _, comp = connected_components(g, directed=False)
+        return len(np.unique(comp[spine]))
+
+    plain = trees.fishbone_labels(pts, tri, axis=0)
+    joined = trees.fishbone_labels(pts, tri, axis=0, twin=twin)
+    assert pieces(plain.spine_level == 0) == 2
+    assert pieces(joined.spine_level == 0) == 1
+    added = (joined.spine_level == 0) & (plain.spine_level != 0)
+    c = pts[tri].mean(axis=1)
+    assert added.any() and (np.hypot(*(c[added] - [1.0, 0.5]).T) < 0.4).all()  # on the rim
