@@ -670,7 +670,8 @@ def fishbone_auto(points, tri, twin, is_con, levels: int = 3) -> np.ndarray:
     """:func:`fishbone_weights` with the top axis turned by the angle (of
     ``AUTO_ANGLES``) whose spines of the top ``levels`` levels hold the fewest
     triangles: those spines are the cuts between the stretches at k = 8 (two levels)
-    and k = 64 (three), the walls between them cost about the same at every angle."""
+    and k = 64 (three); the walls between the cells are not counted (a guess that
+    they vary less with the angle; measured in docs/partition.md, not proven)."""
     cost = []
     for a in AUTO_ANGLES:
         fb = fishbone_of(points, tri, twin, 0, True, a)
