@@ -313,31 +313,63 @@ def cut_ratio_cells(h, ks: list[int]) -> list[str]:
     return cells
 
 
-def _print_trees(domains, target: int, ks: list[int], schemes: list[str] | None = None) -> None:
+def _print_trees(domains, targets: list[int], ks: list[int], schemes: list[str] | None = None) -> None:
     """Incircle cycle cut / METIS cut of each tree scheme of ``partition_trees.SCHEMES``
-    (METIS run on each scheme's own output: the outputs differ by their flips)."""
+    (METIS run on each scheme's own output: the outputs differ by their flips), on one
+    mesh per entry of ``targets``; with several, the mean and the largest ratio of each
+    scheme follow (one mesh's figure moves by about 0.1 with the mesh size alone).
+    Fishbone schemes also get their cells' own cut at ``k = 4^j`` (``cells j``: the
+    cycle cut where each level-``j`` cell is first reached, :func:`runs_of_cells`)."""
     import os
     import sys
 
     import hammesh
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from partition_trees import SCHEMES, tree
+    from partition_trees import SCHEMES, fishbone_of, runs_of_cells, tree
+
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.partition import dual_edges, edge_cut, partition
 
     print("| domain | tree | triangles | " + " | ".join(f"k = {k}" for k in ks) + " | tree s |")
     print("|---|---|---|" + "---|" * len(ks) + "---|")
+    ratios: dict = {}
     for name, dom, area in domains:
-        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target / 3.0))
-        for scheme, weights in SCHEMES.items():
-            if schemes and scheme not in schemes:
-                continue
-            t = time.perf_counter()
-            with tree(weights):
-                h = hammesh.hamiltonian(mesh, mode="incircle")
-            dt = time.perf_counter() - t
-            m = h.n_triangles
-            cells = cut_ratio_cells(h, ks)
-            print(f"| {name} | {scheme} | {m:,} | " + " | ".join(cells) + f" | {dt:.1f} |", flush=True)
+        for target in targets:
+            mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target / 3.0))
+            for scheme, weights in SCHEMES.items():
+                if schemes and scheme not in schemes:
+                    continue
+                t = time.perf_counter()
+                with tree(weights):
+                    h = hammesh.hamiltonian(mesh, mode="incircle")
+                dt = time.perf_counter() - t
+                m = h.n_triangles
+                cells = cut_ratio_cells(h, ks)
+                ratios.setdefault((name, scheme), []).append([float(x.split()[0]) for x in cells])
+                extra = ""
+                if scheme.startswith("fishbone"):
+                    twin = prepare_mesh(mesh)[1].twin
+                    fb = fishbone_of(mesh.points, mesh.triangles, twin, **getattr(weights, "keywords", {}))
+                    a, b = dual_edges(h.triangles)
+                    mine = []
+                    for k in ks:
+                        j = int(round(np.log(k) / np.log(4)))
+                        if 4**j == k and 0 < j < len(fb.labels):
+                            run = runs_of_cells(h.parent, fb.labels[j])
+                            sizes = np.bincount(run)
+                            share = edge_cut(run, a, b) / partition(h, k).edge_cut
+                            mine.append(f"k = {k}: cells' cut / cycle cut {share:.2f}, cells of {sizes.min():,}-{sizes.max():,}")
+                    extra = " (" + "; ".join(mine) + ")" if mine else ""
+                print(f"| {name} | {scheme} | {m:,} | " + " | ".join(cells) + f" | {dt:.1f} |{extra}", flush=True)
+    if len(targets) > 1:
+        print()
+        print("| domain | tree | meshes | " + " | ".join(f"k = {k} mean / max" for k in ks) + " |")
+        print("|---|---|---|" + "---|" * len(ks))
+        for (name, scheme), v in ratios.items():
+            v = np.array(v)
+            print(f"| {name} | {scheme} | {len(v)} | "
+                  + " | ".join(f"{v[:, i].mean():.3f} / {v[:, i].max():.2f}" for i in range(len(ks))) + " |")
 
 
 #: ``--sparse-cells`` join orders (benchmark only: ``sparse._join_order`` is replaced inside the run).
@@ -455,6 +487,8 @@ def main() -> None:
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
     ap.add_argument("--trees", action="store_true",
                     help="only the incircle cut of other spanning trees (benchmarks/partition_trees.py) vs METIS")
+    ap.add_argument("--targets", default="",
+                    help="--trees: comma-separated mesh sizes (triangles), one mesh each; mean and max ratio follow")
     ap.add_argument("--schemes", default="", help="--trees' schemes (comma-separated; default: all)")
     ap.add_argument("--sparse-cells", metavar="SIZES", default="",
                     help="only the sparse cut with the cover confined to cells of these sizes (0: not), "
@@ -491,7 +525,8 @@ def main() -> None:
                             [int(x) for x in args.sparse_cells.split(",")], args.orders.split(","))
         return
     if args.trees:
-        _print_trees([d for d in _domains() if d[0] in chosen], args.target, ks,
+        targets = [int(float(x)) for x in args.targets.split(",")] if args.targets else [args.target]
+        _print_trees([d for d in _domains() if d[0] in chosen], targets, ks,
                      args.schemes.split(",") if args.schemes else None)
         return
     for name, dom, area in (d for d in _domains() if d[0] in chosen):

@@ -33,17 +33,26 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   each line to its cell's median of all triangles; ``cross_unsampled`` is the same
   rules with every triangle sampled (the control); ``cross_local_l2``, ``_l3``: that
   many levels of them, then a count quadtree of each cross cell of its own
-  (:func:`local_quadtree_weights`), and ``quadtree_local_l0`` its control (one cell).
+  (:func:`local_quadtree_weights`), and ``quadtree_local_l0`` its control (one cell);
+* ``fishbone_x``, ``fishbone_y`` (session 11): every child pendant from its parent's
+  spine (:func:`fishbone_weights`), the top spine along x or y, a line's gaps joined
+  round the boundary (``_plain``: not joined); ``fishbone_y_15`` ... ``_75``: the axes
+  turned by that many degrees; ``fishbone_auto``: the turn whose top spines are
+  smallest (:func:`fishbone_auto`); :func:`runs_of_cells` gives the cut its cells
+  would have if their counts matched the stretches exactly.
 """
 
 from __future__ import annotations
 
 from contextlib import contextmanager
 from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights", "SCHEMES"]
+__all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
+           "fishbone_labels", "fishbone_of", "fishbone_weights", "fishbone_auto", "runs_of_cells", "Fishbone",
+           "AUTO_ANGLES", "SCHEMES"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -474,6 +483,222 @@ def cross_unsampled_weights(points, tri, twin, is_con, levels: int = 6, directio
     return cross_weights(points, tri, twin, is_con, levels, directions, labels=labels)
 
 
+def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int) -> np.ndarray:
+    """Per cell id (``cell`` >= 0), the value at rank ``count // 2`` of its members
+    (so that the upper side, ``value >= median``, holds ``ceil(count / 2)`` of distinct
+    values); NaN for an empty cell."""
+    o = np.lexsort((value, cell))
+    cnt = np.bincount(cell, minlength=n_cells)
+    start = np.r_[0, np.cumsum(cnt)[:-1]]
+    med = np.full(n_cells, np.nan)
+    full = cnt > 0
+    med[full] = value[o][start[full] + cnt[full] // 2]
+    return med
+
+
+class Fishbone(NamedTuple):
+    """Cells of :func:`fishbone_labels`."""
+
+    #: ``labels[l]``: the cell (0 .. 4**l - 1) of each triangle at level ``l``, -1 once
+    #: the triangle has been taken into a spine above
+    labels: list
+    #: level at which each triangle is in its cell's spine, -1 for none
+    spine_level: np.ndarray
+    #: ``lines[l]``: each level-``l`` cell's spine line (a coordinate across its axis)
+    lines: list
+    #: ``regions[l]``: the level-``l`` cell each triangle counts in, spine triangles included
+    regions: list
+    #: axis (0: x, 1: y) along which the top cell's spine runs; level ``l``'s is ``(axis + l) % 2``
+    axis: int
+
+
+def fishbone_labels(points: np.ndarray, tri: np.ndarray, axis: int = 0, min_cell: int = 8,
+                    twin: np.ndarray | None = None, gap_levels: int = 99) -> Fishbone:
+    """Cells of a *fishbone* hierarchy (session 11). Each cell has a spine: the
+    triangles its count-median line crosses (the line runs along ``axis`` at the top,
+    and each level turns it by 90 degrees). The other triangles fall into four
+    children: the two sides of the line, each halved by count along the line. So a
+    child's own spine starts on its parent's spine, where the child hangs from it. The
+    lines are medians of every triangle of the cell's region, its own and its
+    ancestors' spine triangles included (on their centroid's side), so the regions hold
+    equal counts (within one). With ``twin`` (half-edge twins, -1 on the boundary), a
+    line that leaves the domain and comes back (a hole, a notch) is joined round the
+    gap by the triangles touching the boundary there, on its lower side: the spine
+    stays one path, so the children hang from it as on a domain without holes.
+    Levels until cells hold about ``min_cell`` triangles."""
+    c = points[tri].mean(axis=1)
+    lo, hi = points[tri].min(axis=1), points[tri].max(axis=1)
+    m = len(c)
+    depth = max(1, int(np.log(max(m / min_cell, 1.0)) / np.log(4.0)))
+    labels, lines, regions = [], [], []
+    spine_level = np.full(m, -1)
+    lab = np.zeros(m, np.int64)
+    # the cell a triangle counts in, spines included: a spine's rows are walked
+    # just before or after the cells beside it (the first and last children of the
+    # cell below, which hangs from it), so they count in those cells' medians
+    region = np.zeros(m, np.int64)
+    for level in range(depth + 1):
+        labels.append(lab)
+        regions.append(region)
+        along = (axis + level) % 2
+        across = 1 - along
+        line = _cell_medians(region, c[:, across], 4**level)
+        lines.append(line)
+        if level == depth:
+            break
+        at = line[region]
+        side = 2 * region + (c[:, across] >= at)
+        far = c[:, along] >= _cell_medians(side, c[:, along], 2 * 4**level)[side]
+        region = 2 * side + far
+        spine = (lab >= 0) & (lo[:, across] <= at) & (at <= hi[:, across])
+        if twin is not None and level < gap_levels:
+            _join_round_gaps(spine, lab, c, at, along, twin, tri)
+        lab = np.where((lab >= 0) & ~spine, region, -1)
+        spine_level[spine] = level
+    return Fishbone(labels, spine_level, lines, regions, axis)
+
+
+def _join_round_gaps(spine: np.ndarray, lab: np.ndarray, c: np.ndarray, at: np.ndarray, along: int,
+                     twin: np.ndarray, tri: np.ndarray) -> None:
+    """Add to ``spine`` (in place), for each cell whose spine has a gap along its line
+    (the line crosses a hole or runs outside the domain), the triangles with a vertex on
+    the boundary that lie in the gap below the line and connect its two ends."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = len(c)
+    across = 1 - along
+    on_rim = np.zeros(int(tri.max()) + 1, bool)
+    on_rim[tri.ravel()[twin < 0]] = True
+    rim = on_rim[tri].any(axis=1)
+    idx = np.flatnonzero(spine)
+    idx = idx[np.lexsort((c[idx, along], lab[idx]))]
+    step = np.diff(c[idx, along])
+    same = lab[idx[1:]] == lab[idx[:-1]]
+    if not same.any():
+        return
+    typical = np.median(step[same])
+    for g in np.flatnonzero(same & (step > 6.0 * typical)):
+        t0, t1 = idx[g], idx[g + 1]
+        cell = lab[t0]
+        slack = 4.0 * typical
+        cand = np.flatnonzero((lab == cell) & rim & ~spine & (c[:, along] > c[t0, along] - slack)
+                              & (c[:, along] < c[t1, along] + slack) & (c[:, across] < at))
+        if not len(cand):
+            continue
+        line_own = idx[lab[idx] == cell]
+        line_own = line_own[(line_own != t0) & (line_own != t1)]
+        nodes = np.r_[t0, t1, cand, line_own]  # the line's own triangles: the ends' neighbours
+        pos = np.full(m, -1)
+        pos[nodes] = np.arange(len(nodes))
+        h = (3 * nodes[:, None] + np.arange(3)).ravel()
+        nb = np.where(twin[h] >= 0, pos[np.maximum(twin[h], 0) // 3], -1)
+        src = np.repeat(np.arange(len(nodes)), 3)
+        ok = nb >= 0
+        g_ = coo_matrix((np.ones(ok.sum()), (src[ok], nb[ok])), shape=(len(nodes), len(nodes)))
+        _, comp = connected_components(g_, directed=False)
+        if comp[0] == comp[1]:  # a path round the gap from one end to the other
+            spine[cand[comp[2:2 + len(cand)] == comp[0]]] = True
+
+
+def _turned(points: np.ndarray, angle: float) -> np.ndarray:
+    """``points`` in axes turned counter-clockwise by ``angle`` degrees."""
+    if not angle:
+        return points
+    t = np.radians(angle)
+    return points @ np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+
+
+def fishbone_of(points, tri, twin, axis: int = 0, holes: bool = True, angle: float = 0.0,
+                gap_levels: int = 99) -> Fishbone:
+    """The cells :func:`fishbone_weights` builds its tree from (same arguments)."""
+    return fishbone_labels(_turned(points, angle), tri, axis, twin=twin if holes else None, gap_levels=gap_levels)
+
+
+def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = True, angle: float = 0.0,
+                     gap_levels: int = 99) -> np.ndarray:
+    """The fishbone tree (:func:`fishbone_labels`): inside each cell, the spine's own
+    edges first, then each child hangs from the spine by the edge nearest the point
+    where the child's spine line meets it, then the edges between children (walls,
+    taken only where a hole cuts a spine); deeper cells before their parents. The walk
+    then visits each child whole (every child is pendant): a cell is walked as
+    near-left, far-left, far-right, near-right child, so that for ``k = 4^j`` the
+    stretches are cells and for ``k = 2 * 4^j`` halves of cells split by their spine,
+    with no offset at any level (the quadtree's entry child is split, docs/partition.md)."""
+    fb = fishbone_of(points, tri, twin, axis, holes, angle, gap_levels)
+    points = _turned(points, angle)
+    c = points[tri].mean(axis=1)
+    a, b, _ = _edges(tri, twin)
+    depth = len(fb.labels) - 1
+    mid = 0.5 * (c[a] + c[b])
+    scale = 2.0 * float(np.ptp(c, axis=0).max()) + 1e-300  # distances below 1/2
+    deepest = np.full(len(a), -1)  # the deepest cell holding both triangles
+    for level, lab in enumerate(fb.labels):
+        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    w = np.zeros(len(a))
+    for level in range(depth + 1):
+        sel = deepest == level
+        base = 10.0 * (depth - level)
+        if level == depth:
+            w[sel] = base
+            continue
+        along = (axis + level) % 2
+        sa, sb = fb.spine_level[a] == level, fb.spine_level[b] == level
+        w[sel & sa & sb] = base
+        hang = np.flatnonzero(sel & (sa ^ sb))
+        kid = np.where(sa, b, a)[hang]
+        child = fb.labels[level + 1][kid]
+        target = np.empty((len(hang), 2))
+        target[:, along] = fb.lines[level + 1][child]  # the child's spine line
+        target[:, 1 - along] = fb.lines[level][fb.labels[level][a[hang]]]  # meets the parent's
+        # a child hangs by its own spine's end: hung by another of its triangles, the
+        # walk would enter a grandchild first and split it in two runs
+        off_spine = 2.0 * (fb.spine_level[kid] != level + 1)
+        w[hang] = base + 1.0 + off_spine + np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
+        walls = np.flatnonzero(sel & ~sa & ~sb)
+        line = fb.lines[level][fb.labels[level][a[walls]]]
+        w[walls] = base + 5.0 + np.abs(mid[walls, 1 - along] - line) / scale
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+#: Turns :func:`fishbone_auto` tries (degrees; the lines repeat every 90, the axes every 180).
+AUTO_ANGLES = tuple(range(0, 180, 15))
+
+
+def fishbone_auto(points, tri, twin, is_con, levels: int = 3) -> np.ndarray:
+    """:func:`fishbone_weights` with the top axis turned by the angle (of
+    ``AUTO_ANGLES``) whose spines of the top ``levels`` levels hold the fewest
+    triangles: those spines are the cuts between the stretches at k = 8 (two levels)
+    and k = 64 (three); the walls between the cells are not counted (a guess that
+    they vary less with the angle; measured in docs/partition.md, not proven)."""
+    cost = []
+    for a in AUTO_ANGLES:
+        fb = fishbone_of(points, tri, twin, 0, True, a)
+        cost.append(int(np.count_nonzero((fb.spine_level >= 0) & (fb.spine_level < levels))))
+    return fishbone_weights(points, tri, twin, is_con, angle=AUTO_ANGLES[int(np.argmin(cost))])
+
+
+def runs_of_cells(parent: np.ndarray, cell: np.ndarray) -> np.ndarray:
+    """Cut a cycle (output rows in order, ``parent``: each row's input triangle) where
+    a cell (``cell``: one per input triangle, -1 for none) is first reached, counting
+    from the first row of the cell reached second (so that the cell the cycle starts
+    in is not split; rows of no cell go with the run before them). Returns each row's
+    run: what the stretches would be if every cell's count matched the stretch size
+    exactly (the cells' own cut, unbalanced)."""
+    m = len(parent)
+    lab = cell[parent]
+    rows = np.flatnonzero(lab >= 0)
+    first = np.full(int(lab.max()) + 1, m)
+    np.minimum.at(first, lab[rows], rows)
+    reached = np.sort(first[first < m])
+    pos = (np.arange(m) - (reached[1] if len(reached) > 1 else 0)) % m
+    first[:] = m  # again from there: the cell the cycle starts in is now in one piece
+    np.minimum.at(first, lab[rows], pos[rows])
+    starts = np.sort(first[first < m])
+    return np.searchsorted(starts, pos, side="right") - 1
+
+
 #: ``--trees`` schemes: name -> weights function (None: the shipped numba forest).
 SCHEMES = {
     "shipped": None,
@@ -489,4 +714,10 @@ SCHEMES = {
     "cross_local_l2": partial(cross_local_weights, levels=2),
     "cross_local_l3": cross_local_weights,
     "quadtree_local_l0": partial(cross_local_weights, levels=0),
+    "fishbone_x": fishbone_weights,
+    "fishbone_y": partial(fishbone_weights, axis=1),
+    "fishbone_auto": fishbone_auto,
+    "fishbone_x_plain": partial(fishbone_weights, holes=False),
+    "fishbone_y_plain": partial(fishbone_weights, axis=1, holes=False),
+    **{f"fishbone_y_{a}": partial(fishbone_weights, axis=1, angle=a) for a in (15, 30, 45, 60, 75)},
 }

@@ -55,3 +55,18 @@ def test_bench_partition_runs() -> None:
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "worst cut ratio" in proc.stdout
     assert "| gear | incircle | rcm |" in proc.stdout
+
+
+@pytest.mark.slow
+def test_bench_partition_trees_averages_over_meshes() -> None:
+    pytest.importorskip("pymetis")
+    proc = subprocess.run(
+        [sys.executable, str(BENCH / "bench_partition.py"), "--trees", "--schemes", "shipped,fishbone_y",
+         "--targets", "3000,4000", "--domains", "square", "--ks", "4,8"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "| square | fishbone_y | 2 |" in proc.stdout  # the mean / max table
+    assert "cells' cut / cycle cut" in proc.stdout  # the fishbone's own cells at k = 4

@@ -30,7 +30,9 @@ def _plate():
     return hammesh.quality_mesh(dom, min_angle=30, max_area=0.002)
 
 
-@pytest.mark.parametrize("scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3", "cross_local_l3"])
+@pytest.mark.parametrize(
+    "scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3", "cross_local_l3", "fishbone_x"]
+)
 def test_scheme_gives_a_minimum_spanning_forest_the_walk_accepts(scheme: str) -> None:
     mesh = _plate()
     clean, he, is_con = prepare_mesh(mesh)
@@ -111,3 +113,89 @@ def test_bisection_cells_halve_counts() -> None:
     c = rng.random((1024, 2))
     lab = trees.bisection_labels(c, np.zeros(0, np.int64), np.zeros(0, np.int64), 4)
     assert (np.bincount(lab, minlength=16) == 64).all()
+
+
+def test_runs_of_cells_cut_the_cycle_where_each_cell_begins() -> None:
+    # rows are input triangles here; cell 2 wraps round the cycle's start, row 2 is a spine's
+    cell = np.array([2, 2, -1, 0, 0, 1, 1, 2])
+    run = trees.runs_of_cells(np.arange(8), cell)
+    # one run per cell, the spine row with the run before it (cell 2's, round the end)
+    np.testing.assert_array_equal(run, [2, 2, 2, 0, 0, 1, 1, 2])
+
+
+def _square_mesh():
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=0.0005)
+
+
+def test_fishbone_children_split_each_cell_in_equal_quarters() -> None:
+    """Each cell's region (spine triangles counted on their centroid's side) is cut in
+    four equal counts (within one) by its spine line and each side's median along it;
+    its children are those regions without the spine triangles."""
+    mesh = _square_mesh()
+    c = mesh.points[mesh.triangles].mean(axis=1)
+    fb = trees.fishbone_labels(mesh.points, mesh.triangles)
+    for level in range(3):
+        along = (fb.axis + level) % 2
+        for cell in range(4**level):
+            own = np.flatnonzero(fb.regions[level] == cell)
+            side = c[own, 1 - along] >= fb.lines[level][cell]
+            assert abs(2 * int(side.sum()) - len(own)) <= 1
+            counts = []
+            for s in (False, True):
+                x = np.sort(c[own[side == s], along])
+                far = x >= x[len(x) // 2]
+                counts += [int((~far).sum()), int(far.sum())]
+            assert max(counts) - min(counts) <= 1
+            quarters = np.bincount(fb.regions[level + 1][own] - 4 * cell, minlength=4)
+            assert len(quarters) == 4 and sorted(quarters) == sorted(counts)
+            kids = fb.labels[level + 1][own]
+            spine = fb.spine_level[own] == level
+            assert (kids[spine] == -1).all()
+            member = fb.labels[level][own] == cell
+            np.testing.assert_array_equal(kids[member & ~spine], fb.regions[level + 1][own][member & ~spine])
+
+
+def test_fishbone_children_are_runs_of_the_cycle() -> None:
+    """The fishbone's point: every child hangs from its parent's spine by one edge, so
+    the walk visits it whole, one run of the cycle (the shipped tree splits the child
+    holding a cell's entry); on a square, and the cells then cut about as the stretches."""
+    mesh = _square_mesh()
+    fb = trees.fishbone_labels(mesh.points, mesh.triangles)
+    with trees.tree(trees.SCHEMES["fishbone_x"]):
+        h = hammesh.hamiltonian(mesh, mode="incircle")
+    lab = fb.labels[1][h.parent]
+    for cell in range(4):
+        rows = lab == cell
+        assert np.count_nonzero(rows & ~np.roll(rows, 1)) == 1  # one run, round the cycle
+    run = trees.runs_of_cells(h.parent, fb.labels[1])
+    sizes = np.bincount(run)
+    assert len(sizes) == 4 and sizes.max() - sizes.min() <= 0.02 * h.n_triangles
+
+
+def test_fishbone_spine_is_joined_round_a_hole() -> None:
+    """The plate's top line (along x, through its hole) leaves two pieces of spine;
+    with the twins the gap is joined round the hole's rim, so the spine is one path."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    mesh = _plate()  # 2 x 1, a hole of radius 0.3 at its centre
+    clean, he, _ = prepare_mesh(mesh)
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    m = len(tri)
+    h = np.flatnonzero(twin >= 0)
+
+    def pieces(spine: np.ndarray) -> int:
+        a, b = h // 3, twin[h] // 3
+        keep = spine[a] & spine[b]
+        g = coo_matrix((np.ones(int(keep.sum())), (a[keep], b[keep])), shape=(m, m))
+        _, comp = connected_components(g, directed=False)
+        return len(np.unique(comp[spine]))
+
+    plain = trees.fishbone_labels(pts, tri, axis=0)
+    joined = trees.fishbone_labels(pts, tri, axis=0, twin=twin)
+    assert pieces(plain.spine_level == 0) == 2
+    assert pieces(joined.spine_level == 0) == 1
+    added = (joined.spine_level == 0) & (plain.spine_level != 0)
+    c = pts[tri].mean(axis=1)
+    assert added.any() and (np.hypot(*(c[added] - [1.0, 0.5]).T) < 0.4).all()  # on the rim
