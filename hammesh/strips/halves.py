@@ -167,6 +167,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         stop[0] = True
         return _failed("an edge is not proper")
     pillows = int(count_pillows(rec))
+    scratch = None
     if finish is not None:
         twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
         indices, local, n_strips, n_swaps = finish(pts, part.astype(np.int64), rec, twin)
@@ -175,12 +176,14 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         if whole is not None:
             # bound of the whole buffer: this half's 4 k, a restart, the other half's 4 (m - k)
             whole.append(np.empty(4 * m + 1, np.int64))
-        g = greedy_strip_buffer(rec, w_swap, restart, _half_work(k, None if whole is None else whole[0][: 4 * k]))
+        work = _half_work(k, None if whole is None else whole[0][: 4 * k])
+        g = greedy_strip_buffer(rec, w_swap, restart, work)
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
+        scratch = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
     order = rows[local]
     proof = -1
     if seen is not None:
-        proof = int(check_claimed_part(tri, indices, restart, True, order, seen)[0])
+        proof = int(check_claimed_part(tri, indices, restart, True, order, seen, scratch)[0])
     return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
