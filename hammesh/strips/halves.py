@@ -148,8 +148,10 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
     rows = np.empty(m, np.int64)
     part = np.empty((m, 3), np.int32)  # the records are int32 here (checked by the caller): half the bytes
-    k = int(rows_of_cells_into(tri, cells.label, first, last, np.empty(m, np.int64), np.empty(m, cells.label.dtype),
-                               np.zeros(last - first + 1, np.int64), rows, part))
+    # the copy's scratch, its first k entries faulted in by it, is reused afterwards (the
+    # census flags, the claimed order): fresh pages cost ~0.14 ms per MB here
+    stash, lab = np.empty(m, np.int64), np.empty(m, cells.label.dtype)
+    k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True
         return _failed("a vertex index out of range" if k == -2 else "a row repeats a vertex")
@@ -157,7 +159,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         stop[0] = True
         return _failed("unbalanced")
     rows, part = rows[:k], part[:k]
-    n_zero = face_flags(pts, part, ZERO_AREA_RTOL, np.empty(k, np.int8))[1]
+    n_zero = face_flags(pts, part, ZERO_AREA_RTOL, lab.view(np.int8)[:k])[1]
     start = np.empty(n + 1, np.int32)
     keys = np.empty(3 * k, np.int64)
     rec = np.empty((k, REC_WIDTH), np.int32)
@@ -181,7 +183,8 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
         pillows = pillow_rows(rec, g.order, g.starts)
         scratch = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
-    order = rows[local]
+    # mode "clip": numpy buffers ``out`` in its default mode; the claim is proved, not trusted
+    order = np.take(rows, local, out=stash[:k], mode="clip")
     proof = -1
     if seen is not None:
         proof = int(check_claimed_part(tri, indices, restart, True, order, seen, scratch)[0])
