@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammesh.strips._numba import kernel
+from hammesh.strips._numba import kernel, row
 
 __all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "decode_draws_into", "first_wrong_draw"]
 
@@ -120,8 +120,8 @@ def decode_draws_into(indices, restart, use_restart, drawn):
             pos = 0
             continue
         if pos >= 2:
-            a = indices[i - 2]
-            b = indices[i - 1]
+            a = indices[row(i - 2)]  # row(): no negative-index wraparound (see _cover_kernels)
+            b = indices[row(i - 1)]
             if (a != b) & (b != v) & (a != v):
                 if k >= cap:
                     return k
@@ -129,9 +129,10 @@ def decode_draws_into(indices, restart, use_restart, drawn):
                 odd = pos % 2 == 1  # window starts at an odd position: drawn (b, a, v)
                 x = b if odd else a
                 y = a if odd else b
-                drawn[k, 0] = x if (x >= 0) & (x <= top) else -1
-                drawn[k, 1] = y if (y >= 0) & (y <= top) else -1
-                drawn[k, 2] = v if (v >= 0) & (v <= top) else -1
+                j = row(k)
+                drawn[j, 0] = x if (x >= 0) & (x <= top) else -1
+                drawn[j, 1] = y if (y >= 0) & (y <= top) else -1
+                drawn[j, 2] = v if (v >= 0) & (v <= top) else -1
                 k += 1
         pos += 1
     return k
@@ -145,13 +146,16 @@ def first_wrong_draw(tri, drawn, count, order, seen):
     m = tri.shape[0]
     for k in range(count):
         t = order[k]
-        if t < 0 or t >= m or seen[t]:
+        if t < 0 or t >= m:
             return 4, k
-        seen[t] = True
+        r = row(t)  # in range: no negative-index wraparound (see _cover_kernels)
+        if seen[r]:
+            return 4, k
+        seen[r] = True
         x = drawn[k, 0]
         y = drawn[k, 1]
         z = drawn[k, 2]
         # -1 marks an index that does not fit: never a vertex, even of a row holding -1
-        if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[t, 0], tri[t, 1], tri[t, 2])):
+        if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[r, 0], tri[r, 1], tri[r, 2])):
             return 1, k
     return 0, -1
