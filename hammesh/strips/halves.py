@@ -83,13 +83,15 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     ``pool``: an executor whose thread labels the second half of the points meanwhile.
     """
     n = len(points)
-    sample = points[:: max(1, n // 4096)]
-    lo = sample.min(axis=0)
+    # one row per axis, contiguous: numpy's min and max along the rows of a narrow (k, 2)
+    # array took ~65 us each (the same values in ~5 us this way; on the critical path)
+    sample = np.ascontiguousarray(points[:: max(1, n // 4096)].T)
+    lo = sample.min(axis=1)
     with np.errstate(over="ignore", invalid="ignore"):
-        ext = sample.max(axis=0) - lo
+        ext = sample.max(axis=1) - lo
         axes = np.argsort(ext, kind="stable")[::-1]
         a, b = int(axes[0]), int(axes[1])
-        cut = float(np.median(sample[:, a]))
+        cut = float(np.median(sample[a]))
         cells = max(2, n_triangles // cell_triangles)
         h = max(float(np.sqrt(ext[a] * ext[b] / cells)), float(ext[a]) / cells)
         sizes = ((cut - lo[a]) / h, (lo[a] + ext[a] - cut) / h, ext[b] / h)
