@@ -3,6 +3,10 @@
 Both read the per-triangle records of :mod:`hammesh.strips._dual_kernels` (vertices,
 twins and a scratch column in one half cache line; ``int32`` or ``int64``, one kernel
 for both: numba compiles a specialisation per dtype).
+
+Row numbers that are known to be valid are turned into ``np.uint64`` (:data:`~hammesh.strips._numba.row`)
+before they index an array: numba then leaves out Python's negative-index wraparound (a
+compare and a select per access), which had been ~10% of the greedy cover's time.
 """
 
 from __future__ import annotations
@@ -12,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN
-from hammesh.strips._numba import NEXT_CORNER, carve, kernel, loop_helper
+from hammesh.strips._numba import CORNERS, NEXT_CORNER, carve, kernel, loop_helper, row
 from hammesh.strips._path_kernels import vertex_between
 
 __all__ = [
@@ -46,10 +50,11 @@ def queue_free_degrees(rec, seed_order, bucket, top):
         rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
     given = seed_order.shape[0] > 0
     for i in range(m):
-        t = seed_order[i] if given else m - 1 - i
-        d = rec[t, REC_SCRATCH]
-        bucket[d, top[d]] = t
-        top[d] += 1
+        t = row(seed_order[i] if given else m - 1 - i)
+        d = row(rec[t, REC_SCRATCH])
+        j = top[d]
+        bucket[d, row(j)] = t
+        top[d] = j + 1
 
 
 @loop_helper
@@ -60,9 +65,10 @@ def pop_fewest_free(rec, bucket, top):
     """
     for d in range(4):
         while top[d] > 0:
-            top[d] -= 1
-            t = bucket[d, top[d]]
-            if rec[t, REC_SCRATCH] == d:
+            j = top[d] - 1
+            top[d] = j
+            t = bucket[d, row(j)]
+            if rec[row(t), REC_SCRATCH] == d:
                 return t
     return -1
 
@@ -78,8 +84,7 @@ def free_step(rec, cur, entry, k, prev_pivot):
     h = rec[cur, REC_TWIN + k]
     if k == entry or h < 0:
         return Step(-1, -1, -1, 0)
-    u = h // 3
-    du = rec[u, REC_SCRATCH]
+    du = rec[row(h) // CORNERS, REC_SCRATCH]
     if du < 0:  # taken
         return Step(-1, -1, -1, 0)
     pivot = rec[cur, k] if entry < 0 else vertex_between(rec, cur, entry, k)
@@ -90,18 +95,21 @@ def free_step(rec, cur, entry, k, prev_pivot):
 @loop_helper
 def take_triangle(t, rec, bucket, top):
     """Mark ``t`` taken (free degree -1) and requeue its free neighbours one degree lower."""
-    rec[t, REC_SCRATCH] = -1
+    tr = row(t)
+    rec[tr, REC_SCRATCH] = -1
     for k in range(3):
-        h = rec[t, REC_TWIN + k]
+        h = rec[tr, REC_TWIN + k]
         if h < 0:
             continue
-        u = h // 3
+        u = row(h) // CORNERS
         d = rec[u, REC_SCRATCH]
         if d >= 0:
             d -= 1
             rec[u, REC_SCRATCH] = d
-            bucket[d, top[d]] = u
-            top[d] += 1
+            dd = row(d)
+            j = top[dd]
+            bucket[dd, row(j)] = u
+            top[dd] = j + 1
 
 
 @loop_helper
@@ -112,6 +120,7 @@ def grow_path(cur, entry, prev_pivot, rec, bucket, top, out, w_swap):
     swap`` (few free neighbours first, so no triangle is stranded; then the
     alternating turn).  Appends to ``out``; returns a :class:`GrownPath`.
     """
+    at = row(cur)  # unsigned from here on (see the module docstring)
     n = 0
     first_exit = -1
     first_pivot = -1
@@ -120,7 +129,7 @@ def grow_path(cur, entry, prev_pivot, rec, bucket, top, out, w_swap):
         best_score = 1 << 30
         best_pivot = -1
         for k in range(3):
-            st = free_step(rec, cur, entry, k, prev_pivot)
+            st = free_step(rec, at, entry, k, prev_pivot)
             if st.h < 0:
                 continue
             score = 2 * st.degree + w_swap * st.swap
@@ -133,14 +142,14 @@ def grow_path(cur, entry, prev_pivot, rec, bucket, top, out, w_swap):
         if n == 0:
             first_exit = best
             first_pivot = best_pivot
-        h = rec[cur, REC_TWIN + best]
-        u = h // 3
+        h = row(rec[at, REC_TWIN + best])
+        u = h // CORNERS
         take_triangle(u, rec, bucket, top)
         out[n] = u
         n += 1
         prev_pivot = best_pivot
-        entry = h - 3 * u
-        cur = u
+        entry = np.int64(h - CORNERS * u)
+        at = u
     return GrownPath(n, first_exit, first_pivot)
 
 

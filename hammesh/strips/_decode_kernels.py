@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammesh.strips._numba import kernel
+from hammesh.strips._numba import kernel, row
 
-__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part"]
+__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "decode_draws_into", "first_wrong_draw"]
 
 
 @kernel
@@ -73,8 +73,7 @@ def check_claimed_draws(tri, indices, restart, use_restart, order):
     return check_claimed_part(tri, indices, restart, use_restart, order, np.zeros(m, np.bool_))
 
 
-@kernel
-def check_claimed_part(tri, indices, restart, use_restart, order, seen):
+def check_claimed_part(tri, indices, restart, use_restart, order, seen, drawn=None):
     """:func:`check_claimed_draws` on a part of a buffer that starts a strip (at a restart).
 
     ``indices`` must draw exactly the rows ``order``, in that order; each is marked in
@@ -82,10 +81,37 @@ def check_claimed_part(tri, indices, restart, use_restart, order, seen):
     parts of one buffer cut just after restart indices decode as the whole does (a
     restart resets the strip), so when every part returns 0, the claims add up to ``m``
     rows and every row is in ``seen``, the buffer draws each row once with its winding.
+
+    Two passes: :func:`decode_draws_into` decodes the buffer alone (sequential reads and
+    writes), then :func:`first_wrong_draw` compares the draws with the claimed rows, a
+    loop of a few instructions around one gather of ``tri[order[k]]``.  Split this way
+    more of those scattered reads are in flight at once: at 1M triangles a half's proof
+    took 15.7-17.5 ms in one pass and 10.7-11.1 ms in two (thread CPU, caches cold).
+    ``drawn``: ``(len(order) + 1) * 3`` ``int32`` of scratch (made here if not given).
     """
-    m = tri.shape[0]
     n = order.shape[0]
+    if drawn is None or drawn.shape[0] < 3 * (n + 1):
+        drawn = np.empty(3 * (n + 1), np.int32)
+    drawn = drawn[: 3 * (n + 1)].reshape(n + 1, 3)
+    count = decode_draws_into(indices, restart, use_restart, drawn)
+    status, k = first_wrong_draw(tri, drawn, min(count, n), order, seen)
+    if status != 0:
+        return status, k
+    if count > n:
+        return 2, n
+    if count < n:
+        return 3, count
+    return 0, -1
+
+
+@kernel
+def decode_draws_into(indices, restart, use_restart, drawn):
+    """The triangles ``indices`` draws (OpenGL's strip rules), each with its winding, into
+    ``drawn`` (``int32``; an index outside ``[0, 2**31)`` is written as -1, which no row
+    holds).  Returns how many, stopping at ``len(drawn)``."""
+    cap = drawn.shape[0]
     L = indices.shape[0]
+    top = np.int64(0x7FFFFFFF)
     pos = 0  # position inside the current strip
     k = 0
     for i in range(L):
@@ -94,23 +120,42 @@ def check_claimed_part(tri, indices, restart, use_restart, order, seen):
             pos = 0
             continue
         if pos >= 2:
-            a = indices[i - 2]
-            b = indices[i - 1]
+            a = indices[row(i - 2)]  # row(): no negative-index wraparound (see _cover_kernels)
+            b = indices[row(i - 1)]
             if (a != b) & (b != v) & (a != v):
-                if k >= n:
-                    return 2, k
-                t = order[k]
-                if t < 0 or t >= m or seen[t]:
-                    return 4, k
-                seen[t] = True
+                if k >= cap:
+                    return k
                 # selects instead of branches: the window's parity would be mispredicted
                 odd = pos % 2 == 1  # window starts at an odd position: drawn (b, a, v)
                 x = b if odd else a
                 y = a if odd else b
-                if not _same_rotation(x, y, v, tri[t, 0], tri[t, 1], tri[t, 2]):
-                    return 1, k
+                j = row(k)
+                drawn[j, 0] = x if (x >= 0) & (x <= top) else -1
+                drawn[j, 1] = y if (y >= 0) & (y <= top) else -1
+                drawn[j, 2] = v if (v >= 0) & (v <= top) else -1
                 k += 1
         pos += 1
-    if k != n:
-        return 3, k
+    return k
+
+
+@kernel
+def first_wrong_draw(tri, drawn, count, order, seen):
+    """``(0, -1)`` if draw ``k`` is row ``order[k]`` with its winding for every ``k <
+    count`` (each row marked in ``seen``, none twice), else ``(status, k)`` of the first
+    that is not: 4 ``order[k]`` out of range or already seen, 1 a different triangle."""
+    m = tri.shape[0]
+    for k in range(count):
+        t = order[k]
+        if t < 0 or t >= m:
+            return 4, k
+        r = row(t)  # in range: no negative-index wraparound (see _cover_kernels)
+        if seen[r]:
+            return 4, k
+        seen[r] = True
+        x = drawn[k, 0]
+        y = drawn[k, 1]
+        z = drawn[k, 2]
+        # -1 marks an index that does not fit: never a vertex, even of a row holding -1
+        if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[r, 0], tri[r, 1], tri[r, 2])):
+            return 1, k
     return 0, -1

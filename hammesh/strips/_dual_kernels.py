@@ -12,7 +12,7 @@ from collections import namedtuple
 import numpy as np
 
 from hammesh.halfedge import half_edge_twins_packed
-from hammesh.strips._numba import kernel, loop_helper
+from hammesh.strips._numba import kernel, loop_helper, row
 
 __all__ = [
     "FACE_OK",
@@ -94,14 +94,17 @@ def is_zero_area(pts, a, b, c, rtol):
 @kernel
 def face_flags(pts, tri, rtol, flags):
     """Fill ``flags[t]``: 1 repeated vertex, 2 zero area (:func:`is_zero_area`), 0
-    otherwise; return both counts."""
+    otherwise; return both counts.  Every index of ``tri`` must be in range (the callers'
+    rows are checked: :func:`hammesh.halfedge.mesh_arrays`, or the halves' rows copy):
+    they index the points as ``np.uint64``, without numba's negative-index wraparound
+    (:data:`~hammesh.strips._numba.row`; ~15% of the census at 1M triangles)."""
     m = tri.shape[0]
     n_rep = 0
     n_zero = 0
     for t in range(m):
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
+        a = row(tri[t, 0])
+        b = row(tri[t, 1])
+        c = row(tri[t, 2])
         if a == b or b == c or c == a:
             flags[t] = FACE_REPEATED
             n_rep += 1

@@ -10,7 +10,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper
+from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper, row
 from hammesh.strips._path_kernels import edge_to_neighbour, edge_towards
 
 __all__ = ["stitch_strips", "emit_restart_joined", "RestartBuffer", "restart_buffer", "WrittenPath", "write_path"]
@@ -171,24 +171,25 @@ def write_path(tri, twin3, order, a, b, out, pos):
     head (the first triangle keeps its winding at an even position); then one new vertex
     per triangle, preceded by the previous pivot where two pivots coincide.
     """
-    t = order[a]
+    # rows and positions as row(): no negative-index wraparound (see _cover_kernels)
+    t = row(order[a])
     mx = max(tri[t, 0], tri[t, 1], tri[t, 2])
     if b - a == 1:
         for j in range(3):
-            out[pos + j] = tri[t, j]
+            out[row(pos + j)] = tri[t, j]
         return WrittenPath(pos + 3, 0, mx, 0)
     k = edge_to_neighbour(twin3, t, order[a + 1])
     if k < 0:
         return WrittenPath(pos, 0, mx, 1)
-    out[pos] = tri[t, (k + 2) % 3]
-    out[pos + 1] = tri[t, k]
-    out[pos + 2] = tri[t, NEXT_CORNER[k]]
+    out[row(pos)] = tri[t, (k + 2) % 3]
+    out[row(pos + 1)] = tri[t, k]
+    out[row(pos + 2)] = tri[t, NEXT_CORNER[k]]
     pos += 3
     prev_pivot = tri[t, k]
     swaps = 0
     for i in range(a + 1, b):
-        u = order[i]
-        kin = twin3[t, k] - 3 * u
+        u = row(order[i])
+        kin = np.int64(twin3[t, k]) - 3 * np.int64(u)
         v = tri[u, (kin + 2) % 3]
         if i < b - 1:
             kout = edge_to_neighbour(twin3, u, order[i + 1])
@@ -198,12 +199,12 @@ def write_path(tri, twin3, order, a, b, out, pos):
             # a swap (two equal pivots) in ~1 of 5 positions: written always, kept by
             # advancing or not (a branch here would be mispredicted at every swap)
             sw = np.int64(p == prev_pivot)
-            out[pos] = prev_pivot
+            out[row(pos)] = prev_pivot
             pos += sw
             swaps += sw
             prev_pivot = p
             k = kout
-        out[pos] = v
+        out[row(pos)] = v
         pos += 1
         mx = max(mx, v)
         t = u

@@ -14,6 +14,12 @@ fast for the same reason: it writes each strip while it walks it, looking only a
 small window of triangles.  It builds no adjacency, so on scattered rows its strips are
 short; we keep the global greedy cover (fewest free neighbours first) and borrow only
 the write-as-you-walk.  Our code.
+
+The helpers it inlines (:func:`~hammesh.strips._cover_kernels.grow_both_ways`,
+:func:`~hammesh.strips._emit_kernels.write_path`) index with unsigned row numbers
+(:data:`~hammesh.strips._numba.row`).  numba's cache of this module does not notice
+an edit of theirs: change this file too (this note) when they change, or its cached
+kernel keeps the old code.
 """
 
 from __future__ import annotations

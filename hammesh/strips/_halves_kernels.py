@@ -20,7 +20,7 @@ import numpy as np
 
 from hammesh.halfedge import bucket_half_edges_into
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN, REC_WIDTH
-from hammesh.strips._numba import kernel, loop_helper
+from hammesh.strips._numba import CORNERS, kernel, loop_helper, row
 
 __all__ = ["vertex_cells_into", "rows_of_cells_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
 
@@ -64,28 +64,28 @@ def pair_records_into(tri, start, mark, keys, rec, loose):
     for v in range(n_points):
         s1 = start[v]
         for j in range(s0, s1):
-            kj = keys[j]
-            o = kj >> 33
+            kj = keys[row(j)]  # row(): no negative-index wraparound (see _cover_kernels)
+            o = row(kj >> 33)
             p = mark[o]
             if p == -1:  # first half of edge (v, o)
                 mark[o] = j
             elif p >= 0:  # second half: must run the other way
-                kp = keys[p]
+                kp = keys[row(p)]
                 if ((kp ^ kj) >> 32) & 1 == 0:
                     return HalfPairing(-1, n_loose)
-                hj = kj & mask
-                hp = kp & mask
-                rec[hj // 3, REC_TWIN + hj % 3] = hp
-                rec[hp // 3, REC_TWIN + hp % 3] = hj
+                hj = row(kj & mask)
+                hp = row(kp & mask)
+                rec[hj // CORNERS, REC_TWIN + hj % CORNERS] = hp
+                rec[hp // CORNERS, REC_TWIN + hp % CORNERS] = hj
                 mark[o] = -2
                 pairs += 1
             else:  # a third triangle on the edge
                 return HalfPairing(-1, n_loose)
         for j in range(s0, s1):
-            o = keys[j] >> 33
+            o = row(keys[row(j)] >> 33)
             if mark[o] >= 0:  # alone on its edge in this half
                 loose[n_loose, 0] = v
-                loose[n_loose, 1] = keys[mark[o]]
+                loose[n_loose, 1] = keys[row(mark[o])]
                 n_loose += 1
             mark[o] = -1
         s0 = s1
@@ -204,20 +204,22 @@ def rows_of_cells_into(tri, label, first, last, stash, lab, count, rows, half):
         if a == b or b == c or c == a:
             stash[0] = t
             return -1
-        l = label[min(a, min(b, c))]
+        l = label[row(min(a, min(b, c)))]  # checked in range: row() (see _cover_kernels)
         if first <= l < last:
-            stash[k] = t
-            lab[k] = l - first
-            count[l - first + 1] += 1
+            stash[row(k)] = t
+            lab[row(k)] = l - first
+            count[row(l - first + 1)] += 1
             k += 1
     for i in range(last - first):
         count[i + 1] += count[i]
     for i in range(k):
-        t = stash[i]
-        p = count[lab[i]]
-        count[lab[i]] = p + 1
-        rows[p] = t
-        half[p, 0] = tri[t, 0]
-        half[p, 1] = tri[t, 1]
-        half[p, 2] = tri[t, 2]
+        t = row(stash[i])
+        c = row(lab[i])
+        p = count[c]
+        count[c] = p + 1
+        q = row(p)
+        rows[q] = t
+        half[q, 0] = tri[t, 0]
+        half[q, 1] = tri[t, 1]
+        half[q, 2] = tri[t, 2]
     return k

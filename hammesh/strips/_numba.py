@@ -19,13 +19,24 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["kernel", "loop_helper", "HELPERS_WITHOUT_REFCOUNT", "carve", "NEXT_CORNER"]
+__all__ = ["kernel", "loop_helper", "HELPERS_WITHOUT_REFCOUNT", "carve", "NEXT_CORNER", "row", "CORNERS"]
 
 #: The decorator of every strip kernel that may allocate.
 kernel = njit(cache=True, nogil=True)
 
 #: ``(k + 1) % 3`` as a table: an index select instead of a division or a branch.
 NEXT_CORNER = np.array([1, 2, 0], np.int64)
+
+#: An index the caller knows is ``>= 0``, as ``np.uint64``: numba indexes with it without
+#: Python's negative-index wraparound (a compare and a select per access; ~10% of the
+#: greedy cover's time at 1M triangles).  Arithmetic on it stays unsigned only with other
+#: ``uint64`` operands (``row(h) // CORNERS``; with a literal, ``row(h) // 3``, numba
+#: types the result ``int64`` again), so convert back (``np.int64``) for signed arithmetic.
+row = np.uint64
+
+#: Corners per triangle as ``np.uint64``: ``row(h) // CORNERS`` is the triangle of
+#: half-edge ``h``, still unsigned.
+CORNERS = np.uint64(3)
 
 
 def _probe(a):

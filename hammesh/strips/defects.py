@@ -125,7 +125,11 @@ ZERO_AREA_RTOL = 1e-13
 
 
 def zero_area_rows(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """``(m,) bool``: rows of zero area (:data:`ZERO_AREA_RTOL`; rows repeating a vertex too)."""
+    """``(m,) bool``: rows of zero area (:data:`ZERO_AREA_RTOL`; rows repeating a vertex too).
+
+    Every index must be in ``[0, len(points))`` (checked by the callers, e.g. with
+    :func:`hammesh.halfedge.mesh_arrays`): the compiled census reads the points unchecked.
+    """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
     flags = np.empty(len(tri), np.int8)

@@ -383,7 +383,7 @@ def encode(
         See :func:`mesh_paths`.  A HamiltonianMesh gives exactly one strip per cycle.
     verify : bool
         Decode the buffer with OpenGL's rules and compare with the mesh
-        (:func:`~hammesh.strips.gl.verify_gl_strip`, one O(L) compiled pass against
+        (:func:`~hammesh.strips.gl.verify_gl_strip`, two O(L) compiled passes against
         the order the paths were meant to draw).  Costs ~10% of the encoding; leave on.
     cache : int, optional
         Lay the strips for a FIFO vertex cache of this many entries (at least 3;

@@ -302,7 +302,7 @@ def verify_gl_strip(
         of multisets.
     order : (m,) int, optional
         The rows in the order the encoder meant them to be drawn.  Then the proof is
-        one O(L) compiled pass (:func:`~hammesh.strips._decode_kernels.check_claimed_draws`): decode
+        two O(L) compiled passes (:func:`~hammesh.strips._decode_kernels.check_claimed_draws`): decode
         with OpenGL's rules, the ``k``-th triangle drawn is row ``order[k]`` with its
         winding, and ``order`` names every row once.  If that claim fails, the full
         O(m log m) comparison below decides (and names the problem).

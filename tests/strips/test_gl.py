@@ -197,6 +197,48 @@ def test_claimed_order_proof_agrees_with_the_full_comparison(seed, join, corrupt
             verify_gl_strip(m.triangles, idx, s.restart_index, order=claim)
 
 
+def _claimed_status_reference(tri, indices, restart, order):
+    """The claimed-order proof's ``(status, k)``, draw by draw in plain Python."""
+    draws = gl_decode_reference(indices, restart)
+    seen = set()
+    for k, d in enumerate(draws):
+        if k >= len(order):
+            return 2, k
+        t = int(order[k])
+        if not 0 <= t < len(tri) or t in seen:
+            return 4, k
+        seen.add(t)
+        row = [int(x) for x in tri[t]]
+        if list(d) not in (row, row[1:] + row[:1], row[2:] + row[:2]):
+            return 1, k
+    return (0, -1) if len(draws) == len(order) else (3, len(draws))
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(0, 6))
+def test_claimed_part_in_two_passes_reports_the_first_wrong_draw(seed, corrupt):
+    """check_claimed_part (decode pass, then the gather pass) gives the status and draw of
+    the one-pass definition for every fault, including an index too big for ``int32``
+    (6) that must not wrap onto a vertex."""
+    from hammesh.strips._decode_kernels import check_claimed_part
+
+    m = grid_mesh(4, 3) if seed % 2 else torus_mesh(6, 4)
+    d = dual_mesh(m)
+    rng = np.random.default_rng(seed)
+    order, starts = random_path_cover(d.neighbor_triangles, rng)
+    s = gl_strip(d.triangles, d.twin, order, starts, join="restart")
+    idx, claim = corrupt_claim(s.indices, order, corrupt if corrupt <= 4 else 0, rng, len(m.points), RESTART_INDEX)
+    if corrupt == 5:
+        claim = claim[:-1]  # one draw more than claimed
+    if corrupt == 6:
+        i = int(rng.integers(len(idx)))
+        if idx[i] != RESTART_INDEX:
+            idx[i] += 2**32  # the same vertex modulo 2**32
+    tri = d.triangles.astype(np.int64)
+    got = check_claimed_part(tri, idx.astype(np.int64), RESTART_INDEX, True, np.asarray(claim, np.int64),
+                             np.zeros(len(tri), np.bool_))
+    assert tuple(int(x) for x in got) == _claimed_status_reference(tri, idx, RESTART_INDEX, claim)
+
+
 def test_claimed_order_with_a_bad_claim_falls_back_to_naming_the_problem():
     m = zigzag_mesh(3)
     with pytest.raises(VerificationError, match="reversed"):

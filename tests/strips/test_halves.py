@@ -284,3 +284,27 @@ def test_coordinates_whose_differences_overflow_still_split(monkeypatch):
     for fast in (True, False):
         s = encode(huge, fast=fast)
         assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(0, 6), st.booleans())
+@settings(max_examples=25, deadline=None)
+def test_halves_count_double_sided_faces_as_the_census(seed, n_pillows, fast):
+    """Closed two-triangle pieces (a face and its reverse on their own vertices) added to a
+    mesh: the halves report as many double-sided faces as the one-thread census, the fast
+    mode from the greedy cover's paths of two (halves.pillow_rows)."""
+    from hammesh.strips.dual import dual_mesh
+
+    m = delaunay_mesh(seed, 200)
+    rng = np.random.default_rng(seed)
+    pts, tri = [m.points], [m.triangles]
+    n = len(m.points)
+    for i in range(n_pillows):
+        p = m.points[rng.integers(n)] + rng.random((3, 2)) * 1e-3
+        pts.append(p)
+        a, b, c = n + 3 * i, n + 3 * i + 1, n + 3 * i + 2
+        tri.append(np.array([[a, b, c], [a, c, b]]))
+    mesh = Mesh(np.concatenate(pts), np.concatenate(tri))
+    s = _halves(mesh, fast=fast)
+    assert s is not None
+    assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(mesh.triangles)
+    assert s.defects.double_sided == n_pillows == dual_mesh(mesh).defects.double_sided
