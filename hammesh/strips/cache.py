@@ -105,9 +105,10 @@ def vertex_cache_stats(
 
 
 #: Weight of one more index (a reversed strip may need one more swap) against one more
-#: vertex load in :func:`fifo_strip_order`.  On the q30 square of 10k triangles (FIFO 16,
-#: the swap-free chains' strips): 0 gave 1.282 indices per triangle at ACMR 0.901, 0.3
-#: 1.281 / 0.900, 0.7 1.275 / 0.896, 1.5 1.271 / 0.899; no reversal 1.264 / 0.935.
+#: vertex load in :func:`fifo_strip_order`: a pair whose gain does not beat it does not
+#: fix a direction.  On the q30 square of 10k triangles (FIFO 16, the swap-free chains'
+#: strips, session 11's nearest-neighbour order): 0 gave 1.282 indices per triangle at
+#: ACMR 0.901, 0.3 1.281 / 0.900, 0.7 1.275 / 0.896, 1.5 1.271 / 0.899.
 REVERSAL_WEIGHT = 0.7
 
 
@@ -123,11 +124,10 @@ def fifo_strip_order(
     """The dual paths ``order``/``starts`` re-ordered and turned for a FIFO of ``cache_size`` entries.
 
     Each path keeps its triangles (so the buffer keeps its length, but for a swap where a
-    reversed path needs one); the next path sent is the one, among those through a
-    cached vertex, with the fewest simulated misses per triangle in its better direction
-    (:mod:`hammesh.strips._cache_order_kernels`).  ``tri``/``twin``: the rows the paths
-    refer to and their pairing; ``order`` must be valid dual paths.  Returns the new
-    ``(order, starts)``.
+    reversed path needs one); the paths are chained pair by pair, the pairs that save the
+    most vertex loads first (:mod:`hammesh.strips._cache_order_kernels`, greedy edge).
+    ``tri``/``twin``: the rows the paths refer to and their pairing; ``order`` must be
+    valid dual paths.  Returns the new ``(order, starts)``.
     """
     S = len(starts) - 1
     if S < 2:
@@ -138,9 +138,11 @@ def fifo_strip_order(
     fw_lo, fw_hi = _segments(fw)
     bw_lo, bw_hi = _segments(bw)
     vt_off, vt = _cache_order_kernels.strips_at_vertices(fw, fw_lo, fw_hi, int(n_points))
-    pick, flip = _cache_order_kernels.fifo_strip_order(
-        fw, fw_lo, fw_hi, bw, bw_lo, bw_hi, np.diff(starts).astype(np.float64), vt_off, vt, int(n_points),
-        int(cache_size), float(REVERSAL_WEIGHT),
+    gain, ab = _cache_order_kernels.pair_gains(fw, fw_lo, fw_hi, bw, bw_lo, bw_hi, vt_off, vt, int(n_points), int(cache_size))
+    nf, nb = fw_hi - fw_lo, bw_hi - bw_lo
+    short = np.minimum(nf, nb)
+    pick, flip = _cache_order_kernels.greedy_edge_order(
+        gain, ab, (nf - short).astype(np.float64), (nb - short).astype(np.float64), float(REVERSAL_WEIGHT)
     )
     return _cache_order_kernels.paths_in_order(order, starts, pick, flip)
 

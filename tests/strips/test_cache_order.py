@@ -38,69 +38,95 @@ def strips_of(indices, restart=R):
     return out
 
 
-def oracle_check(fw, bw, n_tri, C, pick, flip):
-    """Replay the greedy with a deque FIFO; at each step the kernel's choice must score the minimum.
+def deque_loads(seq, C, fifo=()):
+    """Loads of ``seq`` read after the FIFO ``fifo`` (oldest first), and the FIFO after it: a deque model."""
+    q = deque(fifo)
+    loads = 0
+    for v in seq:
+        if v not in q:
+            q.append(v)
+            loads += 1
+            if len(q) > C:
+                q.popleft()
+    return loads, list(q)
 
-    Candidates: unsent strips through a cached vertex; score: (misses + w * extra) / triangles
-    in the better direction; with no candidate, the first unsent strip.  Ties may go either way.
-    """
-    S = len(fw)
-    fifo: deque = deque()
-    used = [False] * S
 
-    def misses(seq):
-        q = deque(fifo)
-        miss = 0
-        for v in seq:
-            if v not in q:
-                q.append(v)
-                miss += 1
-                if len(q) > C:
-                    q.popleft()
-        return miss
+def buffers(mesh, method="greedy"):
+    """A cover's strips as index buffers (as the cover oriented them, and reversed) with their bounds."""
+    dual, tri, twin, order, starts, ids = _oriented_local(mesh, method, None, dual_mesh(mesh))
+    S = len(starts) - 1
+    rev, _ = K.paths_in_order(order, starts, np.arange(S, dtype=np.int64), np.ones(S, np.bool_))
+    out = []
+    for o in (order, rev):
+        b = restart_buffer(tri, twin, o, starts, -1).indices
+        c = np.flatnonzero(b == -1)
+        out += [b, np.r_[0, c + 1].astype(np.int64), np.r_[c, len(b)].astype(np.int64)]
+    return dual, tri, twin, order, starts, out
 
-    for k in range(S):
-        cached = set(fifo)
-        cands = [s for s in range(S) if not used[s] and cached & set(fw[s])]
-        s_k, f_k = int(pick[k]), bool(flip[k])
-        if not cands:
-            assert s_k == used.index(False) and not f_k
-        else:
-            assert s_k in cands
-            short = lambda s: min(len(fw[s]), len(bw[s]))  # noqa: E731
-            score = lambda s, seq: (misses(seq) + REVERSAL_WEIGHT * (len(seq) - short(s))) / n_tri[s]  # noqa: E731
-            best = min(min(score(s, fw[s]), score(s, bw[s])) for s in cands)
-            got = score(s_k, bw[s_k] if f_k else fw[s_k])
-            assert got <= best + 1e-12
-        used[s_k] = True
-        for v in bw[s_k] if f_k else fw[s_k]:
-            if v not in fifo:
-                fifo.append(v)
-                if len(fifo) > C:
-                    fifo.popleft()
+
+def replay_greedy_edge(gain, ab, extra_f, extra_b, w):
+    """The greedy edge in plain Python: pairs best first (stable), ends free, directions agree,
+    no cycle, gain beats ``w`` per newly fixed extra index; chains head by head in strip order."""
+    S = len(extra_f)
+    dirn, succ, pred = [-1] * S, [-1] * S, [-1] * S
+    comp = list(range(S))
+    for p in sorted(range(len(gain)), key=lambda p: -gain[p]):
+        a, da, b, db = map(int, ab[p])
+        if succ[a] >= 0 or pred[b] >= 0 or dirn[a] not in (-1, da) or dirn[b] not in (-1, db):
+            continue
+        extra = (extra_b[a] if da else extra_f[a]) * (dirn[a] < 0) + (extra_b[b] if db else extra_f[b]) * (dirn[b] < 0)
+        if gain[p] - w * extra <= 0 or comp[a] == comp[b]:
+            continue
+        old = comp[a]
+        comp = [comp[b] if c == old else c for c in comp]
+        succ[a], pred[b], dirn[a], dirn[b] = b, a, da, db
+    pick, flip = [], []
+    for s in range(S):
+        if pred[s] < 0:
+            x = s
+            while x >= 0:
+                pick.append(x)
+                flip.append(bool(dirn[x] == 1) if dirn[x] >= 0 else bool(extra_f[x] > extra_b[x]))
+                x = succ[x]
+    return pick, flip
 
 
 @settings(max_examples=25, deadline=None)
 @given(st.integers(0, 10_000), st.integers(30, 160), st.sampled_from([3, 4, 8, 16]))
-def test_fifo_order_is_the_greedy_of_the_rule(seed, n, C):
+def test_fifo_states_pair_gains_and_greedy_edge_match_plain_python(seed, n, C):
     mesh = delaunay_mesh(seed, n)
-    dual, tri, twin, order, starts, ids = _oriented_local(mesh, "greedy", None, dual_mesh(mesh))
+    dual, tri, twin, order, starts, (fw, flo, fhi, bw, blo, bhi) = buffers(mesh)
     S = len(starts) - 1
-    rev, _ = K.paths_in_order(order, starts, np.arange(S, dtype=np.int64), np.ones(S, np.bool_))
-    fwb = restart_buffer(tri, twin, order, starts, -1).indices
-    bwb = restart_buffer(tri, twin, rev, starts, -1).indices
-    cf, cb = np.flatnonzero(fwb == -1), np.flatnonzero(bwb == -1)
-    flo, fhi = np.r_[0, cf + 1], np.r_[cf, len(fwb)]
-    blo, bhi = np.r_[0, cb + 1], np.r_[cb, len(bwb)]
-    off, vt = K.strips_at_vertices(fwb, flo, fhi, len(dual.points))
-    pick, flip = K.fifo_strip_order(fwb, flo, fhi, bwb, blo, bhi, np.diff(starts).astype(float), off, vt,
-                                    len(dual.points), C, REVERSAL_WEIGHT)
+    n_pts = len(dual.points)
+    seqs = {(s, d): (bw[blo[s]:bhi[s]] if d else fw[flo[s]:fhi[s]]).tolist() for s in range(S) for d in (0, 1)}
+    for d, (buf, lo, hi) in enumerate(((fw, flo, fhi), (bw, blo, bhi))):
+        states = K.fifo_states(buf, lo, hi, C, n_pts)
+        for s in range(S):
+            _, q = deque_loads(seqs[(s, d)], C)
+            assert states[s].tolist() == [-1] * (C - len(q)) + q
+    off, vt = K.strips_at_vertices(fw, flo, fhi, n_pts)
+    gain, ab = K.pair_gains(fw, flo, fhi, bw, blo, bhi, off, vt, n_pts, C)
+    got = {tuple(map(int, r)): int(g) for g, r in zip(gain, ab)}
+    assert len(got) == len(gain)  # each pair once
+    want = {}
+    for a in range(S):
+        for b in range(S):
+            if a == b or not set(seqs[(a, 0)]) & set(seqs[(b, 0)]):
+                continue
+            for da in (0, 1):
+                for db in (0, 1):
+                    alone, _ = deque_loads(seqs[(b, db)], C)
+                    after, _ = deque_loads(seqs[(b, db)], C, deque_loads(seqs[(a, da)], C)[1])
+                    if alone - after > 0:
+                        want[(a, da, b, db)] = alone - after
+    assert got == want
+    nf, nb = fhi - flo, bhi - blo
+    ef, eb = (nf - np.minimum(nf, nb)).astype(float), (nb - np.minimum(nf, nb)).astype(float)
+    pick, flip = K.greedy_edge_order(gain, ab, ef, eb, REVERSAL_WEIGHT)
     assert sorted(pick.tolist()) == list(range(S))
-    fw = [fwb[a:b].tolist() for a, b in zip(flo, fhi)]
-    bw = [bwb[a:b].tolist() for a, b in zip(blo, bhi)]
-    oracle_check(fw, bw, np.diff(starts), C, pick, flip)
+    assert (pick.tolist(), flip.tolist()) == replay_greedy_edge(gain, ab, ef, eb, REVERSAL_WEIGHT)
     # the paths come back whole, reversed where flipped
-    o2, s2 = fifo_strip_order(tri, twin, order, starts, len(dual.points), C)
+    o2, s2 = fifo_strip_order(tri, twin, order, starts, n_pts, C)
     assert len(s2) == len(starts)
     for k in range(S):
         p = order[starts[pick[k]] : starts[pick[k] + 1]]
