@@ -48,7 +48,7 @@ from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, greedy_strip_buf
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
-from hammesh.strips.cache import fifo_strip_order
+from hammesh.strips.cache import PIECE_LENGTH, fifo_strip_order, split_paths
 from hammesh.strips.cache import reorder_vertices as _first_use_numbering
 from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
@@ -331,6 +331,9 @@ def _oriented_local(
     else:
         tri, twin, order, starts, ids = _greedy_cover(dual, improve, zigzag)
     order, starts = check_starts(order, starts, dual.n_triangles)
+    if cache is not None:
+        # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
+        starts = split_paths(starts, PIECE_LENGTH * cache)
     order, _ = orient_paths(tri, twin, order, starts)
     if cache is not None:
         order, starts = fifo_strip_order(tri, twin, order, starts, len(dual.points), cache)
@@ -400,9 +403,10 @@ def encode(
         Lay the strips for a FIFO vertex cache of this many entries (at least 3).  With
         ``method="auto"``, the cache-aware cover (:func:`cache_paths`): fewer
         vertex-shader runs for some more indices.  With ``"greedy"`` or ``"zigzag"``,
-        that cover's strips (its indices, but for a swap where a reversed strip needs
-        one), sent in an order laid for the FIFO
-        (:func:`~hammesh.strips.cache.fifo_strip_order`).
+        that cover's strips, those longer than ``cache.PIECE_LENGTH * cache`` triangles
+        cut into equal pieces (:func:`~hammesh.strips.cache.split_paths`), sent in an
+        order laid for the FIFO (:func:`~hammesh.strips.cache.fifo_strip_order`): on
+        q30 planar meshes ``"zigzag"`` stays under 1.30 indices per triangle.
     reorder_vertices : bool
         Renumber the vertices in order of first use (as meshoptimizer's
         ``optimizeVertexFetch``); the result's ``vertex_order`` says which old vertex

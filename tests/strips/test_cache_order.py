@@ -16,7 +16,7 @@ from hammesh.mesh import Mesh
 from hammesh.strips import decode_gl_strip, dual_mesh, encode, vertex_cache_stats
 from hammesh.strips import _cache_order_kernels as K
 from hammesh.strips._emit_kernels import restart_buffer
-from hammesh.strips.cache import REVERSAL_WEIGHT, fifo_strip_order
+from hammesh.strips.cache import PIECE_LENGTH, REVERSAL_WEIGHT, fifo_strip_order, split_paths
 from hammesh.strips.choose import choose_strip
 from hammesh.strips.encode import _oriented_local
 
@@ -147,21 +147,41 @@ def test_cache_order_draws_the_mesh_with_fewer_loads(mesh, method):
 
 
 @pytest.mark.parametrize("mesh", [square_mesh(0.0001), delaunay_mesh(6, 6000)], ids=["square-15k", "delaunay-12k"])
-def test_cache_order_keeps_the_cover(mesh):
-    """Above 5,000 triangles with many swaps the greedy cover is the only one tried: the same strips
-    (as sets of oriented triangles), at most one more swap per strip (a reversed one)."""
+def test_cache_order_keeps_the_cover_in_pieces(mesh):
+    """Above 5,000 triangles with many swaps the greedy cover is the only one tried: every strip is
+    a piece of one of its strips (at most PIECE_LENGTH * N triangles, the pieces of a strip of equal
+    length), each piece costing at most a restart, two start indices and a reversal's swap more."""
     plain = encode(mesh, method="greedy")
     s = encode(mesh, method="greedy", cache=16)
-    assert sorted(strips_of(s.indices), key=sorted) == sorted(strips_of(plain.indices), key=sorted)
-    assert len(plain.indices) <= len(s.indices) <= len(plain.indices) + s.n_strips
-    assert strips_of(s.indices) != strips_of(plain.indices)  # re-ordered
+    whole = strips_of(plain.indices)
+    pieces = strips_of(s.indices)
+    owner = {t: k for k, st_ in enumerate(whole) for t in st_}
+    longest = PIECE_LENGTH * 16
+    for p in pieces:
+        assert len({owner[t] for t in p}) == 1 and len(p) <= longest
+    counts = np.bincount([owner[next(iter(p))] for p in pieces], minlength=len(whole))
+    assert counts.tolist() == [-(-len(w) // longest) for w in whole]
+    assert len(s.indices) <= len(plain.indices) + 3 * (s.n_strips - plain.n_strips) + s.n_strips
+    assert pieces != sorted(pieces, key=lambda p: min(owner[t] for t in p))  # re-ordered
 
 
-def test_one_strip_is_left_alone():
+def test_split_paths():
+    st_ = np.array([0, 1, 49, 97, 200])
+    out = split_paths(st_, 48)
+    assert out.tolist() == [0, 1, 49, 97, 131, 165, 200]
+    assert split_paths(np.array([0, 5]), 5).tolist() == [0, 5]
+
+
+def test_one_long_strip_is_cut_into_pieces():
+    """A closed torus is one greedy strip; in cache mode it is cut into strips of at most
+    PIECE_LENGTH * N triangles (a longer strip cannot hand its vertices to the next one)."""
     t = torus_mesh(30, 20)
     plain = encode(t, method="greedy")
     assert plain.n_strips == 1
-    assert np.array_equal(encode(t, method="greedy", cache=16).indices, plain.indices)
+    s = encode(t, method="greedy", cache=16)
+    assert s.n_strips == -(-t.n_triangles // (PIECE_LENGTH * 16))
+    assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(t.triangles)
+    assert vertex_cache_stats(s.indices, R, t.n_triangles, 16).acmr < vertex_cache_stats(plain.indices, R, t.n_triangles, 16).acmr
 
 
 def test_stitched_and_reordered_vertices():
