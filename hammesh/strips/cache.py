@@ -37,6 +37,7 @@ __all__ = [
     "DEFAULT_CACHE",
     "REVERSAL_WEIGHT",
     "PIECE_LENGTH",
+    "SHORT_PIECE_LENGTH",
     "split_paths",
 ]
 
@@ -121,6 +122,14 @@ REVERSAL_WEIGHT = 0.7
 #: triangles 1.2837 / 0.876, 48 1.2947 / 0.856, 40 1.2988 / 0.848, 36 1.3029 / 0.846,
 #: 28 1.3264 / 0.825, 20 1.3610 / 0.797, 12 1.4405 / 0.782.
 PIECE_LENGTH = 3
+
+#: The same for ``encode(cache=N)`` with ``method="auto"``: the swap-free chains cut at
+#: ``1.25 N`` triangles, the fewest vertex loads of ours.  Against session 10's cache-aware
+#: cover (strips grown while the FIFO is simulated, 3 N at most; then in FIFO order) on the
+#: 14 meshes of ``bench_strips.py --peers --quick``: fewer indices on all 14 (q30 10k
+#: 1.375 -> 1.360), lower ACMR16 on 12 (0.835 -> 0.796), 0.008 higher on two
+#: (pyvista's Sphere 30x30, Delaunay 10k).
+SHORT_PIECE_LENGTH = 1.25
 
 
 def split_paths(starts: np.ndarray, longest: int) -> np.ndarray:
