@@ -874,7 +874,7 @@ def cache_bound_rows(quick: bool) -> None:
 CACHE_TABLE_OURS = (
     ("hammesh default", {}),
     ("hammesh method=zigzag", {"method": "zigzag"}),
-    ("hammesh --cache N (chains in pieces of 1.25 N)", {"cache": "N"}),
+    ("hammesh --cache N (auto: chains in short pieces)", {"cache": "N"}),
     ("hammesh --cache N greedy (FIFO order)", {"cache": "N", "method": "greedy"}),
     ("hammesh --cache N zigzag (FIFO order)", {"cache": "N", "method": "zigzag"}),
 )

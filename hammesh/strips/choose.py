@@ -113,7 +113,7 @@ def choose_strip(
         extra["triangles"] = enc.n_triangles
         extra["indices_per_triangle"] = len(strip.indices) / enc.n_triangles
     elif cache is not None:
-        # auto: the cache-aware cover; greedy / zigzag: that cover's strips in FIFO order
+        # auto: the swap-free chains in short pieces; greedy / zigzag: that cover; both in FIFO order
         strip = encode(mesh, method=method, join=join, restart_index=restart_index, cache=cache,
                        reorder_vertices=reorder_vertices)
         method = "cache" if method == "auto" else f"{method}+cache"
