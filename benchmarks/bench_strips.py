@@ -9,6 +9,7 @@
     python benchmarks/bench_strips.py --speed --repeat 5  # issue 16's speed target alone (q30 10k, 100k, 1M:
                                                      # wall and CPU vs meshopt stripify, then fresh processes)
     python benchmarks/bench_strips.py --cache-bound  # issue 16's cache target against strip layouts (grids, swap rates)
+    python benchmarks/bench_strips.py --cache-table  # issue 16's cache target: ipt, strips, ACMR, ATVR per encoder (q30)
 
 Then Thm 5.3 (Christofides) at ~1,000 and ~3,000 triangles, Lemma 5.1 on triangulated
 polygons, and real-world surfaces (issue 12): pyvista's bundled airplane and globe, its
@@ -580,6 +581,13 @@ def peer_rows(quick: bool, repeat: int, cache: int | None) -> dict[str, Mesh]:
             ok = c[1] <= v[1] and c[0] <= 1.30
             print(f"cache target on {k}: hammesh --cache {cache} ACMR16 {c[1]:.3f} at {c[0]:.3f} ipt vs meshopt vcache+stripify "
                   f"{v[1]:.3f} (target ACMR <= meshopt's at ipt <= 1.30: {'met' if ok else 'missed'})")
+            # the swap-free chains' strips in FIFO order: the lowest ACMR of ours at <= 1.30 (session 11)
+            from hammesh.strips import vertex_cache_stats
+
+            z = encode(meshes[k], method="zigzag", cache=cache)
+            zi, za = z.indices_per_triangle, vertex_cache_stats(z.indices, z.restart_index, z.n_triangles, 16).acmr
+            print(f"cache target on {k}: hammesh --cache {cache} --method zigzag ACMR16 {za:.3f} at {zi:.3f} ipt "
+                  f"({'met' if za <= v[1] and zi <= 1.30 else 'missed'})")
     for k in SPEED_MESHES:
         if k in worst and worst[k][1]:
             print(f"speed target on {k}: hammesh (verified) / meshopt stripify {worst[k][1]:.2f} (target <= 2)"
@@ -862,6 +870,74 @@ def cache_bound_rows(quick: bool) -> None:
     print("  indices per triangle; same-direction rows reuse the previous row's far side only while L/2 + 1 <= N - 1.")
 
 
+#: :func:`cache_table_rows`' encoders of ours: label and ``encode`` keywords (FIFO ``N``).
+CACHE_TABLE_OURS = (
+    ("hammesh default", {}),
+    ("hammesh method=zigzag", {"method": "zigzag"}),
+    ("hammesh --cache N (auto: chains in short pieces)", {"cache": "N"}),
+    ("hammesh --cache N greedy (FIFO order)", {"cache": "N", "method": "greedy"}),
+    ("hammesh --cache N zigzag (FIFO order)", {"cache": "N", "method": "zigzag"}),
+)
+
+
+def cache_table_rows(quick: bool, N: int = 16) -> None:
+    """Issue 16's cache target as one table per q30 mesh: indices per triangle, strips, ACMR and
+    ATVR (FIFO ``N``) of ours (default, swap-free chains, the cache-aware cover, and the greedy
+    and swap-free covers sent in FIFO order), meshopt stripify (input order, and after
+    ``optimize_vertex_cache``) and vtkStripper; every buffer decoded and compared with the mesh.
+    Times: one call each (thread CPU of ours includes the proof), for scale only."""
+    from hammesh.strips import vertex_cache_stats
+
+    mo = _meshopt()
+    meshes = {"q30 square 10k": planar(1.6e-4), "q30 A 12k": bundled("A", BUNDLED["A"])}
+    if not quick:
+        meshes["q30 square 100k"] = planar(1.6e-5)
+        meshes["q30 square 1M"] = planar(1.6e-6)
+    print()
+    print(f"Issue 16 cache target (FIFO {N}): ACMR <= meshopt vcache+stripify's at ipt <= 1.30")
+    head = f"{'mesh':<17}{'encoder':<40}{'ipt':>7}{'strips':>9}{'ACMR':>7}{'ATVR':>7}{'bad':>5}{'ms':>9}"
+    print(head)
+    print("-" * len(head))
+    for name, mesh in meshes.items():
+        if mesh is None:
+            continue
+        m = mesh.n_triangles
+        rows = []
+        for label, kw in CACHE_TABLE_OURS:
+            kw = {k: (N if v == "N" else v) for k, v in kw.items()}
+            t = time.process_time()
+            g = encode(mesh, **kw)
+            rows.append((label.replace(" N", f" {N}"), g.indices, g.restart_index, time.process_time() - t))
+        if mo is not None:
+            for label, vc in (("meshopt stripify", False), ("meshopt vcache+stripify", True)):
+                t = time.process_time()
+                b = meshopt_strip(mo, mesh.triangles, len(mesh.points), vc)
+                rows.append((label, b.astype(np.int64), R32, time.process_time() - t))
+        try:
+            poly = _vtk_poly(mesh)
+            t = time.process_time()
+            out = poly.strip()
+            rows.append(("vtkStripper", _vtk_buffer(out), R32, time.process_time() - t))
+        except ImportError:
+            pass
+        target = None
+        for label, idx, r, dt in rows:
+            c = vertex_cache_stats(idx, r, m, N)
+            S = int(np.count_nonzero(idx == r)) + 1 if r is not None else 1
+            bad = _bad_draws(mesh, idx, r)
+            print(f"{name:<17}{label:<40}{len(idx) / m:>7.4f}{S:>9,}{c.acmr:>7.3f}{c.atvr:>7.3f}{bad:>5}{1e3 * dt:>9.1f}")
+            if label == "meshopt vcache+stripify":
+                target = c.acmr
+        if target is not None:
+            ok = [lb for lb, idx, r, _ in rows if lb.startswith("hammesh") and len(idx) / m <= 1.30
+                  and vertex_cache_stats(idx, r, m, N).acmr <= target]
+            best = min(((vertex_cache_stats(idx, r, m, N).acmr, lb) for lb, idx, r, _ in rows
+                        if lb.startswith("hammesh") and len(idx) / m <= 1.30), default=None)
+            print(f"{name}: target ACMR <= {target:.3f} at ipt <= 1.30: {'met by ' + ', '.join(ok) if ok else 'missed'}"
+                  + (f" (best of ours at <= 1.30: {best[0]:.3f}, {best[1]})" if best else ""))
+    print("ms: process CPU of one call (ours with its round-trip proof), for scale only (the speed target is --speed).")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
@@ -873,7 +949,14 @@ def main() -> None:
                     help="only the cache target against strip layouts (grid rows and snakes, q30 swap rates)")
     ap.add_argument("--speed", action="store_true",
                     help="only issue 16's speed target: q30 10k/100k/1M, ours vs meshopt stripify, wall and CPU, fresh processes")
+    ap.add_argument("--cache-table", action="store_true",
+                    help="only the cache target's table: ipt, strips, ACMR, ATVR per encoder on the q30 meshes")
     args = ap.parse_args()
+    if args.cache_table:
+        for kw in CACHE_TABLE_OURS:  # warm-up (numba)
+            encode(planar(1e-2), **{k: (16 if v == "N" else v) for k, v in kw[1].items()})
+        cache_table_rows(args.quick)
+        return
     if args.cache_bound:
         cache_bound_rows(args.quick)
         return

@@ -9,6 +9,10 @@
   vertices used (1.0 ideal).  The models are meshoptimizer's ``meshopt_analyzeVertexCache``
   (without warps) and ``meshopt_analyzeVertexFetch`` (``src/indexanalyzer.cpp``,
   github.com/zeux/meshoptimizer), applied to the strip's index stream.
+* :func:`fifo_strip_order`: the order (and direction) in which a cover's strips are sent
+  so that each finds its vertices in a FIFO of ``cache_size`` entries
+  (:mod:`hammesh.strips._cache_order_kernels`): the cover's indices kept, fewer vertex
+  loads; :func:`split_paths` first cuts strips too long to hand their vertices on.
 * :func:`reorder_vertices`: renumber vertices in order of first use in the buffer (what
   meshoptimizer's ``optimizeVertexFetch`` does for a triangle list): the GPU then reads
   the vertex buffer almost sequentially.
@@ -21,9 +25,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
-from hammesh.strips import _cache_kernels
+from hammesh.strips import _cache_kernels, _cache_order_kernels
+from hammesh.strips._emit_kernels import restart_buffer
 
-__all__ = ["VertexCacheStats", "vertex_cache_stats", "reorder_vertices", "VERTEX_SIZE", "DEFAULT_CACHE"]
+__all__ = [
+    "VertexCacheStats",
+    "vertex_cache_stats",
+    "fifo_strip_order",
+    "reorder_vertices",
+    "VERTEX_SIZE",
+    "DEFAULT_CACHE",
+    "REVERSAL_WEIGHT",
+    "PIECE_LENGTH",
+    "SHORT_PIECE_LENGTH",
+    "split_paths",
+]
 
 #: FIFO entries the strip documents report their cache figures for when no ``--cache`` is
 #: given (a typical post-transform cache: 16-32).
@@ -89,6 +105,82 @@ def vertex_cache_stats(
         bytes_fetched=int(fetched),
         overfetch=float(fetched) / max(int(distinct) * VERTEX_SIZE, 1),
     )
+
+
+#: Weight of one more index (a reversed strip may need one more swap) against one more
+#: vertex load in :func:`fifo_strip_order`: a pair whose gain does not beat it does not
+#: fix a direction.  On the q30 square of 10k triangles (FIFO 16, the swap-free chains'
+#: strips, session 11's nearest-neighbour order): 0 gave 1.282 indices per triangle at
+#: ACMR 0.901, 0.3 1.281 / 0.900, 0.7 1.275 / 0.896, 1.5 1.271 / 0.899.
+REVERSAL_WEIGHT = 0.7
+
+
+#: Longest strip, in multiples of the FIFO size, that :func:`split_paths` leaves a cover
+#: with before its strips are put in FIFO order: a strip reused by the next one must not
+#: load more than the FIFO holds before that one reaches its start.  On the q30 square of
+#: 10k triangles (FIFO 16, swap-free chains): no cut 1.2745 ipt at ACMR16 0.885, 64
+#: triangles 1.2837 / 0.876, 48 1.2947 / 0.856, 40 1.2988 / 0.848, 36 1.3029 / 0.846,
+#: 28 1.3264 / 0.825, 20 1.3610 / 0.797, 12 1.4405 / 0.782.
+PIECE_LENGTH = 3
+
+#: The same for ``encode(cache=N)`` with ``method="auto"``: the swap-free chains cut at
+#: ``1.25 N`` triangles, the fewest vertex loads of ours.  Against session 10's cache-aware
+#: cover (strips grown while the FIFO is simulated, 3 N at most; then in FIFO order) on the
+#: 14 meshes of ``bench_strips.py --peers --quick``: fewer indices on all 14 (q30 10k
+#: 1.375 -> 1.360), lower ACMR16 on 12 (0.835 -> 0.796), 0.008 higher on two
+#: (pyvista's Sphere 30x30, Delaunay 10k).
+SHORT_PIECE_LENGTH = 1.25
+
+
+def split_paths(starts: np.ndarray, longest: int) -> np.ndarray:
+    """Path offsets with every path longer than ``longest`` cut into equal pieces.
+
+    Examples
+    --------
+    >>> split_paths(np.array([0, 3, 10]), 4).tolist()
+    [0, 3, 6, 10]
+    """
+    starts = np.asarray(starts, np.int64)
+    lens = np.diff(starts)
+    k = np.maximum(-(-lens // int(longest)), 1)
+    i = np.repeat(np.arange(len(lens)), k)
+    j = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
+    return np.r_[starts[:-1][i] + lens[i] * j // k[i], starts[-1:]].astype(np.int64)
+
+
+def _segments(buf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of the strips of a buffer joined by ``-1``."""
+    cuts = np.flatnonzero(buf == -1)
+    return np.r_[0, cuts + 1].astype(np.int64), np.r_[cuts, len(buf)].astype(np.int64)
+
+
+def fifo_strip_order(
+    tri: np.ndarray, twin: np.ndarray, order: np.ndarray, starts: np.ndarray, n_points: int, cache_size: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The dual paths ``order``/``starts`` re-ordered and turned for a FIFO of ``cache_size`` entries.
+
+    Each path keeps its triangles (so the buffer keeps its length, but for a swap where a
+    reversed path needs one); the paths are chained pair by pair, the pairs that save the
+    most vertex loads first (:mod:`hammesh.strips._cache_order_kernels`, greedy edge).
+    ``tri``/``twin``: the rows the paths refer to and their pairing; ``order`` must be
+    valid dual paths.  Returns the new ``(order, starts)``.
+    """
+    S = len(starts) - 1
+    if S < 2:
+        return order, starts
+    rev, _ = _cache_order_kernels.paths_in_order(order, starts, np.arange(S, dtype=np.int64), np.ones(S, np.bool_))
+    fw = restart_buffer(tri, twin, order, starts, -1).indices
+    bw = restart_buffer(tri, twin, rev, starts, -1).indices
+    fw_lo, fw_hi = _segments(fw)
+    bw_lo, bw_hi = _segments(bw)
+    vt_off, vt = _cache_order_kernels.strips_at_vertices(fw, fw_lo, fw_hi, int(n_points))
+    gain, ab = _cache_order_kernels.pair_gains(fw, fw_lo, fw_hi, bw, bw_lo, bw_hi, vt_off, vt, int(n_points), int(cache_size))
+    nf, nb = fw_hi - fw_lo, bw_hi - bw_lo
+    short = np.minimum(nf, nb)
+    pick, flip = _cache_order_kernels.greedy_edge_order(
+        gain, ab, (nf - short).astype(np.float64), (nb - short).astype(np.float64), float(REVERSAL_WEIGHT)
+    )
+    return _cache_order_kernels.paths_in_order(order, starts, pick, flip)
 
 
 def reorder_vertices(indices: np.ndarray, restart_index: int | None, n_points: int) -> tuple[np.ndarray, np.ndarray]:

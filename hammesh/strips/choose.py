@@ -86,8 +86,8 @@ def choose_strip(
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
     if cache is not None:
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
-        if generalized or method not in ("auto", "greedy"):
-            raise InvalidOptionError("a cache-aware encoding is a GL strip of its own paths: method auto or greedy only")
+        if generalized or method not in ("auto", "greedy", "zigzag"):
+            raise InvalidOptionError("a cache-aware encoding is a GL strip of its own paths: method auto, greedy or zigzag only")
     fast = params.flag("fast", fast)
     if fast and (generalized or cache is not None or method not in ("auto", "greedy")):
         raise InvalidOptionError("fast is the greedy cover alone: a GL strip of method auto or greedy, without cache")
@@ -113,8 +113,10 @@ def choose_strip(
         extra["triangles"] = enc.n_triangles
         extra["indices_per_triangle"] = len(strip.indices) / enc.n_triangles
     elif cache is not None:
-        strip = encode(mesh, join=join, restart_index=restart_index, cache=cache, reorder_vertices=reorder_vertices)
-        method = "cache"
+        # auto: the swap-free chains in short pieces; greedy / zigzag: that cover; both in FIFO order
+        strip = encode(mesh, method=method, join=join, restart_index=restart_index, cache=cache,
+                       reorder_vertices=reorder_vertices)
+        method = "cache" if method == "auto" else f"{method}+cache"
     elif fast:
         strip = encode(mesh, method="greedy", join=join, restart_index=restart_index, reorder_vertices=reorder_vertices,
                        fast=True)

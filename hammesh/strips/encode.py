@@ -34,7 +34,6 @@ import numpy as np
 from hammesh import params, threads
 from hammesh.errors import InvalidOptionError
 from hammesh.mesh import HamiltonianMesh
-from hammesh.strips._cache_cover_kernels import cache_path_cover
 from hammesh.strips._cover_kernels import (
     LONGEST_CHAIN,
     SHORTEST_CHAIN,
@@ -48,6 +47,7 @@ from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, greedy_strip_buf
 from hammesh.strips._moves_kernels import improve_cover
 from hammesh.strips._path_kernels import orient_paths
 from hammesh.strips.dual import DualMesh, MeshLike, dual_mesh
+from hammesh.strips.cache import PIECE_LENGTH, SHORT_PIECE_LENGTH, fifo_strip_order, split_paths
 from hammesh.strips.cache import reorder_vertices as _first_use_numbering
 from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
@@ -64,8 +64,6 @@ __all__ = [
     "encode",
     "encode_generalized",
     "restart_strip",
-    "cache_paths",
-    "CACHE_STRIP_LENGTH",
     "orient_path_turns",
     "PROOF_IN_TWO_PARTS",
     "half_encoder",
@@ -176,33 +174,6 @@ def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = Non
     return tri, twin, local, starts, order
 
 
-#: Longest strip of the cache-aware cover, in multiples of the cache size: a strip loads
-#: about one new vertex per two triangles once it runs beside the previous one, so at
-#: ``3 C`` triangles the next strip still finds most shared vertices cached.  On a q30
-#: square of 10k triangles (FIFO 32): 2 C gave 1.368 indices per triangle and ACMR 0.798,
-#: 3 C 1.347 / 0.789, 4 C 1.363 / 0.791, no limit 1.339 / 0.808.
-CACHE_STRIP_LENGTH = 3
-
-#: Weight of a cache miss against a free neighbour (2 each) in the cache-aware growth.
-_CACHE_MISS_WEIGHT = 4
-
-
-def cache_paths(dual: DualMesh, cache_size: int) -> tuple[np.ndarray, np.ndarray]:
-    """Dual paths laid for a FIFO vertex cache of ``cache_size`` entries (``order``, ``starts``).
-
-    See :mod:`hammesh.strips._cache_cover_kernels`.  No local moves and no reversal
-    afterwards: both change the index stream the cache was simulated on (joining paths
-    gave 0.06 fewer indices per triangle but 0.08 more cache misses per triangle).
-    """
-    m = dual.n_triangles
-    rec = dual.cover_records()
-    order, starts = cache_path_cover(
-        rec, len(dual.points), int(cache_size), CACHE_STRIP_LENGTH * int(cache_size), np.arange(m - 1, -1, -1),
-        _CACHE_MISS_WEIGHT,
-    )
-    return order, starts
-
-
 def _cut_cycle(tri: np.ndarray, twin: np.ndarray, run: np.ndarray) -> np.ndarray:
     """Rotate one cycle so that opening it gives the shortest strip (exact, O(k)).
 
@@ -293,9 +264,12 @@ def _oriented_local(
     dual: DualMesh | None = None,
     rule: int = LONGEST_CHAIN,
     improve: bool = True,
+    piece: float = PIECE_LENGTH,
 ):
     """:func:`_oriented_paths` in the numbering the paths were improved in (``rule``: which
-    swap-free chain ``method="zigzag"`` takes from each seed; ``improve``: the end moves).
+    swap-free chain ``method="zigzag"`` takes from each seed; ``improve``: the end moves;
+    with ``cache``, paths longer than ``piece * cache`` triangles are cut into equal pieces
+    and all are sent in FIFO order).
 
     Returns ``(dual, tri, twin, order, starts, ids)``: ``order`` refers to the rows of
     ``tri`` (``twin`` its pairing), ``ids[i]`` is the input triangle of row ``i``
@@ -305,11 +279,8 @@ def _oriented_local(
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     zigzag = rule if method == "zigzag" else None
     dual = dual_mesh(mesh) if dual is None else dual
-    if cache is not None:
-        if method == "order":
-            raise InvalidOptionError("a cache-aware encoding makes its own paths: method 'order' does not apply")
-        order, starts = cache_paths(dual, cache)
-        return dual, dual.triangles, dual.twin, order, starts, None
+    if cache is not None and method == "order":
+        raise InvalidOptionError("a cache-aware encoding makes its own paths: method 'order' does not apply")
     if method == "auto":
         method = "order" if isinstance(mesh, HamiltonianMesh) else "greedy"
     if method == "order":
@@ -322,7 +293,12 @@ def _oriented_local(
     else:
         tri, twin, order, starts, ids = _greedy_cover(dual, improve, zigzag)
     order, starts = check_starts(order, starts, dual.n_triangles)
+    if cache is not None:
+        # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
+        starts = split_paths(starts, max(1, int(piece * cache)))
     order, _ = orient_paths(tri, twin, order, starts)
+    if cache is not None:
+        order, starts = fifo_strip_order(tri, twin, order, starts, len(dual.points), cache)
     return dual, tri, twin, order, starts, ids
 
 
@@ -386,8 +362,14 @@ def encode(
         (:func:`~hammesh.strips.gl.verify_gl_strip`, two O(L) compiled passes against
         the order the paths were meant to draw).  Costs ~10% of the encoding; leave on.
     cache : int, optional
-        Lay the strips for a FIFO vertex cache of this many entries (at least 3;
-        :func:`cache_paths`): fewer vertex-shader runs for some more indices.
+        Lay the strips for a FIFO vertex cache of this many entries (at least 3): the
+        cover's strips longer than ``cache.PIECE_LENGTH * cache`` triangles cut into equal
+        pieces (:func:`~hammesh.strips.cache.split_paths`) and all sent in an order laid
+        for the FIFO (:func:`~hammesh.strips.cache.fifo_strip_order`).  With
+        ``method="auto"`` the cover is the swap-free chains' cut at
+        ``cache.SHORT_PIECE_LENGTH * cache``: fewer vertex-shader runs for some more
+        indices; with ``"greedy"`` or ``"zigzag"`` that cover (``"zigzag"`` stays under 1.30
+        indices per triangle on q30 planar meshes).
     reorder_vertices : bool
         Renumber the vertices in order of first use (as meshoptimizer's
         ``optimizeVertexFetch``); the result's ``vertex_order`` says which old vertex
@@ -449,7 +431,11 @@ def encode(
             if one_pass is not None:
                 return one_pass
     dual = dual_mesh(mesh) if dual is None else dual
-    strip, order, starts = _cover_and_write(mesh, dual, method, cache, join, restart_index, fast)
+    piece = PIECE_LENGTH
+    if cache is not None and method == "auto":
+        # the fewest vertex loads: the swap-free chains in short pieces (cache.SHORT_PIECE_LENGTH)
+        method, piece = "zigzag", SHORT_PIECE_LENGTH
+    strip, order, starts = _cover_and_write(mesh, dual, method, cache, join, restart_index, fast, piece)
     rows = dual.triangles
     if reorder_vertices:
         strip, rows = _renumbered(strip, dual)
@@ -458,12 +444,12 @@ def encode(
     return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
 
 
-def _cover_and_write(mesh, dual: DualMesh, method: str, cache, join: str, restart_index, fast: bool):
+def _cover_and_write(mesh, dual: DualMesh, method: str, cache, join: str, restart_index, fast: bool, piece=PIECE_LENGTH):
     """:func:`encode`'s paths and buffer for a checked mesh: ``(strip, order, starts)``, ``order``
     the input rows of ``dual`` in draw order (no proof, no renumbering)."""
-    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, dual=dual, improve=not fast)
+    dual, tri, twin, local, starts, ids = _oriented_local(mesh, method, cache, dual=dual, improve=not fast, piece=piece)
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
-    greedy = cache is None and (method == "greedy" or (method == "auto" and not isinstance(mesh, HamiltonianMesh)))
+    greedy = method == "greedy" or (cache is None and method == "auto" and not isinstance(mesh, HamiltonianMesh))
     few_swaps = _few_swaps(strip)
     rules = ()
     if fast:
@@ -477,7 +463,7 @@ def _cover_and_write(mesh, dual: DualMesh, method: str, cache, join: str, restar
         # swap-free chains both ways, keep the shortest buffer
         rules = (LONGEST_CHAIN, SHORTEST_CHAIN)
     for rule in rules:
-        alt_paths = _oriented_local(mesh, "zigzag", None, dual, rule)
+        alt_paths = _oriented_local(mesh, "zigzag", cache, dual, rule, piece=piece)
         alt, alt_order = _buffer(*alt_paths, join, restart_index)
         if len(alt.indices) < len(strip.indices):
             strip, order, starts = alt, alt_order, alt_paths[4]

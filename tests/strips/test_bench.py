@@ -46,3 +46,14 @@ def test_bench_strips_cache_bound_quick_runs():
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "same-direction rows of  6 quads" in proc.stdout and "snake in bands of  7 quads" in proc.stdout
     assert "method=zigzag" in proc.stdout
+
+
+@pytest.mark.slow
+def test_bench_strips_cache_table_quick_runs():
+    proc = subprocess.run(
+        [sys.executable, str(BENCH), "--cache-table", "--quick"], capture_output=True, text=True, timeout=1800
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "hammesh --cache 16 zigzag (FIFO order)" in proc.stdout and "q30 A 12k" in proc.stdout
+    if importlib.util.find_spec("meshoptimizer") is not None:
+        assert "target ACMR <=" in proc.stdout
