@@ -44,14 +44,80 @@ def _lca(x, y, fa, mate, parent, stamp, s):
 
 
 @njit(cache=True, nogil=True)
-def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
+def _no_guide():
+    """The ``guide`` of a breadth-first search (``_augment``): empty arrays."""
+    return np.empty((0, 3), np.int64), np.empty((0, 2)), np.empty(0), np.empty(0), np.empty(0)
+
+
+@njit(cache=True, nogil=True)
+def _push(queue, tail, w, guide, g):
+    """Enqueue the even vertex ``w`` (``_augment``): at the tail (breadth-first), or
+    with a guide ``(tri, points, goal, keys, cost)`` (``keys`` as long as ``queue``,
+    ``cost`` one per triangle) into a binary heap keyed as A* keys it: ``g`` (the
+    tree path's cost to ``w``, kept in ``cost[w]``) plus the distance from ``w``'s
+    centroid to the goal ``goal[:d]`` times ``goal[d]`` (steps per unit length;
+    ``goal[d + 1]``: the cost of a chain's triangle, ``_augment``).
+    Returns the new queue length."""
+    tri, pts, goal, keys, cost = guide
+    if keys.shape[0] == 0:
+        queue[tail] = w
+        return tail + 1
+    d = 0.0
+    for j in range(pts.shape[1]):
+        c = (pts[tri[w, 0], j] + pts[tri[w, 1], j] + pts[tri[w, 2], j]) / 3.0 - goal[j]
+        d += c * c
+    cost[w] = g
+    d = g + goal[pts.shape[1]] * np.sqrt(d)
+    i = tail
+    while i > 0:
+        p = (i - 1) // 2
+        if keys[p] <= d:
+            break
+        keys[i] = keys[p]
+        queue[i] = queue[p]
+        i = p
+    keys[i] = d
+    queue[i] = w
+    return tail + 1
+
+
+@njit(cache=True, nogil=True)
+def _pop(queue, head, tail, guide):
+    """The next even vertex to expand and the new ``(head, tail)``: the queue's head,
+    or with a guide (``_push``) the heap's nearest to the goal (head stays 0)."""
+    keys = guide[3]
+    if keys.shape[0] == 0:
+        return queue[head], head + 1, tail
+    v = queue[0]
+    tail -= 1
+    d = keys[tail]
+    w = queue[tail]
+    i = 0
+    while True:
+        c = 2 * i + 1
+        if c >= tail:
+            break
+        if c + 1 < tail and keys[c + 1] < keys[c]:
+            c += 1
+        if keys[c] >= d:
+            break
+        keys[i] = keys[c]
+        queue[i] = queue[c]
+        i = c
+    if tail > 0:
+        keys[i] = d
+        queue[i] = w
+    return v, head, tail
+
+
+@njit(cache=True, nogil=True)
+def _blossom(v, w, a, fa, mate, parent, label, queue, tail, guide, g):
     while _find(fa, v) != a:
         parent[v] = w
         w = mate[v]
         if label[w] == 1:  # odd vertex inside the blossom becomes even
             label[w] = 0
-            queue[tail] = w
-            tail += 1
+            tail = _push(queue, tail, w, guide, g)
         if fa[v] == v:
             fa[v] = a
         if fa[w] == w:
@@ -166,7 +232,7 @@ def _drop(u, nb, active, alive, mate, log, nlog):
 
 @njit(cache=True, nogil=True)
 def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
-             nlog, seen):
+             nlog, seen, guide):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
@@ -195,6 +261,13 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     ``OBSERVE`` search answers the ``DROP`` search that would follow it
     (``_drop_matching``) without exploring the same triangles again.
 
+    ``guide`` (``_no_guide()``: none) makes the search best-first (A*) instead of
+    breadth-first: the even vertex of least tree cost plus distance to a goal point
+    is expanded next (``_push``; a step costs 1, a chain's triangle ``goal[d + 1]``).
+    Edmonds' search is correct in any expansion order; a search that must cross the
+    mesh to the free triangle near the goal (``CHAIN`` searches between distant
+    parity defects) then explores a band along the way instead of a disc.
+
     Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
     applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
     after a drop the partner freed (or -1); after a failed ``DROP`` search the first
@@ -208,8 +281,9 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     fa[r] = r  # the union-find is set up as triangles are touched (fa may start empty)
     touched[n_t] = r
     n_t += 1
-    queue[tail] = r
-    tail += 1
+    guided = guide[3].shape[0] > 0
+    chain_cost = guide[2][guide[1].shape[1] + 1] if guided else 0.0
+    tail = _push(queue, tail, r, guide, 0.0)
     found = -1
     drop = False
     extra = -1
@@ -218,14 +292,14 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
         seen[0] = -1
         seen[2] = -1
     while head < tail and found < 0 and n_t < budget:
-        v = queue[head]
-        head += 1
+        v, head, tail = _pop(queue, head, tail, guide)
+        gv = guide[4][v] + 1.0 if guided else 0.0  # (A*: a step costs 1, a chain's triangle chain_cost)
         n_v = n_t
         for k in range(3):
             if mode == CHAIN:
-                u, _ = _chain_end(nb, active, alive, v, k)
+                u, ln = _chain_end(nb, active, alive, v, k)
             else:
-                u = nb[v, k]
+                u, ln = nb[v, k], 0
             if u < 0 or not active[u]:
                 continue
             if label[u] < 0:
@@ -261,13 +335,12 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
                 fa[w] = w
                 touched[n_t] = w
                 n_t += 1
-                queue[tail] = w
-                tail += 1
+                tail = _push(queue, tail, w, guide, gv + chain_cost * ln)
             elif label[u] == 0 and _find(fa, v) != _find(fa, u):
                 s += 1
                 a = _lca(u, v, fa, mate, parent, stamp, s)
-                tail = _blossom(u, v, a, fa, mate, parent, label, queue, tail)
-                tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail)
+                tail = _blossom(u, v, a, fa, mate, parent, label, queue, tail, guide, gv)
+                tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail, guide, gv)
     if found >= 0:
         v = found
         keep = log.shape[0] > 0
@@ -375,6 +448,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     touched = np.empty(online + 16, np.int64)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     s = 0
     hdeg = np.zeros(m, np.int8)  # free candidates, 0-3
     for i in range(n):
@@ -418,7 +492,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             if online <= 0:
                 continue
             far, s, _x = _augment(t, nb, active, active, mate, parent, fa, label, stamp, s, touched, queue, online,
-                                  PLAIN, -1, nolog, nonlog, nonlog)
+                                  PLAIN, -1, nolog, nonlog, nonlog, noguide)
             if far < 0:
                 continue
             # t and the path's far end are newly matched (the path's inner triangles
@@ -468,12 +542,13 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
     seen = np.empty(4, np.int64)
+    noguide = _no_guide()
     for t in frees:  # the free triangles, in index order (the list only shrinks)
         if not active[t] or mate[t] >= 0:
             continue
         r = t  # a longer augmenting path first: it leaves nothing uncovered
         f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                             plain_budget, OBSERVE, -1, log, nlog, seen)
+                             plain_budget, OBSERVE, -1, log, nlog, seen, noguide)
         if f0 >= 0:
             continue
         nlog[0] = 0
@@ -489,15 +564,15 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 extra = seen[2] if seen[2] >= 0 and seen[3] < budget else -1
                 if seen[0] >= 0 and seen[1] < budget:  # the search stops there
                     found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                               queue, budget, DROP, -1, log, nlog, seen)
+                                               queue, budget, DROP, -1, log, nlog, seen, noguide)
             else:
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                           budget, DROP, -1, log, nlog, seen)
+                                           budget, DROP, -1, log, nlog, seen, noguide)
             if found < 0:
                 if extra < 0 or it == rounds:
                     break
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                           queue, budget, DROP, extra, log, nlog, seen)
+                                           queue, budget, DROP, extra, log, nlog, seen, noguide)
                 if found < 0:  # the same search again: it stops at the same triangle
                     break
             if not alive[found]:
@@ -507,7 +582,7 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 break
             r = extra  # freed by the drop: an augmenting path first, then drop again
             f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                 budget, OBSERVE, -1, log, nlog, seen)
+                                 budget, OBSERVE, -1, log, nlog, seen, noguide)
             if f2 >= 0:
                 fixed = True
                 break
@@ -518,7 +593,44 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
 
 
 @njit(cache=True, nogil=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees):
+def _centroid_into(tri, pts, t, out):
+    """``out``: the centroid of triangle ``t``."""
+    for j in range(pts.shape[1]):
+        out[j] = (pts[tri[t, 0], j] + pts[tri[t, 1], j] + pts[tri[t, 2], j]) / 3.0
+
+
+@njit(cache=True, nogil=True)
+def _nearest_free_centroid(t, frees, active, mate, tri, pts, goal, weight):
+    """``goal[:d]``: the centroid of the free triangle of ``frees`` (other than ``t``)
+    nearest to ``t``'s (a few dozen at most: a plain scan); ``goal[d]``: the inverse
+    of ``t``'s mean edge length (A*'s steps per unit length, ``_push``)."""
+    d = pts.shape[1]
+    here = np.empty(d)
+    there = np.empty(d)
+    _centroid_into(tri, pts, t, here)
+    per = 0.0
+    for k in range(3):
+        e = 0.0
+        for j in range(d):
+            e += (pts[tri[t, (k + 1) % 3], j] - pts[tri[t, k], j]) ** 2
+        per += np.sqrt(e)
+    goal[d] = 3.0 * weight / per if per > 0.0 else 0.0
+    best = np.inf
+    for u in frees:
+        if u == t or not active[u] or mate[u] >= 0:
+            continue
+        _centroid_into(tri, pts, u, there)
+        dd = 0.0
+        for j in range(d):
+            dd += (there[j] - here[j]) ** 2
+        if dd < best:
+            best = dd
+            goal[:d] = there
+
+
+@njit(cache=True, nogil=True)
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,
+                    chain_cost):
     """Augment through chains of degree-2 triangles; a chain used is left uncovered.
 
     A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
@@ -534,6 +646,12 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
     0.064 / 0.145 s thread CPU at 1.5 M (Hilbert order / Triangle's) against 0.032 /
     0.108 s one root at a time, and its paths ran through chains (5 / 30 boundary
     triangles left uncovered, against none): not kept.
+
+    With the points (``pts`` with a row per vertex of ``tri``; empty: breadth-first)
+    each search is best-first towards the centroid of the free triangle nearest to
+    its start (``_augment``'s ``guide``): these last defects lie far apart (corners,
+    holes), and a breadth-first search from one explores a disc reaching the
+    nearest other (150-630 k triangles at 1.5 M).
     """
     m = nb.shape[0]
     hit = False
@@ -544,12 +662,19 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
         if active[t] and mate[t] < 0:
             n += 1
     touched = np.empty(m + 16 if n >= 2 else 0, np.int64)  # a search touches a triangle once
+    guided = n >= 2 and pts.shape[0] > 0
+    keys = np.empty(m + 8 if guided else 0)  # the heap's keys, beside queue
+    cost = np.empty(m if guided else 0)  # each even triangle's tree path cost (set as pushed)
+    goal = np.zeros(pts.shape[1] + 2)
+    goal[pts.shape[1] + 1] = chain_cost
     for t in frees:
         if n < 2:
             break
         if active[t] and mate[t] < 0:
+            if guided:
+                _nearest_free_centroid(t, frees, active, mate, tri, pts, goal, guide_weight)
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                m + 8, CHAIN, -1, nolog, nonlog, nonlog)
+                                m + 8, CHAIN, -1, nolog, nonlog, nonlog, (tri, pts, goal, keys, cost))
             if f >= 0:
                 hit = True
                 n -= 2
@@ -835,11 +960,12 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     touched = np.empty(budget + 8, np.int64)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     for i in range(order.shape[0]):
         t = order[i]
         if act[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, act, act, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog, noguide)
     return s
 
 
@@ -850,10 +976,11 @@ def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, qu
     touched = np.empty(budget + 8, np.int64)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     for t in range(nb.shape[0]):
         if active[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog, noguide)
     return s
 
 
@@ -876,14 +1003,15 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
 
 @njit(cache=True, nogil=True)
 def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget, plain_budget, drop_budget,
-                    drop_rounds):
+                    drop_rounds, tri, pts, guide_weight, chain_cost):
     """From the matchings of the halves (or cells) to the matching the cover complements.
 
     Searches of ``budget`` triangles over the whole graph from each triangle still
     free (those left at the split between the halves, mostly: the join across it);
     the parity defects (``_drop_matching``: searches of ``plain_budget``, then of
     ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then chains
-    (``_chain_matching``). The free triangles are listed once (the phases only
+    (``_chain_matching``, best-first towards the nearest free triangle when ``pts``,
+    the points of ``tri``, has rows). The free triangles are listed once (the phases only
     match them; a drop sequence that frees another either matches it or is undone).
     Then ``cover_edges_into`` (rows on threads) and ``settle_cover``.
 
@@ -904,16 +1032,18 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
     touched = np.empty(budget + 8, np.int64)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     for t in frees:
         if mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog, noguide)
     n_drop = 0
     if drop_rounds >= 0:
         touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
         s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
                                    plain_budget, drop_budget, drop_rounds, frees)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,
+                        chain_cost)
     n_free = 0
     for t in frees:
         if active[t] and mate[t] < 0:
