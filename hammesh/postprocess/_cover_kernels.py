@@ -1230,9 +1230,12 @@ def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
             if new_id[r] < 0:
                 new_id[r] = n_new
                 n_new += 1
+        table = np.empty(max(n_cyc, 1), np.int64)  # each old id's new one: no find per row
+        for c in range(n_cyc):
+            table[c] = new_id[_find(uf, c)]
         for t in range(m):
             if cyc[t] >= 0:
-                cyc[t] = new_id[_find(uf, cyc[t])]
+                cyc[t] = table[cyc[t]]
     return merged
 
 
