@@ -402,7 +402,7 @@ def _bfs_order(nb, side, half):
     for t in range(m):
         if side[t] == half:
             n += 1
-    order = np.empty(n, np.int64)
+    order = np.empty(n, np.int32)
     seen = np.zeros(m, np.bool_)
     head = 0
     tail = 0
@@ -444,8 +444,8 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     next lca stamp.
     """
     n = order.shape[0]
-    stack = np.empty(4 * n + 16, np.int64)  # a triangle is pushed once, then once per neighbour matched
-    touched = np.empty(online + 16, np.int64)
+    stack = np.empty(4 * n + 16, np.int32)  # a triangle is pushed once, then once per neighbour matched
+    touched = np.empty(online + 16, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     noguide = _no_guide()
@@ -661,7 +661,7 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
     for t in frees:
         if active[t] and mate[t] < 0:
             n += 1
-    touched = np.empty(m + 16 if n >= 2 else 0, np.int64)  # a search touches a triangle once
+    touched = np.empty(m + 16 if n >= 2 else 0, np.int32)  # a search touches a triangle once
     guided = n >= 2 and pts.shape[0] > 0
     keys = np.empty(m + 8 if guided else 0)  # the heap's keys, beside queue
     cost = np.empty(m if guided else 0)  # each even triangle's tree path cost (set as pushed)
@@ -940,7 +940,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     act = np.zeros(m, np.bool_)
     for t in range(m):
         act[t] = active[t] and side[t] == half
-    queue = np.empty(max(online, budget) + 16, np.int64)  # a search enqueues what it touches
+    queue = np.empty(max(online, budget) + 16, np.int32)  # a search enqueues what it touches
     if online > 0:  # breadth-first even in a local row order (session 10, 1.5 M in
         # Hilbert order: sweeping rows left 13,152 cycles instead of 11,954 and cost
         # more in finish_matching than the breadth-first order saves)
@@ -950,14 +950,14 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
         for t in range(m):
             if act[t]:
                 n += 1
-        order = np.empty(n, np.int64)
+        order = np.empty(n, np.int32)
         n = 0
         for t in range(m):
             if act[t]:
                 order[n] = t
                 n += 1
     s = _greedy_matching(nb, act, m, good, order, online, parent, fa, label, stamp, queue, mate)
-    touched = np.empty(budget + 8, np.int64)
+    touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     noguide = _no_guide()
@@ -973,7 +973,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
 def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, queue, budget):
     """A plain search of at most ``budget`` triangles (``_augment``) from every active
     triangle still unmatched, in index order; returns the next lca stamp."""
-    touched = np.empty(budget + 8, np.int64)
+    touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     noguide = _no_guide()
@@ -995,8 +995,8 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
     nbc = _cell_neighbors(nb, cell)
     inner = active & (mate < 0)  # the pinned pairs stay out of the cell's searches
     one = np.zeros(m, np.int8)
-    order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m)
-    queue = np.empty(m + 8, np.int64)
+    order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m).astype(np.int32)
+    queue = np.empty(m + 8, np.int32)
     s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
     return _augment_every_free(nbc, inner, alive, mate, parent, fa, label, stamp, s, queue, budget)
 
@@ -1028,8 +1028,8 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
         if active[t] and mate[t] < 0:
             frees[n] = t
             n += 1
-    queue = np.empty(m + 8, np.int64)
-    touched = np.empty(budget + 8, np.int64)
+    queue = np.empty(m + 8, np.int32)
+    touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     noguide = _no_guide()
@@ -1039,7 +1039,7 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
                                  PLAIN, -1, nolog, nonlog, nonlog, noguide)
     n_drop = 0
     if drop_rounds >= 0:
-        touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
+        touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int32)
         s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
                                    plain_budget, drop_budget, drop_rounds, frees)
     s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,

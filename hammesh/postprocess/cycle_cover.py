@@ -208,11 +208,12 @@ def cycle_cover(
     alive, deg = _k.peel(nb, m)
     mark("peel")
     active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int64)
+    mate = np.full(m, -1, np.int32)
     # the searches' parent, union-find, label (-1: none) and lca stamps: each search
     # sets what it touches, so only label is written ahead (int8; stamp's zeros are
-    # lazy pages)
-    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    # lazy pages). Triangle ids are int32 in the matching's arrays (mate, parent,
+    # union-find, orders, stacks, queues): half the pages a first call faults in
+    work = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     if cell is not None:
         s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
     else:
