@@ -51,17 +51,14 @@ def _no_guide():
 
 @njit(cache=True, nogil=True)
 def _push(queue, tail, w, guide, g):
-    """Enqueue the even vertex ``w`` (``_augment``): at the tail (breadth-first), or
-    with a guide ``(tri, points, goal, keys, cost)`` (``keys`` as long as ``queue``,
-    ``cost`` one per triangle) into a binary heap keyed as A* keys it: ``g`` (the
-    tree path's cost to ``w``, kept in ``cost[w]``) plus the distance from ``w``'s
-    centroid to the goal ``goal[:d]`` times ``goal[d]`` (steps per unit length;
-    ``goal[d + 1]``: the cost of a chain's triangle, ``_augment``).
-    Returns the new queue length."""
+    """Push the even vertex ``w`` of a guided search (``_augment``; ``guide =
+    (tri, points, goal, keys, cost)``, ``keys`` as long as ``queue``, ``cost`` one
+    per triangle) into the binary heap ``queue[:tail]``, keyed as A* keys it: ``g``
+    (the tree path's cost to ``w``, kept in ``cost[w]``) plus the distance from
+    ``w``'s centroid to the goal ``goal[:d]`` times ``goal[d]`` (steps per unit
+    length; ``goal[d + 1]``: the cost of a chain's triangle, ``_augment``).
+    Returns the new heap size."""
     tri, pts, goal, keys, cost = guide
-    if keys.shape[0] == 0:
-        queue[tail] = w
-        return tail + 1
     d = 0.0
     for j in range(pts.shape[1]):
         c = (pts[tri[w, 0], j] + pts[tri[w, 1], j] + pts[tri[w, 2], j]) / 3.0 - goal[j]
@@ -82,12 +79,9 @@ def _push(queue, tail, w, guide, g):
 
 
 @njit(cache=True, nogil=True)
-def _pop(queue, head, tail, guide):
-    """The next even vertex to expand and the new ``(head, tail)``: the queue's head,
-    or with a guide (``_push``) the heap's nearest to the goal (head stays 0)."""
+def _pop(queue, tail, guide):
+    """The least-key vertex of ``_push``'s heap ``queue[:tail]`` and the new size."""
     keys = guide[3]
-    if keys.shape[0] == 0:
-        return queue[head], head + 1, tail
     v = queue[0]
     tail -= 1
     d = keys[tail]
@@ -107,17 +101,18 @@ def _pop(queue, head, tail, guide):
     if tail > 0:
         keys[i] = d
         queue[i] = w
-    return v, head, tail
+    return v, tail
 
 
 @njit(cache=True, nogil=True)
-def _blossom(v, w, a, fa, mate, parent, label, queue, tail, guide, g):
+def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
     while _find(fa, v) != a:
         parent[v] = w
         w = mate[v]
         if label[w] == 1:  # odd vertex inside the blossom becomes even
             label[w] = 0
-            tail = _push(queue, tail, w, guide, g)
+            queue[tail] = w
+            tail += 1
         if fa[v] == v:
             fa[v] = a
         if fa[w] == w:
@@ -283,7 +278,13 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     n_t += 1
     guided = guide[3].shape[0] > 0
     chain_cost = guide[2][guide[1].shape[1] + 1] if guided else 0.0
-    tail = _push(queue, tail, r, guide, 0.0)
+    # (breadth-first, the queue is written here: helpers taking the guide's arrays
+    # cost a call with reference counts per vertex, +70 % on the defects' searches)
+    if guided:
+        tail = _push(queue, tail, r, guide, 0.0)
+    else:
+        queue[tail] = r
+        tail += 1
     found = -1
     drop = False
     extra = -1
@@ -292,8 +293,13 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
         seen[0] = -1
         seen[2] = -1
     while head < tail and found < 0 and n_t < budget:
-        v, head, tail = _pop(queue, head, tail, guide)
-        gv = guide[4][v] + 1.0 if guided else 0.0  # (A*: a step costs 1, a chain's triangle chain_cost)
+        if guided:
+            v, tail = _pop(queue, tail, guide)  # (head stays 0)
+            gv = guide[4][v] + 1.0  # (A*: a step costs 1, a chain's triangle chain_cost)
+        else:
+            v = queue[head]
+            head += 1
+            gv = 0.0
         n_v = n_t
         for k in range(3):
             if mode == CHAIN:
@@ -335,12 +341,21 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
                 fa[w] = w
                 touched[n_t] = w
                 n_t += 1
-                tail = _push(queue, tail, w, guide, gv + chain_cost * ln)
+                if guided:
+                    tail = _push(queue, tail, w, guide, gv + chain_cost * ln)
+                else:
+                    queue[tail] = w
+                    tail += 1
             elif label[u] == 0 and _find(fa, v) != _find(fa, u):
                 s += 1
                 a = _lca(u, v, fa, mate, parent, stamp, s)
-                tail = _blossom(u, v, a, fa, mate, parent, label, queue, tail, guide, gv)
-                tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail, guide, gv)
+                nt = _blossom(u, v, a, fa, mate, parent, label, queue, tail)
+                nt = _blossom(v, u, a, fa, mate, parent, label, queue, nt)
+                if guided:  # the vertices made even were appended past the heap: push them
+                    for i in range(tail, nt):
+                        tail = _push(queue, tail, queue[i], guide, gv)  # (i == tail: writes at <= i)
+                else:
+                    tail = nt
     if found >= 0:
         v = found
         keep = log.shape[0] > 0
