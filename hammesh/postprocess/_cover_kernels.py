@@ -1274,7 +1274,7 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, cell):
     from ``cycle_cover`` (``star_prefilter_into``, ``star_candidates_into``, then
     ``rotate_candidates``); this is them in one call.
     """
-    vh = np.full(n_points, -1, np.int64)
+    vh = np.full(n_points, -1, np.int32)
     skip = np.zeros(n_points, np.bool_)
     cand = np.empty(n_points, np.bool_)
     star_prefilter_into(tri, is_cov, vh, skip, 0, tri.shape[0])

@@ -308,7 +308,8 @@ class _Later:
         self.cdeg = np.full(m, 0, np.int8)
         self.cyc = np.full(m, -1, np.int64)
         self.n_pts = int(np.max(triangles)) + 1 if rotate and m else 0
-        self.vh = np.full(self.n_pts, -1, np.int64)
+        # half-edge ids: int32 below 2**31 (715 M triangles), as nb is for triangle ids
+        self.vh = np.full(self.n_pts, -1, np.int32 if 3 * m < 2**31 else np.int64)
         self.skip = np.full(self.n_pts, False)
         self.cand = np.full(self.n_pts, False)
 
