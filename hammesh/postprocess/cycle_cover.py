@@ -154,7 +154,10 @@ def cycle_cover(
         dual edge across a cell border is matched first, so no cover cycle crosses one
         (up to the few the matching must unpin), and the joins can then go finest cell
         first (``join_classes``) so that the final cycle sweeps the quadtree cell by
-        cell, as the incircle mode's compact tree does.
+        cell, as the incircle mode's compact tree does. With points (2D or 3D) and
+        from ``GUIDE_MIN_TRIANGLES`` triangles on, the last parity defects' chain
+        searches are A* searches towards the nearest other free triangle
+        (``CHAIN_COST``, ``GUIDE_WEIGHT``).
     cell_size : int, optional
         Default ``CELL_SIZE`` (read at call time).
     drop : bool
