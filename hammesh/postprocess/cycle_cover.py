@@ -58,7 +58,7 @@ DROP_ROUNDS = 1
 #: 1.5 M); counting only the distance (no chain cost), the paths ran along the
 #: chains of thin strokes (Triangle's ``A`` at 16 k: 26 -> 76 uncovered).
 CHAIN_COST = 20.0
-GUIDE_WEIGHT = 1.0
+GUIDE_WEIGHT = 1.25
 #: Meshes from this size on guide the chain searches; below it a breadth-first search
 #: costs little, and its chains are kept: guided at 16 k, Triangle's ``A`` lost its
 #: angle target (24.1 deg out, 27.0 wanted; 13 uncovered instead of 26, but chains

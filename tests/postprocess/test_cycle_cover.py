@@ -700,7 +700,7 @@ def test_guided_chain_searches_leave_fewer_uncovered_in_all(monkeypatch) -> None
     # A* counts each chain triangle CHAIN_COST steps (breadth-first: a chain is one
     # step whatever its length): over five bundled domains at three sizes (with the
     # matching's breadth-first sweep, as from 100 k on) fewer triangles are left
-    # uncovered in all (measured 116 -> 100; per mesh from 6 -> 8 to 25 -> 13), with a
+    # uncovered in all (measured 116 -> 99; per mesh from 6 -> 8 to 25 -> 15), with a
     # valid cover each. Without the chain cost the paths ran along thin strokes' chains
     import hammesh.postprocess.cycle_cover as cc
 
