@@ -422,7 +422,7 @@ def _bfs_order(nb, side, half):
     head = 0
     tail = 0
     for s in range(m):
-        if seen[s] or side[s] != half:
+        if side[s] != half or seen[s]:  # (the other half's pages of seen never touched)
             continue
         seen[s] = True
         order[tail] = s
@@ -954,7 +954,8 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     m = nb.shape[0]
     act = np.zeros(m, np.bool_)
     for t in range(m):
-        act[t] = active[t] and side[t] == half
+        if side[t] == half:  # (zeros elsewhere: the other half's pages never written)
+            act[t] = active[t]
     queue = np.empty(max(online, budget) + 16, np.int32)  # a search enqueues what it touches
     if online > 0:  # breadth-first even in a local row order (session 10, 1.5 M in
         # Hilbert order: sweeping rows left 13,152 cycles instead of 11,954 and cost
