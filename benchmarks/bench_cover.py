@@ -17,6 +17,16 @@ largest cycle's share (a winding cover: issue 14).
     python benchmarks/bench_cover.py --compile     # first cycle_cover with an empty numba cache
     python benchmarks/bench_cover.py --steps [--target 1500000] [--repeat 5]
     python benchmarks/bench_cover.py --steps --local [--target 1500000] [--repeat 5]
+    python benchmarks/bench_cover.py --fresh 3 [--target 1500000]
+
+``--fresh N``: the cover's first call in a fresh process, as sparse mode makes it: the
+sparse ``hamiltonian()`` of the plate is run once with ``cycle_cover``'s arguments
+captured (rows renumbered by ``renumber_local``, the judged ``good`` edges) into a
+temporary file; N children each time raw Triangle's first call on the plate (the
+peer, in that process), load the cover's kernels on a small mesh (as ``quality_mesh``
+does while Triangle runs), then time the first and a second ``cycle_cover`` on those
+arguments: wall and process CPU (the side thread included), CPU per step, the
+cover's shape, and first call / raw Triangle in wall and in CPU (median printed).
 
 ``--corpus``: the sparse ``hamiltonian()`` on the ~16k-triangle q30 meshes of
 ``bench_sparse.py`` (8 domains): the cover's uncovered triangles per mesh and in all,
@@ -148,6 +158,99 @@ for step, (w, cs) in clock.items():
 """
 
 
+_FRESH_CHILD = """
+import resource, sys, time
+import numpy as np
+import triangle
+from scipy.spatial import Delaunay
+sys.path.insert(0, sys.argv[3])
+from bench_cover import plate_domain
+from hammesh.halfedge import half_edges
+from hammesh.meshing import MeshOptions, triangle_switches
+from hammesh.postprocess.cycle_cover import cycle_cover
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+dom, max_area = plate_domain(int(sys.argv[2]))
+data = {"vertices": np.array(dom.vertices, np.float64), "segments": np.array(dom.segments, np.int32),
+        "holes": np.array(dom.holes, np.float64)}
+w, c = time.perf_counter(), cpu()
+raw = triangle.triangulate(data, triangle_switches(dom, MeshOptions(min_angle=30, max_area=max_area)))
+print(f"FRESH triangle {time.perf_counter() - w:.4f} {cpu() - c:.4f} {len(raw['triangles'])} triangles")
+del raw
+g = np.mgrid[0:60, 0:60].reshape(2, -1).T.astype(float)
+p = g + 0.01 * np.random.default_rng(1).random(g.shape)
+t = Delaunay(p).simplices.astype(np.int64)
+cycle_cover(t, half_edges(t, len(p)).twin, points=p, online=256, good=np.zeros(3 * len(t), bool))  # kernels loaded
+z = np.load(sys.argv[1])
+tri, tw, good, pts = z["tri"], z["tw"], z["good"], z["points"]
+for call in ("first", "second"):
+    clock = {}
+    w, c = time.perf_counter(), cpu()
+    cov = cycle_cover(tri, tw, good=good, points=pts, local=bool(z["local"]), clock=clock)
+    w, c = time.perf_counter() - w, cpu() - c
+    steps = " ".join(f"{k}={v[1]:.3f}" for k, v in clock.items())
+    print(f"FRESH {call} {w:.4f} {c:.4f} cycles {cov.n_cycles} uncovered {cov.n_uncovered}; CPU per step {steps}")
+"""
+
+
+def fresh_table(target: int, runs: int) -> None:
+    """The cover's first call in fresh processes, on the arguments sparse mode gives it (``--fresh``)."""
+    import os
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    import hammesh
+    import hammesh.postprocess.sparse as sparse
+
+    mesh, _ = plate_mesh(target)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "cover_in.npz")
+        real = sparse.cycle_cover
+
+        def capture(tri, tw, **kw):
+            np.savez(path, tri=tri, tw=tw, good=kw["good"], points=kw["points"], local=kw["local"])
+            return real(tri, tw, **kw)
+
+        sparse.cycle_cover = capture
+        try:
+            hammesh.hamiltonian(mesh, mode="sparse")
+        finally:
+            sparse.cycle_cover = real
+        print(f"m = {mesh.n_triangles:,}; each child: raw Triangle on the plate (first call, the peer), the cover's "
+              f"kernels loaded on a small mesh, then cycle_cover twice on sparse mode's arguments")
+        ratios = []
+        for _ in range(runs):
+            out = subprocess.run([sys.executable, "-c", _FRESH_CHILD, path, str(target), str(Path(__file__).parent)],
+                                 capture_output=True, text=True, check=True).stdout
+            got = {}
+            for line in out.splitlines():
+                if line.startswith("FRESH"):
+                    _, call, w, c, rest = line.split(" ", 4)
+                    got[call] = (float(w), float(c))
+                    print(f"  {call:8s} {float(w):.3f} s wall, {float(c):.3f} s CPU; {rest}", flush=True)
+            (tw_, tc), (fw, fc) = got["triangle"], got["first"]
+            ratios.append((fw / tw_, fc / tc))
+            print(f"  first call / raw Triangle: {fw / tw_:.3f} wall, {fc / tc:.3f} CPU", flush=True)
+        w, c = np.median(np.array(ratios), axis=0)
+        print(f"FRESH_RATIO first cycle_cover / raw Triangle, median of {runs}: {w:.3f} wall, {c:.3f} CPU")
+
+
+def plate_domain(target: int):
+    """The plate with two holes of ``plate_mesh`` and its max area for about ``target`` triangles."""
+    import hammesh
+
+    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    circ = np.c_[np.cos(a), np.sin(a)]
+    plate = hammesh.Domain.from_polygon(
+        [[0, 0], [4, 0], [4, 2], [0, 2]], holes=[circ * 0.45 + [1, 1], circ * 0.3 + [3, 1]]
+    )
+    area = 8.0 - np.pi * (0.45**2 + 0.3**2)
+    return plate, area / (0.63 * target)
+
+
 def compile_time() -> None:
     """The cover's kernels compiled from nothing, in a child with an empty numba cache (``--compile``)."""
     import os
@@ -165,14 +268,9 @@ def plate_mesh(target: int):
     triangles, and Triangle's first-call seconds."""
     import hammesh
 
-    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    circ = np.c_[np.cos(a), np.sin(a)]
-    plate = hammesh.Domain.from_polygon(
-        [[0, 0], [4, 0], [4, 2], [0, 2]], holes=[circ * 0.45 + [1, 1], circ * 0.3 + [3, 1]]
-    )
-    area = 8.0 - np.pi * (0.45**2 + 0.3**2)
+    plate, max_area = plate_domain(target)
     t = time.perf_counter()
-    mesh = hammesh.quality_mesh(plate, min_angle=30, max_area=area / (0.63 * target))
+    mesh = hammesh.quality_mesh(plate, min_angle=30, max_area=max_area)
     return mesh, time.perf_counter() - t
 
 
@@ -290,7 +388,11 @@ def main() -> None:
     ap.add_argument("--compile", action="store_true", help="first cycle_cover with an empty numba cache instead")
     ap.add_argument("--steps", action="store_true", help="CPU per cover step, Triangle's vs local numberings")
     ap.add_argument("--local", action="store_true", help="--steps, renumber_local: quadtree vs quadrant halves")
+    ap.add_argument("--fresh", type=int, default=0, help="first cycle_cover in N fresh processes, as sparse calls it")
     args = ap.parse_args()
+    if args.fresh > 0:
+        fresh_table(args.target or 1_500_000, args.fresh)
+        return
     if args.steps:
         steps_table(args.target or 1_500_000, args.repeat, args.local)
         return

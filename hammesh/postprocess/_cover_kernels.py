@@ -44,6 +44,67 @@ def _lca(x, y, fa, mate, parent, stamp, s):
 
 
 @njit(cache=True, nogil=True)
+def _no_guide():
+    """The ``guide`` of a breadth-first search (``_augment``): empty arrays."""
+    return np.empty((0, 3), np.int64), np.empty((0, 2)), np.empty(0), np.empty(0), np.empty(0)
+
+
+@njit(cache=True, nogil=True)
+def _push(queue, tail, w, guide, g):
+    """Push the even vertex ``w`` of a guided search (``_augment``; ``guide =
+    (tri, points, goal, keys, cost)``, ``keys`` as long as ``queue``, ``cost`` one
+    per triangle) into the binary heap ``queue[:tail]``, keyed as A* keys it: ``g``
+    (the tree path's cost to ``w``, kept in ``cost[w]``) plus the distance from
+    ``w``'s centroid to the goal ``goal[:d]`` times ``goal[d]`` (steps per unit
+    length; ``goal[d + 1]``: the cost of a chain's triangle, ``_augment``).
+    Returns the new heap size."""
+    tri, pts, goal, keys, cost = guide
+    d = 0.0
+    for j in range(pts.shape[1]):
+        c = (pts[tri[w, 0], j] + pts[tri[w, 1], j] + pts[tri[w, 2], j]) / 3.0 - goal[j]
+        d += c * c
+    cost[w] = g
+    d = g + goal[pts.shape[1]] * np.sqrt(d)
+    i = tail
+    while i > 0:
+        p = (i - 1) // 2
+        if keys[p] <= d:
+            break
+        keys[i] = keys[p]
+        queue[i] = queue[p]
+        i = p
+    keys[i] = d
+    queue[i] = w
+    return tail + 1
+
+
+@njit(cache=True, nogil=True)
+def _pop(queue, tail, guide):
+    """The least-key vertex of ``_push``'s heap ``queue[:tail]`` and the new size."""
+    keys = guide[3]
+    v = queue[0]
+    tail -= 1
+    d = keys[tail]
+    w = queue[tail]
+    i = 0
+    while True:
+        c = 2 * i + 1
+        if c >= tail:
+            break
+        if c + 1 < tail and keys[c + 1] < keys[c]:
+            c += 1
+        if keys[c] >= d:
+            break
+        keys[i] = keys[c]
+        queue[i] = queue[c]
+        i = c
+    if tail > 0:
+        keys[i] = d
+        queue[i] = w
+    return v, tail
+
+
+@njit(cache=True, nogil=True)
 def _blossom(v, w, a, fa, mate, parent, label, queue, tail):
     while _find(fa, v) != a:
         parent[v] = w
@@ -166,7 +227,7 @@ def _drop(u, nb, active, alive, mate, log, nlog):
 
 @njit(cache=True, nogil=True)
 def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
-             nlog, seen):
+             nlog, seen, guide):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
@@ -195,6 +256,13 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     ``OBSERVE`` search answers the ``DROP`` search that would follow it
     (``_drop_matching``) without exploring the same triangles again.
 
+    ``guide`` (``_no_guide()``: none) makes the search best-first (A*) instead of
+    breadth-first: the even vertex of least tree cost plus distance to a goal point
+    is expanded next (``_push``; a step costs 1, a chain's triangle ``goal[d + 1]``).
+    Edmonds' search is correct in any expansion order; a search that must cross the
+    mesh to the free triangle near the goal (``CHAIN`` searches between distant
+    parity defects) then explores a band along the way instead of a disc.
+
     Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
     applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
     after a drop the partner freed (or -1); after a failed ``DROP`` search the first
@@ -208,8 +276,15 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     fa[r] = r  # the union-find is set up as triangles are touched (fa may start empty)
     touched[n_t] = r
     n_t += 1
-    queue[tail] = r
-    tail += 1
+    guided = guide[3].shape[0] > 0
+    chain_cost = guide[2][guide[1].shape[1] + 1] if guided else 0.0
+    # (breadth-first, the queue is written here: helpers taking the guide's arrays
+    # cost a call with reference counts per vertex, +70 % on the defects' searches)
+    if guided:
+        tail = _push(queue, tail, r, guide, 0.0)
+    else:
+        queue[tail] = r
+        tail += 1
     found = -1
     drop = False
     extra = -1
@@ -218,14 +293,19 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
         seen[0] = -1
         seen[2] = -1
     while head < tail and found < 0 and n_t < budget:
-        v = queue[head]
-        head += 1
+        if guided:
+            v, tail = _pop(queue, tail, guide)  # (head stays 0)
+            gv = guide[4][v] + 1.0  # (A*: a step costs 1, a chain's triangle chain_cost)
+        else:
+            v = queue[head]
+            head += 1
+            gv = 0.0
         n_v = n_t
         for k in range(3):
             if mode == CHAIN:
-                u, _ = _chain_end(nb, active, alive, v, k)
+                u, ln = _chain_end(nb, active, alive, v, k)
             else:
-                u = nb[v, k]
+                u, ln = nb[v, k], 0
             if u < 0 or not active[u]:
                 continue
             if label[u] < 0:
@@ -261,13 +341,21 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
                 fa[w] = w
                 touched[n_t] = w
                 n_t += 1
-                queue[tail] = w
-                tail += 1
+                if guided:
+                    tail = _push(queue, tail, w, guide, gv + chain_cost * ln)
+                else:
+                    queue[tail] = w
+                    tail += 1
             elif label[u] == 0 and _find(fa, v) != _find(fa, u):
                 s += 1
                 a = _lca(u, v, fa, mate, parent, stamp, s)
-                tail = _blossom(u, v, a, fa, mate, parent, label, queue, tail)
-                tail = _blossom(v, u, a, fa, mate, parent, label, queue, tail)
+                nt = _blossom(u, v, a, fa, mate, parent, label, queue, tail)
+                nt = _blossom(v, u, a, fa, mate, parent, label, queue, nt)
+                if guided:  # the vertices made even were appended past the heap: push them
+                    for i in range(tail, nt):
+                        tail = _push(queue, tail, queue[i], guide, gv)  # (i == tail: writes at <= i)
+                else:
+                    tail = nt
     if found >= 0:
         v = found
         keep = log.shape[0] > 0
@@ -329,12 +417,12 @@ def _bfs_order(nb, side, half):
     for t in range(m):
         if side[t] == half:
             n += 1
-    order = np.empty(n, np.int64)
+    order = np.empty(n, np.int32)
     seen = np.zeros(m, np.bool_)
     head = 0
     tail = 0
     for s in range(m):
-        if seen[s] or side[s] != half:
+        if side[s] != half or seen[s]:  # (the other half's pages of seen never touched)
             continue
         seen[s] = True
         order[tail] = s
@@ -371,10 +459,11 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     next lca stamp.
     """
     n = order.shape[0]
-    stack = np.empty(4 * n + 16, np.int64)  # a triangle is pushed once, then once per neighbour matched
-    touched = np.empty(online + 16, np.int64)
+    stack = np.empty(4 * n + 16, np.int32)  # a triangle is pushed once, then once per neighbour matched
+    touched = np.empty(online + 16, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     s = 0
     hdeg = np.zeros(m, np.int8)  # free candidates, 0-3
     for i in range(n):
@@ -418,7 +507,7 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
             if online <= 0:
                 continue
             far, s, _x = _augment(t, nb, active, active, mate, parent, fa, label, stamp, s, touched, queue, online,
-                                  PLAIN, -1, nolog, nonlog, nonlog)
+                                  PLAIN, -1, nolog, nonlog, nonlog, noguide)
             if far < 0:
                 continue
             # t and the path's far end are newly matched (the path's inner triangles
@@ -468,12 +557,13 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
     seen = np.empty(4, np.int64)
+    noguide = _no_guide()
     for t in frees:  # the free triangles, in index order (the list only shrinks)
         if not active[t] or mate[t] >= 0:
             continue
         r = t  # a longer augmenting path first: it leaves nothing uncovered
         f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                             plain_budget, OBSERVE, -1, log, nlog, seen)
+                             plain_budget, OBSERVE, -1, log, nlog, seen, noguide)
         if f0 >= 0:
             continue
         nlog[0] = 0
@@ -489,15 +579,15 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 extra = seen[2] if seen[2] >= 0 and seen[3] < budget else -1
                 if seen[0] >= 0 and seen[1] < budget:  # the search stops there
                     found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                               queue, budget, DROP, -1, log, nlog, seen)
+                                               queue, budget, DROP, -1, log, nlog, seen, noguide)
             else:
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                           budget, DROP, -1, log, nlog, seen)
+                                           budget, DROP, -1, log, nlog, seen, noguide)
             if found < 0:
                 if extra < 0 or it == rounds:
                     break
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                           queue, budget, DROP, extra, log, nlog, seen)
+                                           queue, budget, DROP, extra, log, nlog, seen, noguide)
                 if found < 0:  # the same search again: it stops at the same triangle
                     break
             if not alive[found]:
@@ -507,7 +597,7 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 break
             r = extra  # freed by the drop: an augmenting path first, then drop again
             f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                 budget, OBSERVE, -1, log, nlog, seen)
+                                 budget, OBSERVE, -1, log, nlog, seen, noguide)
             if f2 >= 0:
                 fixed = True
                 break
@@ -518,7 +608,44 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
 
 
 @njit(cache=True, nogil=True)
-def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees):
+def _centroid_into(tri, pts, t, out):
+    """``out``: the centroid of triangle ``t``."""
+    for j in range(pts.shape[1]):
+        out[j] = (pts[tri[t, 0], j] + pts[tri[t, 1], j] + pts[tri[t, 2], j]) / 3.0
+
+
+@njit(cache=True, nogil=True)
+def _nearest_free_centroid(t, frees, active, mate, tri, pts, goal, weight):
+    """``goal[:d]``: the centroid of the free triangle of ``frees`` (other than ``t``)
+    nearest to ``t``'s (a few dozen at most: a plain scan); ``goal[d]``: the inverse
+    of ``t``'s mean edge length (A*'s steps per unit length, ``_push``)."""
+    d = pts.shape[1]
+    here = np.empty(d)
+    there = np.empty(d)
+    _centroid_into(tri, pts, t, here)
+    per = 0.0
+    for k in range(3):
+        e = 0.0
+        for j in range(d):
+            e += (pts[tri[t, (k + 1) % 3], j] - pts[tri[t, k], j]) ** 2
+        per += np.sqrt(e)
+    goal[d] = 3.0 * weight / per if per > 0.0 else 0.0
+    best = np.inf
+    for u in frees:
+        if u == t or not active[u] or mate[u] >= 0:
+            continue
+        _centroid_into(tri, pts, u, there)
+        dd = 0.0
+        for j in range(d):
+            dd += (there[j] - here[j]) ** 2
+        if dd < best:
+            best = dd
+            goal[:d] = there
+
+
+@njit(cache=True, nogil=True)
+def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,
+                    chain_cost):
     """Augment through chains of degree-2 triangles; a chain used is left uncovered.
 
     A chain of degree-2 triangles between two degree-3 ones x, y may serve as a
@@ -534,6 +661,12 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
     0.064 / 0.145 s thread CPU at 1.5 M (Hilbert order / Triangle's) against 0.032 /
     0.108 s one root at a time, and its paths ran through chains (5 / 30 boundary
     triangles left uncovered, against none): not kept.
+
+    With the points (``pts`` with a row per vertex of ``tri``; empty: breadth-first)
+    each search is best-first towards the centroid of the free triangle nearest to
+    its start (``_augment``'s ``guide``): these last defects lie far apart (corners,
+    holes), and a breadth-first search from one explores a disc reaching the
+    nearest other (150-630 k triangles at 1.5 M).
     """
     m = nb.shape[0]
     hit = False
@@ -543,13 +676,20 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
     for t in frees:
         if active[t] and mate[t] < 0:
             n += 1
-    touched = np.empty(m + 16 if n >= 2 else 0, np.int64)  # a search touches a triangle once
+    touched = np.empty(m + 16 if n >= 2 else 0, np.int32)  # a search touches a triangle once
+    guided = n >= 2 and pts.shape[0] > 0
+    keys = np.empty(m + 8 if guided else 0)  # the heap's keys, beside queue
+    cost = np.empty(m if guided else 0)  # each even triangle's tree path cost (set as pushed)
+    goal = np.zeros(pts.shape[1] + 2)
+    goal[pts.shape[1] + 1] = chain_cost
     for t in frees:
         if n < 2:
             break
         if active[t] and mate[t] < 0:
+            if guided:
+                _nearest_free_centroid(t, frees, active, mate, tri, pts, goal, guide_weight)
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                m + 8, CHAIN, -1, nolog, nonlog, nonlog)
+                                m + 8, CHAIN, -1, nolog, nonlog, nonlog, (tri, pts, goal, keys, cost))
             if f >= 0:
                 hit = True
                 n -= 2
@@ -814,8 +954,9 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
     m = nb.shape[0]
     act = np.zeros(m, np.bool_)
     for t in range(m):
-        act[t] = active[t] and side[t] == half
-    queue = np.empty(max(online, budget) + 16, np.int64)  # a search enqueues what it touches
+        if side[t] == half:  # (zeros elsewhere: the other half's pages never written)
+            act[t] = active[t]
+    queue = np.empty(max(online, budget) + 16, np.int32)  # a search enqueues what it touches
     if online > 0:  # breadth-first even in a local row order (session 10, 1.5 M in
         # Hilbert order: sweeping rows left 13,152 cycles instead of 11,954 and cost
         # more in finish_matching than the breadth-first order saves)
@@ -825,21 +966,22 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
         for t in range(m):
             if act[t]:
                 n += 1
-        order = np.empty(n, np.int64)
+        order = np.empty(n, np.int32)
         n = 0
         for t in range(m):
             if act[t]:
                 order[n] = t
                 n += 1
     s = _greedy_matching(nb, act, m, good, order, online, parent, fa, label, stamp, queue, mate)
-    touched = np.empty(budget + 8, np.int64)
+    touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     for i in range(order.shape[0]):
         t = order[i]
         if act[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, act, act, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog, noguide)
     return s
 
 
@@ -847,13 +989,14 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
 def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, queue, budget):
     """A plain search of at most ``budget`` triangles (``_augment``) from every active
     triangle still unmatched, in index order; returns the next lca stamp."""
-    touched = np.empty(budget + 8, np.int64)
+    touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     for t in range(nb.shape[0]):
         if active[t] and mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog, noguide)
     return s
 
 
@@ -868,22 +1011,23 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
     nbc = _cell_neighbors(nb, cell)
     inner = active & (mate < 0)  # the pinned pairs stay out of the cell's searches
     one = np.zeros(m, np.int8)
-    order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m)
-    queue = np.empty(m + 8, np.int64)
+    order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m).astype(np.int32)
+    queue = np.empty(m + 8, np.int32)
     s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
     return _augment_every_free(nbc, inner, alive, mate, parent, fa, label, stamp, s, queue, budget)
 
 
 @njit(cache=True, nogil=True)
 def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget, plain_budget, drop_budget,
-                    drop_rounds):
+                    drop_rounds, tri, pts, guide_weight, chain_cost):
     """From the matchings of the halves (or cells) to the matching the cover complements.
 
     Searches of ``budget`` triangles over the whole graph from each triangle still
     free (those left at the split between the halves, mostly: the join across it);
     the parity defects (``_drop_matching``: searches of ``plain_budget``, then of
     ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then chains
-    (``_chain_matching``). The free triangles are listed once (the phases only
+    (``_chain_matching``, best-first towards the nearest free triangle when ``pts``,
+    the points of ``tri``, has rows). The free triangles are listed once (the phases only
     match them; a drop sequence that frees another either matches it or is undone).
     Then ``cover_edges_into`` (rows on threads) and ``settle_cover``.
 
@@ -900,20 +1044,22 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
         if active[t] and mate[t] < 0:
             frees[n] = t
             n += 1
-    queue = np.empty(m + 8, np.int64)
-    touched = np.empty(budget + 8, np.int64)
+    queue = np.empty(m + 8, np.int32)
+    touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
+    noguide = _no_guide()
     for t in frees:
         if mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
-                                 PLAIN, -1, nolog, nonlog, nonlog)
+                                 PLAIN, -1, nolog, nonlog, nonlog, noguide)
     n_drop = 0
     if drop_rounds >= 0:
-        touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int64)
+        touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int32)
         s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
                                    plain_budget, drop_budget, drop_rounds, frees)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees)
+    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,
+                        chain_cost)
     n_free = 0
     for t in frees:
         if active[t] and mate[t] < 0:
@@ -1100,9 +1246,12 @@ def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
             if new_id[r] < 0:
                 new_id[r] = n_new
                 n_new += 1
+        table = np.empty(max(n_cyc, 1), np.int64)  # each old id's new one: no find per row
+        for c in range(n_cyc):
+            table[c] = new_id[_find(uf, c)]
         for t in range(m):
             if cyc[t] >= 0:
-                cyc[t] = new_id[_find(uf, cyc[t])]
+                cyc[t] = table[cyc[t]]
     return merged
 
 
@@ -1126,7 +1275,7 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, cell):
     from ``cycle_cover`` (``star_prefilter_into``, ``star_candidates_into``, then
     ``rotate_candidates``); this is them in one call.
     """
-    vh = np.full(n_points, -1, np.int64)
+    vh = np.full(n_points, -1, np.int32)
     skip = np.zeros(n_points, np.bool_)
     cand = np.empty(n_points, np.bool_)
     star_prefilter_into(tri, is_cov, vh, skip, 0, tri.shape[0])

@@ -27,7 +27,8 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
-    "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves",
+    "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves", "CHAIN_COST", "GUIDE_WEIGHT",
+    "GUIDE_MIN_TRIANGLES",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -46,6 +47,23 @@ CELL_SIZE = 0
 DEFECT_SEARCH_BUDGET = 100_000
 DROP_BUDGET = 100_000
 DROP_ROUNDS = 1
+
+#: The chain searches between the last parity defects (``_cover_kernels._chain_matching``)
+#: are A* searches towards the nearest other free triangle when the points are known:
+#: a step of the alternating tree costs 1, each triangle of a chain it steps through
+#: (left uncovered if the path is taken) ``CHAIN_COST``, and the distance to the goal
+#: counts ``GUIDE_WEIGHT`` steps per mean edge length of the start triangle.
+#: Breadth-first, a chain was one step whatever its length, and a search from a
+#: corner explored a disc reaching the nearest other defect (150-630 k triangles at
+#: 1.5 M); counting only the distance (no chain cost), the paths ran along the
+#: chains of thin strokes (Triangle's ``A`` at 16 k: 26 -> 76 uncovered).
+CHAIN_COST = 20.0
+GUIDE_WEIGHT = 1.25
+#: Meshes from this size on guide the chain searches; below it a breadth-first search
+#: costs little, and its chains are kept: guided at 16 k, Triangle's ``A`` lost its
+#: angle target (24.1 deg out, 27.0 wanted; 13 uncovered instead of 26, but chains
+#: whose joins cost more).
+GUIDE_MIN_TRIANGLES = 100_000
 
 #: Triangles an augmenting search started by the greedy matching may label (``online``).
 ONLINE_BUDGET = 256
@@ -136,7 +154,10 @@ def cycle_cover(
         dual edge across a cell border is matched first, so no cover cycle crosses one
         (up to the few the matching must unpin), and the joins can then go finest cell
         first (``join_classes``) so that the final cycle sweeps the quadtree cell by
-        cell, as the incircle mode's compact tree does.
+        cell, as the incircle mode's compact tree does. With points (2D or 3D) and
+        from ``GUIDE_MIN_TRIANGLES`` triangles on, the last parity defects' chain
+        searches are A* searches towards the nearest other free triangle
+        (``CHAIN_COST``, ``GUIDE_WEIGHT``).
     cell_size : int, optional
         Default ``CELL_SIZE`` (read at call time).
     drop : bool
@@ -190,11 +211,12 @@ def cycle_cover(
     alive, deg = _k.peel(nb, m)
     mark("peel")
     active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int64)
+    mate = np.full(m, -1, np.int32)
     # the searches' parent, union-find, label (-1: none) and lca stamps: each search
     # sets what it touches, so only label is written ahead (int8; stamp's zeros are
-    # lazy pages)
-    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    # lazy pages). Triangle ids are int32 in the matching's arrays (mate, parent,
+    # union-find, orders, stacks, queues): half the pages a first call faults in
+    work = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     if cell is not None:
         s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
     else:
@@ -212,9 +234,14 @@ def cycle_cover(
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
     mark("match_halves")
+    # the chain searches go best-first towards the nearest free triangle (points needed)
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    guide = points is not None and m >= GUIDE_MIN_TRIANGLES
+    pts = np.ascontiguousarray(points, dtype=np.float64) if guide else np.zeros((0, 2))
     finish = partial(
         _k.finish_matching,
         nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1,
+        tri, pts, float(GUIDE_WEIGHT), float(CHAIN_COST),
     )
     if len(spans) > 1:  # the defects' searches are serial: the other core faults in the arrays used next
         (n_free, n_drop), later = run_all([finish, partial(_Later, m, triangles, rotate)])
@@ -234,7 +261,6 @@ def cycle_cover(
     mark("cycle_ids")
     n_rot = 0
     if rotate and n_cyc > 1:
-        tri = np.ascontiguousarray(triangles, dtype=np.int64)
         cl = no_cell if cell is None else cell
         # the prefilter and the candidates on two threads, the rotations on one
         n_pts, vh, skip, cand = later.n_pts, later.vh, later.skip, later.cand
@@ -285,7 +311,8 @@ class _Later:
         self.cdeg = np.full(m, 0, np.int8)
         self.cyc = np.full(m, -1, np.int64)
         self.n_pts = int(np.max(triangles)) + 1 if rotate and m else 0
-        self.vh = np.full(self.n_pts, -1, np.int64)
+        # half-edge ids: int32 below 2**31 (715 M triangles), as nb is for triangle ids
+        self.vh = np.full(self.n_pts, -1, np.int32 if 3 * m < 2**31 else np.int64)
         self.skip = np.full(self.n_pts, False)
         self.cand = np.full(self.n_pts, False)
 
