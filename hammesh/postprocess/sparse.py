@@ -1518,14 +1518,18 @@ def sparse_cycles(
     tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts))
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of virtual row {int(dup) // 3} used twice")
-    order_rows, lengths, low, bad = _k.walk_links(status, cover.is_cov, link, parent, tw, tw_new, changed, face_tw)
+    # (the walk's table of links, then the gather's row places: one buffer)
+    ends = fresh(2 * (len(tri) + len(out)), np.int64)
+    order_rows, lengths, low, bad = _k.walk_links(status, cover.is_cov, link, parent, tw, tw_new, changed, face_tw,
+                                                  ends)
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
     # runs in the order of their lowest input triangle; rows, their parents' smallest
     # angle (pm) and the twins renumbered as the claim, in one gather
     run_order = np.argsort(low, kind="stable") if len(lengths) > 1 else np.zeros(len(lengths), np.int64)
     out, parent, partner, kind, pm, lengths, claim = _k.rows_in_cycle_order(
-        order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p
+        order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
+        ends,
     )
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
