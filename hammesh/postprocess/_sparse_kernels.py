@@ -141,15 +141,17 @@ class Plan(NamedTuple):
     bad: np.ndarray  # (m,) bool
 
 
-def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges) -> Plan:
+def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, room=0) -> Plan:
     """Join the cover cycles and the uncovered triangles into one cycle per piece
     (:func:`_plan_merges_into`; its big arrays from ``hammesh.pages``: a first call
-    faults no pages for them where ``quality_mesh`` left a reserve)."""
+    faults no pages for them where ``quality_mesh`` left a reserve). ``room``: rows of
+    memory left after ``status``, ``slot``, ``swap_he`` and ``join`` (each the start of
+    a buffer that much longer), for a caller that appends rows to the plan later."""
     m = tri.shape[0]
-    status = fresh(m, np.int8)
-    slot = fresh(3 * m, np.int8)
-    swap_he = fresh(m, np.int64)
-    join = fresh(m, np.int64)
+    status = fresh(m + room, np.int8)[:m]
+    slot = fresh(3 * (m + room), np.int8)[: 3 * m]
+    swap_he = fresh(m + room, np.int64)[:m]
+    join = fresh(m + room, np.int64)[:m]
     uf = fresh(n_cyc + m, np.int64)
     pu = fresh(n_cyc + m, np.int64)
     counts, bad = _plan_merges_into(
