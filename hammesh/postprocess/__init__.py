@@ -27,7 +27,7 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 
 #: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
 #: ``pages.fresh``); the rest of a reserve is given back as the call starts
-#: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
+#: (``pages.trim``). incircle: 256 (``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``'s list);
 #: sparse: its arrays of one entry per input triangle, half-edge or output row (a
 #: few more rows than triangles): the validation's half-edge twins (24), the
 #: triangles' smallest and largest angles (16), the judged edges (3), the open
@@ -38,8 +38,11 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: ``sparse.LOCAL_MIN_TRIANGLES`` the renumbering's too (cell keys 8, order 8, rows
 #: 24, twins 24, pinned marks 3, points ~8: 75), 283 in all: so all of the 256 that
 #: ``quality_mesh`` faults (the rest are made inside kernels, or small: a kernel
-#: handed ``pages.fresh`` arrays raises this).
-RESERVE_TAKEN = {"incircle": None, "sparse": 256}
+#: handed ``pages.fresh`` arrays raises this). Session 11: the walk's table of links
+#: (16, its buffer then the gather's positions) and room after the per-row arrays
+#: (``sparse.ROOM_ROWS``: the ring rows appended in place, not ~90 B per triangle of
+#: copies): measured at 1.5 M the reserve ran out in the output rows at 256; 320.
+RESERVE_TAKEN = {"incircle": 256, "sparse": 320}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
 #: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,
