@@ -401,13 +401,25 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                 if slot[h] == MID:
                     n_midh += 1
     total = m - n_pass + 2 * n_split + n_midh + n_edge
+    # the bridges' midpoint slots, ascending, and each one's midpoint (its pair's: the
+    # first of the two emitted makes it); a few, found by binary search (a per-half-edge
+    # map was 24 B per input triangle, filled, ~9k page faults at 1.5 M)
+    mid_hs = np.empty(n_midh, np.int64)
+    mid_of = np.full(n_midh, -1, np.int64)
+    if n_midh:
+        i = 0
+        for t in range(m):
+            if status[t] == SPLIT:
+                for h in range(3 * t, 3 * t + 3):
+                    if slot[h] == MID:
+                        mid_hs[i] = h
+                        i += 1
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
     parent = np.empty(total, np.int64)
     partner = np.full(total, -1, np.int64)
     kind = np.empty(total, np.int8)
-    mid_of = np.full(3 * m if n_midh else 0, -1, np.int64)  # (bridges' midpoints: rare; 24 B per row else)
     mid_a = np.empty(n_midh // 2, np.int64)
     mid_b = np.empty(n_midh // 2, np.int64)
     mid_t = np.full(n_midh // 2, -1, np.int64)
@@ -473,13 +485,14 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     pos += 1
                 else:
                     g = twin[h]
-                    if mid_of[h] < 0:
-                        mid_of[h] = n_all + n_mid
-                        mid_of[g] = n_all + n_mid
+                    ih = lower_bound(mid_hs, h)
+                    if mid_of[ih] < 0:
+                        mid_of[ih] = n_all + n_mid
+                        mid_of[lower_bound(mid_hs, g)] = n_all + n_mid
                         mid_a[n_mid] = a
                         mid_b[n_mid] = b
                         n_mid += 1
-                    mv = mid_of[h]
+                    mv = mid_of[ih]
                     _row(out, link, parent, partner, kind, pos, inc, a, mv, 3, t, g // 3, 2)
                     _row(out, link, parent, partner, kind, pos + 1, inc, mv, b, 6, t, g // 3, 2)
                     pos += 2
