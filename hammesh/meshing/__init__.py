@@ -44,7 +44,7 @@ _NAMES = {"triangle": "Triangle", "meshpy": "meshpy"}
 #: points about 24, and the spanning forest's arrays 88 (its order 8, rows 24, codes
 #: 24, queue 24, quadtree coordinates 8); sparse from 1.5 M triangles on takes ~320
 #: (session 11: at 256 its reserve ran out in the output rows, 18k pages faulted there).
-RESERVE_BYTES_PER_TRIANGLE = 320
+RESERVE_BYTES_PER_TRIANGLE = 352
 #: Triangle's triangle count per ``area / max_area`` at a quality bound (1.59 on the
 #: square with a hole at q30, 1e-6: 1.52 M triangles for an area of 0.96).
 TRIANGLES_PER_AREA = 1.6

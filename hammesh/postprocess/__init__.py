@@ -42,7 +42,7 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: (16, its buffer then the gather's positions) and room after the per-row arrays
 #: (``sparse.ROOM_ROWS``: the ring rows appended in place, not ~90 B per triangle of
 #: copies): measured at 1.5 M the reserve ran out in the output rows at 256; 320.
-RESERVE_TAKEN = {"incircle": 256, "sparse": 320}
+RESERVE_TAKEN = {"incircle": 256, "sparse": 352}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
 #: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,

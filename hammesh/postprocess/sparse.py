@@ -491,8 +491,11 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows):
         return cover, 0
-    is_cov = cover.is_cov.copy()
-    cycle = cover.cycle.copy()
+    # copies with room after them: the ring fans and joins append rows in place (``_longer``)
+    is_cov = _longer(cover.is_cov, 0, None, 3 * ROOM_ROWS)
+    cycle = _longer(cover.cycle, 0, None, ROOM_ROWS)
+    if np.shares_memory(is_cov, cover.is_cov) or np.shares_memory(cycle, cover.cycle):
+        is_cov, cycle = cover.is_cov.copy(), cover.cycle.copy()  # (the cover's own had room: copied plainly)
     touched = np.zeros(m, np.bool_)
     fan_or_touched = is_fan.copy()  # is_fan | touched, and touched as a set: no O(m) pass per pair
     touched_set: set[int] = set()
