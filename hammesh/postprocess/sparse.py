@@ -1459,7 +1459,7 @@ def sparse_cycles(
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
     orig_of = _with_room(np.arange(m + room), m)
-    is_fan = _with_room(np.zeros(m + room, np.bool_), m)
+    is_fan = _with_room(fresh(m + room, np.bool_, 0), m)  # (pages faulted: read first in the report)
     n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
         pts, tri, tw, con, cover, amin_p, orig_f, fan_f, n_fan = _fans(
