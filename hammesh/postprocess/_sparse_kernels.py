@@ -50,18 +50,25 @@ def _sides(twin, cyc, h):
     return g, cyc[h // 3], cyc[g // 3]
 
 
-@njit(cache=True, nogil=True)
-def join_candidates(twin, cyc):
-    """Half-edges across which a join can merge two nodes.
+def join_candidates(twin, cyc) -> np.ndarray:
+    """Half-edges across which a join can merge two nodes, ascending.
 
     ``h`` of a covered triangle t whose twin is in an uncovered triangle (an
     absorbing join) or in a covered triangle of another cycle (then only ``h < twin``,
-    one per edge).
+    one per edge). One range of half-edges per core (:func:`_join_candidates_range`),
+    joined in order.
     """
-    nh = twin.shape[0]
-    out = np.empty(nh, np.int64)
+    parts = run_all([partial(_join_candidates_range, twin, cyc, lo, hi)
+                     for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+@njit(cache=True, nogil=True)
+def _join_candidates_range(twin, cyc, lo, hi):
+    """:func:`join_candidates` among the half-edges ``lo..hi``."""
+    out = np.empty(hi - lo, np.int64)
     n = 0
-    for h in range(nh):
+    for h in range(lo, hi):
         g, ct, cu = _sides(twin, cyc, h)
         if g < 0 or ct < 0 or ct == cu or (cu >= 0 and g < h):
             continue
