@@ -161,15 +161,34 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     join = fresh(m + room, np.int64)[:m]
     uf = fresh(n_cyc + m, np.int64)
     pu = fresh(n_cyc + m, np.int64)
+    # the half-edges between two different nodes, one range per core, in order
+    parts = run_all([partial(_crossing_range, twin, cyc, lo, hi)
+                     for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
+    cross = parts[0] if len(parts) == 1 else np.concatenate(parts)
     counts, bad = _plan_merges_into(
-        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu
+        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu,
+        cross,
     )
     return Plan(status, slot, swap_he, join, counts, bad)
 
 
 @njit(cache=True, nogil=True)
+def _crossing_range(twin, cyc, lo, hi):
+    """Half-edges ``lo..hi`` between two different nodes (cover cycles, uncovered
+    triangles), both directions, ascending (:func:`plan_merges`)."""
+    out = np.empty(hi - lo, np.int64)
+    n = 0
+    for h in range(lo, hi):
+        g, ct, cu = _sides(twin, cyc, h)
+        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
+            out[n] = h
+            n += 1
+    return out[:n]
+
+
+@njit(cache=True, nogil=True)
 def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he,
-                      join, uf, pu):
+                      join, uf, pu, cross):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
 
     Nodes are the cover cycles and the uncovered triangles; a dual edge between two
@@ -191,7 +210,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
 
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
     int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + m,)`` int64 scratch), any
-    contents, and returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
+    contents; ``cross``: the half-edges between two different nodes, ascending
+    (:func:`_crossing_range`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
     swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
     ``bad`` flags the triangles of connected pieces left as more than one node (an
     absorbed triangle was some cycle's only way out): the caller retries without
@@ -208,14 +228,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     for x in range(n_cyc + m):
         uf[x] = x
         pu[x] = x
-    # half-edges between two different nodes (both directions)
-    n_cross = 0
-    cross = np.empty(nh, np.int64)
-    for h in range(nh):
-        g, ct, cu = _sides(twin, cyc, h)
-        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
-            cross[n_cross] = h
-            n_cross += 1
+    n_cross = cross.shape[0]  # (half-edges between two different nodes, both directions)
     n_abs = 0
     n_join = 0
     n_merge = 0
