@@ -41,7 +41,8 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: handed ``pages.fresh`` arrays raises this). Session 11: the walk's table of links
 #: (16, its buffer then the gather's positions) and room after the per-row arrays
 #: (``sparse.ROOM_ROWS``: the ring rows appended in place, not ~90 B per triangle of
-#: copies): measured at 1.5 M the reserve ran out in the output rows at 256; 320.
+#: copies), and the certificate's input facts (~26): measured at 1.5 M the reserve ran
+#: out in the output rows at 256; 352.
 RESERVE_TAKEN = {"incircle": 256, "sparse": 352}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
