@@ -27,7 +27,9 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 
 #: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
 #: ``pages.fresh``); the rest of a reserve is given back as the call starts
-#: (``pages.trim``). incircle: 256 (``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``'s list);
+#: (``pages.trim``). incircle: 288 (``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``'s list of
+#: 256 and what it did not list: trimmed to 256 it faulted 22 k pages at 1.5 M, at 288
+#: 4.1 k, when it held all of a 256 B reserve 6.0 k);
 #: sparse: its arrays of one entry per input triangle, half-edge or output row (a
 #: few more rows than triangles): the validation's half-edge twins (24), the
 #: triangles' smallest and largest angles (16), the judged edges (3), the open
@@ -43,7 +45,7 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: (``sparse.ROOM_ROWS``: the ring rows appended in place, not ~90 B per triangle of
 #: copies), and the certificate's input facts (~26): measured at 1.5 M the reserve ran
 #: out in the output rows at 256; 352.
-RESERVE_TAKEN = {"incircle": 256, "sparse": 352}
+RESERVE_TAKEN = {"incircle": 288, "sparse": 352}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
 #: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,
