@@ -48,11 +48,12 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 RESERVE_TAKEN = {"incircle": 288, "sparse": 352}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
-#: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,
+#: (the open candidates 9, the plan 36, the walk 8 and its table of links 16 (then the
+#: gather's row places), the gather 73, the pinned edges 3,
 #: the stamps 16, the certificate's claim 12): without a reserve (a mesh read from a
 #: file, or made by ``quality_mesh(isolate=False)``) the second thread faults in a
 #: reserve of this size while the cover runs, mostly on one core.
-RESERVE_AFTER_COVER = 165
+RESERVE_AFTER_COVER = 173
 #: triangles below which sparse mode makes no reserve of its own (few pages to fault)
 SIDE_RESERVE_MIN_TRIANGLES = 200_000
 
