@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import os
 import subprocess
 import sys
 import time
@@ -248,9 +249,11 @@ def breakdown(area: float) -> None:
     for th in __import__("threading").enumerate():
         if th.name in ("hammesh-reap", "hammesh-meanwhile"):
             th.join()
+    r0 = resource.getrusage(resource.RUSAGE_SELF)
     t, c = time.perf_counter(), cpu()
     h = hammesh.hamiltonian(m, mode="sparse")
     t_all, c_all = time.perf_counter() - t, cpu() - c
+    r1 = resource.getrusage(resource.RUSAGE_SELF)
     r = h.report
     wall, pcpu = r["step_seconds"], r["step_cpu_seconds"]
     sec = r["seconds"]
@@ -264,6 +267,9 @@ def breakdown(area: float) -> None:
     for name, w, c in rows:
         cs = f"{c:>8.3f}{c / c_tri:>7.3f}" if c is not None else f"{'':>8}{'':>7}"
         print(f"{name:<52}{w:>8.3f}{w / t_tri:>7.3f}{cs}")
+    # (page faults on fresh memory are most of the system time: hammesh.pages)
+    print(f"system time {r1.ru_stime - r0.ru_stime:.3f} s, minor page faults {r1.ru_minflt - r0.ru_minflt:,} "
+          f"(load {os.getloadavg()[0]:.1f})")
     print(f"BREAKDOWN_RATIO {t_all / t_tri:.4f}")
 
 

@@ -157,7 +157,7 @@ def cell_order(
 
 def renumber_local(
     points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, marks: np.ndarray | None = None,
-    keys: CellKeys | None = None,
+    keys: CellKeys | None = None, room: tuple[int, int] = (0, 0),
 ) -> Renumbered:
     """The mesh renumbered for locality: rows in :func:`cell_order`, vertices by first use.
 
@@ -172,6 +172,11 @@ def renumber_local(
     keys : CellKeys, optional
         The triangles' cell keys if a pass found them already (``prepare_mesh(...,
         cells=True)``: ``info["validated"]["cells"]``); consumed.
+    room : (int, int)
+        Rows of memory to leave after the new triangles (and their twins and marks)
+        and after the new points: the arrays returned are the first ``m`` (``n``) rows
+        of buffers that long, so that a construction that appends a few rows later
+        (sparse mode's ring fans, its Steiner points) can grow them in place.
 
     Returns
     -------
@@ -186,17 +191,18 @@ def renumber_local(
     mk = np.zeros(0, np.bool_) if marks is None else np.ascontiguousarray(marks, dtype=np.bool_)
     m, n = len(tri), len(pts)
     order, inverse = cell_order(pts, tri, keys)
-    tri_new = fresh((m, 3), np.int64)
+    rt, rp = (max(0, int(r)) for r in room)
+    tri_new = fresh((m + rt, 3), np.int64)[:m]
     vertex_new = np.full(n, -1, np.int64)
     vertex_order = np.empty(n, np.int64)
-    twin_new = fresh(3 * m, np.int64)
-    marks_new = fresh(3 * m if len(mk) else 0, np.bool_)
+    twin_new = fresh(3 * (m + rt), np.int64)[: 3 * m]
+    marks_new = fresh(3 * (m + rt) if len(mk) else 0, np.bool_)[: 3 * m if len(mk) else 0]
     # the serial vertex pass on one thread, the twins (reading the inverse) on the other
     run_all([
         lambda: _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new),
         lambda: _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new, 0, m),
     ])
-    pts_new = fresh(pts.shape, np.float64)
+    pts_new = fresh((n + rp,) + pts.shape[1:], np.float64)[:n]
     run_all([
         (lambda lo=lo, hi=hi: _kernels.gather_points_into(pts, vertex_order, pts_new, lo, hi))
         for lo, hi in row_ranges(n, threads.THREAD_MIN_ROWS)

@@ -28,7 +28,9 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 
 #: Bytes per input triangle each mode takes from ``hammesh.pages``' reserve (through
 #: ``pages.fresh``); the rest of a reserve is given back as the call starts
-#: (``pages.trim``). incircle: all of ``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``;
+#: (``pages.trim``). incircle: 288 (``hammesh.meshing.RESERVE_BYTES_PER_TRIANGLE``'s list of
+#: 256 and what it did not list: trimmed to 256 it faulted 22 k pages at 1.5 M, at 288
+#: 4.1 k, when it held all of a 256 B reserve 6.0 k);
 #: sparse: its arrays of one entry per input triangle, half-edge or output row (a
 #: few more rows than triangles): the validation's half-edge twins (24), the
 #: triangles' smallest and largest angles (16), the judged edges (3), the open
@@ -39,15 +41,20 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: ``sparse.LOCAL_MIN_TRIANGLES`` the renumbering's too (cell keys 8, order 8, rows
 #: 24, twins 24, pinned marks 3, points ~8: 75), 283 in all: so all of the 256 that
 #: ``quality_mesh`` faults (the rest are made inside kernels, or small: a kernel
-#: handed ``pages.fresh`` arrays raises this).
-RESERVE_TAKEN = {"incircle": None, "sparse": 256}
+#: handed ``pages.fresh`` arrays raises this). Session 11: the walk's table of links
+#: (16, its buffer then the gather's positions) and room after the per-row arrays
+#: (``sparse.ROOM_ROWS``: the ring rows appended in place, not ~90 B per triangle of
+#: copies), and the certificate's input facts (~26): measured at 1.5 M the reserve ran
+#: out in the output rows at 256; 352.
+RESERVE_TAKEN = {"incircle": 288, "sparse": 352}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
-#: (the open candidates 9, the plan 36, the walk 8, the gather 81, the pinned edges 3,
+#: (the open candidates 9, the plan 36, the walk 8 and its table of links 16 (then the
+#: gather's row places), the gather 73, the pinned edges 3,
 #: the stamps 16, the certificate's claim 12): without a reserve (a mesh read from a
 #: file, or made by ``quality_mesh(isolate=False)``) the second thread faults in a
 #: reserve of this size while the cover runs, mostly on one core.
-RESERVE_AFTER_COVER = 165
+RESERVE_AFTER_COVER = 173
 #: triangles below which sparse mode makes no reserve of its own (few pages to fault)
 SIDE_RESERVE_MIN_TRIANGLES = 200_000
 

@@ -50,18 +50,25 @@ def _sides(twin, cyc, h):
     return g, cyc[h // 3], cyc[g // 3]
 
 
-@njit(cache=True, nogil=True)
-def join_candidates(twin, cyc):
-    """Half-edges across which a join can merge two nodes.
+def join_candidates(twin, cyc) -> np.ndarray:
+    """Half-edges across which a join can merge two nodes, ascending.
 
     ``h`` of a covered triangle t whose twin is in an uncovered triangle (an
     absorbing join) or in a covered triangle of another cycle (then only ``h < twin``,
-    one per edge).
+    one per edge). One range of half-edges per core (:func:`_join_candidates_range`),
+    joined in order.
     """
-    nh = twin.shape[0]
-    out = np.empty(nh, np.int64)
+    parts = run_all([partial(_join_candidates_range, twin, cyc, lo, hi)
+                     for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+@njit(cache=True, nogil=True)
+def _join_candidates_range(twin, cyc, lo, hi):
+    """:func:`join_candidates` among the half-edges ``lo..hi``."""
+    out = np.empty(hi - lo, np.int64)
     n = 0
-    for h in range(nh):
+    for h in range(lo, hi):
         g, ct, cu = _sides(twin, cyc, h)
         if g < 0 or ct < 0 or ct == cu or (cu >= 0 and g < h):
             continue
@@ -141,26 +148,47 @@ class Plan(NamedTuple):
     bad: np.ndarray  # (m,) bool
 
 
-def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges) -> Plan:
+def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, room=0) -> Plan:
     """Join the cover cycles and the uncovered triangles into one cycle per piece
     (:func:`_plan_merges_into`; its big arrays from ``hammesh.pages``: a first call
-    faults no pages for them where ``quality_mesh`` left a reserve)."""
+    faults no pages for them where ``quality_mesh`` left a reserve). ``room``: rows of
+    memory left after ``status``, ``slot``, ``swap_he`` and ``join`` (each the start of
+    a buffer that much longer), for a caller that appends rows to the plan later."""
     m = tri.shape[0]
-    status = fresh(m, np.int8)
-    slot = fresh(3 * m, np.int8)
-    swap_he = fresh(m, np.int64)
-    join = fresh(m, np.int64)
+    status = fresh(m + room, np.int8)[:m]
+    slot = fresh(3 * (m + room), np.int8)[: 3 * m]
+    swap_he = fresh(m + room, np.int64)[:m]
+    join = fresh(m + room, np.int64)[:m]
     uf = fresh(n_cyc + m, np.int64)
     pu = fresh(n_cyc + m, np.int64)
+    # the half-edges between two different nodes, one range per core, in order
+    parts = run_all([partial(_crossing_range, twin, cyc, lo, hi)
+                     for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
+    cross = parts[0] if len(parts) == 1 else np.concatenate(parts)
     counts, bad = _plan_merges_into(
-        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu
+        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu,
+        cross,
     )
     return Plan(status, slot, swap_he, join, counts, bad)
 
 
 @njit(cache=True, nogil=True)
+def _crossing_range(twin, cyc, lo, hi):
+    """Half-edges ``lo..hi`` between two different nodes (cover cycles, uncovered
+    triangles), both directions, ascending (:func:`plan_merges`)."""
+    out = np.empty(hi - lo, np.int64)
+    n = 0
+    for h in range(lo, hi):
+        g, ct, cu = _sides(twin, cyc, h)
+        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
+            out[n] = h
+            n += 1
+    return out[:n]
+
+
+@njit(cache=True, nogil=True)
 def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he,
-                      join, uf, pu):
+                      join, uf, pu, cross):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
 
     Nodes are the cover cycles and the uncovered triangles; a dual edge between two
@@ -182,7 +210,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
 
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
     int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + m,)`` int64 scratch), any
-    contents, and returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
+    contents; ``cross``: the half-edges between two different nodes, ascending
+    (:func:`_crossing_range`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
     swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
     ``bad`` flags the triangles of connected pieces left as more than one node (an
     absorbed triangle was some cycle's only way out): the caller retries without
@@ -199,14 +228,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     for x in range(n_cyc + m):
         uf[x] = x
         pu[x] = x
-    # half-edges between two different nodes (both directions)
-    n_cross = 0
-    cross = np.empty(nh, np.int64)
-    for h in range(nh):
-        g, ct, cu = _sides(twin, cyc, h)
-        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
-            cross[n_cross] = h
-            n_cross += 1
+    n_cross = cross.shape[0]  # (half-edges between two different nodes, both directions)
     n_abs = 0
     n_join = 0
     n_merge = 0
@@ -399,13 +421,25 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                 if slot[h] == MID:
                     n_midh += 1
     total = m - n_pass + 2 * n_split + n_midh + n_edge
+    # the bridges' midpoint slots, ascending, and each one's midpoint (its pair's: the
+    # first of the two emitted makes it); a few, found by binary search (a per-half-edge
+    # map was 24 B per input triangle, filled, ~9k page faults at 1.5 M)
+    mid_hs = np.empty(n_midh, np.int64)
+    mid_of = np.full(n_midh, -1, np.int64)
+    if n_midh:
+        i = 0
+        for t in range(m):
+            if status[t] == SPLIT:
+                for h in range(3 * t, 3 * t + 3):
+                    if slot[h] == MID:
+                        mid_hs[i] = h
+                        i += 1
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
     parent = np.empty(total, np.int64)
     partner = np.full(total, -1, np.int64)
     kind = np.empty(total, np.int8)
-    mid_of = np.full(3 * m if n_midh else 0, -1, np.int64)  # (bridges' midpoints: rare; 24 B per row else)
     mid_a = np.empty(n_midh // 2, np.int64)
     mid_b = np.empty(n_midh // 2, np.int64)
     mid_t = np.full(n_midh // 2, -1, np.int64)
@@ -471,13 +505,14 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     pos += 1
                 else:
                     g = twin[h]
-                    if mid_of[h] < 0:
-                        mid_of[h] = n_all + n_mid
-                        mid_of[g] = n_all + n_mid
+                    ih = lower_bound(mid_hs, h)
+                    if mid_of[ih] < 0:
+                        mid_of[ih] = n_all + n_mid
+                        mid_of[lower_bound(mid_hs, g)] = n_all + n_mid
                         mid_a[n_mid] = a
                         mid_b[n_mid] = b
                         n_mid += 1
-                    mv = mid_of[h]
+                    mv = mid_of[ih]
                     _row(out, link, parent, partner, kind, pos, inc, a, mv, 3, t, g // 3, 2)
                     _row(out, link, parent, partner, kind, pos + 1, inc, mv, b, 6, t, g // 3, 2)
                     pos += 2
@@ -594,7 +629,7 @@ class Walk(NamedTuple):
 WALK_TWO_ENDS_MIN_ROWS = 400_000
 
 
-def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw) -> Walk:
+def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, ends=None) -> Walk:
     """Follow the links into cycles over the virtual rows, checking each row as the walk reaches it.
 
     Virtual rows as in :func:`new_row_twins` (kept input triangles, then the new
@@ -604,6 +639,13 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
     not link back. Every row is reached exactly once (the outer loop starts a walk at
     each row not seen yet), so every row is checked, in the same pass that orders
     them.
+
+    First every row's two links are looked up, one row range per core
+    (:func:`_link_ends_into`, into ``ends``: ``(2 n_v,)`` int64 scratch, any contents,
+    e.g. from ``hammesh.pages``; made here if None): that pass reads the input's twins,
+    cover marks and statuses with no row waiting on another, so the walk itself then
+    reads one pair of entries per row (a pointer chase through ~8 arrays was ~75 ns
+    a row at 1.5 M rows, the table's ~4x less).
 
     From ``WALK_TWO_ENDS_MIN_ROWS`` rows (and two cores) the first cycle, usually
     all of the mesh, is walked from both ends at once: this thread forward from its
@@ -616,22 +658,27 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
     m = status.shape[0]
     n_v = m + link_new.shape[0]
     n_rows = link_new.shape[0] + int(np.count_nonzero(status == PASS))
+    if ends is None:
+        ends = fresh(2 * n_v, np.int64)
+    run_all([
+        partial(_link_ends_into, status, is_cov, link_new, twin_in, tw_new, changed, face_tw, lo, hi, ends)
+        for lo, hi in row_ranges(n_v, threads.THREAD_MIN_ROWS)
+    ])
     s0 = _first_start(status, n_v)
     if n_rows < WALK_TWO_ENDS_MIN_ROWS or threads.cores() < 2 or s0 < 0:
-        return Walk(*_walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows))
+        return Walk(*_walk_all(ends, parent_new, m, status, n_rows))
     fwd = np.zeros(n_v, np.bool_)
     bwd = np.zeros(n_v, np.bool_)
     order = fresh(n_rows, np.int64)
     back = np.empty(n_rows, np.int64)
-    args = (status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, s0)
+    args = (ends, parent_new, m, s0)
     with ThreadPoolExecutor(1) as pool:
         other = pool.submit(_walk_one_into, *args, False, bwd, fwd, back)
         n_f, lo_f, bad_f = _walk_one_into(*args, True, fwd, bwd, order)
         n_b, lo_b, bad_b = other.result()
     if bad_f >= 0 or bad_b >= 0:
-        return Walk(*_walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows))
-    return Walk(*_walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, n_f,
-                            min(lo_f, lo_b), back, n_b, fwd, bwd))
+        return Walk(*_walk_all(ends, parent_new, m, status, n_rows))
+    return Walk(*_walk_rest(ends, parent_new, m, status, order, n_f, min(lo_f, lo_b), back, n_b, fwd, bwd))
 
 
 def load_output_kernels() -> None:
@@ -646,11 +693,13 @@ def load_output_kernels() -> None:
     none = np.zeros(0, np.int64)
     link = np.full(k, 6, np.uint8)  # (each row crosses its two edges to the centre)
     marks = (np.zeros(k, np.bool_), np.zeros(k, np.bool_))
-    args = (status, np.zeros(0, np.bool_), link, r.copy(), none, tw, none, none, 0)
+    ends = np.empty(2 * k, np.int64)
+    _link_ends_into(status, np.zeros(0, np.bool_), link, none, tw, none, none, 0, k, ends)
+    args = (ends, r.copy(), 0, 0)
     order, back = np.empty(k, np.int64), np.empty(k, np.int64)
     n_b, lo_b, _ = _walk_one_into(*args, False, marks[1], marks[0], back)
     n_f, lo_f, _ = _walk_one_into(*args, True, marks[0], marks[1], order)
-    walk = _walk_rest(*args[:-1], order, n_f, min(lo_f, lo_b), back, n_b, marks[0], marks[1])
+    walk = _walk_rest(ends, r.copy(), 0, status, order, n_f, min(lo_f, lo_b), back, n_b, marks[0], marks[1])
     rows, lengths = np.empty(k, np.int64), np.empty(2, np.int64)
     _runs_in_order_into(walk[0], np.array([2, 2]), np.array([1, 0]), rows, lengths)
 
@@ -665,52 +714,66 @@ def _first_start(status, n_v):
     return -1
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _links(status, is_cov, link_new, twin_in, tw_new, changed, face_tw, x):
-    """``(ok, j1, g1, j2, g2)``: the two edges ``j1 < j2`` of virtual row ``x`` the cycle
-    crosses and their virtual twins; not ok unless exactly two, each linked back."""
+@njit(cache=True, nogil=True)
+def _link_ends_into(status, is_cov, link_new, twin_in, tw_new, changed, face_tw, lo, hi, ends):
+    """Each virtual row's two links, for rows ``lo..hi``.
+
+    ``ends[2 x]``, ``ends[2 x + 1]`` = ``4 g + j`` for the edges ``j1 < j2`` of row x the
+    cycle crosses and their virtual twins ``g``; both -1 unless there are exactly two,
+    each linked back. A kept row's links are its cover edges (the input's twins, or
+    where the other side changed the kept half-edge's twin, :func:`_faced`), a new
+    row's its link bits. Rows are independent: threads fill disjoint ranges. (Written
+    out in one loop: the same test as a helper returning a tuple, with its early
+    exits, compiled ~5x slower, 70 ns a row at 1.5 M.)
+    """
     m = status.shape[0]
-    n_links = 0
-    j1 = g1 = j2 = g2 = -1
-    for j in range(3):
-        h = 3 * x + j
-        if x < m:  # a kept triangle: links on its cover edges, the input's twins
-            if not is_cov[h]:
-                continue
-            g = twin_in[h]
-            if g >= 0 and status[g // 3] != PASS:
-                g = _faced(g, changed, face_tw)
+    for x in range(lo, hi):
+        n_links = 0
+        e1 = e2 = -1
+        for j in range(3):
+            h = 3 * x + j
+            if x < m:  # a kept triangle: links on its cover edges, the input's twins
+                if not is_cov[h]:
+                    continue
+                g = twin_in[h]
+                if g >= 0 and status[g // 3] != PASS:
+                    g = _faced(g, changed, face_tw)
+            else:
+                if not (link_new[x - m] >> j) & 1:
+                    continue
+                g = tw_new[h - 3 * m]
+            n_links += 1
+            if g < 0:
+                n_links = 3
+                break
+            y = g // 3
+            back = is_cov[g] if y < m else (link_new[y - m] >> (g - 3 * y)) & 1
+            if not back:
+                n_links = 3
+                break
+            if e1 < 0:
+                e1 = 4 * g + j
+            else:
+                e2 = 4 * g + j
+        if n_links == 2:
+            ends[2 * x] = e1
+            ends[2 * x + 1] = e2
         else:
-            if not (link_new[x - m] >> j) & 1:
-                continue
-            g = tw_new[h - 3 * m]
-        n_links += 1
-        if g < 0:
-            return False, j1, g1, j2, g2
-        y = g // 3
-        back = is_cov[g] if y < m else (link_new[y - m] >> (g - 3 * y)) & 1
-        if not back:
-            return False, j1, g1, j2, g2
-        if j1 < 0:
-            j1 = j
-            g1 = g
-        else:
-            j2 = j
-            g2 = g
-    return n_links == 2, j1, g1, j2, g2
+            ends[2 * x] = -1
+            ends[2 * x + 1] = -1
 
 
 @njit(cache=True, nogil=True)
-def _walk_one_into(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, s, forward, mine,
-                   theirs, buf):
+def _walk_one_into(ends, parent_new, m, s, forward, mine, theirs, buf):
     """Walk the cycle through virtual row ``s`` into ``buf``, marking ``mine``.
 
+    ``ends``: the rows' links (:func:`_link_ends_into`); ``m`` the input's triangles
+    (virtual rows from ``m`` on are new rows, their parents ``parent_new``).
     ``forward``: leave ``s`` by its second link (as :func:`_walk_all`), else by its
     first. Stops before a row ``theirs`` marks (another walk of the same cycle from
     the other end has been there) or on returning to ``s``. Returns ``(count,
     lowest parent, bad)``.
     """
-    m = status.shape[0]
     n = 0
     x = s
     came = -1
@@ -720,13 +783,15 @@ def _walk_one_into(status, is_cov, link_new, parent_new, twin_in, tw_new, change
         buf[n] = x
         n += 1
         lo = min(lo, x if x < m else parent_new[x - m])
-        ok, j1, g1, j2, g2 = _links(status, is_cov, link_new, twin_in, tw_new, changed, face_tw, x)
-        if not ok:
+        e1 = ends[2 * x]
+        if e1 < 0:
             return n, lo, x
+        e2 = ends[2 * x + 1]
         if x == s and came < 0:
-            g = g2 if forward else g1
+            e = e2 if forward else e1
         else:
-            g = g2 if j1 == came else g1
+            e = e2 if (e1 & 3) == came else e1
+        g = e >> 2
         y = g // 3
         came = g - 3 * y
         if y == s:
@@ -739,26 +804,23 @@ def _walk_one_into(status, is_cov, link_new, parent_new, twin_in, tw_new, change
 
 
 @njit(cache=True, nogil=True)
-def _walk_all(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, n_rows):
+def _walk_all(ends, parent_new, m, status, n_rows):
     """:func:`walk_links` in one thread: ``(order, lengths, low, bad)``."""
-    m = status.shape[0]
-    n_v = m + link_new.shape[0]
+    n_v = ends.shape[0] // 2
     seen = np.zeros(n_v, np.bool_)
     order = np.empty(n_rows, np.int64)
-    return _walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, 0, m,
-                      np.empty(0, np.int64), 0, seen, seen)
+    return _walk_rest(ends, parent_new, m, status, order, 0, m, np.empty(0, np.int64), 0, seen, seen)
 
 
 @njit(cache=True, nogil=True)
-def _walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, order, n_f, lo_first, back,
-               n_b, seen, seen_b):
+def _walk_rest(ends, parent_new, m, status, order, n_f, lo_first, back, n_b, seen, seen_b):
     """The walk's outer loop: ``order[:n_f]`` holds a first cycle walked forward (its
     lowest parent ``lo_first``; none if ``n_f`` is 0) and ``back[:n_b]`` the same
     cycle walked backward from the same row; the rows of ``back`` not in ``seen`` (the
     forward walk's marks) follow it, reversed. Then a walk from every row neither
-    ``seen`` nor ``seen_b`` marks. Returns ``(order, lengths, low, bad)``."""
-    m = status.shape[0]
-    n_v = m + link_new.shape[0]
+    ``seen`` nor ``seen_b`` marks (kept rows of ``status`` ``PASS`` and new rows, from
+    ``m`` on). Returns ``(order, lengths, low, bad)``."""
+    n_v = ends.shape[0] // 2
     n_rows = order.shape[0]
     lengths = np.empty(n_rows, np.int64)
     low = np.empty(n_rows, np.int64)
@@ -777,8 +839,7 @@ def _walk_rest(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
     for s in range(n_v):
         if seen[s] or seen_b[s] or (s < m and status[s] != PASS):
             continue
-        n, lo, bad = _walk_one_into(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, face_tw, s, True,
-                                    seen, seen, order[pos:])
+        n, lo, bad = _walk_one_into(ends, parent_new, m, s, True, seen, seen, order[pos:])
         if bad >= 0:
             return order, lengths, low, bad
         lengths[n_c] = n
@@ -802,7 +863,7 @@ class CycleRows(NamedTuple):
 
 def rows_in_cycle_order(
     order, lengths, run_order, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed,
-    face_tw, amin,
+    face_tw, amin, scratch=None,
 ) -> CycleRows:
     """The output rows, walked into ``order`` (:func:`walk_links`, virtual rows), taken across in one gather.
 
@@ -812,7 +873,9 @@ def rows_in_cycle_order(
     of final row i, -1 on the boundary) are written in the same pass, over one row
     range per core (:func:`_row_positions_into`, then :func:`_gather_rows_into`: each
     row is written by one thread only). The big arrays come from ``hammesh.pages``
-    (the reserve ``quality_mesh`` faulted while Triangle ran, if any).
+    (the reserve ``quality_mesh`` faulted while Triangle ran, if any). ``scratch``: an int64
+    array of at least one entry per virtual row, any contents (e.g. :func:`walk_links`'
+    ``ends``, done with), for the rows' final places; made here if None.
     """
     m = tri.shape[0]
     k = order.shape[0]
@@ -822,7 +885,8 @@ def rows_in_cycle_order(
         new_len = np.empty(lengths.shape[0], np.int64)
         _runs_in_order_into(order, lengths, run_order, rows, new_len)
     spans = row_ranges(k, threads.THREAD_MIN_ROWS)
-    pos = fresh(m + out_new.shape[0], np.int64)  # (entries of rows not output: never read)
+    n_v = m + out_new.shape[0]  # (entries of rows not output: never read)
+    pos = fresh(n_v, np.int64) if scratch is None or scratch.shape[0] < n_v else scratch[:n_v]
     run_all([partial(_row_positions_into, rows, pos, lo, hi) for lo, hi in spans])
     res = CycleRows(
         fresh((k, 3), np.int64), fresh(k, np.int64), fresh(k, np.int64), fresh(k, np.int8), fresh(k, np.float64),

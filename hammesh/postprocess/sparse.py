@@ -153,16 +153,19 @@ def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
     return lo, hi
 
 
-def triangle_facts(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
+def triangle_facts(
+    points: np.ndarray, triangles: np.ndarray, room: int = 0
+) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Smallest and largest angle of every triangle, the worst radius ratio and its row.
 
     One threaded pass (``_join_kernels.triangle_min_max_into``): the angles the local
     rule needs and the report's worst circumradius / (2 x inradius) (``row`` -1 if
-    no triangle is worse than equilateral).
+    no triangle is worse than equilateral). ``room``: rows of memory left after the
+    smallest angles (``_longer`` grows them in place).
     """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    lo = fresh(len(tri), np.float64)  # (from quality_mesh's reserve, if any: no page faults)
+    lo = _with_room(fresh(len(tri) + room, np.float64), len(tri))  # (from quality_mesh's reserve, if any: no faults)
     hi = fresh(len(tri), np.float64)
     parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri))
     worst, row = 1.0, -1
@@ -488,8 +491,11 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows):
         return cover, 0
-    is_cov = cover.is_cov.copy()
-    cycle = cover.cycle.copy()
+    # copies with room after them: the ring fans and joins append rows in place (``_longer``)
+    is_cov = _longer(cover.is_cov, 0, None, 3 * ROOM_ROWS)
+    cycle = _longer(cover.cycle, 0, None, ROOM_ROWS)
+    if np.shares_memory(is_cov, cover.is_cov) or np.shares_memory(cycle, cover.cycle):
+        is_cov, cycle = cover.is_cov.copy(), cover.cycle.copy()  # (the cover's own had room: copied plainly)
     touched = np.zeros(m, np.bool_)
     fan_or_touched = is_fan.copy()  # is_fan | touched, and touched as a set: no O(m) pass per pair
     touched_set: set[int] = set()
@@ -1004,6 +1010,42 @@ def _memory_owner(a: np.ndarray):
     return a if a.base is None else a.base
 
 
+def _keep_room(a: np.ndarray, rows: int) -> None:
+    """Note that ``a``, a prefix of its buffer, has ``rows`` rows of memory there: a later
+    ``_longer`` of ``a`` grows into them without a copy (while the buffer lives)."""
+    if not len(a) or rows <= len(a) or not a.flags.c_contiguous:
+        return
+    addr = a.ctypes.data
+
+    def gone(r, addr=addr) -> None:  # (only its own entry: a longer view may have taken the address)
+        if _ROOMY.get(addr, (None,))[0] is r:
+            del _ROOMY[addr]
+
+    try:
+        ref = weakref.ref(_memory_owner(a), gone)
+    except TypeError:  # an owner without weak references: no room kept
+        return
+    _ROOMY[addr] = (ref, int(rows), a.dtype, a.shape[1:])
+
+
+def _with_room(buf: np.ndarray, n: int) -> np.ndarray:
+    """The first ``n`` rows of ``buf``; the others are room for ``_longer`` (``_keep_room``)."""
+    out = buf[:n]
+    _keep_room(out, len(buf))
+    return out
+
+
+#: rows of room after the per-triangle arrays that sparse mode's ring fans and ring
+#: joins lengthen (two rows each: ``_apply_rings``), where those arrays are made: so
+#: that the rows are appended in place rather than every array copied (~130 MB at
+#: 1.5 M triangles, for one ring fan and 15 ring joins, and the reserve's pages the
+#: output then had to fault in: ``bench_sparse.py --breakdown``)
+ROOM_ROWS = 512
+#: ... and room for ``m // STEINER_ROOM_DIVISOR`` Steiner points after the points (at
+#: 1.5 M q30 triangles sparse mode adds ~0.3 %; beyond the room they are copied)
+STEINER_ROOM_DIVISOR = 64
+
+
 def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
     """``a`` with ``extra`` more rows (``fill`` or unspecified).
 
@@ -1024,6 +1066,7 @@ def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
             out = full[: n + extra]
             if fill is not None:
                 out[n:] = fill
+            _keep_room(out, rows)  # (its owner is a new view object: a later call grows it too)
             return out
     buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
     out = buf[: n + extra]
@@ -1031,12 +1074,7 @@ def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
     if fill is not None:
         out[n:] = fill
     if spare and n:
-        addr = buf.ctypes.data
-        try:
-            ref = weakref.ref(_memory_owner(buf), lambda _r, addr=addr: _ROOMY.pop(addr, None))
-        except TypeError:  # an owner without weak references: no room kept
-            return out
-        _ROOMY[addr] = (ref, len(buf), buf.dtype, buf.shape[1:])
+        _keep_room(out, len(buf))
     return out
 
 
@@ -1370,7 +1408,8 @@ def sparse_cycles(
     con = np.ascontiguousarray(is_con, dtype=np.bool_)
     n, m = len(pts), len(tri)
     steps = _Steps()
-    amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri)
+    room = ROOM_ROWS if fans and pts.shape[1] == 2 else 0  # (only planar ring fans grow arrays)
+    amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room)
     steps.done("input_angles")
     hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
@@ -1419,11 +1458,15 @@ def sparse_cycles(
     steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
-    orig_of, is_fan, n_fan, amin_p = np.arange(m), np.zeros(m, np.bool_), 0, amin_t
+    orig_of = _with_room(np.arange(m + room), m)
+    is_fan = _with_room(fresh(m + room, np.bool_, 0), m)  # (pages faulted: read first in the report)
+    n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
-        pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_fan = _fans(
+        pts, tri, tw, con, cover, amin_p, orig_f, fan_f, n_fan = _fans(
             pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
         )
+        if n_fan:  # (else the arrays with room made above stay)
+            orig_of, is_fan = orig_f, fan_f
         n, m = len(pts), len(tri)
     n_ring = n_reroute = 0
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:  # (every size: session 10)
@@ -1480,8 +1523,10 @@ def sparse_cycles(
             if attempt == 3:
                 no_absorb[:] = True
             status, slot, swap_he, join, counts, bad = _k.plan_merges(
-                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges
+                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges, room
             )
+            for a, rows in ((status, m + room), (slot, 3 * (m + room)), (swap_he, m + room), (join, m + room)):
+                _keep_room(a, rows)  # (the ring joins append rows to the plan: ``_ring_joins``)
             if not bad.any():
                 break
             no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
@@ -1514,18 +1559,24 @@ def sparse_cycles(
     mids = 0.5 * (pts[mid_a] + pts[mid_b])
     placed = mid_t >= 0
     mids[placed] = point[order][join[mid_t[placed]]]
-    all_pts = np.concatenate([pts, _incenters(pts, tri[is_split]), mids])
+    inc = _incenters(pts, tri[is_split])
+    all_pts = _longer(pts, len(inc) + len(mids))  # (in place where the points have room)
+    all_pts[len(pts):] = np.concatenate([inc, mids])
     tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts))
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of virtual row {int(dup) // 3} used twice")
-    order_rows, lengths, low, bad = _k.walk_links(status, cover.is_cov, link, parent, tw, tw_new, changed, face_tw)
+    # (the walk's table of links, then the gather's row places: one buffer)
+    ends = fresh(2 * (len(tri) + len(out)), np.int64)
+    order_rows, lengths, low, bad = _k.walk_links(status, cover.is_cov, link, parent, tw, tw_new, changed, face_tw,
+                                                  ends)
     if bad >= 0:
         raise VerificationError(f"internal error: output row {int(bad)} is not linked into a cycle")
     # runs in the order of their lowest input triangle; rows, their parents' smallest
     # angle (pm) and the twins renumbered as the claim, in one gather
     run_order = np.argsort(low, kind="stable") if len(lengths) > 1 else np.zeros(len(lengths), np.int64)
     out, parent, partner, kind, pm, lengths, claim = _k.rows_in_cycle_order(
-        order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p
+        order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
+        ends,
     )
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
@@ -1813,7 +1864,13 @@ def sparse_hamiltonian(
         t0, c0 = time.perf_counter(), time.process_time()
         # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
         keys = seen.pop("cells", None) if seen else None
-        loc = renumber_local(pts, tri, he.twin, pinned, keys)
+        # room after the rows and points: the ring fans and joins and the Steiner points
+        # are appended in place (``_longer``), not by copying every array
+        rt, rp = ROOM_ROWS, ROOM_ROWS + m // STEINER_ROOM_DIVISOR
+        loc = renumber_local(pts, tri, he.twin, pinned, keys, room=(rt, rp))
+        for a, rows in ((loc.triangles, m + rt), (loc.twin, 3 * (m + rt)), (loc.marks, 3 * (m + rt)),
+                        (loc.points, n + rp)):
+            _keep_room(a, rows)
         r = sparse_cycles(
             loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True
         )

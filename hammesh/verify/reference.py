@@ -20,6 +20,7 @@ import numpy as np
 
 from hammesh.errors import VerificationError
 from hammesh.mesh import Mesh
+from hammesh.pages import fresh
 from hammesh.verify import _kernels
 
 __all__ = ["InputFacts", "input_facts", "KEY_BASE", "edge_keys", "boundary_keys", "undirected_keys"]
@@ -74,7 +75,12 @@ def input_facts(mesh: Mesh) -> InputFacts:
     VerificationError
         The input itself is not a valid planar triangulation (named).
     """
-    pts = np.array(mesh.points, dtype=np.float64, copy=True)
+    pts = np.asarray(mesh.points)
+    if pts.ndim == 2 and pts.shape[1] == 2:  # (a copy, in pages from the reserve: hammesh.pages)
+        src, pts = pts, fresh(pts.shape, np.float64)
+        pts[...] = src
+    else:
+        pts = np.array(pts, dtype=np.float64, copy=True)
     tri = np.asarray(mesh.triangles)
     if pts.ndim != 2 or pts.shape[1] != 2:
         _bad_input(f"points have shape {pts.shape}, not (n, 2)")
@@ -86,9 +92,9 @@ def input_facts(mesh: Mesh) -> InputFacts:
         _bad_input(f"point {int(np.argmin(np.isfinite(pts).all(axis=1)))} is not finite")
     # one pass over the rows as given (no counter-clockwise copy: the pairing reads
     # them again with the flips), then the bucket matching; both the certificate's own
-    flip = np.zeros(m, dtype=np.bool_)
-    used = np.zeros(n, dtype=np.bool_)
-    start = np.zeros(n + 1, dtype=np.int64)
+    flip = fresh(m, np.bool_, 0)
+    used = fresh(n, np.bool_, 0)
+    start = fresh(n + 1, np.int64, 0)
     scan = _kernels.scan_input_into(pts, tri, flip, used, start)
     if scan.bad_index >= 0:
         t = scan.bad_index
@@ -98,7 +104,7 @@ def input_facts(mesh: Mesh) -> InputFacts:
         _bad_input(f"triangle {t} {tri[t].tolist()} is degenerate (exact orientation test)")
     if not (np.isfinite(scan.min_angle) and np.isfinite(scan.total_area)):
         _bad_input("angles and areas are not finite (coordinates too large or too small)")
-    keys = np.empty(3 * m, dtype=np.int32 if 2 * n + 1 < 2**31 else np.int64)
+    keys = fresh(3 * m, np.int32 if 2 * n + 1 < 2**31 else np.int64)
     boundary, ok = _kernels.input_boundary_into(tri, flip, start, keys)
     del keys
     if not ok:  # name the edge: the rows counter-clockwise, paired with half-edge names

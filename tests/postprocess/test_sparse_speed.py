@@ -247,3 +247,105 @@ def test_kept_radius_ratio_is_the_worst_of_every_kept_row(seed: int, monkeypatch
         kept = kind == 3
         want = sparse.triangle_facts(m.points, m.triangles[kept])[2] if kept.any() else 1.0
         assert sparse.kept_radius_ratio(m.points, m.triangles, kind, np.arange(m.n_triangles), lo) == want
+
+
+@pytest.mark.parametrize("name", ["la", "regions"])
+def test_ring_rows_appended_in_place_give_the_copied_output(name: str, monkeypatch) -> None:
+    """With room after the per-row arrays (``sparse.ROOM_ROWS``, renumbered input) the
+    ring fans, ring joins and Steiner points are appended in place; with none
+    (``ROOM_ROWS = 0``, ``STEINER_ROOM_DIVISOR`` huge) every growth copies, as before
+    session 11. Same output, array for array, and the room is really used."""
+    from hammesh.postprocess import sparse
+
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
+    monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", 100)
+    grown = []
+    real = sparse._longer
+
+    def spy(a, extra, fill=None, spare=0):
+        out = real(a, extra, fill, spare)
+        grown.append(bool(len(a)) and np.shares_memory(out, a))
+        return out
+
+    monkeypatch.setattr(sparse, "_longer", spy)
+    h = hammesh.hamiltonian(m)
+    in_place = sum(grown)
+    assert h.report["ring_joins"] + h.report["ring_fans"] > 0 or name == "regions"
+    assert in_place >= 1  # (the Steiner points at least; every ring row's arrays where rings are)
+    monkeypatch.setattr(sparse, "ROOM_ROWS", 0)
+    monkeypatch.setattr(sparse, "STEINER_ROOM_DIVISOR", 10**12)
+    grown.clear()
+    copied = hammesh.hamiltonian(m)
+    assert sum(grown) < in_place
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(h, f), getattr(copied, f), err_msg=f)
+    assert _report(h) == _report(copied)
+
+
+def test_room_outlives_the_views_that_grew_into_it() -> None:
+    """``sparse._keep_room``: a view ``_longer`` grew in place is grown again in place
+    (its owner is a new view object), and the death of an older view does not drop the
+    newer one's entry (the weak reference's callback removes only its own)."""
+    import gc
+
+    from hammesh.postprocess import sparse
+
+    buf = np.arange(100, dtype=np.int64)
+    a = sparse._with_room(buf, 10)
+    b = sparse._longer(a, 5, -1)
+    assert np.shares_memory(a, b) and b.tolist() == list(range(10)) + [-1] * 5
+    c = sparse._longer(b, 5, -2)
+    assert np.shares_memory(c, buf) and c[10:].tolist() == [-1] * 5 + [-2] * 5
+    del b
+    gc.collect()
+    d = sparse._longer(c, 80, 0)  # (c's entry survived b's death; 100 rows: still in place)
+    assert np.shares_memory(d, buf) and len(d) == 100
+    e = sparse._longer(d, 1)  # no room left: a copy
+    assert not np.shares_memory(e, buf) and np.array_equal(e[:100], d)
+
+
+def test_link_table_flags_rows_not_linked_back() -> None:
+    """``_sparse_kernels._link_ends_into``: each row's two links (``4 g + j``), -1 for a row
+    with other than two links or one whose other side does not link back."""
+    # a fan of four new rows around a centre, each crossing its two spokes (as
+    # ``load_output_kernels``): one cycle
+    k = 4
+    r = np.arange(k)
+    tw = np.stack([np.full(k, -1), 3 * ((r + 1) % k) + 2, 3 * ((r - 1) % k) + 1], axis=1).reshape(-1)
+    none = np.zeros(0, np.int64)
+    link = np.full(k, 6, np.uint8)
+    ends = np.empty(2 * k, np.int64)
+    sk._link_ends_into(np.zeros(0, np.int8), np.zeros(0, np.bool_), link, none, tw, none, none, 0, k, ends)
+    for x in range(k):
+        assert sorted(ends[2 * x: 2 * x + 2] >> 2) == sorted([tw[3 * x + 1], tw[3 * x + 2]])
+        assert (ends[2 * x: 2 * x + 2] & 3).tolist() == [1, 2]
+    link[2] = 2  # row 2 crosses one spoke only: it and row 1 (whose link to 2 is not returned) are bad
+    sk._link_ends_into(np.zeros(0, np.int8), np.zeros(0, np.bool_), link, none, tw, none, none, 0, k, ends)
+    bad = [x for x in range(k) if ends[2 * x] < 0]
+    assert 2 in bad and len(bad) == 2
+    walk = sk.walk_links(np.zeros(0, np.int8), np.zeros(0, np.bool_), link, r.copy(), none, tw, none, none)
+    assert walk.bad in bad
+
+
+@pytest.mark.parametrize("name", ["A", "face"])
+def test_every_midpoint_bridge_shares_one_midpoint(name: str) -> None:
+    """``emit``: a midpoint bridge's two split triangles use one midpoint (found for the
+    second by binary search over the bridges' midpoint slots): every midpoint vertex lies
+    in exactly four rows, two on each side, and no edge is split twice."""
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import sparse
+
+    m = hammesh.quality_mesh(_domain(name), min_angle=30, max_area=None)
+    clean, he, con = prepare_mesh(m)
+    for kw in ({"use_cover": False, "flip_bridges": False}, {"flip_bridges": False}):
+        kw["improve"] = False  # (improvement flips may give a midpoint a fifth row)
+        r = sparse.sparse_cycles(clean.points, clean.triangles, he.twin, con, clean.info["validated"]["min_angle"],
+                                 **kw)
+        assert len(r.mid_a) > 0
+        first_mid = len(r.points) - len(r.mid_a)
+        used = np.bincount(r.triangles.ravel(), minlength=len(r.points))[first_mid:]
+        assert (used == 4).all()
+        edges = np.sort(np.stack([r.mid_a, r.mid_b], axis=1), axis=1)
+        assert len(np.unique(edges, axis=0)) == len(edges)
