@@ -204,7 +204,7 @@ def _star4(pa, pb, pc, pd, mm, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, iters):
+def place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, iters, exact=True):
     """Compass search for the Steiner point of a split (planar, free edge).
 
     The four triangles around the point are the fan over the quadrilateral
@@ -229,7 +229,7 @@ def place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, iters):
     quad[3, 1] = cy
     poly = np.arange(4)
     step = 0.25 * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
-    px, py, s1, m1, x1 = compass_search(quad, poly, 4, mx, my, lo, hi, step, iters, 4 * iters)
+    px, py, s1, m1, x1 = compass_search(quad, poly, 4, mx, my, lo, hi, step, iters, 4 * iters, exact)
     if not s1 > s0:
         return mx, my, s0, m0, x0
     # the fan's strict-orientation test is per polygon edge; keep the split's own
@@ -319,7 +319,7 @@ def _swap_score(l1, h1, l2, h2, floor, lo, hi):
 @njit(cache=True, nogil=True)
 def score_joins_into(
     pts, tri, twin, pinned, cand, amin, keep, hi, floor, cos_fold, swaps, edge_splits, place_iters, reach,
-    kind, slack, newmin, newmax, point,
+    kind, slack, newmin, newmax, point, exact=True,
 ):
     """Judge every candidate join (half-edge ``cand[i]`` of the covered triangle t).
 
@@ -355,7 +355,7 @@ def score_joins_into(
             if edge_splits and best < 0.0:
                 s, smin, smax = _star4_2d(ax, ay, bx, by, cx, cy, dx, dy, point[i, 0], point[i, 1], lo, hi)
                 if not pinned[h] and place_iters > 0 and -reach <= s < 0.0:
-                    x, y, s2, m2, x2 = place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, place_iters)
+                    x, y, s2, m2, x2 = place_split(ax, ay, bx, by, cx, cy, dx, dy, lo, hi, place_iters, exact)
                     if s2 > s:
                         s = s2
                         smin = m2
@@ -499,12 +499,14 @@ NO_ROUND_CAP = 1 << 62
 
 
 @njit(cache=True, nogil=True)
-def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds):
+def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds, exact=True):
     """Compass search from ``(px, py)`` for the fan's point over ``poly[:n]``.
 
     Eight directions per round; the step halves when none improves the slack, up to
     ``iters`` halvings or ``max_rounds`` rounds. Candidates are compared on cosines
-    (``_fan_eval_fast``); the result is judged on exact angles. Returns ``(x, y,
+    (``_fan_eval_fast``); the result is judged on exact angles. Where it ends short of
+    the rule (slack < 0) :func:`ridge_ascent` climbs on from there to the optimum (the
+    compass alone stopped up to 0.8 degrees short on ``la``'s splits). Returns ``(x, y,
     slack, smallest angle, largest angle)``; slack ``-inf`` if ``(px, py)`` is not in
     the polygon's kernel.
     """
@@ -538,6 +540,14 @@ def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds):
             step *= 0.5
             halvings += 1
     best, bmin, bmax = fan_eval(pts, poly, n, mx, my, lo, hi)
+    if exact and best < 0.0:
+        # short of the rule: where two constraints bind, the eight directions may all
+        # leave the ridge between them; the optimum decides whether the rule is met
+        rx, ry, rs = ridge_ascent(pts, poly, n, mx, my, lo, hi, 2.0 * step)
+        if rs > best:
+            mx = rx
+            my = ry
+            best, bmin, bmax = fan_eval(pts, poly, n, mx, my, lo, hi)
     return mx, my, best, bmin, bmax
 
 
@@ -964,3 +974,156 @@ def load_ring_kernels() -> None:
     out = np.zeros(2, np.int64)
     label_outside_into(twin, is_cov, 0, links, out, 0)
     relabel_cycles_into(out, np.zeros(1, np.int64))
+
+
+@njit(cache=True, nogil=True)
+def _fan_slack(pts, poly, n, px, py, lo, hi):
+    """:func:`fan_eval`'s slack alone (exact angles; ``-inf`` off the kernel)."""
+    return fan_eval(pts, poly, n, px, py, lo, hi)[0]
+
+
+@njit(cache=True, nogil=True)
+def _near_active_gradients(pts, poly, n, px, py, lo, hi, level, grads):
+    """Gradients (in ``p``) of the fan's angle constraints within ``level`` of binding.
+
+    Each triangle ``(p, a, b)`` of the fan has its angles at ``a``, ``b`` and ``p`` as
+    functions of ``p``: ``arg(p - a) - arg(b - a)`` grows along ``perp(p - a) / |p - a|^2``,
+    the angle at ``b`` along ``-perp(p - b) / |p - b|^2`` and the angle at ``p`` along
+    minus their sum. Constraint ``angle - lo`` has that gradient, ``hi - angle`` its
+    negative. Fills ``grads[:k]`` with the gradients of the constraints whose value is
+    ``<= level`` and returns ``k``.
+    """
+    k = 0
+    for i in range(n):
+        a = poly[i]
+        b = poly[(i + 1) % n]
+        ax = pts[a, 0]
+        ay = pts[a, 1]
+        bx = pts[b, 0]
+        by = pts[b, 1]
+        wax = px - ax
+        way = py - ay
+        wbx = px - bx
+        wby = py - by
+        ra = wax * wax + way * way
+        rb = wbx * wbx + wby * wby
+        gax = -way / ra
+        gay = wax / ra
+        gbx = wby / rb
+        gby = -wbx / rb
+        t_a = _corner2(ax, ay, bx, by, px, py)
+        t_b = _corner2(bx, by, px, py, ax, ay)
+        t_p = math.pi - t_a - t_b
+        for j in range(3):
+            if j == 0:
+                th, gx, gy = t_a, gax, gay
+            elif j == 1:
+                th, gx, gy = t_b, gbx, gby
+            else:
+                th, gx, gy = t_p, -gax - gbx, -gay - gby
+            if th - lo <= level and k < grads.shape[0]:
+                grads[k, 0] = gx
+                grads[k, 1] = gy
+                k += 1
+            if hi - th <= level and k < grads.shape[0]:
+                grads[k, 0] = -gx
+                grads[k, 1] = -gy
+                k += 1
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _steepest_minmax_direction(grads, k):
+    """The unit direction ``d`` maximising ``min_i grads[i] . d`` over ``i < k``, and that value.
+
+    In the plane the optimum is either one gradient's direction or a direction at which
+    two of the linear functions are equal (perpendicular to their difference): every
+    candidate is tried (``k`` is a handful). A value ``<= 0`` means no direction improves
+    every near-binding constraint: the point is stationary for this active set.
+    """
+    best = -np.inf
+    dx = 0.0
+    dy = 0.0
+    for c in range(k + 2 * k * k):
+        if c < k:
+            cx = grads[c, 0]
+            cy = grads[c, 1]
+        else:
+            q = c - k
+            i = q // (2 * k)
+            r = q - 2 * k * i
+            j = r // 2
+            if j <= i:
+                continue
+            ex = grads[i, 0] - grads[j, 0]
+            ey = grads[i, 1] - grads[j, 1]
+            cx = -ey if r % 2 == 0 else ey
+            cy = ex if r % 2 == 0 else -ex
+        nn = math.sqrt(cx * cx + cy * cy)
+        if nn <= 0.0:
+            continue
+        cx /= nn
+        cy /= nn
+        v = np.inf
+        for i in range(k):
+            v = min(v, grads[i, 0] * cx + grads[i, 1] * cy)
+        if v > best:
+            best = v
+            dx = cx
+            dy = cy
+    return dx, dy, best
+
+
+#: the ridge ascent's limits: line searches, and the active set's widest margin (radians)
+RIDGE_ITERS = 64
+RIDGE_LEVEL = 1e-2
+
+
+@njit(cache=True, nogil=True)
+def ridge_ascent(pts, poly, n, px, py, lo, hi, step):
+    """Climb the fan's slack from ``(px, py)`` along its ridges (Amenta-Bern-Eppstein's optimum).
+
+    The slack is the minimum of a few smooth functions (the angles against ``lo`` and
+    ``hi``); where two of them bind, a compass search's eight fixed directions may all
+    fall off the ridge between them and it stops short of the optimum (on ``la``'s
+    splits by up to 0.8 degrees). Here each step takes the constraints within a margin
+    of binding, moves along the direction that raises all of them fastest
+    (:func:`_steepest_minmax_direction`) with a halving line search, and narrows the
+    margin when no direction raises them all: an epsilon-subgradient ascent, which ends
+    at the maximum of a quasi-concave slack (ABE: the angle constraints are; the
+    largest-angle ones at the point itself are not, so this is a local maximum there).
+    Returns ``(x, y, slack)`` judged on exact angles, never worse than the start.
+    """
+    best = _fan_slack(pts, poly, n, px, py, lo, hi)
+    if best == -np.inf:
+        return px, py, best
+    grads = np.empty((6 * n, 2))
+    level = RIDGE_LEVEL
+    h = step
+    min_step = 1e-9 * step
+    for _ in range(RIDGE_ITERS):
+        k = _near_active_gradients(pts, poly, n, px, py, lo, hi, best + level, grads)
+        dx, dy, rate = _steepest_minmax_direction(grads, k)
+        if not rate > 0.0:
+            level *= 0.1
+            if level < 1e-9:
+                break
+            continue
+        t = h
+        moved = False
+        while t >= min_step:
+            s = _fan_slack(pts, poly, n, px + t * dx, py + t * dy, lo, hi)
+            if s > best:
+                best = s
+                px += t * dx
+                py += t * dy
+                moved = True
+                break
+            t *= 0.5
+        if moved:
+            h = 2.0 * t
+        else:
+            level *= 0.1
+            if level < 1e-9:
+                break
+    return px, py, best
