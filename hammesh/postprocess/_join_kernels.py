@@ -1127,3 +1127,231 @@ def ridge_ascent(pts, poly, n, px, py, lo, hi, step):
             if level < 1e-9:
                 break
     return px, py, best
+
+
+@njit(cache=True, nogil=True)
+def _on_path(nodes, n, x):
+    for i in range(n):
+        if nodes[i] == x:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, starts, max_cycles):
+    """Alternating cycles of the cover through its non-cover half-edge ``h0`` (``t -> u``), shorter first.
+
+    From ``u`` a cover edge to ``y``, ``y``'s non-cover edge to ``z``, a cover edge
+    from ``z``, ... until a cover edge ends at ``t``: swapping cover and non-cover
+    along such a cycle leaves every triangle on it with two cover edges (a rotation
+    around a vertex is the shortest kind). Depth-first over the pairs ``(y, z)``,
+    each triangle at most once per cycle and none with ``blocked`` set, deepened by 4
+    pairs at a time up to ``depth`` pairs (the shortest cycles often split some cover
+    cycle: the caller judges each in turn), at most ``budget`` steps in all. Writes
+    each cycle's half-edges whose cover state the swap changes (one per edge, ``h0``
+    first) to ``out[starts[i]:starts[i + 1]]``; returns the number of cycles (at most
+    ``max_cycles``).
+    """
+    t = h0 // 3
+    u = twin[h0] // 3
+    nodes = np.empty(2 * depth + 2, np.int64)
+    flips = np.empty(2 * depth + 2, np.int64)
+    stack_x = np.empty(depth + 1, np.int64)
+    stack_j = np.empty(depth + 1, np.int64)
+    n_out = 0
+    starts[0] = 0
+    steps = 0
+    for limit in range(4, depth + 1, 4):
+        level = 0
+        stack_x[0] = u
+        stack_j[0] = 0
+        nodes[0] = t
+        nodes[1] = u
+        n_nodes = 2
+        flips[0] = h0
+        n_fl = 1
+        while level >= 0:
+            x = stack_x[level]
+            j = stack_j[level]
+            if j == 3:
+                level -= 1
+                n_nodes -= 2
+                n_fl -= 2
+                continue
+            stack_j[level] = j + 1
+            f = 3 * x + j
+            if not is_cov[f] or twin[f] < 0:
+                continue
+            steps += 1
+            if steps > budget:
+                return n_out
+            y = twin[f] // 3
+            if y == t:
+                # new at this depth (the shallower ones were written before)
+                if (level > limit - 4 or limit == 4) and starts[n_out] + n_fl + 1 <= out.shape[0]:
+                    p = starts[n_out]
+                    for i in range(n_fl):
+                        out[p + i] = flips[i]
+                    out[p + n_fl] = f
+                    starts[n_out + 1] = p + n_fl + 1
+                    n_out += 1
+                    if n_out == max_cycles:
+                        return n_out
+                continue
+            if level >= limit or blocked[y] or _on_path(nodes, n_nodes, y):
+                continue
+            g = -1
+            for i in range(3):
+                if not is_cov[3 * y + i]:
+                    g = 3 * y + i
+                    break
+            if g < 0 or twin[g] < 0:
+                continue  # (y's non-cover edge is on the boundary)
+            z = twin[g] // 3
+            if blocked[z] or _on_path(nodes, n_nodes, z):
+                continue
+            nodes[n_nodes] = y
+            nodes[n_nodes + 1] = z
+            n_nodes += 2
+            flips[n_fl] = f
+            flips[n_fl + 1] = g
+            n_fl += 2
+            level += 1
+            stack_x[level] = z
+            stack_j[level] = 0
+    return n_out
+
+
+@njit(cache=True, nogil=True)
+def _index_of(a, n, x):
+    for i in range(n):
+        if a[i] == x:
+            return i
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def _root_of(root, c):
+    while root[c] != c:
+        c = root[c]
+    return c
+
+
+@njit(cache=True, nogil=True)
+def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget):
+    """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
+    other cycle crossing ``group`` one cycle of its own? (``sparse._alternating_merges``' test)
+
+    ``flips``: one half-edge per edge whose cover state the swap changes; ``group``:
+    their triangles; a triangle's cycle is ``root``'s root of ``cyc[t]``. As
+    ``sparse._swap_outcome`` decides it (links: cover edges across the group's border;
+    outside, each cycle pairs its links, walked in lock-step by
+    :func:`ring_outside_pairs` where it crosses more than once; inside, the swapped
+    cover pairs them; the new cycles are the components of both pairings), without
+    building the outcome: False where a walk is undecided within ``budget``, a cycle
+    would split or lie wholly inside the group, or a third cycle would merge.
+    """
+    ng = group.shape[0]
+    nf = flips.shape[0]
+    links = np.empty(3 * ng, np.int64)
+    nl = 0
+    for gi in range(ng):
+        x = group[gi]
+        for k in range(3):
+            h = 3 * x + k
+            g = twin[h]
+            if g >= 0 and is_cov[h] and _index_of(group, ng, g // 3) < 0:
+                links[nl] = h
+                nl += 1
+    ids = np.empty(nl, np.int64)
+    for i in range(nl):
+        ids[i] = _root_of(root, cyc[twin[links[i]] // 3])
+    for gi in range(ng):
+        if _index_of(ids, nl, _root_of(root, cyc[group[gi]])) < 0:
+            return False  # a cycle wholly inside the group: it would merge unseen
+    inp = np.full(nl, -1, np.int64)
+    seen = np.zeros(ng, np.bool_)
+    for i in range(nl):
+        if inp[i] >= 0:
+            continue
+        came = links[i]
+        while True:
+            x = came // 3
+            seen[_index_of(group, ng, x)] = True
+            f = -1
+            for k in range(3):
+                h = 3 * x + k
+                if h == came:
+                    continue
+                flipped = _index_of(flips, nf, h) >= 0 or _index_of(flips, nf, twin[h]) >= 0
+                if is_cov[h] != flipped:
+                    if f >= 0:
+                        return False
+                    f = h
+            if f < 0 or twin[f] < 0:
+                return False
+            if _index_of(group, ng, twin[f] // 3) < 0:
+                j = _index_of(links, nl, f)
+                inp[i] = j
+                inp[j] = i
+                break
+            came = twin[f]
+    for gi in range(ng):
+        if not seen[gi]:
+            return False  # a new cycle wholly inside the group
+    # cheap refusals before any walk: an inside path between two other cycles merges
+    # them; none between ca and cb merges nothing wanted
+    joins = False
+    for i in range(nl):
+        a = ids[i]
+        b = ids[inp[i]]
+        if a != b:
+            if (a == ca and b == cb) or (a == cb and b == ca):
+                joins = True
+            else:
+                return False
+    if not joins:
+        return False
+    outp = np.full(nl, -1, np.int64)
+    sel = np.empty(nl, np.int64)
+    for i in range(nl):
+        if outp[i] >= 0:
+            continue
+        ns = 0
+        for j in range(nl):
+            if ids[j] == ids[i]:
+                sel[ns] = j
+                ns += 1
+        if ns == 2:
+            outp[sel[0]] = sel[1]
+            outp[sel[1]] = sel[0]
+            continue
+        hs = np.empty(ns, np.int64)
+        for a in range(ns):
+            hs[a] = links[sel[a]]
+        pair, _ = ring_outside_pairs(twin, is_cov, hs, budget)
+        for a in range(ns):
+            if pair[a] < 0:
+                return False
+            outp[sel[a]] = sel[pair[a]]
+    uf = np.arange(nl)
+    for i in range(nl):
+        for other in (outp[i], inp[i]):
+            a = _root_of(uf, i)
+            b = _root_of(uf, other)
+            if a != b:
+                uf[a] = b
+    merged = False
+    for i in range(nl):
+        ri = _root_of(uf, i)
+        for j in range(i + 1, nl):
+            same = ri == _root_of(uf, j)
+            if ids[i] == ids[j]:
+                if not same:
+                    return False  # a split
+            elif same:
+                if (ids[i] == ca and ids[j] == cb) or (ids[i] == cb and ids[j] == ca):
+                    merged = True
+                else:
+                    return False  # a third cycle merged
+    return merged

@@ -1297,6 +1297,174 @@ def _place_taken(
     return int(better.sum())
 
 
+#: joins below the rule between two cycles that one call tries to replace by a cover
+#: swap merging the two cycles (``_alternating_merges``), worst first
+ALT_MERGE_TRIES = 64
+#: give-ups of an alternating cycle (``_alternating_cycles``): its length is twice that
+ALT_MERGE_DEPTH = 20
+#: steps of the search for one join's alternating cycles (``_join_kernels.alternating_cycles_into``)
+ALT_MERGE_BUDGET = 20_000
+#: alternating cycles judged per join (``_swap_outcome``), shorter first
+ALT_MERGE_CHECKS = 24
+
+
+def _swap_outcome(tw, is_cov, flipped: set, cycle, group: set, find) -> RingOutcome | None:
+    """What a cover swap inside ``group`` does to the cycles crossing it, decided locally.
+
+    ``flipped``: the half-edges (both of each edge) whose cover state the swap
+    changes. As ``_relabel_group`` pairs the links (outside: the cover as it is,
+    walked in lock-step where a cycle crosses more than once; inside: the swapped
+    cover), without labelling. None if a walk is undecided, or if some triangle of
+    the group is not on a path between two links afterwards (a cycle wholly inside
+    the group: a split) or some cycle lay wholly inside it before (it would merge
+    unseen).
+    """
+    links = [3 * x + k for x in sorted(group) for k in range(3)
+             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and is_cov[3 * x + k]]
+    old_id = {h: find(int(cycle[tw[h] // 3])) for h in links}
+    by_id: dict[int, list] = {}
+    for h in links:
+        by_id.setdefault(old_id[h], []).append(h)
+    if any(find(int(cycle[x])) not in by_id for x in group):
+        return None
+    outside = {}
+    for hs in by_id.values():
+        if len(hs) == 2:
+            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
+            continue
+        pair, _ = _j.ring_outside_pairs(tw, is_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for h, j in zip(hs, pair.tolist()):
+            outside[h] = hs[j]
+    inside, on_path = {}, set()
+    for h in links:
+        if h in inside:
+            continue
+        came = h
+        while True:
+            x = came // 3
+            on_path.add(x)
+            f = [3 * x + k for k in range(3) if 3 * x + k != came and is_cov[3 * x + k] != (3 * x + k in flipped)]
+            if len(f) != 1:
+                return None
+            f = f[0]
+            if tw[f] // 3 not in group:
+                break
+            came = int(tw[f])
+        inside[h], inside[f] = f, h
+    if len(on_path) != len(group):
+        return None
+    comp = _link_components(links, outside, inside)
+    split = any(len({comp[h] for h in hs}) > 1 for hs in by_id.values())
+    return RingOutcome(links, old_id, comp, split)
+
+
+def _label_paths(tw, is_cov, group: set, out: RingOutcome, find, cyc) -> None:
+    """After a swap inside ``group``: each of its triangles takes the id of the cycle
+    whose path through the group it is on now (``out.comp``; merged ids by ``find``)."""
+    ids: dict = {}
+    for h in out.links:
+        ids.setdefault(out.comp[h], find(out.old_id[h]))
+    for h in out.links:
+        came = h
+        while True:
+            x = came // 3
+            cyc[x] = ids[out.comp[h]]
+            f = next(3 * x + k for k in range(3) if 3 * x + k != came and is_cov[3 * x + k])
+            if tw[f] // 3 not in group:
+                break
+            came = int(tw[f])
+
+
+def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack, newmin, newmax, status, slot,
+                        swap_he, counts, lo: float, hi: float):
+    """Joins below the rule between two cycles replaced by merging the cycles in the cover (issue 13).
+
+    A swap or split over ``ab`` of ``t = abc`` (cycle A), ``u = bad`` (cycle B)
+    divides the corners ``c`` and ``d``; where no edge between A and B has both
+    corners large enough, every join between them misses the local rule. But the
+    cover itself can change for free: swapping cover and non-cover edges along an
+    *alternating cycle* through ``t-u`` (``_alternating_cycles``; the cover's
+    rotations around a vertex are the shortest) keeps every triangle on two cover
+    edges, nothing in the mesh changes, and where it makes A and B one cycle and
+    leaves every other cycle crossing it one cycle (``_swap_outcome``), the join is
+    not needed. Tried, up to ``ALT_MERGE_TRIES``, on the joins between two cycles
+    below the rule, those missing the absolute targets (``lo``, ``hi``) first, then by
+    slack; the cycle's other triangles must take part in no step of the plan (nor
+    in a fan, nor in an earlier swap), so the plan is patched as ``_ring_joins``
+    patches it: the join's statuses and counts undone, Kruskal's tree minus the edge
+    A-B with A and B one node. Returns the new cover and the number of merges
+    (``counts`` and the plan's arrays are updated in place).
+    """
+    taken = order[np.unique(join[join >= 0])]
+    low = taken[slack[taken] < 0.0]
+    t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
+    both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
+    low = low[both]
+    if not len(low):
+        return cover, 0
+    miss = ~((newmin[low] >= lo) & (newmax[low] <= hi))
+    low = low[np.lexsort((slack[low], ~miss))][:ALT_MERGE_TRIES]
+    is_cov = cover.is_cov.copy()
+    cyc = cover.cycle.copy()  # (the decisions read the ids as the swaps before left them)
+    # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
+    # or on a swap taken before (an O(m) pass, only where some join is tried)
+    blocked = (status != _k.PASS) | is_fan[: len(status)] | (cyc < 0) | slot.reshape(-1, 3).any(axis=1)
+    used: set[int] = set()
+    root = np.arange(cover.n_cycles, dtype=np.int64)  # merged cycle ids: union-find
+
+    def find(c: int) -> int:
+        while root[c] != c:
+            c = int(root[c])
+        return c
+
+    buf = np.empty(ALT_MERGE_CHECKS * (2 * ALT_MERGE_DEPTH + 2), np.int64)
+    starts = np.empty(ALT_MERGE_CHECKS + 1, np.int64)
+    done = 0
+    for i in low.tolist():
+        h0 = int(cand[i])
+        t, u = h0 // 3, int(tw[h0] // 3)
+        if t in used or u in used or slot[3 * t: 3 * t + 3].any() or slot[3 * u: 3 * u + 3].any():
+            continue
+        ca, cb = find(int(cyc[t])), find(int(cyc[u]))
+        n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, ALT_MERGE_DEPTH, ALT_MERGE_BUDGET, buf, starts,
+                                       ALT_MERGE_CHECKS)
+        for c in range(n):
+            fl = buf[starts[c]:starts[c + 1]]
+            group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
+            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, RING_WALK_BUDGET):
+                continue
+            flips = fl.tolist()
+            group = set(group_arr.tolist())
+            flipped = set(flips) | {int(tw[h]) for h in flips}
+            out = _swap_outcome(tw, is_cov, flipped, cyc, group, find)  # (the same decision, with the pairings)
+            if out is None or not out.only_merges(ca, cb):
+                continue
+            _flip_cover(tw, is_cov, flips)
+            blocked[list(group)] = True
+            used.update(group)
+            root[cb] = ca
+            _label_paths(tw, is_cov, group, out, find, cyc)
+            done += 1
+            # the join is not needed: undone (t and u now pass, as kept triangles)
+            counts[1 if status[t] == _k.SWAP else 3] -= 1
+            for x in (t, u):
+                status[x] = _k.PASS
+                swap_he[x] = join[x] = -1
+            break
+    if not done:
+        return cover, 0
+    lut = np.array([find(c) for c in np.flatnonzero(root != np.arange(len(root))).tolist()], np.int64)
+    lut_all = np.arange(cover.n_cycles, dtype=np.int64)
+    lut_all[root != np.arange(len(root))] = lut
+    lut = lut_all
+    alive = lut == np.arange(cover.n_cycles)
+    rank = np.cumsum(alive) - 1
+    _j.relabel_cycles_into(cyc, rank[lut])
+    return replace(cover, is_cov=is_cov, cycle=cyc, n_cycles=int(alive.sum())), done
+
+
 def sparse_cycles(
     points: np.ndarray,
     triangles: np.ndarray,
@@ -1501,6 +1669,10 @@ def sparse_cycles(
                 status, counts,
                 int(place_iters),
             )
+        n_alt = 0
+        if use_cover and fans and pts.shape[1] == 2 and ALT_MERGE_TRIES > 0:
+            cover, n_alt = _alternating_merges(tw, cover, is_fan, order, join, cand, slack, newmin, newmax, status,
+                                               slot, swap_he, counts, keep * min_angle, hi)
         for _ in range(RING_JOIN_PASSES if use_cover and fans and pts.shape[1] == 2 else 0):
             rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
                                 newmax, status, slot, swap_he, counts, keep, keep * min_angle, hi, 2.0 * floor)
@@ -1567,6 +1739,7 @@ def sparse_cycles(
         "ring_fans": int(n_ring),
         "rerouted": int(n_reroute),
         "ring_joins": int(n_ring_join),
+        "alternating_merges": int(n_alt),
         "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,
