@@ -1306,6 +1306,8 @@ ALT_MERGE_DEPTH = 20
 ALT_MERGE_BUDGET = 20_000
 #: alternating cycles judged per join (``_swap_outcome``), shorter first
 ALT_MERGE_CHECKS = 24
+#: most steps of one swap's outside walks (``_join_kernels.swap_only_merges``); undecided: not taken
+ALT_MERGE_WALK = 20_000
 
 
 def _swap_outcome(tw, is_cov, flipped: set, cycle, group: set, find) -> RingOutcome | None:
@@ -1397,15 +1399,25 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     A-B with A and B one node. Returns the new cover and the number of merges
     (``counts`` and the plan's arrays are updated in place).
     """
-    taken = order[np.unique(join[join >= 0])]
-    low = taken[slack[taken] < 0.0]
+    is_taken = np.zeros(len(cand), np.bool_)  # (the joins taken, without np.unique's sort)
+    is_taken[join[join >= 0]] = True
+    low = order[np.flatnonzero(is_taken)]
+    low = low[slack[low] < 0.0]
     t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
-    both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
-    low = low[both]
-    if not len(low):
-        return cover, 0
+    low = low[(cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)]
     miss = ~((newmin[low] >= lo) & (newmax[low] <= hi))
-    low = low[np.lexsort((slack[low], ~miss))][:ALT_MERGE_TRIES]
+    # Thm 2.4 bridges between two cycles first (two incenters, sectors halving every
+    # corner), each the one step of both its triangles; then the joins below the rule
+    bridged = np.flatnonzero(slot != _k.PLAIN)
+    bridged = bridged[tw[bridged] > bridged]
+    bt, bu = bridged // 3, tw[bridged] // 3
+    sole = (cover.cycle[bt] >= 0) & (cover.cycle[bu] >= 0)
+    sole &= ((slot.reshape(-1, 3)[bt] != _k.PLAIN).sum(axis=1) == 1)
+    sole &= ((slot.reshape(-1, 3)[bu] != _k.PLAIN).sum(axis=1) == 1)
+    tasks = bridged[sole].tolist() + cand[low[np.lexsort((slack[low], ~miss))]].tolist()
+    tasks = tasks[:ALT_MERGE_TRIES]
+    if not tasks:
+        return cover, 0
     is_cov = cover.is_cov.copy()
     cyc = cover.cycle.copy()  # (the decisions read the ids as the swaps before left them)
     # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
@@ -1422,10 +1434,10 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     buf = np.empty(ALT_MERGE_CHECKS * (2 * ALT_MERGE_DEPTH + 2), np.int64)
     starts = np.empty(ALT_MERGE_CHECKS + 1, np.int64)
     done = 0
-    for i in low.tolist():
-        h0 = int(cand[i])
+    for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
-        if t in used or u in used or slot[3 * t: 3 * t + 3].any() or slot[3 * u: 3 * u + 3].any():
+        bridge = slot[h0] != _k.PLAIN
+        if t in used or u in used:
             continue
         ca, cb = find(int(cyc[t])), find(int(cyc[u]))
         n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, ALT_MERGE_DEPTH, ALT_MERGE_BUDGET, buf, starts,
@@ -1433,7 +1445,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
-            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, RING_WALK_BUDGET):
+            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK):
                 continue
             flips = fl.tolist()
             group = set(group_arr.tolist())
@@ -1448,7 +1460,11 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             _label_paths(tw, is_cov, group, out, find, cyc)
             done += 1
             # the join is not needed: undone (t and u now pass, as kept triangles)
-            counts[1 if status[t] == _k.SWAP else 3] -= 1
+            if bridge:
+                slot[h0] = slot[tw[h0]] = _k.PLAIN
+                counts[2] -= 1
+            else:
+                counts[1 if status[t] == _k.SWAP else 3] -= 1
             for x in (t, u):
                 status[x] = _k.PASS
                 swap_he[x] = join[x] = -1
