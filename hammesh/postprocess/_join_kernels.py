@@ -23,8 +23,10 @@ point); here, with only four triangles, a compass search (eight directions, step
 halved when no direction improves, started from the midpoint of ``ab``, which is
 always feasible) finds a point whose slack is within the final step of a local
 optimum — simple, robust (every trial point is checked for a strictly positive
-star) and a few microseconds per edge. The LP-type algorithm would give the exact
-optimum; the compass search gives a feasible point at least as good as the midpoint.
+star) and a few microseconds per edge. Where it ends short of the rule,
+:func:`ridge_ascent` climbs on along the slack's ridges to the optimum (the
+smallest-angle problem is quasi-concave, so that is ABE's exact optimum; a largest-angle
+bound at the point itself is not, and there it is a local one).
 
 Serial, nopython, ``cache=True``; O(number of candidate edges).
 """
@@ -963,8 +965,9 @@ def relabel_cycles_into(cycle, lut):
 
 
 def load_ring_kernels() -> None:
-    """Load (or compile) the kernels only ring fans, ring joins and re-routes reach
-    (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``), on two
+    """Load (or compile) the kernels only ring fans, ring joins, re-routes and cover swaps
+    reach (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``,
+    ``alternating_cycles_into``, ``swap_only_merges``), on two
     triangles: ``hammesh.postprocess.load_kernels``' small mesh leaves no triangle
     off its cover, so those steps do not run there."""
     twin = np.array([3, 4, -1, 0, 1, -1], np.int64)
@@ -974,6 +977,13 @@ def load_ring_kernels() -> None:
     out = np.zeros(2, np.int64)
     label_outside_into(twin, is_cov, 0, links, out, 0)
     relabel_cycles_into(out, np.zeros(1, np.int64))
+    # the cover swaps' search and test (``sparse._alternating_merges``): the two
+    # triangles again, their third edges joined (not on the cover)
+    twin = np.array([3, 4, 5, 0, 1, 2], np.int64)
+    buf = np.empty(8, np.int64)
+    starts = np.empty(3, np.int64)
+    alternating_cycles_into(twin, is_cov, np.zeros(2, np.bool_), 2, 4, 16, buf, starts, 2)
+    swap_only_merges(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0)
 
 
 @njit(cache=True, nogil=True)

@@ -1408,8 +1408,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     miss = ~((newmin[low] >= lo) & (newmax[low] <= hi))
     # Thm 2.4 bridges between two cycles first (two incenters, sectors halving every
     # corner), each the one step of both its triangles; then the joins below the rule
-    bridged = np.flatnonzero(slot != _k.PLAIN)
-    bridged = bridged[tw[bridged] > bridged]
+    slotted = np.flatnonzero(slot != _k.PLAIN)  # (few: the bridges' half-edges)
+    bridged = slotted[tw[slotted] > slotted]
     bt, bu = bridged // 3, tw[bridged] // 3
     sole = (cover.cycle[bt] >= 0) & (cover.cycle[bu] >= 0)
     sole &= ((slot.reshape(-1, 3)[bt] != _k.PLAIN).sum(axis=1) == 1)
@@ -1422,7 +1422,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     cyc = cover.cycle.copy()  # (the decisions read the ids as the swaps before left them)
     # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
     # or on a swap taken before (an O(m) pass, only where some join is tried)
-    blocked = (status != _k.PASS) | is_fan[: len(status)] | (cyc < 0) | slot.reshape(-1, 3).any(axis=1)
+    blocked = (status != _k.PASS) | is_fan[: len(status)] | (cyc < 0)
+    blocked[slotted // 3] = True
     used: set[int] = set()
     root = np.arange(cover.n_cycles, dtype=np.int64)  # merged cycle ids: union-find
 
