@@ -109,3 +109,17 @@ def test_cover_swaps_take_joins_below_the_rule_away(name: str, monkeypatch) -> N
     both_off = hammesh.hamiltonian(m)
     assert r_on["below_parent_rule"] < both_off.report["below_parent_rule"]
     assert r_on["steiner_points"] <= both_off.report["steiner_points"]
+
+
+def test_a_second_pass_of_swaps_starts_from_the_first(monkeypatch) -> None:
+    """``ALT_MERGE_PASSES = 2``: the second call works on the cover and plan the first
+    left (no join swapped twice, the points and rows as the certificate checks them)."""
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "benchmarks"))
+    bench_sparse = importlib.import_module("bench_sparse")
+    m = bench_sparse._mesh_at(dict(bench_sparse._domains())["double_hex"], 4000)
+    one = hammesh.hamiltonian(m)
+    monkeypatch.setattr(sparse, "ALT_MERGE_PASSES", 2)
+    two = hammesh.hamiltonian(m)
+    assert_sparse_certificate(m, two)
+    assert two.report["alternating_merges"] >= one.report["alternating_merges"] >= 1
+    assert two.n_points == m.n_points + two.report["steiner_points"]
