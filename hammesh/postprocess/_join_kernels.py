@@ -983,7 +983,8 @@ def load_ring_kernels() -> None:
     buf = np.empty(8, np.int64)
     starts = np.empty(3, np.int64)
     alternating_cycles_into(twin, is_cov, np.zeros(2, np.bool_), 2, 4, 16, buf, starts, 2)
-    swap_only_merges(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0)
+    swap_only_merges(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0, False)
+    swap_only_merges(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0, True)
 
 
 @njit(cache=True, nogil=True)
@@ -1248,7 +1249,7 @@ def _root_of(root, c):
 
 
 @njit(cache=True, nogil=True)
-def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget):
+def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge):
     """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
     other cycle crossing ``group`` one cycle of its own? (``sparse._alternating_merges``' test)
 
@@ -1260,6 +1261,8 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget):
     cover pairs them; the new cycles are the components of both pairings), without
     building the outcome: False where a walk is undecided within ``budget``, a cycle
     would split or lie wholly inside the group, or a third cycle would merge.
+    ``any_merge``: True wherever no cycle splits and some merge (which ones is the
+    caller's to read off ``sparse._swap_outcome``).
     """
     ng = group.shape[0]
     nf = flips.shape[0]
@@ -1316,7 +1319,7 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget):
         a = ids[i]
         b = ids[inp[i]]
         if a != b:
-            if (a == ca and b == cb) or (a == cb and b == ca):
+            if any_merge or (a == ca and b == cb) or (a == cb and b == ca):
                 joins = True
             else:
                 return False
@@ -1360,7 +1363,7 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget):
                 if not same:
                     return False  # a split
             elif same:
-                if (ids[i] == ca and ids[j] == cb) or (ids[i] == cb and ids[j] == ca):
+                if any_merge or (ids[i] == ca and ids[j] == cb) or (ids[i] == cb and ids[j] == ca):
                     merged = True
                 else:
                     return False  # a third cycle merged

@@ -1309,6 +1309,9 @@ ALT_MERGE_BUDGET = 20_000
 ALT_MERGE_PASSES = 1
 #: alternating cycles judged per join (``_swap_outcome``), shorter first
 ALT_MERGE_CHECKS = 24
+#: alternating cycles per join also judged for merging more cycles than the join's two
+#: (taken where the plan joins exactly those by a subtree of its steps, all undone)
+ALT_MERGE_WIDER = 8
 #: most steps of one swap's outside walks (``_join_kernels.swap_only_merges``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
@@ -1435,43 +1438,105 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             c = int(root[c])
         return c
 
+    # the plan's steps between two cycles that a swap may make unneeded: its joins
+    # (any slack) and the bridges above, as half-edge -> is a bridge
+    every = order[np.flatnonzero(is_taken)]
+    jt, ju = cand[every] // 3, tw[cand[every]] // 3
+    steps = dict.fromkeys(cand[every[(cover.cycle[jt] >= 0) & (cover.cycle[ju] >= 0)]].tolist(), False)
+    steps.update(dict.fromkeys(bridged[sole].tolist(), True))
+    at: dict[int, set] = {}  # cycle id (a root of ``root``) -> the steps at that cycle
+    for h in steps:
+        at.setdefault(int(cyc[h // 3]), set()).add(h)
+        at.setdefault(int(cyc[tw[h] // 3]), set()).add(h)
+
+    def undo(h: int) -> None:
+        """The plan's step over ``h`` is not needed: undone (its triangles pass whole)."""
+        t, u = h // 3, int(tw[h] // 3)
+        if steps.pop(h):
+            slot[h] = slot[tw[h]] = _k.PLAIN
+            counts[2] -= 1
+        else:
+            counts[1 if status[t] == _k.SWAP else 3] -= 1
+        for x in (t, u):
+            status[x] = _k.PASS
+            swap_he[x] = join[x] = -1
+
+    def tree_inside(merged: set) -> list | None:
+        """The plan's steps between the cycles ``merged``, if they span them (a subtree of
+        Kruskal's tree: all of them can go), else None (the swap would close a loop)."""
+        # every step inside has an end at a cycle other than the one with the most
+        # steps (the big cycle holds most of the mesh's joins: not scanned)
+        sets = sorted((at.get(c, set()) for c in merged), key=len)
+        near = set().union(*sets[:-1])
+        inside = [h for h in near if find(int(cyc[h // 3])) in merged and find(int(cyc[tw[h] // 3])) in merged]
+        if len(inside) != len(merged) - 1:
+            return None
+        parent = {c: c for c in merged}
+
+        def top(c):
+            while parent[c] != c:
+                c = parent[c]
+            return c
+
+        for h in inside:
+            parent[top(find(int(cyc[h // 3])))] = top(find(int(cyc[tw[h] // 3])))
+        return inside if len({top(c) for c in merged}) == 1 else None
+
     buf = np.empty(ALT_MERGE_CHECKS * (2 * ALT_MERGE_DEPTH + 2), np.int64)
     starts = np.empty(ALT_MERGE_CHECKS + 1, np.int64)
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
-        bridge = slot[h0] != _k.PLAIN
-        if t in used or u in used:
+        if t in used or u in used or h0 not in steps:
             continue
         ca, cb = find(int(cyc[t])), find(int(cyc[u]))
         n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, ALT_MERGE_DEPTH, ALT_MERGE_BUDGET, buf, starts,
                                        ALT_MERGE_CHECKS)
+        wider = ALT_MERGE_WIDER
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
-            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK):
-                continue
+            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, False):
+                # (more cycles merged: taken if the plan joins them by a subtree)
+                if wider <= 0:
+                    continue
+                wider -= 1
+                if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, True):
+                    continue
             flips = fl.tolist()
             group = set(group_arr.tolist())
             flipped = set(flips) | {int(tw[h]) for h in flips}
             out = _swap_outcome(tw, is_cov, flipped, cyc, group, find)  # (the same decision, with the pairings)
-            if out is None or not out.only_merges(ca, cb):
+            if out is None or out.split:
+                continue
+            by_comp: dict = {}
+            for h in out.links:
+                by_comp.setdefault(out.comp[h], set()).add(out.old_id[h])
+            gone = []
+            for merged in (ids for ids in by_comp.values() if len(ids) > 1):
+                inside = tree_inside(merged)
+                if inside is None:
+                    gone = None
+                    break
+                gone.append((merged, inside))
+            if not gone or h0 not in {h for _, inside in gone for h in inside}:
                 continue
             _flip_cover(tw, is_cov, flips)
             blocked[list(group)] = True
             used.update(group)
-            root[cb] = ca
+            for merged, inside in gone:
+                keep_id = min(merged)
+                sets = sorted((at.pop(c, set()) for c in merged), key=len)
+                near = sets[-1]  # (the largest set updated in place, the others added)
+                near.update(*sets[:-1])
+                near.difference_update(inside)
+                for c_id in merged:
+                    root[c_id] = keep_id
+                at[keep_id] = near
+                for h in inside:
+                    undo(h)
+                    done += 1
             _label_paths(tw, is_cov, group, out, find, cyc)
-            done += 1
-            # the join is not needed: undone (t and u now pass, as kept triangles)
-            if bridge:
-                slot[h0] = slot[tw[h0]] = _k.PLAIN
-                counts[2] -= 1
-            else:
-                counts[1 if status[t] == _k.SWAP else 3] -= 1
-            for x in (t, u):
-                status[x] = _k.PASS
-                swap_he[x] = join[x] = -1
             break
     if not done:
         return cover, 0
