@@ -1086,7 +1086,7 @@ def _steepest_minmax_direction(grads, k):
 
 
 #: the ridge ascent's limits: line searches, and the active set's widest margin (radians)
-RIDGE_ITERS = 64
+RIDGE_ITERS = 256
 RIDGE_LEVEL = 1e-2
 
 

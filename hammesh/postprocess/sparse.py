@@ -1311,7 +1311,7 @@ ALT_MERGE_PASSES = 1
 ALT_MERGE_CHECKS = 24
 #: alternating cycles per join also judged for merging more cycles than the join's two
 #: (taken where the plan joins exactly those by a subtree of its steps, all undone)
-ALT_MERGE_WIDER = 8
+ALT_MERGE_WIDER = 16
 #: most steps of one swap's outside walks (``_join_kernels.swap_only_merges``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
