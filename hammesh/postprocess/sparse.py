@@ -1300,7 +1300,7 @@ def _place_taken(
 #: joins below the rule between two cycles that one call tries to replace by a cover
 #: swap merging the two cycles (``_alternating_merges``), worst first
 ALT_MERGE_TRIES = 32
-#: give-ups of an alternating cycle (``_alternating_cycles``): its length is twice that
+#: give-ups of an alternating cycle (``_join_kernels.alternating_cycles_into``): its length is twice that
 ALT_MERGE_DEPTH = 20
 #: steps of the search for one join's alternating cycles (``_join_kernels.alternating_cycles_into``)
 ALT_MERGE_BUDGET = 20_000
@@ -1393,7 +1393,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     divides the corners ``c`` and ``d``; where no edge between A and B has both
     corners large enough, every join between them misses the local rule. But the
     cover itself can change for free: swapping cover and non-cover edges along an
-    *alternating cycle* through ``t-u`` (``_alternating_cycles``; the cover's
+    *alternating cycle* through ``t-u`` (``_join_kernels.alternating_cycles_into``; the cover's
     rotations around a vertex are the shortest) keeps every triangle on two cover
     edges, nothing in the mesh changes, and where it makes A and B one cycle and
     leaves every other cycle crossing it one cycle (``_swap_outcome``), the join is
