@@ -41,10 +41,12 @@ triangles), ``join`` what any join can keep at the triangles the cover leaves of
 (``join_bounds``: a join divides the corners opposite its edge), ``unc`` the uncovered
 triangles with a boundary edge, ``u<tg`` those whose join bound is below 0.9 x the
 input's minimum (only a cover passing them can fix those); the last two marks check
-``out min >= min(0.9 x in min, corner)`` and ``out min >= min(that, join)``; ``rf/rr/rj``
-the report's ``ring_fans``, ``rerouted`` and ``ring_joins`` (session 9: the join stage's
+``out min >= min(0.9 x in min, corner)`` and ``out min >= min(that, join)``; ``rf/rr/rj/sw``
+the report's ``ring_fans``, ``rerouted``, ``ring_joins`` (session 9: the join stage's
 answers where no join over an uncovered triangle's edges keeps the targets, and ring
-fans in place of joins below the local rule; at every size since session 10).
+fans in place of joins below the local rule; at every size since session 10) and
+``alternating_merges`` (session 11: joins below the rule made unneeded by swapping the
+cover along an alternating cycle that merges their two cycles).
 
 One command for every figure the issue names: ``python benchmarks/bench_sparse.py --big``.
 
@@ -130,7 +132,7 @@ def quality_table(target: int) -> dict:
     head = (
         f"{'mesh':<20}{'tri':>7}{'steiner':>9}{'min in':>8}{'min out':>8}{'max in':>8}{'max out':>8}"
         f"{'below':>7}{'R/2r in':>8}{'R/2r out':>9}{'recheck':>8}{'corner':>8}{'join':>7}{'unc':>5}{'u<tg':>5}"
-        f"  targets (min, max, steiner, rule; bounds)  rf/rr/rj"
+        f"  targets (min, max, steiner, rule; bounds)  rf/rr/rj/sw"
     )
     print(head)
     print("-" * len(head))
@@ -167,7 +169,7 @@ def quality_table(target: int) -> dict:
             f"{r['below_parent_rule']:>7}{r['radius_ratio_input']:>8.2f}{r['radius_ratio_output']:>9.2f}"
             f"{recheck:>8}{r['corner_bound_deg']:>8.2f}{'-' if jb is None else f'{jb:.2f}':>7}"
             f"{r['uncovered_boundary']:>5}{r['uncovered_below_target']:>5}  {marks}"
-            f"   {r['ring_fans']}/{r['rerouted']}/{r['ring_joins']}"
+            f"   {r['ring_fans']}/{r['rerouted']}/{r['ring_joins']}/{r['alternating_merges']}"
         )
     print(
         "corner: half the smallest boundary corner (no Hamiltonian triangulation keeping the boundary beats it)\n"
@@ -175,7 +177,8 @@ def quality_table(target: int) -> dict:
         "with a boundary edge; u<tg: those whose join bound is below 0.9 x min in (no join over their own edges\n"
         "can fix them: a re-routed cover or a ring fan can, rr and rf)\n"
         "bounds marks: out min >= min(0.9 x min in, corner)?  out min >= min(that, join)?\n"
-        "rf/rr/rj: ring fans, uncovered triangles the cover was re-routed through, ring joins (docs/sparse.md)"
+        "rf/rr/rj/sw: ring fans, uncovered triangles the cover was re-routed through, ring joins, joins made\n"
+        "unneeded by cover swaps (docs/sparse.md)"
     )
     return rows
 

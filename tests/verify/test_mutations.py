@@ -277,14 +277,15 @@ def test_angle_cache_in_the_input_is_not_trusted(monkeypatch, mode: str) -> None
 
 
 def made_in(mode: str, m: hammesh.Mesh) -> hammesh.HamiltonianMesh:
-    """``hamiltonian(m, mode)``; sparse without swaps and edge splits, so that its
-    merges are Thm 2.4 bridges (incenters to damage)."""
+    """``hamiltonian(m, mode)``; sparse without swaps, edge splits and cover swaps, so
+    that its merges are Thm 2.4 bridges (incenters to damage)."""
     from hammesh.postprocess import sparse
 
     with pytest.MonkeyPatch.context() as mp:
         if mode == "sparse":
             mp.setattr(sparse.sparse_cycles, "__kwdefaults__",
                        {**sparse.sparse_cycles.__kwdefaults__, "swaps": False, "edge_splits": False})
+            mp.setattr(sparse, "ALT_MERGE_TRIES", 0)  # (they would take the bridges away)
         h = hammesh.hamiltonian(m, mode=mode)
     assert h.report["incenters"] >= 1
     return h
