@@ -41,7 +41,8 @@ def validate_mesh(mesh: Mesh | HamiltonianMesh) -> None:
 
     Checks: ``points`` is ``(n, 2)`` (or ``(n, 3)``, a surface) and finite; ``triangles`` is a non-empty
     ``(m, 3)`` integer array with indices in ``[0, n)``; ``segments`` is ``(s, 2)``
-    with indices in range; ``triangle_attributes`` has ``m`` rows and is finite.
+    with indices in range; ``triangle_attributes`` has ``m`` rows (any values: NaN in a
+    user's cell data is data, not an error).
     For a :class:`HamiltonianMesh` also: ``components`` are positive and sum to ``m``;
     ``position``, ``parent`` and ``kind`` have ``m`` entries.
 
@@ -78,9 +79,6 @@ def validate_mesh(mesh: Mesh | HamiltonianMesh) -> None:
         raise InvalidMeshError(
             f"triangle_attributes must have shape ({m}, k), got {attrs.shape}"
         )
-    if attrs.size and not np.isfinite(attrs).all():
-        row = int(np.flatnonzero(~np.isfinite(attrs).all(axis=1))[0])
-        raise InvalidMeshError(f"triangle_attributes[{row}] is not finite")
 
     if isinstance(mesh, HamiltonianMesh):
         components = _int_array("components", mesh.components, 1)

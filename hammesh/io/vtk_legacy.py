@@ -28,7 +28,7 @@ from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_block
 __all__ = ["read_polydata", "dataset_type"]
 
 _TYPES = {
-    "bit": None, "unsigned_char": ">u1", "char": ">i1", "unsigned_short": ">u2", "short": ">i2",
+    "bit": ">u1", "unsigned_char": ">u1", "char": ">i1", "unsigned_short": ">u2", "short": ">i2",
     "unsigned_int": ">u4", "int": ">i4", "unsigned_long": ">u8", "long": ">i8",
     "float": ">f4", "double": ">f8", "vtktypeint64": ">i8", "vtktypeuint64": ">u8",
     "vtkidtype": ">i8",
@@ -92,6 +92,16 @@ class _Reader:
         dtype = _TYPES.get(vtk_type.lower())
         if dtype is None:
             raise self.error(f"unsupported data type {vtk_type!r} for {what}")
+        if self.binary and vtk_type.lower() == "bit":
+            # VTK packs bits eight to a byte, most significant first
+            size = (count + 7) // 8
+            if self.pos + size > len(self.buf):
+                raise self.error(f"truncated {what} (declared {count} values)")
+            packed = np.frombuffer(self.buf, dtype=np.uint8, count=size, offset=self.pos)
+            self.pos += size
+            if self.buf[self.pos:self.pos + 1] == b"\n":
+                self.pos += 1
+            return np.unpackbits(packed)[:count].astype(np.int64)
         if self.binary:
             size = np.dtype(dtype).itemsize * count
             if self.pos + size > len(self.buf):

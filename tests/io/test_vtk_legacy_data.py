@@ -88,3 +88,37 @@ def test_binary_51_file_from_pyvista(tmp_path):
     np.testing.assert_array_equal(m.point_data["elev"], np.asarray(p.point_data["elev"]))
     np.testing.assert_array_equal(m.triangle_attributes[:, m.attribute_names.index("mat")],
                                   np.asarray(p.cell_data["mat"]))
+
+
+def _binary_square(bits: bytes, values: np.ndarray) -> bytes:
+    """A binary legacy file: the unit square's two triangles, a bit array and doubles per cell."""
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=">f8")
+    polys = np.array([3, 0, 1, 2, 3, 0, 2, 3], dtype=">i4")
+    return (b"# vtk DataFile Version 3.0\nsq\nBINARY\nDATASET POLYDATA\nPOINTS 4 double\n"
+            + pts.tobytes() + b"\nPOLYGONS 2 8\n" + polys.tobytes()
+            + b"\nCELL_DATA 2\nSCALARS flag bit 1\nLOOKUP_TABLE default\n" + bits
+            + b"\nSCALARS value double 1\nLOOKUP_TABLE default\n" + values.astype(">f8").tobytes() + b"\n")
+
+
+def test_bit_arrays_and_nan_values_are_data(tmp_path):
+    # ASCII bits are 0/1 words; binary bits are packed eight to a byte, most significant first
+    ascii_file = tmp_path / "a.vtk"
+    ascii_file.write_text(ASCII.replace("SCALARS material int 1", "SCALARS material bit 1")
+                          .replace("7 8 9", "1 0 1"))
+    m = read_mesh(ascii_file)
+    np.testing.assert_array_equal(m.triangle_attributes[:, m.attribute_names.index("material")], [0, 1, 1])
+
+    binary_file = tmp_path / "b.vtk"
+    binary_file.write_bytes(_binary_square(bytes([0b01000000]), np.array([np.nan, 2.0])))
+    m = read_mesh(binary_file)
+    np.testing.assert_array_equal(m.triangle_attributes[:, m.attribute_names.index("flag")], [0, 1])
+    value = m.triangle_attributes[:, m.attribute_names.index("value")]
+    assert np.isnan(value[0]) and value[1] == 2.0
+
+    # a NaN in the user's cell data is carried to the output, not refused after all the work
+    h = hammesh.hamiltonian(m, mode="incircle")
+    out = tmp_path / "out.vtu"
+    hammesh.io.write(h, out)
+    back = read_mesh(out)
+    carried = back.triangle_attributes[:, back.attribute_names.index("value")]
+    np.testing.assert_array_equal(np.isnan(carried), np.isnan(value[h.parent]))
