@@ -400,10 +400,10 @@ def _read_raw(path: Path, suffix: str) -> Any:
 
         return read_off(path)
     if suffix == ".vtk":
-        from hammesh.io.vtk_legacy import dataset_type, read_polydata
+        from hammesh.io.vtk_legacy import DATASETS, dataset_type, read_legacy
 
-        if dataset_type(path) == "POLYDATA":
-            return read_polydata(path)
+        if dataset_type(path) in DATASETS:
+            return read_legacy(path)
     expected_faces = _check_header(path, suffix)
     raw = _meshio_read(path, _FORMATS[suffix][0])
     if expected_faces is not None:
@@ -416,7 +416,7 @@ def _read_raw(path: Path, suffix: str) -> Any:
 
 
 def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = False) -> Mesh:
-    """Read a triangle mesh with meshio (OBJ and legacy VTK POLYDATA: hammesh's readers).
+    """Read a triangle mesh with meshio (OBJ, OFF and legacy VTK: hammesh's readers).
 
     Triangles keep their file order (all cell blocks, concatenated); quads and polygons
     are split into triangles in place (:func:`hammesh.io.polygons.triangulate_cells`);

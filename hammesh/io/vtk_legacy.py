@@ -1,6 +1,10 @@
-"""Legacy VTK ``POLYDATA`` reading (ASCII and binary), which meshio 5 does not read.
+"""Legacy VTK ``POLYDATA`` and ``UNSTRUCTURED_GRID`` reading (ASCII and binary).
 
-Reads ``POINTS`` and the cell sections ``VERTICES LINES POLYGONS TRIANGLE_STRIPS``, in
+meshio 5 reads neither POLYDATA nor the version 5.1 layout that VTK 9.1+ (and so
+pyvista's ``save``) writes.  Reads ``POINTS`` and the cell sections ``VERTICES LINES
+POLYGONS TRIANGLE_STRIPS`` (POLYDATA) or ``CELLS`` + ``CELL_TYPES`` (UNSTRUCTURED_GRID:
+vertices, lines, polylines, triangles, strips, polygons, pixels, quads; other cell types,
+volumes and second-order cells, are named and left to the caller to refuse), in
 both layouts: the classic one (``POLYGONS n size`` then ``n`` lists ``k i0 .. ik-1``)
 and that of file version 5.1 (``POLYGONS n+1 size`` then ``OFFSETS`` and
 ``CONNECTIVITY`` arrays).  Binary data is big-endian, as the format says.  ``LINES``
@@ -10,9 +14,10 @@ alternating winding (VTK's ``vtkTriangleStrip`` rule).  ``POINT_DATA`` and
 ``TEXTURE_COORDINATES``, ``COLOR_SCALARS``, ``GLOBAL_IDS``, ``PEDIGREE_IDS`` and
 ``FIELD`` arrays) are read as point and cell data (a strip's or polyline's value goes
 to each of its triangles or segments), so a file's fields reach the output (never
-lost); ``LOOKUP_TABLE`` definitions and ``METADATA`` are skipped.  Other datasets (``UNSTRUCTURED_GRID``, as meshio and hammesh write) are left to meshio.
+lost); ``LOOKUP_TABLE`` definitions, ``METADATA`` and dataset-level ``FIELD`` data are
+skipped.  Other datasets (structured grids) are left to meshio.
 
-Reference: "VTK File Formats", legacy format, Dataset format POLYDATA
+Reference: "VTK File Formats", legacy format, Dataset formats POLYDATA and UNSTRUCTURED_GRID
 (https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html).
 """
 
@@ -25,15 +30,28 @@ import numpy as np
 from hammesh.errors import FileFormatError
 from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
 
-__all__ = ["read_polydata", "dataset_type"]
+__all__ = ["read_legacy", "dataset_type", "DATASETS"]
 
 _TYPES = {
     "bit": ">u1", "unsigned_char": ">u1", "char": ">i1", "unsigned_short": ">u2", "short": ">i2",
     "unsigned_int": ">u4", "int": ">i4", "unsigned_long": ">u8", "long": ">i8",
     "float": ">f4", "double": ">f8", "vtktypeint64": ">i8", "vtktypeuint64": ">u8",
-    "vtkidtype": ">i8",
+    "vtkidtype": ">i8", "vtktypeint8": ">i1", "vtktypeuint8": ">u1", "vtktypeint16": ">i2",
+    "vtktypeuint16": ">u2", "vtktypeint32": ">i4", "vtktypeuint32": ">u4", "vtktypefloat32": ">f4",
+    "vtktypefloat64": ">f8", "signed_char": ">i1",
 }
 _SECTIONS = ("VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS")
+#: The datasets :func:`read_legacy` reads.
+DATASETS = ("POLYDATA", "UNSTRUCTURED_GRID")
+#: POLYDATA sections and UNSTRUCTURED_GRID cell types, by how their cells become blocks.
+_KIND_OF_SECTION = {"VERTICES": "vertex", "LINES": "line", "POLYGONS": "polygon", "TRIANGLE_STRIPS": "strip"}
+_KIND_OF_TYPE = {1: "vertex", 2: "vertex", 3: "line", 4: "line", 5: "polygon", 6: "strip", 7: "polygon",
+                 8: "polygon", 9: "polygon"}
+#: Names (meshio's) of the cell types hammesh does not take, so that the refusal names them.
+_OTHER_TYPES = {10: "tetra", 11: "voxel", 12: "hexahedron", 13: "wedge", 14: "pyramid", 21: "line3",
+                22: "triangle6", 23: "quad8", 24: "tetra10", 25: "hexahedron20", 28: "quad9",
+                34: "triangle7", 68: "lagrange_curve", 69: "lagrange_triangle", 70: "lagrange_quadrilateral"}
+_VTK_PIXEL = 8
 _MAX_HEADER = 4096
 
 
@@ -165,13 +183,94 @@ def _strip_triangles(offsets: np.ndarray, conn: np.ndarray) -> np.ndarray:
     return np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
 
 
-def read_polydata(path: str | Path) -> RawMesh:
-    """Points and cells of a legacy VTK ``POLYDATA`` file.
+def _cell_lists(r: _Reader, words: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """CSR ``offsets`` and ``connectivity`` of a ``POLYGONS``/``CELLS``... section (header
+    ``words`` read), in either layout: classic or version 5.1 (``OFFSETS``, ``CONNECTIVITY``)."""
+    key = words[0].upper()
+    if len(words) < 3:
+        raise r.error(f"{key} needs two counts")
+    n = r.count(words[1], f"{key} count")
+    size = r.count(words[2], f"{key} size")
+    mark = r.pos
+    nxt = r.line()
+    if nxt is not None and nxt[0].upper() == "OFFSETS":  # file version 5.1
+        offsets = r.numbers(n, nxt[1] if len(nxt) > 1 else "", f"{key} OFFSETS")
+        conn_head = r.line()
+        if conn_head is None or conn_head[0].upper() != "CONNECTIVITY":
+            raise r.error(f"{key}: CONNECTIVITY expected after OFFSETS")
+        conn = r.numbers(size, conn_head[1] if len(conn_head) > 1 else "", f"{key} CONNECTIVITY")
+        if len(offsets) == 0 or offsets[0] != 0 or offsets[-1] != size or (np.diff(offsets) < 0).any():
+            raise r.error(f"{key}: OFFSETS are not increasing from 0 to {size}")
+        return offsets, conn
+    r.pos = mark
+    return _cells_classic(r, n, size, key)
+
+
+def _blocks_of_kind(kind: str, offsets: np.ndarray, conn: np.ndarray,
+                    first: int) -> tuple[list[CellBlock], list[np.ndarray]]:
+    """Cell blocks of ``offsets``/``conn`` cells all of one ``kind``, and each block's cells'
+    numbers in the file (``first`` + row): how cell data follows its cells."""
+    cells = len(offsets) - 1
+    if kind == "polygon":
+        return polygon_blocks(offsets, conn), [first + rows for rows in polygon_block_rows(offsets)]
+    if kind == "strip":
+        return ([CellBlock("triangle", _strip_triangles(offsets, conn))],
+                [first + np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 2, 0))])
+    if kind == "line":  # a polyline: its consecutive pairs
+        pairs = np.maximum(np.diff(offsets) - 1, 0)
+        pair_of = np.repeat(np.arange(cells), pairs)
+        if len(pair_of) == 0:
+            return [], []
+        rank = np.arange(len(pair_of)) - (np.cumsum(pairs) - pairs)[pair_of]  # within its polyline
+        at = offsets[:-1][pair_of] + rank
+        return [CellBlock("line", np.stack([conn[at], conn[at + 1]], axis=1))], [first + pair_of]
+    if kind == "vertex":
+        return [], []
+    sizes = np.diff(offsets)  # a cell type hammesh does not take: named, for the caller to refuse
+    if (sizes != sizes[0]).any():
+        raise ValueError(f"{kind} cells of different sizes")
+    return [CellBlock(kind, conn.reshape(cells, int(sizes[0])))], [first + np.arange(cells)]
+
+
+def _grid_blocks(r: _Reader, offsets: np.ndarray, conn: np.ndarray,
+                 types: np.ndarray) -> tuple[list[CellBlock], list[np.ndarray]]:
+    """Blocks of an UNSTRUCTURED_GRID's cells: one per run of cells of the same kind (file order)."""
+    if len(types) != len(offsets) - 1:
+        raise r.error(f"CELL_TYPES has {len(types)} types for {len(offsets) - 1} cells")
+    pixels = np.flatnonzero(types == _VTK_PIXEL)
+    if len(pixels):  # a pixel's corners go row by row: 0 1 3 2 is its boundary
+        conn = conn.copy()
+        third = offsets[pixels] + 2
+        conn[third], conn[third + 1] = conn[third + 1], conn[third].copy()
+    kinds = np.array([_KIND_OF_TYPE.get(t) or _OTHER_TYPES.get(t) or f"VTK cell type {t}"
+                      for t in np.unique(types).tolist()])
+    kind_id = np.searchsorted(np.unique(types), types)
+    # runs of one kind (each unknown type its own kind): one block list per run
+    kind_of_cell = np.unique(kinds, return_inverse=True)[1][kind_id]
+    cuts = np.flatnonzero(np.diff(kind_of_cell)) + 1
+    starts = np.concatenate([[0], cuts]).tolist()
+    ends = np.concatenate([cuts, [len(types)]]).tolist()
+    blocks: list[CellBlock] = []
+    origins: list[np.ndarray] = []
+    for a, b in zip(starts, ends):
+        kind = str(kinds[kind_id[a]])
+        run_offsets = offsets[a:b + 1] - offsets[a]
+        try:
+            got, rows = _blocks_of_kind(kind, run_offsets, conn[offsets[a]:offsets[b]], a)
+        except ValueError as exc:
+            raise r.error(str(exc)) from None
+        blocks.extend(got)
+        origins.extend(rows)
+    return blocks, origins
+
+
+def read_legacy(path: str | Path) -> RawMesh:
+    """Points, cells and point/cell data of a legacy VTK ``POLYDATA`` or ``UNSTRUCTURED_GRID`` file.
 
     Raises
     ------
     FileFormatError
-        Not a legacy VTK POLYDATA file, truncated or malformed data.
+        Not a legacy VTK file of one of :data:`DATASETS`, truncated or malformed data.
     """
     path = Path(path)
     r = _Reader(path)
@@ -184,12 +283,14 @@ def read_polydata(path: str | Path) -> RawMesh:
         raise r.error("expected ASCII or BINARY on line 3")
     r.binary = mode[0].upper() == "BINARY"
     ds = r.line()
-    if not ds or len(ds) < 2 or ds[0].upper() != "DATASET" or ds[1].upper() != "POLYDATA":
-        raise r.error("not a POLYDATA dataset")
+    if not ds or len(ds) < 2 or ds[0].upper() != "DATASET" or ds[1].upper() not in DATASETS:
+        raise r.error(f"not a {' or '.join(DATASETS)} dataset")
+    grid = ds[1].upper() == "UNSTRUCTURED_GRID"
     points = None
     blocks: list[CellBlock] = []
     origins: list[np.ndarray] = []  # each block's cells' numbers in the file's cell order
     n_cells = 0
+    grid_cells: tuple[np.ndarray, np.ndarray] | None = None  # CELLS, waiting for CELL_TYPES
     point_data: dict[str, np.ndarray] = {}
     cell_data_all: dict[str, np.ndarray] = {}
     target: dict[str, np.ndarray] | None = None  # the POINT_DATA or CELL_DATA section read now
@@ -204,38 +305,22 @@ def read_polydata(path: str | Path) -> RawMesh:
                 raise r.error("POINTS needs a count and a type")
             n = r.count(words[1], "number of points")
             points = r.numbers(3 * n, words[2], "POINTS").reshape(n, 3)
-        elif key in _SECTIONS:
-            if len(words) < 3:
-                raise r.error(f"{key} needs two counts")
-            n = r.count(words[1], f"{key} count")
-            size = r.count(words[2], f"{key} size")
-            mark = r.pos
-            nxt = r.line()
-            if nxt is not None and nxt[0].upper() == "OFFSETS":  # file version 5.1
-                offsets = r.numbers(n, nxt[1], f"{key} OFFSETS")
-                conn_head = r.line()
-                if conn_head is None or conn_head[0].upper() != "CONNECTIVITY":
-                    raise r.error(f"{key}: CONNECTIVITY expected after OFFSETS")
-                conn = r.numbers(size, conn_head[1], f"{key} CONNECTIVITY")
-                if len(offsets) == 0 or offsets[0] != 0 or offsets[-1] != size or (np.diff(offsets) < 0).any():
-                    raise r.error(f"{key}: OFFSETS are not increasing from 0 to {size}")
-            else:
-                r.pos = mark
-                offsets, conn = _cells_classic(r, n, size, key)
-            cells = len(offsets) - 1  # (5.1 files count the offsets, classic ones the cells)
-            if key == "POLYGONS":
-                blocks.extend(polygon_blocks(offsets, conn))
-                origins.extend(n_cells + rows for rows in polygon_block_rows(offsets))
-            elif key == "TRIANGLE_STRIPS":
-                blocks.append(CellBlock("triangle", _strip_triangles(offsets, conn)))
-                origins.append(n_cells + np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 2, 0)))
-            elif key == "LINES":
-                pairs = [np.stack([conn[a:b - 1], conn[a + 1:b]], axis=1)
-                         for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()) if b - a >= 2]
-                if pairs:
-                    blocks.append(CellBlock("line", np.concatenate(pairs)))
-                    origins.append(n_cells + np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 1, 0)))
-            n_cells += cells
+        elif not grid and key in _SECTIONS:
+            offsets, conn = _cell_lists(r, words)
+            got, rows = _blocks_of_kind(_KIND_OF_SECTION[key], offsets, conn, n_cells)
+            blocks.extend(got)
+            origins.extend(rows)
+            n_cells += len(offsets) - 1  # (5.1 files count the offsets, classic ones the cells)
+        elif grid and key == "CELLS":
+            grid_cells = _cell_lists(r, words)
+        elif grid and key == "CELL_TYPES":
+            if grid_cells is None:
+                raise r.error("CELL_TYPES before CELLS")
+            if len(words) < 2:
+                raise r.error("CELL_TYPES needs a count")
+            types = r.numbers(r.count(words[1], "CELL_TYPES count"), "int", "CELL_TYPES")
+            blocks, origins = _grid_blocks(r, *grid_cells, types)
+            n_cells = len(types)
         elif key == "METADATA":  # text up to a blank line (file versions >= 4.2)
             r.skip_to_blank_line()
         elif key in ("POINT_DATA", "CELL_DATA"):
@@ -245,10 +330,14 @@ def read_polydata(path: str | Path) -> RawMesh:
             target = point_data if key == "POINT_DATA" else cell_data_all
         elif target is not None and key in _ARRAYS:
             _read_array(r, words, tuples, target)
+        elif target is None and key == "FIELD":  # dataset-level data (e.g. TIME): not per point or cell
+            _read_array(r, words, -1, {})
         else:
             raise r.error(f"unexpected section {words[0]!r}")
     if points is None:
         raise r.error("no POINTS section")
+    if grid and grid_cells is not None and n_cells == 0 and len(grid_cells[0]) > 1:
+        raise r.error("CELLS without CELL_TYPES")
     cell_data: dict[str, list[np.ndarray]] = {}
     for name, values in cell_data_all.items():
         if len(values) != n_cells:

@@ -122,3 +122,55 @@ def test_bit_arrays_and_nan_values_are_data(tmp_path):
     back = read_mesh(out)
     carried = back.triangle_attributes[:, back.attribute_names.index("value")]
     np.testing.assert_array_equal(np.isnan(carried), np.isnan(value[h.parent]))
+
+
+# an unstructured grid with every surface cell kind: a quad, two triangles, a pixel
+# (corners row by row), a polyline and a vertex; dataset-level FIELD data before POINTS
+GRID_CELLS = [[0, 1, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 6, 7], [0, 3, 6], [2]]
+GRID_TYPES = [9, 5, 5, 8, 4, 1]
+
+
+def _grid_text(layout: str) -> str:
+    head = ("# vtk DataFile Version {v}\ngrid\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+            "FIELD FieldData 1\nTIME 1 1 double\n1.5\n"
+            "POINTS 8 double\n0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0 0 2 0 1 2 0\n")
+    if layout == "classic":
+        size = sum(len(c) + 1 for c in GRID_CELLS)
+        cells = f"CELLS 6 {size}\n" + "\n".join(f"{len(c)} " + " ".join(map(str, c)) for c in GRID_CELLS)
+        head = head.format(v="4.2")
+    else:
+        offsets = np.cumsum([0] + [len(c) for c in GRID_CELLS])
+        conn = [i for c in GRID_CELLS for i in c]
+        cells = (f"CELLS 7 {len(conn)}\nOFFSETS vtktypeint64\n" + " ".join(map(str, offsets))
+                 + "\nCONNECTIVITY vtktypeint64\n" + " ".join(map(str, conn)))
+        head = head.format(v="5.1")
+    return (head + cells + "\nCELL_TYPES 6\n" + " ".join(map(str, GRID_TYPES))
+            + "\nCELL_DATA 6\nFIELD FieldData 1\nmat 1 6 vtktypeint32\n0 10 20 30 40 50\n"
+            + "POINT_DATA 8\nSCALARS x float 1\nLOOKUP_TABLE default\n0 1 2 0 1 2 0 1\n")
+
+
+@pytest.mark.parametrize("layout", ["classic", "5.1"])
+def test_unstructured_grid_cells_and_data(tmp_path, layout):
+    path = tmp_path / "grid.vtk"
+    path.write_text(_grid_text(layout))
+    m = read_mesh(path)
+    # every cell's area is kept (quad and pixel split into two triangles each), all CCW
+    p = m.points[m.triangles]
+    area = 0.5 * np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    assert (area > 0).all() and area.sum() == pytest.approx(3.0)
+    # a triangle's cell value is its cell's: the pixel's two triangles lie in y >= 1, x <= 1
+    mat = m.triangle_attributes[:, m.attribute_names.index("mat")]
+    centroid = p.mean(axis=1)
+    in_pixel = (centroid[:, 1] > 1) & (centroid[:, 0] < 1)
+    assert (mat[in_pixel] == 30).all() and in_pixel.sum() == 2
+    assert sorted(set(mat.tolist())) == [0, 10, 20, 30]
+    assert sorted(map(sorted, m.segments.tolist())) == [[0, 3], [3, 6]]
+    np.testing.assert_array_equal(m.point_data["x"], m.points[:, 0])
+
+
+def test_volume_cells_are_refused_by_name(tmp_path):
+    path = tmp_path / "tet.vtk"
+    path.write_text("# vtk DataFile Version 4.2\nt\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                    "POINTS 4 double\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n")
+    with pytest.raises(FileFormatError, match="tetra"):
+        read_mesh(path, dim=None)
