@@ -37,7 +37,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
-from hammesh.io.cell_data import ATTRIBUTE_PREFIX, join_components, triangle_cell_data
+from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
@@ -94,6 +94,8 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     names = [_token(attribute_name(given, j)) for j in range(attrs.shape[1])]
     columns = [attrs[:, j] for j in range(attrs.shape[1])]
     if isinstance(mesh, HamiltonianMesh):
+        # a user's column named like a cycle field keeps its data under another name
+        names = [f"input_{name}" if name in CYCLE_FIELDS else name for name in names]
         names += list(_CYCLE_FIELDS)
         columns += [data[k] for k in _CYCLE_FIELDS]
     point_names, point_columns = [], []
@@ -342,8 +344,9 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
 
     names = _comment_names(tok, k)
     attribute_names: tuple[str, ...] = ()
-    if names is not None:  # hammesh's: the cycle fields are the output's, not attributes
-        kept = [j for j, name in enumerate(names) if name not in _CYCLE_FIELDS]
+    if names is not None:  # a Hamiltonian mesh's cycle fields are the output's, not attributes
+        hamiltonian = "cycle_position" in names
+        kept = [j for j, name in enumerate(names) if not (hamiltonian and name in _CYCLE_FIELDS)]
         attrs = attrs[:, kept]
         attribute_names = tuple(names[j] for j in kept)
 
