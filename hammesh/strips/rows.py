@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into
 
 __all__ = ["ROW_AXES", "parallel_edges", "row_links", "row_path_cover"]
@@ -38,9 +39,10 @@ def parallel_edges(points: np.ndarray, triangles: np.ndarray, angle: float) -> n
     """
     p = np.asarray(points, np.float64)[:, :2]
     tri = np.asarray(triangles)
-    e = p[np.roll(tri, -1, axis=1)] - p[tri]  # (m, 3, 2): edge k from v_k to v_k+1
-    across = np.abs(e[..., 1] * np.cos(angle) - e[..., 0] * np.sin(angle))
-    with np.errstate(invalid="ignore", divide="ignore"):
+    # coordinates whose differences overflow give inf / nan: any choice is a valid cover
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        e = p[np.roll(tri, -1, axis=1)] - p[tri]  # (m, 3, 2): edge k from v_k to v_k+1
+        across = np.abs(e[..., 1] * np.cos(angle) - e[..., 0] * np.sin(angle))
         sine = np.nan_to_num(across / np.hypot(e[..., 0], e[..., 1]), nan=0.0)
     return np.argmin(sine, axis=1)
 
@@ -59,11 +61,12 @@ def row_links(twin: np.ndarray, refused: np.ndarray) -> np.ndarray:
     return np.where(ok, u, -1)
 
 
-def row_path_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, angle: float) -> tuple[np.ndarray, np.ndarray]:
-    """The rows along ``angle`` as a dual path cover: ``(order (m,), starts (S + 1,))`` int64."""
+def row_path_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, angle: float) -> PathCover:
+    """The rows along ``angle`` as a dual path cover (:class:`~hammesh.strips._cover_kernels.PathCover`:
+    ``order (m,)``, ``starts (S + 1,)`` int64)."""
     link = row_links(twin, parallel_edges(points, triangles, angle))
     m = len(link)
     order = np.empty(m, np.int64)
     starts = np.empty(m + 1, np.int64)
     S = link_paths_into(link, order, starts)
-    return order, starts[: S + 1].copy()
+    return PathCover(order, starts[: S + 1].copy())
