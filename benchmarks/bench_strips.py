@@ -874,9 +874,11 @@ def cache_bound_rows(quick: bool) -> None:
 CACHE_TABLE_OURS = (
     ("hammesh default", {}),
     ("hammesh method=zigzag", {"method": "zigzag"}),
+    ("hammesh method=rows", {"method": "rows"}),
     ("hammesh --cache N (auto: chains in short pieces)", {"cache": "N"}),
     ("hammesh --cache N greedy (FIFO order)", {"cache": "N", "method": "greedy"}),
     ("hammesh --cache N zigzag (FIFO order)", {"cache": "N", "method": "zigzag"}),
+    ("hammesh --cache N rows (FIFO order)", {"cache": "N", "method": "rows"}),
 )
 
 

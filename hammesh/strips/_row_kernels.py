@@ -1,4 +1,4 @@
-"""Compiled step of the row cover (:mod:`hammesh.strips.rows`): paths of a link graph of degree <= 2."""
+"""Compiled steps of the row cover (:mod:`hammesh.strips.rows`): the links, and the paths of a link graph of degree <= 2."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 
 from hammesh.strips._numba import kernel
 
-__all__ = ["link_paths_into"]
+__all__ = ["link_paths_into", "row_links_into"]
 
 
 @kernel
@@ -45,3 +45,39 @@ def link_paths_into(link, order, starts):
             S += 1
             starts[S] = L
     return S
+
+
+@kernel
+def row_links_into(points, tri, twin, cos_a, sin_a, refused, link):
+    """Each triangle's edge most parallel to the axis ``(cos_a, sin_a)`` into ``refused``
+    ``(m,)``, then ``link`` ``(m, 3)``: the neighbour across each edge, -1 where either
+    side refuses it (see :func:`hammesh.strips.rows.row_links`; the same result as
+    :func:`hammesh.strips.rows.parallel_edges` followed by it, in two compiled passes).
+
+    The measure is ``|sin|`` of the edge's angle to the axis; a zero-length edge, or one
+    whose length overflows, counts as parallel (any choice is a valid cover).
+    """
+    m = tri.shape[0]
+    for t in range(m):
+        best = 0
+        best_s = 2.0
+        for k in range(3):
+            a = tri[t, k]
+            b = tri[t, (k + 1) % 3]
+            dx = points[b, 0] - points[a, 0]
+            dy = points[b, 1] - points[a, 1]
+            length = np.hypot(dx, dy)
+            s = abs(dy * cos_a - dx * sin_a) / length if length > 0.0 else 0.0
+            if not s == s:  # nan (overflowed differences)
+                s = 0.0
+            if s < best_s:
+                best_s = s
+                best = k
+        refused[t] = best
+    for t in range(m):
+        for k in range(3):
+            h = twin[3 * t + k]
+            u = -1
+            if h >= 0 and k != refused[t] and refused[h // 3] != h % 3:
+                u = h // 3
+            link[t, k] = u

@@ -474,8 +474,9 @@ def _cover_and_write(mesh, dual: DualMesh, method: str, cache, join: str, restar
         if few_swaps or strip.n_triangles <= _ZIGZAG_ALWAYS:
             rules = (("zigzag", LONGEST_CHAIN), ("zigzag", SHORTEST_CHAIN))
         if planar and strip.n_triangles <= _ROWS_UP_TO:
-            # planar meshes: the row cover along both axes (rows.py: 0.02-0.05 fewer
-            # indices per triangle than the greedy cover on q30 meshes)
+            # planar meshes: the row cover along both axes (rows.py: 0.03-0.06 fewer
+            # indices per triangle than the greedy cover on q30 meshes; two more covers
+            # and end moves, ~2.5x the default's time)
             rules += tuple(("rows", a) for a in range(len(ROW_AXES)))
     for alt_method, rule in rules:
         alt_paths = _oriented_local(mesh, alt_method, cache, dual, rule, piece=piece)
@@ -512,9 +513,12 @@ _ZIGZAG_TRIGGER = 3
 #: covers, ~1 ms): pyvista's ant 1.261 -> 1.243, nut 1.229 -> 1.222, globe 1.379 -> 1.358.
 _ZIGZAG_ALWAYS = 5000
 
-#: Planar meshes up to this many triangles also try the row cover along each of
-#: :data:`~hammesh.strips.rows.ROW_AXES` (two more covers and end moves; larger meshes
-#: on two cores take the two-halves path, which does not).
+#: Covers of at most this many triangles (a half of the two-halves path counts its own:
+#: meshes up to ~2 ``HALVES_FROM`` there) also try the row cover along each of
+#: :data:`~hammesh.strips.rows.ROW_AXES` on planar meshes: 0.03-0.06 fewer indices per
+#: triangle on q30 meshes for ~2.5x the default's time; above it the default keeps its
+#: time (1M: 1.274 against 1.216 with the rows, for ~4.7x the time; ``method="rows"`` and
+#: the CLI's ``auto`` try them at any size).
 _ROWS_UP_TO = HALVES_FROM
 
 #: ... or at most this many swaps per triangle (smooth surfaces: a torus 0.025 and 0.006,

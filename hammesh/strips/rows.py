@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammesh.strips._cover_kernels import PathCover
-from hammesh.strips._row_kernels import link_paths_into
+from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
 __all__ = ["ROW_AXES", "parallel_edges", "row_links", "row_path_cover"]
 
@@ -32,7 +32,9 @@ ROW_AXES = (0.0, np.pi / 2)
 
 
 def parallel_edges(points: np.ndarray, triangles: np.ndarray, angle: float) -> np.ndarray:
-    """``(m,)`` local index ``k`` of each triangle's edge ``(v_k, v_k+1)`` most parallel to ``angle``.
+    """``(m,)`` local index ``k`` of each triangle's edge ``(v_k, v_k+1)`` most parallel to ``angle``
+    (numpy; :func:`row_path_cover` computes it and :func:`row_links` in one compiled kernel,
+    :func:`~hammesh.strips._row_kernels.row_links_into`, and the tests compare the two).
 
     The measure is ``|sin|`` of the angle between edge and axis; a zero-length edge
     (coincident points) counts as parallel.
@@ -64,8 +66,11 @@ def row_links(twin: np.ndarray, refused: np.ndarray) -> np.ndarray:
 def row_path_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, angle: float) -> PathCover:
     """The rows along ``angle`` as a dual path cover (:class:`~hammesh.strips._cover_kernels.PathCover`:
     ``order (m,)``, ``starts (S + 1,)`` int64)."""
-    link = row_links(twin, parallel_edges(points, triangles, angle))
-    m = len(link)
+    p = np.asarray(points, np.float64)
+    tri = np.asarray(triangles)
+    m = len(tri)
+    link = np.empty((m, 3), np.int64)
+    row_links_into(p, tri, np.asarray(twin, np.int64).reshape(-1), np.cos(angle), np.sin(angle), np.empty(m, np.int64), link)
     order = np.empty(m, np.int64)
     starts = np.empty(m + 1, np.int64)
     S = link_paths_into(link, order, starts)

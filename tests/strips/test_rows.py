@@ -78,3 +78,17 @@ def test_rows_on_a_surface_use_the_xy_projection_and_the_cli_offers_them_on_plan
     assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(t.triangles)
     assert choose_strip(square_mesh(1e-2)).method in ("rows", "greedy", "zigzag")
     assert choose_strip(square_mesh(1e-2), method="rows", cache=16).method == "rows+cache"
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(4, 150), st.floats(0, 3.2))
+@settings(max_examples=30, deadline=None)
+def test_the_compiled_links_match_the_numpy_rule(seed, n, angle):
+    from hammesh.strips._row_kernels import row_links_into
+
+    dual = dual_mesh(delaunay_mesh(seed, n))
+    m = dual.n_triangles
+    refused, link = np.empty(m, np.int64), np.empty((m, 3), np.int64)
+    row_links_into(dual.points, dual.triangles, dual.twin, np.cos(angle), np.sin(angle), refused, link)
+    sines = _edge_sines(dual.points, dual.triangles, angle)
+    assert np.allclose(sines[np.arange(m), refused], sines.min(axis=1))
+    assert np.array_equal(link, row_links(dual.twin, refused))
