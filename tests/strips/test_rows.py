@@ -92,3 +92,45 @@ def test_the_compiled_links_match_the_numpy_rule(seed, n, angle):
     sines = _edge_sines(dual.points, dual.triangles, angle)
     assert np.allclose(sines[np.arange(m), refused], sines.min(axis=1))
     assert np.array_equal(link, row_links(dual.twin, refused))
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(30, 300), st.sampled_from([6, 16, 32]), st.sampled_from(ROW_AXES))
+@settings(max_examples=25, deadline=None)
+def test_band_layout_sends_whole_pieces_column_by_column(seed, n, N, angle):
+    from hammesh.strips.rows import band_frame, band_layout
+
+    dual = dual_mesh(delaunay_mesh(seed, n))
+    order, starts = row_path_cover(dual.points, dual.triangles, dual.twin, angle)
+    frame = band_frame(dual.points, dual.triangles, N, angle)
+    new, ns = band_layout(frame, order, starts)
+    assert sorted(new.tolist()) == list(range(dual.n_triangles))
+    pieces = [new[a:b] for a, b in zip(ns[:-1], ns[1:])]
+    cols = [set(frame.column[p].tolist()) for p in pieces]
+    assert all(len(c) == 1 for c in cols)  # a piece never crosses a column border
+    col = [c.pop() for c in cols]
+    assert col == sorted(col)  # column after column
+    old = {int(t): i for i, (a, b) in enumerate(zip(starts[:-1], starts[1:])) for t in order[a:b]}
+    for p in pieces:  # each piece a consecutive run of one path
+        assert len({old[int(t)] for t in p}) == 1
+        pos = [int(np.flatnonzero(order == t)[0]) for t in p]
+        assert pos == list(range(pos[0], pos[0] + len(p)))
+    for c in set(col):  # serpentine: mean heights up in even columns, down in odd ones
+        h = [frame.height[p].mean() for p, k in zip(pieces, col) if k == c]
+        assert h == sorted(h, reverse=c % 2 == 1)
+
+
+def test_cache_mode_lays_rows_in_bands_on_planar_meshes():
+    """q30 square, FIFO 16: the rows in bands load fewer vertices per triangle than
+    meshoptimizer's vcache + stripify does on such meshes (0.706-0.714, measured in
+    docs/strips.md) at far fewer indices (1.72 there); surfaces keep the chains."""
+    from hammesh.strips import vertex_cache_stats
+
+    m = square_mesh(1e-4)
+    s = encode(m, cache=16)
+    assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+    acmr = vertex_cache_stats(s.indices, s.restart_index, m.n_triangles, 16).acmr
+    plain = vertex_cache_stats(*(lambda g: (g.indices, g.restart_index))(encode(m)), m.n_triangles, 16).acmr
+    assert acmr < 0.70 < plain and s.indices_per_triangle < 1.45
+    t = torus_mesh(30, 20)
+    c = encode(t, cache=16)
+    assert oriented_set(decode_gl_strip(c.indices, c.restart_index)) == oriented_set(t.triangles)
