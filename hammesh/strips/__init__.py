@@ -11,6 +11,10 @@ module                                   what
 :mod:`hammesh.strips.sequential`         Thm 4.3: is a triangulation sequential, O(n)
 :mod:`hammesh.strips.encode`             scalable encoder (greedy dual paths, cycles,
                                          Lemma 5.1 on dual forests)
+:mod:`hammesh.strips.rows`               row cover along an axis; rows laid in bands for
+                                         a FIFO vertex cache
+:mod:`hammesh.strips.halves`             two halves on two threads (from 50k triangles)
+:mod:`hammesh.strips.scratch`            work arrays kept between two-halves encodings
 :mod:`hammesh.strips.christofides`       Thm 5.3: 9/4-approximate encoding (networkx)
 :mod:`hammesh.strips.cache`              vertex cache / fetch figures, first-use numbering
 :mod:`hammesh.strips.files`              3D mesh reading, ``.json`` / ``.npz`` output

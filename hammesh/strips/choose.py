@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from hammesh import params
 from hammesh.errors import InvalidOptionError
 from hammesh.strips.cache import DEFAULT_CACHE, vertex_cache_stats
@@ -20,7 +22,7 @@ from hammesh.strips.gl import RESTART_INDEX, GLStrip
 
 __all__ = ["StripChoice", "choose_strip", "METHODS", "JOINS", "MAX_RESTART_INDEX"]
 
-METHODS = ("auto", "greedy", "order", "zigzag", "christofides")
+METHODS = ("auto", "greedy", "order", "zigzag", "rows", "christofides")
 JOINS = ("restart", "stitch")
 #: GL index buffers are uint32: the largest restart index there is.
 MAX_RESTART_INDEX = 2**32 - 1
@@ -86,8 +88,9 @@ def choose_strip(
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)
     if cache is not None:
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
-        if generalized or method not in ("auto", "greedy", "zigzag"):
-            raise InvalidOptionError("a cache-aware encoding is a GL strip of its own paths: method auto, greedy or zigzag only")
+        if generalized or method not in ("auto", "greedy", "zigzag", "rows"):
+            raise InvalidOptionError(
+                "a cache-aware encoding is a GL strip of its own paths: method auto, greedy, zigzag or rows only")
     fast = params.flag("fast", fast)
     if fast and (generalized or cache is not None or method not in ("auto", "greedy")):
         raise InvalidOptionError("fast is the greedy cover alone: a GL strip of method auto or greedy, without cache")
@@ -113,7 +116,7 @@ def choose_strip(
         extra["triangles"] = enc.n_triangles
         extra["indices_per_triangle"] = len(strip.indices) / enc.n_triangles
     elif cache is not None:
-        # auto: the swap-free chains in short pieces; greedy / zigzag: that cover; both in FIFO order
+        # auto: the swap-free chains in short pieces; greedy / zigzag / rows: that cover; all in FIFO order
         strip = encode(mesh, method=method, join=join, restart_index=restart_index, cache=cache,
                        reorder_vertices=reorder_vertices)
         method = "cache" if method == "auto" else f"{method}+cache"
@@ -124,6 +127,8 @@ def choose_strip(
     elif method == "auto":
         kw = {"join": join, "restart_index": restart_index, "reorder_vertices": reorder_vertices}
         candidates = [("greedy", encode(mesh, method="greedy", **kw)), ("zigzag", encode(mesh, method="zigzag", **kw))]
+        if np.asarray(mesh.points).shape[1] == 2:  # rows along the x or y axis: planar meshes
+            candidates.insert(0, ("rows", encode(mesh, method="rows", **kw)))
         try:
             candidates.append(("order", encode(mesh, method="order", **kw)))
         except (InvalidOptionError, ValueError):

@@ -53,6 +53,7 @@ from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
+from hammesh.strips.rows import ROW_AXES, band_frame, band_layout, row_path_cover
 
 __all__ = [
     "METHODS",
@@ -70,9 +71,11 @@ __all__ = [
 ]
 
 #: How the dual paths are found: ``"auto"`` is ``"order"`` for a HamiltonianMesh and
-#: ``"greedy"`` otherwise (which also tries ``"zigzag"`` on meshes with few swaps);
-#: ``"zigzag"`` starts from the swap-free chains (a dual forest keeps Lemma 5.1's cover).
-METHODS = ("auto", "greedy", "order", "zigzag")
+#: ``"greedy"`` otherwise (which also tries ``"zigzag"`` on meshes with few swaps, and
+#: ``"rows"`` on planar meshes up to :data:`_ROWS_UP_TO` triangles); ``"zigzag"`` starts
+#: from the swap-free chains, ``"rows"`` from the row cover (:mod:`hammesh.strips.rows`;
+#: planar meshes) (a dual forest keeps Lemma 5.1's cover).
+METHODS = ("auto", "greedy", "order", "zigzag", "rows")
 
 #: Weight of a swap against a neighbour's remaining degree in the greedy choice.
 _SWAP_WEIGHT = 1
@@ -135,7 +138,7 @@ def greedy_paths(dual: DualMesh, improve: bool = True) -> tuple[np.ndarray, np.n
     return (order if ids is None else ids[order]).astype(np.int64, copy=False), starts
 
 
-def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = None):
+def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = None, rows: int | None = None):
     """:func:`greedy_paths` in the numbering of the first cover (what the fast path uses).
 
     The greedy pass reads the mesh's records (:attr:`DualMesh.records`, one half
@@ -151,7 +154,8 @@ def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = Non
     Returns ``(tri, twin, order, starts, ids)``: the arrays the paths ``order`` refer
     to, and ``ids[i]`` the input triangle of row ``i`` (``None``: the input's own).
     ``zigzag``: start from the swap-free chains, taking each seed's longest
-    (``LONGEST_CHAIN``) or shortest (``SHORTEST_CHAIN``) chain; ``None``: the greedy cover.
+    (``LONGEST_CHAIN``) or shortest (``SHORTEST_CHAIN``) chain; ``rows``: start from the
+    row cover along ``rows.ROW_AXES[rows]``; both ``None``: the greedy cover.
     """
     m = dual.n_triangles
     rec = dual.cover_records()
@@ -159,6 +163,8 @@ def _greedy_cover(dual: DualMesh, improve: bool = True, zigzag: int | None = Non
         order, starts = forest_paths(dual)
     elif zigzag is not None:
         order, starts = zigzag_path_cover(rec, np.arange(m - 1, -1, -1), zigzag)
+    elif rows is not None:
+        order, starts = row_path_cover(dual.points, dual.triangles, dual.twin, ROW_AXES[rows])
     else:
         order, starts = greedy_path_cover(rec, _SWAP_WEIGHT, NO_SEED_ORDER)  # seeds m - 1, ..., 0
     if not improve or len(starts) == 2:
@@ -278,6 +284,7 @@ def _oriented_local(
     if method not in METHODS:
         raise InvalidOptionError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     zigzag = rule if method == "zigzag" else None
+    rows = rule if method == "rows" else None
     dual = dual_mesh(mesh) if dual is None else dual
     if cache is not None and method == "order":
         raise InvalidOptionError("a cache-aware encoding makes its own paths: method 'order' does not apply")
@@ -291,13 +298,21 @@ def _oriented_local(
         order, starts = cycle_paths(dual, comps)
         tri, twin, ids = dual.triangles, dual.twin, None
     else:
-        tri, twin, order, starts, ids = _greedy_cover(dual, improve, zigzag)
+        tri, twin, order, starts, ids = _greedy_cover(dual, improve, zigzag, rows)
     order, starts = check_starts(order, starts, dual.n_triangles)
-    if cache is not None:
+    bands = cache is not None and rows is not None
+    if bands:
+        # the rows (joined by the end moves over the whole mesh) cut into columns of ~cache -
+        # BAND_SLACK triangles a row, sent column by column (rows.band_layout).  A cover made
+        # inside the columns (the dual cut at their borders) had fewer pieces but its end
+        # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
+        # against 1.4126 / 0.670 this way
+        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts)
+    elif cache is not None:
         # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
         starts = split_paths(starts, max(1, int(piece * cache)))
     order, _ = orient_paths(tri, twin, order, starts)
-    if cache is not None:
+    if cache is not None and not bands:
         order, starts = fifo_strip_order(tri, twin, order, starts, len(dual.points), cache)
     return dual, tri, twin, order, starts, ids
 
@@ -321,7 +336,7 @@ def mesh_paths(mesh: MeshLike, method: str = "auto") -> tuple[DualMesh, PathTurn
     Parameters
     ----------
     mesh : Mesh or HamiltonianMesh
-    method : {"auto", "greedy", "order"}
+    method : {"auto", "greedy", "order", "zigzag", "rows"}
         ``"order"`` takes the rows as given: a HamiltonianMesh's cycles, or a plain mesh
         whose pieces are stored as consecutive runs of rows, each a dual path or cycle
         (a Hamiltonian mesh read back from a file).
@@ -355,8 +370,9 @@ def encode(
     join : {"restart", "stitch"}
     restart_index : int
         Used with ``join="restart"`` (default ``0xFFFFFFFF``).
-    method : {"auto", "greedy", "order"}
-        See :func:`mesh_paths`.  A HamiltonianMesh gives exactly one strip per cycle.
+    method : {"auto", "greedy", "order", "zigzag", "rows"}
+        See :data:`METHODS` and :func:`mesh_paths`.  A HamiltonianMesh gives exactly one
+        strip per cycle.
     verify : bool
         Decode the buffer with OpenGL's rules and compare with the mesh
         (:func:`~hammesh.strips.gl.verify_gl_strip`, two O(L) compiled passes against
@@ -365,11 +381,13 @@ def encode(
         Lay the strips for a FIFO vertex cache of this many entries (at least 3): the
         cover's strips longer than ``cache.PIECE_LENGTH * cache`` triangles cut into equal
         pieces (:func:`~hammesh.strips.cache.split_paths`) and all sent in an order laid
-        for the FIFO (:func:`~hammesh.strips.cache.fifo_strip_order`).  With
-        ``method="auto"`` the cover is the swap-free chains' cut at
-        ``cache.SHORT_PIECE_LENGTH * cache``: fewer vertex-shader runs for some more
-        indices; with ``"greedy"`` or ``"zigzag"`` that cover (``"zigzag"`` stays under 1.30
-        indices per triangle on q30 planar meshes).
+        for the FIFO (:func:`~hammesh.strips.cache.fifo_strip_order`), with ``"greedy"`` or
+        ``"zigzag"`` (``"zigzag"`` stays under 1.30 indices per triangle on q30 planar
+        meshes, ACMR16 ~0.87).  With ``method="auto"`` on a planar mesh, or ``"rows"``: the
+        row cover laid in bands (:func:`~hammesh.strips.rows.band_layout`; q30 meshes ACMR16
+        0.65-0.69 at 1.40-1.43 indices per triangle); ``"auto"`` on a surface: the
+        swap-free chains cut at ``cache.SHORT_PIECE_LENGTH * cache``.  Fewer vertex-shader
+        runs for more indices.
     reorder_vertices : bool
         Renumber the vertices in order of first use (as meshoptimizer's
         ``optimizeVertexFetch``); the result's ``vertex_order`` says which old vertex
@@ -433,8 +451,13 @@ def encode(
     dual = dual_mesh(mesh) if dual is None else dual
     piece = PIECE_LENGTH
     if cache is not None and method == "auto":
-        # the fewest vertex loads: the swap-free chains in short pieces (cache.SHORT_PIECE_LENGTH)
-        method, piece = "zigzag", SHORT_PIECE_LENGTH
+        if dual.points.shape[1] == 2:
+            # planar: the rows laid in bands (rows.band_layout): q30 meshes ACMR16 0.65-0.69
+            # at 1.40-1.43 indices per triangle (meshoptimizer's vcache + stripify 0.71 at 1.72)
+            method = "rows"
+        else:
+            # surfaces: the swap-free chains in short pieces (cache.SHORT_PIECE_LENGTH)
+            method, piece = "zigzag", SHORT_PIECE_LENGTH
     strip, order, starts = _cover_and_write(mesh, dual, method, cache, join, restart_index, fast, piece)
     rows = dual.triangles
     if reorder_vertices:
@@ -451,19 +474,29 @@ def _cover_and_write(mesh, dual: DualMesh, method: str, cache, join: str, restar
     strip, order = _buffer(dual, tri, twin, local, starts, ids, join, restart_index)
     greedy = method == "greedy" or (cache is None and method == "auto" and not isinstance(mesh, HamiltonianMesh))
     few_swaps = _few_swaps(strip)
-    rules = ()
+    rules: tuple = ()
+    planar = dual.points.shape[1] == 2
     if fast:
         pass
     elif method == "zigzag":
-        rules = (SHORTEST_CHAIN,)
-    elif greedy and (few_swaps or strip.n_triangles <= _ZIGZAG_ALWAYS) and not is_forest(dual):
+        rules = (("zigzag", SHORTEST_CHAIN),)
+    elif method == "rows":
+        rules = (("rows", 1),)  # the other axis
+    elif greedy and not is_forest(dual):
         # (a forest keeps Lemma 5.1's fewest strips) few swaps: a structured grid or a
         # smooth surface, whose swap-free rows the degree-first cover bends into L shapes
         # (one swap each); or a small mesh, where the two extra covers take ~1 ms: try the
         # swap-free chains both ways, keep the shortest buffer
-        rules = (LONGEST_CHAIN, SHORTEST_CHAIN)
-    for rule in rules:
-        alt_paths = _oriented_local(mesh, "zigzag", cache, dual, rule, piece=piece)
+        if few_swaps or strip.n_triangles <= _ZIGZAG_ALWAYS:
+            rules = (("zigzag", LONGEST_CHAIN), ("zigzag", SHORTEST_CHAIN))
+        if planar and cache is None and strip.n_triangles <= _ROWS_UP_TO:
+            # planar meshes: the row cover along both axes (rows.py: 0.03-0.06 fewer
+            # indices per triangle than the greedy cover on q30 meshes; two more covers
+            # and end moves, ~2.5x the default's time).  Not with ``cache``: there the rows
+            # are laid in bands (auto or method "rows"), a layout of their own
+            rules += tuple(("rows", a) for a in range(len(ROW_AXES)))
+    for alt_method, rule in rules:
+        alt_paths = _oriented_local(mesh, alt_method, cache, dual, rule, piece=piece)
         alt, alt_order = _buffer(*alt_paths, join, restart_index)
         if len(alt.indices) < len(strip.indices):
             strip, order, starts = alt, alt_order, alt_paths[4]
@@ -496,6 +529,14 @@ _ZIGZAG_TRIGGER = 3
 #: Meshes of at most this many triangles always try the swap-free chains too (two more
 #: covers, ~1 ms): pyvista's ant 1.261 -> 1.243, nut 1.229 -> 1.222, globe 1.379 -> 1.358.
 _ZIGZAG_ALWAYS = 5000
+
+#: Covers of at most this many triangles (a half of the two-halves path counts its own:
+#: meshes up to ~2 ``HALVES_FROM`` there) also try the row cover along each of
+#: :data:`~hammesh.strips.rows.ROW_AXES` on planar meshes: 0.03-0.06 fewer indices per
+#: triangle on q30 meshes for ~2.5x the default's time; above it the default keeps its
+#: time (1M: 1.274 against 1.216 with the rows, for ~4.7x the time; ``method="rows"`` and
+#: the CLI's ``auto`` try them at any size).
+_ROWS_UP_TO = HALVES_FROM
 
 #: ... or at most this many swaps per triangle (smooth surfaces: a torus 0.025 and 0.006,
 #: where the chains joined by the end moves give 1.0083 and 1.0031 against the greedy

@@ -40,6 +40,7 @@ from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greed
 from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
 from hammesh.strips.gl import GLStrip, verify_gl_strip
+from hammesh.strips.scratch import Scratch, borrow
 
 __all__ = ["HALVES_FROM", "CELL_TRIANGLES", "VertexCells", "vertex_cells", "pillow_rows", "encode_in_halves"]
 
@@ -111,15 +112,16 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
     return VertexCells(label, n0 * ny, (n0 + n1) * ny, bool(finite))
 
 
-def _half_work(k: int, out: np.ndarray | None) -> StripWork:
+def _half_work(k: int, out: np.ndarray | None, scratch: Scratch, side: int) -> StripWork:
     """:func:`~hammesh.strips._greedy_strip_kernels.strip_work` for a half, its pages left to
     first use: a thread has no time to spare here, and numpy asks for huge pages on big
     arrays (the bucket queue, path and index offsets and the buffer are sized for the
     worst case; ~1/3 of them is written)."""
-    bucket = np.empty((4, k), np.int32)
-    grow = np.empty((2, k), np.int32)
-    big = np.empty(3 * k + 2, np.int64)
-    out = np.empty(4 * k, np.int64) if out is None else out
+    bucket = scratch.take(f"{side}.bucket", (4, k), np.int32)
+    grow = scratch.take(f"{side}.grow", (2, k), np.int32)
+    big = scratch.take(f"{side}.big", 3 * k + 2, np.int64)
+    # the second half's part is copied into the whole buffer: its own can be kept
+    out = scratch.take(f"{side}.out", 4 * k, np.int64) if out is None else out
     return StripWork(bucket, grow[0], grow[1], np.zeros(4, np.int32), big[:k], big[k : 2 * k + 1], big[2 * k + 1 :], NO_SEED_ORDER, out)
 
 
@@ -137,22 +139,24 @@ def _timed_half(clock, key, *args):
             clock[key] = time.thread_time() - t
 
 
-def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None, whole=None) -> _Half:
+def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, finish=None, whole=None) -> _Half:
     """One half: rows in cell order, census, pairing, strips, proof of its part (``seen`` shared).
 
     ``finish``: ``None`` for the one-pass greedy strips, or the encoder
     ``(points, rows, records, twin) -> (indices, order, n_strips, n_swaps)`` of the
     default mode (:func:`hammesh.strips.encode.encode`'s cover, end moves and writer).
     ``whole`` (one-pass only): a list to receive the buffer of the whole mesh, whose head
-    this half writes (and proves) in place.
+    this half writes (and proves) in place.  ``scratch``: where the work arrays come from
+    (:mod:`hammesh.strips.scratch`; roles named by ``side``).
     """
     m, n = len(tri), len(pts)
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
-    rows = np.empty(m, np.int64)
-    part = np.empty((m, 3), np.int32)  # the records are int32 here (checked by the caller): half the bytes
+    take = scratch.take
+    rows = take(f"{side}.rows", m, np.int64)
+    part = take(f"{side}.part", (m, 3), np.int32)  # the records are int32 here (checked by the caller): half the bytes
     # the copy's scratch, its first k entries faulted in by it, is reused afterwards (the
     # census flags, the claimed order): fresh pages cost ~0.14 ms per MB here
-    stash, lab = np.empty(m, np.int64), np.empty(m, cells.label.dtype)
+    stash, lab = take(f"{side}.stash", m, np.int64), take(f"{side}.lab", m, cells.label.dtype)
     k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True
@@ -162,15 +166,15 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         return _failed("unbalanced")
     rows, part = rows[:k], part[:k]
     n_zero = face_flags(pts, part, ZERO_AREA_RTOL, lab.view(np.int8)[:k])[1]
-    start = np.empty(n + 1, np.int32)
-    keys = np.empty(3 * k, np.int64)
-    rec = np.empty((k, REC_WIDTH), np.int32)
-    loose = np.empty((3 * k, 2), np.int64)
-    paired = pair_records_into(part, start, np.empty(n, np.int32), keys, rec, loose)
+    start = take(f"{side}.start", n + 1, np.int32)
+    keys = take(f"{side}.keys", 3 * k, np.int64)
+    rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32)
+    loose = take(f"{side}.loose", (3 * k, 2), np.int64)
+    paired = pair_records_into(part, start, take(f"{side}.mark", n, np.int32), keys, rec, loose)
     if paired.pairs < 0 or stop[0]:
         stop[0] = True
         return _failed("an edge is not proper")
-    scratch = None
+    draws = None
     if finish is not None:
         pillows = int(count_pillows(rec))
         twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
@@ -180,16 +184,16 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, finish=None
         if whole is not None:
             # bound of the whole buffer: this half's 4 k, a restart, the other half's 4 (m - k)
             whole.append(np.empty(4 * m + 1, np.int64))
-        work = _half_work(k, None if whole is None else whole[0][: 4 * k])
+        work = _half_work(k, None if whole is None else whole[0][: 4 * k], scratch, side)
         g = greedy_strip_buffer(rec, w_swap, restart, work)
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
         pillows = pillow_rows(rec, g.order, g.starts)
-        scratch = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
+        draws = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
     # mode "clip": numpy buffers ``out`` in its default mode; the claim is proved, not trusted
     order = np.take(rows, local, out=stash[:k], mode="clip")
     proof = -1
     if seen is not None:
-        proof = int(check_claimed_part(tri, indices, restart, True, order, seen, scratch)[0])
+        proof = int(check_claimed_part(tri, indices, restart, True, order, seen, draws)[0])
     return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
@@ -253,15 +257,29 @@ def encode_in_halves(
     m, n = len(tri), len(pts)
     if records_dtype(m, n) is not np.int32:
         return None
-    seen = np.zeros(m, np.bool_) if verify else None
+    scratch = borrow()
+    try:
+        return _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch)
+    finally:
+        scratch.give_back()  # nothing returned lives in the kept arrays
+
+
+def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) -> GLStrip | None:
+    """:func:`encode_in_halves` on checked arrays, its work arrays taken from ``scratch``."""
+    m = len(tri)
+    seen = None
+    if verify:
+        seen = scratch.take("seen", m, np.bool_)
+        seen.fill(False)
     stop = np.zeros(1, np.bool_)
     whole: list[np.ndarray] = []
     with ThreadPoolExecutor(1) as pool:
         cells = vertex_cells(pts, m, pool=pool)
         if not cells.finite:
             return None
-        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, finish)
-        a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, finish, None if finish else whole)
+        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, scratch, finish)
+        a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, scratch, finish,
+                        None if finish else whole)
         b = second.result()
     if a.failed or b.failed:
         return None

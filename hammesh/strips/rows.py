@@ -1,0 +1,139 @@
+"""Row cover: dual paths that never cross a triangle's edge most parallel to a direction.
+
+In a triangle a strip enters by one edge and leaves by another; the segment joining
+their midpoints is parallel to the third edge (the midline), so a strip heads along the
+edges it does *not* cross.  Each triangle here refuses to cross its edge most parallel
+to an axis; two neighbours are linked when neither refuses their common edge.  Every
+triangle then has at most two links, so the links are paths (and the odd cycle, opened
+where it is met): rows running along the axis, as a structured grid's rows run, with
+few swaps (two consecutive turns the same way need the strip to cross an edge nearly
+parallel to its heading).  On q30 planar meshes (10k-12k triangles) the rows have
+~0.11 swaps per triangle at ~13 triangles per row; the end moves
+(:func:`~hammesh.strips._moves_kernels.improve_cover`) then join them into strips of
+~25 triangles: 1.214-1.254 indices per triangle against the greedy cover's 1.270-1.282
+and the swap-free chains' 1.264-1.268 (measured in ``docs/strips.md``, session 12).
+
+Planar meshes only (the axes are those of the ``x, y`` plane); :data:`ROW_AXES` are the
+directions tried (``encode`` keeps the shortest buffer).  Our construction; the midline
+observation is elementary geometry.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from collections import namedtuple
+
+from hammesh.strips._cover_kernels import PathCover
+from hammesh.strips._row_kernels import link_paths_into, row_links_into
+
+__all__ = ["ROW_AXES", "BAND_SLACK", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+
+#: Directions (radians from the x axis) the row cover is tried along.
+ROW_AXES = (0.0, np.pi / 2)
+
+
+def parallel_edges(points: np.ndarray, triangles: np.ndarray, angle: float) -> np.ndarray:
+    """``(m,)`` local index ``k`` of each triangle's edge ``(v_k, v_k+1)`` most parallel to ``angle``
+    (numpy; :func:`row_path_cover` computes it and :func:`row_links` in one compiled kernel,
+    :func:`~hammesh.strips._row_kernels.row_links_into`, and the tests compare the two).
+
+    The measure is ``|sin|`` of the angle between edge and axis; a zero-length edge
+    (coincident points) counts as parallel.
+    """
+    p = np.asarray(points, np.float64)[:, :2]
+    tri = np.asarray(triangles)
+    # coordinates whose differences overflow give inf / nan: any choice is a valid cover
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        e = p[np.roll(tri, -1, axis=1)] - p[tri]  # (m, 3, 2): edge k from v_k to v_k+1
+        across = np.abs(e[..., 1] * np.cos(angle) - e[..., 0] * np.sin(angle))
+        sine = np.nan_to_num(across / np.hypot(e[..., 0], e[..., 1]), nan=0.0)
+    return np.argmin(sine, axis=1)
+
+
+def row_links(twin: np.ndarray, refused: np.ndarray) -> np.ndarray:
+    """``(m, 3)`` linked neighbour across each edge, -1 where either side refuses it.
+
+    ``twin``: ``(3 m,)`` half-edge pairing (-1: no proper neighbour); ``refused``: each
+    triangle's refused local edge (:func:`parallel_edges`).
+    """
+    m = len(refused)
+    tw = np.asarray(twin, np.int64).reshape(m, 3)
+    u, ku = tw // 3, tw % 3
+    ok = (tw >= 0) & (np.arange(3) != refused[:, None])
+    ok &= refused[np.where(ok, u, 0)] != ku
+    return np.where(ok, u, -1)
+
+
+def row_path_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, angle: float) -> PathCover:
+    """The rows along ``angle`` as a dual path cover (:class:`~hammesh.strips._cover_kernels.PathCover`:
+    ``order (m,)``, ``starts (S + 1,)`` int64)."""
+    p = np.asarray(points, np.float64)
+    tri = np.asarray(triangles)
+    m = len(tri)
+    link = np.empty((m, 3), np.int64)
+    row_links_into(p, tri, np.asarray(twin, np.int64).reshape(-1), np.cos(angle), np.sin(angle), np.empty(m, np.int64), link)
+    order = np.empty(m, np.int64)
+    starts = np.empty(m + 1, np.int64)
+    S = link_paths_into(link, order, starts)
+    return PathCover(order, starts[: S + 1].copy())
+
+
+#: Longest row of a band, in triangles, is ``cache - BAND_SLACK`` (:func:`band_layout`):
+#: a row whose vertices all missed loads about ``L + 2`` of them, and the next row finds
+#: its far side still in a FIFO of ``N`` entries only while ``L + 2 <= N - 1``: shorter
+#: rows recover after a miss, longer ones pass it on (measured on the q30 square of 10k
+#: triangles, FIFO 16: rows of ~14 triangles ACMR 0.66-0.70, of ~18 0.87-0.94).
+BAND_SLACK = 3
+
+
+#: :func:`band_frame`'s result: each triangle's ``column`` (``(m,)`` int64, counted across
+#: the rows) and ``height`` (its centroid across the rows), or ``None`` for both where the
+#: coordinates give no finite frame.
+BandFrame = namedtuple("BandFrame", ["column", "height"])
+
+
+def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0.0) -> BandFrame:
+    """Columns ``(cache - BAND_SLACK) / 2`` mean edge lengths wide across rows along ``angle``.
+
+    A row crossing a column then has at most about ``cache - BAND_SLACK`` triangles.
+    Depends only on the rows' vertices, not on their order.
+    """
+    p = np.asarray(points, np.float64)[:, :2]
+    ca, sa = np.cos(angle), np.sin(angle)
+    p = np.c_[p[:, 0] * ca + p[:, 1] * sa, p[:, 1] * ca - p[:, 0] * sa]  # along the rows, across them
+    with np.errstate(over="ignore", invalid="ignore"):
+        c = p[tri].mean(axis=1)  # (m, 2) centroids
+        e = p[tri[:, 1]] - p[tri[:, 0]]
+        edge = float(np.mean(np.hypot(e[:, 0], e[:, 1])))
+        width = max(1.0, (int(cache) - BAND_SLACK) / 2) * edge
+        x = c[:, 0]
+        if not (len(x) and width > 0 and np.isfinite(width) and np.isfinite(c).all()):
+            return BandFrame(None, None)
+        return BandFrame(np.floor((x - x.min()) / width).astype(np.int64), c[:, 1])
+
+
+def band_layout(frame: BandFrame, order: np.ndarray, starts: np.ndarray) -> PathCover:
+    """Paths sent column by column (left to right), inside a column by the mean height of
+    their centroids, alternately upwards and downwards (a serpentine, so the first rows of a
+    column meet the last ones of the one before); a path crossing a column border is cut
+    there.  Each row then finds the vertices of its lower side in the FIFO, loaded by the
+    row before.  ``frame``: :func:`band_frame` of the rows ``order`` refers to.  Returns the
+    new ``(order, starts)`` (the caller turns each piece in its better direction).
+    """
+    if frame.column is None:
+        return PathCover(order, starts)
+    col = frame.column[order]
+    cut = np.zeros(len(order) + 1, np.bool_)
+    cut[starts] = True
+    cut[1:-1] |= col[1:] != col[:-1]
+    new_starts = np.flatnonzero(cut)
+    lo, lens = new_starts[:-1], np.diff(new_starts)
+    height = np.add.reduceat(frame.height[order], lo) / lens
+    pcol = col[lo]
+    pick = np.lexsort((np.where(pcol % 2 == 0, height, -height), pcol))  # serpentine
+    n = lens[pick]
+    new_starts = np.r_[0, np.cumsum(n)].astype(np.int64)
+    # piece j's triangles: order[lo[pick[j]] + i], i < n[j], placed from new_starts[j]
+    at = np.repeat(lo[pick] - new_starts[:-1], n) + np.arange(len(order))
+    return PathCover(np.asarray(order, np.int64)[at], new_starts)
