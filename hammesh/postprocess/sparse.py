@@ -1350,7 +1350,7 @@ ALT_MERGE_CHECKS = 24
 #: alternating cycles per join also judged for merging more cycles than the join's two
 #: (taken where the plan joins exactly those by a subtree of its steps, all undone)
 ALT_MERGE_WIDER = 16
-#: most steps of one swap's outside walks (``_join_kernels.swap_only_merges``); undecided: not taken
+#: most steps of one swap's outside walks (``_join_kernels.swap_merge_outcome``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
 
@@ -1482,10 +1482,21 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     jt, ju = cand[every] // 3, tw[cand[every]] // 3
     steps = dict.fromkeys(cand[every[(cover.cycle[jt] >= 0) & (cover.cycle[ju] >= 0)]].tolist(), False)
     steps.update(dict.fromkeys(bridged[sole].tolist(), True))
-    at: dict[int, set] = {}  # cycle id (a root of ``root``) -> the steps at that cycle
-    for h in steps:
-        at.setdefault(int(cyc[h // 3]), set()).add(h)
-        at.setdefault(int(cyc[tw[h] // 3]), set()).add(h)
+    # cycle id (a root of ``root``) -> the steps at that cycle, a set made when first
+    # asked for (``at_of``) from the steps sorted by cycle: a set per cycle made up
+    # front (~12 k at 1.5 M) cost more in the garbage collector's passes than the rest
+    hs_all = np.fromiter(steps, np.int64, len(steps))
+    ends = np.concatenate([cyc[hs_all // 3], cyc[tw[hs_all] // 3]])
+    by_end = np.argsort(ends, kind="stable")
+    at_h = np.concatenate([hs_all, hs_all])[by_end]
+    at_start = np.searchsorted(ends[by_end], np.arange(cover.n_cycles + 1))
+    at: dict[int, set] = {}
+
+    def at_of(c: int) -> set:
+        s = at.get(c)
+        if s is None:
+            s = at[c] = set(at_h[at_start[c]:at_start[c + 1]].tolist())
+        return s
 
     def undo(h: int) -> None:
         """The plan's step over ``h`` is not needed: undone (its triangles pass whole)."""
@@ -1504,7 +1515,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         Kruskal's tree: all of them can go), else None (the swap would close a loop)."""
         # every step inside has an end at a cycle other than the one with the most
         # steps (the big cycle holds most of the mesh's joins: not scanned)
-        sets = sorted((at.get(c, set()) for c in merged), key=len)
+        sets = sorted((at_of(c) for c in merged), key=len)
         near = set().union(*sets[:-1])
         inside = [h for h in near if find(int(cyc[h // 3])) in merged and find(int(cyc[tw[h] // 3])) in merged]
         if len(inside) != len(merged) - 1:
@@ -1534,12 +1545,14 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
-            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, False):
-                # (more cycles merged: taken if the plan joins them by a subtree)
+            # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
+            # taken if the plan joins them by a subtree)
+            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0)
+            if merges != 1:
                 if wider <= 0:
                     continue
                 wider -= 1
-                if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, True):
+                if merges != 2:
                     continue
             flips = fl.tolist()
             group = set(group_arr.tolist())
@@ -1564,12 +1577,13 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             used.update(group)
             for merged, inside in gone:
                 keep_id = min(merged)
-                sets = sorted((at.pop(c, set()) for c in merged), key=len)
+                sets = sorted((at_of(c) for c in merged), key=len)
                 near = sets[-1]  # (the largest set updated in place, the others added)
                 near.update(*sets[:-1])
                 near.difference_update(inside)
                 for c_id in merged:
                     root[c_id] = keep_id
+                    at[c_id] = set()  # (merged into keep_id's)
                 at[keep_id] = near
                 for h in inside:
                     undo(h)
