@@ -1006,12 +1006,7 @@ def _near_active_gradients(pts, poly, n, px, py, lo, hi, level, grads):
     """
     k = 0
     for i in range(n):
-        a = poly[i]
-        b = poly[(i + 1) % n]
-        ax = pts[a, 0]
-        ay = pts[a, 1]
-        bx = pts[b, 0]
-        by = pts[b, 1]
+        ax, ay, bx, by, _ = _fan_edge(pts, poly, n, i, px, py)
         wax = px - ax
         way = py - ay
         wbx = px - bx

@@ -582,6 +582,42 @@ def _link_components(links, *partners: dict) -> dict:
     return {h: find(h) for h in links}
 
 
+def _border_links(tw: np.ndarray, cov: np.ndarray, group: set) -> list[int]:
+    """The group's *links*: its half-edges on the cover ``cov`` whose twin lies outside
+    it (member side), in row order."""
+    return [3 * x + k for x in sorted(group) for k in range(3)
+            if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and cov[3 * x + k]]
+
+
+def _inside_pairs(tw: np.ndarray, on_cover: Callable[[int], bool], group: set, links: list):
+    """The links paired *inside* ``group`` by a cover (``on_cover(h)``: is half-edge
+    ``h`` on it), walked from each link through the group's triangles to the link it
+    leaves by (``_relabel_group``, ``_swap_outcome``).
+
+    Returns ``(inside, on_path)``: each link's partner (both ways) and, per triangle
+    on a path, the link its path starts from; None where a triangle on a path has
+    other than one cover edge onwards.
+    """
+    inside: dict[int, int] = {}
+    on_path: dict[int, int] = {}
+    for h in links:
+        if h in inside:
+            continue
+        came = h
+        while True:
+            x = came // 3
+            on_path[x] = h
+            f = [3 * x + k for k in range(3) if 3 * x + k != came and on_cover(3 * x + k)]
+            if len(f) != 1:
+                return None
+            f = f[0]
+            if tw[f] // 3 not in group:
+                break
+            came = int(tw[f])
+        inside[h], inside[f] = f, h
+    return inside, on_path
+
+
 def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     """The cover's cycle ids after its edges changed only *inside* ``group`` (``_reroute``), or None.
 
@@ -597,8 +633,7 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     (``label_outside_into``; within the walks' budget). None (the caller labels the
     cover anew) where a walk is undecided.
     """
-    links = [3 * x + k for x in sorted(group) for k in range(3)
-             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and old_cov[3 * x + k]]
+    links = _border_links(tw, old_cov, group)
     old_id = {h: int(cycle[tw[h] // 3]) for h in links}
     by_id: dict[int, list] = {}
     for h in links:
@@ -615,24 +650,10 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
         for h, j in zip(hs, pair.tolist()):
             outside[h] = hs[j]
         unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
-    inside, on_path = {}, {}
-    for h in links:  # the new cover inside the group, from each link to the next
-        if h in inside:
-            continue
-        came, path = h, []
-        while True:
-            x = came // 3
-            path.append(x)
-            f = [3 * x + k for k in range(3) if 3 * x + k != came and new_cov[3 * x + k]]
-            if len(f) != 1:
-                return None
-            f = f[0]
-            if tw[f] // 3 not in group:
-                break
-            came = int(tw[f])
-        inside[h], inside[f] = f, h
-        for x in path:
-            on_path[x] = h
+    paths = _inside_pairs(tw, lambda h: bool(new_cov[h]), group, links)  # (the new cover inside)
+    if paths is None:
+        return None
+    inside, on_path = paths
     comp = _link_components(links, outside, inside)
     # each new cycle's id: the smallest old id whose far (unwalked) part it holds, else a new one
     holds: dict[int, int] = {}
@@ -1365,8 +1386,7 @@ def _swap_outcome(tw, is_cov, flipped: set, cycle, group: set, find) -> RingOutc
     the group: a split) or some cycle lay wholly inside it before (it would merge
     unseen).
     """
-    links = [3 * x + k for x in sorted(group) for k in range(3)
-             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and is_cov[3 * x + k]]
+    links = _border_links(tw, is_cov, group)
     old_id = {h: find(int(cycle[tw[h] // 3])) for h in links}
     by_id: dict[int, list] = {}
     for h in links:
@@ -1383,24 +1403,10 @@ def _swap_outcome(tw, is_cov, flipped: set, cycle, group: set, find) -> RingOutc
             return None
         for h, j in zip(hs, pair.tolist()):
             outside[h] = hs[j]
-    inside, on_path = {}, set()
-    for h in links:
-        if h in inside:
-            continue
-        came = h
-        while True:
-            x = came // 3
-            on_path.add(x)
-            f = [3 * x + k for k in range(3) if 3 * x + k != came and is_cov[3 * x + k] != (3 * x + k in flipped)]
-            if len(f) != 1:
-                return None
-            f = f[0]
-            if tw[f] // 3 not in group:
-                break
-            came = int(tw[f])
-        inside[h], inside[f] = f, h
-    if len(on_path) != len(group):
+    paths = _inside_pairs(tw, lambda h: bool(is_cov[h]) != (h in flipped), group, links)
+    if paths is None or len(paths[1]) != len(group):
         return None
+    inside = paths[0]
     comp = _link_components(links, outside, inside)
     split = any(len({comp[h] for h in hs}) > 1 for hs in by_id.values())
     return RingOutcome(links, old_id, comp, split)
