@@ -219,7 +219,8 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     """Replace groups of uncovered triangles by fans (``_join_kernels.fan_groups``).
 
     Returns the modified ``(points, triangles, twin, pinned, cover, parent_min,
-    orig_of, is_fan, n_fan)``: the fans' points follow the input points, fan
+    orig_of, is_fan, n_fan)`` (no fan: the arguments, ``orig_of`` and ``is_fan``
+    None): the fans' points follow the input points, fan
     triangles follow the kept ones; ``orig_of`` maps each triangle to the input
     triangle it lies in or over (a fan triangle: the one holding its outer edge),
     ``parent_min`` is the smallest angle of the triangles each one replaces.
@@ -232,8 +233,8 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
         pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS
     )
     n_fan = len(fpt)
-    if n_fan == 0:
-        return pts, tri, tw, con, cover, amin_t, np.arange(m), np.zeros(m, np.bool_), 0
+    if n_fan == 0:  # (no new orig_of, is_fan: the caller's stand; an arange here faulted 12 MB at 1.5 M)
+        return pts, tri, tw, con, cover, amin_t, None, None, 0
     n = len(pts)
     kept = np.flatnonzero(group < 0)
     sizes = np.diff(off)
