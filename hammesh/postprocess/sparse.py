@@ -61,7 +61,7 @@ import numpy as np
 from hammesh.halfedge import half_edge_twins, orient_ccw, renumber_local, restore_vertices
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
-from hammesh.pages import fresh
+from hammesh.pages import fresh, reserved
 from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
@@ -1669,10 +1669,12 @@ def sparse_cycles(
         consecutive triangles where that keeps the cycle and raises the pair's
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
     beside_cover : callable, optional
-        Called once as the cover starts, to hand work that needs nothing of the
-        construction to another thread (``hammesh.hamiltonian`` starts the certificate's look
-        at the input there): the cover is this call's longest step and most of it
-        runs on one core.
+        Called once, to hand work that needs nothing of the construction to another
+        thread (``hammesh.hamiltonian`` starts the certificate's look at the input
+        there, and without a page reserve faults one for the steps after the cover):
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, once the
+        joins are scored, beside the plan, the cover swaps and the ring joins, which
+        run on one core (the cover's matching runs on two).
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
@@ -1718,7 +1720,13 @@ def sparse_cycles(
             good[ok] = True
             good[tw[ok]] = True
         steps.done("judge_edges")
-        if beside_cover is not None:
+        # the other core's work: at the cover's start where it has pages to fault for
+        # the steps after the cover (no reserve left by quality_mesh); with a reserve
+        # only the certificate's look at the input, which waits for the serial plan:
+        # beside the cover it took a core from the matching's two threads (0.1 s CPU
+        # at 1.5 M)
+        late = beside_cover is not None and reserved() > 0
+        if beside_cover is not None and not late:
             beside_cover()
         cover = cycle_cover(tri, tw, good=good, points=pts, local=local)
     else:
@@ -1799,6 +1807,8 @@ def sparse_cycles(
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls)
         steps.done("place_splits")
+        if use_cover and late:
+            beside_cover()  # (the plan, the alternating merges and ring joins: one core)
         no_absorb = np.zeros(m, np.bool_)
         for attempt in range(4):
             if attempt == 3:
@@ -2124,7 +2134,7 @@ def sparse_hamiltonian(
     keep : float
         The local quality rule's factor (``sparse_cycles``).
     beside_cover : callable, optional
-        Called as the cover starts (``sparse_cycles``).
+        Called once beside the construction (``sparse_cycles``).
 
     Returns
     -------
