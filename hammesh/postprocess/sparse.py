@@ -590,6 +590,32 @@ def _border_links(tw: np.ndarray, cov: np.ndarray, group: set) -> list[int]:
             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and cov[3 * x + k]]
 
 
+def _outside_pairs(tw: np.ndarray, cov: np.ndarray, by_id: dict):
+    """The links paired *outside* a group by the cover ``cov`` (``by_id``: each cycle's
+    links): a cycle crossing the group once pairs its two links, one crossing more
+    often is walked outwards (``_join_kernels.ring_outside_pairs``, lock-step;
+    ``_relabel_group``, ``_swap_outcome``).
+
+    Returns ``(outside, unwalked)``: each link's partner and, per cycle, one link
+    whose outside path was not walked; None where a walk is undecided within
+    ``RING_WALK_BUDGET``.
+    """
+    outside: dict[int, int] = {}
+    unwalked: set[int] = set()
+    for hs in by_id.values():
+        if len(hs) == 2:
+            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
+            unwalked.add(hs[0])
+            continue
+        pair, deduced = _j.ring_outside_pairs(tw, cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for h, j in zip(hs, pair.tolist()):
+            outside[h] = hs[j]
+        unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
+    return outside, unwalked
+
+
 def _inside_pairs(tw: np.ndarray, on_cover: Callable[[int], bool], group: set, links: list):
     """The links paired *inside* ``group`` by a cover (``on_cover(h)``: is half-edge
     ``h`` on it), walked from each link through the group's triangles to the link it
@@ -639,18 +665,10 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     by_id: dict[int, list] = {}
     for h in links:
         by_id.setdefault(old_id[h], []).append(h)
-    outside, unwalked = {}, set()
-    for hs in by_id.values():
-        if len(hs) == 2:
-            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
-            unwalked.add(hs[0])
-            continue
-        pair, deduced = _j.ring_outside_pairs(tw, old_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
-        if (pair < 0).any():
-            return None
-        for h, j in zip(hs, pair.tolist()):
-            outside[h] = hs[j]
-        unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
+    pairs = _outside_pairs(tw, old_cov, by_id)
+    if pairs is None:
+        return None
+    outside, unwalked = pairs
     paths = _inside_pairs(tw, lambda h: bool(new_cov[h]), group, links)  # (the new cover inside)
     if paths is None:
         return None
@@ -1394,16 +1412,10 @@ def _swap_outcome(tw, is_cov, flipped: set, cycle, group: set, find) -> RingOutc
         by_id.setdefault(old_id[h], []).append(h)
     if any(find(int(cycle[x])) not in by_id for x in group):
         return None
-    outside = {}
-    for hs in by_id.values():
-        if len(hs) == 2:
-            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
-            continue
-        pair, _ = _j.ring_outside_pairs(tw, is_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
-        if (pair < 0).any():
-            return None
-        for h, j in zip(hs, pair.tolist()):
-            outside[h] = hs[j]
+    pairs = _outside_pairs(tw, is_cov, by_id)
+    if pairs is None:
+        return None
+    outside = pairs[0]
     paths = _inside_pairs(tw, lambda h: bool(is_cov[h]) != (h in flipped), group, links)
     if paths is None or len(paths[1]) != len(group):
         return None
