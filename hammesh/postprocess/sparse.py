@@ -1703,7 +1703,8 @@ def sparse_cycles(
     room = ROOM_ROWS if fans and pts.shape[1] == 2 else 0  # (only planar ring fans grow arrays)
     amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room)
     steps.done("input_angles")
-    hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
+    amax_in = float(amax_t.max()) if m else 0.0  # (the input's largest angle, once: an O(m) pass)
+    hi = amax_in + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
     if use_cover:
@@ -1761,7 +1762,7 @@ def sparse_cycles(
     n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
         pts, tri, tw, con, cover, amin_p, orig_f, fan_f, n_fan = _fans(
-            pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
+            pts, tri, tw, con, cover, amin_t, keep, hi, floor, amax_in
         )
         if n_fan:  # (else the arrays with room made above stay)
             orig_of, is_fan = orig_f, fan_f
@@ -1909,7 +1910,7 @@ def sparse_cycles(
             worst_kept = bool((kind[parent == r_now] == 3).any())
     kept_ratio = ratio_in if worst_kept else kept_radius_ratio(all_pts, out, kind, parent, amin_p)
     quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio)
-    quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
+    quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)
     if n_fan:
         parent = orig_of[parent]
