@@ -43,8 +43,9 @@ _NAMES = {"triangle": "Triangle", "meshpy": "meshpy"}
 #: pairing 24, output rows 72, the claimed pairing 36, the walk's slots 12, output
 #: points about 24, and the spanning forest's arrays 88 (its order 8, rows 24, codes
 #: 24, queue 24, quadtree coordinates 8)); sparse from 1.5 M triangles on takes ~352
-#: (session 11: at 256 its reserve ran out in the output rows, 18k pages faulted there).
-RESERVE_BYTES_PER_TRIANGLE = 352
+#: (session 11: at 256 its reserve ran out in the output rows, 18k pages faulted there);
+#: session 12: ~400, the cover's matching and cycle arrays (48) taken from it too.
+RESERVE_BYTES_PER_TRIANGLE = 400
 #: Triangle's triangle count per ``area / max_area`` at a quality bound (1.59 on the
 #: square with a hole at q30, 1e-6: 1.52 M triangles for an area of 0.96).
 TRIANGLES_PER_AREA = 1.6

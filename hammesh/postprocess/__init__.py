@@ -45,8 +45,9 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: (16, its buffer then the gather's positions) and room after the per-row arrays
 #: (``sparse.ROOM_ROWS``: the ring rows appended in place, not ~90 B per triangle of
 #: copies), and the certificate's input facts (~26): measured at 1.5 M the reserve ran
-#: out in the output rows at 256; 352.
-RESERVE_TAKEN = {"incircle": 288, "sparse": 352}
+#: out in the output rows at 256; 352. Session 12: the cover's neighbours, matching,
+#: search arrays and cycle arrays (48: ~4 k pages fewer faulted in the cover at 1.5 M); 400.
+RESERVE_TAKEN = {"incircle": 288, "sparse": 400}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
 #: (the open candidates 9, the plan 36, the walk 8 and its table of links 16 (then the

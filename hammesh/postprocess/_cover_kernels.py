@@ -552,7 +552,6 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     drops that fix nothing would only add uncovered triangles.
     Returns ``(next lca stamp, triangles dropped)``.
     """
-    m = nb.shape[0]
     n_drop = 0
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
@@ -1100,6 +1099,17 @@ def edge_classes(qa, qb, out):
 
 
 @njit(cache=True, nogil=True)
+def _cover_next(twin, is_cov, cur, prev):
+    """The triangle after ``cur`` on its cover cycle, come to from ``prev`` (-1: none)."""
+    nxt = -1
+    for k in range(3):
+        h = 3 * cur + k
+        if is_cov[h] and twin[h] // 3 != prev:
+            nxt = twin[h] // 3
+    return nxt
+
+
+@njit(cache=True, nogil=True)
 def cycle_ids(twin, is_cov, m):
     """Cycle id of each covered triangle (-1 if uncovered) and the number of cycles."""
     cyc = np.full(m, -1, np.int64)
@@ -1119,13 +1129,7 @@ def cycle_ids(twin, is_cov, m):
         cur = twin[3 * s + first] // 3
         while cur != s:
             cyc[cur] = n
-            nxt = -1
-            for k in range(3):
-                h = 3 * cur + k
-                if is_cov[h] and twin[h] // 3 != prev:
-                    nxt = twin[h] // 3
-            prev = cur
-            cur = nxt
+            prev, cur = cur, _cover_next(twin, is_cov, cur, prev)
             if cur < 0:
                 break
         n += 1
@@ -1320,13 +1324,7 @@ def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
             while cur >= 0 and cur != s and side[cur] == half:
                 cyc[cur] = n
                 lo = min(lo, cur)
-                nxt = -1
-                for k in range(3):
-                    h = 3 * cur + k
-                    if is_cov[h] and twin[h] // 3 != prev:
-                        nxt = twin[h] // 3
-                prev = cur
-                cur = nxt
+                prev, cur = cur, _cover_next(twin, is_cov, cur, prev)
             if cur == s:  # closed inside the half
                 break
             if cur < 0:  # a broken chain (a surface whose two cover edges lead to one

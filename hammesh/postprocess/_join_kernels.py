@@ -967,7 +967,7 @@ def relabel_cycles_into(cycle, lut):
 def load_ring_kernels() -> None:
     """Load (or compile) the kernels only ring fans, ring joins, re-routes and cover swaps
     reach (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``,
-    ``alternating_cycles_into``, ``swap_only_merges``), on two
+    ``alternating_cycles_into``, ``swap_merge_outcome``), on two
     triangles: ``hammesh.postprocess.load_kernels``' small mesh leaves no triangle
     off its cover, so those steps do not run there."""
     twin = np.array([3, 4, -1, 0, 1, -1], np.int64)
@@ -983,8 +983,8 @@ def load_ring_kernels() -> None:
     buf = np.empty(8, np.int64)
     starts = np.empty(3, np.int64)
     alternating_cycles_into(twin, is_cov, np.zeros(2, np.bool_), 2, 4, 16, buf, starts, 2)
-    swap_only_merges(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0, False)
-    swap_only_merges(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0, True)
+    swap_merge_outcome(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0,
+                       True)
 
 
 @njit(cache=True, nogil=True)
@@ -1006,12 +1006,7 @@ def _near_active_gradients(pts, poly, n, px, py, lo, hi, level, grads):
     """
     k = 0
     for i in range(n):
-        a = poly[i]
-        b = poly[(i + 1) % n]
-        ax = pts[a, 0]
-        ay = pts[a, 1]
-        bx = pts[b, 0]
-        by = pts[b, 1]
+        ax, ay, bx, by, _ = _fan_edge(pts, poly, n, i, px, py)
         wax = px - ax
         way = py - ay
         wbx = px - bx
@@ -1251,6 +1246,14 @@ def _root_of(root, c):
 @njit(cache=True, nogil=True)
 def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge):
     """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
+    other cycle crossing ``group`` one cycle of its own? (:func:`swap_merge_outcome`'s
+    first answer; ``any_merge``: its second, True wherever no cycle splits and some merge)."""
+    return swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge) > 0
+
+
+@njit(cache=True, nogil=True)
+def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wide):
+    """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
     other cycle crossing ``group`` one cycle of its own? (``sparse._alternating_merges``' test)
 
     ``flips``: one half-edge per edge whose cover state the swap changes; ``group``:
@@ -1259,10 +1262,14 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
     outside, each cycle pairs its links, walked in lock-step by
     :func:`ring_outside_pairs` where it crosses more than once; inside, the swapped
     cover pairs them; the new cycles are the components of both pairings), without
-    building the outcome: False where a walk is undecided within ``budget``, a cycle
+    building the outcome: not where a walk is undecided within ``budget``, a cycle
     would split or lie wholly inside the group, or a third cycle would merge.
-    ``any_merge``: True wherever no cycle splits and some merge (which ones is the
-    caller's to read off ``sparse._swap_outcome``).
+
+    Returns 1 if so; else, with ``wide``, 2 wherever no cycle splits and some merge
+    (which ones is the caller's to read off ``sparse._swap_outcome``); else 0. Both
+    answers come from one walk: the caller asking the wider question where the first
+    fails walked the same cycles twice before (session 12: 725 tests at 1.5 M, 40 % of
+    them the wider one).
     """
     ng = group.shape[0]
     nf = flips.shape[0]
@@ -1281,7 +1288,7 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
         ids[i] = _root_of(root, cyc[twin[links[i]] // 3])
     for gi in range(ng):
         if _index_of(ids, nl, _root_of(root, cyc[group[gi]])) < 0:
-            return False  # a cycle wholly inside the group: it would merge unseen
+            return 0  # a cycle wholly inside the group: it would merge unseen
     inp = np.full(nl, -1, np.int64)
     seen = np.zeros(ng, np.bool_)
     for i in range(nl):
@@ -1299,10 +1306,10 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
                 flipped = _index_of(flips, nf, h) >= 0 or _index_of(flips, nf, twin[h]) >= 0
                 if is_cov[h] != flipped:
                     if f >= 0:
-                        return False
+                        return 0
                     f = h
             if f < 0 or twin[f] < 0:
-                return False
+                return 0
             if _index_of(group, ng, twin[f] // 3) < 0:
                 j = _index_of(links, nl, f)
                 inp[i] = j
@@ -1311,20 +1318,24 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
             came = twin[f]
     for gi in range(ng):
         if not seen[gi]:
-            return False  # a new cycle wholly inside the group
+            return 0  # a new cycle wholly inside the group
     # cheap refusals before any walk: an inside path between two other cycles merges
-    # them; none between ca and cb merges nothing wanted
-    joins = False
+    # them (not the first answer); none between ca and cb merges nothing wanted
+    narrow = True
+    joins = joins_any = False
     for i in range(nl):
         a = ids[i]
         b = ids[inp[i]]
         if a != b:
-            if any_merge or (a == ca and b == cb) or (a == cb and b == ca):
+            joins_any = True
+            if (a == ca and b == cb) or (a == cb and b == ca):
                 joins = True
             else:
-                return False
-    if not joins:
-        return False
+                narrow = False
+    narrow = narrow and joins
+    wide = wide and joins_any
+    if not (narrow or wide):
+        return 0
     outp = np.full(nl, -1, np.int64)
     sel = np.empty(nl, np.int64)
     for i in range(nl):
@@ -1345,7 +1356,7 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
         pair, _ = ring_outside_pairs(twin, is_cov, hs, budget)
         for a in range(ns):
             if pair[a] < 0:
-                return False
+                return 0
             outp[sel[a]] = sel[pair[a]]
     uf = np.arange(nl)
     for i in range(nl):
@@ -1354,17 +1365,20 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
             b = _root_of(uf, other)
             if a != b:
                 uf[a] = b
-    merged = False
+    merged = merged_any = False
     for i in range(nl):
         ri = _root_of(uf, i)
         for j in range(i + 1, nl):
             same = ri == _root_of(uf, j)
             if ids[i] == ids[j]:
                 if not same:
-                    return False  # a split
+                    return 0  # a split
             elif same:
-                if any_merge or (ids[i] == ca and ids[j] == cb) or (ids[i] == cb and ids[j] == ca):
+                merged_any = True
+                if (ids[i] == ca and ids[j] == cb) or (ids[i] == cb and ids[j] == ca):
                     merged = True
                 else:
-                    return False  # a third cycle merged
-    return merged
+                    narrow = False  # a third cycle merged
+    if narrow and merged:
+        return 1
+    return 2 if wide and merged_any else 0

@@ -61,7 +61,7 @@ import numpy as np
 from hammesh.halfedge import half_edge_twins, orient_ccw, renumber_local, restore_vertices
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
-from hammesh.pages import fresh
+from hammesh.pages import fresh, reserved
 from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
@@ -219,7 +219,8 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     """Replace groups of uncovered triangles by fans (``_join_kernels.fan_groups``).
 
     Returns the modified ``(points, triangles, twin, pinned, cover, parent_min,
-    orig_of, is_fan, n_fan)``: the fans' points follow the input points, fan
+    orig_of, is_fan, n_fan)`` (no fan: the arguments, ``orig_of`` and ``is_fan``
+    None): the fans' points follow the input points, fan
     triangles follow the kept ones; ``orig_of`` maps each triangle to the input
     triangle it lies in or over (a fan triangle: the one holding its outer edge),
     ``parent_min`` is the smallest angle of the triangles each one replaces.
@@ -232,8 +233,8 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
         pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS
     )
     n_fan = len(fpt)
-    if n_fan == 0:
-        return pts, tri, tw, con, cover, amin_t, np.arange(m), np.zeros(m, np.bool_), 0
+    if n_fan == 0:  # (no new orig_of, is_fan: the caller's stand; an arange here faulted 12 MB at 1.5 M)
+        return pts, tri, tw, con, cover, amin_t, None, None, 0
     n = len(pts)
     kept = np.flatnonzero(group < 0)
     sizes = np.diff(off)
@@ -582,6 +583,68 @@ def _link_components(links, *partners: dict) -> dict:
     return {h: find(h) for h in links}
 
 
+def _border_links(tw: np.ndarray, cov: np.ndarray, group: set) -> list[int]:
+    """The group's *links*: its half-edges on the cover ``cov`` whose twin lies outside
+    it (member side), in row order."""
+    return [3 * x + k for x in sorted(group) for k in range(3)
+            if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and cov[3 * x + k]]
+
+
+def _outside_pairs(tw: np.ndarray, cov: np.ndarray, by_id: dict):
+    """The links paired *outside* a group by the cover ``cov`` (``by_id``: each cycle's
+    links): a cycle crossing the group once pairs its two links, one crossing more
+    often is walked outwards (``_join_kernels.ring_outside_pairs``, lock-step;
+    ``_relabel_group``, ``_swap_outcome``).
+
+    Returns ``(outside, unwalked)``: each link's partner and, per cycle, one link
+    whose outside path was not walked; None where a walk is undecided within
+    ``RING_WALK_BUDGET``.
+    """
+    outside: dict[int, int] = {}
+    unwalked: set[int] = set()
+    for hs in by_id.values():
+        if len(hs) == 2:
+            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
+            unwalked.add(hs[0])
+            continue
+        pair, deduced = _j.ring_outside_pairs(tw, cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
+        if (pair < 0).any():
+            return None
+        for h, j in zip(hs, pair.tolist()):
+            outside[h] = hs[j]
+        unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
+    return outside, unwalked
+
+
+def _inside_pairs(tw: np.ndarray, on_cover: Callable[[int], bool], group: set, links: list):
+    """The links paired *inside* ``group`` by a cover (``on_cover(h)``: is half-edge
+    ``h`` on it), walked from each link through the group's triangles to the link it
+    leaves by (``_relabel_group``, ``_swap_outcome``).
+
+    Returns ``(inside, on_path)``: each link's partner (both ways) and, per triangle
+    on a path, the link its path starts from; None where a triangle on a path has
+    other than one cover edge onwards.
+    """
+    inside: dict[int, int] = {}
+    on_path: dict[int, int] = {}
+    for h in links:
+        if h in inside:
+            continue
+        came = h
+        while True:
+            x = came // 3
+            on_path[x] = h
+            f = [3 * x + k for k in range(3) if 3 * x + k != came and on_cover(3 * x + k)]
+            if len(f) != 1:
+                return None
+            f = f[0]
+            if tw[f] // 3 not in group:
+                break
+            came = int(tw[f])
+        inside[h], inside[f] = f, h
+    return inside, on_path
+
+
 def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     """The cover's cycle ids after its edges changed only *inside* ``group`` (``_reroute``), or None.
 
@@ -597,42 +660,19 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     (``label_outside_into``; within the walks' budget). None (the caller labels the
     cover anew) where a walk is undecided.
     """
-    links = [3 * x + k for x in sorted(group) for k in range(3)
-             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and old_cov[3 * x + k]]
+    links = _border_links(tw, old_cov, group)
     old_id = {h: int(cycle[tw[h] // 3]) for h in links}
     by_id: dict[int, list] = {}
     for h in links:
         by_id.setdefault(old_id[h], []).append(h)
-    outside, unwalked = {}, set()
-    for hs in by_id.values():
-        if len(hs) == 2:
-            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
-            unwalked.add(hs[0])
-            continue
-        pair, deduced = _j.ring_outside_pairs(tw, old_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
-        if (pair < 0).any():
-            return None
-        for h, j in zip(hs, pair.tolist()):
-            outside[h] = hs[j]
-        unwalked.add(hs[deduced] if deduced >= 0 else hs[0])
-    inside, on_path = {}, {}
-    for h in links:  # the new cover inside the group, from each link to the next
-        if h in inside:
-            continue
-        came, path = h, []
-        while True:
-            x = came // 3
-            path.append(x)
-            f = [3 * x + k for k in range(3) if 3 * x + k != came and new_cov[3 * x + k]]
-            if len(f) != 1:
-                return None
-            f = f[0]
-            if tw[f] // 3 not in group:
-                break
-            came = int(tw[f])
-        inside[h], inside[f] = f, h
-        for x in path:
-            on_path[x] = h
+    pairs = _outside_pairs(tw, old_cov, by_id)
+    if pairs is None:
+        return None
+    outside, unwalked = pairs
+    paths = _inside_pairs(tw, lambda h: bool(new_cov[h]), group, links)  # (the new cover inside)
+    if paths is None:
+        return None
+    inside, on_path = paths
     comp = _link_components(links, outside, inside)
     # each new cycle's id: the smallest old id whose far (unwalked) part it holds, else a new one
     holds: dict[int, int] = {}
@@ -1350,7 +1390,7 @@ ALT_MERGE_CHECKS = 24
 #: alternating cycles per join also judged for merging more cycles than the join's two
 #: (taken where the plan joins exactly those by a subtree of its steps, all undone)
 ALT_MERGE_WIDER = 16
-#: most steps of one swap's outside walks (``_join_kernels.swap_only_merges``); undecided: not taken
+#: most steps of one swap's outside walks (``_join_kernels.swap_merge_outcome``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
 
@@ -1365,42 +1405,21 @@ def _swap_outcome(tw, is_cov, flipped: set, cycle, group: set, find) -> RingOutc
     the group: a split) or some cycle lay wholly inside it before (it would merge
     unseen).
     """
-    links = [3 * x + k for x in sorted(group) for k in range(3)
-             if tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in group and is_cov[3 * x + k]]
+    links = _border_links(tw, is_cov, group)
     old_id = {h: find(int(cycle[tw[h] // 3])) for h in links}
     by_id: dict[int, list] = {}
     for h in links:
         by_id.setdefault(old_id[h], []).append(h)
     if any(find(int(cycle[x])) not in by_id for x in group):
         return None
-    outside = {}
-    for hs in by_id.values():
-        if len(hs) == 2:
-            outside[hs[0]], outside[hs[1]] = hs[1], hs[0]
-            continue
-        pair, _ = _j.ring_outside_pairs(tw, is_cov, np.asarray(hs, np.int64), RING_WALK_BUDGET)
-        if (pair < 0).any():
-            return None
-        for h, j in zip(hs, pair.tolist()):
-            outside[h] = hs[j]
-    inside, on_path = {}, set()
-    for h in links:
-        if h in inside:
-            continue
-        came = h
-        while True:
-            x = came // 3
-            on_path.add(x)
-            f = [3 * x + k for k in range(3) if 3 * x + k != came and is_cov[3 * x + k] != (3 * x + k in flipped)]
-            if len(f) != 1:
-                return None
-            f = f[0]
-            if tw[f] // 3 not in group:
-                break
-            came = int(tw[f])
-        inside[h], inside[f] = f, h
-    if len(on_path) != len(group):
+    pairs = _outside_pairs(tw, is_cov, by_id)
+    if pairs is None:
         return None
+    outside = pairs[0]
+    paths = _inside_pairs(tw, lambda h: bool(is_cov[h]) != (h in flipped), group, links)
+    if paths is None or len(paths[1]) != len(group):
+        return None
+    inside = paths[0]
     comp = _link_components(links, outside, inside)
     split = any(len({comp[h] for h in hs}) > 1 for hs in by_id.values())
     return RingOutcome(links, old_id, comp, split)
@@ -1482,10 +1501,21 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     jt, ju = cand[every] // 3, tw[cand[every]] // 3
     steps = dict.fromkeys(cand[every[(cover.cycle[jt] >= 0) & (cover.cycle[ju] >= 0)]].tolist(), False)
     steps.update(dict.fromkeys(bridged[sole].tolist(), True))
-    at: dict[int, set] = {}  # cycle id (a root of ``root``) -> the steps at that cycle
-    for h in steps:
-        at.setdefault(int(cyc[h // 3]), set()).add(h)
-        at.setdefault(int(cyc[tw[h] // 3]), set()).add(h)
+    # cycle id (a root of ``root``) -> the steps at that cycle, a set made when first
+    # asked for (``at_of``) from the steps sorted by cycle: a set per cycle made up
+    # front (~12 k at 1.5 M) cost more in the garbage collector's passes than the rest
+    hs_all = np.fromiter(steps, np.int64, len(steps))
+    ends = np.concatenate([cyc[hs_all // 3], cyc[tw[hs_all] // 3]])
+    by_end = np.argsort(ends, kind="stable")
+    at_h = np.concatenate([hs_all, hs_all])[by_end]
+    at_start = np.searchsorted(ends[by_end], np.arange(cover.n_cycles + 1))
+    at: dict[int, set] = {}
+
+    def at_of(c: int) -> set:
+        s = at.get(c)
+        if s is None:
+            s = at[c] = set(at_h[at_start[c]:at_start[c + 1]].tolist())
+        return s
 
     def undo(h: int) -> None:
         """The plan's step over ``h`` is not needed: undone (its triangles pass whole)."""
@@ -1504,7 +1534,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         Kruskal's tree: all of them can go), else None (the swap would close a loop)."""
         # every step inside has an end at a cycle other than the one with the most
         # steps (the big cycle holds most of the mesh's joins: not scanned)
-        sets = sorted((at.get(c, set()) for c in merged), key=len)
+        sets = sorted((at_of(c) for c in merged), key=len)
         near = set().union(*sets[:-1])
         inside = [h for h in near if find(int(cyc[h // 3])) in merged and find(int(cyc[tw[h] // 3])) in merged]
         if len(inside) != len(merged) - 1:
@@ -1534,12 +1564,14 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
-            if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, False):
-                # (more cycles merged: taken if the plan joins them by a subtree)
+            # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
+            # taken if the plan joins them by a subtree)
+            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0)
+            if merges != 1:
                 if wider <= 0:
                     continue
                 wider -= 1
-                if not _j.swap_only_merges(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, True):
+                if merges != 2:
                     continue
             flips = fl.tolist()
             group = set(group_arr.tolist())
@@ -1564,12 +1596,13 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             used.update(group)
             for merged, inside in gone:
                 keep_id = min(merged)
-                sets = sorted((at.pop(c, set()) for c in merged), key=len)
+                sets = sorted((at_of(c) for c in merged), key=len)
                 near = sets[-1]  # (the largest set updated in place, the others added)
                 near.update(*sets[:-1])
                 near.difference_update(inside)
                 for c_id in merged:
                     root[c_id] = keep_id
+                    at[c_id] = set()  # (merged into keep_id's)
                 at[keep_id] = near
                 for h in inside:
                     undo(h)
@@ -1648,10 +1681,12 @@ def sparse_cycles(
         consecutive triangles where that keeps the cycle and raises the pair's
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
     beside_cover : callable, optional
-        Called once as the cover starts, to hand work that needs nothing of the
-        construction to another thread (``hammesh.hamiltonian`` starts the certificate's look
-        at the input there): the cover is this call's longest step and most of it
-        runs on one core.
+        Called once, to hand work that needs nothing of the construction to another
+        thread (``hammesh.hamiltonian`` starts the certificate's look at the input
+        there, and without a page reserve faults one for the steps after the cover):
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, once the
+        joins are scored, beside the plan, the cover swaps and the ring joins, which
+        run on one core (the cover's matching runs on two).
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
@@ -1668,7 +1703,8 @@ def sparse_cycles(
     room = ROOM_ROWS if fans and pts.shape[1] == 2 else 0  # (only planar ring fans grow arrays)
     amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room)
     steps.done("input_angles")
-    hi = float(amax_t.max()) + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
+    amax_in = float(amax_t.max()) if m else 0.0  # (the input's largest angle, once: an O(m) pass)
+    hi = amax_in + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
     if use_cover:
@@ -1697,7 +1733,13 @@ def sparse_cycles(
             good[ok] = True
             good[tw[ok]] = True
         steps.done("judge_edges")
-        if beside_cover is not None:
+        # the other core's work: at the cover's start where it has pages to fault for
+        # the steps after the cover (no reserve left by quality_mesh); with a reserve
+        # only the certificate's look at the input, which waits for the serial plan:
+        # beside the cover it took a core from the matching's two threads (0.1 s CPU
+        # at 1.5 M)
+        late = beside_cover is not None and reserved() > 0
+        if beside_cover is not None and not late:
             beside_cover()
         cover = cycle_cover(tri, tw, good=good, points=pts, local=local)
     else:
@@ -1720,7 +1762,7 @@ def sparse_cycles(
     n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
         pts, tri, tw, con, cover, amin_p, orig_f, fan_f, n_fan = _fans(
-            pts, tri, tw, con, cover, amin_t, keep, hi, floor, float(amax_t.max())
+            pts, tri, tw, con, cover, amin_t, keep, hi, floor, amax_in
         )
         if n_fan:  # (else the arrays with room made above stay)
             orig_of, is_fan = orig_f, fan_f
@@ -1778,6 +1820,8 @@ def sparse_cycles(
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls)
         steps.done("place_splits")
+        if use_cover and late:
+            beside_cover()  # (the plan, the alternating merges and ring joins: one core)
         no_absorb = np.zeros(m, np.bool_)
         for attempt in range(4):
             if attempt == 3:
@@ -1866,7 +1910,7 @@ def sparse_cycles(
             worst_kept = bool((kind[parent == r_now] == 3).any())
     kept_ratio = ratio_in if worst_kept else kept_radius_ratio(all_pts, out, kind, parent, amin_p)
     quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio)
-    quality["max_angle_input_deg"] = math.degrees(float(amax_t.max())) if m0 else 0.0
+    quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)
     if n_fan:
         parent = orig_of[parent]
@@ -2103,7 +2147,7 @@ def sparse_hamiltonian(
     keep : float
         The local quality rule's factor (``sparse_cycles``).
     beside_cover : callable, optional
-        Called as the cover starts (``sparse_cycles``).
+        Called once beside the construction (``sparse_cycles``).
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Cover swaps along alternating cycles in place of joins below the rule (issue 13, item 1).
 
-The local decision (``_join_kernels.swap_only_merges``: links, outside walks, inside
+The local decision (``_join_kernels.swap_merge_outcome``: links, outside walks, inside
 pairs) is checked against labelling the whole swapped cover again
 (``_cover_kernels.cycle_ids``), and the construction against itself with the swaps off.
 """
@@ -23,20 +23,27 @@ from tests.helpers import bundled_domain, hull_area
 from tests.postprocess.test_sparse import assert_sparse_certificate
 
 
-def _only_merges_by_relabelling(tw, is_cov, flips, a, b, m) -> bool:
-    """Swap, label every cycle again: outside the swapped triangles (whose cycles may
-    trade triangles among them), is the new partition the old one with a and b joined?"""
+def _ids_before_and_after(tw, is_cov, flips, m):
+    """Every cycle labelled again before and after the swap along ``flips``: the two
+    labellings, their counts and the (old, new) id pairs of the triangles outside the
+    swapped ones (whose cycles may trade triangles among them)."""
     old, n_old = ck.cycle_ids(tw, is_cov, m)
     new_cov = is_cov.copy()
     for h in flips:
         new_cov[h] = not new_cov[h]
         new_cov[tw[h]] = new_cov[h]
     new, n_new = ck.cycle_ids(tw, new_cov, m)
-    if not np.array_equal(old < 0, new < 0) or n_new != n_old - 1:
-        return False  # (one cycle fewer: none new inside the swapped triangles, none lost there)
     cov = old >= 0
     cov[[h // 3 for h in flips] + [tw[h] // 3 for h in flips]] = False
-    pairs = set(zip(old[cov].tolist(), new[cov].tolist()))
+    return old, n_old, new, n_new, set(zip(old[cov].tolist(), new[cov].tolist()))
+
+
+def _only_merges_by_relabelling(tw, is_cov, flips, a, b, m) -> bool:
+    """Swap, label every cycle again: outside the swapped triangles, is the new
+    partition the old one with a and b joined?"""
+    old, n_old, new, n_new, pairs = _ids_before_and_after(tw, is_cov, flips, m)
+    if not np.array_equal(old < 0, new < 0) or n_new != n_old - 1:
+        return False  # (one cycle fewer: none new inside the swapped triangles, none lost there)
     old_to_new: dict = {}
     new_to_old: dict = {}
     for o, n in pairs:
@@ -51,15 +58,7 @@ def _only_merges_by_relabelling(tw, is_cov, flips, a, b, m) -> bool:
 def _no_split_by_relabelling(tw, is_cov, flips, m) -> bool:
     """Swap, label every cycle again: outside the swapped triangles no cycle split, no
     cycle lies wholly inside them before or after, and some merged."""
-    old, n_old = ck.cycle_ids(tw, is_cov, m)
-    new_cov = is_cov.copy()
-    for h in flips:
-        new_cov[h] = not new_cov[h]
-        new_cov[tw[h]] = new_cov[h]
-    new, n_new = ck.cycle_ids(tw, new_cov, m)
-    cov = old >= 0
-    cov[[h // 3 for h in flips] + [tw[h] // 3 for h in flips]] = False
-    pairs = set(zip(old[cov].tolist(), new[cov].tolist()))
+    _, n_old, _, n_new, pairs = _ids_before_and_after(tw, is_cov, flips, m)
     olds = {o for o, _ in pairs}
     news = {n for _, n in pairs}
     return len(olds) == n_old and len(news) == n_new and len(pairs) == len(olds) and n_new < n_old
@@ -99,6 +98,10 @@ def test_local_swap_decision_equals_relabelling_the_cover(name: str) -> None:
             assert wide == _no_split_by_relabelling(tw, is_cov, fl.tolist(), len(tri))
             assert wide or not local
             wider += wide and not local
+            # both answers from one walk, as ``sparse._alternating_merges`` asks them
+            both = J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, True)
+            assert both == (1 if local else 2 if wide else 0)
+            assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, False) == int(local)
     assert yes >= 1 and no >= 1 and wider >= 1  # every answer exercised
 
 

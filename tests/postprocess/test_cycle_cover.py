@@ -385,6 +385,20 @@ def test_halves_on_two_threads_give_the_one_thread_cover(monkeypatch, local: boo
     assert two.n_uncovered <= 0.01 * len(tri)
 
 
+def _matching_start(name: str, divisor: int):
+    """A bundled domain's q30 mesh at its hull area / ``divisor`` and what the matching
+    starts from: ``(triangles, m, neighbours, alive, degree-3 alive, mate all -1)``."""
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain(name)
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / divisor)
+    tri = msh.triangles
+    m = len(tri)
+    nb = ck.neighbors(half_edges(tri, msh.n_points).twin, m)
+    alive, deg = ck.peel(nb, m)
+    return tri, m, nb, alive, alive & (deg == 3), np.full(m, -1, np.int64)
+
+
 @pytest.mark.parametrize("name", ["face", "double_hex", "square_circle_hole", "A"])
 def test_observed_search_answers_the_drop_search(name: str) -> None:
     # _drop_matching skips the DROP search after a failed OBSERVE search of at least
@@ -393,14 +407,7 @@ def test_observed_search_answers_the_drop_search(name: str) -> None:
     # saw; checked from every defect the matching leaves, for two budgets each
     from hammesh.postprocess import _cover_kernels as ck
 
-    dom = bundled_domain(name)
-    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000)
-    tri = msh.triangles
-    m = len(tri)
-    nb = ck.neighbors(half_edges(tri, msh.n_points).twin, m)
-    alive, deg = ck.peel(nb, m)
-    active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int64)
+    tri, m, nb, alive, active, mate = _matching_start(name, 6000)
     parent, fa, label, stamp = np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64)
     g = np.zeros((m, 3), np.bool_)
     s = ck.match_half(nb, active, np.zeros(m, np.int8), 0, g, 0, 2000, mate, parent, fa, label, stamp)
@@ -523,14 +530,7 @@ def test_chain_phase_pairs_what_unbounded_searches_pair(name: str) -> None:
     # degree-2 triangles), leaving fewer free (at most one: the meshes are connected)
     from hammesh.postprocess import _cover_kernels as ck
 
-    dom = bundled_domain(name)
-    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
-    tri = msh.triangles
-    m = len(tri)
-    nb = ck.neighbors(half_edges(tri, msh.n_points).twin, m)
-    alive, deg = ck.peel(nb, m)
-    active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int64)
+    tri, m, nb, alive, active, mate = _matching_start(name, 3000)
     # a greedy matching in a shuffled order, no searches: many triangles left free
     order = np.random.default_rng(5).permutation(np.flatnonzero(active))
     work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))

@@ -292,7 +292,10 @@ def test_placed_split_point_never_worse_than_the_midpoint(c, d, lo_deg) -> None:
         assert e[0] * f[1] - e[1] * f[0] > 0
         for o, u, v in ((p, q, r), (q, r, p), (r, p, q)):
             cu, cv = u - o, v - o
-            angles.append(np.arccos(np.clip(cu @ cv / np.linalg.norm(cu) / np.linalg.norm(cv), -1, 1)))
+            # (atan2 of cross and dot: arccos of a cosine near 1 cannot resolve angles
+            # below ~1e-8, e.g. a point placed next to a corner, c=(-1.5, 0.5),
+            # d=(-1.5, -2), 5 degrees: 3.3e-12 rad)
+            angles.append(np.arctan2(abs(cu[0] * cv[1] - cu[1] * cv[0]), cu @ cv))
     assert min(angles) == pytest.approx(smin, abs=1e-9) and max(angles) == pytest.approx(smax, abs=1e-9)
 
 
