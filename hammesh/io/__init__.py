@@ -83,6 +83,7 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
     ".ply": (meshio_format.read, meshio_format.write),
     ".stl": (meshio_format.read, meshio_format.write),
     ".off": (meshio_format.read, meshio_format.write),
+    ".vtp": (meshio_format.read, meshio_format.write),  # VTK XML PolyData: hammesh.io.vtp
     ".ele": (triangle_format.read_ele, triangle_format.write),
     ".node": (triangle_format.read_ele, triangle_format.write),
     ".pvtu": (pvtu.read, pvtu.write),  # partitioned VTK: an index of .vtu pieces (issue 15)

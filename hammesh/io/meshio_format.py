@@ -82,6 +82,7 @@ _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
     ".ply": (("ply",), "ply", {}),
     ".stl": (("stl",), "stl", {}),
     ".off": (("off",), "off", {}),
+    ".vtp": ((), "vtp", {}),  # read by hammesh.io.vtp (meshio has no .vtp reader)
 }
 
 #: Suffixes handled by this module.
@@ -399,6 +400,10 @@ def _read_raw(path: Path, suffix: str) -> Any:
         from hammesh.io.off_format import read_off
 
         return read_off(path)
+    if suffix == ".vtp":
+        from hammesh.io.vtp import read_vtp
+
+        return read_vtp(path)
     if suffix == ".vtk":
         from hammesh.io.vtk_legacy import DATASETS, dataset_type, read_legacy
 
