@@ -39,16 +39,21 @@ import base64
 import binascii
 import lzma
 import xml.etree.ElementTree as ET
+import os
 import zlib
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from hammesh.errors import FileFormatError
+from hammesh import threads as row_threads
 from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind
+from hammesh.io.vtu import write_data_array
 
-__all__ = ["read_vtp", "COMPRESSORS", "VTK_TYPES"]
+__all__ = ["read_vtp", "write_vtp", "COMPRESSORS", "VTK_TYPES"]
 
 #: numpy type code of each VTK XML ``type`` (``Bit``: unpacked to one byte per value).
 VTK_TYPES: dict[str, str] = {
@@ -112,6 +117,54 @@ def read_vtp(path: str | Path) -> RawMesh:
         detail = str(exc).strip().splitlines()
         raise FileFormatError(
             f"{path}: malformed .vtp data ({type(exc).__name__}: {detail[0] if detail else ''})") from None
+
+
+def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = None) -> None:
+    """Write ``mesh`` (a ``meshio.Mesh`` of ``triangle`` and ``line`` blocks) as a compressed
+    ``.vtp``: the arrays as :func:`hammesh.io.vtu.write` writes them (zlib blocks, base64),
+    the triangles as ``Polys``, the lines as ``Lines``.  VTK numbers lines before polygons,
+    so the cell data is reordered the same way: each cell keeps its values.
+
+    Raises
+    ------
+    ValueError
+        A cell type other than ``triangle``/``line`` (hammesh writes no other).
+    """
+    kinds = {"line": "Lines", "triangle": "Polys"}
+    for block in mesh.cells:
+        if block.type not in kinds:
+            raise ValueError(f"hammesh.io.vtp: cell type {block.type!r} is not supported")
+    order = [i for kind in ("line", "triangle") for i, b in enumerate(mesh.cells) if b.type == kind]
+    sections = {}
+    for kind, section in kinds.items():
+        cells = [np.asarray(b.data, dtype=np.int64) for b in mesh.cells if b.type == kind]
+        if cells:
+            sections[section] = np.concatenate(cells)
+    cell_data = {name: np.concatenate([np.asarray(per_block[i]) for i in order])
+                 for name, per_block in mesh.cell_data.items()}
+    counts = {s: len(sections.get(s, ())) for s in ("Lines", "Polys")}
+    workers = max(1, threads or row_threads.cores())
+    with ThreadPoolExecutor(workers) as pool, open(path, "wb") as fh:
+        fh.write(b'<?xml version="1.0"?>\n<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
+                 b'header_type="UInt32" compressor="vtkZLibDataCompressor">\n'
+                 b"<!--This file was created by hammesh-->\n<PolyData>\n")
+        fh.write(f'<Piece NumberOfPoints="{len(mesh.points)}" NumberOfVerts="0" NumberOfLines="{counts["Lines"]}" '
+                 f'NumberOfStrips="0" NumberOfPolys="{counts["Polys"]}">\n'.encode())
+        for tag, data in (("PointData", mesh.point_data), ("CellData", cell_data)):
+            if data:
+                fh.write(f"<{tag}>\n".encode())
+                for name, values in data.items():
+                    write_data_array(fh, pool, workers, name, np.asarray(values))
+                fh.write(f"</{tag}>\n".encode())
+        fh.write(b"<Points>\n")
+        write_data_array(fh, pool, workers, "Points", np.asarray(mesh.points, dtype=np.float64))
+        fh.write(b"</Points>\n")
+        for section, cells in sections.items():
+            fh.write(f"<{section}>\n".encode())
+            write_data_array(fh, pool, workers, "connectivity", cells.reshape(-1))
+            write_data_array(fh, pool, workers, "offsets", np.arange(1, len(cells) + 1, dtype=np.int64) * cells.shape[1])
+            fh.write(f"</{section}>\n".encode())
+        fh.write(b"</Piece>\n</PolyData>\n</VTKFile>\n")
 
 
 def _read(raw: bytes) -> RawMesh:

@@ -430,3 +430,38 @@ def test_vtk_multi_piece_file(tmp_path):
         ref.GetCellPoints(c, ids)
         ref_tris.append([ids.GetId(k) for k in range(ids.GetNumberOfIds())])
     assert tris.tolist() == ref_tris
+
+
+# ---- writing ----------------------------------------------------------------------------------------
+
+def test_written_vtp_reads_back_with_cycle_fields_and_vtk(tmp_path, hexagon):
+    from hammesh.io import write
+
+    path = tmp_path / "h.vtp"
+    write(hexagon, path)
+    raw = read_vtp(path)
+    tris = np.concatenate([b.data for b in raw.cells])
+    np.testing.assert_array_equal(tris, hexagon.triangles)
+    np.testing.assert_array_equal(np.concatenate(raw.cell_data["cycle_position"]), np.arange(len(tris)))
+    back = read_mesh(path)
+    np.testing.assert_array_equal(back.triangles, hexagon.triangles)
+    pv = pytest.importorskip("pyvista")
+    theirs = pv.read(path)  # VTK reads what hammesh writes
+    np.testing.assert_array_equal(theirs.faces.reshape(-1, 4)[:, 1:], hexagon.triangles)
+    np.testing.assert_array_equal(theirs.cell_data["cycle_position"], np.arange(len(tris)))
+
+
+def test_writer_puts_lines_first_and_keeps_each_cells_data(tmp_path):
+    import meshio
+
+    from hammesh.io.vtp import write_vtp
+
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    seg = np.array([[0, 1], [1, 2], [2, 3]])
+    mesh = meshio.Mesh(POINTS[:4], [("triangle", tri), ("line", seg)],
+                       cell_data={"v": [np.array([1.0, 2.0]), np.array([7.0, 8.0, 9.0])]})
+    path = tmp_path / "mixed.vtp"
+    write_vtp(path, mesh)
+    raw = read_vtp(path)
+    got = {b.type: (b.data.tolist(), v.tolist()) for b, v in zip(raw.cells, raw.cell_data["v"])}
+    assert got == {"line": (seg.tolist(), [7.0, 8.0, 9.0]), "triangle": (tri.tolist(), [1.0, 2.0])}
