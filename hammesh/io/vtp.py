@@ -79,7 +79,7 @@ class _Encoding:
     order: str  # "<" or ">"
     header: np.dtype  # UInt32 or UInt64 in the file's byte order
     compressor: str | None
-    appended: bytes | None  # bytes after AppendedData's "_" mark
+    appended: memoryview | None  # bytes after AppendedData's "_" mark (base64: up to its end tag)
     appended_base64: bool
 
 
@@ -168,13 +168,13 @@ def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = Non
 
 
 def _read(raw: bytes) -> RawMesh:
-    xml, appended, appended_tag = _split_appended(raw)
+    xml, appended, encoding = _split_appended(raw)
     root = ET.fromstring(xml)
     if root.tag != "VTKFile":
         raise _Bad(f"not a VTK XML file (root element <{root.tag}>)")
     if root.get("type") != "PolyData":
         raise _Bad(f"not VTK PolyData (type={root.get('type')!r}); .vtp holds PolyData")
-    enc = _encoding(root, appended, appended_tag)
+    enc = _encoding(root, appended, encoding)
     grid = root.find("PolyData")
     if grid is None:
         raise _Bad("no <PolyData> element")
@@ -199,27 +199,33 @@ def _read(raw: bytes) -> RawMesh:
     return RawMesh(np.concatenate(points), blocks, cell_data=cell_data, point_data=_joined(point_arrays))
 
 
-def _split_appended(raw: bytes) -> tuple[bytes, bytes | None, bytes]:
-    """The XML part of the file (closed again if ``<AppendedData>`` was cut off), the
-    bytes after the appended data's ``_`` mark and the ``<AppendedData ...>`` tag.
+def _split_appended(raw: bytes) -> tuple[bytes, memoryview | None, str]:
+    """The XML part of the file (closed again after the ``<AppendedData ...>`` tag), a view
+    of the appended data after its ``_`` mark (base64: up to the end tag) and its encoding.
 
     Raw appended data is not XML: it is cut off before parsing (as meshio does)."""
     at = raw.find(b"<AppendedData")
     if at < 0:
-        return raw, None, b""
+        return raw, None, "raw"
     close = raw.find(b">", at)
     if close < 0:
         raise _Bad("truncated <AppendedData> tag")
     tag = raw[at:close + 1]
+    encoding = ET.fromstring(tag[:-2] + b"/>" if tag.endswith(b"/>") else tag[:-1] + b"/>").get("encoding", "raw")
+    if encoding not in ("raw", "base64"):
+        raise _Bad(f"unknown AppendedData encoding {encoding!r}")
     if tag.endswith(b"/>"):
-        return raw[:close + 1] + b"</VTKFile>", None, tag
+        return raw[:close + 1] + b"</VTKFile>", None, encoding
     mark = raw.find(b"_", close)
     if mark < 0 or raw[close + 1:mark].strip():
         raise _Bad("<AppendedData> does not start with its '_' mark")
-    return raw[:close + 1] + b"</AppendedData></VTKFile>", raw[mark + 1:], tag
+    end = raw.rfind(b"</AppendedData>") if encoding == "base64" else -1
+    # a view, not a copy: the appended data is most of the file
+    data = memoryview(raw)[mark + 1:end if end > mark else len(raw)]
+    return raw[:close + 1] + b"</AppendedData></VTKFile>", data, encoding
 
 
-def _encoding(root: ET.Element, appended: bytes | None, appended_tag: bytes) -> _Encoding:
+def _encoding(root: ET.Element, appended: memoryview | None, encoding: str) -> _Encoding:
     order = {"LittleEndian": "<", "BigEndian": ">", None: "<"}.get(root.get("byte_order"))
     if order is None:
         raise _Bad(f"unknown byte_order {root.get('byte_order')!r}")
@@ -229,13 +235,6 @@ def _encoding(root: ET.Element, appended: bytes | None, appended_tag: bytes) -> 
     compressor = root.get("compressor") or None
     if compressor is not None and compressor not in COMPRESSORS:
         raise _Bad(f"unknown compressor {compressor!r} (read: {', '.join(COMPRESSORS)})")
-    tag = ET.fromstring(appended_tag.rstrip(b"/>") + b"/>") if appended_tag else None
-    encoding = tag.get("encoding", "raw") if tag is not None else "raw"
-    if encoding not in ("raw", "base64"):
-        raise _Bad(f"unknown AppendedData encoding {encoding!r}")
-    if appended is not None and encoding == "base64":
-        end = appended.rfind(b"</AppendedData>")
-        appended = appended[:end if end >= 0 else len(appended)]
     return _Encoding(order, np.dtype(header).newbyteorder(order), compressor, appended, encoding == "base64")
 
 
@@ -292,7 +291,7 @@ def _piece(piece: ET.Element, enc: _Encoding, point_base: int, cell_base: int,
         if len(conn) and (conn.min() < 0 or conn.max() >= n):
             bad = int(conn.max() if conn.max() >= n else conn.min())
             raise _Bad(f"{where} {section}: point index {bad} out of range [0, {n})")
-        got, rows = blocks_of_kind(kind, offsets, conn + point_base, first)
+        got, rows = blocks_of_kind(kind, offsets, conn + point_base if point_base else conn, first)
         blocks += got
         origins += rows
         first += cells
@@ -398,7 +397,7 @@ def _base64_payload(text: bytes, enc: _Encoding, what: str) -> bytes:
     return _uncompressed(header, data, enc, what)
 
 
-def _raw_payload(buf: bytes, offset: int, enc: _Encoding, what: str) -> bytes:
+def _raw_payload(buf: memoryview, offset: int, enc: _Encoding, what: str) -> bytes:
     """The bytes of a raw appended array at ``offset``."""
     item = enc.header.itemsize
     head_items = 1 if enc.compressor is None else 3 + _header_items(buf[offset:], 1, enc, what)[0]
