@@ -51,7 +51,7 @@ import numpy as np
 from hammesh.errors import FileFormatError
 from hammesh import threads as row_threads
 from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind
-from hammesh.io.vtu import write_data_array
+from hammesh.io.vtu import write_data_array, write_data_sections
 
 __all__ = ["read_vtp", "write_vtp", "COMPRESSORS", "VTK_TYPES"]
 
@@ -150,12 +150,6 @@ def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = Non
                  b"<!--This file was created by hammesh-->\n<PolyData>\n")
         fh.write(f'<Piece NumberOfPoints="{len(mesh.points)}" NumberOfVerts="0" NumberOfLines="{counts["Lines"]}" '
                  f'NumberOfStrips="0" NumberOfPolys="{counts["Polys"]}">\n'.encode())
-        for tag, data in (("PointData", mesh.point_data), ("CellData", cell_data)):
-            if data:
-                fh.write(f"<{tag}>\n".encode())
-                for name, values in data.items():
-                    write_data_array(fh, pool, workers, name, np.asarray(values))
-                fh.write(f"</{tag}>\n".encode())
         fh.write(b"<Points>\n")
         write_data_array(fh, pool, workers, "Points", np.asarray(mesh.points, dtype=np.float64))
         fh.write(b"</Points>\n")
@@ -164,6 +158,7 @@ def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = Non
             write_data_array(fh, pool, workers, "connectivity", cells.reshape(-1))
             write_data_array(fh, pool, workers, "offsets", np.arange(1, len(cells) + 1, dtype=np.int64) * cells.shape[1])
             fh.write(f"</{section}>\n".encode())
+        write_data_sections(fh, pool, workers, mesh.point_data, cell_data)
         fh.write(b"</Piece>\n</PolyData>\n</VTKFile>\n")
 
 
@@ -426,7 +421,7 @@ def _uncompressed(header: list[int], data: bytes, enc: _Encoding, what: str) -> 
     at = 0
     for i, size in enumerate(header[3:]):
         expected = last if i == blocks - 1 and last else block_size
-        chunk = decompress(data[at:at + size], expected)
+        chunk = decompress(data[at:at + size], max(expected, 1))  # (0 would mean: no limit)
         if len(chunk) != expected:
             raise _Bad(f"{what}: compressed block {i} holds {len(chunk)} bytes, not {expected}")
         out.append(chunk)

@@ -39,7 +39,7 @@ import numpy as np
 from hammesh import threads as row_threads
 from hammesh.errors import FileFormatError
 
-__all__ = ["write", "write_raw", "read_raw", "write_data_array", "xml_attribute", "VTK_CELL_TYPES", "BLOCK_BYTES", "LEVEL", "RAW_DTYPES"]
+__all__ = ["write", "write_raw", "read_raw", "write_data_array", "write_data_sections", "xml_attribute", "VTK_CELL_TYPES", "BLOCK_BYTES", "LEVEL", "RAW_DTYPES"]
 
 #: VTK cell type of each meshio cell type written here.
 VTK_CELL_TYPES: dict[str, int] = {"line": 3, "triangle": 5}
@@ -102,13 +102,20 @@ def write(path: str | os.PathLike[str], mesh: Any, threads: int | None = None) -
         write_data_array(fh, pool, workers, "offsets", np.cumsum(sizes))
         write_data_array(fh, pool, workers, "types", types)
         fh.write(b"</Cells>\n")
-        for tag, data in (("PointData", mesh.point_data), ("CellData", cell_data)):
-            if data:
-                fh.write(f"<{tag}>\n".encode())
-                for name, values in data.items():
-                    write_data_array(fh, pool, workers, name, np.asarray(values))
-                fh.write(f"</{tag}>\n".encode())
+        write_data_sections(fh, pool, workers, mesh.point_data, cell_data)
         fh.write(b"</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
+
+
+def write_data_sections(fh: BinaryIO, pool: ThreadPoolExecutor, workers: int, point_data: dict[str, Any],
+                        cell_data: dict[str, np.ndarray]) -> None:
+    """``<PointData>`` and ``<CellData>`` (each only if not empty), every array by
+    :func:`write_data_array`; shared by the ``.vtu`` and ``.vtp`` writers."""
+    for tag, data in (("PointData", point_data), ("CellData", cell_data)):
+        if data:
+            fh.write(f"<{tag}>\n".encode())
+            for name, values in data.items():
+                write_data_array(fh, pool, workers, name, np.asarray(values))
+            fh.write(f"</{tag}>\n".encode())
 
 
 def write_data_array(fh: BinaryIO, pool: ThreadPoolExecutor, workers: int, name: str, values: np.ndarray) -> None:
