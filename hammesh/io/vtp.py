@@ -1,7 +1,8 @@
-"""VTK XML PolyData (``.vtp``) reading: what pyvista's ``PolyData.save`` and ParaView write.
+"""VTK XML PolyData (``.vtp``): what pyvista's ``PolyData.save`` and ParaView write.
 
-meshio 5 does not read ``.vtp``.  Every encoding VTK's ``vtkXMLPolyDataWriter`` writes
-is read:
+meshio 5 neither reads nor writes ``.vtp``.  :func:`write_vtp` writes hammesh's output
+(triangles as ``Polys``, segments as ``Lines``) compressed like :mod:`hammesh.io.vtu`.
+:func:`read_vtp` reads every encoding VTK's ``vtkXMLPolyDataWriter`` writes:
 
 * ``<DataArray format="ascii">``: whitespace-separated values;
 * ``format="binary"``: base64 of a header and the bytes, the header ``UInt32`` or
@@ -38,8 +39,8 @@ from __future__ import annotations
 import base64
 import binascii
 import lzma
-import xml.etree.ElementTree as ET
 import os
+import xml.etree.ElementTree as ET
 import zlib
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -48,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from hammesh.errors import FileFormatError
 from hammesh import threads as row_threads
+from hammesh.errors import FileFormatError
 from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind
 from hammesh.io.vtu import write_data_array, write_data_sections
 
