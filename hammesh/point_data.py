@@ -37,9 +37,10 @@ def steiner_weights(
 
     Parameters
     ----------
-    input_points : (n0, 2) float64
+    input_points : (n0, d) float64
+        ``d`` = 2, or 3 for a surface (its new points lie in their parents' planes).
     input_triangles : (m0, 3) int
-    points : (n, 2) float64
+    points : (n, d) float64
         The output's points; the first ``n0`` are the input's.
     triangles : (m, 3) int
     parent : (m,) int
@@ -103,7 +104,7 @@ def steiner_weights(
             outside = np.flatnonzero(score < -_INSIDE_TOLERANCE)
             if len(outside) == 0:
                 break
-        if len(outside):  # (not seen in hammesh's constructions; matplotlib's point location)
+        if len(outside) and pts0.shape[1] == 2:  # (not seen in hammesh's constructions; matplotlib's)
             from matplotlib.tri import Triangulation
 
             finder = Triangulation(pts0[:, 0], pts0[:, 1], tri0).get_trifinder()
@@ -144,14 +145,23 @@ class _VertexRing:
 
 
 def _barycentric(abc: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """``(k, 3)`` barycentric coordinates of points ``p (k, 2)`` in triangles ``abc (k, 3, 2)``
-    (a degenerate triangle: equal thirds)."""
+    """``(k, 3)`` barycentric coordinates of points ``p (k, d)`` in triangles ``abc (k, 3, d)``,
+    ``d`` = 2, or 3 (a surface: of ``p``'s projection onto the triangle's plane); a
+    degenerate triangle: equal thirds."""
     a, b, c = abc[:, 0], abc[:, 1], abc[:, 2]
     v0, v1, v2 = b - a, c - a, p - a
-    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
-    safe = np.where(den != 0, den, 1.0)
-    l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / safe
-    l2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / safe
+    if abc.shape[-1] == 2:
+        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        safe = np.where(den != 0, den, 1.0)
+        l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / safe
+        l2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / safe
+    else:  # the normal equations of p - a = l1 v0 + l2 v1
+        d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
+        d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
+        den = d00 * d11 - d01 * d01
+        safe = np.where(den != 0, den, 1.0)
+        l1 = (d11 * d20 - d01 * d21) / safe
+        l2 = (d00 * d21 - d01 * d20) / safe
     lam = np.column_stack([1.0 - l1 - l2, l1, l2])
     return np.where((den != 0)[:, None], lam, 1.0 / 3.0)
 

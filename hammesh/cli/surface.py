@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 from hammesh import params
 from hammesh.errors import FileFormatError
 
@@ -28,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     from hammesh.io import check_outputs, read_mesh, write_report
     from hammesh.io.report import collect_repairs
     from hammesh.surface import SURFACE_SUFFIXES, surface_hamiltonian, write_surface
-    from hammesh.surface.files import weld_points
+    from hammesh.surface.files import weld_surface
 
     if args.output is not None and args.output.suffix.lower() not in SURFACE_SUFFIXES:
         raise FileFormatError(f"{args.output}: unknown surface format; supported: {' '.join(SURFACE_SUFFIXES)}")
@@ -37,8 +39,12 @@ def run(args: argparse.Namespace) -> int:
     params.number("--max-fold", args.max_fold, low=0, high=180, what="degrees")
     check_outputs({"-o": args.output, "--report": args.report}, [args.input])
     mesh = read_mesh(args.input, dim=3)
-    pts, tri = weld_points(mesh.points, mesh.triangles)
-    h = surface_hamiltonian(pts, tri, swaps=args.swaps, max_fold_deg=args.max_fold)
+    welded = weld_surface(mesh.points, mesh.triangles, mesh.point_data)
+    h = surface_hamiltonian(
+        welded.points, welded.triangles, swaps=args.swaps, max_fold_deg=args.max_fold,
+        triangle_attributes=mesh.triangle_attributes, attribute_names=mesh.attribute_names,
+        point_data={name: np.asarray(v)[welded.source] for name, v in mesh.point_data.items()},
+    )
     h.report["repairs"] = collect_repairs(mesh, h)
     if args.output is not None:
         write_surface(h, args.output)

@@ -13,10 +13,14 @@ import numpy as np
 
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
-__all__ = ["cycle_ids", "triangle_cell_data", "ATTRIBUTE_PREFIX", "split_components", "join_components"]
+__all__ = ["cycle_ids", "triangle_cell_data", "ATTRIBUTE_PREFIX", "CYCLE_FIELDS", "split_components", "join_components"]
 
 #: Cell-data name of column ``i`` of ``triangle_attributes`` is ``f"attribute_{i}"``.
 ATTRIBUTE_PREFIX = "attribute_"
+#: The per-triangle fields hammesh writes about a Hamiltonian mesh (and a partition's
+#: ``part``); a reader of hammesh's output skips them, so a user's field never takes
+#: these names in such a file.
+CYCLE_FIELDS = ("cycle_position", "cycle_id", "parent", "kind", "part")
 
 
 def cycle_ids(components: np.ndarray) -> np.ndarray:
@@ -47,9 +51,13 @@ def triangle_cell_data(mesh: Mesh | HamiltonianMesh) -> dict[str, np.ndarray]:
     ``kind`` (all ``(m,) int64``); for any mesh: each column of
     ``triangle_attributes`` ``(m,) float64`` under its name (``attribute_names``, a
     mesh file's field names, else ``attribute_<i>``); columns named ``v[0]``,
-    ``v[1]``, ... are one ``(m, c)`` field ``v``, as they were read.
+    ``v[1]``, ... are one ``(m, c)`` field ``v``, as they were read.  A user's field
+    named like one of hammesh's (``kind``, ``parent``...) is written as ``input_<name>``,
+    never over hammesh's.
     """
     data: dict[str, np.ndarray] = {}
+    # a Hamiltonian mesh's file reserves every cycle field name (its reader skips them)
+    reserved = set(CYCLE_FIELDS) if isinstance(mesh, HamiltonianMesh) else set()
     if isinstance(mesh, HamiltonianMesh):
         data["cycle_position"] = np.asarray(mesh.position, dtype=np.int64)
         data["cycle_id"] = cycle_ids(mesh.components)
@@ -68,12 +76,19 @@ def triangle_cell_data(mesh: Mesh | HamiltonianMesh) -> dict[str, np.ndarray]:
             c = 1
             while i + c < k and _component(attribute_name(names, i + c)) == (base, c):
                 c += 1
-            data[base] = np.ascontiguousarray(attrs[:, i:i + c])
+            data[_free_name(data, reserved, base)] = np.ascontiguousarray(attrs[:, i:i + c])
             i += c
             continue
-        data[name] = np.ascontiguousarray(attrs[:, i])
+        data[_free_name(data, reserved, name)] = np.ascontiguousarray(attrs[:, i])
         i += 1
     return data
+
+
+def _free_name(data: dict[str, np.ndarray], reserved: set[str], name: str) -> str:
+    """``name``, or ``input_<name>`` (``input_input_<name>``...) if taken or reserved."""
+    while name in data or name in reserved:
+        name = f"input_{name}"
+    return name
 
 
 _COMPONENT_RE = re.compile(r"^(.*)\[(\d+)\]$")

@@ -66,7 +66,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
 from hammesh.io import tags, vtu
-from hammesh.io.cell_data import ATTRIBUTE_PREFIX, join_components, split_components, triangle_cell_data
+from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, split_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
@@ -590,8 +590,10 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
 
 #: Cell data that hammesh writes about its own output (re-derived on every write, so
 #: never read back as the user's data); ``attribute_<i>`` are read as attributes.
-_OWN_CELL_DATA = frozenset({"cycle_position", "cycle_id", "parent", "kind", "part", SEGMENT_MARKER,
-                            tags.SEGMENT_EDGES, tags.EDGE_MARKER})
+_OWN_CELL_DATA = frozenset({SEGMENT_MARKER, tags.SEGMENT_EDGES, tags.EDGE_MARKER})
+#: The cycle's own fields: skipped only in a Hamiltonian mesh hammesh wrote (it has
+#: ``cycle_position``); in anyone else's file a field named ``kind`` or ``part`` is data.
+_CYCLE_CELL_DATA = frozenset(CYCLE_FIELDS)
 #: Point data hammesh writes about its own output (``vertex_marker`` is read as markers).
 _OWN_POINT_DATA = frozenset({tags.VERTEX_MARKER, NODE_ENTITY, "gmsh:dim_tags"})
 
@@ -604,7 +606,8 @@ def _attribute_columns(
     ``attribute_<i>`` (hammesh's and Triangle's unnamed attributes) come first, in
     order; then every other field in file order under its own name (a field of ``c``
     components gives columns ``name[0]`` ... ``name[c-1]``).  hammesh's own output
-    fields (:data:`_OWN_CELL_DATA`, ``skfem:``) are skipped, and so are Gmsh's tags in
+    fields (:data:`_OWN_CELL_DATA`, ``skfem:``, and :data:`_CYCLE_CELL_DATA` in a
+    Hamiltonian mesh it wrote) are skipped, and so are Gmsh's tags in
     a Hamiltonian mesh or attribute-carrying file hammesh wrote (it derives them); in any
     other Gmsh file the physical and elementary tags are kept as the columns
     ``physical`` and ``geometrical`` (:data:`_GMSH_COLUMNS`); ``physical``, first, is
@@ -615,9 +618,11 @@ def _attribute_columns(
     named: list[tuple[str, np.ndarray]] = []
     # hammesh's .msh files: the entity tags are runs of rows, and the physical tags
     # repeat the first attribute when there is one
-    ours = "cycle_position" in cell_data or any(_ATTRIBUTE_RE.match(k) for k in cell_data)
+    hamiltonian = "cycle_position" in cell_data
+    ours = hamiltonian or any(_ATTRIBUTE_RE.match(k) for k in cell_data)
     for key, per_block in cell_data.items():
-        if key in _OWN_CELL_DATA or key.startswith("skfem:") or (ours and key in _GMSH_TAGS):
+        if (key in _OWN_CELL_DATA or (hamiltonian and key in _CYCLE_CELL_DATA) or key.startswith("skfem:")
+                or (ours and key in _GMSH_TAGS)):
             continue
         values = _origin_values(per_block, origin, m)
         if values is None:

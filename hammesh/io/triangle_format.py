@@ -31,13 +31,14 @@ from __future__ import annotations
 
 import io
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
-from hammesh.io.cell_data import ATTRIBUTE_PREFIX, join_components, triangle_cell_data
+from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
@@ -94,6 +95,8 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     names = [_token(attribute_name(given, j)) for j in range(attrs.shape[1])]
     columns = [attrs[:, j] for j in range(attrs.shape[1])]
     if isinstance(mesh, HamiltonianMesh):
+        # a user's column named like a cycle field keeps its data under another name
+        names = [f"input_{name}" if name in CYCLE_FIELDS else name for name in names]
         names += list(_CYCLE_FIELDS)
         columns += [data[k] for k in _CYCLE_FIELDS]
     point_names, point_columns = [], []
@@ -145,7 +148,13 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
 
 
 class _Tokens:
-    """Non-comment lines of a Triangle file as ``(line number, tokens)``."""
+    """A cursor over the records (non-blank, non-comment lines) of a Triangle file.
+
+    :meth:`row` reads one record as tokens (exact messages: file and line);
+    :meth:`table` reads many records at once with :func:`numpy.loadtxt` (a million
+    triangles in a fraction of a second) and leaves a bad file to :meth:`row`, whose
+    message then names the line.
+    """
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -157,33 +166,65 @@ class _Tokens:
             raise FileFormatError(f"{path}: not a text file") from None
         except OSError as exc:
             raise FileFormatError(f"{path}: cannot read ({exc.strerror})") from None
-        self.comments = []
-        self._rows: list[tuple[int, list[str]]] = []
-        for lineno, line in enumerate(text.splitlines(), start=1):
-            body, hash_, comment = line.partition("#")
-            if hash_:
-                self.comments.append("#" + comment)
-            tokens = body.split()
-            if tokens:
-                self._rows.append((lineno, tokens))
-        self._next = 0
+        self.lines = text.splitlines()
+        self.comments = ["#" + line.partition("#")[2] for line in self.lines if "#" in line]
+        self._line = 0  # index of the next line to look at
         self.lineno = 0
+
+    def _records_left(self, at_least: int) -> int:
+        """How many records are left, counted up to ``at_least`` (a line is at most one)."""
+        left = len(self.lines) - self._line
+        if left < at_least:
+            return sum(1 for line in self.lines[self._line:] if line.partition("#")[0].strip())
+        return left
 
     def check_count(self, count: int, what: str) -> None:
         """A declared count must not exceed the records left (no allocation for it otherwise)."""
-        left = len(self._rows) - self._next
+        left = self._records_left(count)
         if count > left:
             raise self.error(f"declares {count} {what}, the file has only {left} more records")
+
+    def position(self) -> tuple[int, int]:
+        return self._line, self.lineno
+
+    def rewind(self, position: tuple[int, int]) -> None:
+        self._line, self.lineno = position
+
+    def table(self, count: int, width: int) -> np.ndarray | None:
+        """The next ``count`` records' first ``width`` numbers, ``(count, width) float64``, or
+        None (nothing consumed) if one is short, not a number or missing."""
+        if count == 0:
+            return np.zeros((0, width))
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # (loadtxt warns of an empty input)
+                values = np.loadtxt(self.lines[self._line:], comments="#", max_rows=count,
+                                    usecols=range(width), ndmin=2, dtype=np.float64)
+        except (ValueError, IndexError, OverflowError):
+            return None
+        if values.shape != (count, width):
+            return None
+        seen = 0
+        for i in range(self._line, len(self.lines)):  # move past the records read
+            if self.lines[i].partition("#")[0].strip():
+                seen += 1
+                if seen == count:
+                    self._line, self.lineno = i + 1, i + 1
+                    break
+        return values
 
     def error(self, message: str, lineno: int | None = None) -> FileFormatError:
         where = self.lineno if lineno is None else lineno
         return FileFormatError(f"{self.path}:{where}: {message}" if where else f"{self.path}: {message}")
 
     def row(self, what: str, min_tokens: int) -> list[str]:
-        if self._next >= len(self._rows):
-            raise FileFormatError(f"{self.path}: unexpected end of file (expected {what})")
-        self.lineno, tokens = self._rows[self._next]
-        self._next += 1
+        tokens: list[str] = []
+        while not tokens:
+            if self._line >= len(self.lines):
+                raise FileFormatError(f"{self.path}: unexpected end of file (expected {what})")
+            tokens = self.lines[self._line].partition("#")[0].split()
+            self._line += 1
+        self.lineno = self._line
         if len(tokens) < min_tokens:
             raise self.error(f"expected {min_tokens} numbers ({what}), got {len(tokens)}")
         return tokens
@@ -219,6 +260,39 @@ def _read_node(path: Path) -> tuple[np.ndarray, int, np.ndarray]:
     if n == 0:
         raise tok.error("no vertices")
     tok.check_count(n, "vertices")
+    start = tok.position()
+    fast = _node_table(tok.table(n, 3 + n_attr + n_mark), n_attr, n_mark)
+    if fast is not None:
+        points, base, vmarks, values = fast
+    else:  # row by row: the message names the line
+        tok.rewind(start)
+        points, base, vmarks, values = _node_rows(tok, n, n_attr, n_mark)
+    names = _comment_names(tok, n_attr) or [f"{ATTRIBUTE_PREFIX}{j}" for j in range(n_attr)]
+    return points, base, vmarks, join_components({name: values[:, j] for j, name in enumerate(names)})
+
+
+def _integral(values: np.ndarray) -> bool:
+    """Whether float64 ``values`` are integers read exactly (below 2**53)."""
+    return bool(np.all(values == np.round(values)) and np.all(np.abs(values) < 2.0**53))
+
+
+def _node_table(table: np.ndarray | None, n_attr: int,
+                n_mark: int) -> tuple[np.ndarray, int, np.ndarray, np.ndarray] | None:
+    """Points, base, markers and attributes of a ``.node`` table, or None if a row is wrong."""
+    if table is None or not _integral(table[:, 0]) or (n_mark and not _integral(table[:, 3 + n_attr])):
+        return None
+    base = int(table[0, 0])
+    points = np.ascontiguousarray(table[:, 1:3])
+    if base not in (0, 1) or not np.array_equal(table[:, 0], base + np.arange(len(table))):
+        return None
+    if not np.isfinite(points).all():
+        return None
+    vmarks = table[:, 3 + n_attr].astype(np.int64) if n_mark else np.zeros(len(table), dtype=np.int64)
+    return points, base, vmarks, np.ascontiguousarray(table[:, 3:3 + n_attr])
+
+
+def _node_rows(tok: "_Tokens", n: int, n_attr: int, n_mark: int) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+    """:func:`_node_table` row by row, raising at the first wrong row."""
     points = np.empty((n, 2), dtype=np.float64)
     vmarks = np.zeros(n, dtype=np.int64)
     values = np.empty((n, n_attr), dtype=np.float64)
@@ -240,8 +314,7 @@ def _read_node(path: Path) -> tuple[np.ndarray, int, np.ndarray]:
             values[i, j] = tok.as_float(row[3 + j], f"attribute {j + 1}")
         if n_mark:
             vmarks[i] = tok.as_int(row[3 + n_attr], "boundary marker")
-    names = _comment_names(tok, n_attr) or [f"{ATTRIBUTE_PREFIX}{j}" for j in range(n_attr)]
-    return points, base, vmarks, join_components({name: values[:, j] for j, name in enumerate(names)})
+    return points, base, vmarks, values
 
 
 def _token(name: str) -> str:
@@ -331,19 +404,28 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
     tok.check_count(m, "triangles")
     if k > 1_000_000:
         raise tok.error(f"declares {k} attributes per triangle")
-    triangles = np.empty((m, 3), dtype=np.int64)
-    attrs = np.empty((m, k), dtype=np.float64)
-    for i in range(m):
-        row = tok.row(f"triangle {i + 1} of {m}", 1 + per + k)
-        tok.as_int(row[0], "triangle number")
-        triangles[i] = [_vertex(tok, t, base, n) for t in row[1:4]]
-        for j in range(k):
-            attrs[i, j] = tok.as_float(row[1 + per + j], f"attribute {j + 1}")
+    start = tok.position()
+    table = tok.table(m, 1 + per + k)
+    corners = None if table is None else table[:, 1:4] - base
+    if table is not None and _integral(table[:, :4]) and (corners >= 0).all() and (corners < n).all():
+        triangles = corners.astype(np.int64)
+        attrs = np.ascontiguousarray(table[:, 1 + per:])
+    else:  # row by row: the message names the line
+        tok.rewind(start)
+        triangles = np.empty((m, 3), dtype=np.int64)
+        attrs = np.empty((m, k), dtype=np.float64)
+        for i in range(m):
+            row = tok.row(f"triangle {i + 1} of {m}", 1 + per + k)
+            tok.as_int(row[0], "triangle number")
+            triangles[i] = [_vertex(tok, t, base, n) for t in row[1:4]]
+            for j in range(k):
+                attrs[i, j] = tok.as_float(row[1 + per + j], f"attribute {j + 1}")
 
     names = _comment_names(tok, k)
     attribute_names: tuple[str, ...] = ()
-    if names is not None:  # hammesh's: the cycle fields are the output's, not attributes
-        kept = [j for j, name in enumerate(names) if name not in _CYCLE_FIELDS]
+    if names is not None:  # a Hamiltonian mesh's cycle fields are the output's, not attributes
+        hamiltonian = "cycle_position" in names
+        kept = [j for j, name in enumerate(names) if not (hamiltonian and name in _CYCLE_FIELDS)]
         attrs = attrs[:, kept]
         attribute_names = tuple(names[j] for j in kept)
 

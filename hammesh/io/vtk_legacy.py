@@ -24,6 +24,7 @@ Reference: "VTK File Formats", legacy format, Dataset formats POLYDATA and UNSTR
 from __future__ import annotations
 
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 
@@ -326,6 +327,7 @@ def _read_array(r: _Reader, words: list[str], tuples: int, into: dict[str, np.nd
             raise r.error(f"{key} needs {k - 1} fields after it, got {' '.join(words[1:])!r}")
 
     def put(name: str, values: np.ndarray, c: int) -> None:
+        name = unquote(name)  # VTK writes a space in a name as %20 (vtkDataWriter::EncodeString)
         into[name] = values.reshape(tuples, c) if c > 1 else values.reshape(tuples)
 
     if key == "SCALARS":

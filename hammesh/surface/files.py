@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from hammesh.mesh import HamiltonianMesh
 
-__all__ = ["read_surface", "weld_points", "write_surface", "SURFACE_SUFFIXES"]
+__all__ = ["read_surface", "weld_points", "weld_surface", "Welded", "write_surface", "SURFACE_SUFFIXES"]
 
 #: Formats that hold a 3D surface (every mesh format of :mod:`hammesh.io` but Triangle's).
 SURFACE_SUFFIXES: tuple[str, ...] = (".obj", ".ply", ".stl", ".off", ".vtu", ".vtk", ".msh", ".xdmf", ".vtp")
@@ -35,16 +36,41 @@ def read_surface(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     return weld_points(mesh.points, mesh.triangles)
 
 
+class Welded(NamedTuple):
+    """A surface with coincident points merged (:func:`weld_surface`)."""
+
+    points: np.ndarray  #: (k, d) float64, first-occurrence order
+    triangles: np.ndarray  #: (m, 3) int64 into ``points``
+    source: np.ndarray  #: (k,) int64: the input point each kept point is
+
+
+def weld_surface(pts: np.ndarray, tri: np.ndarray, point_data: dict[str, np.ndarray] | None = None) -> Welded:
+    """Merge exactly coincident points that also carry equal ``point_data`` values.
+
+    STL stores every triangle's corners separately: welding makes it one surface.  Two
+    points at one place with different data (a texture seam: two UVs) stay two points,
+    so no value is lost; first-occurrence order is kept, unused points too.
+    """
+    pts = np.ascontiguousarray(pts)
+    tri = np.ascontiguousarray(tri)
+    key = pts.reshape(len(pts), -1).astype(np.float64)
+    if point_data:
+        key = np.column_stack([key] + [np.asarray(v).reshape(len(pts), -1).astype(np.float64)
+                                       for v in point_data.values()])
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    if len(first) == len(pts):
+        return Welded(pts, tri, np.arange(len(pts), dtype=np.int64))
+    order = np.argsort(first)
+    rank = np.empty(len(order), np.int64)
+    rank[order] = np.arange(len(order))
+    source = np.sort(first).astype(np.int64)
+    return Welded(np.ascontiguousarray(pts[source]), np.ascontiguousarray(rank[inv.reshape(-1)][tri]), source)
+
+
 def weld_points(pts: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Merge exactly coincident points (first occurrence order kept); unused points kept."""
-    uniq, first, inv = np.unique(pts, axis=0, return_index=True, return_inverse=True)
-    if len(uniq) < len(pts):  # weld duplicates, keeping first-occurrence order
-        order = np.argsort(first)
-        rank = np.empty(len(order), np.int64)
-        rank[order] = np.arange(len(order))
-        tri = rank[inv.reshape(-1)][tri]
-        pts = pts[np.sort(first)]
-    return np.ascontiguousarray(pts), np.ascontiguousarray(tri)
+    welded = weld_surface(pts, tri)
+    return welded.points, welded.triangles
 
 
 def write_surface(h: HamiltonianMesh, path: str | os.PathLike[str]) -> None:

@@ -40,6 +40,7 @@ import numpy as np
 from hammesh.errors import InvalidMeshError
 from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import HamiltonianMesh, cycle_positions
+from hammesh.point_data import carry_point_data
 from hammesh.postprocess.sparse import count_report, sparse_cycles
 from hammesh.strips.defects import (
     MeshDefects,
@@ -159,6 +160,9 @@ def surface_hamiltonian(
     swaps: bool = False,
     max_fold_deg: float = 10.0,
     split_all: bool = False,
+    triangle_attributes: np.ndarray | None = None,
+    attribute_names: tuple[str, ...] = (),
+    point_data: dict[str, np.ndarray] | None = None,
 ) -> HamiltonianMesh:
     """Make a triangle surface a verified Hamiltonian cycle surface, few Steiner points.
 
@@ -175,6 +179,13 @@ def surface_hamiltonian(
     split_all : bool
         Baseline: no cycle cover, every triangle split at its incenter and joined by
         midpoint bridges along a spanning tree (Thm 2.4's construction on a surface).
+    triangle_attributes : (m, k) float64, optional
+        Per-triangle values (a file's cell data): each output triangle takes its
+        parent's row; ``attribute_names`` names the columns.
+    point_data : dict of str to (n,) or (n, c) arrays, optional
+        Per-point values: kept at the input points, interpolated linearly at Steiner
+        points inside their input triangle (integers: the nearest corner's;
+        :func:`hammesh.point_data.carry_point_data`).
 
     Returns
     -------
@@ -248,7 +259,10 @@ def surface_hamiltonian(
         position=position,
         parent=parent,
         kind=r.kind,
-        triangle_attributes=np.zeros((len(r.triangles), 0)),
+        triangle_attributes=(np.zeros((len(r.triangles), 0)) if triangle_attributes is None
+                             else np.asarray(triangle_attributes, dtype=np.float64).reshape(m_in, -1)[parent]),
+        attribute_names=tuple(attribute_names) if triangle_attributes is not None else (),
+        point_data=carry_point_data(point_data or {}, pts, tri, r.points, r.triangles, r.parent, r.kind),
         report=report,
     )
     return h

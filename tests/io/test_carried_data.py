@@ -200,3 +200,24 @@ def test_triangle_node_attributes_are_point_data(tmp_path):
     back = read_mesh(tmp_path / "o.ele")
     np.testing.assert_array_equal(back.point_data["attribute_0"][:4], [10, 20, 30, 40])
     assert np.all((back.point_data["attribute_0"] >= 10) & (back.point_data["attribute_0"] <= 40))
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".msh", ".ele"])
+def test_user_fields_named_like_hammesh_fields_are_kept(tmp_path, suffix):
+    # someone else's mesh with cell fields called kind and part: data, read and carried
+    square = meshio.Mesh(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float), [("triangle", np.array([[0, 1, 2], [0, 2, 3]]))],
+                         cell_data={"kind": [np.array([4.0, 5.0])], "part": [np.array([7, 8])]})
+    src = tmp_path / "in.vtu"
+    square.write(src)
+    m = hammesh.io.read_mesh(src)
+    assert set(m.attribute_names) == {"kind", "part"}
+    h = hammesh.hamiltonian(m, mode="incircle")
+    out = tmp_path / f"out{suffix}"
+    hammesh.io.write(h, out)
+    back = hammesh.io.read_mesh(out)
+    # hammesh's own kind is not read back as data; the user's is, under input_kind
+    kind = back.triangle_attributes[:, back.attribute_names.index("input_kind")]
+    np.testing.assert_array_equal(kind, m.triangle_attributes[h.parent, m.attribute_names.index("kind")])
+    assert "kind" not in back.attribute_names
+    part = back.triangle_attributes[:, back.attribute_names.index("input_part")]
+    np.testing.assert_array_equal(part, m.triangle_attributes[h.parent, m.attribute_names.index("part")])

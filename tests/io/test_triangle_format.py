@@ -171,3 +171,38 @@ def test_ele_round_trip_property(tmp_path, n, seed, scale, k):
     np.testing.assert_array_equal(back.triangle_attributes, mesh.triangle_attributes)
     np.testing.assert_array_equal(back.segments, mesh.segments)
     np.testing.assert_array_equal(back.segment_markers, mesh.segment_markers)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(n=st.integers(3, 30), seed=st.integers(0, 2**32 - 1), base=st.sampled_from([0, 1]),
+       k=st.integers(0, 2), marks=st.booleans())
+def test_vectorised_and_row_readers_agree(tmp_path, n, seed, base, k, marks):
+    """Triangle's files as people write them (comments, blank lines, trailing tokens, any
+    base): the one-pass table read gives what the row-by-row reader gives."""
+    rng = np.random.default_rng(seed)
+    points = rng.random((n, 2)) * 10
+    triangles = Delaunay(points).simplices
+    attrs = rng.normal(size=(len(triangles), k))
+
+    def noise() -> str:  # a comment or blank line now and then
+        return rng.choice(["", "", "", "\n", "# note\n", "   \n"])
+
+    node = f"{n} 2 0 {int(marks)}\n" + "".join(
+        noise() + f"{i + base} {float(x)!r} {float(y)!r}" + (f" {i % 3}" if marks else "") + " # c\n"
+        for i, (x, y) in enumerate(points))
+    ele = f"{len(triangles)} 3 {k}\n" + "".join(
+        noise() + f"{j + base} " + " ".join(str(v + base) for v in t) + "".join(f" {float(a)!r}" for a in row) + "\n"
+        for j, (t, row) in enumerate(zip(triangles, attrs)))
+    path = _write(tmp_path, "w", node, ele)
+    fast = triangle_format.read_ele(path)
+    original = triangle_format._Tokens.table
+    try:
+        triangle_format._Tokens.table = lambda self, count, width: None  # row by row only
+        rows = triangle_format.read_ele(path)
+    finally:
+        triangle_format._Tokens.table = original
+    for a, b in [(fast.points, rows.points), (fast.triangles, rows.triangles),
+                 (fast.triangle_attributes, rows.triangle_attributes), (fast.vertex_markers, rows.vertex_markers)]:
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(fast.points, points)
+    np.testing.assert_array_equal(fast.triangles, triangles)

@@ -174,3 +174,10 @@ def test_volume_cells_are_refused_by_name(tmp_path):
                     "POINTS 4 double\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n")
     with pytest.raises(FileFormatError, match="tetra"):
         read_mesh(path, dim=None)
+
+
+def test_encoded_names_are_decoded(tmp_path):
+    # VTK's writer encodes a space in an array name as %20
+    path = tmp_path / "sq.vtk"
+    path.write_text(ASCII.replace("SCALARS height float 1", "SCALARS my%20height float 1"))
+    assert "my height" in read_mesh(path).point_data
