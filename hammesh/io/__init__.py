@@ -9,6 +9,7 @@ pair; nothing registers itself on import.  Every writer validates the mesh first
 suffixes                                   module
 =========================================  ==========================================
 ``.vtu .vtk .msh .xdmf .obj .ply .stl .off``  :mod:`hammesh.io.meshio_format`
+``.vtp``                                   :mod:`hammesh.io.vtp` (through meshio_format)
 ``.ele .node``                             :mod:`hammesh.io.triangle_format`
 =========================================  ==========================================
 
@@ -83,6 +84,7 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
     ".ply": (meshio_format.read, meshio_format.write),
     ".stl": (meshio_format.read, meshio_format.write),
     ".off": (meshio_format.read, meshio_format.write),
+    ".vtp": (meshio_format.read, meshio_format.write),  # VTK XML PolyData: hammesh.io.vtp
     ".ele": (triangle_format.read_ele, triangle_format.write),
     ".node": (triangle_format.read_ele, triangle_format.write),
     ".pvtu": (pvtu.read, pvtu.write),  # partitioned VTK: an index of .vtu pieces (issue 15)
@@ -91,7 +93,7 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
 
 #: Suffixes whose files hold the triangles' attributes and the points' data (the other
 #: formats hold geometry, and ``.pvtu`` pieces hold the attributes unnamed).
-DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf", ".ele", ".node"})
+DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf", ".vtp", ".ele", ".node"})
 
 
 def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> list[str]:

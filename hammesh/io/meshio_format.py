@@ -82,13 +82,14 @@ _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
     ".ply": (("ply",), "ply", {}),
     ".stl": (("stl",), "stl", {}),
     ".off": (("off",), "off", {}),
+    ".vtp": ((), "vtp", {}),  # hammesh.io.vtp reads and writes it (meshio has no .vtp)
 }
 
 #: Suffixes handled by this module.
 SUFFIXES: tuple[str, ...] = tuple(_FORMATS)
 
 #: Suffixes whose files store the per-triangle cell data.
-CELL_DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf"})
+CELL_DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf", ".vtp"})
 
 #: Cell data holding each constrained edge's boundary marker (-1 on triangles).
 SEGMENT_MARKER = "segment_marker"
@@ -150,6 +151,10 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     with atomic_path(path) as tmp:
         if suffix == ".vtu":  # meshio's .vtu writer spends most of its time in zlib
             vtu.write(tmp, out)
+        elif suffix == ".vtp":  # (meshio has no .vtp writer)
+            from hammesh.io.vtp import write_vtp
+
+            write_vtp(tmp, out)
         else:
             meshio.write(tmp, out, file_format=file_format, **kwargs)
 
@@ -399,6 +404,10 @@ def _read_raw(path: Path, suffix: str) -> Any:
         from hammesh.io.off_format import read_off
 
         return read_off(path)
+    if suffix == ".vtp":
+        from hammesh.io.vtp import read_vtp
+
+        return read_vtp(path)
     if suffix == ".vtk":
         from hammesh.io.vtk_legacy import DATASETS, dataset_type, read_legacy
 

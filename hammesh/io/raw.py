@@ -1,7 +1,7 @@
 """The cells of a mesh file as read, before they become a :class:`~hammesh.mesh.Mesh`.
 
 Readers that hammesh implements itself (OBJ with relative indices, legacy VTK
-``POLYDATA``) return a :class:`RawMesh` shaped like a ``meshio.Mesh`` (``points``,
+``POLYDATA``, VTK XML ``.vtp``) return a :class:`RawMesh` shaped like a ``meshio.Mesh`` (``points``,
 ``cells`` blocks with ``type`` and ``data``, ``cell_data``, ``point_data``), so one
 conversion (:func:`hammesh.io.meshio_format.to_mesh`) serves every format.
 """
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CellBlock", "RawMesh", "polygon_blocks", "polygon_block_rows"]
+__all__ = ["CellBlock", "RawMesh", "polygon_blocks", "polygon_block_rows", "strip_triangles", "blocks_of_kind"]
 
 
 @dataclass(frozen=True)
@@ -66,3 +66,55 @@ def polygon_block_rows(offsets: np.ndarray) -> list[np.ndarray]:
     starts = np.concatenate([[0], cuts])
     ends = np.concatenate([cuts, [len(sizes)]])
     return [np.arange(a, b, dtype=np.int64) for a, b in zip(starts.tolist(), ends.tolist()) if sizes[a] != 0]
+
+
+def strip_triangles(offsets: np.ndarray, conn: np.ndarray) -> np.ndarray:
+    """``(t, 3) int64`` triangles of the triangle strips ``offsets`` (k + 1) / ``conn``, in
+    order, with VTK's alternating winding (``vtkTriangleStrip``: every odd triangle has
+    its first two corners swapped); strips of fewer than 3 points give none.
+
+    >>> strip_triangles(np.array([0, 5]), np.array([0, 1, 2, 3, 4])).tolist()
+    [[0, 1, 2], [2, 1, 3], [2, 3, 4]]
+    """
+    counts = np.maximum(np.diff(offsets) - 2, 0)
+    strip_of = np.repeat(np.arange(len(counts)), counts)
+    rank = np.arange(len(strip_of)) - (np.cumsum(counts) - counts)[strip_of]  # within its strip
+    at = offsets[:-1][strip_of] + rank
+    tris = np.stack([conn[at], conn[at + 1], conn[at + 2]], axis=1).astype(np.int64).reshape(-1, 3)
+    odd = rank % 2 == 1
+    tris[odd, 0], tris[odd, 1] = tris[odd, 1], tris[odd, 0].copy()
+    return tris
+
+
+def blocks_of_kind(kind: str, offsets: np.ndarray, conn: np.ndarray,
+                   first: int) -> tuple[list[CellBlock], list[np.ndarray]]:
+    """Cell blocks of ``offsets`` (k + 1) / ``conn`` cells all of one ``kind``, and each
+    block's cells' numbers in the file (``first`` + row): how cell data follows its cells.
+
+    ``kind``: ``"polygon"`` (:func:`polygon_blocks`), ``"strip"`` (triangles,
+    :func:`strip_triangles`), ``"line"`` (a polyline: its consecutive pairs),
+    ``"vertex"`` (no block); any other name is one block of that type (cells of one size,
+    for the caller to refuse by name; ``ValueError`` if their sizes differ).
+    """
+    cells = len(offsets) - 1
+    if kind == "polygon":
+        return polygon_blocks(offsets, conn), [first + rows for rows in polygon_block_rows(offsets)]
+    if kind == "strip":
+        strip_of = np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 2, 0))
+        if len(strip_of) == 0:  # (an empty block would stand for no cells of the file)
+            return [], []
+        return [CellBlock("triangle", strip_triangles(offsets, conn))], [first + strip_of]
+    if kind == "line":
+        pairs = np.maximum(np.diff(offsets) - 1, 0)
+        pair_of = np.repeat(np.arange(cells), pairs)
+        if len(pair_of) == 0:
+            return [], []
+        rank = np.arange(len(pair_of)) - (np.cumsum(pairs) - pairs)[pair_of]  # within its polyline
+        at = offsets[:-1][pair_of] + rank
+        return [CellBlock("line", np.stack([conn[at], conn[at + 1]], axis=1).astype(np.int64))], [first + pair_of]
+    if kind == "vertex":
+        return [], []
+    sizes = np.diff(offsets)
+    if (sizes != sizes[0]).any():
+        raise ValueError(f"{kind} cells of different sizes")
+    return [CellBlock(kind, conn.reshape(cells, int(sizes[0])))], [first + np.arange(cells)]

@@ -29,7 +29,7 @@ from urllib.parse import unquote
 import numpy as np
 
 from hammesh.errors import FileFormatError
-from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
+from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind
 
 __all__ = ["read_legacy", "dataset_type", "DATASETS"]
 
@@ -172,18 +172,6 @@ def _cells_classic(r: _Reader, n: int, size: int, what: str) -> tuple[np.ndarray
     return offsets, flat[keep]
 
 
-def _strip_triangles(offsets: np.ndarray, conn: np.ndarray) -> np.ndarray:
-    tris = []
-    for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()):
-        s = conn[a:b]
-        if len(s) < 3:
-            continue
-        t = np.stack([s[:-2], s[1:-1], s[2:]], axis=1)
-        t[1::2] = t[1::2][:, [1, 0, 2]]  # odd triangles: swap to keep the winding
-        tris.append(t)
-    return np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
-
-
 def _cell_lists(r: _Reader, words: list[str]) -> tuple[np.ndarray, np.ndarray]:
     """CSR ``offsets`` and ``connectivity`` of a ``POLYGONS``/``CELLS``... section (header
     ``words`` read), in either layout: classic or version 5.1 (``OFFSETS``, ``CONNECTIVITY``)."""
@@ -205,32 +193,6 @@ def _cell_lists(r: _Reader, words: list[str]) -> tuple[np.ndarray, np.ndarray]:
         return offsets, conn
     r.pos = mark
     return _cells_classic(r, n, size, key)
-
-
-def _blocks_of_kind(kind: str, offsets: np.ndarray, conn: np.ndarray,
-                    first: int) -> tuple[list[CellBlock], list[np.ndarray]]:
-    """Cell blocks of ``offsets``/``conn`` cells all of one ``kind``, and each block's cells'
-    numbers in the file (``first`` + row): how cell data follows its cells."""
-    cells = len(offsets) - 1
-    if kind == "polygon":
-        return polygon_blocks(offsets, conn), [first + rows for rows in polygon_block_rows(offsets)]
-    if kind == "strip":
-        return ([CellBlock("triangle", _strip_triangles(offsets, conn))],
-                [first + np.repeat(np.arange(cells), np.maximum(np.diff(offsets) - 2, 0))])
-    if kind == "line":  # a polyline: its consecutive pairs
-        pairs = np.maximum(np.diff(offsets) - 1, 0)
-        pair_of = np.repeat(np.arange(cells), pairs)
-        if len(pair_of) == 0:
-            return [], []
-        rank = np.arange(len(pair_of)) - (np.cumsum(pairs) - pairs)[pair_of]  # within its polyline
-        at = offsets[:-1][pair_of] + rank
-        return [CellBlock("line", np.stack([conn[at], conn[at + 1]], axis=1))], [first + pair_of]
-    if kind == "vertex":
-        return [], []
-    sizes = np.diff(offsets)  # a cell type hammesh does not take: named, for the caller to refuse
-    if (sizes != sizes[0]).any():
-        raise ValueError(f"{kind} cells of different sizes")
-    return [CellBlock(kind, conn.reshape(cells, int(sizes[0])))], [first + np.arange(cells)]
 
 
 def _grid_blocks(r: _Reader, offsets: np.ndarray, conn: np.ndarray,
@@ -257,7 +219,7 @@ def _grid_blocks(r: _Reader, offsets: np.ndarray, conn: np.ndarray,
         kind = str(kinds[kind_id[a]])
         run_offsets = offsets[a:b + 1] - offsets[a]
         try:
-            got, rows = _blocks_of_kind(kind, run_offsets, conn[offsets[a]:offsets[b]], a)
+            got, rows = blocks_of_kind(kind, run_offsets, conn[offsets[a]:offsets[b]], a)
         except ValueError as exc:
             raise r.error(str(exc)) from None
         blocks.extend(got)
@@ -308,7 +270,7 @@ def read_legacy(path: str | Path) -> RawMesh:
             points = r.numbers(3 * n, words[2], "POINTS").reshape(n, 3)
         elif not grid and key in _SECTIONS:
             offsets, conn = _cell_lists(r, words)
-            got, rows = _blocks_of_kind(_KIND_OF_SECTION[key], offsets, conn, n_cells)
+            got, rows = blocks_of_kind(_KIND_OF_SECTION[key], offsets, conn, n_cells)
             blocks.extend(got)
             origins.extend(rows)
             n_cells += len(offsets) - 1  # (5.1 files count the offsets, classic ones the cells)

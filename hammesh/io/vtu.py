@@ -39,7 +39,7 @@ import numpy as np
 from hammesh import threads as row_threads
 from hammesh.errors import FileFormatError
 
-__all__ = ["write", "write_raw", "read_raw", "VTK_CELL_TYPES", "BLOCK_BYTES", "LEVEL", "RAW_DTYPES"]
+__all__ = ["write", "write_raw", "read_raw", "write_data_array", "write_data_sections", "xml_attribute", "VTK_CELL_TYPES", "BLOCK_BYTES", "LEVEL", "RAW_DTYPES"]
 
 #: VTK cell type of each meshio cell type written here.
 VTK_CELL_TYPES: dict[str, int] = {"line": 3, "triangle": 5}
@@ -96,22 +96,29 @@ def write(path: str | os.PathLike[str], mesh: Any, threads: int | None = None) -
                  b"<!--This file was created by hammesh-->\n<UnstructuredGrid>\n")
         fh.write(f'<Piece NumberOfPoints="{len(mesh.points)}" NumberOfCells="{n_cells}">\n'.encode())
         fh.write(b"<Points>\n")
-        _data_array(fh, pool, workers, "Points", np.asarray(mesh.points, dtype=np.float64))
+        write_data_array(fh, pool, workers, "Points", np.asarray(mesh.points, dtype=np.float64))
         fh.write(b"</Points>\n<Cells>\n")
-        _data_array(fh, pool, workers, "connectivity", connectivity)
-        _data_array(fh, pool, workers, "offsets", np.cumsum(sizes))
-        _data_array(fh, pool, workers, "types", types)
+        write_data_array(fh, pool, workers, "connectivity", connectivity)
+        write_data_array(fh, pool, workers, "offsets", np.cumsum(sizes))
+        write_data_array(fh, pool, workers, "types", types)
         fh.write(b"</Cells>\n")
-        for tag, data in (("PointData", mesh.point_data), ("CellData", cell_data)):
-            if data:
-                fh.write(f"<{tag}>\n".encode())
-                for name, values in data.items():
-                    _data_array(fh, pool, workers, name, np.asarray(values))
-                fh.write(f"</{tag}>\n".encode())
+        write_data_sections(fh, pool, workers, mesh.point_data, cell_data)
         fh.write(b"</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
 
 
-def _data_array(fh: BinaryIO, pool: ThreadPoolExecutor, workers: int, name: str, values: np.ndarray) -> None:
+def write_data_sections(fh: BinaryIO, pool: ThreadPoolExecutor, workers: int, point_data: dict[str, Any],
+                        cell_data: dict[str, np.ndarray]) -> None:
+    """``<PointData>`` and ``<CellData>`` (each only if not empty), every array by
+    :func:`write_data_array`; shared by the ``.vtu`` and ``.vtp`` writers."""
+    for tag, data in (("PointData", point_data), ("CellData", cell_data)):
+        if data:
+            fh.write(f"<{tag}>\n".encode())
+            for name, values in data.items():
+                write_data_array(fh, pool, workers, name, np.asarray(values))
+            fh.write(f"</{tag}>\n".encode())
+
+
+def write_data_array(fh: BinaryIO, pool: ThreadPoolExecutor, workers: int, name: str, values: np.ndarray) -> None:
     """One ``<DataArray format="binary">``: a block header and the zlib blocks, base64."""
     values = np.ascontiguousarray(values)
     if values.dtype.byteorder == ">":
@@ -120,7 +127,7 @@ def _data_array(fh: BinaryIO, pool: ThreadPoolExecutor, workers: int, name: str,
     if vtk_type is None:
         raise ValueError(f"hammesh.io.vtu: {name}: dtype {values.dtype} is not supported")
     components = f' NumberOfComponents="{values.shape[1]}"' if values.ndim == 2 else ""
-    fh.write(f'<DataArray type="{vtk_type}" Name="{_xml_attribute(name)}"{components} format="binary">\n'.encode())
+    fh.write(f'<DataArray type="{vtk_type}" Name="{xml_attribute(name)}"{components} format="binary">\n'.encode())
     raw = memoryview(values.reshape(-1).view(np.uint8))
     chunks = [raw[i:i + BLOCK_BYTES] for i in range(0, len(raw), BLOCK_BYTES)] or [raw]
     # one task per group of blocks: a task per 32 KiB block would cost as much as its zlib
@@ -138,7 +145,7 @@ def _compress_all(chunks: list[memoryview]) -> list[bytes]:
     return [zlib.compress(chunk, LEVEL) for chunk in chunks]
 
 
-def _xml_attribute(text: str) -> str:
+def xml_attribute(text: str) -> str:
     """``text`` quoted for an XML attribute value."""
     return text.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
 

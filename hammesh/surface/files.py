@@ -13,7 +13,7 @@ from hammesh.mesh import HamiltonianMesh
 __all__ = ["read_surface", "weld_points", "weld_surface", "Welded", "write_surface", "SURFACE_SUFFIXES"]
 
 #: Formats that hold a 3D surface (every mesh format of :mod:`hammesh.io` but Triangle's).
-SURFACE_SUFFIXES: tuple[str, ...] = (".obj", ".ply", ".stl", ".off", ".vtu", ".vtk", ".msh", ".xdmf")
+SURFACE_SUFFIXES: tuple[str, ...] = (".obj", ".ply", ".stl", ".off", ".vtu", ".vtk", ".msh", ".xdmf", ".vtp")
 
 def read_surface(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     """``(points (n, 3) float64, triangles (m, 3) int64)`` of a surface file.

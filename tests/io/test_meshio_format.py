@@ -23,14 +23,19 @@ NO_CELL_DATA = sorted(set(SUFFIXES) - meshio_format.CELL_DATA_SUFFIXES)
 
 
 def raw_read(path):
-    """What another program sees: meshio's own reader (Gmsh for .msh)."""
+    """What another program sees: meshio's own reader (Gmsh for .msh; meshio has no .vtp
+    reader: hammesh's, checked against VTK's in tests/io/test_vtp.py)."""
+    if str(path).endswith(".vtp"):
+        from hammesh.io.vtp import read_vtp
+
+        return read_vtp(path)
     fmt = "gmsh" if str(path).endswith(".msh") else None
     return meshio.read(path, file_format=fmt)
 
 
 def test_suffix_sets():
-    assert set(SUFFIXES) == {".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off"}
-    assert set(CELL_DATA) == {".vtu", ".vtk", ".msh", ".xdmf"}
+    assert set(SUFFIXES) == {".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off", ".vtp"}
+    assert set(CELL_DATA) == {".vtu", ".vtk", ".msh", ".xdmf", ".vtp"}
 
 
 @pytest.mark.parametrize("suffix", SUFFIXES)

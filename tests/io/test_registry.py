@@ -14,7 +14,7 @@ import hammesh.io as hio
 from hammesh.io import vtu
 from hammesh.errors import FileFormatError, InvalidMeshError
 
-ALL = [".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off", ".ele", ".node", ".pvtu"]
+ALL = [".vtu", ".vtk", ".msh", ".xdmf", ".obj", ".ply", ".stl", ".off", ".vtp", ".ele", ".node", ".pvtu"]
 
 
 def test_registry_is_explicit_and_complete():
