@@ -10,7 +10,7 @@ import numpy as np
 from hammesh import params
 from hammesh.errors import FileFormatError
 
-HELP = "make a 3D triangle surface (.obj .ply .stl .off .vtu .vtk) one strip per piece, few Steiner points"
+HELP = "make a 3D triangle surface (.obj .ply .stl .off .vtu .vtk .vtp) one strip per piece, few Steiner points"
 EXAMPLES = """examples:
   hammesh surface bunny.ply -o bunny.vtu --report bunny.json
   hammesh surface part.stl -o part.obj --swaps          # Steiner-free flips too (surface moves slightly)
@@ -19,8 +19,8 @@ Every new triangle lies inside an input triangle (same surface, same area); the 
 
 
 def add_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", type=Path, help="surface mesh (.obj .ply .stl .off .vtu .vtk)")
-    p.add_argument("-o", "--output", type=Path, help="output surface (.vtu .vtk .obj .ply .stl .off)")
+    p.add_argument("input", type=Path, help="surface mesh (.obj .ply .stl .off .vtu .vtk .vtp .msh .xdmf)")
+    p.add_argument("-o", "--output", type=Path, help="output surface (.vtu .vtk .vtp .obj .ply .stl .off .msh .xdmf)")
     p.add_argument("--report", type=Path, help="write the report JSON here")
     p.add_argument("--swaps", action="store_true", help="also flip edges without Steiner points (not exact)")
     p.add_argument("--max-fold", type=float, default=10.0, help="with --swaps: largest normal change in degrees (0..180)")
