@@ -8,7 +8,7 @@ from typing import Iterator
 from hammesh.errors import InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
-           "dask_installed", "DASK_MISSING", "QUIET_CLUSTER"]
+           "dask_installed", "DASK_MISSING", "QUIET_CLUSTER", "TILE_QUEUE"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
 
@@ -135,6 +135,14 @@ QUIET_CLUSTER = {
 }
 
 
+#: Dask's scheduler sends a worker its next tile only when it is free (root tasks
+#: queued on the scheduler, ``worker-saturation`` 1.0; Dask's default 1.1 sends each
+#: one-thread worker two at once, fixing which worker runs which tile up front): with
+#: more tiles than workers (:func:`~hammesh.parallel.run.default_tiles`) a worker done
+#: early takes the next tile instead of idling while another still has two.
+TILE_QUEUE = {"distributed.scheduler.worker-saturation": 1.0}
+
+
 def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = ()):
     """Start a local cluster of ``workers`` processes and its client, both closed by
     ``stack`` (``modules`` imported first, see :data:`FORK_AFTER_IMPORTING`)."""
@@ -156,7 +164,7 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
         load_tile_kernels()  # (the lattice's: each worker loaded them in its first tile, ~0.25 s CPU)
     # one process per worker, one thread each: Triangle and the kernels hold their core;
     # Dask's shutdown chatter (nanny warnings) is not the user's business
-    with dask.config.set({"distributed.worker.multiprocessing-method": method, **QUIET_CLUSTER}):
+    with dask.config.set({"distributed.worker.multiprocessing-method": method, **QUIET_CLUSTER, **TILE_QUEUE}):
         # no dashboard; the scheduler's HTTP server on a free local port (its default,
         # 8787, warns on stderr when another cluster has it)
         cluster = stack.enter_context(distributed.LocalCluster(
