@@ -51,6 +51,17 @@ min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores)
 
     python benchmarks/bench_scale.py --sizes 6e6 --write-ab 3 --modes incircle
 
+``--tiles-ab R``: the whole command against one raw call, ``R`` rounds per mode of
+fresh processes alternating the default tiles (two per worker past 1M triangles,
+largest first, each worker taking the next when free) and one tile per worker.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --workers 2 --tiles-ab 2 --modes sparse,incircle
+
+Before measuring, every mode runs once small with ``PYTHONDONTWRITEBYTECODE`` unset
+(:func:`cache_bytecode`), so that no measured process compiles its imports from
+source (``--source-imports``: measure without it); the first line says whether the
+bytecode was cached before.
+
 ``--ab R``: the whole command against one raw call, ``R`` rounds per mode of fresh
 processes alternating session 10's switches on / off (the early cluster start and
 the band tiles; the import changes cannot be switched off), after one uncounted 0.2M
@@ -240,6 +251,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
     ap.add_argument("--ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
+    ap.add_argument("--tiles-ab", type=int, metavar="ROUNDS",
+                    help="A/B of the whole command, the default tiles (balance: 2 per worker) / one tile per worker")
     ap.add_argument("--write-ab", type=int, metavar="ROUNDS",
                     help="A/B of one piece written with 32-bit / 64-bit integer arrays")
     ap.add_argument("--source-imports", action="store_true",
@@ -251,6 +264,8 @@ def main(argv: list[str] | None = None) -> int:
         return tile_ab(a)
     if a.ab:
         return whole_ab(a)
+    if a.tiles_ab:
+        return tiles_ab(a)
     if a.write_ab:
         return write_ab(a)
     if a.startup:
@@ -372,16 +387,22 @@ def write_ab(a) -> int:
     return 0
 
 
-def whole_ab(a) -> int:
-    """``--ab``: one raw call, then per mode ``R`` rounds of the command with session
-    10's switches on and off (``EARLY_START``, ``LATTICE_BAND``), alternating."""
+def _ab_start(a) -> tuple[float, int, dict]:
+    """An A/B's area (first size), worker count (first), and its one raw call (printed),
+    after caching the bytecode (:func:`cache_bytecode`) unless ``--source-imports``."""
     area = max_area_for(float(a.sizes.split(",")[0]))
-    w = int(a.workers.split(",")[0])
     if not a.source_imports:
         print(cache_bytecode(a.out_dir, a.modes.split(",")))
     r = raw(area)
     print(f"raw: {r['seconds']:.2f} s wall, {r['cpu_seconds']:.2f} s CPU, {r['triangles']:,} triangles "
           f"(load {os.getloadavg()[0]:.1f})")
+    return area, int(a.workers.split(",")[0]), r
+
+
+def whole_ab(a) -> int:
+    """``--ab``: one raw call, then per mode ``R`` rounds of the command with session
+    10's switches on and off (``EARLY_START``, ``LATTICE_BAND``), alternating."""
+    area, w, r = _ab_start(a)
     for mode in a.modes.split(","):
         # a small run first, not counted: numba compiles what an edit made stale in
         # the first run (the workers' lattice kernels were compiled inside the first
@@ -394,11 +415,9 @@ def whole_ab(a) -> int:
                 o = ours(area, w, a.tiles, mode, a.out_dir, early=on, band=on)
                 got[on].append(o)
                 ts = o["parallel"]["tile_seconds"]
-                print(f"{mode} round {k} new={int(on)}: wall {o['wall']:.2f} s ({o['wall'] / r['seconds']:.2f} x raw), "
-                      f"whole CPU {o['tree_cpu']:.2f} s ({o['tree_cpu'] / r['cpu_seconds']:.2f} x raw CPU), "
+                print(f"{mode} round {k} new={int(on)}: {_vs_raw(o, r)}, "
                       f"workers' mesh CPU {ts['cpu_mesh']:.2f} s (thread {ts.get('thread_mesh', float('nan')):.2f}), "
-                      f"hamiltonian {ts['cpu_hamiltonian']:.2f} s, "
-                      f"{o['triangles']:,} triangles, load {o['load'][0]:.1f} -> {o['load'][1]:.1f}")
+                      f"hamiltonian {ts['cpu_hamiltonian']:.2f} s, {o['triangles']:,} triangles")
                 sys.stdout.flush()
         for on in (True, False):
             cpu = statistics.median(o["tree_cpu"] for o in got[on])
@@ -406,6 +425,50 @@ def whole_ab(a) -> int:
             print(f"{mode} new={int(on)}: whole CPU / raw CPU median {cpu / r['cpu_seconds']:.2f}, "
                   f"wall / raw median {wall / r['seconds']:.2f} (the first round may include numba's compile)")
     return 0
+
+
+def tiles_ab(a) -> int:
+    """``--tiles-ab``: one raw call, then per mode ``R`` rounds of the command with the
+    default tiles (``run.default_tiles``: two per worker past 1M triangles, run largest
+    first, a worker taking the next when free) and with one tile per worker (the
+    default before session 12), alternating; wall and whole CPU against the raw call's,
+    and the spread of the workers' ends (their tile tasks' summed wall seconds)."""
+    area, w, r = _ab_start(a)
+    for mode in a.modes.split(","):
+        got: dict = {True: [], False: []}
+        for k in range(a.tiles_ab):
+            for balanced in ((True, False) if k % 2 == 0 else (False, True)):
+                o = ours(area, w, None if balanced else w, mode, a.out_dir)
+                got[balanced].append(o)
+                par = o["parallel"]
+                print(f"{mode} round {k} tiles={par['tiles']}: {_vs_raw(o, r)}, driver tiles stage "
+                      f"{par['seconds']['tiles']:.2f} s, workers' busy s {_worker_busy(par['tile_steps'], w)}")
+                sys.stdout.flush()
+        for balanced in (True, False):
+            med = {k: statistics.median(f(o) for o in got[balanced]) for k, f in
+                   (("wall", lambda o: o["wall"]), ("cpu", lambda o: o["tree_cpu"]),
+                    ("stage", lambda o: o["parallel"]["seconds"]["tiles"]))}
+            print(f"{mode} {'default tiles' if balanced else 'one per worker'}: wall / raw median "
+                  f"{med['wall'] / r['seconds']:.2f}, whole CPU / raw CPU median {med['cpu'] / r['cpu_seconds']:.2f}, "
+                  f"tiles stage median {med['stage']:.2f} s")
+    return 0
+
+
+def _vs_raw(o: dict, r: dict) -> str:
+    """A command's wall and whole CPU seconds, each against the raw call's, and the load."""
+    return (f"wall {o['wall']:.2f} s ({o['wall'] / r['seconds']:.2f} x raw), "
+            f"whole CPU {o['tree_cpu']:.2f} s ({o['tree_cpu'] / r['cpu_seconds']:.2f} x raw CPU), "
+            f"load {o['load'][0]:.1f} -> {o['load'][1]:.1f}")
+
+
+def _worker_busy(steps: list, workers: int) -> str:
+    """The tile tasks' wall seconds (mesh to border rows), by greedy assignment in
+    submission order (largest first) to the first free worker: what each worker did."""
+    task = sorted((sum(s.get(k, 0.0) for k in ("mesh", "hamiltonian", "border", "spill")) for s in steps), reverse=True)
+    busy = [0.0] * workers
+    for t in task:
+        busy[busy.index(min(busy))] += t
+    return " / ".join(f"{b:.1f}" for b in busy)
 
 
 def startup_ab(a) -> int:
