@@ -46,6 +46,12 @@ min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores)
 
     python benchmarks/bench_scale.py --sizes 6e6 --tile-ab 3 --modes incircle,sparse
 
+``--order-ab R``: the same for the order of the lattice's blocks
+(``tile_mesh.LATTICE_ORDER``): row by row (the default since session 12) against a
+Hilbert order of the blocks.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --tiles 4 --order-ab 3 --modes incircle,sparse
+
 ``--write-ab R``: one tile's piece (first mode) written ``R`` times each way, with the
 32-bit integer arrays (``partitioned.piece_types``) or all 64-bit; CPU and size.
 
@@ -255,6 +261,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="A/B of the whole command, the default tiles (balance: 2 per worker) / one tile per worker")
     ap.add_argument("--write-ab", type=int, metavar="ROUNDS",
                     help="A/B of one piece written with 32-bit / 64-bit integer arrays")
+    ap.add_argument("--order-ab", type=int, metavar="ROUNDS",
+                    help="A/B of one tile with the lattice's blocks row by row / in a Hilbert order")
     ap.add_argument("--source-imports", action="store_true",
                     help="measure without first caching the imported modules' bytecode (cache_bytecode)")
     ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
@@ -262,6 +270,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     if a.tile_ab:
         return tile_ab(a)
+    if a.order_ab:
+        return tile_ab(a, "order")
     if a.ab:
         return whole_ab(a)
     if a.tiles_ab:
@@ -310,8 +320,15 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def tile_ab(a) -> int:
-    """``--tile-ab``: the band mesh against Triangle on the lattice's points, one tile, same process."""
+#: ``--tile-ab`` / ``--order-ab``: the ``tile_mesh`` switch and its (default, other) values
+TILE_SWITCHES = {"band": ("LATTICE_BAND", True, False), "order": ("LATTICE_ORDER", "rows", "hilbert")}
+
+
+def tile_ab(a, switch: str = "band") -> int:
+    """``--tile-ab`` (``--order-ab``): one tile meshed with ``tile_mesh``'s switch at its
+    default and its other value (the band mesh against Triangle on the lattice's points;
+    the lattice's blocks row by row against a Hilbert order), same process, alternating;
+    then ``hamiltonian()`` of each mesh per mode."""
     import numpy as np
 
     import hammesh
@@ -321,6 +338,8 @@ def tile_ab(a) -> int:
     from hammesh.parallel.union import min_angles_deg
     from hammesh.postprocess import hamiltonian, load_kernels
 
+    name, default, other = TILE_SWITCHES[switch]
+    rounds = a.order_ab if switch == "order" else a.tile_ab
     threads.limit(1)
     area = max_area_for(float(a.sizes.split(",")[0]))
     d = decompose(hammesh.read_domain(DEMO), min_angle=30, max_area=area, n_tiles=a.tiles or 2)
@@ -329,9 +348,9 @@ def tile_ab(a) -> int:
         load_kernels(mode)
     tm.mesh_tile(tile, 30, area)  # (kernels loaded: not the A/B's business)
     cpu: dict = {}
-    for r in range(a.tile_ab):
-        for band in ((True, False) if r % 2 == 0 else (False, True)):
-            tm.LATTICE_BAND = band
+    for r in range(rounds):
+        for value in ((default, other) if r % 2 == 0 else (other, default)):
+            setattr(tm, name, value)
             c = time.process_time()
             m = tm.mesh_tile(tile, 30, area)
             row = {"mesh": time.process_time() - c}
@@ -340,15 +359,15 @@ def tile_ab(a) -> int:
                 hamiltonian(m, mode=mode)
                 row[mode] = time.process_time() - c
             for k, v in row.items():
-                cpu.setdefault((band, k), []).append(v)
-            print(f"round {r} band={int(band)}: {m.n_triangles:,} triangles, min angle "
+                cpu.setdefault((value, k), []).append(v)
+            print(f"round {r} {switch}={value}: {m.n_triangles:,} triangles, min angle "
                   f"{min_angles_deg(m.points, m.triangles).min():.3f}; CPU s "
                   + ", ".join(f"{k} {v:.3f}" for k, v in row.items()) + f" (load {os.getloadavg()[0]:.1f})")
             sys.stdout.flush()
-    tm.LATTICE_BAND = True
+    setattr(tm, name, default)
     for k in ["mesh", *modes]:
-        on, off = (float(np.median(cpu[(b, k)])) for b in (True, False))
-        print(f"{k}: band {on:.3f} s, lattice points {off:.3f} s (medians), band / points {on / off:.2f}")
+        on, off = (float(np.median(cpu[(v, k)])) for v in (default, other))
+        print(f"{k}: {switch} {default} {on:.3f} s, {other} {off:.3f} s (medians), ratio {on / off:.2f}")
     return 0
 
 

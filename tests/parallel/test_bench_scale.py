@@ -34,6 +34,7 @@ def test_bench_scale_runs(extra, needle):
     (["--ab", "1"], ["raw:", "sparse warm-up (0.2M, not counted)", "sparse new=1: whole CPU / raw CPU median",
                      "sparse new=0: whole CPU / raw CPU median"]),
     (["--tile-ab", "1"], ["mesh: band", "sparse: band"]),
+    (["--order-ab", "1"], ["mesh: order rows", "sparse: order rows"]),
     (["--tiles-ab", "1", "--workers", "2"], ["sparse default tiles: wall / raw median",
                                              "sparse one per worker: wall / raw median"])])
 def test_bench_scale_ab_modes_run(extra, needles):
