@@ -41,9 +41,10 @@ __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "pa
 
 INDEX_NAME = "mesh.pvtu"
 
-#: bytes a worker holds per triangle of a tile between its task and its piece (the
-#: Hamiltonian mesh: incircle's three rows per triangle with parents, kinds and
-#: attributes, its points; measured ~350-400 B per triangle at 1.5M-triangle tiles)
+#: bytes a worker holds per triangle of a tile between its task and its piece: an
+#: upper bound (the Hamiltonian mesh, incircle's three rows per triangle with parents,
+#: kinds and attributes, and its points, is less than a tile task's peak, measured at
+#: 350-400 B per triangle at 1.5M-triangle tiles, docs/scale.md "On a cluster")
 HELD_BYTES_PER_TRIANGLE = 400
 #: share of a worker's memory its held tiles may take before they go to spill files
 SPILL_SHARE = 0.5
@@ -54,10 +55,11 @@ def spill_wanted(runner, n_workers: int, tiles: int, estimate: float) -> bool:
     of its worker's memory: when a worker would hold more tiles than fit in
     ``SPILL_SHARE`` of its memory (``HELD_BYTES_PER_TRIANGLE`` per triangle).
 
-    Why not whenever a worker runs several tiles: at 6M triangles four tiles on two
-    workers hold ~1.2 GB each, and writing and reading ~2 GB of pickles cost more
-    than the balance the extra tiles bring (:func:`~hammesh.parallel.run.default_tiles`);
-    at 100M (64 tiles, 32 per worker) they would hold ~20 GB each.
+    Why not whenever a worker runs several tiles (before session 12): at 6M triangles
+    the four balance tiles (:func:`~hammesh.parallel.run.default_tiles`) on two
+    workers hold at most ~1.2 GB each, and pickling them to files and back is work on
+    every tile's path that memory does not call for; at 100M (64 tiles, 32 per
+    worker) they would hold ~20 GB each, and spill.
     Memory per worker: a running cluster's ``memory_limit`` (the smallest), else
     this machine's memory over the workers (a local cluster's default limit).
     """

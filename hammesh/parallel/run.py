@@ -68,11 +68,12 @@ def default_tiles(estimate: float, workers: int) -> int:
     ``MIN_BALANCED_TILE`` triangles.
 
     Why the balance tiles: tiles of equal triangle counts do not cost the same. On
-    the 6M demo's two tiles sparse ``hamiltonian()`` took 2.3 and 3.6-3.8 s CPU (the
-    second's cover and fans: its holes and crack); the command waits for the slower
-    while the other worker idles. Four tiles took 1.62 / 1.31 / 1.37 / 1.27 s (5.6 s
-    in all against 5.9): run largest first, each worker taking the next when free
-    (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), the workers end 0.2 s apart.
+    the 6M demo's two tiles sparse ``hamiltonian()`` took 2.3 and 3.5-3.8 s CPU (the
+    second's cover and fans 1.3 and 0.6-0.8 s against 0.55 and 0.03 s); the command
+    waits for the slower while the other worker idles. Four tiles took 1.62 / 1.31 /
+    1.37 / 1.27 s (5.6 s in all against 5.9): run largest first, each worker taking
+    the next when free (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), by those
+    figures the workers end 0.2 s apart instead of 1.3 s.
     """
     w = max(1, int(workers))
     per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
