@@ -46,10 +46,27 @@ min angle (threads capped at 1, as in a worker of a 2-worker cluster on 2 cores)
 
     python benchmarks/bench_scale.py --sizes 6e6 --tile-ab 3 --modes incircle,sparse
 
+``--order-ab R``: the same for the order of the lattice's blocks
+(``tile_mesh.LATTICE_ORDER``): row by row (the default since session 12) against a
+Hilbert order of the blocks.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --tiles 4 --order-ab 3 --modes incircle,sparse
+
 ``--write-ab R``: one tile's piece (first mode) written ``R`` times each way, with the
 32-bit integer arrays (``partitioned.piece_types``) or all 64-bit; CPU and size.
 
     python benchmarks/bench_scale.py --sizes 6e6 --write-ab 3 --modes incircle
+
+``--tiles-ab R``: the whole command against one raw call, ``R`` rounds per mode of
+fresh processes alternating the default tiles (two per worker past 1M triangles,
+largest first, each worker taking the next when free) and one tile per worker.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --workers 2 --tiles-ab 2 --modes sparse,incircle
+
+Before measuring, every mode runs once small with ``PYTHONDONTWRITEBYTECODE`` unset
+(:func:`cache_bytecode`), so that no measured process compiles its imports from
+source (``--source-imports``: measure without it); the first line says whether the
+bytecode was cached before.
 
 ``--ab R``: the whole command against one raw call, ``R`` rounds per mode of fresh
 processes alternating session 10's switches on / off (the early cluster start and
@@ -90,6 +107,36 @@ sec, cpu = time.perf_counter() - t, time.process_time() - c
 print(json.dumps({"seconds": sec, "cpu_seconds": cpu, "triangles": int(len(out["triangles"])),
                   "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 """
+
+
+def cache_bytecode(out_dir: str | None, modes: list[str]) -> str:
+    """Let Python cache the bytecode of every module the command imports (driver and
+    workers), by one small run per mode with ``PYTHONDONTWRITEBYTECODE`` unset; what
+    it says about the cache before.
+
+    Why: with that variable set (this VM's environment) and an installer that does not
+    compile (``uv pip install`` without ``--compile-bytecode``), every fresh process
+    compiles numpy, numba, scipy, Dask and hammesh from source: measured 1.9 s of a
+    3.1 s driver start at 6M. ``pip install`` compiles at install time, so a user's
+    command does not pay it, and the raw call's imports are not timed at all.
+    ``--source-imports`` measures without this step.
+    """
+    import importlib.util
+
+    spec = importlib.util.find_spec("distributed")
+    cached = spec is not None and spec.cached is not None and Path(spec.cached).exists()
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    for mode in modes:
+        tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
+        try:
+            subprocess.run([sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", "1e-3", "--mode", mode,
+                            "--workers", "2", "--partitioned", "-o", str(Path(tmp) / "out")],
+                           capture_output=True, text=True, check=True, env=env)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    return (f"bytecode: {'was cached' if cached else 'was NOT cached (imports compiled from source)'}; "
+            f"cached now by one small run per mode (PYTHONDONTWRITEBYTECODE "
+            f"{'set' if 'PYTHONDONTWRITEBYTECODE' in os.environ else 'unset'} in this environment)")
 
 
 def max_area_for(triangles: float) -> float:
@@ -210,15 +257,25 @@ def main(argv: list[str] | None = None) -> int:
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
     ap.add_argument("--ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
+    ap.add_argument("--tiles-ab", type=int, metavar="ROUNDS",
+                    help="A/B of the whole command, the default tiles (balance: 2 per worker) / one tile per worker")
     ap.add_argument("--write-ab", type=int, metavar="ROUNDS",
                     help="A/B of one piece written with 32-bit / 64-bit integer arrays")
+    ap.add_argument("--order-ab", type=int, metavar="ROUNDS",
+                    help="A/B of one tile with the lattice's blocks row by row / in a Hilbert order")
+    ap.add_argument("--source-imports", action="store_true",
+                    help="measure without first caching the imported modules' bytecode (cache_bytecode)")
     ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
                     help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
     a = ap.parse_args(argv)
     if a.tile_ab:
         return tile_ab(a)
+    if a.order_ab:
+        return tile_ab(a, "order")
     if a.ab:
         return whole_ab(a)
+    if a.tiles_ab:
+        return tiles_ab(a)
     if a.write_ab:
         return write_ab(a)
     if a.startup:
@@ -226,6 +283,9 @@ def main(argv: list[str] | None = None) -> int:
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
     workers = [int(w) for w in a.workers.split(",")]
     modes = a.modes.split(",")
+    print(cache_bytecode(a.out_dir, modes) if not a.source_imports else
+          f"bytecode not cached first (--source-imports; PYTHONDONTWRITEBYTECODE "
+          f"{'set' if 'PYTHONDONTWRITEBYTECODE' in os.environ else 'unset'})")
     print("size    raw s  raw MB  | mode      workers  wall s  /raw  over-ref  driver MB  worker MB (each)  tiles joins")
     sys.stdout.flush()
     for n in sizes:
@@ -260,8 +320,15 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def tile_ab(a) -> int:
-    """``--tile-ab``: the band mesh against Triangle on the lattice's points, one tile, same process."""
+#: ``--tile-ab`` / ``--order-ab``: the ``tile_mesh`` switch and its (default, other) values
+TILE_SWITCHES = {"band": ("LATTICE_BAND", True, False), "order": ("LATTICE_ORDER", "rows", "hilbert")}
+
+
+def tile_ab(a, switch: str = "band") -> int:
+    """``--tile-ab`` (``--order-ab``): one tile meshed with ``tile_mesh``'s switch at its
+    default and its other value (the band mesh against Triangle on the lattice's points;
+    the lattice's blocks row by row against a Hilbert order), same process, alternating;
+    then ``hamiltonian()`` of each mesh per mode."""
     import numpy as np
 
     import hammesh
@@ -271,6 +338,8 @@ def tile_ab(a) -> int:
     from hammesh.parallel.union import min_angles_deg
     from hammesh.postprocess import hamiltonian, load_kernels
 
+    name, default, other = TILE_SWITCHES[switch]
+    rounds = a.order_ab if switch == "order" else a.tile_ab
     threads.limit(1)
     area = max_area_for(float(a.sizes.split(",")[0]))
     d = decompose(hammesh.read_domain(DEMO), min_angle=30, max_area=area, n_tiles=a.tiles or 2)
@@ -279,9 +348,9 @@ def tile_ab(a) -> int:
         load_kernels(mode)
     tm.mesh_tile(tile, 30, area)  # (kernels loaded: not the A/B's business)
     cpu: dict = {}
-    for r in range(a.tile_ab):
-        for band in ((True, False) if r % 2 == 0 else (False, True)):
-            tm.LATTICE_BAND = band
+    for r in range(rounds):
+        for value in ((default, other) if r % 2 == 0 else (other, default)):
+            setattr(tm, name, value)
             c = time.process_time()
             m = tm.mesh_tile(tile, 30, area)
             row = {"mesh": time.process_time() - c}
@@ -290,15 +359,15 @@ def tile_ab(a) -> int:
                 hamiltonian(m, mode=mode)
                 row[mode] = time.process_time() - c
             for k, v in row.items():
-                cpu.setdefault((band, k), []).append(v)
-            print(f"round {r} band={int(band)}: {m.n_triangles:,} triangles, min angle "
+                cpu.setdefault((value, k), []).append(v)
+            print(f"round {r} {switch}={value}: {m.n_triangles:,} triangles, min angle "
                   f"{min_angles_deg(m.points, m.triangles).min():.3f}; CPU s "
                   + ", ".join(f"{k} {v:.3f}" for k, v in row.items()) + f" (load {os.getloadavg()[0]:.1f})")
             sys.stdout.flush()
-    tm.LATTICE_BAND = True
+    setattr(tm, name, default)
     for k in ["mesh", *modes]:
-        on, off = (float(np.median(cpu[(b, k)])) for b in (True, False))
-        print(f"{k}: band {on:.3f} s, lattice points {off:.3f} s (medians), band / points {on / off:.2f}")
+        on, off = (float(np.median(cpu[(v, k)])) for v in (default, other))
+        print(f"{k}: {switch} {default} {on:.3f} s, {other} {off:.3f} s (medians), ratio {on / off:.2f}")
     return 0
 
 
@@ -337,14 +406,22 @@ def write_ab(a) -> int:
     return 0
 
 
-def whole_ab(a) -> int:
-    """``--ab``: one raw call, then per mode ``R`` rounds of the command with session
-    10's switches on and off (``EARLY_START``, ``LATTICE_BAND``), alternating."""
+def _ab_start(a) -> tuple[float, int, dict]:
+    """An A/B's area (first size), worker count (first), and its one raw call (printed),
+    after caching the bytecode (:func:`cache_bytecode`) unless ``--source-imports``."""
     area = max_area_for(float(a.sizes.split(",")[0]))
-    w = int(a.workers.split(",")[0])
+    if not a.source_imports:
+        print(cache_bytecode(a.out_dir, a.modes.split(",")))
     r = raw(area)
     print(f"raw: {r['seconds']:.2f} s wall, {r['cpu_seconds']:.2f} s CPU, {r['triangles']:,} triangles "
           f"(load {os.getloadavg()[0]:.1f})")
+    return area, int(a.workers.split(",")[0]), r
+
+
+def whole_ab(a) -> int:
+    """``--ab``: one raw call, then per mode ``R`` rounds of the command with session
+    10's switches on and off (``EARLY_START``, ``LATTICE_BAND``), alternating."""
+    area, w, r = _ab_start(a)
     for mode in a.modes.split(","):
         # a small run first, not counted: numba compiles what an edit made stale in
         # the first run (the workers' lattice kernels were compiled inside the first
@@ -357,11 +434,9 @@ def whole_ab(a) -> int:
                 o = ours(area, w, a.tiles, mode, a.out_dir, early=on, band=on)
                 got[on].append(o)
                 ts = o["parallel"]["tile_seconds"]
-                print(f"{mode} round {k} new={int(on)}: wall {o['wall']:.2f} s ({o['wall'] / r['seconds']:.2f} x raw), "
-                      f"whole CPU {o['tree_cpu']:.2f} s ({o['tree_cpu'] / r['cpu_seconds']:.2f} x raw CPU), "
+                print(f"{mode} round {k} new={int(on)}: {_vs_raw(o, r)}, "
                       f"workers' mesh CPU {ts['cpu_mesh']:.2f} s (thread {ts.get('thread_mesh', float('nan')):.2f}), "
-                      f"hamiltonian {ts['cpu_hamiltonian']:.2f} s, "
-                      f"{o['triangles']:,} triangles, load {o['load'][0]:.1f} -> {o['load'][1]:.1f}")
+                      f"hamiltonian {ts['cpu_hamiltonian']:.2f} s, {o['triangles']:,} triangles")
                 sys.stdout.flush()
         for on in (True, False):
             cpu = statistics.median(o["tree_cpu"] for o in got[on])
@@ -369,6 +444,50 @@ def whole_ab(a) -> int:
             print(f"{mode} new={int(on)}: whole CPU / raw CPU median {cpu / r['cpu_seconds']:.2f}, "
                   f"wall / raw median {wall / r['seconds']:.2f} (the first round may include numba's compile)")
     return 0
+
+
+def tiles_ab(a) -> int:
+    """``--tiles-ab``: one raw call, then per mode ``R`` rounds of the command with the
+    default tiles (``run.default_tiles``: two per worker past 1M triangles, run largest
+    first, a worker taking the next when free) and with one tile per worker (the
+    default before session 12), alternating; wall and whole CPU against the raw call's,
+    and the spread of the workers' ends (their tile tasks' summed wall seconds)."""
+    area, w, r = _ab_start(a)
+    for mode in a.modes.split(","):
+        got: dict = {True: [], False: []}
+        for k in range(a.tiles_ab):
+            for balanced in ((True, False) if k % 2 == 0 else (False, True)):
+                o = ours(area, w, None if balanced else w, mode, a.out_dir)
+                got[balanced].append(o)
+                par = o["parallel"]
+                print(f"{mode} round {k} tiles={par['tiles']}: {_vs_raw(o, r)}, driver tiles stage "
+                      f"{par['seconds']['tiles']:.2f} s, workers' busy s {_worker_busy(par['tile_steps'], w)}")
+                sys.stdout.flush()
+        for balanced in (True, False):
+            med = {k: statistics.median(f(o) for o in got[balanced]) for k, f in
+                   (("wall", lambda o: o["wall"]), ("cpu", lambda o: o["tree_cpu"]),
+                    ("stage", lambda o: o["parallel"]["seconds"]["tiles"]))}
+            print(f"{mode} {'default tiles' if balanced else 'one per worker'}: wall / raw median "
+                  f"{med['wall'] / r['seconds']:.2f}, whole CPU / raw CPU median {med['cpu'] / r['cpu_seconds']:.2f}, "
+                  f"tiles stage median {med['stage']:.2f} s")
+    return 0
+
+
+def _vs_raw(o: dict, r: dict) -> str:
+    """A command's wall and whole CPU seconds, each against the raw call's, and the load."""
+    return (f"wall {o['wall']:.2f} s ({o['wall'] / r['seconds']:.2f} x raw), "
+            f"whole CPU {o['tree_cpu']:.2f} s ({o['tree_cpu'] / r['cpu_seconds']:.2f} x raw CPU), "
+            f"load {o['load'][0]:.1f} -> {o['load'][1]:.1f}")
+
+
+def _worker_busy(steps: list, workers: int) -> str:
+    """The tile tasks' wall seconds (mesh to border rows), by greedy assignment in
+    submission order (largest first) to the first free worker: what each worker did."""
+    task = sorted((sum(s.get(k, 0.0) for k in ("mesh", "hamiltonian", "border", "spill")) for s in steps), reverse=True)
+    busy = [0.0] * workers
+    for t in task:
+        busy[busy.index(min(busy))] += t
+    return " / ".join(f"{b:.1f}" for b in busy)
 
 
 def startup_ab(a) -> int:

@@ -92,8 +92,8 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
 
 
 #: Suffixes whose files hold the triangles' attributes and the points' data (the other
-#: formats hold geometry, and ``.pvtu`` pieces hold the attributes unnamed).
-DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".msh", ".xdmf", ".vtp", ".ele", ".node"})
+#: formats hold geometry).
+DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".vtp", ".msh", ".xdmf", ".ele", ".node", ".pvtu"})
 
 
 def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> list[str]:
@@ -115,10 +115,6 @@ def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -
     names = [attribute_name(tuple(getattr(mesh, "attribute_names", ())), j) for j in range(k)]
     names = list(dict.fromkeys(x.partition("[")[0] if x.endswith("]") else x for x in names))  # v[0], v[1]: v
     points = list(getattr(mesh, "point_data", {}))
-    if suffix == ".pvtu":
-        named = [x for x in names if not x.startswith("attribute_")]
-        return [f"cell data {x!r} (.pvtu pieces name attributes attribute_<i>)" for x in named] + [
-            f"point data {x!r} (.pvtu pieces hold no point data)" for x in points]
     if suffix in DATA_SUFFIXES:
         return []
     return [f"cell data {x!r} ({suffix} holds geometry only)" for x in names] + [

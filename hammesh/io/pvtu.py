@@ -29,10 +29,11 @@ import numpy as np
 
 from hammesh.errors import FileFormatError
 from hammesh.io import vtu
-from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
+from hammesh.io.cell_data import join_components, split_components
+from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name, cycle_positions
 
 __all__ = ["read", "write", "write_piece", "write_raw_chunks", "write_index", "read_pieces", "PIECE_CELL_DATA",
-           "CYCLE_CELL_DATA", "VTK_TRIANGLE"]
+           "CYCLE_CELL_DATA", "VTK_TRIANGLE", "named_attributes", "OWN_CELL_DATA"]
 
 #: cell data of every piece (name -> VTK type)
 PIECE_CELL_DATA = {"global_position": "Int64", "parent": "Int64", "kind": "Int64"}
@@ -42,16 +43,40 @@ CYCLE_CELL_DATA = {"cycle_id": "Int64", "cycle_position": "Int64"}
 
 #: VTK cell type of a triangle
 VTK_TRIANGLE = 5
+#: hammesh's own cell data in a piece (every other cell array is a triangle attribute)
+OWN_CELL_DATA = frozenset({*PIECE_CELL_DATA, *CYCLE_CELL_DATA, "part"})
+
+
+def named_attributes(attributes: np.ndarray, names: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
+    """The columns of ``attributes (m, k)`` by the name the serial ``.vtu`` writer gives
+    them (:func:`hammesh.io.cell_data.triangle_cell_data`): ``names[i]`` (a mesh file's
+    field names, ``attribute_names``), else ``attribute_<i>``; columns ``v[0]``,
+    ``v[1]``, ... are one ``(m, c)`` array ``v``.
+
+    >>> sorted(named_attributes(np.zeros((2, 3)), ("rho", "v[0]", "v[1]")).items(), key=lambda x: x[0])[1][1].shape
+    (2, 2)
+    """
+    m = len(attributes)
+    attributes = np.asarray(attributes, dtype=np.float64).reshape(m, -1)
+    return join_components({attribute_name(tuple(names), i): attributes[:, i] for i in range(attributes.shape[1])})
+
+
+def _vtk_type(values: np.ndarray) -> str:
+    return "Float64" if np.asarray(values).dtype.kind == "f" else "Int64"
 
 
 def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.ndarray, triangles: np.ndarray,
                 position: np.ndarray, cycle_id: np.ndarray | None, cycle_position: np.ndarray | None,
                 parent: np.ndarray, kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None,
-                local: bool = False) -> None:
+                local: bool = False, attribute_names: tuple[str, ...] = (),
+                point_data: dict[str, np.ndarray] | None = None) -> None:
     """Write one piece: ``triangles`` in global point ids (``local``: indices into
     ``point_ids``/``points`` already), rows in cycle order.
 
     ``cycle_id`` / ``cycle_position`` None: not written (an output of one cycle).
+    ``attributes (m, k)`` are named as the serial ``.vtu`` writer names them
+    (:func:`named_attributes`: ``attribute_names``, else ``attribute_<i>``);
+    ``point_data``: per-point arrays (the mesh's, in ``points``' order), written as point data.
 
     ``part`` (optional): a ``part`` cell array (``--parts``). Written as raw appended
     binary (:func:`hammesh.io.vtu.write_raw`) into ``NAME.part`` and renamed: never a half-written piece.
@@ -60,12 +85,14 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     point_ids = np.asarray(point_ids, dtype=np.int64)
     points = np.asarray(points)
     triangles = np.asarray(triangles, dtype=np.int64)
+    point_data = {k: np.asarray(v) for k, v in (point_data or {}).items()}
     if local:
         if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(point_ids)):
             raise FileFormatError(f"{path}: a triangle uses a point the piece does not hold")
     else:
         order = np.argsort(point_ids, kind="stable")
         point_ids, points = point_ids[order], points[order]
+        point_data = {k: v[order] for k, v in point_data.items()}
         at = np.minimum(np.searchsorted(point_ids, triangles), max(len(point_ids) - 1, 0))
         if len(point_ids) and not np.array_equal(point_ids[at], triangles):
             raise FileFormatError(f"{path}: a triangle uses a point the piece does not hold")
@@ -75,14 +102,16 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     pts3 = np.zeros((len(points), 3))
     pts3[:, :2] = points
     arrays = [("PointData", "global_id", "Int64", point_ids, 1)]
+    arrays += [("PointData", _escape(k), _vtk_type(v), v, 1 if v.ndim == 1 else v.shape[1])
+               for k, v in point_data.items()]
     cell = {"global_position": position, "parent": parent, "kind": kind}
     if cycle_id is not None or cycle_position is not None:
         cell["cycle_id"], cell["cycle_position"] = cycle_id, cycle_position
     if part is not None:
         cell["part"] = part
     arrays += [("CellData", k, "Int64", np.asarray(v), 1) for k, v in cell.items()]
-    attributes = np.asarray(attributes, dtype=np.float64).reshape(m, -1)
-    arrays += [("CellData", f"attribute_{i}", "Float64", attributes[:, i], 1) for i in range(attributes.shape[1])]
+    arrays += [("CellData", _escape(k), "Float64", v, 1 if v.ndim == 1 else v.shape[1])
+               for k, v in named_attributes(attributes, attribute_names).items()]
     arrays += [("Points", "", "Float64", pts3, 3),
                ("Cells", "connectivity", "Int64", local, 1),
                ("Cells", "offsets", "Int64", 3 * np.arange(1, m + 1, dtype=np.int64), 1),
@@ -141,7 +170,9 @@ def write_raw_chunks(path: str | os.PathLike[str], arrays: list[tuple], n_points
 
 
 def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: int = 0, *, cycles: bool = True,
-                part: bool = False, types: dict[str, str] | None = None) -> None:
+                part: bool = False, types: dict[str, str] | None = None,
+                cell_arrays: dict[str, tuple[str, int]] | None = None,
+                point_arrays: dict[str, tuple[str, int]] | None = None) -> None:
     """Write the ``.pvtu`` index listing ``pieces`` (file names relative to it), in order.
 
     Its cell data are the pieces': :data:`PIECE_CELL_DATA`, :data:`CYCLE_CELL_DATA`
@@ -149,6 +180,8 @@ def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: i
     regional attributes (a reader such as ParaView shows only the arrays listed here).
     ``types``: VTK type by array name where the pieces use another than these
     defaults (``global_id`` included), e.g. ``Int32`` (they must agree with the pieces).
+    ``cell_arrays`` / ``point_arrays``: the pieces' named attributes and point data,
+    ``{name: (vtk type, components)}`` (``cell_arrays`` replaces ``n_attributes``).
     """
     types = types or {}
     path = Path(path)
@@ -157,12 +190,16 @@ def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: i
     grid = ET.SubElement(root, "PUnstructuredGrid", GhostLevel="0")
     pd = ET.SubElement(grid, "PPointData")
     ET.SubElement(pd, "PDataArray", type=types.get("global_id", "Int64"), Name="global_id")
+    for name, (typ, ncomp) in (point_arrays or {}).items():
+        ET.SubElement(pd, "PDataArray", type=typ, Name=name, **({"NumberOfComponents": str(ncomp)} if ncomp > 1 else {}))
     cd = ET.SubElement(grid, "PCellData")
     names = {**PIECE_CELL_DATA, **(CYCLE_CELL_DATA if cycles else {}), **({"part": "Int64"} if part else {})}
     for name, typ in names.items():
         ET.SubElement(cd, "PDataArray", type=types.get(name, typ), Name=name)
-    for i in range(n_attributes):
-        ET.SubElement(cd, "PDataArray", type="Float64", Name=f"attribute_{i}")
+    if cell_arrays is None:
+        cell_arrays = {f"attribute_{i}": ("Float64", 1) for i in range(n_attributes)}
+    for name, (typ, ncomp) in cell_arrays.items():
+        ET.SubElement(cd, "PDataArray", type=typ, Name=name, **({"NumberOfComponents": str(ncomp)} if ncomp > 1 else {}))
     pp = ET.SubElement(grid, "PPoints")
     ET.SubElement(pp, "PDataArray", type="Float64", NumberOfComponents="3")
     for src in pieces:
@@ -191,10 +228,21 @@ def read_pieces(path: str | os.PathLike[str]) -> list[Path]:
     return out
 
 
+def _columns(cell_data: dict[str, np.ndarray], m: int) -> tuple[np.ndarray, tuple[str, ...]]:
+    """A piece's triangle attributes ``(m, k)`` and their names from its cell arrays
+    other than hammesh's own (:data:`OWN_CELL_DATA`), in file order; an ``(m, c)``
+    array ``v`` is the columns ``v[0]`` ... ``v[c-1]`` (as the serial readers take it)."""
+    data = split_components({k: np.asarray(v) for k, v in cell_data.items() if k not in OWN_CELL_DATA}, (1,))
+    names = tuple(data)
+    attr = np.stack([np.asarray(data[k], np.float64).reshape(m) for k in names], 1) if names else np.zeros((m, 0))
+    return attr, names
+
+
 def _read_piece(piece: Path):
-    """``(global_id, points (n, 2), triangles (local), global_position or None, attributes)``
-    of one piece, or None if it has no triangles. hammesh's own raw pieces are read
-    directly (:func:`_read_raw_vtu`), any other ``.vtu`` by meshio."""
+    """``(global_id, points (n, 2), triangles (local), global_position or None,
+    attributes, attribute names, point data)`` of one piece, or None if it has no
+    triangles. hammesh's own raw pieces are read directly
+    (:func:`hammesh.io.vtu.read_raw`), any other ``.vtu`` by meshio."""
     try:
         raw = vtu.read_raw(piece)
     except (OSError, ValueError, KeyError) as exc:
@@ -215,9 +263,12 @@ def _read_piece(piece: Path):
         if len(gid) != n or (t < 0).any() or (t >= n).any():
             raise FileFormatError(f"{piece}: a triangle uses a point the piece does not hold")
         gp = raw.get(("CellData", "global_position"))
-        names = sorted(k[1] for k in raw if k[0] == "CellData" and k[1].startswith("attribute_"))
-        attr = np.stack([raw[("CellData", k)] for k in names], 1) if names else np.zeros((len(t), 0))
-        return gid, np.asarray(pts)[:, :2], t, None if gp is None else gp.astype(np.int64), attr
+        cells = {_unescape(k[1]): v for k, v in raw.items() if k[0] == "CellData"}
+        pdata = {_unescape(k[1]): v for k, v in raw.items() if k[0] == "PointData" and k[1] != "global_id"}
+        if any(len(v) != len(t) for v in cells.values()) or any(len(v) != n for v in pdata.values()):
+            raise FileFormatError(f"{piece}: an array's length is not its piece's")
+        attr, names = _columns(cells, len(t))
+        return gid, np.asarray(pts)[:, :2], t, None if gp is None else gp.astype(np.int64), attr, names, pdata
     import meshio
 
     try:
@@ -230,11 +281,25 @@ def _read_piece(piece: Path):
         return None
     t = np.concatenate([m.cells[i].data for i in blocks]).astype(np.int64)
     gp = m.cell_data.get("global_position")
-    names = sorted(k for k in m.cell_data if k.startswith("attribute_"))
-    attr = (np.stack([np.concatenate([np.asarray(m.cell_data[k][i]) for i in blocks]) for k in names], 1)
-            if names else np.zeros((len(t), 0)))
+    cells = {k: np.concatenate([np.asarray(v[i]) for i in blocks]) for k, v in m.cell_data.items()
+             if np.asarray(v[blocks[0]]).dtype.kind in "biuf"}
+    attr, names = _columns(cells, len(t))
+    pdata = {k: np.asarray(v) for k, v in m.point_data.items() if k != "global_id" and np.asarray(v).dtype.kind in "biuf"}
     return (gid, np.asarray(m.points)[:, :2], t,
-            np.concatenate([np.asarray(gp[i]) for i in blocks]).astype(np.int64) if gp else None, attr)
+            np.concatenate([np.asarray(gp[i]) for i in blocks]).astype(np.int64) if gp else None, attr, names, pdata)
+
+
+def _escape(name: str) -> str:
+    """An array's name as an XML attribute value (a mesh file's field names may hold ``"<&``)."""
+    from xml.sax.saxutils import escape
+
+    return escape(name, {'"': "&quot;"})
+
+
+def _unescape(name: str) -> str:
+    from xml.sax.saxutils import unescape
+
+    return unescape(name, {"&quot;": '"'})
 
 
 def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = False) -> Mesh:
@@ -242,18 +307,23 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
 
     Points shared by pieces are one point (``global_id``); rows are ordered by
     ``global_position`` when every piece has it (hammesh's pieces), else piece by piece.
+    Cell arrays other than hammesh's own are the triangle attributes (by name:
+    ``attribute_names`` unless all are ``attribute_<i>``), point arrays other than
+    ``global_id`` the point data (those every piece holds).
     """
-    ids, xy, tris, pos, attrs = [], [], [], [], []
+    ids, xy, tris, pos, attrs, names, pdata = [], [], [], [], [], [], []
     for piece in read_pieces(path):
         got = _read_piece(piece)
         if got is None:
             continue
-        gid, pts, t, gp, attr = got
+        gid, pts, t, gp, attr, nm, pd = got
         ids.append(gid)
         xy.append(pts)
         tris.append(gid[t])
         pos.append(gp)
         attrs.append(attr)
+        names.append(nm)
+        pdata.append(pd)
     if not tris:
         raise FileFormatError(f"{path}: the pieces hold no triangles")
     gids = np.concatenate(ids)
@@ -263,6 +333,9 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     tri = np.concatenate(tris)
     width = min(a.shape[1] for a in attrs)
     attr = np.concatenate([a[:, :width] for a in attrs])
+    attr_names = names[0][:width] if all(nm[:width] == names[0][:width] for nm in names) else ()
+    if all(x == f"attribute_{i}" for i, x in enumerate(attr_names)):
+        attr_names = ()
     if all(p is not None for p in pos):
         order = np.argsort(np.concatenate(pos), kind="stable")
         tri, attr = tri[order], attr[order]
@@ -270,9 +343,17 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     used[tri.ravel()] = True
     if np.isnan(points[used]).any():
         raise FileFormatError(f"{path}: a triangle uses a point no piece holds")
+    point_data = {}
+    for key in [k for k in pdata[0] if all(k in d for d in pdata)]:
+        first = np.asarray(pdata[0][key])
+        values = np.zeros((n, *first.shape[1:]), first.dtype)
+        for gid, d in zip(ids, pdata):
+            values[gid] = d[key]
+        point_data[key] = values
     # points no triangle uses (ids of other runs' join points) get a harmless position
     points[~used] = 0.0
-    return Mesh(points=points, triangles=tri, triangle_attributes=attr, info={"pieces": len(tris)})
+    return Mesh(points=points, triangles=tri, triangle_attributes=attr, attribute_names=attr_names,
+                point_data=point_data, info={"pieces": len(tris)})
 
 
 def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
@@ -288,7 +369,12 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     else:
         parent, kind = np.full(m, -1), np.zeros(m)
     piece = path.with_name(path.stem + ".0.vtu")
+    names = tuple(getattr(mesh, "attribute_names", ()))
+    attrs = np.asarray(mesh.triangle_attributes).reshape(m, -1)
+    point_data = {k: np.asarray(v) for k, v in (getattr(mesh, "point_data", None) or {}).items()}
     write_piece(piece, np.arange(len(mesh.points)), mesh.points[:, :2], mesh.triangles, np.arange(m), cid, cpos,
-                parent, kind, np.asarray(mesh.triangle_attributes).reshape(m, -1))
-    write_index(path, [piece.name], np.asarray(mesh.triangle_attributes).reshape(m, -1).shape[1],
-                cycles=cid is not None)
+                parent, kind, attrs, attribute_names=names, point_data=point_data)
+    write_index(path, [piece.name], cycles=cid is not None,
+                cell_arrays={k: ("Float64", 1 if v.ndim == 1 else v.shape[1])
+                             for k, v in named_attributes(attrs, names).items()},
+                point_arrays={k: (_vtk_type(v), 1 if v.ndim == 1 else v.shape[1]) for k, v in point_data.items()})

@@ -5,12 +5,16 @@ from __future__ import annotations
 import contextlib
 from typing import Iterator
 
-from hammesh.errors import InvalidOptionError
+from hammesh.errors import HammeshError, InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
-           "dask_installed", "DASK_MISSING", "QUIET_CLUSTER"]
+           "dask_installed", "DASK_MISSING", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
+
+
+class ClusterError(HammeshError, RuntimeError):
+    """A local Dask cluster did not start (within :data:`START_TIMEOUT`)."""
 
 
 def _distributed():
@@ -135,6 +139,21 @@ QUIET_CLUSTER = {
 }
 
 
+#: seconds a local cluster's start may take (each worker process's start, the client's
+#: connection, the workers' setup) before it fails with :class:`~hammesh.errors.ClusterError`
+#: instead of waiting for ever: a forked worker that inherited a lock held by another
+#: thread of the driver would never start (seen once under pytest-xdist)
+START_TIMEOUT = 120.0
+
+
+#: Dask's scheduler sends a worker its next tile only when it is free (root tasks
+#: queued on the scheduler, ``worker-saturation`` 1.0; Dask's default 1.1 sends each
+#: one-thread worker two at once, fixing which worker runs which tile up front): with
+#: more tiles than workers (:func:`~hammesh.parallel.run.default_tiles`) a worker done
+#: early takes the next tile instead of idling while another still has two.
+TILE_QUEUE = {"distributed.scheduler.worker-saturation": 1.0}
+
+
 def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = ()):
     """Start a local cluster of ``workers`` processes and its client, both closed by
     ``stack`` (``modules`` imported first, see :data:`FORK_AFTER_IMPORTING`)."""
@@ -156,19 +175,26 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
         load_tile_kernels()  # (the lattice's: each worker loaded them in its first tile, ~0.25 s CPU)
     # one process per worker, one thread each: Triangle and the kernels hold their core;
     # Dask's shutdown chatter (nanny warnings) is not the user's business
-    with dask.config.set({"distributed.worker.multiprocessing-method": method, **QUIET_CLUSTER}):
+    with dask.config.set({"distributed.worker.multiprocessing-method": method, **QUIET_CLUSTER, **TILE_QUEUE}):
         # no dashboard; the scheduler's HTTP server on a free local port (its default,
         # 8787, warns on stderr when another cluster has it)
-        cluster = stack.enter_context(distributed.LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.ERROR, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}))
-    # (closed by the stack, not entered as a context: a client entered in the starting
-    # thread could not be left in the caller's, its "current client" is per context)
-    c = distributed.Client(cluster)
-    stack.callback(c.close)
-    # the workers share this machine's cores: each threaded pass of a worker gets its
-    # share, not every core (N workers x C threads on C cores only thrash)
-    c.run(worker_setup, worker_threads(workers))
+        # (death_timeout: a nanny whose worker process is not up by then kills it and
+        # fails the start, which the stack then closes)
+        try:
+            cluster = stack.enter_context(distributed.LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                silence_logs=logging.ERROR, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                death_timeout=START_TIMEOUT))
+            # (closed by the stack, not entered as a context: a client entered in the starting
+            # thread could not be left in the caller's, its "current client" is per context)
+            c = distributed.Client(cluster, timeout=START_TIMEOUT)
+            stack.callback(c.close)
+            # the workers share this machine's cores: each threaded pass of a worker gets its
+            # share, not every core (N workers x C threads on C cores only thrash)
+            c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
+        except (TimeoutError, OSError) as exc:  # (asyncio's and Dask's timeouts are TimeoutError)
+            raise ClusterError(f"the local Dask cluster of {workers} workers did not start within "
+                               f"{START_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from exc
     return c
 
 

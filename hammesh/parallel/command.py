@@ -127,6 +127,8 @@ def run_parallel(args: argparse.Namespace) -> int:
             print(f"{p['k']} parts (cycle stretches): {p['size_min']:,}..{p['size_max']:,} triangles, "
                   f"imbalance {p['imbalance']:.3f}")
         print(f"wrote index: {rep['index']} ({rep['pieces']} pieces)")
+        for x in rep.get("not_carried", []):
+            print(f"note: {x}")
         return 0
     from hammesh.io import write, write_report
     from hammesh.parallel.cluster import runner_for
@@ -148,6 +150,12 @@ def run_parallel(args: argparse.Namespace) -> int:
 
         h = partitioned(h, k=args.parts, renumber=args.renumber)  # the whole mesh is here: as without --workers
     if args.output is not None:
+        from hammesh.io import unwritten_data
+
+        # never in silence (as the serial path): what the input brought and the file cannot hold
+        lost = [f"not written: {x}" for x in unwritten_data(h, args.output)]
+        if lost:
+            h.report["not_carried"] = [*h.report.get("not_carried", []), *lost]
         write(h, args.output)
     if args.report is not None:
         write_report(h.report, args.report)
@@ -157,4 +165,6 @@ def run_parallel(args: argparse.Namespace) -> int:
     for label, path in (("mesh", args.output), ("report", args.report)):
         if path is not None:
             print(f"wrote {label}: {path}")
+    for x in h.report.get("not_carried", []):
+        print(f"note: {x}")
     return 0

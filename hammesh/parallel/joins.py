@@ -531,7 +531,7 @@ def piece_layout(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: l
     # stretches): a run of a cycle (at most two stretches of rows, forward or
     # backward: no index array, no sort), or a join triangle
     mine = sorted((g, i) for i, (bk, g) in enumerate(zip(plan_blocks, plan_start.tolist())) if bk[0] == tile_index)
-    items, spans, removed_rows = [], [], []
+    items, spans = [], []
     for g, i in mine:
         bk = plan_blocks[i]
         if bk[1] == "run":

@@ -33,13 +33,54 @@ from hammesh import params
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
 from hammesh.partition import spread_parts
-from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, on_holder, outcome_hamiltonian,
-                                  progress_bar, run_tiles, since_start)
+from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, not_carried, on_holder,
+                                  outcome_hamiltonian, progress_bar, run_tiles, since_start)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target",
-           "piece_types", "int_type"]
+           "piece_types", "int_type", "spill_wanted", "HELD_BYTES_PER_TRIANGLE", "SPILL_SHARE"]
 
 INDEX_NAME = "mesh.pvtu"
+
+#: bytes a worker holds per triangle of a tile between its task and its piece: an
+#: upper bound (the Hamiltonian mesh, incircle's three rows per triangle with parents,
+#: kinds and attributes, and its points, is less than a tile task's peak, measured at
+#: 350-400 B per triangle at 1.5M-triangle tiles, docs/scale.md "On a cluster")
+HELD_BYTES_PER_TRIANGLE = 400
+#: share of a worker's memory its held tiles may take before they go to spill files
+SPILL_SHARE = 0.5
+
+
+def spill_wanted(runner, n_workers: int, tiles: int, estimate: float) -> bool:
+    """Whether each tile's Hamiltonian mesh waits for the join plan in a file instead
+    of its worker's memory: when a worker would hold more tiles than fit in
+    ``SPILL_SHARE`` of its memory (``HELD_BYTES_PER_TRIANGLE`` per triangle).
+
+    Why not whenever a worker runs several tiles (before session 12): at 6M triangles
+    the four balance tiles (:func:`~hammesh.parallel.run.default_tiles`) on two
+    workers hold at most ~1.2 GB each, and pickling them to files and back is work on
+    every tile's path that memory does not call for; at 100M (64 tiles, 32 per
+    worker) they would hold ~20 GB each, and spill.
+    Memory per worker: a running cluster's ``memory_limit`` (the smallest), else
+    this machine's memory over the workers (a local cluster's default limit).
+    """
+    if tiles <= n_workers:
+        return False
+    held = -(-tiles // n_workers) * (float(estimate) / tiles) * HELD_BYTES_PER_TRIANGLE
+    from hammesh.parallel.cluster import Starting
+
+    limit = 0.0
+    info = None if isinstance(runner, Starting) else getattr(runner, "scheduler_info", None)
+    if info is not None:  # (a cluster of its own: what each worker may use)
+        limits = [w.get("memory_limit") or 0 for w in info().get("workers", {}).values()]
+        limit = float(min(limits)) if limits and min(limits) > 0 else 0.0
+    if limit <= 0:
+        try:
+            import psutil
+
+            limit = psutil.virtual_memory().total / max(1, n_workers)
+        except ImportError:  # pragma: no cover - psutil comes with Dask
+            return True
+    return held > SPILL_SHARE * limit
 
 
 def piece_name(tile: int) -> str:
@@ -263,11 +304,12 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     try:
         with runner_for(workers=workers, client=client, scheduler=scheduler, mode=mode,
                         background=True) as (runner, n_workers):
+            estimate = decompose_estimate(domain, min_angle, max_area)
             if tiles is None:
-                tiles = default_tiles(decompose_estimate(domain, min_angle, max_area), n_workers)
-            # a worker holding more than one tile keeps none in memory until the plan
+                tiles = default_tiles(estimate, n_workers)
+            # workers whose tiles would not fit in memory keep none until the plan
             spill_dir = None
-            if tiles > n_workers:
+            if spill_wanted(runner, n_workers, tiles, estimate):
                 spill.mkdir()
                 spill_dir = spill
             tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
@@ -321,6 +363,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                      "since_start": {**tiled.since_start, "end": since_start()},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
+    if not_carried(domain):
+        report["not_carried"] = not_carried(domain)
     if parts is not None:
         sizes = np.sum([x[4] for x in done], axis=0)
         report["partition"] = {"k": int(parts), "scheme": "cycle stretches (shift 0)",

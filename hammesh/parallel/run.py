@@ -29,10 +29,14 @@ from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
-           "register_sizeof"]
+           "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "not_carried"]
 
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
+#: tiles per worker for balance (several workers, tiles of at least ``MIN_BALANCED_TILE``)
+BALANCE_TILES = 2
+#: estimated triangles per tile below which no tile is added for balance
+MIN_BALANCED_TILE = 500_000
 
 
 class _Done:
@@ -58,11 +62,24 @@ class LocalRunner:
 
 
 def default_tiles(estimate: float, workers: int) -> int:
-    """One tile per worker, more when a tile would exceed ``TRIANGLES_PER_TILE`` by
-    more than 20 %: then a multiple of the workers (3 tiles on 2 workers take as long
-    as 4; the 6M benchmark's estimate, 6.1M, got 3 tiles)."""
+    """Tiles for ``workers``: a multiple of them (3 tiles on 2 workers take as long as
+    4), more when a tile would exceed ``TRIANGLES_PER_TILE`` by more than 20 %, and
+    with several workers at least ``BALANCE_TILES`` per worker while a tile keeps
+    ``MIN_BALANCED_TILE`` triangles.
+
+    Why the balance tiles: tiles of equal triangle counts do not cost the same. On
+    the 6M demo's two tiles sparse ``hamiltonian()`` took 2.3 and 3.5-3.8 s CPU (the
+    second's cover and fans 1.3 and 0.6-0.8 s against 0.55 and 0.03 s); the command
+    waits for the slower while the other worker idles. Four tiles took 1.62 / 1.31 /
+    1.37 / 1.27 s (5.6 s in all against 5.9): run largest first, each worker taking
+    the next when free (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), by those
+    figures the workers end 0.2 s apart instead of 1.3 s.
+    """
     w = max(1, int(workers))
-    return w * max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
+    per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
+    if w > 1 and estimate >= BALANCE_TILES * w * MIN_BALANCED_TILE:
+        per = max(per, BALANCE_TILES)
+    return w * per
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,21 +275,26 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
 
     t0, s0 = time.perf_counter(), since_start()
     starting = isinstance(run, Starting)  # (a local cluster starting beside the decomposition)
-    warming = [] if starting else warm_workers(run, mode)  # (kept alive while the tiles run)
+    # (the futures are held until the tiles are done: Dask forgets a task nobody holds)
+    warming = [] if starting else warm_workers(run, mode)
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
     if starting:
-        warming = warm_workers(run, mode)  # noqa: F841
+        warming = warm_workers(run, mode)
     t1b = time.perf_counter()
+    # largest first (longest processing time first: the last tile to start is a small one)
+    rank = np.argsort(np.argsort([-t.estimate for t in decomp.tiles], kind="stable"))
 
     def submit(i: int, check: bool = True):
         spill = None if spill_dir is None else os.path.join(str(spill_dir), f"tile_{i:06d}.pickle")
         return run.submit(tile_task, decomp.tiles[i], decomp.n_input, min_angle, max_area, mode, keep, keep_meshes,
-                          spill, check, lattice, pure=False)
+                          spill, check, lattice, pure=False, priority=int(decomp.n_tiles - rank[i]))
 
-    handles = [submit(i) for i in range(decomp.n_tiles)]
+    handles = [submit(i) for i in np.argsort(rank).tolist()]
+    handles = [handles[r] for r in rank.tolist()]  # (tile order again)
     s1 = since_start()
     wait_for(run, handles)  # done: their holders are known
+    del warming
     small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
     rounds = 0
     while any(len(o.bad) for o in small):
@@ -442,9 +464,25 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
         "tile_seconds": tiled.tile_seconds, "tile_steps": tiled.tile_steps, "since_start": tiled.since_start,
     }
     report["triangles"] = int(len(h.triangles))
+    if not_carried(domain):
+        report["not_carried"] = not_carried(domain)
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,
                            segment_markers=h.segment_markers, components=h.components, position=h.position,
                            parent=h.parent, kind=h.kind, triangle_attributes=h.triangle_attributes, report=report)
+
+
+def not_carried(domain: Domain) -> list[str]:
+    """What the domain brings that the tiles' output does not hold, one line each (the
+    report's ``not_carried``, printed by the command as ``note:`` lines, as the serial
+    path does): its vertex attributes (``Domain.vertex_attributes``, from a ``.node``
+    or ``.poly``), which the serial Triangle backend interpolates to every output
+    point but the tiles do not take."""
+    va = getattr(domain, "vertex_attributes", None)
+    k = int(np.shape(va)[-1]) if va is not None and np.ndim(va) == 2 else 0
+    if not k:
+        return []
+    return [f"vertex attributes ({k} per vertex): parallel meshing does not interpolate them "
+            "(hammesh mesh without --workers/--tiles/--partitioned does)"]
 
 
 def decompose_estimate(domain: Domain, min_angle, max_area) -> float:

@@ -13,7 +13,7 @@ from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
-           "LATTICE_BAND", "LATTICE_BLOCK", "lattice_blocks", "load_tile_kernels"]
+           "LATTICE_BAND", "LATTICE_BLOCK", "LATTICE_ORDER", "lattice_blocks", "load_tile_kernels"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -28,6 +28,14 @@ LATTICE_BAND = True
 #: the lattice's triangles are numbered in blocks of this many strips and cells
 #: (:func:`~hammesh.parallel._kernels.lattice_triangles_into`: neighbours close in memory)
 LATTICE_BLOCK = 2
+#: the order of those blocks: ``"rows"`` (row by row) or ``"hilbert"`` (a Hilbert
+#: curve over the blocks, session 10's). Session 12, one 1.5M-triangle tile of the 6M
+#: demo, same process, two tiles x two rounds (CPU s): the mesh step 0.13-0.27 rows
+#: against 0.21-0.34 hilbert (the curve's keys and sort, and the scattered writes),
+#: ``hamiltonian()`` the same or less (sparse 1.19-1.48 against 1.28-1.52, incircle
+#: 0.48-0.77 against 0.52-0.85): sparse mode now renumbers big meshes by cells itself
+#: (``sparse.LOCAL_MIN_TRIANGLES``), so the curve no longer pays for itself.
+LATTICE_ORDER = "rows"
 #: no lattice when the tile's box holds more than this many lattice points per
 #: estimated triangle of the tile (about 0.5 of them are inside when the tile fills it)
 LATTICE_BOX_FILL = 8.0
@@ -182,16 +190,21 @@ def tile_switches(min_angle: float | None, max_area: float) -> str:
     return sw + "a" + format_number(max_area) + "YnQ"
 
 
-def lattice_blocks(strips: int, cells: int, block: int) -> np.ndarray:
+def lattice_blocks(strips: int, cells: int, block: int, order: str | None = None) -> np.ndarray:
     """``(k, 2)`` block row and column of every ``block`` x ``block`` block of a
-    ``strips`` x ``cells`` grid, in a Hilbert order of the blocks' centres (the order
-    :func:`~hammesh.parallel._kernels.lattice_triangles_into` numbers them in)."""
+    ``strips`` x ``cells`` grid, in the order
+    :func:`~hammesh.parallel._kernels.lattice_triangles_into` numbers them in:
+    ``order`` (default :data:`LATTICE_ORDER`) ``"rows"``, row by row, or ``"hilbert"``,
+    a Hilbert order of the blocks' centres."""
+    order = LATTICE_ORDER if order is None else order
+    bj, bi = np.divmod(np.arange(-(-strips // block) * -(-cells // block)), -(-cells // block))
+    if order == "rows":
+        return np.ascontiguousarray(np.stack([bj, bi], axis=1), dtype=np.int64)
     from hammesh.numbering import hilbert_keys
 
-    bj, bi = np.divmod(np.arange(-(-strips // block) * -(-cells // block)), -(-cells // block))
     # (centres in the plane: a strip is sqrt(3)/2 of a cell high)
-    order = np.argsort(hilbert_keys(np.stack([bi, bj * (np.sqrt(3.0) / 2.0)], axis=1)), kind="stable")
-    return np.ascontiguousarray(np.stack([bj, bi], axis=1)[order], dtype=np.int64)
+    keys = np.argsort(hilbert_keys(np.stack([bi, bj * (np.sqrt(3.0) / 2.0)], axis=1)), kind="stable")
+    return np.ascontiguousarray(np.stack([bj, bi], axis=1)[keys], dtype=np.int64)
 
 
 def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: float) -> Mesh | None:

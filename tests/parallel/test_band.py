@@ -33,13 +33,13 @@ def _check_neighbors(t: np.ndarray, nbr: np.ndarray) -> None:
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(ny=st.integers(2, 9), nx=st.integers(2, 9), seed=st.integers(0, 2**32 - 1), fill=st.floats(0.3, 1.0),
-       block=st.integers(1, 4))
-def test_lattice_triangles_are_equilateral_ccw_with_their_neighbours(ny, nx, seed, fill, block):
+       block=st.integers(1, 4), order=st.sampled_from(["rows", "hilbert"]))
+def test_lattice_triangles_are_equilateral_ccw_with_their_neighbours(ny, nx, seed, fill, block, order):
     keep = np.random.default_rng(seed).random((ny, nx)) < fill
     index = np.empty((ny - 1, 2 * (nx - 1)), np.int64)
     from hammesh.parallel.tile_mesh import lattice_blocks
 
-    blocks = lattice_blocks(ny - 1, nx - 1, block)
+    blocks = lattice_blocks(ny - 1, nx - 1, block, order)
     assert len(np.unique(blocks, axis=0)) == len(blocks) == -(-(ny - 1) // block) * -(-(nx - 1) // block)
     count = lattice_triangles_into(keep, block, blocks, index)
     assert np.array_equal(np.sort(index[index >= 0]), np.arange(count))  # numbered 0..count-1

@@ -20,6 +20,7 @@ def test_bench_scale_runs(extra, needle):
                            *extra], capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert needle in proc.stdout
+    assert proc.stdout.startswith("bytecode: was ")  # (cached by a small run first, and said so)
     assert "workers' CPU / raw CPU" in proc.stdout or "--partitioned-only" in extra
     assert "whole command's CPU" in proc.stdout or "--partitioned-only" in extra
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
@@ -32,12 +33,16 @@ def test_bench_scale_runs(extra, needle):
     (["--startup", "1"], ["early=1: submitted median", "early=0: submitted median"]),
     (["--ab", "1"], ["raw:", "sparse warm-up (0.2M, not counted)", "sparse new=1: whole CPU / raw CPU median",
                      "sparse new=0: whole CPU / raw CPU median"]),
-    (["--tile-ab", "1"], ["mesh: band", "sparse: band"])])
+    (["--tile-ab", "1"], ["mesh: band", "sparse: band"]),
+    (["--order-ab", "1"], ["mesh: order rows", "sparse: order rows"]),
+    (["--tiles-ab", "1", "--workers", "2"], ["sparse default tiles: wall / raw median",
+                                             "sparse one per worker: wall / raw median"])])
 def test_bench_scale_ab_modes_run(extra, needles):
-    """The A/B modes (session 10's switches on / off) keep running at a tiny size."""
+    """The A/B modes (session 10's switches on / off, session 12's tiles) keep running
+    at a tiny size (without caching the bytecode first: ``--source-imports``)."""
     pytest.importorskip("distributed")
     proc = subprocess.run([sys.executable, str(BENCH), "--sizes", "3e4", "--workers", "1", "--modes", "sparse",
-                           *extra], capture_output=True, text=True, timeout=900)
+                           "--source-imports", *extra], capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-2000:]
     for needle in needles:
         assert needle in proc.stdout

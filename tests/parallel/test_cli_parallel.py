@@ -76,9 +76,10 @@ def test_bad_parallel_options_exit_2(tmp_path, capsys, argv, what):
 
 
 @pytest.mark.slow
-def test_local_dask_cluster_of_two_workers(tmp_path, capsys):
+def test_local_dask_cluster_of_two_workers(tmp_path, capsys, run_cli):
     pytest.importorskip("distributed")
     out = tmp_path / "parts"
-    assert main(["mesh", DEMO, "-q", "30", "-a", "2e-3", "--workers", "2", "--partitioned", "-o", str(out)]) == 0
-    assert capsys.readouterr().err == ""  # no Dask chatter (port warnings, nanny logs) for the user
+    rc, _, err, left = run_cli(["mesh", DEMO, "-q", "30", "-a", "2e-3", "--workers", "2", "--partitioned", "-o", str(out)])
+    assert rc == 0 and left == []
+    assert err == ""  # no Dask chatter (port warnings, nanny logs) for the user
     assert main(["check", str(out / "mesh.pvtu")]) == 0

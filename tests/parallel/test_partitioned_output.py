@@ -87,7 +87,10 @@ def test_a_failing_run_leaves_nothing_behind(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []  # neither the pieces, the temp dir nor the parents it made
 
 
-def test_parts_with_partitioned_are_connected_balanced_stretches(tmp_path, capsys):
+def test_parts_with_partitioned_are_connected_balanced_stretches(tmp_path, capsys, monkeypatch):
+    from hammesh.parallel import partitioned as P
+
+    monkeypatch.setattr(P, "SPILL_SHARE", 0.0)  # (no tile fits: every Hamiltonian mesh goes to a file)
     out = tmp_path / "parts"
     rep = tmp_path / "r.json"
     assert main([*ARGS, "--tiles", "3", "--partitioned", "--parts", "5", "-o", str(out), "--report", str(rep)]) == 0
@@ -164,7 +167,7 @@ def test_raw_piece_round_trip_and_truncation(tmp_path):
     gid = m.point_data["global_id"]
     assert np.array_equal(gid[m.cells[0].data], tri)
     assert np.allclose(m.points[np.argsort(gid), :2], pts[np.argsort(ids)])
-    g, xy, t, gp, attr = pvtu._read_piece(path)
+    g, xy, t, gp, attr = pvtu._read_piece(path)[:5]
     assert np.array_equal(g[t], tri) and np.array_equal(gp, np.arange(300))
     assert np.allclose(attr[:, 0], m.cell_data["attribute_0"][0])
     assert not list(tmp_path.glob("*.part"))
@@ -202,7 +205,8 @@ def test_locate_in_triangles_finds_the_holder(seed):
 
 
 @pytest.mark.parametrize("estimate, workers, tiles", [
-    (1e5, 2, 2), (6.1e6, 2, 2), (7.5e6, 2, 4), (6.1e6, 1, 2), (1e8, 2, 34), (3e6, 8, 8),
+    (1e5, 2, 2), (1.9e6, 2, 2), (2e6, 2, 4), (6.1e6, 2, 4), (7.5e6, 2, 4), (6.1e6, 1, 2), (1e8, 2, 34),
+    (3e6, 8, 8), (8e6, 8, 16),
 ])
 def test_default_tiles_are_a_multiple_of_the_workers(estimate, workers, tiles):
     from hammesh.parallel.run import TRIANGLES_PER_TILE, default_tiles
@@ -210,6 +214,21 @@ def test_default_tiles_are_a_multiple_of_the_workers(estimate, workers, tiles):
     got = default_tiles(estimate, workers)
     assert got == tiles and got % workers == 0
     assert estimate / got <= 1.2 * TRIANGLES_PER_TILE or got == workers
+
+
+def test_spill_only_when_the_held_tiles_exceed_the_workers_memory(monkeypatch):
+    from hammesh.parallel import partitioned as P
+
+    class Cluster:  # (a running cluster's scheduler_info: 4 GB per worker)
+        def scheduler_info(self):
+            return {"workers": {a: {"memory_limit": 4e9} for a in "ab"}}
+
+    c = Cluster()
+    assert not P.spill_wanted(c, 2, 2, 1e9)  # one tile per worker: nothing waits
+    assert not P.spill_wanted(c, 2, 4, 6e6)  # 2 x 1.5M x 400 B = 1.2 GB <= 2 GB
+    assert P.spill_wanted(c, 2, 64, 1e8)  # 32 x 1.56M x 400 B = 20 GB
+    monkeypatch.setattr(P, "SPILL_SHARE", 0.1)
+    assert P.spill_wanted(c, 2, 4, 6e6)  # 1.2 GB > 0.4 GB
 
 
 @settings(max_examples=25, deadline=None)
@@ -227,8 +246,6 @@ def test_label_pieces_matches_scipy_components(seed, n_cut):
                                              segments=np.array([[0, 1], [1, 2], [2, 3], [3, 0]])),
                               max_area=0.01 + 0.02 * rng.random(), isolate=False)
     tri, n = m_.triangles, len(m_.points)
-    from tests.helpers import dual_pieces  # noqa: F401  (the same dual graph notion)
-
     edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
     cut = np.unique(edges, axis=0)[rng.permutation(len(np.unique(edges, axis=0)))[:n_cut]]
     keys = np.unique(cut @ np.array([n, 1]))

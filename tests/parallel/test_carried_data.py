@@ -1,0 +1,113 @@
+"""What the parallel path carries or says it does not (vertex attributes), and the
+names a ``.pvtu`` gives triangle attributes and point data (issue 15)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import hammesh
+from hammesh.cli import main
+from hammesh.io import pvtu, unwritten_data
+
+# a square with one attribute per vertex (Triangle's .poly: "n 2 k b")
+POLY = """4 2 1 0
+1 0 0 10
+2 1 0 20
+3 1 1 30
+4 0 1 40
+4 0
+1 1 2
+2 2 3
+3 3 4
+4 4 1
+0
+"""
+
+
+@pytest.fixture
+def poly(tmp_path):
+    p = tmp_path / "sq.poly"
+    p.write_text(POLY)
+    return p
+
+
+def test_domain_reads_the_vertex_attributes(poly):
+    dom = hammesh.read_domain(poly)
+    assert np.shape(dom.vertex_attributes) == (4, 1)
+
+
+@pytest.mark.parametrize("extra", [["--tiles", "2", "-o", "one.vtu"], ["--tiles", "2", "--partitioned", "-o", "dir"]])
+def test_parallel_path_notes_the_vertex_attributes_it_does_not_carry(poly, tmp_path, capsys, extra):
+    extra = [str(tmp_path / x) if x in ("one.vtu", "dir") else x for x in extra]
+    rep = tmp_path / "r.json"
+    assert main(["mesh", str(poly), "-q", "30", "-a", "2e-3", *extra, "--report", str(rep)]) == 0
+    out = capsys.readouterr().out
+    notes = [line for line in out.splitlines() if line.startswith("note: ")]
+    assert len(notes) == 1 and "vertex attributes (1 per vertex)" in notes[0]
+    assert json.loads(rep.read_text())["not_carried"] == [notes[0][len("note: "):]]
+
+
+def test_no_note_without_vertex_attributes(tmp_path, capsys):
+    p = tmp_path / "plain.poly"
+    p.write_text(POLY.replace("4 2 1 0", "4 2 0 0").replace(" 10\n", "\n").replace(" 20\n", "\n")
+                 .replace(" 30\n", "\n").replace(" 40\n", "\n"))
+    assert main(["mesh", str(p), "-q", "30", "-a", "2e-3", "--tiles", "2", "--partitioned",
+                 "-o", str(tmp_path / "d")]) == 0
+    assert "note:" not in capsys.readouterr().out
+
+
+def _mesh(rng, names, k, vector_point_data):
+    m = hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30,
+                             max_area=0.05 + 0.05 * rng.random(), isolate=False)
+    attrs = rng.random((m.n_triangles, k))
+    pd = {"temperature": rng.random(m.n_points), "id": rng.integers(0, 9, m.n_points)}
+    if vector_point_data:
+        pd["velocity"] = rng.random((m.n_points, 2))
+    return hammesh.Mesh(points=m.points, triangles=m.triangles, triangle_attributes=attrs, attribute_names=names,
+                        point_data=pd)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**31), named=st.booleans(), vector=st.booleans())
+def test_pvtu_names_attributes_and_point_data_as_the_vtu_writer(tmp_path_factory, seed, named, vector):
+    rng = np.random.default_rng(seed)
+    names = ("density", "v[0]", "v[1]") if named else ()
+    mesh = _mesh(rng, names, 3, vector)
+    d = tmp_path_factory.mktemp("pvtu")
+    assert unwritten_data(mesh, d / "m.pvtu") == []  # nothing the file cannot hold
+    hammesh.write(mesh, d / "m.pvtu")
+    hammesh.write(mesh, d / "m.vtu")
+    import meshio
+
+    from hammesh.io.cell_data import triangle_cell_data
+
+    piece = meshio.read(pvtu.read_pieces(d / "m.pvtu")[0])  # (another reader)
+    whole = meshio.read(d / "m.vtu")
+    own = {"global_position", "parent", "kind", "cycle_id", "cycle_position", "part"}
+    named = set(triangle_cell_data(mesh))  # the serial writer's names of the attributes
+    assert named == {k for k in piece.cell_data if k not in own} and named <= set(whole.cell_data)
+    for k in named:
+        assert np.allclose(piece.cell_data[k][0], whole.cell_data[k][0])
+    order = np.argsort(piece.point_data["global_id"])
+    assert set(piece.point_data) == {"global_id", *mesh.point_data} and set(mesh.point_data) <= set(whole.point_data)
+    for k in mesh.point_data:
+        assert np.allclose(piece.point_data[k][order], whole.point_data[k])
+    back = hammesh.read_mesh(d / "m.pvtu")
+    assert np.array_equal(back.triangles, mesh.triangles)
+    assert np.array_equal(back.triangle_attributes, mesh.triangle_attributes)
+    assert tuple(back.attribute_names) == names
+    assert set(back.point_data) == set(mesh.point_data)
+    for k, v in mesh.point_data.items():
+        assert np.array_equal(back.point_data[k], v)
+
+
+def test_pvtu_escapes_names(tmp_path):
+    mesh = _mesh(np.random.default_rng(1), ('a "q" <b> & c',), 1, False)
+    hammesh.write(mesh, tmp_path / "m.pvtu")
+    back = hammesh.read_mesh(tmp_path / "m.pvtu")
+    assert tuple(back.attribute_names) == ('a "q" <b> & c',)
