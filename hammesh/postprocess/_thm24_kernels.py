@@ -19,10 +19,14 @@ from numba import njit
 from hammesh import threads
 from hammesh import pages
 from hammesh.threads import row_ranges, run_all
+from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.verify.stream import UNLINKED
 
 __all__ = [
     "Forest",
+    "Classes",
+    "forest_classes",
+    "LEAF_CLASSES",
     "quadtree_coords",
     "top_cross_angle",
     "CROSS_ANGLES",
@@ -233,29 +237,19 @@ def spanning_forest(tri, twin, is_con, points=None):
     m = tri.shape[0]
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
-    # number, side by side: the search reads both of a neighbour at once
+    # number, side by side
     qr = pages.fresh((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
     out = {}
 
-    def outputs() -> None:  # their pages faulted in beside the coordinates' pass
+    def outputs() -> None:  # their pages faulted in beside the classes' first pass
         out["order"] = pages.fresh(m, np.int64)
         out["tri_r"] = pages.fresh(tri.shape, tri.dtype)
         out["code"] = pages.fresh(3 * m, np.int64)
 
-    if points is None or not m:
-        qr[:, 0] = 0
-        qr[:, 1] = -1
-        outputs()
-    elif len(spans) > 1:  # the rotation is chosen on this thread while the other faults pages
-        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)], top_cross_angle(points, tri, twin)), outputs])
-    else:
-        quadtree_coords(points, tri, qr, spans, top_cross_angle(points, tri, twin))
-        outputs()
+    cl = forest_classes(tri, twin, is_con, points, qr, side_work=outputs)
     order, tri_r, code = out["order"], out["tri_r"], out["code"]
-    # the two halves of the top split of the longer axis hold half the triangles each
-    # (the coordinates count them): one search per half, side by side
-    nx, ny = _half_counts(qr) if m else (0, 0)
-    hbit, n_hi = (2 * CELL_BITS - 1, nx) if abs(2 * nx - m) <= abs(2 * ny - m) else (CELL_BITS - 1, ny)
+    # one search per side of the top line (each holds half the triangles), side by side
+    n_hi = int(np.count_nonzero(cl.half))
     n_lo = m - n_hi
     starts = np.empty(m, np.int64)  # components' first new numbers: low half from 0, high from n_lo
     # each half's queue rows and cross edges: most rows are written, so small pages
@@ -264,7 +258,8 @@ def spanning_forest(tri, twin, is_con, points=None):
     halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
     calls = [
         (lambda side=side, base=base, a=a, b=b: _prim_half_into(
-            tri, twin, is_con, qr, hbit, side, base, order, tri_r, code, starts[base:], queue, a, b))
+            tri, twin, is_con, cl.cls, cl.cross_from, qr, cl.half, side, base, order, tri_r, code, starts[base:],
+            queue, a, b))
         for side, base, a, b in halves
     ]
     # on small meshes one thread runs both (same result: the halves share nothing)
@@ -275,9 +270,161 @@ def spanning_forest(tri, twin, is_con, points=None):
     cross = np.concatenate((queue[3 * n_lo - x_lo : 3 * n_lo][::-1], queue[3 * m - x_hi :][::-1])).astype(np.int64)
     parent = np.empty(len(comp_starts), np.int64)
     split = np.empty(2 * len(cross), np.int64)
-    n_split = _join_into(twin, is_con, qr, order, code, comp_starts, cross, parent, split)
+    n_split = _join_into(twin, is_con, qr, order, code, comp_starts, cross, parent, split, cl.cross_from,
+                         cl.n_classes)
     firsts = _piece_firsts(parent, comp_starts, order, qr)
     return Forest(tri_r, code, order, firsts, np.sort(split[:n_split]))
+
+
+class Classes(NamedTuple):
+    """Result of :func:`forest_classes` (see there)."""
+
+    cls: np.ndarray
+    half: np.ndarray
+    cross_from: int
+    n_classes: int
+    depth: int
+    angle: float
+
+
+#: Classes of the count quadtree's edges below the fishbone's deepest level.
+LEAF_CLASSES = (CELL_BITS + 1) * CENTRE_BINS
+
+
+def forest_classes(tri, twin, is_con, points=None, qr=None, side_work=None):
+    """The class of every dual edge that :func:`spanning_forest` ranks its tree by.
+
+    With ``points`` and at least ``4 * FISH_MIN_CELL`` triangles: the fishbone's
+    (``_fishbone_kernels``): its axes turned by ``fish_angle``, lines from a sample
+    (``kd_lines``), each triangle's cells (``descend_into``), each spine joined round
+    the holes its line crosses (``join_gaps_into``), then one class per half-edge
+    (:func:`_edge_classes_into`): below the fishbone's deepest level the count
+    quadtree's (:func:`edge_class`, ``< LEAF_CLASSES``), then each level from the
+    deepest up (``PER_LEVEL`` classes each), constrained edges last. The halves the
+    two searches take are the sides of the top line; ``cross_from``: the top level's
+    first class (those edges are the join's). On smaller meshes the count quadtree
+    alone (``depth`` 0, turned by :func:`top_cross_angle`; the halves: the top split
+    of its longer axis, the join's edges those between top-level quadrants). Without
+    ``points`` every free edge is in class 0.
+
+    ``qr``: (m, 2) int array whose column 0 gets the quadtree coordinates and column 1
+    -1 (the search's "not reached"); ``side_work``: a callable run on another thread
+    during the first pass (``spanning_forest`` faults its outputs' pages there).
+
+    Returns
+    -------
+    Classes
+        ``cls`` (3 m,) int16 (boundary half-edges 0), ``half`` (m,) int8 (0 or 1),
+        ``cross_from``, ``n_classes`` (constrained edges: ``n_classes - 1``),
+        ``depth`` (fishbone levels), ``angle`` (radians).
+    """
+    m = tri.shape[0]
+    spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    if qr is None:
+        qr = np.empty((m, 2), index_dtype(m))
+    side_work = side_work if side_work is not None else (lambda: None)
+    cls = pages.fresh(3 * m, np.int16)
+    sample = np.arange(0, m, max(1, m // fk.FISH_SAMPLE))
+    depth = fk.fish_depth(len(sample)) if points is not None else 0
+    if points is None or not m:
+        qr[:, 0] = 0
+        qr[:, 1] = -1
+        side_work()
+        cls[:] = 0
+        cls[is_con & (twin >= 0)] = N_CLASSES - 1
+        return Classes(cls, np.zeros(m, np.int8), QUAD_CLASSES, N_CLASSES, 0, 0.0)
+    zeros = np.zeros(1, np.float64)
+    if depth == 0:  # too few triangles for a fishbone level: the count quadtree
+        angle = top_cross_angle(points, tri, twin)
+        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)], angle), side_work])
+        nx, ny = _half_counts(qr)
+        hbit = 2 * CELL_BITS - 1 if abs(2 * nx - m) <= abs(2 * ny - m) else CELL_BITS - 1
+        half = ((qr[:, 0] >> hbit) & 1).astype(np.int8)
+        key = np.zeros(m, np.int32)
+        spine = np.zeros(m, np.int8)
+        lines, extent, cross_from, n_classes = zeros, zeros, QUAD_CLASSES, N_CLASSES
+    else:
+        found = {}
+
+        def first_pass() -> None:  # the turn, the lines and the quadtree below them
+            a = found["angle"] = fk.fish_angle(points, tri)
+            found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
+            quadtree_coords(points, tri, qr, [(0, m)], a)
+
+        run_all([first_pass, side_work])
+        angle, fl = found["angle"], found["lines"]
+        ca, sa = math.cos(angle), math.sin(angle)
+        key = np.empty(m, np.int32)
+        spine = np.empty(m, np.int8)
+        half = np.empty(m, np.int8)
+        run_all([
+            (lambda a=a, b=b: fk.descend_into(points, tri, ca, sa, fl.lines, fl.fars, depth, key, spine, half, a, b))
+            for a, b in spans
+        ])
+        on_rim = fk.rim_vertices(tri, twin, points.shape[0])
+        fk.join_gaps_into(points, tri, twin, ca, sa, key, spine, fl.lines, depth, on_rim)
+        lines, extent = fl.lines, fl.extent
+        cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
+        n_classes = LEAF_CLASSES + depth * fk.PER_LEVEL + 1
+    ca, sa = math.cos(angle), math.sin(angle)
+    run_all([
+        (lambda a=a, b=b: _edge_classes_into(points, tri, ca, sa, twin, is_con, key, spine, qr, lines, extent, depth,
+                                             n_classes - 1, cls, a, b))
+        for a, b in spans
+    ])
+    return Classes(cls, half, cross_from, n_classes, depth, angle)
+
+
+@njit(cache=True, nogil=True)
+def _edge_classes_into(points, tri, ca, sa, twin, is_con, key, spine, qr, lines, extent, depth, con, cls, lo, hi):
+    """Class of each half-edge of triangles ``lo..hi`` (:func:`forest_classes`).
+
+    ``d``: the deepest fishbone level whose cell holds both triangles and neither in
+    an ancestor's spine (the common 2-bit digits of ``key``, capped by ``spine``). At
+    ``d == depth`` the quadtree's :func:`edge_class`; else level ``d``'s classes from
+    ``LEAF_CLASSES + (depth - 1 - d) * PER_LEVEL``: 0 both on the spine; a hang
+    (one on it): the child's own spine end first (``HANG_BINS`` more for others),
+    by the L-infinity distance of the edge (its centroids' midpoint) from where the
+    child's line meets the spine, over the cell's extent; a wall (neither): by
+    its distance from the line. Boundary half-edges 0, constrained ones ``con``."""
+    for h in range(3 * lo, 3 * hi):
+        g = twin[h]
+        if g < 0:
+            cls[h] = 0
+            continue
+        if is_con[h]:
+            cls[h] = con
+            continue
+        t = h // 3
+        u = g // 3
+        la = spine[t]
+        lb = spine[u]
+        cp = depth - (math.frexp(float(key[t] ^ key[u]))[1] + 1) // 2  # equal 2-bit digits from the top
+        d = min(cp, la, lb)
+        if d >= depth:
+            cls[h] = edge_class(qr[t, 0], qr[u, 0])
+            continue
+        base = LEAF_CLASSES + (depth - 1 - d) * fk.PER_LEVEL
+        oc = fk.level_offset(d) + (key[t] >> (2 * (depth - d)))
+        line = lines[oc]
+        ext = extent[oc]
+        tx, ty = fk.turned_centroid(points, tri, t, ca, sa)
+        ux, uy = fk.turned_centroid(points, tri, u, ca, sa)
+        mx = 0.5 * (tx + ux)
+        my = 0.5 * (ty + uy)
+        m_along, m_across = (mx, my) if d % 2 == 0 else (my, mx)
+        if la == d and lb == d:
+            cls[h] = base
+        elif la == d or lb == d:
+            kid = u if la == d else t
+            child = key[kid] >> (2 * (depth - d - 1))
+            meet = lines[fk.level_offset(d + 1) + child]  # the child's line meets the spine there
+            dist = max(abs(m_along - meet), abs(m_across - line))
+            own = 0 if spine[kid] == d + 1 else fk.HANG_BINS  # a child hangs by its own spine's end
+            cls[h] = base + 1 + own + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.HANG_BINS)
+        else:
+            dist = abs(m_across - line)
+            cls[h] = base + 1 + 2 * fk.HANG_BINS + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
 
 
 def top_cross_angle(points, tri, twin, sample=None):
@@ -564,14 +711,15 @@ def _half_counts(qr):
 
 
 @njit(cache=True, nogil=True)
-def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code, starts, queue, q_lo, q_hi):
+def _prim_half_into(tri, twin, is_con, cls, cross_from, qr, half_of, side, base, order, tri_r, code, starts, queue, q_lo, q_hi):
     """Prim's search with a bucket queue of edge classes over the triangles of one half.
 
-    The half: triangles whose packed quadtree coordinates have bit ``hbit`` equal to
-    ``side`` (the top bit of one axis). Only free edges inside a top-level quadrant
-    (class below ``QUAD_CLASSES``) are searched, so a search never reads a triangle
-    the other half's search is numbering: the two halves run side by side. Each
-    search (a *component*, inside one quadrant) starts at its lowest input triangle.
+    The half: triangles ``t`` with ``half_of[t] == side`` (a side of the top line).
+    ``cls``: each half-edge's class (:func:`_edge_classes_into`). Only edges of a
+    class below ``cross_from`` are searched (inside one top-level cell), so a search
+    never reads a triangle the other half's search is numbering: the two halves run
+    side by side. Each search (a *component*, inside one top-level cell) starts at
+    its lowest input triangle.
 
     Numbers the half's triangles from ``base`` in the order they are reached: fills
     ``qr[t, 1]`` (-1 on entry), ``order``, ``tri_r`` and ``starts`` (the new number of
@@ -589,18 +737,18 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
     Returns ``(components, cross edges)``.
     """
     m = qr.shape[0]
-    head = np.full(QUAD_CLASSES, -1, np.int64)
+    head = np.full(cross_from, -1, np.int64)
     free = -1  # popped slots, linked through their first column
     n_used = q_lo
     top = q_hi
     n_seen = base
     n_comp = 0
     for s in range(m):
-        if ((qr[s, 0] >> hbit) & 1) != side or qr[s, 1] >= 0:
+        if half_of[s] != side or qr[s, 1] >= 0:
             continue
         starts[n_comp] = n_seen
         n_comp += 1
-        low = QUAD_CLASSES  # no class below it holds an entry
+        low = cross_from  # no class below it holds an entry
         t = s
         via = -1  # the half-edge of t its tree edge enters by
         while t >= 0:
@@ -611,8 +759,7 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
             tri_r[i, 0] = tri[t, 0]
             tri_r[i, 1] = tri[t, 1]
             tri_r[i, 2] = tri[t, 2]
-            qt = qr[t, 0]
-            best = QUAD_CLASSES  # the lightest edge out of t goes next without queueing if
+            best = cross_from  # the lightest edge out of t goes next without queueing if
             best_g = -1  # nothing queued is lighter (most tree edges)
             for kk in range(3):
                 h = 3 * t + kk
@@ -621,11 +768,11 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
                     code[3 * i + kk] = CON_BIT if is_con[h] else 0
                     continue
                 u = g // 3
-                c = QUAD_CLASSES if is_con[h] else edge_class(qt, qr[u, 0])
-                if c >= QUAD_CLASSES:  # the join's (``_join_into``)
+                c = cls[h]
+                if c >= cross_from:  # the join's (``_join_into``)
                     if h < g:
                         top -= 1
-                        queue[top, 0] = N_CLASSES - 1 if is_con[h] else c
+                        queue[top, 0] = c
                         queue[top, 1] = h
                     continue
                 j = qr[u, 1]  # same quadrant: numbered by this search, if at all
@@ -649,7 +796,7 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
             if best_g >= 0:
                 free, n_used = bucket_push(queue, head, free, n_used, best, best_g)
                 low = min(low, best)
-            while low < QUAD_CLASSES:  # the lowest class edge to a triangle not reached
+            while low < cross_from:  # the lowest class edge to a triangle not reached
                 slot = head[low]
                 if slot < 0:
                     low += 1
@@ -672,7 +819,7 @@ def _component_of(starts, i):
 
 
 @njit(cache=True, nogil=True)
-def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split):
+def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split, cross_from, n_classes):
     """Kruskal's join of the components of :func:`_prim_half_into` (new-number
     ``starts``, ascending) over the ``cross`` edges (rows ``(class, half-edge)``),
     lightest class first (a counting sort; constrained edges last), in their order
@@ -684,15 +831,15 @@ def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split):
     for c in range(n_comp):
         parent[c] = c
     n_cross = cross.shape[0]
-    n_bins = N_CLASSES - QUAD_CLASSES
+    n_bins = n_classes - cross_from
     first = np.zeros(n_bins + 1, np.int64)
     for e in range(n_cross):
-        first[cross[e, 0] - QUAD_CLASSES + 1] += 1
+        first[cross[e, 0] - cross_from + 1] += 1
     for b in range(n_bins):
         first[b + 1] += first[b]
     ranked = np.empty(n_cross, np.int64)
     for e in range(n_cross):
-        b = cross[e, 0] - QUAD_CLASSES
+        b = cross[e, 0] - cross_from
         ranked[first[b]] = e
         first[b] += 1
     n_split = 0
