@@ -50,6 +50,7 @@ __all__ = [
     "GAP_COST",
     "descend_into",
     "join_gaps_into",
+    "hang_spines_into",
     "distance_bin",
     "turned_centroid",
     "sample_centroids",
@@ -499,6 +500,70 @@ def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
             i = e
         for j in range(n):
             loc[lst[j]] = -1
+    return added
+
+
+@njit(cache=True, nogil=True)
+def hang_spines_into(twin, key, spine, depth):
+    """Reach each cell's spine to its parent's spine where it does not touch it.
+
+    A child hangs from its parent's spine by its own spine's end (the walk then
+    enters it there and visits it whole, one run). Where the child's line meets the
+    parent's spine at a hole (the parent's spine joined round the rim) the two do
+    not touch, the child hung by another of its triangles, and the walk split the
+    grandchild holding it (the gear at k = 64, session 12). A breadth-first search
+    from the child's spine through the child's other triangles finds the shortest
+    path to a triangle next to the parent's spine; the path joins the child's spine.
+    Updates ``spine`` in place; returns the triangles added."""
+    m = key.shape[0]
+    seen = np.full(m, -1, np.int64)
+    via = np.empty(m, np.int64)
+    added = 0
+    stamp = 0
+    for level in range(1, depth):
+        shift = 2 * (depth - level)
+        members = np.flatnonzero(spine == level)
+        n = members.shape[0]
+        cell_of = np.empty(n, np.int64)
+        for j in range(n):
+            cell_of[j] = key[members[j]] >> shift
+        by_cell = np.argsort(cell_of, kind="mergesort")
+        i = 0
+        while i < n:
+            e = i
+            while e < n and cell_of[by_cell[e]] == cell_of[by_cell[i]]:
+                e += 1
+            cell = cell_of[by_cell[i]]
+            stamp += 1
+            queue = []
+            for q in range(i, e):
+                t = members[by_cell[q]]
+                seen[t] = stamp
+                via[t] = -1
+                queue.append(t)
+            head = 0
+            end = -1
+            while head < len(queue) and end < 0:
+                t = queue[head]
+                head += 1
+                for kk in range(3):
+                    g = twin[3 * t + kk]
+                    if g < 0:
+                        continue
+                    u = g // 3
+                    if spine[u] == level - 1 and (key[u] >> (shift + 2)) == (cell >> 2):
+                        end = t  # next to the parent's spine
+                        break
+                    if seen[u] == stamp or spine[u] <= level or (key[u] >> shift) != cell:
+                        continue
+                    seen[u] = stamp
+                    via[u] = t
+                    queue.append(u)
+            while end >= 0 and via[end] >= 0:
+                spine[end] = level
+                added += 1
+                end = via[end]
+            i = e
     return added
 
 

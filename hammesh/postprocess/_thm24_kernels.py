@@ -363,6 +363,7 @@ def forest_classes(tri, twin, is_con, points=None, qr=None, side_work=None):
         ])
         on_rim = fk.rim_vertices(tri, twin, points.shape[0])
         fk.join_gaps_into(points, tri, twin, ca, sa, key, spine, fl.lines, depth, on_rim)
+        fk.hang_spines_into(twin, key, spine, depth)
         lines, extent = fl.lines, fl.extent
         cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
         n_classes = LEAF_CLASSES + depth * fk.PER_LEVEL + 1
@@ -422,8 +423,12 @@ def _edge_classes_into(points, tri, ca, sa, twin, is_con, key, spine, qr, lines,
             dist = max(abs(m_along - meet), abs(m_across - line))
             own = 0 if spine[kid] == d + 1 else fk.HANG_BINS  # a child hangs by its own spine's end
             cls[h] = base + 1 + own + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.HANG_BINS)
-        else:
-            dist = abs(m_across - line)
+        else:  # nearest a child's hanging point: the child it splits is split near its entry
+            off = fk.level_offset(d + 1)
+            shift = 2 * (depth - d - 1)
+            ma = lines[off + (key[t] >> shift)]
+            mb = lines[off + (key[u] >> shift)]
+            dist = min(max(abs(m_along - ma), abs(m_across - line)), max(abs(m_along - mb), abs(m_across - line)))
             cls[h] = base + 1 + 2 * fk.HANG_BINS + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
 
 
