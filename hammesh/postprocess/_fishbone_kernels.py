@@ -11,7 +11,7 @@ those cells cut by their spines (docs/partition.md, "Fishbone trees").
 
 The lines are medians of a sample of the centroids (:func:`kd_lines`: a kd build
 with quickselect, two splits a level, the line turning by 90 degrees a level), and
-every triangle finds its cells by descending them (:func:`_descend`). A line that
+every triangle finds its cells by descending them (:func:`descend`). A line that
 crosses a hole leaves its spine in pieces; :func:`join_gaps_into` joins them round
 the hole's rim (the triangles touching the boundary, on one side of the line), so
 that the children still hang from one path. ``_thm24_kernels.spanning_forest`` turns
@@ -49,8 +49,10 @@ __all__ = [
     "GAP_STEPS",
     "GAP_COST",
     "descend_into",
+    "descend",
+    "turned_box",
     "join_gaps_into",
-    "hang_spines_into",
+    "spines_by_level",
     "distance_bin",
     "turned_centroid",
     "sample_centroids",
@@ -60,7 +62,7 @@ __all__ = [
 #: Most fishbone levels (below them the count quadtree ranks the edges).
 FISH_LEVELS = 7
 #: Centroids the lines are medians of (every ``m // FISH_SAMPLE``-th triangle; all below).
-FISH_SAMPLE = 1 << 18
+FISH_SAMPLE = 1 << 16
 #: Sampled centroids per deepest cell at least (fewer levels on small meshes).
 FISH_MIN_CELL = 16
 #: Distance classes of the edges that hang a child (each of own-spine / other kid).
@@ -205,7 +207,7 @@ def _turn(x, y, ca, sa):
 
 
 @njit(cache=True, nogil=True)
-def _descend(cx, cy, x0, x1, y0, y1, lines, fars, depth):
+def descend(cx, cy, x0, x1, y0, y1, lines, fars, depth):
     """``(cell, spine level)`` of a triangle of turned centroid ``(cx, cy)`` and box
     ``[x0, x1] x [y0, y1]``: the deepest cell (2 bits a level, ``2 * side + far``) and
     the first level whose line its box straddles (``depth``: none)."""
@@ -227,7 +229,7 @@ def _descend(cx, cy, x0, x1, y0, y1, lines, fars, depth):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _tri_box(points, tri, t, ca, sa):
+def turned_box(points, tri, t, ca, sa):
     """Turned centroid and bounding box of triangle ``t``."""
     ax, ay = _turn(points[tri[t, 0], 0], points[tri[t, 0], 1], ca, sa)
     bx, by = _turn(points[tri[t, 1], 0], points[tri[t, 1], 1], ca, sa)
@@ -237,22 +239,21 @@ def _tri_box(points, tri, t, ca, sa):
 
 
 @njit(cache=True, nogil=True)
-def descend_into(points, tri, ca, sa, lines, fars, depth, key, spine, side, lo, hi):
-    """Cells of triangles ``lo..hi`` (:func:`_descend`): ``key`` the deepest cell,
-    ``spine`` the spine level (``depth``: none), ``side`` the top line's side (the
-    two searches' halves)."""
+def descend_into(points, tri, ca, sa, lines, fars, depth, fish_shift, qr, half, lo, hi):
+    """Cells of triangles ``lo..hi`` (:func:`descend`): ``qr[t, 2]`` the deepest cell
+    ``| spine level << fish_shift`` (``depth``: on no spine), ``half`` the top line's
+    side (the two searches' halves)."""
     for t in range(lo, hi):
-        cx, cy, x0, x1, y0, y1 = _tri_box(points, tri, t, ca, sa)
-        reg, sp = _descend(cx, cy, x0, x1, y0, y1, lines, fars, depth)
-        key[t] = reg
-        spine[t] = sp
-        side[t] = (reg >> (2 * depth - 1)) & 1 if depth > 0 else 0
+        cx, cy, x0, x1, y0, y1 = turned_box(points, tri, t, ca, sa)
+        reg, sp = descend(cx, cy, x0, x1, y0, y1, lines, fars, depth)
+        qr[t, 2] = reg | (sp << fish_shift)
+        half[t] = (reg >> (2 * depth - 1)) & 1 if depth > 0 else 0
 
 
 @njit(cache=True, nogil=True)
 def _sample_boxes(points, tri, sample, ca, sa, xy, box):
     for i in range(sample.shape[0]):
-        cx, cy, x0, x1, y0, y1 = _tri_box(points, tri, sample[i], ca, sa)
+        cx, cy, x0, x1, y0, y1 = turned_box(points, tri, sample[i], ca, sa)
         xy[i, 0] = cx
         xy[i, 1] = cy
         box[i, 0] = x0
@@ -381,29 +382,59 @@ def _root(parent, x):
 
 
 @njit(cache=True, nogil=True)
-def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
-    """Join each cell's spine round the holes its line crosses (session 11's rule).
+def spines_by_level(qr, fish_shift, levels):
+    """The triangles on a spine of the top ``levels`` levels (``qr[:, 2]``), grouped
+    by level in one pass (a counting sort): ``(triangles, first)``, level ``l``'s at
+    ``first[l]:first[l + 1]``, each level's in increasing order."""
+    first = np.zeros(levels + 1, np.int64)
+    for t in range(qr.shape[0]):
+        sp = qr[t, 2] >> fish_shift
+        if sp < levels:
+            first[sp + 1] += 1
+    for lv in range(levels):
+        first[lv + 1] += first[lv]
+    out = np.empty(first[levels], np.int64)
+    fill = first[:levels].copy()
+    for t in range(qr.shape[0]):
+        sp = qr[t, 2] >> fish_shift
+        if sp < levels:
+            out[fill[sp]] = t
+            fill[sp] += 1
+    return out, first
 
-    Level by level from the top, the spine triangles of each cell are split into
-    pieces (dual-connected inside the cell's spine); while a cell has more than one,
-    a breadth-first search from the first piece through the cell's triangles that
-    touch the boundary (``on_rim`` vertices), first below the line then above it,
-    finds the shortest such path to another piece, whose triangles join the spine.
-    Without a path (the pieces are not apart by a hole) the pieces stay. Updates
-    ``spine`` in place; returns the triangles added."""
-    m = key.shape[0]
-    loc = np.full(m, -1, np.int64)  # a spine triangle's index in its level's list
-    seen = np.full(m, -1, np.int64)  # BFS stamp
-    via = np.empty(m, np.int64)
+
+@njit(cache=True, nogil=True)
+def join_gaps_into(points, tri, twin, ca, sa, qr, fish_shift, lines, depth, levels, on_rim):
+    """Join each cell's spine round the holes its line crosses (session 11's rule),
+    for the top ``levels`` levels.
+
+    ``qr[:, 2]``: each triangle's cell ``| spine level << fish_shift``
+    (:func:`descend_into`). Level by level from the top, the spine triangles of each
+    cell are split into pieces (dual-connected inside the cell's spine); while a
+    cell has more than one, a breadth-first search from the first piece through the
+    cell's triangles that touch the boundary (``on_rim`` vertices), first below the
+    line then above it, finds the shortest such path to another piece, whose
+    triangles join the spine. Without a path (the pieces are not apart by a hole)
+    the pieces stay. Updates ``qr[:, 2]``; returns the triangles added."""
+    m = qr.shape[0]
+    low = (1 << fish_shift) - 1
+    loc = np.full(m, -1, np.int32)  # a spine triangle's index in its level's list
+    seen = np.full(1, -1, np.int32)  # BFS stamp and parent: made at the first search
+    via = np.empty(1, np.int32)
     added = 0
     stamp = 0
-    for level in range(depth):
+    levels = min(levels, depth)
+    listed, first = spines_by_level(qr, fish_shift, levels)
+    for level in range(levels):
         shift = 2 * (depth - level)
-        members = np.flatnonzero(spine == level)
-        cap = members.shape[0] + m // 4 + 16
+        members = listed[first[level] : first[level + 1]]  # (a path moves a triangle up, never down)
+        cap = 2 * members.shape[0] + 1024  # room for the paths (rim strips)
         lst = np.empty(cap, np.int64)
-        n = members.shape[0]
-        lst[:n] = members
+        n = 0
+        for t in members:
+            if (qr[t, 2] >> fish_shift) == level:  # (not moved up by a path above)
+                lst[n] = t
+                n += 1
         parent = np.arange(cap)
         for j in range(n):
             loc[lst[j]] = j
@@ -414,13 +445,13 @@ def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
                 if g < 0:
                     continue
                 u = g // 3
-                if spine[u] == level and (key[u] >> shift) == (key[t] >> shift):
+                if (qr[u, 2] >> fish_shift) == level and ((qr[u, 2] & low) >> shift) == ((qr[t, 2] & low) >> shift):
                     a, b = _root(parent, j), _root(parent, loc[u])
                     if a != b:
                         parent[max(a, b)] = min(a, b)
         cell_of = np.empty(n, np.int64)
         for j in range(n):
-            cell_of[j] = key[lst[j]] >> shift
+            cell_of[j] = (qr[lst[j], 2] & low) >> shift
         by_cell = np.argsort(cell_of, kind="mergesort")
         oc0 = level_offset(level)
         n0 = n  # the list grows by the paths; the pieces are of the first n0
@@ -442,6 +473,9 @@ def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
                 if not split:
                     break
                 joined = False
+                if seen.shape[0] < m:
+                    seen = np.full(m, -1, np.int32)
+                    via = np.empty(m, np.int32)
                 for below in range(2):
                     stamp += 1
                     queue = []
@@ -461,14 +495,15 @@ def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
                             if g < 0:
                                 continue
                             u = g // 3
-                            if (key[u] >> shift) != cell or seen[u] == stamp:
+                            if ((qr[u, 2] & low) >> shift) != cell or seen[u] == stamp:
                                 continue
-                            if spine[u] == level:
+                            sp = qr[u, 2] >> fish_shift
+                            if sp == level:
                                 if loc[u] >= 0 and _root(parent, loc[u]) != r0 and via[t] >= 0:
                                     hit, end = u, t
                                     break
                                 continue
-                            if spine[u] < level or not _on_rim(tri, on_rim, u):
+                            if sp < level or not _on_rim(tri, on_rim, u):
                                 continue
                             cu = turned_centroid(points, tri, u, ca, sa)
                             if (cu[across] < line) != (below == 0):
@@ -480,13 +515,11 @@ def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
                         continue
                     t = end
                     while via[t] >= 0:  # the path joins the spine (and this level's list)
-                        spine[t] = level
+                        qr[t, 2] = (qr[t, 2] & low) | (level << fish_shift)
                         if n < cap:
                             lst[n] = t
                             loc[t] = n
-                            parent[n] = n
-                            a = _root(parent, n)
-                            parent[a] = _root(parent, loc[hit])
+                            parent[n] = _root(parent, loc[hit])
                             n += 1
                         added += 1
                         t = via[t]
@@ -500,70 +533,6 @@ def join_gaps_into(points, tri, twin, ca, sa, key, spine, lines, depth, on_rim):
             i = e
         for j in range(n):
             loc[lst[j]] = -1
-    return added
-
-
-@njit(cache=True, nogil=True)
-def hang_spines_into(twin, key, spine, depth):
-    """Reach each cell's spine to its parent's spine where it does not touch it.
-
-    A child hangs from its parent's spine by its own spine's end (the walk then
-    enters it there and visits it whole, one run). Where the child's line meets the
-    parent's spine at a hole (the parent's spine joined round the rim) the two do
-    not touch, the child hung by another of its triangles, and the walk split the
-    grandchild holding it (the gear at k = 64, session 12). A breadth-first search
-    from the child's spine through the child's other triangles finds the shortest
-    path to a triangle next to the parent's spine; the path joins the child's spine.
-    Updates ``spine`` in place; returns the triangles added."""
-    m = key.shape[0]
-    seen = np.full(m, -1, np.int64)
-    via = np.empty(m, np.int64)
-    added = 0
-    stamp = 0
-    for level in range(1, depth):
-        shift = 2 * (depth - level)
-        members = np.flatnonzero(spine == level)
-        n = members.shape[0]
-        cell_of = np.empty(n, np.int64)
-        for j in range(n):
-            cell_of[j] = key[members[j]] >> shift
-        by_cell = np.argsort(cell_of, kind="mergesort")
-        i = 0
-        while i < n:
-            e = i
-            while e < n and cell_of[by_cell[e]] == cell_of[by_cell[i]]:
-                e += 1
-            cell = cell_of[by_cell[i]]
-            stamp += 1
-            queue = []
-            for q in range(i, e):
-                t = members[by_cell[q]]
-                seen[t] = stamp
-                via[t] = -1
-                queue.append(t)
-            head = 0
-            end = -1
-            while head < len(queue) and end < 0:
-                t = queue[head]
-                head += 1
-                for kk in range(3):
-                    g = twin[3 * t + kk]
-                    if g < 0:
-                        continue
-                    u = g // 3
-                    if spine[u] == level - 1 and (key[u] >> (shift + 2)) == (cell >> 2):
-                        end = t  # next to the parent's spine
-                        break
-                    if seen[u] == stamp or spine[u] <= level or (key[u] >> shift) != cell:
-                        continue
-                    seen[u] = stamp
-                    via[u] = t
-                    queue.append(u)
-            while end >= 0 and via[end] >= 0:
-                spine[end] = level
-                added += 1
-                end = via[end]
-            i = e
     return added
 
 

@@ -25,7 +25,15 @@ from hammesh.verify.stream import UNLINKED
 __all__ = [
     "Forest",
     "Classes",
+    "Frame",
+    "QuadFrame",
+    "quad_frame",
+    "fishbone_frame",
     "forest_classes",
+    "edge_class_of",
+    "fish_class",
+    "FISH_SHIFT",
+    "GAP_LEVELS",
     "LEAF_CLASSES",
     "quadtree_coords",
     "top_cross_angle",
@@ -238,7 +246,8 @@ def spanning_forest(tri, twin, is_con, points=None):
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
     # number, side by side
-    qr = pages.fresh((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
+    # and its fishbone cell (and a pad: 16 bytes, never across two cache lines)
+    qr = pages.fresh((m, 4), index_dtype(m))
     out = {}
 
     def outputs() -> None:  # their pages faulted in beside the classes' first pass
@@ -246,7 +255,9 @@ def spanning_forest(tri, twin, is_con, points=None):
         out["tri_r"] = pages.fresh(tri.shape, tri.dtype)
         out["code"] = pages.fresh(3 * m, np.int64)
 
-    cl = forest_classes(tri, twin, is_con, points, qr, side_work=outputs)
+    cl = fishbone_frame(tri, twin, points, qr, side_work=outputs)
+    pts = points if points is not None else np.zeros((1, 2))
+    ca, sa = math.cos(cl.angle), math.sin(cl.angle)
     order, tri_r, code = out["order"], out["tri_r"], out["code"]
     # one search per side of the top line (each holds half the triangles), side by side
     n_hi = int(np.count_nonzero(cl.half))
@@ -258,8 +269,8 @@ def spanning_forest(tri, twin, is_con, points=None):
     halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
     calls = [
         (lambda side=side, base=base, a=a, b=b: _prim_half_into(
-            tri, twin, is_con, cl.cls, cl.cross_from, qr, cl.half, side, base, order, tri_r, code, starts[base:],
-            queue, a, b))
+            tri, twin, is_con, pts, ca, sa, cl.lines, cl.extent, cl.depth, cl.n_classes - 1, cl.cross_from, qr,
+            cl.half, side, base, order, tri_r, code, starts[base:], queue, a, b))
         for side, base, a, b in halves
     ]
     # on small meshes one thread runs both (same result: the halves share nothing)
@@ -276,160 +287,178 @@ def spanning_forest(tri, twin, is_con, points=None):
     return Forest(tri_r, code, order, firsts, np.sort(split[:n_split]))
 
 
-class Classes(NamedTuple):
-    """Result of :func:`forest_classes` (see there)."""
+class Frame(NamedTuple):
+    """Result of :func:`fishbone_frame` (see there)."""
 
-    cls: np.ndarray
     half: np.ndarray
-    cross_from: int
-    n_classes: int
+    lines: np.ndarray
+    extent: np.ndarray
     depth: int
     angle: float
+    cross_from: int
+    n_classes: int
+
+
+class Classes(NamedTuple):
+    """Result of :func:`forest_classes`: ``cls`` (3 m,) int16, each half-edge's class
+    (boundary half-edges 0), and the :class:`Frame` it came from."""
+
+    cls: np.ndarray
+    frame: Frame
 
 
 #: Classes of the count quadtree's edges below the fishbone's deepest level.
 LEAF_CLASSES = (CELL_BITS + 1) * CENTRE_BINS
+#: Fishbone levels whose spines are joined round holes (deeper cells are small; on
+#: the gear 4 and all levels give the same cut, session 12).
+GAP_LEVELS = 4
 
 
-def forest_classes(tri, twin, is_con, points=None, qr=None, side_work=None):
-    """The class of every dual edge that :func:`spanning_forest` ranks its tree by.
+def fishbone_frame(tri, twin, points, qr, side_work=None):
+    """Everything :func:`spanning_forest`'s edge classes are computed from.
 
-    With ``points`` and at least ``4 * FISH_MIN_CELL`` triangles: the fishbone's
+    With ``points`` and at least ``4 * FISH_MIN_CELL`` triangles, the fishbone
     (``_fishbone_kernels``): its axes turned by ``fish_angle``, lines from a sample
-    (``kd_lines``), each triangle's cells (``descend_into``), each spine joined round
-    the holes its line crosses (``join_gaps_into``), then one class per half-edge
-    (:func:`_edge_classes_into`): below the fishbone's deepest level the count
-    quadtree's (:func:`edge_class`, ``< LEAF_CLASSES``), then each level from the
-    deepest up (``PER_LEVEL`` classes each), constrained edges last. The halves the
-    two searches take are the sides of the top line; ``cross_from``: the top level's
-    first class (those edges are the join's). On smaller meshes the count quadtree
-    alone (``depth`` 0, turned by :func:`top_cross_angle`; the halves: the top split
-    of its longer axis, the join's edges those between top-level quadrants). Without
-    ``points`` every free edge is in class 0.
+    (``kd_lines``), each triangle's cells (:func:`_cells_into`, one pass with the
+    quadtree coordinates), the spines of the top ``GAP_LEVELS`` levels joined round
+    the holes their lines cross (``join_gaps_into``). The classes (:func:`edge_class_of`): below the
+    fishbone's deepest level the count quadtree's (:func:`edge_class`, under
+    ``LEAF_CLASSES``), then each level from the deepest up (``PER_LEVEL`` classes
+    each), constrained edges last (``n_classes - 1``). The two searches' halves are
+    the sides of the top line; ``cross_from`` is the top level's first class (those
+    edges are the join's). On smaller meshes the count quadtree alone (``depth`` 0,
+    turned by :func:`top_cross_angle`; the halves: the top split of its longer axis,
+    the join's edges those between top-level quadrants).
 
-    ``qr``: (m, 2) int array whose column 0 gets the quadtree coordinates and column 1
-    -1 (the search's "not reached"); ``side_work``: a callable run on another thread
-    during the first pass (``spanning_forest`` faults its outputs' pages there).
-
-    Returns
-    -------
-    Classes
-        ``cls`` (3 m,) int16 (boundary half-edges 0), ``half`` (m,) int8 (0 or 1),
-        ``cross_from``, ``n_classes`` (constrained edges: ``n_classes - 1``),
-        ``depth`` (fishbone levels), ``angle`` (radians).
+    ``qr``: (m, 4) int array: column 0 gets the quadtree coordinates, 1 -1 (the
+    search's "not reached"), 2 the fishbone cell and spine level (``FISH_SHIFT``).
+    ``side_work``: run on another thread during the first pass (``spanning_forest``
+    faults its outputs' pages there).
     """
     m = tri.shape[0]
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
-    if qr is None:
-        qr = np.empty((m, 2), index_dtype(m))
     side_work = side_work if side_work is not None else (lambda: None)
-    cls = pages.fresh(3 * m, np.int16)
     sample = np.arange(0, m, max(1, m // fk.FISH_SAMPLE))
     depth = fk.fish_depth(len(sample)) if points is not None else 0
+    zeros = np.zeros(1, np.float64)
     if points is None or not m:
         qr[:, 0] = 0
         qr[:, 1] = -1
+        qr[:, 2] = 0
         side_work()
-        cls[:] = 0
-        cls[is_con & (twin >= 0)] = N_CLASSES - 1
-        return Classes(cls, np.zeros(m, np.int8), QUAD_CLASSES, N_CLASSES, 0, 0.0)
-    zeros = np.zeros(1, np.float64)
+        return Frame(np.zeros(m, np.int8), zeros, zeros, 0, 0.0, QUAD_CLASSES, N_CLASSES)
     if depth == 0:  # too few triangles for a fishbone level: the count quadtree
         angle = top_cross_angle(points, tri, twin)
         run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)], angle), side_work])
+        qr[:, 2] = 0
         nx, ny = _half_counts(qr)
         hbit = 2 * CELL_BITS - 1 if abs(2 * nx - m) <= abs(2 * ny - m) else CELL_BITS - 1
         half = ((qr[:, 0] >> hbit) & 1).astype(np.int8)
-        key = np.zeros(m, np.int32)
-        spine = np.zeros(m, np.int8)
-        lines, extent, cross_from, n_classes = zeros, zeros, QUAD_CLASSES, N_CLASSES
-    else:
-        found = {}
+        return Frame(half, zeros, zeros, 0, angle, QUAD_CLASSES, N_CLASSES)
+    found = {}
 
-        def first_pass() -> None:  # the turn, the lines and the quadtree below them
-            a = found["angle"] = fk.fish_angle(points, tri)
-            found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
-            quadtree_coords(points, tri, qr, [(0, m)], a)
+    def first_pass() -> None:  # the turn, the lines and the quadtree's frame
+        a = found["angle"] = fk.fish_angle(points, tri)
+        found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
+        found["frame"] = quad_frame(points, tri, a)
 
-        run_all([first_pass, side_work])
-        angle, fl = found["angle"], found["lines"]
-        ca, sa = math.cos(angle), math.sin(angle)
-        key = np.empty(m, np.int32)
-        spine = np.empty(m, np.int8)
-        half = np.empty(m, np.int8)
-        run_all([
-            (lambda a=a, b=b: fk.descend_into(points, tri, ca, sa, fl.lines, fl.fars, depth, key, spine, half, a, b))
-            for a, b in spans
-        ])
-        on_rim = fk.rim_vertices(tri, twin, points.shape[0])
-        fk.join_gaps_into(points, tri, twin, ca, sa, key, spine, fl.lines, depth, on_rim)
-        fk.hang_spines_into(twin, key, spine, depth)
-        lines, extent = fl.lines, fl.extent
-        cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
-        n_classes = LEAF_CLASSES + depth * fk.PER_LEVEL + 1
-    ca, sa = math.cos(angle), math.sin(angle)
+    run_all([first_pass, side_work])
+    angle, fl, fr = found["angle"], found["lines"], found["frame"]
+    half = np.empty(m, np.int8)
     run_all([
-        (lambda a=a, b=b: _edge_classes_into(points, tri, ca, sa, twin, is_con, key, spine, qr, lines, extent, depth,
-                                             n_classes - 1, cls, a, b))
+        (lambda a=a, b=b: _cells_into(points, tri, fr.ca, fr.sa, fr.x0, fr.y0, fr.bx, fr.by, fr.cum, fr.fx, fr.fy,
+                                      fl.lines, fl.fars, depth, qr, half, a, b))
         for a, b in spans
     ])
-    return Classes(cls, half, cross_from, n_classes, depth, angle)
+    on_rim = fk.rim_vertices(tri, twin, points.shape[0])
+    levels = min(depth, GAP_LEVELS)
+    fk.join_gaps_into(points, tri, twin, fr.ca, fr.sa, qr, FISH_SHIFT, fl.lines, depth, levels, on_rim)
+    cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
+    return Frame(half, fl.lines, fl.extent, depth, angle, cross_from, LEAF_CLASSES + depth * fk.PER_LEVEL + 1)
+
+
+def forest_classes(tri, twin, is_con, points=None):
+    """The class of every dual edge that :func:`spanning_forest` ranks its tree by
+    (:func:`fishbone_frame`; the search computes them as it goes, this lists them).
+    Returns :class:`Classes`."""
+    m = tri.shape[0]
+    qr = np.empty((m, 4), index_dtype(m))
+    fr = fishbone_frame(tri, twin, points, qr)
+    cls = np.zeros(3 * m, np.int16)
+    pts = points if points is not None else np.zeros((1, 2))
+    ca, sa = math.cos(fr.angle), math.sin(fr.angle)
+    _edge_classes_into(pts, tri, ca, sa, twin, is_con, qr, fr.lines, fr.extent, fr.depth, fr.n_classes - 1, cls)
+    return Classes(cls, fr)
 
 
 @njit(cache=True, nogil=True)
-def _edge_classes_into(points, tri, ca, sa, twin, is_con, key, spine, qr, lines, extent, depth, con, cls, lo, hi):
-    """Class of each half-edge of triangles ``lo..hi`` (:func:`forest_classes`).
+def _edge_classes_into(points, tri, ca, sa, twin, is_con, qr, lines, extent, depth, con, cls):
+    """:func:`edge_class_of` of every half-edge (boundary ones 0, constrained ``con``)."""
+    for h in range(twin.shape[0]):
+        g = twin[h]
+        if g >= 0:
+            cls[h] = con if is_con[h] else edge_class_of(points, tri, ca, sa, qr, h // 3, g // 3, lines, extent, depth)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def edge_class_of(points, tri, ca, sa, qr, t, u, lines, extent, depth):
+    """Class of the free dual edge between triangles ``t`` and ``u`` (:func:`fishbone_frame`):
+    the quadtree's :func:`edge_class` inside one deepest fishbone cell (most edges),
+    else :func:`fish_class`."""
+    fa = qr[t, 2]
+    if fa == qr[u, 2] and (fa >> FISH_SHIFT) == depth:
+        return edge_class(qr[t, 0], qr[u, 0])
+    return fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth)
+
+
+@njit(cache=True, nogil=True)
+def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
+    """Class of the free dual edge between triangles ``t`` and ``u`` (:func:`fishbone_frame`),
+    a separate call: the search's loop stays small for the common case.
 
     ``d``: the deepest fishbone level whose cell holds both triangles and neither in
-    an ancestor's spine (the common 2-bit digits of ``key``, capped by ``spine``). At
-    ``d == depth`` the quadtree's :func:`edge_class`; else level ``d``'s classes from
-    ``LEAF_CLASSES + (depth - 1 - d) * PER_LEVEL``: 0 both on the spine; a hang
-    (one on it): the child's own spine end first (``HANG_BINS`` more for others),
-    by the L-infinity distance of the edge (its centroids' midpoint) from where the
-    child's line meets the spine, over the cell's extent; a wall (neither): by
-    its distance from the line. Boundary half-edges 0, constrained ones ``con``."""
-    for h in range(3 * lo, 3 * hi):
-        g = twin[h]
-        if g < 0:
-            cls[h] = 0
-            continue
-        if is_con[h]:
-            cls[h] = con
-            continue
-        t = h // 3
-        u = g // 3
-        la = spine[t]
-        lb = spine[u]
-        cp = depth - (math.frexp(float(key[t] ^ key[u]))[1] + 1) // 2  # equal 2-bit digits from the top
-        d = min(cp, la, lb)
-        if d >= depth:
-            cls[h] = edge_class(qr[t, 0], qr[u, 0])
-            continue
-        base = LEAF_CLASSES + (depth - 1 - d) * fk.PER_LEVEL
-        oc = fk.level_offset(d) + (key[t] >> (2 * (depth - d)))
-        line = lines[oc]
-        ext = extent[oc]
-        tx, ty = fk.turned_centroid(points, tri, t, ca, sa)
-        ux, uy = fk.turned_centroid(points, tri, u, ca, sa)
-        mx = 0.5 * (tx + ux)
-        my = 0.5 * (ty + uy)
-        m_along, m_across = (mx, my) if d % 2 == 0 else (my, mx)
-        if la == d and lb == d:
-            cls[h] = base
-        elif la == d or lb == d:
-            kid = u if la == d else t
-            child = key[kid] >> (2 * (depth - d - 1))
-            meet = lines[fk.level_offset(d + 1) + child]  # the child's line meets the spine there
-            dist = max(abs(m_along - meet), abs(m_across - line))
-            own = 0 if spine[kid] == d + 1 else fk.HANG_BINS  # a child hangs by its own spine's end
-            cls[h] = base + 1 + own + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.HANG_BINS)
-        else:  # nearest a child's hanging point: the child it splits is split near its entry
-            off = fk.level_offset(d + 1)
-            shift = 2 * (depth - d - 1)
-            ma = lines[off + (key[t] >> shift)]
-            mb = lines[off + (key[u] >> shift)]
-            dist = min(max(abs(m_along - ma), abs(m_across - line)), max(abs(m_along - mb), abs(m_across - line)))
-            cls[h] = base + 1 + 2 * fk.HANG_BINS + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
+    an ancestor's spine (the common 2-bit digits of the cells, capped by the spine
+    levels; ``qr[:, 2]``). At ``d == depth`` the quadtree's :func:`edge_class`; else level ``d``'s classes from
+    ``LEAF_CLASSES + (depth - 1 - d) * PER_LEVEL``: 0 both on the spine; a hang (one
+    on it): the child's own spine end first (``HANG_BINS`` more for others), by the
+    L-infinity distance of the edge (its centroids' midpoint) from where the child's
+    line meets the spine, over the cell's extent; a wall (neither): by its distance
+    from the nearer point where one of the two children hangs, so that a child hung
+    from its sibling splits it near its entry."""
+    fa = qr[t, 2]
+    fb = qr[u, 2]
+    low = (1 << FISH_SHIFT) - 1
+    ka = fa & low
+    kb = fb & low
+    la = fa >> FISH_SHIFT
+    lb = fb >> FISH_SHIFT
+    cp = depth - (math.frexp(float(ka ^ kb))[1] + 1) // 2  # equal 2-bit digits from the top
+    d = min(cp, la, lb)
+    if d >= depth:
+        return edge_class(qr[t, 0], qr[u, 0])
+    base = LEAF_CLASSES + (depth - 1 - d) * fk.PER_LEVEL
+    oc = fk.level_offset(d) + (ka >> (2 * (depth - d)))
+    line = lines[oc]
+    ext = extent[oc]
+    tx, ty = fk.turned_centroid(points, tri, t, ca, sa)
+    ux, uy = fk.turned_centroid(points, tri, u, ca, sa)
+    mx = 0.5 * (tx + ux)
+    my = 0.5 * (ty + uy)
+    m_along, m_across = (mx, my) if d % 2 == 0 else (my, mx)
+    if la == d and lb == d:
+        return base
+    off = fk.level_offset(d + 1)
+    shift = 2 * (depth - d - 1)
+    if la == d or lb == d:
+        kid_key, kid_level = (kb, lb) if la == d else (ka, la)
+        meet = lines[off + (kid_key >> shift)]  # the child's line meets the spine there
+        dist = max(abs(m_along - meet), abs(m_across - line))
+        own = 0 if kid_level == d + 1 else fk.HANG_BINS  # a child hangs by its own spine's end
+        return base + 1 + own + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.HANG_BINS)
+    ma = lines[off + (ka >> shift)]
+    mb = lines[off + (kb >> shift)]
+    dist = min(max(abs(m_along - ma), abs(m_across - line)), max(abs(m_along - mb), abs(m_across - line)))
+    return base + 1 + 2 * fk.HANG_BINS + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
 
 
 def top_cross_angle(points, tri, twin, sample=None):
@@ -594,6 +623,34 @@ def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
         return out
     if spans is None:
         spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    fr = quad_frame(points, tri, angle)
+    run_all([
+        (lambda a=a, b=b: _cell_coords_into(points, tri, fr.ca, fr.sa, fr.x0, fr.y0, fr.bx, fr.by, fr.cum, fr.fx, fr.fy,
+                                            out, a, b))
+        for a, b in spans
+    ])
+    return out
+
+
+class QuadFrame(NamedTuple):
+    """Result of :func:`quad_frame`: the turn (``ca``, ``sa``), the turned box's
+    corner (``x0``, ``y0``), histogram bins per unit (``bx``, ``by``), the cumulative
+    histograms ``cum`` (2, RANK_BINS + 1) and the scales ``fx``, ``fy``."""
+
+    ca: float
+    sa: float
+    x0: float
+    y0: float
+    bx: float
+    by: float
+    cum: np.ndarray
+    fx: float
+    fy: float
+
+
+def quad_frame(points, tri, angle=0.0):
+    """What :func:`quadtree_coords` maps each centroid through (see there)."""
+    m = tri.shape[0]
     ca, sa = math.cos(angle), math.sin(angle)  # exactly 1 and 0 for angle 0
     x0, y0, x1, y1 = _bounds(points, ca, sa)
     span = max(x1 - x0, y1 - y0)
@@ -609,11 +666,7 @@ def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
     n = cum[0, RANK_BINS]
     fx = top * (x1 - x0) / span / n if span > 0 else 0.0  # the box's aspect is kept
     fy = top * (y1 - y0) / span / n if span > 0 else 0.0
-    run_all([
-        (lambda a=a, b=b: _cell_coords_into(points, tri, ca, sa, x0, y0, bx, by, cum, fx, fy, out, a, b))
-        for a, b in spans
-    ])
-    return out
+    return QuadFrame(ca, sa, x0, y0, bx, by, cum, fx, fy)
 
 
 @njit(cache=True, nogil=True)
@@ -664,21 +717,46 @@ def _cell_coords_into(points, tri, ca, sa, x0, y0, bx, by, cum, fx, fy, qr, lo, 
     centroid is the number of sampled centroids below it (``cum``, linear inside a
     bin) times ``fx``/``fy``; packed ``x << CELL_BITS | y`` into ``qr[:, 0]``;
     ``qr[:, 1] = -1``."""
-    top = (1 << CELL_BITS) - 1
     for t in range(lo, hi):
         x, y = _turned(
             (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0,
             (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0,
             ca, sa,
         )
-        px = (x - x0) * bx
-        py = (y - y0) * by
-        i = min(max(int(px), 0), RANK_BINS - 1)
-        j = min(max(int(py), 0), RANK_BINS - 1)
-        rx = cum[0, i] + min(max(px - i, 0.0), 1.0) * (cum[0, i + 1] - cum[0, i])
-        ry = cum[1, j] + min(max(py - j, 0.0), 1.0) * (cum[1, j + 1] - cum[1, j])
-        qr[t, 0] = (min(int(rx * fx), top) << CELL_BITS) | min(int(ry * fy), top)
+        qr[t, 0] = _packed_coords(x, y, x0, y0, bx, by, cum, fx, fy)
         qr[t, 1] = -1  # not reached yet (``_prim_into``)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _packed_coords(x, y, x0, y0, bx, by, cum, fx, fy):
+    """``x << CELL_BITS | y`` of a turned centroid, each axis as a count (``cum``)."""
+    top = (1 << CELL_BITS) - 1
+    px = (x - x0) * bx
+    py = (y - y0) * by
+    i = min(max(int(px), 0), RANK_BINS - 1)
+    j = min(max(int(py), 0), RANK_BINS - 1)
+    rx = cum[0, i] + min(max(px - i, 0.0), 1.0) * (cum[0, i + 1] - cum[0, i])
+    ry = cum[1, j] + min(max(py - j, 0.0), 1.0) * (cum[1, j + 1] - cum[1, j])
+    return (min(int(rx * fx), top) << CELL_BITS) | min(int(ry * fy), top)
+
+
+@njit(cache=True, nogil=True)
+def _cells_into(points, tri, fr_ca, fr_sa, x0, y0, bx, by, cum, fx, fy, lines, fars, depth, qr, half, lo, hi):
+    """One pass over triangles lo..hi for :func:`forest_classes`: the quadtree
+    coordinates (``qr[:, 0]``, as :func:`_cell_coords_into`), ``qr[:, 1] = -1``, the
+    fishbone's cell and spine level packed in ``qr[:, 2]`` (``key | spine << 16``,
+    ``_fishbone_kernels.descend_into``) and the top line's side in ``half``."""
+    for t in range(lo, hi):
+        cx, cy, bx0, bx1, by0, by1 = fk.turned_box(points, tri, t, fr_ca, fr_sa)
+        qr[t, 0] = _packed_coords(cx, cy, x0, y0, bx, by, cum, fx, fy)
+        qr[t, 1] = -1
+        reg, sp = fk.descend(cx, cy, bx0, bx1, by0, by1, lines, fars, depth)
+        qr[t, 2] = reg | (sp << FISH_SHIFT)
+        half[t] = (reg >> (2 * depth - 1)) & 1 if depth > 0 else 0
+
+
+#: ``qr[:, 2]`` of :func:`spanning_forest`: the fishbone cell below this bit, the spine level above.
+FISH_SHIFT = 16
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -716,11 +794,12 @@ def _half_counts(qr):
 
 
 @njit(cache=True, nogil=True)
-def _prim_half_into(tri, twin, is_con, cls, cross_from, qr, half_of, side, base, order, tri_r, code, starts, queue, q_lo, q_hi):
+def _prim_half_into(tri, twin, is_con, points, ca, sa, lines, extent, depth, con, cross_from, qr, half_of, side, base,
+                    order, tri_r, code, starts, queue, q_lo, q_hi):
     """Prim's search with a bucket queue of edge classes over the triangles of one half.
 
     The half: triangles ``t`` with ``half_of[t] == side`` (a side of the top line).
-    ``cls``: each half-edge's class (:func:`_edge_classes_into`). Only edges of a
+    Each edge's class is :func:`edge_class_of` (``con`` if constrained). Only edges of a
     class below ``cross_from`` are searched (inside one top-level cell), so a search
     never reads a triangle the other half's search is numbering: the two halves run
     side by side. Each search (a *component*, inside one top-level cell) starts at
@@ -764,6 +843,9 @@ def _prim_half_into(tri, twin, is_con, cls, cross_from, qr, half_of, side, base,
             tri_r[i, 0] = tri[t, 0]
             tri_r[i, 1] = tri[t, 1]
             tri_r[i, 2] = tri[t, 2]
+            qt = qr[t, 0]
+            ft = qr[t, 2]
+            leaf = (ft >> FISH_SHIFT) == depth
             best = cross_from  # the lightest edge out of t goes next without queueing if
             best_g = -1  # nothing queued is lighter (most tree edges)
             for kk in range(3):
@@ -773,7 +855,13 @@ def _prim_half_into(tri, twin, is_con, cls, cross_from, qr, half_of, side, base,
                     code[3 * i + kk] = CON_BIT if is_con[h] else 0
                     continue
                 u = g // 3
-                c = cls[h]
+                fu = qr[u, 2]
+                if is_con[h]:
+                    c = con
+                elif fu == ft and leaf:  # most edges: inside one deepest cell
+                    c = edge_class(qt, qr[u, 0])
+                else:
+                    c = fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth)
                 if c >= cross_from:  # the join's (``_join_into``)
                     if h < g:
                         top -= 1

@@ -113,7 +113,7 @@ def test_forest_is_a_minimum_spanning_forest_of_the_edge_classes(dom, area: floa
     for h in np.flatnonzero(he.twin > np.arange(3 * m)):
         a, b = h // 3, he.twin[h] // 3
         assert cl.cls[h] == cl.cls[he.twin[h]]  # one class per edge
-        assert (cl.cls[h] == cl.n_classes - 1) == is_con[h]  # constrained edges last, alone
+        assert (cl.cls[h] == cl.frame.n_classes - 1) == is_con[h]  # constrained edges last, alone
         g.add_edge(a, b, w=int(cl.cls[h]))
     best = sum(d["w"] for _, _, d in nx.minimum_spanning_edges(g, weight="w", data=True))
     tw = (f.code >> 2) - 1
@@ -174,7 +174,7 @@ def test_two_searches_join_across_the_halves_as_one_search_would() -> None:
     for h in np.flatnonzero(twin > np.arange(3 * m)):
         g.add_edge(h // 3, twin[h] // 3, w=int(cl.cls[h]))
     # the arms really are apart in their half (else the join is not exercised)
-    inside = nx.Graph([(a, b) for a, b, d in g.edges(data=True) if d["w"] < cl.cross_from])
+    inside = nx.Graph([(a, b) for a, b, d in g.edges(data=True) if d["w"] < cl.frame.cross_from])
     inside.add_nodes_from(range(m))
     assert nx.number_connected_components(inside) > 4 + 1
     tw = (two.code >> 2) - 1
