@@ -106,24 +106,25 @@ def level_offset(level):
 
 
 @njit(cache=True, nogil=True)
-def _nth(idx, vals, lo, hi, k):
-    """Reorder ``idx[lo:hi]`` so that ``vals[idx[k]]`` is the ``k``-th smallest, none
-    above it before and none below it after (quickselect, three-way split)."""
+def _nth(key, other, lo, hi, k):
+    """Reorder ``key[lo:hi]`` (and ``other`` alongside) so that ``key[k]`` is the
+    ``k``-th smallest, none above it before and none below it after (quickselect,
+    three-way split; the coordinates move, not indices: sequential memory)."""
     while hi - lo > 1:
-        x, y, z = vals[idx[lo]], vals[idx[(lo + hi) // 2]], vals[idx[hi - 1]]
+        x, y, z = key[lo], key[(lo + hi) // 2], key[hi - 1]
         pivot = max(min(x, y), min(max(x, y), z))  # median of three
         lt, i, gt = lo, lo, hi
         while i < gt:
-            v = idx[i]
-            if vals[v] < pivot:
-                idx[i] = idx[lt]
-                idx[lt] = v
+            v = key[i]
+            if v < pivot:
+                key[i], key[lt] = key[lt], v
+                other[i], other[lt] = other[lt], other[i]
                 lt += 1
                 i += 1
-            elif vals[v] > pivot:
+            elif v > pivot:
                 gt -= 1
-                idx[i] = idx[gt]
-                idx[gt] = v
+                key[i], key[gt] = key[gt], v
+                other[i], other[gt] = other[gt], other[i]
             else:
                 i += 1
         if k < lt:
@@ -138,7 +139,6 @@ def _nth(idx, vals, lo, hi, k):
 def _kd_lines_into(xy, depth, lines, fars, extent):
     """The kd build of :func:`kd_lines` over the points ``xy`` ((s, 2), turned)."""
     s = xy.shape[0]
-    idx = np.arange(s)
     xs = xy[:, 0].copy()
     ys = xy[:, 1].copy()
     seg = np.zeros(2, np.int64)
@@ -159,17 +159,17 @@ def _kd_lines_into(xy, depth, lines, fars, extent):
             extent[off + c] = 0.0
             if b <= a:
                 continue
-            x0 = x1 = xs[idx[a]]
-            y0 = y1 = ys[idx[a]]
+            x0 = x1 = xs[a]
+            y0 = y1 = ys[a]
             for i in range(a + 1, b):
-                x0 = min(x0, xs[idx[i]])
-                x1 = max(x1, xs[idx[i]])
-                y0 = min(y0, ys[idx[i]])
-                y1 = max(y1, ys[idx[i]])
+                x0 = min(x0, xs[i])
+                x1 = max(x1, xs[i])
+                y0 = min(y0, ys[i])
+                y1 = max(y1, ys[i])
             extent[off + c] = max(x1 - x0, y1 - y0)
             k = (b - a) // 2
-            _nth(idx, across, a, b, a + k)
-            lines[off + c] = across[idx[a + k]]
+            _nth(across, along, a, b, a + k)
+            lines[off + c] = across[a + k]
             if level == depth:
                 continue
             nxt[4 * c + 2] = a + k
@@ -179,8 +179,8 @@ def _kd_lines_into(xy, depth, lines, fars, extent):
                     nxt[4 * c + 2 * side + 1] = sa
                     continue
                 kk = (sb - sa) // 2
-                _nth(idx, along, sa, sb, sa + kk)
-                fars[2 * (off + c) + side] = along[idx[sa + kk]]
+                _nth(along, across, sa, sb, sa + kk)
+                fars[2 * (off + c) + side] = along[sa + kk]
                 nxt[4 * c + 2 * side + 1] = sa + kk
         seg = nxt
 
@@ -263,6 +263,21 @@ def _sample_boxes(points, tri, sample, ca, sa, xy, box):
 
 
 @njit(cache=True, nogil=True)
+def _corner_boxes(corners, ca, sa, xy, box):
+    """Turned centroids and boxes of triangles given by their corners ((s, 6): x0 y0 x1 y1 x2 y2)."""
+    for i in range(corners.shape[0]):
+        ax, ay = _turn(corners[i, 0], corners[i, 1], ca, sa)
+        bx, by = _turn(corners[i, 2], corners[i, 3], ca, sa)
+        cx, cy = _turn(corners[i, 4], corners[i, 5], ca, sa)
+        xy[i, 0] = (ax + bx + cx) / 3.0
+        xy[i, 1] = (ay + by + cy) / 3.0
+        box[i, 0] = min(ax, bx, cx)
+        box[i, 1] = max(ax, bx, cx)
+        box[i, 2] = min(ay, by, cy)
+        box[i, 3] = max(ay, by, cy)
+
+
+@njit(cache=True, nogil=True)
 def _sampled_spines_into(xy, box, lines, fars, levels, line_of, along_of):
     """The sampled triangles on a spine of the top ``levels`` levels: for each, its
     line (flat cell index) and its coordinate along the line. Returns their number."""
@@ -338,11 +353,12 @@ def fish_angle(points, tri, sample=None):
         return 0.0
     xy = np.empty((len(sample), 2))
     box = np.empty((len(sample), 4))
+    corners = np.ascontiguousarray(points[tri[sample]].reshape(len(sample), 6))  # read once, turned 12 times
     best, best_a = np.inf, 0.0
     for i in range(AUTO_ANGLES):
         a = math.pi * i / AUTO_ANGLES
-        _sample_boxes(points, tri, sample, math.cos(a), math.sin(a), xy, box)
-        fl = kd_lines(xy, depth)
+        _corner_boxes(corners, math.cos(a), math.sin(a), xy, box)
+        fl = kd_lines(xy, depth - 1)  # lines of levels 0 .. depth - 1, all the spines need
         line_of = np.empty(len(sample), np.int64)
         along_of = np.empty(len(sample))
         n = _sampled_spines_into(xy, box, fl.lines, fl.fars, depth, line_of, along_of)

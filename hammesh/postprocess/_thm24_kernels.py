@@ -246,8 +246,8 @@ def spanning_forest(tri, twin, is_con, points=None):
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
     # number, side by side
-    # and its fishbone cell (and a pad: 16 bytes, never across two cache lines)
-    qr = pages.fresh((m, 4), index_dtype(m))
+    # and its fishbone cell: 12 bytes a triangle, read together
+    qr = pages.fresh((m, 3), index_dtype(m))
     out = {}
 
     def outputs() -> None:  # their pages faulted in beside the classes' first pass
@@ -330,7 +330,7 @@ def fishbone_frame(tri, twin, points, qr, side_work=None):
     turned by :func:`top_cross_angle`; the halves: the top split of its longer axis,
     the join's edges those between top-level quadrants).
 
-    ``qr``: (m, 4) int array: column 0 gets the quadtree coordinates, 1 -1 (the
+    ``qr``: (m, 3) int array: column 0 gets the quadtree coordinates, 1 -1 (the
     search's "not reached"), 2 the fishbone cell and spine level (``FISH_SHIFT``).
     ``side_work``: run on another thread during the first pass (``spanning_forest``
     faults its outputs' pages there).
@@ -382,7 +382,7 @@ def forest_classes(tri, twin, is_con, points=None):
     (:func:`fishbone_frame`; the search computes them as it goes, this lists them).
     Returns :class:`Classes`."""
     m = tri.shape[0]
-    qr = np.empty((m, 4), index_dtype(m))
+    qr = np.empty((m, 3), index_dtype(m))
     fr = fishbone_frame(tri, twin, points, qr)
     cls = np.zeros(3 * m, np.int16)
     pts = points if points is not None else np.zeros((1, 2))
