@@ -310,8 +310,8 @@ class Classes(NamedTuple):
 #: Classes of the count quadtree's edges below the fishbone's deepest level.
 LEAF_CLASSES = (CELL_BITS + 1) * CENTRE_BINS
 #: Fishbone levels whose spines are joined round holes (deeper cells are small; on
-#: the gear 4 and all levels give the same cut, session 12).
-GAP_LEVELS = 4
+#: the plate and the gear 3, 4 and all levels give the same cut, session 12).
+GAP_LEVELS = 3
 
 
 def fishbone_frame(tri, twin, points, qr, side_work=None):
@@ -437,6 +437,8 @@ def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
     if d >= depth:
         return edge_class(qr[t, 0], qr[u, 0])
     base = LEAF_CLASSES + (depth - 1 - d) * fk.PER_LEVEL
+    if la == d and lb == d:  # along the spine (most of these edges: no geometry needed)
+        return base
     oc = fk.level_offset(d) + (ka >> (2 * (depth - d)))
     line = lines[oc]
     ext = extent[oc]
@@ -445,8 +447,6 @@ def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
     mx = 0.5 * (tx + ux)
     my = 0.5 * (ty + uy)
     m_along, m_across = (mx, my) if d % 2 == 0 else (my, mx)
-    if la == d and lb == d:
-        return base
     off = fk.level_offset(d + 1)
     shift = 2 * (depth - d - 1)
     if la == d or lb == d:
