@@ -45,8 +45,6 @@ __all__ = [
     "level_offset",
     "kd_lines",
     "fish_angle",
-    "spine_cost",
-    "GAP_STEPS",
     "GAP_COST",
     "descend_into",
     "descend",
@@ -74,9 +72,12 @@ PER_LEVEL = 1 + 2 * HANG_BINS + WALL_BINS
 #: Turns of the top line tried by :func:`fish_angle` (``i * 180 / AUTO_ANGLES`` degrees).
 AUTO_ANGLES = 12
 #: Triangles sampled to judge the turns.
-ANGLE_SAMPLE = 1 << 15
+ANGLE_SAMPLE = 1 << 13
 #: Levels whose lines the turn is judged on (k = 8 and k = 64 stretches meet there).
 ANGLE_LEVELS = 3
+#: What a hole's gap costs against a line's length inside the domain (:func:`fish_angle`):
+#: the rim path round half a round hole is pi / 2 times its diameter.
+GAP_COST = 1.5
 
 
 class FishLines(NamedTuple):
@@ -262,71 +263,6 @@ def _sample_boxes(points, tri, sample, ca, sa, xy, box):
         box[i, 3] = y1
 
 
-@njit(cache=True, nogil=True)
-def _corner_boxes(corners, ca, sa, xy, box):
-    """Turned centroids and boxes of triangles given by their corners ((s, 6): x0 y0 x1 y1 x2 y2)."""
-    for i in range(corners.shape[0]):
-        ax, ay = _turn(corners[i, 0], corners[i, 1], ca, sa)
-        bx, by = _turn(corners[i, 2], corners[i, 3], ca, sa)
-        cx, cy = _turn(corners[i, 4], corners[i, 5], ca, sa)
-        xy[i, 0] = (ax + bx + cx) / 3.0
-        xy[i, 1] = (ay + by + cy) / 3.0
-        box[i, 0] = min(ax, bx, cx)
-        box[i, 1] = max(ax, bx, cx)
-        box[i, 2] = min(ay, by, cy)
-        box[i, 3] = max(ay, by, cy)
-
-
-@njit(cache=True, nogil=True)
-def _sampled_spines_into(xy, box, lines, fars, levels, line_of, along_of):
-    """The sampled triangles on a spine of the top ``levels`` levels: for each, its
-    line (flat cell index) and its coordinate along the line. Returns their number."""
-    n = 0
-    for i in range(xy.shape[0]):
-        cx, cy = xy[i, 0], xy[i, 1]
-        reg = 0
-        for level in range(levels):
-            oc = level_offset(level) + reg
-            line = lines[oc]
-            if level % 2 == 0:
-                a, al, b0, b1 = cy, cx, box[i, 2], box[i, 3]
-            else:
-                a, al, b0, b1 = cx, cy, box[i, 0], box[i, 1]
-            if b0 <= line and line <= b1:
-                line_of[n] = oc
-                along_of[n] = al
-                n += 1
-                break
-            sd = 1 if a >= line else 0
-            f = 1 if al >= fars[2 * oc + sd] else 0
-            reg = 4 * reg + 2 * sd + f
-    return n
-
-
-#: A gap along a sampled spine longer than this many times the line's median step is
-#: a hole (or a notch) the spine is joined round (:func:`join_gaps_into`).
-GAP_STEPS = 4.0
-#: What a hole's gap costs, in triangles per missing one: the rim path round half a
-#: round hole is pi / 2 times its diameter.
-GAP_COST = 1.5
-
-
-def spine_cost(line_of, along_of):
-    """Triangles on the sampled spines, each gap of a line (longer than ``GAP_STEPS``
-    median steps) counted as ``GAP_COST`` times the triangles it would hold."""
-    o = np.lexsort((along_of, line_of))
-    line_of, along_of = line_of[o], along_of[o]
-    same = line_of[1:] == line_of[:-1]
-    step = np.diff(along_of)[same]
-    if not len(step):
-        return float(len(line_of))
-    med = np.median(step)
-    if med <= 0:
-        return float(len(line_of))
-    gaps = step[step > GAP_STEPS * med]
-    return float(len(line_of) + GAP_COST * (gaps / med).sum())
-
-
 def sample_centroids(points, tri, sample, angle):
     """(s, 2): the turned centroids of triangles ``sample``."""
     xy = np.empty((len(sample), 2))
@@ -335,37 +271,100 @@ def sample_centroids(points, tri, sample, angle):
     return xy
 
 
-def fish_angle(points, tri, sample=None):
-    """The turn of the fishbone's axes (radians, ``[0, pi)``) whose spines of the top
-    ``ANGLE_LEVELS`` levels hold the fewest triangles, each hole a line crosses
-    counted as the rim path that joins it (:func:`spine_cost`), judged on a sample
-    of the triangles (every ``m // ANGLE_SAMPLE``-th). The stretches of k = 8 and
+def fish_angle(points, tri, twin, sample=None):
+    """The turn of the fishbone's axes (radians, ``[0, pi)``, one of ``AUTO_ANGLES``)
+    whose lines of the top ``ANGLE_LEVELS`` levels are shortest inside the domain,
+    each hole or notch a line crosses counted ``GAP_COST`` times its width (the
+    spine is joined round it, :func:`join_gaps_into`). The stretches of k = 8 and
     k = 64 meet along those lines: on the plate with two holes the top line goes
-    between the holes (session 11: 1.38 against 1.82 at k = 8 along the holes)."""
+    between the holes (session 11: 1.38 against 1.82 at k = 8 along the holes).
+
+    The lines are medians of a sample of the centroids (every ``m // ANGLE_SAMPLE``-th
+    triangle); their lengths are exact, from the boundary edges (``twin < 0``) they
+    cross (:func:`_line_costs`). Session 12 first counted the sampled triangles on the
+    spines: as slow at 2**15 triangles a turn, and at 2**13 the sample's noise picked
+    wrong turns on the plate. Lengths are not weighted by the mesh's density (a
+    graded mesh's lines are judged as if it were uniform)."""
     m = tri.shape[0]
-    if m < 4:
-        return 0.0
     if sample is None:
         sample = np.arange(0, m, max(1, m // ANGLE_SAMPLE))
     sample = np.asarray(sample, np.int64)
     depth = min(ANGLE_LEVELS, fish_depth(len(sample)))
     if depth == 0:
         return 0.0
-    xy = np.empty((len(sample), 2))
-    box = np.empty((len(sample), 4))
-    corners = np.ascontiguousarray(points[tri[sample]].reshape(len(sample), 6))  # read once, turned 12 times
-    best, best_a = np.inf, 0.0
+    h = np.flatnonzero(twin < 0)
+    ends = np.ascontiguousarray(np.c_[points[tri[h // 3, h % 3]], points[tri[h // 3, (h % 3 + 1) % 3]]])
+    centroids = points[tri[sample]].mean(axis=1)
+    costs = np.empty(AUTO_ANGLES)
     for i in range(AUTO_ANGLES):
         a = math.pi * i / AUTO_ANGLES
-        _corner_boxes(corners, math.cos(a), math.sin(a), xy, box)
-        fl = kd_lines(xy, depth - 1)  # lines of levels 0 .. depth - 1, all the spines need
-        line_of = np.empty(len(sample), np.int64)
-        along_of = np.empty(len(sample))
-        n = _sampled_spines_into(xy, box, fl.lines, fl.fars, depth, line_of, along_of)
-        cost = spine_cost(line_of[:n], along_of[:n])
-        if cost < best * (1.0 - 1e-9):
-            best, best_a = cost, a
-    return best_a
+        ca, sa = math.cos(a), math.sin(a)
+        xy = np.c_[ca * centroids[:, 0] + sa * centroids[:, 1], ca * centroids[:, 1] - sa * centroids[:, 0]]
+        fl = kd_lines(xy, depth - 1)  # lines of levels 0 .. depth - 1
+        costs[i] = _line_costs(fl.lines, fl.fars, depth, ends, ca, sa)
+    return math.pi * int(np.argmin(costs)) / AUTO_ANGLES
+
+
+@njit(cache=True, nogil=True)
+def _line_costs(lines, fars, levels, ends, ca, sa):
+    """Length inside the domain of each line of levels ``< levels`` within its cell
+    (a rectangle in the turned axes, bounded by its ancestors' lines and far
+    medians), plus ``GAP_COST`` times each gap between two inside stretches of it.
+    ``ends``: (b, 4) boundary edges ``x0 y0 x1 y1``; a point of the line is inside
+    when an odd number of them cross the line before it (the domain is closed)."""
+    nb = ends.shape[0]
+    ex = np.empty((nb, 4))
+    for e in range(nb):
+        ex[e, 0], ex[e, 1] = _turn(ends[e, 0], ends[e, 1], ca, sa)
+        ex[e, 2], ex[e, 3] = _turn(ends[e, 2], ends[e, 3], ca, sa)
+    hits = np.empty(nb)
+    total = 0.0
+    for level in range(levels):
+        across = 1 if level % 2 == 0 else 0
+        for cell in range(1 << (2 * level)):
+            lo = np.array([-np.inf, -np.inf])  # the cell's rectangle
+            hi = np.array([np.inf, np.inf])
+            reg = 0
+            for up in range(level):  # from the top: each ancestor's side and far half
+                digit = (cell >> (2 * (level - 1 - up))) & 3
+                s, f = digit >> 1, digit & 1
+                oc = level_offset(up) + reg
+                ac = 1 if up % 2 == 0 else 0
+                if s:
+                    lo[ac] = max(lo[ac], lines[oc])
+                else:
+                    hi[ac] = min(hi[ac], lines[oc])
+                far = fars[2 * oc + s]
+                if f:
+                    lo[1 - ac] = max(lo[1 - ac], far)
+                else:
+                    hi[1 - ac] = min(hi[1 - ac], far)
+                reg = 4 * reg + digit
+            line = lines[level_offset(level) + cell]
+            if not (line >= lo[across] and line <= hi[across]):
+                continue  # an empty cell (NaN)
+            n = 0
+            for e in range(nb):  # where the boundary crosses the line, along it
+                a0, a1 = ex[e, across], ex[e, 2 + across]
+                if (a0 < line) != (a1 < line):
+                    w = (line - a0) / (a1 - a0)
+                    hits[n] = ex[e, 1 - across] + w * (ex[e, 3 - across] - ex[e, 1 - across])
+                    n += 1
+            xs = np.sort(hits[:n])
+            inside = 0.0
+            gaps = 0.0
+            last_end = np.nan  # where the last inside stretch (within the cell) ended
+            for j in range(0, n - 1, 2):  # inside between crossings 2i and 2i + 1
+                a = max(xs[j], lo[1 - across])
+                b = min(xs[j + 1], hi[1 - across])
+                if b <= a:
+                    continue
+                if last_end == last_end:  # not NaN: a gap since the last stretch
+                    gaps += a - last_end
+                inside += b - a
+                last_end = b
+            total += inside + GAP_COST * gaps
+    return total
 
 
 def rim_vertices(tri, twin, n_points):

@@ -358,7 +358,7 @@ def fishbone_frame(tri, twin, points, qr, side_work=None):
     found = {}
 
     def first_pass() -> None:  # the turn, the lines and the quadtree's frame
-        a = found["angle"] = fk.fish_angle(points, tri)
+        a = found["angle"] = fk.fish_angle(points, tri, twin)
         found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
         found["frame"] = quad_frame(points, tri, a)
 
