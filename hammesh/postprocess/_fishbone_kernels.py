@@ -43,6 +43,7 @@ __all__ = [
     "ANGLE_LEVELS",
     "fish_depth",
     "level_offset",
+    "nth",
     "kd_lines",
     "fish_angle",
     "GAP_COST",
@@ -107,10 +108,11 @@ def level_offset(level):
 
 
 @njit(cache=True, nogil=True)
-def _nth(key, other, lo, hi, k):
-    """Reorder ``key[lo:hi]`` (and ``other`` alongside) so that ``key[k]`` is the
-    ``k``-th smallest, none above it before and none below it after (quickselect,
-    three-way split; the coordinates move, not indices: sequential memory)."""
+def nth(key, other, lo, hi, k, carry):
+    """Reorder ``key[lo:hi]`` so that ``key[k]`` is the ``k``-th smallest, none above
+    it before and none below it after (quickselect with a three-way split: equal
+    values, as on a grid, cost no extra passes); with ``carry`` ``other`` moves
+    alongside (the coordinates move, not indices: sequential memory)."""
     while hi - lo > 1:
         x, y, z = key[lo], key[(lo + hi) // 2], key[hi - 1]
         pivot = max(min(x, y), min(max(x, y), z))  # median of three
@@ -119,13 +121,15 @@ def _nth(key, other, lo, hi, k):
             v = key[i]
             if v < pivot:
                 key[i], key[lt] = key[lt], v
-                other[i], other[lt] = other[lt], other[i]
+                if carry:
+                    other[i], other[lt] = other[lt], other[i]
                 lt += 1
                 i += 1
             elif v > pivot:
                 gt -= 1
                 key[i], key[gt] = key[gt], v
-                other[i], other[gt] = other[gt], other[i]
+                if carry:
+                    other[i], other[gt] = other[gt], other[i]
             else:
                 i += 1
         if k < lt:
@@ -169,7 +173,7 @@ def _kd_lines_into(xy, depth, lines, fars, extent):
                 y1 = max(y1, ys[i])
             extent[off + c] = max(x1 - x0, y1 - y0)
             k = (b - a) // 2
-            _nth(across, along, a, b, a + k)
+            nth(across, along, a, b, a + k, True)
             lines[off + c] = across[a + k]
             if level == depth:
                 continue
@@ -180,7 +184,7 @@ def _kd_lines_into(xy, depth, lines, fars, extent):
                     nxt[4 * c + 2 * side + 1] = sa
                     continue
                 kk = (sb - sa) // 2
-                _nth(along, across, sa, sb, sa + kk)
+                nth(along, across, sa, sb, sa + kk, True)
                 fars[2 * (off + c) + side] = along[sa + kk]
                 nxt[4 * c + 2 * side + 1] = sa + kk
         seg = nxt
@@ -252,22 +256,15 @@ def descend_into(points, tri, ca, sa, lines, fars, depth, fish_shift, qr, half, 
 
 
 @njit(cache=True, nogil=True)
-def _sample_boxes(points, tri, sample, ca, sa, xy, box):
+def _sample_centroids_into(points, tri, sample, ca, sa, xy):
     for i in range(sample.shape[0]):
-        cx, cy, x0, x1, y0, y1 = turned_box(points, tri, sample[i], ca, sa)
-        xy[i, 0] = cx
-        xy[i, 1] = cy
-        box[i, 0] = x0
-        box[i, 1] = x1
-        box[i, 2] = y0
-        box[i, 3] = y1
+        xy[i, 0], xy[i, 1] = turned_centroid(points, tri, sample[i], ca, sa)
 
 
 def sample_centroids(points, tri, sample, angle):
     """(s, 2): the turned centroids of triangles ``sample``."""
     xy = np.empty((len(sample), 2))
-    box = np.empty((len(sample), 4))
-    _sample_boxes(points, tri, np.asarray(sample, np.int64), math.cos(angle), math.sin(angle), xy, box)
+    _sample_centroids_into(points, tri, np.asarray(sample, np.int64), math.cos(angle), math.sin(angle), xy)
     return xy
 
 

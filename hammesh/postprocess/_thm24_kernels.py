@@ -571,32 +571,10 @@ def _top_cross_counts_into(points, tri, twin, sample, cos_a, sin_a, cuts):
 @njit(cache=True, nogil=True)
 def _select(a, lo, hi, k):
     """The ``k``-th smallest value of ``a[lo:hi]`` (``lo <= k < hi``), partly ordering
-    that range in place (quickselect with a three-way split: equal values, as on a
-    grid, cost no extra passes). Afterwards ``a[k:hi]`` holds no value below it."""
-    while hi - lo > 1:
-        x, y, z = a[lo], a[(lo + hi) // 2], a[hi - 1]
-        pivot = max(min(x, y), min(max(x, y), z))  # median of three
-        lt, i, gt = lo, lo, hi
-        while i < gt:
-            v = a[i]
-            if v < pivot:
-                a[i] = a[lt]
-                a[lt] = v
-                lt += 1
-                i += 1
-            elif v > pivot:
-                gt -= 1
-                a[i] = a[gt]
-                a[gt] = v
-            else:
-                i += 1
-        if k < lt:
-            hi = lt
-        elif k >= gt:
-            lo = gt
-        else:
-            return pivot
-    return a[lo]
+    that range in place (``_fishbone_kernels.nth``). Afterwards ``a[k:hi]`` holds no
+    value below it."""
+    fk.nth(a, a, lo, hi, k, False)
+    return a[k]
 
 
 def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
