@@ -349,7 +349,7 @@ def fishbone_frame(tri, twin, points, qr, side_work=None):
         return Frame(np.zeros(m, np.int8), zeros, zeros, 0, 0.0, QUAD_CLASSES, N_CLASSES)
     if depth == 0:  # too few triangles for a fishbone level: the count quadtree
         angle = top_cross_angle(points, tri, twin)
-        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)], angle), side_work])
+        _beside(lambda: quadtree_coords(points, tri, qr, [(0, m)], angle), side_work, len(spans) > 1)
         qr[:, 2] = 0
         nx, ny = _half_counts(qr)
         hbit = 2 * CELL_BITS - 1 if abs(2 * nx - m) <= abs(2 * ny - m) else CELL_BITS - 1
@@ -362,7 +362,7 @@ def fishbone_frame(tri, twin, points, qr, side_work=None):
         found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
         found["frame"] = quad_frame(points, tri, a)
 
-    run_all([first_pass, side_work])
+    _beside(first_pass, side_work, len(spans) > 1)
     angle, fl, fr = found["angle"], found["lines"], found["frame"]
     half = np.empty(m, np.int8)
     run_all([
@@ -375,6 +375,16 @@ def fishbone_frame(tri, twin, points, qr, side_work=None):
     fk.join_gaps_into(points, tri, twin, fr.ca, fr.sa, qr, FISH_SHIFT, fl.lines, depth, levels, on_rim)
     cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
     return Frame(half, fl.lines, fl.extent, depth, angle, cross_from, LEAF_CLASSES + depth * fk.PER_LEVEL + 1)
+
+
+def _beside(work, side_work, threaded: bool) -> None:
+    """``work`` and ``side_work`` on two threads, or one after the other (a small mesh,
+    or a process capped at one thread: ``hammesh.threads.limit``)."""
+    if threaded:
+        run_all([work, side_work])
+    else:
+        work()
+        side_work()
 
 
 def forest_classes(tri, twin, is_con, points=None):
