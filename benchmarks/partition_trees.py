@@ -2,8 +2,10 @@
 
 Thm 2.4's cycle is the walk around a spanning tree of the dual graph, and the cut of
 its stretches is decided by that tree (docs/partition.md). The shipped tree is a
-minimum spanning forest for edge classes from a count quadtree
-(``_thm24_kernels.spanning_forest``, Prim's search in numba). Here any other class
+minimum spanning forest for edge classes of a fishbone over a count quadtree
+(``_thm24_kernels.spanning_forest``, Prim's search in numba; session 12 ported
+:func:`fishbone_weights` there). ``quadtree`` below is the tree shipped until
+session 11 (the count quadtree alone, but not turned by ``top_cross_angle``). Here any other class
 scheme is tried the slow way: an edge weight per dual edge, scipy's minimum spanning
 tree, and the result handed to the incircle construction in place of the shipped
 forest (:func:`tree`), so that the output is built, verified and partitioned as
@@ -11,8 +13,8 @@ usual. ``bench_partition.py --trees`` prints the cut of each scheme against METI
 
 Schemes (weights: lower is taken first; every scheme ranks constrained edges last):
 
-* ``quadtree``: the shipped classes (``edge_class``) through scipy's tree: the control
-  (the same classes, the tree differing only inside a class);
+* ``quadtree``: the count quadtree's classes (``edge_class``) through scipy's tree:
+  session 11's shipped tree (unturned), the control for the fishbone;
 * ``bisection``: recursive bisection, each cell cut where its triangles' centroids
   are halved by count along the direction (of 16) that crosses the fewest dual edges;
   two levels form one class level (a cell and its four grandchildren, as in the
@@ -129,7 +131,7 @@ def _edges(tri: np.ndarray, twin: np.ndarray):
 
 
 def quadtree_weights(points, tri, twin, is_con) -> np.ndarray:
-    """The shipped classes (``_thm24_kernels.edge_class`` of the count quadtree)."""
+    """Session 11's shipped classes (``_thm24_kernels.edge_class`` of the count quadtree)."""
     from hammesh.postprocess._cover_kernels import edge_classes
     from hammesh.postprocess._thm24_kernels import quadtree_coords
 

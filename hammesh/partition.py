@@ -5,8 +5,10 @@ each cycle into ``k`` stretches of consecutive rows gives parts that are connect
 (consecutive rows share an edge) and balanced to one triangle, in linear time. How
 short the cut is depends on how compact a stretch of the cycle is: Thm 2.4's walk
 around a depth-first spanning tree gives finger-like stretches (edge cuts 12-40x
-METIS's), so the tree is grown in quadtree order (``_thm24_kernels.spanning_forest``)
-and the walk sweeps the domain cell by cell like a space-filling curve.
+METIS's), so the tree is a *fishbone* (``_thm24_kernels.spanning_forest``,
+``_fishbone_kernels``): cells cut by count-median lines, each child hanging from its
+parent's line by one edge, so that the walk visits every cell whole and the stretches
+of ``k = 4^j`` or ``2 4^j`` parts are cells or half cells.
 
 What is left to choose is where the ``k`` stretches start. With sizes fixed (exact
 balance), the starts are ``s + floor(j n / k)``, and the cut is the number of dual

@@ -19,10 +19,22 @@ from numba import njit
 from hammesh import threads
 from hammesh import pages
 from hammesh.threads import row_ranges, run_all
+from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.verify.stream import UNLINKED
 
 __all__ = [
     "Forest",
+    "Classes",
+    "Frame",
+    "QuadFrame",
+    "quad_frame",
+    "fishbone_frame",
+    "forest_classes",
+    "edge_class_of",
+    "fish_class",
+    "FISH_SHIFT",
+    "GAP_LEVELS",
+    "LEAF_CLASSES",
     "quadtree_coords",
     "top_cross_angle",
     "CROSS_ANGLES",
@@ -233,29 +245,22 @@ def spanning_forest(tri, twin, is_con, points=None):
     m = tri.shape[0]
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # per input triangle: its quadtree coordinates and (-1 until reached) its new
-    # number, side by side: the search reads both of a neighbour at once
-    qr = pages.fresh((m, 2), index_dtype(m))  # int32 pairs: 8 bytes a triangle
+    # number, side by side
+    # and its fishbone cell: 12 bytes a triangle, read together
+    qr = pages.fresh((m, 3), index_dtype(m))
     out = {}
 
-    def outputs() -> None:  # their pages faulted in beside the coordinates' pass
+    def outputs() -> None:  # their pages faulted in beside the classes' first pass
         out["order"] = pages.fresh(m, np.int64)
         out["tri_r"] = pages.fresh(tri.shape, tri.dtype)
         out["code"] = pages.fresh(3 * m, np.int64)
 
-    if points is None or not m:
-        qr[:, 0] = 0
-        qr[:, 1] = -1
-        outputs()
-    elif len(spans) > 1:  # the rotation is chosen on this thread while the other faults pages
-        run_all([lambda: quadtree_coords(points, tri, qr, [(0, m)], top_cross_angle(points, tri, twin)), outputs])
-    else:
-        quadtree_coords(points, tri, qr, spans, top_cross_angle(points, tri, twin))
-        outputs()
+    cl = fishbone_frame(tri, twin, points, qr, side_work=outputs)
+    pts = points if points is not None else np.zeros((1, 2))
+    ca, sa = math.cos(cl.angle), math.sin(cl.angle)
     order, tri_r, code = out["order"], out["tri_r"], out["code"]
-    # the two halves of the top split of the longer axis hold half the triangles each
-    # (the coordinates count them): one search per half, side by side
-    nx, ny = _half_counts(qr) if m else (0, 0)
-    hbit, n_hi = (2 * CELL_BITS - 1, nx) if abs(2 * nx - m) <= abs(2 * ny - m) else (CELL_BITS - 1, ny)
+    # one search per side of the top line (each holds half the triangles), side by side
+    n_hi = int(np.count_nonzero(cl.half))
     n_lo = m - n_hi
     starts = np.empty(m, np.int64)  # components' first new numbers: low half from 0, high from n_lo
     # each half's queue rows and cross edges: most rows are written, so small pages
@@ -264,7 +269,8 @@ def spanning_forest(tri, twin, is_con, points=None):
     halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
     calls = [
         (lambda side=side, base=base, a=a, b=b: _prim_half_into(
-            tri, twin, is_con, qr, hbit, side, base, order, tri_r, code, starts[base:], queue, a, b))
+            tri, twin, is_con, pts, ca, sa, cl.lines, cl.extent, cl.depth, cl.n_classes - 1, cl.cross_from, qr,
+            cl.half, side, base, order, tri_r, code, starts[base:], queue, a, b))
         for side, base, a, b in halves
     ]
     # on small meshes one thread runs both (same result: the halves share nothing)
@@ -275,9 +281,194 @@ def spanning_forest(tri, twin, is_con, points=None):
     cross = np.concatenate((queue[3 * n_lo - x_lo : 3 * n_lo][::-1], queue[3 * m - x_hi :][::-1])).astype(np.int64)
     parent = np.empty(len(comp_starts), np.int64)
     split = np.empty(2 * len(cross), np.int64)
-    n_split = _join_into(twin, is_con, qr, order, code, comp_starts, cross, parent, split)
+    n_split = _join_into(twin, is_con, qr, order, code, comp_starts, cross, parent, split, cl.cross_from,
+                         cl.n_classes)
     firsts = _piece_firsts(parent, comp_starts, order, qr)
     return Forest(tri_r, code, order, firsts, np.sort(split[:n_split]))
+
+
+class Frame(NamedTuple):
+    """Result of :func:`fishbone_frame` (see there)."""
+
+    half: np.ndarray
+    lines: np.ndarray
+    extent: np.ndarray
+    depth: int
+    angle: float
+    cross_from: int
+    n_classes: int
+
+
+class Classes(NamedTuple):
+    """Result of :func:`forest_classes`: ``cls`` (3 m,) int16, each half-edge's class
+    (boundary half-edges 0), and the :class:`Frame` it came from."""
+
+    cls: np.ndarray
+    frame: Frame
+
+
+#: Classes of the count quadtree's edges below the fishbone's deepest level.
+LEAF_CLASSES = (CELL_BITS + 1) * CENTRE_BINS
+#: Fishbone levels whose spines are joined round holes (deeper cells are small; on
+#: the plate and the gear 3, 4 and all levels give the same cut, session 12).
+GAP_LEVELS = 3
+
+
+def fishbone_frame(tri, twin, points, qr, side_work=None):
+    """Everything :func:`spanning_forest`'s edge classes are computed from.
+
+    With ``points`` and at least ``4 * FISH_MIN_CELL`` triangles, the fishbone
+    (``_fishbone_kernels``): its axes turned by ``fish_angle``, lines from a sample
+    (``kd_lines``), each triangle's cells (:func:`_cells_into`, one pass with the
+    quadtree coordinates), the spines of the top ``GAP_LEVELS`` levels joined round
+    the holes their lines cross (``join_gaps_into``). The classes (:func:`edge_class_of`): below the
+    fishbone's deepest level the count quadtree's (:func:`edge_class`, under
+    ``LEAF_CLASSES``), then each level from the deepest up (``PER_LEVEL`` classes
+    each), constrained edges last (``n_classes - 1``). The two searches' halves are
+    the sides of the top line; ``cross_from`` is the top level's first class (those
+    edges are the join's). On smaller meshes the count quadtree alone (``depth`` 0,
+    turned by :func:`top_cross_angle`; the halves: the top split of its longer axis,
+    the join's edges those between top-level quadrants).
+
+    ``qr``: (m, 3) int array: column 0 gets the quadtree coordinates, 1 -1 (the
+    search's "not reached"), 2 the fishbone cell and spine level (``FISH_SHIFT``).
+    ``side_work``: run on another thread during the first pass (``spanning_forest``
+    faults its outputs' pages there).
+    """
+    m = tri.shape[0]
+    spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    side_work = side_work if side_work is not None else (lambda: None)
+    sample = np.arange(0, m, max(1, m // fk.FISH_SAMPLE))
+    depth = fk.fish_depth(len(sample)) if points is not None else 0
+    zeros = np.zeros(1, np.float64)
+    if points is None or not m:
+        qr[:, 0] = 0
+        qr[:, 1] = -1
+        qr[:, 2] = 0
+        side_work()
+        return Frame(np.zeros(m, np.int8), zeros, zeros, 0, 0.0, QUAD_CLASSES, N_CLASSES)
+    if depth == 0:  # too few triangles for a fishbone level: the count quadtree
+        angle = top_cross_angle(points, tri, twin)
+        _beside(lambda: quadtree_coords(points, tri, qr, [(0, m)], angle), side_work, len(spans) > 1)
+        qr[:, 2] = 0
+        nx, ny = _half_counts(qr)
+        hbit = 2 * CELL_BITS - 1 if abs(2 * nx - m) <= abs(2 * ny - m) else CELL_BITS - 1
+        half = ((qr[:, 0] >> hbit) & 1).astype(np.int8)
+        return Frame(half, zeros, zeros, 0, angle, QUAD_CLASSES, N_CLASSES)
+    found = {}
+
+    def first_pass() -> None:  # the turn, the lines and the quadtree's frame
+        a = found["angle"] = fk.fish_angle(points, tri, twin)
+        found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
+        found["frame"] = quad_frame(points, tri, a)
+
+    _beside(first_pass, side_work, len(spans) > 1)
+    angle, fl, fr = found["angle"], found["lines"], found["frame"]
+    half = np.empty(m, np.int8)
+    run_all([
+        (lambda a=a, b=b: _cells_into(points, tri, fr.ca, fr.sa, fr.x0, fr.y0, fr.bx, fr.by, fr.cum, fr.fx, fr.fy,
+                                      fl.lines, fl.fars, depth, qr, half, a, b))
+        for a, b in spans
+    ])
+    on_rim = fk.rim_vertices(tri, twin, points.shape[0])
+    levels = min(depth, GAP_LEVELS)
+    fk.join_gaps_into(points, tri, twin, fr.ca, fr.sa, qr, FISH_SHIFT, fl.lines, depth, levels, on_rim)
+    cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
+    return Frame(half, fl.lines, fl.extent, depth, angle, cross_from, LEAF_CLASSES + depth * fk.PER_LEVEL + 1)
+
+
+def _beside(work, side_work, threaded: bool) -> None:
+    """``work`` and ``side_work`` on two threads, or one after the other (a small mesh,
+    or a process capped at one thread: ``hammesh.threads.limit``)."""
+    if threaded:
+        run_all([work, side_work])
+    else:
+        work()
+        side_work()
+
+
+def forest_classes(tri, twin, is_con, points=None):
+    """The class of every dual edge that :func:`spanning_forest` ranks its tree by
+    (:func:`fishbone_frame`; the search computes them as it goes, this lists them).
+    Returns :class:`Classes`."""
+    m = tri.shape[0]
+    qr = np.empty((m, 3), index_dtype(m))
+    fr = fishbone_frame(tri, twin, points, qr)
+    cls = np.zeros(3 * m, np.int16)
+    pts = points if points is not None else np.zeros((1, 2))
+    ca, sa = math.cos(fr.angle), math.sin(fr.angle)
+    _edge_classes_into(pts, tri, ca, sa, twin, is_con, qr, fr.lines, fr.extent, fr.depth, fr.n_classes - 1, cls)
+    return Classes(cls, fr)
+
+
+@njit(cache=True, nogil=True)
+def _edge_classes_into(points, tri, ca, sa, twin, is_con, qr, lines, extent, depth, con, cls):
+    """:func:`edge_class_of` of every half-edge (boundary ones 0, constrained ``con``)."""
+    for h in range(twin.shape[0]):
+        g = twin[h]
+        if g >= 0:
+            cls[h] = con if is_con[h] else edge_class_of(points, tri, ca, sa, qr, h // 3, g // 3, lines, extent, depth)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def edge_class_of(points, tri, ca, sa, qr, t, u, lines, extent, depth):
+    """Class of the free dual edge between triangles ``t`` and ``u`` (:func:`fishbone_frame`):
+    the quadtree's :func:`edge_class` inside one deepest fishbone cell (most edges),
+    else :func:`fish_class`."""
+    fa = qr[t, 2]
+    if fa == qr[u, 2] and (fa >> FISH_SHIFT) == depth:
+        return edge_class(qr[t, 0], qr[u, 0])
+    return fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth)
+
+
+@njit(cache=True, nogil=True)
+def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
+    """Class of the free dual edge between triangles ``t`` and ``u`` (:func:`fishbone_frame`),
+    a separate call: the search's loop stays small for the common case.
+
+    ``d``: the deepest fishbone level whose cell holds both triangles and neither in
+    an ancestor's spine (the common 2-bit digits of the cells, capped by the spine
+    levels; ``qr[:, 2]``). At ``d == depth`` the quadtree's :func:`edge_class`; else level ``d``'s classes from
+    ``LEAF_CLASSES + (depth - 1 - d) * PER_LEVEL``: 0 both on the spine; a hang (one
+    on it): the child's own spine end first (``HANG_BINS`` more for others), by the
+    L-infinity distance of the edge (its centroids' midpoint) from where the child's
+    line meets the spine, over the cell's extent; a wall (neither): by its distance
+    from the nearer point where one of the two children hangs, so that a child hung
+    from its sibling splits it near its entry."""
+    fa = qr[t, 2]
+    fb = qr[u, 2]
+    low = (1 << FISH_SHIFT) - 1
+    ka = fa & low
+    kb = fb & low
+    la = fa >> FISH_SHIFT
+    lb = fb >> FISH_SHIFT
+    cp = depth - (math.frexp(float(ka ^ kb))[1] + 1) // 2  # equal 2-bit digits from the top
+    d = min(cp, la, lb)
+    if d >= depth:
+        return edge_class(qr[t, 0], qr[u, 0])
+    base = LEAF_CLASSES + (depth - 1 - d) * fk.PER_LEVEL
+    if la == d and lb == d:  # along the spine (most of these edges: no geometry needed)
+        return base
+    oc = fk.level_offset(d) + (ka >> (2 * (depth - d)))
+    line = lines[oc]
+    ext = extent[oc]
+    tx, ty = fk.turned_centroid(points, tri, t, ca, sa)
+    ux, uy = fk.turned_centroid(points, tri, u, ca, sa)
+    mx = 0.5 * (tx + ux)
+    my = 0.5 * (ty + uy)
+    m_along, m_across = (mx, my) if d % 2 == 0 else (my, mx)
+    off = fk.level_offset(d + 1)
+    shift = 2 * (depth - d - 1)
+    if la == d or lb == d:
+        kid_key, kid_level = (kb, lb) if la == d else (ka, la)
+        meet = lines[off + (kid_key >> shift)]  # the child's line meets the spine there
+        dist = max(abs(m_along - meet), abs(m_across - line))
+        own = 0 if kid_level == d + 1 else fk.HANG_BINS  # a child hangs by its own spine's end
+        return base + 1 + own + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.HANG_BINS)
+    ma = lines[off + (ka >> shift)]
+    mb = lines[off + (kb >> shift)]
+    dist = min(max(abs(m_along - ma), abs(m_across - line)), max(abs(m_along - mb), abs(m_across - line)))
+    return base + 1 + 2 * fk.HANG_BINS + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
 
 
 def top_cross_angle(points, tri, twin, sample=None):
@@ -390,32 +581,10 @@ def _top_cross_counts_into(points, tri, twin, sample, cos_a, sin_a, cuts):
 @njit(cache=True, nogil=True)
 def _select(a, lo, hi, k):
     """The ``k``-th smallest value of ``a[lo:hi]`` (``lo <= k < hi``), partly ordering
-    that range in place (quickselect with a three-way split: equal values, as on a
-    grid, cost no extra passes). Afterwards ``a[k:hi]`` holds no value below it."""
-    while hi - lo > 1:
-        x, y, z = a[lo], a[(lo + hi) // 2], a[hi - 1]
-        pivot = max(min(x, y), min(max(x, y), z))  # median of three
-        lt, i, gt = lo, lo, hi
-        while i < gt:
-            v = a[i]
-            if v < pivot:
-                a[i] = a[lt]
-                a[lt] = v
-                lt += 1
-                i += 1
-            elif v > pivot:
-                gt -= 1
-                a[i] = a[gt]
-                a[gt] = v
-            else:
-                i += 1
-        if k < lt:
-            hi = lt
-        elif k >= gt:
-            lo = gt
-        else:
-            return pivot
-    return a[lo]
+    that range in place (``_fishbone_kernels.nth``). Afterwards ``a[k:hi]`` holds no
+    value below it."""
+    fk.nth(a, a, lo, hi, k, False)
+    return a[k]
 
 
 def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
@@ -442,6 +611,34 @@ def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
         return out
     if spans is None:
         spans = row_ranges(m, threads.THREAD_MIN_ROWS)
+    fr = quad_frame(points, tri, angle)
+    run_all([
+        (lambda a=a, b=b: _cell_coords_into(points, tri, fr.ca, fr.sa, fr.x0, fr.y0, fr.bx, fr.by, fr.cum, fr.fx, fr.fy,
+                                            out, a, b))
+        for a, b in spans
+    ])
+    return out
+
+
+class QuadFrame(NamedTuple):
+    """Result of :func:`quad_frame`: the turn (``ca``, ``sa``), the turned box's
+    corner (``x0``, ``y0``), histogram bins per unit (``bx``, ``by``), the cumulative
+    histograms ``cum`` (2, RANK_BINS + 1) and the scales ``fx``, ``fy``."""
+
+    ca: float
+    sa: float
+    x0: float
+    y0: float
+    bx: float
+    by: float
+    cum: np.ndarray
+    fx: float
+    fy: float
+
+
+def quad_frame(points, tri, angle=0.0):
+    """What :func:`quadtree_coords` maps each centroid through (see there)."""
+    m = tri.shape[0]
     ca, sa = math.cos(angle), math.sin(angle)  # exactly 1 and 0 for angle 0
     x0, y0, x1, y1 = _bounds(points, ca, sa)
     span = max(x1 - x0, y1 - y0)
@@ -457,11 +654,7 @@ def quadtree_coords(points, tri, out=None, spans=None, angle=0.0):
     n = cum[0, RANK_BINS]
     fx = top * (x1 - x0) / span / n if span > 0 else 0.0  # the box's aspect is kept
     fy = top * (y1 - y0) / span / n if span > 0 else 0.0
-    run_all([
-        (lambda a=a, b=b: _cell_coords_into(points, tri, ca, sa, x0, y0, bx, by, cum, fx, fy, out, a, b))
-        for a, b in spans
-    ])
-    return out
+    return QuadFrame(ca, sa, x0, y0, bx, by, cum, fx, fy)
 
 
 @njit(cache=True, nogil=True)
@@ -512,21 +705,46 @@ def _cell_coords_into(points, tri, ca, sa, x0, y0, bx, by, cum, fx, fy, qr, lo, 
     centroid is the number of sampled centroids below it (``cum``, linear inside a
     bin) times ``fx``/``fy``; packed ``x << CELL_BITS | y`` into ``qr[:, 0]``;
     ``qr[:, 1] = -1``."""
-    top = (1 << CELL_BITS) - 1
     for t in range(lo, hi):
         x, y = _turned(
             (points[tri[t, 0], 0] + points[tri[t, 1], 0] + points[tri[t, 2], 0]) / 3.0,
             (points[tri[t, 0], 1] + points[tri[t, 1], 1] + points[tri[t, 2], 1]) / 3.0,
             ca, sa,
         )
-        px = (x - x0) * bx
-        py = (y - y0) * by
-        i = min(max(int(px), 0), RANK_BINS - 1)
-        j = min(max(int(py), 0), RANK_BINS - 1)
-        rx = cum[0, i] + min(max(px - i, 0.0), 1.0) * (cum[0, i + 1] - cum[0, i])
-        ry = cum[1, j] + min(max(py - j, 0.0), 1.0) * (cum[1, j + 1] - cum[1, j])
-        qr[t, 0] = (min(int(rx * fx), top) << CELL_BITS) | min(int(ry * fy), top)
+        qr[t, 0] = _packed_coords(x, y, x0, y0, bx, by, cum, fx, fy)
         qr[t, 1] = -1  # not reached yet (``_prim_into``)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _packed_coords(x, y, x0, y0, bx, by, cum, fx, fy):
+    """``x << CELL_BITS | y`` of a turned centroid, each axis as a count (``cum``)."""
+    top = (1 << CELL_BITS) - 1
+    px = (x - x0) * bx
+    py = (y - y0) * by
+    i = min(max(int(px), 0), RANK_BINS - 1)
+    j = min(max(int(py), 0), RANK_BINS - 1)
+    rx = cum[0, i] + min(max(px - i, 0.0), 1.0) * (cum[0, i + 1] - cum[0, i])
+    ry = cum[1, j] + min(max(py - j, 0.0), 1.0) * (cum[1, j + 1] - cum[1, j])
+    return (min(int(rx * fx), top) << CELL_BITS) | min(int(ry * fy), top)
+
+
+@njit(cache=True, nogil=True)
+def _cells_into(points, tri, fr_ca, fr_sa, x0, y0, bx, by, cum, fx, fy, lines, fars, depth, qr, half, lo, hi):
+    """One pass over triangles lo..hi for :func:`forest_classes`: the quadtree
+    coordinates (``qr[:, 0]``, as :func:`_cell_coords_into`), ``qr[:, 1] = -1``, the
+    fishbone's cell and spine level packed in ``qr[:, 2]`` (``key | spine << 16``,
+    ``_fishbone_kernels.descend_into``) and the top line's side in ``half``."""
+    for t in range(lo, hi):
+        cx, cy, bx0, bx1, by0, by1 = fk.turned_box(points, tri, t, fr_ca, fr_sa)
+        qr[t, 0] = _packed_coords(cx, cy, x0, y0, bx, by, cum, fx, fy)
+        qr[t, 1] = -1
+        reg, sp = fk.descend(cx, cy, bx0, bx1, by0, by1, lines, fars, depth)
+        qr[t, 2] = reg | (sp << FISH_SHIFT)
+        half[t] = (reg >> (2 * depth - 1)) & 1 if depth > 0 else 0
+
+
+#: ``qr[:, 2]`` of :func:`spanning_forest`: the fishbone cell below this bit, the spine level above.
+FISH_SHIFT = 16
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -564,14 +782,16 @@ def _half_counts(qr):
 
 
 @njit(cache=True, nogil=True)
-def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code, starts, queue, q_lo, q_hi):
+def _prim_half_into(tri, twin, is_con, points, ca, sa, lines, extent, depth, con, cross_from, qr, half_of, side, base,
+                    order, tri_r, code, starts, queue, q_lo, q_hi):
     """Prim's search with a bucket queue of edge classes over the triangles of one half.
 
-    The half: triangles whose packed quadtree coordinates have bit ``hbit`` equal to
-    ``side`` (the top bit of one axis). Only free edges inside a top-level quadrant
-    (class below ``QUAD_CLASSES``) are searched, so a search never reads a triangle
-    the other half's search is numbering: the two halves run side by side. Each
-    search (a *component*, inside one quadrant) starts at its lowest input triangle.
+    The half: triangles ``t`` with ``half_of[t] == side`` (a side of the top line).
+    Each edge's class is :func:`edge_class_of` (``con`` if constrained). Only edges of a
+    class below ``cross_from`` are searched (inside one top-level cell), so a search
+    never reads a triangle the other half's search is numbering: the two halves run
+    side by side. Each search (a *component*, inside one top-level cell) starts at
+    its lowest input triangle.
 
     Numbers the half's triangles from ``base`` in the order they are reached: fills
     ``qr[t, 1]`` (-1 on entry), ``order``, ``tri_r`` and ``starts`` (the new number of
@@ -589,18 +809,18 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
     Returns ``(components, cross edges)``.
     """
     m = qr.shape[0]
-    head = np.full(QUAD_CLASSES, -1, np.int64)
+    head = np.full(cross_from, -1, np.int64)
     free = -1  # popped slots, linked through their first column
     n_used = q_lo
     top = q_hi
     n_seen = base
     n_comp = 0
     for s in range(m):
-        if ((qr[s, 0] >> hbit) & 1) != side or qr[s, 1] >= 0:
+        if half_of[s] != side or qr[s, 1] >= 0:
             continue
         starts[n_comp] = n_seen
         n_comp += 1
-        low = QUAD_CLASSES  # no class below it holds an entry
+        low = cross_from  # no class below it holds an entry
         t = s
         via = -1  # the half-edge of t its tree edge enters by
         while t >= 0:
@@ -612,7 +832,9 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
             tri_r[i, 1] = tri[t, 1]
             tri_r[i, 2] = tri[t, 2]
             qt = qr[t, 0]
-            best = QUAD_CLASSES  # the lightest edge out of t goes next without queueing if
+            ft = qr[t, 2]
+            leaf = (ft >> FISH_SHIFT) == depth
+            best = cross_from  # the lightest edge out of t goes next without queueing if
             best_g = -1  # nothing queued is lighter (most tree edges)
             for kk in range(3):
                 h = 3 * t + kk
@@ -621,11 +843,17 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
                     code[3 * i + kk] = CON_BIT if is_con[h] else 0
                     continue
                 u = g // 3
-                c = QUAD_CLASSES if is_con[h] else edge_class(qt, qr[u, 0])
-                if c >= QUAD_CLASSES:  # the join's (``_join_into``)
+                fu = qr[u, 2]
+                if is_con[h]:
+                    c = con
+                elif fu == ft and leaf:  # most edges: inside one deepest cell
+                    c = edge_class(qt, qr[u, 0])
+                else:
+                    c = fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth)
+                if c >= cross_from:  # the join's (``_join_into``)
                     if h < g:
                         top -= 1
-                        queue[top, 0] = N_CLASSES - 1 if is_con[h] else c
+                        queue[top, 0] = c
                         queue[top, 1] = h
                     continue
                 j = qr[u, 1]  # same quadrant: numbered by this search, if at all
@@ -649,7 +877,7 @@ def _prim_half_into(tri, twin, is_con, qr, hbit, side, base, order, tri_r, code,
             if best_g >= 0:
                 free, n_used = bucket_push(queue, head, free, n_used, best, best_g)
                 low = min(low, best)
-            while low < QUAD_CLASSES:  # the lowest class edge to a triangle not reached
+            while low < cross_from:  # the lowest class edge to a triangle not reached
                 slot = head[low]
                 if slot < 0:
                     low += 1
@@ -672,7 +900,7 @@ def _component_of(starts, i):
 
 
 @njit(cache=True, nogil=True)
-def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split):
+def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split, cross_from, n_classes):
     """Kruskal's join of the components of :func:`_prim_half_into` (new-number
     ``starts``, ascending) over the ``cross`` edges (rows ``(class, half-edge)``),
     lightest class first (a counting sort; constrained edges last), in their order
@@ -684,15 +912,15 @@ def _join_into(twin, is_con, qr, order, code, starts, cross, parent, split):
     for c in range(n_comp):
         parent[c] = c
     n_cross = cross.shape[0]
-    n_bins = N_CLASSES - QUAD_CLASSES
+    n_bins = n_classes - cross_from
     first = np.zeros(n_bins + 1, np.int64)
     for e in range(n_cross):
-        first[cross[e, 0] - QUAD_CLASSES + 1] += 1
+        first[cross[e, 0] - cross_from + 1] += 1
     for b in range(n_bins):
         first[b + 1] += first[b]
     ranked = np.empty(n_cross, np.int64)
     for e in range(n_cross):
-        b = cross[e, 0] - QUAD_CLASSES
+        b = cross[e, 0] - cross_from
         ranked[first[b]] = e
         first[b] += 1
     n_split = 0
