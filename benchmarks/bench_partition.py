@@ -72,7 +72,7 @@ def _mesh(dom, area: float, target: int, mode: str):
     m_in = target / per_input
     # Triangle's triangles at min angle 30 average about 0.63 x max_area
     mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * m_in))
-    return hammesh.hamiltonian(mesh, mode=mode), mesh
+    return hammesh.hamiltonian(mesh, mode=mode, tree="fishbone"), mesh  # (the tree: incircle only)
 
 
 def _plain_forest_kernel():
@@ -342,7 +342,7 @@ def _print_trees(domains, targets: list[int], ks: list[int], schemes: list[str] 
                     continue
                 t = time.perf_counter()
                 with tree(weights):
-                    h = hammesh.hamiltonian(mesh, mode="incircle")
+                    h = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
                 dt = time.perf_counter() - t
                 m = h.n_triangles
                 cells = cut_ratio_cells(h, ks)

@@ -102,7 +102,7 @@ def tree(weights):
     from hammesh.postprocess import _thm24_kernels, incircle
 
     if weights is not None:
-        def forest(tri, twin, is_con, points=None):
+        def forest(tri, twin, is_con, points=None, levels=None):
             return forest_from_weights(tri, twin, is_con, weights(points, tri, twin, is_con))
 
         incircle._kernels = _Kernels(_thm24_kernels, forest)

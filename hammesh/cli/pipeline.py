@@ -120,6 +120,7 @@ def run_pipeline(
     *,
     mode: str = "sparse",
     keep: float = 0.9,
+    tree: str = "quadtree",
     strict: bool = False,
     finish: Callable[[HamiltonianMesh], HamiltonianMesh] | None = None,
 ) -> HamiltonianMesh:
@@ -148,7 +149,7 @@ def run_pipeline(
             mesh = source
         steps.done()
         steps.step("hamiltonian + verify")
-        h = hamiltonian(mesh, mode=mode, keep=keep)
+        h = hamiltonian(mesh, mode=mode, keep=keep, tree=tree)
         steps.done()
         h.report["repairs"] = collect_repairs(source, mesh, h)
         # never in silence: what the input brought that the output will not hold

@@ -13,7 +13,7 @@ from hammesh.domain.resolution import check_resolution, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
 from hammesh.point_data import carry_point_data
-from hammesh.postprocess.incircle import incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
+from hammesh.postprocess.incircle import TREES, incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
@@ -118,7 +118,7 @@ def _snapped(out: HamiltonianMesh, clean: Mesh, facts, claim) -> tuple[Hamiltoni
         return out, k, None
 
 
-def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> HamiltonianMesh:
+def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: str = "quadtree") -> HamiltonianMesh:
     """Turn a planar triangle mesh into a verified Hamiltonian cycle mesh.
 
     ``mode="sparse"`` (the default): keeps the input mesh's quality. A cycle cover of
@@ -146,6 +146,11 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
         replaces and <= the input's largest angle + 5 degrees where any join can
         (the report counts where none could); the proven floor (>= 1/2 the input's
         minimum) holds regardless. Ignored by ``"incircle"``.
+    tree : {"quadtree", "fishbone"}
+        Incircle mode's dual spanning tree (``hammesh.postprocess.incircle.TREES``):
+        ``"fishbone"`` makes the cycle sweep the domain so that ``hammesh.partition``'s
+        stretches cut close to METIS (docs/partition.md), at about +20 % of this call's
+        time; ``"quadtree"`` (the default) is the fastest. Ignored by ``"sparse"``.
 
     Returns
     -------
@@ -166,17 +171,19 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP) -> Hami
         The output failed its certificate (never returned then).
     """
     try:
-        return _hamiltonian(mesh, mode, keep)
+        return _hamiltonian(mesh, mode, keep, tree)
     finally:  # what quality_mesh faulted in ahead and this call did not take
         pages.release()
 
 
-def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
+def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> HamiltonianMesh:
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     if not (isinstance(keep, (int, float)) and 0.0 <= keep <= 1.0):
         raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
+    if tree not in TREES:
+        raise InvalidOptionError(f"tree must be one of {sorted(TREES)}, got {tree!r}")
     t0 = time.perf_counter()
     taken, shape = RESERVE_TAKEN.get(mode), np.shape(mesh.triangles)
     if taken is not None and len(shape) == 2 and pages.reserved():  # pages it will not take: back now
@@ -217,7 +224,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float) -> HamiltonianMesh:
         rows = prepared = vmarks = None
         if mode == "incircle":
             serial = isinstance(side, threads.InlineExecutor)  # (no row stream then: its checker waits for rows)
-            out, claim, stream = incircle_streaming(clean, he, is_con, None if serial else side, ready, reuse=True)
+            out, claim, stream = incircle_streaming(clean, he, is_con, None if serial else side, ready, reuse=True,
+                                                    tree=tree)
             del he, is_con  # (their memory is the output's parent and kind now)
             t1 = time.perf_counter()
             # the certificate's last steps, ahead, while the other thread checks rows

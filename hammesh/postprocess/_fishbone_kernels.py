@@ -92,11 +92,12 @@ class FishLines(NamedTuple):
     extent: np.ndarray
 
 
-def fish_depth(n_sample: int) -> int:
+def fish_depth(n_sample: int, levels: int = FISH_LEVELS) -> int:
     """Fishbone levels for a sample of ``n_sample`` centroids: at least
-    ``FISH_MIN_CELL`` of them per deepest cell, at most ``FISH_LEVELS``."""
+    ``FISH_MIN_CELL`` of them per deepest cell, at most ``levels`` (0: none, the count
+    quadtree alone)."""
     d = 0
-    while d < FISH_LEVELS and 4 ** (d + 1) * FISH_MIN_CELL <= n_sample:
+    while d < levels and 4 ** (d + 1) * FISH_MIN_CELL <= n_sample:
         d += 1
     return d
 

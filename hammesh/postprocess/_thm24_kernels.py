@@ -173,7 +173,7 @@ N_CLASSES = (CELL_BITS + 1) * CENTRE_BINS + 1
 QUAD_CLASSES = CELL_BITS * CENTRE_BINS
 
 
-def spanning_forest(tri, twin, is_con, points=None):
+def spanning_forest(tri, twin, is_con, points=None, levels=fk.FISH_LEVELS):
     """A compact spanning forest of the dual graph that crosses the fewest constrained edges.
 
     Prim's algorithm with a bucket queue over edge *classes* (issue 14): a free dual
@@ -255,7 +255,7 @@ def spanning_forest(tri, twin, is_con, points=None):
         out["tri_r"] = pages.fresh(tri.shape, tri.dtype)
         out["code"] = pages.fresh(3 * m, np.int64)
 
-    cl = fishbone_frame(tri, twin, points, qr, side_work=outputs)
+    cl = fishbone_frame(tri, twin, points, qr, side_work=outputs, levels=levels)
     pts = points if points is not None else np.zeros((1, 2))
     ca, sa = math.cos(cl.angle), math.sin(cl.angle)
     order, tri_r, code = out["order"], out["tri_r"], out["code"]
@@ -314,7 +314,7 @@ LEAF_CLASSES = (CELL_BITS + 1) * CENTRE_BINS
 GAP_LEVELS = 3
 
 
-def fishbone_frame(tri, twin, points, qr, side_work=None):
+def fishbone_frame(tri, twin, points, qr, side_work=None, levels=fk.FISH_LEVELS):
     """Everything :func:`spanning_forest`'s edge classes are computed from.
 
     With ``points`` and at least ``4 * FISH_MIN_CELL`` triangles, the fishbone
@@ -339,7 +339,7 @@ def fishbone_frame(tri, twin, points, qr, side_work=None):
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     side_work = side_work if side_work is not None else (lambda: None)
     sample = np.arange(0, m, max(1, m // fk.FISH_SAMPLE))
-    depth = fk.fish_depth(len(sample)) if points is not None else 0
+    depth = fk.fish_depth(len(sample), levels) if points is not None else 0
     zeros = np.zeros(1, np.float64)
     if points is None or not m:
         qr[:, 0] = 0
@@ -387,13 +387,13 @@ def _beside(work, side_work, threaded: bool) -> None:
         side_work()
 
 
-def forest_classes(tri, twin, is_con, points=None):
+def forest_classes(tri, twin, is_con, points=None, levels=fk.FISH_LEVELS):
     """The class of every dual edge that :func:`spanning_forest` ranks its tree by
     (:func:`fishbone_frame`; the search computes them as it goes, this lists them).
     Returns :class:`Classes`."""
     m = tri.shape[0]
     qr = np.empty((m, 3), index_dtype(m))
-    fr = fishbone_frame(tri, twin, points, qr)
+    fr = fishbone_frame(tri, twin, points, qr, levels=levels)
     cls = np.zeros(3 * m, np.int16)
     pts = points if points is not None else np.zeros((1, 2))
     ca, sa = math.cos(fr.angle), math.sin(fr.angle)

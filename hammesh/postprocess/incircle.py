@@ -31,6 +31,7 @@ from concurrent.futures import Executor, Future
 import numpy as np
 
 from hammesh.postprocess import _thm24_kernels as _kernels
+from hammesh.postprocess._fishbone_kernels import FISH_LEVELS
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.pages import fresh
@@ -38,7 +39,7 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.halfedge import HalfEdges
 from hammesh.verify.stream import RowStream
 
-__all__ = ["incircle_hamiltonian", "incircle_streaming", "incenters"]
+__all__ = ["incircle_hamiltonian", "incircle_streaming", "incenters", "TREES"]
 
 def incenters(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Incenters of triangles.
@@ -59,7 +60,7 @@ def incenters(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 
 
 def incircle_hamiltonian(
-    mesh: Mesh, he: HalfEdges, is_con: np.ndarray
+    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, *, tree: str = "quadtree"
 ) -> tuple[HamiltonianMesh, np.ndarray]:
     """Build the Thm 2.4 Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
 
@@ -71,6 +72,8 @@ def incircle_hamiltonian(
         Its half-edge adjacency.
     is_con : (3 m,) bool
         Half-edges on constrained edges.
+    tree : {"quadtree", "fishbone"}
+        The dual spanning tree the cycle walks around (:data:`TREES`).
 
     Returns
     -------
@@ -80,9 +83,17 @@ def incircle_hamiltonian(
         The output's half-edge twins as the construction implies them; the
         certificate checks this claim instead of recomputing the pairing.
     """
-    h, claim, _ = incircle_streaming(mesh, he, is_con, None)
+    h, claim, _ = incircle_streaming(mesh, he, is_con, None, tree=tree)
     return h, claim
 
+
+#: The dual spanning trees Thm 2.4's cycle can walk around, by name: the fishbone
+#: levels of :func:`~hammesh.postprocess._thm24_kernels.spanning_forest` (docs/partition.md).
+#: ``"quadtree"`` (0 levels): the count quadtree, the fastest; its stretches cut
+#: 1.5-1.9x METIS's. ``"fishbone"``: kd lines turned to cross the domain shortest, a
+#: compact cycle for ``hammesh.partition`` (1.3-1.4x METIS's on a plate with holes) at
+#: about +20 % of the incircle construction's first call.
+TREES: dict[str, int] = {"quadtree": 0, "fishbone": FISH_LEVELS}
 
 #: Rows the walk writes between two hand-overs to the row checks.
 WALK_CHUNK = 1 << 18
@@ -129,7 +140,7 @@ def walk_arrays(total: int, nh: int, parent: bool = True, n_points: int | None =
 
 def incircle_streaming(
     mesh: Mesh, he: HalfEdges, is_con: np.ndarray, side: Executor | None, ready: Future | None = None,
-    *, reuse: bool = False,
+    *, reuse: bool = False, tree: str = "quadtree",
 ) -> tuple[HamiltonianMesh, np.ndarray, RowStream | None]:
     """``incircle_hamiltonian`` with a second thread (``side``) working beside the walk.
 
@@ -156,7 +167,8 @@ def incircle_streaming(
         ready = side.submit(walk_arrays, nh, nh)
     # the walk runs in the tree search's numbering (locality): incenter n + i is that
     # of input triangle order[i]
-    tri, code, order, firsts, split = _kernels.spanning_forest(mesh.triangles, he.twin, is_con, pts)
+    tri, code, order, firsts, split = _kernels.spanning_forest(mesh.triangles, he.twin, is_con, pts,
+                                                               levels=TREES[tree])
     mid_h, mid_id, mid_a, mid_b = _kernels.split_slots(tri, code, split)
     total = nh + len(mid_h)
     arrays = ready.result() if ready is not None else None

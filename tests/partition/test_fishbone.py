@@ -141,7 +141,7 @@ def test_fish_angle_runs_the_top_line_between_the_plates_holes() -> None:
 def test_children_are_runs_of_the_cycle() -> None:
     """The point of the fishbone: every child hangs from its parent's spine by one
     edge, so the Thm 2.4 walk visits each cell whole. On a square every cell of the
-    top two levels is one run of the shipped cycle (round the cycle's end), its own
+    top two levels is one run of the cycle (``tree="fishbone"``) (round the cycle's end), its own
     spine included, and the cells' counts differ by at most 2 % of the mesh. The
     forest's classes are the ones listed by ``forest_classes``: its spines joined
     round no hole here, as the cells recomputed here."""
@@ -156,7 +156,7 @@ def test_children_are_runs_of_the_cycle() -> None:
     fr = cl.frame
     assert fr.depth >= 3
     _, key, spine, _ = _cells(pts, tri, twin, fr.angle, fr.depth)
-    h = hammesh.hamiltonian(sq, mode="incircle")
+    h = hammesh.hamiltonian(sq, mode="incircle", tree="fishbone")
     for level in (1, 2):
         lab = np.where(spine >= level, key >> (2 * (fr.depth - level)), -1)[h.parent]
         for cell in range(4**level):
@@ -165,3 +165,35 @@ def test_children_are_runs_of_the_cycle() -> None:
             assert np.count_nonzero(rows & ~np.roll(rows, 1)) == 1, (level, cell)
         sizes = np.bincount(lab[lab >= 0])
         assert sizes.max() - sizes.min() <= 0.02 * h.n_triangles
+
+
+def test_tree_option_picks_the_walk_and_both_are_certified(tmp_path) -> None:
+    """``tree`` changes only which spanning tree the incircle walk goes round: both
+    cycles are certified, of the same triangles; ``hammesh mesh --parts`` walks the
+    fishbone unless told otherwise; a wrong name is refused."""
+    import meshio
+    import pytest
+
+    from hammesh.cli import main
+    from hammesh.io import write
+    from hammesh.errors import InvalidOptionError
+
+    plate = _plate(holes_at=((0.6, 0.5), (1.4, 0.5)), r=0.2, area=0.004)
+    quad = hammesh.hamiltonian(plate, mode="incircle")
+    fish = hammesh.hamiltonian(plate, mode="incircle", tree="fishbone")
+    assert quad.report["verified"] and fish.report["verified"]
+    assert quad.n_triangles == fish.n_triangles
+    assert sorted(quad.parent.tolist()) == sorted(fish.parent.tolist())
+    assert not np.array_equal(quad.parent, fish.parent)  # another walk
+    for h in (quad, fish):  # one cycle: consecutive rows share an edge, round the end
+        a, b = np.sort(h.triangles, axis=1), np.sort(np.roll(h.triangles, -1, axis=0), axis=1)
+        shared = (a[:, :, None] == b[:, None, :]).any(axis=2).sum(axis=1)
+        assert (shared == 2).all()
+    with pytest.raises(InvalidOptionError, match="tree"):
+        hammesh.hamiltonian(plate, mode="incircle", tree="kd")
+    src = tmp_path / "plate.vtu"
+    write(plate, src)
+    for extra, expected in (([], fish), (["--tree", "quadtree"], quad)):
+        out = tmp_path / f"out{len(extra)}.vtu"
+        assert main(["mesh", str(src), "--mode", "incircle", "--parts", "4", "-o", str(out)] + extra) == 0
+        np.testing.assert_array_equal(meshio.read(out).cell_data["parent"][0], expected.parent)
