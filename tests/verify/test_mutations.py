@@ -182,8 +182,8 @@ def test_tree_edge_dropped_splits_the_cycle(monkeypatch) -> None:
     """The spanning forest loses a tree edge: the walk makes two cycles for one piece."""
     real = thm24.spanning_forest
 
-    def broken(tri, twin, is_con, points=None):
-        f = real(tri, twin, is_con, points)
+    def broken(tri, twin, is_con, points=None, **options):
+        f = real(tri, twin, is_con, points, **options)
         code = f.code.copy()
         h = int(np.flatnonzero(((code & thm24.TREE_BIT) != 0) & ((code & thm24.CON_BIT) == 0))[-1])
         g = int((code[h] >> 2) - 1)
