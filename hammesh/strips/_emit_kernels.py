@@ -11,7 +11,7 @@ from collections import namedtuple
 import numpy as np
 
 from hammesh.strips._numba import NEXT_CORNER, kernel, loop_helper, row
-from hammesh.strips._path_kernels import edge_to_neighbour, edge_towards
+from hammesh.strips._path_kernels import edge_to_neighbour
 
 __all__ = ["stitch_strips", "emit_restart_joined", "RestartBuffer", "restart_buffer", "WrittenPath", "write_path"]
 
