@@ -170,9 +170,11 @@ class _Tokens:
         self.comments = ["#" + line.partition("#")[2] for line in self.lines if "#" in line]
         self._line = 0  # index of the next line to look at
         self.lineno = 0
+        self._skip = 0  # records a table read and the cursor has not moved past yet
 
     def _records_left(self, at_least: int) -> int:
         """How many records are left, counted up to ``at_least`` (a line is at most one)."""
+        self._catch_up()
         left = len(self.lines) - self._line
         if left < at_least:
             return sum(1 for line in self.lines[self._line:] if line.partition("#")[0].strip())
@@ -185,14 +187,30 @@ class _Tokens:
             raise self.error(f"declares {count} {what}, the file has only {left} more records")
 
     def position(self) -> tuple[int, int]:
+        self._catch_up()
         return self._line, self.lineno
 
     def rewind(self, position: tuple[int, int]) -> None:
         self._line, self.lineno = position
+        self._skip = 0
+
+    def _catch_up(self) -> None:
+        """Move past the records the last :meth:`table` read (only when something reads
+        on: a table is mostly a file's last section, and this is a Python loop per line)."""
+        seen, count, self._skip = 0, self._skip, 0
+        if count == 0:
+            return
+        for i in range(self._line, len(self.lines)):
+            if self.lines[i].partition("#")[0].strip():
+                seen += 1
+                if seen == count:
+                    self._line = self.lineno = i + 1
+                    return
 
     def table(self, count: int, width: int) -> np.ndarray | None:
         """The next ``count`` records' first ``width`` numbers, ``(count, width) float64``, or
         None (nothing consumed) if one is short, not a number or missing."""
+        self._catch_up()
         if count == 0:
             return np.zeros((0, width))
         try:
@@ -204,13 +222,7 @@ class _Tokens:
             return None
         if values.shape != (count, width):
             return None
-        seen = 0
-        for i in range(self._line, len(self.lines)):  # move past the records read
-            if self.lines[i].partition("#")[0].strip():
-                seen += 1
-                if seen == count:
-                    self._line, self.lineno = i + 1, i + 1
-                    break
+        self._skip = count  # (the cursor moves past them when something reads on)
         return values
 
     def error(self, message: str, lineno: int | None = None) -> FileFormatError:
@@ -218,6 +230,7 @@ class _Tokens:
         return FileFormatError(f"{self.path}:{where}: {message}" if where else f"{self.path}: {message}")
 
     def row(self, what: str, min_tokens: int) -> list[str]:
+        self._catch_up()
         tokens: list[str] = []
         while not tokens:
             if self._line >= len(self.lines):

@@ -205,18 +205,17 @@ def _grid_blocks(r: _Reader, offsets: np.ndarray, conn: np.ndarray,
         conn = conn.copy()
         third = offsets[pixels] + 2
         conn[third], conn[third + 1] = conn[third + 1], conn[third].copy()
-    kinds = np.array([_KIND_OF_TYPE.get(t) or _OTHER_TYPES.get(t) or f"VTK cell type {t}"
-                      for t in np.unique(types).tolist()])
-    kind_id = np.searchsorted(np.unique(types), types)
-    # runs of one kind (each unknown type its own kind): one block list per run
-    kind_of_cell = np.unique(kinds, return_inverse=True)[1][kind_id]
+    present, type_id = np.unique(types, return_inverse=True)
+    kinds = [_KIND_OF_TYPE.get(t) or _OTHER_TYPES.get(t) or f"VTK cell type {t}" for t in present.tolist()]
+    # runs of one kind (a triangle next to a quad: one run; each unknown type its own kind)
+    kind_of_cell = np.unique(kinds, return_inverse=True)[1][type_id]
     cuts = np.flatnonzero(np.diff(kind_of_cell)) + 1
     starts = np.concatenate([[0], cuts]).tolist()
     ends = np.concatenate([cuts, [len(types)]]).tolist()
     blocks: list[CellBlock] = []
     origins: list[np.ndarray] = []
     for a, b in zip(starts, ends):
-        kind = str(kinds[kind_id[a]])
+        kind = kinds[type_id[a]]
         run_offsets = offsets[a:b + 1] - offsets[a]
         try:
             got, rows = blocks_of_kind(kind, run_offsets, conn[offsets[a]:offsets[b]], a)
