@@ -101,6 +101,8 @@ def run(args: argparse.Namespace) -> int:
         if args.parts is not None:
             params.integer("--parts", args.parts, low=1, what="number of parts")
         finish = partial(partitioned, k=args.parts, renumber=args.renumber)
+    if args.tree is not None and args.mode != "incircle":
+        raise InvalidOptionError(f"--tree {args.tree}: the spanning tree is incircle mode's (--mode incircle)")
     tree = args.tree or ("fishbone" if args.parts is not None else "quadtree")
     h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, tree=tree, strict=args.strict,
                      finish=finish)
