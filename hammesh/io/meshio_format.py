@@ -476,6 +476,31 @@ _IGNORED_CELLS = frozenset({"vertex"})
 _POLYGON_CELLS = frozenset({"quad", "polygon"})
 
 
+def _drop_zero_area(points: np.ndarray, triangles: np.ndarray, origin: list[tuple[int, np.ndarray]], path: Path,
+                    strict: bool, repairs: list[str]) -> tuple[np.ndarray, list[tuple[int, np.ndarray]]]:
+    """A planar mesh file's triangles without those of zero area (exact test), as VTK
+    keeps them but no Hamiltonian mesh can (a zero angle): they hold no area, so the
+    domain is the same; the repair is reported (refused with ``strict``)."""
+    from hammesh.predicates import orient_rows
+
+    p = points[triangles]
+    flat = orient_rows(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]),
+                       np.ascontiguousarray(p[:, 2])) == 0
+    if not flat.any():
+        return triangles, origin
+    k = int(flat.sum())
+    if k == len(triangles):
+        raise FileFormatError(f"{path}: every triangle has zero area: no planar mesh")
+    what = f"dropped {k} zero-area triangle{'s' if k != 1 else ''} (no area: the domain is unchanged)"
+    if strict:
+        raise FileFormatError(f"{path}: needs repairs, refused (strict): {what}")
+    repairs.append(what)
+    keep = ~flat
+    ends = np.cumsum([len(rows) for _, rows in origin])
+    kept_origin = [(b, rows[keep[end - len(rows):end]]) for (b, rows), end in zip(origin, ends.tolist())]
+    return np.ascontiguousarray(triangles[keep]), kept_origin
+
+
 def _planar(points: np.ndarray, path: Path, dim: int | None, repairs: list[str]) -> np.ndarray:
     """Points with the ``dim`` asked for (see :func:`read`)."""
     if points.shape[1] == 2:
@@ -555,6 +580,8 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
     if not tri_blocks or sum(len(t) for t in tri_blocks) == 0:
         raise FileFormatError(f"{path}: no triangles")
     triangles = np.concatenate(tri_blocks)
+    if points.shape[1] == 2:
+        triangles, tri_origin = _drop_zero_area(points, triangles, tri_origin, path, strict, repairs)
     segments = np.concatenate(seg_blocks) if seg_blocks else np.zeros((0, 2), np.int64)
 
     not_carried: list[str] = []

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
 from hammesh.errors import FileFormatError
-from hammesh.io import meshio_format
+from hammesh.io import meshio_format, read_mesh
 from hammesh.io.cell_data import cycle_ids
 from hammesh.mesh import Mesh
 
@@ -488,3 +488,21 @@ def test_segments_round_trip_property(tmp_path, mesh, suffix):
     np.testing.assert_array_equal(back.triangles, mesh.triangles)
     np.testing.assert_array_equal(back.triangle_attributes, mesh.triangle_attributes)
     assert undirected(back.segments, back.segment_markers) == undirected(mesh.segments, mesh.segment_markers)
+
+
+def test_zero_area_triangles_are_dropped_with_their_data(tmp_path):
+    # VTK keeps a zero-area triangle (collinear corners); no Hamiltonian mesh can: it is
+    # dropped (the domain is unchanged), its cell data with it, and the repair reported
+    pts = np.array([[0, 0], [1, 0], [2, 0], [0, 1], [1, 1]], float)
+    tri = np.array([[0, 1, 3], [1, 2, 0], [1, 4, 3]])  # row 1: on the x axis
+    path = tmp_path / "flat.vtu"
+    meshio.Mesh(pts, [("triangle", tri)], cell_data={"mat": [np.array([5.0, 6.0, 7.0])]}).write(path)
+    m = read_mesh(path)
+    assert m.triangles.tolist() == [[0, 1, 3], [1, 4, 3]]
+    assert m.triangle_attributes[:, m.attribute_names.index("mat")].tolist() == [5.0, 7.0]
+    assert any("zero-area" in r for r in m.info["repairs"])
+    with pytest.raises(FileFormatError, match="strict.*zero-area"):
+        read_mesh(path, strict=True)
+    meshio.Mesh(pts, [("triangle", tri[1:2])]).write(path)
+    with pytest.raises(FileFormatError, match="every triangle has zero area"):
+        read_mesh(path)
