@@ -152,23 +152,23 @@ def _cells_classic(r: _Reader, n: int, size: int, what: str) -> tuple[np.ndarray
         rows = flat.reshape(n, c + 1)
         if (rows[:, 0] == c).all():
             return np.arange(n + 1, dtype=np.int64) * c, rows[:, 1:].reshape(-1)
-    offsets = np.empty(n + 1, dtype=np.int64)
-    offsets[0] = 0
-    pos = 0
-    # the sizes are interleaved with the indices: walk them (one step per cell)
-    sizes = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        if pos >= size:
-            raise r.error(f"{what}: {n} cells declared, data ends after {i}")
-        sizes[i] = flat[pos]
-        pos += 1 + int(flat[pos])
-    if pos != size:
-        raise r.error(f"{what}: size {size} does not match the cells' lengths ({pos})")
-    if (sizes < 0).any():
+    # sizes interleaved with indices: a kernel follows them (numba is loaded by the reader anyway)
+    from hammesh.io._cells_kernels import follow_cell_sizes_into
+
+    starts = np.empty(n, dtype=np.int64)
+    found = follow_cell_sizes_into(flat, starts)
+    starts = starts[:found]
+    if found and flat[starts[-1]] < 0:
         raise r.error(f"{what}: negative cell size")
-    offsets[1:] = np.cumsum(sizes)
-    starts = np.cumsum(sizes + 1) - sizes  # position of each cell's first index in flat
-    keep = np.repeat(starts, sizes) + (np.arange(offsets[-1]) - np.repeat(offsets[:-1], sizes))
+    if found < n:
+        raise r.error(f"{what}: {n} cells declared, data ends after {found}")
+    sizes = flat[starts]
+    end = int(starts[-1] + 1 + sizes[-1]) if n else 0
+    if end != size:
+        raise r.error(f"{what}: size {size} does not match the cells' lengths ({end})")
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    keep = np.repeat(starts + 1 - offsets[:-1], sizes) + np.arange(offsets[-1])
     return offsets, flat[keep]
 
 

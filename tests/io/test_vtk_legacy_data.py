@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import hammesh
 from hammesh.errors import FileFormatError
@@ -182,3 +184,64 @@ def test_encoded_names_are_decoded(tmp_path):
     path = tmp_path / "sq.vtk"
     path.write_text(ASCII.replace("SCALARS height float 1", "SCALARS my%20height float 1"))
     assert "my height" in read_mesh(path).point_data
+
+
+def _row_of_squares(kinds: list[bool], order: list[int]) -> tuple[str, list[list[int]], list[int]]:
+    """A row of unit squares, each one quad (True) or two triangles, cells in ``order``."""
+    n = len(kinds)
+    points = " ".join(f"{x} {y} 0" for y in (0, 1) for x in range(n + 1))
+    cells: list[list[int]] = []
+    types: list[int] = []
+    for i, quad in enumerate(kinds):
+        a, b, c, d = i, i + 1, n + 2 + i, n + 1 + i
+        if quad:
+            cells.append([a, b, c, d]), types.append(9)
+        else:
+            cells += [[a, b, c], [a, c, d]]
+            types += [5, 5]
+    cells = [cells[k % len(cells)] for k in order] if order else cells
+    types = [types[k % len(types)] for k in order] if order else types
+    return f"POINTS {2 * (n + 1)} double\n{points}\n", cells, types
+
+
+@given(kinds=st.lists(st.booleans(), min_size=1, max_size=40),
+       order=st.permutations(list(range(80))))
+@settings(max_examples=40, deadline=None)
+def test_classic_cells_of_mixed_sizes_read_as_the_51_layout(tmp_path_factory, kinds, order):
+    # the classic layout interleaves sizes and indices; cells of mixed sizes are found by
+    # following the sizes, which must give the same cells as the 5.1 layout's offsets
+    points, cells, types = _row_of_squares(kinds, [])
+    perm = [k for k in order if k < len(cells)]
+    cells, types = [cells[k] for k in perm], [types[k] for k in perm]
+    head = "# vtk DataFile Version {v}\nrow\nASCII\nDATASET UNSTRUCTURED_GRID\n" + points
+    tail = (f"\nCELL_TYPES {len(cells)}\n" + " ".join(map(str, types))
+            + f"\nCELL_DATA {len(cells)}\nSCALARS id int 1\nLOOKUP_TABLE default\n"
+            + " ".join(map(str, range(len(cells)))) + "\n")
+    size = sum(len(c) + 1 for c in cells)
+    classic = (head.format(v="4.2") + f"CELLS {len(cells)} {size}\n"
+               + "\n".join(f"{len(c)} " + " ".join(map(str, c)) for c in cells) + tail)
+    offsets = np.cumsum([0] + [len(c) for c in cells])
+    v51 = (head.format(v="5.1") + f"CELLS {len(cells) + 1} {offsets[-1]}\nOFFSETS vtktypeint64\n"
+           + " ".join(map(str, offsets)) + "\nCONNECTIVITY vtktypeint64\n"
+           + " ".join(str(i) for c in cells for i in c) + tail)
+    d = tmp_path_factory.mktemp("row")
+    (d / "classic.vtk").write_text(classic)
+    (d / "v51.vtk").write_text(v51)
+    a, b = read_mesh(d / "classic.vtk"), read_mesh(d / "v51.vtk")
+    np.testing.assert_array_equal(a.triangles, b.triangles)
+    np.testing.assert_array_equal(a.triangle_attributes, b.triangle_attributes)
+    assert len(a.triangles) == 2 * len(kinds)
+
+
+@pytest.mark.parametrize("cells, message", [
+    ("CELLS 3 9\n3 0 1 2\n4 0 1 2 3\n", "data ends after 2"),       # a cell missing
+    ("CELLS 2 9\n3 0 1 2\n5 0 1 2 3\n", "does not match the cells. lengths \\(10\\)"),  # a size too big
+    ("CELLS 2 10\n3 0 1 2\n-2 0 1 2 3 4\n", "negative cell size"),
+    ("CELLS 2 10\n3 0 1 2\n2 0 1 2 3 4\n", "does not match the cells. lengths \\(7\\)"),        # data left over
+])
+def test_classic_cell_lists_that_do_not_add_up_are_named(tmp_path, cells, message):
+    path = tmp_path / "bad.vtk"
+    path.write_text("# vtk DataFile Version 4.2\nb\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                    "POINTS 4 double\n0 0 0 1 0 0 1 1 0 0 1 0\n" + cells + "CELL_TYPES 2\n5 9\n")
+    with pytest.raises(FileFormatError, match=message):
+        read_mesh(path)
