@@ -90,7 +90,8 @@ def mesh_arrays(
     Raises
     ------
     InvalidMeshError
-        Wrong shapes or dtype, no triangles, a non-finite point, an index out of range
+        Wrong shapes or dtype, no triangles, a non-finite point or one beyond
+        ``MAX_ABS_COORDINATE`` (squared lengths overflow), an index out of range
         (the message names the point or triangle).
     """
     pts = np.asarray(points)
@@ -109,6 +110,12 @@ def mesh_arrays(
     if not np.isfinite(pts).all():  # (the row-wise search only on failure: 4x slower)
         i = int(np.argmin(np.isfinite(pts).all(axis=1)))
         raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
+    if len(pts) and max(-pts.min(), pts.max()) > MAX_ABS_COORDINATE:  # planar and 3D alike
+        i = int(np.argmax(np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE))
+        raise InvalidMeshError(
+            f"point {i} {pts[i].tolist()} is beyond |x| <= {MAX_ABS_COORDINATE:g} "
+            "(squared lengths would overflow)"
+        )
     n = len(pts)
     if tri.min() < 0 or tri.max() >= n:
         out = (tri < 0) | (tri >= n)
@@ -148,12 +155,6 @@ def prepare_mesh(mesh: Mesh, *, measure: bool = True, cells: bool = False) -> tu
         that is not an edge of the mesh.
     """
     pts, tri = mesh_arrays(mesh.points, mesh.triangles)
-    if max(-pts.min(), pts.max()) > MAX_ABS_COORDINATE:
-        i = int(np.argmax(np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE))
-        raise InvalidMeshError(
-            f"point {i} {pts[i].tolist()} is beyond |x| <= {MAX_ABS_COORDINATE:g} "
-            "(squared lengths would overflow)"
-        )
     n = len(pts)
     used = np.zeros(n, dtype=np.bool_) if measure else None
     keys = None

@@ -47,6 +47,10 @@ from hammesh.errors import VerificationError
 
 __all__ = ["verify_surface", "infer_surface_runs", "ANGLE_RTOL", "AREA_RTOL", "PLANE_RTOL", "DROP_RTOL"]
 
+#: beyond this magnitude this module's own cross products and squared lengths overflow
+#: (its own bound: the construction refuses far smaller inputs, 1e30)
+_MAX_ABS = 1e150
+
 ANGLE_RTOL = 1e-9
 AREA_RTOL = 1e-9
 #: distance of an output vertex from its parent's plane, relative to the parent's longest side
@@ -198,6 +202,9 @@ def verify_surface(
     n, m = len(pts), len(tri)
     if not np.isfinite(pts).all():
         _fail(f"point {int(np.argmax(~np.isfinite(pts).all(axis=1)))} is not finite")
+    if n and np.abs(pts).max() > _MAX_ABS:
+        _fail(f"point {int(np.argmax(np.abs(pts).max(axis=1)))} is beyond |x| <= {_MAX_ABS:g}: "
+              "the check's own products would overflow")
     if tri.min() < 0 or tri.max() >= n:
         _fail(f"triangle {int(np.argmax(((tri < 0) | (tri >= n)).any(axis=1)))} references a vertex outside 0..{n - 1}")
     if (runs <= 0).any() or runs.sum() != m:
