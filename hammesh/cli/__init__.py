@@ -27,6 +27,7 @@ import argparse
 import os
 import signal
 import sys
+import warnings
 from collections.abc import Sequence
 
 from hammesh.cli import check, demo, mesh, partition, points, polygon, strip, surface
@@ -148,7 +149,11 @@ def _main(argv: Sequence[str] | None) -> int:
     except Terminated as exc:
         return 128 + exc.signum
     try:
-        return int(args._run(args))
+        with warnings.catch_warnings():
+            # numpy's overflow/divide notes from hammesh's own arithmetic on extreme input
+            # are not the user's to act on, and the CLI promises one line on bad input
+            warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"hammesh\.")
+            return int(args._run(args))
     except VerificationError as exc:
         _say(f"hammesh: verification failed: {exc}")
         return EXIT_VERIFICATION

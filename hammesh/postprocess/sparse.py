@@ -2014,7 +2014,9 @@ def local_quality(
         "keep": float(keep),
         "below_parent_rule": int(below.sum()),
         "above_max_rule": int(above.sum()),
-        "worst_parent_ratio": float((lo / pm).min()) if len(new) else 1.0,
+        # a parent of zero angle (a degenerate input, refused later) gives no ratio: inf
+        "worst_parent_ratio": float(np.divide(lo, pm, out=np.full_like(lo, np.inf), where=pm > 0).min())
+        if len(new) else 1.0,
         "min_angle_new_deg": math.degrees(float(lo.min())) if len(new) else None,
         "max_angle_new_deg": math.degrees(float(hi.max())) if len(new) else None,
         "radius_ratio_output": float(max(ratio, kept_ratio)),
