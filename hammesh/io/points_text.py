@@ -37,7 +37,7 @@ def read_points(path: str | Path) -> np.ndarray:
     if suffix == ".npy":
         try:
             arr = np.load(path, allow_pickle=False)
-        except (ValueError, OSError, EOFError, MemoryError) as exc:
+        except Exception as exc:  # noqa: BLE001 - a corrupt header fails in ast/tokenize: any error
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise FileFormatError(f"{path}: not a numpy array file ({detail})") from None
         if not isinstance(arr, np.ndarray):  # an .npz archive renamed .npy

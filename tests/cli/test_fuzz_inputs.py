@@ -56,6 +56,7 @@ MALFORMED: dict[str, bytes] = {
     "complex.npy": _npy(np.array([[0, 0], [1, 0], [0, 1j]])),
     "nan.npy": _npy(np.array([[0, 0], [1, 0], [0, np.nan]])),
     "not_npy.npy": b"not a numpy file",
+    "open_header.npy": _npy(np.zeros((3, 2))).replace(b"}", b"(", 1),  # tokenize: EOF in multi-line
     "latin1.wkt": "POLYGON ((0 0, 1 0, 0 1)) \u00e9".encode("latin-1"),
     "hole_crossing.wkt": b"POLYGON ((0 0, 1 0, 0 1), (0.5 0.5, 2 0.5, 0.5 2))",  # holes are read now
     "list.geojson": b"[1, 2, 3]",
