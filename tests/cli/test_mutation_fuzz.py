@@ -1,12 +1,13 @@
 """Valid files of every format a subcommand reads, mutated at random (bytes flipped,
 cut, inserted; lines deleted or repeated; a number replaced by an extreme one), through
-the CLI in-process: the exit is 0, 2 (bad input: one line, nothing written) or, for
+the CLI in-process (every subcommand but ``demo``): the exit is 0, 2 (bad input: one line, nothing written) or, for
 ``check``, 3 (a mesh read but not Hamiltonian/valid); never a traceback, never another
 code, never a changed input.
 
 The hand-made cases of ``test_fuzz_inputs.py`` name what each reader must refuse; this
 finds what nobody thought of (it found 3D inputs with coordinates near 1e300, which
-overflowed inside the construction and failed the certificate instead of being refused).
+overflowed inside the construction and failed the certificate instead of being refused, and
+``.npy`` headers that fail in ``tokenize``: exit 1).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from hammesh.cli import main
 EXTREMES = [b"0", b"-1", b"1e308", b"nan", b"inf", b"-0", b"99999999999999999999", b"3.5", b"-7", b"1e-320"]
 
 #: subcommand -> argv after the input
-COMMANDS = {"check": [], "mesh": ["-o", "{out}/o.vtu"], "surface": ["-o", "{out}/o.vtu"],
+COMMANDS = {"points": ["-o", "{out}/o.vtu"], "polygon": ["-o", "{out}/o.json"], "check": [], "mesh": ["-o", "{out}/o.vtu"], "surface": ["-o", "{out}/o.vtu"],
             "strip": ["-o", "{out}/o.json"], "partition": ["-k", "2", "-o", "{out}/o.vtu"]}
 
 
@@ -59,6 +60,10 @@ def seeds(tmp_path_factory) -> dict[str, bytes]:
     (d / "a.ele").write_text(f"{len(h.triangles)} 3 0\n"
                              + "".join(f"{i + 1} {a + 1} {b + 1} {c + 1}\n" for i, (a, b, c) in enumerate(h.triangles.tolist())))
     (d / "sq.poly").write_text("4 2 0 1\n1 0 0 1\n2 1 0 1\n3 1 1 1\n4 0 1 1\n4 1\n1 1 2 1\n2 2 3 1\n3 3 4 1\n4 4 1 1\n0\n")
+    np.save(d / "p.npy", np.random.default_rng(0).random((40, 2)))
+    (d / "p.txt").write_text("".join(f"{x!r} {y!r}\n" for x, y in np.random.default_rng(1).random((40, 2)).tolist()))
+    (d / "q.wkt").write_text("POLYGON ((0 0, 4 0, 4 3, 2 1, 0 3, 0 0), (0.5 0.5, 1 0.5, 1 0.8, 0.5 0.5))")
+    (d / "q.geojson").write_text('{"type": "Polygon", "coordinates": [[[0, 0], [4, 0], [4, 3], [2, 1], [0, 3], [0, 0]]]}')
     return {p.name: p.read_bytes() for p in sorted(d.iterdir())}
 
 
@@ -93,16 +98,20 @@ def _mutate(data: bytes, ops: list[tuple[int, float, int]]) -> bytes:
 
 
 NAMES = ["a.vtu", "b.vtu", "a.vtk", "b.vtk", "a.msh", "b.msh", "a.obj", "a.off", "a.ply", "b.ply",
-         "a.stl", "b.stl", "h.vtu", "h.vtp", "a.node", "a.ele", "sq.poly"]
+         "a.stl", "b.stl", "h.vtu", "h.vtp", "a.node", "a.ele", "sq.poly", "p.npy", "p.txt", "q.wkt", "q.geojson"]
+#: the subcommands that read point sets and polygons, and the files only they read
+POINTS_POLYGONS = {"p.npy": ("points", "polygon"), "p.txt": ("points", "polygon"), "q.wkt": ("polygon",),
+                   "q.geojson": ("polygon",), "sq.poly": ("mesh", "polygon"), "a.node": ("points", "check", "mesh")}
 
 
-@settings(max_examples=250, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=300, deadline=None, suppress_health_check=list(HealthCheck))
 @given(name=st.sampled_from(NAMES), cmd=st.sampled_from(sorted(COMMANDS)),
        ops=st.lists(st.tuples(st.integers(0, 6), st.floats(0, 1), st.integers(0, 255)), min_size=1, max_size=3))
 def test_mutated_files_exit_0_2_or_3_cleanly(seeds, tmp_path_factory, name, cmd, ops):
-    if name == "sq.poly":
-        cmd = "mesh"
-    elif cmd == "surface" and name.endswith((".node", ".ele")):
+    if name in POINTS_POLYGONS:
+        allowed = POINTS_POLYGONS[name]
+        cmd = cmd if cmd in allowed else allowed[sorted(COMMANDS).index(cmd) % len(allowed)]
+    elif cmd in ("points", "polygon") or (cmd == "surface" and name.endswith(".ele")):
         cmd = "check"
     root = tmp_path_factory.mktemp("fuzz")
     src, out = root / "in", root / "out"
