@@ -9,7 +9,7 @@ pair; nothing registers itself on import.  Every writer validates the mesh first
 suffixes                                   module
 =========================================  ==========================================
 ``.vtu .vtk .msh .xdmf .obj .ply .stl .off``  :mod:`hammesh.io.meshio_format`
-``.vtp``                                   :mod:`hammesh.io.vtp` (through meshio_format)
+``.vtp``                                   :mod:`hammesh.io.vtk_xml` (through meshio_format)
 ``.ele .node``                             :mod:`hammesh.io.triangle_format`
 =========================================  ==========================================
 
@@ -84,7 +84,7 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
     ".ply": (meshio_format.read, meshio_format.write),
     ".stl": (meshio_format.read, meshio_format.write),
     ".off": (meshio_format.read, meshio_format.write),
-    ".vtp": (meshio_format.read, meshio_format.write),  # VTK XML PolyData: hammesh.io.vtp
+    ".vtp": (meshio_format.read, meshio_format.write),  # VTK XML PolyData: hammesh.io.vtk_xml
     ".ele": (triangle_format.read_ele, triangle_format.write),
     ".node": (triangle_format.read_ele, triangle_format.write),
     ".pvtu": (pvtu.read, pvtu.write),  # partitioned VTK: an index of .vtu pieces (issue 15)

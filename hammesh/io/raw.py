@@ -13,7 +13,20 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CellBlock", "RawMesh", "polygon_blocks", "polygon_block_rows", "strip_triangles", "blocks_of_kind"]
+__all__ = ["CellBlock", "RawMesh", "polygon_blocks", "polygon_block_rows", "strip_triangles", "blocks_of_kind",
+           "grid_blocks", "KIND_OF_VTK_TYPE", "OTHER_VTK_TYPES", "VTK_PIXEL"]
+
+#: VTK cell types (``vtkCellType.h``) hammesh reads, by how their cells become blocks
+#: (:func:`blocks_of_kind`): vertices, lines and polylines, triangles, strips, polygons,
+#: pixels and quads.
+KIND_OF_VTK_TYPE = {1: "vertex", 2: "vertex", 3: "line", 4: "line", 5: "polygon", 6: "strip", 7: "polygon",
+                    8: "polygon", 9: "polygon"}
+#: Names (meshio's) of the VTK cell types hammesh does not take, so that the refusal names them.
+OTHER_VTK_TYPES = {10: "tetra", 11: "voxel", 12: "hexahedron", 13: "wedge", 14: "pyramid", 21: "line3",
+                   22: "triangle6", 23: "quad8", 24: "tetra10", 25: "hexahedron20", 28: "quad9",
+                   34: "triangle7", 68: "lagrange_curve", 69: "lagrange_triangle", 70: "lagrange_quadrilateral"}
+#: A pixel's corners go row by row (0 1 3 2 is its boundary).
+VTK_PIXEL = 8
 
 
 @dataclass(frozen=True)
@@ -118,3 +131,37 @@ def blocks_of_kind(kind: str, offsets: np.ndarray, conn: np.ndarray,
     if (sizes != sizes[0]).any():
         raise ValueError(f"{kind} cells of different sizes")
     return [CellBlock(kind, conn.reshape(cells, int(sizes[0])))], [first + np.arange(cells)]
+
+
+def grid_blocks(offsets: np.ndarray, conn: np.ndarray,
+                types: np.ndarray) -> tuple[list[CellBlock], list[np.ndarray]]:
+    """Blocks of an unstructured grid's cells (CSR ``offsets`` (k + 1), ``conn``, VTK
+    ``types`` (k,)): one per run of cells of the same kind (file order), and each block's
+    cell numbers; shared by the legacy and XML VTK readers.
+
+    Raises
+    ------
+    ValueError
+        ``types`` and ``offsets`` disagree in count, or cells of one unknown type differ in size.
+    """
+    if len(types) != len(offsets) - 1:
+        raise ValueError(f"{len(types)} cell types for {len(offsets) - 1} cells")
+    pixels = np.flatnonzero(types == VTK_PIXEL)
+    if len(pixels):  # a pixel's corners go row by row: 0 1 3 2 is its boundary
+        conn = conn.copy()
+        third = offsets[pixels] + 2
+        conn[third], conn[third + 1] = conn[third + 1], conn[third].copy()
+    present, type_id = np.unique(types, return_inverse=True)
+    kinds = [KIND_OF_VTK_TYPE.get(t) or OTHER_VTK_TYPES.get(t) or f"VTK cell type {t}" for t in present.tolist()]
+    # runs of one kind (a triangle next to a quad: one run; each unknown type its own kind)
+    kind_of_cell = np.unique(kinds, return_inverse=True)[1][type_id]
+    cuts = np.flatnonzero(np.diff(kind_of_cell)) + 1
+    starts = np.concatenate([[0], cuts]).tolist()
+    ends = np.concatenate([cuts, [len(types)]]).tolist()
+    blocks: list[CellBlock] = []
+    origins: list[np.ndarray] = []
+    for a, b in zip(starts, ends):
+        got, rows = blocks_of_kind(kinds[type_id[a]], offsets[a:b + 1] - offsets[a], conn[offsets[a]:offsets[b]], a)
+        blocks.extend(got)
+        origins.extend(rows)
+    return blocks, origins

@@ -29,7 +29,7 @@ from urllib.parse import unquote
 import numpy as np
 
 from hammesh.errors import FileFormatError
-from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind
+from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind, grid_blocks
 
 __all__ = ["read_legacy", "dataset_type", "DATASETS"]
 
@@ -44,15 +44,8 @@ _TYPES = {
 _SECTIONS = ("VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS")
 #: The datasets :func:`read_legacy` reads.
 DATASETS = ("POLYDATA", "UNSTRUCTURED_GRID")
-#: POLYDATA sections and UNSTRUCTURED_GRID cell types, by how their cells become blocks.
+#: POLYDATA sections, by how their cells become blocks (grid cell types: :mod:`hammesh.io.raw`).
 _KIND_OF_SECTION = {"VERTICES": "vertex", "LINES": "line", "POLYGONS": "polygon", "TRIANGLE_STRIPS": "strip"}
-_KIND_OF_TYPE = {1: "vertex", 2: "vertex", 3: "line", 4: "line", 5: "polygon", 6: "strip", 7: "polygon",
-                 8: "polygon", 9: "polygon"}
-#: Names (meshio's) of the cell types hammesh does not take, so that the refusal names them.
-_OTHER_TYPES = {10: "tetra", 11: "voxel", 12: "hexahedron", 13: "wedge", 14: "pyramid", 21: "line3",
-                22: "triangle6", 23: "quad8", 24: "tetra10", 25: "hexahedron20", 28: "quad9",
-                34: "triangle7", 68: "lagrange_curve", 69: "lagrange_triangle", 70: "lagrange_quadrilateral"}
-_VTK_PIXEL = 8
 _MAX_HEADER = 4096
 
 
@@ -153,7 +146,7 @@ def _cells_classic(r: _Reader, n: int, size: int, what: str) -> tuple[np.ndarray
         if (rows[:, 0] == c).all():
             return np.arange(n + 1, dtype=np.int64) * c, rows[:, 1:].reshape(-1)
     # sizes interleaved with indices: a kernel follows them (numba is loaded by the reader anyway)
-    from hammesh.io._cells_kernels import follow_cell_sizes_into
+    from hammesh.io._kernels import follow_cell_sizes_into
 
     starts = np.empty(n, dtype=np.int64)
     found = follow_cell_sizes_into(flat, starts)
@@ -197,33 +190,11 @@ def _cell_lists(r: _Reader, words: list[str]) -> tuple[np.ndarray, np.ndarray]:
 
 def _grid_blocks(r: _Reader, offsets: np.ndarray, conn: np.ndarray,
                  types: np.ndarray) -> tuple[list[CellBlock], list[np.ndarray]]:
-    """Blocks of an UNSTRUCTURED_GRID's cells: one per run of cells of the same kind (file order)."""
-    if len(types) != len(offsets) - 1:
-        raise r.error(f"CELL_TYPES has {len(types)} types for {len(offsets) - 1} cells")
-    pixels = np.flatnonzero(types == _VTK_PIXEL)
-    if len(pixels):  # a pixel's corners go row by row: 0 1 3 2 is its boundary
-        conn = conn.copy()
-        third = offsets[pixels] + 2
-        conn[third], conn[third + 1] = conn[third + 1], conn[third].copy()
-    present, type_id = np.unique(types, return_inverse=True)
-    kinds = [_KIND_OF_TYPE.get(t) or _OTHER_TYPES.get(t) or f"VTK cell type {t}" for t in present.tolist()]
-    # runs of one kind (a triangle next to a quad: one run; each unknown type its own kind)
-    kind_of_cell = np.unique(kinds, return_inverse=True)[1][type_id]
-    cuts = np.flatnonzero(np.diff(kind_of_cell)) + 1
-    starts = np.concatenate([[0], cuts]).tolist()
-    ends = np.concatenate([cuts, [len(types)]]).tolist()
-    blocks: list[CellBlock] = []
-    origins: list[np.ndarray] = []
-    for a, b in zip(starts, ends):
-        kind = kinds[type_id[a]]
-        run_offsets = offsets[a:b + 1] - offsets[a]
-        try:
-            got, rows = blocks_of_kind(kind, run_offsets, conn[offsets[a]:offsets[b]], a)
-        except ValueError as exc:
-            raise r.error(str(exc)) from None
-        blocks.extend(got)
-        origins.extend(rows)
-    return blocks, origins
+    """Blocks of an UNSTRUCTURED_GRID's cells (:func:`hammesh.io.raw.grid_blocks`), errors named."""
+    try:
+        return grid_blocks(offsets, conn, types)
+    except ValueError as exc:
+        raise r.error(f"CELL_TYPES: {exc}" if "cell types for" in str(exc) else str(exc)) from None
 
 
 def read_legacy(path: str | Path) -> RawMesh:

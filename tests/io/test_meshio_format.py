@@ -25,7 +25,7 @@ def raw_read(path):
     """What another program sees: meshio's own reader (Gmsh for .msh; meshio has no .vtp
     reader: hammesh's, checked against VTK's in tests/io/test_vtp.py)."""
     if str(path).endswith(".vtp"):
-        from hammesh.io.vtp import read_vtp
+        from hammesh.io.vtk_xml import read_vtk_xml as read_vtp
 
         return read_vtp(path)
     fmt = "gmsh" if str(path).endswith(".msh") else None

@@ -1,14 +1,17 @@
-"""VTK XML PolyData (``.vtp``): what pyvista's ``PolyData.save`` and ParaView write.
+"""VTK XML files: PolyData (``.vtp``) and UnstructuredGrid (``.vtu``), as pyvista's ``save``,
+ParaView and VTK's XML writers write them.
 
-meshio 5 neither reads nor writes ``.vtp``.  :func:`write_vtp` writes hammesh's output
-(triangles as ``Polys``, segments as ``Lines``) compressed like :mod:`hammesh.io.vtu`.
-:func:`read_vtp` reads every encoding VTK's ``vtkXMLPolyDataWriter`` writes:
+meshio 5 neither reads nor writes ``.vtp``, and refuses ``.vtu`` files that VTK reads
+(``compressor="vtkLZ4DataCompressor"``: ``KeyError``; any compressor named on an ASCII
+file: ``AssertionError``).  :func:`write_vtp` writes hammesh's output (triangles as
+``Polys``, segments as ``Lines``) compressed like :mod:`hammesh.io.vtu` (which writes
+``.vtu``).  :func:`read_vtk_xml` reads every encoding VTK's XML writers write:
 
 * ``<DataArray format="ascii">``: whitespace-separated values;
 * ``format="binary"``: base64 of a header and the bytes, the header ``UInt32`` or
   ``UInt64`` (``header_type``).  Uncompressed: one item, the byte count.  Compressed
   (``compressor="vtkZLibDataCompressor"``, ``vtkLZMADataCompressor``;
-  ``vtkLZ4DataCompressor`` when the ``lz4`` package is installed, else refused by name):
+  ``vtkLZ4DataCompressor``, decoded by hammesh's own kernel: no ``lz4`` package needed):
   ``[blocks, block size, last block size, compressed size of each block]`` then the
   compressed blocks.  VTK encodes the header and the data separately (two base64 runs,
   the first padded); one run over both is read too;
@@ -18,9 +21,11 @@ meshio 5 neither reads nor writes ``.vtp``.  :func:`write_vtp` writes hammesh's 
   ``Float32``, ``Float64`` and ``Bit`` (binary: eight to a byte, first value in the
   most significant bit).
 
-Cells: a piece's ``Verts``, ``Lines``, ``Polys`` and ``Strips`` (``connectivity`` and
+Cells: PolyData's ``Verts``, ``Lines``, ``Polys`` and ``Strips`` (``connectivity`` and
 ``offsets``, the offsets being each cell's end), in that order, which is VTK's cell
-numbering for cell data.  Polygons become triangle, quad and polygon blocks, strips
+numbering for cell data; an UnstructuredGrid's ``Cells`` (``connectivity``, ``offsets``,
+``types``: :func:`hammesh.io.raw.grid_blocks`, pixels and quads included, volume cells
+named for the refusal).  Polygons become triangle, quad and polygon blocks, strips
 triangles with VTK's alternating winding, polylines their segments, vertices nothing
 (:func:`hammesh.io.raw.blocks_of_kind`, shared with the legacy reader); each cell's data
 follows its triangles and segments.  Pieces are concatenated (their point indices
@@ -29,7 +34,7 @@ offset by the points before them); point and cell data arrays present in every p
 
 Learned from meshio 5.3's ``meshio/vtu/_vtu.py`` (``VtuReader``: the block header of
 compressed arrays, a raw ``<AppendedData>`` split off before the XML is parsed); written
-anew for PolyData, big-endian files, either base64 layout and bounds checked before any
+anew for PolyData and grids, big-endian files, either base64 layout and bounds checked before any
 read.  Reference: "VTK File Formats", *Serial XML file formats*
 (https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html).
 """
@@ -51,26 +56,28 @@ import numpy as np
 
 from hammesh import threads as row_threads
 from hammesh.errors import FileFormatError
-from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind
+from hammesh.io.raw import CellBlock, RawMesh, blocks_of_kind, grid_blocks
 from hammesh.io.vtu import write_data_array, write_data_sections
 
-__all__ = ["read_vtp", "write_vtp", "COMPRESSORS", "VTK_TYPES"]
+__all__ = ["read_vtk_xml", "write_vtp", "COMPRESSORS", "VTK_TYPES", "DATASETS"]
 
 #: numpy type code of each VTK XML ``type`` (``Bit``: unpacked to one byte per value).
 VTK_TYPES: dict[str, str] = {
     "Int8": "i1", "UInt8": "u1", "Int16": "i2", "UInt16": "u2", "Int32": "i4", "UInt32": "u4",
     "Int64": "i8", "UInt64": "u8", "Float32": "f4", "Float64": "f8", "Bit": "u1",
 }
-#: The ``compressor`` values read (LZ4 needs the ``lz4`` package).
+#: The ``compressor`` values read.
 COMPRESSORS = ("vtkZLibDataCompressor", "vtkLZMADataCompressor", "vtkLZ4DataCompressor")
 
 #: VTK's cell order in a piece, and how each section's cells become blocks.
 _SECTIONS = {"Verts": "vertex", "Lines": "line", "Polys": "polygon", "Strips": "strip"}
 _HEADER_TYPES = {"UInt32": "u4", "UInt64": "u8"}
+#: The XML dataset types read, by file suffix.
+DATASETS = {".vtp": "PolyData", ".vtu": "UnstructuredGrid"}
 
 
 class _Bad(Exception):
-    """A defect of the file, said in words (read_vtp adds the file's name)."""
+    """A defect of the file, said in words (read_vtk_xml adds the file's name)."""
 
 
 @dataclass(frozen=True)
@@ -84,13 +91,15 @@ class _Encoding:
     appended_base64: bool
 
 
-def read_vtp(path: str | Path) -> RawMesh:
-    """Points, cells and point/cell data of a VTK XML PolyData file.
+def read_vtk_xml(path: str | Path) -> RawMesh:
+    """Points, cells and point/cell data of a VTK XML PolyData (``.vtp``) or
+    UnstructuredGrid (``.vtu``) file.
 
     Parameters
     ----------
     path : path-like
-        A ``.vtp`` file in any encoding VTK writes (see the module notes).
+        A ``.vtp`` or ``.vtu`` file in any encoding VTK writes (see the module notes); the
+        suffix says which dataset type it must hold.
 
     Returns
     -------
@@ -101,13 +110,13 @@ def read_vtp(path: str | Path) -> RawMesh:
     Raises
     ------
     FileFormatError
-        Malformed XML, not PolyData, an unknown type or compressor, truncated or
+        Malformed XML, not the suffix's dataset type, an unknown type or compressor, truncated or
         undecodable data, counts that disagree, an index out of range.  The message
         names the file.
     """
     path = Path(path)
     try:
-        return _read(path.read_bytes())
+        return _read(path.read_bytes(), DATASETS.get(path.suffix.lower(), "PolyData"))
     except _Bad as exc:
         raise FileFormatError(f"{path}: {exc}") from None
     except ET.ParseError as exc:
@@ -117,7 +126,7 @@ def read_vtp(path: str | Path) -> RawMesh:
     except (ValueError, TypeError, IndexError, OverflowError, binascii.Error, zlib.error, lzma.LZMAError) as exc:
         detail = str(exc).strip().splitlines()
         raise FileFormatError(
-            f"{path}: malformed .vtp data ({type(exc).__name__}: {detail[0] if detail else ''})") from None
+            f"{path}: malformed {path.suffix} data ({type(exc).__name__}: {detail[0] if detail else ''})") from None
 
 
 def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = None) -> None:
@@ -134,7 +143,7 @@ def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = Non
     kinds = {"line": "Lines", "triangle": "Polys"}
     for block in mesh.cells:
         if block.type not in kinds:
-            raise ValueError(f"hammesh.io.vtp: cell type {block.type!r} is not supported")
+            raise ValueError(f"hammesh.io.vtk_xml: cell type {block.type!r} is not supported")
     order = [i for kind in ("line", "triangle") for i, b in enumerate(mesh.cells) if b.type == kind]
     sections = {}
     for kind, section in kinds.items():
@@ -163,20 +172,21 @@ def write_vtp(path: str | os.PathLike[str], mesh: Any, threads: int | None = Non
         fh.write(b"</Piece>\n</PolyData>\n</VTKFile>\n")
 
 
-def _read(raw: bytes) -> RawMesh:
+def _read(raw: bytes, dataset: str) -> RawMesh:
     xml, appended, encoding = _split_appended(raw)
     root = ET.fromstring(xml)
     if root.tag != "VTKFile":
         raise _Bad(f"not a VTK XML file (root element <{root.tag}>)")
-    if root.get("type") != "PolyData":
-        raise _Bad(f"not VTK PolyData (type={root.get('type')!r}); .vtp holds PolyData")
+    if root.get("type") != dataset:
+        suffix = {v: k for k, v in DATASETS.items()}[dataset]
+        raise _Bad(f"not VTK {dataset} (type={root.get('type')!r}); {suffix} holds {dataset}")
     enc = _encoding(root, appended, encoding)
-    grid = root.find("PolyData")
+    grid = root.find(dataset)
     if grid is None:
-        raise _Bad("no <PolyData> element")
+        raise _Bad(f"no <{dataset}> element")
     pieces = grid.findall("Piece")
     if not pieces:
-        raise _Bad("no <Piece> in <PolyData>")
+        raise _Bad(f"no <Piece> in <{dataset}>")
     points, blocks, origins = [], [], []
     point_arrays: list[dict[str, np.ndarray]] = []
     cell_arrays: list[dict[str, np.ndarray]] = []
@@ -191,7 +201,7 @@ def _read(raw: bytes) -> RawMesh:
         cell_arrays.append(_attributes(piece.find("CellData"), cells, enc, f"{where} CellData"))
         n_points += len(pts)
         n_cells += cells
-    cell_data = {name: [values[o] for o in origins] for name, values in _joined(cell_arrays).items()}
+    cell_data = {name: [_rows(values, o) for o in origins] for name, values in _joined(cell_arrays).items()}
     return RawMesh(np.concatenate(points), blocks, cell_data=cell_data, point_data=_joined(point_arrays))
 
 
@@ -263,6 +273,8 @@ def _piece(piece: ET.Element, enc: _Encoding, point_base: int, cell_base: int,
         if points.ndim != 2 or points.shape[1] != 3:
             raise _Bad(f"{where}: Points have {points.shape[1] if points.ndim == 2 else 1} components, not 3")
         points = points.astype(np.float64)
+    if piece.find("Cells") is not None or piece.get("NumberOfCells") is not None:  # UnstructuredGrid
+        return (points, *_grid_piece(piece, enc, n, point_base, cell_base, where))
     blocks: list[CellBlock] = []
     origins: list[np.ndarray] = []
     first = cell_base
@@ -278,20 +290,47 @@ def _piece(piece: ET.Element, enc: _Encoding, point_base: int, cell_base: int,
             continue
         if "offsets" not in arrays or "connectivity" not in arrays:
             raise _Bad(f"{where} {section}: needs DataArrays 'connectivity' and 'offsets'")
-        ends = _values(arrays["offsets"], cells, enc, f"{where} {section} offsets")
-        offsets = np.concatenate([[0], ends.astype(np.int64)])
-        conn = _values(arrays["connectivity"], None, enc, f"{where} {section} connectivity").astype(np.int64)
-        if ends.ndim != 1 or (np.diff(offsets) < 0).any() or offsets[-1] != len(conn):
-            raise _Bad(f"{where} {section}: offsets are not increasing up to the "
-                       f"{len(conn)} connectivity entries")
-        if len(conn) and (conn.min() < 0 or conn.max() >= n):
-            bad = int(conn.max() if conn.max() >= n else conn.min())
-            raise _Bad(f"{where} {section}: point index {bad} out of range [0, {n})")
+        offsets, conn = _cell_arrays(arrays, cells, n, enc, f"{where} {section}")
         got, rows = blocks_of_kind(kind, offsets, conn + point_base if point_base else conn, first)
         blocks += got
         origins += rows
         first += cells
     return points, blocks, origins, first - cell_base
+
+
+def _cell_arrays(arrays: dict[str | None, ET.Element], cells: int, n: int, enc: _Encoding,
+                 what: str) -> tuple[np.ndarray, np.ndarray]:
+    """CSR ``offsets`` (from 0) and ``connectivity`` of ``cells`` cells over ``n`` points, checked."""
+    ends = _values(arrays["offsets"], cells, enc, f"{what} offsets")
+    offsets = np.concatenate([[0], ends.astype(np.int64)])
+    conn = _values(arrays["connectivity"], None, enc, f"{what} connectivity").astype(np.int64)
+    if ends.ndim != 1 or (np.diff(offsets) < 0).any() or offsets[-1] != len(conn):
+        raise _Bad(f"{what}: offsets are not increasing up to the {len(conn)} connectivity entries")
+    if len(conn) and (conn.min() < 0 or conn.max() >= n):
+        bad = int(conn.max() if conn.max() >= n else conn.min())
+        raise _Bad(f"{what}: point index {bad} out of range [0, {n})")
+    return offsets, conn
+
+
+def _grid_piece(piece: ET.Element, enc: _Encoding, n: int, point_base: int, cell_base: int,
+                where: str) -> tuple[list[CellBlock], list[np.ndarray], int]:
+    """An UnstructuredGrid piece's blocks, their cell numbers and its number of cells."""
+    cells = _count(piece, "NumberOfCells")
+    holder = piece.find("Cells")
+    if holder is None:
+        if cells:
+            raise _Bad(f"{where}: {cells} cells declared, no <Cells> element")
+        return [], [], 0
+    arrays = {a.get("Name"): a for a in holder.findall("DataArray")}
+    if not {"connectivity", "offsets", "types"} <= arrays.keys():
+        raise _Bad(f"{where} Cells: needs DataArrays 'connectivity', 'offsets' and 'types'")
+    offsets, conn = _cell_arrays(arrays, cells, n, enc, f"{where} Cells")
+    types = _values(arrays["types"], cells, enc, f"{where} Cells types").astype(np.int64).reshape(-1)
+    try:
+        blocks, rows = grid_blocks(offsets, conn + point_base if point_base else conn, types)
+    except ValueError as exc:
+        raise _Bad(f"{where} Cells: {exc}") from None
+    return blocks, [cell_base + r for r in rows], cells
 
 
 def _attributes(holder: ET.Element | None, tuples: int, enc: _Encoding, where: str) -> dict[str, np.ndarray]:
@@ -305,8 +344,18 @@ def _attributes(holder: ET.Element | None, tuples: int, enc: _Encoding, where: s
     return out
 
 
+def _rows(values: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``values[rows]``: a view where the rows are consecutive (one block of one kind: the
+    usual file), not a copy."""
+    if len(rows) and rows[-1] - rows[0] == len(rows) - 1 and (len(rows) < 2 or (np.diff(rows) == 1).all()):
+        return values[rows[0]:rows[-1] + 1]
+    return values[rows]
+
+
 def _joined(per_piece: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
     """Arrays present, with the same components, in every piece, concatenated."""
+    if len(per_piece) == 1:
+        return per_piece[0]
     first = per_piece[0]
     names = [k for k in first if all(k in p and p[k].shape[1:] == first[k].shape[1:] for p in per_piece)]
     return {k: np.concatenate([p[k] for p in per_piece]) for k in names}
@@ -328,7 +377,8 @@ def _values(array: ET.Element, tuples: int | None, enc: _Encoding, what: str) ->
         values = np.array(text.split(), dtype=np.dtype(code))
     else:
         if fmt == "binary":
-            text = "".join(((array.text or "") + "".join(c.tail or "" for c in array)).split()).encode("ascii")
+            text = ((array.text or "") + "".join(c.tail or "" for c in array)).encode("ascii")
+            text = text.translate(None, b" \t\r\n\f\v")  # (base64 ignores no whitespace here)
             payload = _base64_payload(text, enc, what)
         elif fmt == "appended":
             if enc.appended is None:
@@ -418,16 +468,33 @@ def _uncompressed(header: list[int], data: bytes, enc: _Encoding, what: str) -> 
         return data
     blocks, block_size, last = header[0], header[1], header[2]
     decompress = _decompressor(enc.compressor, what)
-    out = []
-    at = 0
-    for i, size in enumerate(header[3:]):
+    sizes = header[3:]
+    starts = np.concatenate([[0], np.cumsum(sizes, dtype=np.int64)]).tolist()
+
+    def block(i: int) -> bytes:
         expected = last if i == blocks - 1 and last else block_size
-        chunk = decompress(data[at:at + size], max(expected, 1))  # (0 would mean: no limit)
+        chunk = decompress(data[starts[i]:starts[i + 1]], max(expected, 1))  # (0 would mean: no limit)
         if len(chunk) != expected:
             raise _Bad(f"{what}: compressed block {i} holds {len(chunk)} bytes, not {expected}")
-        out.append(chunk)
-        at += size
-    return b"".join(out)
+        return chunk
+
+    workers = min(row_threads.cores(), len(sizes) // 8)
+    if workers < 2:
+        return b"".join(block(i) for i in range(len(sizes)))
+    # zlib, lzma and the LZ4 kernel release the GIL: big arrays decompress on every core
+    with ThreadPoolExecutor(workers) as pool:
+        return b"".join(pool.map(block, range(len(sizes))))
+
+
+def _lz4_decompress(block: bytes, size: int) -> bytes:
+    """One LZ4 block of at most ``size`` bytes, decoded by :func:`hammesh.io._kernels.lz4_block_decode_into`."""
+    from hammesh.io._kernels import lz4_block_decode_into  # (numba: loaded only for LZ4 files)
+
+    out = np.empty(size, dtype=np.uint8)
+    got = lz4_block_decode_into(np.frombuffer(block, dtype=np.uint8), out)
+    if got < 0:
+        raise _Bad("malformed LZ4 block")
+    return out[:got].tobytes()
 
 
 def _decompressor(compressor: str, what: str):
@@ -436,9 +503,4 @@ def _decompressor(compressor: str, what: str):
         return lambda block, size: zlib.decompressobj().decompress(block, size)
     if compressor == "vtkLZMADataCompressor":  # VTK writes .xz streams (lzma_easy_buffer_encode)
         return lambda block, size: lzma.LZMADecompressor().decompress(block, size)
-    try:
-        import lz4.block
-    except ImportError:
-        raise _Bad(f"{what}: compressor vtkLZ4DataCompressor needs the 'lz4' package "
-                   "(pip install lz4), or save the file with zlib compression") from None
-    return lambda block, size: lz4.block.decompress(block, uncompressed_size=size)
+    return _lz4_decompress
