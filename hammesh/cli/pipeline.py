@@ -238,7 +238,13 @@ def summary(h: HamiltonianMesh) -> str:
             else ""
         ),
         f"min angle {r['min_angle_input_deg']:.2f} -> {r['min_angle_output_deg']:.2f} deg "
-        f"(bound: half), max angle {r['max_angle_output_deg']:.2f} deg",
+        f"(bound: half), max angle {r['max_angle_output_deg']:.2f} deg"
+        + (  # sparse mode's local rule (issue 13): said where a join could not keep it
+            f"; {r['below_parent_rule']:,} new triangle(s) below {r['keep']:g} x their parents' "
+            f"smallest angle (worst {r['worst_parent_ratio']:.2f} x)"
+            if r.get("below_parent_rule")
+            else ""
+        ),
         "seconds: "
         + ", ".join(
             f"{k} {v:.3f}" for k, v in (("mesh", mesh_s), ("hamiltonian", sec.get("hamiltonian")), ("verify", sec.get("verify"))) if v is not None
