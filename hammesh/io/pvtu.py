@@ -273,8 +273,14 @@ def _read_piece(piece: Path):
 
     try:
         m = meshio.read(str(piece), file_format="vtu")
-    except Exception as exc:  # meshio raises many kinds
-        raise FileFormatError(f"{piece}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    except Exception as exc:  # meshio raises many kinds, also on files VTK reads (LZ4 pieces)
+        from hammesh.io.vtk_xml import read_vtk_xml
+
+        try:
+            m = read_vtk_xml(piece)
+        except FileFormatError:
+            raise FileFormatError(
+                f"{piece}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
     gid = np.asarray(m.point_data.get("global_id", np.arange(len(m.points))), dtype=np.int64)
     blocks = [i for i, c in enumerate(m.cells) if c.type == "triangle"]
     if not blocks:

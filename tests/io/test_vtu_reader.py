@@ -106,3 +106,24 @@ def test_a_polydata_file_named_vtu_is_refused(tmp_path):
     path.write_bytes((tmp_path / "p.vtp").read_bytes())
     with pytest.raises(FileFormatError, match="UnstructuredGrid"):
         read_mesh(path, dim=3)
+
+
+def test_a_pvtu_of_lz4_pieces_written_by_vtk(tmp_path):
+    # VTK's parallel writer, LZ4 pieces (meshio refuses them): read through hammesh's reader
+    from hammesh.io import read_mesh as read
+
+    plane = pv.Plane(i_resolution=6, j_resolution=5).triangulate().cast_to_unstructured_grid()
+    plane.cell_data["mat"] = np.arange(plane.n_cells, dtype=np.int32)
+    w = vtk.vtkXMLPUnstructuredGridWriter()
+    w.SetInputData(plane)
+    w.SetFileName(str(tmp_path / "p.pvtu"))
+    w.SetNumberOfPieces(1)  # (without a streaming source every piece would hold all cells)
+    w.SetCompressorTypeToLZ4()
+    w.Write()
+    assert len(list(tmp_path.glob("p_*.vtu"))) == 1
+    m = read(tmp_path / "p.pvtu")
+    assert len(m.triangles) == plane.n_cells
+    area = 0.5 * np.abs(np.cross(m.points[m.triangles[:, 1]] - m.points[m.triangles[:, 0]],
+                                 m.points[m.triangles[:, 2]] - m.points[m.triangles[:, 0]])).sum()
+    assert area == pytest.approx(1.0)
+    assert sorted(m.triangle_attributes[:, m.attribute_names.index("mat")].tolist()) == list(range(plane.n_cells))
