@@ -123,7 +123,8 @@ def test_a_pvtu_of_lz4_pieces_written_by_vtk(tmp_path):
     assert len(list(tmp_path.glob("p_*.vtu"))) == 1
     m = read(tmp_path / "p.pvtu")
     assert len(m.triangles) == plane.n_cells
-    area = 0.5 * np.abs(np.cross(m.points[m.triangles[:, 1]] - m.points[m.triangles[:, 0]],
-                                 m.points[m.triangles[:, 2]] - m.points[m.triangles[:, 0]])).sum()
+    u = m.points[m.triangles[:, 1]] - m.points[m.triangles[:, 0]]
+    v = m.points[m.triangles[:, 2]] - m.points[m.triangles[:, 0]]
+    area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]).sum()
     assert area == pytest.approx(1.0)
     assert sorted(m.triangle_attributes[:, m.attribute_names.index("mat")].tolist()) == list(range(plane.n_cells))
