@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["follow_cell_sizes_into", "lz4_block_decode_into"]
+__all__ = ["follow_cell_sizes_into", "lz4_block_decode_into", "lz4_length"]
 
 
 @njit(cache=True, nogil=True)
@@ -42,6 +42,23 @@ def follow_cell_sizes_into(flat: np.ndarray, starts: np.ndarray) -> int:
     return len(starts)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def lz4_length(src: np.ndarray, ip: int, nibble: int) -> tuple[int, int]:
+    """A length whose token nibble is ``nibble``: 15 means bytes follow at ``ip``, each
+    added, until one is below 255. Returns ``(length, next ip)``, ip -1 past the data."""
+    length = np.int64(nibble)
+    if nibble == 15:
+        while True:
+            if ip >= len(src):
+                return length, -1
+            extra = src[ip]
+            ip += 1
+            length += extra
+            if extra != 255:
+                break
+    return length, ip
+
+
 @njit(cache=True, nogil=True)
 def lz4_block_decode_into(src: np.ndarray, dst: np.ndarray) -> int:
     """Decode the LZ4 block ``src`` (uint8) into ``dst`` (uint8, its size the block's
@@ -54,16 +71,9 @@ def lz4_block_decode_into(src: np.ndarray, dst: np.ndarray) -> int:
     while ip < end:
         token = src[ip]
         ip += 1
-        length = token >> 4
-        if length == 15:
-            while True:
-                if ip >= end:
-                    return -1
-                extra = src[ip]
-                ip += 1
-                length += extra
-                if extra != 255:
-                    break
+        length, ip = lz4_length(src, ip, token >> 4)
+        if ip < 0:
+            return -1
         if ip + length > end or op + length > cap:
             return -1
         dst[op:op + length] = src[ip:ip + length]
@@ -77,16 +87,9 @@ def lz4_block_decode_into(src: np.ndarray, dst: np.ndarray) -> int:
         ip += 2
         if offset == 0 or offset > op:
             return -1
-        length = token & 15
-        if length == 15:
-            while True:
-                if ip >= end:
-                    return -1
-                extra = src[ip]
-                ip += 1
-                length += extra
-                if extra != 255:
-                    break
+        length, ip = lz4_length(src, ip, token & 15)
+        if ip < 0:
+            return -1
         length += 4
         if op + length > cap:
             return -1
