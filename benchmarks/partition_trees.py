@@ -872,3 +872,4 @@ SCHEMES.update({
 SCHEMES.update({f"ring_seam{a}": partial(ring_weights, seam=np.radians(a)) for a in range(0, 45, 5)})
 SCHEMES.update({f"ring_s{s}_seam{a}": partial(ring_weights, sectors=s, seam=np.radians(a))
                 for s in (2, 4) for a in (0, 5, 15, 30)})
+SCHEMES.update({f"ring_s16_seam{a}": partial(ring_weights, sectors=16, seam=np.radians(a)) for a in (5, 20)})
