@@ -41,7 +41,12 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   round the boundary (``_plain``: not joined); ``fishbone_y_15`` ... ``_75``: the axes
   turned by that many degrees; ``fishbone_auto``: the turn whose top spines are
   smallest (:func:`fishbone_auto`); :func:`runs_of_cells` gives the cut its cells
-  would have if their counts matched the stretches exactly.
+  would have if their counts matched the stretches exactly;
+* ``ring`` (session 13, ported as ``_fishbone_kernels.ring_frame``): the fishbone round
+  a hole (:func:`ring_weights`): the triangles touching the largest hole are the top
+  spine, cut open at a seam, sectors of equal rows hang from it at their middles, and
+  each sector is a fishbone in polar coordinates (its top spine radial);
+  ``ring_seam{a}``, ``ring_s{s}_seam{a}``: the seam at ``a`` degrees, ``s`` sectors.
 """
 
 from __future__ import annotations
@@ -54,7 +59,7 @@ import numpy as np
 
 __all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
            "fishbone_labels", "fishbone_of", "fishbone_weights", "fishbone_auto", "runs_of_cells", "Fishbone",
-           "AUTO_ANGLES", "SCHEMES"]
+           "AUTO_ANGLES", "SCHEMES", "Ring", "ring_labels", "ring_weights"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -725,20 +730,6 @@ SCHEMES = {
 }
 
 
-def _boundary_loops(tri: np.ndarray, twin: np.ndarray) -> list[np.ndarray]:
-    """Vertices of each boundary loop (the half-edges without a twin), as index arrays."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    h = np.flatnonzero(twin < 0)
-    u, v = tri.ravel()[h], tri[h // 3, (h % 3 + 1) % 3]
-    n = int(tri.max()) + 1
-    _, comp = connected_components(coo_matrix((np.ones(len(u)), (u, v)), shape=(n, n)), directed=False)
-    on = np.zeros(n, bool)
-    on[u] = True
-    return [np.flatnonzero(on & (comp == c)) for c in np.unique(comp[u])]
-
-
 class Ring(NamedTuple):
     """Cells of :func:`ring_labels`: a :class:`Fishbone` in polar coordinates."""
 
@@ -761,7 +752,10 @@ def ring_labels(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, sectors: 
     top spine is the radial line through its middle. The walk then sweeps the ring
     once: along the rim's outer side, sector after sector (each one run), and back
     along the rim's own hole side."""
-    loops = _boundary_loops(tri, twin)
+    from hammesh.postprocess._fishbone_kernels import boundary_loops
+
+    label = boundary_loops(tri, twin, len(points))
+    loops = [np.flatnonzero(label == i) for i in np.unique(label[label >= 0])]
     ext = [float(np.ptp(points[lp], axis=0).max()) for lp in loops]
     outer = int(np.argmax(ext))
     holes = [i for i in range(len(loops)) if i != outer]
@@ -864,12 +858,11 @@ def ring_weights(points, tri, twin, is_con, sectors: int = 8, seam: float = 0.0)
     return w
 
 
+#: the ring prototype (session 13): 8 sectors, the seam at 0 degrees; ``ring_seam{a}``:
+#: at ``a`` degrees; ``ring_s{s}_seam{a}``: ``s`` sectors
 SCHEMES.update({
     "ring": ring_weights,
-    "ring_s6": partial(ring_weights, sectors=6),
-    "ring_seam15": partial(ring_weights, seam=np.radians(15)),
+    **{f"ring_seam{a}": partial(ring_weights, seam=np.radians(a)) for a in range(0, 45, 5)},
+    **{f"ring_s{s}_seam{a}": partial(ring_weights, sectors=s, seam=np.radians(a))
+       for s in (2, 4, 16) for a in (0, 5, 15, 20, 30)},
 })
-SCHEMES.update({f"ring_seam{a}": partial(ring_weights, seam=np.radians(a)) for a in range(0, 45, 5)})
-SCHEMES.update({f"ring_s{s}_seam{a}": partial(ring_weights, sectors=s, seam=np.radians(a))
-                for s in (2, 4) for a in (0, 5, 15, 30)})
-SCHEMES.update({f"ring_s16_seam{a}": partial(ring_weights, sectors=16, seam=np.radians(a)) for a in (5, 20)})
