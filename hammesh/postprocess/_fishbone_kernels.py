@@ -784,18 +784,23 @@ def ring_frame(points, tri, twin, sample):
     inside the domain (rays from the centre, :func:`_ray_lengths`): on the gear,
     through notches rather than teeth."""
     n = points.shape[0]
-    label = boundary_loops(tri, twin, n)
-    ids = np.unique(label[label >= 0])
-    if len(ids) < 2 or len(sample) < 4 ** 3 * FISH_MIN_CELL:
+    if len(sample) < 4 ** 3 * FISH_MIN_CELL:
         return None
+    label = boundary_loops(tri, twin, n)
+    on = np.flatnonzero(label >= 0)
+    ids, loop = np.unique(label[on], return_inverse=True)
+    if len(ids) < 2:
+        return None
+    lo = np.full((len(ids), 2), np.inf)
+    hi = np.full((len(ids), 2), -np.inf)
+    np.minimum.at(lo, loop, points[on])  # each loop's box, one pass (a domain may have many holes)
+    np.maximum.at(hi, loop, points[on])
+    ext = (hi - lo).max(axis=1)
+    outer = int(np.argmax(ext))
+    ext[outer] = -1.0
+    hole_id = ids[int(np.argmax(ext))]
     h = np.flatnonzero(twin < 0)
     ua, ub = tri[h // 3, h % 3], tri[h // 3, (h % 3 + 1) % 3]
-    ext = {}
-    for i in ids:
-        v = points[label == i]
-        ext[i] = float(np.ptp(v, axis=0).max())
-    outer = max(ids, key=lambda i: ext[i])
-    hole_id = max((i for i in ids if i != outer), key=lambda i: ext[i])
     on = label[ua] == hole_id
     a, b = points[ua[on]], points[ub[on]]
     c = points[tri[sample]].mean(axis=1)
