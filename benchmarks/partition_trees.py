@@ -622,6 +622,15 @@ def fishbone_of(points, tri, twin, axis: int = 0, holes: bool = True, angle: flo
     return fishbone_labels(_turned(points, angle), tri, axis, twin=twin if holes else None, gap_levels=gap_levels)
 
 
+def _deepest(labels: list, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per edge ``a``-``b``: the deepest level whose cell (``labels[level]``, -1 once on
+    a spine above) holds both triangles."""
+    deepest = np.full(len(a), -1)
+    for level, lab in enumerate(labels):
+        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    return deepest
+
+
 def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = True, angle: float = 0.0,
                      gap_levels: int = 99) -> np.ndarray:
     """The fishbone tree (:func:`fishbone_labels`): inside each cell, the spine's own
@@ -639,9 +648,7 @@ def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = Tru
     depth = len(fb.labels) - 1
     mid = 0.5 * (c[a] + c[b])
     scale = 2.0 * float(np.ptp(c, axis=0).max()) + 1e-300  # distances below 1/2
-    deepest = np.full(len(a), -1)  # the deepest cell holding both triangles
-    for level, lab in enumerate(fb.labels):
-        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    deepest = _deepest(fb.labels, a, b)
     w = np.zeros(len(a))
     for level in range(depth + 1):
         sel = deepest == level
@@ -823,17 +830,12 @@ def ring_weights(points, tri, twin, is_con, sectors: int = 8, seam: float = 0.0)
     mid = 0.5 * (c[a] + c[b])
     span = float(np.ptp(c[:, 0]))
     scale = 2.0 * float(np.ptp(c, axis=0).max()) + 1e-300
-    deepest = np.full(len(a), -1)
-    for level, lab in enumerate(rg.labels):
-        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    deepest = _deepest(rg.labels, a, b)
     w = np.zeros(len(a))
     r_in = float(c[rg.rim, 1].min())
-    for level in range(depth + 1):
-        sel = deepest == level
-        base = 10.0 * (depth - level)
-        if level == depth:
-            w[sel] = base
-            continue
+    # (inside the deepest cells every edge weighs 0)
+    for level in range(depth):
+        base, sel = 10.0 * (depth - level), deepest == level
         sa, sb = rg.spine_level[a] == level, rg.spine_level[b] == level
         hang = np.flatnonzero(sel & (sa ^ sb))
         kid = np.where(sa, b, a)[hang]

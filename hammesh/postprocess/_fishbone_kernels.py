@@ -686,14 +686,6 @@ class RingFrame(NamedTuple):
 
 
 @njit(cache=True, nogil=True)
-def _find(parent, x):
-    while parent[x] != x:
-        parent[x] = parent[parent[x]]
-        x = parent[x]
-    return x
-
-
-@njit(cache=True, nogil=True)
 def _loops_into(tri, twin, label):
     """``label[v]``: a boundary vertex's loop (a union-find root of the boundary edges;
     -1 for the others)."""
@@ -705,12 +697,12 @@ def _loops_into(tri, twin, label):
                 label[u] = u
             if label[v] < 0:
                 label[v] = v
-            a, b = _find(label, u), _find(label, v)
+            a, b = _root(label, u), _root(label, v)
             if a != b:
                 label[max(a, b)] = min(a, b)
     for v in range(label.shape[0]):
         if label[v] >= 0:
-            label[v] = _find(label, v)
+            label[v] = _root(label, v)
 
 
 def boundary_loops(tri, twin, n_points):

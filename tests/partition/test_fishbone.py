@@ -14,6 +14,7 @@ import hammesh
 from hammesh.halfedge import prepare_mesh
 from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.postprocess import _thm24_kernels as K
+from tests.partition.test_forest import gear
 
 
 def _cells(pts, tri, twin, angle: float, depth: int, joined: bool = True):
@@ -202,16 +203,6 @@ def test_tree_option_picks_the_walk_and_both_are_certified(tmp_path) -> None:
         np.testing.assert_array_equal(meshio.read(out).cell_data["parent"][0], expected.parent)
 
 
-def _gear(area: float):
-    k = np.arange(96)
-    r = np.where((k // 4) % 2 == 0, 1.0, 0.8)  # 12 teeth, as in bench_partition
-    ang = 2 * np.pi * k / 96
-    a = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    dom = hammesh.Domain.from_polygon(np.c_[r * np.cos(ang), r * np.sin(ang)],
-                                      holes=[np.c_[np.cos(a), np.sin(a)] * 0.3])
-    return hammesh.quality_mesh(dom, min_angle=30, max_area=area)
-
-
 def _frame(mesh):
     clean, he, is_con = prepare_mesh(mesh)
     m = clean.n_triangles
@@ -225,7 +216,7 @@ def test_ring_frame_only_round_a_hole_that_holds_the_domain() -> None:
     point's radius its distance from the centre. The plate with two holes (the centroid
     between them), a square, and a 2:1 plate round a central hole (too long a domain:
     its widest ray is 3.5 of its narrowest) keep the plain frame."""
-    clean, he, _, rf = _frame(_gear(0.002))
+    clean, he, _, rf = _frame(gear(0.002))
     assert rf is not None
     assert np.hypot(*rf.centre) < 0.01 and abs(rf.r_in - 0.3) < 0.01
     hole = np.flatnonzero(rf.hole)
@@ -253,7 +244,7 @@ def test_a_triangle_across_the_seam_is_made_whole() -> None:
     assert fk.turned_box(pts, tri, 0, 1.0, 0.0, 0.0)[5] - fk.turned_box(pts, tri, 0, 1.0, 0.0, 0.0)[4] > 9
 
 
-def test_gear_sectors_are_runs_and_the_forest_is_minimum() -> None:
+def test_gear_sectors_are_runs_and_the_forest_is_minimum(monkeypatch) -> None:
     """The ring frame's tree: the rim is one spine, eight sectors hang from it, each
     visited whole (one run of the cycle, its rows counted without the rim's), of
     nearly equal rows; the cycle is certified; Prim's two searches and the join still
@@ -263,7 +254,7 @@ def test_gear_sectors_are_runs_and_the_forest_is_minimum() -> None:
 
     import hammesh.threads as row_threads
 
-    mesh = _gear(0.0006)
+    mesh = gear(0.0006)
     clean, he, is_con, rf = _frame(mesh)
     assert rf is not None
     pts, tri, twin = clean.points, clean.triangles, he.twin
@@ -290,16 +281,11 @@ def test_gear_sectors_are_runs_and_the_forest_is_minimum() -> None:
         own = lab[part == p]
         own = own[own >= 0]
         assert np.bincount(own).max() >= 0.9 * len(own)
-    old = row_threads.THREAD_MIN_ROWS
-    try:
-        row_threads.THREAD_MIN_ROWS = 10**9
-        one = K.spanning_forest(tri, twin, is_con, pts)
-        row_threads.THREAD_MIN_ROWS = 20
-        two = K.spanning_forest(tri, twin, is_con, pts)
-    finally:
-        row_threads.THREAD_MIN_ROWS = old
-    for a, b in zip(one, two):
-        np.testing.assert_array_equal(a, b)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 10**9)  # one thread
+    one = K.spanning_forest(tri, twin, is_con, pts)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 20)  # both halves side by side
+    two = K.spanning_forest(tri, twin, is_con, pts)
+    assert all(np.array_equal(x, y) for x, y in zip(one, two))
     cl = K.forest_classes(tri, twin, is_con, pts)
     g = nx.Graph()
     for e in np.flatnonzero(twin > np.arange(3 * m)):
@@ -316,7 +302,7 @@ def test_ring_frame_cuts_the_gear_less_than_the_kd_frame() -> None:
     cycle cuts fewer edges round the hole than the turned kd fishbone's."""
     from hammesh.partition import partition
 
-    mesh = _gear(0.0002)
+    mesh = gear(0.0002)
     ring = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
     old = fk.RING_ASPECT
     try:
