@@ -371,7 +371,11 @@ def fishbone_frame(tri, twin, points, qr, side_work=None, levels=fk.FISH_LEVELS)
         found["ring"] = ring
         if ring is not None:
             found["angle"] = 0.0
-            found["lines"] = fk.kd_lines(fk.sample_centroids(ring.points, tri, sample, 0.0, ring.span), depth, ring)
+            # the rim's rows are walked between the sectors, not inside them: the
+            # sectors' own lines are medians of the other triangles
+            off_rim = ~ring.hole[tri[sample]].any(axis=1)
+            xy = fk.sample_centroids(ring.points, tri, sample[off_rim], 0.0, ring.span)
+            found["lines"] = fk.kd_lines(xy, depth, ring)
             found["frame"] = quad_frame(ring.points, tri, 0.0)
             return
         a = found["angle"] = fk.fish_angle(points, tri, twin)
