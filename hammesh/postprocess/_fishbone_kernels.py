@@ -822,13 +822,15 @@ def ring_frame(points, tri, twin, sample):
     th = th[o]
     rim = hole[tri[sample[o]]].any(axis=1)
     best = None
+    step = max(1, len(th) // ANGLE_SAMPLE)  # the seams judged on a sample of the sample
     for i in range(SEAMS):
         seam = 2 * math.pi * i / (SECTORS * SEAMS)
-        cuts = _sector_cuts(th, rim, seam)
+        cuts = _sector_cuts(th[::step], rim[::step], seam)
         cost = float(_ray_lengths(centre, np.r_[seam, seam + cuts], all_a, all_b).sum())
         if best is None or cost < best[0]:
-            best = (cost, seam, cuts)
-    _, seam, cuts = best
+            best = (cost, seam)
+    seam = best[1]
+    cuts = _sector_cuts(th, rim, seam)
     dp = points - centre
     pts = np.empty((n, 2))
     pts[:, 0] = np.hypot(dp[:, 0], dp[:, 1])
