@@ -165,6 +165,44 @@ def _forest_row(name: str, mesh, repeat: int) -> dict:
     return {"domain": name, "triangles": m, "first": first, "best": best, "cpu": cpu}
 
 
+def _print_frames(size: int, repeat: int) -> None:
+    """Process CPU of ``spanning_forest`` in its three frames on bench_core's square
+    round a square hole (which wraps round its hole: the fishbone takes the ring frame),
+    alternating: the fishbone in the ring frame, the same with the ring frame refused
+    (``RING_ASPECT = 0``: the turned kd frame), and the count quadtree (``levels=0``,
+    ``hamiltonian()``'s default tree)."""
+    import os
+    import sys
+
+    import hammesh
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import _fishbone_kernels as fk
+    from hammesh.postprocess._thm24_kernels import spanning_forest
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_core import _domain
+
+    clean, he, is_con = prepare_mesh(hammesh.quality_mesh(_domain(), min_angle=30, max_area=0.96 / (0.63 * size)))
+    tri, twin, pts = clean.triangles, he.twin, clean.points
+    spanning_forest(tri, twin, is_con, pts)  # the kernels compiled or loaded
+    old = fk.RING_ASPECT
+    cpu: dict = {"ring frame": [], "kd frame": [], "count quadtree": []}
+    try:
+        for _ in range(max(repeat, 5)):
+            for name in cpu:
+                fk.RING_ASPECT = old if name == "ring frame" else 0.0
+                c = time.process_time()
+                spanning_forest(tri, twin, is_con, pts, levels=0 if name == "count quadtree" else fk.FISH_LEVELS)
+                cpu[name].append(time.process_time() - c)
+    finally:
+        fk.RING_ASPECT = old
+    base = np.median(cpu["count quadtree"])
+    print("| tree | input triangles | forest CPU s, median (range) | / count quadtree |")
+    print("|---|---|---|---|")
+    for name, v in cpu.items():
+        print(f"| {name} | {len(tri):,} | {np.median(v):.3f} ({min(v):.3f}-{max(v):.3f}) | {np.median(v) / base:.2f} |")
+
+
 def _metis(k: int, xadj: np.ndarray, adjncy: np.ndarray, repeat: int) -> tuple[np.ndarray, float]:
     import pymetis
 
@@ -494,6 +532,9 @@ def main() -> None:
                     help="only the sparse cut with the cover confined to cells of these sizes (0: not), "
                          "comma-separated, each join order of SPARSE_ORDERS (--orders)")
     ap.add_argument("--orders", default=",".join(SPARSE_ORDERS), help="--sparse-cells' join orders")
+    ap.add_argument("--frames", metavar="SIZE", type=int, default=0,
+                    help="only the forest's CPU in the ring frame, the kd frame and as the count quadtree, on "
+                         "bench_core's square round a square hole of about SIZE input triangles")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -501,6 +542,9 @@ def main() -> None:
         args.target, args.repeat = 30_000, 1
     import hammesh
 
+    if args.frames:
+        _print_frames(args.frames, args.repeat)
+        return
     forests = []
     if args.forest_size:
         sq = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])

@@ -41,7 +41,12 @@ Schemes (weights: lower is taken first; every scheme ranks constrained edges las
   round the boundary (``_plain``: not joined); ``fishbone_y_15`` ... ``_75``: the axes
   turned by that many degrees; ``fishbone_auto``: the turn whose top spines are
   smallest (:func:`fishbone_auto`); :func:`runs_of_cells` gives the cut its cells
-  would have if their counts matched the stretches exactly.
+  would have if their counts matched the stretches exactly;
+* ``ring`` (session 13, ported as ``_fishbone_kernels.ring_frame``): the fishbone round
+  a hole (:func:`ring_weights`): the triangles touching the largest hole are the top
+  spine, cut open at a seam, sectors of equal rows hang from it at their middles, and
+  each sector is a fishbone in polar coordinates (its top spine radial);
+  ``ring_seam{a}``, ``ring_s{s}_seam{a}``: the seam at ``a`` degrees, ``s`` sectors.
 """
 
 from __future__ import annotations
@@ -54,7 +59,7 @@ import numpy as np
 
 __all__ = ["forest_from_weights", "tree", "quadtree_weights", "bisection_weights", "cross_weights", "cross_sampled_weights",
            "fishbone_labels", "fishbone_of", "fishbone_weights", "fishbone_auto", "runs_of_cells", "Fishbone",
-           "AUTO_ANGLES", "SCHEMES"]
+           "AUTO_ANGLES", "SCHEMES", "Ring", "ring_labels", "ring_weights"]
 
 #: Weight of a constrained dual edge: above every free one (the forest crosses the fewest).
 CON_WEIGHT = 1e9
@@ -617,6 +622,15 @@ def fishbone_of(points, tri, twin, axis: int = 0, holes: bool = True, angle: flo
     return fishbone_labels(_turned(points, angle), tri, axis, twin=twin if holes else None, gap_levels=gap_levels)
 
 
+def _deepest(labels: list, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per edge ``a``-``b``: the deepest level whose cell (``labels[level]``, -1 once on
+    a spine above) holds both triangles."""
+    deepest = np.full(len(a), -1)
+    for level, lab in enumerate(labels):
+        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    return deepest
+
+
 def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = True, angle: float = 0.0,
                      gap_levels: int = 99) -> np.ndarray:
     """The fishbone tree (:func:`fishbone_labels`): inside each cell, the spine's own
@@ -634,9 +648,7 @@ def fishbone_weights(points, tri, twin, is_con, axis: int = 0, holes: bool = Tru
     depth = len(fb.labels) - 1
     mid = 0.5 * (c[a] + c[b])
     scale = 2.0 * float(np.ptp(c, axis=0).max()) + 1e-300  # distances below 1/2
-    deepest = np.full(len(a), -1)  # the deepest cell holding both triangles
-    for level, lab in enumerate(fb.labels):
-        deepest[(lab[a] == lab[b]) & (lab[a] >= 0)] = level
+    deepest = _deepest(fb.labels, a, b)
     w = np.zeros(len(a))
     for level in range(depth + 1):
         sel = deepest == level
@@ -723,3 +735,136 @@ SCHEMES = {
     "fishbone_y_plain": partial(fishbone_weights, axis=1, holes=False),
     **{f"fishbone_y_{a}": partial(fishbone_weights, axis=1, angle=a) for a in (15, 30, 45, 60, 75)},
 }
+
+
+class Ring(NamedTuple):
+    """Cells of :func:`ring_labels`: a :class:`Fishbone` in polar coordinates."""
+
+    labels: list
+    spine_level: np.ndarray
+    lines: list
+    #: the unrolled polar coordinates of the centroids: (angle from the seam x the
+    #: reference radius, radius)
+    c: np.ndarray
+    rim: np.ndarray
+    sectors: int
+
+
+def ring_labels(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, sectors: int = 8, seam: float = 0.0,
+                min_cell: int = 8) -> Ring:
+    """A fishbone for an annulus. The triangles touching the largest hole form the
+    *rim spine* (level 0), cut open at the angle ``seam`` (radians); the rest is cut
+    into ``sectors`` sectors of equal counts by angle, each hanging from the rim spine
+    at its middle, and each sector is a fishbone (:func:`fishbone_labels`' rules) whose
+    top spine is the radial line through its middle. The walk then sweeps the ring
+    once: along the rim's outer side, sector after sector (each one run), and back
+    along the rim's own hole side."""
+    from hammesh.postprocess._fishbone_kernels import boundary_loops
+
+    label = boundary_loops(tri, twin, len(points))
+    loops = [np.flatnonzero(label == i) for i in np.unique(label[label >= 0])]
+    ext = [float(np.ptp(points[lp], axis=0).max()) for lp in loops]
+    outer = int(np.argmax(ext))
+    holes = [i for i in range(len(loops)) if i != outer]
+    hole = loops[max(holes, key=lambda i: ext[i])]
+    centre = points[hole].mean(axis=0)
+    cen = points[tri].mean(axis=1) - centre
+    th = (np.arctan2(cen[:, 1], cen[:, 0]) - seam) % (2 * np.pi)
+    r = np.hypot(cen[:, 0], cen[:, 1])
+    r_ref = float(np.median(r))
+    c = np.c_[th * r_ref, r]
+    vx = points[tri] - centre  # (m, 3, 2)
+    vth = np.arctan2(vx[..., 1], vx[..., 0]) - seam
+    dth = (vth - th[:, None] + np.pi) % (2 * np.pi) - np.pi
+    vu = (th[:, None] + dth) * r_ref
+    vr = np.hypot(vx[..., 0], vx[..., 1])
+    lo = np.c_[vu.min(1), vr.min(1)]
+    hi = np.c_[vu.max(1), vr.max(1)]
+    on_hole = np.zeros(int(tri.max()) + 1, bool)
+    on_hole[hole] = True
+    rim = on_hole[tri].any(axis=1)
+    m = len(c)
+    spine_level = np.full(m, -1)
+    spine_level[rim] = 0
+    # sectors by count along the angle (every triangle counts: the rim's rows are
+    # walked between the sectors)
+    # sectors by output rows walked on the way out (three a triangle, about two for
+    # a rim triangle: about one of its rows is on the rim's hole side, walked on the
+    # way back after the last sector), so that sector j starts at row j n / sectors
+    o = np.argsort(c[:, 0], kind="stable")
+    fwd = np.where(rim, 2.0, 3.0)[o]
+    region = np.empty(m, np.int64)
+    region[o] = np.minimum((np.cumsum(fwd) - 0.5 * fwd) * sectors // (3.0 * m), sectors - 1)
+    lab = np.where(rim, -1, region)
+    labels, lines = [np.zeros(m, np.int64), lab], [np.full(1, np.nan)]
+    depth = 1 + max(1, int(np.log(max(m / (sectors * min_cell), 1.0)) / np.log(4.0)))
+    for level in range(1, depth + 1):
+        n_cells = sectors * 4 ** (level - 1)
+        along = level % 2  # level 1: the spine runs along the radius
+        across = 1 - along
+        line = _cell_medians(region, c[:, across], n_cells)
+        lines.append(line)
+        if level == depth:
+            break
+        at = line[region]
+        side = 2 * region + (c[:, across] >= at)
+        far = c[:, along] >= _cell_medians(side, c[:, along], 2 * n_cells)[side]
+        region = 2 * side + far
+        spine = (lab >= 0) & (lo[:, across] <= at) & (at <= hi[:, across])
+        _join_round_gaps(spine, lab, c, at, along, twin, tri)
+        lab = np.where((lab >= 0) & ~spine, region, -1)
+        spine_level[spine] = level
+        labels.append(lab)
+    return Ring(labels, spine_level, lines, c, rim, sectors)
+
+
+def ring_weights(points, tri, twin, is_con, sectors: int = 8, seam: float = 0.0) -> np.ndarray:
+    """The tree of :func:`ring_labels` (weights as :func:`fishbone_weights`: deeper
+    cells first; in a cell its spine, then each child hung by its own spine's end
+    nearest where its line meets the spine, then the walls). At the ring level the
+    rim's edges across the seam are walls, so the rim spine is a path round the hole."""
+    rg = ring_labels(points, tri, twin, sectors, seam)
+    c = rg.c
+    a, b, _ = _edges(tri, twin)
+    depth = len(rg.labels) - 1
+    mid = 0.5 * (c[a] + c[b])
+    span = float(np.ptp(c[:, 0]))
+    scale = 2.0 * float(np.ptp(c, axis=0).max()) + 1e-300
+    deepest = _deepest(rg.labels, a, b)
+    w = np.zeros(len(a))
+    r_in = float(c[rg.rim, 1].min())
+    # (inside the deepest cells every edge weighs 0)
+    for level in range(depth):
+        base, sel = 10.0 * (depth - level), deepest == level
+        sa, sb = rg.spine_level[a] == level, rg.spine_level[b] == level
+        hang = np.flatnonzero(sel & (sa ^ sb))
+        kid = np.where(sa, b, a)[hang]
+        child = rg.labels[level + 1][kid]
+        target = np.empty((len(hang), 2))
+        if level == 0:
+            seam_edge = np.abs(c[a, 0] - c[b, 0]) > 0.5 * span
+            w[sel & sa & sb & ~seam_edge] = base
+            w[sel & sa & sb & seam_edge] = base + 5.0
+            target[:, 0] = rg.lines[1][child]
+            target[:, 1] = r_in
+        else:
+            along = level % 2
+            w[sel & sa & sb] = base
+            target[:, along] = rg.lines[level + 1][child]
+            target[:, 1 - along] = rg.lines[level][rg.labels[level][a[hang]]]
+        off_spine = 2.0 * (rg.spine_level[kid] != level + 1)
+        w[hang] = base + 1.0 + off_spine + np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
+        walls = np.flatnonzero(sel & ~sa & ~sb)
+        w[walls] = base + 5.0 + 0.5
+    w[is_con] = CON_WEIGHT
+    return w
+
+
+#: the ring prototype (session 13): 8 sectors, the seam at 0 degrees; ``ring_seam{a}``:
+#: at ``a`` degrees; ``ring_s{s}_seam{a}``: ``s`` sectors
+SCHEMES.update({
+    "ring": ring_weights,
+    **{f"ring_seam{a}": partial(ring_weights, seam=np.radians(a)) for a in range(0, 45, 5)},
+    **{f"ring_s{s}_seam{a}": partial(ring_weights, sectors=s, seam=np.radians(a))
+       for s in (2, 4, 16) for a in (0, 5, 15, 20, 30)},
+})

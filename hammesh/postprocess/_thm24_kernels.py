@@ -256,8 +256,7 @@ def spanning_forest(tri, twin, is_con, points=None, levels=fk.FISH_LEVELS):
         out["code"] = pages.fresh(3 * m, np.int64)
 
     cl = fishbone_frame(tri, twin, points, qr, side_work=outputs, levels=levels)
-    pts = points if points is not None else np.zeros((1, 2))
-    ca, sa = math.cos(cl.angle), math.sin(cl.angle)
+    pts, ca, sa = cl.points, cl.ca, cl.sa
     order, tri_r, code = out["order"], out["tri_r"], out["code"]
     # one search per side of the top line (each holds half the triangles), side by side
     n_hi = int(np.count_nonzero(cl.half))
@@ -269,7 +268,7 @@ def spanning_forest(tri, twin, is_con, points=None, levels=fk.FISH_LEVELS):
     halves = [(0, 0, 0, 3 * n_lo), (1, n_lo, 3 * n_lo, 3 * m)]
     calls = [
         (lambda side=side, base=base, a=a, b=b: _prim_half_into(
-            tri, twin, is_con, pts, ca, sa, cl.lines, cl.extent, cl.depth, cl.n_classes - 1, cl.cross_from, qr,
+            tri, twin, is_con, pts, ca, sa, cl.span, cl.lines, cl.extent, cl.depth, cl.n_classes - 1, cl.cross_from, qr,
             cl.half, side, base, order, tri_r, code, starts[base:], queue, a, b))
         for side, base, a, b in halves
     ]
@@ -297,6 +296,13 @@ class Frame(NamedTuple):
     angle: float
     cross_from: int
     n_classes: int
+    #: the points the classes are computed from (the input's, or the ring frame's)
+    points: np.ndarray
+    #: their turn (1, 0 in the ring frame)
+    ca: float
+    sa: float
+    #: the ring frame's angle range (``_fishbone_kernels.ring_frame``), 0: none
+    span: float = 0.0
 
 
 class Classes(NamedTuple):
@@ -312,6 +318,9 @@ LEAF_CLASSES = (CELL_BITS + 1) * CENTRE_BINS
 #: Fishbone levels whose spines are joined round holes (deeper cells are small; on
 #: the plate and the gear 3, 4 and all levels give the same cut, session 12).
 GAP_LEVELS = 3
+#: Whether a domain that wraps round a hole gets the ring frame
+#: (``_fishbone_kernels.ring_frame``; False: every domain the turned kd frame).
+RING = True
 
 
 def fishbone_frame(tri, twin, points, qr, side_work=None, levels=fk.FISH_LEVELS):
@@ -346,7 +355,7 @@ def fishbone_frame(tri, twin, points, qr, side_work=None, levels=fk.FISH_LEVELS)
         qr[:, 1] = -1
         qr[:, 2] = 0
         side_work()
-        return Frame(np.zeros(m, np.int8), zeros, zeros, 0, 0.0, QUAD_CLASSES, N_CLASSES)
+        return Frame(np.zeros(m, np.int8), zeros, zeros, 0, 0.0, QUAD_CLASSES, N_CLASSES, np.zeros((1, 2)), 1.0, 0.0)
     if depth == 0:  # too few triangles for a fishbone level: the count quadtree
         angle = top_cross_angle(points, tri, twin)
         _beside(lambda: quadtree_coords(points, tri, qr, [(0, m)], angle), side_work, len(spans) > 1)
@@ -354,27 +363,42 @@ def fishbone_frame(tri, twin, points, qr, side_work=None, levels=fk.FISH_LEVELS)
         nx, ny = _half_counts(qr)
         hbit = 2 * CELL_BITS - 1 if abs(2 * nx - m) <= abs(2 * ny - m) else CELL_BITS - 1
         half = ((qr[:, 0] >> hbit) & 1).astype(np.int8)
-        return Frame(half, zeros, zeros, 0, angle, QUAD_CLASSES, N_CLASSES)
+        return Frame(half, zeros, zeros, 0, angle, QUAD_CLASSES, N_CLASSES, points, math.cos(angle), math.sin(angle))
     found = {}
 
-    def first_pass() -> None:  # the turn, the lines and the quadtree's frame
+    def first_pass() -> None:  # the frame (ring or turn), the lines and the quadtree's frame
+        ring = fk.ring_frame(points, tri, twin, sample) if depth >= 3 and RING else None
+        found["ring"] = ring
+        if ring is not None:
+            found["angle"] = 0.0
+            # the rim's rows are walked between the sectors, not inside them: the
+            # sectors' own lines are medians of the other triangles
+            off_rim = ~ring.hole[tri[sample]].any(axis=1)
+            xy = fk.sample_centroids(ring.points, tri, sample[off_rim], 0.0, ring.span)
+            found["lines"] = fk.kd_lines(xy, depth, ring)
+            found["frame"] = quad_frame(ring.points, tri, 0.0)
+            return
         a = found["angle"] = fk.fish_angle(points, tri, twin)
         found["lines"] = fk.kd_lines(fk.sample_centroids(points, tri, sample, a), depth)
         found["frame"] = quad_frame(points, tri, a)
 
     _beside(first_pass, side_work, len(spans) > 1)
-    angle, fl, fr = found["angle"], found["lines"], found["frame"]
+    angle, fl, fr, ring = found["angle"], found["lines"], found["frame"], found["ring"]
+    pts = ring.points if ring is not None else points
+    span = ring.span if ring is not None else 0.0
+    hole = ring.hole if ring is not None else np.zeros(1, np.bool_)
     half = np.empty(m, np.int8)
     run_all([
-        (lambda a=a, b=b: _cells_into(points, tri, fr.ca, fr.sa, fr.x0, fr.y0, fr.bx, fr.by, fr.cum, fr.fx, fr.fy,
-                                      fl.lines, fl.fars, depth, qr, half, a, b))
+        (lambda a=a, b=b: _cells_into(pts, tri, fr.ca, fr.sa, fr.x0, fr.y0, fr.bx, fr.by, fr.cum, fr.fx, fr.fy,
+                                      span, hole, fl.lines, fl.fars, depth, qr, half, a, b))
         for a, b in spans
     ])
     on_rim = fk.rim_vertices(tri, twin, points.shape[0])
-    levels = min(depth, GAP_LEVELS)
-    fk.join_gaps_into(points, tri, twin, fr.ca, fr.sa, qr, FISH_SHIFT, fl.lines, depth, levels, on_rim)
+    levels = min(depth, GAP_LEVELS + (ring is not None))
+    fk.join_gaps_into(pts, tri, twin, fr.ca, fr.sa, span, qr, FISH_SHIFT, fl.lines, depth, levels, on_rim)
     cross_from = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
-    return Frame(half, fl.lines, fl.extent, depth, angle, cross_from, LEAF_CLASSES + depth * fk.PER_LEVEL + 1)
+    return Frame(half, fl.lines, fl.extent, depth, angle, cross_from, LEAF_CLASSES + depth * fk.PER_LEVEL + 1,
+                 pts, fr.ca, fr.sa, span)
 
 
 def _beside(work, side_work, threaded: bool) -> None:
@@ -395,34 +419,34 @@ def forest_classes(tri, twin, is_con, points=None, levels=fk.FISH_LEVELS):
     qr = np.empty((m, 3), index_dtype(m))
     fr = fishbone_frame(tri, twin, points, qr, levels=levels)
     cls = np.zeros(3 * m, np.int16)
-    pts = points if points is not None else np.zeros((1, 2))
-    ca, sa = math.cos(fr.angle), math.sin(fr.angle)
-    _edge_classes_into(pts, tri, ca, sa, twin, is_con, qr, fr.lines, fr.extent, fr.depth, fr.n_classes - 1, cls)
+    _edge_classes_into(fr.points, tri, fr.ca, fr.sa, fr.span, twin, is_con, qr, fr.lines, fr.extent, fr.depth,
+                       fr.n_classes - 1, cls)
     return Classes(cls, fr)
 
 
 @njit(cache=True, nogil=True)
-def _edge_classes_into(points, tri, ca, sa, twin, is_con, qr, lines, extent, depth, con, cls):
+def _edge_classes_into(points, tri, ca, sa, span, twin, is_con, qr, lines, extent, depth, con, cls):
     """:func:`edge_class_of` of every half-edge (boundary ones 0, constrained ``con``)."""
     for h in range(twin.shape[0]):
         g = twin[h]
         if g >= 0:
-            cls[h] = con if is_con[h] else edge_class_of(points, tri, ca, sa, qr, h // 3, g // 3, lines, extent, depth)
+            cls[h] = con if is_con[h] else edge_class_of(points, tri, ca, sa, span, qr, h // 3, g // 3, lines, extent,
+                                                         depth)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def edge_class_of(points, tri, ca, sa, qr, t, u, lines, extent, depth):
+def edge_class_of(points, tri, ca, sa, span, qr, t, u, lines, extent, depth):
     """Class of the free dual edge between triangles ``t`` and ``u`` (:func:`fishbone_frame`):
     the quadtree's :func:`edge_class` inside one deepest fishbone cell (most edges),
     else :func:`fish_class`."""
     fa = qr[t, 2]
     if fa == qr[u, 2] and (fa >> FISH_SHIFT) == depth:
         return edge_class(qr[t, 0], qr[u, 0])
-    return fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth)
+    return fish_class(points, tri, ca, sa, span, qr, t, u, lines, extent, depth)
 
 
 @njit(cache=True, nogil=True)
-def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
+def fish_class(points, tri, ca, sa, span, qr, t, u, lines, extent, depth):
     """Class of the free dual edge between triangles ``t`` and ``u`` (:func:`fishbone_frame`),
     a separate call: the search's loop stays small for the common case.
 
@@ -446,14 +470,16 @@ def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
     d = min(cp, la, lb)
     if d >= depth:
         return edge_class(qr[t, 0], qr[u, 0])
+    if span > 0.0 and d < 2:
+        return ring_class(points, tri, span, t, u, ka, kb, la, lb, lines, extent, depth)
     base = LEAF_CLASSES + (depth - 1 - d) * fk.PER_LEVEL
     if la == d and lb == d:  # along the spine (most of these edges: no geometry needed)
         return base
     oc = fk.level_offset(d) + (ka >> (2 * (depth - d)))
     line = lines[oc]
     ext = extent[oc]
-    tx, ty = fk.turned_centroid(points, tri, t, ca, sa)
-    ux, uy = fk.turned_centroid(points, tri, u, ca, sa)
+    tx, ty = fk.turned_centroid(points, tri, t, ca, sa, span)
+    ux, uy = fk.turned_centroid(points, tri, u, ca, sa, span)
     mx = 0.5 * (tx + ux)
     my = 0.5 * (ty + uy)
     m_along, m_across = (mx, my) if d % 2 == 0 else (my, mx)
@@ -469,6 +495,43 @@ def fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth):
     mb = lines[off + (kb >> shift)]
     dist = min(max(abs(m_along - ma), abs(m_across - line)), max(abs(m_along - mb), abs(m_across - line)))
     return base + 1 + 2 * fk.HANG_BINS + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
+
+
+@njit(cache=True, nogil=True)
+def ring_class(points, tri, span, t, u, ka, kb, la, lb, lines, extent, depth):
+    """:func:`fish_class` of an edge of the ring frame's top levels (``_fishbone_kernels.ring_frame``:
+    ``points`` are (radius, angle), levels 0 and 1 one class level, the top one): the
+    rim's own edges first, except the seam's (last: the rim is a path); then the edges
+    that hang a sector, nearest the point of the rim where the sector's radial line
+    meets it (a sector's own spine first); then the walls between sectors."""
+    base = LEAF_CLASSES + (depth - 1) * fk.PER_LEVEL
+    walls = base + 1 + 2 * fk.HANG_BINS
+    tx, ty = fk.turned_centroid(points, tri, t, 1.0, 0.0, span)
+    ux, uy = fk.turned_centroid(points, tri, u, 1.0, 0.0, span)
+    if abs(ty - uy) > 0.5 * span:  # across the seam
+        if ty < uy:
+            ty += span
+        else:
+            uy += span
+    if la == 0 and lb == 0:
+        return walls + fk.WALL_BINS - 1 if ty >= span or uy >= span else base
+    mr = 0.5 * (tx + ux)
+    ma = 0.5 * (ty + uy)
+    ext = extent[0]
+    off = fk.level_offset(2)
+    shift = 2 * (depth - 2)
+    r_in = lines[0]
+    if la == 0 or lb == 0:
+        kid_key, kid_level = (kb, lb) if la == 0 else (ka, la)
+        meet = lines[off + (kid_key >> shift)]  # the sector's radial line
+        da = abs(ma - meet)
+        dist = max(min(da, span - da), abs(mr - r_in))
+        own = 0 if kid_level == 2 else fk.HANG_BINS
+        return base + 1 + own + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.HANG_BINS)
+    da = abs(ma - lines[off + (ka >> shift)])
+    db = abs(ma - lines[off + (kb >> shift)])
+    dist = max(min(da, db, span - da, span - db), abs(mr - r_in))
+    return walls + fk.distance_bin(dist / ext if ext > 0.0 else np.nan, fk.WALL_BINS)
 
 
 def top_cross_angle(points, tri, twin, sample=None):
@@ -729,16 +792,18 @@ def _packed_coords(x, y, x0, y0, bx, by, cum, fx, fy):
 
 
 @njit(cache=True, nogil=True)
-def _cells_into(points, tri, fr_ca, fr_sa, x0, y0, bx, by, cum, fx, fy, lines, fars, depth, qr, half, lo, hi):
+def _cells_into(points, tri, fr_ca, fr_sa, x0, y0, bx, by, cum, fx, fy, span, hole, lines, fars, depth, qr, half, lo, hi):
     """One pass over triangles lo..hi for :func:`forest_classes`: the quadtree
     coordinates (``qr[:, 0]``, as :func:`_cell_coords_into`), ``qr[:, 1] = -1``, the
     fishbone's cell and spine level packed in ``qr[:, 2]`` (``key | spine << 16``,
     ``_fishbone_kernels.descend_into``) and the top line's side in ``half``."""
+    ring = span > 0.0
     for t in range(lo, hi):
-        cx, cy, bx0, bx1, by0, by1 = fk.turned_box(points, tri, t, fr_ca, fr_sa)
+        cx, cy, bx0, bx1, by0, by1 = fk.turned_box(points, tri, t, fr_ca, fr_sa, span)
         qr[t, 0] = _packed_coords(cx, cy, x0, y0, bx, by, cum, fx, fy)
         qr[t, 1] = -1
-        reg, sp = fk.descend(cx, cy, bx0, bx1, by0, by1, lines, fars, depth)
+        rim = ring and (hole[tri[t, 0]] or hole[tri[t, 1]] or hole[tri[t, 2]])
+        reg, sp = fk.descend(cx, cy, bx0, bx1, by0, by1, lines, fars, depth, ring, rim)
         qr[t, 2] = reg | (sp << FISH_SHIFT)
         half[t] = (reg >> (2 * depth - 1)) & 1 if depth > 0 else 0
 
@@ -782,7 +847,7 @@ def _half_counts(qr):
 
 
 @njit(cache=True, nogil=True)
-def _prim_half_into(tri, twin, is_con, points, ca, sa, lines, extent, depth, con, cross_from, qr, half_of, side, base,
+def _prim_half_into(tri, twin, is_con, points, ca, sa, span, lines, extent, depth, con, cross_from, qr, half_of, side, base,
                     order, tri_r, code, starts, queue, q_lo, q_hi):
     """Prim's search with a bucket queue of edge classes over the triangles of one half.
 
@@ -849,7 +914,7 @@ def _prim_half_into(tri, twin, is_con, points, ca, sa, lines, extent, depth, con
                 elif fu == ft and leaf:  # most edges: inside one deepest cell
                     c = edge_class(qt, qr[u, 0])
                 else:
-                    c = fish_class(points, tri, ca, sa, qr, t, u, lines, extent, depth)
+                    c = fish_class(points, tri, ca, sa, span, qr, t, u, lines, extent, depth)
                 if c >= cross_from:  # the join's (``_join_into``)
                     if h < g:
                         top -= 1

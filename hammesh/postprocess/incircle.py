@@ -90,9 +90,11 @@ def incircle_hamiltonian(
 #: The dual spanning trees Thm 2.4's cycle can walk around, by name: the fishbone
 #: levels of :func:`~hammesh.postprocess._thm24_kernels.spanning_forest` (docs/partition.md).
 #: ``"quadtree"`` (0 levels): the count quadtree, the fastest; its stretches cut
-#: 1.5-1.9x METIS's. ``"fishbone"``: kd lines turned to cross the domain shortest, a
-#: compact cycle for ``hammesh.partition`` (1.3-1.4x METIS's on a plate with holes) at
-#: about +20 % of the incircle construction's first call.
+#: 1.5-1.9x METIS's. ``"fishbone"``: kd lines turned to cross the domain shortest, or
+#: round the hole of a domain that wraps round one (the ring frame: eight sectors hung
+#: from the hole's rim), a compact cycle for ``hammesh.partition`` (1.3-1.5x METIS's on
+#: a plate with holes and on a gear) at about +20 % of the incircle construction's
+#: first call.
 TREES: dict[str, int] = {"quadtree": 0, "fishbone": FISH_LEVELS}
 
 #: Rows the walk writes between two hand-overs to the row checks.

@@ -14,6 +14,7 @@ import hammesh
 from hammesh.halfedge import prepare_mesh
 from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.postprocess import _thm24_kernels as K
+from tests.partition.test_forest import gear
 
 
 def _cells(pts, tri, twin, angle: float, depth: int, joined: bool = True):
@@ -23,9 +24,9 @@ def _cells(pts, tri, twin, angle: float, depth: int, joined: bool = True):
     qr = np.zeros((m, 4), np.int32)
     half = np.empty(m, np.int8)
     ca, sa = math.cos(angle), math.sin(angle)
-    fk.descend_into(pts, tri, ca, sa, fl.lines, fl.fars, depth, K.FISH_SHIFT, qr, half, 0, m)
+    fk.descend_into(pts, tri, ca, sa, 0.0, np.zeros(1, bool), fl.lines, fl.fars, depth, K.FISH_SHIFT, qr, half, 0, m)
     if joined:
-        fk.join_gaps_into(pts, tri, twin, ca, sa, qr, K.FISH_SHIFT, fl.lines, depth, depth,
+        fk.join_gaps_into(pts, tri, twin, ca, sa, 0.0, qr, K.FISH_SHIFT, fl.lines, depth, depth,
                           fk.rim_vertices(tri, twin, len(pts)))
     key = qr[:, 2] & ((1 << K.FISH_SHIFT) - 1)
     spine = qr[:, 2] >> K.FISH_SHIFT
@@ -200,3 +201,114 @@ def test_tree_option_picks_the_walk_and_both_are_certified(tmp_path) -> None:
         out = tmp_path / f"out{len(extra)}.vtu"
         assert main(["mesh", str(src), "--mode", "incircle", "--parts", "4", "-o", str(out)] + extra) == 0
         np.testing.assert_array_equal(meshio.read(out).cell_data["parent"][0], expected.parent)
+
+
+def _frame(mesh):
+    clean, he, is_con = prepare_mesh(mesh)
+    m = clean.n_triangles
+    return clean, he, is_con, fk.ring_frame(clean.points, clean.triangles, he.twin,
+                                           np.arange(0, m, max(1, m // fk.FISH_SAMPLE)))
+
+
+def test_ring_frame_only_round_a_hole_that_holds_the_domain() -> None:
+    """The gear wraps round its hole: the ring frame, centred in the hole, its rim the
+    hole's vertices, its sector borders increasing inside the angle range, every
+    point's radius its distance from the centre. The plate with two holes (the centroid
+    between them), a square, and a 2:1 plate round a central hole (too long a domain:
+    its widest ray is 3.5 of its narrowest) keep the plain frame."""
+    clean, he, _, rf = _frame(gear(0.002))
+    assert rf is not None
+    assert np.hypot(*rf.centre) < 0.01 and abs(rf.r_in - 0.3) < 0.01
+    hole = np.flatnonzero(rf.hole)
+    assert len(hole) >= 48 and np.allclose(np.hypot(*clean.points[hole].T), 0.3)
+    assert len(rf.cuts) == fk.SECTORS - 1 and (np.diff(rf.cuts) > 0).all()
+    assert 0 < rf.cuts[0] and rf.cuts[-1] < rf.span
+    np.testing.assert_allclose(rf.points[:, 0], np.hypot(*(clean.points - rf.centre).T))
+    for mesh in (_plate(holes_at=((1.0, 1.0), (3.0, 1.0)), size=(4.0, 2.0), r=0.4, area=0.004),
+                 _plate(area=0.001),
+                 hammesh.quality_mesh(hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30,
+                                      max_area=3e-4)):
+        assert _frame(mesh)[3] is None
+
+
+def test_a_triangle_across_the_seam_is_made_whole() -> None:
+    """In the ring frame the angle coordinate jumps by ``span`` at the seam: a
+    triangle across it gets its corners unwrapped, its centroid back in range, its
+    box as narrow as it is."""
+    span = 10.0
+    pts = np.array([[1.0, 9.9], [1.2, 0.1], [1.1, 0.05]])
+    tri = np.array([[0, 1, 2]])
+    cx, cy, x0, x1, y0, y1 = fk.turned_box(pts, tri, 0, 1.0, 0.0, span)
+    assert 0 <= cy < span and abs(cy - 0.0167) < 1e-3 and y1 - y0 < 0.3
+    assert fk.turned_centroid(pts, tri, 0, 1.0, 0.0, span) == (cx, cy)
+    assert fk.turned_box(pts, tri, 0, 1.0, 0.0, 0.0)[5] - fk.turned_box(pts, tri, 0, 1.0, 0.0, 0.0)[4] > 9
+
+
+def test_gear_sectors_are_runs_and_the_forest_is_minimum(monkeypatch) -> None:
+    """The ring frame's tree: the rim is one spine, eight sectors hang from it, each
+    visited whole (one run of the cycle, its rows counted without the rim's), of
+    nearly equal rows; the cycle is certified; Prim's two searches and the join still
+    give a minimum spanning forest of the classes (networkx), the same on one thread
+    and on two; and the k = 8 parts are the sectors."""
+    import networkx as nx
+
+    import hammesh.threads as row_threads
+
+    mesh = gear(0.0006)
+    clean, he, is_con, rf = _frame(mesh)
+    assert rf is not None
+    pts, tri, twin = clean.points, clean.triangles, he.twin
+    m = len(tri)
+    qr = np.empty((m, 3), K.index_dtype(m))
+    fr = K.fishbone_frame(tri, twin, pts, qr)
+    assert fr.span > 0 and fr.depth >= 3
+    key = qr[:, 2] & ((1 << K.FISH_SHIFT) - 1)
+    spine = qr[:, 2] >> K.FISH_SHIFT
+    np.testing.assert_array_equal(spine == 0, rf.hole[tri].any(axis=1))  # the rim
+    cell2 = key >> (2 * (fr.depth - 2))
+    assert set(np.unique(cell2 & 1)) == {0}  # level 1 has no far halves
+    sector = 2 * (cell2 >> 2) + ((cell2 >> 1) & 1)
+    h = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
+    assert h.report["verified"]
+    lab = np.where(spine == 0, -1, sector)[h.parent]
+    for s in range(fk.SECTORS):
+        rows = lab == s
+        assert np.count_nonzero(rows & ~np.roll(rows, 1)) == 1, s
+    sizes = np.bincount(lab[lab >= 0])
+    assert sizes.max() - sizes.min() <= 0.03 * h.n_triangles
+    part = hammesh.partition(h, fk.SECTORS).part
+    for p in range(fk.SECTORS):  # each part is mostly one sector
+        own = lab[part == p]
+        own = own[own >= 0]
+        assert np.bincount(own).max() >= 0.9 * len(own)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 10**9)  # one thread
+    one = K.spanning_forest(tri, twin, is_con, pts)
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 20)  # both halves side by side
+    two = K.spanning_forest(tri, twin, is_con, pts)
+    assert all(np.array_equal(x, y) for x, y in zip(one, two))
+    cl = K.forest_classes(tri, twin, is_con, pts)
+    g = nx.Graph()
+    for e in np.flatnonzero(twin > np.arange(3 * m)):
+        assert cl.cls[e] == cl.cls[twin[e]]
+        g.add_edge(e // 3, twin[e] // 3, w=int(cl.cls[e]))
+    best = sum(d["w"] for _, _, d in nx.minimum_spanning_edges(g, weight="w", data=True))
+    tw = (two.code >> 2) - 1
+    tree = np.flatnonzero(((two.code & K.TREE_BIT) != 0) & (np.arange(3 * m) < tw))
+    assert sum(g.edges[two.order[e // 3], two.order[tw[e] // 3]]["w"] for e in tree) == best
+
+
+def test_ring_frame_cuts_the_gear_less_than_the_kd_frame() -> None:
+    """What the ring frame is for (docs/partition.md): on the gear at k = 8 and 64 the
+    cycle cuts fewer edges round the hole than the turned kd fishbone's."""
+    from hammesh.partition import partition
+
+    mesh = gear(0.0002)
+    ring = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
+    old = fk.RING_ASPECT
+    try:
+        fk.RING_ASPECT = 0.0  # no domain qualifies: the kd frame
+        kd = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
+    finally:
+        fk.RING_ASPECT = old
+    for k in (8, 64):
+        assert partition(ring, k).edge_cut < partition(kd, k).edge_cut, k

@@ -186,7 +186,8 @@ def test_two_searches_join_across_the_halves_as_one_search_would() -> None:
     assert len(two.split) == 2  # the loop's region joins the rest by one constrained edge
 
 
-def _gear(area: float):
+def gear(area: float):
+    """bench_partition's gear, meshed at ``max_area`` ``area``."""
     k = np.arange(96)
     r = np.where((k // 4) % 2 == 0, 1.0, 0.8)  # 12 teeth, as in bench_partition
     ang = 2 * np.pi * k / 96
@@ -216,7 +217,7 @@ def test_quadtree_turns_off_the_gear_teeth_and_stays_put_on_boxes() -> None:
         mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon(dom), min_angle=30, max_area=2e-4)
         clean, he, _ = prepare_mesh(mesh)
         assert K.top_cross_angle(clean.points, clean.triangles, he.twin) == 0.0
-    mesh = _gear(2.4 / 10_000)
+    mesh = gear(2.4 / 10_000)
     clean, he, _ = prepare_mesh(mesh)
     pts, tri, twin = clean.points, clean.triangles, he.twin
     angle = K.top_cross_angle(pts, tri, twin)
@@ -287,7 +288,7 @@ def test_top_cross_counts_match_the_numpy_count(dom: str, stride: int, star) -> 
     """The numba count behind the rotation (``_top_cross_counts_into``) gives session 9's
     numpy counts exactly, so the forest's rotation (and tree) is the same."""
     if dom == "gear":
-        mesh = _gear(2.4 / 3000)
+        mesh = gear(2.4 / 3000)
     elif dom == "star":
         mesh = hammesh.quality_mesh(star, min_angle=25, max_area=0.01)
     else:

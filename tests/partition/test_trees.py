@@ -31,7 +31,7 @@ def _plate():
 
 
 @pytest.mark.parametrize(
-    "scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3", "cross_local_l3", "fishbone_x"]
+    "scheme", ["quadtree", "bisection", "cross", "cross_exact64_l3", "cross_local_l3", "fishbone_x", "ring"]
 )
 def test_scheme_gives_a_minimum_spanning_forest_the_walk_accepts(scheme: str) -> None:
     mesh = _plate()
