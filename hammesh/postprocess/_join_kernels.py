@@ -554,7 +554,7 @@ def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds, exact=
 
 
 @njit(cache=True, nogil=True)
-def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters):
+def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters, is_cov, absorb):
     """Groups of adjacent uncovered triangles, each to be replaced by one fan.
 
     Chains of triangles no cover cycle passes (thin parts, what ears leave) would
@@ -566,10 +566,22 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     sectors) and <= ``hi_fan``. A fan over a polygon of ``k + 2`` corners is a cycle of
     ``k + 2`` triangles with one Steiner point, in place of ``k`` triangles.
 
+    With ``absorb`` (``is_cov``: the cover's half-edges) a grown group of two or more may then take
+    in one *covered* triangle ``y`` across the polygon edge that is ``y``'s non-cover
+    edge (the best fan of those within the same bounds; ``_absorb_covered``). ``y``'s two
+    cover edges are then consecutive edges of the polygon, around its apex ``w``, and
+    the fan's cycle cut at the spoke to ``w`` is a path from one to the other: the
+    group joins ``y``'s cycle through its one Steiner point, with no join (on Triangle's
+    ``A`` at 87 triangles each fan was otherwise a cycle of its own, joined by a Thm 2.4
+    bridge: two incenters more).
+
     Returns ``(group (m,) int64, -1 if none; fan points (g, 2); group minimum angle
-    (g,); polygon offsets (g + 1,); polygon corners; polygon edge half-edges)``:
-    group j's polygon is ``corners[off[j]:off[j + 1]]`` counter-clockwise, its edge
-    ``(corners[i], corners[i + 1])`` is the input half-edge ``he[i]``.
+    (g,); polygon offsets (g + 1,); polygon corners; polygon edge half-edges;
+    absorbed (g,) the covered triangle taken in or -1; apex (g,) the index of its apex
+    in the group's polygon, from ``off[j]``, or -1)``: group j's polygon is
+    ``corners[off[j]:off[j + 1]]`` counter-clockwise, its edge ``(corners[i],
+    corners[i + 1])`` is the input half-edge ``he[i]`` (for an absorbed ``y``, the two
+    edges around its apex are ``y``'s).
     """
     m = tri.shape[0]
     group = np.full(m, -1, np.int64)
@@ -578,6 +590,8 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     off = np.zeros(m // 2 + 2, np.int64)
     corners = np.empty(2 * m + 2, np.int64)
     hes = np.empty(2 * m + 2, np.int64)
+    absorbed = np.full(m // 2 + 1, -1, np.int64)
+    apex = np.full(m // 2 + 1, -1, np.int64)
     ng = 0
     n_c = 0
     cap = max_group + 3
@@ -662,6 +676,16 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
                 break
         if nm < 2:
             continue
+        y_in = -1
+        if absorb and nm < max_group:
+            y_in, iw, px, py, gmin, n = _absorb_covered(
+                pts, tri, twin, pinned, cyc, is_cov, group, amin, keep, hi, floor, hi_fan, iters, poly, phe, n,
+                members, nm, gmin, px, py, tpoly, tphe, starts,
+            )
+            if y_in >= 0:
+                group[y_in] = ng
+                absorbed[ng] = y_in
+                apex[ng] = iw
         for j in range(nm):
             group[members[j]] = ng
         fan_pt[ng, 0] = px
@@ -673,7 +697,90 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
             n_c += 1
         ng += 1
         off[ng] = n_c
-    return group, fan_pt[:ng], gmin_out[:ng], off[: ng + 1], corners[:n_c], hes[:n_c]
+    return group, fan_pt[:ng], gmin_out[:ng], off[: ng + 1], corners[:n_c], hes[:n_c], absorbed[:ng], apex[:ng]
+
+
+@njit(cache=True, nogil=True)
+def _absorb_covered(pts, tri, twin, pinned, cyc, is_cov, group, amin, keep, hi, floor, hi_fan, iters, poly, phe, n,
+                    members, nm, gmin, px, py, tpoly, tphe, starts):
+    """The best covered triangle a fan group can take in (``fan_groups``), in place.
+
+    A candidate ``y`` lies across a free polygon edge that is ``y``'s non-cover edge,
+    its apex is not a corner yet, and the fan over the grown polygon keeps the group's
+    bounds (every angle ``>= max(floor, 1/2 x the smallest of the parents)``, ``<=
+    hi_fan``); of several, the largest slack. Returns ``(y or -1, index of y's apex in
+    the polygon, fan point x, y, group minimum, corners)``; with a ``y`` ``poly`` and
+    ``phe`` hold the grown polygon.
+    """
+    best_y = -1
+    best_i = -1
+    best_sl = -np.inf
+    bx = px
+    by = py
+    for i in range(n):
+        h = phe[i]
+        g = twin[h]
+        if g < 0 or pinned[h]:
+            continue
+        y = g // 3
+        if cyc[y] < 0 or group[y] >= 0 or is_cov[g]:
+            continue
+        kg = g - 3 * y
+        w = tri[y, (kg + 2) % 3]
+        dup = False
+        for j in range(n):
+            if poly[j] == w:
+                dup = True
+        if dup:
+            continue
+        for j in range(i + 1):
+            tpoly[j] = poly[j]
+        tpoly[i + 1] = w
+        for j in range(i + 1, n):
+            tpoly[j + 1] = poly[j]
+        gm = min(gmin, amin[y])
+        ns = 0
+        starts[ns, 0] = px
+        starts[ns, 1] = py
+        ns += 1
+        for j in range(nm + 1):
+            x = members[j] if j < nm else y
+            starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
+            starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
+            ns += 1
+        step = 0.25 * math.sqrt(
+            (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
+        )
+        x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n + 1, starts, ns, keep * gm, hi, step, iters)
+        if sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan:
+            continue
+        if sl > best_sl:
+            best_sl = sl
+            best_y = y
+            best_i = i
+            bx = x0
+            by = y0
+    if best_y < 0:
+        return -1, -1, px, py, gmin, n
+    y = best_y
+    i = best_i
+    g = twin[phe[i]]
+    kg = g - 3 * y
+    w = tri[y, (kg + 2) % 3]
+    for j in range(i + 1):
+        tpoly[j] = poly[j]
+        tphe[j] = phe[j]
+    tpoly[i + 1] = w
+    tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
+    tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
+    for j in range(i + 1, n):
+        tpoly[j + 1] = poly[j]
+        tphe[j + 1] = phe[j]
+    n += 1
+    for j in range(n):
+        poly[j] = tpoly[j]
+        phe[j] = tphe[j]
+    return y, i + 1, bx, by, min(gmin, amin[y]), n
 
 
 @njit(cache=True, nogil=True)

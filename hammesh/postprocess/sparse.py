@@ -97,6 +97,9 @@ SCORE_MIN_ROWS = 20_000
 EDGE_MIN_ROWS = 50_000
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
+#: a fan group may take in one covered neighbour across its non-cover edge and so join
+#: that cycle without a join (``_join_kernels.fan_groups``)
+FAN_ABSORB = True
 #: rows between two of the sample whose worst ratio bounds ``kept_radius_ratio``'s search
 KEPT_RATIO_STRIDE = 64
 #: triangles from which ``sparse_hamiltonian`` renumbers its input along a Hilbert
@@ -229,8 +232,9 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     hi_fan = max(hi, 0.5 * math.pi + 0.5 * amax_in)  # no worse than an incenter sector
     # fan triangles keep the input's minimum angle (2 x floor): a bridge may split
     # them at their incenters later, and Thm 2.4's bound then needs exactly that
-    group, fpt, gmin, off, corners, hes = _j.fan_groups(
-        pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS
+    group, fpt, gmin, off, corners, hes, absorbed, apex = _j.fan_groups(
+        pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS,
+        cover.is_cov, FAN_ABSORB,
     )
     n_fan = len(fpt)
     if n_fan == 0:  # (no new orig_of, is_fan: the caller's stand; an arange here faulted 12 MB at 1.5 M)
@@ -253,11 +257,18 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     is_cov2 = np.concatenate(
         [cover.is_cov.reshape(m, 3)[kept], np.tile(np.array([True, False, True]), (len(fan_tri), 1))], axis=0
     )
-    cyc2 = np.concatenate([cover.cycle[kept], cover.n_cycles + g_of])
+    # a fan that took in a covered triangle is a path of that triangle's cycle, cut at
+    # the spoke to its apex (``fan_groups``); the others are cycles of their own
+    own = absorbed < 0
+    gid = np.where(own, cover.n_cycles + np.cumsum(own) - 1, cover.cycle[np.maximum(absorbed, 0)])
+    r_w = len(kept) + off[:-1][~own] + apex[~own]
+    is_cov2[r_w - 1] = (True, True, False)
+    is_cov2[r_w] = (False, True, True)
+    cyc2 = np.concatenate([cover.cycle[kept], gid[g_of]])
     cover2 = CycleCover(
         is_cov=is_cov2.reshape(-1),
         cycle=cyc2,
-        n_cycles=cover.n_cycles + n_fan,
+        n_cycles=cover.n_cycles + int(own.sum()),
         n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched,
         n_rotations=cover.n_rotations,
