@@ -1250,6 +1250,74 @@ def _on_path(nodes, n, x):
     return False
 
 
+#: slots of ``_back_distances``' table (a power of two) and most triangles it labels
+BACK_SLOTS = 1 << 15
+BACK_MAX = 1 << 13
+
+
+@njit(cache=True, nogil=True)
+def _dist_get(keys, vals, x, far):
+    """``x``'s distance in ``_back_distances``' table, ``far`` if it has none."""
+    mask = keys.shape[0] - 1
+    i = (x * 0x9E3779B1) & mask
+    while keys[i] >= 0:
+        if keys[i] == x:
+            return vals[i]
+        i = (i + 1) & mask
+    return far
+
+
+@njit(cache=True, nogil=True)
+def _back_distances(twin, blocked, t, radius):
+    """Dual distances from ``t`` through triangles not ``blocked``, up to ``radius``.
+
+    An open-addressing table (``BACK_SLOTS`` slots, no O(m) array per call) of at most
+    ``BACK_MAX`` triangles, breadth-first: a triangle not in it is at least ``far``
+    away (one more than the last whole layer). Returns ``(keys, vals, far)`` for
+    :func:`_dist_get`.
+    """
+    keys = np.full(BACK_SLOTS, -1, np.int64)
+    vals = np.empty(BACK_SLOTS, np.int64)
+    queue = np.empty(BACK_MAX, np.int64)
+    mask = BACK_SLOTS - 1
+    i = (t * 0x9E3779B1) & mask
+    keys[i] = t
+    vals[i] = 0
+    queue[0] = t
+    head = 0
+    tail = 1
+    far = radius + 1
+    while head < tail:
+        x = queue[head]
+        head += 1
+        dx = _dist_get(keys, vals, x, far)
+        if dx >= radius:
+            break
+        for k in range(3):
+            g = twin[3 * x + k]
+            if g < 0:
+                continue
+            y = g // 3
+            if blocked[y] and y != t:
+                continue
+            j = (y * 0x9E3779B1) & mask
+            found = False
+            while keys[j] >= 0:
+                if keys[j] == y:
+                    found = True
+                    break
+                j = (j + 1) & mask
+            if found:
+                continue
+            if tail == BACK_MAX:
+                return keys, vals, dx + 1  # (the layer after dx is not whole)
+            keys[j] = y
+            vals[j] = dx + 1
+            queue[tail] = y
+            tail += 1
+    return keys, vals, far
+
+
 @njit(cache=True, nogil=True)
 def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, starts, max_cycles):
     """Alternating cycles of the cover through its non-cover half-edge ``h0`` (``t -> u``), shorter first.
@@ -1271,6 +1339,10 @@ def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, start
     flips = np.empty(2 * depth + 2, np.int64)
     stack_x = np.empty(depth + 1, np.int64)
     stack_j = np.empty(depth + 1, np.int64)
+    # dual distances back to t (through triangles a cycle may pass): a pair at z with
+    # r pairs left can close only if z is within 2 r + 1 steps of t, so the search's
+    # budget goes to paths that can still return (``_back_distances``)
+    keys, vals, far = _back_distances(twin, blocked, t, 2 * depth + 1)
     n_out = 0
     starts[0] = 0
     steps = 0
@@ -1323,6 +1395,8 @@ def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, start
             z = twin[g] // 3
             if blocked[z] or _on_path(nodes, n_nodes, z):
                 continue
+            if _dist_get(keys, vals, z, far) > 2 * (limit - level - 1) + 1:
+                continue  # (z cannot get back to t within this depth)
             nodes[n_nodes] = y
             nodes[n_nodes + 1] = z
             n_nodes += 2
