@@ -200,7 +200,48 @@ def coarse_a_row() -> float:
         f"(target <= 10 %; {r['uncovered']} uncovered, {r['fans']} fans over {r['fan_triangles_replaced']}), "
         f"min angle {r['min_angle_output_deg']:.1f}"
     )
+    # where the points come from: the cover's cycles and what joins them
+    print(
+        f"  points: {r['incenters']} incenters + {r['midpoints']} midpoints + {r['fans']} fan points; "
+        f"cover: {r['cycles_before_merging']} cycles, {r['uncovered']} uncovered "
+        f"({r['uncovered_boundary']} with a boundary edge); joins: {r['swaps']} swaps "
+        f"({r['swaps_absorbing']} absorbing), {r['edge_splits']} edge splits, {r['bridges']} Thm 2.4 bridges, "
+        f"{r['ring_joins']} ring joins; {_outer_only(m)} triangles have three vertices on the outer "
+        "boundary (no Hamiltonian triangulation keeps them whole)"
+    )
     return s
+
+
+def _outer_only(m) -> int:
+    """Triangles whose three corners lie on the outer boundary loop.
+
+    A kept triangle lies on the cycle, which crosses two of its edges; each crossed
+    edge has one end inside the cycle's closed curve, and a vertex of the outer
+    boundary never is (a hole's may be, if the cycle winds around it). So none of
+    these can stay whole in any Hamiltonian triangulation that keeps the boundary.
+    """
+    from hammesh.halfedge import half_edges
+
+    tri = np.asarray(m.triangles)
+    tw = half_edges(tri, m.n_points).twin
+    b = np.flatnonzero(tw < 0)
+    nxt = dict(zip(tri[b // 3, b % 3].tolist(), tri[b // 3, (b % 3 + 1) % 3].tolist()))
+    best, outer, seen = -np.inf, [], set()
+    for v in nxt:
+        if v in seen:
+            continue
+        loop = [v]
+        seen.add(v)
+        while nxt[loop[-1]] != v:
+            loop.append(nxt[loop[-1]])
+            seen.add(loop[-1])
+        p = np.asarray(m.points)[loop]
+        area = 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+        if area > best:  # (the outer loop: counter-clockwise, the largest)
+            best, outer = area, loop
+    on = np.zeros(m.n_points, bool)
+    on[outer] = True
+    return int(on[tri].all(axis=1).sum())
 
 
 def fem_row(area: float) -> float | None:
