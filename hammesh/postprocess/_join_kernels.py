@@ -554,6 +554,66 @@ def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds, exact=
 
 
 @njit(cache=True, nogil=True)
+def _with_apex(tri, poly, phe, n, i, y, kg, tpoly, tphe):
+    """``poly[:n]`` with ``y``'s apex ``w`` inserted after corner i (``y`` lies across
+    polygon edge i, its half-edge ``3 y + kg``), into ``tpoly``, ``tphe``: edges
+    ``(a, w)``, ``(w, b)`` of ``y`` in place of ``(a, b)``. Returns ``w``."""
+    w = tri[y, (kg + 2) % 3]
+    for j in range(i + 1):
+        tpoly[j] = poly[j]
+        tphe[j] = phe[j]
+    tpoly[i + 1] = w
+    tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
+    tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
+    for j in range(i + 1, n):
+        tpoly[j + 1] = poly[j]
+        tphe[j + 1] = phe[j]
+    return w
+
+
+@njit(cache=True, nogil=True)
+def _fan_with(pts, tri, tpoly, n, members, nm, y, gm, px, py, have_pt, keep, hi, floor, hi_fan, iters, starts):
+    """The fan over ``tpoly[:n]`` (a group's polygon with ``y`` added): its point, from the
+    members' and ``y``'s centroids and the group's last point (``have_pt``), and
+    whether it keeps the group's bounds (``fan_groups``). Returns ``(x, y, slack, group
+    minimum, ok)``."""
+    ns = 0
+    for j in range(nm + 1):
+        x = members[j] if j < nm else y
+        starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
+        starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
+        ns += 1
+    if have_pt:
+        starts[ns, 0] = px
+        starts[ns, 1] = py
+        ns += 1
+    step = 0.25 * math.sqrt(
+        (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
+    )
+    x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n, starts, ns, keep * gm, hi, step, iters)
+    ok = not (sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan)
+    return x0, y0, sl, gm, ok
+
+
+@njit(cache=True, nogil=True)
+def _across(tri, twin, pinned, poly, phe, n, i):
+    """The triangle across free polygon edge i and that edge's index in it, ``(y, kg)``;
+    ``(-1, -1)`` on the boundary, a pinned edge, or where ``y``'s apex is a corner
+    already (the union would not stay a disc without inner vertices)."""
+    h = phe[i]
+    g = twin[h]
+    if g < 0 or pinned[h]:
+        return -1, -1
+    y = g // 3
+    kg = g - 3 * y
+    w = tri[y, (kg + 2) % 3]
+    for j in range(n):
+        if poly[j] == w:
+            return -1, -1
+    return y, kg
+
+
+@njit(cache=True, nogil=True)
 def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters, is_cov, absorb):
     """Groups of adjacent uncovered triangles, each to be replaced by one fan.
 
@@ -616,50 +676,20 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
         while nm < max_group:
             grown = False
             for i in range(n):
-                h = phe[i]
-                g = twin[h]
-                if g < 0 or pinned[h]:
-                    continue
-                y = g // 3
-                if cyc[y] >= 0 or group[y] >= 0:
+                y, kg = _across(tri, twin, pinned, poly, phe, n, i)
+                if y < 0 or cyc[y] >= 0 or group[y] >= 0:
                     continue
                 dup = False
                 for j in range(nm):
                     if members[j] == y:
                         dup = True
-                kg = g - 3 * y
-                w = tri[y, (kg + 2) % 3]
-                for j in range(n):
-                    if poly[j] == w:
-                        dup = True
                 if dup:
                     continue
                 # insert w between poly[i] and poly[i + 1]: edges (a, w), (w, b) of y
-                for j in range(i + 1):
-                    tpoly[j] = poly[j]
-                    tphe[j] = phe[j]
-                tpoly[i + 1] = w
-                tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
-                tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
-                for j in range(i + 1, n):
-                    tpoly[j + 1] = poly[j]
-                    tphe[j + 1] = phe[j]
-                gm = min(gmin, amin[y])
-                ns = 0
-                for j in range(nm + 1):
-                    x = members[j] if j < nm else y
-                    starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
-                    starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
-                    ns += 1
-                if nm > 1:
-                    starts[ns, 0] = px
-                    starts[ns, 1] = py
-                    ns += 1
-                step = 0.25 * math.sqrt(
-                    (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
-                )
-                x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n + 1, starts, ns, keep * gm, hi, step, iters)
-                if sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan:
+                _with_apex(tri, poly, phe, n, i, y, kg, tpoly, tphe)
+                x0, y0, sl, gm, ok = _fan_with(pts, tri, tpoly, n + 1, members, nm, y, min(gmin, amin[y]), px, py,
+                                               nm > 1, keep, hi, floor, hi_fan, iters, starts)
+                if not ok:
                     continue
                 members[nm] = y
                 nm += 1
@@ -718,41 +748,13 @@ def _absorb_covered(pts, tri, twin, pinned, cyc, is_cov, group, amin, keep, hi, 
     bx = px
     by = py
     for i in range(n):
-        h = phe[i]
-        g = twin[h]
-        if g < 0 or pinned[h]:
+        y, kg = _across(tri, twin, pinned, poly, phe, n, i)
+        if y < 0 or cyc[y] < 0 or group[y] >= 0 or is_cov[3 * y + kg]:
             continue
-        y = g // 3
-        if cyc[y] < 0 or group[y] >= 0 or is_cov[g]:
-            continue
-        kg = g - 3 * y
-        w = tri[y, (kg + 2) % 3]
-        dup = False
-        for j in range(n):
-            if poly[j] == w:
-                dup = True
-        if dup:
-            continue
-        for j in range(i + 1):
-            tpoly[j] = poly[j]
-        tpoly[i + 1] = w
-        for j in range(i + 1, n):
-            tpoly[j + 1] = poly[j]
-        gm = min(gmin, amin[y])
-        ns = 0
-        starts[ns, 0] = px
-        starts[ns, 1] = py
-        ns += 1
-        for j in range(nm + 1):
-            x = members[j] if j < nm else y
-            starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
-            starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
-            ns += 1
-        step = 0.25 * math.sqrt(
-            (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
-        )
-        x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n + 1, starts, ns, keep * gm, hi, step, iters)
-        if sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan:
+        _with_apex(tri, poly, phe, n, i, y, kg, tpoly, tphe)
+        x0, y0, sl, gm, ok = _fan_with(pts, tri, tpoly, n + 1, members, nm, y, min(gmin, amin[y]), px, py, True,
+                                       keep, hi, floor, hi_fan, iters, starts)
+        if not ok:
             continue
         if sl > best_sl:
             best_sl = sl
@@ -764,18 +766,7 @@ def _absorb_covered(pts, tri, twin, pinned, cyc, is_cov, group, amin, keep, hi, 
         return -1, -1, px, py, gmin, n
     y = best_y
     i = best_i
-    g = twin[phe[i]]
-    kg = g - 3 * y
-    w = tri[y, (kg + 2) % 3]
-    for j in range(i + 1):
-        tpoly[j] = poly[j]
-        tphe[j] = phe[j]
-    tpoly[i + 1] = w
-    tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
-    tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
-    for j in range(i + 1, n):
-        tpoly[j + 1] = poly[j]
-        tphe[j + 1] = phe[j]
+    _with_apex(tri, poly, phe, n, i, y, twin[phe[i]] - 3 * y, tpoly, tphe)
     n += 1
     for j in range(n):
         poly[j] = tpoly[j]
