@@ -1401,6 +1401,9 @@ ALT_MERGE_CHECKS = 24
 #: alternating cycles per join also judged for merging more cycles than the join's two
 #: (taken where the plan joins exactly those by a subtree of its steps, all undone)
 ALT_MERGE_WIDER = 16
+#: below this many triangles the swaps' outside pairings are read off cycle positions
+#: (``_join_kernels.cycle_positions_into``, O(m) again after each swap taken), not walked
+ALT_POSITIONS_BELOW = 100_000
 #: most steps of one swap's outside walks (``_join_kernels.swap_merge_outcome``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
@@ -1561,6 +1564,13 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             parent[top(find(int(cyc[h // 3])))] = top(find(int(cyc[tw[h] // 3])))
         return inside if len({top(c) for c in merged}) == 1 else None
 
+    # cycle positions (below ``ALT_POSITIONS_BELOW`` triangles): the checks' outside
+    # pairings read off them, not walked; made again after each swap taken (O(m))
+    small = len(status) < ALT_POSITIONS_BELOW
+    pos = np.empty(len(status) if small else 0, np.int64)
+    plen = np.empty(len(pos), np.int64)
+    if small:
+        _j.cycle_positions_into(tw, is_cov, pos, plen)
     buf = np.empty(ALT_MERGE_CHECKS * (2 * ALT_MERGE_DEPTH + 2), np.int64)
     starts = np.empty(ALT_MERGE_CHECKS + 1, np.int64)
     done = 0
@@ -1577,7 +1587,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
             # taken if the plan joins them by a subtree)
-            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0)
+            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0,
+                                           pos, plen)
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1619,6 +1630,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                     undo(h)
                     done += 1
             _label_paths(tw, is_cov, group, out, find, cyc)
+            if small:
+                _j.cycle_positions_into(tw, is_cov, pos, plen)
             break
     if not done:
         return cover, 0

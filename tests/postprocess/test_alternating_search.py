@@ -125,3 +125,49 @@ def test_pruned_search_finds_the_plain_searchs_cycles(name, area, pick, depth, b
             assert tw[a] // 3 == b // 3
         visited = [f // 3 for f in flips]
         assert len(set(visited)) == len(visited)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    name=st.sampled_from(["face", "la", "double_hex"]),
+    area=st.sampled_from([0.5, 0.05]),
+    seed=st.integers(0, 2**31 - 1),
+    size=st.integers(1, 60),
+)
+def test_positions_pair_links_as_the_walks_do(name, area, seed, size) -> None:
+    # cycle positions: each cycle numbered 0..L-1 along its cover edges; and the
+    # outside pairing of a random group's links on one cycle, read off them, is the
+    # one ``ring_outside_pairs`` walks
+    tri, tw, cover = _cached(name, area)
+    is_cov, cyc = cover.is_cov, cover.cycle
+    m = len(tri)
+    pos, plen = np.empty(m, np.int64), np.empty(m, np.int64)
+    J.cycle_positions_into(tw, is_cov, pos, plen)
+    on = cyc >= 0
+    assert ((pos >= 0) == on).all() and ((plen > 0) == on).all()
+    for c in np.unique(cyc[on]).tolist():
+        members = np.flatnonzero(cyc == c)
+        assert sorted(pos[members].tolist()) == list(range(len(members)))
+        assert (plen[members] == len(members)).all()
+    h = np.flatnonzero(is_cov)
+    d = (pos[tw[h] // 3] - pos[h // 3]) % plen[h // 3]
+    assert ((d == 1) | (d == plen[h // 3] - 1)).all()  # neighbours on the cycle, either way
+    # a random group: a breadth-first blob of ``size`` triangles
+    rng = np.random.default_rng(seed)
+    start = int(rng.choice(np.flatnonzero(on)))
+    group, seen = [start], {start}
+    for x in group:
+        for k in rng.permutation(3).tolist():
+            g = tw[3 * x + k]
+            if g >= 0 and g // 3 not in seen and len(group) < size:
+                seen.add(g // 3)
+                group.append(g // 3)
+    links = [3 * x + k for x in group for k in range(3)
+             if is_cov[3 * x + k] and tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in seen]
+    by_cycle: dict = {}
+    for l in links:
+        by_cycle.setdefault(int(cyc[l // 3]), []).append(l)
+    for hs in by_cycle.values():
+        hs = np.array(hs, np.int64)
+        walked, _ = J.ring_outside_pairs(tw, is_cov, hs, 10**9)
+        assert J.pairs_by_position(tw, pos, plen, hs).tolist() == walked.tolist()
