@@ -1004,9 +1004,9 @@ def cycle_positions_into(twin, is_cov, pos, plen):
         if e < 0:
             continue
         # walk: leave s by e, then by each triangle's other cover edge
+        e0 = e
         pos[s] = 0
         n = 1
-        t = s
         closed = False
         while True:
             if twin[e] < 0:
@@ -1022,15 +1022,10 @@ def cycle_positions_into(twin, is_cov, pos, plen):
             e = cover_exit(twin, is_cov, e)
             if e < 0:
                 break
-            t = x
         # second pass: the length (or -1 for a broken walk)
         length = n if closed else -1
         x = s
-        e2 = -1
-        for k in range(3):
-            if is_cov[3 * s + k]:
-                e2 = 3 * s + k
-                break
+        e2 = e0
         for i in range(n):
             plen[x] = length
             if not closed:
