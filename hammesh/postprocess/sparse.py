@@ -1404,6 +1404,9 @@ ALT_MERGE_WIDER = 16
 #: below this many triangles the swaps' outside pairings are read off cycle positions
 #: (``_join_kernels.cycle_positions_into``, O(m) again after each swap taken), not walked
 ALT_POSITIONS_BELOW = 100_000
+#: there, in place of ``ALT_MERGE_DEPTH``, ``ALT_MERGE_CHECKS``, ``ALT_MERGE_WIDER``: the checks
+#: read positions, so more of them cost what the walks did (docs/sparse.md, session 13)
+ALT_SMALL_DEPTH, ALT_SMALL_CHECKS, ALT_SMALL_WIDER = 28, 64, 64
 #: most steps of one swap's outside walks (``_join_kernels.swap_merge_outcome``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
@@ -1571,17 +1574,19 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     plen = np.empty(len(pos), np.int64)
     if small:
         _j.cycle_positions_into(tw, is_cov, pos, plen)
-    buf = np.empty(ALT_MERGE_CHECKS * (2 * ALT_MERGE_DEPTH + 2), np.int64)
-    starts = np.empty(ALT_MERGE_CHECKS + 1, np.int64)
+    # (with positions the checks are cheap: more of them, deeper)
+    depth, checks, n_wider = (ALT_SMALL_DEPTH, ALT_SMALL_CHECKS, ALT_SMALL_WIDER) if small else (
+        ALT_MERGE_DEPTH, ALT_MERGE_CHECKS, ALT_MERGE_WIDER)
+    buf = np.empty(checks * (2 * depth + 2), np.int64)
+    starts = np.empty(checks + 1, np.int64)
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
         if t in used or u in used or h0 not in steps:
             continue
         ca, cb = find(int(cyc[t])), find(int(cyc[u]))
-        n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, ALT_MERGE_DEPTH, ALT_MERGE_BUDGET, buf, starts,
-                                       ALT_MERGE_CHECKS)
-        wider = ALT_MERGE_WIDER
+        n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, depth, ALT_MERGE_BUDGET, buf, starts, checks)
+        wider = n_wider
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
