@@ -1570,8 +1570,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     # cycle positions (below ``ALT_POSITIONS_BELOW`` triangles): the checks' outside
     # pairings read off them, not walked; made again after each swap taken (O(m))
     small = len(status) < ALT_POSITIONS_BELOW
-    pos = np.empty(len(status) if small else 0, np.int64)
-    plen = np.empty(len(pos), np.int64)
+    pos = fresh(len(status), np.int64) if small else np.empty(0, np.int64)
+    plen = fresh(len(pos), np.int64) if small else pos
     if small:
         _j.cycle_positions_into(tw, is_cov, pos, plen)
     # (with positions the checks are cheap: more of them, deeper)
