@@ -1403,7 +1403,9 @@ ALT_MERGE_CHECKS = 24
 ALT_MERGE_WIDER = 16
 #: below this many triangles the swaps' outside pairings are read off cycle positions
 #: (``_join_kernels.cycle_positions_into``, O(m) again after each swap taken), not walked
-ALT_POSITIONS_BELOW = 100_000
+#: (CPU of the whole call against the walks, session 13: 15 k 0.054 / 0.060 s, 30 k
+#: 0.098 / 0.103 s, 76 k 0.192 / 0.166 s: the renumbering grows with m)
+ALT_POSITIONS_BELOW = 25_000
 #: there, in place of ``ALT_MERGE_DEPTH``, ``ALT_MERGE_CHECKS``, ``ALT_MERGE_WIDER``: the checks
 #: read positions, so more of them cost what the walks did (docs/sparse.md, session 13)
 ALT_SMALL_DEPTH, ALT_SMALL_CHECKS, ALT_SMALL_WIDER = 28, 64, 64
