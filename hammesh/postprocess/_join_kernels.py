@@ -996,13 +996,12 @@ def cycle_positions_into(twin, is_cov, pos, plen):
     for s in range(m):
         if pos[s] >= 0:
             continue
-        e = -1
-        for k in range(3):
-            if is_cov[3 * s + k]:
-                e = 3 * s + k
-                break
-        if e < 0:
-            continue
+        k = 0
+        while k < 3 and not is_cov[3 * s + k]:
+            k += 1
+        if k == 3:
+            continue  # (off the cover)
+        e = 3 * s + k
         # walk: leave s by e, then by each triangle's other cover edge
         e0 = e
         pos[s] = 0
