@@ -50,6 +50,10 @@ cover along an alternating cycle that merges their two cycles).
 
 One command for every figure the issue names: ``python benchmarks/bench_sparse.py --big``.
 
+``--rows MESH`` (e.g. ``la``): that table mesh's new rows below the parents rule,
+grouped by the join (Steiner point) that made them, with the parents' angles and, for
+a split, its opposite corners against the parents' smallest angle.
+
 Where the first call's time goes: ``python benchmarks/bench_sparse.py --breakdown
 [--max-area 1e-6]`` (its own fresh process): raw Triangle's first call, then the
 CLI's pipeline (``quality_mesh``, isolated, which loads the kernels while Triangle
@@ -200,7 +204,123 @@ def coarse_a_row() -> float:
         f"(target <= 10 %; {r['uncovered']} uncovered, {r['fans']} fans over {r['fan_triangles_replaced']}), "
         f"min angle {r['min_angle_output_deg']:.1f}"
     )
+    # where the points come from: the cover's cycles and what joins them
+    print(
+        f"  points: {r['incenters']} incenters + {r['midpoints']} midpoints + {r['fans']} fan points; "
+        f"cover: {r['cycles_before_merging']} cycles, {r['uncovered']} uncovered "
+        f"({r['uncovered_boundary']} with a boundary edge); joins: {r['swaps']} swaps "
+        f"({r['swaps_absorbing']} absorbing), {r['edge_splits']} edge splits, {r['bridges']} Thm 2.4 bridges, "
+        f"{r['ring_joins']} ring joins; {_outer_only(m)} triangles have three vertices on the outer "
+        "boundary (no Hamiltonian triangulation keeps them whole)"
+    )
     return s
+
+
+def _outer_only(m) -> int:
+    """Triangles whose three corners lie on the outer boundary loop.
+
+    A kept triangle lies on the cycle, which crosses two of its edges; each crossed
+    edge has one end inside the cycle's closed curve, and a vertex of the outer
+    boundary never is (a hole's may be, if the cycle winds around it). So none of
+    these can stay whole in any Hamiltonian triangulation that keeps the boundary.
+    """
+    from hammesh.halfedge import half_edges
+
+    tri = np.asarray(m.triangles)
+    tw = half_edges(tri, m.n_points).twin
+    b = np.flatnonzero(tw < 0)
+    nxt = dict(zip(tri[b // 3, b % 3].tolist(), tri[b // 3, (b % 3 + 1) % 3].tolist()))
+    best, outer, seen = -np.inf, [], set()
+    for v in nxt:
+        if v in seen:
+            continue
+        loop = [v]
+        seen.add(v)
+        while nxt[loop[-1]] != v:
+            loop.append(nxt[loop[-1]])
+            seen.add(loop[-1])
+        p = np.asarray(m.points)[loop]
+        area = 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+        if area > best:  # (the outer loop: counter-clockwise, the largest)
+            best, outer = area, loop
+    on = np.zeros(m.n_points, bool)
+    on[outer] = True
+    return int(on[tri].all(axis=1).sum())
+
+
+def _corner_angles(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """(k, 3) angles in degrees at each corner of each triangle."""
+    p = points[tri]
+    out = np.empty(tri.shape)
+    for k in range(3):
+        u, v = p[:, (k + 1) % 3] - p[:, k], p[:, (k + 2) % 3] - p[:, k]
+        out[:, k] = np.degrees(np.arctan2(np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]), (u * v).sum(axis=1)))
+    return out
+
+
+def rows_below_rule(name: str, target: int) -> None:
+    """Which joins make one table mesh's rows below the parents rule (``--rows MESH``).
+
+    Rows are grouped by the Steiner point they share (a split's four rows, a fan's,
+    a bridge's sectors); the group's parents are the input triangles its rows lie
+    in (``parent``), so a row's parents' smallest angle here is the group's
+    (the construction's own is per join: the two triangles a split replaces, the
+    same set for a plain split). For a group of two parents sharing an edge: the
+    corners opposite it against the pair's smallest angle, as ``opp / pm`` (a split
+    keeps ``keep`` only if both are >= 2 x keep: it halves them). Swapped rows
+    without a Steiner point are listed by their parents alone.
+    """
+    import hammesh
+
+    dom = dict(_domains())[name]
+    m = _mesh_at(dom, target)
+    h = hammesh.hamiltonian(m, mode="sparse")
+    keep = h.report["keep"]
+    t_in = np.asarray(m.triangles)
+    a_in = _corner_angles(np.asarray(m.points), t_in)
+    rows = np.asarray(h.triangles)
+    a_out = _corner_angles(np.asarray(h.points), rows)
+    new = np.flatnonzero(h.kind != 3)
+    n_in = m.n_points
+    groups: dict = {}
+    # a swapped row without a Steiner point goes with the new row across its edges
+    # (its pair: the flipped diagonal; an improvement flip's pair likewise)
+    edge_rows: dict = {}
+    for r in new.tolist():
+        for k in range(3):
+            edge_rows.setdefault(tuple(sorted((int(rows[r][k]), int(rows[r][(k + 1) % 3])))), []).append(r)
+    for r in new.tolist():
+        st = rows[r][rows[r] >= n_in]
+        if len(st):
+            key = ("point", int(st.min()))
+        else:
+            mates = [q for k in range(3)
+                     for q in edge_rows[tuple(sorted((int(rows[r][k]), int(rows[r][(k + 1) % 3]))))]
+                     if q != r and not (rows[q] >= n_in).any()]
+            key = ("swap rows", min([r] + mates))
+        groups.setdefault(key, []).append(r)
+    names = {0: "sector/fan", 1: "bridge flip", 2: "split", 4: "swap"}
+    print(f"{name}: {m.n_triangles:,} triangles, {h.report['below_parent_rule']} rows below the parents rule "
+          f"(keep {keep}), by join (parents: their angles in degrees)")
+    shown = 0
+    for key, rs in sorted(groups.items()):
+        par = sorted({int(h.parent[r]) for r in rs})
+        pm = a_in[par].min()
+        low = [r for r in rs if a_out[r].min() < keep * pm * (1 - 1e-9)]
+        if not low:
+            continue
+        shown += len(low)
+        kinds = sorted({names.get(int(h.kind[r]), str(int(h.kind[r]))) for r in rs})
+        line = (f"  {key[0]} {key[1]}: {len(rs)} rows ({', '.join(kinds)}), {len(low)} below; new smallest "
+                f"{a_out[low].min():.2f} = {a_out[low].min() / pm:.3f} x parents' {pm:.2f}; parents "
+                + "; ".join(f"{t} ({', '.join(f'{x:.1f}' for x in a_in[t])})" for t in par))
+        if len(par) == 2:
+            shared = set(t_in[par[0]].tolist()) & set(t_in[par[1]].tolist())
+            if len(shared) == 2:
+                opp = [a_in[t][[v not in shared for v in t_in[t].tolist()]][0] for t in par]
+                line += "; opposite corners / pm " + " / ".join(f"{o / pm:.2f}" for o in opp)
+        print(line)
+    print(f"  ({shown} rows listed by their group's parents; the report counts per join)")
 
 
 def fem_row(area: float) -> float | None:
@@ -325,6 +445,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--breakdown", action="store_true", help="first call's time per step (run as its own command)")
     ap.add_argument("--angles", action="store_true", help="only the quality table, A at 87 and their targets")
     ap.add_argument("--max-area", type=float, default=1e-6, help="--breakdown's mesh (1e-6: about 1.5 M triangles)")
+    ap.add_argument("--rows", metavar="MESH", help="dump one table mesh's new rows below the parents rule, by join")
     ap.add_argument("--fresh", type=float, help=argparse.SUPPRESS)  # child: one first-call row at this area
     args = ap.parse_args(argv)
 
@@ -333,6 +454,9 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.breakdown:
         breakdown(args.max_area)
+        return 0
+    if args.rows:
+        rows_below_rule(args.rows, args.target)
         return 0
     if args.fresh:
         # a fresh process: Triangle's first call, then sparse mode's (kernels loaded here)

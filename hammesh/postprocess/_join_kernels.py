@@ -554,7 +554,67 @@ def compass_search(pts, poly, n, px, py, lo, hi, step, iters, max_rounds, exact=
 
 
 @njit(cache=True, nogil=True)
-def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters):
+def _with_apex(tri, poly, phe, n, i, y, kg, tpoly, tphe):
+    """``poly[:n]`` with ``y``'s apex ``w`` inserted after corner i (``y`` lies across
+    polygon edge i, its half-edge ``3 y + kg``), into ``tpoly``, ``tphe``: edges
+    ``(a, w)``, ``(w, b)`` of ``y`` in place of ``(a, b)``. Returns ``w``."""
+    w = tri[y, (kg + 2) % 3]
+    for j in range(i + 1):
+        tpoly[j] = poly[j]
+        tphe[j] = phe[j]
+    tpoly[i + 1] = w
+    tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
+    tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
+    for j in range(i + 1, n):
+        tpoly[j + 1] = poly[j]
+        tphe[j + 1] = phe[j]
+    return w
+
+
+@njit(cache=True, nogil=True)
+def _fan_with(pts, tri, tpoly, n, members, nm, y, gm, px, py, have_pt, keep, hi, floor, hi_fan, iters, starts):
+    """The fan over ``tpoly[:n]`` (a group's polygon with ``y`` added): its point, from the
+    members' and ``y``'s centroids and the group's last point (``have_pt``), and
+    whether it keeps the group's bounds (``fan_groups``). Returns ``(x, y, slack, group
+    minimum, ok)``."""
+    ns = 0
+    for j in range(nm + 1):
+        x = members[j] if j < nm else y
+        starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
+        starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
+        ns += 1
+    if have_pt:
+        starts[ns, 0] = px
+        starts[ns, 1] = py
+        ns += 1
+    step = 0.25 * math.sqrt(
+        (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
+    )
+    x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n, starts, ns, keep * gm, hi, step, iters)
+    ok = not (sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan)
+    return x0, y0, sl, gm, ok
+
+
+@njit(cache=True, nogil=True)
+def _across(tri, twin, pinned, poly, phe, n, i):
+    """The triangle across free polygon edge i and that edge's index in it, ``(y, kg)``;
+    ``(-1, -1)`` on the boundary, a pinned edge, or where ``y``'s apex is a corner
+    already (the union would not stay a disc without inner vertices)."""
+    h = phe[i]
+    g = twin[h]
+    if g < 0 or pinned[h]:
+        return -1, -1
+    y = g // 3
+    kg = g - 3 * y
+    w = tri[y, (kg + 2) % 3]
+    for j in range(n):
+        if poly[j] == w:
+            return -1, -1
+    return y, kg
+
+
+@njit(cache=True, nogil=True)
+def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters, is_cov, absorb):
     """Groups of adjacent uncovered triangles, each to be replaced by one fan.
 
     Chains of triangles no cover cycle passes (thin parts, what ears leave) would
@@ -566,10 +626,22 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     sectors) and <= ``hi_fan``. A fan over a polygon of ``k + 2`` corners is a cycle of
     ``k + 2`` triangles with one Steiner point, in place of ``k`` triangles.
 
+    With ``absorb`` (``is_cov``: the cover's half-edges) a grown group of two or more may then take
+    in one *covered* triangle ``y`` across the polygon edge that is ``y``'s non-cover
+    edge (the best fan of those within the same bounds; ``_absorb_covered``). ``y``'s two
+    cover edges are then consecutive edges of the polygon, around its apex ``w``, and
+    the fan's cycle cut at the spoke to ``w`` is a path from one to the other: the
+    group joins ``y``'s cycle through its one Steiner point, with no join (on Triangle's
+    ``A`` at 87 triangles each fan was otherwise a cycle of its own, joined by a Thm 2.4
+    bridge: two incenters more).
+
     Returns ``(group (m,) int64, -1 if none; fan points (g, 2); group minimum angle
-    (g,); polygon offsets (g + 1,); polygon corners; polygon edge half-edges)``:
-    group j's polygon is ``corners[off[j]:off[j + 1]]`` counter-clockwise, its edge
-    ``(corners[i], corners[i + 1])`` is the input half-edge ``he[i]``.
+    (g,); polygon offsets (g + 1,); polygon corners; polygon edge half-edges;
+    absorbed (g,) the covered triangle taken in or -1; apex (g,) the index of its apex
+    in the group's polygon, from ``off[j]``, or -1)``: group j's polygon is
+    ``corners[off[j]:off[j + 1]]`` counter-clockwise, its edge ``(corners[i],
+    corners[i + 1])`` is the input half-edge ``he[i]`` (for an absorbed ``y``, the two
+    edges around its apex are ``y``'s).
     """
     m = tri.shape[0]
     group = np.full(m, -1, np.int64)
@@ -578,6 +650,8 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     off = np.zeros(m // 2 + 2, np.int64)
     corners = np.empty(2 * m + 2, np.int64)
     hes = np.empty(2 * m + 2, np.int64)
+    absorbed = np.full(m // 2 + 1, -1, np.int64)
+    apex = np.full(m // 2 + 1, -1, np.int64)
     ng = 0
     n_c = 0
     cap = max_group + 3
@@ -602,50 +676,20 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
         while nm < max_group:
             grown = False
             for i in range(n):
-                h = phe[i]
-                g = twin[h]
-                if g < 0 or pinned[h]:
-                    continue
-                y = g // 3
-                if cyc[y] >= 0 or group[y] >= 0:
+                y, kg = _across(tri, twin, pinned, poly, phe, n, i)
+                if y < 0 or cyc[y] >= 0 or group[y] >= 0:
                     continue
                 dup = False
                 for j in range(nm):
                     if members[j] == y:
                         dup = True
-                kg = g - 3 * y
-                w = tri[y, (kg + 2) % 3]
-                for j in range(n):
-                    if poly[j] == w:
-                        dup = True
                 if dup:
                     continue
                 # insert w between poly[i] and poly[i + 1]: edges (a, w), (w, b) of y
-                for j in range(i + 1):
-                    tpoly[j] = poly[j]
-                    tphe[j] = phe[j]
-                tpoly[i + 1] = w
-                tphe[i] = 3 * y + (kg + 1) % 3  # a -> w
-                tphe[i + 1] = 3 * y + (kg + 2) % 3  # w -> b
-                for j in range(i + 1, n):
-                    tpoly[j + 1] = poly[j]
-                    tphe[j + 1] = phe[j]
-                gm = min(gmin, amin[y])
-                ns = 0
-                for j in range(nm + 1):
-                    x = members[j] if j < nm else y
-                    starts[ns, 0] = (pts[tri[x, 0], 0] + pts[tri[x, 1], 0] + pts[tri[x, 2], 0]) / 3.0
-                    starts[ns, 1] = (pts[tri[x, 0], 1] + pts[tri[x, 1], 1] + pts[tri[x, 2], 1]) / 3.0
-                    ns += 1
-                if nm > 1:
-                    starts[ns, 0] = px
-                    starts[ns, 1] = py
-                    ns += 1
-                step = 0.25 * math.sqrt(
-                    (pts[tri[y, 0], 0] - pts[tri[y, 1], 0]) ** 2 + (pts[tri[y, 0], 1] - pts[tri[y, 1], 1]) ** 2
-                )
-                x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n + 1, starts, ns, keep * gm, hi, step, iters)
-                if sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan:
+                _with_apex(tri, poly, phe, n, i, y, kg, tpoly, tphe)
+                x0, y0, sl, gm, ok = _fan_with(pts, tri, tpoly, n + 1, members, nm, y, min(gmin, amin[y]), px, py,
+                                               nm > 1, keep, hi, floor, hi_fan, iters, starts)
+                if not ok:
                     continue
                 members[nm] = y
                 nm += 1
@@ -662,6 +706,16 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
                 break
         if nm < 2:
             continue
+        y_in = -1
+        if absorb and nm < max_group:
+            y_in, iw, px, py, gmin, n = _absorb_covered(
+                pts, tri, twin, pinned, cyc, is_cov, group, amin, keep, hi, floor, hi_fan, iters, poly, phe, n,
+                members, nm, gmin, px, py, tpoly, tphe, starts,
+            )
+            if y_in >= 0:
+                group[y_in] = ng
+                absorbed[ng] = y_in
+                apex[ng] = iw
         for j in range(nm):
             group[members[j]] = ng
         fan_pt[ng, 0] = px
@@ -673,7 +727,51 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
             n_c += 1
         ng += 1
         off[ng] = n_c
-    return group, fan_pt[:ng], gmin_out[:ng], off[: ng + 1], corners[:n_c], hes[:n_c]
+    return group, fan_pt[:ng], gmin_out[:ng], off[: ng + 1], corners[:n_c], hes[:n_c], absorbed[:ng], apex[:ng]
+
+
+@njit(cache=True, nogil=True)
+def _absorb_covered(pts, tri, twin, pinned, cyc, is_cov, group, amin, keep, hi, floor, hi_fan, iters, poly, phe, n,
+                    members, nm, gmin, px, py, tpoly, tphe, starts):
+    """The best covered triangle a fan group can take in (``fan_groups``), in place.
+
+    A candidate ``y`` lies across a free polygon edge that is ``y``'s non-cover edge,
+    its apex is not a corner yet, and the fan over the grown polygon keeps the group's
+    bounds (every angle ``>= max(floor, 1/2 x the smallest of the parents)``, ``<=
+    hi_fan``); of several, the largest slack. Returns ``(y or -1, index of y's apex in
+    the polygon, fan point x, y, group minimum, corners)``; with a ``y`` ``poly`` and
+    ``phe`` hold the grown polygon.
+    """
+    best_y = -1
+    best_i = -1
+    best_sl = -np.inf
+    bx = px
+    by = py
+    for i in range(n):
+        y, kg = _across(tri, twin, pinned, poly, phe, n, i)
+        if y < 0 or cyc[y] < 0 or group[y] >= 0 or is_cov[3 * y + kg]:
+            continue
+        _with_apex(tri, poly, phe, n, i, y, kg, tpoly, tphe)
+        x0, y0, sl, gm, ok = _fan_with(pts, tri, tpoly, n + 1, members, nm, y, min(gmin, amin[y]), px, py, True,
+                                       keep, hi, floor, hi_fan, iters, starts)
+        if not ok:
+            continue
+        if sl > best_sl:
+            best_sl = sl
+            best_y = y
+            best_i = i
+            bx = x0
+            by = y0
+    if best_y < 0:
+        return -1, -1, px, py, gmin, n
+    y = best_y
+    i = best_i
+    _with_apex(tri, poly, phe, n, i, y, twin[phe[i]] - 3 * y, tpoly, tphe)
+    n += 1
+    for j in range(n):
+        poly[j] = tpoly[j]
+        phe[j] = tphe[j]
+    return y, i + 1, bx, by, min(gmin, amin[y]), n
 
 
 @njit(cache=True, nogil=True)
@@ -883,6 +981,107 @@ def cover_exit(twin, is_cov, e):
 
 
 @njit(cache=True, nogil=True)
+def cycle_positions_into(twin, is_cov, pos, plen):
+    """Each covered triangle's place along its cover cycle and that cycle's length.
+
+    ``pos[t]`` counts from an arbitrary start of the cycle in its walking direction,
+    ``plen[t]`` is the cycle's length (-1 for both off the cover or where the cover
+    is not a closed cycle there). With them the outside pairing of a swap's links is
+    read off (``pairs_by_position``) instead of walked. O(m).
+    """
+    m = pos.shape[0]
+    for t in range(m):
+        pos[t] = -1
+        plen[t] = -1
+    for s in range(m):
+        if pos[s] >= 0:
+            continue
+        k = 0
+        while k < 3 and not is_cov[3 * s + k]:
+            k += 1
+        if k == 3:
+            continue  # (off the cover)
+        e = 3 * s + k
+        # walk: leave s by e, then by each triangle's other cover edge
+        e0 = e
+        pos[s] = 0
+        n = 1
+        closed = False
+        while True:
+            if twin[e] < 0:
+                break
+            x = twin[e] // 3
+            if x == s:
+                closed = True
+                break
+            if pos[x] >= 0:
+                break
+            pos[x] = n
+            n += 1
+            e = cover_exit(twin, is_cov, e)
+            if e < 0:
+                break
+        # second pass: the length (or -1 for a broken walk)
+        length = n if closed else -1
+        x = s
+        e2 = e0
+        for i in range(n):
+            plen[x] = length
+            if not closed:
+                pos[x] = -2  # (seen, unusable)
+            if i + 1 < n:
+                x = twin[e2] // 3
+                e2 = cover_exit(twin, is_cov, e2)
+    for t in range(m):
+        if pos[t] == -2:
+            pos[t] = -1
+
+
+@njit(cache=True, nogil=True)
+def pairs_by_position(twin, pos, plen, hs):
+    """:func:`ring_outside_pairs`' answer from cycle positions (``cycle_positions_into``).
+
+    ``hs`` are one cycle's links (group side). The outside path from link ``a`` (group
+    triangle ``x`` to ``y``) runs along the cycle away from ``x`` until it enters the
+    group again, by the link at the first link triangle in that direction whose own
+    outside triangle faces back. Returns ``pair`` (-1 everywhere if a position is
+    missing).
+    """
+    n = hs.shape[0]
+    pair = np.full(n, -1, np.int64)
+    xs = np.empty(n, np.int64)
+    ds = np.empty(n, np.int64)
+    for a in range(n):
+        x = hs[a] // 3
+        y = twin[hs[a]] // 3
+        L = plen[x]
+        if L <= 0 or pos[x] < 0 or pos[y] < 0 or plen[y] != L:
+            return np.full(n, -1, np.int64)
+        xs[a] = x
+        ds[a] = 1 if (pos[y] - pos[x]) % L == 1 else -1
+    for a in range(n):
+        L = plen[xs[a]]
+        best = -1
+        bd = L + 1
+        for b in range(n):
+            if b == a or ds[b] != -ds[a]:
+                continue
+            d = ((pos[xs[b]] - pos[xs[a]]) * ds[a]) % L
+            if d == 0:
+                d = L
+            if d < bd:
+                bd = d
+                best = b
+        if best < 0:
+            return np.full(n, -1, np.int64)
+        pair[a] = best
+    for a in range(n):
+        if pair[pair[a]] != a:
+            return np.full(n, -1, np.int64)  # (not a matching: positions stale)
+    return pair
+
+
+@njit(cache=True, nogil=True)
 def ring_outside_pairs(twin, is_cov, links, budget):
     """Which links of a ring fan's group the cover cycles join *outside* the group.
 
@@ -983,8 +1182,12 @@ def load_ring_kernels() -> None:
     buf = np.empty(8, np.int64)
     starts = np.empty(3, np.int64)
     alternating_cycles_into(twin, is_cov, np.zeros(2, np.bool_), 2, 4, 16, buf, starts, 2)
-    swap_merge_outcome(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0,
-                       True)
+    pos = np.empty(2, np.int64)
+    plen = np.empty(2, np.int64)
+    cycle_positions_into(twin, is_cov, pos, plen)
+    for p in (pos, np.empty(0, np.int64)):
+        swap_merge_outcome(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0,
+                           True, p, plen)
 
 
 @njit(cache=True, nogil=True)
@@ -1143,6 +1346,74 @@ def _on_path(nodes, n, x):
     return False
 
 
+#: slots of ``_back_distances``' table (a power of two) and most triangles it labels
+BACK_SLOTS = 1 << 15
+BACK_MAX = 1 << 13
+
+
+@njit(cache=True, nogil=True)
+def _dist_get(keys, vals, x, far):
+    """``x``'s distance in ``_back_distances``' table, ``far`` if it has none."""
+    mask = keys.shape[0] - 1
+    i = (x * 0x9E3779B1) & mask
+    while keys[i] >= 0:
+        if keys[i] == x:
+            return vals[i]
+        i = (i + 1) & mask
+    return far
+
+
+@njit(cache=True, nogil=True)
+def _back_distances(twin, blocked, t, radius):
+    """Dual distances from ``t`` through triangles not ``blocked``, up to ``radius``.
+
+    An open-addressing table (``BACK_SLOTS`` slots, no O(m) array per call) of at most
+    ``BACK_MAX`` triangles, breadth-first: a triangle not in it is at least ``far``
+    away (one more than the last whole layer). Returns ``(keys, vals, far)`` for
+    :func:`_dist_get`.
+    """
+    keys = np.full(BACK_SLOTS, -1, np.int64)
+    vals = np.empty(BACK_SLOTS, np.int64)
+    queue = np.empty(BACK_MAX, np.int64)
+    mask = BACK_SLOTS - 1
+    i = (t * 0x9E3779B1) & mask
+    keys[i] = t
+    vals[i] = 0
+    queue[0] = t
+    head = 0
+    tail = 1
+    far = radius + 1
+    while head < tail:
+        x = queue[head]
+        head += 1
+        dx = _dist_get(keys, vals, x, far)
+        if dx >= radius:
+            break
+        for k in range(3):
+            g = twin[3 * x + k]
+            if g < 0:
+                continue
+            y = g // 3
+            if blocked[y] and y != t:
+                continue
+            j = (y * 0x9E3779B1) & mask
+            found = False
+            while keys[j] >= 0:
+                if keys[j] == y:
+                    found = True
+                    break
+                j = (j + 1) & mask
+            if found:
+                continue
+            if tail == BACK_MAX:
+                return keys, vals, dx + 1  # (the layer after dx is not whole)
+            keys[j] = y
+            vals[j] = dx + 1
+            queue[tail] = y
+            tail += 1
+    return keys, vals, far
+
+
 @njit(cache=True, nogil=True)
 def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, starts, max_cycles):
     """Alternating cycles of the cover through its non-cover half-edge ``h0`` (``t -> u``), shorter first.
@@ -1164,6 +1435,10 @@ def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, start
     flips = np.empty(2 * depth + 2, np.int64)
     stack_x = np.empty(depth + 1, np.int64)
     stack_j = np.empty(depth + 1, np.int64)
+    # dual distances back to t (through triangles a cycle may pass): a pair at z with
+    # r pairs left can close only if z is within 2 r + 1 steps of t, so the search's
+    # budget goes to paths that can still return (``_back_distances``)
+    keys, vals, far = _back_distances(twin, blocked, t, 2 * depth + 1)
     n_out = 0
     starts[0] = 0
     steps = 0
@@ -1216,6 +1491,8 @@ def alternating_cycles_into(twin, is_cov, blocked, h0, depth, budget, out, start
             z = twin[g] // 3
             if blocked[z] or _on_path(nodes, n_nodes, z):
                 continue
+            if _dist_get(keys, vals, z, far) > 2 * (limit - level - 1) + 1:
+                continue  # (z cannot get back to t within this depth)
             nodes[n_nodes] = y
             nodes[n_nodes + 1] = z
             n_nodes += 2
@@ -1248,11 +1525,12 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
     """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
     other cycle crossing ``group`` one cycle of its own? (:func:`swap_merge_outcome`'s
     first answer; ``any_merge``: its second, True wherever no cycle splits and some merge)."""
-    return swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge) > 0
+    none = np.empty(0, np.int64)
+    return swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge, none, none) > 0
 
 
 @njit(cache=True, nogil=True)
-def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wide):
+def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wide, pos, plen):
     """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
     other cycle crossing ``group`` one cycle of its own? (``sparse._alternating_merges``' test)
 
@@ -1270,6 +1548,10 @@ def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wi
     answers come from one walk: the caller asking the wider question where the first
     fails walked the same cycles twice before (session 12: 725 tests at 1.5 M, 40 % of
     them the wider one).
+
+    With ``pos`` and ``plen`` (``cycle_positions_into`` on this cover; empty: walk)
+    the outside pairing is read off the positions (``pairs_by_position``): no walk, no
+    budget, so no check is left undecided.
     """
     ng = group.shape[0]
     nf = flips.shape[0]
@@ -1353,7 +1635,10 @@ def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wi
         hs = np.empty(ns, np.int64)
         for a in range(ns):
             hs[a] = links[sel[a]]
-        pair, _ = ring_outside_pairs(twin, is_cov, hs, budget)
+        if pos.shape[0]:
+            pair = pairs_by_position(twin, pos, plen, hs)
+        else:
+            pair, _ = ring_outside_pairs(twin, is_cov, hs, budget)
         for a in range(ns):
             if pair[a] < 0:
                 return 0

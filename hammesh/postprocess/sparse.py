@@ -97,6 +97,9 @@ SCORE_MIN_ROWS = 20_000
 EDGE_MIN_ROWS = 50_000
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
+#: a fan group may take in one covered neighbour across its non-cover edge and so join
+#: that cycle without a join (``_join_kernels.fan_groups``)
+FAN_ABSORB = True
 #: rows between two of the sample whose worst ratio bounds ``kept_radius_ratio``'s search
 KEPT_RATIO_STRIDE = 64
 #: triangles from which ``sparse_hamiltonian`` renumbers its input along a Hilbert
@@ -229,8 +232,9 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     hi_fan = max(hi, 0.5 * math.pi + 0.5 * amax_in)  # no worse than an incenter sector
     # fan triangles keep the input's minimum angle (2 x floor): a bridge may split
     # them at their incenters later, and Thm 2.4's bound then needs exactly that
-    group, fpt, gmin, off, corners, hes = _j.fan_groups(
-        pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS
+    group, fpt, gmin, off, corners, hes, absorbed, apex = _j.fan_groups(
+        pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS,
+        cover.is_cov, FAN_ABSORB,
     )
     n_fan = len(fpt)
     if n_fan == 0:  # (no new orig_of, is_fan: the caller's stand; an arange here faulted 12 MB at 1.5 M)
@@ -253,11 +257,18 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     is_cov2 = np.concatenate(
         [cover.is_cov.reshape(m, 3)[kept], np.tile(np.array([True, False, True]), (len(fan_tri), 1))], axis=0
     )
-    cyc2 = np.concatenate([cover.cycle[kept], cover.n_cycles + g_of])
+    # a fan that took in a covered triangle is a path of that triangle's cycle, cut at
+    # the spoke to its apex (``fan_groups``); the others are cycles of their own
+    own = absorbed < 0
+    gid = np.where(own, cover.n_cycles + np.cumsum(own) - 1, cover.cycle[np.maximum(absorbed, 0)])
+    r_w = len(kept) + off[:-1][~own] + apex[~own]
+    is_cov2[r_w - 1] = (True, True, False)
+    is_cov2[r_w] = (False, True, True)
+    cyc2 = np.concatenate([cover.cycle[kept], gid[g_of]])
     cover2 = CycleCover(
         is_cov=is_cov2.reshape(-1),
         cycle=cyc2,
-        n_cycles=cover.n_cycles + n_fan,
+        n_cycles=cover.n_cycles + int(own.sum()),
         n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched,
         n_rotations=cover.n_rotations,
@@ -1390,6 +1401,14 @@ ALT_MERGE_CHECKS = 24
 #: alternating cycles per join also judged for merging more cycles than the join's two
 #: (taken where the plan joins exactly those by a subtree of its steps, all undone)
 ALT_MERGE_WIDER = 16
+#: below this many triangles the swaps' outside pairings are read off cycle positions
+#: (``_join_kernels.cycle_positions_into``, O(m) again after each swap taken), not walked
+#: (CPU of the whole call against the walks, session 13: 15 k 0.054 / 0.060 s, 30 k
+#: 0.098 / 0.103 s, 76 k 0.192 / 0.166 s: the renumbering grows with m)
+ALT_POSITIONS_BELOW = 25_000
+#: there, in place of ``ALT_MERGE_DEPTH``, ``ALT_MERGE_CHECKS``, ``ALT_MERGE_WIDER``: the checks
+#: read positions, so more of them cost what the walks did (docs/sparse.md, session 13)
+ALT_SMALL_DEPTH, ALT_SMALL_CHECKS, ALT_SMALL_WIDER = 28, 64, 64
 #: most steps of one swap's outside walks (``_join_kernels.swap_merge_outcome``); undecided: not taken
 ALT_MERGE_WALK = 20_000
 
@@ -1550,23 +1569,33 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             parent[top(find(int(cyc[h // 3])))] = top(find(int(cyc[tw[h] // 3])))
         return inside if len({top(c) for c in merged}) == 1 else None
 
-    buf = np.empty(ALT_MERGE_CHECKS * (2 * ALT_MERGE_DEPTH + 2), np.int64)
-    starts = np.empty(ALT_MERGE_CHECKS + 1, np.int64)
+    # cycle positions (below ``ALT_POSITIONS_BELOW`` triangles): the checks' outside
+    # pairings read off them, not walked; made again after each swap taken (O(m))
+    small = len(status) < ALT_POSITIONS_BELOW
+    pos = fresh(len(status), np.int64) if small else np.empty(0, np.int64)
+    plen = fresh(len(pos), np.int64) if small else pos
+    if small:
+        _j.cycle_positions_into(tw, is_cov, pos, plen)
+    # (with positions the checks are cheap: more of them, deeper)
+    depth, checks, n_wider = (ALT_SMALL_DEPTH, ALT_SMALL_CHECKS, ALT_SMALL_WIDER) if small else (
+        ALT_MERGE_DEPTH, ALT_MERGE_CHECKS, ALT_MERGE_WIDER)
+    buf = np.empty(checks * (2 * depth + 2), np.int64)
+    starts = np.empty(checks + 1, np.int64)
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
         if t in used or u in used or h0 not in steps:
             continue
         ca, cb = find(int(cyc[t])), find(int(cyc[u]))
-        n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, ALT_MERGE_DEPTH, ALT_MERGE_BUDGET, buf, starts,
-                                       ALT_MERGE_CHECKS)
-        wider = ALT_MERGE_WIDER
+        n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, depth, ALT_MERGE_BUDGET, buf, starts, checks)
+        wider = n_wider
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
             # taken if the plan joins them by a subtree)
-            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0)
+            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0,
+                                           pos, plen)
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1608,6 +1637,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                     undo(h)
                     done += 1
             _label_paths(tw, is_cov, group, out, find, cyc)
+            if small:
+                _j.cycle_positions_into(tw, is_cov, pos, plen)
             break
     if not done:
         return cover, 0

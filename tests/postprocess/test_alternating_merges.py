@@ -78,6 +78,11 @@ def test_local_swap_decision_equals_relabelling_the_cover(name: str) -> None:
                and cyc[tw[h] // 3] >= 0 and cyc[h // 3] != cyc[tw[h] // 3]]
     assert len(between) >= 10
     buf, starts = np.empty(24 * 42, np.int64), np.empty(25, np.int64)
+    none = np.empty(0, np.int64)
+    # the outside pairings read off cycle positions (``sparse`` below
+    # ``ALT_POSITIONS_BELOW`` triangles) instead of walked: the same answers
+    pos, plen = np.empty(len(tri), np.int64), np.empty(len(tri), np.int64)
+    J.cycle_positions_into(tw, is_cov, pos, plen)
     yes = no = wider = 0
     for h0 in between[:40]:
         t, u = h0 // 3, tw[h0] // 3
@@ -99,9 +104,11 @@ def test_local_swap_decision_equals_relabelling_the_cover(name: str) -> None:
             assert wide or not local
             wider += wide and not local
             # both answers from one walk, as ``sparse._alternating_merges`` asks them
-            both = J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, True)
+            both = J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, True, none, none)
             assert both == (1 if local else 2 if wide else 0)
-            assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, False) == int(local)
+            assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, False, none,
+                                        none) == int(local)
+            assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 0, True, pos, plen) == both
     assert yes >= 1 and no >= 1 and wider >= 1  # every answer exercised
 
 

@@ -365,16 +365,20 @@ def test_sliver_circle_is_fast_and_linear() -> None:
 
 
 @pytest.mark.parametrize("name", ["face", "square_circle_hole"])
-def test_improvement_flips_keep_the_cycle_and_never_worsen(name: str) -> None:
+def test_improvement_flips_keep_the_cycle_and_never_worsen(name: str, monkeypatch) -> None:
     # issue 13: the cavity of a join re-triangulated by flips of edges the cycle
     # crosses between consecutive triangles (``_improve_kernels``)
     from hammesh.halfedge import _kernels, prepare_mesh
+    from hammesh.postprocess import sparse
     from hammesh.postprocess.sparse import sparse_cycles
 
     dom = bundled_domain(name)
     m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 3000)
     clean, he, is_con = prepare_mesh(m)
     amin = float(clean.info["validated"]["min_angle"])
+    # (the joins' cavities without the cover swaps, which take most joins below the
+    # rule away on these meshes since session 13: the flips have work to do)
+    monkeypatch.setattr(sparse, "ALT_MERGE_TRIES", 0)
     runs = {imp: sparse_cycles(clean.points, clean.triangles, he.twin, is_con, amin, improve=imp) for imp in (0, 1)}
     off, on = runs[False], runs[True]
     assert off.counts["improvement_flips"] == 0 < on.counts["improvement_flips"]
