@@ -93,6 +93,10 @@ IMPROVE_ROUNDS = 3
 #: candidate joins per thread below which scoring runs in one call (a placement is
 #: ~100x the work of an angle row, so threads pay off far below THREAD_MIN_ROWS)
 SCORE_MIN_ROWS = 20_000
+#: candidates per thread below which *placing* splits (a compass search per row, ~10 us)
+#: runs in one call: the placement passes are a few thousand rows at 1.5 M triangles,
+#: serial on the main thread before (0.03-0.04 s) while the other core idled
+PLACE_MIN_ROWS = 1_000
 #: edges per thread below which judging the edges for the cover runs in one call
 EDGE_MIN_ROWS = 50_000
 #: most triangles one fan (one Steiner point) may replace
@@ -1792,7 +1796,7 @@ def sparse_cycles(
                     bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts), exact,
                 ),
                 len(c),
-                SCORE_MIN_ROWS,
+                SCORE_MIN_ROWS if iters == 0 else PLACE_MIN_ROWS,
             )
             ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
 
