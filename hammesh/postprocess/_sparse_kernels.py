@@ -382,7 +382,7 @@ def _swap_links(cov_1, cov_2, bit_1, bit_2, bit_diag):
 
 
 @njit(cache=True)
-def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
+def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     """The new output triangles, with the two edges the cycle crosses in each.
 
     Only triangles a join changes get rows here: a triangle kept whole (status
@@ -391,8 +391,10 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     ``m + i``, see :func:`walk_links`): at 1.5 M triangles ~99 % of the rows are
     never copied before the final gather.
 
-    ``split_index[t]`` numbers the split triangles (incenter of t is vertex
-    ``n_points + split_index[t]``); midpoints follow, in order of first emission.
+    ``split_rows``: the split triangles (status ``SPLIT``), ascending; the incenter of
+    ``split_rows[i]`` is vertex ``n_points + i`` (counted along the rows; a bridge's
+    other end found by binary search: where a numbering of every row was a cumulative
+    sum over all of them); midpoints follow, in order of first emission.
     Each output row gets ``link``: bit j set if the cycle crosses its edge j (from
     vertex j to j + 1). Row kinds: 0 incenter sector, 1 flip (bridge), 2 midpoint
     (bridge, or an edge split without incenters), 3 input triangle kept whole, 4
@@ -446,6 +448,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     n_mid = 0
     n_all = n_points + n_split
     pos = 0
+    n_inc = 0
     for t in range(m):
         st = status[t]
         if st == PASS:
@@ -485,7 +488,8 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
             _row(out, link, parent, partner, kind, pos + 3, mv, a, d, 1 | (2 if cu else 4), u, t, 2)
             pos += 4
         else:
-            inc = n_points + split_index[t]
+            inc = n_points + n_inc  # (t ascending: the split rows before t, counted)
+            n_inc += 1
             for k in range(3):
                 h = 3 * t + k
                 a = tri[t, k]
@@ -501,7 +505,8 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     pos += 1
                 elif s == FLIP:
                     u = twin[h] // 3
-                    _row(out, link, parent, partner, kind, pos, inc, a, n_points + split_index[u], 3, t, u, 1)
+                    _row(out, link, parent, partner, kind, pos, inc, a, n_points + lower_bound(split_rows, u), 3, t, u,
+                         1)
                     pos += 1
                 else:
                     g = twin[h]
