@@ -32,7 +32,7 @@ from hammesh import threads
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-from hammesh.postprocess._join_kernels import quad_corners
+from hammesh.postprocess._join_kernels import place_fan, quad_corners
 from hammesh.postprocess._thm24_kernels import find_root as _find
 from hammesh.postprocess._thm24_kernels import lower_bound
 
@@ -985,3 +985,95 @@ def _gather_rows_into(
         if q >= 0 and amin[q] < a:
             a = amin[q]
         pm[i] = a
+
+
+@njit(cache=True, nogil=True)
+def union_polygon_into(tri, twin, pinned, members, poly, hes):
+    """The counter-clockwise corners and outer half-edges of a group's union (``sparse._union_polygon``).
+
+    ``members``: the group's triangles; ``poly``, ``hes``: room for ``len(members) + 2``
+    entries each (or more). Returns the polygon's length, 0 where ``sparse._union_polygon``
+    gives None: an edge inside the group is pinned, the union is not a disc with every
+    corner on its boundary (a vertex starts two outer edges, or the outer edges are not
+    ``len(members) + 2`` in one closed loop). The polygon starts at the first outer
+    half-edge in the order of ``members`` and their edges (as the Python version's
+    dictionary did): the same polygon, without a dictionary per group.
+    """
+    nm = members.shape[0]
+    cap = poly.shape[0]
+    n = 0
+    for i in range(nm):
+        x = members[i]
+        for k in range(3):
+            h = 3 * x + k
+            g = twin[h]
+            inside = False
+            if g >= 0:
+                y = g // 3
+                for j in range(nm):
+                    if members[j] == y:
+                        inside = True
+                        break
+            if inside:
+                if pinned[h]:
+                    return 0
+                continue
+            a = tri[x, k]
+            for j in range(n):
+                if poly[j] == a:
+                    return 0
+            if n >= cap:
+                return 0
+            poly[n] = a  # (a -> b along h, gathered unordered first)
+            hes[n] = h
+            n += 1
+    if n != nm + 2:
+        return 0
+    # chain them: the edge from a vertex v is the one whose start is v
+    for i in range(n - 1):
+        h = hes[i]
+        x = h // 3
+        b = tri[x, (h - 3 * x + 1) % 3]
+        nxt = -1
+        for j in range(i + 1, n):
+            if poly[j] == b:
+                nxt = j
+                break
+        if nxt < 0:
+            return 0
+        if nxt != i + 1:
+            poly[i + 1], poly[nxt] = poly[nxt], poly[i + 1]
+            hes[i + 1], hes[nxt] = hes[nxt], hes[i + 1]
+    h = hes[n - 1]
+    x = h // 3
+    return n if tri[x, (h - 3 * x + 1) % 3] == poly[0] else 0
+
+
+@njit(cache=True, nogil=True)
+def ring_fan_point(pts, tri, members, poly, n, amin, keep, lo, hi, iters):
+    """``place_fan`` over ``poly[:n]`` for a ring fan of ``members`` (``sparse._best_ring``).
+
+    Starts: the members' centroids; the first compass step a quarter of the distance
+    from the first centroid to the nearest corner. The lower bound is ``lo``, or with
+    ``keep > 0`` the larger of ``lo`` and ``keep`` x the members' smallest ``amin``.
+    Returns ``(x, y, slack, smallest angle, largest angle, the bound used)``.
+    """
+    nm = members.shape[0]
+    lo_g = lo
+    if keep > 0.0:
+        a = np.inf
+        for i in range(nm):
+            a = min(a, amin[members[i]])
+        lo_g = max(lo, keep * a)
+    starts = np.empty((nm, 2))
+    for i in range(nm):
+        x = members[i]
+        for d in range(2):
+            starts[i, d] = (pts[tri[x, 0], d] + pts[tri[x, 1], d] + pts[tri[x, 2], d]) / 3.0
+    d2 = np.inf
+    for j in range(n):
+        dx = pts[poly[j], 0] - starts[0, 0]
+        dy = pts[poly[j], 1] - starts[0, 1]
+        d2 = min(d2, dx * dx + dy * dy)
+    x, y, sl, nmin, nmax = place_fan(pts, poly, n, starts, nm, lo_g, hi, 0.25 * np.sqrt(d2), iters)
+    return x, y, sl, nmin, nmax, lo_g

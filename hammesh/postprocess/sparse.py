@@ -285,31 +285,10 @@ def _union_polygon(tri: np.ndarray, tw: np.ndarray, con: np.ndarray, members: li
     keeps every vertex, and no edge inside it is pinned (a constrained edge, or one
     between regions, must stay).
     """
-    ms = set(members)
-    nxt: dict[int, tuple[int, int]] = {}
-    for x in members:
-        for k in range(3):
-            h = 3 * x + k
-            g = tw[h]
-            if g >= 0 and g // 3 in ms:
-                if con[h]:
-                    return None
-                continue
-            a = int(tri[x, k])
-            if a in nxt:
-                return None
-            nxt[a] = (int(tri[x, (k + 1) % 3]), h)
-    if len(nxt) != len(members) + 2:
-        return None
-    start = next(iter(nxt))
-    poly, hes, v = [], [], start
-    for _ in range(len(nxt)):
-        if v not in nxt:
-            return None
-        poly.append(v)
-        v, h = nxt[v]
-        hes.append(h)
-    return (poly, hes) if v == start else None
+    k = len(members) + 2
+    poly, hes = np.empty(k, np.int64), np.empty(k, np.int64)
+    n = _k.union_polygon_into(tri, tw, con, np.asarray(members, np.int64), poly, hes)  # (a kernel: called per
+    return (poly.tolist(), hes.tolist()) if n else None  # group of every ring tried, ~600 at 1.5 M)
 
 
 def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
@@ -397,6 +376,7 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
     best = None
     seen: set[frozenset] = set()
     stack = [[t] if isinstance(t, int) else list(t)]
+    amin_k, keep_k = (np.zeros(0), 0.0) if amin is None else (amin, float(keep))
     while stack:
         members = stack.pop()
         key = frozenset(members)
@@ -404,15 +384,15 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
             continue
         seen.add(key)
         if len(members) > 1:
-            pp = _union_polygon(tri, tw, con, members)
+            ms = np.asarray(members, np.int64)
+            pp = _union_polygon(tri, tw, con, ms)
             options = [] if pp is None else _ring_link_options(tw, is_cov, pp[1])
             if options:
                 poly = np.asarray(pp[0], np.int64)
-                lo_g = lo if amin is None else max(lo, keep * float(amin[members].min()))
-                starts = pts[tri[members]].sum(axis=1) / 3.0  # (centroids; np.mean costs more here)
-                step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
-                x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, hi, step,
-                                                    PLACE_ITERS + 2)
+                # (centroids as starts, the first step, the local rule's bound: in the kernel)
+                x, y, sl, nmin, nmax, lo_g = _k.ring_fan_point(
+                    pts, tri, ms, poly, len(poly), amin_k, keep_k, lo, hi, PLACE_ITERS + 2
+                )
                 ok = sl > -math.inf and nmin >= max(lo_g, floor2) and nmax <= hi
                 if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
                     if accept is not None:  # the costlier check last, only for a better fan
