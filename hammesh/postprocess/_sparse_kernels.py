@@ -78,9 +78,11 @@ def _join_candidates_range(twin, cyc, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _node(cyc, n_cyc, t):
-    """Union-find node of triangle t: its cover cycle, or ``n_cyc + t`` if uncovered."""
-    return cyc[t] if cyc[t] >= 0 else n_cyc + t
+def _node(cyc, n_cyc, unc, t):
+    """Union-find node of triangle t: its cover cycle, or ``n_cyc + i`` if it is the
+    uncovered triangle ``unc[i]`` (``unc``: the uncovered triangles, ascending; a few,
+    so the union-finds hold ``n_cyc + len(unc)`` nodes, not ``n_cyc + m``)."""
+    return cyc[t] if cyc[t] >= 0 else n_cyc + lower_bound(unc, t)
 
 
 @njit(cache=True, nogil=True)
@@ -94,11 +96,13 @@ def _free_pair(twin, used, h):
 def open_candidates(twin, cyc, n_cyc, cand, meets):
     """:func:`_open_candidates_into` with its union-find and marks from ``hammesh.pages``."""
     m = cyc.shape[0]
-    return _open_candidates_into(twin, cyc, n_cyc, cand, meets, fresh(n_cyc + m, np.int64), fresh(m, np.bool_))
+    unc = np.flatnonzero(cyc < 0)
+    return _open_candidates_into(twin, cyc, n_cyc, unc, cand, meets, np.empty(n_cyc + len(unc), np.int64),
+                                 fresh(m, np.bool_))
 
 
 @njit(cache=True, nogil=True)
-def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
+def _open_candidates_into(twin, cyc, n_cyc, unc, cand, meets, uf, used):
     """Which candidate joins could still be taken after every join that meets the rule?
 
     ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
@@ -106,11 +110,12 @@ def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
     nodes, one join per triangle); a candidate that does not meet it is *open* if its
     two triangles are still free and its nodes still apart. Only open candidates can
     gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
-    other): Kruskal never reaches the rest. ``uf`` (``(n_cyc + m,)`` int64) and
-    ``used`` (``(m,)`` bool): scratch, any contents.
+    other): Kruskal never reaches the rest. ``unc``: the uncovered triangles,
+    ascending (:func:`_node`); ``uf`` (``(n_cyc + len(unc),)`` int64) and ``used``
+    (``(m,)`` bool): scratch, any contents.
     """
     m = cyc.shape[0]
-    for x in range(n_cyc + m):
+    for x in range(uf.shape[0]):
         uf[x] = x
     for t in range(m):
         used[t] = False
@@ -121,7 +126,7 @@ def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
         if not free:
             continue
         rt = _find(uf, cyc[t])
-        ru = _find(uf, _node(cyc, n_cyc, u))
+        ru = _find(uf, _node(cyc, n_cyc, unc, u))
         if rt == ru:
             continue
         uf[rt] = ru
@@ -133,7 +138,7 @@ def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
             continue
         t, u, free = _free_pair(twin, used, cand[i])
         if free:
-            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, u))
+            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, unc, u))
     return out
 
 
@@ -159,15 +164,16 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     slot = fresh(3 * (m + room), np.int8)[: 3 * m]
     swap_he = fresh(m + room, np.int64)[:m]
     join = fresh(m + room, np.int64)[:m]
-    uf = fresh(n_cyc + m, np.int64)
-    pu = fresh(n_cyc + m, np.int64)
+    unc = np.flatnonzero(cyc < 0)  # (the union-finds' nodes: cycles and these, ``_node``)
+    uf = np.empty(n_cyc + len(unc), np.int64)
+    pu = np.empty(n_cyc + len(unc), np.int64)
     # the half-edges between two different nodes, one range per core, in order
     parts = run_all([partial(_crossing_range, twin, cyc, lo, hi)
                      for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
     cross = parts[0] if len(parts) == 1 else np.concatenate(parts)
     counts, bad = _plan_merges_into(
-        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu,
-        cross,
+        tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf,
+        pu, cross,
     )
     return Plan(status, slot, swap_he, join, counts, bad)
 
@@ -187,8 +193,8 @@ def _crossing_range(twin, cyc, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he,
-                      join, uf, pu, cross):
+def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot,
+                      swap_he, join, uf, pu, cross):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
 
     Nodes are the cover cycles and the uncovered triangles; a dual edge between two
@@ -209,7 +215,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
 
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
-    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + m,)`` int64 scratch), any
+    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch,
+    ``unc`` the uncovered triangles ascending, :func:`_node`), any
     contents; ``cross``: the half-edges between two different nodes, ascending
     (:func:`_crossing_range`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
     swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
@@ -225,7 +232,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
         status[t] = SPLIT if cyc[t] < 0 else PASS  # uncovered triangles are split unless absorbed
         swap_he[t] = -1
         join[t] = -1
-    for x in range(n_cyc + m):
+    for x in range(uf.shape[0]):
         uf[x] = x
         pu[x] = x
     n_cross = cross.shape[0]  # (half-edges between two different nodes, both directions)
@@ -240,7 +247,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
         u = g // 3
         if swap_he[t] >= 0 or swap_he[u] >= 0 or (cyc[u] < 0 and no_absorb[u]):
             continue
-        nu = _node(cyc, n_cyc, u)
+        nu = _node(cyc, n_cyc, unc, u)
         rt = _find(uf, cyc[t])
         ru = _find(uf, nu)
         if rt == ru:
@@ -268,8 +275,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     for i in range(n_cross):
         h = cross[i]
         g = twin[h]
-        nt = _node(cyc, n_cyc, h // 3)
-        nu = _node(cyc, n_cyc, g // 3)
+        nt = _node(cyc, n_cyc, unc, h // 3)
+        nu = _node(cyc, n_cyc, unc, g // 3)
         a = _find(pu, nt)
         b = _find(pu, nu)
         if a != b:
@@ -302,8 +309,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
                 continue
             if stage == 2 and (st or su):
                 continue
-            nt = _node(cyc, n_cyc, t)
-            nu = _node(cyc, n_cyc, u)
+            nt = _node(cyc, n_cyc, unc, t)
+            nu = _node(cyc, n_cyc, unc, u)
             rt = _find(uf, nt)
             ru = _find(uf, nu)
             if rt == ru:
@@ -318,12 +325,11 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
             status[u] = SPLIT
             n_merge += 1
     # one node per piece?
-    piece_node = np.full(n_cyc + m, -1, np.int64)
-    piece_bad = np.zeros(n_cyc + m, np.bool_)
+    n_nodes = uf.shape[0]
+    piece_node = np.full(n_nodes, -1, np.int64)
+    piece_bad = np.zeros(n_nodes, np.bool_)
     ok = True
-    for node in range(n_cyc + m):
-        if node >= n_cyc and cyc[node - n_cyc] >= 0:
-            continue
+    for node in range(n_nodes):
         p = _find(pu, node)
         r = _find(uf, node)
         if piece_node[p] < 0:
@@ -335,22 +341,22 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     if not ok:  # absorbed triangles next to another node: they cut it off
         n_bad = 0
         for t in range(m):
-            if cyc[t] >= 0 or status[t] < SWAP or not piece_bad[_find(pu, n_cyc + t)]:
+            if cyc[t] >= 0 or status[t] < SWAP or not piece_bad[_find(pu, _node(cyc, n_cyc, unc, t))]:
                 continue
-            rt = _find(uf, n_cyc + t)
+            rt = _find(uf, _node(cyc, n_cyc, unc, t))
             for k in range(3):
                 g = twin[3 * t + k]
                 if g < 0:
                     continue
                 u = g // 3
-                nu = _node(cyc, n_cyc, u)
+                nu = _node(cyc, n_cyc, unc, u)
                 if _find(uf, nu) != rt:
                     bad[t] = True
                     n_bad += 1
                     break
         if n_bad == 0:  # should not happen: give up absorbing in those pieces
             for t in range(m):
-                bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, t))]
+                bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, unc, t))]
     counts[2] = n_merge
     return counts, bad
 
