@@ -1009,6 +1009,15 @@ def _gather_rows_into(
         pm[i] = a
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _holds(items, x):
+    """Is ``x`` one of the few ``items``?"""
+    for y in items:
+        if y == x:
+            return True
+    return False
+
+
 @njit(cache=True, nogil=True)
 def union_polygon_into(tri, twin, pinned, members, poly, hes):
     """The counter-clockwise corners and outer half-edges of a group's union (``sparse._union_polygon``).
@@ -1025,22 +1034,12 @@ def union_polygon_into(tri, twin, pinned, members, poly, hes):
     cap = poly.shape[0]
     n = 0
     for i in range(nm):
-        x = members[i]
-        for k in range(3):
-            h = 3 * x + k
-            g = twin[h]
-            inside = False
-            if g >= 0:
-                y = g // 3
-                for j in range(nm):
-                    if members[j] == y:
-                        inside = True
-                        break
-            if inside:
+        for h in range(3 * members[i], 3 * members[i] + 3):
+            if twin[h] >= 0 and _holds(members, twin[h] // 3):  # an edge inside the group
                 if pinned[h]:
                     return 0
                 continue
-            a = tri[x, k]
+            a = tri[h // 3, h % 3]
             for j in range(n):
                 if poly[j] == a:
                     return 0
