@@ -1009,6 +1009,14 @@ def _gather_rows_into(
         pm[i] = a
 
 
+@njit(cache=True, nogil=True)
+def iota_into(a, lo, hi):
+    """``a[i] = i`` for ``i`` in ``lo..hi`` (a numbering in an array the caller has, e.g.
+    from the page reserve: ``np.arange`` would fault fresh pages)."""
+    for i in range(lo, hi):
+        a[i] = i
+
+
 @njit(cache=True, nogil=True, inline="always")
 def _holds(items, x):
     """Is ``x`` one of the few ``items``?"""

@@ -1766,7 +1766,9 @@ def sparse_cycles(
     steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
-    orig_of = _with_room(np.arange(m + room), m)
+    orig_of = fresh(m + room, np.int64)  # (the reserve's pages, numbered on both cores: no 12 MB arange)
+    _row_pass(lambda lo, hi_: _k.iota_into(orig_of, lo, hi_), m + room)
+    orig_of = _with_room(orig_of, m)
     is_fan = _with_room(fresh(m + room, np.bool_, 0), m)  # (pages faulted: read first in the report)
     n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
