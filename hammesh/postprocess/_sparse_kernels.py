@@ -32,7 +32,7 @@ from hammesh import threads
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-from hammesh.postprocess._join_kernels import quad_corners
+from hammesh.postprocess._join_kernels import place_fan, quad_corners
 from hammesh.postprocess._thm24_kernels import find_root as _find
 from hammesh.postprocess._thm24_kernels import lower_bound
 
@@ -78,9 +78,11 @@ def _join_candidates_range(twin, cyc, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _node(cyc, n_cyc, t):
-    """Union-find node of triangle t: its cover cycle, or ``n_cyc + t`` if uncovered."""
-    return cyc[t] if cyc[t] >= 0 else n_cyc + t
+def _node(cyc, n_cyc, unc, t):
+    """Union-find node of triangle t: its cover cycle, or ``n_cyc + i`` if it is the
+    uncovered triangle ``unc[i]`` (``unc``: the uncovered triangles, ascending; a few,
+    so the union-finds hold ``n_cyc + len(unc)`` nodes, not ``n_cyc + m``)."""
+    return cyc[t] if cyc[t] >= 0 else n_cyc + lower_bound(unc, t)
 
 
 @njit(cache=True, nogil=True)
@@ -94,11 +96,13 @@ def _free_pair(twin, used, h):
 def open_candidates(twin, cyc, n_cyc, cand, meets):
     """:func:`_open_candidates_into` with its union-find and marks from ``hammesh.pages``."""
     m = cyc.shape[0]
-    return _open_candidates_into(twin, cyc, n_cyc, cand, meets, fresh(n_cyc + m, np.int64), fresh(m, np.bool_))
+    unc = np.flatnonzero(cyc < 0)
+    return _open_candidates_into(twin, cyc, n_cyc, unc, cand, meets, np.empty(n_cyc + len(unc), np.int64),
+                                 fresh(m, np.bool_))
 
 
 @njit(cache=True, nogil=True)
-def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
+def _open_candidates_into(twin, cyc, n_cyc, unc, cand, meets, uf, used):
     """Which candidate joins could still be taken after every join that meets the rule?
 
     ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
@@ -106,11 +110,12 @@ def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
     nodes, one join per triangle); a candidate that does not meet it is *open* if its
     two triangles are still free and its nodes still apart. Only open candidates can
     gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
-    other): Kruskal never reaches the rest. ``uf`` (``(n_cyc + m,)`` int64) and
-    ``used`` (``(m,)`` bool): scratch, any contents.
+    other): Kruskal never reaches the rest. ``unc``: the uncovered triangles,
+    ascending (:func:`_node`); ``uf`` (``(n_cyc + len(unc),)`` int64) and ``used``
+    (``(m,)`` bool): scratch, any contents.
     """
     m = cyc.shape[0]
-    for x in range(n_cyc + m):
+    for x in range(uf.shape[0]):
         uf[x] = x
     for t in range(m):
         used[t] = False
@@ -121,7 +126,7 @@ def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
         if not free:
             continue
         rt = _find(uf, cyc[t])
-        ru = _find(uf, _node(cyc, n_cyc, u))
+        ru = _find(uf, _node(cyc, n_cyc, unc, u))
         if rt == ru:
             continue
         uf[rt] = ru
@@ -133,7 +138,7 @@ def _open_candidates_into(twin, cyc, n_cyc, cand, meets, uf, used):
             continue
         t, u, free = _free_pair(twin, used, cand[i])
         if free:
-            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, u))
+            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, unc, u))
     return out
 
 
@@ -159,15 +164,16 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     slot = fresh(3 * (m + room), np.int8)[: 3 * m]
     swap_he = fresh(m + room, np.int64)[:m]
     join = fresh(m + room, np.int64)[:m]
-    uf = fresh(n_cyc + m, np.int64)
-    pu = fresh(n_cyc + m, np.int64)
+    unc = np.flatnonzero(cyc < 0)  # (the union-finds' nodes: cycles and these, ``_node``)
+    uf = np.empty(n_cyc + len(unc), np.int64)
+    pu = np.empty(n_cyc + len(unc), np.int64)
     # the half-edges between two different nodes, one range per core, in order
     parts = run_all([partial(_crossing_range, twin, cyc, lo, hi)
                      for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
     cross = parts[0] if len(parts) == 1 else np.concatenate(parts)
     counts, bad = _plan_merges_into(
-        tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf, pu,
-        cross,
+        tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf,
+        pu, cross,
     )
     return Plan(status, slot, swap_he, join, counts, bad)
 
@@ -187,8 +193,8 @@ def _crossing_range(twin, cyc, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he,
-                      join, uf, pu, cross):
+def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot,
+                      swap_he, join, uf, pu, cross):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
 
     Nodes are the cover cycles and the uncovered triangles; a dual edge between two
@@ -209,7 +215,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
 
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
-    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + m,)`` int64 scratch), any
+    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch,
+    ``unc`` the uncovered triangles ascending, :func:`_node`), any
     contents; ``cross``: the half-edges between two different nodes, ascending
     (:func:`_crossing_range`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
     swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
@@ -225,7 +232,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
         status[t] = SPLIT if cyc[t] < 0 else PASS  # uncovered triangles are split unless absorbed
         swap_he[t] = -1
         join[t] = -1
-    for x in range(n_cyc + m):
+    for x in range(uf.shape[0]):
         uf[x] = x
         pu[x] = x
     n_cross = cross.shape[0]  # (half-edges between two different nodes, both directions)
@@ -240,7 +247,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
         u = g // 3
         if swap_he[t] >= 0 or swap_he[u] >= 0 or (cyc[u] < 0 and no_absorb[u]):
             continue
-        nu = _node(cyc, n_cyc, u)
+        nu = _node(cyc, n_cyc, unc, u)
         rt = _find(uf, cyc[t])
         ru = _find(uf, nu)
         if rt == ru:
@@ -268,8 +275,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     for i in range(n_cross):
         h = cross[i]
         g = twin[h]
-        nt = _node(cyc, n_cyc, h // 3)
-        nu = _node(cyc, n_cyc, g // 3)
+        nt = _node(cyc, n_cyc, unc, h // 3)
+        nu = _node(cyc, n_cyc, unc, g // 3)
         a = _find(pu, nt)
         b = _find(pu, nu)
         if a != b:
@@ -302,8 +309,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
                 continue
             if stage == 2 and (st or su):
                 continue
-            nt = _node(cyc, n_cyc, t)
-            nu = _node(cyc, n_cyc, u)
+            nt = _node(cyc, n_cyc, unc, t)
+            nu = _node(cyc, n_cyc, unc, u)
             rt = _find(uf, nt)
             ru = _find(uf, nu)
             if rt == ru:
@@ -318,12 +325,11 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
             status[u] = SPLIT
             n_merge += 1
     # one node per piece?
-    piece_node = np.full(n_cyc + m, -1, np.int64)
-    piece_bad = np.zeros(n_cyc + m, np.bool_)
+    n_nodes = uf.shape[0]
+    piece_node = np.full(n_nodes, -1, np.int64)
+    piece_bad = np.zeros(n_nodes, np.bool_)
     ok = True
-    for node in range(n_cyc + m):
-        if node >= n_cyc and cyc[node - n_cyc] >= 0:
-            continue
+    for node in range(n_nodes):
         p = _find(pu, node)
         r = _find(uf, node)
         if piece_node[p] < 0:
@@ -335,22 +341,22 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, fli
     if not ok:  # absorbed triangles next to another node: they cut it off
         n_bad = 0
         for t in range(m):
-            if cyc[t] >= 0 or status[t] < SWAP or not piece_bad[_find(pu, n_cyc + t)]:
+            if cyc[t] >= 0 or status[t] < SWAP or not piece_bad[_find(pu, _node(cyc, n_cyc, unc, t))]:
                 continue
-            rt = _find(uf, n_cyc + t)
+            rt = _find(uf, _node(cyc, n_cyc, unc, t))
             for k in range(3):
                 g = twin[3 * t + k]
                 if g < 0:
                     continue
                 u = g // 3
-                nu = _node(cyc, n_cyc, u)
+                nu = _node(cyc, n_cyc, unc, u)
                 if _find(uf, nu) != rt:
                     bad[t] = True
                     n_bad += 1
                     break
         if n_bad == 0:  # should not happen: give up absorbing in those pieces
             for t in range(m):
-                bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, t))]
+                bad[t] = piece_bad[_find(pu, _node(cyc, n_cyc, unc, t))]
     counts[2] = n_merge
     return counts, bad
 
@@ -382,7 +388,7 @@ def _swap_links(cov_1, cov_2, bit_1, bit_2, bit_diag):
 
 
 @njit(cache=True)
-def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
+def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     """The new output triangles, with the two edges the cycle crosses in each.
 
     Only triangles a join changes get rows here: a triangle kept whole (status
@@ -391,8 +397,10 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     ``m + i``, see :func:`walk_links`): at 1.5 M triangles ~99 % of the rows are
     never copied before the final gather.
 
-    ``split_index[t]`` numbers the split triangles (incenter of t is vertex
-    ``n_points + split_index[t]``); midpoints follow, in order of first emission.
+    ``split_rows``: the split triangles (status ``SPLIT``), ascending; the incenter of
+    ``split_rows[i]`` is vertex ``n_points + i`` (counted along the rows; a bridge's
+    other end found by binary search: where a numbering of every row was a cumulative
+    sum over all of them); midpoints follow, in order of first emission.
     Each output row gets ``link``: bit j set if the cycle crosses its edge j (from
     vertex j to j + 1). Row kinds: 0 incenter sector, 1 flip (bridge), 2 midpoint
     (bridge, or an edge split without incenters), 3 input triangle kept whole, 4
@@ -446,6 +454,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
     n_mid = 0
     n_all = n_points + n_split
     pos = 0
+    n_inc = 0
     for t in range(m):
         st = status[t]
         if st == PASS:
@@ -485,7 +494,8 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
             _row(out, link, parent, partner, kind, pos + 3, mv, a, d, 1 | (2 if cu else 4), u, t, 2)
             pos += 4
         else:
-            inc = n_points + split_index[t]
+            inc = n_points + n_inc  # (t ascending: the split rows before t, counted)
+            n_inc += 1
             for k in range(3):
                 h = 3 * t + k
                 a = tri[t, k]
@@ -501,7 +511,8 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_index, n_points):
                     pos += 1
                 elif s == FLIP:
                     u = twin[h] // 3
-                    _row(out, link, parent, partner, kind, pos, inc, a, n_points + split_index[u], 3, t, u, 1)
+                    _row(out, link, parent, partner, kind, pos, inc, a, n_points + lower_bound(split_rows, u), 3, t, u,
+                         1)
                     pos += 1
                 else:
                     g = twin[h]
@@ -574,7 +585,23 @@ def new_row_twins(out, tri, twin_in, status, n_points):
             a = tri[x, j]
             b = tri[x, (j + 1) % 3]
         keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
-    srt = np.argsort(keys, kind="mergesort")
+    # the keys sorted with their index packed below them (a plain sort of int64: the
+    # stable argsort it replaces, 0.018 s at 1.5 M, was most of this kernel), or
+    # argsorted where key and index need more than 62 bits
+    ib = 1
+    while (1 << ib) < n:
+        ib += 1
+    if n_points > 0 and (np.int64(n_points) * np.int64(n_points)) < (np.int64(1) << (62 - ib)):
+        packed = np.empty(n, np.int64)
+        for i in range(n):
+            packed[i] = (keys[i] << ib) | i
+        packed.sort()
+        srt = packed  # (in place: the index is the low bits)
+        mask = (np.int64(1) << ib) - 1
+        for i in range(n):
+            srt[i] = packed[i] & mask
+    else:
+        srt = np.argsort(keys, kind="mergesort")
     i = 0
     while i < n:
         e = i + 1
@@ -980,3 +1007,102 @@ def _gather_rows_into(
         if q >= 0 and amin[q] < a:
             a = amin[q]
         pm[i] = a
+
+
+@njit(cache=True, nogil=True)
+def iota_into(a, lo, hi):
+    """``a[i] = i`` for ``i`` in ``lo..hi`` (a numbering in an array the caller has, e.g.
+    from the page reserve: ``np.arange`` would fault fresh pages)."""
+    for i in range(lo, hi):
+        a[i] = i
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _holds(items, x):
+    """Is ``x`` one of the few ``items``?"""
+    for y in items:
+        if y == x:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def union_polygon_into(tri, twin, pinned, members, poly, hes):
+    """The counter-clockwise corners and outer half-edges of a group's union (``sparse._union_polygon``).
+
+    ``members``: the group's triangles; ``poly``, ``hes``: room for ``len(members) + 2``
+    entries each (or more). Returns the polygon's length, 0 where ``sparse._union_polygon``
+    gives None: an edge inside the group is pinned, the union is not a disc with every
+    corner on its boundary (a vertex starts two outer edges, or the outer edges are not
+    ``len(members) + 2`` in one closed loop). The polygon starts at the first outer
+    half-edge in the order of ``members`` and their edges (as the Python version's
+    dictionary did): the same polygon, without a dictionary per group.
+    """
+    nm = members.shape[0]
+    cap = poly.shape[0]
+    n = 0
+    for i in range(nm):
+        for h in range(3 * members[i], 3 * members[i] + 3):
+            if twin[h] >= 0 and _holds(members, twin[h] // 3):  # an edge inside the group
+                if pinned[h]:
+                    return 0
+                continue
+            a = tri[h // 3, h % 3]
+            for j in range(n):
+                if poly[j] == a:
+                    return 0
+            if n >= cap:
+                return 0
+            poly[n] = a  # (a -> b along h, gathered unordered first)
+            hes[n] = h
+            n += 1
+    if n != nm + 2:
+        return 0
+    # chain them: the edge from a vertex v is the one whose start is v
+    for i in range(n - 1):
+        h = hes[i]
+        x = h // 3
+        b = tri[x, (h - 3 * x + 1) % 3]
+        nxt = -1
+        for j in range(i + 1, n):
+            if poly[j] == b:
+                nxt = j
+                break
+        if nxt < 0:
+            return 0
+        if nxt != i + 1:
+            poly[i + 1], poly[nxt] = poly[nxt], poly[i + 1]
+            hes[i + 1], hes[nxt] = hes[nxt], hes[i + 1]
+    h = hes[n - 1]
+    x = h // 3
+    return n if tri[x, (h - 3 * x + 1) % 3] == poly[0] else 0
+
+
+@njit(cache=True, nogil=True)
+def ring_fan_point(pts, tri, members, poly, n, amin, keep, lo, hi, iters):
+    """``place_fan`` over ``poly[:n]`` for a ring fan of ``members`` (``sparse._best_ring``).
+
+    Starts: the members' centroids; the first compass step a quarter of the distance
+    from the first centroid to the nearest corner. The lower bound is ``lo``, or with
+    ``keep > 0`` the larger of ``lo`` and ``keep`` x the members' smallest ``amin``.
+    Returns ``(x, y, slack, smallest angle, largest angle, the bound used)``.
+    """
+    nm = members.shape[0]
+    lo_g = lo
+    if keep > 0.0:
+        a = np.inf
+        for i in range(nm):
+            a = min(a, amin[members[i]])
+        lo_g = max(lo, keep * a)
+    starts = np.empty((nm, 2))
+    for i in range(nm):
+        x = members[i]
+        for d in range(2):
+            starts[i, d] = (pts[tri[x, 0], d] + pts[tri[x, 1], d] + pts[tri[x, 2], d]) / 3.0
+    d2 = np.inf
+    for j in range(n):
+        dx = pts[poly[j], 0] - starts[0, 0]
+        dy = pts[poly[j], 1] - starts[0, 1]
+        d2 = min(d2, dx * dx + dy * dy)
+    x, y, sl, nmin, nmax = place_fan(pts, poly, n, starts, nm, lo_g, hi, 0.25 * np.sqrt(d2), iters)
+    return x, y, sl, nmin, nmax, lo_g

@@ -54,7 +54,7 @@ import time
 import weakref
 from dataclasses import dataclass, replace
 from functools import partial
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -73,7 +73,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "sparse_hamiltonian", "SparseResult", "sparse_cycles", "local_quality", "kept_radius_ratio", "triangle_angles", "triangle_facts", "KEEP",
-    "corner_bound", "join_bounds",
+    "corner_bound", "join_bounds", "PlanSteps",
 ]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
@@ -93,6 +93,10 @@ IMPROVE_ROUNDS = 3
 #: candidate joins per thread below which scoring runs in one call (a placement is
 #: ~100x the work of an angle row, so threads pay off far below THREAD_MIN_ROWS)
 SCORE_MIN_ROWS = 20_000
+#: candidates per thread below which *placing* splits (a compass search per row, ~10 us)
+#: runs in one call: the placement passes are a few thousand rows at 1.5 M triangles,
+#: serial on the main thread before (0.03-0.04 s) while the other core idled
+PLACE_MIN_ROWS = 1_000
 #: edges per thread below which judging the edges for the cover runs in one call
 EDGE_MIN_ROWS = 50_000
 #: most triangles one fan (one Steiner point) may replace
@@ -292,31 +296,10 @@ def _union_polygon(tri: np.ndarray, tw: np.ndarray, con: np.ndarray, members: li
     keeps every vertex, and no edge inside it is pinned (a constrained edge, or one
     between regions, must stay).
     """
-    ms = set(members)
-    nxt: dict[int, tuple[int, int]] = {}
-    for x in members:
-        for k in range(3):
-            h = 3 * x + k
-            g = tw[h]
-            if g >= 0 and g // 3 in ms:
-                if con[h]:
-                    return None
-                continue
-            a = int(tri[x, k])
-            if a in nxt:
-                return None
-            nxt[a] = (int(tri[x, (k + 1) % 3]), h)
-    if len(nxt) != len(members) + 2:
-        return None
-    start = next(iter(nxt))
-    poly, hes, v = [], [], start
-    for _ in range(len(nxt)):
-        if v not in nxt:
-            return None
-        poly.append(v)
-        v, h = nxt[v]
-        hes.append(h)
-    return (poly, hes) if v == start else None
+    k = len(members) + 2
+    poly, hes = np.empty(k, np.int64), np.empty(k, np.int64)
+    n = _k.union_polygon_into(tri, tw, con, np.asarray(members, np.int64), poly, hes)  # (a kernel: called per
+    return (poly.tolist(), hes.tolist()) if n else None  # group of every ring tried, ~600 at 1.5 M)
 
 
 def _ring_links(tw: np.ndarray, is_cov: np.ndarray, hes: list[int]):
@@ -404,6 +387,7 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
     best = None
     seen: set[frozenset] = set()
     stack = [[t] if isinstance(t, int) else list(t)]
+    amin_k, keep_k = (np.zeros(0), 0.0) if amin is None else (amin, float(keep))
     while stack:
         members = stack.pop()
         key = frozenset(members)
@@ -411,15 +395,15 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
             continue
         seen.add(key)
         if len(members) > 1:
-            pp = _union_polygon(tri, tw, con, members)
+            ms = np.asarray(members, np.int64)
+            pp = _union_polygon(tri, tw, con, ms)
             options = [] if pp is None else _ring_link_options(tw, is_cov, pp[1])
             if options:
                 poly = np.asarray(pp[0], np.int64)
-                lo_g = lo if amin is None else max(lo, keep * float(amin[members].min()))
-                starts = pts[tri[members]].sum(axis=1) / 3.0  # (centroids; np.mean costs more here)
-                step = 0.25 * math.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
-                x, y, sl, nmin, nmax = _j.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, hi, step,
-                                                    PLACE_ITERS + 2)
+                # (centroids as starts, the first step, the local rule's bound: in the kernel)
+                x, y, sl, nmin, nmax, lo_g = _k.ring_fan_point(
+                    pts, tri, ms, poly, len(poly), amin_k, keep_k, lo, hi, PLACE_ITERS + 2
+                )
                 ok = sl > -math.inf and nmin >= max(lo_g, floor2) and nmax <= hi
                 if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
                     if accept is not None:  # the costlier check last, only for a better fan
@@ -861,7 +845,8 @@ def _ring_outcome(tw, is_cov, cycle, members, hes, spoke, find=None) -> RingOutc
 
 
 def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, order, join, cand, slack, newmin,
-                newmax, status, slot, swap_he, counts, keep: float, lo: float, hi: float, floor2: float):
+                newmax, status, slot, swap_he, counts, keep: float, lo: float, hi: float, floor2: float,
+                steps_at: PlanSteps):
     """Ring fans in place of the joins the plan took below the local rule or the targets (issue 13).
 
     A swap or split over ``ab`` of ``t = abc``, ``u = bad`` divides the corners ``c``
@@ -884,16 +869,17 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     (its statuses, slots and counts). So Kruskal's tree stays a tree and no re-plan
     (candidates, scores, placements, Kruskal: O(m)) is needed. Returns
     ``_apply_rings``' arrays, the patched ``(status, slot, swap_he, join)`` and the
-    number of rings, or None; ``counts`` is updated in place.
+    number of rings, or None; ``counts`` is updated in place. ``steps_at``: the plan's
+    steps (:class:`PlanSteps`).
     """
     tasks = []  # (misses the targets, slack, t, u or -1)
-    taken = order[np.unique(join[join >= 0])]
+    taken = order[np.unique(join[steps_at.joined(join)])]
     low = taken[slack[taken] < 0.0]
     t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
     both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
     for i, t, u in zip(low[both].tolist(), t_of[both].tolist(), u_of[both].tolist()):
         tasks.append((not (newmin[i] >= lo and newmax[i] <= hi), float(slack[i]), t, u))
-    bridged = np.flatnonzero(slot != _k.PLAIN)
+    bridged = steps_at.slotted(slot)
     bridged = bridged[tw[bridged] > bridged]
     split_unc = np.flatnonzero(status == _k.SPLIT)
     split_unc = split_unc[cover.cycle[split_unc] < 0]
@@ -1329,9 +1315,31 @@ def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cyc
     return unc, bound, ~inner.all(axis=1)
 
 
+class PlanSteps(NamedTuple):
+    """Where the plan (``_sparse_kernels.plan_merges``) put its steps, found once.
+
+    ``rows``: the triangles in a join (``join >= 0``), ascending; ``slots``: the
+    half-edges with a bridge (``slot != PLAIN``), ascending. The steps after the plan
+    (``_place_taken``, ``_alternating_merges``, ``_ring_joins``, the report) only undo
+    steps and append rows in none, so what is left of these lists is what a scan of
+    every row and slot would find, at the cost of the few entries.
+    """
+
+    rows: np.ndarray
+    slots: np.ndarray
+
+    def joined(self, join: np.ndarray) -> np.ndarray:
+        """The triangles still in a join, ascending (``np.flatnonzero(join >= 0)``)."""
+        return self.rows[join[self.rows] >= 0]
+
+    def slotted(self, slot: np.ndarray) -> np.ndarray:
+        """The half-edges still with a bridge, ascending (``np.flatnonzero(slot != PLAIN)``)."""
+        return self.slots[slot[self.slots] != _k.PLAIN]
+
+
 def _place_taken(
     score, order, join, cand, ckind, slack, newmin, newmax, point, global_lo: float, hi: float, con, tw, cycle, status,
-    counts, iters: int,
+    counts, steps_at: PlanSteps, iters: int,
 ) -> int:
     """Place the Steiner points of the joins Kruskal took below the rule, with no reach.
 
@@ -1342,9 +1350,9 @@ def _place_taken(
     (a free edge) is judged again with its point placed wherever the compass search
     goes (``score``): the better of its swap and its placed split is kept, and the
     pair's ``status`` and the plan's ``counts`` follow a change of kind. Returns the
-    number of joins improved.
+    number of joins improved. ``steps_at``: the plan's steps (:class:`PlanSteps`).
     """
-    taken = order[np.unique(join[join >= 0])]
+    taken = order[np.unique(join[steps_at.joined(join)])]
     low = taken[(slack[taken] < 0.0) & ~con[cand[taken]]]
     if not len(low):
         return 0
@@ -1462,7 +1470,7 @@ def _label_paths(tw, is_cov, group: set, out: RingOutcome, find, cyc) -> None:
 
 
 def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack, newmin, newmax, status, slot,
-                        swap_he, counts, lo: float, hi: float):
+                        swap_he, counts, lo: float, hi: float, steps_at: PlanSteps):
     """Joins below the rule between two cycles replaced by merging the cycles in the cover (issue 13).
 
     A swap or split over ``ab`` of ``t = abc`` (cycle A), ``u = bad`` (cycle B)
@@ -1479,10 +1487,11 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     in a fan, nor in an earlier swap), so the plan is patched as ``_ring_joins``
     patches it: the join's statuses and counts undone, Kruskal's tree minus the edge
     A-B with A and B one node. Returns the new cover and the number of merges
-    (``counts`` and the plan's arrays are updated in place).
+    (``counts`` and the plan's arrays are updated in place). ``steps_at``: the plan's
+    steps (:class:`PlanSteps`).
     """
     is_taken = np.zeros(len(cand), np.bool_)  # (the joins taken, without np.unique's sort)
-    is_taken[join[join >= 0]] = True
+    is_taken[join[steps_at.joined(join)]] = True
     low = order[np.flatnonzero(is_taken)]
     low = low[slack[low] < 0.0]
     t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
@@ -1490,7 +1499,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     miss = ~((newmin[low] >= lo) & (newmax[low] <= hi))
     # Thm 2.4 bridges between two cycles first (two incenters, sectors halving every
     # corner), each the one step of both its triangles; then the joins below the rule
-    slotted = np.flatnonzero(slot != _k.PLAIN)  # (few: the bridges' half-edges)
+    slotted = steps_at.slotted(slot)  # (few: the bridges' half-edges)
     bridged = slotted[tw[slotted] > slotted]
     bt, bu = bridged // 3, tw[bridged] // 3
     sole = (cover.cycle[bt] >= 0) & (cover.cycle[bu] >= 0)
@@ -1788,7 +1797,9 @@ def sparse_cycles(
     steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
-    orig_of = _with_room(np.arange(m + room), m)
+    orig_of = fresh(m + room, np.int64)  # (the reserve's pages, numbered on both cores: no 12 MB arange)
+    _row_pass(lambda lo, hi_: _k.iota_into(orig_of, lo, hi_), m + room)
+    orig_of = _with_room(orig_of, m)
     is_fan = _with_room(fresh(m + room, np.bool_, 0), m)  # (pages faulted: read first in the report)
     n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
@@ -1823,7 +1834,7 @@ def sparse_cycles(
                     bool(edge_splits), iters, reach, *(x[lo:hi_] for x in parts), exact,
                 ),
                 len(c),
-                SCORE_MIN_ROWS,
+                SCORE_MIN_ROWS if iters == 0 else PLACE_MIN_ROWS,
             )
             ckind[rows], slack[rows], newmin[rows], newmax[rows], point[rows] = parts
 
@@ -1867,23 +1878,27 @@ def sparse_cycles(
             no_absorb |= bad  # an absorbed triangle cut a cycle off: not there
         if bad.any():
             raise VerificationError("internal error: the sparse merge left a piece with two cycles")
+        # the plan's steps, found once (the steps after it only undo some, and each
+        # reads what is left of these instead of scanning the m rows and 3 m slots again)
+        steps_at = PlanSteps(np.flatnonzero(join >= 0), np.flatnonzero(slot != _k.PLAIN))
         n_placed_late = 0
         if PLACE_TAKEN and place_iters > 0 and edge_splits and pts.shape[1] == 2:
             n_placed_late = _place_taken(
                 score, order, join, cand, ckind, slack, newmin, newmax, point, keep * min_angle, hi, con, tw, cover.cycle,
-                status, counts,
+                status, counts, steps_at,
                 int(place_iters),
             )
         n_alt = 0
         for _ in range(ALT_MERGE_PASSES if use_cover and fans and pts.shape[1] == 2 and ALT_MERGE_TRIES > 0 else 0):
             cover, n_swapped = _alternating_merges(tw, cover, is_fan, order, join, cand, slack, newmin, newmax,
-                                                   status, slot, swap_he, counts, keep * min_angle, hi)
+                                                   status, slot, swap_he, counts, keep * min_angle, hi, steps_at)
             n_alt += n_swapped
             if not n_swapped:
                 break
         for _ in range(RING_JOIN_PASSES if use_cover and fans and pts.shape[1] == 2 else 0):
             rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
-                                newmax, status, slot, swap_he, counts, keep, keep * min_angle, hi, 2.0 * floor)
+                                newmax, status, slot, swap_he, counts, keep, keep * min_angle, hi, 2.0 * floor,
+                                steps_at)
             if rings is None:
                 break
             (pts, tri, tw, con, cover, amin_p, orig_of, is_fan), (status, slot, swap_he, join), n_rj = rings
@@ -1891,17 +1906,16 @@ def sparse_cycles(
             n, m, n_fan = len(pts), len(tri), n_fan + n_rj
         break  # the ring joins patch the plan (``_ring_joins``): it is not made again
     steps.done("plan_joins")
-    is_split = status == _k.SPLIT
-    split_index = np.cumsum(is_split) - 1
+    split_rows = np.flatnonzero(status == _k.SPLIT)  # (few: the incenters' triangles)
     # new rows only; a triangle kept whole stays the input's row until the gather
     out, link, parent, partner, kind, mid_a, mid_b, mid_t = _k.emit(
-        tri, tw, cover.is_cov, status, slot, swap_he, split_index, n
+        tri, tw, cover.is_cov, status, slot, swap_he, split_rows, n
     )
-    n_split = int(is_split.sum())
+    n_split = len(split_rows)
     mids = 0.5 * (pts[mid_a] + pts[mid_b])
     placed = mid_t >= 0
     mids[placed] = point[order][join[mid_t[placed]]]
-    inc = _incenters(pts, tri[is_split])
+    inc = _incenters(pts, tri[split_rows])
     all_pts = _longer(pts, len(inc) + len(mids))  # (in place where the points have room)
     all_pts[len(pts):] = np.concatenate([inc, mids])
     tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts))
@@ -1972,7 +1986,7 @@ def sparse_cycles(
         "corner_bound_deg": math.degrees(c_bound),
         "improvement_flips": int(n_improve),
         "steiner_moved": int(n_moved),
-        "joins_below_rule": int(counts[2]) + int((slack[order][join[join >= 0]] < 0).sum() // 2),
+        "joins_below_rule": int(counts[2]) + int((slack[order][join[steps_at.joined(join)]] < 0).sum() // 2),
         **quality,
     }
     steps.done("report")

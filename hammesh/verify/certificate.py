@@ -340,7 +340,15 @@ def _certify(
     streamed = rows is not None
     if rows is None:
         used = np.zeros(n, dtype=np.bool_)
-        rows, _ = _certify_rows(pts, tri, runs, claim, used)
+        # the claim's boundary keys beside the row checks (a third thread: the two
+        # row ranges leave a core idle at their ends), used below only if the claim
+        # passes, as ``prepared``'s are (sparse mode hands in no ``prepared``); a
+        # process capped at one thread starts none (then found below, if needed)
+        side = prepared is None and len(claim) > 0 and threads.cores() > 1
+        ahead = (lambda: claim_structure(tri, claim)) if side else None
+        rows, ahead_out = _certify_rows(pts, tri, runs, claim, used, side=ahead)
+        if ahead_out is not None:
+            prepared = ahead_out
     else:  # checked while the construction ran (``hammesh.verify.stream``)
         rows, used = rows
     # the claim is a pairing of all half-edges with as many unpaired ones as the input

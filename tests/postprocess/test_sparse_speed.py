@@ -14,7 +14,9 @@ import pytest
 import hammesh
 from hammesh import threads
 from hammesh.halfedge import half_edge_twins
+from hammesh.halfedge import locality
 from hammesh.postprocess import _sparse_kernels as sk
+from hammesh.postprocess import sparse as sparse_module
 from tests.helpers import bundled_domain, plate_with_loops, square
 
 #: output arrays that must agree
@@ -50,6 +52,8 @@ def test_threaded_passes_give_the_one_thread_output(name: str, monkeypatch) -> N
         pytest.skip("one core: the threaded passes cannot run")
     monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 37)
     monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
+    monkeypatch.setattr(sparse_module, "PLACE_MIN_ROWS", 3)  # (placing splits on both cores)
+    monkeypatch.setattr(locality, "TABLE_MIN_CELLS", 4)  # (the Hilbert table on both cores)
     two = hammesh.hamiltonian(m)
     assert one.n_triangles > 500
     for f in FIELDS:
@@ -349,3 +353,142 @@ def test_every_midpoint_bridge_shares_one_midpoint(name: str) -> None:
         assert (used == 4).all()
         edges = np.sort(np.stack([r.mid_a, r.mid_b], axis=1), axis=1)
         assert len(np.unique(edges, axis=0)) == len(edges)
+
+
+def _union_polygon_by_dict(tri, tw, con, members):
+    """The ring group's union polygon as ``sparse._union_polygon`` walked it before its
+    kernel (session 12): a dictionary from each outer edge's start to its end."""
+    ms = set(members)
+    nxt: dict = {}
+    for x in members:
+        for k in range(3):
+            h = 3 * x + k
+            g = tw[h]
+            if g >= 0 and g // 3 in ms:
+                if con[h]:
+                    return None
+                continue
+            a = int(tri[x, k])
+            if a in nxt:
+                return None
+            nxt[a] = (int(tri[x, (k + 1) % 3]), h)
+    if len(nxt) != len(members) + 2:
+        return None
+    start = next(iter(nxt))
+    poly, hes, v = [], [], start
+    for _ in range(len(nxt)):
+        if v not in nxt:
+            return None
+        poly.append(v)
+        v, h = nxt[v]
+        hes.append(h)
+    return (poly, hes) if v == start else None
+
+
+@pytest.mark.parametrize("name", ["A", "loops", "regions"])
+def test_union_polygon_kernel_walks_as_the_dictionary_did(name: str) -> None:
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import sparse
+
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    clean, he, con = prepare_mesh(hammesh.quality_mesh(dom, min_angle=30, max_area=area, isolate=False))
+    tri, tw = clean.triangles, he.twin
+    rng = np.random.default_rng(7)
+    # groups grown across edges (pinned ones too: those must give None), 2 to 5 triangles,
+    # and some that are not connected or hold a triangle twice
+    groups = []
+    for t in rng.choice(len(tri), min(300, len(tri)), replace=False).tolist():
+        g = [t]
+        for _ in range(int(rng.integers(1, 5))):
+            x = g[int(rng.integers(len(g)))]
+            nb = [int(h // 3) for h in tw[3 * x: 3 * x + 3] if h >= 0 and h // 3 not in g]
+            if nb:
+                g.append(nb[int(rng.integers(len(nb)))])
+        groups.append(g)
+    groups += [[0, len(tri) - 1], [5, 5], [1, 2, 3]]
+    n_some = 0
+    for g in groups:
+        want = _union_polygon_by_dict(tri, tw, con, g)
+        got = sparse._union_polygon(tri, tw, con, np.asarray(g, np.int64))
+        assert got == want, g
+        n_some += want is not None
+    assert 50 < n_some < len(groups)  # (both answers seen)
+
+
+def test_ring_fan_point_places_as_the_numpy_starts_did() -> None:
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import _join_kernels, sparse
+
+    dom = _domain("A")
+    clean, he, con = prepare_mesh(hammesh.quality_mesh(dom, min_angle=30, max_area=0.5, isolate=False))
+    pts, tri, tw = clean.points, clean.triangles, he.twin
+    amin = sparse.triangle_angles(pts, tri)[0]
+    n = 0
+    for h in np.flatnonzero(tw > np.arange(len(tw)))[:200].tolist():
+        members = [h // 3, int(tw[h] // 3)]
+        pp = sparse._union_polygon(tri, tw, con, np.asarray(members))
+        if pp is None:
+            continue
+        poly = np.asarray(pp[0], np.int64)
+        for keep in (0.0, 0.9):
+            lo = 0.2
+            lo_g = lo if keep == 0.0 else max(lo, keep * float(amin[members].min()))
+            starts = pts[tri[members]].sum(axis=1) / 3.0
+            step = 0.25 * np.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
+            want = _join_kernels.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, 2.5, step, 8)
+            got = sk.ring_fan_point(pts, tri, np.asarray(members), poly, len(poly), amin, keep, lo, 2.5, 8)
+            assert got[:5] == want and got[5] == lo_g
+            n += 1
+    assert n > 20
+
+
+@pytest.mark.parametrize("name", ["A", "regions"])
+def test_new_row_twins_packed_sort_matches_its_argsort_fallback(name: str, monkeypatch) -> None:
+    from hammesh.postprocess import sparse
+
+    seen = []
+    real = sk.new_row_twins
+
+    def spy(out, tri, tw, status, n_points):
+        got = real(out, tri, tw, status, n_points)
+        # n_points this large needs more than 62 bits with the index: the argsort path
+        big = real(out, tri, tw, status, 1 << 31)
+        seen.append(len(out))
+        for a, b in zip(got[:3], big[:3]):
+            np.testing.assert_array_equal(a, b)
+        assert got[3] == big[3] == -1
+        return got
+
+    monkeypatch.setattr(sparse._k, "new_row_twins", spy)
+    dom = _domain(name)
+    area = 0.001 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=30, max_area=area, isolate=False))
+    assert seen and seen[0] > 10
+
+
+@pytest.mark.parametrize("name", ["la", "regions"])
+def test_plan_steps_are_what_a_scan_finds(name: str, monkeypatch) -> None:
+    """``PlanSteps`` left after the steps that undo joins and bridges = a fresh scan."""
+    from hammesh.postprocess import sparse
+
+    checked = []
+    # (positions of join, slot (None: not an argument) and steps_at in each step's arguments)
+    where = {"_place_taken": (2, None, -2), "_alternating_merges": (4, 10, -1), "_ring_joins": (9, 15, -1)}
+    for fn, (i_join, i_slot, i_steps) in where.items():
+        def spy(*a, _real=getattr(sparse, fn), _at=(i_join, i_slot, i_steps), **k):
+            join, steps_at = a[_at[0]], a[_at[2]]
+            np.testing.assert_array_equal(steps_at.joined(join), np.flatnonzero(join >= 0))
+            if _at[1] is not None:
+                slot = a[_at[1]]
+                np.testing.assert_array_equal(steps_at.slotted(slot), np.flatnonzero(slot != sparse._k.PLAIN))
+            checked.append(_real.__name__)
+            return _real(*a, **k)
+
+        monkeypatch.setattr(sparse, fn, spy)
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area,
+                                                 isolate=False))
+    assert set(checked) == {"_alternating_merges", "_ring_joins", "_place_taken"}
+    assert h.report["alternating_merges"] + h.report["ring_joins"] > 0  # (steps were undone)

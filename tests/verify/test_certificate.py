@@ -227,3 +227,35 @@ def test_each_mode_hands_the_certificate_a_claim_it_accepts(monkeypatch, mode: s
     assert h.report["verified"] and h.n_triangles > m.n_triangles
     with pytest.raises(AssertionError, match="matched the output's half-edges itself"):
         verify(h, reference=m)  # the public entry takes no claim: it pairs by itself
+
+
+def test_claims_boundary_made_beside_the_rows_is_used_only_if_the_claim_passes(monkeypatch) -> None:
+    """Session 13: without ``prepared`` (sparse mode) the certificate finds the claim's
+    boundary keys beside its row checks. A claim that fails its checks must not lend
+    them: a bogus boundary from the claim is ignored then (and trusted only with a
+    claim that passes, as the certificate's own function of a checked pairing)."""
+    from hammesh.verify import certificate as cert
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import sparse_hamiltonian
+    from hammesh.verify.reference import input_facts
+
+    m = hammesh.quality_mesh(hammesh.Domain.from_polygon(square(0, 0, 1), holes=[square(0.4, 0.4, 0.2)]),
+                             min_angle=30, max_area=0.002, isolate=False)  # (no kernel warm-up thread)
+    clean, he, is_con = prepare_mesh(m)
+    h, claim = sparse_hamiltonian(clean, he, is_con)
+    facts = input_facts(m)
+    seen = []
+    real = cert.claim_structure
+
+    def bogus(tri, c):  # (the keys of one boundary edge too few)
+        seen.append(len(c))
+        return {"boundary": real(tri, c)["boundary"][1:]}
+
+    monkeypatch.setattr(cert, "claim_structure", bogus)
+    with pytest.raises(hammesh.VerificationError, match="boundary changed"):
+        cert.certify(h, facts, claim=claim)  # a passing claim: its (here bogus) keys are used
+    broken = claim.copy()
+    inner = np.flatnonzero(broken >= 0)
+    broken[inner[0]], broken[inner[1]] = broken[inner[1]], broken[inner[0]]  # no longer an involution
+    stats = cert.certify(h, facts, claim=broken)  # its keys ignored: the certificate pairs by itself
+    assert stats["min_angle_output_deg"] > 0 and seen.count(3 * h.n_triangles) == 2
