@@ -137,7 +137,9 @@ def test_sparse_takes_its_big_arrays_from_the_reserve(monkeypatch) -> None:
     h = hammesh.hamiltonian(m)
     assert pages.reserved() == 0  # (the rest given back)
     # validation twins, angles, plan, walk, gather, pinned edges, stamps, claim: most of the share
-    assert 0.75 * share <= sum(taken) <= share
+    # (on this small mesh 73 %: arrays sized by the cycles, not the rows, stay below
+    # RESERVE_MIN_ARRAY since session 13; at 2.4M triangles 93 % of the share is taken)
+    assert 0.7 * share <= sum(taken) <= share
     for f in FIELDS:
         np.testing.assert_array_equal(getattr(h, f), getattr(plain, f), err_msg=f)
 
