@@ -222,6 +222,22 @@ def stages(o: dict, raw_cpu: float) -> str:
     return line
 
 
+def timeline(o: dict) -> str:
+    """The driver's serial part: seconds from the process's start to the
+    decomposition, the tiles' submission, their end and the output's end (the report's
+    ``since_start``), the close and exit after it (the command's wall time minus the
+    end), and the driver process's CPU seconds (every thread) at the submission and in
+    all (``driver_cpu``)."""
+    s, c = o["parallel"].get("since_start") or {}, o["parallel"].get("driver_cpu") or {}
+    if "submitted" not in s or "end" not in s:
+        return ""
+    line = (f"driver timeline s: decompose from {s['decompose']:.2f}, submitted {s['submitted']:.2f}, "
+            f"tiles done {s['tiles_done']:.2f}, output done {s['end']:.2f}, close + exit {o['wall'] - s['end']:.2f}")
+    if "submitted" in c and "end" in c:
+        line += f"; driver CPU {c['submitted']:.2f} s to the submission, {c['end']:.2f} s in all"
+    return line
+
+
 def per_tile(o: dict) -> str:
     """Each tile's ``hamiltonian()`` (with its certificate): CPU seconds, per million of
     the tile's triangles, and its share of all the workers' CPU (issue 15 asks for it:
@@ -314,6 +330,8 @@ def main(argv: list[str] | None = None) -> int:
                 if r["cpu_seconds"] == r["cpu_seconds"]:
                     print(f"{'':22}|   whole command's CPU (driver, Dask, workers) / raw CPU: "
                           f"{o['tree_cpu'] / r['cpu_seconds']:.2f} ({o['tree_cpu']:.1f} s)")
+                if timeline(o):
+                    print(f"{'':22}|   {timeline(o)}")
                 if per_tile(o):
                     print(f"{'':22}|   {per_tile(o)}")
                 sys.stdout.flush()

@@ -26,6 +26,7 @@ def test_bench_scale_runs(extra, needle):
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
     assert "load average" in proc.stdout and "per tile hamiltonian() CPU s" in proc.stdout
     assert "tile tasks wall s" in proc.stdout
+    assert "driver timeline s: decompose from" in proc.stdout and "to the submission" in proc.stdout
 
 
 @pytest.mark.slow
