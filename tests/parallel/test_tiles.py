@@ -187,33 +187,28 @@ def _same_decomposition(x, y) -> None:
             assert eq(u, v), f.name
 
 
+def _with_and_without_memo(dom, min_angle, area, n_tiles):
+    """The decomposition with the plans' memo (``tiles.PLAN_MEMO``) and without it."""
+    import hammesh.parallel.tiles as tiles
+
+    got = []
+    for memo in (True, False):
+        old, tiles.PLAN_MEMO = tiles.PLAN_MEMO, memo
+        try:
+            got.append(decompose(dom, min_angle=min_angle, max_area=area, n_tiles=n_tiles))
+        finally:
+            tiles.PLAN_MEMO = old
+    return got
+
+
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(dom=star_pslg(), n_tiles=st.integers(2, 6), area=st.sampled_from([2e-3, 3e-4]))
 def test_the_plans_memo_changes_nothing(dom, n_tiles, area):
     """The separators' plans reuse the sizes sampled on a piece at the same sample
     count (``tiles.PLAN_MEMO``): the decomposition is the same, array for array."""
-    import hammesh.parallel.tiles as tiles
-
-    got = {}
-    for memo in (True, False):
-        old, tiles.PLAN_MEMO = tiles.PLAN_MEMO, memo
-        try:
-            got[memo] = decompose(dom, min_angle=25, max_area=area, n_tiles=n_tiles)
-        finally:
-            tiles.PLAN_MEMO = old
-    _same_decomposition(got[True], got[False])
+    _same_decomposition(*_with_and_without_memo(dom, 25, area, n_tiles))
 
 
 @pytest.mark.parametrize("area, n_tiles", [(2e-5, 4), (2e-4, 7)])
 def test_the_plans_memo_changes_nothing_on_the_demo(area, n_tiles):
-    import hammesh.parallel.tiles as tiles
-
-    dom = hammesh.read_domain("hammesh/data/demo.poly")
-    got = {}
-    for memo in (True, False):
-        old, tiles.PLAN_MEMO = tiles.PLAN_MEMO, memo
-        try:
-            got[memo] = decompose(dom, min_angle=30, max_area=area, n_tiles=n_tiles)
-        finally:
-            tiles.PLAN_MEMO = old
-    _same_decomposition(got[True], got[False])
+    _same_decomposition(*_with_and_without_memo(hammesh.read_domain("hammesh/data/demo.poly"), 30, area, n_tiles))
