@@ -133,6 +133,9 @@ def run_parallel(args: argparse.Namespace) -> int:
     library), then the domain is read while the cluster starts.
     """
     freeze_at_exit()
+    from hammesh.cli import exit_fast
+
+    exit_fast()  # (run as the command: no interpreter teardown after a cluster, hammesh.cli.fast_exit)
     check_options(args)
     with contextlib.ExitStack() as stack:
         ready = threading.Event()

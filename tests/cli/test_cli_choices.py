@@ -37,3 +37,25 @@ def test_an_unknown_mode_exits_2_with_the_names():
                        text=True)
     assert p.returncode == 2
     assert "incircle" in p.stderr and "sparse" in p.stderr and len(p.stderr.strip().splitlines()) == 1
+
+
+def test_fast_exit_joins_threads_runs_exit_handlers_and_flushes():
+    """``fast_exit`` skips only the interpreter's teardown: a non-daemon thread still
+    working is joined, every ``atexit`` handler runs, buffered output (a pipe) is
+    flushed, and the exit code is the one given."""
+    code = ("import atexit, threading, time\n"
+            "from hammesh.cli import fast_exit\n"
+            "atexit.register(lambda: print('handler ran'))\n"
+            "threading.Thread(target=lambda: (time.sleep(0.3), print('thread done'))).start()\n"
+            "print('before')\n"
+            "fast_exit(7)\n"
+            "print('never')\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 7
+    assert p.stdout.splitlines() == ["before", "thread done", "handler ran"]
+
+
+def test_a_program_calling_main_is_not_the_entry():
+    out = subprocess.run([sys.executable, "-c", "from hammesh.cli import is_entry; print(is_entry())"],
+                         capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

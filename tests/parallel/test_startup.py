@@ -238,3 +238,26 @@ def test_a_failure_before_ready_does_not_leave_the_start_waiting():
             "if t.name.startswith('hammesh-cluster')]]))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True)
     assert json.loads(out.stdout.strip().splitlines()[-1]) == [True, []]
+
+
+@pytest.mark.slow
+def test_the_parallel_command_ends_its_process_fast_and_whole(tmp_path):
+    """``python -m hammesh mesh ... --workers 2 --partitioned`` (the command as the
+    process's entry: it ends by ``cli.fast_exit``): exit 0, every line on a piped
+    stdout, the report and the checked index in place, and no process of the run left
+    (forked workers carry the command line, hence the output's path)."""
+    pytest.importorskip("distributed")
+    import psutil
+
+    out, rep = tmp_path / "fast_out", tmp_path / "r.json"
+    p = subprocess.run([sys.executable, "-m", "hammesh", "mesh", DEMO, "-q", "30", "-a", "2e-3", "--workers", "2",
+                        "--partitioned", "-o", str(out), "--report", str(rep)], capture_output=True, text=True,
+                       timeout=600)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    lines = p.stdout.splitlines()
+    assert len(lines) == 2 and lines[0].endswith("verified per tile and across separators")
+    assert lines[1].startswith("wrote index:")
+    assert json.loads(rep.read_text())["pieces"] >= 1
+    assert main(["check", str(out / "mesh.pvtu")]) == 0
+    left = [q.pid for q in psutil.process_iter(["cmdline"]) if str(out) in " ".join(q.info["cmdline"] or [])]
+    assert left == []
