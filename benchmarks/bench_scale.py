@@ -18,7 +18,10 @@ is a first call: imports, Dask start, kernel loading included), same run:
   certificate, ``border``, ``finish``, ``write``, ``spill``), and the CPU seconds of
   the whole command (every process: driver, Dask, workers) against the raw call's:
   what a loaded machine does not distort, and on two cores the wall time is at least
-  half of it.
+  half of it; and the driver's serial part: seconds from its process's start to the
+  decomposition, the tiles' submission, their end and the output's end, the close
+  and exit after that, and the driver's own CPU seconds to the submission and in all
+  (the report's ``since_start`` and ``driver_cpu``).
 
 ``--partitioned-only`` skips the raw call at the given sizes (100M triangles need ~30
 GB in one Triangle run): the raw count is then extrapolated from two raw runs of the
