@@ -32,6 +32,12 @@ printed. Tiles: ``--tiles`` (default: hammesh's, one per worker, more past 3M ea
     python benchmarks/bench_scale.py [--sizes 1.5e6,6e6] [--workers 1,2] [--modes sparse,incircle]
     python benchmarks/bench_scale.py --sizes 1e8 --workers 2 --partitioned-only --tiles 64
 
+``--imports-ab R``: the same with the local cluster's thread started before the
+driver's imports (``command.START_BEFORE_IMPORTS``, the default since session 13) or
+after them.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --workers 2 --modes sparse --imports-ab 4
+
 ``--startup R``: the driver's start, A/B: ``R`` rounds of two fresh processes each,
 alternating, the local cluster started before reading the domain
 (``hammesh.parallel.command.EARLY_START``, the default) or after; per run the seconds
@@ -177,12 +183,19 @@ EARLY = ("import sys; import hammesh.parallel.command as c, hammesh.parallel.til
          "from hammesh.cli import main; sys.exit(main(sys.argv[3:]))")
 
 
+#: ``python -c`` running the command with ``command.START_BEFORE_IMPORTS`` (argv[1])
+#: set, 0 or 1
+IMPORTS_FIRST = ("import sys; import hammesh.parallel.command as c; c.START_BEFORE_IMPORTS = bool(int(sys.argv[1])); "
+                 "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
+
+
 def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
-         early: bool | None = None, band: bool = True) -> dict:
+         early: bool | None = None, band: bool = True, start_first: bool | None = None) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
-        head = ([sys.executable, "-m", "hammesh"] if early is None else
+        head = ([sys.executable, "-c", IMPORTS_FIRST, str(int(start_first))] if start_first is not None else
+                [sys.executable, "-m", "hammesh"] if early is None else
                 [sys.executable, "-c", EARLY, str(int(early)), str(int(band))])
         cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
@@ -274,6 +287,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
     ap.add_argument("--startup", type=int, metavar="ROUNDS",
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
+    ap.add_argument("--imports-ab", type=int, metavar="ROUNDS",
+                    help="A/B of the cluster's thread started before / after the driver's imports")
     ap.add_argument("--ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
     ap.add_argument("--tiles-ab", type=int, metavar="ROUNDS",
@@ -299,6 +314,8 @@ def main(argv: list[str] | None = None) -> int:
         return write_ab(a)
     if a.startup:
         return startup_ab(a)
+    if a.imports_ab:
+        return imports_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
     workers = [int(w) for w in a.workers.split(",")]
     modes = a.modes.split(",")
@@ -509,6 +526,34 @@ def _worker_busy(steps: list, workers: int) -> str:
     for t in task:
         busy[busy.index(min(busy))] += t
     return " / ".join(f"{b:.1f}" for b in busy)
+
+
+def imports_ab(a) -> int:
+    """``--imports-ab``: interleaved fresh processes, the local cluster's thread started
+    before the driver's imports (``command.START_BEFORE_IMPORTS``, the default since
+    session 13) or after them; per run the seconds from the process's start to the
+    tiles' submission, the driver's CPU to it, the wall time and the whole command's
+    CPU (first size, first mode, first worker count; both run through ``cli.main``
+    in a ``python -c``, so neither ends by ``cli.fast_exit``)."""
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
+    got: dict = {True: [], False: []}
+    for r in range(a.imports_ab):
+        for first in ((True, False) if r % 2 == 0 else (False, True)):
+            o = ours(area, w, a.tiles, mode, a.out_dir, start_first=first)
+            s, c = o["parallel"]["since_start"], o["parallel"]["driver_cpu"]
+            got[first].append(o)
+            print(f"round {r} start_first={int(first)}: submitted {s['submitted']:.2f} s after the start "
+                  f"(driver CPU {c['submitted']:.2f} s), tiles done {s['tiles_done']:.2f}, wall {o['wall']:.2f}, "
+                  f"whole CPU {o['tree_cpu']:.2f} s, load {o['load'][0]:.1f}")
+            sys.stdout.flush()
+    for first in (True, False):
+        sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[first])
+        wall = statistics.median(o["wall"] for o in got[first])
+        cpu = statistics.median(o["tree_cpu"] for o in got[first])
+        print(f"start_first={int(first)}: submitted median {sub:.2f} s, wall median {wall:.2f}, "
+              f"whole CPU median {cpu:.2f}")
+    return 0
 
 
 def startup_ab(a) -> int:

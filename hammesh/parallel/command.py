@@ -14,12 +14,16 @@ from hammesh import params
 from hammesh.errors import InvalidOptionError
 
 __all__ = ["run_parallel", "check_options", "freeze_at_exit", "early_cluster", "import_driver_modules", "DRIVER_MODULES",
-           "EARLY_START"]
+           "EARLY_START", "START_BEFORE_IMPORTS"]
 
 #: ``--workers N`` starts its local cluster before the domain is read (in a thread of
 #: its own: importing Dask, forking the workers), not after; False: after (the order
 #: before session 10, kept for the A/B in ``benchmarks/bench_scale.py --startup``)
 EARLY_START = True
+#: the local cluster's thread starts before the driver's imports (it imports Dask
+#: meanwhile and forks once they are done); False: after them (session 12's order,
+#: kept for the A/B in ``benchmarks/bench_scale.py --imports-ab``)
+START_BEFORE_IMPORTS = True
 
 _freezing = False
 
@@ -139,8 +143,10 @@ def run_parallel(args: argparse.Namespace) -> int:
     check_options(args)
     with contextlib.ExitStack() as stack:
         ready = threading.Event()
+        if not START_BEFORE_IMPORTS:
+            import_driver_modules()
         started = stack.enter_context(early_cluster(args, ready))
-        import_driver_modules()
+        import_driver_modules()  # (imported already: nothing)
         ready.set()
         return _run(args, started, stack)
 
