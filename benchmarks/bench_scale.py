@@ -18,7 +18,10 @@ is a first call: imports, Dask start, kernel loading included), same run:
   certificate, ``border``, ``finish``, ``write``, ``spill``), and the CPU seconds of
   the whole command (every process: driver, Dask, workers) against the raw call's:
   what a loaded machine does not distort, and on two cores the wall time is at least
-  half of it.
+  half of it; and the driver's serial part: seconds from its process's start to the
+  decomposition, the tiles' submission, their end and the output's end, the close
+  and exit after that, and the driver's own CPU seconds to the submission and in all
+  (the report's ``since_start`` and ``driver_cpu``).
 
 ``--partitioned-only`` skips the raw call at the given sizes (100M triangles need ~30
 GB in one Triangle run): the raw count is then extrapolated from two raw runs of the
@@ -28,6 +31,12 @@ printed. Tiles: ``--tiles`` (default: hammesh's, one per worker, more past 3M ea
 
     python benchmarks/bench_scale.py [--sizes 1.5e6,6e6] [--workers 1,2] [--modes sparse,incircle]
     python benchmarks/bench_scale.py --sizes 1e8 --workers 2 --partitioned-only --tiles 64
+
+``--imports-ab R``: the same with the local cluster's thread started before the
+driver's imports (``command.START_BEFORE_IMPORTS``, the default since session 13) or
+after them.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --workers 2 --modes sparse --imports-ab 4
 
 ``--startup R``: the driver's start, A/B: ``R`` rounds of two fresh processes each,
 alternating, the local cluster started before reading the domain
@@ -174,12 +183,19 @@ EARLY = ("import sys; import hammesh.parallel.command as c, hammesh.parallel.til
          "from hammesh.cli import main; sys.exit(main(sys.argv[3:]))")
 
 
+#: ``python -c`` running the command with ``command.START_BEFORE_IMPORTS`` (argv[1])
+#: set, 0 or 1
+IMPORTS_FIRST = ("import sys; import hammesh.parallel.command as c; c.START_BEFORE_IMPORTS = bool(int(sys.argv[1])); "
+                 "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
+
+
 def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
-         early: bool | None = None, band: bool = True) -> dict:
+         early: bool | None = None, band: bool = True, start_first: bool | None = None) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
-        head = ([sys.executable, "-m", "hammesh"] if early is None else
+        head = ([sys.executable, "-c", IMPORTS_FIRST, str(int(start_first))] if start_first is not None else
+                [sys.executable, "-m", "hammesh"] if early is None else
                 [sys.executable, "-c", EARLY, str(int(early)), str(int(band))])
         cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
@@ -222,6 +238,22 @@ def stages(o: dict, raw_cpu: float) -> str:
     return line
 
 
+def timeline(o: dict) -> str:
+    """The driver's serial part: seconds from the process's start to the
+    decomposition, the tiles' submission, their end and the output's end (the report's
+    ``since_start``), the close and exit after it (the command's wall time minus the
+    end), and the driver process's CPU seconds (every thread) at the submission and in
+    all (``driver_cpu``)."""
+    s, c = o["parallel"].get("since_start") or {}, o["parallel"].get("driver_cpu") or {}
+    if "submitted" not in s or "end" not in s:
+        return ""
+    line = (f"driver timeline s: decompose from {s['decompose']:.2f}, submitted {s['submitted']:.2f}, "
+            f"tiles done {s['tiles_done']:.2f}, output done {s['end']:.2f}, close + exit {o['wall'] - s['end']:.2f}")
+    if "submitted" in c and "end" in c:
+        line += f"; driver CPU {c['submitted']:.2f} s to the submission, {c['end']:.2f} s in all"
+    return line
+
+
 def per_tile(o: dict) -> str:
     """Each tile's ``hamiltonian()`` (with its certificate): CPU seconds, per million of
     the tile's triangles, and its share of all the workers' CPU (issue 15 asks for it:
@@ -255,6 +287,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--big", action="store_true", help="also 25M and 100M (100M: with --partitioned-only)")
     ap.add_argument("--startup", type=int, metavar="ROUNDS",
                     help="A/B of the cluster started before / after reading the domain, ROUNDS rounds")
+    ap.add_argument("--imports-ab", type=int, metavar="ROUNDS",
+                    help="A/B of the cluster's thread started before / after the driver's imports")
     ap.add_argument("--ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
     ap.add_argument("--tiles-ab", type=int, metavar="ROUNDS",
@@ -280,6 +314,8 @@ def main(argv: list[str] | None = None) -> int:
         return write_ab(a)
     if a.startup:
         return startup_ab(a)
+    if a.imports_ab:
+        return imports_ab(a)
     sizes = [float(s) for s in a.sizes.split(",")] + ([25e6, 100e6] if a.big else [])
     workers = [int(w) for w in a.workers.split(",")]
     modes = a.modes.split(",")
@@ -314,6 +350,8 @@ def main(argv: list[str] | None = None) -> int:
                 if r["cpu_seconds"] == r["cpu_seconds"]:
                     print(f"{'':22}|   whole command's CPU (driver, Dask, workers) / raw CPU: "
                           f"{o['tree_cpu'] / r['cpu_seconds']:.2f} ({o['tree_cpu']:.1f} s)")
+                if timeline(o):
+                    print(f"{'':22}|   {timeline(o)}")
                 if per_tile(o):
                     print(f"{'':22}|   {per_tile(o)}")
                 sys.stdout.flush()
@@ -488,6 +526,34 @@ def _worker_busy(steps: list, workers: int) -> str:
     for t in task:
         busy[busy.index(min(busy))] += t
     return " / ".join(f"{b:.1f}" for b in busy)
+
+
+def imports_ab(a) -> int:
+    """``--imports-ab``: interleaved fresh processes, the local cluster's thread started
+    before the driver's imports (``command.START_BEFORE_IMPORTS``, the default since
+    session 13) or after them; per run the seconds from the process's start to the
+    tiles' submission, the driver's CPU to it, the wall time and the whole command's
+    CPU (first size, first mode, first worker count; both run through ``cli.main``
+    in a ``python -c``, so neither ends by ``cli.fast_exit``)."""
+    area = max_area_for(float(a.sizes.split(",")[0]))
+    w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
+    got: dict = {True: [], False: []}
+    for r in range(a.imports_ab):
+        for first in ((True, False) if r % 2 == 0 else (False, True)):
+            o = ours(area, w, a.tiles, mode, a.out_dir, start_first=first)
+            s, c = o["parallel"]["since_start"], o["parallel"]["driver_cpu"]
+            got[first].append(o)
+            print(f"round {r} start_first={int(first)}: submitted {s['submitted']:.2f} s after the start "
+                  f"(driver CPU {c['submitted']:.2f} s), tiles done {s['tiles_done']:.2f}, wall {o['wall']:.2f}, "
+                  f"whole CPU {o['tree_cpu']:.2f} s, load {o['load'][0]:.1f}")
+            sys.stdout.flush()
+    for first in (True, False):
+        sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[first])
+        wall = statistics.median(o["wall"] for o in got[first])
+        cpu = statistics.median(o["tree_cpu"] for o in got[first])
+        print(f"start_first={int(first)}: submitted median {sub:.2f} s, wall median {wall:.2f}, "
+              f"whole CPU median {cpu:.2f}")
+    return 0
 
 
 def startup_ab(a) -> int:

@@ -33,7 +33,7 @@ from collections.abc import Sequence
 from hammesh.cli import check, demo, mesh, partition, points, polygon, strip, surface
 from hammesh.errors import HammeshError, Terminated, VerificationError
 
-__all__ = ["main", "build_parser", "chosen_command", "one_line", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
+__all__ = ["main", "build_parser", "chosen_command", "one_line", "exit_fast", "fast_exit", "is_entry", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 
@@ -133,14 +133,73 @@ def _install_signal_handlers() -> dict[int, object]:
     return old
 
 
+_fast_exit = False
+
+
+def exit_fast() -> None:
+    """Ask :func:`main`, when it runs as the process's entry (the ``hammesh`` script or
+    ``python -m hammesh``), to end the process with :func:`fast_exit` once the command
+    returns (the parallel path asks: ``hammesh.parallel.command``)."""
+    global _fast_exit
+    _fast_exit = True
+
+
+def is_entry() -> bool:
+    """Whether this process runs the ``hammesh`` command itself (``__main__`` is the
+    console script or ``hammesh.__main__``), not a program that calls :func:`main`."""
+    m = sys.modules.get("__main__")
+    spec = getattr(m, "__spec__", None)
+    if spec is not None and spec.name == "hammesh.__main__":
+        return True
+    name = os.path.basename(getattr(m, "__file__", None) or "")
+    return name in ("hammesh", "hammesh.exe", "hammesh-script.py")
+
+
+def fast_exit(code: int) -> None:
+    """End this process now with ``code``, after everything an exit must do, without
+    the interpreter's teardown.
+
+    The non-daemon threads are joined and every ``atexit`` handler runs (Dask's,
+    ``tempfile``'s and ``weakref.finalize``'s clean-ups, logging's flush), then stdout
+    and stderr are flushed and ``os._exit`` ends the process: what is skipped is
+    Python's destruction of every module and object it made, which after a local Dask
+    cluster and numba took 0.15-0.18 s of the command's wall time (measured at 0.3M
+    triangles, 6 alternating runs, load 7: the output's end to the process's end
+    0.28 s median against 0.11 s); the system frees the memory at once. Every output
+    file is closed (and renamed into place) before the command returns.
+    Falls back to ``sys.exit`` where the interpreter has no such hooks.
+    """
+    import atexit
+    import threading
+
+    shutdown = getattr(threading, "_shutdown", None)
+    run_exit = getattr(atexit, "_run_exitfuncs", None)
+    if shutdown is None or run_exit is None:  # pragma: no cover - not CPython
+        sys.exit(code)
+    try:
+        shutdown()  # (the non-daemon threads joined, as at a normal exit, first)
+        run_exit()
+    finally:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError, AttributeError):
+                pass
+        os._exit(code)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``hammesh`` console script; returns the exit code."""
+    """Entry point of the ``hammesh`` console script; returns the exit code (as the
+    entry of a command that asked for it, :func:`exit_fast`, ends the process instead)."""
     old = _install_signal_handlers()
     try:
-        return _main(argv)
+        code = _main(argv)
     finally:
         for signum, handler in old.items():
             signal.signal(signum, handler)  # type: ignore[arg-type]
+    if _fast_exit and argv is None and is_entry():
+        fast_exit(code)
+    return code
 
 
 def _main(argv: Sequence[str] | None) -> int:

@@ -18,10 +18,17 @@ EXAMPLES = """examples:
 inputs: .poly/.node are domains (meshed first); .vtu .msh .xdmf .obj .ply .ele ... are meshes."""
 
 
+#: the names of ``hammesh.meshing.BACKENDS`` and ``hammesh.postprocess.MODES``, spelled
+#: here so that parsing the options imports neither registry: their modules load numba,
+#: scipy and every kernel module (0.3-0.7 s measured), and the parallel path starts its
+#: local cluster before it imports them (docs/scale.md "The driver's start");
+#: tests/cli/test_cli_choices.py holds them equal to the registries
+BACKEND_NAMES = ("meshpy", "triangle")
+MODE_NAMES = ("incircle", "sparse")
+
+
 def add_args(p: argparse.ArgumentParser) -> None:
-    from hammesh.meshing import BACKENDS  # the registries name the choices
-    from hammesh.numbering import NUMBERINGS
-    from hammesh.postprocess import MODES
+    from hammesh.numbering import NUMBERINGS  # (a light module: numpy and hammesh.mesh)
 
     p.add_argument("input", type=Path, help="domain (.poly, .node) or triangle mesh file")
     p.add_argument("-o", "--output", type=Path, help="output mesh (.vtu .msh .xdmf .obj .ply .ele ...)")
@@ -31,12 +38,12 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("quality meshing (domain inputs)")
     g.add_argument("-q", "--min-angle", type=float, help="minimum angle in degrees (0..34)")
     g.add_argument("-a", "--max-area", type=float, help="maximum triangle area (> 0)")
-    g.add_argument("--backend", choices=sorted(BACKENDS), default="triangle")
+    g.add_argument("--backend", choices=BACKEND_NAMES, default="triangle")
     g.add_argument("--conforming-delaunay", action="store_true", help="every triangle Delaunay (-D)")
     g.add_argument("--max-steiner", type=int, help="limit on Steiner points added by the mesher")
     g.add_argument("--timeout", type=float, help="stop the mesher after this many seconds")
     p.add_argument(
-        "--mode", choices=sorted(MODES), default="sparse",
+        "--mode", choices=MODE_NAMES, default="sparse",
         help="Hamiltonian construction: sparse (default, keeps the input's quality) or incircle (Thm 2.4)",
     )
     p.add_argument(

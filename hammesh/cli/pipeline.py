@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from hammesh.cli.inputs import DOMAIN_SUFFIXES
 from hammesh.domain import Domain, read_domain
 from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io import check_outputs, read_mesh, supported_suffixes, unwritten_data, write, write_report
@@ -28,9 +29,6 @@ from hammesh.meshing import quality_mesh
 from hammesh.postprocess import hamiltonian
 
 __all__ = ["Outputs", "DOMAIN_SUFFIXES", "load_input", "run_pipeline", "summary"]
-
-#: inputs read as domains (meshed first); anything else is read as a finished mesh
-DOMAIN_SUFFIXES = (".poly", ".node")
 
 
 @dataclass(frozen=True)

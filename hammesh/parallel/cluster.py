@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import threading
 from typing import Iterator
 
 from hammesh.errors import HammeshError, InvalidOptionError
@@ -56,7 +57,8 @@ def start_method() -> str:
 
 @contextlib.contextmanager
 def runner_for(*, workers: int | None = None, client=None, scheduler: str | None = None,
-               mode: str | None = None, background: bool = False) -> Iterator[tuple[object, int]]:
+               mode: str | None = None, background: bool = False,
+               ready: threading.Event | None = None) -> Iterator[tuple[object, int]]:
     """``(runner, n_workers)``: a Dask client (given, connected to ``scheduler``, or a
     local cluster of ``workers`` processes started here and closed on exit), or the
     in-process :class:`~hammesh.parallel.run.LocalRunner` when none is asked for.
@@ -66,10 +68,12 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
     ``background``: a local cluster starts in a thread of its own while the caller goes
     on (reading and splitting the domain: the cluster's start, ~1 s, and the driver's
     decomposition then overlap); the runner is then a :class:`Starting` handle whose
-    first use waits for the start.
+    first use waits for the start. ``ready`` (with ``background``): the starting thread
+    imports Dask, then waits until the caller sets it before it forks the workers (the
+    caller sets it once its own imports are done: a fork in the middle of another
+    thread's import would leave that module half made and locked in the workers); set
+    on the way out in any case.
     """
-    from hammesh.parallel.run import LocalRunner
-
     if isinstance(client, Starting):  # a local cluster the caller started in the background
         yield client, client.n_workers
         return
@@ -82,6 +86,8 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
             yield c, max(1, len(c.scheduler_info().get("workers", {})))
         return
     if workers is None:
+        from hammesh.parallel.run import LocalRunner
+
         yield LocalRunner(), 1
         return
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -94,9 +100,8 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
         return
     from concurrent.futures import ThreadPoolExecutor
 
-    _hold_numba_lock_across_fork()
     with contextlib.ExitStack() as stack, ThreadPoolExecutor(1, thread_name_prefix="hammesh-cluster") as pool:
-        started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING)
+        started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING, ready)
         failed = False
         try:
             yield Starting(started, workers), workers
@@ -104,6 +109,8 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
             failed = True
             raise
         finally:
+            if ready is not None:
+                ready.set()  # (the caller failed before its imports were done: the start goes on, then closes)
             # the cluster is closed (by the stack) only once it is up; a start that
             # failed is reported unless the caller's own error is on its way
             try:
@@ -154,18 +161,22 @@ START_TIMEOUT = 120.0
 TILE_QUEUE = {"distributed.scheduler.worker-saturation": 1.0}
 
 
-def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = ()):
+def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = (),
+                 ready: threading.Event | None = None):
     """Start a local cluster of ``workers`` processes and its client, both closed by
-    ``stack`` (``modules`` imported first, see :data:`FORK_AFTER_IMPORTING`)."""
+    ``stack`` (Dask imported first; then, if given, wait for ``ready``; ``modules``
+    imported before the fork, see :data:`FORK_AFTER_IMPORTING`)."""
     import importlib
     import logging
-
-    for name in modules:
-        importlib.import_module(name)
 
     import dask
 
     distributed = _distributed()
+    if ready is not None:
+        ready.wait()
+    for name in modules:
+        importlib.import_module(name)
+    _hold_numba_lock_across_fork()
     method = start_method()
     if mode is not None and method == "fork":
         from hammesh.parallel.tile_mesh import load_tile_kernels

@@ -6,17 +6,24 @@ import argparse
 import atexit
 import contextlib
 import gc
+import importlib
 import sys
+import threading
 
 from hammesh import params
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["run_parallel", "freeze_at_exit", "early_cluster", "EARLY_START"]
+__all__ = ["run_parallel", "check_options", "freeze_at_exit", "early_cluster", "import_driver_modules", "DRIVER_MODULES",
+           "EARLY_START", "START_BEFORE_IMPORTS"]
 
 #: ``--workers N`` starts its local cluster before the domain is read (in a thread of
 #: its own: importing Dask, forking the workers), not after; False: after (the order
 #: before session 10, kept for the A/B in ``benchmarks/bench_scale.py --startup``)
 EARLY_START = True
+#: the local cluster's thread starts before the driver's imports (it imports Dask
+#: meanwhile and forks once they are done); False: after them (session 12's order,
+#: kept for the A/B in ``benchmarks/bench_scale.py --imports-ab``)
+START_BEFORE_IMPORTS = True
 
 _freezing = False
 
@@ -40,32 +47,53 @@ def freeze_at_exit() -> None:
         _freezing = True
 
 
+#: modules the driver's main thread imports before its local cluster may fork the
+#: workers (:func:`import_driver_modules`): what reading the domain, estimating and
+#: decomposing it, and running the tiles import (tests/parallel/test_startup.py holds
+#: that they import nothing more); (name, required)
+DRIVER_MODULES = (("hammesh.cli.pipeline", True), ("hammesh.parallel.partitioned", True),
+                  ("hammesh.parallel.run", True), ("hammesh.parallel.sizing", True), ("scipy.spatial", True),
+                  ("triangle", True), ("psutil", False))
+
+
+def import_driver_modules() -> None:
+    """Import :data:`DRIVER_MODULES` (an optional one may be missing)."""
+    for name, required in DRIVER_MODULES:
+        try:
+            importlib.import_module(name)
+        except ImportError:
+            if required:
+                raise
+
+
 @contextlib.contextmanager
-def early_cluster(args: argparse.Namespace):
+def early_cluster(args: argparse.Namespace, ready: threading.Event | None = None):
     """The local cluster of ``--workers N``, starting in the background from here on
     (:func:`~hammesh.parallel.cluster.runner_for`), or None (no ``--workers``, a
-    ``--scheduler``'s cluster, or :data:`EARLY_START` off).
+    ``--scheduler``'s cluster, or :data:`EARLY_START` off). ``ready``: set by the
+    caller when its imports are done; the start forks the workers only then.
 
     Why: the driver's start is serial up to the tiles' submission. The cluster's start
-    (importing ``distributed``, ~0.6 s quiet, the scheduler, forking the workers with
-    the mode's kernels loaded) used to begin only when the meshing did, after the
-    command had read the domain and estimated its size; begun first, it runs beside
-    them. Closed (with the workers) when the command is done.
+    (importing ``distributed``, ~0.5 s, the scheduler, forking the workers with the
+    mode's kernels loaded) used to begin only when the meshing did, after the command
+    had read the domain and estimated its size; then (session 10) after the driver's
+    own imports (0.4-0.7 s: the options' registries, the pipeline's modules); now as
+    soon as the options are checked, beside the driver's imports, reading and
+    decomposition. Closed (with the workers) when the command is done.
     """
     if not EARLY_START or args.workers is None:
         yield None
         return
     from hammesh.parallel.cluster import runner_for
 
-    with runner_for(workers=args.workers, mode=args.mode, background=True) as (runner, _):
+    with runner_for(workers=args.workers, mode=args.mode, background=True, ready=ready) as (runner, _):
         yield runner
 
 
-def run_parallel(args: argparse.Namespace) -> int:
-    """Check the options, mesh on the tiles, write the outputs (one file or a directory)."""
-    freeze_at_exit()
-    from hammesh.cli.pipeline import DOMAIN_SUFFIXES, Outputs, load_input
-    from hammesh.domain import Domain
+def check_options(args: argparse.Namespace) -> None:
+    """Refuse the options the parallel path cannot run with: checks that import no
+    library module (made before the local cluster starts)."""
+    from hammesh.cli.inputs import DOMAIN_SUFFIXES
     from hammesh.parallel.cluster import DASK_MISSING, dask_installed
 
     if args.workers is not None:
@@ -93,13 +121,43 @@ def run_parallel(args: argparse.Namespace) -> int:
         raise InvalidOptionError("--force replaces an existing --partitioned -o DIRECTORY: give --partitioned")
     if args.parts is not None:
         params.integer("--parts", args.parts, low=1, what="number of parts")
-    progress = sys.stderr.isatty()
     if args.partitioned:
         if args.output is None:
             raise InvalidOptionError("--partitioned needs -o DIRECTORY")
         if args.renumber is not None:
             raise InvalidOptionError("--renumber needs the whole mesh: not with --partitioned "
                                      "(the pieces keep global ids in cycle order)")
+
+
+def run_parallel(args: argparse.Namespace) -> int:
+    """Check the options, mesh on the tiles, write the outputs (one file or a directory).
+
+    The local cluster of ``--workers`` starts (:func:`early_cluster`) as soon as the
+    options are checked; the output paths are checked next (their modules import the
+    library), then the domain is read while the cluster starts.
+    """
+    freeze_at_exit()
+    from hammesh.cli import exit_fast
+
+    exit_fast()  # (run as the command: no interpreter teardown after a cluster, hammesh.cli.fast_exit)
+    check_options(args)
+    with contextlib.ExitStack() as stack:
+        ready = threading.Event()
+        if not START_BEFORE_IMPORTS:
+            import_driver_modules()
+        started = stack.enter_context(early_cluster(args, ready))
+        import_driver_modules()  # (imported already: nothing)
+        ready.set()
+        return _run(args, started, stack)
+
+
+def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
+    """:func:`run_parallel` once the cluster is starting; ``stack`` closes it."""
+    from hammesh.cli.pipeline import Outputs, load_input
+    from hammesh.domain import Domain
+
+    progress = sys.stderr.isatty()
+    if args.partitioned:
         from hammesh.parallel.partitioned import check_target
 
         inputs = (args.input, args.input.with_suffix(".node"))
@@ -108,15 +166,15 @@ def run_parallel(args: argparse.Namespace) -> int:
         from hammesh.parallel.partitioned import write_partitioned
 
         Outputs(report=args.report, inputs=(args.input,)).check()
-        with early_cluster(args) as started:
-            source = load_input(args.input, strict=args.strict)
-            if not isinstance(source, Domain):
-                raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-            rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
-                                    tiles=args.tiles, workers=None if started else args.workers, client=started,
-                                    scheduler=args.scheduler, mode=args.mode, keep=args.keep, parts=args.parts,
-                                    force=args.force, inputs=inputs, progress=progress,
-                                    lattice=not args.no_lattice)
+        source = load_input(args.input, strict=args.strict)
+        if not isinstance(source, Domain):
+            raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
+        rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
+                                tiles=args.tiles, workers=None if started else args.workers, client=started,
+                                scheduler=args.scheduler, mode=args.mode, keep=args.keep, parts=args.parts,
+                                force=args.force, inputs=inputs, progress=progress,
+                                lattice=not args.no_lattice)
+        stack.close()  # (the local cluster: closed once the output is in place)
         if args.report is not None:
             write_report(rep, args.report)
         par = rep["parallel"]
@@ -136,15 +194,15 @@ def run_parallel(args: argparse.Namespace) -> int:
 
     outputs = Outputs(mesh=args.output, report=args.report, inputs=(args.input,))
     outputs.check()
-    # (a local cluster starts here, beside reading the domain: early_cluster)
-    with early_cluster(args) as started, runner_for(scheduler=args.scheduler) as (runner, n):
-        source = load_input(args.input, strict=args.strict)
-        if not isinstance(source, Domain):
-            raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
-        client = started if started is not None else None if args.scheduler is None else runner
-        h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
-                                 workers=None if client is not None else args.workers, client=client,
-                                 mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
+    runner, _ = stack.enter_context(runner_for(scheduler=args.scheduler))
+    source = load_input(args.input, strict=args.strict)
+    if not isinstance(source, Domain):
+        raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
+    client = started if started is not None else None if args.scheduler is None else runner
+    h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
+                             workers=None if client is not None else args.workers, client=client,
+                             mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
+    stack.close()  # (the clusters: the whole mesh is here)
     if args.parts is not None or args.renumber is not None:
         from hammesh.partition import partitioned
 

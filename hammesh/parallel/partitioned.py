@@ -361,6 +361,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                                          for k in ("finish", "write", "cpu_finish", "cpu_write")}},
                      "tile_steps": [{**st, **x[5]} for st, x in zip(tiled.tile_steps, done)],
                      "since_start": {**tiled.since_start, "end": since_start()},
+                     "driver_cpu": {**tiled.driver_cpu, "end": time.process_time()},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }
     if not_carried(domain):

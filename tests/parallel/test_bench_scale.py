@@ -26,11 +26,13 @@ def test_bench_scale_runs(extra, needle):
     assert "sparse" in proc.stdout and "driver s:" in proc.stdout
     assert "load average" in proc.stdout and "per tile hamiltonian() CPU s" in proc.stdout
     assert "tile tasks wall s" in proc.stdout
+    assert "driver timeline s: decompose from" in proc.stdout and "to the submission" in proc.stdout
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("extra, needles", [
     (["--startup", "1"], ["early=1: submitted median", "early=0: submitted median"]),
+    (["--imports-ab", "1"], ["start_first=1: submitted median", "start_first=0: submitted median"]),
     (["--ab", "1"], ["raw:", "sparse warm-up (0.2M, not counted)", "sparse new=1: whole CPU / raw CPU median",
                      "sparse new=0: whole CPU / raw CPU median"]),
     (["--tile-ab", "1"], ["mesh: band", "sparse: band"]),

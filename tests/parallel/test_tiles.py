@@ -166,3 +166,49 @@ def test_union_of_random_domains_conforms(dom, n_tiles):
     area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
                         - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0])).sum()
     assert facts.area == pytest.approx(area, rel=1e-9)
+
+
+def _same_decomposition(x, y) -> None:
+    """Every field of two decompositions (and of their tiles) equal, array for array."""
+    from dataclasses import fields
+
+    def eq(u, v):
+        u, v = np.asarray(u), np.asarray(v)
+        return np.array_equal(u, v, equal_nan=u.dtype.kind == "f")
+
+    for f in fields(x):
+        u, v = getattr(x, f.name), getattr(y, f.name)
+        if f.name == "tiles":
+            assert len(u) == len(v)
+            for t1, t2 in zip(u, v):
+                for g in fields(t1):
+                    assert eq(getattr(t1, g.name), getattr(t2, g.name)), (f.name, g.name)
+        else:
+            assert eq(u, v), f.name
+
+
+def _with_and_without_memo(dom, min_angle, area, n_tiles):
+    """The decomposition with the plans' memo (``tiles.PLAN_MEMO``) and without it."""
+    import hammesh.parallel.tiles as tiles
+
+    got = []
+    for memo in (True, False):
+        old, tiles.PLAN_MEMO = tiles.PLAN_MEMO, memo
+        try:
+            got.append(decompose(dom, min_angle=min_angle, max_area=area, n_tiles=n_tiles))
+        finally:
+            tiles.PLAN_MEMO = old
+    return got
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(dom=star_pslg(), n_tiles=st.integers(2, 6), area=st.sampled_from([2e-3, 3e-4]))
+def test_the_plans_memo_changes_nothing(dom, n_tiles, area):
+    """The separators' plans reuse the sizes sampled on a piece at the same sample
+    count (``tiles.PLAN_MEMO``): the decomposition is the same, array for array."""
+    _same_decomposition(*_with_and_without_memo(dom, 25, area, n_tiles))
+
+
+@pytest.mark.parametrize("area, n_tiles", [(2e-5, 4), (2e-4, 7)])
+def test_the_plans_memo_changes_nothing_on_the_demo(area, n_tiles):
+    _same_decomposition(*_with_and_without_memo(hammesh.read_domain("hammesh/data/demo.poly"), 30, area, n_tiles))
