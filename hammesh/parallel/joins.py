@@ -219,15 +219,40 @@ def _swap_min_angles(t_xyz: np.ndarray, d: np.ndarray) -> np.ndarray:
     return np.where(legal, low, 0.0)
 
 
+def _incenters(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Incenters of the triangles ``abc`` (each corner weighted by its opposite side)."""
+    la = np.hypot(*(c - b).T)[:, None]
+    lb = np.hypot(*(a - c).T)[:, None]
+    lc = np.hypot(*(b - a).T)[:, None]
+    return (la * a + lb * b + lc * c) / (la + lb + lc)
+
+
+def _bridge_min_angles(t_xyz: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Smallest angle of the six triangles Thm 2.4's bridge makes over ``ab`` of each
+    ``t = abc``, ``u = bad`` (``t_xyz (p, 3, 2)``, ``d (p, 2)``; the module notes name
+    them): at least half of ``t``'s and ``u``'s smallest (the proof), often more, so the
+    bridges are ranked by what they make, not by their parents."""
+    if len(t_xyz) == 0:
+        return np.zeros(0)
+    a, b, c = t_xyz[:, 0], t_xyz[:, 1], t_xyz[:, 2]
+    it, iu = _incenters(a, b, c), _incenters(b, a, d)
+    tris = np.stack([np.stack(corners, 1) for corners in
+                     ((it, c, a), (it, a, iu), (iu, a, d), (iu, d, b), (iu, b, it), (it, b, c))], 1)
+    return _min_angle_deg(tris.reshape(-1, 3, 2)).reshape(-1, 6).min(axis=1)
+
+
 def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: float = 0.9,
                n_separators: int | None = None) -> Plan:
     """Choose the joins (Kruskal over the tiles' cycles) and the global cycle order.
 
     Best first: a *swap* (flip ``ab`` into ``cd``, no Steiner point, the sparse mode's
     join) whose new angles meet the local quality rule (>= ``keep`` x the two
-    triangles' smallest); Thm 2.4's bridge between triangles kept whole (proven:
-    >= half their angles); a swap keeping half the input's minimum; last a bridge of
-    other triangles (only the certificate vouches for those; counted in the report).
+    triangles' smallest); then, by the smallest angle they make, Thm 2.4's bridges
+    between triangles kept whole (proven: >= half their angles) and swaps keeping half
+    the input's minimum (before session 13 every such bridge went first, ranked by its
+    parents: the demo's two tiles were joined by a bridge making 20.4 deg); last a
+    bridge of other triangles (only the certificate vouches for those; counted in the
+    report).
     """
     floor = 0.5 * min((b.input_min_angle for b in borders), default=0.0)
     # nodes: (tile, run)
@@ -277,8 +302,16 @@ def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: flo
     # 0: a swap meeting the local quality rule (no Steiner point); 1: Thm 2.4's bridge
     # (proven bound); 2: a swap keeping the certificate's bound; 3: a bridge of triangles
     # not kept whole (checked by the certificate only)
-    rank = np.where(new >= np.maximum(keep * parents, bound), 0, np.where(whole, 1, np.where(new >= bound, 2, 3)))
-    score = -np.minimum(parents, np.where((rank == 0) | (rank == 2), new, parents))
+    bridged = _bridge_min_angles(xyz[i], xyz[j][:, 2])
+    swap_ok = new >= bound
+    # 0: a swap meeting the local quality rule (no Steiner point); 1: the better of a swap
+    # keeping the certificate's bound and Thm 2.4's bridge of triangles kept whole (its
+    # bound proven), by the smallest angle each makes; 3: a bridge of triangles not kept
+    # whole (checked by the certificate only)
+    rank = np.where(new >= np.maximum(keep * parents, bound), 0, np.where(whole | swap_ok, 1, 3))
+    use_swap = (rank == 0) | (swap_ok & (~whole | (new >= bridged)))
+    made = np.where(use_swap, new, bridged)
+    score = -np.where(rank == 3, parents, made)
     ti, ri, tj, rj = ent[i, 0], ent[i, 1], ent[j, 0], ent[j, 1]
     order = np.lexsort((rj, tj, ri, ti, score, rank))  # best first, ties by tile and row
     uf = _UF(n_nodes)
@@ -297,7 +330,7 @@ def plan_joins(borders: list[BorderRows], n_decomposition_points: int, keep: flo
             used.add(a_)
             used.add(b_)
             chosen.append((a_[0], a_[1], b_[0], b_[1], int(ni[q]), int(nj[q])))
-            swaps[a_] = swaps[b_] = bool(rank[q] in (0, 2))
+            swaps[a_] = swaps[b_] = bool(use_swap[q])
             fallback += int(rank[q] == 3)
     if n_nodes - len(chosen) != pieces:
         raise VerificationError(

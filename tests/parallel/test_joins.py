@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import hammesh
 from hammesh.parallel.run import parallel_hamiltonian
@@ -64,6 +66,36 @@ def test_swap_min_angles_of_a_square_and_of_a_reflex_quad():
     d = np.array([[1.0, 0.0], [3.0, 2.0]])  # second: reflex at b, the flip is not legal
     got = _swap_min_angles(t, d)
     assert np.isclose(got[0], 45.0) and got[1] == 0.0
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.floats(-2, 2, allow_nan=False), min_size=4, max_size=4))
+def test_bridge_min_angles_are_the_six_triangles_and_keep_half_the_parents(coords):
+    """Thm 2.4's bridge over ab of t = abc, u = bad: its six triangles' smallest angle,
+    recomputed here from the incenters, and at least half of t's and u's smallest."""
+    from hammesh.parallel.joins import _bridge_min_angles
+
+    a, b = np.array([0.0, 0.0]), np.array([1.0, 0.0])
+    c = np.array([coords[0], 0.2 + abs(coords[1])])   # above ab: t = abc counter-clockwise
+    d = np.array([coords[2], -0.2 - abs(coords[3])])  # below: u = bad counter-clockwise
+
+    def incenter(p, q, r):
+        w = np.array([np.linalg.norm(q - r), np.linalg.norm(r - p), np.linalg.norm(p - q)])
+        return (w[0] * p + w[1] * q + w[2] * r) / w.sum()
+
+    def smallest(p, q, r):
+        out = []
+        for x, y, z in ((p, q, r), (q, r, p), (r, p, q)):
+            u, v = y - x, z - x
+            out.append(np.degrees(np.arccos(np.clip(u @ v / np.linalg.norm(u) / np.linalg.norm(v), -1, 1))))
+        return min(out)
+
+    it, iu = incenter(a, b, c), incenter(b, a, d)
+    six = [(it, c, a), (it, a, iu), (iu, a, d), (iu, d, b), (iu, b, it), (it, b, c)]
+    want = min(smallest(*x) for x in six)
+    got = _bridge_min_angles(np.array([[a, b, c]]), np.array([d]))[0]
+    assert np.isclose(got, want, atol=1e-7)
+    assert got >= 0.5 * min(smallest(a, b, c), smallest(b, a, d)) - 1e-9
 
 
 def _edges_within_numpy(tri, k):
