@@ -957,29 +957,30 @@ def cache_table_rows(quick: bool, N: int = 16) -> None:
 
 
 #: Band slacks of :func:`band_width_rows`: rows of at most ``N - slack`` triangles a band
-#: (``hammesh.strips.rows.BAND_SLACK``, 3 by default; larger: narrower columns).
-BAND_SLACKS = (0, 3, 6, 9, 12)
+#: (``hammesh.strips.rows.band_slack``: ``max(3, N // 4)`` by default; larger: narrower columns).
+BAND_SLACKS = (0, 3, 6, 9, 12, 16, 24)
 
 
 def band_width_rows(name: str, mesh: Mesh, N: int, target: float | None) -> None:
     """Cache mode's trade-off on one mesh: ipt and ACMR (FIFO ``N``) of the bands at each of
-    :data:`BAND_SLACKS` (narrower columns: fewer loads, more row ends), against ``target``
-    (meshopt vcache + stripify's ACMR at the same FIFO)."""
+    :data:`BAND_SLACKS` below ``N - 2`` (narrower columns: fewer loads, more row ends),
+    against ``target`` (meshopt vcache + stripify's ACMR at the same FIFO)."""
     from hammesh.strips import rows as band_rows
     from hammesh.strips import vertex_cache_stats
 
-    kept = band_rows.BAND_SLACK
+    kept = band_rows.band_slack
     cells = []
     try:
-        for slack in BAND_SLACKS:
-            band_rows.BAND_SLACK = slack
+        for slack in (s for s in BAND_SLACKS if s < N - 2):
+            band_rows.band_slack = lambda cache, s=slack: s
             g = encode(mesh, cache=N)
             a = vertex_cache_stats(g.indices, g.restart_index, mesh.n_triangles, N).acmr
             mark = "*" if target is not None and a <= target else " "
             cells.append(f"{slack}: {g.indices_per_triangle:.3f}/{a:.3f}{mark}")
     finally:
-        band_rows.BAND_SLACK = kept
-    print(f"{name}: bands by slack (rows <= N - slack), ipt/ACMR{N} (* at most meshopt vcache's): " + ", ".join(cells))
+        band_rows.band_slack = kept
+    print(f"{name}: bands by slack (rows <= N - slack; default {kept(N)}), ipt/ACMR{N} (* at most meshopt vcache's): "
+          + ", ".join(cells))
 
 
 def main() -> None:

@@ -27,7 +27,7 @@ from collections import namedtuple
 from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
-__all__ = ["ROW_AXES", "BAND_SLACK", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
 
 #: Directions (radians from the x axis) the row cover is tried along.
 ROW_AXES = (0.0, np.pi / 2)
@@ -79,12 +79,26 @@ def row_path_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, 
     return PathCover(order, starts[: S + 1].copy())
 
 
-#: Longest row of a band, in triangles, is ``cache - BAND_SLACK`` (:func:`band_layout`):
-#: a row whose vertices all missed loads about ``L + 2`` of them, and the next row finds
-#: its far side still in a FIFO of ``N`` entries only while ``L + 2 <= N - 1``: shorter
-#: rows recover after a miss, longer ones pass it on (measured on the q30 square of 10k
-#: triangles, FIFO 16: rows of ~14 triangles ACMR 0.66-0.70, of ~18 0.87-0.94).
+#: Longest row of a band, in triangles, is ``cache - band_slack(cache)`` (:func:`band_layout`),
+#: the slack at least ``BAND_SLACK``: a row whose vertices all missed loads about ``L + 2``
+#: of them, and the next row finds its far side still in a FIFO of ``N`` entries only while
+#: ``L + 2 <= N - 1``: shorter rows recover after a miss, longer ones pass it on (measured
+#: on the q30 square of 10k triangles, FIFO 16: rows of ~14 triangles ACMR 0.66-0.70, of
+#: ~18 0.87-0.94).
 BAND_SLACK = 3
+
+
+def band_slack(cache: int) -> int:
+    """Triangles a band's rows stay below the FIFO size: ``max(BAND_SLACK, cache // 4)``.
+
+    The rows are not a grid's (they end at vertices of degree other than 6, and the end
+    moves join them into strips of ~25 triangles that the columns cut), so the recovery
+    bound above is optimistic for larger FIFOs: at ``cache - 3`` the ACMR of the bands
+    grows with the FIFO (q30 square 10k: 0.670 at 16, 0.691 at 32, 0.708 at 48, 0.724 at
+    64), while rows of at most three quarters of it keep it falling (0.663 at 16, 0.629 at
+    32, 0.619 at 48, 0.608 at 64; measured in ``docs/strips.md``, session 13).
+    """
+    return max(BAND_SLACK, int(cache) // 4)
 
 
 #: :func:`band_frame`'s result: each triangle's ``column`` (``(m,)`` int64, counted across
@@ -94,9 +108,9 @@ BandFrame = namedtuple("BandFrame", ["column", "height"])
 
 
 def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0.0) -> BandFrame:
-    """Columns ``(cache - BAND_SLACK) / 2`` mean edge lengths wide across rows along ``angle``.
+    """Columns ``(cache - band_slack(cache)) / 2`` mean edge lengths wide across rows along ``angle``.
 
-    A row crossing a column then has at most about ``cache - BAND_SLACK`` triangles.
+    A row crossing a column then has at most about ``cache - band_slack(cache)`` triangles.
     Depends only on the rows' vertices, not on their order.
     """
     p = np.asarray(points, np.float64)[:, :2]
@@ -106,7 +120,7 @@ def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0
         c = p[tri].mean(axis=1)  # (m, 2) centroids
         e = p[tri[:, 1]] - p[tri[:, 0]]
         edge = float(np.mean(np.hypot(e[:, 0], e[:, 1])))
-        width = max(1.0, (int(cache) - BAND_SLACK) / 2) * edge
+        width = max(1.0, (int(cache) - band_slack(cache)) / 2) * edge
         x = c[:, 0]
         if not (len(x) and width > 0 and np.isfinite(width) and np.isfinite(c).all()):
             return BandFrame(None, None)

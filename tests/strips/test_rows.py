@@ -134,3 +134,18 @@ def test_cache_mode_lays_rows_in_bands_on_planar_meshes():
     t = torus_mesh(30, 20)
     c = encode(t, cache=16)
     assert oriented_set(decode_gl_strip(c.indices, c.restart_index)) == oriented_set(t.triangles)
+
+
+def test_cache_mode_at_fifo_64_loads_fewer_vertices_within_1_30_indices():
+    """q30 square, FIFO 64: rows of at most three quarters of the FIFO (rows.band_slack) keep
+    under 1.30 indices per triangle with fewer loads than meshoptimizer vcache + stripify's
+    0.608-0.618 at FIFO 64 on such meshes (measured in docs/strips.md, session 13); rows of
+    FIFO - 3 triangles (the slack at 16) load more at 64 than at 16."""
+    from hammesh.strips import rows, vertex_cache_stats
+
+    assert [rows.band_slack(n) for n in (3, 16, 32, 64)] == [3, 4, 8, 16]
+    m = square_mesh(1e-4)
+    s = encode(m, cache=64)
+    assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+    assert vertex_cache_stats(s.indices, s.restart_index, m.n_triangles, 64).acmr < 0.61
+    assert s.indices_per_triangle < 1.30
