@@ -86,9 +86,9 @@ def new_buffer(nbytes: int, written: float) -> np.ndarray:
 
     Why (the first call in a process; ``docs/strips.md``, Speed): numpy asks for
     transparent huge pages on arrays of 4 MiB and more, and with this VM's
-    ``defrag=madvise`` a huge-page fault may compact memory first: a first encoding at
-    1M triangles spent 25-240 ms of system time faulting its work arrays in huge pages,
-    35-50 ms in small ones.  ``MADV_POPULATE_WRITE`` then faults the part the call
+    ``defrag=madvise`` a huge-page fault may compact memory first: first encodings at
+    1M triangles spent 82-288 ms of system time faulting their work arrays in huge pages,
+    32-56 ms in small ones (four fresh processes each).  ``MADV_POPULATE_WRITE`` then faults the part the call
     writes in one system call instead of a trap per page (:mod:`hammesh.pages`); the
     rest is faulted in only if it is ever written.
     """
