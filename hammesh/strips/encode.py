@@ -53,7 +53,7 @@ from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
-from hammesh.strips.rows import ROW_AXES, band_frame, band_layout, row_path_cover
+from hammesh.strips.rows import BAND_MERGE, ROW_AXES, band_frame, band_layout, row_path_cover
 
 __all__ = [
     "METHODS",
@@ -307,7 +307,7 @@ def _oriented_local(
         # inside the columns (the dual cut at their borders) had fewer pieces but its end
         # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
         # against 1.4126 / 0.670 this way
-        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts)
+        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts, BAND_MERGE)
     elif cache is not None:
         # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
         starts = split_paths(starts, max(1, int(piece * cache)))
