@@ -385,8 +385,8 @@ def encode(
         ``"zigzag"`` (``"zigzag"`` stays under 1.30 indices per triangle on q30 planar
         meshes, ACMR16 ~0.87).  With ``method="auto"`` on a planar mesh, or ``"rows"``: the
         row cover laid in bands (:func:`~hammesh.strips.rows.band_layout`, rows of at most
-        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR16 0.63-0.69 at
-        1.41-1.44 indices per triangle, ACMR64 ~0.60 at 1.26-1.30); ``"auto"`` on a surface: the
+        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR16 0.64-0.69 at
+        1.40-1.42 indices per triangle, ACMR64 ~0.59-0.61 at 1.26-1.29); ``"auto"`` on a surface: the
         swap-free chains cut at ``cache.SHORT_PIECE_LENGTH * cache``.  Fewer vertex-shader
         runs for more indices.
     reorder_vertices : bool

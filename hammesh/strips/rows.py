@@ -96,7 +96,8 @@ def band_slack(cache: int) -> int:
     bound above is optimistic for larger FIFOs: at ``cache - 3`` the ACMR of the bands
     grows with the FIFO (q30 square 10k: 0.670 at 16, 0.691 at 32, 0.708 at 48, 0.724 at
     64), while rows of at most three quarters of it keep it falling (0.663 at 16, 0.629 at
-    32, 0.619 at 48, 0.608 at 64; measured in ``docs/strips.md``, session 13).
+    32, 0.619 at 48, 0.608 at 64, before :data:`BAND_MERGE`; measured in ``docs/strips.md``,
+    session 13).
     """
     return max(BAND_SLACK, int(cache) // 4)
 
