@@ -779,7 +779,8 @@ def first_call_rows(meshes: dict[str, Mesh]) -> list[tuple[str, dict]]:
                 mw += (f"{1e3 * r['fast_first_cpu']:>9.1f}{1e3 * r['fast_mo_first_cpu']:>8.1f}"
                        f"{r['fast_first_cpu'] / r['fast_mo_first_cpu']:>7.2f}")
             else:
-                mo, mw = f"{'-':>10}{'-':>10}", f"{'-':>8}{'-':>7}{'-':>9}{'-':>7}{'-':>10}{'-':>8}{'-':>7}{'-':>9}{'-':>8}{'-':>7}"
+                mo = f"{'-':>10}{'-':>10}"
+                mw = f"{'-':>8}{'-':>7}{'-':>9}{'-':>7}{'-':>10}{'-':>8}{'-':>7}{'-':>9}{'-':>8}{'-':>7}"
             print(f"{name:<20}{mesh.n_triangles:>10,}{r['import']:>10.2f}{1e3 * r['ours_first']:>12.1f}{mo}{1e3 * r['ours_warm']:>9.1f}{mw}")
     print("import s: importing numpy + hammesh.strips; 1st: the first call in that process (ours loads its")
     print("compiled kernels from numba's disk cache here); ours ms, mo ms: best of 3 warm calls after it;")

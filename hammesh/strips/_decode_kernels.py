@@ -9,7 +9,8 @@ import numpy as np
 
 from hammesh.strips._numba import kernel, row
 
-__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "claimed_part_status", "decode_draws_into", "first_wrong_draw"]
+__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "claimed_part_status",
+           "decode_draws_into", "first_wrong_draw"]
 
 
 @kernel

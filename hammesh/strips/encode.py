@@ -306,7 +306,7 @@ def _oriented_local(
         # rows.band_slack(cache) triangles a row, sent column by column (rows.band_layout).  A cover made
         # inside the columns (the dual cut at their borders) had fewer pieces but its end
         # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
-        # against 1.4126 / 0.670 this way
+        # against 1.413 / 0.647 this way (docs/strips.md, sessions 12-13)
         order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts, BAND_MERGE)
     elif cache is not None:
         # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)

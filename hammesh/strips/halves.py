@@ -152,10 +152,12 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     m, n = len(tri), len(pts)
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
     take = scratch.take
-    rows = take(f"{side}.rows", m, np.int64, written=1 / 2)  # (sized for any split; ~half of it used)
-    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # the records are int32 here (checked by the caller): half the bytes
+    # sized for any split, about half of each written (``written``: faulted in at once)
+    rows = take(f"{side}.rows", m, np.int64, written=1 / 2)
+    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # int32 records (checked by the caller): half the bytes
     # the copy's scratch is reused afterwards (the census flags, the claimed order)
-    stash, lab = take(f"{side}.stash", m, np.int64, written=1 / 2), take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
+    stash = take(f"{side}.stash", m, np.int64, written=1 / 2)
+    lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
     k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True

@@ -27,7 +27,8 @@ from collections import namedtuple
 from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
-__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "path_columns", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "path_columns", "parallel_edges", "row_links",
+           "row_path_cover", "BandFrame", "band_frame", "band_layout"]
 
 #: Directions (radians from the x axis) the row cover is tried along.
 ROW_AXES = (0.0, np.pi / 2)
