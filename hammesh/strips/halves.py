@@ -116,8 +116,9 @@ def _half_work(k: int, out: np.ndarray | None, scratch: Scratch, side: int) -> S
     """:func:`~hammesh.strips._greedy_strip_kernels.strip_work` for a half from ``scratch``:
     new buffers in small pages, the part the call writes faulted in at once
     (:func:`~hammesh.strips.scratch.new_buffer`; the path and index offsets and the buffer
-    are sized for the worst case, ~1/3 of them is written, the rest is never faulted in)."""
-    bucket = scratch.take(f"{side}.bucket", (4, k), np.int32)  # then the proof's 3 k draws
+    are sized for the worst case, ~1/3 of them is written, the rest is never faulted in),
+    but the bucket queue, used at random, in huge pages."""
+    bucket = scratch.take(f"{side}.bucket", (4, k), np.int32, huge=True)  # then the proof's 3 k draws
     grow = scratch.take(f"{side}.grow", (2, k), np.int32, written=0)  # a path at a time
     big = scratch.take(f"{side}.big", 3 * k + 2, np.int64, written=1 / 3)  # the order; the offsets: one per path
     # the second half's part is copied into the whole buffer: its own can be kept
@@ -168,8 +169,8 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     rows, part = rows[:k], part[:k]
     n_zero = face_flags(pts, part, ZERO_AREA_RTOL, lab.view(np.int8)[:k])[1]
     start = take(f"{side}.start", n + 1, np.int32)
-    keys = take(f"{side}.keys", 3 * k, np.int64)
-    rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32)
+    keys = take(f"{side}.keys", 3 * k, np.int64, huge=True)  # read and written at random: huge pages
+    rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32, huge=True)
     loose = take(f"{side}.loose", (3 * k, 2), np.int64, written=0)  # the edges on the cut and the boundary
     paired = pair_records_into(part, start, take(f"{side}.mark", n, np.int32), keys, rec, loose)
     if paired.pairs < 0 or stop[0]:
