@@ -355,13 +355,21 @@ def _meshopt():
     return meshoptimizer, lib
 
 
-def meshopt_strip(mo, tri: np.ndarray, n: int, vcache: bool) -> np.ndarray:
-    """meshopt ``stripify`` (restart ``0xFFFFFFFF``) of the rows in input order, or after ``optimize_vertex_cache``."""
+def meshopt_strip(mo, tri: np.ndarray, n: int, vcache: bool | int) -> np.ndarray:
+    """meshopt ``stripify`` (restart ``0xFFFFFFFF``) of the rows in input order, or after
+    ``optimize_vertex_cache`` (``vcache`` True: Forsyth-style scores for meshoptimizer's own
+    cache model of 16 entries, whatever the FIFO measured), or after
+    ``optimize_vertex_cache_fifo(cache_size=vcache)`` (an int: Sander et al.'s Tipsify for a
+    FIFO of that size)."""
     module, lib = mo
     idx = np.ascontiguousarray(tri, np.uint32).ravel()
-    if vcache:
+    if vcache is True:
         dst = np.empty_like(idx)
         module.optimize_vertex_cache(dst, idx, len(idx), n)
+        idx = dst
+    elif vcache:
+        dst = np.empty_like(idx)
+        module.optimize_vertex_cache_fifo(dst, idx, len(idx), n, int(vcache))
         idx = dst
     out = np.empty(lib.meshopt_stripifyBound(len(idx)), np.uint32)
     k = lib.meshopt_stripify(out.ctypes.data, idx.ctypes.data, len(idx), n, R32)
@@ -716,7 +724,8 @@ if sys.argv[3] == "fast":  # the fast path's own first call: before the default 
 for key, f in calls:
     if key == "meshopt" and mo is None:
         continue
-    t = time.perf_counter(); f(); out[key + "_first"] = time.perf_counter() - t
+    t, c = time.perf_counter(), time.process_time(); f()
+    out[key + "_first"], out[key + "_first_cpu"] = time.perf_counter() - t, time.process_time() - c
     warm = []
     for _ in range(3):
         t = time.perf_counter(); f(); warm.append(time.perf_counter() - t)
@@ -741,7 +750,8 @@ def first_call_rows(meshes: dict[str, Mesh]) -> list[tuple[str, dict]]:
     print()
     print("Issue 16 speed target (encode verified <= 2x meshopt stripify), each mesh in a fresh process:")
     head = (f"{'mesh':<20}{'m':>10}{'import s':>10}{'ours 1st ms':>12}{'mo 1st ms':>10}{'1st ratio':>10}{'ours ms':>9}"
-            f"{'mo ms':>8}{'ratio':>7}{'fast ms':>9}{'ratio':>7}{'fast 1st':>10}{'mo 1st':>8}{'ratio':>7}")
+            f"{'mo ms':>8}{'ratio':>7}{'fast ms':>9}{'ratio':>7}{'fast 1st':>10}{'mo 1st':>8}{'ratio':>7}"
+            f"{'1st cpu':>9}{'mo cpu':>8}{'ratio':>7}")
     print(head)
     print("-" * len(head))
     here = os.path.dirname(os.path.abspath(__file__))
@@ -759,19 +769,24 @@ def first_call_rows(meshes: dict[str, Mesh]) -> list[tuple[str, dict]]:
             f = json.loads(fres.stdout.strip().splitlines()[-1])
             r["fast_first"] = f["fast_first"]
             r["fast_mo_first"] = f.get("meshopt_first")
+            r["fast_first_cpu"], r["fast_mo_first_cpu"] = f["fast_first_cpu"], f.get("meshopt_first_cpu")
             rows.append((name, r))
             if "meshopt_first" in r:
                 mo = f"{1e3 * r['meshopt_first']:>10.1f}{r['ours_first'] / r['meshopt_first']:>10.2f}"
                 mw = f"{1e3 * r['meshopt_warm']:>8.1f}{r['ours_warm'] / r['meshopt_warm']:>7.2f}"
                 mw += f"{1e3 * r['fast_warm']:>9.1f}{r['fast_warm'] / r['meshopt_warm']:>7.2f}"
                 mw += f"{1e3 * r['fast_first']:>10.1f}{1e3 * r['fast_mo_first']:>8.1f}{r['fast_first'] / r['fast_mo_first']:>7.2f}"
+                mw += (f"{1e3 * r['fast_first_cpu']:>9.1f}{1e3 * r['fast_mo_first_cpu']:>8.1f}"
+                       f"{r['fast_first_cpu'] / r['fast_mo_first_cpu']:>7.2f}")
             else:
-                mo, mw = f"{'-':>10}{'-':>10}", f"{'-':>8}{'-':>7}{'-':>9}{'-':>7}{'-':>10}{'-':>8}{'-':>7}"
+                mo = f"{'-':>10}{'-':>10}"
+                mw = f"{'-':>8}{'-':>7}{'-':>9}{'-':>7}{'-':>10}{'-':>8}{'-':>7}{'-':>9}{'-':>8}{'-':>7}"
             print(f"{name:<20}{mesh.n_triangles:>10,}{r['import']:>10.2f}{1e3 * r['ours_first']:>12.1f}{mo}{1e3 * r['ours_warm']:>9.1f}{mw}")
     print("import s: importing numpy + hammesh.strips; 1st: the first call in that process (ours loads its")
     print("compiled kernels from numba's disk cache here); ours ms, mo ms: best of 3 warm calls after it;")
     print("fast ms: encode(fast=True) (the greedy cover alone), best of 3 warm; fast 1st, mo 1st: the first")
-    print("calls of encode(fast=True) and of meshopt stripify in a second fresh process (fast first).")
+    print("calls of encode(fast=True) and of meshopt stripify in a second fresh process (fast first);")
+    print("1st cpu, mo cpu: the same two first calls in process CPU ms (all threads: steadier under load).")
     return rows
 
 
@@ -910,7 +925,8 @@ def cache_table_rows(quick: bool, N: int = 16) -> None:
             g = encode(mesh, **kw)
             rows.append((label.replace(" N", f" {N}"), g.indices, g.restart_index, time.process_time() - t))
         if mo is not None:
-            for label, vc in (("meshopt stripify", False), ("meshopt vcache+stripify", True)):
+            for label, vc in (("meshopt stripify", False), ("meshopt vcache+stripify", True),
+                              (f"meshopt vcache_fifo({N})+stripify", N)):
                 t = time.process_time()
                 b = meshopt_strip(mo, mesh.triangles, len(mesh.points), vc)
                 rows.append((label, b.astype(np.int64), R32, time.process_time() - t))
@@ -941,7 +957,37 @@ def cache_table_rows(quick: bool, N: int = 16) -> None:
             if below:
                 ipt, lb = min(below)
                 print(f"{name}: ACMR <= meshopt vcache+stripify's ({target:.3f}) at the fewest indices: {lb}, ipt {ipt:.4f}")
+        band_width_rows(name, mesh, N, target)
     print("ms: process CPU of one call (ours with its round-trip proof), for scale only (the speed target is --speed).")
+    print("meshopt vcache: optimize_vertex_cache, scores tuned for its own 16-entry cache model (kCacheSizeMax = 16)")
+    print(f"at any N; vcache_fifo({N}): optimize_vertex_cache_fifo(cache_size={N}) (Tipsify, Sander et al. 2007).")
+
+
+#: Band slacks of :func:`band_width_rows`: rows of at most ``N - slack`` triangles a band
+#: (``hammesh.strips.rows.band_slack``: ``max(3, N // 4)`` by default; larger: narrower columns).
+BAND_SLACKS = (0, 3, 6, 9, 12, 16, 24)
+
+
+def band_width_rows(name: str, mesh: Mesh, N: int, target: float | None) -> None:
+    """Cache mode's trade-off on one mesh: ipt and ACMR (FIFO ``N``) of the bands at each of
+    :data:`BAND_SLACKS` below ``N - 2`` (narrower columns: fewer loads, more row ends),
+    against ``target`` (meshopt vcache + stripify's ACMR at the same FIFO)."""
+    from hammesh.strips import rows as band_rows
+    from hammesh.strips import vertex_cache_stats
+
+    kept = band_rows.band_slack
+    cells = []
+    try:
+        for slack in (s for s in BAND_SLACKS if s < N - 2):
+            band_rows.band_slack = lambda cache, s=slack: s
+            g = encode(mesh, cache=N)
+            a = vertex_cache_stats(g.indices, g.restart_index, mesh.n_triangles, N).acmr
+            mark = "*" if target is not None and a <= target else " "
+            cells.append(f"{slack}: {g.indices_per_triangle:.3f}/{a:.3f}{mark}")
+    finally:
+        band_rows.band_slack = kept
+    print(f"{name}: bands by slack (rows <= N - slack; default {kept(N)}), ipt/ACMR{N} (* at most meshopt vcache's): "
+          + ", ".join(cells))
 
 
 def main() -> None:
@@ -950,7 +996,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=9, help="timed calls per mesh (best is shown)")
     ap.add_argument("--real-world", action="store_true", help="only the real-world surfaces section")
     ap.add_argument("--peers", action="store_true", help="only issue 16's table (meshopt, vtkStripper, cache mode)")
-    ap.add_argument("--cache", type=int, default=16, help="FIFO size of the cache mode in the peers table (0: off)")
+    ap.add_argument("--cache", type=int, default=16,
+                    help="FIFO size of the cache mode in the peers table (0: off) and of --cache-table")
     ap.add_argument("--cache-bound", action="store_true",
                     help="only the cache target against strip layouts (grid rows and snakes, q30 swap rates)")
     ap.add_argument("--speed", action="store_true",
@@ -959,9 +1006,10 @@ def main() -> None:
                     help="only the cache target's table: ipt, strips, ACMR, ATVR per encoder on the q30 meshes")
     args = ap.parse_args()
     if args.cache_table:
+        N = args.cache or 16
         for kw in CACHE_TABLE_OURS:  # warm-up (numba)
-            encode(planar(1e-2), **{k: (16 if v == "N" else v) for k, v in kw[1].items()})
-        cache_table_rows(args.quick)
+            encode(planar(1e-2), **{k: (N if v == "N" else v) for k, v in kw[1].items()})
+        cache_table_rows(args.quick, N)
         return
     if args.cache_bound:
         cache_bound_rows(args.quick)

@@ -44,7 +44,7 @@ import weakref
 
 import numpy as np
 
-__all__ = ["fresh", "reserve", "release", "reserved", "trim", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE",
+__all__ = ["fresh", "advise", "reserve", "release", "reserved", "trim", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE",
            "RESERVE_SECONDS", "RESERVE_MIN_ARRAY"]
 
 MADV_NOHUGEPAGE = 15
@@ -83,6 +83,13 @@ def _advise(a: np.ndarray, advice: int) -> bool:
     lo = (addr + _PAGE - 1) // _PAGE * _PAGE
     hi = (addr + a.nbytes) // _PAGE * _PAGE
     return hi > lo and _libc.madvise(lo, hi - lo, advice) == 0
+
+
+def advise(a: np.ndarray, advice: int) -> bool:
+    """``madvise(advice)`` over the whole pages inside ``a``'s buffer (e.g. a prefix of a
+    work array: :data:`MADV_NOHUGEPAGE`, :data:`MADV_POPULATE_WRITE`); True if the kernel
+    agreed (False where ``madvise`` is missing: then nothing happens)."""
+    return _advise(a, advice)
 
 
 class _Reserve:

@@ -36,11 +36,12 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("GPU caches")
     g.add_argument("--cache", type=int, default=None, metavar="N",
                    help="lay strips for a FIFO vertex cache of N entries (typical 16-32). Planar meshes: "
-                        "rows (strips along the x or y axis) cut into columns of ~N-3 triangles a row and sent "
+                        "rows (strips along the x or y axis) cut into columns of ~3N/4 triangles a row and sent "
                         "column by column, so each row finds the vertices of the row before still cached "
-                        "(q30 meshes, FIFO 16: ~0.67 vertex loads per triangle at ~1.41 indices, against ~1.05 "
+                        "(q30 meshes, FIFO 16: ~0.65 vertex loads per triangle at ~1.41 indices, against ~1.05 "
                         "at ~1.23 without --cache; meshoptimizer's vertex-cache order + stripify: ~0.71 at "
-                        "~1.72). Surfaces: the swap-free (zigzag) chains cut into pieces of ~1.25 N triangles, "
+                        "~1.72; FIFO 64: ~0.60 at ~1.26-1.29, meshoptimizer ~0.61 at 1.72). Surfaces: the "
+                        "swap-free (zigzag) chains cut into pieces of ~1.25 N triangles, "
                         "sent in an order that finds their vertices cached (~0.8 at ~1.36). With --method "
                         "greedy or zigzag: that cover in pieces of at most 3 N in that order (~0.87 at ~1.29)")
     p.add_argument("--fast", action="store_true",

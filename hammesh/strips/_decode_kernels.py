@@ -9,7 +9,8 @@ import numpy as np
 
 from hammesh.strips._numba import kernel, row
 
-__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "decode_draws_into", "first_wrong_draw"]
+__all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "claimed_part_status",
+           "decode_draws_into", "first_wrong_draw"]
 
 
 @kernel
@@ -92,7 +93,15 @@ def check_claimed_part(tri, indices, restart, use_restart, order, seen, drawn=No
     n = order.shape[0]
     if drawn is None or drawn.shape[0] < 3 * (n + 1):
         drawn = np.empty(3 * (n + 1), np.int32)
-    drawn = drawn[: 3 * (n + 1)].reshape(n + 1, 3)
+    return claimed_part_status(tri, indices, restart, use_restart, order, seen, drawn[: 3 * (n + 1)].reshape(n + 1, 3))
+
+
+@kernel
+def claimed_part_status(tri, indices, restart, use_restart, order, seen, drawn):
+    """:func:`check_claimed_part`'s two passes (:func:`decode_draws_into`, then
+    :func:`first_wrong_draw`), called from one kernel: a fresh process loads one compiled
+    kernel for the proof, not two.  ``drawn``: ``(len(order) + 1, 3)`` ``int32`` scratch."""
+    n = order.shape[0]
     count = decode_draws_into(indices, restart, use_restart, drawn)
     status, k = first_wrong_draw(tri, drawn, min(count, n), order, seen)
     if status != 0:

@@ -53,7 +53,7 @@ from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
-from hammesh.strips.rows import ROW_AXES, band_frame, band_layout, row_path_cover
+from hammesh.strips.rows import BAND_MERGE, ROW_AXES, band_frame, band_layout, row_path_cover
 
 __all__ = [
     "METHODS",
@@ -303,11 +303,11 @@ def _oriented_local(
     bands = cache is not None and rows is not None
     if bands:
         # the rows (joined by the end moves over the whole mesh) cut into columns of ~cache -
-        # BAND_SLACK triangles a row, sent column by column (rows.band_layout).  A cover made
+        # rows.band_slack(cache) triangles a row, sent column by column (rows.band_layout).  A cover made
         # inside the columns (the dual cut at their borders) had fewer pieces but its end
         # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
-        # against 1.4126 / 0.670 this way
-        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts)
+        # against 1.413 / 0.647 this way (docs/strips.md, sessions 12-13)
+        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts, BAND_MERGE)
     elif cache is not None:
         # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
         starts = split_paths(starts, max(1, int(piece * cache)))
@@ -384,8 +384,9 @@ def encode(
         for the FIFO (:func:`~hammesh.strips.cache.fifo_strip_order`), with ``"greedy"`` or
         ``"zigzag"`` (``"zigzag"`` stays under 1.30 indices per triangle on q30 planar
         meshes, ACMR16 ~0.87).  With ``method="auto"`` on a planar mesh, or ``"rows"``: the
-        row cover laid in bands (:func:`~hammesh.strips.rows.band_layout`; q30 meshes ACMR16
-        0.65-0.69 at 1.40-1.43 indices per triangle); ``"auto"`` on a surface: the
+        row cover laid in bands (:func:`~hammesh.strips.rows.band_layout`, rows of at most
+        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR16 0.64-0.69 at
+        1.40-1.42 indices per triangle, ACMR64 ~0.59-0.61 at 1.26-1.29); ``"auto"`` on a surface: the
         swap-free chains cut at ``cache.SHORT_PIECE_LENGTH * cache``.  Fewer vertex-shader
         runs for more indices.
     reorder_vertices : bool

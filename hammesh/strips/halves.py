@@ -113,15 +113,16 @@ def vertex_cells(points: np.ndarray, n_triangles: int, cell_triangles: int = CEL
 
 
 def _half_work(k: int, out: np.ndarray | None, scratch: Scratch, side: int) -> StripWork:
-    """:func:`~hammesh.strips._greedy_strip_kernels.strip_work` for a half, its pages left to
-    first use: a thread has no time to spare here, and numpy asks for huge pages on big
-    arrays (the bucket queue, path and index offsets and the buffer are sized for the
-    worst case; ~1/3 of them is written)."""
-    bucket = scratch.take(f"{side}.bucket", (4, k), np.int32)
-    grow = scratch.take(f"{side}.grow", (2, k), np.int32)
-    big = scratch.take(f"{side}.big", 3 * k + 2, np.int64)
+    """:func:`~hammesh.strips._greedy_strip_kernels.strip_work` for a half from ``scratch``:
+    new buffers in small pages, the part the call writes faulted in at once
+    (:func:`~hammesh.strips.scratch.new_buffer`; the path and index offsets and the buffer
+    are sized for the worst case, ~1/3 of them is written, the rest is never faulted in),
+    but the bucket queue, used at random, in huge pages."""
+    bucket = scratch.take(f"{side}.bucket", (4, k), np.int32, huge=True)  # then the proof's 3 k draws
+    grow = scratch.take(f"{side}.grow", (2, k), np.int32, written=0)  # a path at a time
+    big = scratch.take(f"{side}.big", 3 * k + 2, np.int64, written=1 / 3)  # the order; the offsets: one per path
     # the second half's part is copied into the whole buffer: its own can be kept
-    out = scratch.take(f"{side}.out", 4 * k, np.int64) if out is None else out
+    out = scratch.take(f"{side}.out", 4 * k, np.int64, written=1 / 3) if out is None else out
     return StripWork(bucket, grow[0], grow[1], np.zeros(4, np.int32), big[:k], big[k : 2 * k + 1], big[2 * k + 1 :], NO_SEED_ORDER, out)
 
 
@@ -152,11 +153,12 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     m, n = len(tri), len(pts)
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
     take = scratch.take
-    rows = take(f"{side}.rows", m, np.int64)
-    part = take(f"{side}.part", (m, 3), np.int32)  # the records are int32 here (checked by the caller): half the bytes
-    # the copy's scratch, its first k entries faulted in by it, is reused afterwards (the
-    # census flags, the claimed order): fresh pages cost ~0.14 ms per MB here
-    stash, lab = take(f"{side}.stash", m, np.int64), take(f"{side}.lab", m, cells.label.dtype)
+    # sized for any split, about half of each written (``written``: faulted in at once)
+    rows = take(f"{side}.rows", m, np.int64, written=1 / 2)
+    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # int32 records (checked by the caller): half the bytes
+    # the copy's scratch is reused afterwards (the census flags, the claimed order)
+    stash = take(f"{side}.stash", m, np.int64, written=1 / 2)
+    lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
     k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
     if k < 0 or stop[0]:
         stop[0] = True
@@ -167,9 +169,9 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     rows, part = rows[:k], part[:k]
     n_zero = face_flags(pts, part, ZERO_AREA_RTOL, lab.view(np.int8)[:k])[1]
     start = take(f"{side}.start", n + 1, np.int32)
-    keys = take(f"{side}.keys", 3 * k, np.int64)
-    rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32)
-    loose = take(f"{side}.loose", (3 * k, 2), np.int64)
+    keys = take(f"{side}.keys", 3 * k, np.int64, huge=True)  # read and written at random: huge pages
+    rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32, huge=True)
+    loose = take(f"{side}.loose", (3 * k, 2), np.int64, written=0)  # the edges on the cut and the boundary
     paired = pair_records_into(part, start, take(f"{side}.mark", n, np.int32), keys, rec, loose)
     if paired.pairs < 0 or stop[0]:
         stop[0] = True

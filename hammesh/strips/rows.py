@@ -27,7 +27,8 @@ from collections import namedtuple
 from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
-__all__ = ["ROW_AXES", "BAND_SLACK", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "path_columns", "parallel_edges", "row_links",
+           "row_path_cover", "BandFrame", "band_frame", "band_layout"]
 
 #: Directions (radians from the x axis) the row cover is tried along.
 ROW_AXES = (0.0, np.pi / 2)
@@ -79,12 +80,27 @@ def row_path_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, 
     return PathCover(order, starts[: S + 1].copy())
 
 
-#: Longest row of a band, in triangles, is ``cache - BAND_SLACK`` (:func:`band_layout`):
-#: a row whose vertices all missed loads about ``L + 2`` of them, and the next row finds
-#: its far side still in a FIFO of ``N`` entries only while ``L + 2 <= N - 1``: shorter
-#: rows recover after a miss, longer ones pass it on (measured on the q30 square of 10k
-#: triangles, FIFO 16: rows of ~14 triangles ACMR 0.66-0.70, of ~18 0.87-0.94).
+#: Longest row of a band, in triangles, is ``cache - band_slack(cache)`` (:func:`band_layout`),
+#: the slack at least ``BAND_SLACK``: a row whose vertices all missed loads about ``L + 2``
+#: of them, and the next row finds its far side still in a FIFO of ``N`` entries only while
+#: ``L + 2 <= N - 1``: shorter rows recover after a miss, longer ones pass it on (measured
+#: on the q30 square of 10k triangles, FIFO 16: rows of ~14 triangles ACMR 0.66-0.70, of
+#: ~18 0.87-0.94).
 BAND_SLACK = 3
+
+
+def band_slack(cache: int) -> int:
+    """Triangles a band's rows stay below the FIFO size: ``max(BAND_SLACK, cache // 4)``.
+
+    The rows are not a grid's (they end at vertices of degree other than 6, and the end
+    moves join them into strips of ~25 triangles that the columns cut), so the recovery
+    bound above is optimistic for larger FIFOs: at ``cache - 3`` the ACMR of the bands
+    grows with the FIFO (q30 square 10k: 0.670 at 16, 0.691 at 32, 0.708 at 48, 0.724 at
+    64), while rows of at most three quarters of it keep it falling (0.663 at 16, 0.629 at
+    32, 0.619 at 48, 0.608 at 64, before :data:`BAND_MERGE`; measured in ``docs/strips.md``,
+    session 13).
+    """
+    return max(BAND_SLACK, int(cache) // 4)
 
 
 #: :func:`band_frame`'s result: each triangle's ``column`` (``(m,)`` int64, counted across
@@ -94,9 +110,9 @@ BandFrame = namedtuple("BandFrame", ["column", "height"])
 
 
 def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0.0) -> BandFrame:
-    """Columns ``(cache - BAND_SLACK) / 2`` mean edge lengths wide across rows along ``angle``.
+    """Columns ``(cache - band_slack(cache)) / 2`` mean edge lengths wide across rows along ``angle``.
 
-    A row crossing a column then has at most about ``cache - BAND_SLACK`` triangles.
+    A row crossing a column then has at most about ``cache - band_slack(cache)`` triangles.
     Depends only on the rows' vertices, not on their order.
     """
     p = np.asarray(points, np.float64)[:, :2]
@@ -106,24 +122,66 @@ def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0
         c = p[tri].mean(axis=1)  # (m, 2) centroids
         e = p[tri[:, 1]] - p[tri[:, 0]]
         edge = float(np.mean(np.hypot(e[:, 0], e[:, 1])))
-        width = max(1.0, (int(cache) - BAND_SLACK) / 2) * edge
+        width = max(1.0, (int(cache) - band_slack(cache)) / 2) * edge
         x = c[:, 0]
         if not (len(x) and width > 0 and np.isfinite(width) and np.isfinite(c).all()):
             return BandFrame(None, None)
         return BandFrame(np.floor((x - x.min()) / width).astype(np.int64), c[:, 1])
 
 
-def band_layout(frame: BandFrame, order: np.ndarray, starts: np.ndarray) -> PathCover:
+#: A path's run of fewer triangles than this in one column stays with the path's run
+#: before it (:func:`path_columns`): a single triangle over a border is not a piece of its
+#: own.  Longer runs kept (3-10) gave fewer indices but more loads (FIFO 16 q30 square 10k,
+#: merge 3: 1.403 / 0.679; FIFO 64 merge 6 or 10: ACMR64 above meshoptimizer's; session 13).
+BAND_MERGE = 2
+
+
+def path_columns(column: np.ndarray, order: np.ndarray, starts: np.ndarray, merge: int) -> np.ndarray:
+    """Column of each position of ``order``: its triangle's ``column``, except that a run of
+    fewer than ``merge`` consecutive triangles of one path in one column takes the column
+    of the path's run before it (at the path's first run: the run after it).
+
+    Why: a path crossing a column border by a triangle or two would leave a piece of one or
+    two triangles, 3 indices each for a restart and a new start; kept with its neighbour it
+    costs nothing and loads the few vertices it has beyond the border early (q30 square
+    10k, FIFO 16: 1.434 / 0.663 → 1.413 / 0.647 indices per triangle / ACMR16 at merge 2;
+    session 13).  Runs are those of the original columns (one pass: two short runs in a
+    row may still be cut between them).
+    """
+    col = np.asarray(column)[order]
+    n = len(col)
+    if merge <= 1 or n == 0:
+        return col
+    brk = np.zeros(n + 1, np.bool_)
+    brk[starts] = True
+    brk[1:-1] |= col[1:] != col[:-1]
+    rs = np.flatnonzero(brk[:-1])
+    ln = np.diff(np.r_[rs, n])
+    path = np.searchsorted(starts, rs, side="right") - 1
+    rcol = col[rs]
+    same_prev = np.r_[False, path[1:] == path[:-1]]
+    same_next = np.r_[path[:-1] == path[1:], False]
+    short = ln < merge
+    new = rcol.copy()
+    prev = np.flatnonzero(short & same_prev)
+    new[prev] = rcol[prev - 1]
+    nxt = np.flatnonzero(short & ~same_prev & same_next)
+    new[nxt] = rcol[nxt + 1]
+    return np.repeat(new, ln)
+
+
+def band_layout(frame: BandFrame, order: np.ndarray, starts: np.ndarray, merge: int = 0) -> PathCover:
     """Paths sent column by column (left to right), inside a column by the mean height of
     their centroids, alternately upwards and downwards (a serpentine, so the first rows of a
     column meet the last ones of the one before); a path crossing a column border is cut
-    there.  Each row then finds the vertices of its lower side in the FIFO, loaded by the
+    there, unless it has fewer than ``merge`` triangles on one side (:func:`path_columns`).
+    Each row then finds the vertices of its lower side in the FIFO, loaded by the
     row before.  ``frame``: :func:`band_frame` of the rows ``order`` refers to.  Returns the
     new ``(order, starts)`` (the caller turns each piece in its better direction).
     """
     if frame.column is None:
         return PathCover(order, starts)
-    col = frame.column[order]
+    col = path_columns(frame.column, order, starts, merge)
     cut = np.zeros(len(order) + 1, np.bool_)
     cut[starts] = True
     cut[1:-1] |= col[1:] != col[:-1]

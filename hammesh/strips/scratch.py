@@ -24,7 +24,9 @@ import time
 
 import numpy as np
 
-__all__ = ["KEEP_SECONDS", "Scratch", "borrow", "release", "kept_bytes"]
+from hammesh.pages import MADV_NOHUGEPAGE, MADV_POPULATE_WRITE, advise
+
+__all__ = ["KEEP_SECONDS", "Scratch", "borrow", "new_buffer", "release", "kept_bytes"]
 
 #: Seconds the work arrays of the last call are kept for the next one.
 KEEP_SECONDS = 60.0
@@ -47,13 +49,23 @@ class Scratch:
         self._kept = kept
         self._used: dict[str, np.ndarray] = {}
 
-    def take(self, role: str, shape: int | tuple[int, ...], dtype) -> np.ndarray:
-        """An uninitialised array for ``role`` (each role at most once per call)."""
+    def take(self, role: str, shape: int | tuple[int, ...], dtype, written: float = 1.0,
+             huge: bool = False) -> np.ndarray:
+        """An uninitialised array for ``role`` (each role at most once per call).
+
+        ``written``: about which fraction of it the call writes (from the front).  A new
+        buffer gets small pages, that part of it faulted in by one system call
+        (:func:`new_buffer`); with ``huge``, numpy's default (transparent huge pages from 4
+        MiB, faulted in as written): for arrays read and written at random, where a small
+        page's TLB miss costs more than a huge page's fault (at 1M triangles the two halves
+        took 3-10% longer with the records, pairing keys and strip queue in small pages).
+        """
         dt = np.dtype(dtype)
         nbytes = int(np.prod(shape, dtype=np.int64)) * dt.itemsize
         buf = self._kept.pop(role, None)
         if buf is None or buf.nbytes < nbytes:
-            buf = np.empty(max(nbytes, dt.itemsize), np.uint8)
+            size = max(nbytes, dt.itemsize)
+            buf = np.empty(size, np.uint8) if huge else new_buffer(size, written)
         self._used[role] = buf
         return buf[:nbytes].view(dt).reshape(shape)
 
@@ -72,6 +84,24 @@ class Scratch:
                 _timer = threading.Timer(KEEP_SECONDS, _expire)
                 _timer.daemon = True
                 _timer.start()
+
+
+def new_buffer(nbytes: int, written: float) -> np.ndarray:
+    """``nbytes`` of new memory in small pages, its first ``written`` fraction faulted in now.
+
+    Why (the first call in a process; ``docs/strips.md``, Speed): numpy asks for
+    transparent huge pages on arrays of 4 MiB and more, and with this VM's
+    ``defrag=madvise`` a huge-page fault may compact memory first: first encodings at
+    1M triangles spent 82-288 ms of system time faulting their work arrays in huge pages,
+    32-56 ms in small ones (four fresh processes each).  ``MADV_POPULATE_WRITE`` then faults the part the call
+    writes in one system call instead of a trap per page (:mod:`hammesh.pages`); the
+    rest is faulted in only if it is ever written.
+    """
+    buf = np.empty(nbytes, np.uint8)
+    advise(buf, MADV_NOHUGEPAGE)
+    if written > 0:
+        advise(buf[: int(nbytes * min(written, 1.0))], MADV_POPULATE_WRITE)
+    return buf
 
 
 def borrow() -> Scratch:

@@ -79,3 +79,38 @@ def test_calls_at_once_on_two_threads_never_share_arrays():
     for i, m in enumerate(meshes):
         s = out[i]
         assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
+
+
+def _resident_pages(a: np.ndarray) -> np.ndarray:
+    """``mincore`` of the whole pages inside ``a``: True where the page is in memory."""
+    import ctypes
+    import mmap
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    page = mmap.PAGESIZE
+    lo = -(-a.ctypes.data // page) * page
+    n = (a.ctypes.data + a.nbytes - lo) // page
+    vec = (ctypes.c_ubyte * n)()
+    libc.mincore.argtypes = (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
+    assert libc.mincore(ctypes.c_void_p(lo), ctypes.c_size_t(n * page), vec) == 0
+    return np.frombuffer(vec, np.uint8) & 1 == 1
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="madvise/mincore are Linux's")
+def test_new_buffers_fault_in_the_written_part_only():
+    """A new work array has the part the call writes in memory already, and nothing beyond it
+    (small pages: a huge page would bring 2 MiB at once)."""
+    from hammesh import pages
+
+    probe = np.empty(1 << 20, np.uint8)
+    if not pages.advise(probe, pages.MADV_POPULATE_WRITE):
+        pytest.skip("no MADV_POPULATE_WRITE here")
+    # above glibc's largest dynamic mmap threshold (32 MiB): new pages, not the heap's
+    buf = scratch.new_buffer(64 << 20, written=0.25)
+    assert buf.dtype == np.uint8 and buf.nbytes == 64 << 20
+    res = _resident_pages(buf)
+    q = len(res) // 4
+    assert res[: q - 1].all()  # the written quarter: faulted in by one call
+    assert not res[q + 1 :].any()  # the rest: not touched, not a huge page
+    buf[-1] = 7  # still ordinary memory
+    assert buf[-1] == 7
