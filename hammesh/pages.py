@@ -75,21 +75,16 @@ if sys.platform.startswith("linux"):  # (the advice numbers are Linux's)
         _libc = None
 
 
-def _advise(a: np.ndarray, advice: int) -> bool:
-    """``madvise`` over the whole pages inside ``a``'s buffer; True if the kernel agreed."""
+def advise(a: np.ndarray, advice: int) -> bool:
+    """``madvise(advice)`` over the whole pages inside ``a``'s buffer (e.g. a prefix of a
+    work array: :data:`MADV_NOHUGEPAGE`, :data:`MADV_POPULATE_WRITE`); True if the kernel
+    agreed (False where ``madvise`` is missing: then nothing happens)."""
     if _libc is None or a.nbytes < 2 * _PAGE:
         return False
     addr = a.ctypes.data
     lo = (addr + _PAGE - 1) // _PAGE * _PAGE
     hi = (addr + a.nbytes) // _PAGE * _PAGE
     return hi > lo and _libc.madvise(lo, hi - lo, advice) == 0
-
-
-def advise(a: np.ndarray, advice: int) -> bool:
-    """``madvise(advice)`` over the whole pages inside ``a``'s buffer (e.g. a prefix of a
-    work array: :data:`MADV_NOHUGEPAGE`, :data:`MADV_POPULATE_WRITE`); True if the kernel
-    agreed (False where ``madvise`` is missing: then nothing happens)."""
-    return _advise(a, advice)
 
 
 class _Reserve:
@@ -224,8 +219,8 @@ def fresh(shape: int | tuple[int, ...], dtype: type, fill: int | float | None = 
             a.fill(fill)
         return a
     a = np.empty(shape, dtype)
-    _advise(a, MADV_NOHUGEPAGE)
-    populated = _advise(a, MADV_POPULATE_WRITE)
+    advise(a, MADV_NOHUGEPAGE)
+    populated = advise(a, MADV_POPULATE_WRITE)
     if fill is not None:
         a.fill(fill)
     elif not populated and a.size:
