@@ -528,55 +528,46 @@ def _worker_busy(steps: list, workers: int) -> str:
     return " / ".join(f"{b:.1f}" for b in busy)
 
 
+def _interleaved_ab(rounds: int, name: str, run) -> int:
+    """Fresh processes ``run(True)`` / ``run(False)`` interleaved (the order swapped every
+    round); per run the seconds from the process's start to the tiles' submission, the
+    driver's CPU to it, the wall time and the whole command's CPU, then the medians."""
+    got: dict = {True: [], False: []}
+    for r in range(rounds):
+        for flag in ((True, False) if r % 2 == 0 else (False, True)):
+            o = run(flag)
+            s, c = o["parallel"]["since_start"], o["parallel"].get("driver_cpu", {})
+            got[flag].append(o)
+            print(f"round {r} {name}={int(flag)}: submitted {s['submitted']:.2f} s after the start "
+                  f"(decomposition from {s['decompose']:.2f}; driver CPU {c.get('submitted', float('nan')):.2f} s), "
+                  f"tiles done {s['tiles_done']:.2f}, wall {o['wall']:.2f}, whole CPU {o['tree_cpu']:.2f} s, "
+                  f"load {o['load'][0]:.1f}")
+            sys.stdout.flush()
+    for flag in (True, False):
+        sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[flag])
+        wall = statistics.median(o["wall"] for o in got[flag])
+        cpu = statistics.median(o["tree_cpu"] for o in got[flag])
+        print(f"{name}={int(flag)}: submitted median {sub:.2f} s, wall median {wall:.2f}, whole CPU median {cpu:.2f}")
+    return 0
+
+
 def imports_ab(a) -> int:
-    """``--imports-ab``: interleaved fresh processes, the local cluster's thread started
-    before the driver's imports (``command.START_BEFORE_IMPORTS``, the default since
-    session 13) or after them; per run the seconds from the process's start to the
-    tiles' submission, the driver's CPU to it, the wall time and the whole command's
-    CPU (first size, first mode, first worker count; both run through ``cli.main``
-    in a ``python -c``, so neither ends by ``cli.fast_exit``)."""
+    """``--imports-ab``: the local cluster's thread started before the driver's imports
+    (``command.START_BEFORE_IMPORTS``, the default since session 13) or after them
+    (first size, first mode, first worker count; both run through ``cli.main`` in a
+    ``python -c``, so neither ends by ``cli.fast_exit``)."""
     area = max_area_for(float(a.sizes.split(",")[0]))
     w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
-    got: dict = {True: [], False: []}
-    for r in range(a.imports_ab):
-        for first in ((True, False) if r % 2 == 0 else (False, True)):
-            o = ours(area, w, a.tiles, mode, a.out_dir, start_first=first)
-            s, c = o["parallel"]["since_start"], o["parallel"]["driver_cpu"]
-            got[first].append(o)
-            print(f"round {r} start_first={int(first)}: submitted {s['submitted']:.2f} s after the start "
-                  f"(driver CPU {c['submitted']:.2f} s), tiles done {s['tiles_done']:.2f}, wall {o['wall']:.2f}, "
-                  f"whole CPU {o['tree_cpu']:.2f} s, load {o['load'][0]:.1f}")
-            sys.stdout.flush()
-    for first in (True, False):
-        sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[first])
-        wall = statistics.median(o["wall"] for o in got[first])
-        cpu = statistics.median(o["tree_cpu"] for o in got[first])
-        print(f"start_first={int(first)}: submitted median {sub:.2f} s, wall median {wall:.2f}, "
-              f"whole CPU median {cpu:.2f}")
-    return 0
+    return _interleaved_ab(a.imports_ab, "start_first",
+                           lambda first: ours(area, w, a.tiles, mode, a.out_dir, start_first=first))
 
 
 def startup_ab(a) -> int:
     """``--startup``: interleaved fresh processes, early cluster start on / off."""
     area = max_area_for(float(a.sizes.split(",")[0]))
     w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
-    got: dict = {True: [], False: []}
-    for r in range(a.startup):
-        for early in ((True, False) if r % 2 == 0 else (False, True)):
-            o = ours(area, w, a.tiles, mode, a.out_dir, early=early, band=True)
-            s = o["parallel"]["since_start"]
-            got[early].append(o)
-            print(f"round {r} early={int(early)}: submitted {s['submitted']:.2f} s after the start "
-                  f"(decomposition from {s['decompose']:.2f}), tiles done {s['tiles_done']:.2f}, "
-                  f"end {s['end']:.2f}, wall {o['wall']:.2f}, whole CPU {o['tree_cpu']:.2f} s, "
-                  f"load {o['load'][0]:.1f}")
-            sys.stdout.flush()
-    for early in (True, False):
-        sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[early])
-        cpu = statistics.median(o["tree_cpu"] for o in got[early])
-        wall = statistics.median(o["wall"] for o in got[early])
-        print(f"early={int(early)}: submitted median {sub:.2f} s, wall median {wall:.2f}, whole CPU median {cpu:.2f}")
-    return 0
+    return _interleaved_ab(a.startup, "early",
+                           lambda early: ours(area, w, a.tiles, mode, a.out_dir, early=early, band=True))
 
 
 if __name__ == "__main__":
