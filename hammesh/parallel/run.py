@@ -33,8 +33,8 @@ __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "fin
 
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
-#: tiles per worker for balance (several workers, tiles of at least ``MIN_BALANCED_TILE``)
-BALANCE_TILES = 2
+#: tiles per worker for balance (several workers, as many as keep ``MIN_BALANCED_TILE`` each, up to this)
+BALANCE_TILES = 3
 #: estimated triangles per tile below which no tile is added for balance
 MIN_BALANCED_TILE = 500_000
 
@@ -73,12 +73,15 @@ def default_tiles(estimate: float, workers: int) -> int:
     waits for the slower while the other worker idles. Four tiles took 1.62 / 1.31 /
     1.37 / 1.27 s (5.6 s in all against 5.9): run largest first, each worker taking
     the next when free (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), by those
-    figures the workers end 0.2 s apart instead of 1.3 s.
+    figures the workers end 0.2 s apart instead of 1.3 s. Three per worker (session
+    14, when each keeps ``MIN_BALANCED_TILE``): at 6M the tile tasks still took
+    1.54-1.86 s, and the last one's end decided the tiles' stage; six tiles ended it
+    sooner and with less CPU in all (``bench_scale.py --tiles-ab``, docs/scale.md).
     """
     w = max(1, int(workers))
     per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
-    if w > 1 and estimate >= BALANCE_TILES * w * MIN_BALANCED_TILE:
-        per = max(per, BALANCE_TILES)
+    if w > 1:
+        per = max(per, min(BALANCE_TILES, int(estimate // (w * MIN_BALANCED_TILE))))
     return w * per
 
 
