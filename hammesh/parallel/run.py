@@ -29,14 +29,19 @@ from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
-           "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "not_carried"]
+           "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
+           "not_carried"]
 
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
-#: tiles per worker for balance (several workers, as many as keep ``MIN_BALANCED_TILE`` each, up to this)
-BALANCE_TILES = 3
+#: tiles per worker for balance (several workers, tiles of at least ``MIN_BALANCED_TILE``)
+BALANCE_TILES = 2
 #: estimated triangles per tile below which no tile is added for balance
 MIN_BALANCED_TILE = 500_000
+#: tiles per worker for balance when each still keeps ``MIN_THIRD_TILE`` triangles
+MORE_BALANCE_TILES = 3
+#: estimated triangles per tile below which the third tile per worker is not made
+MIN_THIRD_TILE = 800_000
 
 
 class _Done:
@@ -73,15 +78,19 @@ def default_tiles(estimate: float, workers: int) -> int:
     waits for the slower while the other worker idles. Four tiles took 1.62 / 1.31 /
     1.37 / 1.27 s (5.6 s in all against 5.9): run largest first, each worker taking
     the next when free (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), by those
-    figures the workers end 0.2 s apart instead of 1.3 s. Three per worker (session
-    14, when each keeps ``MIN_BALANCED_TILE``): at 6M the tile tasks still took
-    1.54-1.86 s, and the last one's end decided the tiles' stage; six tiles ended it
-    sooner and with less CPU in all (``bench_scale.py --tiles-ab``, docs/scale.md).
+    figures the workers end 0.2 s apart instead of 1.3 s. Three per worker
+    (``MORE_BALANCE_TILES``, session 14) while each keeps ``MIN_THIRD_TILE``: at 6M
+    the four tile tasks still took 1.54-1.86 s and the last one's end decided the
+    tiles' stage; six tiles of 1M ended it sooner, with less CPU in all (interleaved
+    fresh runs, wall 5.22 s against 5.40 s median). At 3M six tiles of 0.5M were
+    slower than four (3.88 s against 3.62 s): docs/scale.md.
     """
     w = max(1, int(workers))
     per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
-    if w > 1:
-        per = max(per, min(BALANCE_TILES, int(estimate // (w * MIN_BALANCED_TILE))))
+    if w > 1 and estimate >= BALANCE_TILES * w * MIN_BALANCED_TILE:
+        per = max(per, BALANCE_TILES)
+    if w > 1 and estimate >= MORE_BALANCE_TILES * w * MIN_THIRD_TILE:
+        per = max(per, MORE_BALANCE_TILES)
     return w * per
 
 
