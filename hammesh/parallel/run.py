@@ -30,8 +30,10 @@ from hammesh.parallel.union import assemble, check_union
 __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
-           "not_carried"]
+           "not_carried", "SUMMARIES_WITH_TILES"]
 
+#: each tile's summary submitted with the tile (False: gathered after the last tile is done)
+SUMMARIES_WITH_TILES = True
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
 #: tiles per worker for balance (several workers, tiles of at least ``MIN_BALANCED_TILE``)
@@ -321,10 +323,16 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
 
     handles = [submit(i) for i in np.argsort(rank).tolist()]
     handles = [handles[r] for r in rank.tolist()]  # (tile order again)
+    # each tile's summary is asked for with the tile: Dask runs it on the worker that
+    # holds the outcome as soon as the tile is done, not in a round after the last one
+    summaries = [run.submit(_small, h, pure=False) for h in handles] if SUMMARIES_WITH_TILES else None
     s1, p1 = since_start(), time.process_time()
-    wait_for(run, handles)  # done: their holders are known
-    del warming
-    small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
+    if summaries is None:
+        wait_for(run, handles)  # done: their holders are known
+        small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
+    else:
+        small = run.gather(summaries)  # (a tile's error is raised here)
+    del warming, summaries
     rounds = 0
     while any(len(o.bad) for o in small):
         ids = np.unique(np.concatenate([o.bad for o in small]))
