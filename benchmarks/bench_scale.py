@@ -292,7 +292,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, session 10's switches (early cluster, band tiles) on / off")
     ap.add_argument("--tiles-ab", type=int, metavar="ROUNDS",
-                    help="A/B of the whole command, the default tiles (balance: 2 per worker) / one tile per worker")
+                    help="A/B of the whole command, the default tiles (balance: 2-3 per worker) / one tile per worker")
+    ap.add_argument("--other-tiles", type=int, metavar="N",
+                    help="with --tiles-ab: the other arm runs N tiles instead of one per worker")
     ap.add_argument("--write-ab", type=int, metavar="ROUNDS",
                     help="A/B of one piece written with 32-bit / 64-bit integer arrays")
     ap.add_argument("--order-ab", type=int, metavar="ROUNDS",
@@ -486,16 +488,16 @@ def whole_ab(a) -> int:
 
 def tiles_ab(a) -> int:
     """``--tiles-ab``: one raw call, then per mode ``R`` rounds of the command with the
-    default tiles (``run.default_tiles``: two per worker past 1M triangles, run largest
-    first, a worker taking the next when free) and with one tile per worker (the
-    default before session 12), alternating; wall and whole CPU against the raw call's,
+    default tiles (``run.default_tiles``: two per worker past 1M triangles, three past
+    4.8M, run largest first, a worker taking the next when free) and with one tile per
+    worker (the default before session 12; ``--other-tiles N``: N tiles), alternating; wall and whole CPU against the raw call's,
     and the spread of the workers' ends (their tile tasks' summed wall seconds)."""
     area, w, r = _ab_start(a)
     for mode in a.modes.split(","):
         got: dict = {True: [], False: []}
         for k in range(a.tiles_ab):
             for balanced in ((True, False) if k % 2 == 0 else (False, True)):
-                o = ours(area, w, None if balanced else w, mode, a.out_dir)
+                o = ours(area, w, None if balanced else (a.other_tiles or w), mode, a.out_dir)
                 got[balanced].append(o)
                 par = o["parallel"]
                 print(f"{mode} round {k} tiles={par['tiles']}: {_vs_raw(o, r)}, driver tiles stage "
@@ -505,7 +507,8 @@ def tiles_ab(a) -> int:
             med = {k: statistics.median(f(o) for o in got[balanced]) for k, f in
                    (("wall", lambda o: o["wall"]), ("cpu", lambda o: o["tree_cpu"]),
                     ("stage", lambda o: o["parallel"]["seconds"]["tiles"]))}
-            print(f"{mode} {'default tiles' if balanced else 'one per worker'}: wall / raw median "
+            other = f"{a.other_tiles} tiles" if a.other_tiles else "one per worker"
+            print(f"{mode} {'default tiles' if balanced else other}: wall / raw median "
                   f"{med['wall'] / r['seconds']:.2f}, whole CPU / raw CPU median {med['cpu'] / r['cpu_seconds']:.2f}, "
                   f"tiles stage median {med['stage']:.2f} s")
     return 0

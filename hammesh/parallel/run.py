@@ -29,14 +29,21 @@ from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
-           "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "not_carried"]
+           "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
+           "not_carried", "SUMMARIES_WITH_TILES"]
 
+#: each tile's summary submitted with the tile (False: gathered after the last tile is done)
+SUMMARIES_WITH_TILES = True
 #: tiles beyond one per worker when the estimate is large (memory per task ~ 1 GB)
 TRIANGLES_PER_TILE = 3_000_000
 #: tiles per worker for balance (several workers, tiles of at least ``MIN_BALANCED_TILE``)
 BALANCE_TILES = 2
 #: estimated triangles per tile below which no tile is added for balance
 MIN_BALANCED_TILE = 500_000
+#: tiles per worker for balance when each still keeps ``MIN_THIRD_TILE`` triangles
+MORE_BALANCE_TILES = 3
+#: estimated triangles per tile below which the third tile per worker is not made
+MIN_THIRD_TILE = 800_000
 
 
 class _Done:
@@ -73,12 +80,19 @@ def default_tiles(estimate: float, workers: int) -> int:
     waits for the slower while the other worker idles. Four tiles took 1.62 / 1.31 /
     1.37 / 1.27 s (5.6 s in all against 5.9): run largest first, each worker taking
     the next when free (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), by those
-    figures the workers end 0.2 s apart instead of 1.3 s.
+    figures the workers end 0.2 s apart instead of 1.3 s. Three per worker
+    (``MORE_BALANCE_TILES``, session 14) while each keeps ``MIN_THIRD_TILE``: at 6M
+    the four tile tasks still took 1.54-1.86 s and the last one's end decided the
+    tiles' stage; six tiles of 1M ended it sooner, with less CPU in all (interleaved
+    fresh runs, wall 5.22 s against 5.40 s median). At 3M six tiles of 0.5M were
+    slower than four (3.88 s against 3.62 s): docs/scale.md.
     """
     w = max(1, int(workers))
     per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
     if w > 1 and estimate >= BALANCE_TILES * w * MIN_BALANCED_TILE:
         per = max(per, BALANCE_TILES)
+    if w > 1 and estimate >= MORE_BALANCE_TILES * w * MIN_THIRD_TILE:
+        per = max(per, MORE_BALANCE_TILES)
     return w * per
 
 
@@ -309,10 +323,16 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
 
     handles = [submit(i) for i in np.argsort(rank).tolist()]
     handles = [handles[r] for r in rank.tolist()]  # (tile order again)
+    # each tile's summary is asked for with the tile: Dask runs it on the worker that
+    # holds the outcome as soon as the tile is done, not in a round after the last one
+    summaries = [run.submit(_small, h, pure=False) for h in handles] if SUMMARIES_WITH_TILES else None
     s1, p1 = since_start(), time.process_time()
-    wait_for(run, handles)  # done: their holders are known
-    del warming
-    small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
+    if summaries is None:
+        wait_for(run, handles)  # done: their holders are known
+        small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
+    else:
+        small = run.gather(summaries)  # (a tile's error is raised here)
+    del warming, summaries
     rounds = 0
     while any(len(o.bad) for o in small):
         ids = np.unique(np.concatenate([o.bad for o in small]))
