@@ -81,7 +81,7 @@ def default_tiles(estimate: float, workers: int) -> int:
     1.37 / 1.27 s (5.6 s in all against 5.9): run largest first, each worker taking
     the next when free (:data:`~hammesh.parallel.cluster.TILE_QUEUE`), by those
     figures the workers end 0.2 s apart instead of 1.3 s. Three per worker
-    (``MORE_BALANCE_TILES``, session 14) while each keeps ``MIN_THIRD_TILE``: at 6M
+    (``MORE_BALANCE_TILES``, session 13) while each keeps ``MIN_THIRD_TILE``: at 6M
     the four tile tasks still took 1.54-1.86 s and the last one's end decided the
     tiles' stage; six tiles of 1M ended it sooner, with less CPU in all (interleaved
     fresh runs, wall 5.22 s against 5.40 s median). At 3M six tiles of 0.5M were
