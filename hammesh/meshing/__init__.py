@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import os
+import threading
 import time
 from dataclasses import replace
 from functools import partial
@@ -89,7 +90,7 @@ def expected_result(domain: Domain, opts: MeshOptions) -> int:
     return _expected_bytes(domain, opts, RESULT_BYTES_PER_TRIANGLE, RESULT_MIN_BYTES)
 
 
-def _meanwhile(reserve_bytes: int = 0) -> None:
+def _meanwhile(reserve_bytes: int = 0, loaded: threading.Event | None = None) -> None:
     """While the mesher runs in its child, prepare what ``hamiltonian()`` needs next.
 
     The parent process only waits meanwhile. The first call of each compiled kernel
@@ -100,10 +101,14 @@ def _meanwhile(reserve_bytes: int = 0) -> None:
     project's VM a fresh page costs a host fault besides its zeroing, a third of the
     first big ``hamiltonian()``'s system time (docs/benchmarks.md).
     """
-    from hammesh.postprocess import load_kernels
+    try:
+        from hammesh.postprocess import load_kernels
 
-    load_kernels("sparse")
-    load_kernels("incircle")
+        load_kernels("sparse")
+        load_kernels("incircle")
+    finally:  # (the imports are done: the caller may import again, see quality_mesh)
+        if loaded is not None:
+            loaded.set()
     if reserve_bytes:
         pages.reserve(reserve_bytes)
 
@@ -187,16 +192,26 @@ def quality_mesh(
     check_sizes(domain, opts)
     func = BACKENDS[backend]
     t0 = time.perf_counter()
+    loaded = threading.Event()
     if isolate:
         # the child allocates its output arrays where this process maps them (no copy)
         mesh = run_isolated(
             func, (domain, opts), name=_NAMES[backend], timeout=timeout, alloc=True,
-            meanwhile=partial(_meanwhile, expected_reserve(domain, opts)),
+            meanwhile=partial(_meanwhile, expected_reserve(domain, opts), loaded),
             prefault=expected_result(domain, opts) if backend == "triangle" else 0,
         )
     else:
         mesh = func(domain, opts)
+        loaded.set()
     seconds = time.perf_counter() - t0
+    # The side thread imports hammesh.postprocess and what its kernels' first calls import:
+    # the caller's next import of the same modules (hamiltonian(), a test module) must
+    # not run beside it, or Python hands one of the two threads a partially initialized
+    # module ("cannot import name 'KEEP' from partially initialized module
+    # 'hammesh.postprocess.sparse'", seen under pytest-xdist). On a big mesh it is done
+    # long before Triangle; a small one waits for it (the next hamiltonian() would load
+    # the kernels anyway).
+    loaded.wait()
     if mesh.n_triangles == 0:
         raise MeshingError(
             f"{_NAMES[backend]} produced no triangles (are all triangles inside holes?)"
