@@ -49,6 +49,7 @@ import xml.etree.ElementTree as ET
 import zlib
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -486,12 +487,11 @@ def _uncompressed(header: list[int], data: bytes, enc: _Encoding, what: str) -> 
         return b"".join(pool.map(block, range(len(sizes))))
 
 
-def _lz4_decompress(block: bytes, size: int) -> bytes:
-    """One LZ4 block of at most ``size`` bytes, decoded by :func:`hammesh.io._kernels.lz4_block_decode_into`."""
-    from hammesh.io._kernels import lz4_block_decode_into  # (numba: loaded only for LZ4 files)
-
+def _lz4_decompress(decode, block: bytes, size: int) -> bytes:
+    """One LZ4 block of at most ``size`` bytes, decoded by ``decode``
+    (:func:`hammesh.io._kernels.lz4_block_decode_into`)."""
     out = np.empty(size, dtype=np.uint8)
-    got = lz4_block_decode_into(np.frombuffer(block, dtype=np.uint8), out)
+    got = decode(np.frombuffer(block, dtype=np.uint8), out)
     if got < 0:
         raise _Bad("malformed LZ4 block")
     return out[:got].tobytes()
@@ -503,4 +503,8 @@ def _decompressor(compressor: str, what: str):
         return lambda block, size: zlib.decompressobj().decompress(block, size)
     if compressor == "vtkLZMADataCompressor":  # VTK writes .xz streams (lzma_easy_buffer_encode)
         return lambda block, size: lzma.LZMADecompressor().decompress(block, size)
-    return _lz4_decompress
+    # imported once here, on the reading thread (numba: loaded only for LZ4 files), not
+    # in each block's call on the decompressing threads
+    from hammesh.io._kernels import lz4_block_decode_into
+
+    return partial(_lz4_decompress, lz4_block_decode_into)
