@@ -82,6 +82,18 @@ def _walk_all(pts, tri, nb, start, around):
     return vis
 
 
+@numba.njit(cache=True, inline="always")
+def _push_wedge(st, top, t, a, b, right, left):
+    """Push "enter triangle ``t`` across edge ``(a, b)`` with the wedge from ray ``i right``
+    counter-clockwise to ray ``i left``" onto the walk's stack; the new stack size."""
+    st[top, 0] = t
+    st[top, 1] = a
+    st[top, 2] = b
+    st[top, 3] = right
+    st[top, 4] = left
+    return top + 1
+
+
 @numba.njit(cache=True)
 def _walk(i, pts, tri, nb, start, around, vis):
     n = pts.shape[0]
@@ -104,12 +116,7 @@ def _walk(i, pts, tri, nb, start, around, vis):
                 vis[i, v] = True
         u = nb[t, (k + 1) % 3]
         if u >= 0:
-            st[top, 0] = u
-            st[top, 1] = a
-            st[top, 2] = b
-            st[top, 3] = a
-            st[top, 4] = b
-            top += 1
+            top = _push_wedge(st, top, u, a, b, a, b)
     while top > 0:
         top -= 1
         u = st[top, 0]
@@ -128,32 +135,12 @@ def _walk(i, pts, tri, nb, start, around, vis):
         if r > 0 and l < 0:
             vis[i, c] = True
             if ua >= 0:
-                st[top, 0] = ua
-                st[top, 1] = a
-                st[top, 2] = c
-                st[top, 3] = R
-                st[top, 4] = c
-                top += 1
+                top = _push_wedge(st, top, ua, a, c, R, c)
             if ub >= 0:
-                st[top, 0] = ub
-                st[top, 1] = c
-                st[top, 2] = b
-                st[top, 3] = c
-                st[top, 4] = L
-                top += 1
+                top = _push_wedge(st, top, ub, c, b, c, L)
         elif r <= 0 and l < 0:
             if ub >= 0:
-                st[top, 0] = ub
-                st[top, 1] = c
-                st[top, 2] = b
-                st[top, 3] = R
-                st[top, 4] = L
-                top += 1
+                top = _push_wedge(st, top, ub, c, b, R, L)
         elif r > 0 and l >= 0:
             if ua >= 0:
-                st[top, 0] = ua
-                st[top, 1] = a
-                st[top, 2] = c
-                st[top, 3] = R
-                st[top, 4] = L
-                top += 1
+                top = _push_wedge(st, top, ua, a, c, R, L)
