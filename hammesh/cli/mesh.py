@@ -75,6 +75,8 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # options hamiltonian() would refuse, refused before minutes of meshing
+    params.number("--keep", args.keep, low=0, high=1, what="the local quality rule's factor")
     if args.workers is not None or args.scheduler is not None or args.partitioned or args.tiles is not None \
             or args.force or args.no_lattice:
         from hammesh.parallel.command import run_parallel
