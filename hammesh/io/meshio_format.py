@@ -361,11 +361,19 @@ def _meshio_read(path: Path, formats: tuple[str, ...]) -> Any:
     errors = []
     for fmt in formats:
         reader = getattr(meshio, fmt).read
+        said = io.StringIO()
         try:  # meshio prints its warnings (rich, to sys.stderr): a library stays quiet
-            with np.errstate(all="ignore"), contextlib.redirect_stderr(io.StringIO()):
-                return reader(str(path))
+            with np.errstate(all="ignore"), contextlib.redirect_stderr(said):
+                got = reader(str(path))
         except Exception as exc:  # meshio raises anything on a bad file
             errors.append(f"as {fmt}: {_first_line(exc)}")
+            continue
+        # meshio skips the cells it has no type for (a warning, nothing more): their
+        # triangles and segments would be lost in silence (.vtu: hammesh's reader takes them)
+        skipped = re.search(r"cells that meshio cannot handle \(([^)]*)\)", said.getvalue())
+        if skipped is None:
+            return got
+        errors.append(f"as {fmt}: meshio skips its cells of {skipped.group(1)}")
     raise FileFormatError(f"{path}: cannot read ({'; '.join(errors)})")
 
 
@@ -394,6 +402,10 @@ def _check_header(path: Path, suffix: str) -> int | None:
     return faces
 
 
+#: Legacy VTK datasets that are grids given by their dimensions, not cells.
+_GRID_DATASETS = ("STRUCTURED_POINTS", "STRUCTURED_GRID", "RECTILINEAR_GRID")
+
+
 def _read_raw(path: Path, suffix: str) -> Any:
     """The file's points and cells: hammesh's own OBJ, OFF, legacy VTK and VTK XML readers, else meshio."""
     if suffix == ".obj":
@@ -418,8 +430,15 @@ def _read_raw(path: Path, suffix: str) -> Any:
     if suffix == ".vtk":
         from hammesh.io.vtk_legacy import DATASETS, dataset_type, read_legacy
 
-        if dataset_type(path) in DATASETS:
+        dataset = dataset_type(path)
+        if dataset in DATASETS:
             return read_legacy(path)
+        if dataset in _GRID_DATASETS:  # (meshio fails on them with a TypeError)
+            raise FileFormatError(
+                f"{path}: a {dataset} dataset (a structured grid, not a cell list): hammesh reads "
+                f"{' and '.join(DATASETS)}; e.g. pyvista: "
+                "pv.read(path).cast_to_unstructured_grid().save('grid.vtu')"
+            )
     expected_faces = _check_header(path, suffix)
     raw = _meshio_read(path, _FORMATS[suffix][0])
     if expected_faces is not None:

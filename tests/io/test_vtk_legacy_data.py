@@ -245,3 +245,17 @@ def test_classic_cell_lists_that_do_not_add_up_are_named(tmp_path, cells, messag
                     "POINTS 4 double\n0 0 0 1 0 0 1 1 0 0 1 0\n" + cells + "CELL_TYPES 2\n5 9\n")
     with pytest.raises(FileFormatError, match=message):
         read_mesh(path)
+
+
+@pytest.mark.parametrize("dataset, geometry", [
+    ("STRUCTURED_POINTS", "DIMENSIONS 3 2 1\nORIGIN 0 0 0\nSPACING 1 1 1\n"),
+    ("STRUCTURED_GRID", "DIMENSIONS 2 2 1\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 1 1 0\n"),
+    ("RECTILINEAR_GRID", "DIMENSIONS 2 2 1\nX_COORDINATES 2 float\n0 1\nY_COORDINATES 2 float\n0 1\n"
+                         "Z_COORDINATES 1 float\n0\n"),
+])
+def test_structured_grids_are_named_with_the_way_out(tmp_path, dataset, geometry):
+    # (meshio failed on them with "TypeError: object of type 'NoneType' has no len()")
+    path = tmp_path / "g.vtk"
+    path.write_text(f"# vtk DataFile Version 3.0\ngrid\nASCII\nDATASET {dataset}\n{geometry}")
+    with pytest.raises(FileFormatError, match=f"{dataset} dataset.*cast_to_unstructured_grid"):
+        read_mesh(path)

@@ -128,3 +128,28 @@ def test_a_pvtu_of_lz4_pieces_written_by_vtk(tmp_path):
     area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]).sum()
     assert area == pytest.approx(1.0)
     assert sorted(m.triangle_attributes[:, m.attribute_names.index("mat")].tolist()) == list(range(plane.n_cells))
+
+
+@pytest.mark.parametrize("compressor", ["zlib", None])
+def test_cells_meshio_skips_are_read_not_lost(tmp_path, compressor):
+    # meshio 5 skips VTK triangle strips (6) and polylines (4) in a .vtu with a warning:
+    # read_mesh must give every triangle and segment VTK sees, each with its cell data
+    plane = pv.Plane(i_resolution=5, j_resolution=4).triangulate()
+    strips = plane.strip()  # PolyData strips
+    pts = np.asarray(strips.points)
+    flat = np.r_[np.asarray(strips.strips), [4, 0, 1, 2, 3]]
+    n_strips = int(strips.n_strips)
+    types = np.r_[np.full(n_strips, 6), [4]].astype(np.uint8)
+    grid = pv.UnstructuredGrid(flat, types, pts)
+    grid.cell_data["mat"] = np.arange(grid.n_cells, dtype=np.int32) + 1
+    path = tmp_path / "strips.vtu"
+    _write(grid, path, "appended", "UInt64", compressor)
+    m = read_mesh(path, dim=3)
+    vtk_tris = grid.triangulate()  # VTK's own reading: strips as triangles
+    want = {tuple(sorted(c)) for c in vtk_tris.cells_dict[5].tolist()}
+    assert {tuple(sorted(c)) for c in m.triangles.tolist()} == want
+    assert len(m.triangles) == len(want) == plane.n_cells
+    assert sorted(map(tuple, np.sort(m.segments, axis=1).tolist())) == [(0, 1), (1, 2), (2, 3)]
+    # each triangle carries its strip's value, each segment the polyline's
+    tri_mat = m.triangle_attributes[:, m.attribute_names.index("mat")] if "mat" in m.attribute_names else None
+    assert tri_mat is not None and set(tri_mat.tolist()) == set(range(1, n_strips + 1))
