@@ -134,9 +134,19 @@ def _lookup(path: str | os.PathLike[str]) -> tuple[Reader, Writer]:
         return FORMATS[suffix]
     except KeyError:
         shown = repr(suffix) if suffix else "no suffix"
+        grid = _VTK_GRID_SUFFIXES.get(suffix)
+        if grid is not None:  # VTK opens them; say how to make them a cell list
+            raise FileFormatError(
+                f"{path}: a VTK {grid} (a structured grid, not a cell list): hammesh reads .vtu/.vtp; "
+                "e.g. pyvista: pv.read(path).cast_to_unstructured_grid().save('grid.vtu')"
+            ) from None
         raise FileFormatError(
             f"{path}: unknown mesh format ({shown}); supported: {' '.join(FORMATS)}"
         ) from None
+
+
+#: VTK XML structured datasets, which VTK opens and hammesh does not (no cell list).
+_VTK_GRID_SUFFIXES = {".vti": "ImageData", ".vts": "StructuredGrid", ".vtr": "RectilinearGrid"}
 
 
 def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:

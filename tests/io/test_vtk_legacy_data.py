@@ -259,3 +259,12 @@ def test_structured_grids_are_named_with_the_way_out(tmp_path, dataset, geometry
     path.write_text(f"# vtk DataFile Version 3.0\ngrid\nASCII\nDATASET {dataset}\n{geometry}")
     with pytest.raises(FileFormatError, match=f"{dataset} dataset.*cast_to_unstructured_grid"):
         read_mesh(path)
+
+
+@pytest.mark.parametrize("suffix, dataset", [(".vti", "ImageData"), (".vts", "StructuredGrid"),
+                                             (".vtr", "RectilinearGrid")])
+def test_xml_structured_grids_are_named_with_the_way_out(tmp_path, suffix, dataset):
+    path = tmp_path / f"g{suffix}"
+    path.write_text(f'<VTKFile type="{dataset}"></VTKFile>')
+    with pytest.raises(FileFormatError, match=f"{dataset}.*cast_to_unstructured_grid"):
+        read_mesh(path)
