@@ -18,6 +18,7 @@ BENCH = Path(__file__).parent.parent / "benchmarks"
         ("bench_core.py", ["--max-area", "0.001", "--repeat", "1", "--fresh", "1"], "ratio ours / triangle"),
         ("bench_polygon.py", ["--sizes", "60"], "60"),
         ("bench_points.py", ["--sizes", "2000"], "uniform"),
+        ("bench_io.py", ["--faces", "2000", "--repeat", "1", "--rounds", "1"], "same result: True"),
     ],
 )
 def test_benchmark_script_runs(script: str, args: list[str], needle: str) -> None:

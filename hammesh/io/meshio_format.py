@@ -66,6 +66,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
 from hammesh.io import tags, vtu
+from hammesh.io.raw import RawMesh
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, split_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
@@ -610,7 +611,9 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
         triangles, tri_origin = _drop_zero_area(points, triangles, tri_origin, path, strict, repairs)
     segments = np.concatenate(seg_blocks) if seg_blocks else np.zeros((0, 2), np.int64)
 
-    not_carried: list[str] = []
+    # hammesh's readers: what the file said beside its cells (a meshio.Mesh's .info is its own)
+    read_info = dict(raw.info) if isinstance(raw, RawMesh) else {}
+    not_carried: list[str] = list(read_info.pop("not_carried", []))
     attributes, names = _attribute_columns(raw.cell_data, tri_origin, len(triangles), not_carried)
     point_data = _point_data(raw.point_data, to_original, n, not_carried)
 
@@ -626,6 +629,7 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
             segments, markers = from_fields
 
     info: dict[str, Any] = {"repairs": repairs} if repairs else {}
+    info.update(read_info)
     if not_carried:
         info["not_carried"] = not_carried
     return Mesh(

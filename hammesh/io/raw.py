@@ -43,6 +43,9 @@ class RawMesh:
     cells: list[CellBlock]
     cell_data: dict[str, list[Any]] = field(default_factory=dict)
     point_data: dict[str, Any] = field(default_factory=dict)
+    #: what the file said beside its cells (e.g. OBJ material names), and
+    #: ``not_carried``: what the reader could not take; merged into ``Mesh.info``
+    info: dict[str, Any] = field(default_factory=dict)
 
 
 def polygon_blocks(offsets: np.ndarray, connectivity: np.ndarray) -> list[CellBlock]:
