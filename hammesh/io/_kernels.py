@@ -13,6 +13,10 @@
   and the match copied byte by byte (it may overlap what it writes); the last sequence
   has literals only.
 
+* :func:`ply_record_positions_into` / :func:`ply_value_positions_into`: where each
+  property of each record of a PLY element starts (binary bytes / ASCII values): a list
+  property makes the records differ in size.
+
 numba is loaded lazily by the callers (importing it costs ~1 s).
 """
 
@@ -21,7 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["follow_cell_sizes_into", "lz4_block_decode_into", "lz4_length"]
+__all__ = ["follow_cell_sizes_into", "lz4_block_decode_into", "lz4_length", "ply_record_positions_into",
+           "ply_value_positions_into"]
 
 
 @njit(cache=True, nogil=True)
@@ -98,3 +103,65 @@ def lz4_block_decode_into(src: np.ndarray, dst: np.ndarray) -> int:
             dst[op + k] = dst[start + k]
         op += length
     return op
+
+
+@njit(cache=True, nogil=True)
+def ply_record_positions_into(buf: np.ndarray, pos: int, sizes: np.ndarray, counts: np.ndarray, signed: np.ndarray,
+                              big_endian: bool, at: np.ndarray, items: np.ndarray) -> int:
+    """Walk ``at.shape[0]`` binary PLY records from byte ``pos``: ``at[i, p]`` the byte
+    where property ``p`` of record ``i`` starts, ``items[i, p]`` its list's length (0 for
+    a scalar).  Property ``p``: items of ``sizes[p]`` bytes; a list if ``counts[p] > 0``
+    (its count an integer of that many bytes, ``signed[p]``).  Returns the byte after
+    the last record, -1 if the records run past the data or a count is negative."""
+    n = len(buf)
+    for i in range(at.shape[0]):
+        for p in range(len(sizes)):
+            at[i, p] = pos
+            cs = counts[p]
+            if cs == 0:
+                items[i, p] = 0
+                pos += sizes[p]
+                continue
+            if pos + cs > n:
+                return -1
+            c = 0
+            for k in range(cs):
+                byte = buf[pos + (k if big_endian else cs - 1 - k)]
+                c = (c << 8) | byte
+            if signed[p] and c >= 1 << (8 * cs - 1):
+                c -= 1 << (8 * cs)
+            if c < 0:
+                return -1
+            items[i, p] = c
+            pos += cs + c * sizes[p]
+        if pos > n:
+            return -1
+    return pos
+
+
+@njit(cache=True, nogil=True)
+def ply_value_positions_into(values: np.ndarray, first: np.ndarray, count: np.ndarray, lists: np.ndarray,
+                             at: np.ndarray, items: np.ndarray) -> int:
+    """The ASCII twin of :func:`ply_record_positions_into`: record ``i`` is the values
+    ``first[i] .. first[i] + count[i]``; ``at[i, p]`` the value where property ``p``
+    starts (a list: its count).  Returns -1, or the first record whose values do not
+    match the properties (a count not a whole number >= 0, too few or too many values)."""
+    for i in range(at.shape[0]):
+        q = first[i]
+        end = first[i] + count[i]
+        for p in range(len(lists)):
+            at[i, p] = q
+            if not lists[p]:
+                items[i, p] = 0
+                q += 1
+                continue
+            if q >= end:
+                return i
+            c = values[q]
+            if not (c >= 0 and c == np.floor(c) and c <= end - q - 1):
+                return i
+            items[i, p] = np.int64(c)
+            q += 1 + np.int64(c)
+        if q != end:
+            return i
+    return -1

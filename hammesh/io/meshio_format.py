@@ -378,31 +378,6 @@ def _meshio_read(path: Path, formats: tuple[str, ...]) -> Any:
     raise FileFormatError(f"{path}: cannot read ({'; '.join(errors)})")
 
 
-_MAX_HEADER_BYTES = 1 << 20
-
-
-def _check_header(path: Path, suffix: str) -> int | None:
-    """Reject PLY/OFF files that end inside their header; return PLY's face count."""
-    if suffix not in (".ply", ".off"):
-        return None
-    with open(path, "rb") as f:
-        head = f.read(_MAX_HEADER_BYTES)
-    lines = [line.strip() for line in head.splitlines()]
-    if suffix == ".off":
-        significant = [ln for ln in lines[1:] if ln and not ln.startswith(b"#")]
-        if not lines or lines[0] != b"OFF" or not significant:
-            raise FileFormatError(f"{path}: not an OFF file or truncated header")
-        return None
-    if not lines or lines[0] != b"ply" or b"end_header" not in lines:
-        raise FileFormatError(f"{path}: not a PLY file or truncated header (no end_header)")
-    faces = 0
-    for line in lines[: lines.index(b"end_header")]:
-        match = re.fullmatch(rb"element\s+face\s+(\d+)", line)
-        if match:
-            faces = int(match.group(1))
-    return faces
-
-
 #: Legacy VTK datasets that are grids given by their dimensions, not cells.
 _GRID_DATASETS = ("STRUCTURED_POINTS", "STRUCTURED_GRID", "RECTILINEAR_GRID")
 
@@ -417,6 +392,10 @@ def _read_raw(path: Path, suffix: str) -> Any:
         from hammesh.io.off_format import read_off
 
         return read_off(path)
+    if suffix == ".ply":  # (meshio's fails on VTK's face colours, reads ASCII line by line)
+        from hammesh.io.ply_format import read_ply
+
+        return read_ply(path)
     if suffix == ".vtp":  # (meshio has no .vtp reader)
         from hammesh.io.vtk_xml import read_vtk_xml
 
@@ -440,15 +419,7 @@ def _read_raw(path: Path, suffix: str) -> Any:
                 f"{' and '.join(DATASETS)}; e.g. pyvista: "
                 "pv.read(path).cast_to_unstructured_grid().save('grid.vtu')"
             )
-    expected_faces = _check_header(path, suffix)
-    raw = _meshio_read(path, _FORMATS[suffix][0])
-    if expected_faces is not None:
-        got = sum(len(block.data) for block in raw.cells)
-        if got != expected_faces:
-            raise FileFormatError(
-                f"{path}: truncated (header declares {expected_faces} faces, found {got})"
-            )
-    return raw
+    return _meshio_read(path, _FORMATS[suffix][0])
 
 
 def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = False) -> Mesh:
