@@ -13,6 +13,12 @@ suffixes                                   module
 ``.ele .node``                             :mod:`hammesh.io.triangle_format`
 =========================================  ==========================================
 
+meshio_format reads through hammesh's own readers where meshio loses data or is slow
+(``.obj``: :mod:`~hammesh.io.obj_format`, ``.off``: :mod:`~hammesh.io.off_format`,
+``.ply``: :mod:`~hammesh.io.ply_format`, legacy ``.vtk``: :mod:`~hammesh.io.vtk_legacy`,
+``.vtp`` and the ``.vtu`` files meshio refuses or reads in part:
+:mod:`~hammesh.io.vtk_xml`), and through meshio for the rest.
+
 :func:`read_mesh` is the one mesh-reading entry point of hammesh (``hammesh.strips``,
 ``hammesh.surface`` and the command line call it): ``dim=2`` planar meshes, ``dim=3``
 surfaces, ``dim=None`` whichever the file holds.  Point lists (:func:`read_points`) and
