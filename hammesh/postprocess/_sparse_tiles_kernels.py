@@ -32,17 +32,20 @@ def _gap(p, a, n):
 
 
 @njit(cache=True, nogil=True)
-def plan_tile_joins_into(order, cls, pref, row_t, row_u, cyc_t, cyc_u, pos_t, pos_u, length, n_rows, rounds, take):
+def plan_tile_joins_into(order, cls, pref, far, row_t, row_u, cyc_t, cyc_u, pos_t, pos_u, length, n_rows, rounds, take):
     """Kruskal over the candidate joins ``order`` (sorted by class, then preference):
     class by class, the joins between two cycles not yet one, each triangle in one
     join at most. Inside a class a join is placed near the position where its cycles
     were first joined (their *anchor*): candidates go by their distance from the
-    anchors (plus ``pref``: a swap before a bridge at the same distance); one whose
+    anchors (plus ``pref``: a swap before a bridge at the same distance), after
+    ``far`` (the two cells' distance in the fishbone's order, which outranks the
+    rest: the halves of a cell joined where they meet in that order); one whose
     distance grew since it was ranked (an anchor set in this class) waits for the
     next of ``rounds`` passes, ranked again. So each cell's joins sit close together
     along its cycle and the cell stays nearly one run of the joined cycle.
     ``take`` (candidates,) bool: out. Returns the joins taken."""
     n_cyc = length.shape[0]
+    scale = 4 * length.max() + 2 if n_cyc else 1
     uf = np.arange(n_cyc)
     anchor = np.full(n_cyc, -1, np.int64)
     used = np.zeros(n_rows, np.bool_)
@@ -58,8 +61,8 @@ def plan_tile_joins_into(order, cls, pref, row_t, row_u, cyc_t, cyc_u, pos_t, po
             cost = np.empty(pending.shape[0], np.int64)
             for x in range(pending.shape[0]):
                 c = pending[x]
-                cost[x] = 2 * (_gap(pos_t[c], anchor[cyc_t[c]], length[cyc_t[c]])
-                               + _gap(pos_u[c], anchor[cyc_u[c]], length[cyc_u[c]])) + pref[c]
+                cost[x] = far[c] * scale + 2 * (_gap(pos_t[c], anchor[cyc_t[c]], length[cyc_t[c]])
+                                                + _gap(pos_u[c], anchor[cyc_u[c]], length[cyc_u[c]])) + pref[c]
             ranked = np.argsort(cost, kind="mergesort")
             wait = np.empty(pending.shape[0], np.int64)
             k = 0
@@ -71,8 +74,8 @@ def plan_tile_joins_into(order, cls, pref, row_t, row_u, cyc_t, cyc_u, pos_t, po
                 b = _find(uf, cyc_u[c])
                 if a == b:
                     continue
-                now = 2 * (_gap(pos_t[c], anchor[cyc_t[c]], length[cyc_t[c]])
-                           + _gap(pos_u[c], anchor[cyc_u[c]], length[cyc_u[c]])) + pref[c]
+                now = far[c] * scale + 2 * (_gap(pos_t[c], anchor[cyc_t[c]], length[cyc_t[c]])
+                                            + _gap(pos_u[c], anchor[cyc_u[c]], length[cyc_u[c]])) + pref[c]
                 if r + 1 < rounds and now > cost[x]:
                     wait[k] = c
                     k += 1

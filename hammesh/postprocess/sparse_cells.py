@@ -63,11 +63,6 @@ MERGE_LEAF = True
 STRICT = False
 #: Passes of ``_cover_kernels.smooth_cells`` over the ids (fewer junction triangles).
 SMOOTH_PASSES = 4
-#: Cells as tiles: no bands, every triangle confined to its deepest cell (a spine's
-#: triangles to the cell they lie in), each cell covered and joined on its own
-#: (``confine`` severs the borders) and the cells joined by the level of the smallest
-#: fishbone cell holding both (``join_classes``): deeper first.
-TILES = False
 
 
 class FishboneCells(NamedTuple):
@@ -86,8 +81,6 @@ class FishboneCells(NamedTuple):
         The triangles the classes are computed on.
     added : int
         Triangles the bands added to the spines.
-    tiles : bool
-        Cells as tiles (``TILES``): ``cell`` is the deepest cell, no bands.
     """
 
     cell: np.ndarray
@@ -95,7 +88,6 @@ class FishboneCells(NamedTuple):
     frame: Frame
     triangles: np.ndarray
     added: int
-    tiles: bool = False
 
 
 def cell_levels(m: int, cell_triangles: int = CELL_TRIANGLES) -> int:
@@ -114,7 +106,7 @@ def fishbone_cells(
     *,
     cell_triangles: int | None = None,
     band_steps: int | None = None,
-    tiles: bool | None = None,
+    tiles: bool = False,
 ) -> FishboneCells:
     """The cells and bands sparse mode's cover is confined to (module docstring).
 
@@ -128,6 +120,9 @@ def fishbone_cells(
         Triangles of a deepest cell, about (default ``CELL_TRIANGLES``).
     band_steps : int, optional
         Dual steps each spine is widened by (default ``BAND_STEPS``).
+    tiles : bool
+        No bands: every triangle's id is its deepest cell (a spine's triangles the
+        cell they lie in), for ``sparse_tiles``.
 
     Returns
     -------
@@ -156,7 +151,6 @@ def fishbone_cells(
     frame = fishbone_frame(tri, tw, pts, qr, levels=cell_levels(m, size))
     nb = ck.neighbors(tw, m)
     word = qr[:, 2].astype(np.int64)
-    tiles = TILES if tiles is None else bool(tiles)
     cell = np.empty(m, np.int64)
     if tiles:
         added = 0
@@ -169,7 +163,7 @@ def fishbone_cells(
         # a triangle with two neighbours in another cell moves there (its word with it)
         ck.smooth_cells(nb, cell, word, SMOOTH_PASSES)
     qr[:, 2] = word
-    return FishboneCells(cell, qr, frame, tri, added, tiles)
+    return FishboneCells(cell, qr, frame, tri, added)
 
 
 def join_classes(cells: FishboneCells, t: np.ndarray, u: np.ndarray, merge_leaf: bool | None = None) -> np.ndarray:
@@ -177,9 +171,6 @@ def join_classes(cells: FishboneCells, t: np.ndarray, u: np.ndarray, merge_leaf:
     (int64 arrays; the join's two rows as ``cells`` numbered them): lower first.
     ``merge_leaf`` (default ``MERGE_LEAF``): the classes inside one deepest cell as one."""
     fr = cells.frame
-    if cells.tiles:  # the bit length of the two deepest cells' xor: 0 inside one cell
-        x = cells.cell[np.asarray(t, np.int64)] ^ cells.cell[np.asarray(u, np.int64)]
-        return np.frexp(x.astype(np.float64))[1].astype(np.int64)
     out = np.empty(len(t), np.int64)
     merge = MERGE_LEAF if merge_leaf is None else bool(merge_leaf)
     _k.join_classes_into(fr.points, cells.triangles, fr.ca, fr.sa, fr.span, cells.fish, fr.lines, fr.extent, fr.depth,
@@ -191,4 +182,4 @@ def confine(nb: np.ndarray, cell: np.ndarray) -> int:
     """``cycle_cover``'s hook (``cells=``): with ``STRICT``, remove every dual edge
     between two cells from the neighbour array ``nb`` ((m, 3) int32, in place), so that
     each cell is covered as a domain of its own. Returns the edges removed."""
-    return int(_k.sever_cell_borders(nb, cell)) if STRICT or TILES else 0
+    return int(_k.sever_cell_borders(nb, cell)) if STRICT else 0

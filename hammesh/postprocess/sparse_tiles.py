@@ -29,6 +29,14 @@ final cycle (docs/partition.md, "Session 14"). Here, for
 If the joins cannot make one cycle per connected piece (a piece of a cell without
 a usable join), the caller's construction runs on the uncut mesh instead (the
 report says ``tile_fallback``). The certificate checks the output as any other.
+
+Measured at 300 000 triangles (docs/partition.md, "Session 14, second round") it cuts
+plate 2.51 / 1.94 and gear 2.89 / 1.96 x METIS's at k = 8 / 64, against the confined
+cover's (``sparse_cells``, round one) 3.23 / 2.17 and 2.48 / 2.18: about 10 % less at
+k = 64, within the spread at k = 8, for 1.3-1.4x its Steiner points (0.58-0.82 %) and
+1.5-1.6x its CPU. So it is off (``TILES``): a cell is nearly but not quite one run
+(its joins' candidates lie far apart along its cycle), and even cells walked whole
+cut 1.3-2.0 / 1.5-1.6 (the cells' own sparse cycles wind).
 """
 
 from __future__ import annotations
@@ -54,6 +62,9 @@ TILES = False
 MIN_PIECE = 16
 #: Passes of each class in the joins' plan (``plan_tile_joins_into``).
 ROUNDS = 3
+#: Inside a class, the join between the two cells nearest in the fishbone's order
+#: first (the cells' numbers: a cell's halves joined where they meet in that order).
+ORDERED = False
 #: Passes moving each join along its two cycles towards their other joins
 #: (``tighten_joins_into``; 0: the plan's choice).
 SWEEPS = 3
@@ -243,12 +254,14 @@ def _join_tiles(r, pts_in, tri_in, con_in, cell, n, min_angle, keep):
     swap = ok & (_area2(X) > 0) & (_area2(Y) > 0) & (new_min >= np.maximum(keep * old, floor)) & (new_max <= hi)
     bridge = ok & ~swap & (r.kind[rt] == _KIND_WHOLE) & (r.kind[ru] == _KIND_WHOLE)
     usable = np.flatnonzero(swap | bridge)
-    cls = np.frexp((cell[r.parent[rt]] ^ cell[r.parent[ru]]).astype(np.float64))[1].astype(np.int64)
+    cls = np.frexp((cell[r.parent[rt]] ^ cell[r.parent[ru]]).astype(np.float64))[1].astype(np.int64)  # (0: one cell)
     pref = np.where(swap, 0, 1).astype(np.int64)
     order = usable[np.lexsort((pref[usable], cls[usable]))]
     take = np.zeros(len(bh), np.bool_)
     ct, cu, pt, pu = cyc[rt], cyc[ru], pos[rt], pos[ru]
-    _k.plan_tile_joins_into(order, cls, pref, rt, ru, ct, cu, pt, pu, L, m1, ROUNDS, take)
+    wt, wu = cell[r.parent[rt]], cell[r.parent[ru]]
+    far = np.abs(wt - wu) if ORDERED else np.zeros(len(bh), np.int64)
+    _k.plan_tile_joins_into(order, cls, pref, far, rt, ru, ct, cu, pt, pu, L, m1, ROUNDS, take)
     if SWEEPS:
         take = _tightened(take, usable, pref, rt, ru, ct, cu, pt, pu, L, m1)
     sw, br = np.flatnonzero(take & swap), np.flatnonzero(take & ~swap)

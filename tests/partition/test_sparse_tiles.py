@@ -84,7 +84,7 @@ def test_plan_joins_spans_the_cycles_in_class_order() -> None:
     pref = np.zeros(4, np.int64)
     take = np.zeros(4, np.bool_)
     order = np.array([1, 0, 3, 2])
-    n = K.plan_tile_joins_into(order, cls, pref, row_t, row_u, cyc_t, cyc_u, pos_t, pos_u, np.full(3, 10), 30, 3, take)
+    n = K.plan_tile_joins_into(order, cls, pref, np.zeros(4, np.int64), row_t, row_u, cyc_t, cyc_u, pos_t, pos_u, np.full(3, 10), 30, 3, take)
     assert n == 2 and take.tolist() == [False, True, True, False]
 
 
