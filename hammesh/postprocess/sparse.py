@@ -69,7 +69,6 @@ from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, cycle_ids_by_halves, join_classes
 from hammesh.postprocess.sparse_cells import fishbone_cells, join_classes as fish_classes
 from hammesh.postprocess import sparse_tiles
-from hammesh.postprocess.sparse_tiles import tiled_cycles
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
@@ -2236,7 +2235,7 @@ def sparse_hamiltonian(
         differ[inner] = (a2[np.arange(3 * m)[inner] // 3] != a2[tw[inner] // 3]).any(axis=1)
         pinned = is_con | differ
     # (issue 14: the fishbone's cells as tiles, each a sparse construction, then joined)
-    cycles = partial(tiled_cycles, sparse_cycles) if tree == "fishbone" and sparse_tiles.TILES else sparse_cycles
+    cycles = partial(sparse_tiles.tiled_cycles, sparse_cycles) if tree == "fishbone" and sparse_tiles.TILES else sparse_cycles
     if m >= LOCAL_MIN_TRIANGLES and pts.shape[1] == 2:
         t0, c0 = time.perf_counter(), time.process_time()
         # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
