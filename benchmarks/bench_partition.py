@@ -35,6 +35,12 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --quick --modes incircle --plot parts/   # pictures of the parts
     python benchmarks/bench_partition.py --trees --target 100000   # other spanning trees (partition_trees.py)
     python benchmarks/bench_partition.py --sparse-cells 0,1024,4096 --target 100000   # sparse: cell-confined covers
+    python benchmarks/bench_partition.py --modes sparse,sparse-fishbone --repeat 3   # sparse's fishbone option
+
+``--modes sparse-fishbone`` is ``hamiltonian(mesh, mode="sparse", tree="fishbone")``
+(``hammesh.postprocess.sparse_cells``); with it a table of its price against sparse
+mode's default on the same input (Steiner points, angles, rows below the parent rule,
+the call's process CPU).
 """
 
 from __future__ import annotations
@@ -65,6 +71,28 @@ def _domains():
             ("square", square, 1.0), ("rect_2x1", rect, 2.0)]
 
 
+#: ``--modes``: the ``hamiltonian`` call of each (``sparse-fishbone``: sparse mode's
+#: opt-in compact cycle, ``hammesh.postprocess.sparse_cells``; plain ``sparse`` is
+#: sparse mode's default, the cover left free).
+MODES = {"incircle": ("incircle", "fishbone"), "sparse": ("sparse", "quadtree"),
+         "sparse-fishbone": ("sparse", "fishbone"), "sparse-tiles": ("sparse", "fishbone")}
+
+
+def _hamiltonian(mesh, mode: str):
+    """``hammesh.hamiltonian`` as ``--modes`` names it (``sparse-tiles``: ``tree="fishbone"``
+    with ``sparse_tiles.TILES`` on, the fishbone's cells as tiles; measured, not the default)."""
+    import hammesh
+    from hammesh.postprocess import sparse_tiles
+
+    how, tree = MODES[mode]
+    was = sparse_tiles.TILES
+    sparse_tiles.TILES = mode == "sparse-tiles"
+    try:
+        return hammesh.hamiltonian(mesh, mode=how, tree=tree)
+    finally:
+        sparse_tiles.TILES = was
+
+
 def _mesh(dom, area: float, target: int, mode: str):
     import hammesh
 
@@ -72,7 +100,29 @@ def _mesh(dom, area: float, target: int, mode: str):
     m_in = target / per_input
     # Triangle's triangles at min angle 30 average about 0.63 x max_area
     mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * m_in))
-    return hammesh.hamiltonian(mesh, mode=mode, tree="fishbone"), mesh  # (the tree: incircle only)
+    return _hamiltonian(mesh, mode), mesh
+
+
+def _sparse_price(name: str, mesh, repeat: int, modes: tuple = ("sparse-fishbone",)) -> list[str]:
+    """Sparse mode's default against ``tree="fishbone"`` on the same input: Steiner
+    points, min / max angle, rows below the parent rule, and the ``hamiltonian``
+    call's process CPU (first call of each in this process, then ``repeat`` more
+    alternating: median and range) and their ratio."""
+    cpu: dict = {"sparse": [], **{mode: [] for mode in modes}}
+    out: dict = {}
+    for _ in range(1 + max(repeat, 0)):
+        for mode in cpu:
+            c = time.process_time()
+            out[mode] = _hamiltonian(mesh, mode)
+            cpu[mode].append(time.process_time() - c)
+    base = float(np.median(cpu["sparse"]))
+    rows = []
+    for mode, h in out.items():
+        r, m, c = h.report, h.n_triangles, cpu[mode]
+        rows.append(f"| {name} | {mode} | {m:,} | {r['steiner_points']:,} ({r['steiner_points'] / m:.2%}) "
+                    f"| {r['min_angle_output_deg']:.1f} / {r['max_angle_output_deg']:.1f} | {r['below_parent_rule']:,} "
+                    f"| {c[0]:.2f} | {np.median(c):.2f} ({min(c):.2f}-{max(c):.2f}) | {np.median(c) / base:.2f} |")
+    return rows
 
 
 def _plain_forest_kernel():
@@ -521,7 +571,9 @@ def main() -> None:
     ap.add_argument("--forest-only", action="store_true", help="only the forest table")
     ap.add_argument("--domains", default="plate_2_holes,gear",
                     help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
-    ap.add_argument("--modes", default="incircle,sparse", help="comma-separated: incircle, sparse")
+    ap.add_argument("--modes", default="incircle,sparse,sparse-fishbone",
+                    help="comma-separated: incircle, sparse, sparse-fishbone (sparse mode's tree=\"fishbone\"), "
+                    "sparse-tiles (the same with sparse_tiles.TILES: the cells as tiles)")
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
     ap.add_argument("--trees", action="store_true",
                     help="only the incircle cut of other spanning trees (benchmarks/partition_trees.py) vs METIS")
@@ -556,13 +608,13 @@ def main() -> None:
 
     from hammesh.partition import dual_edges
 
-    rows, numbering = [], []
+    rows, numbering, price = [], [], []
     chosen = args.domains.split(",")
     known = [d[0] for d in _domains()]
     if set(chosen) - set(known):
         ap.error(f"--domains: unknown {sorted(set(chosen) - set(known))}; known: {known}")
-    if set(args.modes.split(",")) - {"incircle", "sparse"}:
-        ap.error("--modes: incircle and/or sparse")
+    if set(args.modes.split(",")) - set(MODES):
+        ap.error(f"--modes: some of {sorted(MODES)}")
     ks = [int(k) for k in args.ks.split(",")]
     if args.sparse_cells:
         _print_sparse_cells([d for d in _domains() if d[0] in chosen], args.target, ks,
@@ -578,6 +630,9 @@ def main() -> None:
             h, mesh = _mesh(dom, area, args.target, mode)
             if mode == "incircle":
                 forests.append(_forest_row(name, mesh, args.repeat))
+            opted = tuple(x for x in args.modes.split(",") if x in ("sparse-fishbone", "sparse-tiles"))
+            if opted and mode == opted[0]:
+                price += _sparse_price(name, mesh, args.repeat, opted)
             a, b = dual_edges(h.triangles)
             m = h.n_triangles
             g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
@@ -617,6 +672,13 @@ def main() -> None:
     ok = all(r["connected"] for r in rows) and all(r["imbalance"] <= 1 + 1.0 * r["k"] / r["triangles"] for r in rows)
     print(f"\nworst cut ratio {worst:.2f} (target <= 1.5, goal 1.1); all connected and balanced: {ok}; "
           f"smallest METIS / partition time {slow:.1f} (target >= 20)")
+    if price:
+        print("\nSparse mode's price of tree=\"fishbone\" (same input; hamiltonian process CPU: first call, then "
+              "median (range) of --repeat more, alternating):\n")
+        print("| domain | mode | triangles | Steiner points | min / max angle | rows below the parent rule "
+              "| CPU s first | CPU s median (range) | / sparse |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        print("\n".join(price))
     print()
     _print_forests(forests)
     print()

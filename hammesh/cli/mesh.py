@@ -55,7 +55,9 @@ def add_args(p: argparse.ArgumentParser) -> None:
                    help="cut the cycle into K connected, balanced parts: a 'part' cell array in the output")
     g.add_argument("--tree", choices=("quadtree", "fishbone"),
                    help="incircle mode's spanning tree: fishbone (the default with --parts) sweeps the domain so "
-                        "that parts cut close to METIS, ~20%% slower; quadtree (the default otherwise) is the fastest")
+                        "that parts cut close to METIS, ~20%% slower; quadtree (the default otherwise) is the fastest. "
+                        "Sparse mode: fishbone confines the cover to the fishbone's cells (an opt-in: more Steiner "
+                        "points, lower angles; docs/partition.md)")
     g.add_argument("--renumber", choices=NUMBERINGS,
                    help="renumber the vertices (bandwidth/profile in the report)")
     g = p.add_argument_group("parallel (decoupled tiles, docs/scale.md; domain inputs with -a)")
@@ -110,9 +112,8 @@ def run(args: argparse.Namespace) -> int:
         if args.parts is not None:
             params.integer("--parts", args.parts, low=1, what="number of parts")
         finish = partial(partitioned, k=args.parts, renumber=args.renumber)
-    if args.tree is not None and args.mode != "incircle":
-        raise InvalidOptionError(f"--tree {args.tree}: the spanning tree is incircle mode's (--mode incircle)")
-    tree = args.tree or ("fishbone" if args.parts is not None else "quadtree")
+    # (sparse mode's fishbone is an opt-in: --parts alone keeps its free cover)
+    tree = args.tree or ("fishbone" if args.parts is not None and args.mode == "incircle" else "quadtree")
     h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, tree=tree, strict=args.strict,
                      finish=finish)
     print(summary(h))

@@ -150,7 +150,10 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: s
         Incircle mode's dual spanning tree (``hammesh.postprocess.incircle.TREES``):
         ``"fishbone"`` makes the cycle sweep the domain so that ``hammesh.partition``'s
         stretches cut close to METIS (docs/partition.md), at about +20 % of this call's
-        time; ``"quadtree"`` (the default) is the fastest. Ignored by ``"sparse"``.
+        time; ``"quadtree"`` (the default) is the fastest. Sparse mode: ``"fishbone"``
+        confines the cover to the fishbone's cells and joins them in its class order
+        (``hammesh.postprocess.sparse_cells``; an opt-in: it costs Steiner points and
+        angles), ``"quadtree"`` (the default) leaves the cover free.
 
     Returns
     -------
@@ -236,7 +239,7 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
                 stream.join()  # then help with the row checks still to do
                 rows = (stream.result(out.components), stream.used)
         else:
-            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover)
+            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover, tree=tree)
             t1 = time.perf_counter()
         start_facts()  # (if the construction did not)
         ref_facts = facts[0].result()

@@ -23,6 +23,7 @@ from hammesh import threads
 from hammesh.pages import fresh, reserved
 from hammesh.halfedge.locality import grid_frame
 from hammesh.postprocess import _cover_kernels as _k
+from hammesh.postprocess.sparse_cells import confine
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 from hammesh.threads import row_ranges, run_all
 
@@ -123,6 +124,7 @@ def cycle_cover(
     drop: bool = True,
     local: bool = False,
     clock: dict | None = None,
+    cells: np.ndarray | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -176,6 +178,9 @@ def cycle_cover(
     clock : dict, optional
         Filled with ``step: (wall, process CPU)`` seconds per step of the cover
         (``benchmarks/bench_cover.py --steps``); process CPU counts every thread.
+    cells : (m,) int64, optional
+        The cells to confine the cycles to, given (``sparse_cells.fishbone_cells``:
+        issue 14's hook; ``cell_size`` is then not used).
 
     Returns
     -------
@@ -202,6 +207,8 @@ def cycle_cover(
         cell_size = CELL_SIZE
     if points is not None and cell_size > 0 and m > 0 and np.shape(points)[1] == 2:
         quad, cell = _cells(np.ascontiguousarray(points, dtype=np.float64), triangles, tw, m, int(cell_size))
+    if cells is not None:  # (issue 14: sparse_cells' fishbone cells and bands)
+        cell = np.ascontiguousarray(cells, dtype=np.int64)
     no_cell = np.zeros(0, np.int64)
     spans = row_ranges(m, threads.THREAD_MIN_ROWS)
     # the big arrays from ``hammesh.pages``' reserve where there is one (a first call
@@ -209,6 +216,8 @@ def cycle_cover(
     nb = fresh((m, 3), np.int32)
     run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
     mark("neighbors")
+    if cells is not None:  # (issue 14: ``sparse_cells`` may keep every cycle off the borders)
+        confine(nb, cell)
     if cell is not None:
         _k.cut_cell_borders(nb, cell)
     alive, deg = _k.peel(nb, m)

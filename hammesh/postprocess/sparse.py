@@ -67,6 +67,8 @@ from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, cycle_ids_by_halves, join_classes
+from hammesh.postprocess.sparse_cells import fishbone_cells, join_classes as fish_classes
+from hammesh.postprocess import sparse_tiles
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
@@ -194,7 +196,7 @@ def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
 
 def _join_order(
     kind: np.ndarray, slack: np.ndarray, newmin: np.ndarray, pmin: np.ndarray, whole: np.ndarray,
-    cls: np.ndarray | None = None,
+    cls: np.ndarray | None = None, first: bool = False,
 ) -> np.ndarray:
     """Candidates in the order Kruskal takes them: best joins first.
 
@@ -210,7 +212,8 @@ def _join_order(
     the finest cells first, near the cells' centres, then up the quadtree, so that
     the final cycle sweeps the domain cell by cell (issue 14). Measured, tiers first
     keep the Steiner points near the unconfined cover's; classes first cut a
-    little less and cost 2-4x the points.
+    little less and cost 2-4x the points. ``first``: the class before the tiers
+    (``sparse_cells``: the fishbone's classes, ``tree="fishbone"``).
     """
     meets = slack >= 0.0
     usable = (kind != _j.NO_JOIN) & (meets | (newmin >= 0.5 * pmin))
@@ -219,6 +222,8 @@ def _join_order(
     tier = np.where(meets[idx], 0, np.where(whole[idx], 1, 2))
     if cls is None:
         return idx[np.lexsort((-slack[idx], kk, tier))]
+    if first:
+        return idx[np.lexsort((-slack[idx], kk, tier, cls[idx]))]
     return idx[np.lexsort((-slack[idx], cls[idx], kk, tier))]
 
 
@@ -1679,6 +1684,7 @@ def sparse_cycles(
     improve: bool = True,
     beside_cover: Callable[[], object] | None = None,
     local: bool = False,
+    tree: str = "quadtree",
 ) -> SparseResult:
     """The sparse construction on arrays (unverified).
 
@@ -1731,6 +1737,9 @@ def sparse_cycles(
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
         order (``cycle_cover(..., local=True)``).
+    tree : {"quadtree", "fishbone"}
+        ``"fishbone"`` (planar): the cover confined to the fishbone's cells and bands,
+        the joins in its class order (``sparse_cells``, issue 14: a compact cycle).
     """
     if not 0.0 <= keep <= 1.0:
         raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
@@ -1747,6 +1756,7 @@ def sparse_cycles(
     hi = amax_in + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
+    fish = None  # (tree="fishbone": sparse_cells' cells and classes)
     if use_cover:
         # edges whose join (swap or midpoint split) keeps the rule: the cover's
         # matching prefers them as its non-cover edges, where cycles get joined
@@ -1781,7 +1791,8 @@ def sparse_cycles(
         late = beside_cover is not None and reserved() > 0
         if beside_cover is not None and not late:
             beside_cover()
-        cover = cycle_cover(tri, tw, good=good, points=pts, local=local)
+        fish = fishbone_cells(pts, tri, tw) if tree == "fishbone" and pts.shape[1] == 2 else None  # (issue 14)
+        cover = cycle_cover(tri, tw, good=good, points=pts, local=local, cells=None if fish is None else fish.cell)
     else:
         if beside_cover is not None:
             beside_cover()
@@ -1841,6 +1852,8 @@ def sparse_cycles(
         t_of, u_of = cand // 3, tw[cand] // 3
         pmin = np.minimum(amin_p[t_of], amin_p[u_of])
         cls = None if quad0 is None else join_classes(quad0, orig_of[t_of], orig_of[u_of])
+        if fish is not None:
+            cls = fish_classes(fish, orig_of[t_of], orig_of[u_of])
         every = np.arange(len(cand))
         # judge every candidate unplaced; place a split's point only where Kruskal can
         # still use the join after all joins meeting the rule unplaced (``open_candidates``)
@@ -1848,7 +1861,7 @@ def sparse_cycles(
         steps.done("score_joins")
         if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
             whole = (newmin >= keep * min_angle) & (newmax <= hi)
-            order = _join_order(ckind, slack, newmin, pmin, whole, cls)
+            order = _join_order(ckind, slack, newmin, pmin, whole, cls, fish is not None)
             dropped = np.ones(len(cand), np.bool_)  # dropped: a bridge did better
             dropped[order] = False
             rest = np.flatnonzero(dropped)  # (as setdiff1d of every and order, without its sort)
@@ -1860,7 +1873,7 @@ def sparse_cycles(
             # went 533 -> 540 (face 59 -> 64, square_circle_hole 72 -> 75))
             score(np.sort(redo), int(place_iters), exact=False)
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
-        order = _join_order(ckind, slack, newmin, pmin, whole, cls)
+        order = _join_order(ckind, slack, newmin, pmin, whole, cls, fish is not None)
         steps.done("place_splits")
         if use_cover and late:
             beside_cover()  # (the plan, the alternating merges and ring joins: one core)
@@ -2181,7 +2194,7 @@ def _numbered_back(r: SparseResult, loc, points: np.ndarray, started: tuple[floa
 
 def sparse_hamiltonian(
     mesh: Mesh, he: HalfEdges, is_con: np.ndarray, *, keep: float = KEEP,
-    beside_cover: Callable[[], object] | None = None,
+    beside_cover: Callable[[], object] | None = None, tree: str = "quadtree",
 ) -> tuple[HamiltonianMesh, np.ndarray]:
     """Build the sparse Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
 
@@ -2195,6 +2208,8 @@ def sparse_hamiltonian(
         The local quality rule's factor (``sparse_cycles``).
     beside_cover : callable, optional
         Called once beside the construction (``sparse_cycles``).
+    tree : {"quadtree", "fishbone"}
+        ``sparse_cycles``' (``"fishbone"``: a compact cycle, ``sparse_cells``).
 
     Returns
     -------
@@ -2219,6 +2234,8 @@ def sparse_hamiltonian(
         differ = np.zeros(3 * m, np.bool_)
         differ[inner] = (a2[np.arange(3 * m)[inner] // 3] != a2[tw[inner] // 3]).any(axis=1)
         pinned = is_con | differ
+    # (issue 14: the fishbone's cells as tiles, each a sparse construction, then joined)
+    cycles = partial(sparse_tiles.tiled_cycles, sparse_cycles) if tree == "fishbone" and sparse_tiles.TILES else sparse_cycles
     if m >= LOCAL_MIN_TRIANGLES and pts.shape[1] == 2:
         t0, c0 = time.perf_counter(), time.process_time()
         # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
@@ -2230,12 +2247,13 @@ def sparse_hamiltonian(
         for a, rows in ((loc.triangles, m + rt), (loc.twin, 3 * (m + rt)), (loc.marks, 3 * (m + rt)),
                         (loc.points, n + rp)):
             _keep_room(a, rows)
-        r = sparse_cycles(
-            loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True
+        r = cycles(
+            loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True,
+            tree=tree,
         )
         r = _numbered_back(r, loc, pts, (t0, c0))
     else:
-        r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover)
+        r = cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover, tree=tree)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)

@@ -194,9 +194,13 @@ def test_tree_option_picks_the_walk_and_both_are_certified(tmp_path) -> None:
         hammesh.hamiltonian(plate, mode="incircle", tree="kd")
     src = tmp_path / "plate.vtu"
     write(plate, src)
-    # the tree is incircle mode's: asking for one in sparse mode is a mistake, said, nothing written
-    assert main(["mesh", str(src), "--tree", "fishbone", "-o", str(tmp_path / "no.vtu")]) == 2
-    assert not (tmp_path / "no.vtu").exists()
+    # sparse mode takes the fishbone as an opt-in (``sparse_cells``): not with --parts alone
+    sp_fish = hammesh.hamiltonian(plate, mode="sparse", tree="fishbone")
+    sp_quad = hammesh.hamiltonian(plate, mode="sparse")
+    for extra, expected in ((["--tree", "fishbone"], sp_fish), ([], sp_quad)):
+        out = tmp_path / f"sparse{len(extra)}.vtu"
+        assert main(["mesh", str(src), "--parts", "4", "-o", str(out)] + extra) == 0
+        np.testing.assert_array_equal(meshio.read(out).cell_data["parent"][0], expected.parent)
     for extra, expected in (([], fish), (["--tree", "quadtree"], quad)):
         out = tmp_path / f"out{len(extra)}.vtu"
         assert main(["mesh", str(src), "--mode", "incircle", "--parts", "4", "-o", str(out)] + extra) == 0
