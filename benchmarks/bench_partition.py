@@ -75,22 +75,7 @@ def _domains():
 #: opt-in compact cycle, ``hammesh.postprocess.sparse_cells``; plain ``sparse`` is
 #: sparse mode's default, the cover left free).
 MODES = {"incircle": ("incircle", "fishbone"), "sparse": ("sparse", "quadtree"),
-         "sparse-fishbone": ("sparse", "fishbone"), "sparse-tiles": ("sparse", "fishbone")}
-
-
-def _hamiltonian(mesh, mode: str):
-    """``hammesh.hamiltonian`` as ``--modes`` names it (``sparse-tiles``: ``tree="fishbone"``
-    with ``sparse_tiles.TILES`` on, the fishbone's cells as tiles; measured, not the default)."""
-    import hammesh
-    from hammesh.postprocess import sparse_tiles
-
-    how, tree = MODES[mode]
-    was = sparse_tiles.TILES
-    sparse_tiles.TILES = mode == "sparse-tiles"
-    try:
-        return hammesh.hamiltonian(mesh, mode=how, tree=tree)
-    finally:
-        sparse_tiles.TILES = was
+         "sparse-fishbone": ("sparse", "fishbone")}
 
 
 def _mesh(dom, area: float, target: int, mode: str):
@@ -100,20 +85,24 @@ def _mesh(dom, area: float, target: int, mode: str):
     m_in = target / per_input
     # Triangle's triangles at min angle 30 average about 0.63 x max_area
     mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * m_in))
-    return _hamiltonian(mesh, mode), mesh
+    how, tree = MODES[mode]
+    return hammesh.hamiltonian(mesh, mode=how, tree=tree), mesh
 
 
-def _sparse_price(name: str, mesh, repeat: int, modes: tuple = ("sparse-fishbone",)) -> list[str]:
+def _sparse_price(name: str, mesh, repeat: int) -> list[str]:
     """Sparse mode's default against ``tree="fishbone"`` on the same input: Steiner
     points, min / max angle, rows below the parent rule, and the ``hamiltonian``
     call's process CPU (first call of each in this process, then ``repeat`` more
     alternating: median and range) and their ratio."""
-    cpu: dict = {"sparse": [], **{mode: [] for mode in modes}}
+    import hammesh
+
+    cpu: dict = {"sparse": [], "sparse-fishbone": []}
     out: dict = {}
     for _ in range(1 + max(repeat, 0)):
         for mode in cpu:
+            how, tree = MODES[mode]
             c = time.process_time()
-            out[mode] = _hamiltonian(mesh, mode)
+            out[mode] = hammesh.hamiltonian(mesh, mode=how, tree=tree)
             cpu[mode].append(time.process_time() - c)
     base = float(np.median(cpu["sparse"]))
     rows = []
@@ -572,8 +561,7 @@ def main() -> None:
     ap.add_argument("--domains", default="plate_2_holes,gear",
                     help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
     ap.add_argument("--modes", default="incircle,sparse,sparse-fishbone",
-                    help="comma-separated: incircle, sparse, sparse-fishbone (sparse mode's tree=\"fishbone\"), "
-                    "sparse-tiles (the same with sparse_tiles.TILES: the cells as tiles)")
+                    help="comma-separated: incircle, sparse, sparse-fishbone (sparse mode's tree=\"fishbone\")")
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
     ap.add_argument("--trees", action="store_true",
                     help="only the incircle cut of other spanning trees (benchmarks/partition_trees.py) vs METIS")
@@ -630,9 +618,8 @@ def main() -> None:
             h, mesh = _mesh(dom, area, args.target, mode)
             if mode == "incircle":
                 forests.append(_forest_row(name, mesh, args.repeat))
-            opted = tuple(x for x in args.modes.split(",") if x in ("sparse-fishbone", "sparse-tiles"))
-            if opted and mode == opted[0]:
-                price += _sparse_price(name, mesh, args.repeat, opted)
+            if mode == "sparse-fishbone":
+                price += _sparse_price(name, mesh, args.repeat)
             a, b = dual_edges(h.triangles)
             m = h.n_triangles
             g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))

@@ -68,7 +68,6 @@ from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, cycle_ids_by_halves, join_classes
 from hammesh.postprocess.sparse_cells import fishbone_cells, join_classes as fish_classes
-from hammesh.postprocess import sparse_tiles
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
@@ -2234,8 +2233,6 @@ def sparse_hamiltonian(
         differ = np.zeros(3 * m, np.bool_)
         differ[inner] = (a2[np.arange(3 * m)[inner] // 3] != a2[tw[inner] // 3]).any(axis=1)
         pinned = is_con | differ
-    # (issue 14: the fishbone's cells as tiles, each a sparse construction, then joined)
-    cycles = partial(sparse_tiles.tiled_cycles, sparse_cycles) if tree == "fishbone" and sparse_tiles.TILES else sparse_cycles
     if m >= LOCAL_MIN_TRIANGLES and pts.shape[1] == 2:
         t0, c0 = time.perf_counter(), time.process_time()
         # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
@@ -2247,13 +2244,13 @@ def sparse_hamiltonian(
         for a, rows in ((loc.triangles, m + rt), (loc.twin, 3 * (m + rt)), (loc.marks, 3 * (m + rt)),
                         (loc.points, n + rp)):
             _keep_room(a, rows)
-        r = cycles(
+        r = sparse_cycles(
             loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True,
             tree=tree,
         )
         r = _numbered_back(r, loc, pts, (t0, c0))
     else:
-        r = cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover, tree=tree)
+        r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover, tree=tree)
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)

@@ -43,7 +43,7 @@ import numpy as np
 
 from hammesh.postprocess import _cover_kernels as ck
 from hammesh.postprocess import _sparse_cells_kernels as _k
-from hammesh.postprocess._thm24_kernels import FISH_SHIFT, Frame, fishbone_frame, index_dtype
+from hammesh.postprocess._thm24_kernels import Frame, fishbone_frame, index_dtype
 
 __all__ = ["FishboneCells", "fishbone_cells", "join_classes", "cell_levels", "CELL_TRIANGLES", "BAND_STEPS",
            "MERGE_LEAF", "SMOOTH_PASSES",
@@ -106,7 +106,6 @@ def fishbone_cells(
     *,
     cell_triangles: int | None = None,
     band_steps: int | None = None,
-    tiles: bool = False,
 ) -> FishboneCells:
     """The cells and bands sparse mode's cover is confined to (module docstring).
 
@@ -120,9 +119,6 @@ def fishbone_cells(
         Triangles of a deepest cell, about (default ``CELL_TRIANGLES``).
     band_steps : int, optional
         Dual steps each spine is widened by (default ``BAND_STEPS``).
-    tiles : bool
-        No bands: every triangle's id is its deepest cell (a spine's triangles the
-        cell they lie in), for ``sparse_tiles``.
 
     Returns
     -------
@@ -151,14 +147,9 @@ def fishbone_cells(
     frame = fishbone_frame(tri, tw, pts, qr, levels=cell_levels(m, size))
     nb = ck.neighbors(tw, m)
     word = qr[:, 2].astype(np.int64)
+    added = int(_k.widen_bands_into(nb, word, frame.depth, steps, np.empty(m, np.int64), np.empty(m, np.int64)))
     cell = np.empty(m, np.int64)
-    if tiles:
-        added = 0
-        word &= (1 << FISH_SHIFT) - 1  # (every triangle off the spines: its deepest cell)
-        cell[:] = word
-    else:
-        added = int(_k.widen_bands_into(nb, word, frame.depth, steps, np.empty(m, np.int64), np.empty(m, np.int64)))
-        _k.confinement_ids_into(word, frame.depth, cell)
+    _k.confinement_ids_into(word, frame.depth, cell)
     if frame.depth:
         # a triangle with two neighbours in another cell moves there (its word with it)
         ck.smooth_cells(nb, cell, word, SMOOTH_PASSES)
