@@ -74,6 +74,15 @@ def add_args(p: argparse.ArgumentParser) -> None:
                         "instead of repairing it; the report's 'repairs' lists what was repaired")
 
 
+def spanning_tree(args: argparse.Namespace) -> str:
+    """Incircle mode's spanning tree for these options (``--tree``; fishbone by default
+    with ``--parts``, else quadtree), the same on the serial and the parallel path;
+    ``--tree`` with another mode is refused."""
+    if args.tree is not None and args.mode != "incircle":
+        raise InvalidOptionError(f"--tree {args.tree}: the spanning tree is incircle mode's (--mode incircle)")
+    return args.tree or ("fishbone" if args.parts is not None else "quadtree")
+
+
 def run(args: argparse.Namespace) -> int:
     if args.workers is not None or args.scheduler is not None or args.partitioned or args.tiles is not None \
             or args.force or args.no_lattice:
@@ -108,9 +117,7 @@ def run(args: argparse.Namespace) -> int:
         if args.parts is not None:
             params.integer("--parts", args.parts, low=1, what="number of parts")
         finish = partial(partitioned, k=args.parts, renumber=args.renumber)
-    if args.tree is not None and args.mode != "incircle":
-        raise InvalidOptionError(f"--tree {args.tree}: the spanning tree is incircle mode's (--mode incircle)")
-    tree = args.tree or ("fishbone" if args.parts is not None else "quadtree")
+    tree = spanning_tree(args)
     h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, tree=tree, strict=args.strict,
                      finish=finish)
     print(summary(h))

@@ -94,6 +94,7 @@ def check_options(args: argparse.Namespace) -> None:
     """Refuse the options the parallel path cannot run with: checks that import no
     library module (made before the local cluster starts)."""
     from hammesh.cli.inputs import DOMAIN_SUFFIXES
+    from hammesh.cli.mesh import spanning_tree
     from hammesh.parallel.cluster import DASK_MISSING, dask_installed
 
     if args.workers is not None:
@@ -121,6 +122,7 @@ def check_options(args: argparse.Namespace) -> None:
         raise InvalidOptionError("--force replaces an existing --partitioned -o DIRECTORY: give --partitioned")
     if args.parts is not None:
         params.integer("--parts", args.parts, low=1, what="number of parts")
+    spanning_tree(args)  # (--tree with another mode than incircle: refused)
     if args.partitioned:
         if args.output is None:
             raise InvalidOptionError("--partitioned needs -o DIRECTORY")
@@ -153,9 +155,11 @@ def run_parallel(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     """:func:`run_parallel` once the cluster is starting; ``stack`` closes it."""
+    from hammesh.cli.mesh import spanning_tree
     from hammesh.cli.pipeline import Outputs, load_input
     from hammesh.domain import Domain
 
+    tree = spanning_tree(args)  # (as the serial path: fishbone with --parts unless --tree)
     progress = sys.stderr.isatty()
     if args.partitioned:
         from hammesh.parallel.partitioned import check_target
@@ -173,7 +177,7 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
                                 tiles=args.tiles, workers=None if started else args.workers, client=started,
                                 scheduler=args.scheduler, mode=args.mode, keep=args.keep, parts=args.parts,
                                 force=args.force, inputs=inputs, progress=progress,
-                                lattice=not args.no_lattice)
+                                lattice=not args.no_lattice, tree=tree)
         stack.close()  # (the local cluster: closed once the output is in place)
         if args.report is not None:
             write_report(rep, args.report)
@@ -201,7 +205,8 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     client = started if started is not None else None if args.scheduler is None else runner
     h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
                              workers=None if client is not None else args.workers, client=client,
-                             mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
+                             mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice,
+                             tree=tree)
     stack.close()  # (the clusters: the whole mesh is here)
     if args.parts is not None or args.renumber is not None:
         from hammesh.partition import partitioned
