@@ -160,7 +160,7 @@ class LatticeGrid:
 
 
 def outline_hole_points(grid: LatticeGrid, corners: np.ndarray, out_t: np.ndarray, outline: np.ndarray,
-                            nx: int) -> np.ndarray:
+                        nx: int) -> np.ndarray:
     """Centroid of one lattice triangle on each closed loop of the lattice's outline
     (its edges ``outline``, the lattice triangles ``out_t`` they bound): a point inside
     every piece of the lattice, for Triangle's holes (a piece with holes or pinched
@@ -443,6 +443,13 @@ def load_tile_kernels() -> Mesh:
     from hammesh.domain import Domain
     from hammesh.parallel.tiles import decompose
 
+    from hammesh.parallel._kernels import label_pieces_into
+
     area = 1e-3
     d = decompose(Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30, max_area=area, n_tiles=1)
-    return mesh_tile(d.tiles[0], 30, area)
+    m = mesh_tile(d.tiles[0], 30, area)
+    # (the regions' flood fill, which a tile of one region does not run)
+    label = np.empty(m.n_triangles, np.int64)
+    label_pieces_into(m.triangles, m.neighbors, np.zeros(0, np.int64), np.zeros(m.n_points, np.bool_), label,
+                      np.empty(m.n_triangles, np.int64))
+    return m
