@@ -186,7 +186,8 @@ EARLY = ("import sys; import hammesh.parallel.command as c, hammesh.parallel.til
 #: ``python -c`` running the command with ``command.START_BEFORE_IMPORTS`` (argv[1])
 #: set, 0 or 1
 #: the command with one switch of hammesh.parallel.cluster set (argv[1]: name, argv[2]: 0/1)
-CLUSTER_SWITCH = ("import sys; import hammesh.parallel.cluster as c; setattr(c, sys.argv[1], bool(int(sys.argv[2]))); "
+CLUSTER_SWITCH = ("import sys; import hammesh.parallel.cluster as c; getattr(c, sys.argv[1]); "
+                  "setattr(c, sys.argv[1], bool(int(sys.argv[2]))); "
                   "from hammesh.cli import main; sys.exit(main(sys.argv[3:]))")
 
 IMPORTS_FIRST = ("import sys; import hammesh.parallel.command as c; c.START_BEFORE_IMPORTS = bool(int(sys.argv[1])); "
@@ -311,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
     ap.add_argument("--switch-ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, a boolean of hammesh.parallel.cluster (--switch NAME) on / off")
-    ap.add_argument("--switch", default="KERNELS_IN_WORKERS", help="with --switch-ab: the switch's name")
+    ap.add_argument("--switch", default="NO_HUGEPAGE_ADVICE", help="with --switch-ab: the switch's name")
     a = ap.parse_args(argv)
     if a.switch_ab:
         return switch_ab(a)
@@ -578,7 +579,7 @@ def imports_ab(a) -> int:
 
 def switch_ab(a) -> int:
     """``--switch-ab R --switch NAME``: interleaved fresh processes with the boolean
-    ``hammesh.parallel.cluster.NAME`` on / off (e.g. ``KERNELS_IN_WORKERS``; both run
+    ``hammesh.parallel.cluster.NAME`` on / off (e.g. ``NO_HUGEPAGE_ADVICE``; both run
     through ``cli.main`` in a ``python -c``); the raw call first, for the ratios."""
     area, w, r = _ab_start(a)
     mode = a.modes.split(",")[0]
