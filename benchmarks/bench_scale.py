@@ -185,16 +185,23 @@ EARLY = ("import sys; import hammesh.parallel.command as c, hammesh.parallel.til
 
 #: ``python -c`` running the command with ``command.START_BEFORE_IMPORTS`` (argv[1])
 #: set, 0 or 1
+#: the command with one switch of hammesh.parallel.cluster set (argv[1]: name, argv[2]: 0/1)
+CLUSTER_SWITCH = ("import sys; import hammesh.parallel.cluster as c; getattr(c, sys.argv[1]); "
+                  "setattr(c, sys.argv[1], bool(int(sys.argv[2]))); "
+                  "from hammesh.cli import main; sys.exit(main(sys.argv[3:]))")
+
 IMPORTS_FIRST = ("import sys; import hammesh.parallel.command as c; c.START_BEFORE_IMPORTS = bool(int(sys.argv[1])); "
                  "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
 
 
 def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
-         early: bool | None = None, band: bool = True, start_first: bool | None = None) -> dict:
+         early: bool | None = None, band: bool = True, start_first: bool | None = None,
+         switch: tuple[str, bool] | None = None) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
-        head = ([sys.executable, "-c", IMPORTS_FIRST, str(int(start_first))] if start_first is not None else
+        head = ([sys.executable, "-c", CLUSTER_SWITCH, switch[0], str(int(switch[1]))] if switch is not None else
+                [sys.executable, "-c", IMPORTS_FIRST, str(int(start_first))] if start_first is not None else
                 [sys.executable, "-m", "hammesh"] if early is None else
                 [sys.executable, "-c", EARLY, str(int(early)), str(int(band))])
         cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
@@ -303,7 +310,12 @@ def main(argv: list[str] | None = None) -> int:
                     help="measure without first caching the imported modules' bytecode (cache_bytecode)")
     ap.add_argument("--tile-ab", type=int, metavar="ROUNDS",
                     help="A/B of one tile meshed with the lattice's own triangles / Triangle on its points")
+    ap.add_argument("--switch-ab", type=int, metavar="ROUNDS",
+                    help="A/B of the whole command, a boolean of hammesh.parallel.cluster (--switch NAME) on / off")
+    ap.add_argument("--switch", default="NO_HUGEPAGE_ADVICE", help="with --switch-ab: the switch's name")
     a = ap.parse_args(argv)
+    if a.switch_ab:
+        return switch_ab(a)
     if a.tile_ab:
         return tile_ab(a)
     if a.order_ab:
@@ -563,6 +575,17 @@ def imports_ab(a) -> int:
     w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
     return _interleaved_ab(a.imports_ab, "start_first",
                            lambda first: ours(area, w, a.tiles, mode, a.out_dir, start_first=first))
+
+
+def switch_ab(a) -> int:
+    """``--switch-ab R --switch NAME``: interleaved fresh processes with the boolean
+    ``hammesh.parallel.cluster.NAME`` on / off (e.g. ``NO_HUGEPAGE_ADVICE``; both run
+    through ``cli.main`` in a ``python -c``); the raw call first, for the ratios."""
+    area, w, r = _ab_start(a)
+    mode = a.modes.split(",")[0]
+    _interleaved_ab(a.switch_ab, a.switch, lambda on: ours(area, w, a.tiles, mode, a.out_dir, switch=(a.switch, on)))
+    print(f"raw call: {r['seconds']:.2f} s wall, {r['cpu_seconds']:.2f} s CPU")
+    return 0
 
 
 def startup_ab(a) -> int:

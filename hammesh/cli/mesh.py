@@ -76,6 +76,14 @@ def add_args(p: argparse.ArgumentParser) -> None:
                         "instead of repairing it; the report's 'repairs' lists what was repaired")
 
 
+def spanning_tree(args: argparse.Namespace) -> str:
+    """The ``tree`` these options ask for, the same on the serial and the parallel path:
+    ``--tree`` if given (sparse mode too: ``fishbone`` is its opt-in compact cycle);
+    else incircle mode's fishbone with ``--parts``, and quadtree otherwise (sparse mode
+    keeps its free cover with ``--parts`` alone)."""
+    return args.tree or ("fishbone" if args.parts is not None and args.mode == "incircle" else "quadtree")
+
+
 def run(args: argparse.Namespace) -> int:
     # options hamiltonian() would refuse, refused before minutes of meshing
     params.number("--keep", args.keep, low=0, high=1, what="the local quality rule's factor")
@@ -112,8 +120,7 @@ def run(args: argparse.Namespace) -> int:
         if args.parts is not None:
             params.integer("--parts", args.parts, low=1, what="number of parts")
         finish = partial(partitioned, k=args.parts, renumber=args.renumber)
-    # (sparse mode's fishbone is an opt-in: --parts alone keeps its free cover)
-    tree = args.tree or ("fishbone" if args.parts is not None and args.mode == "incircle" else "quadtree")
+    tree = spanning_tree(args)
     h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, tree=tree, strict=args.strict,
                      finish=finish)
     print(summary(h))

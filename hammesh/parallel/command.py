@@ -153,9 +153,11 @@ def run_parallel(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     """:func:`run_parallel` once the cluster is starting; ``stack`` closes it."""
+    from hammesh.cli.mesh import spanning_tree
     from hammesh.cli.pipeline import Outputs, load_input
     from hammesh.domain import Domain
 
+    tree = spanning_tree(args)  # (as the serial path: fishbone with --parts unless --tree)
     progress = sys.stderr.isatty()
     if args.partitioned:
         from hammesh.parallel.partitioned import check_target
@@ -173,7 +175,7 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
                                 tiles=args.tiles, workers=None if started else args.workers, client=started,
                                 scheduler=args.scheduler, mode=args.mode, keep=args.keep, parts=args.parts,
                                 force=args.force, inputs=inputs, progress=progress,
-                                lattice=not args.no_lattice)
+                                lattice=not args.no_lattice, tree=tree)
         stack.close()  # (the local cluster: closed once the output is in place)
         if args.report is not None:
             write_report(rep, args.report)
@@ -201,7 +203,8 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     client = started if started is not None else None if args.scheduler is None else runner
     h = parallel_hamiltonian(source, min_angle=args.min_angle, max_area=args.max_area, tiles=args.tiles,
                              workers=None if client is not None else args.workers, client=client,
-                             mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice)
+                             mode=args.mode, keep=args.keep, progress=progress, lattice=not args.no_lattice,
+                             tree=tree)
     stack.close()  # (the clusters: the whole mesh is here)
     if args.parts is not None or args.renumber is not None:
         from hammesh.partition import partitioned

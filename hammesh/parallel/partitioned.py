@@ -268,7 +268,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                       max_area: float, tiles: int | None = None, workers: int | None = None, client=None,
                       scheduler: str | None = None, mode: str = "sparse", keep: float = 0.9,
                       parts: int | None = None, force: bool = False, inputs: tuple = (),
-                      progress: bool = False, lattice: bool = True) -> dict:
+                      progress: bool = False, lattice: bool = True, tree: str = "quadtree") -> dict:
     """Mesh ``domain`` on the tiles and write ``DIRECTORY/mesh.pvtu`` + one ``.vtu`` per tile.
 
     Everything is written into a fresh directory beside ``DIRECTORY`` and renamed onto it
@@ -279,7 +279,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
     ``parts``: a ``part`` cell array of ``parts`` balanced stretches of the cycle
     (:func:`stretch_parts`); the report gains ``"partition"`` (sizes, imbalance).
     ``lattice``: as :func:`~hammesh.parallel.run.parallel_hamiltonian` (``False``: no
-    interior lattice, each tile Triangle's own run).
+    interior lattice, each tile Triangle's own run). ``tree``: incircle mode's spanning
+    tree in every tile (:func:`hammesh.hamiltonian`).
 
     Returns the report (counts, seconds, ``index`` path). Pieces are written by the
     worker that made them; the index lists them in the order the cycle enters them.
@@ -314,7 +315,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                 spill_dir = spill
             tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
                               mode=mode, keep=keep, progress=progress_bar(progress, 2), spill_dir=spill_dir,
-                              lattice=lattice)
+                              lattice=lattice, tree=tree)
             comps = tiled.plan.components
             if parts is not None and parts > int(comps.sum()):
                 raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
@@ -350,7 +351,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
         "index": str(out / INDEX_NAME), "pieces": sum(x[1] > 0 for x in done), "triangles": int(sum(x[1] for x in done)),
         "components": comps.tolist(), "verified": True,
         "parallel": {"tiles": d.n_tiles, "workers": n_workers, "repair_rounds": tiled.rounds,
-                     "lattice": lattice, "joins": len(tiled.plan.joins),
+                     "lattice": lattice, "tree": tree,
+                     "joins": len(tiled.plan.joins),
                      "join_swaps": sum(j.swap for j in tiled.plan.joins),
                      "joins_not_whole": tiled.plan.fallback_joins, "tile_cycles": tiled.plan.nodes,
                      "pieces": tiled.plan.pieces, "estimate": d.estimate,

@@ -123,12 +123,13 @@ class TileOutcome:
 
 def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode: str, keep: float,
               keep_mesh: bool = False, spill: str | None = None, check: bool = True,
-              lattice: bool = True) -> TileOutcome:
+              lattice: bool = True, tree: str = "quadtree") -> TileOutcome:
     """Mesh one tile, check its prescribed corners, make it Hamiltonian (certified), take
     its border rows: one task, so a worker goes from Triangle to the cycle without
     waiting for the other tiles (a repair round is rare: then only the mesh's counts
     and the bad corners come back). ``check=False``: no repair check (last round).
-    ``lattice=False``: Triangle alone, no interior lattice (:func:`mesh_tile`)."""
+    ``lattice=False``: Triangle alone, no interior lattice (:func:`mesh_tile`); ``tree``:
+    the spanning tree (incircle) or the opt-in compact cover (sparse, issue 14) (:func:`hammesh.hamiltonian`)."""
     from hammesh.postprocess import hamiltonian
 
     register_sizeof()
@@ -143,7 +144,7 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     if len(bad):
         return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
                            border=None, seconds=sec)
-    ham = hamiltonian(mesh, mode=mode, keep=keep)
+    ham = hamiltonian(mesh, mode=mode, keep=keep, tree=tree)
     t2, c2 = time.perf_counter(), time.process_time()
     border = border_rows(ham, tile, tile.index)
     t3, c3 = time.perf_counter(), time.process_time()
@@ -292,17 +293,21 @@ def since_start() -> float:
 def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles: int, runner=None,
               mode: str = "sparse", keep: float = 0.9, progress: Callable[[str, int], None] | None = None,
               keep_meshes: bool = False, spill_dir: str | os.PathLike[str] | None = None,
-              lattice: bool = True) -> Tiled:
+              lattice: bool = True, tree: str = "quadtree") -> Tiled:
     """Decompose, run every tile's task (mesh, repair check, Hamiltonian), repair, plan the joins.
 
     ``keep_meshes``: the workers keep the tile meshes (for the union certificate);
     ``spill_dir``: the workers write each tile's Hamiltonian mesh there instead of
     keeping it in memory until the plan is made; ``lattice=False``: the tiles are
-    meshed by Triangle alone, without the interior lattice (docs/scale.md).
+    meshed by Triangle alone, without the interior lattice (docs/scale.md); ``tree``:
+    as :func:`hammesh.hamiltonian` takes it, in every tile.
     """
+    from hammesh.parallel.cluster import Starting
+    from hammesh.postprocess.incircle import TREES
+
+    params.choice("tree", tree, TREES)  # (here, not in every tile's task)
     run = runner or LocalRunner()
     note = progress or (lambda what, n: None)
-    from hammesh.parallel.cluster import Starting
 
     t0, s0, p0 = time.perf_counter(), since_start(), time.process_time()
     starting = isinstance(run, Starting)  # (a local cluster starting beside the decomposition)
@@ -319,7 +324,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     def submit(i: int, check: bool = True):
         spill = None if spill_dir is None else os.path.join(str(spill_dir), f"tile_{i:06d}.pickle")
         return run.submit(tile_task, decomp.tiles[i], decomp.n_input, min_angle, max_area, mode, keep, keep_meshes,
-                          spill, check, lattice, pure=False, priority=int(decomp.n_tiles - rank[i]))
+                          spill, check, lattice, tree, pure=False, priority=int(decomp.n_tiles - rank[i]))
 
     handles = [submit(i) for i in np.argsort(rank).tolist()]
     handles = [handles[r] for r in rank.tolist()]  # (tile order again)
@@ -433,7 +438,8 @@ def finish_all(tiled: Tiled, runner=None) -> list:
 
 def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_area: float, tiles: int | None = None,
                          workers: int | None = None, client=None, mode: str = "sparse", keep: float = 0.9,
-                         verify: bool = True, progress: bool = False, lattice: bool = True) -> HamiltonianMesh:
+                         verify: bool = True, progress: bool = False, lattice: bool = True,
+                         tree: str = "quadtree") -> HamiltonianMesh:
     """Mesh ``domain`` as decoupled tiles, make each Hamiltonian, join them; one mesh back.
 
     Parameters
@@ -447,7 +453,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
         Start a local Dask cluster with this many worker processes (``pip install
         hammesh[dask]``); ``client``: use this ``dask.distributed.Client`` instead.
         Neither: every tile in this process, one after the other.
-    mode, keep : as :func:`hammesh.hamiltonian`, per tile.
+    mode, keep, tree : as :func:`hammesh.hamiltonian`, per tile.
     verify : bool
         Run the union certificate (``hammesh.verify`` of the output against the union
         of the tile meshes) on top of the per-tile certificates and the union check.
@@ -472,7 +478,7 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
             tiles = default_tiles(est, n_workers)
         tiled = run_tiles(domain, min_angle=min_angle, max_area=max_area, tiles=tiles, runner=runner,
                           mode=mode, keep=keep, progress=progress_bar(progress, 1), keep_meshes=verify,
-                          lattice=lattice)
+                          lattice=lattice, tree=tree)
         t1 = time.perf_counter()
         pieces = runner.gather(finish_all(tiled, runner))
         meshes = runner.gather([runner.submit(_outcome_mesh, h, pure=False, **on_holder(runner, h))
@@ -494,7 +500,8 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
     t3 = time.perf_counter()
     report["parallel"] = {
         "tiles": tiled.decomposition.n_tiles, "workers": n_workers, "repair_rounds": tiled.rounds,
-        "lattice": lattice, "joins": len(tiled.plan.joins), "joins_not_whole": tiled.plan.fallback_joins,
+        "lattice": lattice, "tree": tree,
+        "joins": len(tiled.plan.joins), "joins_not_whole": tiled.plan.fallback_joins,
         "join_swaps": sum(j.swap for j in tiled.plan.joins),
         "tile_cycles": tiled.plan.nodes, "pieces": tiled.plan.pieces,
         "estimate": tiled.decomposition.estimate, "mesh_triangles": int(tiled.mesh_triangles.sum()),

@@ -13,7 +13,8 @@ from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
-           "LATTICE_BAND", "LATTICE_BLOCK", "LATTICE_ORDER", "lattice_blocks", "load_tile_kernels"]
+           "LATTICE_BAND", "LATTICE_BLOCK", "LATTICE_ORDER", "lattice_blocks", "load_tile_kernels",
+           "outline_hole_points"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -142,7 +143,52 @@ class LatticeGrid:
     dy: float
 
     def coords(self, j: np.ndarray, i: np.ndarray) -> np.ndarray:
-        return np.stack([self.x0 + (i + 0.5 * (j & 1)) * self.h, self.y0 + j * self.dy], axis=1)
+        out = np.empty((len(j), 2))
+        self.coords_into(j, i, out)
+        return out
+
+    def coords_into(self, j: np.ndarray, i: np.ndarray, out: np.ndarray) -> None:
+        """:meth:`coords` written into ``out`` (``(len(j), 2)`` float64)."""
+        x, y = out[:, 0], out[:, 1]
+        np.bitwise_and(j, 1, out=y, casting="unsafe")  # (y as scratch: the row's half step)
+        np.multiply(y, 0.5, out=x)
+        np.add(x, i, out=x)
+        np.multiply(x, self.h, out=x)
+        np.add(x, self.x0, out=x)
+        np.multiply(j, self.dy, out=y)
+        np.add(y, self.y0, out=y)
+
+
+def outline_hole_points(grid: LatticeGrid, corners: np.ndarray, out_t: np.ndarray, outline: np.ndarray,
+                        nx: int) -> np.ndarray:
+    """Centroid of one lattice triangle on each closed loop of the lattice's outline
+    (its edges ``outline``, the lattice triangles ``out_t`` they bound): a point inside
+    every piece of the lattice, for Triangle's holes (a piece with holes or pinched
+    loops gets several: Triangle eats the same piece from each).
+
+    Why not one per piece by a flood fill over the lattice (the order before session
+    14): that pass visited every lattice triangle (~1M per tile, ~18 % of the band
+    step's CPU) for a handful of points; the outline has a few thousand edges.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    if not len(outline):
+        return np.zeros((0, 2))
+    # the loops, joined through points with two outline edges only: at a point where
+    # pieces touch (four or six edges) the loops are cut (each edge end its own node),
+    # so no two pieces are ever one loop; a loop cut into arcs gets a point per arc
+    ends = outline.ravel()
+    deg = np.bincount(ends)
+    node = np.where(deg[ends] == 2, ends, len(deg) + np.arange(len(ends)))
+    nodes, inv = np.unique(node, return_inverse=True)
+    inv = inv.reshape(-1, 2)
+    u = len(nodes)
+    graph = coo_matrix((np.ones(len(inv), np.int8), (inv[:, 0], inv[:, 1])), shape=(u, u))
+    _, lab = connected_components(graph, directed=False)
+    _, first = np.unique(lab[inv[:, 0]], return_index=True)
+    c = corners[out_t[first]].ravel()
+    return grid.coords(c // nx, c % nx).reshape(-1, 3, 2).mean(axis=1)
 
 
 def lattice_grid(tile: Tile, max_area: float) -> LatticeGrid | None:
@@ -247,18 +293,14 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
     interior = incident == 6  # (every triangle around it kept: not on the outline)
     band_ids = np.flatnonzero(keep.ravel() & ~interior)
     inner_ids = np.flatnonzero(interior)
-    # one hole point inside each edge-connected piece of the lattice: the centroid of
-    # its first triangle (the pieces: dual components, no segment to stop at)
-    label = np.empty(count, np.int64)
-    seeds = np.empty(count, np.int64)
-    pieces = label_pieces_into(corners, lnbr, np.zeros(0, np.int64), np.zeros(nx * ny, np.bool_), label, seeds)
-    first = corners[seeds[:pieces]].ravel()
-    hole_xy = grid.coords(first // nx, first % nx).reshape(-1, 3, 2).mean(axis=1)
     k, nb = len(tile.vertices), len(band_ids)
     pid = np.full(nx * ny, -1, np.int64)
     pid[band_ids] = k + np.arange(nb)
     out_t, out_s = np.nonzero(lnbr < 0)  # the outline, from the lattice's side
     outline = np.stack([pid[corners[out_t, out_s]], pid[corners[out_t, (out_s + 1) % 3]]], axis=1)
+    # a hole point inside every piece of the lattice: the centroid of one outline
+    # triangle per loop of the outline
+    hole_xy = outline_hole_points(grid, corners, out_t, outline, nx)
     verts = np.concatenate([tile.vertices, grid.coords(band_ids // nx, band_ids % nx)])
     data = {
         "vertices": np.ascontiguousarray(verts, dtype=np.float64),
@@ -298,9 +340,17 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
         return None
     mb = len(bt)
     pid[inner_ids] = n_out + np.arange(len(inner_ids))
-    points = np.concatenate([bp, grid.coords(inner_ids // nx, inner_ids % nx)])
-    tri = np.concatenate([bt, pid[corners]])
-    nbr = np.concatenate([bnbr, np.where(lnbr >= 0, lnbr + mb, -1)])
+    # (the whole tile's arrays filled in place: no temporary of their size)
+    points = np.empty((n_out + len(inner_ids), 2))
+    points[:n_out] = bp
+    grid.coords_into(inner_ids // nx, inner_ids % nx, points[n_out:])
+    tri = np.empty((mb + count, 3), np.int64)
+    tri[:mb] = bt
+    np.take(pid, corners, out=tri[mb:])
+    nbr = np.empty((mb + count, 3), np.int64)
+    nbr[:mb] = bnbr
+    np.add(lnbr, mb, out=nbr[mb:])
+    nbr[mb:][lnbr < 0] = -1
     lt, ls = out_t[order[pos]], out_s[order[pos]]
     nbr[br, bs] = lt + mb
     nbr[mb + lt, ls] = br
@@ -309,12 +359,19 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
     user = ~(((segs >= k) & (segs < k + nb)).all(axis=1))  # the outline is no segment of the domain
     segs, marks = segs[user], marks[user]
     attrs = np.zeros((len(tri), 0))
-    if len(tile.region_triangles):
+    if len(tile.region_triangles) and len(np.unique(tile.region_attribute)) == 1:
+        attrs = np.full((len(tri), 1), tile.region_attribute[0])  # (the tile lies in one region)
+    elif len(tile.region_triangles):
         # each piece of the lattice lies in one region (no segment comes near it): one
         # location per piece; the band's own pieces (its neighbours stop at the
         # outline) by the flood fill, over the band only (not the whole tile's rows)
         inside = region_attributes(tile, bp, bt, bnbr, segs)
-        where = locate_in_triangles(tile.region_points, tile.region_triangles, hole_xy)
+        label = np.empty(count, np.int64)
+        seeds = np.empty(count, np.int64)
+        pieces = label_pieces_into(corners, lnbr, np.zeros(0, np.int64), np.zeros(nx * ny, np.bool_), label, seeds)
+        first = corners[seeds[:pieces]].ravel()
+        where = locate_in_triangles(tile.region_points, tile.region_triangles,
+                                    grid.coords(first // nx, first % nx).reshape(-1, 3, 2).mean(axis=1))
         if (where < 0).any():
             raise MeshingError(f"tile {tile.index}: a piece of the lattice lies outside the coarse mesh (regions)")
         attrs = np.concatenate([inside, tile.region_attribute[where][label]])[:, None]
@@ -386,6 +443,13 @@ def load_tile_kernels() -> Mesh:
     from hammesh.domain import Domain
     from hammesh.parallel.tiles import decompose
 
+    from hammesh.parallel._kernels import label_pieces_into
+
     area = 1e-3
     d = decompose(Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30, max_area=area, n_tiles=1)
-    return mesh_tile(d.tiles[0], 30, area)
+    m = mesh_tile(d.tiles[0], 30, area)
+    # (the regions' flood fill, which a tile of one region does not run)
+    label = np.empty(m.n_triangles, np.int64)
+    label_pieces_into(m.triangles, m.neighbors, np.zeros(0, np.int64), np.zeros(m.n_points, np.bool_), label,
+                      np.empty(m.n_triangles, np.int64))
+    return m

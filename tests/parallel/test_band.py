@@ -115,3 +115,39 @@ def test_band_that_fails_its_check_falls_back_to_the_lattice_points(monkeypatch)
     m = tm.mesh_tile(t, 30, 1e-4)
     assert m.info.get("lattice") is None
     assert np.isin(tm.lattice_points(t, 1e-4).view("f8,f8").ravel(), m.points.view("f8,f8").ravel()).all()
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(ny=st.integers(2, 12), nx=st.integers(2, 12), seed=st.integers(0, 2**32 - 1), fill=st.floats(0.3, 1.0))
+def test_outline_hole_points_fall_in_every_piece_of_the_lattice(ny, nx, seed, fill):
+    """Triangle's hole points for the lattice (one per loop of its outline): each is the
+    centroid of a lattice triangle, and every piece of the lattice (its triangles'
+    edge-connected components, found here by a plain walk) holds at least one."""
+    keep = np.random.default_rng(seed).random((ny, nx)) < fill
+    index = np.empty((ny - 1, 2 * (nx - 1)), np.int64)
+    count = lattice_triangles_into(keep, 1, tm.lattice_blocks(ny - 1, nx - 1, 1), index)
+    if count == 0:
+        return
+    corners, nbr, inc = np.empty((count, 3), np.int64), np.empty((count, 3), np.int64), np.empty(nx * ny, np.int64)
+    lattice_mesh_into(index, nx, corners, nbr, inc)
+    grid = tm.LatticeGrid(keep=keep, x0=0.0, y0=0.0, h=1.0, dy=np.sqrt(3) / 2)
+    out_t, out_s = np.nonzero(nbr < 0)
+    outline = np.stack([corners[out_t, out_s], corners[out_t, (out_s + 1) % 3]], axis=1)
+    holes = tm.outline_hole_points(grid, corners, out_t, outline, nx)
+    j, i = np.divmod(np.arange(nx * ny), nx)
+    centroids = np.stack([i + 0.5 * (j & 1), j * np.sqrt(3) / 2], axis=1)[corners].mean(axis=1)
+    dist = np.linalg.norm(holes[:, None] - centroids[None], axis=2)
+    assert np.isclose(dist.min(axis=1), 0).all()  # each one a lattice triangle's centroid
+    holder = dist.argmin(axis=1)
+    piece = np.full(count, -1)
+    for seed_t in range(count):
+        if piece[seed_t] >= 0:
+            continue
+        piece[seed_t], todo = seed_t, [seed_t]
+        while todo:
+            t = todo.pop()
+            for u in nbr[t]:
+                if u >= 0 and piece[u] < 0:
+                    piece[u] = seed_t
+                    todo.append(u)
+    assert set(np.unique(piece)) <= set(piece[holder].tolist())
