@@ -61,10 +61,7 @@ def read_obj(path: str | Path) -> RawMesh:
     try:
         v = np.flatnonzero(kinds == 1)
         row = v
-        counts = field_counts(buf, after[v], lines.ends[v])
-        short = np.flatnonzero(counts < 3)
-        if len(short):
-            raise BadRecord(int(short[0]), "a vertex needs x y z")
+        counts = field_counts(buf, after[v], lines.ends[v], 3, "a vertex needs x y z")
         values = parse_floats(buf, after[v], lines.ends[v], counts)
         first = np.cumsum(counts) - counts
         points = values[first[:, None] + np.arange(3)]
@@ -72,10 +69,7 @@ def read_obj(path: str | Path) -> RawMesh:
         defined = np.cumsum(kinds == 1) - (kinds == 1)  # vertices read before each line
         f = np.flatnonzero(kinds == 2)
         row = f
-        fcounts = field_counts(buf, after[f], lines.ends[f])
-        few = np.flatnonzero(fcounts < 3)
-        if len(few):
-            raise BadRecord(int(few[0]), "a face needs at least 3 vertices")
+        fcounts = field_counts(buf, after[f], lines.ends[f], 3, "a face needs at least 3 vertices")
         faces = index_lists(buf, after[f], lines.ends[f], fcounts, defined=defined[f])
         ln = np.flatnonzero(kinds == 3)
         row = ln

@@ -87,10 +87,7 @@ def read_off(path: str | Path) -> RawMesh:
     starts, ends = lines.starts, lines.ends
     row = v
     try:
-        vcounts = field_counts(buf, starts[v], ends[v])
-        short = np.flatnonzero(vcounts < 3)
-        if len(short):
-            raise BadRecord(int(short[0]), "a vertex line is not 'x y z'")
+        vcounts = field_counts(buf, starts[v], ends[v], 3, "a vertex line is not 'x y z'")
         values = parse_floats(buf, starts[v], ends[v], vcounts)
         first = np.cumsum(vcounts) - vcounts
         points = values[first[:, None] + np.arange(3)]

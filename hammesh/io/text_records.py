@@ -74,12 +74,22 @@ def first_word_codes(buf: np.ndarray, lines: Lines, words: tuple[bytes, ...]) ->
     return codes, after
 
 
-def field_counts(buf: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """Whitespace-separated fields in each range, ``int64``."""
+def field_counts(buf: np.ndarray, starts: np.ndarray, ends: np.ndarray, at_least: int = 0,
+                 what: str = "") -> np.ndarray:
+    """Whitespace-separated fields in each range, ``int64``.
+
+    Raises
+    ------
+    BadRecord
+        A range has fewer than ``at_least`` fields (``what`` says what it needs).
+    """
     from hammesh.io._text_kernels import count_fields_into
 
     counts = np.empty(len(starts), np.int64)
     count_fields_into(buf, np.ascontiguousarray(starts), np.ascontiguousarray(ends), counts)
+    short = np.flatnonzero(counts < at_least)
+    if len(short):
+        raise BadRecord(int(short[0]), what)
     return counts
 
 

@@ -105,19 +105,6 @@ def test_obj_extra_vertex_columns_on_some_lines_are_named_not_dropped(tmp_path):
     assert "vertex fields beyond x y z (on some v records only)" in m.info["not_carried"]
 
 
-@pytest.mark.parametrize("text, message", [
-    ("v 0 0\nf 1 1 1\n", r"m\.obj:1: a vertex needs x y z"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", r"m\.obj:4: a face needs at least 3 vertices"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", r"m\.obj:4: vertex index is not an integer: 'x'"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", r"m\.obj:4: vertex index 0 refers to no vertex"),
-    ("v 0 0 0\nv 1 0 zz\nv 0 1 0\nf 1 2 3\n", r"m\.obj:2: a field is not a number"),
-])
-def test_obj_bad_records_are_named_with_their_line(tmp_path, text, message):
-    path = tmp_path / "m.obj"
-    path.write_text(text)
-    with pytest.raises(FileFormatError, match=message):
-        read_mesh(path)
-
 
 @st.composite
 def off_texts(draw) -> tuple[str, np.ndarray, list[list[int]], np.ndarray | None]:
@@ -169,16 +156,21 @@ def test_coff_vertex_colours_and_face_colours_reach_the_output(tmp_path):
     assert any(k.startswith("color") for k in written.cell_data) and "color" in written.point_data
 
 
-@pytest.mark.parametrize("text, message", [
-    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", r"m\.off:6: face declares 4 corners, lists 3"),
-    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 x\n3 0 1 2\n", r"m\.off:5: a field is not a number"),
-    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n", r"m\.off:6: vertex index -2 refers to no vertex"),
-    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n", r"m\.off:6: a face line is not 'k i0 .. ik-1'"),
-    ("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", r"declares 3 vertices and 2 faces"),
-    ("4OFF\n1 0 0\n0 0 0 0\n", r"4D and n-dimensional"),
+@pytest.mark.parametrize("suffix, text, message", [
+    (".obj", "v 0 0\nf 1 1 1\n", r"m\.obj:1: a vertex needs x y z"),
+    (".obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", r"m\.obj:4: a face needs at least 3 vertices"),
+    (".obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", r"m\.obj:4: vertex index is not an integer: 'x'"),
+    (".obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", r"m\.obj:4: vertex index 0 refers to no vertex"),
+    (".obj", "v 0 0 0\nv 1 0 zz\nv 0 1 0\nf 1 2 3\n", r"m\.obj:2: a field is not a number"),
+    (".off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", r"m\.off:6: face declares 4 corners, lists 3"),
+    (".off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 x\n3 0 1 2\n", r"m\.off:5: a field is not a number"),
+    (".off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n", r"m\.off:6: vertex index -2 refers to no vertex"),
+    (".off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n", r"m\.off:6: a face line is not 'k i0 .. ik-1'"),
+    (".off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", r"declares 3 vertices and 2 faces"),
+    (".off", "4OFF\n1 0 0\n0 0 0 0\n", r"4D and n-dimensional"),
 ])
-def test_off_bad_lines_are_named_with_their_line(tmp_path, text, message):
-    path = tmp_path / "m.off"
+def test_bad_records_are_named_with_their_line(tmp_path, suffix, text, message):
+    path = tmp_path / f"m{suffix}"
     path.write_text(text)
     with pytest.raises(FileFormatError, match=message):
         read_mesh(path)
