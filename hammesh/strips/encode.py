@@ -53,7 +53,7 @@ from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
-from hammesh.strips.rows import BAND_MERGE, ROW_AXES, band_frame, band_layout, row_path_cover
+from hammesh.strips.rows import BAND_DRIFT, BAND_MERGE, ROW_AXES, band_frame, band_layout, band_reach, row_path_cover
 
 __all__ = [
     "METHODS",
@@ -307,11 +307,15 @@ def _oriented_local(
         # inside the columns (the dual cut at their borders) had fewer pieces but its end
         # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
         # against 1.413 / 0.647 this way (docs/strips.md, sessions 12-13)
-        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts, BAND_MERGE)
-    elif cache is not None:
-        # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
-        starts = split_paths(starts, max(1, int(piece * cache)))
-    order, _ = orient_paths(tri, twin, order, starts)
+        # (session 14: cuts moved to save swaps, cut again where a piece drifts across rows,
+        # each piece turned along the rows on a tie; band_layout turns the pieces itself)
+        frame = band_frame(dual.points, tri, cache, ROW_AXES[rows])
+        order, starts = band_layout(frame, tri, twin, order, starts, BAND_MERGE, band_reach(cache), BAND_DRIFT)
+    else:
+        if cache is not None:
+            # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
+            starts = split_paths(starts, max(1, int(piece * cache)))
+        order, _ = orient_paths(tri, twin, order, starts)
     if cache is not None and not bands:
         order, starts = fifo_strip_order(tri, twin, order, starts, len(dual.points), cache)
     return dual, tri, twin, order, starts, ids

@@ -24,11 +24,12 @@ import numpy as np
 
 from collections import namedtuple
 
+from hammesh.strips._band_kernels import equal_pivots_into, level_cuts_into, move_cuts, orient_pieces
 from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
-__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "path_columns", "parallel_edges", "row_links",
-           "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "BAND_DRIFT", "band_reach", "path_columns",
+           "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
 
 #: Directions (radians from the x axis) the row cover is tried along.
 ROW_AXES = (0.0, np.pi / 2)
@@ -104,9 +105,10 @@ def band_slack(cache: int) -> int:
 
 
 #: :func:`band_frame`'s result: each triangle's ``column`` (``(m,)`` int64, counted across
-#: the rows) and ``height`` (its centroid across the rows), or ``None`` for both where the
-#: coordinates give no finite frame.
-BandFrame = namedtuple("BandFrame", ["column", "height"])
+#: the rows), ``height`` and ``along`` (its centroid across and along the rows) and the
+#: ``row_height`` of the mesh (a mean edge's equilateral height), or ``None`` for all four
+#: where the coordinates give no finite frame.
+BandFrame = namedtuple("BandFrame", ["column", "height", "along", "row_height"])
 
 
 def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0.0) -> BandFrame:
@@ -125,8 +127,8 @@ def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0
         width = max(1.0, (int(cache) - band_slack(cache)) / 2) * edge
         x = c[:, 0]
         if not (len(x) and width > 0 and np.isfinite(width) and np.isfinite(c).all()):
-            return BandFrame(None, None)
-        return BandFrame(np.floor((x - x.min()) / width).astype(np.int64), c[:, 1])
+            return BandFrame(None, None, None, None)
+        return BandFrame(np.floor((x - x.min()) / width).astype(np.int64), c[:, 1], x, edge * np.sqrt(3) / 2)
 
 
 #: A path's run of fewer triangles than this in one column stays with the path's run
@@ -170,28 +172,84 @@ def path_columns(column: np.ndarray, order: np.ndarray, starts: np.ndarray, merg
     return np.repeat(new, ln)
 
 
-def band_layout(frame: BandFrame, order: np.ndarray, starts: np.ndarray, merge: int = 0) -> PathCover:
-    """Paths sent column by column (left to right), inside a column by the mean height of
-    their centroids, alternately upwards and downwards (a serpentine, so the first rows of a
-    column meet the last ones of the one before); a path crossing a column border is cut
-    there, unless it has fewer than ``merge`` triangles on one side (:func:`path_columns`).
-    Each row then finds the vertices of its lower side in the FIFO, loaded by the
-    row before.  ``frame``: :func:`band_frame` of the rows ``order`` refers to.  Returns the
-    new ``(order, starts)`` (the caller turns each piece in its better direction).
+#: A piece is cut where its triangles' centroids have drifted more than this many row
+#: heights across the rows from its first triangle's (:func:`band_layout`): the end moves
+#: join rows into staircases, and a piece climbing three or more rows inside a column
+#: reloaded ~8 vertices its rows' neighbours had loaded (q30 square 10k, FIFO 32: 30
+#: pieces, 920 triangles, 7.9 reloads each against ~1 for one-row pieces).  Cut at 3 rows:
+#: FIFO 32 ipt / ACMR 1.3012 / 0.630 with :func:`band_reach`, at 2.5: 1.3047 / 0.629, at 4:
+#: 1.2991 / 0.645 (docs/strips.md, session 14).
+BAND_DRIFT = 3.0
+
+
+def band_reach(cache: int) -> int:
+    """Positions a cut of :func:`band_layout` may move along its path to save indices:
+    ``max(1, min(4, cache // 8))``.
+
+    A cut at a swap removes the swap (the two pieces' ends do not turn), so moving the
+    column and drift cuts by a few triangles saves ~0.02 indices per triangle (q30 square
+    10k, FIFO 32, reach 4: 1.3196 → 1.2978); the triangles it moves across a column border
+    are drawn in the other column's pass and reload a vertex or two there (ACMR 0.633 →
+    0.652 at reach 4 without the drift cuts; 0.641 at 1; at FIFO 16 reach 4 gives 0.710
+    against 0.691 at 2), hence less reach for smaller FIFOs (session 14).
     """
+    return max(1, min(4, int(cache) // 8))
+
+
+def band_layout(
+    frame: BandFrame,
+    tri: np.ndarray,
+    twin: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    merge: int = 0,
+    reach: int = 0,
+    drift: float = 0.0,
+) -> PathCover:
+    """Pieces of the paths sent column by column (left to right), inside a column by the mean
+    height of their centroids, alternately upwards and downwards (a serpentine, so the first
+    rows of a column meet the last ones of the one before), each in its cheaper direction.
+
+    A path is cut where it crosses a column border, unless it has fewer than ``merge``
+    triangles on one side (:func:`path_columns`), and (``drift > 0``) where its centroids
+    leave its last cut's height by more than ``drift`` row heights
+    (:func:`~hammesh.strips._band_kernels.level_cuts_into`); then each of those cuts moves
+    by at most ``reach`` triangles along its path to where its two pieces cost fewest
+    indices (:func:`~hammesh.strips._band_kernels.move_cuts`).  A piece's column is its
+    middle triangle's.  Each piece is then turned to the direction with fewer swaps, on a
+    tie to run along the rows' axis (:func:`~hammesh.strips._band_kernels.orient_pieces`):
+    each row finds the vertices of its lower side in the FIFO, loaded by the row before, in
+    the order it loaded them.  ``frame``: :func:`band_frame` of the rows ``tri``
+    (``twin`` its pairing) that ``order`` refers to.  Returns the new ``(order, starts)``.
+    """
+    order = np.asarray(order, np.int64)
+    starts = np.asarray(starts, np.int64)
     if frame.column is None:
         return PathCover(order, starts)
+    n = len(order)
     col = path_columns(frame.column, order, starts, merge)
-    cut = np.zeros(len(order) + 1, np.bool_)
+    cut = np.zeros(n + 1, np.bool_)
     cut[starts] = True
     cut[1:-1] |= col[1:] != col[:-1]
-    new_starts = np.flatnonzero(cut)
-    lo, lens = new_starts[:-1], np.diff(new_starts)
+    bounds = np.flatnonzero(cut)
+    if drift > 0:
+        out = np.empty(n + 1, np.int64)
+        bounds = out[: level_cuts_into(frame.height, order, bounds, float(drift) * frame.row_height, out)]
+    twin3 = np.asarray(twin).reshape(-1, 3)
+    if reach > 0 and len(bounds) > 2:
+        natural = np.zeros(n + 1, np.bool_)
+        natural[starts] = True
+        cum = np.empty(n + 1, np.int64)
+        equal_pivots_into(tri, twin3, order, starts, cum)
+        bounds = bounds.copy()
+        move_cuts(tri, twin3, order, cum, bounds, ~natural[bounds], int(reach))
+    lo, lens = bounds[:-1], np.diff(bounds)
     height = np.add.reduceat(frame.height[order], lo) / lens
-    pcol = col[lo]
+    pcol = col[lo + lens // 2]
     pick = np.lexsort((np.where(pcol % 2 == 0, height, -height), pcol))  # serpentine
-    n = lens[pick]
-    new_starts = np.r_[0, np.cumsum(n)].astype(np.int64)
-    # piece j's triangles: order[lo[pick[j]] + i], i < n[j], placed from new_starts[j]
-    at = np.repeat(lo[pick] - new_starts[:-1], n) + np.arange(len(order))
-    return PathCover(np.asarray(order, np.int64)[at], new_starts)
+    k = lens[pick]
+    new_starts = np.r_[0, np.cumsum(k)].astype(np.int64)
+    # piece j's triangles: order[lo[pick[j]] + i], i < k[j], placed from new_starts[j]
+    new = order[np.repeat(lo[pick] - new_starts[:-1], k) + np.arange(n)]
+    orient_pieces(tri, twin3, frame.along, new, new_starts)
+    return PathCover(new, new_starts)
