@@ -36,6 +36,7 @@ def test_bench_strips_speed_quick_runs():
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "q30 square 10k" in proc.stdout and "interleaved calls" in proc.stdout
     assert "fast 1st" in proc.stdout and "failed" not in proc.stdout
+    assert "modes interleaved per round" in proc.stdout
 
 
 @pytest.mark.slow
