@@ -17,7 +17,8 @@ import numpy as np
 from hammesh.strips._numba import kernel, loop_helper
 from hammesh.strips._path_kernels import edge_to_neighbour, starts_with_swap, vertex_between
 
-__all__ = ["equal_pivots_into", "piece_cost", "level_cuts_into", "move_cuts", "orient_pieces"]
+__all__ = ["equal_pivots_into", "piece_cost", "level_cuts_into", "move_cuts", "orient_pieces", "chain_cost",
+           "join_heading_pieces"]
 
 
 @loop_helper
@@ -125,3 +126,121 @@ def orient_pieces(tri, twin3, along, order, starts):
                 order[b - i] = x
             flipped += 1
     return flipped
+
+
+@loop_helper
+def _along_chain(link, t, prev):
+    """The chain neighbour of ``t`` that is not ``prev`` (-1 at an end); ``link`` ``(m, 2)``
+    holds each triangle's (at most two) chain neighbours in either slot, -1 for none."""
+    a = link[t, 0]
+    return link[t, 1] if a == prev else a
+
+
+@loop_helper
+def chain_cost(tri, twin3, link, start):
+    """:func:`piece_cost` of the chain of ``link`` that ends at ``start`` (walked from it)."""
+    k = 0
+    prev = np.int64(-1)
+    cur = np.int64(start)
+    swaps = 0
+    last_pivot = np.int64(-1)
+    t0 = t1 = t2 = np.int64(-1)
+    a = b = c = np.int64(-1)
+    while cur >= 0:
+        nxt = np.int64(_along_chain(link, cur, prev))
+        if prev >= 0 and nxt >= 0:
+            pv = vertex_between(tri, cur, edge_to_neighbour(twin3, cur, prev), edge_to_neighbour(twin3, cur, nxt))
+            if k >= 2 and pv == last_pivot:
+                swaps += 1
+            last_pivot = pv
+        if k == 0:
+            t0 = cur
+        elif k == 1:
+            t1 = cur
+        elif k == 2:
+            t2 = cur
+        a, b, c = b, c, cur
+        k += 1
+        prev, cur = cur, nxt
+    if k < 3:
+        return k + 2
+    both = starts_with_swap(tri, twin3, t0, t1, t2) and starts_with_swap(tri, twin3, c, b, a)
+    return k + 2 + swaps + np.int64(both)
+
+
+@kernel
+def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, cost, out_order, out_bounds):
+    """Join pieces of one column whose ends are dual neighbours, heading the same way along
+    the rows, where the joined piece costs fewer indices than the two and a restart; returns
+    how many pieces are left, written path after path into ``out_order`` / ``out_bounds``.
+
+    ``column``: each triangle's column; ``along``: its centroid along the rows.  The ends
+    are visited in ``order``'s order; a piece may join at both ends, and again once joined.
+    No U-turn: with both pieces of two or more triangles, the first must run towards the
+    join along the rows and the second away from it (a U-turn would send the second row
+    back over the first and reload its far side).  Work arrays (``m`` triangles): ``link``
+    ``(m, 2)``, ``other``, ``cost`` ``(m,)``.
+    """
+    m = order.shape[0]
+    K = bounds.shape[0] - 1
+    for i in range(m):
+        link[i, 0] = -1
+        link[i, 1] = -1
+    for p in range(K):
+        a, b = bounds[p], bounds[p + 1]
+        for i in range(a, b - 1):
+            link[order[i], 1] = order[i + 1]
+            link[order[i + 1], 0] = order[i]
+        other[order[a]] = order[b - 1]
+        other[order[b - 1]] = order[a]
+    for p in range(K):
+        c = chain_cost(tri, twin3, link, order[bounds[p]])
+        cost[order[bounds[p]]] = c
+        cost[order[bounds[p + 1] - 1]] = c
+    for p in range(K):
+        for end in range(2):
+            e = order[bounds[p]] if end == 0 else order[bounds[p + 1] - 1]
+            for k in range(3):
+                if link[e, 0] >= 0 and link[e, 1] >= 0:
+                    break  # no longer an end
+                h = twin3[e, k]
+                if h < 0:
+                    continue
+                u = h // 3
+                if (link[u, 0] >= 0 and link[u, 1] >= 0) or other[e] == u or column[u] != column[e]:
+                    continue
+                fx, fy = other[e], other[u]
+                if fx != e and fy != u and (along[e] - along[fx]) * (along[fy] - along[u]) < 0:
+                    continue  # a U-turn
+                se = 0 if link[e, 0] < 0 else 1
+                su = 0 if link[u, 0] < 0 else 1
+                link[e, se] = u
+                link[u, su] = e
+                joined = chain_cost(tri, twin3, link, fx)
+                if joined < cost[e] + cost[u] + 1:
+                    other[fx] = fy
+                    other[fy] = fx
+                    cost[fx] = joined
+                    cost[fy] = joined
+                else:
+                    link[e, se] = -1
+                    link[u, su] = -1
+    # chains, in the order their first-met end appears in ``order``
+    n = 0
+    S = 0
+    out_bounds[0] = 0
+    for i in range(m):
+        t = order[i]
+        if (link[t, 0] >= 0 and link[t, 1] >= 0) or cost[t] < 0:
+            continue
+        prev = np.int64(-1)
+        cur = np.int64(t)
+        while cur >= 0:
+            out_order[n] = cur
+            n += 1
+            cost[cur] = -1  # emitted
+            nxt = np.int64(_along_chain(link, cur, prev))
+            prev, cur = cur, nxt
+        S += 1
+        out_bounds[S] = n
+    return S

@@ -308,9 +308,10 @@ def _oriented_local(
         # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
         # against 1.413 / 0.647 this way (docs/strips.md, sessions 12-13)
         # (session 14: cuts moved to save swaps, cut again where a piece drifts across rows,
-        # each piece turned along the rows on a tie; band_layout turns the pieces itself)
+        # pieces heading the same way joined, each turned along the rows on a tie; band_layout
+        # turns the pieces itself)
         frame = band_frame(dual.points, tri, cache, ROW_AXES[rows])
-        order, starts = band_layout(frame, tri, twin, order, starts, BAND_MERGE, band_reach(cache), BAND_DRIFT)
+        order, starts = band_layout(frame, tri, twin, order, starts, BAND_MERGE, band_reach(cache), BAND_DRIFT, join=True)
     else:
         if cache is not None:
             # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)

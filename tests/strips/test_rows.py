@@ -160,12 +160,11 @@ def _plain_piece_cost(dual, piece):
        st.integers(1, 4), st.sampled_from([0.0, 1.0, 3.0]))
 @settings(max_examples=25, deadline=None)
 def test_band_layout_moves_cuts_to_the_cheapest_place(seed, n, N, angle, reach, drift):
-    """With moved cuts and drift cuts: whole runs of paths, column by column of their middle
-    triangle, each piece in a direction with no more indices than the other (the writer's own
-    count), the compiled piece cost equal to the writer's, and (no drift cuts) every cut
-    inside a path within ``reach`` of a column border."""
+    """With moved cuts and drift cuts: whole runs of paths, each piece in a direction with
+    no more indices than the other (the writer's own count), the compiled piece cost equal
+    to the writer's, and (no drift cuts) every cut inside a path within ``reach`` of a
+    column border."""
     from hammesh.strips._band_kernels import equal_pivots_into, piece_cost
-    from hammesh.strips.encode import restart_strip
     from hammesh.strips.rows import band_frame, band_layout, path_columns
 
     dual = dual_mesh(delaunay_mesh(seed, n))
@@ -175,8 +174,6 @@ def test_band_layout_moves_cuts_to_the_cheapest_place(seed, n, N, angle, reach, 
     assert sorted(new.tolist()) == list(range(dual.n_triangles))
     pieces = [new[a:b] for a, b in zip(ns[:-1], ns[1:])]
     _assert_runs_of_paths(order, starts, pieces)
-    column = np.empty(dual.n_triangles, np.int64)
-    column[order] = path_columns(frame.column, order, starts, 2)
     twin3 = dual.twin.reshape(-1, 3)
     cum = np.empty(len(order) + 1, np.int64)
     equal_pivots_into(dual.triangles, twin3, order, starts, cum)
@@ -186,16 +183,55 @@ def test_band_layout_moves_cuts_to_the_cheapest_place(seed, n, N, angle, reach, 
         lo = int(where[p].min())
         plain = _plain_piece_cost(dual, p)
         assert piece_cost(dual.triangles, twin3, order, cum, lo, lo + len(p)) == plain
-        sent = restart_strip(dual.triangles, dual.twin, np.asarray(p, np.int64), np.array([0, len(p)], np.int64), RESTART_INDEX)
-        assert len(sent.indices) == plain  # sent in a cheapest direction
-    # every cut inside a path lies within `reach` of a column border or a drift cut's place
-    raw_cuts = set()
+        assert _sent_cost(dual, p) == plain  # sent in a cheapest direction
+    column = np.empty(dual.n_triangles, np.int64)
+    column[order] = path_columns(frame.column, order, starts, 2)
     pc = column[order]
+    raw_cuts = set()
     for a, b in zip(starts[:-1], starts[1:]):
         raw_cuts.update(int(i) for i in range(a + 1, b) if pc[i] != pc[i - 1])
     cuts = {int(where[p].min()) for p in pieces} - set(starts.tolist())
     if drift == 0:
         assert all(min((abs(c - r) for r in raw_cuts), default=reach + 1) <= reach for c in cuts)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(30, 400), st.sampled_from([8, 16, 32]), st.sampled_from(ROW_AXES))
+@settings(max_examples=25, deadline=None)
+def test_band_layout_joins_pieces_only_where_that_saves_indices(seed, n, N, angle):
+    """Joined pieces: every piece a dual path (consecutive triangles share an edge), every
+    triangle once, each piece sent in a cheapest direction, the compiled chain cost equal to
+    the writer's, and the whole buffer no longer than without the joins."""
+    from hammesh.strips._band_kernels import chain_cost
+    from hammesh.strips.encode import restart_strip
+    from hammesh.strips.rows import band_frame, band_layout
+
+    dual = dual_mesh(delaunay_mesh(seed, n))
+    tri, twin = dual.triangles, dual.twin
+    order, starts = row_path_cover(dual.points, tri, twin, angle)
+    frame = band_frame(dual.points, tri, N, angle)
+    plain = band_layout(frame, tri, twin, order, starts, 2, 2, 3.0)
+    new, ns = band_layout(frame, tri, twin, order, starts, 2, 2, 3.0, join=True)
+    assert sorted(new.tolist()) == list(range(dual.n_triangles))
+    neighbours = {t: set((twin.reshape(-1, 3)[t][twin.reshape(-1, 3)[t] >= 0] // 3).tolist()) for t in range(len(tri))}
+    link = np.full((len(tri), 2), -1, np.int64)
+    for a, b in zip(ns[:-1], ns[1:]):
+        p = new[a:b]
+        assert all(int(v) in neighbours[int(u)] for u, v in zip(p[:-1], p[1:]))
+        assert _sent_cost(dual, p) == _plain_piece_cost(dual, p)
+        for u, v in zip(p[:-1], p[1:]):
+            link[u, 1], link[v, 0] = v, u
+        assert chain_cost(tri, twin.reshape(-1, 3), link, p[0]) == _plain_piece_cost(dual, p)
+    ours = restart_strip(tri, twin, new, ns, RESTART_INDEX)
+    assert len(ours.indices) <= len(restart_strip(tri, twin, *plain, RESTART_INDEX).indices)
+    assert oriented_set(decode_gl_strip(ours.indices, ours.restart_index)) == oriented_set(tri)
+
+
+def _sent_cost(dual, p):
+    """Indices of piece ``p`` written in the direction it is given (no restart)."""
+    from hammesh.strips.encode import restart_strip
+
+    s = restart_strip(dual.triangles, dual.twin, np.asarray(p, np.int64), np.array([0, len(p)], np.int64), RESTART_INDEX)
+    return len(s.indices)
 
 
 def test_cache_mode_lays_rows_in_bands_on_planar_meshes():
