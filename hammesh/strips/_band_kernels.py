@@ -169,17 +169,19 @@ def chain_cost(tri, twin3, link, start):
 
 
 @kernel
-def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, cost, out_order, out_bounds):
+def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, cost, size, short, out_order, out_bounds):
     """Join pieces of one column whose ends are dual neighbours, heading the same way along
     the rows, where the joined piece costs fewer indices than the two and a restart; returns
     how many pieces are left, written path after path into ``out_order`` / ``out_bounds``.
 
-    ``column``: each triangle's column; ``along``: its centroid along the rows.  The ends
-    are visited in ``order``'s order; a piece may join at both ends, and again once joined.
-    No U-turn: with both pieces of two or more triangles, the first must run towards the
-    join along the rows and the second away from it (a U-turn would send the second row
-    back over the first and reload its far side).  Work arrays (``m`` triangles): ``link``
-    ``(m, 2)``, ``other``, ``cost`` ``(m,)``.
+    ``column``: each triangle's column (a joined piece takes the larger piece's, written
+    at its ends); ``along``: its centroid along the rows.  The ends are visited in
+    ``order``'s order; a piece may join at both ends, and again once joined.  No U-turn:
+    with both pieces of two or more triangles, the first must run towards the join along
+    the rows and the second away from it (a U-turn would send the second row back over the
+    first and reload its far side).  A piece of at most ``short`` triangles joins whatever
+    the columns and headings.  Work arrays (``m`` triangles): ``link`` ``(m, 2)``,
+    ``other``, ``cost``, ``size`` ``(m,)``.
     """
     m = order.shape[0]
     K = bounds.shape[0] - 1
@@ -193,6 +195,8 @@ def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, c
             link[order[i + 1], 0] = order[i]
         other[order[a]] = order[b - 1]
         other[order[b - 1]] = order[a]
+        size[order[a]] = b - a
+        size[order[b - 1]] = b - a
     for p in range(K):
         c = chain_cost(tri, twin3, link, order[bounds[p]])
         cost[order[bounds[p]]] = c
@@ -207,10 +211,13 @@ def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, c
                 if h < 0:
                     continue
                 u = h // 3
-                if (link[u, 0] >= 0 and link[u, 1] >= 0) or other[e] == u or column[u] != column[e]:
+                if (link[u, 0] >= 0 and link[u, 1] >= 0) or other[e] == u:
                     continue
                 fx, fy = other[e], other[u]
-                if fx != e and fy != u and (along[e] - along[fx]) * (along[fy] - along[u]) < 0:
+                tiny = min(size[e], size[u]) <= short
+                if column[u] != column[e] and not tiny:
+                    continue
+                if fx != e and fy != u and (along[e] - along[fx]) * (along[fy] - along[u]) < 0 and not tiny:
                     continue  # a U-turn
                 se = 0 if link[e, 0] < 0 else 1
                 su = 0 if link[u, 0] < 0 else 1
@@ -218,10 +225,16 @@ def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, c
                 link[u, su] = e
                 joined = chain_cost(tri, twin3, link, fx)
                 if joined < cost[e] + cost[u] + 1:
+                    col = column[e] if size[e] >= size[u] else column[u]
+                    k = size[e] + size[u]
                     other[fx] = fy
                     other[fy] = fx
                     cost[fx] = joined
                     cost[fy] = joined
+                    size[fx] = k
+                    size[fy] = k
+                    column[fx] = col
+                    column[fy] = col
                 else:
                     link[e, se] = -1
                     link[u, su] = -1

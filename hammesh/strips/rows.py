@@ -91,7 +91,7 @@ BAND_SLACK = 3
 
 
 def band_slack(cache: int) -> int:
-    """Triangles a band's rows stay below the FIFO size: ``max(BAND_SLACK, cache // 4)``.
+    """Triangles a band's rows stay below the FIFO size: ``max(BAND_SLACK, 5 * cache // 16)``.
 
     The rows are not a grid's (they end at vertices of degree other than 6, and the end
     moves join them into strips of ~25 triangles that the columns cut), so the recovery
@@ -99,9 +99,13 @@ def band_slack(cache: int) -> int:
     grows with the FIFO (q30 square 10k: 0.670 at 16, 0.691 at 32, 0.708 at 48, 0.724 at
     64), while rows of at most three quarters of it keep it falling (0.663 at 16, 0.629 at
     32, 0.619 at 48, 0.608 at 64, before :data:`BAND_MERGE`; measured in ``docs/strips.md``,
-    session 13).
+    session 13).  Session 14's joins of short pieces across column borders
+    (:data:`JOIN_SHORT`) load a few vertices early; rows of at most ``11/16`` of the FIFO
+    pay for them (FIFO 32, q30 square 10k / A 12k / 100k: slack 8 1.2871 / 0.631, 1.2967
+    / 0.644, 1.2781 / 0.630; slack 10 1.2871 / 0.631, 1.2981 / 0.624, 1.2818 / 0.620
+    indices per triangle / ACMR32, meshoptimizer vcache + stripify 0.636-0.643).
     """
-    return max(BAND_SLACK, int(cache) // 4)
+    return max(BAND_SLACK, 5 * int(cache) // 16)
 
 
 #: :func:`band_frame`'s result: each triangle's ``column`` (``(m,)`` int64, counted across
@@ -110,6 +114,14 @@ def band_slack(cache: int) -> int:
 #: where the coordinates give no finite frame.
 BandFrame = namedtuple("BandFrame", ["column", "height", "along", "row_height"])
 
+
+#: :func:`band_layout`'s joins also take a piece of at most this many triangles into a
+#: neighbouring piece's end whatever their columns and headings (the tail of a row just
+#: past a column border, a short row at the boundary or a hole; each alone costs a restart
+#: and two start indices): q30 meshes at FIFO 32, 0 / 2 / 3 / 4 / 6: square 10k 1.2959 /
+#: 1.2915 / 1.2871 / 1.2838 / 1.2748 indices per triangle at ACMR32 0.625 / 0.627 / 0.631 /
+#: 0.635 / 0.658 (slack 8; session 14).
+JOIN_SHORT = 3
 
 #: :func:`band_frame` divides the rows' extent into equal columns no wider than the target
 #: (instead of target-wide columns and a thin last one, whose short rows cost a restart
@@ -264,10 +276,11 @@ def band_layout(
         column = np.empty(n, np.int64)
         column[order] = np.repeat(pcol, lens)
         link = np.empty((n, 2), np.int64)
-        work = np.empty((3, n), np.int64)
+        work = np.empty((4, n), np.int64)
         out = np.empty(n + 1, np.int64)
-        K = join_heading_pieces(tri, twin3, frame.along, column, order, bounds, link, work[0], work[1], work[2], out)
-        order, bounds = work[2], out[: K + 1]
+        K = join_heading_pieces(tri, twin3, frame.along, column, order, bounds, link, work[0], work[1], work[2],
+                                JOIN_SHORT, work[3], out)
+        order, bounds = work[3], out[: K + 1]
         lo, lens = bounds[:-1], np.diff(bounds)
         pcol = column[order[lo]]
     height = np.add.reduceat(frame.height[order], lo) / lens

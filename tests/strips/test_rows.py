@@ -252,13 +252,13 @@ def test_cache_mode_lays_rows_in_bands_on_planar_meshes():
 
 
 def test_cache_mode_at_fifo_64_loads_fewer_vertices_within_1_30_indices():
-    """q30 square, FIFO 64: rows of at most three quarters of the FIFO (rows.band_slack) keep
+    """q30 square, FIFO 64: rows of at most 11/16 of the FIFO (rows.band_slack) keep
     under 1.30 indices per triangle with fewer loads than meshoptimizer vcache + stripify's
     0.608-0.618 at FIFO 64 on such meshes (measured in docs/strips.md, session 13); rows of
     FIFO - 3 triangles (the slack at 16) load more at 64 than at 16."""
     from hammesh.strips import rows, vertex_cache_stats
 
-    assert [rows.band_slack(n) for n in (3, 16, 32, 64)] == [3, 4, 8, 16]
+    assert [rows.band_slack(n) for n in (3, 16, 32, 64)] == [3, 5, 10, 20]
     m = square_mesh(1e-4)
     s = encode(m, cache=64)
     assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(m.triangles)
