@@ -38,11 +38,11 @@ def add_args(p: argparse.ArgumentParser) -> None:
     # const: hammesh.strips.cache.CACHE_MODE_FIFO, written out to keep the CLI's imports lazy (a test compares)
     g.add_argument("--cache", type=int, nargs="?", const=32, default=None, metavar="N",
                    help="lay strips for a FIFO vertex cache of N entries (typical 16-32; --cache alone: 32). "
-                        "Planar meshes: rows (strips along the x or y axis) cut into columns of ~3N/4 triangles "
+                        "Planar meshes: rows (strips along the x or y axis) cut into columns of ~11N/16 triangles "
                         "a row and sent column by column, so each row finds the vertices of the row before "
-                        "still cached (q30 meshes, FIFO 32: ~0.60-0.635 vertex loads per triangle at ~1.29-1.32 "
-                        "indices, meshoptimizer's vertex-cache order + stripify ~0.64 at ~1.72; FIFO 16: ~0.69 "
-                        "at ~1.38, meshoptimizer ~0.71; without --cache ~1.05 at ~1.23). Surfaces: the "
+                        "still cached (q30 meshes, FIFO 32: ~0.62-0.63 vertex loads per triangle at ~1.28-1.30 "
+                        "indices, meshoptimizer's vertex-cache order + stripify ~0.64 at ~1.72; FIFO 16: ~0.68-0.70 "
+                        "at ~1.36-1.38, meshoptimizer ~0.71; without --cache ~1.0 at ~1.23). Surfaces: the "
                         "swap-free (zigzag) chains cut into pieces of ~1.25 N triangles, "
                         "sent in an order that finds their vertices cached (~0.8 at ~1.36 at FIFO 16). With "
                         "--method greedy or zigzag: that cover in pieces of at most 3 N in that order")

@@ -390,8 +390,10 @@ def encode(
         ``"zigzag"`` (``"zigzag"`` stays under 1.30 indices per triangle on q30 planar
         meshes, ACMR16 ~0.87).  With ``method="auto"`` on a planar mesh, or ``"rows"``: the
         row cover laid in bands (:func:`~hammesh.strips.rows.band_layout`, rows of at most
-        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR16 0.64-0.69 at
-        1.40-1.42 indices per triangle, ACMR64 ~0.59-0.61 at 1.26-1.29); ``"auto"`` on a surface: the
+        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR32 0.618-0.631 at
+        1.28-1.30 indices per triangle, ACMR16 0.68-0.70 at 1.36-1.38, ACMR64 0.57-0.59 at
+        1.25-1.27; meshoptimizer's vertex-cache order + stripify 0.635-0.643, 0.71 and
+        0.61 at 1.72-1.74); ``"auto"`` on a surface: the
         swap-free chains cut at ``cache.SHORT_PIECE_LENGTH * cache``.  Fewer vertex-shader
         runs for more indices.
     reorder_vertices : bool
@@ -458,8 +460,8 @@ def encode(
     piece = PIECE_LENGTH
     if cache is not None and method == "auto":
         if dual.points.shape[1] == 2:
-            # planar: the rows laid in bands (rows.band_layout): q30 meshes ACMR16 0.65-0.69
-            # at 1.40-1.43 indices per triangle (meshoptimizer's vcache + stripify 0.71 at 1.72)
+            # planar: the rows laid in bands (rows.band_layout): q30 meshes at FIFO 32 ACMR
+            # 0.618-0.631 at 1.28-1.30 indices per triangle (meshoptimizer vcache + stripify 0.64 at 1.72)
             method = "rows"
         else:
             # surfaces: the swap-free chains in short pieces (cache.SHORT_PIECE_LENGTH)
