@@ -28,8 +28,8 @@ from hammesh.strips._band_kernels import equal_pivots_into, join_heading_pieces,
 from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
-__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "BAND_DRIFT", "EVEN_COLUMNS", "band_reach", "path_columns",
-           "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "BAND_DRIFT", "JOIN_SHORT", "EVEN_COLUMNS", "band_reach",
+           "path_columns", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
 
 #: Directions (radians from the x axis) the row cover is tried along.
 ROW_AXES = (0.0, np.pi / 2)
@@ -242,9 +242,11 @@ def band_layout(
     by at most ``reach`` triangles along its path to where its two pieces cost fewest
     indices (:func:`~hammesh.strips._band_kernels.move_cuts`).  A piece's column is its
     middle triangle's.  With ``join``, pieces of one column whose ends are neighbours and
-    that head the same way along the rows are joined where that saves indices
-    (:func:`~hammesh.strips._band_kernels.join_heading_pieces`).  Each piece is then turned to the direction with fewer swaps, on a
-    tie to run along the rows' axis (:func:`~hammesh.strips._band_kernels.orient_pieces`):
+    that head the same way along the rows are joined where that saves indices, and so is a
+    piece of at most :data:`JOIN_SHORT` triangles with any neighbouring end
+    (:func:`~hammesh.strips._band_kernels.join_heading_pieces`).  Each piece is then turned
+    to the direction with fewer swaps, on a tie to run along the rows' axis
+    (:func:`~hammesh.strips._band_kernels.orient_pieces`):
     each row finds the vertices of its lower side in the FIFO, loaded by the row before, in
     the order it loaded them.  ``frame``: :func:`band_frame` of the rows ``tri``
     (``twin`` its pairing) that ``order`` refers to.  Returns the new ``(order, starts)``.
