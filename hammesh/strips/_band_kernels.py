@@ -227,14 +227,11 @@ def join_heading_pieces(tri, twin3, along, column, order, bounds, link, other, c
                 if joined < cost[e] + cost[u] + 1:
                     col = column[e] if size[e] >= size[u] else column[u]
                     k = size[e] + size[u]
-                    other[fx] = fy
-                    other[fy] = fx
-                    cost[fx] = joined
-                    cost[fy] = joined
-                    size[fx] = k
-                    size[fy] = k
-                    column[fx] = col
-                    column[fy] = col
+                    for end, far in ((fx, fy), (fy, fx)):  # the joined chain's figures, at both its ends
+                        other[end] = far
+                        cost[end] = joined
+                        size[end] = k
+                        column[end] = col
                 else:
                     link[e, se] = -1
                     link[u, su] = -1
