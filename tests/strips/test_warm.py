@@ -40,3 +40,20 @@ def test_prepare_loads_the_fast_paths_kernels_in_a_fresh_process():
     out = subprocess.run([sys.executable, "-c", _FRESH], capture_output=True, text=True, check=True).stdout
     before, after = json.loads(out.strip().splitlines()[-1])
     assert before == [0] * 7 and all(n >= 1 for n in after)
+
+
+def test_the_grid_goes_through_both_halves_in_both_modes():
+    """prepare's grid must not be sent to the one-thread path (then the halves' later kernels
+    would not be loaded): a verified two-halves buffer in both modes, drawing every triangle."""
+    from hammesh.strips import decode_gl_strip
+    from hammesh.strips.encode import half_encoder
+    from hammesh.strips.gl import RESTART_INDEX
+    from hammesh.strips.halves import encode_in_halves
+
+    from .conftest import oriented_set
+
+    points, triangles = quad_grid(PREPARE_GRID)
+    for finish in (None, half_encoder(RESTART_INDEX)):
+        s = encode_in_halves(points, triangles, RESTART_INDEX, True, 1, finish)
+        assert s is not None and s.n_strips >= 2  # the halves' parts, joined by a restart
+        assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(triangles)
