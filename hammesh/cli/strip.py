@@ -14,7 +14,8 @@ EXAMPLES = """examples:
   hammesh strip plate.vtu -o plate.npz                   # binary (uint32 indices)
   hammesh strip small.obj -o small.json --method christofides   # Thm 5.3, <= 5000 triangles
   hammesh strip plate.vtu -o plate.json --generalized    # IRIS GL: one vertex + one bit each
-  hammesh strip plate.vtu -o plate.json --cache 32 --reorder-vertices   # for a 32-entry FIFO
+  hammesh strip plate.vtu -o plate.json --cache --reorder-vertices   # for a 32-entry FIFO
+  hammesh strip plate.vtu -o plate.json --cache 16       # for a 16-entry FIFO
   hammesh strip big.vtu -o big.npz --fast                # greedy cover alone (no end moves)
 methods: auto (the shortest of rows (planar meshes), greedy, zigzag and, for a file stored in
 Hamiltonian-cycle order as 'hammesh mesh' writes it, one strip per cycle), greedy, zigzag (from
@@ -34,16 +35,17 @@ def add_args(p: argparse.ArgumentParser) -> None:
         "--method", choices=("auto", "greedy", "order", "zigzag", "rows", "christofides"), default="auto", help="how to find the strips"
     )
     g = p.add_argument_group("GPU caches")
-    g.add_argument("--cache", type=int, default=None, metavar="N",
-                   help="lay strips for a FIFO vertex cache of N entries (typical 16-32). Planar meshes: "
-                        "rows (strips along the x or y axis) cut into columns of ~3N/4 triangles a row and sent "
-                        "column by column, so each row finds the vertices of the row before still cached "
-                        "(q30 meshes, FIFO 16: ~0.65 vertex loads per triangle at ~1.41 indices, against ~1.05 "
-                        "at ~1.23 without --cache; meshoptimizer's vertex-cache order + stripify: ~0.71 at "
-                        "~1.72; FIFO 64: ~0.60 at ~1.26-1.29, meshoptimizer ~0.61 at 1.72). Surfaces: the "
+    # const: hammesh.strips.cache.CACHE_MODE_FIFO, written out to keep the CLI's imports lazy (a test compares)
+    g.add_argument("--cache", type=int, nargs="?", const=32, default=None, metavar="N",
+                   help="lay strips for a FIFO vertex cache of N entries (typical 16-32; --cache alone: 32). "
+                        "Planar meshes: rows (strips along the x or y axis) cut into columns of ~11N/16 triangles "
+                        "a row and sent column by column, so each row finds the vertices of the row before "
+                        "still cached (q30 meshes, FIFO 32: ~0.62-0.63 vertex loads per triangle at ~1.28-1.30 "
+                        "indices, meshoptimizer's vertex-cache order + stripify ~0.64 at ~1.72; FIFO 16: ~0.68-0.70 "
+                        "at ~1.36-1.38, meshoptimizer ~0.71; without --cache ~1.0 at ~1.23). Surfaces: the "
                         "swap-free (zigzag) chains cut into pieces of ~1.25 N triangles, "
-                        "sent in an order that finds their vertices cached (~0.8 at ~1.36). With --method "
-                        "greedy or zigzag: that cover in pieces of at most 3 N in that order (~0.87 at ~1.29)")
+                        "sent in an order that finds their vertices cached (~0.8 at ~1.36 at FIFO 16). With "
+                        "--method greedy or zigzag: that cover in pieces of at most 3 N in that order")
     p.add_argument("--fast", action="store_true",
                    help="the greedy cover alone, no end moves: faster, ~0.03 more indices per triangle")
     g.add_argument("--reorder-vertices", action="store_true",

@@ -15,6 +15,7 @@ module                                   what
                                          a FIFO vertex cache
 :mod:`hammesh.strips.halves`             two halves on two threads (from 50k triangles)
 :mod:`hammesh.strips.scratch`            work arrays kept between two-halves encodings
+:mod:`hammesh.strips.warm`               ``prepare()``: load the large-mesh kernels ahead
 :mod:`hammesh.strips.christofides`       Thm 5.3: 9/4-approximate encoding (networkx)
 :mod:`hammesh.strips.cache`              vertex cache / fetch figures, first-use numbering
 :mod:`hammesh.strips.files`              3D mesh reading, ``.json`` / ``.npz`` output
@@ -43,6 +44,7 @@ from hammesh.strips.generalized import (
 from hammesh.strips.gl import RESTART_INDEX, GLStrip, decode_gl_strip, gl_strip, verify_gl_strip
 from hammesh.strips.paths import PathTurns, path_turns
 from hammesh.strips.sequential import SequentialOrder, sequential_order
+from hammesh.strips.warm import prepare
 
 __all__ = [
     "choose_strip",
@@ -74,4 +76,5 @@ __all__ = [
     "vertex_cache_stats",
     "VertexCacheStats",
     "reorder_vertices",
+    "prepare",
 ]

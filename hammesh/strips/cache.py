@@ -35,6 +35,7 @@ __all__ = [
     "reorder_vertices",
     "VERTEX_SIZE",
     "DEFAULT_CACHE",
+    "CACHE_MODE_FIFO",
     "REVERSAL_WEIGHT",
     "PIECE_LENGTH",
     "SHORT_PIECE_LENGTH",
@@ -44,6 +45,13 @@ __all__ = [
 #: FIFO entries the strip documents report their cache figures for when no ``--cache`` is
 #: given (a typical post-transform cache: 16-32).
 DEFAULT_CACHE = 16
+
+#: FIFO entries ``hammesh strip --cache`` lays the strips for when it is given without a
+#: number (a typical post-transform cache holds 16-32).  32: there the planar bands keep
+#: fewer loads than meshoptimizer's vertex-cache order + stripify at ~1.30 indices per
+#: triangle (q30 meshes 1.29-1.32 against its 1.72-1.74; at 16 they need ~1.38:
+#: docs/strips.md, session 14).
+CACHE_MODE_FIFO = 32
 
 #: Bytes per vertex assumed by the fetch model (a position and a normal as half floats, or
 #: a float3 position and a packed normal).

@@ -53,7 +53,7 @@ from hammesh.strips.halves import HALVES_FROM, encode_in_halves
 from hammesh.strips.generalized import GeneralizedStrips, generalized_from_turns
 from hammesh.strips.gl import JOINS, RESTART_INDEX, GLStrip, gl_strip_from_turns, verify_gl_strip
 from hammesh.strips.paths import PathTurns, check_starts, path_turns
-from hammesh.strips.rows import BAND_MERGE, ROW_AXES, band_frame, band_layout, row_path_cover
+from hammesh.strips.rows import BAND_DRIFT, BAND_MERGE, ROW_AXES, band_frame, band_layout, band_reach, row_path_cover
 
 __all__ = [
     "METHODS",
@@ -307,11 +307,16 @@ def _oriented_local(
         # inside the columns (the dual cut at their borders) had fewer pieces but its end
         # moves join rows into U-turns and blobs: q30 10k 1.3615 ipt at ACMR16 0.804,
         # against 1.413 / 0.647 this way (docs/strips.md, sessions 12-13)
-        order, starts = band_layout(band_frame(dual.points, tri, cache, ROW_AXES[rows]), order, starts, BAND_MERGE)
-    elif cache is not None:
-        # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
-        starts = split_paths(starts, max(1, int(piece * cache)))
-    order, _ = orient_paths(tri, twin, order, starts)
+        # (session 14: cuts moved to save swaps, cut again where a piece drifts across rows,
+        # pieces heading the same way joined, each turned along the rows on a tie; band_layout
+        # turns the pieces itself)
+        frame = band_frame(dual.points, tri, cache, ROW_AXES[rows])
+        order, starts = band_layout(frame, tri, twin, order, starts, BAND_MERGE, band_reach(cache), BAND_DRIFT, join=True)
+    else:
+        if cache is not None:
+            # strips a FIFO of ``cache`` entries can carry into the next one (cache.PIECE_LENGTH)
+            starts = split_paths(starts, max(1, int(piece * cache)))
+        order, _ = orient_paths(tri, twin, order, starts)
     if cache is not None and not bands:
         order, starts = fifo_strip_order(tri, twin, order, starts, len(dual.points), cache)
     return dual, tri, twin, order, starts, ids
@@ -385,8 +390,10 @@ def encode(
         ``"zigzag"`` (``"zigzag"`` stays under 1.30 indices per triangle on q30 planar
         meshes, ACMR16 ~0.87).  With ``method="auto"`` on a planar mesh, or ``"rows"``: the
         row cover laid in bands (:func:`~hammesh.strips.rows.band_layout`, rows of at most
-        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR16 0.64-0.69 at
-        1.40-1.42 indices per triangle, ACMR64 ~0.59-0.61 at 1.26-1.29); ``"auto"`` on a surface: the
+        ``cache - rows.band_slack(cache)`` triangles; q30 meshes ACMR32 0.618-0.631 at
+        1.28-1.30 indices per triangle, ACMR16 0.68-0.70 at 1.36-1.38, ACMR64 0.57-0.59 at
+        1.25-1.27; meshoptimizer's vertex-cache order + stripify 0.635-0.643, 0.71 and
+        0.61 at 1.72-1.74); ``"auto"`` on a surface: the
         swap-free chains cut at ``cache.SHORT_PIECE_LENGTH * cache``.  Fewer vertex-shader
         runs for more indices.
     reorder_vertices : bool
@@ -453,8 +460,8 @@ def encode(
     piece = PIECE_LENGTH
     if cache is not None and method == "auto":
         if dual.points.shape[1] == 2:
-            # planar: the rows laid in bands (rows.band_layout): q30 meshes ACMR16 0.65-0.69
-            # at 1.40-1.43 indices per triangle (meshoptimizer's vcache + stripify 0.71 at 1.72)
+            # planar: the rows laid in bands (rows.band_layout): q30 meshes at FIFO 32 ACMR
+            # 0.618-0.631 at 1.28-1.30 indices per triangle (meshoptimizer vcache + stripify 0.64 at 1.72)
             method = "rows"
         else:
             # surfaces: the swap-free chains in short pieces (cache.SHORT_PIECE_LENGTH)

@@ -24,11 +24,12 @@ import numpy as np
 
 from collections import namedtuple
 
+from hammesh.strips._band_kernels import equal_pivots_into, join_heading_pieces, level_cuts_into, move_cuts, orient_pieces
 from hammesh.strips._cover_kernels import PathCover
 from hammesh.strips._row_kernels import link_paths_into, row_links_into
 
-__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "path_columns", "parallel_edges", "row_links",
-           "row_path_cover", "BandFrame", "band_frame", "band_layout"]
+__all__ = ["ROW_AXES", "BAND_SLACK", "band_slack", "BAND_MERGE", "BAND_DRIFT", "JOIN_SHORT", "EVEN_COLUMNS", "band_reach",
+           "path_columns", "parallel_edges", "row_links", "row_path_cover", "BandFrame", "band_frame", "band_layout"]
 
 #: Directions (radians from the x axis) the row cover is tried along.
 ROW_AXES = (0.0, np.pi / 2)
@@ -90,7 +91,7 @@ BAND_SLACK = 3
 
 
 def band_slack(cache: int) -> int:
-    """Triangles a band's rows stay below the FIFO size: ``max(BAND_SLACK, cache // 4)``.
+    """Triangles a band's rows stay below the FIFO size: ``max(BAND_SLACK, 5 * cache // 16)``.
 
     The rows are not a grid's (they end at vertices of degree other than 6, and the end
     moves join them into strips of ~25 triangles that the columns cut), so the recovery
@@ -98,19 +99,40 @@ def band_slack(cache: int) -> int:
     grows with the FIFO (q30 square 10k: 0.670 at 16, 0.691 at 32, 0.708 at 48, 0.724 at
     64), while rows of at most three quarters of it keep it falling (0.663 at 16, 0.629 at
     32, 0.619 at 48, 0.608 at 64, before :data:`BAND_MERGE`; measured in ``docs/strips.md``,
-    session 13).
+    session 13).  Session 14's joins of short pieces across column borders
+    (:data:`JOIN_SHORT`) load a few vertices early; rows of at most ``11/16`` of the FIFO
+    pay for them (FIFO 32, q30 square 10k / A 12k / 100k: slack 8 1.2871 / 0.631, 1.2967
+    / 0.644, 1.2781 / 0.630; slack 10 1.2871 / 0.631, 1.2981 / 0.624, 1.2818 / 0.620
+    indices per triangle / ACMR32, meshoptimizer vcache + stripify 0.636-0.643).
     """
-    return max(BAND_SLACK, int(cache) // 4)
+    return max(BAND_SLACK, 5 * int(cache) // 16)
 
 
 #: :func:`band_frame`'s result: each triangle's ``column`` (``(m,)`` int64, counted across
-#: the rows) and ``height`` (its centroid across the rows), or ``None`` for both where the
-#: coordinates give no finite frame.
-BandFrame = namedtuple("BandFrame", ["column", "height"])
+#: the rows), ``height`` and ``along`` (its centroid across and along the rows) and the
+#: ``row_height`` of the mesh (a mean edge's equilateral height), or ``None`` for all four
+#: where the coordinates give no finite frame.
+BandFrame = namedtuple("BandFrame", ["column", "height", "along", "row_height"])
+
+
+#: :func:`band_layout`'s joins also take a piece of at most this many triangles into a
+#: neighbouring piece's end whatever their columns and headings (the tail of a row just
+#: past a column border, a short row at the boundary or a hole; each alone costs a restart
+#: and two start indices): q30 meshes at FIFO 32, 0 / 2 / 3 / 4 / 6: square 10k 1.2959 /
+#: 1.2915 / 1.2871 / 1.2838 / 1.2748 indices per triangle at ACMR32 0.625 / 0.627 / 0.631 /
+#: 0.635 / 0.658 (slack 8; session 14).
+JOIN_SHORT = 3
+
+#: :func:`band_frame` divides the rows' extent into equal columns no wider than the target
+#: (instead of target-wide columns and a thin last one, whose short rows cost a restart
+#: each): q30 meshes ~10k, ACMR 0.691 → 0.669 at FIFO 16, 0.580 → 0.560 at 64, about the
+#: same indices (session 14).
+EVEN_COLUMNS = True
 
 
 def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0.0) -> BandFrame:
-    """Columns ``(cache - band_slack(cache)) / 2`` mean edge lengths wide across rows along ``angle``.
+    """Columns at most ``(cache - band_slack(cache)) / 2`` mean edge lengths wide across rows
+    along ``angle``, all of one width (:data:`EVEN_COLUMNS`).
 
     A row crossing a column then has at most about ``cache - band_slack(cache)`` triangles.
     Depends only on the rows' vertices, not on their order.
@@ -125,8 +147,12 @@ def band_frame(points: np.ndarray, tri: np.ndarray, cache: int, angle: float = 0
         width = max(1.0, (int(cache) - band_slack(cache)) / 2) * edge
         x = c[:, 0]
         if not (len(x) and width > 0 and np.isfinite(width) and np.isfinite(c).all()):
-            return BandFrame(None, None)
-        return BandFrame(np.floor((x - x.min()) / width).astype(np.int64), c[:, 1])
+            return BandFrame(None, None, None, None)
+        lo, extent = x.min(), x.max() - x.min()
+        if EVEN_COLUMNS and extent > 0 and np.isfinite(extent):
+            width = extent / np.ceil(extent / width)  # equal columns, none thin at the end
+        column = np.minimum(np.floor((x - lo) / width), max(0.0, np.ceil(extent / width) - 1))
+        return BandFrame(column.astype(np.int64), c[:, 1], x, edge * np.sqrt(3) / 2)
 
 
 #: A path's run of fewer triangles than this in one column stays with the path's run
@@ -170,28 +196,100 @@ def path_columns(column: np.ndarray, order: np.ndarray, starts: np.ndarray, merg
     return np.repeat(new, ln)
 
 
-def band_layout(frame: BandFrame, order: np.ndarray, starts: np.ndarray, merge: int = 0) -> PathCover:
-    """Paths sent column by column (left to right), inside a column by the mean height of
-    their centroids, alternately upwards and downwards (a serpentine, so the first rows of a
-    column meet the last ones of the one before); a path crossing a column border is cut
-    there, unless it has fewer than ``merge`` triangles on one side (:func:`path_columns`).
-    Each row then finds the vertices of its lower side in the FIFO, loaded by the
-    row before.  ``frame``: :func:`band_frame` of the rows ``order`` refers to.  Returns the
-    new ``(order, starts)`` (the caller turns each piece in its better direction).
+#: A piece is cut where its triangles' centroids have drifted more than this many row
+#: heights across the rows from its first triangle's (:func:`band_layout`): the end moves
+#: join rows into staircases, and a piece climbing three or more rows inside a column
+#: reloaded ~8 vertices its rows' neighbours had loaded (q30 square 10k, FIFO 32: 30
+#: pieces, 920 triangles, 7.9 reloads each against ~1 for one-row pieces).  Cut at 3 rows:
+#: FIFO 32 ipt / ACMR 1.3012 / 0.630 with :func:`band_reach`, at 2.5: 1.3047 / 0.629, at 4:
+#: 1.2991 / 0.645 (docs/strips.md, session 14).
+BAND_DRIFT = 3.0
+
+
+def band_reach(cache: int) -> int:
+    """Positions a cut of :func:`band_layout` may move along its path to save indices:
+    ``max(1, min(4, cache // 8))``.
+
+    A cut at a swap removes the swap (the two pieces' ends do not turn), so moving the
+    column and drift cuts by a few triangles saves ~0.02 indices per triangle (q30 square
+    10k, FIFO 32, reach 4: 1.3196 → 1.2978); the triangles it moves across a column border
+    are drawn in the other column's pass and reload a vertex or two there (ACMR 0.633 →
+    0.652 at reach 4 without the drift cuts; 0.641 at 1; at FIFO 16 reach 4 gives 0.710
+    against 0.691 at 2), hence less reach for smaller FIFOs (session 14).
     """
+    return max(1, min(4, int(cache) // 8))
+
+
+def band_layout(
+    frame: BandFrame,
+    tri: np.ndarray,
+    twin: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    merge: int = 0,
+    reach: int = 0,
+    drift: float = 0.0,
+    join: bool = False,
+) -> PathCover:
+    """Pieces of the paths sent column by column (left to right), inside a column by the mean
+    height of their centroids, alternately upwards and downwards (a serpentine, so the first
+    rows of a column meet the last ones of the one before), each in its cheaper direction.
+
+    A path is cut where it crosses a column border, unless it has fewer than ``merge``
+    triangles on one side (:func:`path_columns`), and (``drift > 0``) where its centroids
+    leave its last cut's height by more than ``drift`` row heights
+    (:func:`~hammesh.strips._band_kernels.level_cuts_into`); then each of those cuts moves
+    by at most ``reach`` triangles along its path to where its two pieces cost fewest
+    indices (:func:`~hammesh.strips._band_kernels.move_cuts`).  A piece's column is its
+    middle triangle's.  With ``join``, pieces of one column whose ends are neighbours and
+    that head the same way along the rows are joined where that saves indices, and so is a
+    piece of at most :data:`JOIN_SHORT` triangles with any neighbouring end
+    (:func:`~hammesh.strips._band_kernels.join_heading_pieces`).  Each piece is then turned
+    to the direction with fewer swaps, on a tie to run along the rows' axis
+    (:func:`~hammesh.strips._band_kernels.orient_pieces`):
+    each row finds the vertices of its lower side in the FIFO, loaded by the row before, in
+    the order it loaded them.  ``frame``: :func:`band_frame` of the rows ``tri``
+    (``twin`` its pairing) that ``order`` refers to.  Returns the new ``(order, starts)``.
+    """
+    order = np.asarray(order, np.int64)
+    starts = np.asarray(starts, np.int64)
     if frame.column is None:
         return PathCover(order, starts)
+    n = len(order)
     col = path_columns(frame.column, order, starts, merge)
-    cut = np.zeros(len(order) + 1, np.bool_)
+    cut = np.zeros(n + 1, np.bool_)
     cut[starts] = True
     cut[1:-1] |= col[1:] != col[:-1]
-    new_starts = np.flatnonzero(cut)
-    lo, lens = new_starts[:-1], np.diff(new_starts)
+    bounds = np.flatnonzero(cut)
+    if drift > 0:
+        out = np.empty(n + 1, np.int64)
+        bounds = out[: level_cuts_into(frame.height, order, bounds, float(drift) * frame.row_height, out)]
+    twin3 = np.asarray(twin).reshape(-1, 3)
+    if reach > 0 and len(bounds) > 2:
+        natural = np.zeros(n + 1, np.bool_)
+        natural[starts] = True
+        cum = np.empty(n + 1, np.int64)
+        equal_pivots_into(tri, twin3, order, starts, cum)
+        bounds = bounds.copy()
+        move_cuts(tri, twin3, order, cum, bounds, ~natural[bounds], int(reach))
+    lo, lens = bounds[:-1], np.diff(bounds)
+    pcol = col[lo + lens // 2]
+    if join:
+        column = np.empty(n, np.int64)
+        column[order] = np.repeat(pcol, lens)
+        link = np.empty((n, 2), np.int64)
+        work = np.empty((4, n), np.int64)
+        out = np.empty(n + 1, np.int64)
+        K = join_heading_pieces(tri, twin3, frame.along, column, order, bounds, link, work[0], work[1], work[2],
+                                JOIN_SHORT, work[3], out)
+        order, bounds = work[3], out[: K + 1]
+        lo, lens = bounds[:-1], np.diff(bounds)
+        pcol = column[order[lo]]
     height = np.add.reduceat(frame.height[order], lo) / lens
-    pcol = col[lo]
     pick = np.lexsort((np.where(pcol % 2 == 0, height, -height), pcol))  # serpentine
-    n = lens[pick]
-    new_starts = np.r_[0, np.cumsum(n)].astype(np.int64)
-    # piece j's triangles: order[lo[pick[j]] + i], i < n[j], placed from new_starts[j]
-    at = np.repeat(lo[pick] - new_starts[:-1], n) + np.arange(len(order))
-    return PathCover(np.asarray(order, np.int64)[at], new_starts)
+    k = lens[pick]
+    new_starts = np.r_[0, np.cumsum(k)].astype(np.int64)
+    # piece j's triangles: order[lo[pick[j]] + i], i < k[j], placed from new_starts[j]
+    new = order[np.repeat(lo[pick] - new_starts[:-1], k) + np.arange(n)]
+    orient_pieces(tri, twin3, frame.along, new, new_starts)
+    return PathCover(new, new_starts)

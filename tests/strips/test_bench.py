@@ -36,6 +36,7 @@ def test_bench_strips_speed_quick_runs():
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "q30 square 10k" in proc.stdout and "interleaved calls" in proc.stdout
     assert "fast 1st" in proc.stdout and "failed" not in proc.stdout
+    assert "modes interleaved per round" in proc.stdout
 
 
 @pytest.mark.slow
@@ -54,6 +55,6 @@ def test_bench_strips_cache_table_quick_runs():
         [sys.executable, str(BENCH), "--cache-table", "--quick"], capture_output=True, text=True, timeout=1800
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert "hammesh --cache 16 zigzag (FIFO order)" in proc.stdout and "q30 A 12k" in proc.stdout
+    assert "hammesh --cache 32 zigzag (FIFO order)" in proc.stdout and "q30 A 12k" in proc.stdout
     if importlib.util.find_spec("meshoptimizer") is not None:
         assert "target ACMR <=" in proc.stdout

@@ -112,6 +112,12 @@ def test_cli_cache_and_reorder(tmp_path, capsys):
     plain = tmp_path / "p.json"
     assert run([src, "-o", plain]) == 0
     assert json.loads(plain.read_text())["cache_size"] == 16
+    alone = tmp_path / "a.json"  # --cache without N: hammesh.strips.cache.CACHE_MODE_FIFO
+    assert run([src, "-o", alone, "--cache"]) == 0
+    from hammesh.strips.cache import CACHE_MODE_FIFO
+
+    doc = json.loads(alone.read_text())
+    assert doc["method"] == "cache" and doc["cache_size"] == CACHE_MODE_FIFO == 32
 
 
 def test_cli_rejects_a_tiny_cache(tmp_path):
