@@ -33,7 +33,7 @@ from collections.abc import Sequence
 from hammesh.cli import check, demo, mesh, partition, points, polygon, strip, surface
 from hammesh.errors import HammeshError, Terminated, VerificationError
 
-__all__ = ["main", "build_parser", "chosen_command", "one_line", "exit_fast", "fast_exit", "is_entry", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
+__all__ = ["main", "build_parser", "chosen_command", "with_bare_values", "one_line", "exit_fast", "fast_exit", "is_entry", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 
@@ -202,9 +202,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     return code
 
 
+def with_bare_values(argv: Sequence[str], bare: dict[str, str]) -> list[str]:
+    """``argv`` with the value written out after each option of ``bare`` given without
+    its (optional, integer) value: ``--cache mesh.vtu`` becomes ``--cache 32 mesh.vtu``.
+
+    argparse lets an ``nargs="?"`` option take the next word whatever it is, so the
+    input file after a bare ``--cache`` was read as its number ("invalid int value").
+    """
+    words = list(argv)
+    out: list[str] = []
+    for i, word in enumerate(words):
+        out.append(word)
+        nxt = words[i + 1] if i + 1 < len(words) else None
+        if word in bare and nxt is not None and not nxt.startswith("-"):
+            try:
+                int(nxt)
+            except ValueError:
+                out.append(bare[word])
+    return out
+
+
 def _main(argv: Sequence[str] | None) -> int:
+    command = chosen_command(argv)
+    bare = getattr(COMMANDS.get(command), "BARE_VALUES", None)
+    if bare:
+        argv = with_bare_values(sys.argv[1:] if argv is None else argv, bare)
     try:
-        args = build_parser(chosen_command(argv)).parse_args(argv)
+        args = build_parser(command).parse_args(argv)
     except Terminated as exc:
         return 128 + exc.signum
     try:

@@ -25,6 +25,11 @@ The document reports the buffer's FIFO cache figures (acmr, atvr, overfetch; 16 
 unless --cache says otherwise)."""
 
 
+#: Options whose value may be left out, and the value then (``hammesh.cli.with_bare_values``:
+#: ``--cache mesh.vtu`` must not read the mesh's name as the number).
+BARE_VALUES = {"--cache": "32"}
+
+
 def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", type=Path, help="triangle mesh (.vtu .msh .obj .ply .stl .off .ele ...)")
     p.add_argument("-o", "--output", type=Path, required=True, help="strip buffer (.json or .npz)")
@@ -36,7 +41,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
     )
     g = p.add_argument_group("GPU caches")
     # const: hammesh.strips.cache.CACHE_MODE_FIFO, written out to keep the CLI's imports lazy (a test compares)
-    g.add_argument("--cache", type=int, nargs="?", const=32, default=None, metavar="N",
+    g.add_argument("--cache", type=int, nargs="?", const=int(BARE_VALUES["--cache"]), default=None, metavar="N",
                    help="lay strips for a FIFO vertex cache of N entries (typical 16-32; --cache alone: 32). "
                         "Planar meshes: rows (strips along the x or y axis) cut into columns of ~11N/16 triangles "
                         "a row and sent column by column, so each row finds the vertices of the row before "

@@ -35,7 +35,7 @@ from hammesh.strips.choose import StripChoice, choose_strip
 from hammesh.strips.christofides import ChristofidesEncoding, christofides_strip, christofides_walk
 from hammesh.strips.dual import DualMesh, dual_mesh, oriented_key
 from hammesh.strips.encode import encode, encode_generalized, greedy_paths, mesh_paths
-from hammesh.strips.files import read_surface, write_strip
+from hammesh.strips.files import write_strip
 from hammesh.strips.generalized import (
     GeneralizedStrips,
     decode_generalized,
@@ -71,7 +71,6 @@ __all__ = [
     "dual_mesh",
     "DualMesh",
     "oriented_key",
-    "read_surface",
     "write_strip",
     "vertex_cache_stats",
     "VertexCacheStats",

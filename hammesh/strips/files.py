@@ -1,4 +1,5 @@
-"""Strip files: reading any triangle mesh (2D or 3D) and writing index buffers atomically.
+"""Strip files: writing index buffers atomically (meshes are read by
+:func:`hammesh.io.read_mesh` with ``dim=None``: 2D or 3D, whichever the file holds).
 
 Output formats, chosen by suffix:
 
@@ -16,34 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidOptionError
-from hammesh.io import read_mesh
 from hammesh.io.atomic import atomic_path, atomic_write_text
-from hammesh.mesh import Mesh
 from hammesh.strips.generalized import GeneralizedStrips
 from hammesh.strips.gl import GLStrip
 
-__all__ = ["read_surface", "write_strip", "STRIP_SUFFIXES"]
+__all__ = ["write_strip", "STRIP_SUFFIXES"]
 
 #: Suffixes :func:`write_strip` writes.
 STRIP_SUFFIXES = (".json", ".npz")
-
-
-def read_surface(path: str | os.PathLike[str]) -> Mesh:
-    """Read a triangle mesh whose points may be 3D (a surface): :func:`hammesh.io.read_mesh`
-    with ``dim=None``.
-
-    Returns
-    -------
-    Mesh
-        ``points (n, 2)`` for planar files (constant ``z``), ``(n, 3)`` otherwise; quads
-        and polygons split into triangles (listed in ``mesh.info["repairs"]``).
-
-    Raises
-    ------
-    FileFormatError
-        Unknown suffix, missing or malformed file, no triangles, index out of range.
-    """
-    return read_mesh(path, dim=None)
 
 
 def write_strip(strip: GLStrip | GeneralizedStrips, path: str | os.PathLike[str], extra: dict | None = None) -> None:

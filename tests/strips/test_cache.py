@@ -118,6 +118,10 @@ def test_cli_cache_and_reorder(tmp_path, capsys):
 
     doc = json.loads(alone.read_text())
     assert doc["method"] == "cache" and doc["cache_size"] == CACHE_MODE_FIFO == 32
+    # a bare --cache before the mesh: the mesh is not read as its number
+    first = tmp_path / "f.json"
+    assert run(["--cache", src, "-o", first]) == 0
+    assert json.loads(first.read_text())["cache_size"] == CACHE_MODE_FIFO
 
 
 def test_cli_rejects_a_tiny_cache(tmp_path):

@@ -12,7 +12,8 @@ import pytest
 import hammesh
 from hammesh.cli import strip as strip_cli
 from hammesh.errors import FileFormatError
-from hammesh.strips import decode_generalized, decode_gl_strip, read_surface
+from hammesh.io import read_mesh
+from hammesh.strips import decode_generalized, decode_gl_strip
 from hammesh.strips.generalized import GeneralizedStrips
 
 from .conftest import oriented_set, square_hamiltonian, torus_mesh
@@ -71,7 +72,7 @@ def test_npz_and_3d_surface(torus_file, tmp_path):
     assert z["indices"].dtype == np.uint32
     t = torus_mesh()
     tri = decode_gl_strip(z["indices"].astype(np.int64), int(z["restart_index"]))
-    assert oriented_set(tri) == oriented_set(read_surface(torus_file).triangles)
+    assert oriented_set(tri) == oriented_set(read_mesh(torus_file, dim=None).triangles)
     assert int(z["triangles"]) == t.n_triangles
 
 
@@ -86,7 +87,7 @@ def test_generalized(torus_file, tmp_path):
         np.array(doc["strip_starts"]),
         np.r_[0, np.cumsum(np.diff(doc["strip_starts"]) - 2)],
     )
-    assert oriented_set(decode_generalized(g)) == oriented_set(read_surface(torus_file).triangles)
+    assert oriented_set(decode_generalized(g)) == oriented_set(read_mesh(torus_file, dim=None).triangles)
 
 
 def test_christofides_reports_bound(ham_file, tmp_path):
@@ -117,7 +118,7 @@ def test_fast_is_the_greedy_cover_alone(torus_file, tmp_path):
     doc = json.loads(out.read_text())
     assert doc["method"] == "fast"
     assert oriented_set(decode_gl_strip(np.array(doc["indices"]), doc["restart_index"])) == oriented_set(
-        read_surface(torus_file).triangles
+        read_mesh(torus_file, dim=None).triangles
     )
     run([torus_file, "-o", tmp_path / "d.json"])
     assert len(doc["indices"]) >= len(json.loads((tmp_path / "d.json").read_text())["indices"])
