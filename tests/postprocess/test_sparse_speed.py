@@ -494,3 +494,32 @@ def test_plan_steps_are_what_a_scan_finds(name: str, monkeypatch) -> None:
                                                  isolate=False))
     assert set(checked) == {"_alternating_merges", "_ring_joins", "_place_taken"}
     assert h.report["alternating_merges"] + h.report["ring_joins"] > 0  # (steps were undone)
+
+
+@pytest.mark.parametrize("name", ["la", "square_circle_hole"])
+def test_cover_swap_tests_on_two_threads_take_the_one_thread_swaps(name: str, monkeypatch) -> None:
+    # (the walks' path, ``ALT_POSITIONS_BELOW`` = 0, as on big meshes; two threads share
+    # each task's tests there: ``sparse._SwapTests``)
+    monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
+    old = threads.limit(1)
+    try:
+        one = hammesh.hamiltonian(m)
+    finally:
+        threads.limit(old)
+    if threads.cores() < 2:
+        pytest.skip("one core: the tests run in the caller's thread")
+    shared, real = [], sparse_module._SwapTests.__init__
+
+    def counted(self, *a, **k):
+        shared.append(self)
+        real(self, *a, **k)
+
+    monkeypatch.setattr(sparse_module._SwapTests, "__init__", counted)
+    two = hammesh.hamiltonian(m)
+    assert one.report["alternating_merges"] >= 3 and shared  # (swaps taken, the shared tests ran)
+    assert _report(two) == _report(one)
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(two, f), getattr(one, f), err_msg=f)
