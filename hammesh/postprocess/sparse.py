@@ -1576,8 +1576,11 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     tasks = tasks[:ALT_MERGE_TRIES]
     if not tasks:
         return cover, 0
-    is_cov = cover.is_cov.copy()
-    cyc = cover.cycle.copy()  # (the decisions read the ids as the swaps before left them)
+    # (copies in pages of the reserve: 15 MB at 1.5 M that would fault in here)
+    is_cov = fresh(cover.is_cov.shape, np.bool_)
+    is_cov[:] = cover.is_cov
+    cyc = fresh(cover.cycle.shape, cover.cycle.dtype)  # (the decisions read the ids as the swaps before left them)
+    cyc[:] = cover.cycle
     # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
     # or on a swap taken before (an O(m) pass, only where some join is tried)
     blocked = (status != _k.PASS) | is_fan[: len(status)] | (cyc < 0)
