@@ -101,6 +101,11 @@ SCORE_MIN_ROWS = 20_000
 PLACE_MIN_ROWS = 1_000
 #: edges per thread below which judging the edges for the cover runs in one call
 EDGE_MIN_ROWS = 50_000
+#: rows per thread below which ``triangle_facts`` runs in one call: its passes over the
+#: new rows (~35 k at 1.5 M: the report, the target repair, the kept rows' sample) ran
+#: serial, ~18 ms on the main thread; a pass on ``hammesh.threads``' kept pool starts
+#: in ~20 us (the default ``THREAD_MIN_ROWS`` dates from a new pool per pass)
+FACTS_MIN_ROWS = 8_192
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 #: a fan group may take in one covered neighbour across its non-cover edge and so join
@@ -176,7 +181,8 @@ def triangle_facts(
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     lo = _with_room(fresh(len(tri) + room, np.float64), len(tri))  # (from quality_mesh's reserve, if any: no faults)
     hi = fresh(len(tri), np.float64)
-    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri))
+    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri),
+                      FACTS_MIN_ROWS)
     worst, row = 1.0, -1
     for a, w, r in parts:
         if r >= 0 and w > worst:

@@ -54,6 +54,7 @@ def test_threaded_passes_give_the_one_thread_output(name: str, monkeypatch) -> N
     monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
     monkeypatch.setattr(sparse_module, "PLACE_MIN_ROWS", 3)  # (placing splits on both cores)
     monkeypatch.setattr(locality, "TABLE_MIN_CELLS", 4)  # (the Hilbert table on both cores)
+    monkeypatch.setattr(sparse_module, "FACTS_MIN_ROWS", 5)  # (the new rows' angles on both cores)
     two = hammesh.hamiltonian(m)
     assert one.n_triangles > 500
     for f in FIELDS:
