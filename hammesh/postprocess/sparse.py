@@ -1499,7 +1499,7 @@ class _SwapTests:
         self.args, self.n, self.wide, self.cb = cover_args, n, wide, (ca, cb, ALT_MERGE_WALK)
         self.pp = (pos, plen)
         self.answers = np.full(n, -1, np.int64)
-        self.next = 0
+        self.next, self.ended = 0, False
         self.lock = threading.Condition()
         self.other = pool.submit(self._run)
 
@@ -1515,10 +1515,15 @@ class _SwapTests:
         return _k.swap_outcome_of(*self.args, c, *self.cb, wide, *self.pp)
 
     def _run(self) -> None:
-        while (c := self._claim()) >= 0:
-            a = self._test(c, c < self.wide)
+        try:
+            while (c := self._claim()) >= 0:
+                a = self._test(c, c < self.wide)
+                with self.lock:
+                    self.answers[c] = a
+                    self.lock.notify_all()
+        finally:  # (also on an error: the caller stops waiting and raises it, ``answer``)
             with self.lock:
-                self.answers[c] = a
+                self.next, self.ended = self.n, True
                 self.lock.notify_all()
 
     def answer(self, c: int, wide: bool) -> int:
@@ -1529,7 +1534,10 @@ class _SwapTests:
                 self.answers[mine] = self._test(mine, mine < self.wide)
                 continue
             with self.lock:
-                self.lock.wait_for(lambda: self.answers[c] >= 0)
+                self.lock.wait_for(lambda: self.answers[c] >= 0 or self.ended)
+            if self.answers[c] < 0:
+                self.other.result()  # (the other thread's error, if it stopped on one)
+                self.answers[c] = self._test(c, c < self.wide)  # (else the finally ran first)
         a = int(self.answers[c])
         if wide and c >= self.wide and a != 1:  # (asked narrow: the wide answer differs only here)
             a = self._test(c, True)

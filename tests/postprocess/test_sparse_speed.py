@@ -524,3 +524,37 @@ def test_cover_swap_tests_on_two_threads_take_the_one_thread_swaps(name: str, mo
     assert _report(two) == _report(one)
     for f in FIELDS:
         np.testing.assert_array_equal(getattr(two, f), getattr(one, f), err_msg=f)
+
+
+def test_an_error_in_the_other_threads_swap_test_reaches_the_caller(monkeypatch) -> None:
+    import threading
+
+    if threads.cores() < 2:
+        pytest.skip("one core: the tests run in the caller's thread")
+    monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
+    dom = _domain("la")
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=25, max_area=area, isolate=False)
+    caller, real = threading.get_ident(), sk.swap_outcome_of
+
+    def fails_off_the_caller(*a):
+        if threading.get_ident() != caller:
+            raise RuntimeError("test failed on the other thread")
+        return real(*a)
+
+    monkeypatch.setattr(sk, "swap_outcome_of", fails_off_the_caller)
+    got: list = []
+
+    def run() -> None:
+        nonlocal caller
+        caller = threading.get_ident()
+        try:
+            hammesh.hamiltonian(m)
+        except RuntimeError as exc:
+            got.append(exc)
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(120)
+    assert not t.is_alive(), "the caller waits for ever on the other thread's answer"
+    assert got and "other thread" in str(got[0])
