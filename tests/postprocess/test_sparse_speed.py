@@ -34,20 +34,28 @@ def _domain(name: str) -> hammesh.Domain:
     return bundled_domain(name)
 
 
+def _small_mesh(name: str) -> hammesh.Mesh:
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    return hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
+
+
+def _one_thread(m: hammesh.Mesh) -> hammesh.HamiltonianMesh:
+    old = threads.limit(1)
+    try:
+        return hammesh.hamiltonian(m)
+    finally:
+        threads.limit(old)
+
+
 def _report(h: hammesh.HamiltonianMesh) -> dict:
     return {k: v for k, v in h.report.items() if k not in ("seconds", "step_seconds", "step_cpu_seconds")}
 
 
 @pytest.mark.parametrize("name", ["A", "la", "loops", "regions"])
 def test_threaded_passes_give_the_one_thread_output(name: str, monkeypatch) -> None:
-    dom = _domain(name)
-    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
-    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
-    old = threads.limit(1)
-    try:
-        one = hammesh.hamiltonian(m)
-    finally:
-        threads.limit(old)
+    m = _small_mesh(name)
+    one = _one_thread(m)
     if threads.cores() < 2:
         pytest.skip("one core: the threaded passes cannot run")
     monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 37)
@@ -502,14 +510,8 @@ def test_cover_swap_tests_on_two_threads_take_the_one_thread_swaps(name: str, mo
     # (the walks' path, ``ALT_POSITIONS_BELOW`` = 0, as on big meshes; two threads share
     # each task's tests there: ``sparse._SwapTests``)
     monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
-    dom = _domain(name)
-    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
-    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
-    old = threads.limit(1)
-    try:
-        one = hammesh.hamiltonian(m)
-    finally:
-        threads.limit(old)
+    m = _small_mesh(name)
+    one = _one_thread(m)
     if threads.cores() < 2:
         pytest.skip("one core: the tests run in the caller's thread")
     shared, real = [], sparse_module._SwapTests.__init__
@@ -532,9 +534,7 @@ def test_an_error_in_the_other_threads_swap_test_reaches_the_caller(monkeypatch)
     if threads.cores() < 2:
         pytest.skip("one core: the tests run in the caller's thread")
     monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
-    dom = _domain("la")
-    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
-    m = hammesh.quality_mesh(dom, min_angle=25, max_area=area, isolate=False)
+    m = _small_mesh("la")
     caller, real = threading.get_ident(), sk.swap_outcome_of
 
     def fails_off_the_caller(*a):
