@@ -1823,9 +1823,9 @@ def sparse_cycles(
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
         there, and without a page reserve faults one for the steps after the cover):
         as the cover starts, or, where ``hammesh.pages`` holds a reserve, after the
-        cover swaps, beside the ring joins, the output rows, the improvement and the
-        report, which run on one core (the cover's matching and, on big meshes, the
-        cover swaps' tests run on two).
+        output rows, beside the improvement, the report and the mapping back, which
+        run on one core bar a few short passes (the cover's matching, the output
+        rows' walk and gather and, on big meshes, the cover swaps' tests run on two).
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
@@ -1992,8 +1992,6 @@ def sparse_cycles(
             n_alt += n_swapped
             if not n_swapped:
                 break
-        if use_cover and late:  # (the ring joins, output rows, improvement and report: one core;
-            beside_cover()  # the cover swaps before them test on both)
         for _ in range(RING_JOIN_PASSES if use_cover and fans and pts.shape[1] == 2 else 0):
             rings = _ring_joins(pts, tri, tw, con, cover, amin_p, orig_of, is_fan, order, join, cand, slack, newmin,
                                 newmax, status, slot, swap_he, counts, keep, keep * min_angle, hi, 2.0 * floor,
@@ -2036,6 +2034,8 @@ def sparse_cycles(
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
     steps.done("output_rows")
+    if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
+        beside_cover()  # short passes; the swap tests and the output rows' passes take both)
     n_improve = n_moved = 0
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
