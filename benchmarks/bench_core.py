@@ -35,6 +35,18 @@ the input and the page reserve, made beside it on the other thread (both arms al
 the pinned edges on two threads (default) or on one, and prints each phase's critical
 path (the busiest thread's ``time.thread_time`` in its compiled calls).
 
+**Critical path of a first call** (session 14; a figure the load on a shared machine
+moves little, where wall times mean nothing):
+
+    python benchmarks/bench_core.py --mode sparse --critical 5
+
+``--critical N`` runs N fresh ``quality_mesh`` + ``hamiltonian`` first calls and prints,
+per step, the main thread's CPU outside the threaded passes plus each pass's largest
+call's thread CPU (``hammesh.threads.run_all``), plus the time the main thread waits on
+the cover swap tests' other thread beyond its own share (``sparse._SwapTests``): about
+what the call's wall time is on two free cores. Compare two trees by running it in
+each, alternating.
+
 The children inherit the environment: ``NUMPY_MADVISE_HUGEPAGE=0 python
 benchmarks/bench_core.py`` measures without numpy's transparent-huge-page advice.
 
@@ -134,6 +146,8 @@ def child(what: str, min_angle: float, max_area: float, path: str, mode: str = "
             return _pipeline(dom, quality_mesh, min_angle, max_area, path, mode, inside, t_import)
         finally:
             os.unlink(inside)
+    if what == "critical":
+        return _critical_child(dom, min_angle, max_area, mode)
     if what == "file":  # hamiltonian on a mesh read from a file: kernels loaded cold
         with np.load(path) as f:
             mesh = hammesh.Mesh(**{k: f[k] for k in f.files})
@@ -185,6 +199,119 @@ def _pipeline(dom, quality_mesh, min_angle: float, max_area: float, path: str, m
             "quality_mesh_cpu": c_mesh, "hamiltonian_cpu": c_ham, "hamiltonian_sys": k_ham,
             "triangles": mesh.n_triangles, "reserve_mib": reserve / 2**20,
             "verified": bool(h.report["verified"]), "import_meshing": t_import}
+
+
+def _critical_child(dom, min_angle: float, max_area: float, mode: str) -> dict:
+    """``--critical``'s measurement of one first call (see the module's docstring)."""
+    import hammesh
+    from hammesh import threads
+    from hammesh.postprocess import sparse
+
+    mesh = hammesh.quality_mesh(dom, min_angle=min_angle, max_area=max_area)
+    for th in threading.enumerate():  # (untimed) the child reaped, the kernels loaded
+        if th.name in ("hammesh-reap", "hammesh-meanwhile"):
+            th.join()
+    real, caller = threads.run_all, threading.get_ident()
+    acc = {"inside": 0.0, "largest": 0.0}
+
+    def run_all(calls):
+        if threading.get_ident() != caller:
+            return real(calls)
+        cpu = [0.0] * len(calls)
+
+        def timed(i, c):
+            def call():
+                t = time.thread_time()
+                out = c()
+                cpu[i] = time.thread_time() - t
+                return out
+            return call
+
+        t = time.thread_time()
+        out = real([timed(i, c) for i, c in enumerate(calls)])
+        acc["inside"] += time.thread_time() - t
+        acc["largest"] += max(cpu)
+        return out
+
+    for name, module in list(sys.modules.items()):
+        if name.startswith("hammesh") and getattr(module, "run_all", None) is real:
+            module.run_all = run_all
+    tests: list = []
+    swap = getattr(sparse, "_SwapTests", None)
+    if swap is not None:  # (the caller's CPU per task and the other thread's)
+        init, run, stop = swap.__init__, swap._run, swap.stop
+
+        def s_init(self, *a, **k):
+            self.bench = [time.thread_time(), None, 0.0]
+            tests.append(self)
+            init(self, *a, **k)
+
+        def s_run(self):
+            t = time.thread_time()
+            run(self)
+            self.bench[2] = time.thread_time() - t
+
+        def s_stop(self):
+            if self.bench[1] is None:
+                self.bench[1] = time.thread_time() - self.bench[0]
+            stop(self)
+
+        swap.__init__, swap._run, swap.stop = s_init, s_run, s_stop
+
+    def waited() -> float:
+        return sum(max(0.0, x.bench[2] - (x.bench[1] or 0.0)) for x in tests)
+
+    marks = []
+
+    def mark(name: str) -> None:
+        marks.append((name, time.thread_time() - acc["inside"] + acc["largest"] + waited()))
+
+    done = sparse._Steps.done
+
+    def step_done(self, name):
+        mark(name)
+        return done(self, name)
+
+    sparse._Steps.done = step_done
+    post = sys.modules["hammesh.postprocess"]
+    certify, build = post.certify, post.sparse_hamiltonian
+
+    def timed_certify(*a, **k):
+        mark("mapping back, the mesh")
+        out = certify(*a, **k)
+        mark("certificate")
+        return out
+
+    def timed_build(*a, **k):
+        mark("validation")
+        return build(*a, **k)
+
+    post.certify, post.sparse_hamiltonian = timed_certify, timed_build
+    t, c = time.perf_counter(), _cpu()
+    mark("<start>")
+    h = hammesh.hamiltonian(mesh, mode=mode)
+    mark("<end>")
+    t, c = time.perf_counter() - t, _cpu() - c
+    steps = {b[0]: b[1] - a[1] for a, b in zip(marks, marks[1:]) if b[0] != "<end>"}
+    return {"wall": t, "cpu": c, "critical": marks[-1][1] - marks[0][1], "steps": steps,
+            "verified": bool(h.report["verified"]), "load": os.getloadavg()[0]}
+
+
+def critical_paths(args: argparse.Namespace) -> None:
+    """``--critical``: fresh first calls, the critical-path estimate per step."""
+    runs = []
+    for _ in range(args.critical):
+        r = _fresh("critical", args)
+        assert r["verified"]
+        runs.append(r)
+        print(f"  critical path {r['critical']:.3f} s, wall {r['wall']:.3f} s, CPU {r['cpu']:.3f} s, "
+              f"load {r['load']:.1f}", flush=True)
+    print(f"first call, mode={args.mode}: critical-path estimate per step, median of {len(runs)} (CPU s)")
+    for k in runs[0]["steps"]:
+        print(f"  {k:<26}{statistics.median(r['steps'].get(k, 0.0) for r in runs):8.3f}")
+    for k in ("critical", "wall", "cpu"):
+        v = [r[k] for r in runs]
+        print(f"  {'whole call: ' + k:<26}{statistics.median(v):8.3f}  ({min(v):.3f}-{max(v):.3f})")
 
 
 def _fresh(what: str, args: argparse.Namespace, path: str = "") -> dict:
@@ -385,6 +512,8 @@ def main(argv: list[str] | None = None) -> int:
                     "renumbering, the A/B of session 10)")
     ap.add_argument("--ab", choices=["locality", "output-threads"], help="a same-run A/B of sparse mode (see above)")
     ap.add_argument("--rounds", type=int, default=6, help="--ab: rounds, each arm once a round")
+    ap.add_argument("--critical", type=int, default=0,
+                    help="fresh first calls measured by the critical-path estimate (see above)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--path", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -395,6 +524,9 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.ab:
         same_run_ab(args)
+        return 0
+    if args.critical:
+        critical_paths(args)
         return 0
     # numba cold start: compile (or load the cache) in a fresh interpreter, measured
     cold = time.perf_counter()

@@ -16,7 +16,8 @@ cluster started elsewhere: ``HAMMESH_THREADS=1 dask worker ... --nworkers K``).
 from __future__ import annotations
 
 import os
-from concurrent.futures import Executor, Future, ThreadPoolExecutor
+import threading
+from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
 from typing import Any, Callable
 
 __all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "THREAD_MIN_ROWS"]
@@ -60,12 +61,49 @@ def row_ranges(m: int, min_rows: int) -> list[tuple[int, int]]:
     return [(cuts[i], cuts[i + 1]) for i in range(k)]
 
 
+#: threads the shared pool may start (it starts one only where no idle one waits; a
+#: pass takes at most ``cores() - 1`` of them, more only where passes run at once)
+POOL_THREADS = 32
+_pool: ThreadPoolExecutor | None = None
+_pool_lock = threading.Lock()
+
+
+def _shared_pool() -> ThreadPoolExecutor:
+    global _pool
+    with _pool_lock:
+        if _pool is None:
+            _pool = ThreadPoolExecutor(POOL_THREADS, thread_name_prefix="hammesh-pass")
+        return _pool
+
+
+def _forget_pool() -> None:  # (a forked child has none of its parent's threads)
+    global _pool
+    _pool = None
+
+
+os.register_at_fork(after_in_child=_forget_pool)
+
+
 def run_all(calls: list[Callable[[], Any]]) -> list[Any]:
-    """Results of ``calls``, run side by side (in the caller's thread if just one)."""
+    """Results of ``calls``, run side by side (in the caller's thread if just one).
+
+    Up to :func:`cores` calls: the first in the caller's thread, the others on a pool
+    kept for the process (a new pool per pass cost ~0.3 ms of thread starts, and a
+    sparse ``hamiltonian()`` makes ~40 passes). More calls than that: a pool of
+    :func:`cores` threads for this call, so that no more run at once.
+    """
     if len(calls) == 1:
         return [calls[0]()]
-    with ThreadPoolExecutor(min(len(calls), cores())) as pool:
-        return [f.result() for f in [pool.submit(c) for c in calls]]
+    if len(calls) > cores():
+        with ThreadPoolExecutor(cores()) as pool:
+            return [f.result() for f in [pool.submit(c) for c in calls]]
+    rest = [_shared_pool().submit(c) for c in calls[1:]]
+    try:
+        first = calls[0]()
+    except BaseException:
+        wait(rest)  # (the others write the caller's arrays too: done before it sees the error)
+        raise
+    return [first] + [f.result() for f in rest]
 
 
 class InlineExecutor(Executor):

@@ -32,7 +32,7 @@ from hammesh import threads
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-from hammesh.postprocess._join_kernels import place_fan, quad_corners
+from hammesh.postprocess._join_kernels import place_fan, quad_corners, swap_merge_outcome
 from hammesh.postprocess._thm24_kernels import find_root as _find
 from hammesh.postprocess._thm24_kernels import lower_bound
 
@@ -708,6 +708,21 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
     return Walk(*_walk_rest(ends, parent_new, m, status, order, n_f, min(lo_f, lo_b), back, n_b, fwd, bwd))
 
 
+@njit(cache=True, nogil=True)
+def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wide, pos, plen):
+    """``_join_kernels.swap_merge_outcome`` of the alternating cycle ``c`` of ``buf`` /
+    ``starts`` (``alternating_cycles_into``'s output), its group the cycle's triangles,
+    sorted, as the caller's ``np.unique`` makes it. Reads only: two threads test one
+    task's cycles at once (``sparse._SwapTests``).
+    """
+    fl = buf[starts[c]:starts[c + 1]]
+    tris = np.empty(2 * fl.shape[0], np.int64)
+    for i in range(fl.shape[0]):
+        tris[2 * i] = fl[i] // 3
+        tris[2 * i + 1] = twin[fl[i]] // 3
+    return swap_merge_outcome(twin, is_cov, cyc, root, fl, np.unique(tris), ca, cb, budget, wide, pos, plen)
+
+
 def load_output_kernels() -> None:
     """Load (or compile) the kernels only big outputs reach: the walk from both ends and
     the gather of several runs, on a fan of four new rows (two runs of it, one
@@ -729,6 +744,12 @@ def load_output_kernels() -> None:
     walk = _walk_rest(ends, r.copy(), 0, status, order, n_f, min(lo_f, lo_b), back, n_b, marks[0], marks[1])
     rows, lengths = np.empty(k, np.int64), np.empty(2, np.int64)
     _runs_in_order_into(walk[0], np.array([2, 2]), np.array([1, 0]), rows, lengths)
+    # the cover swaps' tests on two threads (``sparse._alternating_merges``), on two
+    # triangles whose third edges are joined
+    twin = np.array([3, 4, 5, 0, 1, 2], np.int64)
+    swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
+                    np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
+                    none, none)
 
 
 @njit(cache=True, nogil=True)

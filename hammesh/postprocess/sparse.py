@@ -50,8 +50,10 @@ certificate as its pairing claim.
 from __future__ import annotations
 
 import math
+import threading
 import time
 import weakref
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Callable, NamedTuple
@@ -100,6 +102,11 @@ SCORE_MIN_ROWS = 20_000
 PLACE_MIN_ROWS = 1_000
 #: edges per thread below which judging the edges for the cover runs in one call
 EDGE_MIN_ROWS = 50_000
+#: rows per thread below which ``triangle_facts`` runs in one call: its passes over the
+#: new rows (~35 k at 1.5 M: the report, the target repair, the kept rows' sample) ran
+#: serial, ~18 ms on the main thread; a pass on ``hammesh.threads``' kept pool starts
+#: in ~20 us (the default ``THREAD_MIN_ROWS`` dates from a new pool per pass)
+FACTS_MIN_ROWS = 8_192
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 #: a fan group may take in one covered neighbour across its non-cover edge and so join
@@ -175,7 +182,8 @@ def triangle_facts(
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     lo = _with_room(fresh(len(tri) + room, np.float64), len(tri))  # (from quality_mesh's reserve, if any: no faults)
     hi = fresh(len(tri), np.float64)
-    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri))
+    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri),
+                      FACTS_MIN_ROWS)
     worst, row = 1.0, -1
     for a, w, r in parts:
         if r >= 0 and w > worst:
@@ -1473,6 +1481,94 @@ def _label_paths(tw, is_cov, group: set, out: RingOutcome, find, cyc) -> None:
             came = int(tw[f])
 
 
+#: cover swap tests the other thread may make beyond the one the caller reads
+#: (``_SwapTests``): enough to keep both threads testing, few wasted when one is taken
+SWAP_TESTS_AHEAD = 2
+
+
+class _SwapTests:
+    """One task's cover-swap tests (``_join_kernels.swap_merge_outcome``), shared by the
+    caller and one pool thread in the order the caller reads them.
+
+    Each thread claims the next untested alternating cycle; the caller reads the
+    answers in order and, where one is not there yet, tests the next unclaimed cycle
+    itself (or waits for the other thread's). A test only reads the cover, which
+    changes only when a swap is taken, and then the task ends: :meth:`stop` lets the
+    other thread finish its test first. So every answer is the one the serial loop
+    gets; the tests made beyond the one taken are those the other thread
+    claimed while the caller judged an answer (at most ``SWAP_TESTS_AHEAD`` beyond
+    the one it reads: ~430 tests at 1.5 M became ~590 without that bound, +0.02 s
+    CPU). Cycle ``c`` is asked the wide question
+    (merges beyond the two cycles wanted) if ``c < wide`` — the caller asks it while
+    its count of answers other than 1 lasts, so exactly there unless an answer 1 came
+    before and was not taken; then :meth:`answer` asks again. The tests of one task
+    cost from microseconds to ~5 ms each (walks on the big cycle that end undecided at
+    ``ALT_MERGE_WALK``): at 1.5 M triangles ~430 of them, 0.06 s.
+    """
+
+    def __init__(self, pool: ThreadPoolExecutor, cover_args: tuple, n: int, ca: int, cb: int, wide: int, pos, plen):
+        self.args, self.n, self.wide, self.cb = cover_args, n, wide, (ca, cb, ALT_MERGE_WALK)
+        self.pp = (pos, plen)
+        self.answers = np.full(n, -1, np.int64)
+        self.next, self.read, self.ended = 0, 0, False
+        self.lock = threading.Condition()
+        self.other = pool.submit(self._run)
+
+    def _claim(self, ahead: bool = False) -> int:
+        """The next untested cycle, -1 if none; ``ahead``: the other thread's claim, at
+        most ``SWAP_TESTS_AHEAD`` cycles past the one the caller reads (it waits)."""
+        with self.lock:
+            while ahead and self.read + SWAP_TESTS_AHEAD < self.next < self.n:
+                self.lock.wait()
+            c = self.next
+            if c >= self.n:
+                return -1
+            self.next = c + 1
+            return c
+
+    def _test(self, c: int, wide: bool) -> int:
+        return _k.swap_outcome_of(*self.args, c, *self.cb, wide, *self.pp)
+
+    def _run(self) -> None:
+        try:
+            while (c := self._claim(ahead=True)) >= 0:
+                a = self._test(c, c < self.wide)
+                with self.lock:
+                    self.answers[c] = a
+                    self.lock.notify_all()
+        finally:  # (also on an error: the caller stops waiting and raises it, ``answer``)
+            with self.lock:
+                self.next, self.ended = self.n, True
+                self.lock.notify_all()
+
+    def answer(self, c: int, wide: bool) -> int:
+        """Cycle ``c``'s answer to the question the serial loop asks (``wide`` or not)."""
+        with self.lock:
+            self.read = c
+            self.lock.notify_all()
+        while self.answers[c] < 0:
+            mine = self._claim()
+            if mine >= 0:
+                self.answers[mine] = self._test(mine, mine < self.wide)
+                continue
+            with self.lock:
+                self.lock.wait_for(lambda: self.answers[c] >= 0 or self.ended)
+            if self.answers[c] < 0:
+                self.other.result()  # (the other thread's error, if it stopped on one)
+                self.answers[c] = self._test(c, c < self.wide)  # (else the finally ran first)
+        a = int(self.answers[c])
+        if wide and c >= self.wide and a != 1:  # (asked narrow: the wide answer differs only here)
+            a = self._test(c, True)
+        return a
+
+    def stop(self) -> None:
+        """No more tests; returns once the other thread's test in progress is done."""
+        with self.lock:
+            self.next = self.n
+            self.lock.notify_all()
+        self.other.result()
+
+
 def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack, newmin, newmax, status, slot,
                         swap_he, counts, lo: float, hi: float, steps_at: PlanSteps):
     """Joins below the rule between two cycles replaced by merging the cycles in the cover (issue 13).
@@ -1513,8 +1609,11 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     tasks = tasks[:ALT_MERGE_TRIES]
     if not tasks:
         return cover, 0
-    is_cov = cover.is_cov.copy()
-    cyc = cover.cycle.copy()  # (the decisions read the ids as the swaps before left them)
+    # (copies in pages of the reserve: 15 MB at 1.5 M that would fault in here)
+    is_cov = fresh(cover.is_cov.shape, np.bool_)
+    is_cov[:] = cover.is_cov
+    cyc = fresh(cover.cycle.shape, cover.cycle.dtype)  # (the decisions read the ids as the swaps before left them)
+    cyc[:] = cover.cycle
     # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
     # or on a swap taken before (an O(m) pass, only where some join is tried)
     blocked = (status != _k.PASS) | is_fan[: len(status)] | (cyc < 0)
@@ -1594,6 +1693,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         ALT_MERGE_DEPTH, ALT_MERGE_CHECKS, ALT_MERGE_WIDER)
     buf = np.empty(checks * (2 * depth + 2), np.int64)
     starts = np.empty(checks + 1, np.int64)
+    # big meshes: a task's tests shared by two threads (``_SwapTests``)
+    pool = ThreadPoolExecutor(1) if not small and threads.cores() > 1 else None
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
@@ -1602,13 +1703,19 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         ca, cb = find(int(cyc[t])), find(int(cyc[u]))
         n = _j.alternating_cycles_into(tw, is_cov, blocked, h0, depth, ALT_MERGE_BUDGET, buf, starts, checks)
         wider = n_wider
+        tests = None
+        if pool is not None and n > 1:
+            tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen)
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
             # taken if the plan joins them by a subtree)
-            merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK, wider > 0,
-                                           pos, plen)
+            if tests is not None:
+                merges = tests.answer(c, wider > 0)
+            else:
+                merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK,
+                                               wider > 0, pos, plen)
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1633,6 +1740,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                 gone.append((merged, inside))
             if not gone or h0 not in {h for _, inside in gone for h in inside}:
                 continue
+            if tests is not None:
+                tests.stop()  # (before the cover changes under the other thread's test)
             _flip_cover(tw, is_cov, flips)
             blocked[list(group)] = True
             used.update(group)
@@ -1653,6 +1762,10 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             if small:
                 _j.cycle_positions_into(tw, is_cov, pos, plen)
             break
+        if tests is not None:
+            tests.stop()
+    if pool is not None:
+        pool.shutdown()
     if not done:
         return cover, 0
     lut = np.array([find(c) for c in np.flatnonzero(root != np.arange(len(root))).tolist()], np.int64)
@@ -1729,9 +1842,10 @@ def sparse_cycles(
         Called once, to hand work that needs nothing of the construction to another
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
         there, and without a page reserve faults one for the steps after the cover):
-        as the cover starts, or, where ``hammesh.pages`` holds a reserve, once the
-        joins are scored, beside the plan, the cover swaps and the ring joins, which
-        run on one core (the cover's matching runs on two).
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, after the
+        output rows, beside the improvement, the report and the mapping back, which
+        run on one core bar a few short passes (the cover's matching, the output
+        rows' walk and gather and, on big meshes, the cover swaps' tests run on two).
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
@@ -1874,8 +1988,6 @@ def sparse_cycles(
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls, fish is not None)
         steps.done("place_splits")
-        if use_cover and late:
-            beside_cover()  # (the plan, the alternating merges and ring joins: one core)
         no_absorb = np.zeros(m, np.bool_)
         for attempt in range(4):
             if attempt == 3:
@@ -1949,6 +2061,8 @@ def sparse_cycles(
     if n_fan:
         kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
     steps.done("output_rows")
+    if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
+        beside_cover()  # short passes; the swap tests and the output rows' passes take both)
     n_improve = n_moved = 0
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):

@@ -34,26 +34,35 @@ def _domain(name: str) -> hammesh.Domain:
     return bundled_domain(name)
 
 
+def _small_mesh(name: str) -> hammesh.Mesh:
+    dom = _domain(name)
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    return hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
+
+
+def _one_thread(m: hammesh.Mesh) -> hammesh.HamiltonianMesh:
+    old = threads.limit(1)
+    try:
+        return hammesh.hamiltonian(m)
+    finally:
+        threads.limit(old)
+
+
 def _report(h: hammesh.HamiltonianMesh) -> dict:
     return {k: v for k, v in h.report.items() if k not in ("seconds", "step_seconds", "step_cpu_seconds")}
 
 
 @pytest.mark.parametrize("name", ["A", "la", "loops", "regions"])
 def test_threaded_passes_give_the_one_thread_output(name: str, monkeypatch) -> None:
-    dom = _domain(name)
-    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
-    m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
-    old = threads.limit(1)
-    try:
-        one = hammesh.hamiltonian(m)
-    finally:
-        threads.limit(old)
+    m = _small_mesh(name)
+    one = _one_thread(m)
     if threads.cores() < 2:
         pytest.skip("one core: the threaded passes cannot run")
     monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 37)
     monkeypatch.setattr(sk, "WALK_TWO_ENDS_MIN_ROWS", 10)
     monkeypatch.setattr(sparse_module, "PLACE_MIN_ROWS", 3)  # (placing splits on both cores)
     monkeypatch.setattr(locality, "TABLE_MIN_CELLS", 4)  # (the Hilbert table on both cores)
+    monkeypatch.setattr(sparse_module, "FACTS_MIN_ROWS", 5)  # (the new rows' angles on both cores)
     two = hammesh.hamiltonian(m)
     assert one.n_triangles > 500
     for f in FIELDS:
@@ -494,3 +503,58 @@ def test_plan_steps_are_what_a_scan_finds(name: str, monkeypatch) -> None:
                                                  isolate=False))
     assert set(checked) == {"_alternating_merges", "_ring_joins", "_place_taken"}
     assert h.report["alternating_merges"] + h.report["ring_joins"] > 0  # (steps were undone)
+
+
+@pytest.mark.parametrize("name", ["la", "square_circle_hole"])
+def test_cover_swap_tests_on_two_threads_take_the_one_thread_swaps(name: str, monkeypatch) -> None:
+    # (the walks' path, ``ALT_POSITIONS_BELOW`` = 0, as on big meshes; two threads share
+    # each task's tests there: ``sparse._SwapTests``)
+    monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
+    m = _small_mesh(name)
+    one = _one_thread(m)
+    if threads.cores() < 2:
+        pytest.skip("one core: the tests run in the caller's thread")
+    shared, real = [], sparse_module._SwapTests.__init__
+
+    def counted(self, *a, **k):
+        shared.append(self)
+        real(self, *a, **k)
+
+    monkeypatch.setattr(sparse_module._SwapTests, "__init__", counted)
+    two = hammesh.hamiltonian(m)
+    assert one.report["alternating_merges"] >= 3 and shared  # (swaps taken, the shared tests ran)
+    assert _report(two) == _report(one)
+    for f in FIELDS:
+        np.testing.assert_array_equal(getattr(two, f), getattr(one, f), err_msg=f)
+
+
+def test_an_error_in_the_other_threads_swap_test_reaches_the_caller(monkeypatch) -> None:
+    import threading
+
+    if threads.cores() < 2:
+        pytest.skip("one core: the tests run in the caller's thread")
+    monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
+    m = _small_mesh("la")
+    caller, real = threading.get_ident(), sk.swap_outcome_of
+
+    def fails_off_the_caller(*a):
+        if threading.get_ident() != caller:
+            raise RuntimeError("test failed on the other thread")
+        return real(*a)
+
+    monkeypatch.setattr(sk, "swap_outcome_of", fails_off_the_caller)
+    got: list = []
+
+    def run() -> None:
+        nonlocal caller
+        caller = threading.get_ident()
+        try:
+            hammesh.hamiltonian(m)
+        except RuntimeError as exc:
+            got.append(exc)
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(120)
+    assert not t.is_alive(), "the caller waits for ever on the other thread's answer"
+    assert got and "other thread" in str(got[0])
