@@ -23,13 +23,14 @@ from hammesh import threads
 from hammesh.pages import fresh, reserved
 from hammesh.halfedge.locality import grid_frame
 from hammesh.postprocess import _cover_kernels as _k
+from hammesh.postprocess import _recolour_kernels as _rk
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
     "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves", "CHAIN_COST", "GUIDE_WEIGHT",
-    "GUIDE_MIN_TRIANGLES",
+    "GUIDE_MIN_TRIANGLES", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -73,6 +74,20 @@ ONLINE_BUDGET = 256
 #: Triangle's numbering is kept (the small meshes' figures stay as they were).
 ONLINE_MIN_TRIANGLES = 100_000
 
+#: Below this many triangles (and with ``good`` edges), nodes of the cover that have no
+#: non-cover edge whose join keeps the local rule (cycles of at most ``RECOLOUR_NODE``
+#: triangles, uncovered triangles) are merged into others where re-colouring up to
+#: ``RECOLOUR_SET`` of the ``RECOLOUR_CANDIDATES`` vertices nearest them allows
+#: (``_recolour_kernels.recolour_merges``: the cover swapped along the dual cycle around
+#: those vertices, the mesh unchanged). Measured on the 16k corpus of
+#: ``bench_sparse.py`` (docs/sparse.md, session 14); from this size on not tried
+#: (the 1.5 M path is unchanged).
+RECOLOUR_BELOW = 100_000
+RECOLOUR_SET = 3
+RECOLOUR_NODE = 64
+RECOLOUR_CANDIDATES = 64
+RECOLOUR_ROUNDS = 3
+
 
 @dataclass(frozen=True, eq=False)
 class CycleCover:
@@ -91,6 +106,9 @@ class CycleCover:
         Degree-3 triangles the matching left free (before the local repair).
     n_rotations : int
         Cycles merged away by re-matching around vertices.
+    n_recoloured : int
+        Nodes (cycles, uncovered triangles) merged away by re-colouring vertices
+        (``_recolour_kernels.recolour_merges``); counted in ``n_rotations`` too.
     n_dropped : int
         Interior (degree-3) triangles left uncovered to fix the matching's parity
         defects, instead of chains of boundary triangles (``drop``).
@@ -107,6 +125,7 @@ class CycleCover:
     n_rotations: int = 0
     quad: np.ndarray | None = None
     n_dropped: int = 0
+    n_recoloured: int = 0
 
 
 def cycle_cover(
@@ -275,15 +294,27 @@ def cycle_cover(
         n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
         n_cyc -= n_rot
     mark("rotate")
+    n_rec = 0
+    if rotate and good is not None and 0 < m < RECOLOUR_BELOW and cell is None:
+        tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
+        n_rec = int(_rk.recolour_merges(
+            tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
+            RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS,
+        ))
+        if n_rec:  # (new cycles took fresh ids: number them as the cover does)
+            cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
+            n_unc = int((cyc < 0).sum())
+    mark("recolour")
     return CycleCover(
         is_cov=is_cov,
         cycle=cyc,
         n_cycles=int(n_cyc),
         n_uncovered=int(n_unc),
         n_unmatched=int(n_free),
-        n_rotations=n_rot,
+        n_rotations=n_rot + n_rec,
         quad=quad,
         n_dropped=int(n_drop),
+        n_recoloured=n_rec,
     )
 
 

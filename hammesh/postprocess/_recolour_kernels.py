@@ -1,0 +1,349 @@
+"""Merging cover cycles by re-colouring a few mesh vertices (numba kernels).
+
+A cycle cover of a triangle mesh's dual graph draws closed curves through the
+triangles; each mesh edge is crossed (a cover edge) or not (the triangle's one
+matching edge). In the plane the crossed edges are exactly those whose end points
+lie on different sides of the curves: colour each vertex inside / outside and a
+triangle is covered iff it is *bichromatic* (a triangle has then exactly one
+monochromatic edge, its matching edge), uncovered iff monochromatic; the cycles are
+the borders of the inside colour's components (Arkin, Held, Mitchell, Skiena,
+*Hamiltonian triangulations for fast rendering*, 1996: a triangulation has a
+Hamiltonian dual path iff its vertices split into such a tree and forest).
+
+So flipping the colour of a set ``S`` of interior vertices gives another cover as
+long as no triangle around ``S`` becomes monochromatic; it swaps the cover along
+the dual cycle around ``S`` (an alternating cycle of the matching; a single vertex
+of even degree with alternating spokes is ``_cover_kernels.rotate_candidates``'s
+rotation). Nothing in the mesh changes. :func:`recolour_merges` looks, around every
+small cycle (and uncovered triangle) that has no non-cover edge to another node whose
+join keeps the local quality rule (``good``), for a set of up to three vertices
+whose re-colouring leaves fewer nodes: that node then needs no join of its own (on
+Triangle's ``la`` such nodes were the stars of single interior vertices, each joined
+by a split that halves the corner at the star's centre). Everything here reads and
+writes the cover in place; callers gate it by size (``cycle_cover.RECOLOUR_BELOW``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["recolour_merges", "vertex_colours"]
+
+
+@njit(cache=True, nogil=True)
+def _crossed(twin, is_cov, h):
+    """Is the mesh edge of half-edge ``h`` crossed by the cover (a dual cover edge)?"""
+    return twin[h] >= 0 and is_cov[h]
+
+
+@njit(cache=True, nogil=True)
+def vertex_colours(tri, twin, is_cov, vstart, vtri, col):
+    """Colour the vertices (``col``: (n,) int8, filled) so that exactly the crossed
+    edges join two colours, one breadth-first search per connected piece.
+
+    ``vstart`` (n + 1,), ``vtri`` (3 m,): the triangles around each vertex (CSR).
+    Returns False if no such colouring exists (the cover's curves do not separate,
+    e.g. on a surface of higher genus): then nothing may be re-coloured.
+    """
+    n = col.shape[0]
+    for v in range(n):
+        col[v] = -1
+    stack = np.empty(n, np.int64)
+    for s in range(n):
+        if col[s] >= 0 or vstart[s] == vstart[s + 1]:
+            continue
+        col[s] = 0
+        stack[0] = s
+        top = 1
+        while top > 0:
+            top -= 1
+            v = stack[top]
+            for i in range(vstart[v], vstart[v + 1]):
+                t = vtri[i]
+                for k in range(3):
+                    if tri[t, k] != v:
+                        continue
+                    for e in (3 * t + k, 3 * t + (k + 2) % 3):  # the two edges of t at v
+                        w = tri[t, (k + 1) % 3] if e == 3 * t + k else tri[t, (k + 2) % 3]
+                        c = col[v] ^ (1 if _crossed(twin, is_cov, e) else 0)
+                        if col[w] < 0:
+                            col[w] = c
+                            stack[top] = w
+                            top += 1
+    m = tri.shape[0]
+    for t in range(m):
+        for k in range(3):
+            if (col[tri[t, k]] != col[tri[t, (k + 1) % 3]]) != _crossed(twin, is_cov, 3 * t + k):
+                return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id):
+    """Walk the cover cycle through ``t0``, setting ``stamp`` to ``value`` (and, with
+    ``new_id >= 0``, ``cyc`` to it) on every triangle; returns False if some triangle
+    on the way does not have exactly two cover edges."""
+    x = t0
+    came = -1  # the half-edge of x the walk entered by
+    while True:
+        stamp[x] = value
+        if new_id >= 0:
+            cyc[x] = new_id
+        out = -1
+        n_cov = 0
+        for k in range(3):
+            h = 3 * x + k
+            if _crossed(twin, is_cov, h):
+                n_cov += 1
+                if h != came and out < 0:
+                    out = h
+        if n_cov != 2 or out < 0:
+            return False
+        g = twin[out]
+        x = g // 3
+        came = g
+        if x == t0:
+            return True
+
+
+@njit(cache=True, nogil=True)
+def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, ns, ts, saved, stamp, clock):
+    """Re-colour the ``ns`` vertices ``sv`` if that leaves every triangle around them
+    covered and fewer nodes (cycles + uncovered triangles) among them; returns
+    ``(nodes merged away, clock)`` (0: the cover is as before)."""
+    for i in range(ns):
+        in_s[sv[i]] = True
+    nt = 0
+    ok = True
+    for i in range(ns):
+        v = sv[i]
+        for j in range(vstart[v], vstart[v + 1]):
+            t = vtri[j]
+            c0 = col[tri[t, 0]] ^ (1 if in_s[tri[t, 0]] else 0)
+            c1 = col[tri[t, 1]] ^ (1 if in_s[tri[t, 1]] else 0)
+            c2 = col[tri[t, 2]] ^ (1 if in_s[tri[t, 2]] else 0)
+            if c0 == c1 and c1 == c2:
+                ok = False
+                break
+            seen = False
+            for q in range(nt):
+                if ts[q] == t:
+                    seen = True
+            if not seen:
+                ts[nt] = t
+                nt += 1
+        if not ok:
+            break
+    merged = 0
+    if ok:
+        # old nodes among the triangles around S; then the cover re-written there
+        clock += 1
+        n_old = 0
+        for q in range(nt):
+            t = ts[q]
+            if cyc[t] < 0:
+                n_old += 1
+            else:
+                new = True
+                for r in range(q):
+                    if cyc[ts[r]] == cyc[t]:
+                        new = False
+                if new:
+                    n_old += 1
+        for q in range(nt):
+            t = ts[q]
+            for k in range(3):
+                h = 3 * t + k
+                saved[3 * q + k] = is_cov[h]
+                a = col[tri[t, k]] ^ (1 if in_s[tri[t, k]] else 0)
+                b = col[tri[t, (k + 1) % 3]] ^ (1 if in_s[tri[t, (k + 1) % 3]] else 0)
+                is_cov[h] = twin[h] >= 0 and a != b
+        # (an edge at a vertex of S has both its triangles around S: twins agree)
+        n_new = 0
+        good = True
+        for q in range(nt):
+            if stamp[ts[q]] == clock:
+                continue
+            if not _walk_stamp(twin, is_cov, ts[q], stamp, clock, cyc, -1):
+                good = False
+                break
+            n_new += 1
+        if good and n_new < n_old:
+            merged = n_old - n_new
+            for i in range(ns):
+                col[sv[i]] ^= 1
+        else:
+            for q in range(nt):
+                for k in range(3):
+                    is_cov[3 * ts[q] + k] = saved[3 * q + k]
+    for i in range(ns):
+        in_s[sv[i]] = False
+    return merged, clock
+
+
+@njit(cache=True, nogil=True)
+def _is_target(twin, is_cov, cyc, good, members, nmem):
+    """Has this node (its triangles ``members``) no non-cover edge to another node
+    whose join keeps the rule (``good``)?"""
+    for i in range(nmem):
+        t = members[i]
+        for k in range(3):
+            h = 3 * t + k
+            g = twin[h]
+            if g < 0 or _crossed(twin, is_cov, h):
+                continue
+            if cyc[t] >= 0 and cyc[g // 3] == cyc[t]:
+                continue
+            if good[h]:
+                return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_set, max_cand, rounds):
+    """Merge small cover nodes into others by re-colouring up to ``max_set`` vertices.
+
+    Parameters: ``tri (m, 3)``, ``twin (3 m,)``, ``is_cov (3 m,) bool`` and ``cyc (m,)``
+    (the cover; both rewritten in place, new cycles get ids from ``n_cyc`` on, so the
+    caller renumbers), ``good (3 m,) bool`` (half-edges whose join keeps the local
+    rule), ``n_pts`` vertices. A node (a cycle of at most ``max_nodes`` triangles or
+    an uncovered triangle) with no good non-cover edge to another node is a target;
+    the vertices of its triangles and their neighbours (interior ones, the first
+    ``max_cand``) are tried in sets of 1, 2, ... ``max_set``, the first set that
+    leaves fewer nodes is taken (:func:`_try_set`); ``rounds`` passes over the
+    nodes. Returns the number of nodes merged away (0 if the cover has no vertex
+    colouring, :func:`vertex_colours`).
+    """
+    m = tri.shape[0]
+    # triangles around each vertex (CSR) and the boundary's vertices
+    vstart = np.zeros(n_pts + 1, np.int64)
+    for t in range(m):
+        for k in range(3):
+            vstart[tri[t, k] + 1] += 1
+    for v in range(n_pts):
+        vstart[v + 1] += vstart[v]
+    fill = vstart[:-1].copy()
+    vtri = np.empty(3 * m, np.int64)
+    bnd = np.zeros(n_pts, np.bool_)
+    for t in range(m):
+        for k in range(3):
+            v = tri[t, k]
+            vtri[fill[v]] = t
+            fill[v] += 1
+            if twin[3 * t + k] < 0:
+                bnd[v] = True
+                bnd[tri[t, (k + 1) % 3]] = True
+    col = np.empty(n_pts, np.int8)
+    if not vertex_colours(tri, twin, is_cov, vstart, vtri, col):
+        return 0
+    in_s = np.zeros(n_pts, np.bool_)
+    mark = np.zeros(n_pts, np.int64)
+    stamp = np.zeros(m, np.int64)
+    clock = 0
+    visit = 0
+    cands = np.empty(max_cand, np.int64)
+    sv = np.empty(max(max_set, 1), np.int64)
+    ts = np.empty(64 * max(max_set, 1), np.int64)
+    saved = np.empty(3 * ts.shape[0], np.bool_)
+    members = np.empty(max_nodes, np.int64)
+    next_id = n_cyc
+    total = 0
+    for _ in range(rounds):
+        # members of each cycle at this round's start (CSR by id)
+        n_ids = next_id
+        cstart = np.zeros(n_ids + 1, np.int64)
+        for t in range(m):
+            if cyc[t] >= 0:
+                cstart[cyc[t] + 1] += 1
+        for c in range(n_ids):
+            cstart[c + 1] += cstart[c]
+        cfill = cstart[:-1].copy()
+        ctri = np.empty(max(cstart[n_ids], 1), np.int64)
+        for t in range(m):
+            if cyc[t] >= 0:
+                ctri[cfill[cyc[t]]] = t
+                cfill[cyc[t]] += 1
+        merged_round = 0
+        for node in range(n_ids + m):
+            if node < n_ids:
+                nmem = cstart[node + 1] - cstart[node]
+                if nmem == 0 or nmem > max_nodes or cyc[ctri[cstart[node]]] != node:
+                    continue  # (empty, large, or merged in this round already)
+                for i in range(nmem):
+                    members[i] = ctri[cstart[node] + i]
+            else:
+                t = node - n_ids
+                if cyc[t] >= 0:
+                    continue
+                nmem = 1
+                members[0] = t
+            if not _is_target(twin, is_cov, cyc, good, members, nmem):
+                continue
+            # candidate vertices: the node's, then their neighbours (interior only)
+            visit += 1
+            nc = 0
+            for ring in range(2):
+                for i in range(nmem):
+                    t = members[i]
+                    for k in range(3):
+                        v = tri[t, k]
+                        if ring == 0:
+                            if not bnd[v] and mark[v] != visit and nc < max_cand:
+                                mark[v] = visit
+                                cands[nc] = v
+                                nc += 1
+                            continue
+                        for j in range(vstart[v], vstart[v + 1]):
+                            s = vtri[j]
+                            for kk in range(3):
+                                w = tri[s, kk]
+                                if not bnd[w] and mark[w] != visit and nc < max_cand:
+                                    mark[w] = visit
+                                    cands[nc] = w
+                                    nc += 1
+            done = 0
+            for size in range(1, max_set + 1):
+                if done:
+                    break
+                # subsets of ``size`` candidates in lexicographic order
+                idx = np.arange(size)
+                if size > nc:
+                    break
+                while True:
+                    for i in range(size):
+                        sv[i] = cands[idx[i]]
+                    # (a set's triangles: at most 64 per vertex listed)
+                    fits = True
+                    for i in range(size):
+                        if vstart[sv[i] + 1] - vstart[sv[i]] > 64:
+                            fits = False
+                    if fits:
+                        got, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, size, ts, saved,
+                                              stamp, clock)
+                        if got > 0:
+                            # the new cycles through the set's triangles get fresh ids
+                            clock += 1
+                            for i in range(size):
+                                v = sv[i]
+                                for j in range(vstart[v], vstart[v + 1]):
+                                    t = vtri[j]
+                                    if stamp[t] != clock:
+                                        _walk_stamp(twin, is_cov, t, stamp, clock, cyc, next_id)
+                                        next_id += 1
+                            merged_round += got
+                            done = 1
+                            break
+                    # next subset
+                    p = size - 1
+                    while p >= 0 and idx[p] == nc - size + p:
+                        p -= 1
+                    if p < 0:
+                        break
+                    idx[p] += 1
+                    for i in range(p + 1, size):
+                        idx[i] = idx[i - 1] + 1
+        total += merged_round
+        if merged_round == 0:
+            break
+    return total
