@@ -108,10 +108,35 @@ def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id):
 
 
 @njit(cache=True, nogil=True)
-def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, ns, ts, saved, stamp, clock):
+def _has_good_edge(twin, is_cov, good, t0, stamp, value):
+    """Has the cycle through ``t0`` (stamped ``value``) a good non-cover edge to a
+    triangle that is not on it?"""
+    x = t0
+    came = -1
+    while True:
+        out = -1
+        for k in range(3):
+            h = 3 * x + k
+            g = twin[h]
+            if g < 0:
+                continue
+            if is_cov[h]:
+                if h != came and out < 0:
+                    out = h
+            elif good[h] and stamp[g // 3] != value:
+                return True
+        came = twin[out]
+        x = came // 3
+        if x == t0:
+            return False
+
+
+@njit(cache=True, nogil=True)
+def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, saved, stamp, clock, shift):
     """Re-colour the ``ns`` vertices ``sv`` if that leaves every triangle around them
-    covered and fewer nodes (cycles + uncovered triangles) among them; returns
-    ``(nodes merged away, clock)`` (0: the cover is as before)."""
+    covered and fewer nodes (cycles + uncovered triangles) among them, or, with
+    ``shift``, as many nodes, each with a good non-cover edge to another node;
+    returns ``(nodes merged away, taken, clock)`` (not taken: the cover is as before)."""
     for i in range(ns):
         in_s[sv[i]] = True
     nt = 0
@@ -136,9 +161,9 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, ns, ts, saved,
         if not ok:
             break
     merged = 0
+    taken = False
     if ok:
         # old nodes among the triangles around S; then the cover re-written there
-        clock += 1
         n_old = 0
         for q in range(nt):
             t = ts[q]
@@ -159,18 +184,29 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, ns, ts, saved,
                 a = col[tri[t, k]] ^ (1 if in_s[tri[t, k]] else 0)
                 b = col[tri[t, (k + 1) % 3]] ^ (1 if in_s[tri[t, (k + 1) % 3]] else 0)
                 is_cov[h] = twin[h] >= 0 and a != b
-        # (an edge at a vertex of S has both its triangles around S: twins agree)
+        # (an edge at a vertex of S has both its triangles around S: twins agree);
+        # each new cycle through them walked with a stamp of its own
+        first = clock + 1
         n_new = 0
-        good = True
+        valid = True
         for q in range(nt):
-            if stamp[ts[q]] == clock:
+            if stamp[ts[q]] >= first:
                 continue
+            clock += 1
             if not _walk_stamp(twin, is_cov, ts[q], stamp, clock, cyc, -1):
-                good = False
+                valid = False
                 break
             n_new += 1
-        if good and n_new < n_old:
+        if valid and n_new < n_old:
             merged = n_old - n_new
+            taken = True
+        elif valid and shift and n_new == n_old:
+            taken = True
+            for q in range(nt):
+                if not _has_good_edge(twin, is_cov, good, ts[q], stamp, stamp[ts[q]]):
+                    taken = False
+                    break
+        if taken:
             for i in range(ns):
                 col[sv[i]] ^= 1
         else:
@@ -179,7 +215,7 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, ns, ts, saved,
                     is_cov[3 * ts[q] + k] = saved[3 * q + k]
     for i in range(ns):
         in_s[sv[i]] = False
-    return merged, clock
+    return merged, taken, clock
 
 
 @njit(cache=True, nogil=True)
@@ -213,7 +249,8 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
     ``max_cand``) are tried in sets of 1, 2, ... ``max_set``, the first set that
     leaves fewer nodes is taken (:func:`_try_set`); ``rounds`` passes over the
     nodes. Returns the number of nodes merged away (0 if the cover has no vertex
-    colouring, :func:`vertex_colours`).
+    colouring, :func:`vertex_colours`), and the number of nodes moved instead (a set that
+    leaves as many nodes, each with a good edge, where no set merges: ``shift``).
     """
     m = tri.shape[0]
     # triangles around each vertex (CSR) and the boundary's vertices
@@ -236,7 +273,7 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
                 bnd[tri[t, (k + 1) % 3]] = True
     col = np.empty(n_pts, np.int8)
     if not vertex_colours(tri, twin, is_cov, vstart, vtri, col):
-        return 0
+        return 0, 0
     in_s = np.zeros(n_pts, np.bool_)
     mark = np.zeros(n_pts, np.int64)
     stamp = np.zeros(m, np.int64)
@@ -249,6 +286,7 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
     members = np.empty(max_nodes, np.int64)
     next_id = n_cyc
     total = 0
+    total_shifted = 0
     for _ in range(rounds):
         # members of each cycle at this round's start (CSR by id)
         n_ids = next_id
@@ -265,6 +303,7 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
                 ctri[cfill[cyc[t]]] = t
                 cfill[cyc[t]] += 1
         merged_round = 0
+        shifted = 0
         for node in range(n_ids + m):
             if node < n_ids:
                 nmem = cstart[node + 1] - cstart[node]
@@ -303,47 +342,52 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
                                     cands[nc] = w
                                     nc += 1
             done = 0
-            for size in range(1, max_set + 1):
+            for shift in range(2):  # merges first, then shifts (as many nodes, none a target)
                 if done:
                     break
-                # subsets of ``size`` candidates in lexicographic order
-                idx = np.arange(size)
-                if size > nc:
-                    break
-                while True:
-                    for i in range(size):
-                        sv[i] = cands[idx[i]]
-                    # (a set's triangles: at most 64 per vertex listed)
-                    fits = True
-                    for i in range(size):
-                        if vstart[sv[i] + 1] - vstart[sv[i]] > 64:
-                            fits = False
-                    if fits:
-                        got, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, in_s, sv, size, ts, saved,
-                                              stamp, clock)
-                        if got > 0:
-                            # the new cycles through the set's triangles get fresh ids
-                            clock += 1
-                            for i in range(size):
-                                v = sv[i]
-                                for j in range(vstart[v], vstart[v + 1]):
-                                    t = vtri[j]
-                                    if stamp[t] != clock:
-                                        _walk_stamp(twin, is_cov, t, stamp, clock, cyc, next_id)
-                                        next_id += 1
-                            merged_round += got
-                            done = 1
-                            break
-                    # next subset
-                    p = size - 1
-                    while p >= 0 and idx[p] == nc - size + p:
-                        p -= 1
-                    if p < 0:
+                for size in range(1, max_set + 1):
+                    if done:
                         break
-                    idx[p] += 1
-                    for i in range(p + 1, size):
-                        idx[i] = idx[i - 1] + 1
+                    # subsets of ``size`` candidates in lexicographic order
+                    idx = np.arange(size)
+                    if size > nc:
+                        break
+                    while True:
+                        for i in range(size):
+                            sv[i] = cands[idx[i]]
+                        # (a set's triangles: at most 64 per vertex listed)
+                        fits = True
+                        for i in range(size):
+                            if vstart[sv[i] + 1] - vstart[sv[i]] > 64:
+                                fits = False
+                        if fits:
+                            got, taken, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, size,
+                                                         ts, saved, stamp, clock, shift == 1)
+                            if taken:
+                                # the new cycles through the set's triangles get fresh ids
+                                clock += 1
+                                for i in range(size):
+                                    v = sv[i]
+                                    for j in range(vstart[v], vstart[v + 1]):
+                                        t = vtri[j]
+                                        if stamp[t] != clock:
+                                            _walk_stamp(twin, is_cov, t, stamp, clock, cyc, next_id)
+                                            next_id += 1
+                                merged_round += got
+                                shifted += 0 if got else 1
+                                done = 1
+                                break
+                        # next subset
+                        p = size - 1
+                        while p >= 0 and idx[p] == nc - size + p:
+                            p -= 1
+                        if p < 0:
+                            break
+                        idx[p] += 1
+                        for i in range(p + 1, size):
+                            idx[i] = idx[i - 1] + 1
         total += merged_round
-        if merged_round == 0:
+        total_shifted += shifted
+        if merged_round == 0 and shifted == 0:
             break
-    return total
+    return total, total_shifted

@@ -297,11 +297,12 @@ def cycle_cover(
     n_rec = 0
     if rotate and good is not None and 0 < m < RECOLOUR_BELOW and cell is None:
         tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
-        n_rec = int(_rk.recolour_merges(
+        n_rec, n_shift = _rk.recolour_merges(
             tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
             RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS,
-        ))
-        if n_rec:  # (new cycles took fresh ids: number them as the cover does)
+        )
+        n_rec = int(n_rec)
+        if n_rec or n_shift:  # (new cycles took fresh ids: number them as the cover does)
             cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
             n_unc = int((cyc < 0).sum())
     mark("recolour")
