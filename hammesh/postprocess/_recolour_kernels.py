@@ -145,12 +145,6 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
         v = sv[i]
         for j in range(vstart[v], vstart[v + 1]):
             t = vtri[j]
-            c0 = col[tri[t, 0]] ^ (1 if in_s[tri[t, 0]] else 0)
-            c1 = col[tri[t, 1]] ^ (1 if in_s[tri[t, 1]] else 0)
-            c2 = col[tri[t, 2]] ^ (1 if in_s[tri[t, 2]] else 0)
-            if c0 == c1 and c1 == c2:
-                ok = False
-                break
             seen = False
             for q in range(nt):
                 if ts[q] == t:
@@ -158,8 +152,21 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
             if not seen:
                 ts[nt] = t
                 nt += 1
-        if not ok:
-            break
+    # triangles left monochromatic (uncovered) around S: with ``shift`` at most as many
+    # as before, else none
+    n_mono = 0
+    n_mono_old = 0
+    for q in range(nt):
+        t = ts[q]
+        c0 = col[tri[t, 0]] ^ (1 if in_s[tri[t, 0]] else 0)
+        c1 = col[tri[t, 1]] ^ (1 if in_s[tri[t, 1]] else 0)
+        c2 = col[tri[t, 2]] ^ (1 if in_s[tri[t, 2]] else 0)
+        if c0 == c1 and c1 == c2:
+            n_mono += 1
+        if cyc[t] < 0:
+            n_mono_old += 1
+    if n_mono > (n_mono_old if shift else 0):
+        ok = False
     merged = 0
     taken = False
     if ok:
@@ -192,6 +199,9 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
         for q in range(nt):
             if stamp[ts[q]] >= first:
                 continue
+            if not (is_cov[3 * ts[q]] or is_cov[3 * ts[q] + 1] or is_cov[3 * ts[q] + 2]):
+                n_new += 1  # (left uncovered: a node of its own)
+                continue
             clock += 1
             if not _walk_stamp(twin, is_cov, ts[q], stamp, clock, cyc, -1):
                 valid = False
@@ -203,7 +213,13 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
         elif valid and shift and n_new == n_old:
             taken = True
             for q in range(nt):
-                if not _has_good_edge(twin, is_cov, good, ts[q], stamp, stamp[ts[q]]):
+                t = ts[q]
+                if is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]:
+                    if not _has_good_edge(twin, is_cov, good, t, stamp, stamp[t]):
+                        taken = False
+                        break
+                elif not ((good[3 * t] and twin[3 * t] >= 0) or (good[3 * t + 1] and twin[3 * t + 1] >= 0)
+                          or (good[3 * t + 2] and twin[3 * t + 2] >= 0)):
                     taken = False
                     break
         if taken:
@@ -370,7 +386,9 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
                                     v = sv[i]
                                     for j in range(vstart[v], vstart[v + 1]):
                                         t = vtri[j]
-                                        if stamp[t] != clock:
+                                        if not (is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]):
+                                            cyc[t] = -1  # (left uncovered by a shift)
+                                        elif stamp[t] != clock:
                                             _walk_stamp(twin, is_cov, t, stamp, clock, cyc, next_id)
                                             next_id += 1
                                 merged_round += got
