@@ -253,7 +253,7 @@ def _is_target(twin, is_cov, cyc, good, members, nmem):
 
 
 @njit(cache=True, nogil=True)
-def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_set, max_cand, rounds):
+def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_nodes, max_set, max_cand, rounds):
     """Merge small cover nodes into others by re-colouring up to ``max_set`` vertices.
 
     Parameters: ``tri (m, 3)``, ``twin (3 m,)``, ``is_cov (3 m,) bool`` and ``cyc (m,)``
@@ -377,7 +377,7 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, n_pts, max_nodes, max_s
                             if vstart[sv[i] + 1] - vstart[sv[i]] > 64:
                                 fits = False
                         if fits:
-                            got, taken, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, size,
+                            got, taken, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, placed, in_s, sv, size,
                                                          ts, saved, stamp, clock, shift == 1)
                             if taken:
                                 # the new cycles through the set's triangles get fresh ids

@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from hammesh import threads
 from hammesh.pages import fresh, reserved
 from hammesh.halfedge.locality import grid_frame
 from hammesh.postprocess import _cover_kernels as _k
+from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _recolour_kernels as _rk
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 from hammesh.threads import row_ranges, run_all
@@ -30,7 +32,7 @@ from hammesh.threads import row_ranges, run_all
 __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
     "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves", "CHAIN_COST", "GUIDE_WEIGHT",
-    "GUIDE_MIN_TRIANGLES", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
+    "GUIDE_MIN_TRIANGLES", "JoinRule", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -89,6 +91,17 @@ RECOLOUR_CANDIDATES = 64
 RECOLOUR_ROUNDS = 3
 
 
+class JoinRule(NamedTuple):
+    """Sparse mode's local quality rule, for the cover's re-colouring step (planar):
+    with it, an edge whose split meets the rule once its point is placed counts as
+    a good join there too (``_join_kernels.placed_good_into``), as Kruskal will see it."""
+
+    amin: np.ndarray  # (m,) float64: each triangle's smallest angle, radians
+    keep: float  # the rule's factor
+    hi: float  # the largest angle allowed, radians
+    pinned: np.ndarray  # (3 m,) bool: constrained half-edges (split only at their midpoint)
+
+
 @dataclass(frozen=True, eq=False)
 class CycleCover:
     """Cycles of the dual graph.
@@ -142,6 +155,7 @@ def cycle_cover(
     drop: bool = True,
     local: bool = False,
     clock: dict | None = None,
+    rule: JoinRule | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -195,6 +209,11 @@ def cycle_cover(
     clock : dict, optional
         Filled with ``step: (wall, process CPU)`` seconds per step of the cover
         (``benchmarks/bench_cover.py --steps``); process CPU counts every thread.
+    rule : JoinRule, optional
+        Below ``RECOLOUR_BELOW`` triangles (with ``good``), nodes of the cover with no
+        good join are merged into others by re-colouring a few vertices
+        (``_recolour_kernels``); with ``rule`` and planar ``points`` that step also
+        counts the splits that meet the rule once placed as good joins.
 
     Returns
     -------
@@ -297,8 +316,15 @@ def cycle_cover(
     n_rec = 0
     if rotate and good is not None and 0 < m < RECOLOUR_BELOW and cell is None:
         tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
+        g_rec = g.reshape(-1)
+        if rule is not None and points is not None and np.shape(points)[1] == 2:
+            g_rec = g_rec.copy()  # (the joins as Kruskal sees them: placed splits too)
+            _j.placed_good_into(np.ascontiguousarray(points, dtype=np.float64), tri_c, tw,
+                                np.ascontiguousarray(rule.pinned, dtype=np.bool_),
+                                np.ascontiguousarray(rule.amin, dtype=np.float64), float(rule.keep), float(rule.hi),
+                                g_rec)
         n_rec, n_shift = _rk.recolour_merges(
-            tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
+            tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
             RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS,
         )
         n_rec = int(n_rec)

@@ -66,7 +66,7 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
-from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, cycle_ids_by_halves, join_classes
+from hammesh.postprocess.cycle_cover import CycleCover, JoinRule, cycle_cover, cycle_ids_by_halves, join_classes
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
 from hammesh.threads import row_ranges, run_all
@@ -1781,7 +1781,8 @@ def sparse_cycles(
         late = beside_cover is not None and reserved() > 0
         if beside_cover is not None and not late:
             beside_cover()
-        cover = cycle_cover(tri, tw, good=good, points=pts, local=local)
+        rule = JoinRule(amin_t, float(keep), hi, con) if pts.shape[1] == 2 else None  # (re-colouring's judge)
+        cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule)
     else:
         if beside_cover is not None:
             beside_cover()

@@ -98,7 +98,8 @@ def test_colours_split_exactly_the_crossed_edges() -> None:
     assert not vertex_colours(tri, twin, broken, vstart, vtri, col)
     # and then nothing is re-coloured
     cyc = c.cycle.copy()
-    got = recolour_merges(tri, twin, broken, cyc, c.n_cycles, np.zeros(3 * len(tri), np.bool_), m.n_points,
+    got = recolour_merges(tri, twin, broken, cyc, c.n_cycles, np.zeros(3 * len(tri), np.bool_),
+                          np.zeros(3 * len(tri), np.bool_), m.n_points,
                           64, 3, 64, 3)
     assert tuple(got) == (0, 0)
     np.testing.assert_array_equal(cyc, c.cycle)
