@@ -132,11 +132,13 @@ def _has_good_edge(twin, is_cov, good, t0, stamp, value):
 
 
 @njit(cache=True, nogil=True)
-def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, saved, stamp, clock, shift):
+def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, saved, stamp, clock, shift, target):
     """Re-colour the ``ns`` vertices ``sv`` if that leaves every triangle around them
     covered and fewer nodes (cycles + uncovered triangles) among them, or, with
-    ``shift``, as many nodes, each with a good non-cover edge to another node;
-    returns ``(nodes merged away, taken, clock)`` (not taken: the cover is as before)."""
+    ``shift`` (> 0), at most ``shift - 1`` more nodes, each with a good non-cover edge to
+    another node, the node of triangle ``target`` among them and covered (the target
+    itself moved, not a neighbour); returns ``(nodes merged away, taken, clock)`` (not
+    taken: the cover is as before)."""
     for i in range(ns):
         in_s[sv[i]] = True
     nt = 0
@@ -165,7 +167,7 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
             n_mono += 1
         if cyc[t] < 0:
             n_mono_old += 1
-    if n_mono > (n_mono_old if shift else 0):
+    if n_mono > (n_mono_old if shift > 0 else 0):
         ok = False
     merged = 0
     taken = False
@@ -210,8 +212,8 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
         if valid and n_new < n_old:
             merged = n_old - n_new
             taken = True
-        elif valid and shift and n_new == n_old:
-            taken = True
+        elif valid and shift > 0 and n_new <= n_old + shift - 1:
+            taken = stamp[target] >= first  # (walked: on a new cycle)
             for q in range(nt):
                 t = ts[q]
                 if is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]:
@@ -253,7 +255,8 @@ def _is_target(twin, is_cov, cyc, good, members, nmem):
 
 
 @njit(cache=True, nogil=True)
-def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_nodes, max_set, max_cand, rounds):
+def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_nodes, max_set, max_cand, rounds,
+                    max_shift=1):
     """Merge small cover nodes into others by re-colouring up to ``max_set`` vertices.
 
     Parameters: ``tri (m, 3)``, ``twin (3 m,)``, ``is_cov (3 m,) bool`` and ``cyc (m,)``
@@ -266,7 +269,8 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
     leaves fewer nodes is taken (:func:`_try_set`); ``rounds`` passes over the
     nodes. Returns the number of nodes merged away (0 if the cover has no vertex
     colouring, :func:`vertex_colours`), and the number of nodes moved instead (a set that
-    leaves as many nodes, each with a good edge, where no set merges: ``shift``).
+    moves the node, leaving as many nodes (or, up to ``max_shift``, ``max_shift - 1`` more),
+    each with a good edge, where no set merges it: ``_try_set``'s ``shift``).
     """
     m = tri.shape[0]
     # triangles around each vertex (CSR) and the boundary's vertices
@@ -293,6 +297,7 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
     in_s = np.zeros(n_pts, np.bool_)
     mark = np.zeros(n_pts, np.int64)
     stamp = np.zeros(m, np.int64)
+    settled = np.zeros(m, np.bool_)
     clock = 0
     visit = 0
     cands = np.empty(max_cand, np.int64)
@@ -335,6 +340,13 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
                 members[0] = t
             if not _is_target(twin, is_cov, cyc, good, members, nmem):
                 continue
+            # a node a shift left (it has a placed join keeping the rule) is not
+            # moved again unless it has none: no shift undoes another
+            movable = True
+            for i in range(nmem):
+                if settled[members[i]]:
+                    movable = _is_target(twin, is_cov, cyc, placed, members, nmem)
+                    break
             # candidate vertices: the node's, then their neighbours (interior only)
             visit += 1
             nc = 0
@@ -358,8 +370,8 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
                                     cands[nc] = w
                                     nc += 1
             done = 0
-            for shift in range(2):  # merges first, then shifts (as many nodes, none a target)
-                if done:
+            for shift in range(1 + max_shift):  # merges, then shifts (as many nodes / one more, none a target)
+                if done or (shift > 0 and not movable):
                     break
                 for size in range(1, max_set + 1):
                     if done:
@@ -378,7 +390,7 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
                                 fits = False
                         if fits:
                             got, taken, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, placed, in_s, sv, size,
-                                                         ts, saved, stamp, clock, shift == 1)
+                                                         ts, saved, stamp, clock, shift, members[0])
                             if taken:
                                 # the new cycles through the set's triangles get fresh ids
                                 clock += 1
@@ -392,7 +404,11 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
                                             _walk_stamp(twin, is_cov, t, stamp, clock, cyc, next_id)
                                             next_id += 1
                                 merged_round += got
-                                shifted += 0 if got else 1
+                                if not got:
+                                    shifted += 1
+                                    for i in range(size):
+                                        for j in range(vstart[sv[i]], vstart[sv[i] + 1]):
+                                            settled[vtri[j]] = True
                                 done = 1
                                 break
                         # next subset

@@ -89,6 +89,7 @@ RECOLOUR_SET = 3
 RECOLOUR_NODE = 64
 RECOLOUR_CANDIDATES = 64
 RECOLOUR_ROUNDS = 3
+RECOLOUR_SHIFT = 2
 
 
 class JoinRule(NamedTuple):
@@ -325,7 +326,7 @@ def cycle_cover(
                                 g_rec)
         n_rec, n_shift = _rk.recolour_merges(
             tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
-            RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS,
+            RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS, RECOLOUR_SHIFT,
         )
         n_rec = int(n_rec)
         if n_rec or n_shift:  # (new cycles took fresh ids: number them as the cover does)
