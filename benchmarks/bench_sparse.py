@@ -213,6 +213,16 @@ def coarse_a_row() -> float:
         f"{r['ring_joins']} ring joins; {_outer_only(m)} triangles have three vertices on the outer "
         "boundary (no Hamiltonian triangulation keeps them whole)"
     )
+    # what no construction can beat (``steiner_lower_bound``): at the issue's angle
+    # targets, and at Thm 2.4's floor
+    a_in, a_max = r["min_angle_input_deg"], r["max_angle_input_deg"]
+    for th, tx, what in ((0.9 * a_in, a_max + 5.0, "0.9 x min in, max in + 5"), (0.5 * a_in, 180.0, "1/2 x min in")):
+        lb, needy, edges = steiner_lower_bound(m, th, tx)
+        print(
+            f"  lower bound, every angle in [{th:.1f}, {tx:.1f}] deg ({what}): >= {lb} Steiner points "
+            f"= {100 * lb / m.n_triangles:.1f} % ({needy} of {edges} outer edges see no input vertex that may "
+            "lie inside the cycle; disjoint apex regions, docs/sparse.md)"
+        )
     return s
 
 
