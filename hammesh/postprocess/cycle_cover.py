@@ -123,6 +123,8 @@ class CycleCover:
     n_recoloured : int
         Nodes (cycles, uncovered triangles) merged away by re-colouring vertices
         (``_recolour_kernels.recolour_merges``); counted in ``n_rotations`` too.
+    n_recolour_shifts : int
+        Nodes moved by re-colouring instead (each leaves at most one node more).
     n_dropped : int
         Interior (degree-3) triangles left uncovered to fix the matching's parity
         defects, instead of chains of boundary triangles (``drop``).
@@ -140,6 +142,7 @@ class CycleCover:
     quad: np.ndarray | None = None
     n_dropped: int = 0
     n_recoloured: int = 0
+    n_recolour_shifts: int = 0
 
 
 def cycle_cover(
@@ -314,7 +317,7 @@ def cycle_cover(
         n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
         n_cyc -= n_rot
     mark("rotate")
-    n_rec = 0
+    n_rec = n_shift = 0
     if rotate and good is not None and 0 < m < RECOLOUR_BELOW and cell is None:
         tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
         g_rec = g.reshape(-1)
@@ -328,7 +331,7 @@ def cycle_cover(
             tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
             RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS, RECOLOUR_SHIFT,
         )
-        n_rec = int(n_rec)
+        n_rec, n_shift = int(n_rec), int(n_shift)
         if n_rec or n_shift:  # (new cycles took fresh ids: number them as the cover does)
             cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
             n_unc = int((cyc < 0).sum())
@@ -343,6 +346,7 @@ def cycle_cover(
         quad=quad,
         n_dropped=int(n_drop),
         n_recoloured=n_rec,
+        n_recolour_shifts=n_shift,
     )
 
 
