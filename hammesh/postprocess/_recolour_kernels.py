@@ -80,16 +80,20 @@ def vertex_colours(tri, twin, is_cov, vstart, vtri, col):
 
 
 @njit(cache=True, nogil=True)
-def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id):
+def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id, pos):
     """Walk the cover cycle through ``t0``, setting ``stamp`` to ``value`` (and, with
-    ``new_id >= 0``, ``cyc`` to it) on every triangle; returns False if some triangle
-    on the way does not have exactly two cover edges."""
+    ``new_id >= 0``, ``cyc`` to it and ``pos`` to the step count) on every triangle;
+    returns its length, or -1 if some triangle on the way does not have exactly two
+    cover edges."""
     x = t0
     came = -1  # the half-edge of x the walk entered by
+    n = 0
     while True:
         stamp[x] = value
         if new_id >= 0:
             cyc[x] = new_id
+            pos[x] = n
+        n += 1
         out = -1
         n_cov = 0
         for k in range(3):
@@ -99,18 +103,81 @@ def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id):
                 if h != came and out < 0:
                     out = h
         if n_cov != 2 or out < 0:
-            return False
+            return -1
         g = twin[out]
         x = g // 3
         came = g
         if x == t0:
-            return True
+            return n
+
+
+@njit(cache=True, nogil=True)
+def _walk_jump(twin, is_cov, t0, stamp, value, tsmark, mark, ts, nt, cyc, pos, plen):
+    """Walk the *new* cover cycle through ``t0`` (a triangle around the re-coloured set,
+    ``tsmark == mark``), stamping the set's triangles it passes with ``value``.
+
+    Away from the set the cover is unchanged: a step out of it enters an old cycle
+    (``cyc``, ``pos`` along it, ``plen`` its length) and follows it to the next of the
+    set's triangles on it, found by position, not walked. Returns the new cycle's
+    length, or -1 if a triangle of the set does not have exactly two cover edges.
+    """
+    x = t0
+    came = -1
+    n = 0
+    while True:
+        stamp[x] = value
+        n += 1
+        out = -1
+        n_cov = 0
+        for k in range(3):
+            h = 3 * x + k
+            if _crossed(twin, is_cov, h):
+                n_cov += 1
+                if h != came and out < 0:
+                    out = h
+        if n_cov != 2 or out < 0:
+            return -1
+        g = twin[out]
+        y = g // 3
+        if tsmark[y] == mark:
+            x = y
+            came = g
+        else:
+            # (the edge x-y is not at the set: it was a cover edge, x was on y's cycle)
+            c = cyc[y]
+            ln = plen[c]
+            py = pos[y]
+            d = 1 if (py - pos[x]) % ln == 1 else -1
+            best = -1
+            bd = ln + 1
+            for q in range(nt):
+                z = ts[q]
+                if cyc[z] == c:
+                    dz = ((pos[z] - py) * d) % ln
+                    if 0 < dz < bd:
+                        bd = dz
+                        best = z
+            if best < 0:
+                return -1
+            n += bd  # (y and the arc after it, up to best)
+            pw = (pos[best] - d) % ln
+            came = -1
+            for k in range(3):
+                h = 3 * best + k
+                w = twin[h]
+                if w >= 0 and tsmark[w // 3] != mark and cyc[w // 3] == c and pos[w // 3] == pw:
+                    came = h
+            if came < 0:
+                return -1
+            x = best
+        if x == t0:
+            return n
 
 
 @njit(cache=True, nogil=True)
 def _has_good_edge(twin, is_cov, good, t0, stamp, value):
-    """Has the cycle through ``t0`` (stamped ``value``) a good non-cover edge to a
-    triangle that is not on it?"""
+    """Has the cycle through ``t0`` (every triangle stamped ``value``) a good non-cover
+    edge to a triangle that is not on it?"""
     x = t0
     came = -1
     while True:
@@ -132,13 +199,17 @@ def _has_good_edge(twin, is_cov, good, t0, stamp, value):
 
 
 @njit(cache=True, nogil=True)
-def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, saved, stamp, clock, shift, target):
+def _try_set(tri, twin, is_cov, cyc, pos, plen, col, vstart, vtri, good, in_s, sv, ns, ts, saved, stamp, tsmark,
+             starts, clock, shift, target, small):
     """Re-colour the ``ns`` vertices ``sv`` if that leaves every triangle around them
     covered and fewer nodes (cycles + uncovered triangles) among them, or, with
     ``shift`` (> 0), at most ``shift - 1`` more nodes, each with a good non-cover edge to
     another node, the node of triangle ``target`` among them and covered (the target
-    itself moved, not a neighbour); returns ``(nodes merged away, taken, clock)`` (not
-    taken: the cover is as before)."""
+    itself moved, not a neighbour). A new cycle longer than ``small`` is taken to have
+    a good edge (not walked: a check costs what the set's triangles do). Returns
+    ``(nodes merged away, taken, clock, new cycles)``: not taken, the cover is as
+    before; taken, ``starts[:new cycles]`` holds one triangle of each new cycle.
+    """
     for i in range(ns):
         in_s[sv[i]] = True
     nt = 0
@@ -171,6 +242,7 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
         ok = False
     merged = 0
     taken = False
+    n_start = 0
     if ok:
         # old nodes among the triangles around S; then the cover re-written there
         n_old = 0
@@ -196,34 +268,47 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
         # (an edge at a vertex of S has both its triangles around S: twins agree);
         # each new cycle through them walked with a stamp of its own
         first = clock + 1
+        clock += 1
+        for q in range(nt):
+            tsmark[ts[q]] = first
         n_new = 0
         valid = True
+        long_ok = True
         for q in range(nt):
-            if stamp[ts[q]] >= first:
+            t = ts[q]
+            if stamp[t] > first:
                 continue
-            if not (is_cov[3 * ts[q]] or is_cov[3 * ts[q] + 1] or is_cov[3 * ts[q] + 2]):
+            if not (is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]):
                 n_new += 1  # (left uncovered: a node of its own)
+                stamp[t] = clock + 1
+                clock += 1
                 continue
             clock += 1
-            if not _walk_stamp(twin, is_cov, ts[q], stamp, clock, cyc, -1):
+            ln = _walk_jump(twin, is_cov, t, stamp, clock, tsmark, first, ts, nt, cyc, pos, plen)
+            if ln < 0:
                 valid = False
                 break
+            starts[n_start] = t
+            n_start += 1
             n_new += 1
+            if shift > 0 and ln <= small:
+                # a short new cycle: stamped whole, then its edges read
+                clock += 1
+                _walk_stamp(twin, is_cov, t, stamp, clock, cyc, -1, pos)
+                if not _has_good_edge(twin, is_cov, good, t, stamp, clock):
+                    long_ok = False
         if valid and n_new < n_old:
             merged = n_old - n_new
             taken = True
-        elif valid and shift > 0 and n_new <= n_old + shift - 1:
-            taken = stamp[target] >= first  # (walked: on a new cycle)
+        elif valid and shift > 0 and n_new <= n_old + shift - 1 and long_ok:
+            taken = stamp[target] > first  # (walked: on a new cycle)
             for q in range(nt):
                 t = ts[q]
-                if is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]:
-                    if not _has_good_edge(twin, is_cov, good, t, stamp, stamp[t]):
+                if not (is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]):
+                    if not ((good[3 * t] and twin[3 * t] >= 0) or (good[3 * t + 1] and twin[3 * t + 1] >= 0)
+                            or (good[3 * t + 2] and twin[3 * t + 2] >= 0)):
                         taken = False
                         break
-                elif not ((good[3 * t] and twin[3 * t] >= 0) or (good[3 * t + 1] and twin[3 * t + 1] >= 0)
-                          or (good[3 * t + 2] and twin[3 * t + 2] >= 0)):
-                    taken = False
-                    break
         if taken:
             for i in range(ns):
                 col[sv[i]] ^= 1
@@ -233,7 +318,7 @@ def _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, good, in_s, sv, ns, ts, 
                     is_cov[3 * ts[q] + k] = saved[3 * q + k]
     for i in range(ns):
         in_s[sv[i]] = False
-    return merged, taken, clock
+    return merged, taken, clock, n_start
 
 
 @njit(cache=True, nogil=True)
@@ -256,7 +341,7 @@ def _is_target(twin, is_cov, cyc, good, members, nmem):
 
 @njit(cache=True, nogil=True)
 def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_nodes, max_set, max_cand, rounds,
-                    max_shift=1):
+                    max_shift=1, long_walk=4096):
     """Merge small cover nodes into others by re-colouring up to ``max_set`` vertices.
 
     Parameters: ``tri (m, 3)``, ``twin (3 m,)``, ``is_cov (3 m,) bool`` and ``cyc (m,)``
@@ -297,12 +382,22 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
     in_s = np.zeros(n_pts, np.bool_)
     mark = np.zeros(n_pts, np.int64)
     stamp = np.zeros(m, np.int64)
+    tsmark = np.zeros(m, np.int64)
     settled = np.zeros(m, np.bool_)
-    clock = 0
+    # positions along the cycles (a check jumps along the unchanged arcs: _walk_jump)
+    pos = np.full(m, -1, np.int64)
+    plen = np.zeros(max(2 * n_cyc, 16), np.int64)
+    clock = 1
+    for t in range(m):
+        if cyc[t] >= 0 and pos[t] < 0:
+            plen[cyc[t]] = _walk_stamp(twin, is_cov, t, stamp, clock, cyc, cyc[t], pos)
+    clock += 1
     visit = 0
     cands = np.empty(max_cand, np.int64)
+    near = np.zeros((max_cand, max_cand), np.bool_)
     sv = np.empty(max(max_set, 1), np.int64)
     ts = np.empty(64 * max(max_set, 1), np.int64)
+    starts = np.empty(ts.shape[0], np.int64)
     saved = np.empty(3 * ts.shape[0], np.bool_)
     members = np.empty(max_nodes, np.int64)
     next_id = n_cyc
@@ -369,6 +464,19 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
                                     mark[w] = visit
                                     cands[nc] = w
                                     nc += 1
+            # which candidates share a triangle (the sets tried are connected)
+            for i in range(nc):
+                for j in range(nc):
+                    near[i, j] = False
+                stamp_v = cands[i]
+                for j2 in range(vstart[stamp_v], vstart[stamp_v + 1]):
+                    t = vtri[j2]
+                    for k in range(3):
+                        w = tri[t, k]
+                        if mark[w] == visit and w != stamp_v:
+                            for j in range(nc):
+                                if cands[j] == w:
+                                    near[i, j] = True
             done = 0
             for shift in range(1 + max_shift):  # merges, then shifts (as many nodes / one more, none a target)
                 if done or (shift > 0 and not movable):
@@ -383,26 +491,43 @@ def recolour_merges(tri, twin, is_cov, cyc, n_cyc, good, placed, n_pts, max_node
                     while True:
                         for i in range(size):
                             sv[i] = cands[idx[i]]
-                        # (a set's triangles: at most 64 per vertex listed)
+                        # (a set's triangles: at most 64 per vertex listed); connected
+                        # sets only: apart, two re-colourings act one by one
                         fits = True
                         for i in range(size):
                             if vstart[sv[i] + 1] - vstart[sv[i]] > 64:
                                 fits = False
+                        if fits and size > 1:
+                            links = 0
+                            for i in range(size):
+                                for j in range(i + 1, size):
+                                    if near[idx[i], idx[j]]:
+                                        links += 1
+                            fits = links >= size - 1
                         if fits:
-                            got, taken, clock = _try_set(tri, twin, is_cov, cyc, col, vstart, vtri, placed, in_s, sv, size,
-                                                         ts, saved, stamp, clock, shift, members[0])
+                            got, taken, clock, n_st = _try_set(
+                                tri, twin, is_cov, cyc, pos, plen, col, vstart, vtri, placed, in_s, sv, size, ts, saved,
+                                stamp, tsmark, starts, clock, shift, members[0], long_walk,
+                            )
                             if taken:
                                 # the new cycles through the set's triangles get fresh ids
-                                clock += 1
+                                # and positions (walked whole: only where one is taken)
                                 for i in range(size):
                                     v = sv[i]
                                     for j in range(vstart[v], vstart[v + 1]):
                                         t = vtri[j]
                                         if not (is_cov[3 * t] or is_cov[3 * t + 1] or is_cov[3 * t + 2]):
                                             cyc[t] = -1  # (left uncovered by a shift)
-                                        elif stamp[t] != clock:
-                                            _walk_stamp(twin, is_cov, t, stamp, clock, cyc, next_id)
-                                            next_id += 1
+                                            pos[t] = -1
+                                clock += 1
+                                for q in range(n_st):
+                                    if next_id >= plen.shape[0]:
+                                        grown = np.zeros(2 * plen.shape[0], np.int64)
+                                        grown[: plen.shape[0]] = plen
+                                        plen = grown
+                                    plen[next_id] = _walk_stamp(twin, is_cov, starts[q], stamp, clock, cyc, next_id,
+                                                                pos)
+                                    next_id += 1
                                 merged_round += got
                                 if not got:
                                     shifted += 1
