@@ -78,18 +78,25 @@ ONLINE_MIN_TRIANGLES = 100_000
 
 #: Below this many triangles (and with ``good`` edges), nodes of the cover that have no
 #: non-cover edge whose join keeps the local rule (cycles of at most ``RECOLOUR_NODE``
-#: triangles, uncovered triangles) are merged into others where re-colouring up to
-#: ``RECOLOUR_SET`` of the ``RECOLOUR_CANDIDATES`` vertices nearest them allows
-#: (``_recolour_kernels.recolour_merges``: the cover swapped along the dual cycle around
-#: those vertices, the mesh unchanged). Measured on the 16k corpus of
-#: ``bench_sparse.py`` (docs/sparse.md, session 14); from this size on not tried
-#: (the 1.5 M path is unchanged).
-RECOLOUR_BELOW = 100_000
+#: triangles, uncovered triangles) are merged into others, or moved (``RECOLOUR_SHIFT``
+#: 2: leaving at most one node more, each with a join that keeps the rule once placed),
+#: where re-colouring a connected set of up to ``RECOLOUR_SET`` of the
+#: ``RECOLOUR_CANDIDATES`` vertices nearest them allows (``_recolour_kernels``: the cover
+#: swapped along the dual cycle around those vertices, the mesh unchanged), in at most
+#: ``RECOLOUR_ROUNDS`` passes; a moved node's new cycles longer than
+#: ``RECOLOUR_LONG_WALK`` triangles are taken to have a good join (not walked). Measured
+#: (docs/sparse.md, session 14): the 16 k corpus of ``bench_sparse.py`` at the same CPU,
+#: rows below the parents' rule 209 -> 65, Steiner points 358 -> 115; the plate at 90 k
+#: 318 -> 58 points but 0.21 -> 0.83 s CPU (each move taken re-walks the big cycle), so
+#: the gate is where the cover's other small-mesh extras stop (``sparse.ALT_POSITIONS_BELOW``);
+#: the 1.5 M path is unchanged.
+RECOLOUR_BELOW = 25_000
 RECOLOUR_SET = 3
 RECOLOUR_NODE = 64
 RECOLOUR_CANDIDATES = 64
 RECOLOUR_ROUNDS = 3
 RECOLOUR_SHIFT = 2
+RECOLOUR_LONG_WALK = 25_000
 
 
 class JoinRule(NamedTuple):
@@ -329,7 +336,7 @@ def cycle_cover(
                                 g_rec)
         n_rec, n_shift = _rk.recolour_merges(
             tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
-            RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS, RECOLOUR_SHIFT,
+            RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS, RECOLOUR_SHIFT, RECOLOUR_LONG_WALK,
         )
         n_rec, n_shift = int(n_rec), int(n_shift)
         if n_rec or n_shift:  # (new cycles took fresh ids: number them as the cover does)
