@@ -350,28 +350,10 @@ def _outer_only(m) -> int:
     boundary never is (a hole's may be, if the cycle winds around it). So none of
     these can stay whole in any Hamiltonian triangulation that keeps the boundary.
     """
-    from hammesh.halfedge import half_edges
-
-    tri = np.asarray(m.triangles)
-    tw = half_edges(tri, m.n_points).twin
-    b = np.flatnonzero(tw < 0)
-    nxt = dict(zip(tri[b // 3, b % 3].tolist(), tri[b // 3, (b % 3 + 1) % 3].tolist()))
-    best, outer, seen = -np.inf, [], set()
-    for v in nxt:
-        if v in seen:
-            continue
-        loop = [v]
-        seen.add(v)
-        while nxt[loop[-1]] != v:
-            loop.append(nxt[loop[-1]])
-            seen.add(loop[-1])
-        p = np.asarray(m.points)[loop]
-        area = 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
-        if area > best:  # (the outer loop: counter-clockwise, the largest)
-            best, outer = area, loop
+    outer, _holes = _loops(m)
     on = np.zeros(m.n_points, bool)
     on[outer] = True
-    return int(on[tri].all(axis=1).sum())
+    return int(on[np.asarray(m.triangles)].all(axis=1).sum())
 
 
 def _corner_angles(points: np.ndarray, tri: np.ndarray) -> np.ndarray:

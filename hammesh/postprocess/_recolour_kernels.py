@@ -80,6 +80,21 @@ def vertex_colours(tri, twin, is_cov, vstart, vtri, col):
 
 
 @njit(cache=True, nogil=True)
+def _exit(twin, is_cov, x, came):
+    """The cover half-edge of ``x`` other than ``came`` (the one the walk entered by),
+    or -1 if ``x`` does not have exactly two cover edges."""
+    out = -1
+    n_cov = 0
+    for k in range(3):
+        h = 3 * x + k
+        if _crossed(twin, is_cov, h):
+            n_cov += 1
+            if h != came and out < 0:
+                out = h
+    return out if n_cov == 2 else -1
+
+
+@njit(cache=True, nogil=True)
 def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id, pos):
     """Walk the cover cycle through ``t0``, setting ``stamp`` to ``value`` (and, with
     ``new_id >= 0``, ``cyc`` to it and ``pos`` to the step count) on every triangle;
@@ -94,15 +109,8 @@ def _walk_stamp(twin, is_cov, t0, stamp, value, cyc, new_id, pos):
             cyc[x] = new_id
             pos[x] = n
         n += 1
-        out = -1
-        n_cov = 0
-        for k in range(3):
-            h = 3 * x + k
-            if _crossed(twin, is_cov, h):
-                n_cov += 1
-                if h != came and out < 0:
-                    out = h
-        if n_cov != 2 or out < 0:
+        out = _exit(twin, is_cov, x, came)
+        if out < 0:
             return -1
         g = twin[out]
         x = g // 3
@@ -126,52 +134,50 @@ def _walk_jump(twin, is_cov, t0, stamp, value, tsmark, mark, ts, nt, cyc, pos, p
     n = 0
     while True:
         stamp[x] = value
-        n += 1
-        out = -1
-        n_cov = 0
-        for k in range(3):
-            h = 3 * x + k
-            if _crossed(twin, is_cov, h):
-                n_cov += 1
-                if h != came and out < 0:
-                    out = h
-        if n_cov != 2 or out < 0:
+        out = _exit(twin, is_cov, x, came)
+        if out < 0:
             return -1
-        g = twin[out]
-        y = g // 3
-        if tsmark[y] == mark:
-            x = y
-            came = g
-        else:
-            # (the edge x-y is not at the set: it was a cover edge, x was on y's cycle)
-            c = cyc[y]
-            ln = plen[c]
-            py = pos[y]
-            d = 1 if (py - pos[x]) % ln == 1 else -1
-            best = -1
-            bd = ln + 1
-            for q in range(nt):
-                z = ts[q]
-                if cyc[z] == c:
-                    dz = ((pos[z] - py) * d) % ln
-                    if 0 < dz < bd:
-                        bd = dz
-                        best = z
-            if best < 0:
-                return -1
-            n += bd  # (y and the arc after it, up to best)
-            pw = (pos[best] - d) % ln
-            came = -1
-            for k in range(3):
-                h = 3 * best + k
-                w = twin[h]
-                if w >= 0 and tsmark[w // 3] != mark and cyc[w // 3] == c and pos[w // 3] == pw:
-                    came = h
+        came = twin[out]
+        n += 1
+        if tsmark[came // 3] != mark:  # (off the set: along the old cycle to its next triangle)
+            came, arc = _jump(twin, tsmark, mark, ts, nt, cyc, pos, plen, x, came // 3)
             if came < 0:
                 return -1
-            x = best
+            n += arc
+        x = came // 3
         if x == t0:
             return n
+
+
+@njit(cache=True, nogil=True)
+def _jump(twin, tsmark, mark, ts, nt, cyc, pos, plen, x, y):
+    """From the set's triangle ``x`` into ``y`` off the set: the edge x-y is not at the
+    set, so it was a cover edge and x was on y's old cycle; that cycle is followed (by
+    position) to the next of the set's triangles ``ts[:nt]`` on it. Returns the
+    half-edge of that triangle the walk enters by and the triangles passed on the way
+    (-1, 0 if none is found)."""
+    c = cyc[y]
+    ln = plen[c]
+    py = pos[y]
+    d = 1 if (py - pos[x]) % ln == 1 else -1
+    best = -1
+    bd = ln + 1
+    for q in range(nt):
+        z = ts[q]
+        if cyc[z] == c:
+            dz = ((pos[z] - py) * d) % ln
+            if 0 < dz < bd:
+                bd = dz
+                best = z
+    if best < 0:
+        return -1, 0
+    pw = (pos[best] - d) % ln  # (the triangle before it: off the set, its edge unchanged)
+    for k in range(3):
+        h = 3 * best + k
+        w = twin[h]
+        if w >= 0 and tsmark[w // 3] != mark and cyc[w // 3] == c and pos[w // 3] == pw:
+            return h, bd
+    return -1, 0
 
 
 @njit(cache=True, nogil=True)
