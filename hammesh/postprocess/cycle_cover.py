@@ -8,7 +8,9 @@ matched among themselves, the rest of the dual edges are the cover, and the few
 defects a maximum matching leaves are repaired locally (see
 ``_cover_kernels.finish_matching``, ``settle_cover``). Everything is O(m) in numba; the augmenting searches
 are bounded by ``budget`` labelled triangles each. Finally cycles are merged for free
-where the matching can be rotated around a vertex (``rotate``).
+where the matching can be rotated around a vertex (``rotate``), and, on small meshes
+with sparse mode's ``good`` edges, where re-colouring a few vertices inside / outside
+the cycles merges or moves a node that has no good join (``_recolour_kernels``).
 """
 
 from __future__ import annotations
