@@ -1199,7 +1199,8 @@ def relabel_cycles_into(cycle, lut):
 def load_ring_kernels() -> None:
     """Load (or compile) the kernels only ring fans, ring joins, re-routes and cover swaps
     reach (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``,
-    ``alternating_cycles_into``, ``swap_merge_outcome``), on two
+    ``alternating_cycles_into``, ``swap_merge_outcome``, the ring fans' polygon and
+    point with ``place_fan``), on two
     triangles: ``hammesh.postprocess.load_kernels``' small mesh leaves no triangle
     off its cover, so those steps do not run there."""
     twin = np.array([3, 4, -1, 0, 1, -1], np.int64)
@@ -1221,6 +1222,18 @@ def load_ring_kernels() -> None:
     for p in (pos, np.empty(0, np.int64)):
         swap_merge_outcome(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0,
                            True, p, plen)
+    # the ring fans' polygon and point (``sparse._union_polygon``, ``_best_ring``; since
+    # session 14's re-colouring the covers of small meshes reach them): two triangles
+    from hammesh.postprocess import _sparse_kernels as _sk  # (at call time: it imports this module)
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    tri = np.array([[0, 1, 2], [2, 1, 3]], np.int64)
+    twin = np.array([-1, 3, -1, 1, -1, -1], np.int64)
+    poly, hes = np.empty(4, np.int64), np.empty(4, np.int64)
+    members = np.arange(2, dtype=np.int64)
+    n = _sk.union_polygon_into(tri, twin, np.zeros(6, np.bool_), members, poly, hes)
+    for amin, keep in ((np.zeros(0), 0.0), (np.full(2, 0.5), 0.9)):
+        _sk.ring_fan_point(pts, tri, members, poly, int(n), amin, keep, 0.1, 2.5, 2)
 
 
 @njit(cache=True, nogil=True)
