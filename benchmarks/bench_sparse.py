@@ -213,7 +213,133 @@ def coarse_a_row() -> float:
         f"{r['ring_joins']} ring joins; {_outer_only(m)} triangles have three vertices on the outer "
         "boundary (no Hamiltonian triangulation keeps them whole)"
     )
+    # what no construction can beat (``steiner_lower_bound``): at the issue's angle
+    # targets, and at Thm 2.4's floor
+    a_in, a_max = r["min_angle_input_deg"], r["max_angle_input_deg"]
+    for th, tx, what in ((0.9 * a_in, a_max + 5.0, "0.9 x min in, max in + 5"), (0.5 * a_in, 180.0, "1/2 x min in")):
+        lb, needy, edges = steiner_lower_bound(m, th, tx)
+        print(
+            f"  lower bound, every angle in [{th:.1f}, {tx:.1f}] deg ({what}): >= {lb} Steiner points "
+            f"= {100 * lb / m.n_triangles:.1f} % ({needy} of {edges} outer edges see no input vertex that may "
+            "lie inside the cycle; disjoint apex regions, docs/sparse.md)"
+        )
     return s
+
+
+def _loops(m) -> tuple[list, list]:
+    """The boundary loops of a mesh as vertex lists: (outer loop, hole loops)."""
+    from hammesh.halfedge import half_edges
+
+    tri = np.asarray(m.triangles)
+    tw = half_edges(tri, m.n_points).twin
+    b = np.flatnonzero(tw < 0)
+    nxt = dict(zip(tri[b // 3, b % 3].tolist(), tri[b // 3, (b % 3 + 1) % 3].tolist()))
+    loops, seen = [], set()
+    for v in nxt:
+        if v in seen:
+            continue
+        loop = [v]
+        seen.add(v)
+        while nxt[loop[-1]] != v:
+            loop.append(nxt[loop[-1]])
+            seen.add(loop[-1])
+        loops.append(loop)
+    pts = np.asarray(m.points)
+
+    def area(loop):
+        p = pts[loop]
+        return 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+
+    loops.sort(key=area, reverse=True)  # (the outer loop: counter-clockwise, the largest)
+    return loops[0], loops[1:]
+
+
+def apex_regions(m, theta_deg: float, theta_max_deg: float = 180.0) -> tuple[list, np.ndarray]:
+    """Where the third corner of an outer boundary edge's triangle may lie.
+
+    In a Hamiltonian triangulation the cycle crosses two edges of every triangle, and
+    a crossed edge has one end inside the cycle's closed curve; outer boundary
+    vertices (and midpoints of outer edges) are outside, so the triangle on an outer
+    boundary edge ``ab`` (whole or a half) has its third corner P *inside*: an
+    interior vertex or a hole's. With every angle >= ``theta`` and <= ``theta_max``
+    P lies in the region returned for ``ab``: the wedges at a and b, the disk where
+    ab subtends >= theta, the closed domain (a polygon containing that set: the disk
+    is replaced by a circumscribed polygon). Returns the shapely regions per outer
+    edge (in loop order) and, per edge, whether an input vertex that may be inside
+    (interior or on a hole) lies in it.
+    """
+    from shapely.geometry import Point, Polygon
+    from shapely.prepared import prep
+
+    outer, holes = _loops(m)
+    pts = np.asarray(m.points)
+    dom = Polygon(pts[outer], holes=[pts[h] for h in holes])
+    on_outer = np.zeros(m.n_points, bool)
+    on_outer[outer] = True
+    inner = [Point(*pts[v]) for v in np.flatnonzero(~on_outer)]
+    th, tx = np.radians(theta_deg), np.radians(theta_max_deg)
+    regions, has_vertex = [], []
+    for i, a in enumerate(outer):
+        b = outer[(i + 1) % len(outer)]
+        pa, pb = pts[a], pts[b]
+        d = pb - pa
+        ell = float(np.hypot(*d))
+        u = d / ell
+        nrm = np.array([-u[1], u[0]])  # (the domain's side of a counter-clockwise loop)
+        big = 4.0 * ell / max(np.sin(th), 1e-3)
+
+        def ray(o, base, ang):
+            c, s_ = np.cos(ang), np.sin(ang)
+            return o + big * (c * base + s_ * nrm)
+
+        # angle at a in [th, min(tx, pi - th)]: the wedge at a; likewise at b
+        hi_a = min(tx, np.pi - th)
+        wa = Polygon([pa, ray(pa, u, th), ray(pa, u, 0.5 * (th + hi_a)), ray(pa, u, hi_a)])
+        wb = Polygon([pb, ray(pb, -u, hi_a), ray(pb, -u, 0.5 * (th + hi_a)), ray(pb, -u, th)])
+        # ab seen under >= th from P: inside the circle through a, b with that inscribed
+        # angle (centre on the domain's side); circumscribed 64-gon (a superset)
+        r = 0.5 * ell / np.sin(th)
+        c = 0.5 * (pa + pb) + nrm * 0.5 * ell / np.tan(th)
+        k = np.arange(64)
+        disk = Polygon(c + (r / np.cos(np.pi / 64)) * np.c_[np.cos(2 * np.pi * k / 64), np.sin(2 * np.pi * k / 64)])
+        reg = wa.intersection(wb).intersection(disk).intersection(dom)
+        regions.append(reg)
+        pr = prep(reg.buffer(1e-9 * ell))
+        has_vertex.append(any(pr.intersects(q) for q in inner))
+    return regions, np.asarray(has_vertex)
+
+
+def steiner_lower_bound(m, theta_deg: float, theta_max_deg: float = 180.0) -> tuple[int, int, int]:
+    """A lower bound on the Steiner points of any Hamiltonian triangulation of ``m``'s
+    domain that keeps its outer boundary (edges whole or halved) and every angle in
+    [theta, theta_max].
+
+    Each outer edge whose apex region (:func:`apex_regions`) holds no input vertex
+    that may be inside costs a point of its own: a Steiner point in that region, or,
+    if the edge is halved, its midpoint. Edges with pairwise disjoint regions cost
+    distinct points, so a largest set of such edges (an independent set of the
+    regions' overlap graph, exact by an integer program) is a lower bound.
+    Returns (bound, needy edges, outer edges).
+    """
+    from scipy.optimize import Bounds, LinearConstraint, milp
+
+    regions, has_vertex = apex_regions(m, theta_deg, theta_max_deg)
+    needy = [i for i in range(len(regions)) if not has_vertex[i] and not regions[i].is_empty]
+    pad = [regions[i].buffer(1e-9 * max(regions[i].length, 1e-12)) for i in needy]
+    rows = []
+    for x in range(len(needy)):
+        for y in range(x + 1, len(needy)):
+            if pad[x].intersects(pad[y]):
+                row = np.zeros(len(needy))
+                row[[x, y]] = 1
+                rows.append(row)
+    if not needy:
+        return 0, 0, len(regions)
+    cons = [LinearConstraint(np.array(rows), -np.inf, 1)] if rows else []
+    res = milp(-np.ones(len(needy)), constraints=cons, integrality=np.ones(len(needy)), bounds=Bounds(0, 1))
+    # (an empty region: no triangle on that edge keeps the angles at all; counted as needy too)
+    empty = sum(1 for i in range(len(regions)) if regions[i].is_empty)
+    return int(round(-res.fun)) + empty, len(needy) + empty, len(regions)
 
 
 def _outer_only(m) -> int:
@@ -224,28 +350,10 @@ def _outer_only(m) -> int:
     boundary never is (a hole's may be, if the cycle winds around it). So none of
     these can stay whole in any Hamiltonian triangulation that keeps the boundary.
     """
-    from hammesh.halfedge import half_edges
-
-    tri = np.asarray(m.triangles)
-    tw = half_edges(tri, m.n_points).twin
-    b = np.flatnonzero(tw < 0)
-    nxt = dict(zip(tri[b // 3, b % 3].tolist(), tri[b // 3, (b % 3 + 1) % 3].tolist()))
-    best, outer, seen = -np.inf, [], set()
-    for v in nxt:
-        if v in seen:
-            continue
-        loop = [v]
-        seen.add(v)
-        while nxt[loop[-1]] != v:
-            loop.append(nxt[loop[-1]])
-            seen.add(loop[-1])
-        p = np.asarray(m.points)[loop]
-        area = 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
-        if area > best:  # (the outer loop: counter-clockwise, the largest)
-            best, outer = area, loop
+    outer, _holes = _loops(m)
     on = np.zeros(m.n_points, bool)
     on[outer] = True
-    return int(on[tri].all(axis=1).sum())
+    return int(on[np.asarray(m.triangles)].all(axis=1).sum())
 
 
 def _corner_angles(points: np.ndarray, tri: np.ndarray) -> np.ndarray:

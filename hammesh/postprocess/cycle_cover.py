@@ -8,7 +8,9 @@ matched among themselves, the rest of the dual edges are the cover, and the few
 defects a maximum matching leaves are repaired locally (see
 ``_cover_kernels.finish_matching``, ``settle_cover``). Everything is O(m) in numba; the augmenting searches
 are bounded by ``budget`` labelled triangles each. Finally cycles are merged for free
-where the matching can be rotated around a vertex (``rotate``).
+where the matching can be rotated around a vertex (``rotate``), and, on small meshes
+with sparse mode's ``good`` edges, where re-colouring a few vertices inside / outside
+the cycles merges or moves a node that has no good join (``_recolour_kernels``).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
@@ -24,13 +27,15 @@ from hammesh.pages import fresh, reserved
 from hammesh.halfedge.locality import grid_frame
 from hammesh.postprocess import _cover_kernels as _k
 from hammesh.postprocess.sparse_cells import confine
+from hammesh.postprocess import _join_kernels as _j
+from hammesh.postprocess import _recolour_kernels as _rk
 from hammesh.postprocess._thm24_kernels import CELL_BITS, quadtree_coords
 from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
     "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves", "CHAIN_COST", "GUIDE_WEIGHT",
-    "GUIDE_MIN_TRIANGLES",
+    "GUIDE_MIN_TRIANGLES", "JoinRule", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -74,6 +79,39 @@ ONLINE_BUDGET = 256
 #: Triangle's numbering is kept (the small meshes' figures stay as they were).
 ONLINE_MIN_TRIANGLES = 100_000
 
+#: Below this many triangles (and with ``good`` edges), nodes of the cover that have no
+#: non-cover edge whose join keeps the local rule (cycles of at most ``RECOLOUR_NODE``
+#: triangles, uncovered triangles) are merged into others, or moved (``RECOLOUR_SHIFT``
+#: 2: leaving at most one node more, each with a join that keeps the rule once placed),
+#: where re-colouring a connected set of up to ``RECOLOUR_SET`` of the
+#: ``RECOLOUR_CANDIDATES`` vertices nearest them allows (``_recolour_kernels``: the cover
+#: swapped along the dual cycle around those vertices, the mesh unchanged), in at most
+#: ``RECOLOUR_ROUNDS`` passes; a moved node's new cycles longer than
+#: ``RECOLOUR_LONG_WALK`` triangles are taken to have a good join (not walked). Measured
+#: (docs/sparse.md, session 14): the 16 k corpus of ``bench_sparse.py`` at the same CPU,
+#: rows below the parents' rule 209 -> 65, Steiner points 358 -> 115; the plate at 90 k
+#: 318 -> 58 points but 0.21 -> 0.83 s CPU (each move taken re-walks the big cycle), so
+#: the gate is where the cover's other small-mesh extras stop (``sparse.ALT_POSITIONS_BELOW``);
+#: the 1.5 M path is unchanged.
+RECOLOUR_BELOW = 25_000
+RECOLOUR_SET = 3
+RECOLOUR_NODE = 64
+RECOLOUR_CANDIDATES = 64
+RECOLOUR_ROUNDS = 3
+RECOLOUR_SHIFT = 2
+RECOLOUR_LONG_WALK = 25_000
+
+
+class JoinRule(NamedTuple):
+    """Sparse mode's local quality rule, for the cover's re-colouring step (planar):
+    with it, an edge whose split meets the rule once its point is placed counts as
+    a good join there too (``_join_kernels.placed_good_into``), as Kruskal will see it."""
+
+    amin: np.ndarray  # (m,) float64: each triangle's smallest angle, radians
+    keep: float  # the rule's factor
+    hi: float  # the largest angle allowed, radians
+    pinned: np.ndarray  # (3 m,) bool: constrained half-edges (split only at their midpoint)
+
 
 @dataclass(frozen=True, eq=False)
 class CycleCover:
@@ -92,6 +130,11 @@ class CycleCover:
         Degree-3 triangles the matching left free (before the local repair).
     n_rotations : int
         Cycles merged away by re-matching around vertices.
+    n_recoloured : int
+        Nodes (cycles, uncovered triangles) merged away by re-colouring vertices
+        (``_recolour_kernels.recolour_merges``); counted in ``n_rotations`` too.
+    n_recolour_shifts : int
+        Nodes moved by re-colouring instead (each leaves at most one node more).
     n_dropped : int
         Interior (degree-3) triangles left uncovered to fix the matching's parity
         defects, instead of chains of boundary triangles (``drop``).
@@ -108,6 +151,8 @@ class CycleCover:
     n_rotations: int = 0
     quad: np.ndarray | None = None
     n_dropped: int = 0
+    n_recoloured: int = 0
+    n_recolour_shifts: int = 0
 
 
 def cycle_cover(
@@ -125,6 +170,7 @@ def cycle_cover(
     local: bool = False,
     clock: dict | None = None,
     cells: np.ndarray | None = None,
+    rule: JoinRule | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -181,6 +227,11 @@ def cycle_cover(
     cells : (m,) int64, optional
         The cells to confine the cycles to, given (``sparse_cells.fishbone_cells``:
         issue 14's hook; ``cell_size`` is then not used).
+    rule : JoinRule, optional
+        Below ``RECOLOUR_BELOW`` triangles (with ``good``), nodes of the cover with no
+        good join are merged into others by re-colouring a few vertices
+        (``_recolour_kernels``); with ``rule`` and planar ``points`` that step also
+        counts the splits that meet the rule once placed as good joins.
 
     Returns
     -------
@@ -284,15 +335,36 @@ def cycle_cover(
         n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
         n_cyc -= n_rot
     mark("rotate")
+    n_rec = n_shift = 0
+    if rotate and good is not None and 0 < m < RECOLOUR_BELOW and cell is None:
+        tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
+        g_rec = g.reshape(-1)
+        if rule is not None and points is not None and np.shape(points)[1] == 2:
+            g_rec = g_rec.copy()  # (the joins as Kruskal sees them: placed splits too)
+            _j.placed_good_into(np.ascontiguousarray(points, dtype=np.float64), tri_c, tw,
+                                np.ascontiguousarray(rule.pinned, dtype=np.bool_),
+                                np.ascontiguousarray(rule.amin, dtype=np.float64), float(rule.keep), float(rule.hi),
+                                g_rec)
+        n_rec, n_shift = _rk.recolour_merges(
+            tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
+            RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS, RECOLOUR_SHIFT, RECOLOUR_LONG_WALK,
+        )
+        n_rec, n_shift = int(n_rec), int(n_shift)
+        if n_rec or n_shift:  # (new cycles took fresh ids: number them as the cover does)
+            cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
+            n_unc = int((cyc < 0).sum())
+    mark("recolour")
     return CycleCover(
         is_cov=is_cov,
         cycle=cyc,
         n_cycles=int(n_cyc),
         n_uncovered=int(n_unc),
         n_unmatched=int(n_free),
-        n_rotations=n_rot,
+        n_rotations=n_rot + n_rec,
         quad=quad,
         n_dropped=int(n_drop),
+        n_recoloured=n_rec,
+        n_recolour_shifts=n_shift,
     )
 
 

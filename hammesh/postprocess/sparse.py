@@ -68,7 +68,7 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
-from hammesh.postprocess.cycle_cover import CycleCover, cycle_cover, cycle_ids_by_halves, join_classes
+from hammesh.postprocess.cycle_cover import CycleCover, JoinRule, cycle_cover, cycle_ids_by_halves, join_classes
 from hammesh.postprocess.sparse_cells import fishbone_cells, join_classes as fish_classes
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
@@ -1905,7 +1905,9 @@ def sparse_cycles(
         if beside_cover is not None and not late:
             beside_cover()
         fish = fishbone_cells(pts, tri, tw) if tree == "fishbone" and pts.shape[1] == 2 else None  # (issue 14)
-        cover = cycle_cover(tri, tw, good=good, points=pts, local=local, cells=None if fish is None else fish.cell)
+        rule = JoinRule(amin_t, float(keep), hi, con) if pts.shape[1] == 2 else None  # (re-colouring's judge)
+        cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
+                            cells=None if fish is None else fish.cell)
     else:
         if beside_cover is not None:
             beside_cover()

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import hammesh
+import hammesh.postprocess.cycle_cover as cycle_cover_module
 from hammesh.halfedge import half_edge_twins
 from hammesh.postprocess import _cover_kernels as ck
 from hammesh.postprocess import _join_kernels as J
@@ -119,6 +120,7 @@ def test_cover_swaps_take_joins_below_the_rule_away(name: str, monkeypatch) -> N
     below the rule and no more Steiner points; the certificate's independent re-check
     passes."""
     monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "benchmarks"))
+    monkeypatch.setattr(cycle_cover_module, "RECOLOUR_BELOW", 0)  # (no session-14 re-colouring: it leaves nothing here)
     bench_sparse = importlib.import_module("bench_sparse")
     m = bench_sparse._mesh_at(dict(bench_sparse._domains())[name], 4000)
     on = hammesh.hamiltonian(m)
@@ -151,6 +153,7 @@ def test_a_second_pass_of_swaps_starts_from_the_first(monkeypatch) -> None:
     monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "benchmarks"))
     bench_sparse = importlib.import_module("bench_sparse")
     m = bench_sparse._mesh_at(dict(bench_sparse._domains())["double_hex"], 4000)
+    monkeypatch.setattr(cycle_cover_module, "RECOLOUR_BELOW", 0)  # (no session-14 re-colouring: it leaves nothing here)
     one = hammesh.hamiltonian(m)
     monkeypatch.setattr(sparse, "ALT_MERGE_PASSES", 2)
     two = hammesh.hamiltonian(m)

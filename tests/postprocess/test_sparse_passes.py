@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import hammesh
+import hammesh.postprocess.cycle_cover as cycle_cover_module
 from hammesh import threads
 from tests.helpers import bundled_domain, plate_with_loops, square
 
@@ -408,6 +409,7 @@ def test_placing_taken_joins_after_the_plan_only_lifts_them(name: str, monkeypat
     monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "benchmarks"))
     bench_sparse = importlib.import_module("bench_sparse")
     m = bench_sparse._mesh_at(dict(bench_sparse._domains())[name], 4000)
+    monkeypatch.setattr(cycle_cover_module, "RECOLOUR_BELOW", 0)  # (no session-14 re-colouring: it leaves nothing here)
     # one plan (no ring joins, whose second plan starts from the first's joins, nor
     # cover swaps, which take some of the placed joins away)
     monkeypatch.setattr(sparse, "RING_JOIN_PASSES", 0)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import hammesh
+import hammesh.postprocess.cycle_cover as cycle_cover_module
 from hammesh import threads
 from hammesh.halfedge import half_edge_twins
 from hammesh.halfedge import locality
@@ -276,6 +277,7 @@ def test_ring_rows_appended_in_place_give_the_copied_output(name: str, monkeypat
     area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
     m = hammesh.quality_mesh(dom, min_angle=25 if name == "la" else 30, max_area=area, isolate=False)
     monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", 100)
+    monkeypatch.setattr(cycle_cover_module, "RECOLOUR_BELOW", 0)  # (no session-14 re-colouring: it leaves nothing here)
     grown = []
     real = sparse._longer
 
@@ -509,6 +511,7 @@ def test_plan_steps_are_what_a_scan_finds(name: str, monkeypatch) -> None:
 def test_cover_swap_tests_on_two_threads_take_the_one_thread_swaps(name: str, monkeypatch) -> None:
     # (the walks' path, ``ALT_POSITIONS_BELOW`` = 0, as on big meshes; two threads share
     # each task's tests there: ``sparse._SwapTests``)
+    monkeypatch.setattr(cycle_cover_module, "RECOLOUR_BELOW", 0)  # (no session-14 re-colouring: it leaves no swaps here)
     monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
     m = _small_mesh(name)
     one = _one_thread(m)
@@ -533,6 +536,7 @@ def test_an_error_in_the_other_threads_swap_test_reaches_the_caller(monkeypatch)
 
     if threads.cores() < 2:
         pytest.skip("one core: the tests run in the caller's thread")
+    monkeypatch.setattr(cycle_cover_module, "RECOLOUR_BELOW", 0)  # (no session-14 re-colouring: it leaves no swaps here)
     monkeypatch.setattr(sparse_module, "ALT_POSITIONS_BELOW", 0)
     m = _small_mesh("la")
     caller, real = threading.get_ident(), sk.swap_outcome_of
