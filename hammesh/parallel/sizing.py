@@ -31,6 +31,9 @@ EDGE_PER_SQRT_AREA = 1.2
 AREA_FILL = 0.63
 #: sizes of neighbouring subsegments: h grows by at most GRADING x distance
 GRADING = 0.4
+#: a piece whose size integral (its wanted number of subsegments) is at least this
+#: keeps its end subsegments at exactly the size there (:func:`graded_points_many`)
+PIN_ROOM = 2.5
 #: most samples of the size function along one piece
 MAX_SAMPLES = 2_000_000
 
@@ -112,17 +115,32 @@ def graded_points_many(lengths: np.ndarray, stations: np.ndarray, seg: np.ndarra
     inc[1:] = 0.5 * (inv[1:] + inv[:-1]) * np.diff(stations)
     inc[first] = 0.0
     F = np.cumsum(inc)
-    F -= np.repeat(F[first], np.bincount(seg)[np.unique(seg)])
+    per = np.bincount(seg)[np.unique(seg)]
+    F -= np.repeat(F[first], per)
     total = F[last]
-    n = np.maximum(1, np.ceil(total - 0.05).astype(np.int64))
     pieces = np.unique(seg)
-    # global monotone key: every piece's F lifted above the previous pieces'
+    # global monotone keys: every piece's F (and station) lifted above the previous pieces'
     lift = np.concatenate([[0.0], np.cumsum(total + 1.0)[:-1]])
-    G = F + np.repeat(lift, np.bincount(seg)[pieces])
-    count = n - 1
+    G = F + np.repeat(lift, per)
+    length = stations[last]
+    slift = np.concatenate([[0.0], np.cumsum(length + 1.0)[:-1]])
+    S = stations + np.repeat(slift, per)
+    # pinned ends: a piece with room keeps its end subsegments exactly at the (capped,
+    # graded) size there, so every piece meeting a vertex starts with the same length
+    # once the caps agree; the middle is split evenly in F as before
+    e0, e1 = h[first], h[last]
+    pin = (total >= PIN_ROOM) & (e0 + e1 < 0.75 * length)
+    g0 = np.interp(np.where(pin, e0, 0.0) + slift, S, G)
+    g1 = np.interp(np.where(pin, length - e1, length) + slift, S, G)
+    mid = np.where(pin, g1 - g0, total)
+    n_mid = np.maximum(1, np.ceil(mid - 0.05).astype(np.int64))  # ceil: no subsegment much over its size
+    count = n_mid - 1 + 2 * pin
     owner = np.repeat(pieces, count)
-    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 1
-    target = np.repeat(lift, count) + k / np.repeat(n, count) * np.repeat(total, count)
+    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)  # 0 .. count-1
+    pinned = np.repeat(pin, count)
+    kk = np.where(pinned, k, k + 1)  # the pinned pieces' first point is g0 itself
+    target = np.repeat(g0, count) + kk / np.repeat(n_mid, count) * np.repeat(mid, count)
+    target = np.where(pinned & (k == np.repeat(count, count) - 1), np.repeat(g1, count), target)
     j = np.clip(np.searchsorted(G, target), 1, len(G) - 1)
     w = (target - G[j - 1]) / np.maximum(G[j] - G[j - 1], 1e-300)
     st = stations[j - 1] + np.clip(w, 0, 1) * (stations[j] - stations[j - 1])

@@ -222,6 +222,27 @@ class _Sizer:
         return self.h[i]
 
 
+#: the separators' and pieces' sizes come from a second coarse mesh that has the
+#: separators as segments (False: from the first coarse mesh, which knows no separator)
+FEATURE_MESH = True
+#: most plans made while the caps at the vertices settle (each lowers them)
+CAP_PASSES = 6
+
+
+def _feature_sizer(p: np.ndarray, segs: np.ndarray, lonely: np.ndarray, holes: np.ndarray,
+                   min_angle: float | None, max_area: float) -> _Sizer:
+    """The size function of the domain *with its separators*: a cut passing close to a
+    vertex, or crossing a segment near one of its ends, makes a feature (a narrow gap,
+    a short piece) that the first coarse mesh never saw; Triangle's quality mesh of the
+    decomposed PSLG grades its edges to it (its local feature size, as Ruppert's
+    refinement does), so the pieces and separators there are discretised finely enough
+    that no tile needs a point on a segment ``-Y`` keeps unsplit."""
+    used = np.unique(np.concatenate([segs.ravel(), lonely]))
+    local = np.searchsorted(used, segs)
+    pts, tri, _, _, _ = _coarse_mesh(p[used], local, holes, np.zeros((0, 4)), min_angle, max_area)
+    return _Sizer(pts, tri, np.full(len(tri), max_area))
+
+
 # ---------------------------------------------------------------------------- kd split
 
 
@@ -661,12 +682,18 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     lonely_user = np.ones(len(p), bool)
     lonely_user[segs.ravel()] = False
     lonely_user = lonely_user[: len(verts)]
+    if len(sep) and FEATURE_MESH:
+        sizer = _feature_sizer(p, allsegs, np.flatnonzero(lonely_user), holes, min_angle, float(max_area))
     obstacles = cKDTree(np.concatenate([p[np.unique(b.pieces)], verts[lonely_user]]))
     memo = {} if PLAN_MEMO else None  # (the sizes sampled on each piece, for the next plans)
-    for _ in range(2):
+    # until the caps settle: a short piece split evenly may end shorter than its cap,
+    # and the pinned ends of its neighbours (graded_points_many) must follow it
+    for _ in range(CAP_PASSES):
         plans = _plan(p, allsegs, sizer, caps, obstacles, memo)
-        caps = np.minimum(caps, _end_lengths(p, allsegs, plans, len(p)))
-    plans = _plan(p, allsegs, sizer, caps, obstacles, memo)
+        settled = np.minimum(caps, _end_lengths(p, allsegs, plans, len(p)))
+        if np.all(settled >= caps * (1 - 1e-9)):
+            break
+        caps = settled
     new, rows = _commit(b, allsegs, plans)
     is_user_row = rows < len(b.pieces)
     user_new, user_rows = new[is_user_row], rows[is_user_row]
