@@ -377,7 +377,7 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
             # other axis (balance costs less than an angle the mesher cannot meet)
             c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
             for wider in WIDER_WINDOWS:
-                if key[0]:
+                if key[0] and key[1] >= 1.0:  # (a cut too close to a vertex makes a sliver tile)
                     break
                 for ax in (axis, 1 - axis):
                     order = np.argsort(cx[:, ax], kind="stable")
