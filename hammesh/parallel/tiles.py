@@ -48,7 +48,7 @@ WIDER_WINDOWS = (0.1, 0.2)
 #: a cut should cross user segments at least this many degrees above the min angle
 CROSS_MARGIN_DEG = 10.0
 #: and stay this many local edge lengths away from vertices
-CLEARANCE = 0.5
+CLEARANCE = 1.0
 #: a separator's subsegment is at most this times its distance to a vertex off its line
 OBSTACLE_FACTOR = 1.5
 #: most samples of the size along one piece
@@ -225,8 +225,11 @@ class _Sizer:
 #: the separators' and pieces' sizes come from a second coarse mesh that has the
 #: separators as segments (False: from the first coarse mesh, which knows no separator)
 FEATURE_MESH = True
+#: pieces meeting at a vertex at an angle below this start with equal subsegments
+#: (:func:`_coupled_min`); straighter on, they are not tied
+COUPLED_DEG = 160.0
 #: most plans made while the caps at the vertices settle (each lowers them)
-CAP_PASSES = 6
+CAP_PASSES = 12
 
 
 def _feature_sizer(p: np.ndarray, segs: np.ndarray, lonely: np.ndarray, holes: np.ndarray,
@@ -481,6 +484,39 @@ def _sample_sizes(xy: np.ndarray, seg: np.ndarray, axis: np.ndarray, a: np.ndarr
     return h
 
 
+def _coupled_min(p: np.ndarray, segs: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """For every end of every piece, the shortest ``ends`` of the *other* pieces meeting
+    it at that vertex at an angle below ``COUPLED_DEG`` (inf: none).
+
+    ``ends`` (S, 2): a length at each end of each piece. Where two pieces meet at a
+    corner, the tile's triangle at that corner has both first subsegments as sides:
+    legs more than ``tan(60 deg)`` apart at a right angle make it too thin, and ``-Y``
+    forbids the split that would repair it. Nearly straight on (a polygon's arc, a
+    chain of the coarse mesh's subsegments) they are not coupled: a short end does
+    not ripple along the whole chain.
+    """
+    v = segs.ravel()
+    other = segs[:, ::-1].ravel()
+    d = p[other] - p[v]
+    d /= np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)[:, None]
+    val = ends.ravel()
+    order = np.argsort(v, kind="stable")
+    vs, ds, vals = v[order], d[order], val[order]
+    out = np.full(len(v), np.inf)
+    cos_lim = math.cos(math.radians(COUPLED_DEG))
+    k = 1
+    while k < len(vs) and (vs[k:] == vs[:-k]).any():
+        same = vs[k:] == vs[:-k]
+        close = same & ((ds[k:] * ds[:-k]).sum(axis=1) > cos_lim)
+        i = np.flatnonzero(close)
+        np.minimum.at(out, i, vals[i + k])
+        np.minimum.at(out, i + k, vals[i])
+        k += 1
+    res = np.empty(len(v))
+    res[order] = out
+    return res.reshape(-1, 2)
+
+
 def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
           memo: dict | None = None) -> list[np.ndarray]:
     """Stations of the new points on every segment ``(a, b)`` (graded, capped at the ends).
@@ -502,7 +538,7 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
     d = e - a
     length = np.hypot(d[:, 0], d[:, 1])
     axis = np.where(d[:, 0] == 0, 0, np.where(d[:, 1] == 0, 1, -1))
-    h0 = np.minimum(np.minimum(sizer(a), sizer(e)), np.minimum(caps[segs[:, 0]], caps[segs[:, 1]]))
+    h0 = np.minimum(np.minimum(sizer(a), sizer(e)), caps.min(axis=1))
     m = np.clip(np.ceil(4.0 * length / np.maximum(h0, 1e-300)), 2, MAX_SAMPLES_PER_PIECE).astype(np.int64)
     live = length > 0
     for _ in range(3):
@@ -536,7 +572,7 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
             break
         m[coarse] = np.clip(np.ceil(4.0 * length[coarse] / np.maximum(hmin[coarse], 1e-300)), 2,
                             MAX_SAMPLES_PER_PIECE).astype(np.int64)
-    out, owner = graded_points_many(length, st, seg, h, caps[segs[:, 0]], caps[segs[:, 1]])
+    out, owner = graded_points_many(length, st, seg, h, caps[:, 0], caps[:, 1])
     plans = [np.zeros(0)] * len(segs)
     if len(owner):
         cut = np.flatnonzero(np.diff(owner)) + 1
@@ -545,15 +581,11 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
     return plans
 
 
-def _end_lengths(p: np.ndarray, segs: np.ndarray, plans: list[np.ndarray], n: int) -> np.ndarray:
-    """Shortest planned subsegment at every vertex."""
-    out = np.full(n, np.inf)
-    length = np.linalg.norm(p[segs[:, 0]] - p[segs[:, 1]], axis=1)
-    first = np.array([st[0] if len(st) else L for st, L in zip(plans, length)])
-    last = np.array([L - st[-1] if len(st) else L for st, L in zip(plans, length)])
-    np.minimum.at(out, segs[:, 0], first)
-    np.minimum.at(out, segs[:, 1], last)
-    return out
+def _end_lengths(segs: np.ndarray, plans: list[np.ndarray], length: np.ndarray) -> np.ndarray:
+    """(S, 2): the planned first and last subsegment of every piece."""
+    first = np.array([st[0] if len(st) else L for st, L in zip(plans, length)]).reshape(-1)
+    last = np.array([L - st[-1] if len(st) else L for st, L in zip(plans, length)]).reshape(-1)
+    return np.stack([first, last], axis=1).reshape(-1, 2)
 
 
 def _commit(b: _Builder, segs: np.ndarray, plans: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -673,8 +705,7 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     p = b.coords()
     allsegs = np.concatenate([b.pieces, sep])
     length = np.linalg.norm(p[allsegs[:, 0]] - p[allsegs[:, 1]], axis=1)
-    caps = np.full(b.n_points, np.inf)
-    np.minimum.at(caps, allsegs.ravel(), np.repeat(length, 2))
+    caps = _coupled_min(p, allsegs, np.repeat(length[:, None], 2, axis=1))
     # plan, then plan again with every vertex's ends capped at the shortest subsegment
     # meeting it: where a separator crosses a segment both start equally short
     from scipy.spatial import cKDTree
@@ -690,7 +721,7 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     # and the pinned ends of its neighbours (graded_points_many) must follow it
     for _ in range(CAP_PASSES):
         plans = _plan(p, allsegs, sizer, caps, obstacles, memo)
-        settled = np.minimum(caps, _end_lengths(p, allsegs, plans, len(p)))
+        settled = np.minimum(caps, _coupled_min(p, allsegs, _end_lengths(allsegs, plans, length)))
         if np.all(settled >= caps * (1 - 1e-9)):
             break
         caps = settled
