@@ -30,7 +30,7 @@ EDGE_PER_SQRT_AREA = 1.2
 #: the mean triangle area of a ``q30 a A`` Triangle mesh is ~0.63 A (same run)
 AREA_FILL = 0.63
 #: sizes of neighbouring subsegments: h grows by at most GRADING x distance
-GRADING = 0.4
+GRADING = 0.25
 #: a piece whose size integral (its wanted number of subsegments) is at least this
 #: keeps its end subsegments at exactly the size there (:func:`graded_points_many`)
 PIN_ROOM = 2.5

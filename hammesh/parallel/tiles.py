@@ -201,7 +201,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
 class _Sizer:
     """Wanted edge length at any point: min(area-implied, coarse mesh's local size)."""
 
-    def __init__(self, pts: np.ndarray, tri: np.ndarray, tri_area_bound: np.ndarray) -> None:
+    def __init__(self, pts: np.ndarray, tri: np.ndarray, tri_area_bound: np.ndarray, shortest: bool = False) -> None:
         from scipy.spatial import cKDTree
 
         edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
@@ -210,6 +210,9 @@ class _Sizer:
         total = np.bincount(edges.ravel(), weights=np.repeat(length, 2), minlength=n)
         count = np.bincount(edges.ravel(), minlength=n)
         local = np.where(count > 0, total / np.maximum(count, 1), np.inf)
+        if shortest:  # the shortest edge at each vertex: the narrowest gap it sees
+            local = np.full(n, np.inf)
+            np.minimum.at(local, edges.ravel(), np.repeat(length, 2))
         bound = np.full(n, np.inf)
         np.minimum.at(bound, tri.ravel(), np.repeat(tri_area_bound, 3))
         h = np.minimum(EDGE_PER_SQRT_AREA * np.sqrt(bound), local)
@@ -243,7 +246,7 @@ def _feature_sizer(p: np.ndarray, segs: np.ndarray, lonely: np.ndarray, holes: n
     used = np.unique(np.concatenate([segs.ravel(), lonely]))
     local = np.searchsorted(used, segs)
     pts, tri, _, _, _ = _coarse_mesh(p[used], local, holes, np.zeros((0, 4)), min_angle, max_area)
-    return _Sizer(pts, tri, np.full(len(tri), max_area))
+    return _Sizer(pts, tri, np.full(len(tri), max_area), shortest=True)
 
 
 # ---------------------------------------------------------------------------- kd split
