@@ -49,6 +49,8 @@ WIDER_WINDOWS = (0.1, 0.2)
 CROSS_MARGIN_DEG = 10.0
 #: and stay this many local edge lengths away from vertices
 CLEARANCE = 1.0
+#: a cut closer to a vertex than this fraction of CLEARANCE is looked for in the wider windows too
+WIDEN_BELOW = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
 OBSTACLE_FACTOR = 1.5
 #: most samples of the size along one piece
@@ -383,7 +385,7 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
             # other axis (balance costs less than an angle the mesher cannot meet)
             c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
             for wider in WIDER_WINDOWS:
-                if key[0] and key[1] >= 1.0:  # (a cut too close to a vertex makes a sliver tile)
+                if key[0] and key[1] >= WIDEN_BELOW:  # (a cut too close to a vertex makes a sliver tile)
                     break
                 for ax in (axis, 1 - axis):
                     order = np.argsort(cx[:, ax], kind="stable")
