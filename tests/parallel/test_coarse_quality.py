@@ -73,3 +73,15 @@ def test_random_domains_at_coarse_sizes_meet_the_min_angle(dom, area, n_tiles):
     """Star-shaped domains with a hole or an internal loop: the union conforms, has the
     domain's area and meets 30 degrees (or the single run's own minimum at a small input angle)."""
     _union_meets(dom, 30.0, area, n_tiles)
+
+
+@pytest.mark.parametrize("area, n_tiles", [("0.01", "2"), ("1e-4", "6")])
+def test_the_reported_commands_exit_0_and_check(tmp_path, capsys, area, n_tiles):
+    """The bug report's commands (in process: the same tiles as ``--workers 2``) exit 0,
+    not 3 (the command checks the union itself), and their output passes ``hammesh check``."""
+    from hammesh.cli import main
+
+    out = tmp_path / "t.vtu"
+    assert main(["mesh", "hammesh/data/demo.poly", "-q", "30", "-a", area, "--tiles", n_tiles, "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(out)]) == 0
