@@ -34,6 +34,8 @@ GRADING = 0.25
 #: a piece whose size integral (its wanted number of subsegments) is at least this
 #: keeps its end subsegments at exactly the size there (:func:`graded_points_many`)
 PIN_ROOM = 2.5
+#: a short piece that is split is split into equal parts (False: evenly in the size integral)
+SHORT_EQUAL = True
 #: most samples of the size function along one piece
 MAX_SAMPLES = 2_000_000
 
@@ -144,4 +146,20 @@ def graded_points_many(lengths: np.ndarray, stations: np.ndarray, seg: np.ndarra
     j = np.clip(np.searchsorted(G, target), 1, len(G) - 1)
     w = (target - G[j - 1]) / np.maximum(G[j] - G[j - 1], 1e-300)
     st = stations[j - 1] + np.clip(w, 0, 1) * (stations[j] - stations[j - 1])
+    # a short piece (no pinned ends) split in two or three: equal parts, as many as its
+    # finest size asks (split evenly in F, its parts would differ by the grading over
+    # the whole piece, up to ~1.9x side by side: the longer one encroached)
+    short = ~pin & (n_mid >= 2) & SHORT_EQUAL
+    if short.any():
+        hmin = np.minimum.reduceat(h, np.flatnonzero(first))
+        n_eq = np.where(short, np.maximum(n_mid, np.ceil(length / hmin - 0.05).astype(np.int64)), 0)
+        keep = ~np.repeat(short, count)
+        c2 = np.maximum(n_eq - 1, 0)
+        o2 = np.repeat(pieces, c2)
+        k2 = np.arange(c2.sum()) - np.repeat(np.cumsum(c2) - c2, c2) + 1
+        s2 = k2 / np.repeat(np.maximum(n_eq, 1), c2) * np.repeat(length, c2)
+        st = np.concatenate([st[keep], s2])
+        owner = np.concatenate([owner[keep], o2])
+        order = np.lexsort((st, owner))
+        st, owner = st[order], owner[order]
     return st, owner
