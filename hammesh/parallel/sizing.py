@@ -101,7 +101,10 @@ def graded_points_many(lengths: np.ndarray, stations: np.ndarray, seg: np.ndarra
 
     ``stations`` / ``h``: samples of every piece (``seg`` its index, non-decreasing, each
     piece sampled from 0 to its length, at least two samples); returns the new points'
-    stations and their piece index.
+    stations and their piece index. A piece with room (``PIN_ROOM``) has its end
+    subsegments exactly at the capped, graded size there, so pieces meeting at a
+    corner start equally long once their caps agree; a short piece that is split is
+    split into equal parts (``SHORT_EQUAL``).
     """
     first = np.concatenate([[True], seg[1:] != seg[:-1]])
     last = np.concatenate([seg[1:] != seg[:-1], [True]])
