@@ -30,7 +30,12 @@ EDGE_PER_SQRT_AREA = 1.2
 #: the mean triangle area of a ``q30 a A`` Triangle mesh is ~0.63 A (same run)
 AREA_FILL = 0.63
 #: sizes of neighbouring subsegments: h grows by at most GRADING x distance
-GRADING = 0.4
+GRADING = 0.25
+#: a piece whose size integral (its wanted number of subsegments) is at least this
+#: keeps its end subsegments at exactly the size there (:func:`graded_points_many`)
+PIN_ROOM = 2.5
+#: a short piece that is split is split into equal parts (False: evenly in the size integral)
+SHORT_EQUAL = True
 #: most samples of the size function along one piece
 MAX_SAMPLES = 2_000_000
 
@@ -96,7 +101,10 @@ def graded_points_many(lengths: np.ndarray, stations: np.ndarray, seg: np.ndarra
 
     ``stations`` / ``h``: samples of every piece (``seg`` its index, non-decreasing, each
     piece sampled from 0 to its length, at least two samples); returns the new points'
-    stations and their piece index.
+    stations and their piece index. A piece with room (``PIN_ROOM``) has its end
+    subsegments exactly at the capped, graded size there, so pieces meeting at a
+    corner start equally long once their caps agree; a short piece that is split is
+    split into equal parts (``SHORT_EQUAL``).
     """
     first = np.concatenate([[True], seg[1:] != seg[:-1]])
     last = np.concatenate([seg[1:] != seg[:-1], [True]])
@@ -112,18 +120,49 @@ def graded_points_many(lengths: np.ndarray, stations: np.ndarray, seg: np.ndarra
     inc[1:] = 0.5 * (inv[1:] + inv[:-1]) * np.diff(stations)
     inc[first] = 0.0
     F = np.cumsum(inc)
-    F -= np.repeat(F[first], np.bincount(seg)[np.unique(seg)])
+    per = np.bincount(seg)[np.unique(seg)]
+    F -= np.repeat(F[first], per)
     total = F[last]
-    n = np.maximum(1, np.ceil(total - 0.05).astype(np.int64))
     pieces = np.unique(seg)
-    # global monotone key: every piece's F lifted above the previous pieces'
+    # global monotone keys: every piece's F (and station) lifted above the previous pieces'
     lift = np.concatenate([[0.0], np.cumsum(total + 1.0)[:-1]])
-    G = F + np.repeat(lift, np.bincount(seg)[pieces])
-    count = n - 1
+    G = F + np.repeat(lift, per)
+    length = stations[last]
+    slift = np.concatenate([[0.0], np.cumsum(length + 1.0)[:-1]])
+    S = stations + np.repeat(slift, per)
+    # pinned ends: a piece with room keeps its end subsegments exactly at the (capped,
+    # graded) size there, so every piece meeting a vertex starts with the same length
+    # once the caps agree; the middle is split evenly in F as before
+    e0, e1 = h[first], h[last]
+    pin = (total >= PIN_ROOM) & (e0 + e1 < 0.75 * length)
+    g0 = np.interp(np.where(pin, e0, 0.0) + slift, S, G)
+    g1 = np.interp(np.where(pin, length - e1, length) + slift, S, G)
+    mid = np.where(pin, g1 - g0, total)
+    n_mid = np.maximum(1, np.ceil(mid - 0.05).astype(np.int64))  # ceil: no subsegment much over its size
+    count = n_mid - 1 + 2 * pin
     owner = np.repeat(pieces, count)
-    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 1
-    target = np.repeat(lift, count) + k / np.repeat(n, count) * np.repeat(total, count)
+    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)  # 0 .. count-1
+    pinned = np.repeat(pin, count)
+    kk = np.where(pinned, k, k + 1)  # the pinned pieces' first point is g0 itself
+    target = np.repeat(g0, count) + kk / np.repeat(n_mid, count) * np.repeat(mid, count)
+    target = np.where(pinned & (k == np.repeat(count, count) - 1), np.repeat(g1, count), target)
     j = np.clip(np.searchsorted(G, target), 1, len(G) - 1)
     w = (target - G[j - 1]) / np.maximum(G[j] - G[j - 1], 1e-300)
     st = stations[j - 1] + np.clip(w, 0, 1) * (stations[j] - stations[j - 1])
+    # a short piece (no pinned ends) split in two or three: equal parts, as many as its
+    # finest size asks (split evenly in F, its parts would differ by the grading over
+    # the whole piece, up to ~1.9x side by side: the longer one encroached)
+    short = ~pin & (n_mid >= 2) & SHORT_EQUAL
+    if short.any():
+        hmin = np.minimum.reduceat(h, np.flatnonzero(first))
+        n_eq = np.where(short, np.maximum(n_mid, np.ceil(length / hmin - 0.05).astype(np.int64)), 0)
+        keep = ~np.repeat(short, count)
+        c2 = np.maximum(n_eq - 1, 0)
+        o2 = np.repeat(pieces, c2)
+        k2 = np.arange(c2.sum()) - np.repeat(np.cumsum(c2) - c2, c2) + 1
+        s2 = k2 / np.repeat(np.maximum(n_eq, 1), c2) * np.repeat(length, c2)
+        st = np.concatenate([st[keep], s2])
+        owner = np.concatenate([owner[keep], o2])
+        order = np.lexsort((st, owner))
+        st, owner = st[order], owner[order]
     return st, owner

@@ -48,7 +48,9 @@ WIDER_WINDOWS = (0.1, 0.2)
 #: a cut should cross user segments at least this many degrees above the min angle
 CROSS_MARGIN_DEG = 10.0
 #: and stay this many local edge lengths away from vertices
-CLEARANCE = 0.5
+CLEARANCE = 1.0
+#: a cut closer to a vertex than this fraction of CLEARANCE is looked for in the wider windows too
+WIDEN_BELOW = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
 OBSTACLE_FACTOR = 1.5
 #: most samples of the size along one piece
@@ -201,7 +203,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
 class _Sizer:
     """Wanted edge length at any point: min(area-implied, coarse mesh's local size)."""
 
-    def __init__(self, pts: np.ndarray, tri: np.ndarray, tri_area_bound: np.ndarray) -> None:
+    def __init__(self, pts: np.ndarray, tri: np.ndarray, tri_area_bound: np.ndarray, shortest: bool = False) -> None:
         from scipy.spatial import cKDTree
 
         edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
@@ -210,6 +212,9 @@ class _Sizer:
         total = np.bincount(edges.ravel(), weights=np.repeat(length, 2), minlength=n)
         count = np.bincount(edges.ravel(), minlength=n)
         local = np.where(count > 0, total / np.maximum(count, 1), np.inf)
+        if shortest:  # the shortest edge at each vertex: the narrowest gap it sees
+            local = np.full(n, np.inf)
+            np.minimum.at(local, edges.ravel(), np.repeat(length, 2))
         bound = np.full(n, np.inf)
         np.minimum.at(bound, tri.ravel(), np.repeat(tri_area_bound, 3))
         h = np.minimum(EDGE_PER_SQRT_AREA * np.sqrt(bound), local)
@@ -220,6 +225,33 @@ class _Sizer:
     def __call__(self, xy: np.ndarray) -> np.ndarray:
         _, i = self.tree.query(np.asarray(xy, dtype=np.float64).reshape(-1, 2))
         return self.h[i]
+
+
+#: the separators' and pieces' sizes come from a second coarse mesh that has the
+#: separators as segments (False: from the first coarse mesh, which knows no separator)
+FEATURE_MESH = True
+#: pieces meeting at a vertex at an angle below this start with equal subsegments
+#: (:func:`_coupled_min`); straighter on, they are not tied
+COUPLED_DEG = 160.0
+#: most plans made while the caps at the vertices settle (each lowers them)
+CAP_PASSES = 12
+#: the caps have settled when none drops by more than this fraction (a corner's legs
+#: then differ by at most that much; exact settling took 11 plans at 6M triangles)
+CAP_SETTLED = 0.05
+
+
+def _feature_sizer(p: np.ndarray, segs: np.ndarray, lonely: np.ndarray, holes: np.ndarray,
+                   min_angle: float | None, max_area: float) -> _Sizer:
+    """The size function of the domain *with its separators*: a cut passing close to a
+    vertex, or crossing a segment near one of its ends, makes a feature (a narrow gap,
+    a short piece) that the first coarse mesh never saw; Triangle's quality mesh of the
+    decomposed PSLG grades its edges to it (its local feature size, as Ruppert's
+    refinement does), so the pieces and separators there are discretised finely enough
+    that no tile needs a point on a segment ``-Y`` keeps unsplit."""
+    used = np.unique(np.concatenate([segs.ravel(), lonely]))
+    local = np.searchsorted(used, segs)
+    pts, tri, _, _, _ = _coarse_mesh(p[used], local, holes, np.zeros((0, 4)), min_angle, max_area)
+    return _Sizer(pts, tri, np.full(len(tri), max_area), shortest=True)
 
 
 # ---------------------------------------------------------------------------- kd split
@@ -356,7 +388,7 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
             # other axis (balance costs less than an angle the mesher cannot meet)
             c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
             for wider in WIDER_WINDOWS:
-                if key[0]:
+                if key[0] and key[1] >= WIDEN_BELOW:  # (a cut too close to a vertex makes a sliver tile)
                     break
                 for ax in (axis, 1 - axis):
                     order = np.argsort(cx[:, ax], kind="stable")
@@ -460,6 +492,39 @@ def _sample_sizes(xy: np.ndarray, seg: np.ndarray, axis: np.ndarray, a: np.ndarr
     return h
 
 
+def _coupled_min(p: np.ndarray, segs: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """For every end of every piece, the shortest ``ends`` of the *other* pieces meeting
+    it at that vertex at an angle below ``COUPLED_DEG`` (inf: none).
+
+    ``ends`` (S, 2): a length at each end of each piece. Where two pieces meet at a
+    corner, the tile's triangle at that corner has both first subsegments as sides:
+    legs more than ``tan(60 deg)`` apart at a right angle make it too thin, and ``-Y``
+    forbids the split that would repair it. Nearly straight on (a polygon's arc, a
+    chain of the coarse mesh's subsegments) they are not coupled: a short end does
+    not ripple along the whole chain.
+    """
+    v = segs.ravel()
+    other = segs[:, ::-1].ravel()
+    d = p[other] - p[v]
+    d /= np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)[:, None]
+    val = ends.ravel()
+    order = np.argsort(v, kind="stable")
+    vs, ds, vals = v[order], d[order], val[order]
+    out = np.full(len(v), np.inf)
+    cos_lim = math.cos(math.radians(COUPLED_DEG))
+    k = 1
+    while k < len(vs) and (vs[k:] == vs[:-k]).any():
+        same = vs[k:] == vs[:-k]
+        close = same & ((ds[k:] * ds[:-k]).sum(axis=1) > cos_lim)
+        i = np.flatnonzero(close)
+        np.minimum.at(out, i, vals[i + k])
+        np.minimum.at(out, i + k, vals[i])
+        k += 1
+    res = np.empty(len(v))
+    res[order] = out
+    return res.reshape(-1, 2)
+
+
 def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
           memo: dict | None = None) -> list[np.ndarray]:
     """Stations of the new points on every segment ``(a, b)`` (graded, capped at the ends).
@@ -481,7 +546,7 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
     d = e - a
     length = np.hypot(d[:, 0], d[:, 1])
     axis = np.where(d[:, 0] == 0, 0, np.where(d[:, 1] == 0, 1, -1))
-    h0 = np.minimum(np.minimum(sizer(a), sizer(e)), np.minimum(caps[segs[:, 0]], caps[segs[:, 1]]))
+    h0 = np.minimum(np.minimum(sizer(a), sizer(e)), caps.min(axis=1))
     m = np.clip(np.ceil(4.0 * length / np.maximum(h0, 1e-300)), 2, MAX_SAMPLES_PER_PIECE).astype(np.int64)
     live = length > 0
     for _ in range(3):
@@ -515,7 +580,7 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
             break
         m[coarse] = np.clip(np.ceil(4.0 * length[coarse] / np.maximum(hmin[coarse], 1e-300)), 2,
                             MAX_SAMPLES_PER_PIECE).astype(np.int64)
-    out, owner = graded_points_many(length, st, seg, h, caps[segs[:, 0]], caps[segs[:, 1]])
+    out, owner = graded_points_many(length, st, seg, h, caps[:, 0], caps[:, 1])
     plans = [np.zeros(0)] * len(segs)
     if len(owner):
         cut = np.flatnonzero(np.diff(owner)) + 1
@@ -524,15 +589,11 @@ def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
     return plans
 
 
-def _end_lengths(p: np.ndarray, segs: np.ndarray, plans: list[np.ndarray], n: int) -> np.ndarray:
-    """Shortest planned subsegment at every vertex."""
-    out = np.full(n, np.inf)
-    length = np.linalg.norm(p[segs[:, 0]] - p[segs[:, 1]], axis=1)
-    first = np.array([st[0] if len(st) else L for st, L in zip(plans, length)])
-    last = np.array([L - st[-1] if len(st) else L for st, L in zip(plans, length)])
-    np.minimum.at(out, segs[:, 0], first)
-    np.minimum.at(out, segs[:, 1], last)
-    return out
+def _end_lengths(segs: np.ndarray, plans: list[np.ndarray], length: np.ndarray) -> np.ndarray:
+    """(S, 2): the planned first and last subsegment of every piece."""
+    first = np.array([st[0] if len(st) else L for st, L in zip(plans, length)]).reshape(-1)
+    last = np.array([L - st[-1] if len(st) else L for st, L in zip(plans, length)]).reshape(-1)
+    return np.stack([first, last], axis=1).reshape(-1, 2)
 
 
 def _commit(b: _Builder, segs: np.ndarray, plans: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -652,8 +713,7 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     p = b.coords()
     allsegs = np.concatenate([b.pieces, sep])
     length = np.linalg.norm(p[allsegs[:, 0]] - p[allsegs[:, 1]], axis=1)
-    caps = np.full(b.n_points, np.inf)
-    np.minimum.at(caps, allsegs.ravel(), np.repeat(length, 2))
+    caps = _coupled_min(p, allsegs, np.repeat(length[:, None], 2, axis=1))
     # plan, then plan again with every vertex's ends capped at the shortest subsegment
     # meeting it: where a separator crosses a segment both start equally short
     from scipy.spatial import cKDTree
@@ -661,12 +721,18 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     lonely_user = np.ones(len(p), bool)
     lonely_user[segs.ravel()] = False
     lonely_user = lonely_user[: len(verts)]
+    if len(sep) and FEATURE_MESH:
+        sizer = _feature_sizer(p, allsegs, np.flatnonzero(lonely_user), holes, min_angle, float(max_area))
     obstacles = cKDTree(np.concatenate([p[np.unique(b.pieces)], verts[lonely_user]]))
     memo = {} if PLAN_MEMO else None  # (the sizes sampled on each piece, for the next plans)
-    for _ in range(2):
+    # until the caps settle: a short piece split evenly may end shorter than its cap,
+    # and the pinned ends of its neighbours (graded_points_many) must follow it
+    for _ in range(CAP_PASSES):
         plans = _plan(p, allsegs, sizer, caps, obstacles, memo)
-        caps = np.minimum(caps, _end_lengths(p, allsegs, plans, len(p)))
-    plans = _plan(p, allsegs, sizer, caps, obstacles, memo)
+        settled = np.minimum(caps, _coupled_min(p, allsegs, _end_lengths(allsegs, plans, length)))
+        if np.all(settled >= caps * (1 - CAP_SETTLED)):
+            break
+        caps = settled
     new, rows = _commit(b, allsegs, plans)
     is_user_row = rows < len(b.pieces)
     user_new, user_rows = new[is_user_row], rows[is_user_row]
