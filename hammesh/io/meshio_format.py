@@ -506,13 +506,13 @@ def _planar(points: np.ndarray, path: Path, dim: int | None, repairs: list[str])
     if dim == 3:
         return points
     z = points[:, 2]
-    if len(z) and np.all(z == z[0]):
-        if z[0] != 0:
+    if not len(z) or np.all(z == z[0]):  # (no points: nothing varies; "no triangles" follows)
+        if len(z) and z[0] != 0:
             repairs.append(f"all points at z = {z[0]:.17g}: read as a planar mesh")
         return points[:, :2]
     if dim is None:
         return points
-    lo, hi = (float(z.min()), float(z.max())) if len(z) else (0.0, 0.0)
+    lo, hi = float(z.min()), float(z.max())
     raise NotPlanarError(
         f"{path}: mesh is not planar (z varies from {lo:.6g} to {hi:.6g}); "
         "3D surfaces are for 'hammesh strip' and 'hammesh surface'"

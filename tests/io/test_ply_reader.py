@@ -99,6 +99,8 @@ def test_truncated_binary_files_are_refused(tmp_path, cut):
      b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n4 0 0 0\n", "record 0"),
     (b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
      b"end_header\n0 0 zz\n", "not a number"),
+    (b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+     b"element face 0\nproperty list uchar int vertex_indices\nend_header\n", "no triangles"),
 ])
 def test_bad_files_name_the_problem(tmp_path, text, message):
     path = tmp_path / "b.ply"
@@ -130,3 +132,12 @@ def test_vtk_files_with_face_colours(tmp_path, binary):
     cols = np.column_stack([m.triangle_attributes[:, m.attribute_names.index(c)] for c in ("red", "green", "blue")])
     np.testing.assert_array_equal(cols, rgb)
     np.testing.assert_array_equal(m.triangles, plane.faces.reshape(-1, 4)[:, 1:])
+
+
+def test_an_empty_file_read_as_planar_says_no_triangles(tmp_path):
+    # (it said "mesh is not planar (z varies from 0 to 0)")
+    path = tmp_path / "e.ply"
+    path.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                     b"property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n")
+    with pytest.raises(FileFormatError, match="no triangles"):
+        read_mesh(path)
