@@ -123,6 +123,8 @@ def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -
     points = list(getattr(mesh, "point_data", {}))
     if suffix in DATA_SUFFIXES:
         return []
+    if suffix in (".obj", ".off") and meshio_format.point_colors(mesh) is not None:
+        points.remove("color")  # written as vertex colours
     return [f"cell data {x!r} ({suffix} holds geometry only)" for x in names] + [
         f"point data {x!r} ({suffix} holds geometry only)" for x in points]
 

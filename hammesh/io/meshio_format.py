@@ -71,7 +71,7 @@ from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
-__all__ = ["read", "to_mesh", "write", "as_meshio", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
+__all__ = ["read", "to_mesh", "write", "as_meshio", "point_colors", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
 
 #: suffix -> (meshio format names tried when reading, format written, writer kwargs)
 _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
@@ -156,8 +156,46 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
             from hammesh.io.vtk_xml import write_vtp
 
             write_vtp(tmp, out)
+        elif suffix in _TEXT_WRITERS:  # meshio's text writers format a line per Python call
+            _write_text(suffix, tmp, mesh, out)
         else:
             meshio.write(tmp, out, file_format=file_format, **kwargs)
+
+
+#: Suffixes written by hammesh's own vectorised text writers (:mod:`hammesh.io.text_rows`).
+_TEXT_WRITERS = frozenset({".obj", ".off", ".stl", ".xdmf"})
+
+
+def point_colors(mesh: Mesh | HamiltonianMesh) -> np.ndarray | None:
+    """The point data ``color`` of ``mesh`` if it is one row of 3 or 4 numbers a point
+    (what ``.obj`` and ``.off`` files hold and :func:`write` writes there), else None."""
+    colors = getattr(mesh, "point_data", {}).get("color")
+    if colors is None:
+        return None
+    colors = np.asarray(colors)
+    ok = colors.ndim == 2 and colors.shape[0] == len(mesh.points) and colors.shape[1] in (3, 4)
+    return colors if ok and colors.dtype.kind in "biuf" else None
+
+
+def _write_text(suffix: str, tmp: Path, mesh: Mesh | HamiltonianMesh, out: Any) -> None:
+    """Write ``out`` (the ``meshio.Mesh`` of ``mesh``) with hammesh's own text writers."""
+    triangles = out.cells[0].data
+    if suffix == ".obj":
+        from hammesh.io.obj_format import write_obj
+
+        write_obj(tmp, out.points, triangles, colors=point_colors(mesh))
+    elif suffix == ".off":
+        from hammesh.io.off_format import write_off
+
+        write_off(tmp, out.points, triangles, colors=point_colors(mesh))
+    elif suffix == ".stl":
+        from hammesh.io.stl_format import write_stl
+
+        write_stl(tmp, out.points, triangles)
+    else:
+        from hammesh.io.xdmf_format import write_xdmf
+
+        write_xdmf(tmp, out)
 
 
 def as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str = ".vtu") -> Any:

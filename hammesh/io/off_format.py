@@ -19,6 +19,8 @@ Data after the coordinates and the indices is kept, never dropped in silence:
 Lines, fields and indices are found by numba kernels, numbers parsed by numpy's C
 parser (:mod:`hammesh.io.text_records`): 1 M faces in well under a second, where a
 loop over the lines in Python took 15 s (meshio's, triangles only, 2 s).
+:func:`write_off` writes ``OFF`` (``COFF`` with the point data ``color``) through
+:mod:`hammesh.io.text_rows`, coordinates to 17 significant digits (exact).
 
 Reference: Geomview, "OFF Files" (http://www.geomview.org/docs/html/OFF.html).
 """
@@ -32,9 +34,10 @@ import numpy as np
 
 from hammesh.errors import FileFormatError
 from hammesh.io.raw import RawMesh, polygon_block_rows, polygon_blocks
+from hammesh.io.text_rows import write_rows
 from hammesh.io.text_records import BadRecord, as_bytes, field_counts, index_lists, parse_floats, text_lines
 
-__all__ = ["read_off"]
+__all__ = ["read_off", "write_off"]
 
 #: The header keyword: prefixes, then OFF.
 _KEYWORD = re.compile(rb"(ST)?(C)?(N)?(4)?(n)?OFF", re.IGNORECASE)
@@ -124,6 +127,23 @@ def read_off(path: str | Path) -> RawMesh:
             cell_data["color"] = [colours[rows] for rows in polygon_block_rows(offsets)]
     return RawMesh(points, blocks, cell_data=cell_data, point_data=point_data,
                    info={"not_carried": not_carried} if not_carried else {})
+
+
+def write_off(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
+              colors: np.ndarray | None = None) -> None:
+    """Write ``points (n, 3)`` and ``triangles (m, 3)`` as an OFF (``COFF`` with ``colors (n, 3 | 4)``).
+
+    The caller validates the mesh and makes the write atomic (:func:`hammesh.io.write`).
+    """
+    points = np.asarray(points, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    columns = list(points.T)
+    if colors is not None:
+        columns += list(np.asarray(colors).reshape(len(points), -1).T)
+    with open(path, "w", encoding="ascii", newline="\n") as f:
+        f.write(f"{'C' if colors is not None else ''}OFF\n{len(points)} {len(triangles)} 0\n")
+        write_rows(f, columns)
+        write_rows(f, list(triangles.T), prefix="3 ")
 
 
 def _vertex_columns(keyword: re.Match, values: np.ndarray, first: np.ndarray, counts: np.ndarray,

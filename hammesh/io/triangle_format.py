@@ -29,7 +29,6 @@ Reference: https://www.cs.cmu.edu/~quake/triangle.node.html (and ``.ele``, ``.po
 
 from __future__ import annotations
 
-import io
 import os
 import warnings
 from pathlib import Path
@@ -39,6 +38,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, triangle_cell_data
+from hammesh.io.text_rows import write_rows
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
@@ -57,11 +57,6 @@ def _siblings(path: str | os.PathLike[str]) -> tuple[Path, Path, Path]:
     if path.suffix.lower() not in SUFFIXES:
         raise FileFormatError(f"{path}: expected a .ele or .node path")
     return path.with_suffix(".node"), path.with_suffix(".poly"), path.with_suffix(".ele")
-
-
-def _savetxt(f: io.TextIOBase, rows: np.ndarray, fmt: list[str]) -> None:
-    if len(rows):
-        np.savetxt(f, rows, fmt=fmt, delimiter=" ")
 
 
 def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
@@ -118,9 +113,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
             vmarks = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64).reshape(-1)
             if len(vmarks) != n:
                 vmarks = np.zeros(n, dtype=np.int64)
-            rows = np.column_stack([np.arange(n, dtype=np.float64), points, *point_columns,
-                                    vmarks.astype(np.float64)])
-            _savetxt(f, rows, ["%d", "%.17g", "%.17g", *["%.17g"] * len(point_names), "%d"])
+            write_rows(f, [np.arange(n), points[:, 0], points[:, 1], *point_columns, vmarks])
 
         with open(tmp_poly, "w", encoding="ascii", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .poly file, zero-based; vertices in {node_path.name}\n")
@@ -128,8 +121,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
             f.write("# <# of segments> <# of boundary markers>\n")
             f.write(f"{s} 1\n")
             f.write("# <segment #> <endpoint> <endpoint> <boundary marker>\n")
-            rows = np.column_stack([np.arange(s), segments, markers]).astype(np.int64)
-            _savetxt(f, rows, ["%d"] * 4)
+            write_rows(f, [np.arange(s), segments[:, 0], segments[:, 1], markers])
             f.write("# <# of holes>\n0\n")
 
         with open(tmp_ele, "w", encoding="ascii", newline="\n") as f:
@@ -138,13 +130,9 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
             f.write("# <# of triangles> <nodes per triangle> <# of attributes>\n")
             f.write(f"{m} 3 {len(names)}\n")
             f.write("# <triangle #> <node> <node> <node> <attributes>\n")
-            if names:
-                rows = np.column_stack([np.arange(m), triangles, *[np.asarray(c, np.float64) for c in columns]])
-                fmt = ["%d"] * 4 + ["%d" if k in _CYCLE_FIELDS else "%.17g" for k in names]
-                _savetxt(f, rows, fmt)
-            else:
-                rows = np.column_stack([np.arange(m), triangles])
-                _savetxt(f, rows, ["%d"] * 4)
+            # the cycle fields are integers (``%d``), the user's attributes floats
+            values = [np.asarray(c, np.int64 if k in _CYCLE_FIELDS else np.float64) for k, c in zip(names, columns)]
+            write_rows(f, [np.arange(m), *triangles.T, *values])
 
 
 class _Tokens:

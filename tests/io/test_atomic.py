@@ -10,7 +10,7 @@ import meshio
 import pytest
 
 import hammesh.io as hio
-from hammesh.io import triangle_format, vtu
+from hammesh.io import obj_format, off_format, stl_format, triangle_format, vtu, xdmf_format
 from hammesh.io.atomic import atomic_path, atomic_paths, atomic_write_text
 
 
@@ -100,10 +100,13 @@ def _partial_then_raise(filename, mesh, *args, **kwargs):
     raise OSError("simulated crash in meshio.write")
 
 
-@pytest.mark.parametrize("suffix", [".vtu", ".msh", ".xdmf", ".obj", ".stl"])
+@pytest.mark.parametrize("suffix", [".vtu", ".msh", ".xdmf", ".obj", ".off", ".stl"])
 def test_meshio_crash_leaves_nothing(tmp_path, monkeypatch, hexagon, suffix):
     monkeypatch.setattr(meshio, "write", _partial_then_raise)
     monkeypatch.setattr(vtu, "write", _partial_then_raise)  # hammesh's own .vtu writer
+    for module, name in ((obj_format, "write_obj"), (off_format, "write_off"), (stl_format, "write_stl"),
+                         (xdmf_format, "write_xdmf")):  # and its text writers
+        monkeypatch.setattr(module, name, _partial_then_raise)
     target = tmp_path / f"out{suffix}"
     with pytest.raises(OSError, match="simulated"):
         hio.write(hexagon, target)
@@ -126,28 +129,28 @@ def test_triangle_writer_crash_midway_leaves_old_triple(tmp_path, monkeypatch, h
     hio.write(hexagon, tmp_path / "m.ele")
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     assert sorted(before) == ["m.ele", "m.node", "m.poly"]
-    real = triangle_format._savetxt
+    real = triangle_format.write_rows
     calls = []
 
-    def flaky(f, rows, fmt):
+    def flaky(f, columns, **kw):
         calls.append(1)
         if len(calls) == 3:  # the .ele rows, after .node and .poly are complete
             f.write("0 0 1")
             raise OSError("simulated crash")
-        real(f, rows, fmt)
+        real(f, columns, **kw)
 
-    monkeypatch.setattr(triangle_format, "_savetxt", flaky)
+    monkeypatch.setattr(triangle_format, "write_rows", flaky)
     with pytest.raises(OSError, match="simulated"):
         hio.write(two_cycles, tmp_path / "m.ele")
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
 def test_triangle_writer_crash_on_fresh_target_leaves_nothing(tmp_path, monkeypatch, hexagon):
-    def boom(f, rows, fmt):
+    def boom(f, columns, **kw):
         f.write("1 2")
         raise OSError("simulated crash")
 
-    monkeypatch.setattr(triangle_format, "_savetxt", boom)
+    monkeypatch.setattr(triangle_format, "write_rows", boom)
     with pytest.raises(OSError):
         hio.write(hexagon, tmp_path / "m.node")
     assert os.listdir(tmp_path) == []
