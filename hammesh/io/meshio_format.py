@@ -39,7 +39,12 @@ Format notes (meshio 5.3):
   numbering.
 * meshio prints warnings to ``sys.stderr`` (via rich): reading redirects them.
 * ``.xdmf`` is written with its arrays inline (``data_format="XML"``) so the output is
-  one file that can be replaced atomically (the HDF5 default writes a sibling ``.h5``).
+  one file that can be replaced atomically (the HDF5 default writes a sibling ``.h5``),
+  by meshio's ``XdmfWriter`` with the arrays formatted by :mod:`hammesh.io.xdmf_format`.
+* ``.obj .off .stl`` are written by hammesh's own writers (:mod:`~hammesh.io.obj_format`,
+  :mod:`~hammesh.io.off_format`, :mod:`~hammesh.io.stl_format`, through
+  :mod:`hammesh.io.text_rows`): exact and 3-6x faster than meshio's line-by-line
+  writers; ``.obj``/``.off`` write a point data ``color`` as vertex colours.
 * ``.ply`` cells are written as int32 (PLY has no int64).
 * ``.stl`` is a triangle soup: reading merges equal points in order of first use, so
   unreferenced points are lost and point indices can change; each triangle's
