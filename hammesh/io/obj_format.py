@@ -34,7 +34,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError
 from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
-from hammesh.io.text_rows import write_rows
+from hammesh.io.text_rows import vertex_columns, write_rows
 from hammesh.io.text_records import BadRecord, as_bytes, field_counts, first_word_codes, index_lists, parse_floats, text_lines
 
 __all__ = ["read_obj", "write_obj", "RECORDS"]
@@ -115,10 +115,7 @@ def write_obj(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
     ``colors (n, 3 | 4)``, if given, follow each vertex's coordinates.  The caller
     validates the mesh and makes the write atomic (:func:`hammesh.io.write`).
     """
-    points = np.asarray(points, dtype=np.float64)
-    columns = list(points.T)
-    if colors is not None:
-        columns += list(np.asarray(colors).reshape(len(points), -1).T)
+    columns = vertex_columns(points, colors)
     with open(path, "w", encoding="ascii", newline="\n") as f:
         f.write(f"# {comment}: {len(points)} vertices, {len(triangles)} triangles\n")
         write_rows(f, columns, prefix="v ")

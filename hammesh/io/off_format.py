@@ -34,7 +34,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError
 from hammesh.io.raw import RawMesh, polygon_block_rows, polygon_blocks
-from hammesh.io.text_rows import write_rows
+from hammesh.io.text_rows import vertex_columns, write_rows
 from hammesh.io.text_records import BadRecord, as_bytes, field_counts, index_lists, parse_floats, text_lines
 
 __all__ = ["read_off", "write_off"]
@@ -135,11 +135,8 @@ def write_off(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
 
     The caller validates the mesh and makes the write atomic (:func:`hammesh.io.write`).
     """
-    points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64)
-    columns = list(points.T)
-    if colors is not None:
-        columns += list(np.asarray(colors).reshape(len(points), -1).T)
+    columns = vertex_columns(points, colors)
     with open(path, "w", encoding="ascii", newline="\n") as f:
         f.write(f"{'C' if colors is not None else ''}OFF\n{len(points)} {len(triangles)} 0\n")
         write_rows(f, columns)

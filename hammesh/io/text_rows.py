@@ -22,7 +22,7 @@ from typing import TextIO
 
 import numpy as np
 
-__all__ = ["write_rows", "format_rows", "row_template", "CHUNK_ROWS"]
+__all__ = ["write_rows", "format_rows", "row_template", "vertex_columns", "CHUNK_ROWS"]
 
 #: Rows formatted per ``%`` operation: bounds the temporary Python objects (about
 #: 40 bytes a field) while keeping the per-block overhead negligible.
@@ -68,3 +68,12 @@ def write_rows(f: TextIO, columns: Sequence[np.ndarray], *, prefix: str = "", se
     n = len(columns[0]) if columns else 0
     for start in range(0, n, chunk):
         f.write(format_rows(columns, prefix=prefix, sep=sep, start=start, stop=start + chunk))
+
+
+def vertex_columns(points: np.ndarray, colors: np.ndarray | None = None) -> list[np.ndarray]:
+    """The columns of a vertex line: ``x y z`` as float64, then ``colors (n, c)`` if given."""
+    points = np.asarray(points, dtype=np.float64)
+    columns = list(points.T)
+    if colors is not None:
+        columns += list(np.asarray(colors).reshape(len(points), -1).T)
+    return columns
