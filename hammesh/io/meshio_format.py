@@ -265,7 +265,7 @@ def _vtk_cells(
         cell_data = _with_line_block({k: [v] for k, v in data.items()}, len(triangles), markers)
         return [("triangle", triangles), ("line", segments)], cell_data
     if len(segments):
-        flags, edge_marker = tags.edge_fields(mesh)
+        flags, edge_marker = tags.edge_fields(mesh, slots)
         data[tags.SEGMENT_EDGES] = flags
         data[tags.EDGE_MARKER] = edge_marker
     data.update(tags.skfem_cell_data(mesh, slots))

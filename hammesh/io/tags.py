@@ -114,7 +114,7 @@ class EdgeSlots(NamedTuple):
 
 
 def segment_slots(triangles: np.ndarray, segments: np.ndarray) -> EdgeSlots | None:
-    """Locate every segment among the triangles' edges (vectorized, ``O(m log m)``).
+    """Locate every segment among the triangles' edges (vectorized, ``O(m log s)``).
 
     Returns None if some segment is not an edge of the triangles, an edge is given
     twice (either direction), or an edge is shared by more than two triangles: such a
@@ -129,19 +129,24 @@ def segment_slots(triangles: np.ndarray, segments: np.ndarray) -> EdgeSlots | No
     span = int(max(tri.max(), seg.max())) + 1
     a = tri.reshape(-1)
     b = tri[:, [1, 2, 0]].reshape(-1)
-    keys = np.minimum(a, b) * span + np.maximum(a, b)
     skeys = np.minimum(seg[:, 0], seg[:, 1]) * span + np.maximum(seg[:, 0], seg[:, 1])
-    if len(np.unique(skeys)) != len(skeys):
+    by_key = np.argsort(skeys)
+    sorted_skeys = skeys[by_key]
+    if np.any(sorted_skeys[1:] == sorted_skeys[:-1]):
         return None
-    order = np.argsort(keys, kind="stable")
-    sorted_keys = keys[order]
-    lo = np.searchsorted(sorted_keys, skeys, side="left")
-    hi = np.searchsorted(sorted_keys, skeys, side="right")
-    count = hi - lo
+    # the segments are few (boundary and constraints): look each of the 3 m edges up
+    # among them instead of sorting all the edges (the 1.5 M-triangle write: 0.84 -> 0.2 s)
+    keys = np.minimum(a, b) * span + np.maximum(a, b)
+    at = np.minimum(np.searchsorted(sorted_skeys, keys), len(seg) - 1)
+    hit_slots = np.flatnonzero(sorted_skeys[at] == keys)  # ascending
+    seg_of = by_key[at[hit_slots]]
+    count = np.bincount(seg_of, minlength=len(seg))
     if np.any(count == 0) or np.any(count > 2):
         return None
-    first = order[lo]
-    second = np.where(count == 2, order[np.minimum(lo + 1, len(order) - 1)], -1)
+    grouped = hit_slots[np.argsort(seg_of, kind="stable")]  # per segment, its slots ascending
+    lo = np.cumsum(count) - count
+    first = grouped[lo]
+    second = np.where(count == 2, grouped[np.minimum(lo + 1, len(grouped) - 1)], -1)
     # the slot in which the segment runs forwards
     forwards = a[first] == seg[:, 0]
     slot = np.where(forwards | (second < 0), first, second)
@@ -149,12 +154,13 @@ def segment_slots(triangles: np.ndarray, segments: np.ndarray) -> EdgeSlots | No
     return EdgeSlots(slot, other)
 
 
-def edge_fields(mesh: Mesh | HamiltonianMesh) -> tuple[np.ndarray, np.ndarray] | None:
+def edge_fields(mesh: Mesh | HamiltonianMesh, slots: EdgeSlots | None = None) -> tuple[np.ndarray, np.ndarray] | None:
     """``(segment_edges (m,) int64, edge_marker (m, 3) int64)`` of ``mesh``'s segments
     (see the module docstring), or None if they cannot be stored per triangle
-    (:func:`segment_slots`)."""
+    (:func:`segment_slots`; ``slots``: its result, if the caller has it)."""
     m = len(mesh.triangles)
-    slots = segment_slots(mesh.triangles, mesh.segments)
+    if slots is None:
+        slots = segment_slots(mesh.triangles, mesh.segments)
     if slots is None:
         return None
     markers = np.asarray(mesh.segment_markers, dtype=np.int64).reshape(-1)

@@ -87,7 +87,9 @@ def write(path: str | os.PathLike[str], mesh: Any, threads: int | None = None) -
     sizes = np.concatenate([np.full(len(data), data.shape[1], np.int64) for _, data in blocks])
     types = np.concatenate([np.full(len(data), VTK_CELL_TYPES[kind], np.uint8) for kind, data in blocks])
     n_cells = len(types)
-    cell_data = {name: np.concatenate([np.asarray(a) for a in arrays]) for name, arrays in mesh.cell_data.items()}
+    # (one block, the usual case: no copy of the arrays, 12 MB each at 1.5 M triangles)
+    cell_data = {name: np.asarray(arrays[0]) if len(arrays) == 1 else np.concatenate([np.asarray(a) for a in arrays])
+                 for name, arrays in mesh.cell_data.items()}
 
     workers = max(1, threads or row_threads.cores())
     with ThreadPoolExecutor(workers) as pool, open(path, "wb") as fh:

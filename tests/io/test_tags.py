@@ -91,6 +91,36 @@ def test_segment_slots_refuses_what_a_triangle_field_cannot_hold():
     assert Mesh(points, tri).n_triangles == 2
 
 
+def _slots_by_brute_force(triangles, segments):
+    """Every segment's slots ``3 t + k`` by a dictionary of all edges (the oracle)."""
+    where = {}
+    for t, row in enumerate(np.asarray(triangles).tolist()):
+        for k in range(3):
+            where.setdefault(frozenset((row[k], row[(k + 1) % 3])), []).append(3 * t + k)
+    return [where.get(frozenset(e), []) for e in np.asarray(segments).tolist()]
+
+
+@given(tagged_meshes(), st.integers(0, 2**32 - 1))
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_segment_slots_agree_with_a_dictionary_of_edges(mesh, seed):
+    rng = np.random.default_rng(seed)
+    segments = np.asarray(mesh.segments).reshape(-1, 2)
+    if len(segments) and rng.random() < 0.3:  # a segment that is no edge, or one given twice
+        extra = rng.integers(0, len(mesh.points), 2) if rng.random() < 0.5 else segments[0, ::-1]
+        segments = np.vstack([segments, extra])
+    found = tags.segment_slots(mesh.triangles, segments)
+    expected = _slots_by_brute_force(mesh.triangles, segments)
+    keys = [frozenset(e) for e in segments.tolist()]
+    if len(set(keys)) < len(keys) or any(not 1 <= len(x) <= 2 for x in expected):
+        assert found is None
+        return
+    tri = np.asarray(mesh.triangles).reshape(-1)
+    for j, slots in enumerate(expected):
+        forwards = [x for x in slots if tri[x] == segments[j, 0]]
+        assert found.slot[j] == (forwards[0] if forwards else slots[0])
+        assert found.other[j] == ([x for x in slots if x != found.slot[j]] or [-1])[0]
+
+
 def test_names():
     assert tags.boundary_name(np.int64(-2)) == "marker_-2"
     assert tags.region_name(np.float64(3.0)) == "region_3"
