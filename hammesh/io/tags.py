@@ -114,7 +114,7 @@ class EdgeSlots(NamedTuple):
 
 
 def segment_slots(triangles: np.ndarray, segments: np.ndarray) -> EdgeSlots | None:
-    """Locate every segment among the triangles' edges (vectorized, ``O(m log s)``).
+    """Locate every segment among the triangles' edges (vectorized, ``O(m + s log s)``).
 
     Returns None if some segment is not an edge of the triangles, an edge is given
     twice (either direction), or an edge is shared by more than two triangles: such a
@@ -128,18 +128,25 @@ def segment_slots(triangles: np.ndarray, segments: np.ndarray) -> EdgeSlots | No
         return None
     span = int(max(tri.max(), seg.max())) + 1
     a = tri.reshape(-1)
-    b = tri[:, [1, 2, 0]].reshape(-1)
     skeys = np.minimum(seg[:, 0], seg[:, 1]) * span + np.maximum(seg[:, 0], seg[:, 1])
     by_key = np.argsort(skeys)
     sorted_skeys = skeys[by_key]
     if np.any(sorted_skeys[1:] == sorted_skeys[:-1]):
         return None
-    # the segments are few (boundary and constraints): look each of the 3 m edges up
-    # among them instead of sorting all the edges (the 1.5 M-triangle write: 0.84 -> 0.2 s)
-    keys = np.minimum(a, b) * span + np.maximum(a, b)
+    # the segments are few (boundary and constraints): keep the edges whose two ends are
+    # segment ends and look those up among the segments, instead of sorting all 3 m
+    # edges (the 1.5 M-triangle write: 0.84 -> 0.05 s)
+    on_segment = np.zeros(span, dtype=bool)
+    on_segment[seg.reshape(-1)] = True
+    ends = on_segment[tri]
+    slots = np.flatnonzero((ends & ends[:, [1, 2, 0]]).reshape(-1))  # ascending
+    u, v = a[slots], tri[slots // 3, (slots % 3 + 1) % 3]
+    keys = np.minimum(u, v) * span + np.maximum(u, v)
     at = np.minimum(np.searchsorted(sorted_skeys, keys), len(seg) - 1)
-    hit_slots = np.flatnonzero(sorted_skeys[at] == keys)  # ascending
-    seg_of = by_key[at[hit_slots]]
+    hit = sorted_skeys[at] == keys
+    hit_slots = slots[hit]  # ascending
+    at = at[hit]
+    seg_of = by_key[at]
     count = np.bincount(seg_of, minlength=len(seg))
     if np.any(count == 0) or np.any(count > 2):
         return None
