@@ -11,7 +11,8 @@ are compared (points and faces equal).
 
 ``--write``: writing instead.  A planar Hamiltonian mesh of about ``--faces`` triangles
 (demo domain, sparse mode, its cycle fields and tags as cell data) is written as
-``.obj .off .stl .xdmf`` by ``hammesh.write`` (own vectorised text writers,
+``.vtu .obj .off .stl .xdmf`` by ``hammesh.write`` (own writers: ``.vtu`` zlib level 1 on
+every core, the text formats vectorised,
 :mod:`hammesh.io.text_rows`) and by ``meshio.write`` of the same ``meshio.Mesh``
 (``hammesh.to_meshio``; ``.xdmf`` inline XML as hammesh writes it), and as ``.ele`` by
 hammesh against ``np.savetxt`` of the same ``.node`` and ``.ele`` rows (hammesh's
@@ -99,7 +100,7 @@ def _write_bench(args: argparse.Namespace) -> None:
         mesh_file = Path(tmp) / "mesh.pkl"
         mesh_file.write_bytes(pickle.dumps(h))
         print(f"{len(h.triangles):,} triangles, {len(h.points):,} points")
-        for suffix in (".obj", ".off", ".stl", ".xdmf", ".ele"):
+        for suffix in (".vtu", ".obj", ".off", ".stl", ".xdmf", ".ele"):
             rows: dict[str, list[dict]] = {"hammesh": [], "meshio": []}
             for _ in range(args.rounds):
                 for writer in ("meshio", "hammesh"):
