@@ -25,11 +25,11 @@ surfaces, ``dim=None`` whichever the file holds.  Point lists (:func:`read_point
 simple polygons (:func:`read_polygon`: ``.poly``, GeoJSON, WKT, text) are read here too;
 :func:`check_outputs` checks output paths before a command does any work.
 
-Formats that hold cell data (``.vtu .vtk .msh .xdmf``; ``.ele`` as attributes) store a
+Formats that hold cell data (``.vtu .vtk .msh .xdmf .ply``; ``.ele`` as attributes) store a
 :class:`~hammesh.mesh.HamiltonianMesh`'s ``cycle_position``, ``cycle_id``, ``parent``
 and ``kind`` per triangle; every format keeps the triangles' order, which is the cycle.
 The same formats store the constrained edges and their markers (per-triangle cell data
-in ``.vtu .vtk .xdmf``, which hold triangles only; ``line`` elements with named physical
+in ``.vtu .vtk .xdmf``, which hold triangles only, and face properties in ``.ply``; ``line`` elements with named physical
 groups in ``.msh``; the ``.poly`` next to a ``.ele``), the regions as named sets
 (``marker_<k>``, ``region_<a>``: :mod:`hammesh.io.tags`, read by ``skfem.MeshTri.load``)
 and the points' markers.
@@ -99,7 +99,7 @@ FORMATS: dict[str, tuple[Reader, Writer]] = {
 
 #: Suffixes whose files hold the triangles' attributes and the points' data (the other
 #: formats hold geometry).
-DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".vtp", ".msh", ".xdmf", ".ele", ".node", ".pvtu"})
+DATA_SUFFIXES: frozenset[str] = frozenset({".vtu", ".vtk", ".vtp", ".msh", ".xdmf", ".ply", ".ele", ".node", ".pvtu"})
 
 
 def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> list[str]:

@@ -45,7 +45,10 @@ Format notes (meshio 5.3):
   :mod:`~hammesh.io.off_format`, :mod:`~hammesh.io.stl_format`, through
   :mod:`hammesh.io.text_rows`): exact and 3-6x faster than meshio's line-by-line
   writers; ``.obj``/``.off`` write a point data ``color`` as vertex colours.
-* ``.ply`` cells are written as int32 (PLY has no int64).
+* ``.ply`` is written by :func:`hammesh.io.ply_format.write_ply` (binary): cells as
+  int32 (PLY has no int64), and the data the cell-data formats hold (cycle fields,
+  attributes, ``segment_edges``/``edge_marker``, vertex markers, point data) as vertex
+  and face properties; meshio's writer drops cell data and vector point data.
 * ``.stl`` is a triangle soup: reading merges equal points in order of first use, so
   unreferenced points are lost and point indices can change; each triangle's
   coordinates and the triangle order survive.
@@ -76,7 +79,7 @@ from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
 
-__all__ = ["read", "to_mesh", "write", "as_meshio", "point_colors", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
+__all__ = ["read", "to_mesh", "write", "as_meshio", "point_colors", "ply_data", "SUFFIXES", "CELL_DATA_SUFFIXES", "SEGMENT_MARKER"]
 
 #: suffix -> (meshio format names tried when reading, format written, writer kwargs)
 _FORMATS: dict[str, tuple[tuple[str, ...], str, dict[str, Any]]] = {
@@ -153,6 +156,13 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     suffix = _suffix(path)
     validate_mesh(mesh)
     _, file_format, kwargs = _FORMATS[suffix]
+    if suffix == ".ply":  # hammesh's writer: meshio's drops cell data and vector point data
+        from hammesh.io.ply_format import write_ply
+
+        points, triangles, point_data, cell_data = ply_data(mesh)
+        with atomic_path(path) as tmp:
+            write_ply(tmp, points, triangles, point_data=point_data, cell_data=cell_data)
+        return
     out = _as_meshio(mesh, suffix, path)
     with atomic_path(path) as tmp:
         if suffix == ".vtu":  # meshio's .vtu writer spends most of its time in zlib
@@ -180,6 +190,27 @@ def point_colors(mesh: Mesh | HamiltonianMesh) -> np.ndarray | None:
     colors = np.asarray(colors)
     ok = colors.ndim == 2 and colors.shape[0] == len(mesh.points) and colors.shape[1] in (3, 4)
     return colors if ok and colors.dtype.kind in "biuf" else None
+
+
+def ply_data(mesh: Mesh | HamiltonianMesh) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """``(points (n, 3), triangles, point data, cell data)`` that :func:`write` writes to
+    ``.ply``: the cycle fields and attributes (:func:`~hammesh.io.cell_data.triangle_cell_data`),
+    the constrained edges as ``segment_edges``/``edge_marker`` (:mod:`hammesh.io.tags`),
+    the vertex markers and the mesh's point data."""
+    points = np.asarray(mesh.points, dtype=np.float64)
+    points3 = points if points.shape[1] == 3 else np.column_stack([points, np.zeros(len(points))])
+    triangles = np.asarray(mesh.triangles, dtype=np.int64)
+    cell_data = triangle_cell_data(mesh)
+    slots = tags.segment_slots(triangles, np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2))
+    if slots is not None and len(slots.slot):
+        cell_data[tags.SEGMENT_EDGES], cell_data[tags.EDGE_MARKER] = tags.edge_fields(mesh, slots)
+    point_data: dict[str, np.ndarray] = {}
+    vertex_markers = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64)
+    if vertex_markers.shape == (len(points),) and vertex_markers.any():
+        point_data[tags.VERTEX_MARKER] = vertex_markers
+    for name, values in getattr(mesh, "point_data", {}).items():
+        point_data.setdefault(name, np.asarray(values))
+    return points3, triangles, point_data, cell_data
 
 
 def _write_text(suffix: str, tmp: Path, mesh: Mesh | HamiltonianMesh, out: Any) -> None:
@@ -226,12 +257,14 @@ def as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str = ".vtu") -> Any:
 def _as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str, path: Path) -> Any:
     import meshio
 
+    if suffix == ".ply":  # (what write_ply writes)
+        points3, triangles, point_data, cell_data = ply_data(mesh)
+        return meshio.Mesh(points3, [("triangle", triangles.astype(np.int32))], point_data=point_data,
+                           cell_data={k: [v] for k, v in cell_data.items()})
     points = np.asarray(mesh.points, dtype=np.float64)
     # 3D surfaces (hammesh.surface) as they are; planar meshes get z = 0
     points3 = points if points.shape[1] == 3 else np.column_stack([points, np.zeros(len(points))])
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
-    if suffix == ".ply":
-        triangles = triangles.astype(np.int32)
     cells: list[tuple[str, np.ndarray]] = [("triangle", triangles)]
     cell_data: dict[str, list[np.ndarray]] = {}
     point_data: dict[str, np.ndarray] = {}

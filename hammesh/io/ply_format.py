@@ -15,6 +15,14 @@ for 1 M triangles).  This reader follows the PLY format as Greg Turk described i
 * ``edge``: ``vertex1 vertex2`` segments;
 * other elements and other list properties: listed as not carried (never dropped in silence).
 
+Properties named ``v[0]``, ``v[1]``, ... are one vector ``v`` (as :func:`write_ply` writes
+vectors, and the Gmsh files hammesh writes).
+
+:func:`write_ply` writes every numeric point and cell datum as a vertex or face property
+(meshio 5's writer drops cell data and vector point data): ``int64`` as ``int`` when it
+fits, else ``double`` (exact below 2**53); binary little-endian, or ASCII (exact) when
+there are face properties, which meshio 5's binary reader cannot read.
+
 Binary records are walked by a numba kernel (each property's position in each record:
 lists make records of different sizes) and the values gathered by numpy; ASCII files
 are tokenised by :mod:`hammesh.io.text_records` (one record per line).
@@ -31,9 +39,11 @@ from pathlib import Path
 import numpy as np
 
 from hammesh.errors import FileFormatError
+from hammesh.io.cell_data import join_components
+from hammesh.io.text_rows import write_rows
 from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
 
-__all__ = ["read_ply", "PLY_TYPES"]
+__all__ = ["read_ply", "write_ply", "PLY_TYPES"]
 
 #: numpy type code of each PLY type name.
 PLY_TYPES = {
@@ -268,13 +278,16 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]]) -> Raw
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         blocks = polygon_blocks(offsets, flat.astype(np.int64))
         rows = polygon_block_rows(offsets)
+        scalars = {}
         for name, v in face.items():
             if name == key:
                 continue
             if isinstance(v, tuple):
                 not_carried.append(f"face list property {name!r}")
             else:
-                cell_data[name] = [v[r] for r in rows]
+                scalars[name] = v
+        for name, v in join_components(scalars).items():
+            cell_data[name] = [v[r] for r in rows]
     edge = values.get("edge", {})
     if "vertex1" in edge and "vertex2" in edge:
         blocks.append(CellBlock("line", np.column_stack([edge["vertex1"], edge["vertex2"]]).astype(np.int64)))
@@ -285,3 +298,79 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]]) -> Raw
             not_carried.append(f"element {el.name!r} ({el.rows} records)")
     return RawMesh(points, blocks, cell_data=cell_data, point_data=point_data,
                    info={"not_carried": not_carried} if not_carried else {})
+
+
+#: PLY type name of each numpy type written (PLY has no 64-bit integers).
+_WRITE_TYPES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint",
+                "f4": "float", "f8": "double", "b1": "uchar"}
+
+
+def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str]) -> list[tuple[str, np.ndarray]]:
+    """``(property name, column)`` of every numeric array of ``data``: a vector ``v`` as
+    ``v[0]``, ``v[1]``...; 64-bit integers as ``int`` if they fit, else ``double``."""
+    out = []
+    for name, values in data.items():
+        values = np.asarray(values)
+        if values.dtype.kind not in "biuf" or len(values) != rows:
+            continue
+        values = values.reshape(rows, -1)
+        # a header token: no blanks, ASCII (a name that is not is written with '?')
+        token = "_".join(str(name).split()).encode("ascii", "replace").decode() or "_"
+        while token in taken:  # (x y z, vertex_indices: a user's field keeps its data)
+            token = f"input_{token}"
+        taken.add(token)
+        if values.dtype.itemsize == 8 and values.dtype.kind in "iu":
+            small = not values.size or (values.min() >= -2**31 and values.max() < 2**31)
+            values = values.astype(np.int32 if small else np.float64)
+        elif values.dtype.kind == "b":
+            values = values.astype(np.uint8)
+        one = values.shape[1] == 1
+        out += [(token if one else f"{token}[{j}]", values[:, j]) for j in range(values.shape[1])]
+    return out
+
+
+def _records(columns: list[tuple[str, np.ndarray]], rows: int) -> np.ndarray:
+    """The columns as packed little-endian records (one per row)."""
+    dtype = np.dtype([(f"f{j}", c.dtype.newbyteorder("<")) for j, (_, c) in enumerate(columns)])
+    out = np.empty(rows, dtype=dtype)
+    for j, (_, c) in enumerate(columns):
+        out[f"f{j}"] = c
+    return out
+
+
+def write_ply(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
+              point_data: dict[str, np.ndarray] | None = None,
+              cell_data: dict[str, np.ndarray] | None = None) -> None:
+    """Write ``points (n, 3)``, ``triangles (m, 3)`` and their data as PLY.
+
+    ``point_data`` / ``cell_data``: arrays ``(n,)``/``(n, c)`` and ``(m,)``/``(m, c)``
+    written as vertex and face properties (see the module docstring; :func:`read_ply`
+    reads them back).  Binary little-endian, or ASCII when there are face properties:
+    meshio 5's binary reader fails on those (its ASCII reader takes them); ASCII values
+    are exact (:mod:`hammesh.io.text_rows`).  The caller validates the mesh and makes
+    the write atomic (:func:`hammesh.io.write`).
+    """
+    points = np.asarray(points, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    n, m = len(points), len(triangles)
+    vertex = [("x", points[:, 0]), ("y", points[:, 1]), ("z", points[:, 2])]
+    vertex += _ply_columns(point_data or {}, n, {"x", "y", "z"})
+    face_props = _ply_columns(cell_data or {}, m, {"vertex_indices"})
+    binary = not face_props
+    head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by hammesh",
+            f"element vertex {n}"]
+    head += [f"property {_WRITE_TYPES[c.dtype.str[1:]]} {name}" for name, c in vertex]
+    head += [f"element face {m}", "property list uchar int vertex_indices"]
+    head += [f"property {_WRITE_TYPES[c.dtype.str[1:]]} {name}" for name, c in face_props]
+    head.append("end_header\n")
+    if binary:
+        face = [("", np.full(m, 3, np.uint8)), *[("", triangles[:, k].astype(np.int32)) for k in range(3)]]
+        with open(path, "wb") as f:
+            f.write("\n".join(head).encode("ascii"))
+            f.write(_records(vertex, n).tobytes())
+            f.write(_records(face, m).tobytes())
+        return
+    with open(path, "w", encoding="ascii", newline="\n") as f:
+        f.write("\n".join(head))
+        write_rows(f, [c for _, c in vertex])
+        write_rows(f, [*triangles.T, *(c for _, c in face_props)], prefix="3 ")
