@@ -130,8 +130,8 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
 
     print("| domain | triangles | k | incircle (own mesh) | sparse | sparse, fishbone | walk order, first / median "
           "| incircle's parts projected (disconnected, imbalance) | kd order (disconnected) "
-          "| vertex tree (uncovered) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "| vertex tree (uncovered) | vertex tree, repaired (uncovered) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, dom, area in domains:
         mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
         m = mesh.n_triangles
@@ -143,7 +143,7 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
         hf = hammesh.hamiltonian(mesh, mode="sparse", tree="fishbone")
         first, median = walk_positions(hi.parent, m)
         kd = kd_order(mesh.points[mesh.triangles].mean(axis=1))
-        vt = vertex_tree_cover(mesh.points, mesh.triangles, twin)
+        trees = [vertex_tree_cover(mesh.points, mesh.triangles, twin, repair=r) for r in (0, 6)]
         for k in ks:
             mc = _metis_median(k, a, b, m)
 
@@ -154,20 +154,23 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
             pf, pm = (order_cut(np.argsort(x, kind="stable"), k, a, b) for x in (first, median))
             pp = projected_parts(hi.parent, partition(hi, k).part, m, k, nb)
             kc, kdis = order_cut(kd, k, a, b)
-            # the cycle's stretches (best shift on the edges between its triangles), the
-            # uncovered triangles then given a neighbour's part
-            local = np.full(m, -1, np.int64)
-            local[vt.order] = np.arange(len(vt.order))
-            on = (local[a] >= 0) & (local[b] >= 0)
-            vpart = np.full(m, -1, np.int64)
-            vpart[vt.order] = stretch_parts(np.arange(len(vt.order)), k, local[a[on]], local[b[on]])
-            vpart = _fill_parts(vpart, nb)
+            cells = []
+            for vt in trees:
+                # the cycle's stretches (best shift on the edges between its triangles), the
+                # uncovered triangles then given a neighbour's part
+                local = np.full(m, -1, np.int64)
+                local[vt.order] = np.arange(len(vt.order))
+                on = (local[a] >= 0) & (local[b] >= 0)
+                vpart = np.full(m, -1, np.int64)
+                vpart[vt.order] = stretch_parts(np.arange(len(vt.order)), k, local[a[on]], local[b[on]])
+                vpart = _fill_parts(vpart, nb)
+                cells.append(f"{edge_cut(vpart, a, b) / mc:.2f} ({len(vt.uncovered) / m:.2%})")
             print(f"| {name} | {m:,} | {k} | {own(hi):.2f} | {own(hs):.2f} | {own(hf):.2f} "
                   f"| {pf[0] / mc:.2f} / {pm[0] / mc:.2f} "
                   f"| {edge_cut(pp, a, b) / mc:.2f} ({int((part_components(pp, k, a, b) > 1).sum())}, "
                   f"{np.bincount(pp, minlength=k).max() * k / m:.3f}) "
                   f"| {kc / mc:.2f} ({kdis}) "
-                  f"| {edge_cut(vpart, a, b) / mc:.2f} ({len(vt.uncovered) / m:.2%}) |", flush=True)
+                  f"| {' | '.join(cells)} |", flush=True)
 
 
 def _mesh(dom, area: float, target: int, mode: str):

@@ -230,7 +230,145 @@ def _walk_between_into(tri, twin, inside, start, order):
         cur = nxt
 
 
-def vertex_tree_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray) -> VertexTree:
+@njit(cache=True, nogil=True)
+def _adjacent(ptr, idx, a, b):
+    """Whether vertices ``a`` and ``b`` share an edge (``ptr``/``idx``: neighbour lists)."""
+    for j in range(ptr[a], ptr[a + 1]):
+        if idx[j] == b:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _repair_into(ptr, idx, vt_ptr, vt_idx, tri, inside, boundary, max_visit, passes):
+    """Cover uncovered triangles (no inside vertex) and keep the inside an induced tree:
+    for each, the best of its vertices ``v`` (most triangles covered, net) that either
+    has one inside neighbour (taken in) or two non-adjacent ones ``a``, ``b``: then
+    ``v`` closes a loop with the tree path from ``a`` to ``b`` (breadth-first, at most
+    ``max_visit`` vertices), and one vertex ``w`` of that loop with no other tree
+    neighbour leaves (the tree stays connected, one edge fewer than vertices), the one
+    that uncovers fewest. Only moves that cover more than they uncover; ``passes``
+    sweeps. In place; returns ``(swaps, additions)``."""
+    n = len(inside)
+    m = tri.shape[0]
+    count = np.zeros(n, np.int64)
+    for v in range(n):
+        if inside[v]:
+            for j in range(ptr[v], ptr[v + 1]):
+                count[idx[j]] += 1
+    s = np.zeros(m, np.int64)
+    for t in range(m):
+        for k in range(3):
+            if inside[tri[t, k]]:
+                s[t] += 1
+    par = np.full(n, -1, np.int64)
+    seen = np.full(n, -1, np.int64)
+    queue = np.empty(n, np.int64)
+    stamp = 0
+    swaps = 0
+    adds = 0
+    for _ in range(passes):
+        changed = 0
+        for t in range(m):
+            if s[t] != 0:
+                continue
+            best_net = 0
+            best_v = -1
+            best_w = -1
+            for kk in range(3):
+                v = tri[t, kk]
+                if boundary[v] or inside[v]:
+                    continue
+                gain = 0
+                for j in range(vt_ptr[v], vt_ptr[v + 1]):
+                    if s[vt_idx[j]] == 0:
+                        gain += 1
+                if count[v] == 1:
+                    if gain > best_net:
+                        best_net = gain
+                        best_v = v
+                        best_w = -1
+                    continue
+                if count[v] != 2:
+                    continue
+                a = -1; b = -1
+                for j in range(ptr[v], ptr[v + 1]):
+                    x = idx[j]
+                    if inside[x]:
+                        if a < 0:
+                            a = x
+                        else:
+                            b = x
+                if _adjacent(ptr, idx, a, b):
+                    continue
+                # BFS in the tree from a to b
+                stamp += 1
+                head = 0
+                tail = 1
+                queue[0] = a
+                seen[a] = stamp
+                par[a] = -1
+                found = False
+                while head < tail and tail < max_visit:
+                    x = queue[head]
+                    head += 1
+                    if x == b:
+                        found = True
+                        break
+                    for j in range(ptr[x], ptr[x + 1]):
+                        y = idx[j]
+                        if inside[y] and seen[y] != stamp:
+                            seen[y] = stamp
+                            par[y] = x
+                            queue[tail] = y
+                            tail += 1
+                if not found:
+                    continue
+                w = b
+                while w >= 0:
+                    # tree degree after adding v
+                    deg = 0
+                    for j in range(ptr[w], ptr[w + 1]):
+                        if inside[idx[j]]:
+                            deg += 1
+                    if w == a or w == b:
+                        deg += 1
+                    if deg == 2:
+                        loss = 0
+                        for j in range(vt_ptr[w], vt_ptr[w + 1]):
+                            u = vt_idx[j]
+                            has_v = tri[u, 0] == v or tri[u, 1] == v or tri[u, 2] == v
+                            if s[u] - 1 + (1 if has_v else 0) == 0:
+                                loss += 1
+                        if gain - loss > best_net:
+                            best_net = gain - loss
+                            best_v = v
+                            best_w = w
+                    w = par[w]
+            if best_v < 0:
+                continue
+            changed += 1
+            inside[best_v] = True
+            for j in range(ptr[best_v], ptr[best_v + 1]):
+                count[idx[j]] += 1
+            for j in range(vt_ptr[best_v], vt_ptr[best_v + 1]):
+                s[vt_idx[j]] += 1
+            if best_w >= 0:
+                swaps += 1
+                inside[best_w] = False
+                for j in range(ptr[best_w], ptr[best_w + 1]):
+                    count[idx[j]] -= 1
+                for j in range(vt_ptr[best_w], vt_ptr[best_w + 1]):
+                    s[vt_idx[j]] -= 1
+            else:
+                adds += 1
+        if changed == 0:
+            break
+    return swaps, adds
+
+
+def vertex_tree_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, repair: int = 0,
+                      max_visit: int = 400) -> VertexTree:
     """The cycle around an induced tree of interior vertices (module docstring).
 
     Parameters
@@ -238,9 +376,14 @@ def vertex_tree_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarra
     points : (n, 2) float64
     triangles : (m, 3) int64
     twin : (3 m,) int64, -1 on the boundary
+    repair : int
+        Sweeps of :func:`_repair_into` over the uncovered triangles after the growth
+        (0: none).
+    max_visit : int
+        The repair's tree-path search visits at most this many vertices.
     """
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
-    n, m = len(points), len(tri)
+    n = len(points)
     bh = np.flatnonzero(twin < 0)
     boundary = np.zeros(n, np.bool_)
     boundary[tri[bh // 3, bh % 3]] = True
@@ -256,7 +399,15 @@ def vertex_tree_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarra
     interior = np.flatnonzero(~boundary)
     if len(interior):
         seed = interior[np.argmin(((points[interior] - points.mean(axis=0)) ** 2).sum(axis=1))]
-        _grow_tree_into(ptr.astype(np.int64), np.ascontiguousarray(both[:, 1]), boundary, q, int(seed), inside)
+        ptr = ptr.astype(np.int64)
+        idx = np.ascontiguousarray(both[:, 1])
+        _grow_tree_into(ptr, idx, boundary, q, int(seed), inside)
+        if repair:
+            flat = tri.ravel()
+            tv = np.argsort(flat, kind="stable")
+            vt_ptr = np.searchsorted(flat[tv], np.arange(n + 1)).astype(np.int64)
+            _repair_into(ptr, idx, vt_ptr, (tv // 3).astype(np.int64), tri, inside, boundary, int(max_visit),
+                         int(repair))
     s = inside[tri].sum(axis=1)
     covered = np.flatnonzero((s > 0) & (s < 3))
     order = np.empty(max(len(covered), 1), np.int64)

@@ -104,10 +104,12 @@ def test_projected_parts_keep_every_triangle_and_smoothing_never_adds_cut() -> N
     assert edge_cut(smooth, a, b) <= edge_cut(raw, a, b)
 
 
-def _check_vertex_tree(mesh) -> None:
+def _check_vertex_tree(mesh, repair: int = 0) -> None:
     tri = mesh.triangles
     twin = half_edges(tri, mesh.n_points).twin
-    vt = ceil.vertex_tree_cover(mesh.points, tri, twin)
+    vt = ceil.vertex_tree_cover(mesh.points, tri, twin, repair=repair)
+    if repair:  # the repair only takes moves that cover more than they uncover
+        assert len(vt.uncovered) <= len(ceil.vertex_tree_cover(mesh.points, tri, twin).uncovered)
     inside = vt.inside
     # no boundary vertex inside
     bh = np.flatnonzero(twin < 0)
@@ -138,7 +140,16 @@ def test_vertex_tree_walks_one_cycle_round_an_induced_tree() -> None:
     _check_vertex_tree(_mesh())
 
 
+def test_repaired_vertex_tree_is_still_one_cycle_round_an_induced_tree() -> None:
+    mesh = _mesh()
+    twin = half_edges(mesh.triangles, mesh.n_points).twin
+    grown = ceil.vertex_tree_cover(mesh.points, mesh.triangles, twin)
+    fixed = ceil.vertex_tree_cover(mesh.points, mesh.triangles, twin, repair=3)
+    assert len(fixed.uncovered) < len(grown.uncovered)  # the swaps found something to cover
+    _check_vertex_tree(mesh, repair=3)
+
+
 @settings(max_examples=6, deadline=None)
-@given(st.floats(0.8, 3.0), st.booleans())
-def test_vertex_tree_on_rectangles(w: float, hole: bool) -> None:
-    _check_vertex_tree(_mesh(w=w, hole=hole, area=0.01))
+@given(st.floats(0.8, 3.0), st.booleans(), st.integers(0, 2))
+def test_vertex_tree_on_rectangles(w: float, hole: bool, repair: int) -> None:
+    _check_vertex_tree(_mesh(w=w, hole=hole, area=0.01), repair)
