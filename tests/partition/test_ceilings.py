@@ -5,9 +5,12 @@ triangle in a part, and the vertex tree's cycle is one dual cycle round an induc
 from __future__ import annotations
 
 import importlib.util
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import given, settings, strategies as st
 
 import hammesh
@@ -153,3 +156,18 @@ def test_repaired_vertex_tree_is_still_one_cycle_round_an_induced_tree() -> None
 @given(st.floats(0.8, 3.0), st.booleans(), st.integers(0, 2))
 def test_vertex_tree_on_rectangles(w: float, hole: bool, repair: int) -> None:
     _check_vertex_tree(_mesh(w=w, hole=hole, area=0.01), repair)
+
+
+@pytest.mark.slow
+def test_bench_partition_prints_the_ceilings() -> None:
+    pytest.importorskip("pymetis")  # a benchmark-only peer
+    bench = Path(__file__).parents[2] / "benchmarks" / "bench_partition.py"
+    proc = subprocess.run([sys.executable, str(bench), "--ceilings", "--target", "3000", "--domains", "gear"],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = [r for r in proc.stdout.splitlines() if r.startswith("| gear |")]
+    assert len(rows) == 2  # k = 8 and 64
+    for r in rows:
+        cells = [c.strip() for c in r.strip("|").split("|")]
+        assert len(cells) == 11
+        assert all(float(c.split()[0]) > 0 for c in cells[3:6])  # the three cycles' own ratios
