@@ -36,6 +36,12 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --trees --target 100000   # other spanning trees (partition_trees.py)
     python benchmarks/bench_partition.py --sparse-cells 0,1024,4096 --target 100000   # sparse: cell-confined covers
     python benchmarks/bench_partition.py --modes sparse,sparse-fishbone --repeat 3   # sparse's fishbone option
+    python benchmarks/bench_partition.py --ceilings --target 100000   # what following a compact sweep could cut
+
+``--ceilings`` (session 15) measures, on Triangle's mesh itself (sparse mode's output is
+that mesh plus 0.3 % Steiner points), the cut of orders and partitions a sparse cycle
+could follow (``benchmarks/partition_ceilings.py``) against METIS's (median of three
+seeds), beside the cycles' own ratios.
 
 ``--modes sparse-fishbone`` is ``hamiltonian(mesh, mode="sparse", tree="fishbone")``
 (``hammesh.postprocess.sparse_cells``); with it a table of its price against sparse
@@ -76,6 +82,95 @@ def _domains():
 #: sparse mode's default, the cover left free).
 MODES = {"incircle": ("incircle", "fishbone"), "sparse": ("sparse", "quadtree"),
          "sparse-fishbone": ("sparse", "fishbone")}
+
+
+def _metis_median(k: int, a: np.ndarray, b: np.ndarray, m: int, seeds: int = 3) -> float:
+    """METIS's edge cut on the dual graph ``a``-``b`` of ``m`` triangles: the median
+    over ``seeds`` seeds (its cut moves by up to 20 % between seeds at k = 8)."""
+    import pymetis
+    from scipy.sparse import coo_matrix
+
+    from hammesh.partition import edge_cut
+
+    g = coo_matrix((np.ones(2 * len(a), np.int8), (np.r_[a, b], np.r_[b, a])), shape=(m, m)).tocsr()
+    cuts = []
+    for seed in range(seeds):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = pymetis.part_graph(k, xadj=g.indptr, adjncy=g.indices, options=pymetis.Options(seed=seed))
+        cuts.append(edge_cut(np.asarray(res[1], dtype=np.int64), a, b))
+    return float(np.median(cuts))
+
+
+def _fill_parts(part: np.ndarray, nb: np.ndarray) -> np.ndarray:
+    """``part`` with every -1 triangle given a neighbour's part, repeatedly."""
+    part = part.copy()
+    while (part < 0).any():
+        miss = np.flatnonzero(part < 0)
+        got = np.where(nb[miss] >= 0, part[np.maximum(nb[miss], 0)], -1).max(axis=1)
+        if not (got >= 0).any():
+            break
+        part[miss] = got
+    return part
+
+
+def _print_ceilings(domains, target: int, ks: list[int]) -> None:
+    """``--ceilings``: the cut of orders a sparse cycle could follow, on Triangle's
+    mesh (``partition_ceilings``), and the cycles' own, each / METIS's (median of 3 seeds)."""
+    import os
+    import sys
+
+    import hammesh
+    from hammesh.halfedge import half_edges
+    from hammesh.partition import dual_edges, edge_cut, part_components, partition
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from partition_ceilings import (dual_neighbours, kd_order, order_cut, projected_parts, stretch_parts,
+                                    vertex_tree_cover, walk_positions)
+
+    print("| domain | triangles | k | incircle (own mesh) | sparse | sparse, fishbone | walk order, first / median "
+          "| incircle's parts projected (disconnected, imbalance) | kd order (disconnected) "
+          "| vertex tree (uncovered) | vertex tree, repaired (uncovered) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, dom, area in domains:
+        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+        m = mesh.n_triangles
+        a, b = dual_edges(mesh.triangles, mesh.n_points)
+        twin = half_edges(mesh.triangles, mesh.n_points).twin
+        nb = dual_neighbours(twin)
+        hi = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
+        hs = hammesh.hamiltonian(mesh, mode="sparse")
+        hf = hammesh.hamiltonian(mesh, mode="sparse", tree="fishbone")
+        first, median = walk_positions(hi.parent, m)
+        kd = kd_order(mesh.points[mesh.triangles].mean(axis=1))
+        trees = [vertex_tree_cover(mesh.points, mesh.triangles, twin, repair=r) for r in (0, 6)]
+        for k in ks:
+            mc = _metis_median(k, a, b, m)
+
+            def own(h):
+                ha, hb = dual_edges(h.triangles, h.n_points)
+                return partition(h, k).edge_cut / _metis_median(k, ha, hb, h.n_triangles)
+
+            pf, pm = (order_cut(np.argsort(x, kind="stable"), k, a, b) for x in (first, median))
+            pp = projected_parts(hi.parent, partition(hi, k).part, m, k, nb)
+            kc, kdis = order_cut(kd, k, a, b)
+            cells = []
+            for vt in trees:
+                # the cycle's stretches (best shift on the edges between its triangles), the
+                # uncovered triangles then given a neighbour's part
+                local = np.full(m, -1, np.int64)
+                local[vt.order] = np.arange(len(vt.order))
+                on = (local[a] >= 0) & (local[b] >= 0)
+                vpart = np.full(m, -1, np.int64)
+                vpart[vt.order] = stretch_parts(np.arange(len(vt.order)), k, local[a[on]], local[b[on]])
+                vpart = _fill_parts(vpart, nb)
+                cells.append(f"{edge_cut(vpart, a, b) / mc:.2f} ({len(vt.uncovered) / m:.2%})")
+            print(f"| {name} | {m:,} | {k} | {own(hi):.2f} | {own(hs):.2f} | {own(hf):.2f} "
+                  f"| {pf[0] / mc:.2f} / {pm[0] / mc:.2f} "
+                  f"| {edge_cut(pp, a, b) / mc:.2f} ({int((part_components(pp, k, a, b) > 1).sum())}, "
+                  f"{np.bincount(pp, minlength=k).max() * k / m:.3f}) "
+                  f"| {kc / mc:.2f} ({kdis}) "
+                  f"| {' | '.join(cells)} |", flush=True)
 
 
 def _mesh(dom, area: float, target: int, mode: str):
@@ -575,6 +670,8 @@ def main() -> None:
     ap.add_argument("--frames", metavar="SIZE", type=int, default=0,
                     help="only the forest's CPU in the ring frame, the kd frame and as the count quadtree, on "
                          "bench_core's square round a square hole of about SIZE input triangles")
+    ap.add_argument("--ceilings", action="store_true",
+                    help="only the cut of orders a sparse cycle could follow, on Triangle's mesh (partition_ceilings.py)")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -607,6 +704,9 @@ def main() -> None:
     if args.sparse_cells:
         _print_sparse_cells([d for d in _domains() if d[0] in chosen], args.target, ks,
                             [int(x) for x in args.sparse_cells.split(",")], args.orders.split(","))
+        return
+    if args.ceilings:
+        _print_ceilings([d for d in _domains() if d[0] in chosen], args.target, ks)
         return
     if args.trees:
         targets = [int(float(x)) for x in args.targets.split(",")] if args.targets else [args.target]
