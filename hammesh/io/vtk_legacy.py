@@ -37,10 +37,12 @@ _TYPES = {
     "bit": ">u1", "unsigned_char": ">u1", "char": ">i1", "unsigned_short": ">u2", "short": ">i2",
     "unsigned_int": ">u4", "int": ">i4", "unsigned_long": ">u8", "long": ">i8",
     "float": ">f4", "double": ">f8", "vtktypeint64": ">i8", "vtktypeuint64": ">u8",
-    "vtkidtype": ">i8", "vtktypeint8": ">i1", "vtktypeuint8": ">u1", "vtktypeint16": ">i2",
+    "vtkidtype": ">i4", "vtktypeint8": ">i1", "vtktypeuint8": ">u1", "vtktypeint16": ">i2",
     "vtktypeuint16": ">u2", "vtktypeint32": ">i4", "vtktypeuint32": ">u4", "vtktypefloat32": ">f4",
     "vtktypefloat64": ">f8", "signed_char": ">i1",
 }
+# (``vtkIdType``: VTK's legacy writer and reader store it as a 4-byte int in binary
+# files, whatever the build's id size: vtkDataWriter's "currently writing vtkIdType as int")
 _SECTIONS = ("VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS")
 #: The datasets :func:`read_legacy` reads.
 DATASETS = ("POLYDATA", "UNSTRUCTURED_GRID")

@@ -92,6 +92,17 @@ def test_binary_51_file_from_pyvista(tmp_path):
                                   np.asarray(p.cell_data["mat"]))
 
 
+def test_binary_file_with_vtk_id_type_arrays_from_a_pyvista_filter(tmp_path):
+    # extract_surface adds vtkOriginalCellIds (vtkIdType: 4 bytes each in a binary file)
+    pv = pytest.importorskip("pyvista")
+    p = pv.Plane(i_resolution=3, j_resolution=3).triangulate().extract_surface(algorithm="dataset_surface")
+    p.save(tmp_path / "es.vtk", binary=True)
+    m = read_mesh(tmp_path / "es.vtk")
+    assert m.n_triangles == p.n_cells
+    ids = m.triangle_attributes[:, m.attribute_names.index("vtkOriginalCellIds")]
+    np.testing.assert_array_equal(ids, np.asarray(p.cell_data["vtkOriginalCellIds"]))
+
+
 def _binary_square(bits: bytes, values: np.ndarray) -> bytes:
     """A binary legacy file: the unit square's two triangles, a bit array and doubles per cell."""
     pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=">f8")
