@@ -15,8 +15,10 @@ for 1 M triangles).  This reader follows the PLY format as Greg Turk described i
 * ``edge``: ``vertex1 vertex2`` segments;
 * other elements and other list properties: listed as not carried (never dropped in silence).
 
-Properties named ``v[0]``, ``v[1]``, ... are one vector ``v`` (as :func:`write_ply` writes
-vectors, and the Gmsh files hammesh writes).
+Vectors: properties ``v_0 .. v_{c-1}`` are one ``(n, c)`` array ``v`` when a header line
+``comment hammesh vectors v:c`` says so (as :func:`write_ply` writes them: brackets in
+vertex property names break meshio's ASCII reader); properties named ``v[0]``,
+``v[1]``, ... are one vector ``v`` too.
 
 :func:`write_ply` writes every numeric point and cell datum as a vertex or face property
 (meshio 5's writer drops cell data and vector point data): ``int64`` as ``int`` when it
@@ -87,7 +89,7 @@ def read_ply(path: str | Path) -> RawMesh:
     try:
         fmt, elements, body = _header(data)
         values = (_read_ascii if fmt == "ascii" else _read_binary)(data, body, elements, fmt)
-        return _mesh(elements, values)
+        return _mesh(elements, values, _header_vectors(data))
     except _Bad as exc:
         raise FileFormatError(f"{path}: {exc}") from None
 
@@ -255,7 +257,7 @@ def _cast(values: np.ndarray, dt: np.dtype, element: str, name: str) -> np.ndarr
     return values.astype(dt)
 
 
-def _mesh(elements: list[_Element], values: dict[str, dict[str, object]]) -> RawMesh:
+def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vectors: dict[str, int]) -> RawMesh:
     vertex = values.get("vertex", {})
     if not all(k in vertex for k in "xyz"):
         raise _Bad("no vertex element with properties x y z")
@@ -269,6 +271,7 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]]) -> Raw
             not_carried.append(f"vertex list property {name!r}")
         else:
             point_data[name] = v
+    point_data = _joined_vectors(point_data, vectors)
     blocks: list[CellBlock] = []
     cell_data: dict[str, list[np.ndarray]] = {}
     face = values.get("face", {})
@@ -286,7 +289,7 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]]) -> Raw
                 not_carried.append(f"face list property {name!r}")
             else:
                 scalars[name] = v
-        for name, v in join_components(scalars).items():
+        for name, v in join_components(_joined_vectors(scalars, vectors)).items():
             cell_data[name] = [v[r] for r in rows]
     edge = values.get("edge", {})
     if "vertex1" in edge and "vertex2" in edge:
@@ -305,27 +308,60 @@ _WRITE_TYPES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4"
                 "f4": "float", "f8": "double", "b1": "uchar"}
 
 
-def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str]) -> list[tuple[str, np.ndarray]]:
-    """``(property name, column)`` of every numeric array of ``data``: a vector ``v`` as
-    ``v[0]``, ``v[1]``...; 64-bit integers as ``int`` if they fit, else ``double``."""
-    out = []
+def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str]) -> tuple[list[tuple[str, np.ndarray]], list[str]]:
+    """``(property name, column)`` of every numeric array of ``data`` (a vector ``v`` as
+    ``v_0``, ``v_1``...; 64-bit integers as ``int`` if they fit, else ``double``), and the
+    vectors as ``v:c`` for the header's ``comment hammesh vectors`` line."""
+    out, vectors = [], []
     for name, values in data.items():
         values = np.asarray(values)
         if values.dtype.kind not in "biuf" or len(values) != rows:
             continue
         values = values.reshape(rows, -1)
+        c = values.shape[1]
         # a header token: no blanks, ASCII (a name that is not is written with '?')
         token = "_".join(str(name).split()).encode("ascii", "replace").decode() or "_"
-        while token in taken:  # (x y z, vertex_indices: a user's field keeps its data)
+        names = lambda t: [t] if c == 1 else [f"{t}_{j}" for j in range(c)]  # noqa: E731
+        while token in taken or taken.intersection(names(token)):  # (x y z, another field's)
             token = f"input_{token}"
-        taken.add(token)
+        taken.update([token, *names(token)])
         if values.dtype.itemsize == 8 and values.dtype.kind in "iu":
             small = not values.size or (values.min() >= -2**31 and values.max() < 2**31)
             values = values.astype(np.int32 if small else np.float64)
         elif values.dtype.kind == "b":
             values = values.astype(np.uint8)
-        one = values.shape[1] == 1
-        out += [(token if one else f"{token}[{j}]", values[:, j]) for j in range(values.shape[1])]
+        out += [(label, values[:, j]) for j, label in enumerate(names(token))]
+        if c > 1:
+            vectors.append(f"{token}:{c}")
+    return out, vectors
+
+
+def _joined_vectors(data: dict[str, np.ndarray], vectors: dict[str, int]) -> dict[str, np.ndarray]:
+    """The components ``v_0 .. v_{c-1}`` of each vector ``v: c`` of the header's
+    ``comment hammesh vectors`` line as one ``(rows, c)`` array ``v`` (in ``v_0``'s place)."""
+    out: dict[str, np.ndarray] = {}
+    for name, values in data.items():
+        base, _, j = name.rpartition("_")
+        c = vectors.get(base, 0)
+        parts = [data.get(f"{base}_{i}") for i in range(c)]
+        if j == "0" and c and all(p is not None and np.ndim(p) == 1 for p in parts):
+            out[base] = np.column_stack(parts)
+        elif not (c and j.isdigit() and int(j) < c and base in out):
+            out[name] = values
+    return out
+
+
+def _header_vectors(data: bytes) -> dict[str, int]:
+    """``{name: components}`` from ``comment hammesh vectors v:3 w:2`` header lines."""
+    out: dict[str, int] = {}
+    end = data.find(b"end_header", 0, _MAX_HEADER)
+    for raw in data[:max(end, 0)].decode("latin-1").splitlines():
+        words = raw.split()
+        if words[:3] == ["comment", "hammesh", "vectors"]:
+            for word in words[3:]:
+                name, _, c = word.rpartition(":")
+                if name and c.isdigit() and int(c) > 1:
+                    out[name] = int(c)
     return out
 
 
@@ -354,11 +390,14 @@ def write_ply(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
     triangles = np.asarray(triangles, dtype=np.int64)
     n, m = len(points), len(triangles)
     vertex = [("x", points[:, 0]), ("y", points[:, 1]), ("z", points[:, 2])]
-    vertex += _ply_columns(point_data or {}, n, {"x", "y", "z"})
-    face_props = _ply_columns(cell_data or {}, m, {"vertex_indices"})
+    vertex_props, vertex_vectors = _ply_columns(point_data or {}, n, {"x", "y", "z"})
+    vertex += vertex_props
+    face_props, face_vectors = _ply_columns(cell_data or {}, m, {"vertex_indices"})
     binary = not face_props
-    head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by hammesh",
-            f"element vertex {n}"]
+    head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by hammesh"]
+    if vertex_vectors or face_vectors:
+        head.append(f"comment hammesh vectors {' '.join(vertex_vectors + face_vectors)}")
+    head.append(f"element vertex {n}")
     head += [f"property {_WRITE_TYPES[c.dtype.str[1:]]} {name}" for name, c in vertex]
     head += [f"element face {m}", "property list uchar int vertex_indices"]
     head += [f"property {_WRITE_TYPES[c.dtype.str[1:]]} {name}" for name, c in face_props]

@@ -130,6 +130,8 @@ def test_ply_round_trips_point_and_cell_data_of_any_dtype(seed):
         path = Path(tmp) / "d.ply"
         hio.write(mesh, path)
         back = hio.read_mesh(path, dim=3)
+        theirs = meshio.read(path)  # meshio reads it too (ASCII: face properties; no brackets in names)
+        assert np.array_equal(theirs.points, mesh.points)
     assert np.array_equal(back.points, mesh.points) and np.array_equal(back.triangles, mesh.triangles)
     assert np.array_equal(back.triangle_attributes, attrs)
     assert back.attribute_names == ("a_b", "c")
