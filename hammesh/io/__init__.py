@@ -121,6 +121,8 @@ def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -
     names = [attribute_name(tuple(getattr(mesh, "attribute_names", ())), j) for j in range(k)]
     names = list(dict.fromkeys(x.partition("[")[0] if x.endswith("]") else x for x in names))  # v[0], v[1]: v
     points = list(getattr(mesh, "point_data", {}))
+    if getattr(mesh, "part", None) is not None:  # (a partitioned mesh's parts: the user asked for them)
+        names.append("part")
     if suffix in DATA_SUFFIXES:
         return []
     if suffix in (".obj", ".off") and meshio_format.point_colors(mesh) is not None:

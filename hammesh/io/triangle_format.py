@@ -12,7 +12,8 @@ temporary sibling; the targets are replaced only once all three are complete):
 * ``foo.ele``: ``<m> 3 <k>`` then ``<i> <a> <b> <c> <attributes>``, triangles in row
   (for a :class:`~hammesh.mesh.HamiltonianMesh`: cycle) order.  The attributes are
   the columns of ``triangle_attributes`` then, for a Hamiltonian mesh, ``cycle_id``,
-  ``cycle_position`` and ``kind``; a comment ``# attributes: <names>`` names them.
+  ``cycle_position``, ``kind``, ``parent`` (and a partitioned mesh's ``part``); a
+  comment ``# attributes: <names>`` names them.
 
 Reading follows Triangle's rules: ``#`` starts a comment, blank lines are skipped, the
 first vertex number in ``.node`` (0 or 1) fixes the numbering of every file.  A
@@ -48,7 +49,9 @@ __all__ = ["read_ele", "write", "SUFFIXES"]
 SUFFIXES: tuple[str, ...] = (".ele", ".node")
 
 #: Order of the cycle fields among the ``.ele`` attributes (after ``attribute_<i>``).
-_CYCLE_FIELDS = ("cycle_id", "cycle_position", "kind")
+#: The Hamiltonian mesh's own columns after the attributes, in file order (``parent``
+#: and ``part``, a partitioned mesh's, came later: files without them read the same).
+_CYCLE_FIELDS = ("cycle_id", "cycle_position", "kind", "parent", "part")
 _ATTRIBUTES_COMMENT = "# attributes:"
 
 
@@ -92,8 +95,9 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     if isinstance(mesh, HamiltonianMesh):
         # a user's column named like a cycle field keeps its data under another name
         names = [f"input_{name}" if name in CYCLE_FIELDS else name for name in names]
-        names += list(_CYCLE_FIELDS)
-        columns += [data[k] for k in _CYCLE_FIELDS]
+        own = [k for k in _CYCLE_FIELDS if k in data]
+        names += own
+        columns += [data[k] for k in own]
     point_names, point_columns = [], []
     for name, values in getattr(mesh, "point_data", {}).items():
         values = np.asarray(values, dtype=np.float64).reshape(n, -1)

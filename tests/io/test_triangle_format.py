@@ -33,10 +33,10 @@ def test_round_trip(tmp_path, hmesh, suffix, assert_cycle_order):
 def test_ele_attributes_hold_the_cycle(tmp_path, two_cycles):
     triangle_format.write(two_cycles, tmp_path / "m.ele")
     text = (tmp_path / "m.ele").read_text()
-    assert "# attributes: attribute_0 attribute_1 cycle_id cycle_position kind" in text
+    assert "# attributes: attribute_0 attribute_1 cycle_id cycle_position kind parent" in text
     lines = [ln.split("#")[0].split() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln]
-    assert lines[0] == ["10", "3", "5"]
+    assert lines[0] == ["10", "3", "6"]
     rows = np.array(lines[1:], dtype=np.float64)
     assert rows[:, 0].tolist() == list(range(10))  # zero-based numbering
     np.testing.assert_array_equal(rows[:, 1:4], two_cycles.triangles)
@@ -44,6 +44,22 @@ def test_ele_attributes_hold_the_cycle(tmp_path, two_cycles):
     np.testing.assert_array_equal(rows[:, 6], cycle_ids(two_cycles.components))
     np.testing.assert_array_equal(rows[:, 7], two_cycles.position)
     np.testing.assert_array_equal(rows[:, 8], two_cycles.kind)
+    np.testing.assert_array_equal(rows[:, 9], two_cycles.parent)
+
+
+def test_ele_keeps_a_partitioned_meshs_parts(tmp_path, two_cycles):
+    import hammesh
+
+    parted = hammesh.partitioned(two_cycles, 2)
+    triangle_format.write(parted, tmp_path / "m.ele")
+    text = (tmp_path / "m.ele").read_text()
+    assert "cycle_position kind parent part\n" in text
+    rows = np.array([ln.split() for ln in text.splitlines() if ln and not ln.startswith("#")][1:], dtype=np.float64)
+    np.testing.assert_array_equal(rows[:, -1], parted.part)
+    back = triangle_format.read_ele(tmp_path / "m.ele")  # hammesh's own columns are not attributes
+    np.testing.assert_array_equal(back.triangle_attributes, two_cycles.triangle_attributes)
+    assert hammesh.io.unwritten_data(parted, tmp_path / "m.ele") == []
+    assert "cell data 'part' (.obj holds geometry only)" in hammesh.io.unwritten_data(parted, tmp_path / "m.obj")
 
 
 def test_triangle_package_reads_our_files(tmp_path, hexagon):
