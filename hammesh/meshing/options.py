@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -83,6 +84,10 @@ class MeshOptions:
 
 
 def _number(name: str, x: object) -> float:
+    # a string or a bool is not a number here, though float() takes it (the options are
+    # used as given later on: '0.1' failed deep inside with a TypeError)
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
+        raise InvalidOptionError(f"{name} must be a number, got {x!r}")
     try:
         v = float(x)  # type: ignore[arg-type]
     except (TypeError, ValueError):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import threading
 import time
 from dataclasses import replace
@@ -183,8 +184,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
-    if not (isinstance(keep, (int, float)) and 0.0 <= keep <= 1.0):
+    if isinstance(keep, (bool, np.bool_)) or not (isinstance(keep, numbers.Real) and 0.0 <= keep <= 1.0):
         raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
+    keep = float(keep)  # (a numpy scalar is welcome; the kernels take a float)
     if tree not in TREES:
         raise InvalidOptionError(f"tree must be one of {sorted(TREES)}, got {tree!r}")
     t0 = time.perf_counter()
