@@ -599,6 +599,8 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
     """A :class:`Mesh` from a ``meshio.Mesh`` or :class:`~hammesh.io.raw.RawMesh` (see :func:`read`)."""
     repairs: list[str] = []
     points = np.asarray(raw.points, dtype=np.float64)
+    if points.size == 0:  # (an empty STL solid: meshio gives points of shape (0,))
+        raise FileFormatError(f"{path}: no points, no triangles")
     if points.ndim != 2 or points.shape[1] not in (2, 3):
         raise FileFormatError(f"{path}: points have shape {points.shape}, expected (n, 2) or (n, 3)")
     if not np.isfinite(points).all():
