@@ -9,7 +9,7 @@ from typing import Iterator
 from hammesh.errors import HammeshError, InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
-           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB",
+           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA",
            "dask_installed", "DASK_MISSING", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
@@ -288,7 +288,40 @@ def no_hugepage_advice() -> bool:
 
 
 #: glibc ``mallopt`` parameters (malloc.h)
-_M_TRIM_THRESHOLD, _M_MMAP_MAX = -1, -4
+_M_TRIM_THRESHOLD, _M_MMAP_MAX, _M_ARENA_MAX = -1, -4, -8
+#: ``hammesh mesh --workers`` makes its process use one glibc arena before any thread
+#: starts (:func:`single_arena`), so that its forked workers' task threads do too
+SINGLE_ARENA = True
+
+
+def single_arena() -> bool:
+    """Make every thread of this process (and of the processes it forks) allocate from
+    glibc's main arena (``mallopt(M_ARENA_MAX, 1)``); True if glibc agreed.
+
+    Why: Dask runs each task in a thread of the worker's executor, and a thread's own
+    arena serves a block too big for its 64 MB heaps by ``mmap`` whatever
+    ``M_MMAP_MAX`` says, and unmaps it when freed (glibc's ``sysmalloc``), so
+    :func:`retain_freed_memory` kept none of the tiles' big arrays: every one faulted
+    its pages in again (measured in a local cluster's workers: 24k page faults per
+    100 MB array, every time; with one arena, none after the first, in the next
+    tasks too). A forked child gets its parent's arenas (all but the forking
+    thread's on the free list, which new threads take first), so it must be set in
+    the driver before its first thread: the command does it before the cluster's
+    thread starts. Not done for a Python caller's process (it is theirs: one arena
+    for all its threads is a process-wide choice).
+    """
+    import ctypes
+    import ctypes.util
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        mallopt = ctypes.CDLL(ctypes.util.find_library("c") or None).mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    return bool(mallopt(_M_ARENA_MAX, 1))
 
 
 def retain_freed_memory() -> bool:
