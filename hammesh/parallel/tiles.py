@@ -35,7 +35,8 @@ from hammesh.errors import InvalidOptionError
 from hammesh.meshing.options import MeshOptions, format_number
 from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points_many
 
-__all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "coupled_ends", "COARSE_TRIANGLES",
+__all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "coupled_ends", "without_subnormals",
+           "COARSE_TRIANGLES",
            "COUPLED_DEG"]
 
 #: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
@@ -167,6 +168,22 @@ def _hull_segments(vertices: np.ndarray) -> np.ndarray:
     return np.asarray(out["segments"], dtype=np.int64).reshape(-1, 2)
 
 
+def without_subnormals(xy: np.ndarray) -> np.ndarray:
+    """``xy`` (float64) with every subnormal coordinate (``0 < |x| < 2.2e-308``) made 0:
+    what Triangle gets, the caller putting the given coordinates back on its output.
+
+    Triangle's exact predicates assume no underflow (Shewchuk, "Adaptive precision
+    floating-point arithmetic and fast robust geometric predicates", 1997): random
+    domains with a vertex at ``(0.6, 5e-324)`` made Triangle fail ("Unable to find a
+    triangle leading from ...") on the coarse mesh and on a tile, though the whole
+    domain's quality run happened to pass. Moving a point by less than 2.2e-308 turns
+    no triangle that meets a min angle; the union's check tests the true coordinates.
+    """
+    xy = np.asarray(xy, dtype=np.float64)
+    tiny = (np.abs(xy) < np.finfo(np.float64).tiny) & (xy != 0)
+    return np.where(tiny, 0.0, xy) if tiny.any() else np.array(xy)
+
+
 def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     """Triangle's coarse quality mesh of the domain: points, triangles, region rows,
     and its subsegments with the user segment each lies on (Triangle's own grading of
@@ -176,7 +193,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     ext = np.ptp(vertices, axis=0)
     area_bound = max(float(ext[0] * ext[1]) / COARSE_TRIANGLES, 4.0 * max_area)
     q = 20.0 if min_angle is None else min(float(min_angle), 30.0)
-    data = {"vertices": np.array(vertices), "segments": segments.astype(np.int32),
+    data = {"vertices": without_subnormals(vertices), "segments": segments.astype(np.int32),
             # the marker carries the segment's row, to find it again on each subsegment
             "segment_markers": (np.arange(len(segments), dtype=np.int32) + 1)[:, None]}
     if len(holes):
@@ -190,7 +207,8 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
         data["regions"] = reg
         sw += "A"
     out = triangle.triangulate(data, sw + "Q")
-    pts = np.asarray(out["vertices"], dtype=np.float64)
+    pts = np.array(out["vertices"], dtype=np.float64)
+    pts[: len(vertices)] = vertices  # (as given: see without_subnormals)
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(regions):
         row = np.asarray(out["triangle_attributes"]).reshape(-1).round().astype(np.int64)

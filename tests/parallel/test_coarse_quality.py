@@ -187,3 +187,19 @@ def test_the_reported_commands_exit_0_and_check(tmp_path, capsys, area, n_tiles)
     assert main(["mesh", "hammesh/data/demo.poly", "-q", "30", "-a", area, "--tiles", n_tiles, "-o", str(out)]) == 0
     capsys.readouterr()
     assert main(["check", str(out)]) == 0
+
+
+def test_a_subnormal_coordinate_is_meshed_and_kept():
+    """A vertex at ``(0.6, 5e-324)`` (hypothesis found it) made Triangle fail on a tile
+    and on the coarse mesh: its predicates assume no underflow. Triangle now gets 0
+    there, the union the given coordinate."""
+    from hammesh.parallel.tiles import without_subnormals
+
+    v = [[0.6, 5e-324], [0.08221587816870324, 0.5943404322246207], [-0.4161468365471424, 0.9092974268256817],
+         [-0.6536436208636119, -0.7568024953079282], [0.28366218546322625, -0.9589242746631385]]
+    assert np.array_equal(without_subnormals(np.array(v))[0], [0.6, 0.0])
+    assert np.array_equal(without_subnormals(np.array(v))[1:], np.array(v)[1:])
+    dom = hammesh.Domain.from_polygon(v)
+    r = _union_meets(dom, 30.0, 5e-3, 2)
+    u = assemble(r.decomposition, list(r.meshes))
+    assert u.points[0, 1] == 5e-324 and u.points[0, 0] == 0.6
