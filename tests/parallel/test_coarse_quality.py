@@ -80,7 +80,7 @@ def test_random_domains_at_coarse_sizes_meet_the_min_angle(dom, area, n_tiles):
 
 
 @pytest.mark.slow
-@settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(dom=star_pslg(), area=st.sampled_from([5e-3, 2e-3, 1e-3, 5e-4, 3e-4]), n_tiles=st.integers(2, 8))
 def test_many_random_domains_meet_the_min_angle(dom, area, n_tiles):
     """The same over more examples and finer sizes (session 15, outside the suite: 0
