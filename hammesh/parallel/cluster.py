@@ -9,6 +9,7 @@ from typing import Iterator
 from hammesh.errors import HammeshError, InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
+           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA",
            "dask_installed", "DASK_MISSING", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
@@ -202,7 +203,14 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             stack.callback(c.close)
             # the workers share this machine's cores: each threaded pass of a worker gets its
             # share, not every core (N workers x C threads on C cores only thrash)
-            c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
+            kept = c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
+            if PREFAULT and kept and all(kept.values()):
+                # a task on each worker (its executor's thread: the tiles' arena), not
+                # waited for: the workers fault their memory in while the driver decomposes
+                # (the futures are held until the cluster closes: Dask drops a task nobody holds)
+                held = [c.submit(prefault, PREFAULT_MB << 20, workers=[addr], allow_other_workers=False,
+                                 pure=False, priority=1 << 20) for addr in kept]
+                stack.callback(held.clear)
         except (TimeoutError, OSError) as exc:  # (asyncio's and Dask's timeouts are TimeoutError)
             raise ClusterError(f"the local Dask cluster of {workers} workers did not start within "
                                f"{START_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from exc
@@ -219,6 +227,36 @@ def worker_setup(n_threads: int) -> bool:
     if NO_HUGEPAGE_ADVICE:
         no_hugepage_advice()
     return retain_freed_memory()
+
+
+#: a local cluster's workers fault in ``PREFAULT_MB`` of heap at their start (:func:`prefault`)
+PREFAULT = True
+#: about one 1M-triangle tile task's peak beyond the worker's own ~300 MB (sparse mode)
+PREFAULT_MB = 384
+#: in blocks of this size: a thread's glibc arena maps a bigger one apart and unmaps it when freed
+PREFAULT_BLOCK_MB = 48
+
+
+def prefault(nbytes: int) -> None:
+    """Touch ``nbytes`` of fresh heap once (blocks of ``PREFAULT_BLOCK_MB``) and free it:
+    with :func:`retain_freed_memory` the pages stay in this thread's arena for the
+    first tile's arrays.
+
+    Why: a worker's first tile ran 0.15-0.2 s longer than its later ones (session 13,
+    6M sparse: the kernel zeroing and mapping each page on first touch); the workers
+    are idle while the driver decomposes the domain (0.3-0.5 s), so they take those
+    faults then, not on the tiles' critical path. Submitted
+    right after :func:`worker_setup` (only where glibc keeps freed memory), as a task:
+    the tiles' tasks run in the same thread of the worker's executor, hence the same arena.
+    """
+    import numpy as np
+
+    step = PREFAULT_BLOCK_MB << 20
+    blocks = []
+    for _ in range(max(1, int(nbytes) // step)):
+        blocks.append(np.empty(step, np.uint8))
+        blocks[-1][::4096] = 1  # one write per page faults it in
+    del blocks
 
 
 #: a local cluster's workers ask numpy not to advise huge pages (:func:`no_hugepage_advice`)
@@ -250,7 +288,40 @@ def no_hugepage_advice() -> bool:
 
 
 #: glibc ``mallopt`` parameters (malloc.h)
-_M_TRIM_THRESHOLD, _M_MMAP_MAX = -1, -4
+_M_TRIM_THRESHOLD, _M_MMAP_MAX, _M_ARENA_MAX = -1, -4, -8
+#: ``hammesh mesh --workers`` makes its process use one glibc arena before any thread
+#: starts (:func:`single_arena`), so that its forked workers' task threads do too
+SINGLE_ARENA = True
+
+
+def single_arena() -> bool:
+    """Make every thread of this process (and of the processes it forks) allocate from
+    glibc's main arena (``mallopt(M_ARENA_MAX, 1)``); True if glibc agreed.
+
+    Why: Dask runs each task in a thread of the worker's executor, and a thread's own
+    arena serves a block too big for its 64 MB heaps by ``mmap`` whatever
+    ``M_MMAP_MAX`` says, and unmaps it when freed (glibc's ``sysmalloc``), so
+    :func:`retain_freed_memory` kept none of the tiles' big arrays: every one faulted
+    its pages in again (measured in a local cluster's workers: 24k page faults per
+    100 MB array, every time; with one arena, none after the first, in the next
+    tasks too). A forked child gets its parent's arenas (all but the forking
+    thread's on the free list, which new threads take first), so it must be set in
+    the driver before its first thread: the command does it before the cluster's
+    thread starts. Not done for a Python caller's process (it is theirs: one arena
+    for all its threads is a process-wide choice).
+    """
+    import ctypes
+    import ctypes.util
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        mallopt = ctypes.CDLL(ctypes.util.find_library("c") or None).mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    return bool(mallopt(_M_ARENA_MAX, 1))
 
 
 def retain_freed_memory() -> bool:
@@ -284,6 +355,11 @@ def retain_freed_memory() -> bool:
     except (OSError, AttributeError):
         return False
     mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    # (Dask runs every task in a thread of its executor, whose own glibc arena serves
+    # a block too big for its 64 MB heaps by mmap whatever M_MMAP_MAX says, and unmaps
+    # it when freed: measured in a thread, 24k page faults per 100 MB array every
+    # time, 0 after the first at 50 MB and below. A 1M-triangle tile's arrays are
+    # below that; M_ARENA_MAX set here comes too late, the thread has its arena)
     return bool(mallopt(_M_MMAP_MAX, 0)) and bool(mallopt(_M_TRIM_THRESHOLD, 2**31 - 1))
 
 

@@ -141,6 +141,10 @@ def run_parallel(args: argparse.Namespace) -> int:
 
     exit_fast()  # (run as the command: no interpreter teardown after a cluster, hammesh.cli.fast_exit)
     check_options(args)
+    from hammesh.parallel import cluster
+
+    if cluster.SINGLE_ARENA and args.workers is not None:
+        cluster.single_arena()  # (before the cluster's thread: its forked workers inherit it)
     with contextlib.ExitStack() as stack:
         ready = threading.Event()
         if not START_BEFORE_IMPORTS:

@@ -21,7 +21,8 @@ from hammesh import params
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
-from hammesh.parallel.decoupled import MAX_ROUNDS, bad_corner_vertices
+from hammesh.parallel.decoupled import (MAX_ROUNDS, bad_corner_vertices, coarse_min_angle, repair_rows,
+                                        small_angle_vertices)
 from hammesh.parallel.joins import BorderRows, Plan, TilePiece, border_rows, finish_tile, plan_joins
 from hammesh.parallel.tile_mesh import mesh_tile
 from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split_segments
@@ -123,20 +124,21 @@ class TileOutcome:
 
 def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode: str, keep: float,
               keep_mesh: bool = False, spill: str | None = None, check: bool = True,
-              lattice: bool = True, tree: str = "quadtree") -> TileOutcome:
+              lattice: bool = True, tree: str = "quadtree", ignore: np.ndarray | None = None) -> TileOutcome:
     """Mesh one tile, check its prescribed corners, make it Hamiltonian (certified), take
     its border rows: one task, so a worker goes from Triangle to the cycle without
     waiting for the other tiles (a repair round is rare: then only the mesh's counts
     and the bad corners come back). ``check=False``: no repair check (last round).
     ``lattice=False``: Triangle alone, no interior lattice (:func:`mesh_tile`); ``tree``:
-    the spanning tree (incircle) or the opt-in compact cover (sparse, issue 14) (:func:`hammesh.hamiltonian`)."""
+    the spanning tree (incircle) or the opt-in compact cover (sparse, issue 14) (:func:`hammesh.hamiltonian`);
+    ``ignore``: vertices the repair check never reports (the small input angles)."""
     from hammesh.postprocess import hamiltonian
 
     register_sizeof()
     t0, c0, h0 = time.perf_counter(), time.process_time(), time.thread_time()
     mesh = mesh_tile(tile, min_angle, max_area, lattice=lattice)
     t1, c1, h1 = time.perf_counter(), time.process_time(), time.thread_time()
-    bad = bad_corner_vertices(tile.vertex_ids, n_input, mesh, min_angle) if check else np.zeros(0, np.int64)
+    bad = bad_corner_vertices(tile.vertex_ids, n_input, mesh, min_angle, ignore) if check else np.zeros(0, np.int64)
     # wall seconds per step, and this process's CPU seconds (what a loaded machine does
     # not distort: the steps' cost against a raw Triangle call's CPU time)
     # (and this thread's: the worker's other threads, Dask's, are not the mesh's)
@@ -320,11 +322,12 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     t1b = time.perf_counter()
     # largest first (longest processing time first: the last tile to start is a small one)
     rank = np.argsort(np.argsort([-t.estimate for t in decomp.tiles], kind="stable"))
+    ignore = small_angle_vertices(decomp)
 
     def submit(i: int, check: bool = True):
         spill = None if spill_dir is None else os.path.join(str(spill_dir), f"tile_{i:06d}.pickle")
         return run.submit(tile_task, decomp.tiles[i], decomp.n_input, min_angle, max_area, mode, keep, keep_meshes,
-                          spill, check, lattice, tree, pure=False, priority=int(decomp.n_tiles - rank[i]))
+                          spill, check, lattice, tree, ignore, pure=False, priority=int(decomp.n_tiles - rank[i]))
 
     handles = [submit(i) for i in np.argsort(rank).tolist()]
     handles = [handles[r] for r in rank.tolist()]  # (tile order again)
@@ -341,12 +344,14 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     rounds = 0
     while any(len(o.bad) for o in small):
         ids = np.unique(np.concatenate([o.bad for o in small]))
-        rows = np.flatnonzero(np.isin(decomp.segments, ids).any(axis=1))
-        decomp, changed = split_segments(decomp, rows)
+        rows = repair_rows(decomp, ids)
         rounds += 1
+        changed = np.zeros(0, np.int64)
+        if len(rows):  # (none: a bad corner at a lone vertex; its tile is made as it is)
+            decomp, changed = split_segments(decomp, rows)
         redo = sorted(set(changed.tolist()) | {i for i, o in enumerate(small) if len(o.bad)})
         for i in redo:
-            handles[i] = submit(i, check=rounds < MAX_ROUNDS)
+            handles[i] = submit(i, check=rounds < MAX_ROUNDS and len(rows) > 0)
         wait_for(run, [handles[i] for i in redo])
         again = run.gather([run.submit(_small, handles[i], pure=False, **on_holder(run, handles[i])) for i in redo])
         for i, o in zip(redo, again):
@@ -490,7 +495,9 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
         from hammesh.verify import verify as certificate
 
         union = assemble(tiled.decomposition, meshes)
-        facts = check_union(tiled.decomposition, union)
+        # (at a small input angle Triangle's own run of the whole domain, the coarse one
+        # whose shells the tiles keep, misses the bound too: the union is held to that)
+        facts = check_union(tiled.decomposition, union, single_run_min_angle=coarse_min_angle(tiled.decomposition))
         stats = certificate(h, union)
         report.update({"verified": True, "min_angle_input_deg": stats["min_angle_input_deg"],
                        "min_angle_output_deg": stats["min_angle_output_deg"],

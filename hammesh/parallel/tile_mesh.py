@@ -383,10 +383,28 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
 def mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bool = True) -> Mesh:
     """Triangle mesh of one tile, in its local numbering.
 
-    The tile's vertices keep their order (points ``[:len(tile.vertex_ids)]``); the
-    interior lattice (:func:`lattice_points`, unless ``lattice=False``) and Triangle's
-    Steiner points follow.
+    The tile's vertices keep their order (points ``[:len(tile.vertex_ids)]``, their
+    coordinates exactly the tile's); the interior lattice (:func:`lattice_points`,
+    unless ``lattice=False``) and Triangle's Steiner points follow.
+
+    Subnormal coordinates go to Triangle as 0 and come back as given
+    (:func:`~hammesh.parallel.tiles.without_subnormals`: Triangle's predicates assume
+    no underflow).
     """
+    from dataclasses import replace
+
+    from hammesh.parallel.tiles import without_subnormals
+
+    given = np.asarray(tile.vertices, dtype=np.float64)
+    safe = without_subnormals(given)
+    if np.array_equal(safe, given):
+        return _mesh_tile(tile, min_angle, max_area, lattice)
+    m = _mesh_tile(replace(tile, vertices=safe), min_angle, max_area, lattice)
+    m.points[: len(given)] = given
+    return m
+
+
+def _mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bool) -> Mesh:
     import triangle
 
     grid = lattice_grid(tile, max_area) if lattice else None

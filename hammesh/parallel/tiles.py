@@ -35,7 +35,9 @@ from hammesh.errors import InvalidOptionError
 from hammesh.meshing.options import MeshOptions, format_number
 from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points_many
 
-__all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "COARSE_TRIANGLES"]
+__all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "coupled_ends", "without_subnormals",
+           "COARSE_TRIANGLES",
+           "COUPLED_DEG"]
 
 #: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
 COARSE_TRIANGLES = 20_000
@@ -166,6 +168,22 @@ def _hull_segments(vertices: np.ndarray) -> np.ndarray:
     return np.asarray(out["segments"], dtype=np.int64).reshape(-1, 2)
 
 
+def without_subnormals(xy: np.ndarray) -> np.ndarray:
+    """``xy`` (float64) with every subnormal coordinate (``0 < |x| < 2.2e-308``) made 0:
+    what Triangle gets, the caller putting the given coordinates back on its output.
+
+    Triangle's exact predicates assume no underflow (Shewchuk, "Adaptive precision
+    floating-point arithmetic and fast robust geometric predicates", 1997): random
+    domains with a vertex at ``(0.6, 5e-324)`` made Triangle fail ("Unable to find a
+    triangle leading from ...") on the coarse mesh and on a tile, though the whole
+    domain's quality run happened to pass. Moving a point by less than 2.2e-308 turns
+    no triangle that meets a min angle; the union's check tests the true coordinates.
+    """
+    xy = np.asarray(xy, dtype=np.float64)
+    tiny = (np.abs(xy) < np.finfo(np.float64).tiny) & (xy != 0)
+    return np.where(tiny, 0.0, xy) if tiny.any() else np.array(xy)
+
+
 def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     """Triangle's coarse quality mesh of the domain: points, triangles, region rows,
     and its subsegments with the user segment each lies on (Triangle's own grading of
@@ -175,7 +193,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     ext = np.ptp(vertices, axis=0)
     area_bound = max(float(ext[0] * ext[1]) / COARSE_TRIANGLES, 4.0 * max_area)
     q = 20.0 if min_angle is None else min(float(min_angle), 30.0)
-    data = {"vertices": np.array(vertices), "segments": segments.astype(np.int32),
+    data = {"vertices": without_subnormals(vertices), "segments": segments.astype(np.int32),
             # the marker carries the segment's row, to find it again on each subsegment
             "segment_markers": (np.arange(len(segments), dtype=np.int32) + 1)[:, None]}
     if len(holes):
@@ -189,7 +207,8 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
         data["regions"] = reg
         sw += "A"
     out = triangle.triangulate(data, sw + "Q")
-    pts = np.asarray(out["vertices"], dtype=np.float64)
+    pts = np.array(out["vertices"], dtype=np.float64)
+    pts[: len(vertices)] = vertices  # (as given: see without_subnormals)
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(regions):
         row = np.asarray(out["triangle_attributes"]).reshape(-1).round().astype(np.int64)
@@ -233,6 +252,12 @@ FEATURE_MESH = True
 #: pieces meeting at a vertex at an angle below this start with equal subsegments
 #: (:func:`_coupled_min`); straighter on, they are not tied
 COUPLED_DEG = 160.0
+#: pieces meeting nearly straight on start at most this many times longer than the
+#: shortest of the others there (session 15): a subsegment 4x its neighbour's on a
+#: 168-degree bend of the boundary was encroached by the small triangles its neighbour
+#: needs, and ``-Y`` forbade the split (21 degrees on a random domain; halving both
+#: in a repair round keeps the ratio, so the rounds never fixed it)
+STRAIGHT_RATIO = 1.5
 #: most plans made while the caps at the vertices settle (each lowers them)
 CAP_PASSES = 12
 #: the caps have settled when none drops by more than this fraction (a corner's legs
@@ -492,37 +517,59 @@ def _sample_sizes(xy: np.ndarray, seg: np.ndarray, axis: np.ndarray, a: np.ndarr
     return h
 
 
-def _coupled_min(p: np.ndarray, segs: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """For every end of every piece, the shortest ``ends`` of the *other* pieces meeting
-    it at that vertex at an angle below ``COUPLED_DEG`` (inf: none).
-
-    ``ends`` (S, 2): a length at each end of each piece. Where two pieces meet at a
-    corner, the tile's triangle at that corner has both first subsegments as sides:
-    legs more than ``tan(60 deg)`` apart at a right angle make it too thin, and ``-Y``
-    forbids the split that would repair it. Nearly straight on (a polygon's arc, a
-    chain of the coarse mesh's subsegments) they are not coupled: a short end does
-    not ripple along the whole chain.
-    """
+def vertex_end_pairs(p: np.ndarray, segs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair of segment ends meeting at a vertex: two arrays of indices into
+    ``segs.ravel()`` (end ``2 r + side`` of row ``r``) and whether the two meet at an
+    angle below ``COUPLED_DEG`` (a corner; else nearly straight on)."""
     v = segs.ravel()
     other = segs[:, ::-1].ravel()
     d = p[other] - p[v]
     d /= np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)[:, None]
-    val = ends.ravel()
     order = np.argsort(v, kind="stable")
-    vs, ds, vals = v[order], d[order], val[order]
-    out = np.full(len(v), np.inf)
+    vs, ds = v[order], d[order]
     cos_lim = math.cos(math.radians(COUPLED_DEG))
+    first, second, corner = [], [], []
     k = 1
     while k < len(vs) and (vs[k:] == vs[:-k]).any():
-        same = vs[k:] == vs[:-k]
-        close = same & ((ds[k:] * ds[:-k]).sum(axis=1) > cos_lim)
-        i = np.flatnonzero(close)
-        np.minimum.at(out, i, vals[i + k])
-        np.minimum.at(out, i + k, vals[i])
+        i = np.flatnonzero(vs[k:] == vs[:-k])
+        first.append(order[i])
+        second.append(order[i + k])
+        corner.append((ds[i + k] * ds[i]).sum(axis=1) > cos_lim)
         k += 1
-    res = np.empty(len(v))
-    res[order] = out
-    return res.reshape(-1, 2)
+    if not first:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool)
+    return np.concatenate(first), np.concatenate(second), np.concatenate(corner)
+
+
+def coupled_ends(p: np.ndarray, segs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of segment ends meeting at a vertex at an angle below ``COUPLED_DEG``
+    (:func:`vertex_end_pairs`).
+
+    Where two pieces meet at a corner, the tile's triangle at that corner has both
+    first subsegments as sides: legs more than ``tan(60 deg)`` apart at a right angle
+    make it too thin, and ``-Y`` forbids the split that would repair it. Nearly
+    straight on (a polygon's arc, a chain of the coarse mesh's subsegments) they are
+    not coupled: a short end does not ripple along the whole chain (they are bounded
+    by ``STRAIGHT_RATIO`` instead, :func:`_coupled_min`).
+    """
+    i, j, corner = vertex_end_pairs(p, segs)
+    return i[corner], j[corner]
+
+
+def _coupled_min(p: np.ndarray, segs: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """For every end of every piece, the shortest ``ends`` of the *other* pieces meeting
+    it at that vertex at an angle below ``COUPLED_DEG`` (:func:`coupled_ends`), and
+    ``STRAIGHT_RATIO`` times those meeting it nearly straight on (inf: none).
+
+    ``ends`` (S, 2): a length at each end of each piece.
+    """
+    val = ends.ravel()
+    out = np.full(len(val), np.inf)
+    i, j, corner = vertex_end_pairs(p, segs)
+    factor = np.where(corner, 1.0, STRAIGHT_RATIO)
+    np.minimum.at(out, i, factor * val[j])
+    np.minimum.at(out, j, factor * val[i])
+    return out.reshape(-1, 2)
 
 
 def _plan(p: np.ndarray, segs: np.ndarray, sizer, caps: np.ndarray, obstacles,
