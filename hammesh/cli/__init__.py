@@ -24,6 +24,7 @@ main thread, so every temporary file is removed and no target is half-written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import sys
@@ -36,6 +37,8 @@ from hammesh.errors import HammeshError, Terminated, VerificationError
 __all__ = ["main", "build_parser", "chosen_command", "with_bare_values", "one_line", "exit_fast", "fast_exit", "is_entry", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
+#: stdout closed by its reader (128 + SIGPIPE, as the shell reports a program killed by it)
+EXIT_BROKEN_PIPE = 141
 
 #: subcommand name -> module with add_args / run (and a one-line HELP)
 COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "points": points, "surface": surface, "demo": demo,
@@ -243,6 +246,16 @@ def _main(argv: Sequence[str] | None) -> int:
     except HammeshError as exc:
         _say(f"hammesh: error: {exc}")
         return EXIT_BAD_INPUT
+    except BrokenPipeError as exc:
+        if getattr(exc, "filename", None):  # an output file that is a pipe: a write error
+            _say(f"hammesh: error: {exc.filename}: {exc.strerror or exc}")
+            return EXIT_BAD_INPUT
+        # stdout's reader quit (``hammesh mesh ... | head -1``): the work and its files are
+        # done; end quietly as a program killed by SIGPIPE does, with no second error
+        # when Python flushes stdout at exit
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except OSError as exc:  # unreadable input, unwritable output directory, ...
         where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
         _say(f"hammesh: error: {where}{exc.strerror or exc}")

@@ -43,10 +43,13 @@ def run(args: argparse.Namespace) -> int:
         raise FileFormatError(f"{args.mesh}: no such file")
     mesh = read_mesh(args.mesh, dim=None)
     if mesh.points.shape[1] == 3:  # a 3D surface: the surface certificate (angles in 3D)
-        from hammesh.surface.files import weld_points
+        from hammesh.surface.files import weld_surface
         from hammesh.verify.surface import infer_surface_runs, verify_surface
 
-        points, triangles = weld_points(mesh.points, mesh.triangles)
+        # coincident points merged as `hammesh surface` merges them: only where their data
+        # agree (a cylinder's cap and side meet at the rim with other normals: two points)
+        welded = weld_surface(mesh.points, mesh.triangles, mesh.point_data)
+        points, triangles = welded.points, welded.triangles
         runs = infer_surface_runs(triangles, len(points))
         stats = verify_surface(points, triangles, runs)
     else:

@@ -54,3 +54,17 @@ def test_triangle_files_refuse_a_surface(tmp_path: Path, cycle_surface) -> None:
     with pytest.raises(hammesh.InvalidMeshError, match="planar"):
         hammesh.write(cycle_surface, tmp_path / "s.ele")
     assert not list(tmp_path.iterdir())
+
+
+def test_check_welds_only_points_whose_data_agree(tmp_path: Path, capsys) -> None:
+    """A cylinder's caps and side meet at the rim with other normals: `hammesh surface`
+    keeps those points apart, and so must `hammesh check` (it merged them by coordinate
+    and called the verified output broken)."""
+    pv = pytest.importorskip("pyvista")
+    pv.Cylinder(resolution=24).triangulate().save(tmp_path / "cyl.vtp")
+    out = tmp_path / "cyl.vtu"
+    assert main(["surface", str(tmp_path / "cyl.vtp"), "-o", str(out)]) == 0
+    assert "Normals" in hammesh.read_mesh(out, dim=None).point_data
+    capsys.readouterr()
+    assert main(["check", str(out)]) == 0
+    assert "in 3 Hamiltonian cycle(s)" in capsys.readouterr().out

@@ -153,3 +153,15 @@ def test_poly_output_is_explained_not_just_unknown(tmp_path: Path) -> None:
     assert out.returncode == 2
     assert ".poly is a domain (input) format" in out.stderr and len(out.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "A.poly").exists()
+
+
+def test_closed_stdout_ends_quietly_with_the_outputs_written(tmp_path: Path) -> None:
+    """``hammesh mesh ... | head -0``: the reader quits; exit 141 (SIGPIPE's), no error line."""
+    out = tmp_path / "a.vtu"
+    proc = subprocess.Popen([sys.executable, "-m", "hammesh", "mesh", str(DATA / "A.poly"), "-q", "30",
+                             "-a", "0.05", "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # before the summary is printed
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 141
+    assert err == "" and out.exists()
+    assert main(["check", str(out)]) == 0
