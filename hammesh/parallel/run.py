@@ -529,13 +529,19 @@ def not_carried(domain: Domain) -> list[str]:
     report's ``not_carried``, printed by the command as ``note:`` lines, as the serial
     path does): its vertex attributes (``Domain.vertex_attributes``, from a ``.node``
     or ``.poly``), which the serial Triangle backend interpolates to every output
-    point but the tiles do not take."""
+    point but the tiles do not take, and its nonzero vertex markers (the serial
+    output's ``vertex_markers``)."""
+    out = []
     va = getattr(domain, "vertex_attributes", None)
     k = int(np.shape(va)[-1]) if va is not None and np.ndim(va) == 2 else 0
-    if not k:
-        return []
-    return [f"vertex attributes ({k} per vertex): parallel meshing does not interpolate them "
-            "(hammesh mesh without --workers/--tiles/--partitioned does)"]
+    if k:
+        out.append(f"vertex attributes ({k} per vertex): parallel meshing does not interpolate them "
+                   "(hammesh mesh without --workers/--tiles/--partitioned does)")
+    vm = getattr(domain, "vertex_markers", None)
+    if vm is not None and np.any(np.asarray(vm) != 0):
+        out.append("vertex markers: parallel meshing does not carry them to the output points "
+                   "(hammesh mesh without --workers/--tiles/--partitioned does)")
+    return out
 
 
 def decompose_estimate(domain: Domain, min_angle, max_area) -> float:

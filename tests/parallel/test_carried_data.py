@@ -111,3 +111,14 @@ def test_pvtu_escapes_names(tmp_path):
     hammesh.write(mesh, tmp_path / "m.pvtu")
     back = hammesh.read_mesh(tmp_path / "m.pvtu")
     assert tuple(back.attribute_names) == ('a "q" <b> & c',)
+
+
+def test_parallel_path_notes_the_vertex_markers_it_does_not_carry(tmp_path, capsys):
+    p = tmp_path / "marked.poly"  # (no attributes; boundary markers on, vertex 2's marker 5)
+    p.write_text(POLY.replace("4 2 1 0", "4 2 0 1").replace("1 0 0 10", "1 0 0 0").replace("2 1 0 20", "2 1 0 5")
+                 .replace("3 1 1 30", "3 1 1 0").replace("4 0 1 40", "4 0 1 0"))
+    assert hammesh.read_domain(p).vertex_markers.tolist() == [0, 5, 0, 0]
+    assert main(["mesh", str(p), "-q", "30", "-a", "2e-3", "--tiles", "2", "-o", str(tmp_path / "m.vtu")]) == 0
+    notes = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note: ")]
+    assert notes == ["note: vertex markers: parallel meshing does not carry them to the output points "
+                     "(hammesh mesh without --workers/--tiles/--partitioned does)"]
