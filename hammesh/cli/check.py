@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from hammesh import params
-from hammesh.errors import FileFormatError, VerificationError
+from hammesh.errors import FileFormatError, InvalidMeshError, VerificationError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from hammesh.mesh import Mesh
 
 HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles"
 EXAMPLES = """examples:
@@ -31,8 +37,6 @@ def run(args: argparse.Namespace) -> int:
     # neither the readers nor the certificate's kernels (numba)
     from hammesh.io import check_outputs, read_mesh, write_report
     from hammesh.io.report import collect_repairs
-    from hammesh.planar_overlap import find_overlap
-    from hammesh.verify.certificate import verify_stored_cycle_mesh
 
     if args.min_angle is not None:
         params.number("--min-angle", args.min_angle, low=0, high=60, what="degrees")
@@ -42,6 +46,30 @@ def run(args: argparse.Namespace) -> int:
     if not args.mesh.exists():
         raise FileFormatError(f"{args.mesh}: no such file")
     mesh = read_mesh(args.mesh, dim=None)
+    try:  # (a readable file that is no valid mesh fails the check: exit 3, not 2)
+        runs, stats, triangles = _certify(mesh)
+    except InvalidMeshError as exc:
+        raise VerificationError(str(exc)) from None
+    if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
+        raise VerificationError(
+            f"min angle {stats['min_angle_output_deg']:.6f} deg is below the required {args.min_angle} deg"
+        )
+    stats.update({"file": str(args.mesh), "triangles": len(triangles), "components": runs.tolist(), "verified": True,
+                  "repairs": collect_repairs(mesh)})
+    if args.report is not None:
+        write_report(stats, args.report)
+    print(
+        f"OK {args.mesh}: {len(triangles):,} triangles in {len(runs)} Hamiltonian cycle(s); "
+        f"angles {stats['min_angle_output_deg']:.2f}..{stats['max_angle_output_deg']:.2f} deg"
+    )
+    return 0
+
+
+def _certify(mesh: Mesh) -> tuple[np.ndarray, dict, np.ndarray]:
+    """``(runs, figures, triangles)`` of the certificate of a read mesh (planar or 3D)."""
+    from hammesh.planar_overlap import find_overlap
+    from hammesh.verify.certificate import verify_stored_cycle_mesh
+
     if mesh.points.shape[1] == 3:  # a 3D surface: the surface certificate (angles in 3D)
         from hammesh.surface.files import weld_surface
         from hammesh.verify.surface import infer_surface_runs, verify_surface
@@ -59,16 +87,4 @@ def run(args: argparse.Namespace) -> int:
         pair = find_overlap(mesh.points, triangles, twin=twin)  # no input to compare with: test the plane
         if pair is not None:
             raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
-    if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
-        raise VerificationError(
-            f"min angle {stats['min_angle_output_deg']:.6f} deg is below the required {args.min_angle} deg"
-        )
-    stats.update({"file": str(args.mesh), "triangles": len(triangles), "components": runs.tolist(), "verified": True,
-                  "repairs": collect_repairs(mesh)})
-    if args.report is not None:
-        write_report(stats, args.report)
-    print(
-        f"OK {args.mesh}: {len(triangles):,} triangles in {len(runs)} Hamiltonian cycle(s); "
-        f"angles {stats['min_angle_output_deg']:.2f}..{stats['max_angle_output_deg']:.2f} deg"
-    )
-    return 0
+    return runs, stats, triangles

@@ -165,3 +165,21 @@ def test_closed_stdout_ends_quietly_with_the_outputs_written(tmp_path: Path) -> 
     assert proc.wait(timeout=300) == 141
     assert err == "" and out.exists()
     assert main(["check", str(out)]) == 0
+
+
+@pytest.mark.parametrize("edit", ["clockwise", "repeated"])
+def test_check_of_an_edited_mesh_fails_verification(tmp_path: Path, capsys, edit) -> None:
+    """A file that reads but is no valid mesh (one triangle turned clockwise, one
+    repeated) fails the check: exit 3, not 2 (bad input)."""
+    import meshio
+
+    good = tmp_path / "good.vtu"
+    assert main(["mesh", str(DATA / "A.poly"), "-q", "30", "-a", "0.05", "-o", str(good)]) == 0
+    m = meshio.read(good)
+    t = m.cells_dict["triangle"].copy()
+    t = np.vstack([t, t[:1]]) if edit == "repeated" else np.vstack([t[:5], t[5:6, ::-1], t[6:]])
+    meshio.write(tmp_path / "bad.vtu", meshio.Mesh(m.points, [("triangle", t)]))
+    capsys.readouterr()
+    assert main(["check", str(tmp_path / "bad.vtu")]) == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hammesh: verification failed:")
