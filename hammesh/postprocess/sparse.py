@@ -107,6 +107,11 @@ EDGE_MIN_ROWS = 50_000
 #: serial, ~18 ms on the main thread; a pass on ``hammesh.threads``' kept pool starts
 #: in ~20 us (the default ``THREAD_MIN_ROWS`` dates from a new pool per pass)
 FACTS_MIN_ROWS = 8_192
+#: rows (Steiner points) a thread from which the improvement step's tries (moves) are
+#: worked out on both cores before its serial loops (``_improve_kernels.failing_flips``,
+#: ``smooth_steiner``): ~1 us a try, ~4 us a point
+IMPROVE_MIN_ROWS = 4_096
+SMOOTH_MIN_POINTS = 512
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 #: a fan group may take in one covered neighbour across its non-cover edge and so join
@@ -2221,6 +2226,9 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
     new = np.flatnonzero(kind != 3)
     for _ in range(IMPROVE_ROUNDS):
+        # (the tries that fail as the rows are now, found on both cores; the loop skips them)
+        _ik.failing_flips(pts, out, twin, pinned, starts, lengths, float(hi), new, touched, failed, clock,
+                          IMPROVE_MIN_ROWS)
         flips = _ik.improve_flips(
             pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new, touched, failed,
             clock,
@@ -2232,7 +2240,7 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
             break
         moved = _ik.smooth_steiner(
             pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock,
-            judged,
+            judged, SMOOTH_MIN_POINTS,
         )
         n_moved += moved
         if moved == 0:
