@@ -536,3 +536,23 @@ def _smooth_points(pts, out, twin, pinned, pm, first, keep, hi, iters, cnt, rows
             for j in range(a0, a1):
                 touched[rows[j] // 3] = clock[0]
     return moved
+
+
+def load_improve_kernels() -> None:
+    """Load (or compile) the kernels only big outputs reach: the improvement step's work
+    ahead on both cores (:func:`failing_flips`, :func:`smooth_steiner`, from
+    ``sparse.IMPROVE_MIN_ROWS`` rows / ``sparse.SMOOTH_MIN_POINTS`` points a thread),
+    with the types the step passes (no row, no point: nothing is read);
+    ``hammesh.postprocess.load_kernels``' small mesh does not reach them, and a first
+    call at 1.5 M triangles loaded each on both threads (10-16 ms each)."""
+    pts = np.zeros((3, 2))
+    out = np.zeros((1, 3), np.int64)
+    twin = np.full(3, -1, np.int64)
+    pinned = np.zeros(3, np.bool_)
+    none = np.zeros(0, np.int64)
+    one = np.zeros(1, np.int64)
+    clock = np.zeros(1, np.int64)
+    _failing_flips_into(pts, out, twin, pinned, one, np.ones(1, np.int64), np.zeros(0), np.zeros(0, np.int8), 1.0,
+                        none, one, one.copy(), clock, 0, 0)
+    _judge_points_into(pts, out, twin, pinned, np.zeros(1), 3, 0.9, 1.0, 2, np.zeros(1, np.int64), none, one,
+                       none.copy(), np.zeros(0, np.int8), np.zeros((0, 2)), 0, 2)

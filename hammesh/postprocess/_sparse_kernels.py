@@ -725,7 +725,7 @@ def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wid
 
 def load_output_kernels() -> None:
     """Load (or compile) the kernels only big outputs reach: the walk from both ends and
-    the gather of several runs, on a fan of four new rows (two runs of it, one
+    the gather of several runs (and the fans' kinds, the parents mapped back), on a fan of four new rows (two runs of it, one
     walked from both ends): ``hammesh.postprocess.load_kernels`` warms them on its
     small mesh, where those paths do not run."""
     k = 4
@@ -750,6 +750,12 @@ def load_output_kernels() -> None:
     swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
                     none, none)
+    # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
+    fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)
+    map_through_into(r.copy(), r.copy(), 0, k)
+    from hammesh.postprocess._improve_kernels import load_improve_kernels  # (only when loading)
+
+    load_improve_kernels()
 
 
 @njit(cache=True, nogil=True)
@@ -1036,6 +1042,23 @@ def iota_into(a, lo, hi):
     from the page reserve: ``np.arange`` would fault fresh pages)."""
     for i in range(lo, hi):
         a[i] = i
+
+
+@njit(cache=True, nogil=True)
+def map_through_into(a, table, lo, hi):
+    """``a[i] = table[a[i]]`` for ``i`` in ``lo..hi``, in place (row numbers composed with
+    a renumbering: one threaded pass, no fresh array to fault as ``table[a]`` makes)."""
+    for i in range(lo, hi):
+        a[i] = table[a[i]]
+
+
+@njit(cache=True, nogil=True)
+def fan_kinds_into(kind, is_fan, parent, lo, hi):
+    """Rows ``lo..hi``: a row kept whole (kind 3) whose parent is a fan triangle becomes
+    kind 0 (a side joined to a Steiner point), in place."""
+    for i in range(lo, hi):
+        if kind[i] == 3 and is_fan[parent[i]]:
+            kind[i] = 0
 
 
 @njit(cache=True, nogil=True, inline="always")

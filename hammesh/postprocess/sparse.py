@@ -2065,8 +2065,8 @@ def sparse_cycles(
         order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
         ends,
     )
-    if n_fan:
-        kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
+    if n_fan:  # a fan triangle: a side joined to a Steiner point (one threaded pass, in place)
+        _row_pass(lambda lo, hi_: _k.fan_kinds_into(kind, is_fan, parent, lo, hi_), len(kind))
     steps.done("output_rows")
     if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
         beside_cover()  # short passes; the swap tests and the output rows' passes take both)
@@ -2090,8 +2090,8 @@ def sparse_cycles(
     quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio)
     quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)
-    if n_fan:
-        parent = orig_of[parent]
+    if n_fan:  # (in place: the rows' parents are this function's own array)
+        _row_pass(lambda lo, hi_: _k.map_through_into(parent, orig_of, lo, hi_), len(parent))
     counts_d = {
         "cycles_before_merging": int(cover.n_cycles),
         "cover_rotations": int(cover.n_rotations),
@@ -2312,7 +2312,12 @@ def _numbered_back(r: SparseResult, loc, points: np.ndarray, started: tuple[floa
     wall["locality"] = time.perf_counter() - t0 + (t0 - started[0] - sum(wall.values()))
     cpu["locality"] = time.process_time() - c0 + (c0 - started[1] - sum(cpu.values()))
     counts["step_seconds"], counts["step_cpu_seconds"] = wall, cpu
-    return replace(r, parent=loc.triangle_order[r.parent], mid_a=mid_a, mid_b=mid_b, counts=counts)
+    parent = r.parent  # (sparse_cycles' own array: mapped in place, one threaded pass)
+    run_all([
+        (lambda lo=lo, hi=hi: _k.map_through_into(parent, loc.triangle_order, lo, hi))
+        for lo, hi in row_ranges(len(parent), threads.THREAD_MIN_ROWS)
+    ])
+    return replace(r, parent=parent, mid_a=mid_a, mid_b=mid_b, counts=counts)
 
 
 def sparse_hamiltonian(
