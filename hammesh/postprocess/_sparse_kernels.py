@@ -530,7 +530,6 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
-@njit(cache=True, nogil=True)
 def new_row_twins(out, tri, twin_in, status, n_points):
     """Half-edge twins where the output differs from the input.
 
@@ -546,7 +545,31 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     ``bad`` -1 or a virtual half-edge whose edge is used twice in one direction or by
     three rows. What ``hammesh.halfedge.half_edge_twins`` gives on the whole output,
     at a fraction of the passes.
+
+    The keys are sorted with their index packed below them (a plain sort of distinct
+    int64s: the stable argsort it replaced, 0.018 s at 1.5 M, was most of this), or
+    argsorted (stable) where key and index need more than 62 bits; by numpy between
+    the two compiled halves (:func:`_row_twin_keys`, :func:`_match_row_twins`):
+    numpy's sort of the ~200 k keys at 1.5 M triangles (vectorised, AVX-512 / AVX2)
+    took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
+    sort one way only, so the matching is the same.
     """
+    changed, face_tw, tw_new, rest, keys, packed, ib = _row_twin_keys(out, tri, twin_in, status, n_points)
+    if ib >= 0:
+        packed.sort()  # (in place: the index is the low bits)
+        srt = packed & ((np.int64(1) << ib) - 1)
+    else:
+        srt = np.argsort(keys, kind="stable")
+    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt)
+    return tw_new, changed, face_tw, bad
+
+
+@njit(cache=True, nogil=True)
+def _row_twin_keys(out, tri, twin_in, status, n_points):
+    """:func:`new_row_twins`' first half: ``(changed, face_tw, tw_new, rest, keys, packed,
+    ib)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected edge keys,
+    ``packed`` the keys shifted by ``ib`` bits with their index below (``ib`` -1 and
+    ``packed`` empty where that needs more than 62 bits)."""
     m = tri.shape[0]
     k = out.shape[0]
     n_ch = 0
@@ -573,6 +596,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
             if g >= 0 and status[g // 3] == PASS:
                 rest[n] = g
                 n += 1
+    rest = rest[:n]
     keys = np.empty(n, np.int64)
     for i in range(n):
         h = rest[i]
@@ -585,9 +609,6 @@ def new_row_twins(out, tri, twin_in, status, n_points):
             a = tri[x, j]
             b = tri[x, (j + 1) % 3]
         keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
-    # the keys sorted with their index packed below them (a plain sort of int64: the
-    # stable argsort it replaces, 0.018 s at 1.5 M, was most of this kernel), or
-    # argsorted where key and index need more than 62 bits
     ib = 1
     while (1 << ib) < n:
         ib += 1
@@ -595,13 +616,17 @@ def new_row_twins(out, tri, twin_in, status, n_points):
         packed = np.empty(n, np.int64)
         for i in range(n):
             packed[i] = (keys[i] << ib) | i
-        packed.sort()
-        srt = packed  # (in place: the index is the low bits)
-        mask = (np.int64(1) << ib) - 1
-        for i in range(n):
-            srt[i] = packed[i] & mask
-    else:
-        srt = np.argsort(keys, kind="mergesort")
+        return changed, face_tw, tw_new, rest, keys, packed, ib
+    return changed, face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1
+
+
+@njit(cache=True, nogil=True)
+def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt):
+    """:func:`new_row_twins`' second half: the half-edges ``rest`` in the order ``srt`` of
+    their ``keys``, paired where two share a key (``tw_new``, ``face_tw`` filled); returns
+    -1 or a virtual half-edge whose edge is used twice in one direction or by three rows."""
+    m = tri.shape[0]
+    n = rest.shape[0]
     i = 0
     while i < n:
         e = i + 1
@@ -614,7 +639,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
         elif e - i == 2:
             g = rest[srt[i + 1]]
             if _start(out, tri, m, h) == _start(out, tri, m, g):
-                return tw_new, changed, face_tw, max(h, g)  # one edge twice in one direction
+                return max(h, g)  # one edge twice in one direction
             for x, y in ((h, g), (g, h)):
                 if x >= 3 * m:
                     tw_new[x - 3 * m] = y
@@ -623,9 +648,9 @@ def new_row_twins(out, tri, twin_in, status, n_points):
                     r = lower_bound(changed, f // 3)
                     face_tw[3 * r + f % 3] = y
         else:
-            return tw_new, changed, face_tw, rest[srt[i + 2]]
+            return rest[srt[i + 2]]
         i = e
-    return tw_new, changed, face_tw, -1
+    return -1
 
 
 @njit(cache=True, nogil=True)
