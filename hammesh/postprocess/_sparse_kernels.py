@@ -21,7 +21,6 @@ Codes shared with ``sparse.py``:
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 from typing import NamedTuple
 
@@ -724,10 +723,10 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
     order = fresh(n_rows, np.int64)
     back = np.empty(n_rows, np.int64)
     args = (ends, parent_new, m, s0)
-    with ThreadPoolExecutor(1) as pool:
-        other = pool.submit(_walk_one_into, *args, False, bwd, fwd, back)
-        n_f, lo_f, bad_f = _walk_one_into(*args, True, fwd, bwd, order)
-        n_b, lo_b, bad_b = other.result()
+    # (this thread forward, one of the process's pool backward: no thread started)
+    (n_f, lo_f, bad_f), (n_b, lo_b, bad_b) = run_all([
+        partial(_walk_one_into, *args, True, fwd, bwd, order), partial(_walk_one_into, *args, False, bwd, fwd, back),
+    ])
     if bad_f >= 0 or bad_b >= 0:
         return Walk(*_walk_all(ends, parent_new, m, status, n_rows))
     return Walk(*_walk_rest(ends, parent_new, m, status, order, n_f, min(lo_f, lo_b), back, n_b, fwd, bwd))

@@ -2385,7 +2385,11 @@ def sparse_hamiltonian(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)
     )
     lengths = r.lengths
-    position = cycle_positions(lengths)
+    if len(lengths) == 1:  # (one cycle: 0, 1, ... numbered on both cores in the page reserve, no fresh
+        position = fresh(int(lengths[0]), np.int64)  # 12 MB faulted at 1.5 M as ``np.arange`` does)
+        _row_pass(lambda lo, hi_: _k.iota_into(position, lo, hi_), len(position))
+    else:
+        position = cycle_positions(lengths)
     report = count_report(r, n, m)
     h = HamiltonianMesh(
         points=r.points,
@@ -2396,7 +2400,9 @@ def sparse_hamiltonian(
         position=position,
         parent=r.parent,
         kind=r.kind,
-        triangle_attributes=mesh.triangle_attributes[r.parent],
+        # (no attribute columns: no gather of 1.5 M empty rows)
+        triangle_attributes=mesh.triangle_attributes[r.parent] if np.shape(mesh.triangle_attributes)[1:] != (0,)
+        else np.zeros((len(r.parent), 0)),
         report=report,
     )
     return h, r.claim
