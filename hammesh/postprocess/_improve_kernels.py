@@ -154,6 +154,14 @@ def _run_of(starts, lengths, x):
     return starts[i], lengths[i]
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _failed_since(failed, touched, s, ln, x):
+    """Did the try at row ``x`` (of the run ``s .. s + ln``) fail since ``x`` and its
+    successor last changed (it fails again: :func:`improve_flips`)?"""
+    nx = x + 1 if x + 1 < s + ln else s
+    return failed[x] >= touched[x] and failed[x] >= touched[nx]
+
+
 @njit(cache=True, nogil=True)
 def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock, apply):
     """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps.
@@ -278,10 +286,8 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
         top -= 1
         r = stack[top]
         s, ln = _run_of(starts, lengths, r)
-        prev = r - 1 if r > s else s + ln - 1
-        for x in (r, prev):
-            nx = x + 1 if x + 1 < s + ln else s
-            if failed[x] >= touched[x] and failed[x] >= touched[nx]:
+        for x in (r, r - 1 if r > s else s + ln - 1):  # (the row and its predecessor)
+            if _failed_since(failed, touched, s, ln, x):
                 continue  # tried since it or its successor last changed: fails again
             y = _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock, True)
             if y < 0:
@@ -333,10 +339,8 @@ def _failing_flips_into(pts, out, twin, pinned, starts, lengths, pm, kind, hi, r
     for i in range(lo, hi_):
         r = rows[i]
         s, ln = _run_of(starts, lengths, r)
-        prev = r - 1 if r > s else s + ln - 1
-        for x in (r, prev):
-            nx = x + 1 if x + 1 < s + ln else s
-            if failed[x] >= touched[x] and failed[x] >= touched[nx]:
+        for x in (r, r - 1 if r > s else s + ln - 1):  # (the row and its predecessor)
+            if _failed_since(failed, touched, s, ln, x):
                 continue
             if _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock, False) < 0:
                 failed[x] = stamp
