@@ -2071,9 +2071,10 @@ def sparse_cycles(
     if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
         beside_cover()  # short passes; the swap tests and the output rows' passes take both)
     n_improve = n_moved = 0
+    new_facts = None  # (the new rows' facts, if the improvement's last look is of the final rows)
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
-        out, claim, kind, pm, n_improve, n_moved = _improve(
+        out, claim, kind, pm, n_improve, n_moved, new_facts = _improve(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
             n0_input, keep, keep * min_angle, floor,
         )
@@ -2087,7 +2088,7 @@ def sparse_cycles(
         if r_now < n_whole and orig_of[r_now] == ratio_row:
             worst_kept = bool((kind[parent == r_now] == 3).any())
     kept_ratio = ratio_in if worst_kept else kept_radius_ratio(all_pts, out, kind, parent, amin_p)
-    quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio)
+    quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio, new_facts)
     quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)
     if n_fan:  # (in place: the rows' parents are this function's own array)
@@ -2171,6 +2172,7 @@ def local_quality(
     keep: float,
     max_allowed: float,
     kept_ratio: float | None = None,
+    new_facts: tuple | None = None,
 ) -> dict:
     """The local quality rule's counts over the output (issue 13, item 1).
 
@@ -2179,10 +2181,15 @@ def local_quality(
     input triangles it replaces), *above the max rule* if its largest angle exceeds
     ``max_allowed`` (radians); both up to a relative 1e-9. Only the new rows are
     measured (a kept row has its input triangle's angles); ``kept_ratio`` is the worst
-    radius ratio of the kept rows if the caller knows it (else measured here).
+    radius ratio of the kept rows if the caller knows it (else measured here);
+    ``new_facts``: ``(new rows, their smallest and largest angles, worst radius
+    ratio)`` if the caller measured them on these rows and points (else measured here).
     """
-    new = np.flatnonzero(kind != 3)
-    lo, hi, ratio, _ = triangle_facts(points, triangles[new])
+    if new_facts is None:
+        new = np.flatnonzero(kind != 3)
+        lo, hi, ratio, _ = triangle_facts(points, triangles[new])
+    else:
+        new, lo, hi, ratio = new_facts
     if kept_ratio is None:
         kept_ratio = triangle_facts(points, triangles[kind == 3])[2]
     pm = parents_min[new]
@@ -2245,25 +2252,30 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
         n_moved += moved
         if moved == 0:
             break
-    n_moved += _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
-    return out, twin, kind, pm, int(n_flips), int(n_moved)
+    repaired, facts = _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
+    n_moved += repaired
+    return out, twin, kind, pm, int(n_flips), int(n_moved), facts
 
 
-def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float) -> int:
+def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float):
     """Move the Steiner points of rows that miss issue 13's absolute targets (in place).
 
     After the improvement step, the new rows with an angle below ``lo`` (``keep`` x
     the input's smallest) or above ``hi`` (its largest + 5 degrees) are few (none on
     most meshes); each free Steiner point among their corners is moved for the
     global targets (``_join_kernels.move_to_targets``), up to ``IMPROVE_ROUNDS``
-    rounds. Returns the number of moves.
+    rounds. Returns the number of moves and the new rows' facts ``(new, smallest,
+    largest angle, worst radius ratio)`` if the last ones measured are the final rows'
+    (no move after them; else None): the report's (``local_quality``), not measured again.
     """
     new = np.flatnonzero(kind != 3)
     if not len(new) or first_steiner >= len(pts):
-        return 0
+        return 0, None
     moved = 0
+    final = None
     for _ in range(IMPROVE_ROUNDS):
-        a_lo, a_hi, _, _ = triangle_facts(pts, out[new])
+        a_lo, a_hi, ratio, _ = triangle_facts(pts, out[new])
+        final = (new, a_lo, a_hi, ratio)
         miss = new[(a_lo < lo) | (a_hi > hi)]
         rc = np.argwhere(out[miss] >= first_steiner)
         if not len(rc):
@@ -2272,9 +2284,11 @@ def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float,
         _, first_h = np.unique(out[miss[rc[:, 0]], rc[:, 1]], return_index=True)
         n = _j.move_to_targets(pts, out, twin, pinned, hs[first_h], float(lo), float(hi), float(floor), PLACE_ITERS)
         moved += n
-        if n == 0:
+        if n:
+            final = None  # (points moved since)
+        else:
             break
-    return moved
+    return moved, final
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
