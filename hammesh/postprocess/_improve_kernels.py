@@ -98,7 +98,7 @@ def _input_end(v, w, first_mid, mid_a, mid_b):
     return v, True
 
 
-def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
+def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, rows=None, pinned=None):
     """Which output half-edges lie on a pinned interior input edge (whole or a half)?
 
     A pinned input edge (``con``: constrained, or between regions) with a triangle on
@@ -108,7 +108,17 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     of one of those two, and a half ends at a midpoint ``>= first_mid`` whose ends are
     ``mid_a``, ``mid_b``: O(1) per half-edge, no search over the mesh; one row range per core
     (:func:`_pinned_output_edges_into`), into an array from ``hammesh.pages``.
+    ``rows`` (with ``pinned``): only those rows' entries of ``pinned`` are found (in
+    place), the others are the caller's (sparse mode's gather writes the kept rows':
+    ``_sparse_kernels.rows_in_cycle_order``).
     """
+    if rows is not None and pinned is not None:
+        run_all([
+            partial(_pinned_rows_into, out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, rows,
+                    lo, hi)
+            for lo, hi in row_ranges(len(rows), PINNED_MIN_ROWS)
+        ])
+        return pinned
     k_rows = out.shape[0]
     pinned = fresh(3 * k_rows, np.bool_)
     run_all([
@@ -120,16 +130,33 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     return pinned
 
 
+#: rows a thread below which :func:`pinned_output_edges` of given ``rows`` runs in one call
+PINNED_MIN_ROWS = 8_192
+
+
 @njit(cache=True, nogil=True)
 def _pinned_output_edges_into(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, lo, hi):
     """Rows ``lo..hi`` of :func:`pinned_output_edges` (every entry of theirs written)."""
     for r in range(lo, hi):
-        t = parent[r]
-        if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
-            for j in range(3):  # a row kept whole: its parent's edges, in order
-                h = 3 * t + j
-                pinned[3 * r + j] = con[h] and twin[h] >= 0
-            continue
+        _pin_row(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, r)
+
+
+@njit(cache=True, nogil=True)
+def _pinned_rows_into(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, rows, lo, hi):
+    """Rows ``rows[lo:hi]`` of :func:`pinned_output_edges` (every entry of theirs written)."""
+    for i in range(lo, hi):
+        _pin_row(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, rows[i])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _pin_row(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, r):
+    """Row ``r``'s three entries of :func:`pinned_output_edges`."""
+    t = parent[r]
+    if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
+        for j in range(3):  # a row kept whole: its parent's edges, in order
+            h = 3 * t + j
+            pinned[3 * r + j] = con[h] and twin[h] >= 0
+    else:
         for j in range(3):
             pinned[3 * r + j] = False
             x = out[r, j]

@@ -941,7 +941,7 @@ class CycleRows(NamedTuple):
 
 def rows_in_cycle_order(
     order, lengths, run_order, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed,
-    face_tw, amin, scratch=None,
+    face_tw, amin, scratch=None, con=None, pinned=None,
 ) -> CycleRows:
     """The output rows, walked into ``order`` (:func:`walk_links`, virtual rows), taken across in one gather.
 
@@ -953,7 +953,11 @@ def rows_in_cycle_order(
     row is written by one thread only). The big arrays come from ``hammesh.pages``
     (the reserve ``quality_mesh`` faulted while Triangle ran, if any). ``scratch``: an int64
     array of at least one entry per virtual row, any contents (e.g. :func:`walk_links`'
-    ``ends``, done with), for the rows' final places; made here if None.
+    ``ends``, done with), for the rows' final places; made here if None. ``con``
+    (``(3 m,)`` bool, the input's pinned half-edges) and ``pinned`` (``(3 k,)`` bool):
+    each kept row's pinned output edges written on the way (its input half-edge's
+    ``con``, if inner), as ``_improve_kernels.pinned_output_edges`` finds them; the new
+    rows' entries are left as they were.
     """
     m = tri.shape[0]
     k = order.shape[0]
@@ -970,10 +974,12 @@ def rows_in_cycle_order(
         fresh((k, 3), np.int64), fresh(k, np.int64), fresh(k, np.int64), fresh(k, np.int8), fresh(k, np.float64),
         new_len, fresh(3 * k, np.int64),
     )
+    if con is None or pinned is None:
+        con, pinned = np.zeros(0, np.bool_), np.zeros(0, np.bool_)
     run_all([
         partial(
             _gather_rows_into, rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new,
-            changed, face_tw, amin, res.out, res.parent, res.partner, res.kind, res.pm, res.claim, lo, hi,
+            changed, face_tw, amin, res.out, res.parent, res.partner, res.kind, res.pm, res.claim, con, pinned, lo, hi,
         )
         for lo, hi in spans
     ])
@@ -1021,16 +1027,20 @@ def _row_positions_into(rows, pos, lo, hi):
 @njit(cache=True, nogil=True)
 def _gather_rows_into(
     rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed, face_tw, amin,
-    out2, parent2, partner2, kind2, pm, claim, lo, hi,
+    out2, parent2, partner2, kind2, pm, claim, con, pinned, lo, hi,
 ):
-    """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place)."""
+    """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place;
+    ``pinned`` empty: no pinned edges written)."""
     m = tri.shape[0]
+    pin = pinned.shape[0] == claim.shape[0]
     for i in range(lo, hi):
         x = rows[i]
         for j in range(3):
             h = 3 * x + j
             if x < m:
                 g = twin_in[h]
+                if pin:
+                    pinned[3 * i + j] = con[h] and g >= 0
                 if g >= 0 and status[g // 3] != PASS:
                     g = _faced(g, changed, face_tw)
             else:

@@ -2061,9 +2061,11 @@ def sparse_cycles(
     # runs in the order of their lowest input triangle; rows, their parents' smallest
     # angle (pm) and the twins renumbered as the claim, in one gather
     run_order = np.argsort(low, kind="stable") if len(lengths) > 1 else np.zeros(len(lengths), np.int64)
+    # (and the kept rows' pinned output edges, the improvement's: on the way)
+    pinned_out = fresh(3 * len(order_rows), np.bool_) if improve and pts.shape[1] == 2 else None
     out, parent, partner, kind, pm, lengths, claim = _k.rows_in_cycle_order(
         order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
-        ends,
+        ends, con=con, pinned=pinned_out,
     )
     if n_fan:  # a fan triangle: a side joined to a Steiner point (one threaded pass, in place)
         _row_pass(lambda lo, hi_: _k.fan_kinds_into(kind, is_fan, parent, lo, hi_), len(kind))
@@ -2076,7 +2078,7 @@ def sparse_cycles(
     if improve and pts.shape[1] == 2 and len(out):
         out, claim, kind, pm, n_improve, n_moved, new_facts = _improve(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
-            n0_input, keep, keep * min_angle, floor,
+            n0_input, keep, keep * min_angle, floor, pinned_out,
         )
     steps.done("improve")
     # the kept rows' worst radius ratio: the input's if its worst triangle is kept,
@@ -2209,14 +2211,20 @@ def local_quality(
 
 
 def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, first_mid, hi,
-             first_steiner, keep, lo_global, floor):
+             first_steiner, keep, lo_global, floor, pinned=None):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
     regions; ``con`` over ``tri``) or a half of one split at its midpoint
-    (``_improve_kernels.pinned_output_edges``, from each row's parents).
+    (``_improve_kernels.pinned_output_edges``, from each row's parents). ``pinned``:
+    the kept rows' entries found already (the output rows' gather), the new rows'
+    are found here.
     """
-    pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
+    if pinned is None:
+        pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
+    else:  # (the new rows only: the kept rows', ~99 % of them, came with the gather)
+        pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b,
+                                         rows=np.flatnonzero(kind != 3), pinned=pinned)
     # the caller's rows, claim, kinds and parents' angles are its own fresh arrays:
     # changed in place, not copied (4 x 1.5 M rows of fresh bytes saved)
     out = np.ascontiguousarray(out, dtype=np.int64)
