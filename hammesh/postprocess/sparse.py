@@ -1574,6 +1574,11 @@ class _SwapTests:
         self.other.result()
 
 
+def _flip_group(tw: np.ndarray, fl: np.ndarray) -> np.ndarray:
+    """The triangles on either side of the half-edges ``fl`` of an alternating cycle, sorted."""
+    return np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
+
+
 def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack, newmin, newmax, status, slot,
                         swap_he, counts, lo: float, hi: float, steps_at: PlanSteps):
     """Joins below the rule between two cycles replaced by merging the cycles in the cover (issue 13).
@@ -1713,14 +1718,13 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen)
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
-            group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
             # taken if the plan joins them by a subtree)
             if tests is not None:
                 merges = tests.answer(c, wider > 0)
             else:
-                merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK,
-                                               wider > 0, pos, plen)
+                merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, _flip_group(tw, fl), ca, cb,
+                                               ALT_MERGE_WALK, wider > 0, pos, plen)
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1728,7 +1732,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                 if merges != 2:
                     continue
             flips = fl.tolist()
-            group = set(group_arr.tolist())
+            group = set(_flip_group(tw, fl).tolist())  # (made only here: ~700 cycles tested at 1.5 M, few pass)
             flipped = set(flips) | {int(tw[h]) for h in flips}
             out = _swap_outcome(tw, is_cov, flipped, cyc, group, find)  # (the same decision, with the pairings)
             if out is None or out.split:
