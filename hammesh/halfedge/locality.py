@@ -85,6 +85,10 @@ class CellKeys(NamedTuple):
 
 #: cells of the Hilbert table per thread below which it is made in one call
 TABLE_MIN_CELLS = 32_768
+#: :func:`renumber_local`: the thread of the serial vertex pass also renumbers the first
+#: ``1 / VERTEX_SIDE_SHARE`` of the rows' twins (the other thread the rest), so both
+#: finish together (at 1.5 M: vertices 0.032 s, twins 0.044 s on one thread)
+VERTEX_SIDE_SHARE = 8
 
 
 def grid_frame(points: np.ndarray, m: int) -> tuple[float, float, float, int]:
@@ -203,11 +207,17 @@ def renumber_local(
     vertex_order = np.empty(n, np.int64)
     twin_new = fresh(3 * (m + rt), np.int64)[: 3 * m]
     marks_new = fresh(3 * (m + rt) if len(mk) else 0, np.bool_)[: 3 * m if len(mk) else 0]
-    # the serial vertex pass on one thread, the twins (reading the inverse) on the other
-    run_all([
-        lambda: _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new),
-        lambda: _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new, 0, m),
-    ])
+    # the serial vertex pass on one thread, the twins (reading the inverse) on the other;
+    # the twins' pass is the longer (1.5 M rows: 0.044 against 0.032 s), so the vertex
+    # pass's thread also takes the first VERTEX_SIDE_SHARE of the twins' rows
+    cut = m // VERTEX_SIDE_SHARE if threads.cores() > 1 else 0
+
+    def vertices_first() -> None:
+        _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new)
+        _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new, 0, cut)
+
+    run_all([vertices_first, lambda: _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new,
+                                                                        cut, m)])
     pts_new = fresh((n + rp,) + pts.shape[1:], np.float64)[:n]
     run_all([
         (lambda lo=lo, hi=hi: _kernels.gather_points_into(pts, vertex_order, pts_new, lo, hi))

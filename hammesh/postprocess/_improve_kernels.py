@@ -24,7 +24,10 @@ A flip is taken only if the quadrilateral is strictly convex, neither edge is pi
 stays within ``max(hi, the pair's largest)``. The sorted angle vector of the mesh
 then grows lexicographically with every flip, so the loop ends (and is capped).
 
-Serial, nopython, ``cache=True``.
+Nopython, ``cache=True``. The flips and the moves are serial (each sees the ones
+before it); what each try would do on the rows as they are is worked out on both
+cores first (:func:`failing_flips`, :func:`smooth_steiner`), and the serial loop
+takes it wherever the rows it read are unchanged (same result, array for array).
 """
 
 from __future__ import annotations
@@ -95,7 +98,7 @@ def _input_end(v, w, first_mid, mid_a, mid_b):
     return v, True
 
 
-def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
+def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, rows=None, pinned=None):
     """Which output half-edges lie on a pinned interior input edge (whole or a half)?
 
     A pinned input edge (``con``: constrained, or between regions) with a triangle on
@@ -105,7 +108,17 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     of one of those two, and a half ends at a midpoint ``>= first_mid`` whose ends are
     ``mid_a``, ``mid_b``: O(1) per half-edge, no search over the mesh; one row range per core
     (:func:`_pinned_output_edges_into`), into an array from ``hammesh.pages``.
+    ``rows`` (with ``pinned``): only those rows' entries of ``pinned`` are found (in
+    place), the others are the caller's (sparse mode's gather writes the kept rows':
+    ``_sparse_kernels.rows_in_cycle_order``).
     """
+    if rows is not None and pinned is not None:
+        run_all([
+            partial(_pinned_rows_into, out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, rows,
+                    lo, hi)
+            for lo, hi in row_ranges(len(rows), PINNED_MIN_ROWS)
+        ])
+        return pinned
     k_rows = out.shape[0]
     pinned = fresh(3 * k_rows, np.bool_)
     run_all([
@@ -117,16 +130,33 @@ def pinned_output_edges(out, parent, partner, tri, twin, con, first_mid, mid_a, 
     return pinned
 
 
+#: rows a thread below which :func:`pinned_output_edges` of given ``rows`` runs in one call
+PINNED_MIN_ROWS = 8_192
+
+
 @njit(cache=True, nogil=True)
 def _pinned_output_edges_into(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, lo, hi):
     """Rows ``lo..hi`` of :func:`pinned_output_edges` (every entry of theirs written)."""
     for r in range(lo, hi):
-        t = parent[r]
-        if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
-            for j in range(3):  # a row kept whole: its parent's edges, in order
-                h = 3 * t + j
-                pinned[3 * r + j] = con[h] and twin[h] >= 0
-            continue
+        _pin_row(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, r)
+
+
+@njit(cache=True, nogil=True)
+def _pinned_rows_into(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, rows, lo, hi):
+    """Rows ``rows[lo:hi]`` of :func:`pinned_output_edges` (every entry of theirs written)."""
+    for i in range(lo, hi):
+        _pin_row(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, rows[i])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _pin_row(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, pinned, r):
+    """Row ``r``'s three entries of :func:`pinned_output_edges`."""
+    t = parent[r]
+    if partner[r] < 0 and out[r, 0] == tri[t, 0] and out[r, 1] == tri[t, 1] and out[r, 2] == tri[t, 2]:
+        for j in range(3):  # a row kept whole: its parent's edges, in order
+            h = 3 * t + j
+            pinned[3 * r + j] = con[h] and twin[h] >= 0
+    else:
         for j in range(3):
             pinned[3 * r + j] = False
             x = out[r, j]
@@ -151,14 +181,23 @@ def _run_of(starts, lengths, x):
     return starts[i], lengths[i]
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _failed_since(failed, touched, s, ln, x):
+    """Did the try at row ``x`` (of the run ``s .. s + ln``) fail since ``x`` and its
+    successor last changed (it fails again: :func:`improve_flips`)?"""
+    nx = x + 1 if x + 1 < s + ln else s
+    return failed[x] >= touched[x] and failed[x] >= touched[nx]
+
+
 @njit(cache=True, nogil=True)
-def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock):
+def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock, apply):
     """Flip the edge between row ``x`` and its successor if that keeps the cycle and helps.
 
     The decision reads rows ``x`` and its successor ``y`` only (their corners and their
     points, twins, pinned edges; the neighbours by their place in the run): a flip
     stamps the rows it changes (``x``, ``y`` and the four across its outer edges)
     with the advanced ``clock`` in ``touched`` (see :func:`improve_flips`).
+    ``apply`` False: decide only (returns ``y`` where it would flip, writes nothing).
     """
     s, ln = _run_of(starts, lengths, x)
     if ln < 4:
@@ -204,6 +243,8 @@ def _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched,
     new_min = min(l3, l4)
     if new_min <= old_min * (1.0 + 1e-9) or max(h3, h4) > max(hi, max(h1, h2)):
         return -1
+    if not apply:
+        return y
     e_ad = 3 * y + (kg + 1) % 3
     e_db = 3 * y + (kg + 2) % 3
     e_bc = 3 * x + (kh + 1) % 3
@@ -272,12 +313,10 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
         top -= 1
         r = stack[top]
         s, ln = _run_of(starts, lengths, r)
-        prev = r - 1 if r > s else s + ln - 1
-        for x in (r, prev):
-            nx = x + 1 if x + 1 < s + ln else s
-            if failed[x] >= touched[x] and failed[x] >= touched[nx]:
+        for x in (r, r - 1 if r > s else s + ln - 1):  # (the row and its predecessor)
+            if _failed_since(failed, touched, s, ln, x):
                 continue  # tried since it or its successor last changed: fails again
-            y = _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock)
+            y = _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock, True)
             if y < 0:
                 failed[x] = clock[0]
             if y >= 0:
@@ -293,8 +332,49 @@ def improve_flips(pts, out, twin, pinned, starts, lengths, pm, kind, hi, max_fli
     return n
 
 
+def failing_flips(pts, out, twin, pinned, starts, lengths, hi, rows, touched, failed, clock, min_rows):
+    """Mark, on both cores, the tries of :func:`improve_flips` that fail as the rows are now.
+
+    A try's outcome is a function of its two rows as they are (``_try_flip``), and
+    ``failed[x] = clock`` records exactly that it fails while neither row changes
+    (``touched``): so every try :func:`improve_flips` would make first (each row of
+    ``rows`` and its predecessor, not tried since they changed) is decided here, read
+    only, one range of ``rows`` per core (``min_rows`` a thread at least), and the
+    failing ones are marked at the current ``clock``. The serial loop then skips them
+    and makes only the flips and the tries around them: the same flips in the same
+    order (a mark holds only while the try's rows are unchanged, as its own would).
+    Returns nothing; ``failed`` is written in place (two ranges may mark one
+    predecessor, with the same value).
+    """
+    spans = row_ranges(rows.shape[0], min_rows)
+    if len(spans) < 2:
+        return  # (one core: the loop's own tries cost the same)
+    dummy_pm = np.zeros(0)
+    dummy_kind = np.zeros(0, np.int8)
+    run_all([
+        partial(_failing_flips_into, pts, out, twin, pinned, starts, lengths, dummy_pm, dummy_kind, float(hi), rows,
+                touched, failed, clock, lo, hi_)
+        for lo, hi_ in spans
+    ])
+
+
 @njit(cache=True, nogil=True)
-def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows, touched, clock, judged):
+def _failing_flips_into(pts, out, twin, pinned, starts, lengths, pm, kind, hi, rows, touched, failed, clock, lo,
+                        hi_):
+    """``rows[lo:hi_]`` of :func:`failing_flips` (reads only, bar ``failed``)."""
+    stamp = clock[0]
+    for i in range(lo, hi_):
+        r = rows[i]
+        s, ln = _run_of(starts, lengths, r)
+        for x in (r, r - 1 if r > s else s + ln - 1):  # (the row and its predecessor)
+            if _failed_since(failed, touched, s, ln, x):
+                continue
+            if _try_flip(pts, out, twin, pinned, starts, lengths, pm, kind, hi, x, touched, clock, False) < 0:
+                failed[x] = stamp
+
+
+def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows, touched, clock, judged,
+                   min_points=None):
     """Move each free Steiner point to a better place in its star (in place).
 
     ``new_rows``: every row that can hold a Steiner point (those of kind != 3; a row
@@ -315,9 +395,42 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows,
     not judged again while no row around it changed since (the same rows, corners,
     parents' angles and points: the same outcome). A flip that takes a row out of
     a star stamps the row it leaves there.
+
+    The points are judged in order, each against the points moved before it. A
+    point's outcome is a function of its star as it is (its rows, their corners'
+    places and parents' angles), so it is first worked out for every point on both
+    cores from the stars as they are (``min_points`` points a thread at least,
+    default ``hammesh.threads.THREAD_MIN_ROWS``; every other point a thread:
+    :func:`_judge_points_into`); the
+    serial pass (:func:`_smooth_points`) takes that outcome for each point none of
+    whose star rows a move before it stamped, and judges the others again: the same
+    moves as judging one point after the other.
     """
     n_pts = pts.shape[0]
-    cnt = np.zeros(n_pts - first + 1, np.int64)
+    k = max(n_pts - first, 0)
+    cnt, rows = _steiner_stars(out, first, n_pts, new_rows)
+    code = np.full(k, -1, np.int8)  # -1: not worked out ahead; 0: stays; 1: moves to ``to``
+    to = np.empty((k, 2))
+    parts = len(row_ranges(k, threads.THREAD_MIN_ROWS if min_points is None else min_points))
+    stamp = int(clock[0])
+    if parts > 1:  # (one core: the serial pass's own judging costs the same)
+        # every parts-th point a thread: the incenters (numbered first) miss the rule and
+        # need the search far more often than the midpoints after them
+        run_all([
+            partial(_judge_points_into, pts, out, twin, pinned, pm, first, float(keep), float(hi), int(iters), cnt,
+                    rows, touched, judged, code, to, j, parts)
+            for j in range(parts)
+        ])
+    return _smooth_points(pts, out, twin, pinned, pm, first, float(keep), float(hi), int(iters), cnt, rows, touched,
+                          clock, judged, code, to, stamp)
+
+
+@njit(cache=True, nogil=True)
+def _steiner_stars(out, first, n_pts, new_rows):
+    """``(cnt, rows)``: the half-edges ``3 r + j`` of ``new_rows`` whose corner ``j`` is a
+    Steiner point ``v >= first``, grouped by point (point ``v``'s at
+    ``rows[cnt[v - first]:cnt[v - first + 1]]``, in the order of ``new_rows``)."""
+    cnt = np.zeros(max(n_pts - first, 0) + 1, np.int64)
     for r in new_rows:
         for j in range(3):
             v = out[r, j]
@@ -333,76 +446,144 @@ def smooth_steiner(pts, out, twin, pinned, pm, first, keep, hi, iters, new_rows,
             if v >= first:
                 rows[fill[v - first]] = 3 * r + j
                 fill[v - first] += 1
-    cap = 64
-    us = np.empty(cap, np.int64)
-    ws = np.empty(cap, np.int64)
-    poly = np.empty(cap, np.int64)
+    return cnt, rows
+
+
+@njit(cache=True, nogil=True)
+def _unchanged_since(touched, rows, a0, a1, t):
+    """No row of ``rows[a0:a1]`` (half-edges) stamped after clock ``t``."""
+    for i in range(a0, a1):
+        if touched[rows[i] // 3] > t:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _point_outcome(pts, out, twin, pinned, pm, keep, hi, iters, rows, a0, n, us, ws, poly):
+    """``(moves, x, y)``: where point ``out[rows[a0] // 3, rows[a0] % 3]``'s star ``rows[a0:a0 + n]``
+    would move it (:func:`smooth_steiner`'s test; reads only)."""
+    cap = us.shape[0]
+    if n < 3 or n > cap:
+        return False, 0.0, 0.0
+    lo = np.inf
+    for i in range(n):
+        h = rows[a0 + i]
+        r = h // 3
+        kv = h - 3 * r
+        e_out = 3 * r + kv  # v -> u
+        e_in = 3 * r + (kv + 2) % 3  # w -> v
+        if twin[e_out] < 0 or twin[e_in] < 0 or pinned[e_out] or pinned[e_in]:
+            return False, 0.0, 0.0
+        us[i] = out[r, (kv + 1) % 3]
+        ws[i] = out[r, (kv + 2) % 3]
+        lo = min(lo, pm[r])
+    # the link polygon, counter-clockwise: u -> w in each star triangle (v, u, w)
+    poly[0] = us[0]
+    cur = ws[0]
+    m = 1
+    while cur != us[0] and m < n:
+        poly[m] = cur
+        nxt = -1
+        for i in range(n):
+            if us[i] == cur:
+                nxt = ws[i]
+                break
+        if nxt < 0:
+            break
+        cur = nxt
+        m += 1
+    if m != n or cur != us[0]:
+        return False, 0.0, 0.0
+    lo *= keep
+    h = rows[a0]
+    v = out[h // 3, h % 3]
+    vx = pts[v, 0]
+    vy = pts[v, 1]
+    s0, n0, x0 = fan_eval(pts, poly, n, vx, vy, lo, hi)
+    if s0 == -np.inf or s0 >= 0.0:
+        return False, 0.0, 0.0  # already meets the rule (most fan points: placed for it)
+    d2 = np.inf
+    for i in range(n):
+        d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)
+    px, py, s1, n1, x1 = compass_search(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters, 4 * iters)
+    if s1 > s0 and n1 >= n0 and x1 <= max(hi, x0):
+        return True, px, py
+    return False, 0.0, 0.0
+
+
+#: a star of more rows than this is left alone (the buffers' size)
+STAR_CAP = 64
+
+
+@njit(cache=True, nogil=True)
+def _judge_points_into(pts, out, twin, pinned, pm, first, keep, hi, iters, cnt, rows, touched, judged, code, to,
+                       start, step):
+    """Points ``first + start``, every ``step``-th after it, of :func:`smooth_steiner`,
+    worked out ahead on the stars as they are (reads only, bar ``code`` and ``to``); a
+    point left alone since it was last judged is not (``code`` stays -1)."""
+    us = np.empty(STAR_CAP, np.int64)
+    ws = np.empty(STAR_CAP, np.int64)
+    poly = np.empty(STAR_CAP, np.int64)
+    for i in range(start, cnt.shape[0] - 1, step):
+        a0 = cnt[i]
+        a1 = cnt[i + 1]
+        last = judged[i]
+        if last >= 0 and _unchanged_since(touched, rows, a0, a1, last):
+            continue
+        moves, x, y = _point_outcome(pts, out, twin, pinned, pm, keep, hi, iters, rows, a0, a1 - a0, us, ws, poly)
+        code[i] = 1 if moves else 0
+        to[i, 0] = x
+        to[i, 1] = y
+
+
+@njit(cache=True, nogil=True)
+def _smooth_points(pts, out, twin, pinned, pm, first, keep, hi, iters, cnt, rows, touched, clock, judged, code, to,
+                   stamp):
+    """The serial pass of :func:`smooth_steiner`: each point in order, its outcome worked
+    out ahead (``code`` >= 0, at clock ``stamp``) taken while its star is unchanged."""
+    us = np.empty(STAR_CAP, np.int64)
+    ws = np.empty(STAR_CAP, np.int64)
+    poly = np.empty(STAR_CAP, np.int64)
     moved = 0
-    for v in range(first, n_pts):
-        a0 = cnt[v - first]
-        a1 = cnt[v - first + 1]
-        n = a1 - a0
-        last = judged[v - first]
-        if last >= 0:
-            same = True
-            for i in range(n):
-                if touched[rows[a0 + i] // 3] > last:
-                    same = False
-                    break
-            if same:
-                continue
-        judged[v - first] = clock[0]  # (unless moved below)
-        if n < 3 or n > cap:
+    for i in range(cnt.shape[0] - 1):
+        a0 = cnt[i]
+        a1 = cnt[i + 1]
+        last = judged[i]
+        if last >= 0 and _unchanged_since(touched, rows, a0, a1, last):
             continue
-        ok = True
-        lo = np.inf
-        for i in range(n):
-            h = rows[a0 + i]
-            r = h // 3
-            kv = h - 3 * r
-            e_out = 3 * r + kv  # v -> u
-            e_in = 3 * r + (kv + 2) % 3  # w -> v
-            if twin[e_out] < 0 or twin[e_in] < 0 or pinned[e_out] or pinned[e_in]:
-                ok = False
-                break
-            us[i] = out[r, (kv + 1) % 3]
-            ws[i] = out[r, (kv + 2) % 3]
-            lo = min(lo, pm[r])
-        if not ok:
-            continue
-        # the link polygon, counter-clockwise: u -> w in each star triangle (v, u, w)
-        poly[0] = us[0]
-        cur = ws[0]
-        m = 1
-        while cur != us[0] and m < n:
-            poly[m] = cur
-            nxt = -1
-            for i in range(n):
-                if us[i] == cur:
-                    nxt = ws[i]
-                    break
-            if nxt < 0:
-                break
-            cur = nxt
-            m += 1
-        if m != n or cur != us[0]:
-            continue
-        lo *= keep
-        vx = pts[v, 0]
-        vy = pts[v, 1]
-        s0, n0, x0 = fan_eval(pts, poly, n, vx, vy, lo, hi)
-        if s0 == -np.inf or s0 >= 0.0:
-            continue  # already meets the rule (most fan points: placed for it)
-        d2 = np.inf
-        for i in range(n):
-            d2 = min(d2, (pts[poly[i], 0] - vx) ** 2 + (pts[poly[i], 1] - vy) ** 2)
-        px, py, s1, n1, x1 = compass_search(pts, poly, n, vx, vy, lo, hi, 0.25 * math.sqrt(d2), iters, 4 * iters)
-        if s1 > s0 and n1 >= n0 and x1 <= max(hi, x0):
-            pts[v, 0] = px
-            pts[v, 1] = py
+        judged[i] = clock[0]  # (unless moved below)
+        if code[i] >= 0 and _unchanged_since(touched, rows, a0, a1, stamp):
+            moves, x, y = code[i] == 1, to[i, 0], to[i, 1]
+        else:
+            moves, x, y = _point_outcome(pts, out, twin, pinned, pm, keep, hi, iters, rows, a0, a1 - a0, us, ws,
+                                         poly)
+        if moves:
+            v = first + i
+            pts[v, 0] = x
+            pts[v, 1] = y
             moved += 1
-            judged[v - first] = -1
+            judged[i] = -1
             clock[0] += 1
-            for i in range(n):
-                touched[rows[a0 + i] // 3] = clock[0]
+            for j in range(a0, a1):
+                touched[rows[j] // 3] = clock[0]
     return moved
+
+
+def load_improve_kernels() -> None:
+    """Load (or compile) the kernels only big outputs reach: the improvement step's work
+    ahead on both cores (:func:`failing_flips`, :func:`smooth_steiner`, from
+    ``sparse.IMPROVE_MIN_ROWS`` rows / ``sparse.SMOOTH_MIN_POINTS`` points a thread),
+    with the types the step passes (no row, no point: nothing is read);
+    ``hammesh.postprocess.load_kernels``' small mesh does not reach them, and a first
+    call at 1.5 M triangles loaded each on both threads (10-16 ms each)."""
+    pts = np.zeros((3, 2))
+    out = np.zeros((1, 3), np.int64)
+    twin = np.full(3, -1, np.int64)
+    pinned = np.zeros(3, np.bool_)
+    none = np.zeros(0, np.int64)
+    one = np.zeros(1, np.int64)
+    clock = np.zeros(1, np.int64)
+    _failing_flips_into(pts, out, twin, pinned, one, np.ones(1, np.int64), np.zeros(0), np.zeros(0, np.int8), 1.0,
+                        none, one, one.copy(), clock, 0, 0)
+    _judge_points_into(pts, out, twin, pinned, np.zeros(1), 3, 0.9, 1.0, 2, np.zeros(1, np.int64), none, one,
+                       none.copy(), np.zeros(0, np.int8), np.zeros((0, 2)), 0, 2)

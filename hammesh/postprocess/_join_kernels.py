@@ -1200,7 +1200,7 @@ def load_ring_kernels() -> None:
     """Load (or compile) the kernels only ring fans, ring joins, re-routes and cover swaps
     reach (``ring_outside_pairs``, ``label_outside_into``, ``relabel_cycles_into``,
     ``alternating_cycles_into``, ``swap_merge_outcome``, the ring fans' polygon and
-    point with ``place_fan``), on two
+    point with ``place_fan``, the improvement step's ``move_to_targets``), on two
     triangles: ``hammesh.postprocess.load_kernels``' small mesh leaves no triangle
     off its cover, so those steps do not run there."""
     twin = np.array([3, 4, -1, 0, 1, -1], np.int64)
@@ -1234,6 +1234,9 @@ def load_ring_kernels() -> None:
     n = _sk.union_polygon_into(tri, twin, np.zeros(6, np.bool_), members, poly, hes)
     for amin, keep in ((np.zeros(0), 0.0), (np.full(2, 0.5), 0.9)):
         _sk.ring_fan_point(pts, tri, members, poly, int(n), amin, keep, 0.1, 2.5, 2)
+    # the improvement step's repair of rows missing the absolute targets
+    # (``sparse._repair_targets``: a first call at 1.5 M loaded it, 5-14 ms)
+    move_to_targets(pts, tri, twin, np.zeros(6, np.bool_), np.zeros(0, np.int64), 0.1, 2.5, 0.05, 2)
 
 
 @njit(cache=True, nogil=True)

@@ -21,7 +21,6 @@ Codes shared with ``sparse.py``:
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 from typing import NamedTuple
 
@@ -530,7 +529,6 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
-@njit(cache=True, nogil=True)
 def new_row_twins(out, tri, twin_in, status, n_points):
     """Half-edge twins where the output differs from the input.
 
@@ -546,7 +544,31 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     ``bad`` -1 or a virtual half-edge whose edge is used twice in one direction or by
     three rows. What ``hammesh.halfedge.half_edge_twins`` gives on the whole output,
     at a fraction of the passes.
+
+    The keys are sorted with their index packed below them (a plain sort of distinct
+    int64s: the stable argsort it replaced, 0.018 s at 1.5 M, was most of this), or
+    argsorted (stable) where key and index need more than 62 bits; by numpy between
+    the two compiled halves (:func:`_row_twin_keys`, :func:`_match_row_twins`):
+    numpy's sort of the ~200 k keys at 1.5 M triangles (vectorised, AVX-512 / AVX2)
+    took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
+    sort one way only, so the matching is the same.
     """
+    changed, face_tw, tw_new, rest, keys, packed, ib = _row_twin_keys(out, tri, twin_in, status, n_points)
+    if ib >= 0:
+        packed.sort()  # (in place: the index is the low bits)
+        srt = packed & ((np.int64(1) << ib) - 1)
+    else:
+        srt = np.argsort(keys, kind="stable")
+    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt)
+    return tw_new, changed, face_tw, bad
+
+
+@njit(cache=True, nogil=True)
+def _row_twin_keys(out, tri, twin_in, status, n_points):
+    """:func:`new_row_twins`' first half: ``(changed, face_tw, tw_new, rest, keys, packed,
+    ib)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected edge keys,
+    ``packed`` the keys shifted by ``ib`` bits with their index below (``ib`` -1 and
+    ``packed`` empty where that needs more than 62 bits)."""
     m = tri.shape[0]
     k = out.shape[0]
     n_ch = 0
@@ -573,6 +595,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
             if g >= 0 and status[g // 3] == PASS:
                 rest[n] = g
                 n += 1
+    rest = rest[:n]
     keys = np.empty(n, np.int64)
     for i in range(n):
         h = rest[i]
@@ -585,9 +608,6 @@ def new_row_twins(out, tri, twin_in, status, n_points):
             a = tri[x, j]
             b = tri[x, (j + 1) % 3]
         keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
-    # the keys sorted with their index packed below them (a plain sort of int64: the
-    # stable argsort it replaces, 0.018 s at 1.5 M, was most of this kernel), or
-    # argsorted where key and index need more than 62 bits
     ib = 1
     while (1 << ib) < n:
         ib += 1
@@ -595,13 +615,17 @@ def new_row_twins(out, tri, twin_in, status, n_points):
         packed = np.empty(n, np.int64)
         for i in range(n):
             packed[i] = (keys[i] << ib) | i
-        packed.sort()
-        srt = packed  # (in place: the index is the low bits)
-        mask = (np.int64(1) << ib) - 1
-        for i in range(n):
-            srt[i] = packed[i] & mask
-    else:
-        srt = np.argsort(keys, kind="mergesort")
+        return changed, face_tw, tw_new, rest, keys, packed, ib
+    return changed, face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1
+
+
+@njit(cache=True, nogil=True)
+def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt):
+    """:func:`new_row_twins`' second half: the half-edges ``rest`` in the order ``srt`` of
+    their ``keys``, paired where two share a key (``tw_new``, ``face_tw`` filled); returns
+    -1 or a virtual half-edge whose edge is used twice in one direction or by three rows."""
+    m = tri.shape[0]
+    n = rest.shape[0]
     i = 0
     while i < n:
         e = i + 1
@@ -614,7 +638,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
         elif e - i == 2:
             g = rest[srt[i + 1]]
             if _start(out, tri, m, h) == _start(out, tri, m, g):
-                return tw_new, changed, face_tw, max(h, g)  # one edge twice in one direction
+                return max(h, g)  # one edge twice in one direction
             for x, y in ((h, g), (g, h)):
                 if x >= 3 * m:
                     tw_new[x - 3 * m] = y
@@ -623,9 +647,9 @@ def new_row_twins(out, tri, twin_in, status, n_points):
                     r = lower_bound(changed, f // 3)
                     face_tw[3 * r + f % 3] = y
         else:
-            return tw_new, changed, face_tw, rest[srt[i + 2]]
+            return rest[srt[i + 2]]
         i = e
-    return tw_new, changed, face_tw, -1
+    return -1
 
 
 @njit(cache=True, nogil=True)
@@ -699,10 +723,10 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
     order = fresh(n_rows, np.int64)
     back = np.empty(n_rows, np.int64)
     args = (ends, parent_new, m, s0)
-    with ThreadPoolExecutor(1) as pool:
-        other = pool.submit(_walk_one_into, *args, False, bwd, fwd, back)
-        n_f, lo_f, bad_f = _walk_one_into(*args, True, fwd, bwd, order)
-        n_b, lo_b, bad_b = other.result()
+    # (this thread forward, one of the process's pool backward: no thread started)
+    (n_f, lo_f, bad_f), (n_b, lo_b, bad_b) = run_all([
+        partial(_walk_one_into, *args, True, fwd, bwd, order), partial(_walk_one_into, *args, False, bwd, fwd, back),
+    ])
     if bad_f >= 0 or bad_b >= 0:
         return Walk(*_walk_all(ends, parent_new, m, status, n_rows))
     return Walk(*_walk_rest(ends, parent_new, m, status, order, n_f, min(lo_f, lo_b), back, n_b, fwd, bwd))
@@ -725,7 +749,7 @@ def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wid
 
 def load_output_kernels() -> None:
     """Load (or compile) the kernels only big outputs reach: the walk from both ends and
-    the gather of several runs, on a fan of four new rows (two runs of it, one
+    the gather of several runs (and the fans' kinds, the parents mapped back), on a fan of four new rows (two runs of it, one
     walked from both ends): ``hammesh.postprocess.load_kernels`` warms them on its
     small mesh, where those paths do not run."""
     k = 4
@@ -750,6 +774,12 @@ def load_output_kernels() -> None:
     swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
                     none, none)
+    # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
+    fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)
+    map_through_into(r.copy(), r.copy(), 0, k)
+    from hammesh.postprocess._improve_kernels import load_improve_kernels  # (only when loading)
+
+    load_improve_kernels()
 
 
 @njit(cache=True, nogil=True)
@@ -911,7 +941,7 @@ class CycleRows(NamedTuple):
 
 def rows_in_cycle_order(
     order, lengths, run_order, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed,
-    face_tw, amin, scratch=None,
+    face_tw, amin, scratch=None, con=None, pinned=None,
 ) -> CycleRows:
     """The output rows, walked into ``order`` (:func:`walk_links`, virtual rows), taken across in one gather.
 
@@ -923,7 +953,11 @@ def rows_in_cycle_order(
     row is written by one thread only). The big arrays come from ``hammesh.pages``
     (the reserve ``quality_mesh`` faulted while Triangle ran, if any). ``scratch``: an int64
     array of at least one entry per virtual row, any contents (e.g. :func:`walk_links`'
-    ``ends``, done with), for the rows' final places; made here if None.
+    ``ends``, done with), for the rows' final places; made here if None. ``con``
+    (``(3 m,)`` bool, the input's pinned half-edges) and ``pinned`` (``(3 k,)`` bool):
+    each kept row's pinned output edges written on the way (its input half-edge's
+    ``con``, if inner), as ``_improve_kernels.pinned_output_edges`` finds them; the new
+    rows' entries are left as they were.
     """
     m = tri.shape[0]
     k = order.shape[0]
@@ -940,10 +974,12 @@ def rows_in_cycle_order(
         fresh((k, 3), np.int64), fresh(k, np.int64), fresh(k, np.int64), fresh(k, np.int8), fresh(k, np.float64),
         new_len, fresh(3 * k, np.int64),
     )
+    if con is None or pinned is None:
+        con, pinned = np.zeros(0, np.bool_), np.zeros(0, np.bool_)
     run_all([
         partial(
             _gather_rows_into, rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new,
-            changed, face_tw, amin, res.out, res.parent, res.partner, res.kind, res.pm, res.claim, lo, hi,
+            changed, face_tw, amin, res.out, res.parent, res.partner, res.kind, res.pm, res.claim, con, pinned, lo, hi,
         )
         for lo, hi in spans
     ])
@@ -991,16 +1027,20 @@ def _row_positions_into(rows, pos, lo, hi):
 @njit(cache=True, nogil=True)
 def _gather_rows_into(
     rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed, face_tw, amin,
-    out2, parent2, partner2, kind2, pm, claim, lo, hi,
+    out2, parent2, partner2, kind2, pm, claim, con, pinned, lo, hi,
 ):
-    """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place)."""
+    """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place;
+    ``pinned`` empty: no pinned edges written)."""
     m = tri.shape[0]
+    pin = pinned.shape[0] == claim.shape[0]
     for i in range(lo, hi):
         x = rows[i]
         for j in range(3):
             h = 3 * x + j
             if x < m:
                 g = twin_in[h]
+                if pin:
+                    pinned[3 * i + j] = con[h] and g >= 0
                 if g >= 0 and status[g // 3] != PASS:
                     g = _faced(g, changed, face_tw)
             else:
@@ -1036,6 +1076,23 @@ def iota_into(a, lo, hi):
     from the page reserve: ``np.arange`` would fault fresh pages)."""
     for i in range(lo, hi):
         a[i] = i
+
+
+@njit(cache=True, nogil=True)
+def map_through_into(a, table, lo, hi):
+    """``a[i] = table[a[i]]`` for ``i`` in ``lo..hi``, in place (row numbers composed with
+    a renumbering: one threaded pass, no fresh array to fault as ``table[a]`` makes)."""
+    for i in range(lo, hi):
+        a[i] = table[a[i]]
+
+
+@njit(cache=True, nogil=True)
+def fan_kinds_into(kind, is_fan, parent, lo, hi):
+    """Rows ``lo..hi``: a row kept whole (kind 3) whose parent is a fan triangle becomes
+    kind 0 (a side joined to a Steiner point), in place."""
+    for i in range(lo, hi):
+        if kind[i] == 3 and is_fan[parent[i]]:
+            kind[i] = 0
 
 
 @njit(cache=True, nogil=True, inline="always")

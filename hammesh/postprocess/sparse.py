@@ -107,6 +107,11 @@ EDGE_MIN_ROWS = 50_000
 #: serial, ~18 ms on the main thread; a pass on ``hammesh.threads``' kept pool starts
 #: in ~20 us (the default ``THREAD_MIN_ROWS`` dates from a new pool per pass)
 FACTS_MIN_ROWS = 8_192
+#: rows (Steiner points) a thread from which the improvement step's tries (moves) are
+#: worked out on both cores before its serial loops (``_improve_kernels.failing_flips``,
+#: ``smooth_steiner``): ~1 us a try, ~4 us a point
+IMPROVE_MIN_ROWS = 4_096
+SMOOTH_MIN_POINTS = 512
 #: most triangles one fan (one Steiner point) may replace
 FAN_MAX = 12
 #: a fan group may take in one covered neighbour across its non-cover edge and so join
@@ -1569,6 +1574,11 @@ class _SwapTests:
         self.other.result()
 
 
+def _flip_group(tw: np.ndarray, fl: np.ndarray) -> np.ndarray:
+    """The triangles on either side of the half-edges ``fl`` of an alternating cycle, sorted."""
+    return np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
+
+
 def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack, newmin, newmax, status, slot,
                         swap_he, counts, lo: float, hi: float, steps_at: PlanSteps):
     """Joins below the rule between two cycles replaced by merging the cycles in the cover (issue 13).
@@ -1708,14 +1718,13 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen)
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
-            group_arr = np.unique(np.concatenate([fl // 3, tw[fl] // 3]))
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
             # taken if the plan joins them by a subtree)
             if tests is not None:
                 merges = tests.answer(c, wider > 0)
             else:
-                merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, group_arr, ca, cb, ALT_MERGE_WALK,
-                                               wider > 0, pos, plen)
+                merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, _flip_group(tw, fl), ca, cb,
+                                               ALT_MERGE_WALK, wider > 0, pos, plen)
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1723,7 +1732,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                 if merges != 2:
                     continue
             flips = fl.tolist()
-            group = set(group_arr.tolist())
+            group = set(_flip_group(tw, fl).tolist())  # (made only here: ~700 cycles tested at 1.5 M, few pass)
             flipped = set(flips) | {int(tw[h]) for h in flips}
             out = _swap_outcome(tw, is_cov, flipped, cyc, group, find)  # (the same decision, with the pairings)
             if out is None or out.split:
@@ -2056,21 +2065,24 @@ def sparse_cycles(
     # runs in the order of their lowest input triangle; rows, their parents' smallest
     # angle (pm) and the twins renumbered as the claim, in one gather
     run_order = np.argsort(low, kind="stable") if len(lengths) > 1 else np.zeros(len(lengths), np.int64)
+    # (and the kept rows' pinned output edges, the improvement's: on the way)
+    pinned_out = fresh(3 * len(order_rows), np.bool_) if improve and pts.shape[1] == 2 else None
     out, parent, partner, kind, pm, lengths, claim = _k.rows_in_cycle_order(
         order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
-        ends,
+        ends, con=con, pinned=pinned_out,
     )
-    if n_fan:
-        kind[(kind == 3) & is_fan[parent]] = 0  # a fan triangle: a side joined to a Steiner point
+    if n_fan:  # a fan triangle: a side joined to a Steiner point (one threaded pass, in place)
+        _row_pass(lambda lo, hi_: _k.fan_kinds_into(kind, is_fan, parent, lo, hi_), len(kind))
     steps.done("output_rows")
     if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
         beside_cover()  # short passes; the swap tests and the output rows' passes take both)
     n_improve = n_moved = 0
+    new_facts = None  # (the new rows' facts, if the improvement's last look is of the final rows)
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
     if improve and pts.shape[1] == 2 and len(out):
-        out, claim, kind, pm, n_improve, n_moved = _improve(
+        out, claim, kind, pm, n_improve, n_moved, new_facts = _improve(
             all_pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, n + n_split, hi,
-            n0_input, keep, keep * min_angle, floor,
+            n0_input, keep, keep * min_angle, floor, pinned_out,
         )
     steps.done("improve")
     # the kept rows' worst radius ratio: the input's if its worst triangle is kept,
@@ -2082,11 +2094,11 @@ def sparse_cycles(
         if r_now < n_whole and orig_of[r_now] == ratio_row:
             worst_kept = bool((kind[parent == r_now] == 3).any())
     kept_ratio = ratio_in if worst_kept else kept_radius_ratio(all_pts, out, kind, parent, amin_p)
-    quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio)
+    quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio, new_facts)
     quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)
-    if n_fan:
-        parent = orig_of[parent]
+    if n_fan:  # (in place: the rows' parents are this function's own array)
+        _row_pass(lambda lo, hi_: _k.map_through_into(parent, orig_of, lo, hi_), len(parent))
     counts_d = {
         "cycles_before_merging": int(cover.n_cycles),
         "cover_rotations": int(cover.n_rotations),
@@ -2166,6 +2178,7 @@ def local_quality(
     keep: float,
     max_allowed: float,
     kept_ratio: float | None = None,
+    new_facts: tuple | None = None,
 ) -> dict:
     """The local quality rule's counts over the output (issue 13, item 1).
 
@@ -2174,10 +2187,15 @@ def local_quality(
     input triangles it replaces), *above the max rule* if its largest angle exceeds
     ``max_allowed`` (radians); both up to a relative 1e-9. Only the new rows are
     measured (a kept row has its input triangle's angles); ``kept_ratio`` is the worst
-    radius ratio of the kept rows if the caller knows it (else measured here).
+    radius ratio of the kept rows if the caller knows it (else measured here);
+    ``new_facts``: ``(new rows, their smallest and largest angles, worst radius
+    ratio)`` if the caller measured them on these rows and points (else measured here).
     """
-    new = np.flatnonzero(kind != 3)
-    lo, hi, ratio, _ = triangle_facts(points, triangles[new])
+    if new_facts is None:
+        new = np.flatnonzero(kind != 3)
+        lo, hi, ratio, _ = triangle_facts(points, triangles[new])
+    else:
+        new, lo, hi, ratio = new_facts
     if kept_ratio is None:
         kept_ratio = triangle_facts(points, triangles[kind == 3])[2]
     pm = parents_min[new]
@@ -2197,14 +2215,20 @@ def local_quality(
 
 
 def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, mid_a, mid_b, first_mid, hi,
-             first_steiner, keep, lo_global, floor):
+             first_steiner, keep, lo_global, floor, pinned=None):
     """Cycle-keeping improvement flips (``_improve_kernels.improve_flips``) on the final rows.
 
     An output edge is pinned if it is a pinned input edge (constrained, between
     regions; ``con`` over ``tri``) or a half of one split at its midpoint
-    (``_improve_kernels.pinned_output_edges``, from each row's parents).
+    (``_improve_kernels.pinned_output_edges``, from each row's parents). ``pinned``:
+    the kept rows' entries found already (the output rows' gather), the new rows'
+    are found here.
     """
-    pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
+    if pinned is None:
+        pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
+    else:  # (the new rows only: the kept rows', ~99 % of them, came with the gather)
+        pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b,
+                                         rows=np.flatnonzero(kind != 3), pinned=pinned)
     # the caller's rows, claim, kinds and parents' angles are its own fresh arrays:
     # changed in place, not copied (4 x 1.5 M rows of fresh bytes saved)
     out = np.ascontiguousarray(out, dtype=np.int64)
@@ -2221,6 +2245,9 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
     new = np.flatnonzero(kind != 3)
     for _ in range(IMPROVE_ROUNDS):
+        # (the tries that fail as the rows are now, found on both cores; the loop skips them)
+        _ik.failing_flips(pts, out, twin, pinned, starts, lengths, float(hi), new, touched, failed, clock,
+                          IMPROVE_MIN_ROWS)
         flips = _ik.improve_flips(
             pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new, touched, failed,
             clock,
@@ -2232,30 +2259,35 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
             break
         moved = _ik.smooth_steiner(
             pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock,
-            judged,
+            judged, SMOOTH_MIN_POINTS,
         )
         n_moved += moved
         if moved == 0:
             break
-    n_moved += _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
-    return out, twin, kind, pm, int(n_flips), int(n_moved)
+    repaired, facts = _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
+    n_moved += repaired
+    return out, twin, kind, pm, int(n_flips), int(n_moved), facts
 
 
-def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float) -> int:
+def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float):
     """Move the Steiner points of rows that miss issue 13's absolute targets (in place).
 
     After the improvement step, the new rows with an angle below ``lo`` (``keep`` x
     the input's smallest) or above ``hi`` (its largest + 5 degrees) are few (none on
     most meshes); each free Steiner point among their corners is moved for the
     global targets (``_join_kernels.move_to_targets``), up to ``IMPROVE_ROUNDS``
-    rounds. Returns the number of moves.
+    rounds. Returns the number of moves and the new rows' facts ``(new, smallest,
+    largest angle, worst radius ratio)`` if the last ones measured are the final rows'
+    (no move after them; else None): the report's (``local_quality``), not measured again.
     """
     new = np.flatnonzero(kind != 3)
     if not len(new) or first_steiner >= len(pts):
-        return 0
+        return 0, None
     moved = 0
+    final = None
     for _ in range(IMPROVE_ROUNDS):
-        a_lo, a_hi, _, _ = triangle_facts(pts, out[new])
+        a_lo, a_hi, ratio, _ = triangle_facts(pts, out[new])
+        final = (new, a_lo, a_hi, ratio)
         miss = new[(a_lo < lo) | (a_hi > hi)]
         rc = np.argwhere(out[miss] >= first_steiner)
         if not len(rc):
@@ -2264,9 +2296,11 @@ def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float,
         _, first_h = np.unique(out[miss[rc[:, 0]], rc[:, 1]], return_index=True)
         n = _j.move_to_targets(pts, out, twin, pinned, hs[first_h], float(lo), float(hi), float(floor), PLACE_ITERS)
         moved += n
-        if n == 0:
+        if n:
+            final = None  # (points moved since)
+        else:
             break
-    return moved
+    return moved, final
 
 
 def count_report(r: SparseResult, n: int, m: int) -> dict:
@@ -2304,7 +2338,12 @@ def _numbered_back(r: SparseResult, loc, points: np.ndarray, started: tuple[floa
     wall["locality"] = time.perf_counter() - t0 + (t0 - started[0] - sum(wall.values()))
     cpu["locality"] = time.process_time() - c0 + (c0 - started[1] - sum(cpu.values()))
     counts["step_seconds"], counts["step_cpu_seconds"] = wall, cpu
-    return replace(r, parent=loc.triangle_order[r.parent], mid_a=mid_a, mid_b=mid_b, counts=counts)
+    parent = r.parent  # (sparse_cycles' own array: mapped in place, one threaded pass)
+    run_all([
+        (lambda lo=lo, hi=hi: _k.map_through_into(parent, loc.triangle_order, lo, hi))
+        for lo, hi in row_ranges(len(parent), threads.THREAD_MIN_ROWS)
+    ])
+    return replace(r, parent=parent, mid_a=mid_a, mid_b=mid_b, counts=counts)
 
 
 def sparse_hamiltonian(
@@ -2372,7 +2411,11 @@ def sparse_hamiltonian(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)
     )
     lengths = r.lengths
-    position = cycle_positions(lengths)
+    if len(lengths) == 1:  # (one cycle: 0, 1, ... numbered on both cores in the page reserve, no fresh
+        position = fresh(int(lengths[0]), np.int64)  # 12 MB faulted at 1.5 M as ``np.arange`` does)
+        _row_pass(lambda lo, hi_: _k.iota_into(position, lo, hi_), len(position))
+    else:
+        position = cycle_positions(lengths)
     report = count_report(r, n, m)
     h = HamiltonianMesh(
         points=r.points,
@@ -2383,7 +2426,9 @@ def sparse_hamiltonian(
         position=position,
         parent=r.parent,
         kind=r.kind,
-        triangle_attributes=mesh.triangle_attributes[r.parent],
+        # (no attribute columns: no gather of 1.5 M empty rows)
+        triangle_attributes=mesh.triangle_attributes[r.parent] if np.shape(mesh.triangle_attributes)[1:] != (0,)
+        else np.zeros((len(r.parent), 0)),
         report=report,
     )
     return h, r.claim

@@ -336,7 +336,11 @@ def _certify(
         claim = np.asarray(twin_claim)
         if claim.dtype != pdt or not claim.flags.c_contiguous:  # (incircle's int32 claim: no copy)
             claim = fresh(claim.shape, pdt)  # (sparse's int64 claim, narrowed: a reserve's pages if any)
-            np.copyto(claim, twin_claim, casting="unsafe")
+            wide = np.asarray(twin_claim)
+            run_all([  # (one range per core: numpy's cast releases the GIL)
+                (lambda lo=lo, hi=hi: np.copyto(claim[lo:hi], wide[lo:hi], casting="unsafe"))
+                for lo, hi in row_ranges(len(claim), threads.THREAD_MIN_ROWS)
+            ])
     streamed = rows is not None
     if rows is None:
         used = np.zeros(n, dtype=np.bool_)
@@ -463,7 +467,11 @@ def _compare_with_input(
     n_in = len(facts.points)
     if n < n_in:
         _fail(f"the output has {n} points, fewer than the input's {n_in}")
-    moved = np.flatnonzero((pts[:n_in] != facts.points).any(axis=1))
+    # (one equality pass, SIMD, no temporaries; the row-wise search only on failure:
+    # 2 ms against 17-23 ms at 0.77 M points)
+    moved = [] if np.array_equal(pts[:n_in], facts.points) else np.flatnonzero(
+        (pts[:n_in] != facts.points).any(axis=1)
+    )
     if len(moved):
         i = int(moved[0])
         _fail(f"input point {i} {facts.points[i].tolist()} is not kept unchanged (output has {pts[i].tolist()})")

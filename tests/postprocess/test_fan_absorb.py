@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import hammesh
@@ -90,6 +90,10 @@ def _flag(size: float, width: float, arm: float, y0: float, arm2: float) -> hamm
     arm2=st.one_of(st.just(0.0), st.floats(0.2, 1.5)),
 )
 def test_absorbing_fans_keep_the_cover_a_cover(size, width, arm, y0, arm2) -> None:
+    # the arms inside their side, clear of the square's corners: an arm flush with a
+    # corner (size 0.3, width 0.12, y0 0.2) leaves a sliver Triangle refines without
+    # end at 30 degrees (out of memory after ~20 GB)
+    assume(0.05 * size < y0 * size - 0.5 * width and y0 * size + 0.5 * width < 0.95 * size)
     mesh = hammesh.quality_mesh(_flag(size, width, arm, y0, arm2), min_angle=30)
     cover, got, amin = _fans_on(mesh)
     pts, tri, tw, con, cov2, amin_p, orig_of, is_fan, n_fan = got

@@ -141,8 +141,10 @@ def test_pinned_output_edges_from_parents_equal_the_key_search(name: str, monkey
     seen = []
     real = ik.pinned_output_edges
 
-    def spy(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b):
-        got = real(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b)
+    def spy(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, **given):
+        # (sparse mode hands in the kept rows' entries from its gather, ``rows`` the new ones:
+        # the whole array is compared, so both halves are checked)
+        got = real(out, parent, partner, tri, twin, con, first_mid, mid_a, mid_b, **given)
         seen.append((got.copy(), _pinned_by_keys(out, tri, twin, con, mid_a, mid_b, first_mid, int(out.max()) + 1)))
         return got
 
@@ -251,8 +253,8 @@ def test_claim_from_the_input_twins_equals_a_full_matching(name: str, monkeypatc
     seen = []
     real = sparse._k.rows_in_cycle_order
 
-    def spy(*args):
-        got = real(*args)
+    def spy(*args, **kw):
+        got = real(*args, **kw)
         out, kind, claim = got[0], got[3], got[6]
         # (copied: the improvement flips change the rows and the claim in place afterwards)
         seen.append((claim.copy(), half_edge_twins(out, int(out.max()) + 1), (kind != 3).sum()))
@@ -467,3 +469,27 @@ def test_bench_sparse_angles_prints_the_bounds_and_checks_them() -> None:
             assert (bounds[1] == "ok") == (min_out >= min(goal, float(join)) - 0.005)
     assert any(x.strip().startswith("... >= min(that, join bound)") for x in lines)
     assert any(x.startswith("A at 87 triangles") for x in lines)
+
+
+@pytest.mark.parametrize("name, max_area", [("face", None), ("A", None), ("square_circle_hole", 0.003)])
+def test_improvement_worked_out_ahead_on_both_cores_gives_the_same_mesh(name: str, max_area, monkeypatch) -> None:
+    """The improvement step's tries and moves decided ahead on two cores (``failing_flips``,
+    ``smooth_steiner``'s ``_judge_points_into``), then taken by the serial loops where their
+    rows are unchanged, give the mesh of the serial loops alone, flip for flip and move for
+    move (a mesh where both flips and moves happen, so the ahead work is used and overruled)."""
+    from hammesh.postprocess import sparse
+
+    m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=max_area)
+    monkeypatch.setattr(threads, "cores", lambda: 2)  # (two ranges even on a one-core runner)
+    monkeypatch.setattr(sparse, "IMPROVE_MIN_ROWS", 10**9)
+    monkeypatch.setattr(sparse, "SMOOTH_MIN_POINTS", 10**9)
+    serial = hammesh.hamiltonian(m, mode="sparse")
+    monkeypatch.setattr(sparse, "IMPROVE_MIN_ROWS", 1)
+    monkeypatch.setattr(sparse, "SMOOTH_MIN_POINTS", 1)
+    ahead = hammesh.hamiltonian(m, mode="sparse")
+    assert serial.report["improvement_flips"] > 0 and serial.report["steiner_moved"] > 0
+    for key in ("improvement_flips", "steiner_moved", "below_parent_rule"):
+        assert ahead.report[key] == serial.report[key]
+    for a, b in ((ahead.points, serial.points), (ahead.triangles, serial.triangles), (ahead.kind, serial.kind),
+                 (ahead.parent, serial.parent), (ahead.components, serial.components)):
+        np.testing.assert_array_equal(a, b)
