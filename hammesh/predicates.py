@@ -15,10 +15,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["orient", "orient_points", "orient_many", "orient_rows"]
+__all__ = ["orient", "orient_points", "orient_many", "orient_rows", "ERRBOUND"]
 
 _SPLITTER = 134217729.0  # 2**27 + 1
-_ERRBOUND = 3.3306690738754716e-16  # (3 + 16 eps) eps
+#: Shewchuk's ``ccwerrboundA``: a 2x2 orientation determinant ``left - right`` computed in
+#: floating point has the right sign when its magnitude exceeds ``ERRBOUND * (|left| + |right|)``.
+ERRBOUND = 3.3306690738754716e-16  # (3 + 16 eps) eps
 
 
 @njit(cache=True, inline="always")
@@ -72,7 +74,7 @@ def orient(ax, ay, bx, by, cx, cy):
     detleft = (ax - cx) * (by - cy)
     detright = (ay - cy) * (bx - cx)
     det = detleft - detright
-    bound = _ERRBOUND * (abs(detleft) + abs(detright))
+    bound = ERRBOUND * (abs(detleft) + abs(detright))
     if det > bound:
         return 1
     if -det > bound:

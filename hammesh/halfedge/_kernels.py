@@ -30,6 +30,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from hammesh import threads
+from hammesh.predicates import ERRBOUND, orient_points
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
@@ -129,9 +130,13 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
-        cr = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1]) - (
-            points[b, 1] - points[a, 1]
-        ) * (points[c, 0] - points[a, 0])
+        left = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1])
+        right = (points[b, 1] - points[a, 1]) * (points[c, 0] - points[a, 0])
+        cr = left - right
+        if abs(cr) <= ERRBOUND * (abs(left) + abs(right)):
+            # the rounded sign is in doubt (a sliver): decide it exactly, as the certificate
+            # does; a float 0 here refused a valid counter-clockwise triangle of Triangle's
+            cr = float(orient_points(points, a, b, c))
         if (a == b or b == c or c == a or cr == 0.0) and bad < 0:
             bad = t
         if cr < 0.0:
