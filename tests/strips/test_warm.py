@@ -57,3 +57,33 @@ def test_the_grid_goes_through_both_halves_in_both_modes():
         s = encode_in_halves(points, triangles, RESTART_INDEX, True, 1, finish)
         assert s is not None and s.n_strips >= 2  # the halves' parts, joined by a restart
         assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(triangles)
+
+
+def test_the_first_large_encoding_of_each_mode_loads_its_kernels_ahead_once(monkeypatch):
+    """encode() starts warm.prepare on a thread for the first two-halves call of each mode in a
+    process (fast and default apart), never again, and never when one core is allowed."""
+    from hammesh import threads
+    from hammesh.mesh import Mesh
+    from hammesh.strips import encode, warm
+    from hammesh.strips.halves import HALVES_FROM
+
+    enc = sys.modules["hammesh.strips.encode"]
+    calls = []
+    monkeypatch.setattr(enc, "_LOADING", set())
+    monkeypatch.setattr(warm, "prepare", lambda background=True, fast=False: calls.append((background, fast)))
+    side = int(np.ceil(np.sqrt(HALVES_FROM / 2)))
+    mesh = Mesh(*quad_grid(side))
+    small = Mesh(*quad_grid(PREPARE_GRID))
+    previous = threads.limit(1)
+    try:
+        encode(mesh, fast=True)  # one thread: no halves, nothing loaded ahead
+    finally:
+        threads.limit(previous)
+    encode(small, fast=True)  # below HALVES_FROM: the one-thread path
+    assert calls == []
+    if threads.cores() < 2:
+        return
+    for fast in (True, True, False, False, True):
+        s = encode(mesh, fast=fast)
+        assert s.n_triangles == len(mesh.triangles)
+    assert calls == [(True, True), (True, False)]
