@@ -179,7 +179,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     draws = None
     if finish is not None:
         pillows = int(count_pillows(rec))
-        twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
+        twin = rec[:, REC_TWIN : REC_TWIN + 3].astype(np.int64).reshape(-1)  # one copy (C order), not two
         indices, local, n_strips, n_swaps = finish(pts, part.astype(np.int64), rec, twin)
         max_index = -1  # the writer checked the restart index itself
     else:

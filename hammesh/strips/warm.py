@@ -6,7 +6,9 @@ one compiler lock): ~20-35 ms for the two-halves encoder's seven kernels at 1M t
 paid by the first ``encode`` (docs/strips.md, session 13).  :func:`prepare` encodes a small
 grid through the same two-halves path (both modes), so a caller that starts it before
 reading its mesh finds the kernels loaded.  Explicit, not an import side effect: a thread
-started by ``import`` would run numba's lazy imports beside the caller's own.
+started by ``import`` would run numba's lazy imports beside the caller's own.  ``encode``
+itself starts it at its first two-halves call of each mode in a process (the kernels then
+load while the halves copy and pair the mesh; ``hammesh.strips.encode._load_ahead``).
 """
 
 from __future__ import annotations
