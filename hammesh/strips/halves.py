@@ -229,14 +229,18 @@ def _plain_arrays(points, triangles) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 def encode_in_halves(
-    points, triangles, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
+    points, triangles, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None,
+    pooled: bool = True,
 ) -> GLStrip | None:
     """A restart-joined buffer from two halves on two threads, or ``None``.
 
     ``finish``: ``None`` for ``encode(fast=True)``'s one-pass greedy strips, else the
     default mode's encoder of one half (see :func:`_encode_half`).  ``clock``: a dict
     that receives each half's thread CPU seconds (``"first"`` on the calling thread,
-    ``"second"`` on the other), for benchmarks on a loaded machine.
+    ``"second"`` on the other), for benchmarks on a loaded machine.  ``pooled``: take the
+    work arrays from :mod:`hammesh.strips.scratch`'s pool and give them back (``False``:
+    arrays of its own; :func:`hammesh.strips.warm.prepare`'s small grid, which must not
+    take a large call's kept arrays from under it).
 
     ``points``, ``triangles``: the mesh's arrays as given.  Only the cheap checks run
     here (shapes, integer rows; ``float64`` / ``int64`` contiguous copies where needed);
@@ -259,6 +263,8 @@ def encode_in_halves(
     m, n = len(tri), len(pts)
     if records_dtype(m, n) is not np.int32:
         return None
+    if not pooled:  # work arrays of its own, the pool left alone
+        return _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, Scratch({}))
     scratch = borrow()
     try:
         return _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch)

@@ -39,8 +39,10 @@ def quad_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
 def _load(fast: bool) -> None:
     points, triangles = quad_grid(PREPARE_GRID)
     R = RESTART_INDEX
-    # swap weight 1: any int will do, numba compiles (and loads) one machine code per type
-    encode_in_halves(points, triangles, R, True, 1, None if fast else half_encoder(R))
+    # swap weight 1: any int will do, numba compiles (and loads) one machine code per type.
+    # Not from the work arrays' pool: encode() starts this beside a large call, which would
+    # then find the pool emptied by the grid and fault in ~140 MB of new arrays at 1M
+    encode_in_halves(points, triangles, R, True, 1, None if fast else half_encoder(R), pooled=False)
 
 
 def prepare(background: bool = True, fast: bool = False) -> threading.Thread | None:

@@ -87,3 +87,18 @@ def test_the_first_large_encoding_of_each_mode_loads_its_kernels_ahead_once(monk
         s = encode(mesh, fast=fast)
         assert s.n_triangles == len(mesh.triangles)
     assert calls == [(True, True), (True, False)]
+
+
+
+def test_prepare_never_takes_the_work_arrays_pool(monkeypatch):
+    """prepare's grid brings its own work arrays: encode starts prepare beside a large call,
+    which would find the pool emptied (and fault in new arrays) if the grid borrowed it."""
+    from hammesh.strips import halves
+    from hammesh.strips.warm import prepare
+
+    def refuse():
+        raise AssertionError("prepare borrowed the pool")
+
+    monkeypatch.setattr(halves, "borrow", refuse)
+    for fast in (True, False):
+        prepare(background=False, fast=fast)
