@@ -65,8 +65,11 @@ _Half = namedtuple(
 
 #: Triangles per cell (about) of the grid a half's rows are copied in (:func:`vertex_cells`).
 #: At 1M triangles on the development machine 1k-16k all gave greedy strips ~20% faster than
-#: Triangle's order; larger cells cost fewer index gaps in the second pass of the copy.
-CELL_TRIANGLES = 16_384
+#: Triangle's order; larger cells cost fewer index gaps in the second pass of the copy.  Over
+#: the whole two-halves call (critical path in thread CPU, A/B in one process, session 15),
+#: 4,096 took 0.968-0.975 of 16,384's time at 1M (three runs of 10-14 rounds; 8,192 0.978-0.993,
+#: 65,536 1.047, 262,144 1.093) and the same at 100k, for +0.0001-0.0002 indices per triangle.
+CELL_TRIANGLES = 4_096
 
 #: :func:`vertex_cells`'s result: each vertex's cell ``label`` (``(n,) uint16``, ``int32``
 #: beyond 65,535 cells: half the bytes for the rows pass to look up), the first
