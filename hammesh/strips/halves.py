@@ -10,7 +10,7 @@ pairing and the greedy strips read at random), its face census, its edge pairing
 straight into triangle records (:func:`~hammesh.strips._halves_kernels.pair_records_into`),
 the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`)
 and the round-trip proof of its own part of the buffer against the input's rows
-(:func:`~hammesh.strips._decode_kernels.check_claimed_part`), so the proof of one half
+(:func:`~hammesh.strips._decode_kernels.claimed_copy_status`), so the proof of one half
 overlaps the encoding of the other.  The two buffers are joined by one restart index.
 
 A plane cuts few edges (0.18% of the dual edges of a q30 square at 100k triangles,
@@ -34,7 +34,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
-from hammesh.strips._decode_kernels import check_claimed_part
+from hammesh.strips._decode_kernels import claimed_copy_status
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
 from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
 from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
@@ -53,7 +53,7 @@ HALVES_FROM = 50_000
 #: one-thread path instead.
 _SMALLEST_HALF = 1 / 8
 
-#: One half's result: its rows (input numbers) in draw order, its part of the buffer, the
+#: One half's result: its rows (numbers in its copy) in draw order, its part of the buffer, the
 #: greedy strip's figures, and what the join needs (pairing buckets, unpaired half-edges,
 #: census counts, proof status).  ``failed``: a reason to take the one-thread path.
 _Half = namedtuple(
@@ -159,7 +159,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     # sized for any split, about half of each written (``written``: faulted in at once)
     rows = take(f"{side}.rows", m, np.int64, written=1 / 2)
     part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # int32 records (checked by the caller): half the bytes
-    # the copy's scratch is reused afterwards (the census flags, the claimed order)
+    # the copy's scratch is reused afterwards (the census flags, the inverted claim)
     stash = take(f"{side}.stash", m, np.int64, written=1 / 2)
     lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
     k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
@@ -194,12 +194,15 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
         pillows = pillow_rows(rec, g.order, g.starts)
         draws = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
-    # mode "clip": numpy buffers ``out`` in its default mode; the claim is proved, not trusted
-    order = np.take(rows, local, out=stash[:k], mode="clip")
     proof = -1
     if seen is not None:
-        proof = int(check_claimed_part(tri, indices, restart, True, order, seen, draws)[0])
-    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
+        # the claim: draw j is input row rows[local[j]]; proved, not trusted, in the copy's
+        # order (the copy's scratch ``stash`` holds the inverted claim)
+        if draws is None or len(draws) < 3 * (len(local) + 1):
+            draws = np.empty(3 * (len(local) + 1), np.int32)
+        proof = int(claimed_copy_status(tri, indices, restart, True, rows, local, seen,
+                                        draws[: 3 * (len(local) + 1)].reshape(-1, 3), stash[:k])[0])
+    return _Half(None, local, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
 

@@ -27,7 +27,7 @@ from hammesh.strips import _decode_kernels, _dual_kernels, _greedy_strip_kernels
 from hammesh.strips.warm import prepare
 kernels = [_halves_kernels.vertex_cells_into, _halves_kernels.rows_of_cells_into, _dual_kernels.face_flags,
            _halves_kernels.pair_records_into, _greedy_strip_kernels._greedy_strip_into,
-           _decode_kernels.claimed_part_status, _halves_kernels.shared_edges]
+           _decode_kernels.claimed_copy_status, _halves_kernels.shared_edges]
 before = [len(k.signatures) for k in kernels]
 t = prepare(fast=True)
 t.join()
