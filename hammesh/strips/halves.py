@@ -37,7 +37,13 @@ from hammesh.errors import InvalidOptionError
 from hammesh.strips._decode_kernels import claimed_copy_status
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
 from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
-from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
+from hammesh.strips._halves_kernels import (
+    pair_records_into,
+    row_cells_into,
+    rows_of_cells_into,
+    shared_edges,
+    vertex_cells_into,
+)
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
 from hammesh.strips.gl import GLStrip, verify_gl_strip
 from hammesh.strips.scratch import Scratch, borrow
@@ -143,8 +149,10 @@ def _timed_half(clock, key, *args):
             clock[key] = time.thread_time() - t
 
 
-def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, finish=None, whole=None) -> _Half:
+def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, seen, stop, scratch, finish=None, whole=None) -> _Half:
     """One half: rows in cell order, census, pairing, strips, proof of its part (``seen`` shared).
+
+    ``row_label``: each input row's cell (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
 
     ``finish``: ``None`` for the one-pass greedy strips, or the encoder
     ``(points, rows, records, twin) -> (indices, order, n_strips, n_swaps)`` of the
@@ -162,10 +170,9 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     # the copy's scratch is reused afterwards (the census flags, the inverted claim)
     stash = take(f"{side}.stash", m, np.int64, written=1 / 2)
     lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
-    k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
-    if k < 0 or stop[0]:
-        stop[0] = True
-        return _failed("a vertex index out of range" if k == -2 else "a row repeats a vertex")
+    k = int(rows_of_cells_into(tri, row_label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
+    if stop[0]:
+        return _failed("the other half failed")
     if k < _SMALLEST_HALF * m:
         stop[0] = True
         return _failed("unbalanced")
@@ -252,7 +259,7 @@ def encode_in_halves(
     here (shapes, integer rows; ``float64`` / ``int64`` contiguous copies where needed);
     the kernels that first read every point and row check that the coordinates are
     finite (:func:`~hammesh.strips._halves_kernels.vertex_cells_into`) and that every
-    index is in range (:func:`~hammesh.strips._halves_kernels.rows_of_cells_into`, before
+    index is in range (:func:`~hammesh.strips._halves_kernels.row_cells_into`, before
     it uses one): the passes :func:`hammesh.halfedge.mesh_arrays` would spend on them
     (~5 ms at 1M triangles, on the critical path) are saved.  Anything wrong gives
     ``None``, and the one-thread path's :func:`~hammesh.halfedge.mesh_arrays` names the
@@ -291,8 +298,17 @@ def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) ->
         cells = vertex_cells(pts, m, pool=pool)
         if not cells.finite:
             return None
-        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, scratch, finish)
-        a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, scratch, finish,
+        # each row's cell, half the rows on each thread (each half then scans the labels,
+        # not all the input rows); a bad row (an index out of range, a repeated vertex):
+        # the one-thread path names it
+        row_label = scratch.take("row_label", m, cells.label.dtype)
+        mid = m // 2
+        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:])
+        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid]), other.result()) < 0:
+            return None
+        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, 1, w_swap, restart, seen, stop,
+                             scratch, finish)
+        a = _timed_half(clock, "first", pts, tri, cells, row_label, 0, w_swap, restart, seen, stop, scratch, finish,
                         None if finish else whole)
         b = second.result()
     if a.failed or b.failed:
