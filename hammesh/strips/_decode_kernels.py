@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammesh.strips._numba import kernel, row
+from hammesh.strips._numba import kernel, loop_helper, row
 
 __all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "claimed_part_status",
-           "decode_draws_into", "first_wrong_draw", "claimed_copy_status"]
+           "decode_draws_into", "first_wrong_draw", "mark_drawn_row", "claimed_copy_status"]
 
 
 @kernel
@@ -152,22 +152,31 @@ def first_wrong_draw(tri, drawn, count, order, seen):
     """``(0, -1)`` if draw ``k`` is row ``order[k]`` with its winding for every ``k <
     count`` (each row marked in ``seen``, none twice), else ``(status, k)`` of the first
     that is not: 4 ``order[k]`` out of range or already seen, 1 a different triangle."""
-    m = tri.shape[0]
     for k in range(count):
-        t = order[k]
-        if t < 0 or t >= m:
-            return 4, k
-        r = row(t)  # in range: no negative-index wraparound (see _cover_kernels)
-        if seen[r]:
-            return 4, k
-        seen[r] = True
-        x = drawn[k, 0]
-        y = drawn[k, 1]
-        z = drawn[k, 2]
-        # -1 marks an index that does not fit: never a vertex, even of a row holding -1
-        if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[r, 0], tri[r, 1], tri[r, 2])):
-            return 1, k
+        status = mark_drawn_row(tri, drawn, k, order[k], seen)
+        if status != 0:
+            return status, k
     return 0, -1
+
+
+@loop_helper
+def mark_drawn_row(tri, drawn, k, t, seen):
+    """0 if draw ``k >= 0`` is row ``t`` of ``tri`` with its winding (``t`` then marked in
+    ``seen``), 4 if ``t`` is out of range or already seen, 1 if a different triangle."""
+    if t < 0 or t >= tri.shape[0]:
+        return 4
+    r = row(t)  # in range: no negative-index wraparound (see _cover_kernels)
+    if seen[r]:
+        return 4
+    seen[r] = True
+    j = row(k)
+    x = drawn[j, 0]
+    y = drawn[j, 1]
+    z = drawn[j, 2]
+    # -1 marks an index that does not fit: never a vertex, even of a row holding -1
+    if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[r, 0], tri[r, 1], tri[r, 2])):
+        return 1
+    return 0
 
 
 @kernel
@@ -205,23 +214,11 @@ def claimed_copy_status(tri, indices, restart, use_restart, rows, local, seen, d
         if inv[row(q)] >= 0:
             return 4, j
         inv[row(q)] = j
-    m = tri.shape[0]
     for i in range(k):
         j = inv[i]
         if j < 0:  # a copied row nobody claims: n < k, so another claim repeats (caught above)
             continue
-        t = rows[i]
-        if t < 0 or t >= m:
-            return 4, j
-        r = row(t)  # in range: no negative-index wraparound (see _cover_kernels)
-        if seen[r]:
-            return 4, j
-        seen[r] = True
-        jr = row(j)
-        x = drawn[jr, 0]
-        y = drawn[jr, 1]
-        z = drawn[jr, 2]
-        # -1 marks an index that does not fit: never a vertex, even of a row holding -1
-        if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[r, 0], tri[r, 1], tri[r, 2])):
-            return 1, j
+        status = mark_drawn_row(tri, drawn, j, rows[i], seen)
+        if status != 0:
+            return status, j
     return 0, -1

@@ -214,6 +214,18 @@ def _claimed_status_reference(tri, indices, restart, order):
     return (0, -1) if len(draws) == len(order) else (3, len(draws))
 
 
+def _faulty_claim(seed: int, corrupt: int):
+    """A grid or torus mesh, a random path cover's restart buffer and its claim, with
+    :func:`corrupt_claim`'s fault ``corrupt`` (none above 4): ``(mesh, dual, rng, order, idx, claim)``."""
+    m = grid_mesh(4, 3) if seed % 2 else torus_mesh(6, 4)
+    d = dual_mesh(m)
+    rng = np.random.default_rng(seed)
+    order, starts = random_path_cover(d.neighbor_triangles, rng)
+    s = gl_strip(d.triangles, d.twin, order, starts, join="restart")
+    idx, claim = corrupt_claim(s.indices, order, corrupt if corrupt <= 4 else 0, rng, len(m.points), RESTART_INDEX)
+    return m, d, rng, order, idx, claim
+
+
 @given(st.integers(0, 2**32 - 1), st.integers(0, 6))
 def test_claimed_part_in_two_passes_reports_the_first_wrong_draw(seed, corrupt):
     """check_claimed_part (decode pass, then the gather pass) gives the status and draw of
@@ -221,12 +233,7 @@ def test_claimed_part_in_two_passes_reports_the_first_wrong_draw(seed, corrupt):
     (6) that must not wrap onto a vertex."""
     from hammesh.strips._decode_kernels import check_claimed_part
 
-    m = grid_mesh(4, 3) if seed % 2 else torus_mesh(6, 4)
-    d = dual_mesh(m)
-    rng = np.random.default_rng(seed)
-    order, starts = random_path_cover(d.neighbor_triangles, rng)
-    s = gl_strip(d.triangles, d.twin, order, starts, join="restart")
-    idx, claim = corrupt_claim(s.indices, order, corrupt if corrupt <= 4 else 0, rng, len(m.points), RESTART_INDEX)
+    m, d, rng, order, idx, claim = _faulty_claim(seed, corrupt)
     if corrupt == 5:
         claim = claim[:-1]  # one draw more than claimed
     if corrupt == 6:
@@ -293,12 +300,7 @@ def test_proof_in_the_copys_order_decides_as_the_draw_order_proof(seed, corrupt)
     already drawn by the other part of the buffer, marked in the shared ``seen``)."""
     from hammesh.strips._decode_kernels import check_claimed_part, claimed_copy_status
 
-    m = grid_mesh(4, 3) if seed % 2 else torus_mesh(6, 4)
-    d = dual_mesh(m)
-    rng = np.random.default_rng(seed)
-    order, starts = random_path_cover(d.neighbor_triangles, rng)
-    s = gl_strip(d.triangles, d.twin, order, starts, join="restart")
-    idx, claim = corrupt_claim(s.indices, order, corrupt if corrupt <= 4 else 0, rng, len(m.points), RESTART_INDEX)
+    m, d, rng, order, idx, claim = _faulty_claim(seed, corrupt)
     tri = d.triangles.astype(np.int64)
     rows = rng.permutation(len(tri)).astype(np.int64)  # the copy: every row once, in some order
     where = np.empty_like(rows)
