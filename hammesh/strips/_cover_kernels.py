@@ -46,15 +46,25 @@ def queue_free_degrees(rec, seed_order, bucket, top):
     (empty: ``m - 1, ..., 0``, with no array of ``m`` to fill and read)."""
     m = rec.shape[0]
     top[:] = 0
-    for t in range(m):
-        rec[t, REC_SCRATCH] = (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
     given = seed_order.shape[0] > 0
+    if given:  # the degrees first: a seed order may name a row before its degree is known
+        for t in range(m):
+            rec[t, REC_SCRATCH] = _free_degree(rec, row(t))
     for i in range(m):
         t = row(seed_order[i] if given else m - 1 - i)
-        d = row(rec[t, REC_SCRATCH])
+        # no seed order: each row's degree when it is queued, in one pass over the records
+        # (two passes had been ~5% of the one-pass greedy strips at 1M triangles)
+        d = row(rec[t, REC_SCRATCH] if given else _free_degree(rec, t))
+        rec[t, REC_SCRATCH] = d
         j = top[d]
         bucket[d, row(j)] = t
         top[d] = j + 1
+
+
+@loop_helper
+def _free_degree(rec, t):
+    """Neighbours of row ``t`` (twins ``>= 0``); all free before the cover starts."""
+    return (rec[t, REC_TWIN] >= 0) + (rec[t, REC_TWIN + 1] >= 0) + (rec[t, REC_TWIN + 2] >= 0)
 
 
 @loop_helper

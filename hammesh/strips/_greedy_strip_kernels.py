@@ -19,7 +19,7 @@ The helpers it inlines (:func:`~hammesh.strips._cover_kernels.grow_both_ways`,
 :func:`~hammesh.strips._emit_kernels.write_path`) index with unsigned row numbers
 (:data:`~hammesh.strips._numba.row`).  numba's cache of this module does not notice
 an edit of theirs: change this file too (this note) when they change, or its cached
-kernel keeps the old code.
+kernel keeps the old code (session 15: ``queue_free_degrees`` takes each degree as it queues the row).
 """
 
 from __future__ import annotations

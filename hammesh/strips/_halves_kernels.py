@@ -2,7 +2,7 @@
 
 The mesh is cut by a plane through the median vertex (:mod:`hammesh.strips.halves`): a
 row goes to the side of its least vertex index.  Each thread copies its half's rows in
-the order of a grid of cells (:func:`vertex_cells_into`, :func:`rows_of_cells_into`), pairs their edges into triangle records
+the order of a grid of cells (:func:`vertex_cells_into`, :func:`row_cells_into`, :func:`rows_of_cells_into`), pairs their edges into triangle records
 (:func:`pair_records_into`) and runs the one-pass greedy strips on them; an edge with
 triangles on both sides is a boundary inside each half.  What the halves cannot see
 alone, the edges they share, is settled afterwards from the half-edges each half left
@@ -22,7 +22,7 @@ from hammesh.halfedge import bucket_half_edges_into
 from hammesh.strips._dual_kernels import REC_SCRATCH, REC_TWIN, REC_WIDTH
 from hammesh.strips._numba import CORNERS, kernel, loop_helper, row
 
-__all__ = ["vertex_cells_into", "rows_of_cells_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
+__all__ = ["vertex_cells_into", "row_cells_into", "rows_of_cells_into", "HalfPairing", "pair_records_into", "SharedEdges", "shared_edges", "edge_users"]
 
 
 #: :func:`pair_records_into`'s result: proper edges paired (-1: an edge of this half is
@@ -177,34 +177,48 @@ def vertex_cells_into(pts, axis, other, cut, lo_a, lo_b, h, n0, n1, ny, label):
 
 
 @kernel
-def rows_of_cells_into(tri, label, first, last, stash, lab, count, rows, half):
-    """Copy the rows whose least vertex has a cell label in ``[first, last)`` into ``half``
-    (their row numbers into ``rows``), cell after cell, in input order inside a cell;
-    returns how many, or -1 if one of them repeats a vertex, -2 if a row has a vertex
-    index outside ``[0, len(label))`` (``stash[0]`` is then that row; every index is
-    checked before it is used, so the caller needs no range pass of its own).
+def row_cells_into(tri, label, row_label):
+    """``row_label[t]``: the cell label of row ``t``'s least vertex index, for every row of
+    ``tri`` (the caller gives each thread a slice of the rows); returns 0, or -1 if a row
+    repeats a vertex, -2 if a row has a vertex index outside ``[0, len(label))`` (every
+    index is checked before it is used, so the caller needs no range pass of its own).
 
     The least vertex decides, so rows over the same three vertices (the two sides of a
-    double-sided face) stay together.  A counting sort: one pass finds the rows and
-    counts them per cell (``stash``, ``lab``: ``(m,)`` scratch; ``count``: ``(last -
-    first + 1,)`` zeros), the second copies them to their cell's place.  Triangle's
-    numbering is scattered; in cell order neighbouring triangles are near each other in
-    memory, which the pairing and the greedy strips read at random (at 1M triangles the
-    greedy strips ~20% faster, more than the second pass costs).
+    double-sided face) land in one cell.  Why a pass of its own: each half's copy
+    (:func:`rows_of_cells_into`) used to read all ``m`` input rows (24 bytes each) and
+    look up their labels to find its own; on two threads, each labelling half of the rows
+    once, the halves then scan ``m`` small labels instead (at 1M triangles that pass had
+    been ~4.4 ms of a half's ~80 ms, half of it the same work done twice; session 15).
     """
-    k = 0
     n = label.shape[0]
     for t in range(tri.shape[0]):
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
         if (a < 0) | (a >= n) | (b < 0) | (b >= n) | (c < 0) | (c >= n):
-            stash[0] = t
             return -2
         if a == b or b == c or c == a:
-            stash[0] = t
             return -1
-        l = label[row(min(a, min(b, c)))]  # checked in range: row() (see _cover_kernels)
+        row_label[t] = label[row(min(a, min(b, c)))]  # checked in range: row() (see _cover_kernels)
+    return 0
+
+
+@kernel
+def rows_of_cells_into(tri, row_label, first, last, stash, lab, count, rows, half):
+    """Copy the rows whose cell label (``row_label``, :func:`row_cells_into`) is in
+    ``[first, last)`` into ``half`` (their row numbers into ``rows``), cell after cell, in
+    input order inside a cell; returns how many.
+
+    A counting sort: one pass finds the rows and counts them per cell (``stash``, ``lab``:
+    ``(m,)`` scratch; ``count``: ``(last - first + 1,)`` zeros), the second copies them to
+    their cell's place.  Triangle's numbering is scattered; in cell order neighbouring
+    triangles are near each other in memory, which the pairing and the greedy strips read
+    at random (at 1M triangles the greedy strips ~20% faster, more than the second pass
+    costs).
+    """
+    k = 0
+    for t in range(row_label.shape[0]):
+        l = row_label[t]
         if first <= l < last:
             stash[row(k)] = t
             lab[row(k)] = l - first

@@ -443,6 +443,7 @@ def encode(
     if cache is None and join == "restart" and restart_index is not None and method in ("auto", "greedy"):
         if not isinstance(mesh, HamiltonianMesh) and not reorder_vertices:
             if len(mesh.triangles) >= HALVES_FROM and threads.cores() >= 2:
+                _load_ahead(fast)
                 # the arrays as given: the halves' kernels check them as they first read them
                 finish = None if fast else half_encoder(int(restart_index))
                 halves = encode_in_halves(mesh.points, mesh.triangles, int(restart_index), verify, _SWAP_WEIGHT, finish)
@@ -473,6 +474,29 @@ def encode(
     if verify:
         verify_gl_strip(rows, strip.indices, strip.restart_index, order=order, split=_middle_restart(strip, order, starts))
     return replace(strip, defects=dual.defects, dropped=_dropped_rows(mesh, dual))
+
+
+#: Modes (``fast``) whose two-halves kernels this process has started loading (:func:`_load_ahead`).
+_LOADING: set = set()
+
+
+def _load_ahead(fast: bool) -> None:
+    """The first two-halves encoding of a mode in a process: its later kernels loaded on a
+    thread (:func:`hammesh.strips.warm.prepare`) while the halves run their first steps.
+
+    Why: numba loads each kernel from its disk cache on the kernel's first call, behind one
+    lock; without this the halves wait for each load in turn as they reach it (~20-35 ms
+    of a 1M-triangle first call in the fast mode, more in the default mode, which has more
+    kernels).  The thread runs ahead on a small grid and loads them while the halves copy
+    and pair the mesh.  Nothing happens after the first call of a mode (or after
+    ``prepare``'s own thread was started by the caller: loading twice is waiting once).
+    """
+    if fast in _LOADING:
+        return
+    _LOADING.add(fast)
+    from hammesh.strips.warm import prepare  # warm imports this module
+
+    prepare(background=True, fast=fast)
 
 
 def _cover_and_write(mesh, dual: DualMesh, method: str, cache, join: str, restart_index, fast: bool, piece=PIECE_LENGTH):

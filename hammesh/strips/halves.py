@@ -10,7 +10,7 @@ pairing and the greedy strips read at random), its face census, its edge pairing
 straight into triangle records (:func:`~hammesh.strips._halves_kernels.pair_records_into`),
 the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`)
 and the round-trip proof of its own part of the buffer against the input's rows
-(:func:`~hammesh.strips._decode_kernels.check_claimed_part`), so the proof of one half
+(:func:`~hammesh.strips._decode_kernels.claimed_copy_status`), so the proof of one half
 overlaps the encoding of the other.  The two buffers are joined by one restart index.
 
 A plane cuts few edges (0.18% of the dual edges of a q30 square at 100k triangles,
@@ -34,10 +34,16 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
-from hammesh.strips._decode_kernels import check_claimed_part
+from hammesh.strips._decode_kernels import claimed_copy_status
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
 from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
-from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges, vertex_cells_into
+from hammesh.strips._halves_kernels import (
+    pair_records_into,
+    row_cells_into,
+    rows_of_cells_into,
+    shared_edges,
+    vertex_cells_into,
+)
 from hammesh.strips.defects import ZERO_AREA_RTOL, MeshDefects
 from hammesh.strips.gl import GLStrip, verify_gl_strip
 from hammesh.strips.scratch import Scratch, borrow
@@ -53,7 +59,7 @@ HALVES_FROM = 50_000
 #: one-thread path instead.
 _SMALLEST_HALF = 1 / 8
 
-#: One half's result: its rows (input numbers) in draw order, its part of the buffer, the
+#: One half's result: its rows (numbers in its copy) in draw order, its part of the buffer, the
 #: greedy strip's figures, and what the join needs (pairing buckets, unpaired half-edges,
 #: census counts, proof status).  ``failed``: a reason to take the one-thread path.
 _Half = namedtuple(
@@ -65,8 +71,11 @@ _Half = namedtuple(
 
 #: Triangles per cell (about) of the grid a half's rows are copied in (:func:`vertex_cells`).
 #: At 1M triangles on the development machine 1k-16k all gave greedy strips ~20% faster than
-#: Triangle's order; larger cells cost fewer index gaps in the second pass of the copy.
-CELL_TRIANGLES = 16_384
+#: Triangle's order; larger cells cost fewer index gaps in the second pass of the copy.  Over
+#: the whole two-halves call (critical path in thread CPU, A/B in one process, session 15),
+#: 4,096 took 0.968-0.975 of 16,384's time at 1M (three runs of 10-14 rounds; 8,192 0.978-0.993,
+#: 65,536 1.047, 262,144 1.093) and the same at 100k, for +0.0001-0.0002 indices per triangle.
+CELL_TRIANGLES = 4_096
 
 #: :func:`vertex_cells`'s result: each vertex's cell ``label`` (``(n,) uint16``, ``int32``
 #: beyond 65,535 cells: half the bytes for the rows pass to look up), the first
@@ -140,8 +149,10 @@ def _timed_half(clock, key, *args):
             clock[key] = time.thread_time() - t
 
 
-def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, finish=None, whole=None) -> _Half:
+def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, seen, stop, scratch, finish=None, whole=None) -> _Half:
     """One half: rows in cell order, census, pairing, strips, proof of its part (``seen`` shared).
+
+    ``row_label``: each input row's cell (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
 
     ``finish``: ``None`` for the one-pass greedy strips, or the encoder
     ``(points, rows, records, twin) -> (indices, order, n_strips, n_swaps)`` of the
@@ -156,13 +167,12 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     # sized for any split, about half of each written (``written``: faulted in at once)
     rows = take(f"{side}.rows", m, np.int64, written=1 / 2)
     part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # int32 records (checked by the caller): half the bytes
-    # the copy's scratch is reused afterwards (the census flags, the claimed order)
+    # the copy's scratch is reused afterwards (the census flags, the inverted claim)
     stash = take(f"{side}.stash", m, np.int64, written=1 / 2)
     lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
-    k = int(rows_of_cells_into(tri, cells.label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
-    if k < 0 or stop[0]:
-        stop[0] = True
-        return _failed("a vertex index out of range" if k == -2 else "a row repeats a vertex")
+    k = int(rows_of_cells_into(tri, row_label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
+    if stop[0]:
+        return _failed("the other half failed")
     if k < _SMALLEST_HALF * m:
         stop[0] = True
         return _failed("unbalanced")
@@ -179,7 +189,7 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
     draws = None
     if finish is not None:
         pillows = int(count_pillows(rec))
-        twin = np.ascontiguousarray(rec[:, REC_TWIN : REC_TWIN + 3]).reshape(-1).astype(np.int64)
+        twin = rec[:, REC_TWIN : REC_TWIN + 3].astype(np.int64).reshape(-1)  # one copy (C order), not two
         indices, local, n_strips, n_swaps = finish(pts, part.astype(np.int64), rec, twin)
         max_index = -1  # the writer checked the restart index itself
     else:
@@ -191,12 +201,15 @@ def _encode_half(pts, tri, cells, side, w_swap, restart, seen, stop, scratch, fi
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
         pillows = pillow_rows(rec, g.order, g.starts)
         draws = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
-    # mode "clip": numpy buffers ``out`` in its default mode; the claim is proved, not trusted
-    order = np.take(rows, local, out=stash[:k], mode="clip")
     proof = -1
     if seen is not None:
-        proof = int(check_claimed_part(tri, indices, restart, True, order, seen, draws)[0])
-    return _Half(None, order, indices, n_strips, n_swaps, max_index, start, keys, loose,
+        # the claim: draw j is input row rows[local[j]]; proved, not trusted, in the copy's
+        # order (the copy's scratch ``stash`` holds the inverted claim)
+        if draws is None or len(draws) < 3 * (len(local) + 1):
+            draws = np.empty(3 * (len(local) + 1), np.int32)
+        proof = int(claimed_copy_status(tri, indices, restart, True, rows, local, seen,
+                                        draws[: 3 * (len(local) + 1)].reshape(-1, 3), stash[:k])[0])
+    return _Half(None, local, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
 
@@ -229,20 +242,24 @@ def _plain_arrays(points, triangles) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 def encode_in_halves(
-    points, triangles, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None
+    points, triangles, restart: int, verify: bool, w_swap: int, finish=None, clock: dict | None = None,
+    pooled: bool = True,
 ) -> GLStrip | None:
     """A restart-joined buffer from two halves on two threads, or ``None``.
 
     ``finish``: ``None`` for ``encode(fast=True)``'s one-pass greedy strips, else the
     default mode's encoder of one half (see :func:`_encode_half`).  ``clock``: a dict
     that receives each half's thread CPU seconds (``"first"`` on the calling thread,
-    ``"second"`` on the other), for benchmarks on a loaded machine.
+    ``"second"`` on the other), for benchmarks on a loaded machine.  ``pooled``: take the
+    work arrays from :mod:`hammesh.strips.scratch`'s pool and give them back (``False``:
+    arrays of its own; :func:`hammesh.strips.warm.prepare`'s small grid, which must not
+    take a large call's kept arrays from under it).
 
     ``points``, ``triangles``: the mesh's arrays as given.  Only the cheap checks run
     here (shapes, integer rows; ``float64`` / ``int64`` contiguous copies where needed);
     the kernels that first read every point and row check that the coordinates are
     finite (:func:`~hammesh.strips._halves_kernels.vertex_cells_into`) and that every
-    index is in range (:func:`~hammesh.strips._halves_kernels.rows_of_cells_into`, before
+    index is in range (:func:`~hammesh.strips._halves_kernels.row_cells_into`, before
     it uses one): the passes :func:`hammesh.halfedge.mesh_arrays` would spend on them
     (~5 ms at 1M triangles, on the critical path) are saved.  Anything wrong gives
     ``None``, and the one-thread path's :func:`~hammesh.halfedge.mesh_arrays` names the
@@ -259,6 +276,8 @@ def encode_in_halves(
     m, n = len(tri), len(pts)
     if records_dtype(m, n) is not np.int32:
         return None
+    if not pooled:  # work arrays of its own, the pool left alone
+        return _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, Scratch({}))
     scratch = borrow()
     try:
         return _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch)
@@ -279,8 +298,17 @@ def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) ->
         cells = vertex_cells(pts, m, pool=pool)
         if not cells.finite:
             return None
-        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, 1, w_swap, restart, seen, stop, scratch, finish)
-        a = _timed_half(clock, "first", pts, tri, cells, 0, w_swap, restart, seen, stop, scratch, finish,
+        # each row's cell, half the rows on each thread (each half then scans the labels,
+        # not all the input rows); a bad row (an index out of range, a repeated vertex):
+        # the one-thread path names it
+        row_label = scratch.take("row_label", m, cells.label.dtype)
+        mid = m // 2
+        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:])
+        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid]), other.result()) < 0:
+            return None
+        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, 1, w_swap, restart, seen, stop,
+                             scratch, finish)
+        a = _timed_half(clock, "first", pts, tri, cells, row_label, 0, w_swap, restart, seen, stop, scratch, finish,
                         None if finish else whole)
         b = second.result()
     if a.failed or b.failed:

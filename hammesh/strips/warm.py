@@ -6,7 +6,9 @@ one compiler lock): ~20-35 ms for the two-halves encoder's seven kernels at 1M t
 paid by the first ``encode`` (docs/strips.md, session 13).  :func:`prepare` encodes a small
 grid through the same two-halves path (both modes), so a caller that starts it before
 reading its mesh finds the kernels loaded.  Explicit, not an import side effect: a thread
-started by ``import`` would run numba's lazy imports beside the caller's own.
+started by ``import`` would run numba's lazy imports beside the caller's own.  ``encode``
+itself starts it at its first two-halves call of each mode in a process (the kernels then
+load while the halves copy and pair the mesh; ``hammesh.strips.encode._load_ahead``).
 """
 
 from __future__ import annotations
@@ -37,8 +39,10 @@ def quad_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
 def _load(fast: bool) -> None:
     points, triangles = quad_grid(PREPARE_GRID)
     R = RESTART_INDEX
-    # swap weight 1: any int will do, numba compiles (and loads) one machine code per type
-    encode_in_halves(points, triangles, R, True, 1, None if fast else half_encoder(R))
+    # swap weight 1: any int will do, numba compiles (and loads) one machine code per type.
+    # Not from the work arrays' pool: encode() starts this beside a large call, which would
+    # then find the pool emptied by the grid and fault in ~140 MB of new arrays at 1M
+    encode_in_halves(points, triangles, R, True, 1, None if fast else half_encoder(R), pooled=False)
 
 
 def prepare(background: bool = True, fast: bool = False) -> threading.Thread | None:

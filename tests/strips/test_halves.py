@@ -18,7 +18,7 @@ from hammesh.strips import halves
 from hammesh.strips.encode import encode
 from hammesh.strips.gl import RESTART_INDEX, decode_gl_strip
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH
-from hammesh.strips._halves_kernels import pair_records_into, rows_of_cells_into, shared_edges
+from hammesh.strips._halves_kernels import pair_records_into, row_cells_into, rows_of_cells_into, shared_edges
 
 from .conftest import delaunay_mesh, oriented_set, square_mesh, torus_mesh
 from .defect_meshes import ALL as DEFECT_MESHES
@@ -197,12 +197,16 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
     m = _with_defects(delaunay_mesh(seed % 997, n), rng, kind)
     tri = m.triangles
     label = rng.integers(0, 6, len(m.points)).astype(np.int32)  # cells 0-2: side 0, 3-5: side 1
+    row_label = np.full(len(tri), -7, np.int32)
+    mid = int(rng.integers(len(tri) + 1))  # two threads' slices, anywhere
+    assert row_cells_into(tri[:mid], label, row_label[:mid]) == 0 == row_cells_into(tri[mid:], label, row_label[mid:])
+    assert np.array_equal(row_label, label[tri.min(1)])
     parts = []
     for first, last in ((0, 3), (3, 6)):
         rows = np.empty(len(tri), np.int64)
         part = np.empty((len(tri), 3), np.int64)
         count = np.zeros(last - first + 1, np.int64)
-        k = rows_of_cells_into(tri, label, first, last, np.empty(len(tri), np.int64), np.empty(len(tri), np.int32), count, rows, part)
+        k = rows_of_cells_into(tri, row_label, first, last, np.empty(len(tri), np.int64), np.empty(len(tri), np.int32), count, rows, part)
         # the rows of these cells, cell after cell, in input order inside a cell
         cell = label[tri.min(1)]
         mine = np.flatnonzero((cell >= first) & (cell < last))
@@ -308,3 +312,21 @@ def test_halves_count_double_sided_faces_as_the_census(seed, n_pillows, fast):
     assert s is not None
     assert oriented_set(decode_gl_strip(s.indices, s.restart_index)) == oriented_set(mesh.triangles)
     assert s.defects.double_sided == n_pillows == dual_mesh(mesh).defects.double_sided
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["repeat", "negative", "too_big"]))
+@settings(max_examples=30, deadline=None)
+def test_row_cells_refuse_a_bad_row_before_using_its_indices(seed, fault):
+    """-1 for a row repeating a vertex, -2 for an index outside the points; a good mesh 0."""
+    rng = np.random.default_rng(seed)
+    m = delaunay_mesh(seed % 997, 40)
+    label = rng.integers(0, 4, len(m.points)).astype(np.int32)
+    out = np.empty(len(m.triangles), np.int32)
+    assert row_cells_into(m.triangles, label, out) == 0
+    tri = m.triangles.copy()
+    t = int(rng.integers(len(tri)))
+    if fault == "repeat":
+        tri[t, 2] = tri[t, 0]
+    else:
+        tri[t, int(rng.integers(3))] = -1 if fault == "negative" else len(m.points)
+    assert row_cells_into(tri, label, out) == (-1 if fault == "repeat" else -2)

@@ -225,3 +225,20 @@ def test_tunnel_pre_filter_skips_only_moves_that_would_be_rejected(seed, n, lift
     a = improve_cover(d.triangles, d.twin, order, starts, 2, visit)
     b = improve_cover(d.triangles, d.twin, order, starts, 2, visit, skip_hopeless_tunnels=False)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 3))
+def test_cover_without_a_seed_order_is_the_oracle_with_seeds_last_first(seed, w_swap):
+    """No seed order (each degree taken as its row is queued, one pass over the records) is the
+    oracle's cover with seeds ``m - 1, ..., 0``, on int32 and int64 records."""
+    from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER
+
+    tri, n = _scattered_mesh(seed)
+    rec, twin = mesh_records(tri, n)
+    want = reference_greedy_cover(tri, twin, w_swap, np.arange(len(tri) - 1, -1, -1))
+    rec64 = np.empty(rec.shape, np.int64)
+    records_from_twin(tri, twin, rec64)
+    for r in (rec, rec64):
+        order, starts = greedy_path_cover(r, w_swap, NO_SEED_ORDER)
+        assert np.array_equal(order, want[0]) and np.array_equal(starts, want[1])
