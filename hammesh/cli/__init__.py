@@ -68,8 +68,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = _Parser(
         prog="hammesh",
         description="Guaranteed-quality triangle meshes whose triangles form one "
-        "Hamiltonian cycle (Arkin, Held, Mitchell, Skiena, Thm 2.4).",
-        epilog="Exit codes: 0 ok, 2 bad input or usage, 3 verification failed, 1 internal error.",
+        "Hamiltonian cycle of the dual graph, verified (Arkin, Held, Mitchell, Skiena: "
+        "Hamiltonian triangulations; sparse mode by default, Thm 2.4 as --mode incircle).",
+        epilog="Exit codes: 0 ok, 2 bad input or usage, 3 verification failed, 1 internal error, "
+        "141 stdout closed (outputs written).",
     )
     parser.add_argument("--version", action="version", version=f"hammesh {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidDomainError(f"{args.input}: --sequential is for polygons without holes; "
                                      "try --steiner path")
         T, Q = polygon.hamiltonian_triangulation_holes(pts, holes), np.concatenate(rings)
-        what = f"Hamiltonian triangulation with {len(holes)} holes"
+        what = f"Hamiltonian triangulation with {len(holes)} hole{'' if len(holes) == 1 else 's'}"
         if T is None:
             raise InvalidDomainError(f"{args.input}: the polygon with holes has no Hamiltonian "
                                      "triangulation (Thm 2.2); --steiner path adds Steiner points (Thm 2.3)")
