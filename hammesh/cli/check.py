@@ -50,6 +50,12 @@ def run(args: argparse.Namespace) -> int:
         runs, stats, triangles = _certify(mesh)
     except InvalidMeshError as exc:
         raise VerificationError(str(exc)) from None
+    except VerificationError as exc:
+        if _is_path(mesh.triangles):  # say what it is: `hammesh points`/`polygon` make paths
+            raise VerificationError(
+                f"{exc}; the triangles form a Hamiltonian path, not a cycle (it does not close), "
+                "as `hammesh points`/`polygon` make for some inputs") from None
+        raise
     if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
         raise VerificationError(
             f"min angle {stats['min_angle_output_deg']:.6f} deg is below the required {args.min_angle} deg"
@@ -88,3 +94,16 @@ def _certify(mesh: Mesh) -> tuple[np.ndarray, dict, np.ndarray]:
         if pair is not None:
             raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
     return runs, stats, triangles
+
+
+def _is_path(triangles: np.ndarray) -> bool:
+    """Whether every two consecutive triangles share an edge (two corners) but the last
+    and the first do not: a Hamiltonian path in file order."""
+    import numpy as np
+
+    t = np.sort(np.asarray(triangles, dtype=np.int64), axis=1)
+    if len(t) < 2:
+        return len(t) == 1
+    shared = (t[:-1, :, None] == t[1:, None, :]).any(axis=2).sum(axis=1)
+    wrap = np.isin(t[-1], t[0]).sum()  # (two triangles: the wrap would cross their one edge again)
+    return bool((shared >= 2).all() and (wrap < 2 or len(t) == 2))

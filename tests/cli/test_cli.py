@@ -183,3 +183,14 @@ def test_check_of_an_edited_mesh_fails_verification(tmp_path: Path, capsys, edit
     assert main(["check", str(tmp_path / "bad.vtu")]) == 3
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("hammesh: verification failed:")
+
+
+def test_check_of_a_hamiltonian_path_says_so(tmp_path: Path, capsys) -> None:
+    """`hammesh points` makes a path for points in convex position: check fails it (a
+    path is no cycle) and says it is a path."""
+    pts = tmp_path / "sq.txt"
+    pts.write_text("0 0\n1 0\n1 1\n0 1\n0.5 1.5\n")
+    assert main(["points", str(pts), "-o", str(tmp_path / "p.vtu")]) == 0
+    capsys.readouterr()
+    assert main(["check", str(tmp_path / "p.vtu")]) == 3
+    assert "form a Hamiltonian path, not a cycle" in capsys.readouterr().err
