@@ -20,6 +20,7 @@ from functools import cached_property
 from typing import Optional, Union
 
 import numpy as np
+from hammesh import params
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.strips import _dual_kernels
@@ -131,6 +132,7 @@ def dual_mesh(mesh: MeshLike) -> DualMesh:
     >>> d.neighbor_triangles.tolist(), d.n_components
     ([[-1, -1, 1], [0, -1, -1]], 1)
     """
+    params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh (e.g. hammesh.Mesh(points, triangles))")
     pts, tri = mesh_arrays(mesh.points, mesh.triangles, dims=(2, 3))
     n = len(pts)
     flags = np.empty(len(tri), np.int8)

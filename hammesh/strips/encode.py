@@ -33,7 +33,7 @@ import numpy as np
 
 from hammesh import params, threads
 from hammesh.errors import InvalidOptionError
-from hammesh.mesh import HamiltonianMesh
+from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.strips._cover_kernels import (
     LONGEST_CHAIN,
     SHORTEST_CHAIN,
@@ -433,8 +433,11 @@ def encode(
     >>> s.n_triangles == m.n_triangles, s.indices_per_triangle < 2
     (True, True)
     """
+    params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh (e.g. hammesh.Mesh(points, triangles))")
     if join not in JOINS:
         raise InvalidOptionError(f"join must be one of {', '.join(JOINS)}, got {join!r}")
+    if restart_index is not None:  # (an index buffer of uint32: the restart index is one too)
+        restart_index = params.integer("restart_index", restart_index, low=0, high=2**32 - 1)
     if cache is not None:
         cache = params.integer("cache", cache, low=3, high=1 << 16, what="FIFO entries")
     reorder_vertices = params.flag("reorder_vertices", reorder_vertices)

@@ -232,7 +232,12 @@ def decode_gl_strip(indices: np.ndarray, restart_index: int | None = None) -> np
     >>> decode_gl_strip([0, 1, 2, 2, 3, 7, 4, 5, 6], restart_index=7).tolist()
     [[0, 1, 2], [4, 5, 6]]
     """
-    idx = np.asarray(indices, dtype=np.int64).reshape(-1)
+    given = np.asarray(indices)
+    if given.size and given.dtype.kind not in "iu":  # (a float buffer would be truncated in silence)
+        raise InvalidOptionError(f"indices must be integers, got an array of {given.dtype}")
+    if given.size and given.min() < 0:
+        raise InvalidOptionError(f"indices must be >= 0, got {int(given.min())}")
+    idx = given.astype(np.int64, copy=False).reshape(-1)
     L = len(idx)
     if L < 3:
         return np.zeros((0, 3), dtype=np.int64)
