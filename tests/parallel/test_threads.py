@@ -231,6 +231,7 @@ def test_the_command_s_workers_reuse_big_blocks_across_tasks():
     """With the driver's one arena (``hammesh mesh --workers`` sets it before the
     cluster's thread), a local cluster's forked workers reuse a freed 100 MB block in
     their next tasks: no page faults after each worker's first."""
+    pytest.importorskip("distributed")  # (the [dask] extra; CI runs without it)
     code = (
         "import resource\n"
         "from hammesh.parallel import cluster\n"
