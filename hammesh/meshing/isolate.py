@@ -40,7 +40,7 @@ import numpy as np
 
 from hammesh.errors import HammeshError, MeshingError
 
-__all__ = ["run_isolated", "SharedArena", "SHARED_MEMORY"]
+__all__ = ["run_isolated", "SharedArena", "SHARED_MEMORY", "limit_memory", "MEMORY_FRACTION"]
 
 #: Whether results come back through shared memory (Linux and other systems with
 #: ``memfd_create`` and ``fork``); else they are pickled through a pipe.
@@ -134,6 +134,42 @@ def _allocate_ahead(fd: int, nbytes: int) -> None:
         pass
 
 
+#: The child's address space is capped at what it has at the start plus this share of the
+#: memory the machine has available (``MemAvailable``): a runaway refinement (Triangle
+#: splitting a sliver without end took ~20 GB on a 24 GB machine) then fails in the child
+#: ("out of memory") instead of taking the machine into swap or the OOM killer.
+MEMORY_FRACTION = 0.9
+
+
+def _proc_kb(path: str, key: str) -> int:
+    """A ``key:   <n> kB`` line of ``/proc/...`` in kB."""
+    with open(path) as f:
+        for line in f:
+            if line.startswith(key + ":"):
+                return int(line.split()[1])
+    raise ValueError(f"{key} not in {path}")
+
+
+def limit_memory(fraction: float | None = None) -> int | None:
+    """Cap this process's address space (``RLIMIT_AS``) at its size now plus ``fraction``
+    (default :data:`MEMORY_FRACTION`) of the available memory; the limit set, or None
+    where there is no ``/proc`` or ``resource`` (not Linux), or a tighter one is set."""
+    try:
+        import resource
+
+        share = MEMORY_FRACTION if fraction is None else fraction
+        limit = _proc_kb("/proc/self/status", "VmSize") * 1024 + int(share * _proc_kb("/proc/meminfo", "MemAvailable") * 1024)
+        soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+        if hard != resource.RLIM_INFINITY:
+            limit = min(limit, hard)
+        if soft != resource.RLIM_INFINITY and soft <= limit:
+            return None
+        resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+        return limit
+    except (ImportError, OSError, ValueError):
+        return None
+
+
 def _die_with_parent() -> None:
     """Make sure this child cannot outlive the process that forked it.
 
@@ -173,12 +209,15 @@ def _c_output(log: Any) -> str:
         return ""
 
 
-def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...], fd: int | None, alloc: bool) -> None:
+def _child(conn: Any, func: Callable[..., Any], args: tuple[Any, ...], fd: int | None, alloc: bool,
+           log: Any = None) -> None:
     _die_with_parent()
+    limit_memory()
     # the C library prints to file descriptors 1/2 directly: keep that out of the
-    # caller's terminal and use it to explain a failure instead
+    # caller's terminal and use it to explain a failure instead (``log``: the parent's
+    # file when forked, so that it can read why a child ended without an answer)
     faulthandler.disable()  # a crash is reported by the parent (signal name), not dumped
-    log = tempfile.TemporaryFile()
+    log = tempfile.TemporaryFile() if log is None else log
     os.dup2(log.fileno(), 1)
     os.dup2(log.fileno(), 2)
     try:
@@ -307,9 +346,10 @@ def run_isolated(
     # anonymous, freed with its last descriptor or mapping; inherited by the fork
     fd = os.memfd_create("hammesh-result", getattr(os, "MFD_CLOEXEC", 0)) if SHARED_MEMORY else None
     ahead = None
+    log = tempfile.TemporaryFile() if method == "fork" else None  # (the child's C output)
     try:
         recv, send = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_child, args=(send, func, args, fd, alloc), daemon=True)
+        proc = ctx.Process(target=_child, args=(send, func, args, fd, alloc, log), daemon=True)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)  # fork with threads (3.12+)
             proc.start()
@@ -344,7 +384,8 @@ def run_isolated(
                 except ValueError:
                     sig = f"signal {-code}"
                 raise MeshingError(f"{name} crashed ({sig}) on this input")
-            raise MeshingError(f"{name} exited (code {code}) without a result")
+            said = _c_output(log) if log is not None else ""
+            raise _failure(name, f"exited (code {code}) without a result" + (f": {said}" if said else ""))
         if msg[0] in ("shared", "ok"):
             # the child exits by itself now; its teardown (tens of ms for a big address
             # space) need not delay the caller: a daemon thread reaps it
@@ -363,8 +404,19 @@ def run_isolated(
             ahead.join()
         if fd is not None:
             os.close(fd)  # the mapping (if any) keeps the memory alive, nothing else
+        if log is not None:
+            log.close()
     if msg[0] == "ok":
         return msg[1]
     if msg[0] == "hammesh":
         raise msg[1]
-    raise MeshingError(f"{name} failed: {msg[1]}")
+    raise _failure(name, f"failed: {msg[1]}")
+
+
+def _failure(name: str, what: str) -> MeshingError:
+    """The error of a child that ended without a result; running out of memory (the
+    address-space cap of :func:`limit_memory`, or the machine's) is said as such."""
+    if "out of memory" in what.lower() or "memoryerror" in what.lower():
+        return MeshingError(f"{name} ran out of memory ({what}): the mesh asked for needs more than this "
+                            "machine has available (a larger max area; or a sliver Triangle refines without end)")
+    return MeshingError(f"{name} {what}")

@@ -295,3 +295,32 @@ def test_child_dies_with_its_killed_parent(tmp_path: Path) -> None:
             parent.wait()
         if pid_file.exists() and _running(int(pid_file.read_text())):
             os.kill(int(pid_file.read_text()), signal.SIGKILL)  # (only if the test failed)
+
+
+def _allocate_200_mb() -> int:
+    a = np.ones(200 * 2**20 // 8)  # (touched: a real allocation)
+    return int(a.size)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_AS and /proc: Linux")
+def test_the_child_s_memory_is_capped_and_running_out_is_said(monkeypatch):
+    """The child may use what it has plus a share of the available memory: a runaway
+    refinement fails there ("ran out of memory") instead of taking the machine down."""
+    assert run_isolated(_allocate_200_mb, (), name="test", timeout=60) == 200 * 2**20 // 8
+    monkeypatch.setattr(isolate, "MEMORY_FRACTION", 1e-4)  # (a few MB more than the child has)
+    with pytest.raises(hammesh.MeshingError, match="test ran out of memory"):
+        run_isolated(_allocate_200_mb, (), name="test", timeout=60)
+    # Triangle's own allocation failure (its triexit) is said the same way
+    square = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    with pytest.raises(hammesh.MeshingError, match="Triangle ran out of memory"):
+        hammesh.quality_mesh(square, min_angle=30, max_area=1e-6)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_AS and /proc: Linux")
+def test_limit_memory_sets_size_plus_a_share_of_the_available_memory():
+    code = ("import resource\nfrom hammesh.meshing.isolate import limit_memory\n"
+            "got = limit_memory(0.5)\nprint(got, resource.getrlimit(resource.RLIMIT_AS)[0], limit_memory(0.9))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    got, soft, looser = int(out[0]), int(out[1]), out[2]
+    assert got == soft > 0
+    assert looser == "None"  # (a looser cap is never set over a tighter one)
