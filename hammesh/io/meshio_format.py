@@ -197,20 +197,33 @@ def ply_data(mesh: Mesh | HamiltonianMesh) -> tuple[np.ndarray, np.ndarray, dict
     ``.ply``: the cycle fields and attributes (:func:`~hammesh.io.cell_data.triangle_cell_data`),
     the constrained edges as ``segment_edges``/``edge_marker`` (:mod:`hammesh.io.tags`),
     the vertex markers and the mesh's point data."""
-    points = np.asarray(mesh.points, dtype=np.float64)
-    points3 = points if points.shape[1] == 3 else np.column_stack([points, np.zeros(len(points))])
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     cell_data = triangle_cell_data(mesh)
     slots = tags.segment_slots(triangles, np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2))
     if slots is not None and len(slots.slot):
         cell_data[tags.SEGMENT_EDGES], cell_data[tags.EDGE_MARKER] = tags.edge_fields(mesh, slots)
-    point_data: dict[str, np.ndarray] = {}
+    return _points3(mesh), triangles, _written_point_data(mesh, {}), cell_data
+
+
+def _points3(mesh: Mesh | HamiltonianMesh) -> np.ndarray:
+    """The points as ``(n, 3)`` float64: 3D surfaces as they are, planar meshes with z = 0."""
+    points = np.asarray(mesh.points, dtype=np.float64)
+    return points if points.shape[1] == 3 else np.column_stack([points, np.zeros(len(points))])
+
+
+def _written_point_data(mesh: Mesh | HamiltonianMesh, point_data: dict[str, np.ndarray],
+                        components: tuple[int, ...] | None = None) -> dict[str, np.ndarray]:
+    """``point_data`` (a format's own fields) with the vertex markers (if any is nonzero)
+    and the mesh's point data (``components``: vectors of other sizes split, as Gmsh needs)."""
     vertex_markers = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64)
-    if vertex_markers.shape == (len(points),) and vertex_markers.any():
+    if vertex_markers.shape == (len(mesh.points),) and vertex_markers.any():
         point_data[tags.VERTEX_MARKER] = vertex_markers
-    for name, values in getattr(mesh, "point_data", {}).items():
+    carried = dict(getattr(mesh, "point_data", {}))  # the input's
+    if components is not None:
+        carried = split_components(carried, components)
+    for name, values in carried.items():
         point_data.setdefault(name, np.asarray(values))
-    return points3, triangles, point_data, cell_data
+    return point_data
 
 
 def _write_text(suffix: str, tmp: Path, mesh: Mesh | HamiltonianMesh, out: Any) -> None:
@@ -261,9 +274,7 @@ def _as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str, path: Path) -> Any:
         points3, triangles, point_data, cell_data = ply_data(mesh)
         return meshio.Mesh(points3, [("triangle", triangles.astype(np.int32))], point_data=point_data,
                            cell_data={k: [v] for k, v in cell_data.items()})
-    points = np.asarray(mesh.points, dtype=np.float64)
-    # 3D surfaces (hammesh.surface) as they are; planar meshes get z = 0
-    points3 = points if points.shape[1] == 3 else np.column_stack([points, np.zeros(len(points))])
+    points3 = _points3(mesh)  # (3D surfaces, hammesh.surface, as they are)
     triangles = np.asarray(mesh.triangles, dtype=np.int64)
     cells: list[tuple[str, np.ndarray]] = [("triangle", triangles)]
     cell_data: dict[str, list[np.ndarray]] = {}
@@ -274,15 +285,7 @@ def _as_meshio(mesh: Mesh | HamiltonianMesh, suffix: str, path: Path) -> Any:
             cells, cell_data, point_data, field_data = _gmsh_blocks(mesh, triangles, path)
         else:
             cells, cell_data = _vtk_cells(mesh, triangles)
-        vertex_markers = np.asarray(getattr(mesh, "vertex_markers", np.zeros(0)), dtype=np.int64)
-        if vertex_markers.shape == (len(points),) and vertex_markers.any():
-            point_data[tags.VERTEX_MARKER] = vertex_markers
-        carried = dict(getattr(mesh, "point_data", {}))  # the input's
-        if suffix == ".msh":
-            carried = split_components(carried, _GMSH_COMPONENTS)
-        for name, values in carried.items():
-            if name not in point_data:
-                point_data[name] = np.asarray(values)
+        point_data = _written_point_data(mesh, point_data, _GMSH_COMPONENTS if suffix == ".msh" else None)
     return meshio.Mesh(points3, cells, point_data=point_data, cell_data=cell_data, field_data=field_data)
 
 

@@ -42,7 +42,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError
 from hammesh.io.cell_data import join_components
-from hammesh.io.text_rows import write_rows
+from hammesh.io.text_rows import header_token, write_rows
 from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
 
 __all__ = ["read_ply", "write_ply", "PLY_TYPES"]
@@ -320,7 +320,7 @@ def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str]) -> tup
         values = values.reshape(rows, -1)
         c = values.shape[1]
         # a header token: no blanks, ASCII (a name that is not is written with '?')
-        token = "_".join(str(name).split()).encode("ascii", "replace").decode() or "_"
+        token = header_token(name).encode("ascii", "replace").decode()
         names = lambda t: [t] if c == 1 else [f"{t}_{j}" for j in range(c)]  # noqa: E731
         while token in taken or taken.intersection(names(token)):  # (x y z, another field's)
             token = f"input_{token}"

@@ -22,7 +22,7 @@ from typing import TextIO
 
 import numpy as np
 
-__all__ = ["write_rows", "format_rows", "row_template", "vertex_columns", "CHUNK_ROWS"]
+__all__ = ["write_rows", "format_rows", "row_template", "vertex_columns", "header_token", "CHUNK_ROWS"]
 
 #: Rows formatted per ``%`` operation: bounds the temporary Python objects (about
 #: 40 bytes a field) while keeping the per-block overhead negligible.
@@ -77,3 +77,9 @@ def vertex_columns(points: np.ndarray, colors: np.ndarray | None = None) -> list
     if colors is not None:
         columns += list(np.asarray(colors).reshape(len(points), -1).T)
     return columns
+
+
+def header_token(name: object) -> str:
+    """``name`` as one token of a text header (a ``.ele`` ``# attributes:`` comment, a PLY
+    property): white space becomes ``_``; an empty name is ``_``."""
+    return "_".join(str(name).split()) or "_"

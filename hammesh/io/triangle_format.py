@@ -39,7 +39,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, triangle_cell_data
-from hammesh.io.text_rows import write_rows
+from hammesh.io.text_rows import header_token, write_rows
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
@@ -90,7 +90,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     data = triangle_cell_data(mesh)
     attrs = np.asarray(mesh.triangle_attributes, dtype=np.float64).reshape(m, -1)
     given = tuple(getattr(mesh, "attribute_names", ()))
-    names = [_token(attribute_name(given, j)) for j in range(attrs.shape[1])]
+    names = [header_token(attribute_name(given, j)) for j in range(attrs.shape[1])]
     columns = [attrs[:, j] for j in range(attrs.shape[1])]
     if isinstance(mesh, HamiltonianMesh):
         # a user's column named like a cycle field keeps its data under another name
@@ -102,7 +102,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     for name, values in getattr(mesh, "point_data", {}).items():
         values = np.asarray(values, dtype=np.float64).reshape(n, -1)
         one = values.shape[1] == 1
-        point_names += [_token(name if one else f"{name}[{j}]") for j in range(values.shape[1])]
+        point_names += [header_token(name if one else f"{name}[{j}]") for j in range(values.shape[1])]
         point_columns += [values[:, j] for j in range(values.shape[1])]
     kind = "Hamiltonian mesh (triangles in cycle order)" if isinstance(mesh, HamiltonianMesh) else "mesh"
 
@@ -320,11 +320,6 @@ def _node_rows(tok: "_Tokens", n: int, n_attr: int, n_mark: int) -> tuple[np.nda
         if n_mark:
             vmarks[i] = tok.as_int(row[3 + n_attr], "boundary marker")
     return points, base, vmarks, values
-
-
-def _token(name: str) -> str:
-    """``name`` as one token of an ``# attributes:`` comment (white space -> ``_``)."""
-    return "_".join(str(name).split()) or "_"
 
 
 def _comment_names(tok: "_Tokens", k: int) -> list[str] | None:
