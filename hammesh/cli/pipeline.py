@@ -150,12 +150,6 @@ def run_pipeline(
         h = hamiltonian(mesh, mode=mode, keep=keep, tree=tree)
         steps.done()
         h.report["repairs"] = collect_repairs(source, mesh, h)
-        # never in silence: what the input brought that the output will not hold
-        not_carried = list(mesh.info.get("not_carried", []))
-        if outputs.mesh is not None:
-            not_carried += [f"not written: {x}" for x in unwritten_data(h, outputs.mesh)]
-        if not_carried:
-            h.report["not_carried"] = not_carried
         if strict and h.report["repairs"]:
             first = h.report["repairs"][0]
             more = len(h.report["repairs"]) - 1
@@ -164,6 +158,12 @@ def run_pipeline(
             )
         if finish is not None:
             h = finish(h)
+        # never in silence: what the input brought, or --parts made, that the output will not hold
+        not_carried = list(mesh.info.get("not_carried", []))
+        if outputs.mesh is not None:
+            not_carried += [f"not written: {x}" for x in unwritten_data(h, outputs.mesh)]
+        if not_carried:
+            h.report["not_carried"] = not_carried
         t0 = time.perf_counter()
         for directory in outputs.make_dirs:
             created_dirs += _make_dir(directory)

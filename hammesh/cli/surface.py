@@ -27,7 +27,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from hammesh.io import check_outputs, read_mesh, write_report
+    from hammesh.io import check_outputs, read_mesh, unwritten_data, write_report
     from hammesh.io.report import collect_repairs
     from hammesh.surface import SURFACE_SUFFIXES, surface_hamiltonian, write_surface
     from hammesh.surface.files import weld_surface
@@ -46,6 +46,12 @@ def run(args: argparse.Namespace) -> int:
         point_data={name: np.asarray(v)[welded.source] for name, v in mesh.point_data.items()},
     )
     h.report["repairs"] = collect_repairs(mesh, h)
+    # never in silence (as `hammesh mesh`): what the input brought that the output will not hold
+    not_carried = list(mesh.info.get("not_carried", []))
+    if args.output is not None:
+        not_carried += [f"not written: {x}" for x in unwritten_data(h, args.output)]
+    if not_carried:
+        h.report["not_carried"] = not_carried
     if args.output is not None:
         write_surface(h, args.output)
     if args.report is not None:
@@ -59,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
         f"min angle {r['min_angle_input_deg']:.2f} -> {r['min_angle_output_deg']:.2f} deg (3D, bound: half), "
         f"area change {r['area_change_rel']:.2e}"
     )
+    for note in r.get("not_carried", []):
+        print(f"note: {note}")
     for label, path in (("surface", args.output), ("report", args.report)):
         if path is not None:
             print(f"wrote {label}: {path}")

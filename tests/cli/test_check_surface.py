@@ -68,3 +68,14 @@ def test_check_welds_only_points_whose_data_agree(tmp_path: Path, capsys) -> Non
     capsys.readouterr()
     assert main(["check", str(out)]) == 0
     assert "in 3 Hamiltonian cycle(s)" in capsys.readouterr().out
+
+
+def test_surface_notes_the_point_data_a_format_cannot_hold(tmp_path: Path, capsys) -> None:
+    """`hammesh surface x.vtu -o y.obj` said nothing while dropping the point data."""
+    p, t = torus(12, 6, hole=True)
+    src = tmp_path / "t.vtu"
+    hammesh.write(hammesh.Mesh(p, t, point_data={"temperature": p[:, 0].copy()}), src)
+    assert main(["surface", str(src), "-o", str(tmp_path / "t.obj")]) == 0
+    assert "note: not written: point data 'temperature' (.obj holds geometry only)" in capsys.readouterr().out
+    assert main(["surface", str(src), "-o", str(tmp_path / "t.ply")]) == 0  # (.ply holds it)
+    assert "note:" not in capsys.readouterr().out

@@ -194,3 +194,11 @@ def test_check_of_a_hamiltonian_path_says_so(tmp_path: Path, capsys) -> None:
     capsys.readouterr()
     assert main(["check", str(tmp_path / "p.vtu")]) == 3
     assert "form a Hamiltonian path, not a cycle" in capsys.readouterr().err
+
+
+def test_parts_a_format_cannot_hold_are_noted(tmp_path: Path, capsys) -> None:
+    rep = tmp_path / "r.json"
+    assert main(["mesh", str(DATA / "A.poly"), "-q", "30", "-a", "0.05", "--parts", "4",
+                 "-o", str(tmp_path / "p.obj"), "--report", str(rep)]) == 0
+    assert "note: not written: cell data 'part' (.obj holds geometry only)" in capsys.readouterr().out
+    assert "not written: cell data 'part' (.obj holds geometry only)" in json.loads(rep.read_text())["not_carried"]
