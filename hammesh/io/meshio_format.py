@@ -707,6 +707,14 @@ _CYCLE_CELL_DATA = frozenset(CYCLE_FIELDS)
 _OWN_POINT_DATA = frozenset({tags.VERTEX_MARKER, NODE_ENTITY, "gmsh:dim_tags"})
 
 
+def _relabels(a: np.ndarray, b: np.ndarray) -> bool:
+    """True if ``a`` and ``b`` partition the rows alike (each a one-to-one relabelling of the other)."""
+    if a.shape != b.shape:
+        return False
+    pairs = np.unique(np.stack([a, b], axis=1), axis=0)
+    return len(pairs) == len(np.unique(a)) == len(np.unique(b))
+
+
 def _attribute_columns(
     cell_data: Any, origin: list[tuple[int, np.ndarray]], m: int, not_carried: list[str]
 ) -> tuple[np.ndarray, tuple[str, ...]]:
@@ -745,11 +753,14 @@ def _attribute_columns(
             named.append((key, values))
         else:
             named += [(f"{key}[{j}]", values[:, j]) for j in range(values.shape[1])]
-    # Gmsh's tags carry information only if they vary and repeat no other column (a
-    # hammesh .msh derives them from the first column, or writes 1 without attributes)
+    # Gmsh's tags carry information only if they vary and are no relabelling of another
+    # column (a hammesh .msh derives them from the first column, or writes 1 without
+    # attributes; a Gmsh file with one entity per physical group repeats the physical tags)
     others = [v for name, v in named if name not in _GMSH_COLUMNS.values()] + list(numbered.values())
+    physical = [v for name, v in named if name == "physical"]
     named = [(name, v) for name, v in named if name not in _GMSH_COLUMNS.values() or not (
-        np.all(v == v[0]) or any(np.array_equal(v, o) for o in others))]
+        np.all(v == v[0]) or any(np.array_equal(v, o) for o in others)
+        or (name == "geometrical" and any(_relabels(v, o) for o in others + physical)))]
     keys = sorted(numbered)
     if keys != list(range(len(keys))):  # a gap: keep them all, by name
         named = [(f"{ATTRIBUTE_PREFIX}{k}", numbered[k]) for k in keys] + named

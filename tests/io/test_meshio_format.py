@@ -455,6 +455,23 @@ def test_foreign_gmsh_file_markers_from_physical_tags(tmp_path):
     assert undirected(back.segments, back.segment_markers) == [(0, 1, 8), (1, 2, 8)]
 
 
+@pytest.mark.parametrize("geometrical, kept", [([7, 7, 9, 9], False), ([7, 8, 9, 9], True)])
+def test_foreign_gmsh_elementary_tags_kept_only_when_they_say_more(tmp_path, geometrical, kept):
+    # one elementary entity per physical group (Gmsh's usual file) repeats the physical
+    # tags under other numbers: no column of its own; entities that split a group do
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]])
+    triangles = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    out = meshio.Mesh(points, [("triangle", triangles)],
+                      cell_data={"gmsh:physical": [np.array([1, 1, 2, 2])],
+                                 "gmsh:geometrical": [np.array(geometrical)]})
+    meshio.write(tmp_path / "f.msh", out, file_format="gmsh22", binary=False)
+    back = meshio_format.read(tmp_path / "f.msh")
+    names = list(back.attribute_names)
+    assert "physical" in names
+    assert ("geometrical" in names) == kept
+    np.testing.assert_array_equal(back.triangle_attributes[:, names.index("physical")], [1, 1, 2, 2])
+
+
 def test_reader_without_marker_data_gives_zero_markers(tmp_path):
     points = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
     cells = [("triangle", np.array([[0, 1, 2]])), ("line", np.array([[0, 1]]))]
