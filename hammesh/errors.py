@@ -36,7 +36,19 @@ class InvalidMeshError(HammeshError, ValueError):
 
 
 class InvalidOptionError(HammeshError, ValueError):
-    """An option value is out of range or impossible (e.g. a min angle Triangle cannot reach)."""
+    """An option value is out of range or impossible (e.g. a min angle Triangle cannot reach).
+
+    ``option`` names the parameter (``"min_angle"``) when the message starts with
+    ``"<option>="`` (:func:`hammesh.params.invalid`): the command line then shows its
+    own option name there (``--min-angle=50 is not valid: ...``).
+    """
+
+    def __init__(self, message: str = "", *, option: str | None = None) -> None:
+        super().__init__(message)
+        self.option = option
+
+    def __reduce__(self):  # (keeps ``option`` across processes: Dask workers raise it)
+        return (type(self), self.args, {"option": self.option})
 
 
 class FileFormatError(HammeshError, ValueError):

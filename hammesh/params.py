@@ -44,7 +44,7 @@ def invalid(name: str, value: Any, must: str) -> InvalidOptionError:
         shown = f"<{value.__name__ if isinstance(value, type) else type(value).__name__}>"
     if len(shown) > 80:
         shown = shown[:77] + "..."
-    return InvalidOptionError(f"{name}={shown} is not valid: must be {must}")
+    return InvalidOptionError(f"{name}={shown} is not valid: must be {must}", option=name)
 
 
 def choice(name: str, value: Any, valid: Iterable[str]) -> str:

@@ -29,12 +29,13 @@ import os
 import signal
 import sys
 import warnings
+from typing import Any
 from collections.abc import Sequence
 
 from hammesh.cli import check, demo, mesh, partition, points, polygon, strip, surface
-from hammesh.errors import HammeshError, Terminated, VerificationError
+from hammesh.errors import HammeshError, InvalidOptionError, Terminated, VerificationError
 
-__all__ = ["main", "build_parser", "chosen_command", "with_bare_values", "one_line", "exit_fast", "fast_exit", "is_entry", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
+__all__ = ["main", "build_parser", "option_message", "LIBRARY_NAMES", "chosen_command", "with_bare_values", "one_line", "exit_fast", "fast_exit", "is_entry", "COMMANDS", "EXIT_OK", "EXIT_BAD_INPUT", "EXIT_VERIFICATION", "EXIT_INTERNAL"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_VERIFICATION = 0, 1, 2, 3
 #: stdout closed by its reader (128 + SIGPIPE, as the shell reports a program killed by it)
@@ -45,9 +46,40 @@ COMMANDS = {"mesh": mesh, "check": check, "strip": strip, "polygon": polygon, "p
             "partition": partition}
 
 
+#: Library parameter names whose command-line option has another name (``hammesh mesh
+#: --parts K`` calls ``partition(h, k=K)``).
+LIBRARY_NAMES = {"k": "parts"}
+
+
 class _Parser(argparse.ArgumentParser):
+    """One-line errors; knows its subcommands' parsers (``commands``)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.commands: dict[str, _Parser] = {}
+
+    def option_flag(self, dest: str) -> str | None:
+        """The longest flag of the option stored in ``dest`` (``--min-angle``), if any."""
+        # (argparse keeps every action, also those of argument groups, in ``_actions``)
+        for action in self._actions:
+            if action.dest == dest and action.option_strings:
+                return max(action.option_strings, key=len)
+        return None
+
     def error(self, message: str) -> None:  # one line, exit 2, as for any bad input
         self.exit(EXIT_BAD_INPUT, one_line(f"{self.prog}: error: {message}") + "\n")
+
+
+def option_message(exc: HammeshError, parser: _Parser, command: str | None) -> str:
+    """``exc``'s message with the library's parameter name (``min_angle=50 is not
+    valid``) replaced by the command's option (``--min-angle=50 is not valid``)."""
+    text = str(exc)
+    name = getattr(exc, "option", None)
+    sub = parser.commands.get(command or "")
+    if not isinstance(exc, InvalidOptionError) or not name or sub is None or not text.startswith(f"{name}="):
+        return text
+    flag = sub.option_flag(name) or sub.option_flag(LIBRARY_NAMES.get(name, ""))
+    return flag + text[len(name):] if flag else text
 
 
 def chosen_command(argv: Sequence[str] | None) -> str | None:
@@ -84,6 +116,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
             epilog=module.EXAMPLES,
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
+        parser.commands[name] = p
         if command in (name, "all"):
             module.add_args(p)
         p.set_defaults(_run=module.run)
@@ -232,8 +265,9 @@ def _main(argv: Sequence[str] | None) -> int:
     bare = getattr(COMMANDS.get(command), "BARE_VALUES", None)
     if bare:
         argv = with_bare_values(sys.argv[1:] if argv is None else argv, bare)
+    parser = build_parser(command)
     try:
-        args = build_parser(command).parse_args(argv)
+        args = parser.parse_args(argv)
     except Terminated as exc:
         return 128 + exc.signum
     try:
@@ -246,7 +280,7 @@ def _main(argv: Sequence[str] | None) -> int:
         _say(f"hammesh: verification failed: {exc}")
         return EXIT_VERIFICATION
     except HammeshError as exc:
-        _say(f"hammesh: error: {exc}")
+        _say(f"hammesh: error: {option_message(exc, parser, command)}")
         return EXIT_BAD_INPUT
     except BrokenPipeError as exc:
         if getattr(exc, "filename", None):  # an output file that is a pipe: a write error

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
+from hammesh import params
 from hammesh.errors import InvalidOptionError
 
 __all__ = ["MeshOptions", "MAX_MIN_ANGLE", "MAX_TRIANGLES", "format_number", "hull_area",
@@ -49,29 +49,12 @@ class MeshOptions:
 
     def __post_init__(self) -> None:
         if self.min_angle is not None:
-            a = _number("min_angle", self.min_angle)
-            if not 0.0 <= a <= MAX_MIN_ANGLE:
-                raise InvalidOptionError(
-                    f"min_angle must be between 0 and {MAX_MIN_ANGLE} degrees, got {a!r} "
-                    "(Triangle does not terminate above ~34 degrees)"
-                )
+            params.number("min_angle", self.min_angle, low=0.0, high=MAX_MIN_ANGLE,
+                          what="degrees; Triangle does not terminate above ~34")
         if self.max_area is not None:
-            a = _number("max_area", self.max_area)
-            if not a > 0.0:
-                raise InvalidOptionError(
-                    f"max_area must be positive, got {a!r} (use None for no limit)"
-                )
+            params.number("max_area", self.max_area, low=0.0, low_open=True, what="area; omit it for no limit")
         if self.max_steiner is not None:
-            if isinstance(self.max_steiner, bool) or not isinstance(
-                self.max_steiner, (int, np.integer)
-            ):
-                raise InvalidOptionError(
-                    f"max_steiner must be a non-negative integer, got {self.max_steiner!r}"
-                )
-            if self.max_steiner < 0:
-                raise InvalidOptionError(
-                    f"max_steiner must be a non-negative integer, got {self.max_steiner!r}"
-                )
+            params.integer("max_steiner", self.max_steiner, low=0, what="added Steiner points")
 
     def check_size(self, domain_area: float) -> None:
         """Refuse an area bound that would need more than ``MAX_TRIANGLES`` triangles."""
@@ -79,22 +62,8 @@ class MeshOptions:
             raise InvalidOptionError(
                 f"max_area={self.max_area!r} would need about "
                 f"{domain_area / self.max_area:.3g} triangles for a domain of area "
-                f"{domain_area:.3g} (limit {MAX_TRIANGLES:,})"
+                f"{domain_area:.3g} (limit {MAX_TRIANGLES:,})", option="max_area"
             )
-
-
-def _number(name: str, x: object) -> float:
-    # a string or a bool is not a number here, though float() takes it (the options are
-    # used as given later on: '0.1' failed deep inside with a TypeError)
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
-        raise InvalidOptionError(f"{name} must be a number, got {x!r}")
-    try:
-        v = float(x)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InvalidOptionError(f"{name} must be a number, got {x!r}") from None
-    if not math.isfinite(v):
-        raise InvalidOptionError(f"{name} must be finite, got {x!r}")
-    return v
 
 
 def hull_area(vertices: np.ndarray) -> float:

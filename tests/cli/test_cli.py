@@ -88,8 +88,8 @@ def test_check_min_angle_requirement(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "args, needle",
     [
-        (["mesh", "{d}/A.poly", "--min-angle", "40"], "min_angle"),
-        (["mesh", "{d}/A.poly", "--max-area", "-1"], "max_area"),
+        (["mesh", "{d}/A.poly", "--min-angle", "40"], "--min-angle=40.0"),
+        (["mesh", "{d}/A.poly", "--max-area", "-1"], "--max-area=-1.0"),
         (["mesh", "{t}/missing.poly"], "missing.poly"),
         (["mesh", "{d}/A.poly", "-o", "{t}/out.unknown"], "out.unknown"),
         (["mesh", "{d}/A.poly", "--report", "{t}/r.txt"], "r.txt"),

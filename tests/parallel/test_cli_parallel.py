@@ -65,9 +65,9 @@ def test_workers_without_dask_says_how_to_install(tmp_path, capsys, monkeypatch)
     (["-a", "1e-3", "--tiles", "2", "--png", "x.png"], "--png"),
     (["-a", "1e-3", "--tiles", "0"], "tiles"),
     (["-a", "1e-3", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "give one"),
-    (["-a", "-1", "--tiles", "2"], "max_area must be positive"),
-    (["-a", "nan", "--tiles", "2", "--partitioned"], "max_area must be finite"),
-    (["-a", "1e-3", "-q", "40", "--tiles", "2"], "min_angle must be between"),
+    (["-a", "-1", "--tiles", "2"], "--max-area=-1.0 is not valid"),
+    (["-a", "nan", "--tiles", "2", "--partitioned"], "--max-area=nan is not valid"),
+    (["-a", "1e-3", "-q", "40", "--tiles", "2"], "--min-angle=40.0 is not valid"),
 ])
 def test_bad_parallel_options_exit_2(tmp_path, capsys, argv, what):
     assert main(["mesh", DEMO, "-q", "30", *argv, "-o", str(tmp_path / "o.vtu")]) == 2
