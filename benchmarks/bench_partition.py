@@ -38,6 +38,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --modes sparse,sparse-fishbone --repeat 3   # sparse's fishbone option
     python benchmarks/bench_partition.py --ceilings --target 100000   # what following a compact sweep could cut
     python benchmarks/bench_partition.py --blocks 4096,1024,256 --target 300000   # a ring of compact blocks
+    python benchmarks/bench_partition.py --blocks 4096,1024 --along walk   # blocks of the incircle walk
 
 ``--ceilings`` (session 15) measures, on Triangle's mesh itself (sparse mode's output is
 that mesh plus 0.3 % Steiner points), the cut of orders and partitions a sparse cycle
@@ -121,6 +122,20 @@ def _fill_parts(part: np.ndarray, nb: np.ndarray) -> np.ndarray:
     return part
 
 
+def _input_mesh(dom, area: float, target: int):
+    """Triangle's mesh of about ``target`` triangles (min angle 30), its dual edges
+    ``a``-``b``, half-edge twins and dual neighbours (``--ceilings``, ``--blocks``)."""
+    import hammesh
+    from hammesh.halfedge import half_edges
+    from hammesh.partition import dual_edges
+    from partition_ceilings import dual_neighbours
+
+    mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+    a, b = dual_edges(mesh.triangles, mesh.n_points)
+    twin = half_edges(mesh.triangles, mesh.n_points).twin
+    return mesh, a, b, twin, dual_neighbours(twin)
+
+
 def _print_ceilings(domains, target: int, ks: list[int]) -> None:
     """``--ceilings``: the cut of orders a sparse cycle could follow, on Triangle's
     mesh (``partition_ceilings``), and the cycles' own, each / METIS's (median of 3 seeds)."""
@@ -128,11 +143,10 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
     import sys
 
     import hammesh
-    from hammesh.halfedge import half_edges
     from hammesh.partition import dual_edges, edge_cut, part_components, partition
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from partition_ceilings import (dual_neighbours, kd_order, order_cut, projected_parts, stretch_parts,
+    from partition_ceilings import (kd_order, order_cut, projected_parts, stretch_parts,
                                     vertex_tree_cover, walk_positions)
 
     print("| domain | triangles | k | incircle (own mesh) | sparse | sparse, fishbone | walk order, first / median "
@@ -140,11 +154,8 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
           "| vertex tree (uncovered) | vertex tree, repaired (uncovered) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, dom, area in domains:
-        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+        mesh, a, b, twin, nb = _input_mesh(dom, area, target)
         m = mesh.n_triangles
-        a, b = dual_edges(mesh.triangles, mesh.n_points)
-        twin = half_edges(mesh.triangles, mesh.n_points).twin
-        nb = dual_neighbours(twin)
         hi = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
         hs = hammesh.hamiltonian(mesh, mode="sparse")
         hf = hammesh.hamiltonian(mesh, mode="sparse", tree="fishbone")
@@ -180,48 +191,50 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
                   f"| {' | '.join(cells)} |", flush=True)
 
 
-def _print_blocks(domains, target: int, ks: list[int], sizes: list[int]) -> None:
+def _print_blocks(domains, target: int, ks: list[int], sizes: list[int], along: str = "curve") -> None:
     """``--blocks``: a ring of compact blocks on Triangle's mesh (``partition_ceilings``),
     each / METIS's (median of 3 seeds), beside the sparse cycle's own ratio and what its
-    cover's largest cycle alone cuts."""
+    cover's largest cycle alone cuts. ``along``: the blocks are runs of the generalized
+    Hilbert curve (``curve``) or of the incircle walk on the same mesh (``walk``: each
+    triangle at its median row)."""
     import os
     import sys
 
     import hammesh
-    from hammesh.halfedge import half_edges
     from hammesh.partition import dual_edges, edge_cut, partition
     from hammesh.postprocess.cycle_cover import cycle_cover
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from partition_ceilings import (block_cycles, cover_cycle_order, curve_blocks, curve_order, dual_neighbours,
-                                    order_cut, ring_order, stretch_parts, sweep_blocks)
+    from partition_ceilings import (block_cycles, cover_cycle_order, curve_blocks, curve_order,
+                                    order_cut, ring_order, stretch_parts, sweep_blocks, walk_positions)
 
     print("| domain | triangles | k | sparse (own) | its cover's largest cycle (share) | curve order (disconnected) | "
           + " | ".join(f"blocks of {b}: sweep / own cycles (disconnected)" for b in sizes) + " |")
     print("|---|---|---|---|---|---|" + "---|" * len(sizes))
     notes = []
     for name, dom, area in domains:
-        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+        mesh, a, b, twin, nb = _input_mesh(dom, area, target)
         m = mesh.n_triangles
-        a, b = dual_edges(mesh.triangles, mesh.n_points)
-        twin = half_edges(mesh.triangles, mesh.n_points).twin
-        nb = dual_neighbours(twin)
         hs = hammesh.hamiltonian(mesh, mode="sparse")
         cover = cycle_cover(mesh.triangles, twin, points=mesh.points)
         big = int(np.argmax(np.bincount(cover.cycle[cover.cycle >= 0])))
         giant = cover_cycle_order(twin, cover.is_cov, cover.cycle, big)
         curve = curve_order(mesh.points[mesh.triangles].mean(axis=1), m // 2)
+        runs = curve
+        if along == "walk":
+            hi = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
+            runs = np.argsort(walk_positions(hi.parent, m)[1], kind="stable")
         rings = []
         for size in sizes:
-            block = curve_blocks(curve, size, nb)
+            block = curve_blocks(runs, size, nb)
             t = time.process_time()
             bc = block_cycles(mesh.points, mesh.triangles, block)
             cpu = time.process_time() - t
             own, spliced = ring_order(bc.orders, block, nb)
             rings.append((sweep_blocks(block, nb), own))
             live = sum(1 for o in bc.orders if len(o))
-            notes.append(f"{name}, blocks of {size}: {live} blocks, {spliced} spliceable with no Steiner point; "
-                         f"their own cycles {bc.steiner:,} Steiner points ({bc.steiner / m:.2%}), min angle "
+            notes.append(f"{name}, blocks of {size} along the {along}: {live} blocks, {spliced} spliceable with no "
+                         f"Steiner point; their own cycles {bc.steiner:,} Steiner points ({bc.steiner / m:.2%}), min angle "
                          f"{bc.min_angle:.1f}, {cpu:.1f} s CPU")
         for k in ks:
             mc = _metis_median(k, a, b, m)
@@ -746,6 +759,8 @@ def main() -> None:
     ap.add_argument("--blocks", metavar="SIZES", default="",
                     help="only the cut of a ring of compact blocks of these sizes (comma-separated), on Triangle's "
                          "mesh (partition_ceilings.py)")
+    ap.add_argument("--along", choices=("curve", "walk"), default="curve",
+                    help="--blocks: runs of a generalized Hilbert curve, or of the incircle walk on the same mesh")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -784,7 +799,7 @@ def main() -> None:
         return
     if args.blocks:
         _print_blocks([d for d in _domains() if d[0] in chosen], args.target, ks,
-                      [int(x) for x in args.blocks.split(",")])
+                      [int(x) for x in args.blocks.split(",")], args.along)
         return
     if args.trees:
         targets = [int(float(x)) for x in args.targets.split(",")] if args.targets else [args.target]

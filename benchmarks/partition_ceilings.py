@@ -223,32 +223,6 @@ def _grow_tree_into(vv_ptr, vv_idx, boundary, q, seed, inside):
 
 
 @njit(cache=True, nogil=True)
-def _walk_between_into(tri, twin, inside, start, order):
-    """The cycle through ``start`` across the edges with one end inside; fills
-    ``order``, returns its length (-1 if a walk leaves the mesh)."""
-    prev = -1
-    cur = start
-    length = 0
-    while True:
-        order[length] = cur
-        length += 1
-        nxt = -1
-        for k in range(3):
-            h = 3 * cur + k
-            if inside[tri[cur, k]] != inside[tri[cur, (k + 1) % 3]]:
-                u = twin[h] // 3 if twin[h] >= 0 else -2
-                if u == -2:
-                    return -1
-                if u != prev:
-                    nxt = u
-                    break
-        if nxt == start or nxt < 0:
-            return length
-        prev = cur
-        cur = nxt
-
-
-@njit(cache=True, nogil=True)
 def _adjacent(ptr, idx, a, b):
     """Whether vertices ``a`` and ``b`` share an edge (``ptr``/``idx``: neighbour lists)."""
     for j in range(ptr[a], ptr[a + 1]):
@@ -428,10 +402,13 @@ def vertex_tree_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarra
                          int(repair))
     s = inside[tri].sum(axis=1)
     covered = np.flatnonzero((s > 0) & (s < 3))
-    order = np.empty(max(len(covered), 1), np.int64)
-    length = _walk_between_into(tri, np.ascontiguousarray(twin, dtype=np.int64), inside, int(covered[0]), order) \
+    # the cycle crosses the edges with one end inside (never a boundary edge: no
+    # boundary vertex is inside)
+    across = (inside[tri] != inside[np.roll(tri, -1, axis=1)]).ravel()
+    order = np.empty(len(covered), np.int64)
+    length = _cover_walk_into(np.ascontiguousarray(twin, dtype=np.int64), across, int(covered[0]), order) \
         if len(covered) else 0
-    return VertexTree(inside, order[:max(length, 0)], np.flatnonzero(s == 0))
+    return VertexTree(inside, order[:length], np.flatnonzero(s == 0))
 
 
 def gilbert_path(width: int, height: int) -> np.ndarray:
