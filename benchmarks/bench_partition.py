@@ -37,11 +37,19 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --sparse-cells 0,1024,4096 --target 100000   # sparse: cell-confined covers
     python benchmarks/bench_partition.py --modes sparse,sparse-fishbone --repeat 3   # sparse's fishbone option
     python benchmarks/bench_partition.py --ceilings --target 100000   # what following a compact sweep could cut
+    python benchmarks/bench_partition.py --blocks 4096,1024,256 --target 300000   # a ring of compact blocks
+    python benchmarks/bench_partition.py --blocks 4096,1024 --along walk   # blocks of the incircle walk
 
 ``--ceilings`` (session 15) measures, on Triangle's mesh itself (sparse mode's output is
 that mesh plus 0.3 % Steiner points), the cut of orders and partitions a sparse cycle
 could follow (``benchmarks/partition_ceilings.py``) against METIS's (median of three
 seeds), beside the cycles' own ratios.
+
+``--blocks`` (session 16) measures, on Triangle's mesh, a cycle made as a ring of compact
+blocks (a generalized Hilbert curve's runs of ``B`` triangles, smoothed), each block
+walked once: as an ideal sweep, or along its own sparse cycle (sparse mode on the block
+alone: its Steiner points, smallest angle, and the blocks that could be spliced into the
+ring with none); beside the sparse cycle's own ratio and its cover's largest cycle alone.
 
 ``--modes sparse-fishbone`` is ``hamiltonian(mesh, mode="sparse", tree="fishbone")``
 (``hammesh.postprocess.sparse_cells``); with it a table of its price against sparse
@@ -114,6 +122,20 @@ def _fill_parts(part: np.ndarray, nb: np.ndarray) -> np.ndarray:
     return part
 
 
+def _input_mesh(dom, area: float, target: int):
+    """Triangle's mesh of about ``target`` triangles (min angle 30), its dual edges
+    ``a``-``b``, half-edge twins and dual neighbours (``--ceilings``, ``--blocks``)."""
+    import hammesh
+    from hammesh.halfedge import half_edges
+    from hammesh.partition import dual_edges
+    from partition_ceilings import dual_neighbours
+
+    mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+    a, b = dual_edges(mesh.triangles, mesh.n_points)
+    twin = half_edges(mesh.triangles, mesh.n_points).twin
+    return mesh, a, b, twin, dual_neighbours(twin)
+
+
 def _print_ceilings(domains, target: int, ks: list[int]) -> None:
     """``--ceilings``: the cut of orders a sparse cycle could follow, on Triangle's
     mesh (``partition_ceilings``), and the cycles' own, each / METIS's (median of 3 seeds)."""
@@ -121,11 +143,10 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
     import sys
 
     import hammesh
-    from hammesh.halfedge import half_edges
     from hammesh.partition import dual_edges, edge_cut, part_components, partition
 
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from partition_ceilings import (dual_neighbours, kd_order, order_cut, projected_parts, stretch_parts,
+    from partition_ceilings import (kd_order, order_cut, projected_parts, stretch_parts,
                                     vertex_tree_cover, walk_positions)
 
     print("| domain | triangles | k | incircle (own mesh) | sparse | sparse, fishbone | walk order, first / median "
@@ -133,11 +154,8 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
           "| vertex tree (uncovered) | vertex tree, repaired (uncovered) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, dom, area in domains:
-        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+        mesh, a, b, twin, nb = _input_mesh(dom, area, target)
         m = mesh.n_triangles
-        a, b = dual_edges(mesh.triangles, mesh.n_points)
-        twin = half_edges(mesh.triangles, mesh.n_points).twin
-        nb = dual_neighbours(twin)
         hi = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
         hs = hammesh.hamiltonian(mesh, mode="sparse")
         hf = hammesh.hamiltonian(mesh, mode="sparse", tree="fishbone")
@@ -171,6 +189,72 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
                   f"{np.bincount(pp, minlength=k).max() * k / m:.3f}) "
                   f"| {kc / mc:.2f} ({kdis}) "
                   f"| {' | '.join(cells)} |", flush=True)
+
+
+def _print_blocks(domains, target: int, ks: list[int], sizes: list[int], along: str = "curve") -> None:
+    """``--blocks``: a ring of compact blocks on Triangle's mesh (``partition_ceilings``),
+    each / METIS's (median of 3 seeds), beside the sparse cycle's own ratio and what its
+    cover's largest cycle alone cuts. ``along``: the blocks are runs of the generalized
+    Hilbert curve (``curve``) or of the incircle walk on the same mesh (``walk``: each
+    triangle at its median row)."""
+    import os
+    import sys
+
+    import hammesh
+    from hammesh.partition import dual_edges, edge_cut, partition
+    from hammesh.postprocess.cycle_cover import cycle_cover
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from partition_ceilings import (block_cycles, cover_cycle_order, curve_blocks, curve_order,
+                                    order_cut, ring_order, stretch_parts, sweep_blocks, walk_positions)
+
+    print("| domain | triangles | k | sparse (own) | its cover's largest cycle (share) | curve order (disconnected) | "
+          + " | ".join(f"blocks of {b}: sweep / own cycles (disconnected)" for b in sizes) + " |")
+    print("|---|---|---|---|---|---|" + "---|" * len(sizes))
+    notes = []
+    for name, dom, area in domains:
+        mesh, a, b, twin, nb = _input_mesh(dom, area, target)
+        m = mesh.n_triangles
+        hs = hammesh.hamiltonian(mesh, mode="sparse")
+        cover = cycle_cover(mesh.triangles, twin, points=mesh.points)
+        big = int(np.argmax(np.bincount(cover.cycle[cover.cycle >= 0])))
+        giant = cover_cycle_order(twin, cover.is_cov, cover.cycle, big)
+        curve = curve_order(mesh.points[mesh.triangles].mean(axis=1), m // 2)
+        runs = curve
+        if along == "walk":
+            hi = hammesh.hamiltonian(mesh, mode="incircle", tree="fishbone")
+            runs = np.argsort(walk_positions(hi.parent, m)[1], kind="stable")
+        rings = []
+        for size in sizes:
+            block = curve_blocks(runs, size, nb)
+            t = time.process_time()
+            bc = block_cycles(mesh.points, mesh.triangles, block)
+            cpu = time.process_time() - t
+            own, spliced = ring_order(bc.orders, block, nb)
+            rings.append((sweep_blocks(block, nb), own))
+            live = sum(1 for o in bc.orders if len(o))
+            notes.append(f"{name}, blocks of {size} along the {along}: {live} blocks, {spliced} spliceable with no "
+                         f"Steiner point; their own cycles {bc.steiner:,} Steiner points ({bc.steiner / m:.2%}), min angle "
+                         f"{bc.min_angle:.1f}, {cpu:.1f} s CPU")
+        for k in ks:
+            mc = _metis_median(k, a, b, m)
+            ha, hb = dual_edges(hs.triangles, hs.n_points)
+            local = np.full(m, -1, np.int64)
+            local[giant] = np.arange(len(giant))
+            on = (local[a] >= 0) & (local[b] >= 0)
+            gpart = np.full(m, -1, np.int64)
+            gpart[giant] = stretch_parts(np.arange(len(giant)), k, local[a[on]], local[b[on]])
+            gpart = _fill_parts(gpart, nb)
+            cc, cdis = order_cut(curve, k, a, b)
+            cells = []
+            for sweep, own in rings:
+                (sc, sdis), (oc, odis) = order_cut(sweep, k, a, b), order_cut(own, k, a, b)
+                cells.append(f"{sc / mc:.2f} / {oc / mc:.2f} ({sdis}, {odis})")
+            print(f"| {name} | {m:,} | {k} | {partition(hs, k).edge_cut / _metis_median(k, ha, hb, hs.n_triangles):.2f} "
+                  f"| {edge_cut(gpart, a, b) / mc:.2f} ({len(giant) / m:.0%}) | {cc / mc:.2f} ({cdis}) "
+                  f"| {' | '.join(cells)} |", flush=True)
+    print()
+    print("\n".join(notes))
 
 
 def _mesh(dom, area: float, target: int, mode: str):
@@ -672,6 +756,11 @@ def main() -> None:
                          "bench_core's square round a square hole of about SIZE input triangles")
     ap.add_argument("--ceilings", action="store_true",
                     help="only the cut of orders a sparse cycle could follow, on Triangle's mesh (partition_ceilings.py)")
+    ap.add_argument("--blocks", metavar="SIZES", default="",
+                    help="only the cut of a ring of compact blocks of these sizes (comma-separated), on Triangle's "
+                         "mesh (partition_ceilings.py)")
+    ap.add_argument("--along", choices=("curve", "walk"), default="curve",
+                    help="--blocks: runs of a generalized Hilbert curve, or of the incircle walk on the same mesh")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -707,6 +796,10 @@ def main() -> None:
         return
     if args.ceilings:
         _print_ceilings([d for d in _domains() if d[0] in chosen], args.target, ks)
+        return
+    if args.blocks:
+        _print_blocks([d for d in _domains() if d[0] in chosen], args.target, ks,
+                      [int(x) for x in args.blocks.split(",")], args.along)
         return
     if args.trees:
         targets = [int(float(x)) for x in args.targets.split(",")] if args.targets else [args.target]

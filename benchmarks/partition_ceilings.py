@@ -23,8 +23,25 @@ which the cut of its ``k`` stretches is measured against METIS's on the same gra
   (``_thm24_kernels.edge_class`` on the vertices), a vertex joins when exactly one of
   its neighbours is in the tree; triangles with no tree vertex stay uncovered.
 
+Session 16 ("a ring of compact blocks"): the final cycle as a *ring* of compact
+blocks, each walked as a Hamiltonian path from a triangle next to the previous block
+to one next to the next block (no join tree, so no block in two runs):
+
+* :func:`curve_order`: the triangles along a generalized Hilbert curve through the
+  domain's bounding box (a closed space-filling order of compact cells);
+* :func:`sweep_blocks`: each block walked as a sweep, breadth-first from its triangles
+  next to the previous block (the ideal path: what a block's path could cut at best);
+* :func:`block_cycles` / :func:`ring_order`: each block walked by *its own sparse
+  cycle* (sparse mode on the block alone), opened where it enters from the previous
+  block; and how many blocks could be spliced into the ring with no Steiner point (an
+  entry triangle next to the previous block adjacent, along the block's cycle, to an
+  exit triangle next to the next one);
+* :func:`cover_cycle_order`: one cycle of a cycle cover walked (the default cover's
+  largest cycle holds 87-88 % of the triangles: its stretches are what the sparse
+  cycle cuts).
+
 These are measurements, not constructions sparse mode uses (docs/partition.md,
-"Session 15: ceilings").
+"Session 15: ceilings", "Session 16: a ring of compact blocks").
 """
 
 from __future__ import annotations
@@ -39,7 +56,8 @@ from hammesh.partition import edge_cut, part_components
 from hammesh.postprocess._thm24_kernels import edge_class, quadtree_coords
 
 __all__ = ["walk_positions", "order_cut", "stretch_parts", "projected_parts", "smooth_parts", "kd_order", "VertexTree",
-           "vertex_tree_cover", "dual_neighbours"]
+           "vertex_tree_cover", "dual_neighbours", "gilbert_path", "curve_order", "curve_blocks", "sweep_blocks",
+           "BlockCycles", "block_cycles", "ring_order", "cover_cycle_order"]
 
 
 def dual_neighbours(twin: np.ndarray) -> np.ndarray:
@@ -202,32 +220,6 @@ def _grow_tree_into(vv_ptr, vv_idx, boundary, q, seed, inside):
                 heapq.heappush(heap, (np.int64(edge_class(q[v], q[w])), np.int64(seq), np.int64(w)))
                 seq += 1
     return size
-
-
-@njit(cache=True, nogil=True)
-def _walk_between_into(tri, twin, inside, start, order):
-    """The cycle through ``start`` across the edges with one end inside; fills
-    ``order``, returns its length (-1 if a walk leaves the mesh)."""
-    prev = -1
-    cur = start
-    length = 0
-    while True:
-        order[length] = cur
-        length += 1
-        nxt = -1
-        for k in range(3):
-            h = 3 * cur + k
-            if inside[tri[cur, k]] != inside[tri[cur, (k + 1) % 3]]:
-                u = twin[h] // 3 if twin[h] >= 0 else -2
-                if u == -2:
-                    return -1
-                if u != prev:
-                    nxt = u
-                    break
-        if nxt == start or nxt < 0:
-            return length
-        prev = cur
-        cur = nxt
 
 
 @njit(cache=True, nogil=True)
@@ -410,7 +402,234 @@ def vertex_tree_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarra
                          int(repair))
     s = inside[tri].sum(axis=1)
     covered = np.flatnonzero((s > 0) & (s < 3))
-    order = np.empty(max(len(covered), 1), np.int64)
-    length = _walk_between_into(tri, np.ascontiguousarray(twin, dtype=np.int64), inside, int(covered[0]), order) \
+    # the cycle crosses the edges with one end inside (never a boundary edge: no
+    # boundary vertex is inside)
+    across = (inside[tri] != inside[np.roll(tri, -1, axis=1)]).ravel()
+    order = np.empty(len(covered), np.int64)
+    length = _cover_walk_into(np.ascontiguousarray(twin, dtype=np.int64), across, int(covered[0]), order) \
         if len(covered) else 0
-    return VertexTree(inside, order[:max(length, 0)], np.flatnonzero(s == 0))
+    return VertexTree(inside, order[:length], np.flatnonzero(s == 0))
+
+
+def gilbert_path(width: int, height: int) -> np.ndarray:
+    """(width * height, 2) int64: the cells of a ``width`` x ``height`` grid along a
+    generalized Hilbert curve, consecutive cells side by side (one diagonal step at
+    most where both sides are odd).
+
+    Jakub Cervený's ``gilbert2d`` (github.com/jakubcerveny/gilbert, BSD-2-Clause),
+    with an explicit stack instead of recursion.
+    """
+    out = np.empty((width * height, 2), np.int64)
+    n = 0
+    stack = [(0, 0, width, 0, 0, height) if width >= height else (0, 0, 0, height, width, 0)]
+    while stack:
+        x, y, ax, ay, bx, by = stack.pop()
+        w, h = abs(ax + ay), abs(bx + by)
+        dax, day, dbx, dby = np.sign(ax), np.sign(ay), np.sign(bx), np.sign(by)
+        if h == 1 or w == 1:  # one row (or column) straight through
+            dx, dy, steps = (dax, day, w) if h == 1 else (dbx, dby, h)
+            for i in range(steps):
+                out[n] = (x + i * dx, y + i * dy)
+                n += 1
+            continue
+        ax2, ay2, bx2, by2 = ax // 2, ay // 2, bx // 2, by // 2
+        if 2 * w > 3 * h:  # long: two halves along the major axis
+            if abs(ax2 + ay2) % 2 and w > 2:  # even steps
+                ax2, ay2 = ax2 + dax, ay2 + day
+            stack.append((x + ax2, y + ay2, ax - ax2, ay - ay2, bx, by))
+            stack.append((x, y, ax2, ay2, bx, by))
+        else:  # up, along, back down
+            if abs(bx2 + by2) % 2 and h > 2:
+                bx2, by2 = bx2 + dbx, by2 + dby
+            stack.append((x + (ax - dax) + (bx2 - dbx), y + (ay - day) + (by2 - dby), -bx2, -by2, -(ax - ax2),
+                          -(ay - ay2)))
+            stack.append((x + bx2, y + by2, ax, ay, bx - bx2, by - by2))
+            stack.append((x, y, bx2, by2, ax2, ay2))
+    return out
+
+
+def curve_order(centroids: np.ndarray, cells: int) -> np.ndarray:
+    """Order of the points along :func:`gilbert_path` on a grid of about ``cells``
+    cells over their bounding box (cells as square as the box allows); points of
+    one cell by x, then y."""
+    c = np.asarray(centroids, dtype=np.float64)[:, :2]
+    lo = c.min(axis=0)
+    span = np.maximum(c.max(axis=0) - lo, 1e-300)
+    aspect = span[0] / span[1]
+    h = max(1, int(round(np.sqrt(cells / aspect))))
+    w = max(1, int(round(h * aspect)))
+    path = gilbert_path(w, h)
+    rank = np.empty((w, h), np.int64)
+    rank[path[:, 0], path[:, 1]] = np.arange(len(path))
+    ix = np.minimum(((c[:, 0] - lo[0]) / span[0] * w).astype(np.int64), w - 1)
+    iy = np.minimum(((c[:, 1] - lo[1]) / span[1] * h).astype(np.int64), h - 1)
+    return np.lexsort((c[:, 1], c[:, 0], rank[ix, iy]))
+
+
+def curve_blocks(order: np.ndarray, size: int, nb: np.ndarray, passes: int = 6) -> np.ndarray:
+    """(m,) int64: blocks of ``size`` consecutive triangles of ``order``, their borders
+    smoothed (:func:`smooth_parts`; numbers in the order's sense)."""
+    block = np.empty(len(order), np.int64)
+    block[order] = np.arange(len(order)) // max(int(size), 1)
+    return smooth_parts(block, nb, passes)
+
+
+@njit(cache=True, nogil=True)
+def _sweep_into(block, nb, members, starts, out):
+    """Each block (``members[starts[i]:starts[i + 1]]``) breadth-first from its
+    triangles next to block ``i - 1`` (its first member if none), what the search
+    cannot reach after it, in place of the block's rows in ``out``."""
+    m = block.shape[0]
+    seen = np.zeros(m, np.bool_)
+    for i in range(starts.shape[0] - 1):
+        lo, hi = starts[i], starts[i + 1]
+        n = lo
+        for j in range(lo, hi):
+            t = members[j]
+            for k in range(3):
+                u = nb[t, k]
+                if u >= 0 and block[u] == block[t] - 1 and not seen[t]:
+                    seen[t] = True
+                    out[n] = t
+                    n += 1
+        if n == lo and hi > lo:
+            seen[members[lo]] = True
+            out[n] = members[lo]
+            n += 1
+        head = lo
+        while True:
+            while head < n:
+                t = out[head]
+                head += 1
+                for k in range(3):
+                    u = nb[t, k]
+                    if u >= 0 and block[u] == block[t] and not seen[u]:
+                        seen[u] = True
+                        out[n] = u
+                        n += 1
+            if n == hi:
+                break
+            for j in range(lo, hi):  # another piece of the block
+                if not seen[members[j]]:
+                    seen[members[j]] = True
+                    out[n] = members[j]
+                    n += 1
+                    break
+
+
+def _members(block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    members = np.argsort(block, kind="stable")
+    return members, np.searchsorted(block[members], np.arange(int(block.max()) + 2))
+
+
+def sweep_blocks(block: np.ndarray, nb: np.ndarray) -> np.ndarray:
+    """The triangles block by block (``block`` numbers, 0.. in ring order), each block
+    breadth-first from its triangles next to the previous block: the ideal path
+    through a block (a sweep), the bound of a ring of these blocks."""
+    block = np.ascontiguousarray(block, dtype=np.int64)
+    members, starts = _members(block)
+    out = np.empty(len(block), np.int64)
+    _sweep_into(block, np.ascontiguousarray(nb, dtype=np.int64), members, starts, out)
+    return out
+
+
+class BlockCycles(NamedTuple):
+    """Result of :func:`block_cycles`.
+
+    Attributes
+    ----------
+    orders : list of (b,) int64
+        Each block's input triangles in the order of its own sparse cycle(s) (first
+        row of each; a block in several pieces: one cycle after the other).
+    steiner : int
+        Steiner points of all the blocks' cycles.
+    triangles : int
+        Rows of all the blocks' cycles.
+    min_angle : float
+        Smallest output angle over the blocks, degrees.
+    """
+
+    orders: list
+    steiner: int
+    triangles: int
+    min_angle: float
+
+
+def block_cycles(points: np.ndarray, triangles: np.ndarray, block: np.ndarray) -> BlockCycles:
+    """Sparse mode (``hammesh.hamiltonian(..., mode="sparse")``) on each block alone,
+    as a mesh of its own: what a block's own Hamiltonian cycle looks like, and what
+    cutting the mesh into blocks costs in Steiner points and angles."""
+    import hammesh
+
+    members, starts = _members(np.asarray(block, dtype=np.int64))
+    orders, steiner, rows, amin = [], 0, 0, 180.0
+    for i in range(len(starts) - 1):
+        mem = members[starts[i]:starts[i + 1]]
+        if len(mem) == 0:
+            orders.append(mem)
+            continue
+        used, local = np.unique(triangles[mem].ravel(), return_inverse=True)
+        h = hammesh.hamiltonian(hammesh.Mesh(points=points[used], triangles=local.reshape(-1, 3)), mode="sparse")
+        steiner += int(h.report["steiner_points"])
+        rows += h.n_triangles
+        amin = min(amin, float(h.report["min_angle_output_deg"]))
+        par = h.parent[h.parent >= 0]
+        first = np.unique(par, return_index=True)[1]  # a flipped pair's rows may name one parent only
+        seq = par[np.sort(first)]
+        rest = np.setdiff1d(np.arange(len(mem)), seq)
+        orders.append(mem[np.r_[seq, rest]])
+    return BlockCycles(orders, steiner, rows, amin)
+
+
+def ring_order(orders: list, block: np.ndarray, nb: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(order, spliced)``: the blocks in number order, each walked along its own
+    cycle (``orders``, :func:`block_cycles`) from where it can be spliced into the
+    ring: at a cycle edge whose two triangles touch the previous and the next block
+    (counted in ``spliced``: no Steiner point needed there), else from its first
+    triangle next to the previous block."""
+    out, spliced = [], 0
+    live = [i for i, o in enumerate(orders) if len(o)]
+    for j, i in enumerate(live):
+        o = orders[i]
+        around = np.where(nb[o] >= 0, block[np.maximum(nb[o], 0)], -1)
+        prev = (around == live[j - 1]).any(axis=1)
+        nxt = (around == live[(j + 1) % len(live)]).any(axis=1)
+        fwd = np.flatnonzero(prev & np.roll(nxt, 1))  # path o[s] .. o[s - 1]
+        back = np.flatnonzero(np.roll(prev, 1) & nxt)  # path o[s - 1] .. o[s] backwards
+        if len(fwd):
+            out.append(np.roll(o, -fwd[0]))
+        elif len(back):
+            out.append(np.roll(o, -back[0])[::-1])
+        else:
+            out.append(np.roll(o, -int(np.argmax(prev))))
+        spliced += bool(len(fwd) or len(back))
+    return np.concatenate(out), spliced
+
+
+@njit(cache=True, nogil=True)
+def _cover_walk_into(twin, is_cov, start, order):
+    """The cover cycle through ``start`` (``is_cov`` half-edges); fills ``order``,
+    returns its length."""
+    prev, cur, n = -1, start, 0
+    while True:
+        order[n] = cur
+        n += 1
+        nxt = -1
+        for k in range(3):
+            h = 3 * cur + k
+            if is_cov[h] and twin[h] >= 0 and twin[h] // 3 != prev:
+                nxt = twin[h] // 3
+                break
+        if nxt < 0 or nxt == start or n == order.shape[0]:
+            return n
+        prev, cur = cur, nxt
+
+
+def cover_cycle_order(twin: np.ndarray, is_cov: np.ndarray, cycle: np.ndarray, which: int) -> np.ndarray:
+    """The triangles of cover cycle ``which`` (``cycle`` ids of a ``CycleCover``) in
+    cycle order."""
+    members = np.flatnonzero(cycle == which)
+    order = np.empty(len(members), np.int64)
+    n = _cover_walk_into(np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(is_cov, dtype=np.bool_),
+                         int(members[0]), order)
+    return order[:n]

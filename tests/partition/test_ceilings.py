@@ -171,3 +171,124 @@ def test_bench_partition_prints_the_ceilings() -> None:
         cells = [c.strip() for c in r.strip("|").split("|")]
         assert len(cells) == 11
         assert all(float(c.split()[0]) > 0 for c in cells[3:6])  # the three cycles' own ratios
+
+
+# session 16: a ring of compact blocks
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(1, 40), st.integers(1, 40))
+def test_gilbert_path_visits_every_cell_once_by_neighbouring_steps(w: int, h: int) -> None:
+    p = ceil.gilbert_path(w, h)
+    assert p.shape == (w * h, 2)
+    assert (p >= 0).all() and (p[:, 0] < w).all() and (p[:, 1] < h).all()
+    assert len(np.unique(p, axis=0)) == w * h
+    step = np.abs(np.diff(p, axis=0))
+    assert (step.max(axis=1) == 1).all()  # side by side, or one diagonal step at most
+    diagonal = int((step.sum(axis=1) == 2).sum())
+    assert diagonal <= (0 if w % 2 == 0 and h % 2 == 0 else 1)
+
+
+def test_curve_order_runs_are_compact_and_blocks_follow_it() -> None:
+    mesh = _mesh(w=2.0, hole=False)
+    m = mesh.n_triangles
+    c = mesh.points[mesh.triangles].mean(axis=1)
+    order = ceil.curve_order(c, m // 2)
+    assert np.array_equal(np.sort(order), np.arange(m))
+    a, b = dual_edges(mesh.triangles, mesh.n_points)
+    rand = ceil.order_cut(np.random.default_rng(0).permutation(m), 8, a, b)[0]
+    assert ceil.order_cut(order, 8, a, b)[0] < 0.2 * rand
+    # consecutive triangles along the curve are near each other (grid cells side by side)
+    gap = np.linalg.norm(np.diff(c[order], axis=0), axis=1)
+    assert np.median(gap) < 3 * np.sqrt(2.0 / m)
+    nb = ceil.dual_neighbours(half_edges(mesh.triangles, mesh.n_points).twin)
+    raw = ceil.curve_blocks(order, 100, nb, passes=0)
+    pos = np.empty(m, np.int64)
+    pos[order] = np.arange(m)
+    assert np.array_equal(raw, pos // 100)
+    block = ceil.curve_blocks(order, 100, nb)
+    assert edge_cut(block, a, b) <= edge_cut(raw, a, b)
+
+
+def test_sweep_blocks_walks_each_block_breadth_first_from_the_previous_one() -> None:
+    mesh = _mesh()
+    m = mesh.n_triangles
+    nb = ceil.dual_neighbours(half_edges(mesh.triangles, mesh.n_points).twin)
+    block = ceil.curve_blocks(ceil.curve_order(mesh.points[mesh.triangles].mean(axis=1), m // 2), 150, nb)
+    order = ceil.sweep_blocks(block, nb)
+    assert np.array_equal(np.sort(order), np.arange(m))
+    assert (np.diff(block[order]) >= 0).all()  # block by block, in number order
+    for i in range(1, int(block.max()) + 1):
+        run = order[block[order] == i]
+        if len(run) == 0:
+            continue
+        touches = (np.where(nb[run] >= 0, block[np.maximum(nb[run], 0)], -9) == i - 1).any(axis=1)
+        if touches.any():
+            # the seeds (next to the previous block) first, then each one next to an earlier one
+            seeds = int(touches.sum())
+            assert touches[:seeds].all()
+            earlier = set(run[:seeds].tolist())
+            for t in run[seeds:]:
+                if any(u in earlier for u in nb[t] if u >= 0):
+                    earlier.add(t)
+            assert len(earlier) >= 0.9 * len(run)  # all but other pieces of the block
+
+
+def test_block_cycles_and_the_ring_walk_each_block_once_along_its_own_cycle() -> None:
+    mesh = _mesh()
+    m = mesh.n_triangles
+    nb = ceil.dual_neighbours(half_edges(mesh.triangles, mesh.n_points).twin)
+    block = ceil.curve_blocks(ceil.curve_order(mesh.points[mesh.triangles].mean(axis=1), m // 2), 200, nb)
+    bc = ceil.block_cycles(mesh.points, mesh.triangles, block)
+    assert bc.triangles >= m and bc.steiner >= 0 and 0 < bc.min_angle < 60
+    for i, o in enumerate(bc.orders):
+        assert np.array_equal(np.sort(o), np.flatnonzero(block == i))
+    order, spliced = ceil.ring_order(bc.orders, block, nb)
+    assert np.array_equal(np.sort(order), np.arange(m))
+    assert (np.diff(block[order]) >= 0).all()
+    live = [i for i, o in enumerate(bc.orders) if len(o)]
+    assert 0 <= spliced <= len(live)
+    # a spliced block starts next to the previous block and ends next to the next one,
+    # the two ends neighbours along its cycle (so the ring needs no Steiner point there)
+    found = 0
+    for j, i in enumerate(live):
+        run = order[block[order] == i]
+        first, last = run[0], run[-1]
+        near = (lambda t, other: bool((nb[t] >= 0).any() and (block[nb[t][nb[t] >= 0]] == other).any()))
+        if near(first, live[j - 1]) and near(last, live[(j + 1) % len(live)]):
+            o = bc.orders[i]
+            p = {int(t): n for n, t in enumerate(o)}
+            assert (p[int(first)] - p[int(last)]) % len(o) in (1, len(o) - 1)
+            found += 1
+    assert found >= spliced
+
+
+def test_cover_cycle_order_walks_one_cover_cycle() -> None:
+    from hammesh.postprocess.cycle_cover import cycle_cover
+
+    mesh = _mesh()
+    twin = half_edges(mesh.triangles, mesh.n_points).twin
+    cover = cycle_cover(mesh.triangles, twin, points=mesh.points)
+    nb = ceil.dual_neighbours(twin)
+    sizes = np.bincount(cover.cycle[cover.cycle >= 0])
+    for which in (int(np.argmax(sizes)), int(np.argmin(sizes))):
+        order = ceil.cover_cycle_order(twin, cover.is_cov, cover.cycle, which)
+        assert np.array_equal(np.sort(order), np.flatnonzero(cover.cycle == which))
+        nxt = np.roll(order, -1)
+        assert (nb[order] == nxt[:, None]).any(axis=1).all()  # a closed dual cycle
+
+
+@pytest.mark.slow
+def test_bench_partition_prints_the_blocks() -> None:
+    pytest.importorskip("pymetis")
+    bench = Path(__file__).parents[2] / "benchmarks" / "bench_partition.py"
+    proc = subprocess.run([sys.executable, str(bench), "--blocks", "512", "--target", "3000", "--domains", "gear"],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = [r for r in proc.stdout.splitlines() if r.startswith("| gear |")]
+    assert len(rows) == 2
+    for r in rows:
+        cells = [c.strip() for c in r.strip("|").split("|")]
+        assert len(cells) == 7
+        assert float(cells[3]) > 0 and float(cells[4].split()[0]) > 0
+    assert "spliceable" in proc.stdout
