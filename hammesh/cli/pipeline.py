@@ -233,7 +233,7 @@ def summary(h: HamiltonianMesh) -> str:
         + (
             f", {r['cycles_before_merging']:,} cover cycles joined"
             if "cycles_before_merging" in r
-            else ""
+            else ", the input's cycle order kept" if r.get("kept_input_cycle") else ""
         ),
         f"min angle {r['min_angle_input_deg']:.2f} -> {r['min_angle_output_deg']:.2f} deg "
         f"(bound: half), max angle {r['max_angle_output_deg']:.2f} deg"

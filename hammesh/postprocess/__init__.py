@@ -16,6 +16,7 @@ from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
 from hammesh.point_data import carry_point_data
 from hammesh.postprocess.incircle import TREES, incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
+from hammesh.postprocess.kept_cycle import kept_cycle
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
@@ -241,7 +242,12 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
                 stream.join()  # then help with the row checks still to do
                 rows = (stream.result(out.components), stream.used)
         else:
-            out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover, tree=tree)
+            # rows that already walk a cycle per piece (hammesh's own output read back) are
+            # kept: a construction would only add triangles (kept_cycle)
+            out = kept_cycle(clean, he) if tree == "quadtree" else None
+            claim = None if out is None else he.twin  # (the same rows: the input's pairing)
+            if out is None:
+                out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover, tree=tree)
             t1 = time.perf_counter()
         start_facts()  # (if the construction did not)
         ref_facts = facts[0].result()
