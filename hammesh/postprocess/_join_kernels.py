@@ -1277,7 +1277,7 @@ def load_ring_kernels() -> None:
     members = np.arange(2, dtype=np.int64)
     n = _sk.union_polygon_into(tri, twin, np.zeros(6, np.bool_), members, poly, hes)
     for amin, keep in ((np.zeros(0), 0.0), (np.full(2, 0.5), 0.9)):
-        _sk.ring_fan_point(pts, tri, members, poly, int(n), amin, keep, 0.1, 2.5, 2)
+        _sk.ring_fan_point(pts, tri, members, poly, int(n), amin, keep, 0.1, 2.5, 2, 0.0)
     # the improvement step's repair of rows missing the absolute targets
     # (``sparse._repair_targets``: a first call at 1.5 M loaded it, 5-14 ms)
     move_to_targets(pts, tri, twin, np.zeros(6, np.bool_), np.zeros(0, np.int64), 0.1, 2.5, 0.05, 2)

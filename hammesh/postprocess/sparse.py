@@ -421,7 +421,7 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
                 poly = np.asarray(pp[0], np.int64)
                 # (centroids as starts, the first step, the local rule's bound: in the kernel)
                 x, y, sl, nmin, nmax, lo_g = _k.ring_fan_point(
-                    pts, tri, ms, poly, len(poly), amin_k, keep_k, lo, hi, PLACE_ITERS + 2
+                    pts, tri, ms, poly, len(poly), amin_k, keep_k, lo, hi, PLACE_ITERS + 2, float(floor2)
                 )
                 ok = sl > -math.inf and nmin >= max(lo_g, floor2) and nmax <= hi
                 if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
