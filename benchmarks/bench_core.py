@@ -47,6 +47,11 @@ the cover swap tests' other thread beyond its own share (``sparse._SwapTests``):
 what the call's wall time is on two free cores. Compare two trees by running it in
 each, alternating.
 
+**Thin strips** (session 16; one triangle wide, the dual a path, every triangle
+uncovered): sparse against incircle, process CPU per size, in one process:
+
+    python benchmarks/bench_core.py --thin 25 50 100 200
+
 The children inherit the environment: ``NUMPY_MADVISE_HUGEPAGE=0 python
 benchmarks/bench_core.py`` measures without numpy's transparent-huge-page advice.
 
@@ -497,6 +502,31 @@ def same_run_ab(args: argparse.Namespace) -> None:
         print(f"  {k:<28}" + "".join(f"{statistics.median(r.get(k, 0.0) for r in rows[on]):>14.3f}" for on in (False, True)))
 
 
+def thin_strips(args: argparse.Namespace) -> None:
+    """``--thin``: one-triangle-wide strips (L x 0.01, q30; session 16): sparse against
+    incircle, process CPU in one process (kernels loaded by a first call), per size."""
+    import hammesh
+
+    def cpu_of(f) -> float:
+        c = _cpu()
+        f()
+        return _cpu() - c
+
+    print("thin strips L x 0.01, min angle 30: process CPU s (best of 2), sparse / incircle, steps over 0.01 s")
+    for length in args.thin:
+        dom = hammesh.Domain.from_polygon([[0, 0], [length, 0], [length, 0.01], [0, 0.01]])
+        mesh = hammesh.quality_mesh(dom, min_angle=args.min_angle, isolate=False)
+        hammesh.hamiltonian(mesh)  # (kernels loaded)
+        h = []
+        sp = min(cpu_of(lambda: h.append(hammesh.hamiltonian(mesh))) for _ in range(2))
+        inc = min(cpu_of(lambda: hammesh.hamiltonian(mesh, mode="incircle")) for _ in range(2))
+        r = h[-1].report
+        steps = ", ".join(f"{k} {v:.3f}" for k, v in r["step_cpu_seconds"].items() if v > 0.01)
+        print(f"  L {length:>6g}: {mesh.n_triangles:>7,} triangles  sparse {sp:.3f}  incircle {inc:.3f}  "
+              f"ratio {sp / max(inc, 1e-9):6.1f}  {1e3 * sp / mesh.n_triangles:.3f} ms/triangle  "
+              f"Steiner/triangle {r['steiner_per_input_triangle']:.3f}  ({steps})")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--max-area", type=float, default=1e-6)
@@ -514,6 +544,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rounds", type=int, default=6, help="--ab: rounds, each arm once a round")
     ap.add_argument("--critical", type=int, default=0,
                     help="fresh first calls measured by the critical-path estimate (see above)")
+    ap.add_argument("--thin", type=float, nargs="+",
+                    help="one-triangle-wide strips of these lengths (x 0.01): sparse / incircle CPU (session 16)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--path", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -527,6 +559,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.critical:
         critical_paths(args)
+        return 0
+    if args.thin:
+        thin_strips(args)
         return 0
     # numba cold start: compile (or load the cache) in a fresh interpreter, measured
     cold = time.perf_counter()

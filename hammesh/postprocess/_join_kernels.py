@@ -576,7 +576,16 @@ def _fan_with(pts, tri, tpoly, n, members, nm, y, gm, px, py, have_pt, keep, hi,
     """The fan over ``tpoly[:n]`` (a group's polygon with ``y`` added): its point, from the
     members' and ``y``'s centroids and the group's last point (``have_pt``), and
     whether it keeps the group's bounds (``fan_groups``). Returns ``(x, y, slack, group
-    minimum, ok)``."""
+    minimum, ok)``.
+
+    No search where no point can keep the bound: the spokes to a corner split its
+    interior angle in two, so every fan's smallest angle is at most half the polygon's
+    smallest corner (:func:`half_smallest_corner`). On a one-triangle-wide strip every
+    try fails that way (its pairs' corners are ~50 degrees against a bound of the
+    input's ~30), and the searches, ridge ascents included, were ~0.1 ms a triangle."""
+    need = max(floor, 0.5 * gm)
+    if half_smallest_corner(pts, tpoly, n) < need * (1.0 - CORNER_BOUND_RTOL):
+        return px, py, -np.inf, gm, False
     ns = 0
     for j in range(nm + 1):
         x = members[j] if j < nm else y
@@ -593,6 +602,35 @@ def _fan_with(pts, tri, tpoly, n, members, nm, y, gm, px, py, have_pt, keep, hi,
     x0, y0, sl, nmin, nmax = place_fan(pts, tpoly, n, starts, ns, keep * gm, hi, step, iters)
     ok = not (sl == -np.inf or nmin < max(floor, 0.5 * gm) or nmax > hi_fan)
     return x0, y0, sl, gm, ok
+
+
+#: relative margin under which :func:`_fan_with`'s corner bound refuses a fan without a
+#: search (far above the angles' rounding, so a fan the search could keep is never refused)
+CORNER_BOUND_RTOL = 1e-6
+
+
+@njit(cache=True, nogil=True)
+def half_smallest_corner(pts, poly, n):
+    """Half the smallest interior angle of the counter-clockwise polygon ``poly[:n]`` (radians).
+
+    An upper bound on the smallest angle of any fan over the polygon: a fan point
+    inside its kernel splits each corner's interior angle between two fan triangles.
+    A reflex corner counts as its interior angle (over pi).
+    """
+    best = np.inf
+    for i in range(n):
+        a = poly[i - 1 if i > 0 else n - 1]
+        b = poly[i]
+        c = poly[i + 1 if i + 1 < n else 0]
+        ux = pts[c, 0] - pts[b, 0]
+        uy = pts[c, 1] - pts[b, 1]
+        vx = pts[a, 0] - pts[b, 0]
+        vy = pts[a, 1] - pts[b, 1]
+        ang = math.atan2(ux * vy - uy * vx, ux * vx + uy * vy)  # from b->c counter-clockwise to b->a
+        if ang < 0.0:
+            ang += 2.0 * math.pi
+        best = min(best, ang)
+    return 0.5 * best
 
 
 @njit(cache=True, nogil=True)
@@ -614,7 +652,8 @@ def _across(tri, twin, pinned, poly, phe, n, i):
 
 
 @njit(cache=True, nogil=True)
-def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters, is_cov, absorb):
+def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters, is_cov, absorb, unc,
+               group):
     """Groups of adjacent uncovered triangles, each to be replaced by one fan.
 
     Chains of triangles no cover cycle passes (thin parts, what ears leave) would
@@ -635,6 +674,11 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     ``A`` at 87 triangles each fan was otherwise a cycle of its own, joined by a Thm 2.4
     bridge: two incenters more).
 
+    ``unc``: the uncovered triangles, ascending (``cyc < 0``), the groups' starts in
+    that order; ``group`` (m,) int64, all -1, filled in place (the caller's pages: at
+    1.5 M triangles a scan of every row and a fresh 12 MB array cost ~15 ms for a few
+    dozen uncovered triangles).
+
     Returns ``(group (m,) int64, -1 if none; fan points (g, 2); group minimum angle
     (g,); polygon offsets (g + 1,); polygon corners; polygon edge half-edges;
     absorbed (g,) the covered triangle taken in or -1; apex (g,) the index of its apex
@@ -643,15 +687,15 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     corners[i + 1])`` is the input half-edge ``he[i]`` (for an absorbed ``y``, the two
     edges around its apex are ``y``'s).
     """
-    m = tri.shape[0]
-    group = np.full(m, -1, np.int64)
-    fan_pt = np.empty((m // 2 + 1, 2))
-    gmin_out = np.empty(m // 2 + 1)
-    off = np.zeros(m // 2 + 2, np.int64)
-    corners = np.empty(2 * m + 2, np.int64)
-    hes = np.empty(2 * m + 2, np.int64)
-    absorbed = np.full(m // 2 + 1, -1, np.int64)
-    apex = np.full(m // 2 + 1, -1, np.int64)
+    # a group has >= 2 uncovered members and at most one covered: <= k + 3 <= 2.5 k corners
+    k_unc = unc.shape[0]
+    fan_pt = np.empty((k_unc // 2 + 1, 2))
+    gmin_out = np.empty(k_unc // 2 + 1)
+    off = np.zeros(k_unc // 2 + 2, np.int64)
+    corners = np.empty(3 * k_unc + 3, np.int64)
+    hes = np.empty(3 * k_unc + 3, np.int64)
+    absorbed = np.full(k_unc // 2 + 1, -1, np.int64)
+    apex = np.full(k_unc // 2 + 1, -1, np.int64)
     ng = 0
     n_c = 0
     cap = max_group + 3
@@ -661,7 +705,7 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     tphe = np.empty(cap, np.int64)
     members = np.empty(cap, np.int64)
     starts = np.empty((cap, 2))
-    for s in range(m):
+    for s in unc:
         if cyc[s] >= 0 or group[s] >= 0:
             continue
         nm = 1
@@ -1233,7 +1277,7 @@ def load_ring_kernels() -> None:
     members = np.arange(2, dtype=np.int64)
     n = _sk.union_polygon_into(tri, twin, np.zeros(6, np.bool_), members, poly, hes)
     for amin, keep in ((np.zeros(0), 0.0), (np.full(2, 0.5), 0.9)):
-        _sk.ring_fan_point(pts, tri, members, poly, int(n), amin, keep, 0.1, 2.5, 2)
+        _sk.ring_fan_point(pts, tri, members, poly, int(n), amin, keep, 0.1, 2.5, 2, 0.0)
     # the improvement step's repair of rows missing the absolute targets
     # (``sparse._repair_targets``: a first call at 1.5 M loaded it, 5-14 ms)
     move_to_targets(pts, tri, twin, np.zeros(6, np.bool_), np.zeros(0, np.int64), 0.1, 2.5, 0.05, 2)

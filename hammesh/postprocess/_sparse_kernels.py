@@ -31,7 +31,9 @@ from hammesh import threads
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-from hammesh.postprocess._join_kernels import place_fan, quad_corners, swap_merge_outcome
+from hammesh.postprocess._join_kernels import (
+    CORNER_BOUND_RTOL, half_smallest_corner, place_fan, quad_corners, swap_merge_outcome,
+)
 from hammesh.postprocess._thm24_kernels import find_root as _find
 from hammesh.postprocess._thm24_kernels import lower_bound
 
@@ -1157,13 +1159,16 @@ def union_polygon_into(tri, twin, pinned, members, poly, hes):
 
 
 @njit(cache=True, nogil=True)
-def ring_fan_point(pts, tri, members, poly, n, amin, keep, lo, hi, iters):
+def ring_fan_point(pts, tri, members, poly, n, amin, keep, lo, hi, iters, need=0.0):
     """``place_fan`` over ``poly[:n]`` for a ring fan of ``members`` (``sparse._best_ring``).
 
     Starts: the members' centroids; the first compass step a quarter of the distance
     from the first centroid to the nearest corner. The lower bound is ``lo``, or with
     ``keep > 0`` the larger of ``lo`` and ``keep`` x the members' smallest ``amin``.
-    Returns ``(x, y, slack, smallest angle, largest angle, the bound used)``.
+    Returns ``(x, y, slack, smallest angle, largest angle, the bound used)``; slack
+    ``-inf`` without a search where no fan point can keep the smallest angle at the bound
+    or at ``need`` (the caller's floor): half the polygon's smallest corner is below
+    (``_join_kernels.half_smallest_corner``; most ring groups of 2-4 triangles at 1.5 M).
     """
     nm = members.shape[0]
     lo_g = lo
@@ -1172,6 +1177,8 @@ def ring_fan_point(pts, tri, members, poly, n, amin, keep, lo, hi, iters):
         for i in range(nm):
             a = min(a, amin[members[i]])
         lo_g = max(lo, keep * a)
+    if half_smallest_corner(pts, poly, n) < max(lo_g, need) * (1.0 - CORNER_BOUND_RTOL):
+        return 0.0, 0.0, -np.inf, 0.0, np.pi, lo_g
     starts = np.empty((nm, 2))
     for i in range(nm):
         x = members[i]

@@ -239,7 +239,8 @@ def _join_order(
     return idx[np.lexsort((-slack[idx], cls[idx], kk, tier))]
 
 
-def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, floor: float, amax_in: float):
+def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, floor: float, amax_in: float,
+          unc: np.ndarray):
     """Replace groups of uncovered triangles by fans (``_join_kernels.fan_groups``).
 
     Returns the modified ``(points, triangles, twin, pinned, cover, parent_min,
@@ -247,7 +248,8 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     None): the fans' points follow the input points, fan
     triangles follow the kept ones; ``orig_of`` maps each triangle to the input
     triangle it lies in or over (a fan triangle: the one holding its outer edge),
-    ``parent_min`` is the smallest angle of the triangles each one replaces.
+    ``parent_min`` is the smallest angle of the triangles each one replaces. ``unc``:
+    the uncovered triangles, ascending.
     """
     m = len(tri)
     hi_fan = max(hi, 0.5 * math.pi + 0.5 * amax_in)  # no worse than an incenter sector
@@ -255,7 +257,7 @@ def _fans(pts, tri, tw, con, cover: CycleCover, amin_t, keep: float, hi: float, 
     # them at their incenters later, and Thm 2.4's bound then needs exactly that
     group, fpt, gmin, off, corners, hes, absorbed, apex = _j.fan_groups(
         pts, tri, tw, con, cover.cycle, amin_t, float(keep), hi, 2.0 * floor, hi_fan, FAN_MAX, PLACE_ITERS,
-        cover.is_cov, FAN_ABSORB,
+        cover.is_cov, FAN_ABSORB, unc, fresh(m, np.int64, -1),
     )
     n_fan = len(fpt)
     if n_fan == 0:  # (no new orig_of, is_fan: the caller's stand; an arange here faulted 12 MB at 1.5 M)
@@ -419,7 +421,7 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
                 poly = np.asarray(pp[0], np.int64)
                 # (centroids as starts, the first step, the local rule's bound: in the kernel)
                 x, y, sl, nmin, nmax, lo_g = _k.ring_fan_point(
-                    pts, tri, ms, poly, len(poly), amin_k, keep_k, lo, hi, PLACE_ITERS + 2
+                    pts, tri, ms, poly, len(poly), amin_k, keep_k, lo, hi, PLACE_ITERS + 2, float(floor2)
                 )
                 ok = sl > -math.inf and nmin >= max(lo_g, floor2) and nmax <= hi
                 if ok and (best is None or (sl, -len(members)) > (best[0], -len(best[1]))):
@@ -1939,7 +1941,7 @@ def sparse_cycles(
     n_fan, amin_p = 0, amin_t
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered > 1:
         pts, tri, tw, con, cover, amin_p, orig_f, fan_f, n_fan = _fans(
-            pts, tri, tw, con, cover, amin_t, keep, hi, floor, amax_in
+            pts, tri, tw, con, cover, amin_t, keep, hi, floor, amax_in, unc_all
         )
         if n_fan:  # (else the arrays with room made above stay)
             orig_of, is_fan = orig_f, fan_f

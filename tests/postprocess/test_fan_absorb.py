@@ -52,7 +52,8 @@ def _fans_on(mesh: hammesh.Mesh):
     hi = float(amax_t.max()) + math.radians(S.MAX_ANGLE_SLACK_DEG)
     floor = 0.5 * amin * (1.0 + S.SWAP_MARGIN)
     cover = cycle_cover(tri, tw)
-    got = S._fans(pts, tri, tw, is_con, cover, amin_t, S.KEEP, hi, floor, float(amax_t.max()))
+    got = S._fans(pts, tri, tw, is_con, cover, amin_t, S.KEEP, hi, floor, float(amax_t.max()),
+                  np.flatnonzero(cover.cycle < 0))
     return cover, got, amin
 
 

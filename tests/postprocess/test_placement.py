@@ -124,3 +124,47 @@ def test_ridge_ascent_never_loses_and_stays_in_the_kernel(n, r, lo_deg) -> None:
     assert s >= s0
     assert s == J.fan_eval(xy, poly, n, x, y, lo, hi)[0]
     assert s == pytest.approx(_grid_slack(xy, lo, hi, np.array([x]), np.array([y]))[0], abs=1e-9)
+
+
+def _interior_angles(xy: np.ndarray) -> np.ndarray:
+    """Interior angle at every corner of a counter-clockwise polygon (numpy, own code)."""
+    prev, nxt = np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0)
+    u, v = nxt - xy, prev - xy
+    ang = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], (u * v).sum(axis=1))
+    return np.where(ang < 0, ang + 2 * np.pi, ang)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n=st.integers(3, 9),
+    r=st.lists(st.floats(0.3, 1.5), min_size=9, max_size=9),
+    jitter=st.lists(st.floats(-0.3, 0.3), min_size=9, max_size=9),
+    w=st.lists(st.floats(0.05, 1.0), min_size=9, max_size=9),
+)
+def test_no_fan_beats_half_the_smallest_corner(n, r, jitter, w) -> None:
+    """``half_smallest_corner`` bounds every fan's smallest angle from above (the fan
+    search is skipped below it): at any point of the kernel, here a weighted mean of
+    a star-shaped polygon's corners seen from its centre, and at the optimum found."""
+    ang = 2 * np.pi * (np.arange(n) + np.array(jitter[:n])) / n
+    xy = np.c_[np.array(r[:n]) * np.cos(ang), np.array(r[:n]) * np.sin(ang)]
+    poly = np.arange(n)
+    bound = J.half_smallest_corner(xy, poly, n)
+    assert bound == pytest.approx(0.5 * _interior_angles(xy).min(), abs=1e-12)
+    lo, hi = 0.0, math.pi
+    wt = np.array(w[:n])
+    p = 0.2 * (wt[:, None] * xy).sum(axis=0) / wt.sum()  # near the centre, a kernel point
+    s, nmin, _ = J.fan_eval(xy, poly, n, float(p[0]), float(p[1]), lo, hi)
+    if s > -np.inf:
+        assert nmin <= bound + 1e-12
+    x, y, s_opt, nmin_opt, _ = J.compass_search(xy, poly, n, 0.0, 0.0, lo, hi, 0.1, 6, J.NO_ROUND_CAP)
+    if s_opt > -np.inf:
+        assert nmin_opt <= bound + 1e-12
+
+
+def test_incenter_fan_reaches_half_the_smallest_corner() -> None:
+    """The bound is tight: a triangle's incenter halves each corner."""
+    xy = np.array([[0.0, 0.0], [4.0, 0.0], [1.0, 2.5]])
+    a, b, c = (np.linalg.norm(xy[(i + 1) % 3] - xy[(i + 2) % 3]) for i in range(3))
+    inc = (a * xy[0] + b * xy[1] + c * xy[2]) / (a + b + c)
+    nmin = J.fan_eval(xy, np.arange(3), 3, float(inc[0]), float(inc[1]), 0.0, math.pi)[1]
+    assert nmin == pytest.approx(J.half_smallest_corner(xy, np.arange(3), 3), abs=1e-12)

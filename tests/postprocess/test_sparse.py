@@ -364,6 +364,31 @@ def test_sliver_circle_is_fast_and_linear() -> None:
     assert t4 < 8.0 * t1, (t1, t4)
 
 
+def test_thin_strip_is_fast_and_linear() -> None:
+    # A one-triangle-wide strip (50 x 0.01, q30: ~6 k triangles) has a path for its dual:
+    # no cover cycle, every triangle uncovered. The fan groups tried to grow a fan from
+    # every triangle, each try a placement search and ridge ascent that could not keep
+    # the bound (the strip's corners are ~50 degrees, the fans' bound the input's ~30):
+    # 0.57 s CPU at 6 k triangles (1.2 s at 12 k), now refused by the corner bound
+    # without a search (``_join_kernels.half_smallest_corner``). Bounds generous for a
+    # loaded machine (CPU seconds: the step is one thread's).
+    def strip(length: float) -> hammesh.Mesh:
+        dom = hammesh.Domain.from_polygon([[0, 0], [length, 0], [length, 0.01], [0, 0.01]])
+        return hammesh.quality_mesh(dom, min_angle=30, isolate=False)
+
+    m1, m2 = strip(12.5), strip(50.0)
+    hammesh.hamiltonian(m1)  # (compiled kernels loaded)
+    h = hammesh.hamiltonian(m2)
+    assert_sparse_certificate(m2, h)
+    assert h.report["uncovered"] == m2.n_triangles  # (the dual is a path: no cycle to cover)
+    assert h.report["step_cpu_seconds"]["fans"] < 0.25, h.report["step_cpu_seconds"]
+    # linear: 4x the triangles well under 16x the time (best of 3 against load)
+    t1 = _best_time(lambda: hammesh.hamiltonian(m1), 3)
+    t2 = _best_time(lambda: hammesh.hamiltonian(m2), 3)
+    assert t2 < 8.0 * t1 + 0.5, (t1, t2)
+    assert t2 < 20.0
+
+
 @pytest.mark.parametrize("name", ["face", "square_circle_hole"])
 def test_improvement_flips_keep_the_cycle_and_never_worsen(name: str, monkeypatch) -> None:
     # issue 13: the cavity of a join re-triangulated by flips of edges the cycle

@@ -437,7 +437,7 @@ def test_ring_fan_point_places_as_the_numpy_starts_did() -> None:
     clean, he, con = prepare_mesh(hammesh.quality_mesh(dom, min_angle=30, max_area=0.5, isolate=False))
     pts, tri, tw = clean.points, clean.triangles, he.twin
     amin = sparse.triangle_angles(pts, tri)[0]
-    n = 0
+    n = refused = 0
     for h in np.flatnonzero(tw > np.arange(len(tw)))[:200].tolist():
         members = [h // 3, int(tw[h] // 3)]
         pp = sparse._union_polygon(tri, tw, con, np.asarray(members))
@@ -451,9 +451,23 @@ def test_ring_fan_point_places_as_the_numpy_starts_did() -> None:
             step = 0.25 * np.sqrt(float(((pts[poly] - starts[0]) ** 2).sum(axis=1).min()))
             want = _join_kernels.place_fan(pts, poly, len(poly), starts, len(starts), lo_g, 2.5, step, 8)
             got = sk.ring_fan_point(pts, tri, np.asarray(members), poly, len(poly), amin, keep, lo, 2.5, 8)
-            assert got[:5] == want and got[5] == lo_g
+            assert got[5] == lo_g
+            if got[2] == -np.inf and want[2] > -np.inf:
+                # refused without a search (session 16): no fan point keeps lo_g there,
+                # so the search's point is one the caller refuses too
+                assert want[3] < lo_g
+                refused += 1
+            else:
+                assert got[:5] == want
+            # the caller's floor: above half the smallest corner, never a fan (no search)
+            half = _join_kernels.half_smallest_corner(pts, poly, len(poly))
+            over = sk.ring_fan_point(pts, tri, np.asarray(members), poly, len(poly), amin, keep, lo, 2.5, 8,
+                                     1.01 * half)
+            assert over[2] == -np.inf
+            if want[2] > -np.inf:
+                assert want[3] <= half + 1e-12
             n += 1
-    assert n > 20
+    assert n > 20 and refused < n
 
 
 @pytest.mark.parametrize("name", ["A", "regions"])
