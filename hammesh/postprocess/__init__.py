@@ -11,8 +11,9 @@ import numpy as np
 
 from hammesh import pages, params, threads
 from hammesh.domain.resolution import check_resolution, snap_steiner_points
-from hammesh.errors import InvalidDomainError, InvalidOptionError, VerificationError
+from hammesh.errors import InvalidDomainError, InvalidMeshError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
+from hammesh.planar_overlap import find_overlap
 from hammesh.point_data import carry_point_data
 from hammesh.postprocess.incircle import TREES, incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
@@ -99,6 +100,23 @@ def load_kernels(mode: str = "sparse") -> None:
             kept_radius_ratio(m.points, m.triangles, np.full(m.n_triangles, 3, np.int8), np.arange(m.n_triangles),
                               np.zeros(m.n_triangles))
         _loaded_modes.add(mode)
+
+
+def refuse_overlap(clean: Mesh, he) -> None:
+    """Refuse a planar input mesh two of whose triangles overlap without sharing an edge.
+
+    The validation sees overlaps across a shared edge (a triangle turned over); two
+    triangles that meet at a vertex only, or not at all, can still lie on each other,
+    and then the output would "tile" an input that covers some area twice (``hammesh
+    check`` of it, which has no input to compare with, finds them). Only triangles
+    with a boundary edge need testing (``hammesh.planar_overlap``): cheap next to the
+    construction. Triangle's own meshes (``quality_mesh``) are planar by construction.
+    """
+    pair = find_overlap(clean.points, clean.triangles, twin=he.twin)
+    if pair is not None:
+        i, j = pair
+        raise InvalidMeshError(f"triangles {i} and {j} overlap (a planar mesh covers each point once): "
+                               "not a planar triangulation")
 
 
 def _snapped(out: HamiltonianMesh, clean: Mesh, facts, claim) -> tuple[HamiltonianMesh, int, dict | None]:
@@ -227,6 +245,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         # orientation pass finds: sparse.LOCAL_MIN_TRIANGLES)
         local = mode == "sparse" and len(shape) == 2 and shape[0] >= sparse_module.LOCAL_MIN_TRIANGLES
         clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle", cells=local)
+        if not mesh.info.get("backend"):  # (not Triangle's own mesh: see refuse_overlap)
+            refuse_overlap(clean, he)
         rows = prepared = vmarks = None
         if mode == "incircle":
             serial = isinstance(side, threads.InlineExecutor)  # (no row stream then: its checker waits for rows)
