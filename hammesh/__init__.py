@@ -52,7 +52,10 @@ _LAZY_NAMES = {
     "partitioned": "hammesh.partition",
     "verify": "hammesh.verify",
 }
-_LAZY_SUBPACKAGES = ("strips", "polygon", "pointset")
+#: subpackages and modules reachable as ``hammesh.NAME`` after a plain ``import hammesh``
+#: (the docs write ``hammesh.io.unwritten_data``, ``hammesh.fem.boundary_facets``)
+_LAZY_SUBPACKAGES = ("strips", "polygon", "pointset", "io", "fem", "domain", "surface", "meshing",
+                     "parallel", "plot", "numbering", "halfedge", "postprocess", "params", "predicates")
 
 #: Public functions named like the subpackage that defines them (``hammesh.verify`` is
 #: the function, ``hammesh.partition`` too): the import system binds a subpackage to

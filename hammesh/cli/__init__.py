@@ -275,6 +275,8 @@ def _main(argv: Sequence[str] | None) -> int:
             # numpy's overflow/divide notes from hammesh's own arithmetic on extreme input
             # are not the user's to act on, and the CLI promises one line on bad input
             warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"hammesh\.")
+            # (and numpy's own, raised inside its reductions on such input: a .npy of NaNs)
+            warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"numpy\.")
             return int(args._run(args))
     except VerificationError as exc:
         _say(f"hammesh: verification failed: {exc}")

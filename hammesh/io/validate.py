@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammesh.errors import InvalidMeshError
+from hammesh.errors import InvalidMeshError, InvalidOptionError
 from hammesh.mesh import HamiltonianMesh, Mesh
 
 __all__ = ["validate_mesh"]
@@ -54,6 +54,8 @@ def validate_mesh(mesh: Mesh | HamiltonianMesh) -> None:
     ...
     hammesh.errors.InvalidMeshError: triangles[0, 2] = 3 is out of range [0, 3) (the mesh has 3 points)
     """
+    if not isinstance(mesh, (Mesh, HamiltonianMesh)):  # (a Domain, a meshio.Mesh, arrays...)
+        raise InvalidOptionError(f"mesh must be a hammesh.Mesh or HamiltonianMesh, got {type(mesh).__name__}")
     points = np.asarray(mesh.points)
     if points.ndim != 2 or points.shape[1] not in (2, 3):
         raise InvalidMeshError(f"points must have shape (n, 2) or (n, 3), got {points.shape}")

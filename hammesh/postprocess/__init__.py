@@ -201,6 +201,11 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: s
 
 def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> HamiltonianMesh:
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
+    if isinstance(mesh, HamiltonianMesh):  # (its cycle is the input's order: kept_cycle)
+        mesh = Mesh(mesh.points, mesh.triangles, segments=mesh.segments, segment_markers=mesh.segment_markers,
+                    triangle_attributes=mesh.triangle_attributes,
+                    vertex_markers=mesh.vertex_markers if mesh.vertex_markers is not None else np.zeros(0, np.int64),
+                    attribute_names=mesh.attribute_names, point_data=dict(mesh.point_data))
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     if isinstance(keep, (bool, np.bool_)) or not (isinstance(keep, numbers.Real) and 0.0 <= keep <= 1.0):

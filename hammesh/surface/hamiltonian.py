@@ -37,6 +37,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from hammesh import params
+
 from hammesh.errors import InvalidMeshError
 from hammesh.halfedge import mesh_arrays
 from hammesh.mesh import HamiltonianMesh, cycle_positions
@@ -153,6 +155,25 @@ def prepare_surface(points: np.ndarray, triangles: np.ndarray) -> PreparedSurfac
     return PreparedSurface(pts, kept, pairing.twin, rows.astype(np.int64), found)
 
 
+def _check_options(points, triangles, max_fold_deg, triangle_attributes, attribute_names, point_data) -> None:
+    """The options' shapes against the mesh's rows and points (before any work)."""
+    params.number("max_fold_deg", max_fold_deg, low=0, high=180, what="degrees")
+    n = np.shape(points)[0] if np.ndim(points) == 2 else 0
+    m = np.shape(triangles)[0] if np.ndim(triangles) == 2 else 0
+    if triangle_attributes is not None:
+        shape = np.shape(triangle_attributes)
+        if len(shape) != 2 or shape[0] != m:
+            raise params.invalid("triangle_attributes", f"<array of shape {shape}>",
+                                 f"an (m, k) array with one row per triangle (m = {m})")
+        if attribute_names and len(attribute_names) != shape[1]:
+            raise params.invalid("attribute_names", tuple(attribute_names),
+                                 f"one name per attribute column ({shape[1]})")
+    for key, values in (point_data or {}).items():
+        if np.ndim(values) not in (1, 2) or np.shape(values)[0] != n:
+            raise params.invalid(f"point_data[{key!r}]", f"<array of shape {np.shape(values)}>",
+                                 f"one value or row per point (n = {n})")
+
+
 def surface_hamiltonian(
     points: np.ndarray,
     triangles: np.ndarray,
@@ -208,6 +229,7 @@ def surface_hamiltonian(
     (1, True)
     """
     t0 = time.perf_counter()
+    _check_options(points, triangles, max_fold_deg, triangle_attributes, attribute_names, point_data)
     prep = prepare_surface(points, triangles)
     pts, tri, twin = prep.points, prep.triangles, prep.twin
     n, m = len(pts), len(tri)

@@ -1,0 +1,63 @@
+"""Misused public functions raise HammeshError subclasses naming the problem."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh.errors import InvalidOptionError
+
+P3 = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
+T = np.array([[0, 1, 2], [0, 2, 3]])
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"triangle_attributes": np.zeros((5, 1))}, "triangle_attributes"),
+    ({"triangle_attributes": np.zeros(2)}, "triangle_attributes"),
+    ({"triangle_attributes": np.zeros((2, 1)), "attribute_names": ("a", "b")}, "attribute_names"),
+    ({"point_data": {"a": np.zeros(2)}}, "point_data['a']"),
+    ({"max_fold_deg": -1}, "max_fold_deg=-1"),
+    ({"max_fold_deg": 181}, "max_fold_deg=181"),
+])
+def test_surface_options_checked(kwargs, needle):
+    from hammesh.surface import surface_hamiltonian
+
+    with pytest.raises(InvalidOptionError) as info:
+        surface_hamiltonian(P3, T, **kwargs)
+    assert needle in str(info.value)
+
+
+def test_surface_options_that_fit_are_taken():
+    from hammesh.surface import surface_hamiltonian
+
+    h = surface_hamiltonian(P3, T, triangle_attributes=np.array([[1.0], [2.0]]), attribute_names=("a",),
+                            point_data={"t": np.arange(4.0)})
+    assert h.attribute_names == ("a",) and sorted(np.unique(h.triangle_attributes)) == [1.0, 2.0]
+
+
+def test_write_refuses_a_domain(tmp_path):
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    with pytest.raises(InvalidOptionError, match="Domain"):
+        hammesh.write(dom, tmp_path / "d.vtu")
+    assert not (tmp_path / "d.vtu").exists()
+
+
+def test_hamiltonian_of_a_hamiltonian_mesh_keeps_it():
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=25, max_area=0.01))
+    again = hammesh.hamiltonian(h)
+    np.testing.assert_array_equal(again.triangles, h.triangles)
+    np.testing.assert_array_equal(again.points, h.points)
+    assert again.report["kept_input_cycle"]
+
+
+def test_subpackages_reachable_after_plain_import():
+    code = ("import hammesh; hammesh.io.unwritten_data; hammesh.fem.boundary_facets; "
+            "hammesh.domain.write_poly; hammesh.surface.surface_hamiltonian; hammesh.meshing.quality_mesh; "
+            "import types; assert isinstance(hammesh.verify, types.FunctionType); "
+            "assert isinstance(hammesh.partition, types.FunctionType)")
+    subprocess.run([sys.executable, "-c", code], check=True)
