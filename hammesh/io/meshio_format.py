@@ -75,6 +75,7 @@ from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
 from hammesh.io import tags, vtu
 from hammesh.io.raw import RawMesh
+from hammesh.io.text_rows import header_token
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, split_components, triangle_cell_data
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh
@@ -174,7 +175,11 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
         elif suffix in _TEXT_WRITERS:  # meshio's text writers format a line per Python call
             _write_text(suffix, tmp, mesh, out)
         else:
+            if suffix == ".vtk":  # (legacy VTK names are one word: VTK's own %XX encoding)
+                out.point_data = {header_token(k): v for k, v in out.point_data.items()}
+                out.cell_data = {header_token(k): v for k, v in out.cell_data.items()}
             meshio.write(tmp, out, file_format=file_format, **kwargs)
+
 
 
 #: Suffixes written by hammesh's own vectorised text writers (:mod:`hammesh.io.text_rows`).

@@ -35,14 +35,20 @@ https://paulbourke.net/dataformats/ply/.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
+
+from urllib.parse import unquote
 
 import numpy as np
 
 from hammesh.errors import FileFormatError
 from hammesh.io.cell_data import join_components
 from hammesh.io.text_rows import header_token, write_rows
+
+#: characters of a data name that are not kept in a PLY property name (see _ply_columns)
+_PLY_UNSAFE = re.compile(r"[^A-Za-z0-9_]")
 from hammesh.io.raw import CellBlock, RawMesh, polygon_block_rows, polygon_blocks
 
 __all__ = ["read_ply", "write_ply", "PLY_TYPES"]
@@ -89,7 +95,7 @@ def read_ply(path: str | Path) -> RawMesh:
     try:
         fmt, elements, body = _header(data)
         values = (_read_ascii if fmt == "ascii" else _read_binary)(data, body, elements, fmt)
-        return _mesh(elements, values, _header_vectors(data))
+        return _mesh(elements, values, _header_vectors(data), _header_names(data))
     except _Bad as exc:
         raise FileFormatError(f"{path}: {exc}") from None
 
@@ -257,7 +263,8 @@ def _cast(values: np.ndarray, dt: np.dtype, element: str, name: str) -> np.ndarr
     return values.astype(dt)
 
 
-def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vectors: dict[str, int]) -> RawMesh:
+def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vectors: dict[str, int],
+          names: dict[str, str]) -> RawMesh:
     vertex = values.get("vertex", {})
     if not all(k in vertex for k in "xyz"):
         raise _Bad("no vertex element with properties x y z")
@@ -271,7 +278,7 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vector
             not_carried.append(f"vertex list property {name!r}")
         else:
             point_data[name] = v
-    point_data = _joined_vectors(point_data, vectors)
+    point_data = {names.get(k, k): v for k, v in _joined_vectors(point_data, vectors).items()}
     blocks: list[CellBlock] = []
     cell_data: dict[str, list[np.ndarray]] = {}
     face = values.get("face", {})
@@ -290,7 +297,7 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vector
             else:
                 scalars[name] = v
         for name, v in join_components(_joined_vectors(scalars, vectors)).items():
-            cell_data[name] = [v[r] for r in rows]
+            cell_data[names.get(name, name)] = [v[r] for r in rows]
     edge = values.get("edge", {})
     if "vertex1" in edge and "vertex2" in edge:
         blocks.append(CellBlock("line", np.column_stack([edge["vertex1"], edge["vertex2"]]).astype(np.int64)))
@@ -308,19 +315,23 @@ _WRITE_TYPES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4"
                 "f4": "float", "f8": "double", "b1": "uchar"}
 
 
-def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str]) -> tuple[list[tuple[str, np.ndarray]], list[str]]:
+def _ply_columns(data: dict[str, np.ndarray], rows: int,
+                 taken: set[str]) -> tuple[list[tuple[str, np.ndarray]], list[str], list[str]]:
     """``(property name, column)`` of every numeric array of ``data`` (a vector ``v`` as
-    ``v_0``, ``v_1``...; 64-bit integers as ``int`` if they fit, else ``double``), and the
-    vectors as ``v:c`` for the header's ``comment hammesh vectors`` line."""
-    out, vectors = [], []
+    ``v_0``, ``v_1``...; 64-bit integers as ``int`` if they fit, else ``double``), the
+    vectors as ``v:c`` for the header's ``comment hammesh vectors`` line, and
+    ``"token name"`` (``text_rows.header_token``'s encoding) for each ``comment hammesh
+    name`` line of a name that is not its property's."""
+    out, vectors, renamed = [], [], []
     for name, values in data.items():
         values = np.asarray(values)
         if values.dtype.kind not in "biuf" or len(values) != rows:
             continue
         values = values.reshape(rows, -1)
         c = values.shape[1]
-        # a header token: no blanks, ASCII (a name that is not is written with '?')
-        token = header_token(name).encode("ascii", "replace").decode()
+        # a property name meshio's reader takes (numpy's genfromtxt drops any other
+        # character); the exact name goes in a ``comment hammesh name`` line
+        token = _PLY_UNSAFE.sub("_", str(name)) or "_"
         names = lambda t: [t] if c == 1 else [f"{t}_{j}" for j in range(c)]  # noqa: E731
         while token in taken or taken.intersection(names(token)):  # (x y z, another field's)
             token = f"input_{token}"
@@ -333,7 +344,9 @@ def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str]) -> tup
         out += [(label, values[:, j]) for j, label in enumerate(names(token))]
         if c > 1:
             vectors.append(f"{token}:{c}")
-    return out, vectors
+        if token != name:
+            renamed.append(f"{token} {header_token(name)}")
+    return out, vectors, renamed
 
 
 def _joined_vectors(data: dict[str, np.ndarray], vectors: dict[str, int]) -> dict[str, np.ndarray]:
@@ -365,6 +378,18 @@ def _header_vectors(data: bytes) -> dict[str, int]:
     return out
 
 
+def _header_names(data: bytes) -> dict[str, str]:
+    """``{property name: data name}`` from ``comment hammesh name TOKEN NAME`` header lines
+    (``NAME`` in ``text_rows.header_token``'s %XX encoding)."""
+    out: dict[str, str] = {}
+    end = data.find(b"end_header", 0, _MAX_HEADER)
+    for raw in data[:max(end, 0)].decode("latin-1").splitlines():
+        words = raw.split()
+        if words[:3] == ["comment", "hammesh", "name"] and len(words) == 5:
+            out[words[3]] = unquote(words[4])
+    return out
+
+
 def _records(columns: list[tuple[str, np.ndarray]], rows: int) -> np.ndarray:
     """The columns as packed little-endian records (one per row)."""
     dtype = np.dtype([(f"f{j}", c.dtype.newbyteorder("<")) for j, (_, c) in enumerate(columns)])
@@ -390,13 +415,14 @@ def write_ply(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
     triangles = np.asarray(triangles, dtype=np.int64)
     n, m = len(points), len(triangles)
     vertex = [("x", points[:, 0]), ("y", points[:, 1]), ("z", points[:, 2])]
-    vertex_props, vertex_vectors = _ply_columns(point_data or {}, n, {"x", "y", "z"})
+    vertex_props, vertex_vectors, vertex_names = _ply_columns(point_data or {}, n, {"x", "y", "z"})
     vertex += vertex_props
-    face_props, face_vectors = _ply_columns(cell_data or {}, m, {"vertex_indices"})
+    face_props, face_vectors, face_names = _ply_columns(cell_data or {}, m, {"vertex_indices"})
     binary = not face_props
     head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by hammesh"]
     if vertex_vectors or face_vectors:
         head.append(f"comment hammesh vectors {' '.join(vertex_vectors + face_vectors)}")
+    head += [f"comment hammesh name {pair}" for pair in vertex_names + face_names]
     head.append(f"element vertex {n}")
     head += [f"property {_WRITE_TYPES[c.dtype.str[1:]]} {name}" for name, c in vertex]
     head += [f"element face {m}", "property list uchar int vertex_indices"]

@@ -80,6 +80,10 @@ def vertex_columns(points: np.ndarray, colors: np.ndarray | None = None) -> list
 
 
 def header_token(name: object) -> str:
-    """``name`` as one token of a text header (a ``.ele`` ``# attributes:`` comment, a PLY
-    property): white space becomes ``_``; an empty name is ``_``."""
-    return "_".join(str(name).split()) or "_"
+    """``name`` as one ASCII token of a text header (a ``.ele`` ``# attributes:`` comment, a
+    PLY property, a legacy VTK array): every byte of its UTF-8 that is a blank, a control or
+    non-ASCII character, ``"`` or ``%`` written as ``%XX``, as ``vtkDataWriter::EncodeString``
+    does (``my field`` is ``my%20field``, ``température`` ``temp%C3%A9rature``); the readers
+    decode it (``urllib.parse.unquote``). An empty name is ``_``."""
+    raw = str(name).encode("utf-8")
+    return "".join(chr(b) if 32 < b < 127 and b not in (34, 37) else f"%{b:02X}" for b in raw) or "_"

@@ -34,6 +34,8 @@ import os
 import warnings
 from pathlib import Path
 
+from urllib.parse import unquote
+
 import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError
@@ -107,7 +109,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     kind = "Hamiltonian mesh (triangles in cycle order)" if isinstance(mesh, HamiltonianMesh) else "mesh"
 
     with atomic_paths([node_path, poly_path, ele_path]) as (tmp_node, tmp_poly, tmp_ele):
-        with open(tmp_node, "w", encoding="ascii", newline="\n") as f:
+        with open(tmp_node, "w", encoding="utf-8", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .node file, zero-based\n")
             if point_names:
                 f.write(f"{_ATTRIBUTES_COMMENT} {' '.join(point_names)}\n")
@@ -119,7 +121,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
                 vmarks = np.zeros(n, dtype=np.int64)
             write_rows(f, [np.arange(n), points[:, 0], points[:, 1], *point_columns, vmarks])
 
-        with open(tmp_poly, "w", encoding="ascii", newline="\n") as f:
+        with open(tmp_poly, "w", encoding="utf-8", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .poly file, zero-based; vertices in {node_path.name}\n")
             f.write("0 2 0 1\n")
             f.write("# <# of segments> <# of boundary markers>\n")
@@ -128,7 +130,7 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
             write_rows(f, [np.arange(s), segments[:, 0], segments[:, 1], markers])
             f.write("# <# of holes>\n0\n")
 
-        with open(tmp_ele, "w", encoding="ascii", newline="\n") as f:
+        with open(tmp_ele, "w", encoding="utf-8", newline="\n") as f:
             f.write(f"# hammesh {kind}: Triangle .ele file, zero-based\n")
             f.write(f"{_ATTRIBUTES_COMMENT} {' '.join(names)}\n")
             f.write("# <# of triangles> <nodes per triangle> <# of attributes>\n")
@@ -327,7 +329,7 @@ def _comment_names(tok: "_Tokens", k: int) -> list[str] | None:
     names = None
     for comment in tok.comments:
         if comment.startswith(_ATTRIBUTES_COMMENT):
-            names = comment[len(_ATTRIBUTES_COMMENT):].split()
+            names = [unquote(w) for w in comment[len(_ATTRIBUTES_COMMENT):].split()]  # (text_rows.header_token)
     return names if names is not None and len(names) == k else None
 
 

@@ -79,7 +79,10 @@ class _Reader:
             end = len(self.buf) if end < 0 else end
             raw = self.buf[self.pos:end]
             self.pos = end + 1
-            words = raw.decode("latin-1").split()
+            try:  # (names are UTF-8 as VTK, meshio and pyvista write them; older files Latin-1)
+                words = raw.decode("utf-8").split()
+            except UnicodeDecodeError:
+                words = raw.decode("latin-1").split()
             if words:
                 return words
         return None
