@@ -24,11 +24,12 @@ from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.parallel.decoupled import (MAX_ROUNDS, bad_corner_vertices, coarse_min_angle, repair_rows,
                                         small_angle_vertices)
 from hammesh.parallel.joins import BorderRows, Plan, TilePiece, border_rows, finish_tile, plan_joins
+from hammesh.parallel.markers import input_vertex_markers, marked_inputs, point_markers
 from hammesh.parallel.tile_mesh import mesh_tile
 from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
-__all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
+__all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
            "not_carried", "SUMMARIES_WITH_TILES"]
@@ -519,9 +520,17 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
     report["triangles"] = int(len(h.triangles))
     if not_carried(domain):
         report["not_carried"] = not_carried(domain)
+    vmarks = point_markers(np.arange(len(h.points)), h.segments, h.segment_markers, domain_marks(domain))
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,
                            segment_markers=h.segment_markers, components=h.components, position=h.position,
-                           parent=h.parent, kind=h.kind, triangle_attributes=h.triangle_attributes, report=report)
+                           parent=h.parent, kind=h.kind, triangle_attributes=h.triangle_attributes, report=report,
+                           vertex_markers=vmarks)
+
+
+def domain_marks(domain: Domain) -> tuple[np.ndarray, np.ndarray]:
+    """The input vertices' nonzero markers as the serial path gives them
+    (:func:`~hammesh.parallel.markers.input_vertex_markers`): ``(ids, markers)``."""
+    return marked_inputs(input_vertex_markers(domain.vertex_markers, domain.segments, domain.segment_markers))
 
 
 def not_carried(domain: Domain) -> list[str]:
@@ -529,17 +538,13 @@ def not_carried(domain: Domain) -> list[str]:
     report's ``not_carried``, printed by the command as ``note:`` lines, as the serial
     path does): its vertex attributes (``Domain.vertex_attributes``, from a ``.node``
     or ``.poly``), which the serial Triangle backend interpolates to every output
-    point but the tiles do not take, and its nonzero vertex markers (the serial
-    output's ``vertex_markers``)."""
+    point but the tiles do not take. (Its vertex markers are carried since session 16:
+    :mod:`hammesh.parallel.markers`.)"""
     out = []
     va = getattr(domain, "vertex_attributes", None)
     k = int(np.shape(va)[-1]) if va is not None and np.ndim(va) == 2 else 0
     if k:
         out.append(f"vertex attributes ({k} per vertex): parallel meshing does not interpolate them "
-                   "(hammesh mesh without --workers/--tiles/--partitioned does)")
-    vm = getattr(domain, "vertex_markers", None)
-    if vm is not None and np.any(np.asarray(vm) != 0):
-        out.append("vertex markers: parallel meshing does not carry them to the output points "
                    "(hammesh mesh without --workers/--tiles/--partitioned does)")
     return out
 
