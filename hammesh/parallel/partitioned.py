@@ -36,7 +36,7 @@ from hammesh.io.tags import VERTEX_MARKER
 from hammesh.partition import spread_parts
 from hammesh.parallel.markers import point_markers
 from hammesh.parallel.run import (decompose_estimate, default_tiles, domain_marks, finish_args, not_carried, on_holder,
-                                  outcome_hamiltonian, progress_bar, run_tiles, since_start)
+                                  outcome_hamiltonian, progress_bar, run_tiles, since_start, task_clock)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target",
            "piece_types", "int_type", "spill_wanted", "HELD_BYTES_PER_TRIANGLE", "SPILL_SHARE"]
@@ -161,7 +161,7 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     from hammesh.io.pvtu import VTK_TRIANGLE, write_raw_chunks
     from hammesh.parallel.joins import CHUNK_ROWS, piece_layout
 
-    t0, c0 = time.perf_counter(), time.process_time()
+    e0, t0, c0 = time.time(), time.perf_counter(), time.process_time()
     h = outcome_hamiltonian(outcome)
     lay = piece_layout(h, *args)
     t1, c1 = time.perf_counter(), time.process_time()
@@ -256,7 +256,7 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     first = int(lay.items[0][0]) if lay.items else -1
     return (Path(path).name, mr, first, w, sizes,
             {"finish": t1 - t0, "write": time.perf_counter() - t1, "cpu_finish": c1 - c0,
-             "cpu_write": time.process_time() - c1})
+             "cpu_write": time.process_time() - c1, "clock": (e0, time.time(), os.getpid())})
 
 
 def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
@@ -375,7 +375,9 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                      "tile_seconds": {**tiled.tile_seconds,
                                       **{k: sum(x[5][k] for x in done)
                                          for k in ("finish", "write", "cpu_finish", "cpu_write")}},
-                     "tile_steps": [{**st, **x[5]} for st, x in zip(tiled.tile_steps, done)],
+                     "tile_steps": [{**st, **{k: v for k, v in x[5].items() if k != "clock"},
+                                     "piece_at": task_clock(x[5]["clock"], "piece_at")["piece_at"]}
+                                    for st, x in zip(tiled.tile_steps, done)],
                      "since_start": {**tiled.since_start, "end": since_start()},
                      "driver_cpu": {**tiled.driver_cpu, "end": time.process_time()},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},

@@ -32,7 +32,7 @@ from hammesh.parallel.union import assemble, check_union
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
-           "not_carried", "SUMMARIES_WITH_TILES"]
+           "not_carried", "SUMMARIES_WITH_TILES", "task_clock"]
 
 #: each tile's summary submitted with the tile (False: gathered after the last tile is done)
 SUMMARIES_WITH_TILES = True
@@ -118,6 +118,9 @@ class TileOutcome:
     mesh: Mesh | None = None
     ham: HamiltonianMesh | None = None
     spill: str | None = None
+    #: the task's wall clock (``time.time()``) at its start and end, and its worker's
+    #: process id: the report's timeline of the workers (``tile_steps``' ``at``, ``worker``)
+    clock: tuple = ()
 
     def small(self) -> "TileOutcome":
         return replace(self, mesh=None, ham=None)
@@ -136,6 +139,7 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     from hammesh.postprocess import hamiltonian
 
     register_sizeof()
+    e0 = time.time()
     t0, c0, h0 = time.perf_counter(), time.process_time(), time.thread_time()
     mesh = mesh_tile(tile, min_angle, max_area, lattice=lattice)
     t1, c1, h1 = time.perf_counter(), time.process_time(), time.thread_time()
@@ -146,7 +150,7 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     sec = {"mesh": t1 - t0, "cpu_mesh": c1 - c0, "thread_mesh": h1 - h0}
     if len(bad):
         return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
-                           border=None, seconds=sec)
+                           border=None, seconds=sec, clock=(e0, time.time(), os.getpid()))
     ham = hamiltonian(mesh, mode=mode, keep=keep, tree=tree)
     t2, c2 = time.perf_counter(), time.process_time()
     border = border_rows(ham, tile, tile.index)
@@ -158,7 +162,8 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     sec.update(hamiltonian=t2 - t1, border=t3 - t2, spill=time.perf_counter() - t3,
                cpu_hamiltonian=c2 - c1, cpu_border=c3 - c2, cpu_spill=time.process_time() - c3)
     return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
-                       border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill)
+                       border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill,
+                       clock=(e0, time.time(), os.getpid()))
 
 
 def _outcome_nbytes(outcome: TileOutcome) -> int:
@@ -268,6 +273,16 @@ class Tiled:
     driver_cpu: dict = field(default_factory=dict)
 
 
+def task_clock(clock: tuple, key: str = "at") -> dict:
+    """A task's ``(start, end, pid)`` (wall clock, :class:`TileOutcome`'s ``clock``) as
+    ``{key: [start, end], "worker": pid}``, the times in seconds since this process
+    started (the driver's :func:`since_start`): the workers' timeline beside the driver's."""
+    if not clock:
+        return {}
+    zero = time.time() - since_start()
+    return {key: [clock[0] - zero, clock[1] - zero], "worker": int(clock[2])}
+
+
 def since_start() -> float:
     """Wall seconds since this process started (NaN where unknown): the driver's
     timeline in the report, imports and reading the domain included.
@@ -319,6 +334,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
     if starting:
+        run.tiles_coming()  # (no prefault task before the tiles now)
         warming = warm_workers(run, mode)
     t1b = time.perf_counter()
     # largest first (longest processing time first: the last tile to start is a small one)
@@ -376,7 +392,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                  mesh_triangles=mesh_triangles, ham_points=ham_points, rounds=rounds, borders=borders,
                  seconds={"decompose": t1 - t0, "start": t1b - t1, "tiles": t2 - t1b, "plan": t3 - t2},
                  tile_seconds=tile_seconds,
-                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds} for o in small],
+                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds, **task_clock(o.clock)}
+                             for o in small],
                  since_start={"decompose": s0, "submitted": s1, "tiles_done": s0 + (t2 - t0)},
                  driver_cpu={"decompose": p0, "submitted": p1, "tiles_done": p2})
 
