@@ -259,6 +259,25 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
              "cpu_write": time.process_time() - c1, "clock": (e0, time.time(), os.getpid())})
 
 
+def apex_marks(tiled, args: tuple, marks: tuple | None) -> tuple | None:
+    """``marks`` (the input's nonzero vertex markers) plus the markers of the swap
+    apexes this tile's piece takes from the other tile (``args``: its
+    :func:`~hammesh.parallel.run.finish_args`): such a point is on none of this piece's
+    constrained edges, so its marker comes from the tile that holds them (the border
+    rows' ``z_mark``), and both pieces give it the same."""
+    if marks is None:
+        return None
+    ids, values = [marks[0]], [marks[1]]
+    for ji, (gid, _) in (args[12] or {}).items():
+        j = tiled.plan.joins[ji]
+        bu = tiled.borders[j.u_tile]
+        mark = int(bu.z_mark[int(np.flatnonzero(bu.row == j.u_row)[0])]) if bu.z_mark is not None else 0
+        if mark and gid not in set(marks[0].tolist()):
+            ids.append(np.array([gid], np.int64))
+            values.append(np.array([mark], np.int64))
+    return np.concatenate(ids), np.concatenate(values)
+
+
 def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
     """Refuse an output directory that is a file, holds an input, or is not empty
     (unless ``force``: then its content is replaced once the new one is complete)."""
@@ -337,7 +356,8 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             if not (len(marks[0]) or np.any(tiled.decomposition.segment_markers != 0)):
                 marks = None
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                types, marks, pure=False, **on_holder(runner, h))
+                                                types, apex_marks(tiled, a, marks), pure=False,
+                                                **on_holder(runner, h))
                                   for i, (h, a) in enumerate(zip(tiled.outcomes, fargs))])
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
