@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["input_vertex_markers", "point_markers", "marked_inputs"]
+__all__ = ["input_vertex_markers", "point_markers", "marked_inputs", "given_at"]
 
 
 def input_vertex_markers(vertex_markers: np.ndarray, segments: np.ndarray, segment_markers: np.ndarray) -> np.ndarray:
@@ -56,36 +56,45 @@ def marked_inputs(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ids, markers[ids]
 
 
-def point_markers(point_ids: np.ndarray, segments: np.ndarray, segment_markers: np.ndarray,
-                  marked: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """Marker of each point: an input vertex's own (``marked``: :func:`marked_inputs`),
-    else the largest nonzero marker of a constrained edge ending at it, else 0.
+def point_markers(n_points: int, segments: np.ndarray, segment_markers: np.ndarray,
+                  given: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """Marker of each of ``n_points`` points: a given one's (``given``: local indices
+    and markers, the input vertices' of :func:`marked_inputs`), else the largest
+    nonzero marker of a constrained edge ending at it, else 0.
 
     Parameters
     ----------
-    point_ids : (n,) int64
-        Global ids of the points (a piece's, or ``arange`` for the whole output).
     segments : (s, 2) int64
-        Constrained edges, global ids; ``segment_markers (s,)`` theirs.
+        Constrained edges, indices of the points; ``segment_markers (s,)`` theirs.
+
+    >>> point_markers(4, np.array([[0, 3], [1, 3]]), np.array([2, 6]), (np.array([2]), np.array([5]))).tolist()
+    [2, 6, 5, 6]
     """
-    ids = np.asarray(point_ids, dtype=np.int64).reshape(-1)
-    out = np.zeros(len(ids), np.int64)
+    out = np.zeros(int(n_points), np.int64)
     seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
     mk = np.asarray(segment_markers, dtype=np.int64).reshape(-1)
-    order = np.argsort(ids, kind="stable")
-    sorted_ids = ids[order]
-
-    def local(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        at = np.minimum(np.searchsorted(sorted_ids, g), max(len(ids) - 1, 0))
-        hit = sorted_ids[at] == g if len(ids) else np.zeros(len(g), bool)
-        return order[at[hit]], hit
-
     if len(mk) == len(seg) and len(seg):
         nz = mk != 0
-        ends, value = seg[nz].T.ravel(), np.tile(mk[nz], 2)
-        where, hit = local(ends)
-        np.maximum.at(out, where, value[hit])
-    m_ids, m_val = marked
-    where, hit = local(np.asarray(m_ids, dtype=np.int64))
-    out[where] = np.asarray(m_val, dtype=np.int64)[hit]
+        np.maximum.at(out, seg[nz].T.ravel(), np.tile(mk[nz], 2))
+    where, values = (np.asarray(a, dtype=np.int64).reshape(-1) for a in given)
+    out[where] = values
     return out
+
+
+def given_at(point_ids: np.ndarray, sorted_prefix: int, marked: tuple[np.ndarray, np.ndarray]) -> tuple:
+    """``marked`` (global ids, markers) as local indices into ``point_ids``, whose first
+    ``sorted_prefix`` ids are sorted (a tile's vertices, where the input vertices are)
+    and whose others are searched one by one (a piece's few join points); ids it does
+    not hold are left out. No sort of the piece's millions of ids."""
+    ids = np.asarray(point_ids, dtype=np.int64).reshape(-1)
+    m_ids, m_val = (np.asarray(a, dtype=np.int64).reshape(-1) for a in marked)
+    head = ids[:sorted_prefix]
+    at = np.minimum(np.searchsorted(head, m_ids), max(len(head) - 1, 0))
+    hit = (head[at] == m_ids) if len(head) else np.zeros(len(m_ids), bool)
+    where, values = [at[hit]], [m_val[hit]]
+    tail = ids[sorted_prefix:]
+    if len(tail) and len(m_ids):
+        for j in np.flatnonzero(np.isin(tail, m_ids[~hit])).tolist():
+            where.append(np.array([sorted_prefix + j]))
+            values.append(m_val[~hit][m_ids[~hit] == tail[j]][:1])
+    return np.concatenate(where), np.concatenate(values)

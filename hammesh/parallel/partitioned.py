@@ -34,7 +34,7 @@ from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
 from hammesh.io.tags import VERTEX_MARKER
 from hammesh.partition import spread_parts
-from hammesh.parallel.markers import point_markers
+from hammesh.parallel.markers import given_at, point_markers
 from hammesh.parallel.run import (decompose_estimate, default_tiles, domain_marks, finish_args, not_carried, on_holder,
                                   outcome_hamiltonian, progress_bar, run_tiles, since_start, task_clock)
 
@@ -236,7 +236,8 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
               ("CellData", "parent", ty.get("parent", "Int64"), 1, mr, rows(parent, lay.join_parent, own=global_parent)),
               ("CellData", "kind", ty.get("kind", "Int64"), 1, mr, rows(kind, lay.join_kind))]
     if marks is not None:
-        vm = point_markers(lay.point_ids, lay.segments, lay.segment_markers, marks)
+        vm = point_markers(len(lay.point_ids), lay.local_segments, lay.segment_markers,
+                           given_at(lay.point_ids, len(args[0].vertex_ids), marks))
         vm = vm if keep is None else vm[keep]
         arrays.insert(1, ("PointData", VERTEX_MARKER, "Int32", 1, n_points, lambda: iter([vm.astype(np.int32)])))
     if len(components) > 1:  # (one cycle: all zeros and global_position again, not written)

@@ -537,7 +537,8 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
     report["triangles"] = int(len(h.triangles))
     if not_carried(domain):
         report["not_carried"] = not_carried(domain)
-    vmarks = point_markers(np.arange(len(h.points)), h.segments, h.segment_markers, domain_marks(domain))
+    ids, marks = domain_marks(domain)  # (the output's first points are the input's, in order)
+    vmarks = point_markers(len(h.points), h.segments, h.segment_markers, (ids, marks))
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,
                            segment_markers=h.segment_markers, components=h.components, position=h.position,
                            parent=h.parent, kind=h.kind, triangle_attributes=h.triangle_attributes, report=report,

@@ -187,11 +187,14 @@ def test_partitioned_pieces_carry_the_vertex_markers(marked, tmp_path, capsys):
 
 
 def test_markers_rule_of_triangle():
-    from hammesh.parallel.markers import input_vertex_markers, point_markers
+    from hammesh.parallel.markers import given_at, input_vertex_markers, point_markers
 
     # vertex 0: first nonzero segment (in input order) ending there; 1 keeps its own
     got = input_vertex_markers(np.array([0, 3, 0, 0]), np.array([[2, 0], [0, 1], [1, 2]]), np.array([0, 9, 7]))
     assert got.tolist() == [9, 3, 7, 0]
-    pm = point_markers(np.array([10, 4, 0, 12]), np.array([[10, 12], [4, 12]]), np.array([2, 6]),
-                       (np.array([0]), np.array([5])))
+    # points 0..3; edges (0, 3) marker 2, (1, 3) marker 6 (the larger wins at 3); point 2 given 5
+    pm = point_markers(4, np.array([[0, 3], [1, 3]]), np.array([2, 6]), (np.array([2]), np.array([5])))
     assert pm.tolist() == [2, 6, 5, 6]
+    # global ids to a piece's indices: a sorted head (the tile's vertices), then join points
+    where, values = given_at(np.array([3, 7, 9, 100, 101, 7000]), 3, (np.array([7, 8, 7000]), np.array([1, 2, 3])))
+    assert sorted(zip(where.tolist(), values.tolist())) == [(1, 1), (5, 3)]
