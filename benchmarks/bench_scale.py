@@ -261,6 +261,31 @@ def timeline(o: dict) -> str:
     return line
 
 
+def workers_timeline(o: dict) -> str:
+    """Each worker's tasks on the driver's clock (seconds since its process started):
+    every tile's task (Triangle, repair check, ``hamiltonian()`` + certificate, border
+    rows) and, with ``--partitioned``, its piece (finish + write), largest first as
+    submitted; then each worker's busy and idle seconds between the tiles' submission
+    and the output's end (the report's ``tile_steps``' ``at``/``piece_at``/``worker``)."""
+    par = o["parallel"]
+    steps, s = par.get("tile_steps") or [], par.get("since_start") or {}
+    if not steps or "at" not in steps[0] or "submitted" not in s:
+        return ""
+    by: dict = {}
+    for i, st in enumerate(steps):
+        by.setdefault(st["worker"], []).append((st["at"][0], st["at"][1], f"tile {i} ({st['triangles'] / 1e6:.2f}M)"))
+        if "piece_at" in st:
+            by[st["worker"]].append((st["piece_at"][0], st["piece_at"][1], f"piece {i}"))
+    lo, hi = s["submitted"], s.get("end", max(b for v in by.values() for _, b, _ in v))
+    lines = []
+    for w, (pid, tasks) in enumerate(sorted(by.items())):
+        tasks.sort()
+        busy = sum(min(b, hi) - max(a, lo) for a, b, _ in tasks if b > lo)
+        lines.append(f"worker {w}: " + ", ".join(f"{name} {a:.2f}-{b:.2f}" for a, b, name in tasks)
+                     + f"; busy {busy:.2f} s, idle {hi - lo - busy:.2f} s of {hi - lo:.2f}")
+    return f"\n{'':22}|   ".join(lines)
+
+
 def per_tile(o: dict) -> str:
     """Each tile's ``hamiltonian()`` (with its certificate): CPU seconds, per million of
     the tile's triangles, and its share of all the workers' CPU (issue 15 asks for it:
@@ -368,6 +393,8 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{'':22}|   {timeline(o)}")
                 if per_tile(o):
                     print(f"{'':22}|   {per_tile(o)}")
+                if workers_timeline(o):
+                    print(f"{'':22}|   {workers_timeline(o)}")
                 sys.stdout.flush()
     return 0
 
@@ -553,10 +580,15 @@ def _interleaved_ab(rounds: int, name: str, run) -> int:
             o = run(flag)
             s, c = o["parallel"]["since_start"], o["parallel"].get("driver_cpu", {})
             got[flag].append(o)
+            steps = o["parallel"].get("tile_steps") or []
+            first = min((st["at"][0] for st in steps if "at" in st), default=float("nan"))
             print(f"round {r} {name}={int(flag)}: submitted {s['submitted']:.2f} s after the start "
-                  f"(decomposition from {s['decompose']:.2f}; driver CPU {c.get('submitted', float('nan')):.2f} s), "
-                  f"tiles done {s['tiles_done']:.2f}, wall {o['wall']:.2f}, whole CPU {o['tree_cpu']:.2f} s, "
-                  f"load {o['load'][0]:.1f}")
+                  f"(decomposition from {s['decompose']:.2f}; waited {o['parallel']['seconds'].get('start', 0):.2f} s "
+                  f"for the cluster; driver CPU {c.get('submitted', float('nan')):.2f} s), first tile started "
+                  f"{first:.2f}, tiles done {s['tiles_done']:.2f}, wall {o['wall']:.2f}, whole CPU "
+                  f"{o['tree_cpu']:.2f} s, load {o['load'][0]:.1f}")
+            if workers_timeline(o):
+                print(f"    {workers_timeline(o)}")
             sys.stdout.flush()
     for flag in (True, False):
         sub = statistics.median(o["parallel"]["since_start"]["submitted"] for o in got[flag])

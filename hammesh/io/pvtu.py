@@ -30,6 +30,7 @@ import numpy as np
 from hammesh.errors import FileFormatError
 from hammesh.io import vtu
 from hammesh.io.cell_data import join_components, split_components
+from hammesh.io.tags import VERTEX_MARKER
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name, cycle_positions
 
 __all__ = ["read", "write", "write_piece", "write_raw_chunks", "write_index", "read_pieces", "PIECE_CELL_DATA",
@@ -358,8 +359,12 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
         point_data[key] = values
     # points no triangle uses (ids of other runs' join points) get a harmless position
     points[~used] = 0.0
+    # the points' markers (the parallel path's pieces, a whole mesh's index), as the
+    # .vtu reader takes them: the mesh's vertex_markers, not point data
+    marks = point_data.pop(VERTEX_MARKER, None)
+    marks = np.zeros(0, np.int64) if marks is None or np.asarray(marks).dtype.kind not in "iu" else np.asarray(marks, np.int64)
     return Mesh(points=points, triangles=tri, triangle_attributes=attr, attribute_names=attr_names,
-                point_data=point_data, info={"pieces": len(tris)})
+                point_data=point_data, vertex_markers=marks, info={"pieces": len(tris)})
 
 
 def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
@@ -378,6 +383,11 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     names = tuple(getattr(mesh, "attribute_names", ()))
     attrs = np.asarray(mesh.triangle_attributes).reshape(m, -1)
     point_data = {k: np.asarray(v) for k, v in (getattr(mesh, "point_data", None) or {}).items()}
+    # (as the serial .vtu writer: the points' markers as point data when any is nonzero)
+    marks = np.asarray(getattr(mesh, "vertex_markers", None) if getattr(mesh, "vertex_markers", None) is not None
+                       else np.zeros(0), dtype=np.int64)
+    if marks.shape == (len(mesh.points),) and marks.any():
+        point_data.setdefault(VERTEX_MARKER, marks)
     write_piece(piece, np.arange(len(mesh.points)), mesh.points[:, :2], mesh.triangles, np.arange(m), cid, cpos,
                 parent, kind, attrs, attribute_names=names, point_data=point_data)
     write_index(path, [piece.name], cycles=cid is not None,

@@ -102,10 +102,11 @@ def runner_for(*, workers: int | None = None, client=None, scheduler: str | None
     from concurrent.futures import ThreadPoolExecutor
 
     with contextlib.ExitStack() as stack, ThreadPoolExecutor(1, thread_name_prefix="hammesh-cluster") as pool:
-        started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING, ready)
+        submitting = threading.Event()
+        started = pool.submit(_start_local, stack, workers, mode, FORK_AFTER_IMPORTING, ready, submitting)
         failed = False
         try:
-            yield Starting(started, workers), workers
+            yield Starting(started, workers, submitting), workers
         except BaseException:
             failed = True
             raise
@@ -163,10 +164,12 @@ TILE_QUEUE = {"distributed.scheduler.worker-saturation": 1.0}
 
 
 def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, modules: tuple = (),
-                 ready: threading.Event | None = None):
+                 ready: threading.Event | None = None, submitting: threading.Event | None = None):
     """Start a local cluster of ``workers`` processes and its client, both closed by
     ``stack`` (Dask imported first; then, if given, wait for ``ready``; ``modules``
-    imported before the fork, see :data:`FORK_AFTER_IMPORTING`)."""
+    imported before the fork, see :data:`FORK_AFTER_IMPORTING`). ``submitting``: set
+    once the caller has its tiles to submit; then no :func:`prefault` task is queued
+    before them."""
     import importlib
     import logging
 
@@ -204,7 +207,9 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             # the workers share this machine's cores: each threaded pass of a worker gets its
             # share, not every core (N workers x C threads on C cores only thrash)
             kept = c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
-            if PREFAULT and kept and all(kept.values()):
+            # (only while the driver is still decomposing: once its tiles are ready the
+            # prefault would only delay them, session 16)
+            if PREFAULT and kept and all(kept.values()) and not (submitting is not None and submitting.is_set()):
                 # a task on each worker (its executor's thread: the tiles' arena), not
                 # waited for: the workers fault their memory in while the driver decomposes
                 # (the futures are held until the cluster closes: Dask drops a task nobody holds)
@@ -245,7 +250,11 @@ def prefault(nbytes: int) -> None:
     Why: a worker's first tile ran 0.15-0.2 s longer than its later ones (session 13,
     6M sparse: the kernel zeroing and mapping each page on first touch); the workers
     are idle while the driver decomposes the domain (0.3-0.5 s), so they take those
-    faults then, not on the tiles' critical path. Submitted
+    faults then, not on the tiles' critical path. Session 16: only while the driver
+    is still decomposing (:meth:`Starting.tiles_coming`): at 6M the local cluster was
+    up 0.5-0.7 s after the decomposition (loaded), the prefault task then ran first and
+    the first tile started 0.6-1.0 s after its submission (none without it: interleaved,
+    whole CPU the same). Submitted
     right after :func:`worker_setup` (only where glibc keeps freed memory), as a task:
     the tiles' tasks run in the same thread of the worker's executor, hence the same arena.
     """
@@ -368,9 +377,17 @@ class Starting:
     ``gather``, ...) waits until it is up (or raises the start's error).
     ``n_workers``: the workers it starts, known at once."""
 
-    def __init__(self, future, n_workers: int) -> None:
+    def __init__(self, future, n_workers: int, submitting: threading.Event | None = None) -> None:
         self._future = future
         self.n_workers = n_workers
+        self._submitting = submitting
+
+    def tiles_coming(self) -> None:
+        """The caller has its tiles to submit: the starting thread queues no
+        :func:`prefault` before them (a worker faults its memory in only while the
+        driver is still decomposing; once the tiles are ready it would delay them)."""
+        if self._submitting is not None:
+            self._submitting.set()
 
     def __getattr__(self, name: str):
         return getattr(self._future.result(), name)

@@ -32,6 +32,7 @@ import numpy as np
 from hammesh.errors import VerificationError
 from hammesh.mesh import HamiltonianMesh
 from hammesh.parallel._kernels import area_sum, edges_within_into
+from hammesh.parallel.markers import point_markers
 from hammesh.parallel.tiles import Tile
 
 __all__ = ["BorderRows", "Join", "Plan", "border_rows", "plan_joins", "finish_tile", "TilePiece", "KIND_INPUT",
@@ -75,6 +76,9 @@ class BorderRows:
     n_triangles: int
     input_min_angle: float = 0.0
     area: float = 0.0
+    #: the apex's vertex marker from the tile's constrained edges (largest nonzero marker
+    #: of one ending there, else 0): a swap's apex is the other piece's point too
+    z_mark: np.ndarray | None = None
 
 
 def _min_angle_deg(p: np.ndarray) -> np.ndarray:
@@ -133,6 +137,7 @@ def border_rows(h: HamiltonianMesh, tile: Tile, tile_index: int) -> BorderRows:
         run_length=L, after=after, before=before, kind=np.asarray(h.kind)[rows], xyz=xyz,
         min_angle=_min_angle_deg(xyz), run_starts=starts, n_points=n, n_triangles=len(tri),
         input_min_angle=float(h.report.get("min_angle_input_deg", 0.0)),
+        z_mark=point_markers(n, h.segments, h.segment_markers, (np.zeros(0, np.int64), np.zeros(0, np.int64)))[z],
         area=float(area_sum(np.ascontiguousarray(h.points, dtype=np.float64),
                             np.ascontiguousarray(h.triangles, dtype=np.int64))),
     )
@@ -513,6 +518,8 @@ class PieceLayout:
     join_attributes: np.ndarray
     segments: np.ndarray
     segment_markers: np.ndarray
+    #: ``segments`` as indices into the piece's point list (before dropping the unused)
+    local_segments: np.ndarray | None = None
 
     def chunks(self, chunk: int = CHUNK_ROWS):
         """``(position, rows)`` in cycle order: ``rows`` a slice of the tile's rows (at
@@ -664,7 +671,8 @@ def piece_layout(h: HamiltonianMesh, tile: Tile, tile_index: int, plan_blocks: l
                        triangle_offset=int(triangle_offset), join_triangles=nt,
                        join_kind=np.asarray(new_kind, np.int8), join_parent=np.asarray(new_parent, np.int64),
                        join_attributes=np.asarray(new_attr, np.float64).reshape(len(nt), width),
-                       segments=segs[keep_s], segment_markers=np.asarray(h.segment_markers)[keep_s])
+                       segments=segs[keep_s], segment_markers=np.asarray(h.segment_markers)[keep_s],
+                       local_segments=np.asarray(h.segments, np.int64)[keep_s])
 
 
 def piece_parent(parent: np.ndarray, triangle_offset: int) -> np.ndarray:

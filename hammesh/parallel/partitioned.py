@@ -32,9 +32,11 @@ import numpy as np
 from hammesh import params
 from hammesh.domain import Domain
 from hammesh.errors import InvalidOptionError, OutputError
+from hammesh.io.tags import VERTEX_MARKER
 from hammesh.partition import spread_parts
-from hammesh.parallel.run import (decompose_estimate, default_tiles, finish_args, not_carried, on_holder,
-                                  outcome_hamiltonian, progress_bar, run_tiles, since_start)
+from hammesh.parallel.markers import given_at, point_markers
+from hammesh.parallel.run import (decompose_estimate, default_tiles, domain_marks, finish_args, not_carried, on_holder,
+                                  outcome_hamiltonian, progress_bar, run_tiles, since_start, task_clock)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target",
            "piece_types", "int_type", "spill_wanted", "HELD_BYTES_PER_TRIANGLE", "SPILL_SHARE"]
@@ -143,7 +145,7 @@ def stretch_parts(position: np.ndarray, components: np.ndarray, k: int) -> np.nd
 
 
 def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, parts: int | None,
-                      types: dict[str, str] | None = None):
+                      types: dict[str, str] | None = None, marks: tuple | None = None):
     """On the tile's worker: number its rows globally (its side of the joins), write its
     piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``.
 
@@ -152,11 +154,14 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     forward or backward, and the join rows): no gathered copy of the rows is made
     (at millions of rows such copies, fresh memory each, were most of the finish and
     write steps). The bytes are :func:`~hammesh.io.pvtu.write_piece`'s.
+    ``marks``: the input vertices' nonzero markers (:func:`~hammesh.parallel.run.domain_marks`):
+    the piece's points get a ``vertex_marker`` array as the serial path's output
+    (:func:`~hammesh.parallel.markers.point_markers`); None: none written.
     """
     from hammesh.io.pvtu import VTK_TRIANGLE, write_raw_chunks
     from hammesh.parallel.joins import CHUNK_ROWS, piece_layout
 
-    t0, c0 = time.perf_counter(), time.process_time()
+    e0, t0, c0 = time.time(), time.perf_counter(), time.process_time()
     h = outcome_hamiltonian(outcome)
     lay = piece_layout(h, *args)
     t1, c1 = time.perf_counter(), time.process_time()
@@ -230,6 +235,11 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
               ("CellData", "global_position", ty.get("global_position", "Int64"), 1, mr, by_position(lambda pos: pos)),
               ("CellData", "parent", ty.get("parent", "Int64"), 1, mr, rows(parent, lay.join_parent, own=global_parent)),
               ("CellData", "kind", ty.get("kind", "Int64"), 1, mr, rows(kind, lay.join_kind))]
+    if marks is not None:
+        vm = point_markers(len(lay.point_ids), lay.local_segments, lay.segment_markers,
+                           given_at(lay.point_ids, len(args[0].vertex_ids), marks))
+        vm = vm if keep is None else vm[keep]
+        arrays.insert(1, ("PointData", VERTEX_MARKER, "Int32", 1, n_points, lambda: iter([vm.astype(np.int32)])))
     if len(components) > 1:  # (one cycle: all zeros and global_position again, not written)
         arrays[2:2] = [("CellData", "cycle_id", ty.get("cycle_id", "Int64"), 1, mr, by_position(cycle_id)),
                        ("CellData", "cycle_position", ty.get("cycle_position", "Int64"), 1, mr,
@@ -247,7 +257,26 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     first = int(lay.items[0][0]) if lay.items else -1
     return (Path(path).name, mr, first, w, sizes,
             {"finish": t1 - t0, "write": time.perf_counter() - t1, "cpu_finish": c1 - c0,
-             "cpu_write": time.process_time() - c1})
+             "cpu_write": time.process_time() - c1, "clock": (e0, time.time(), os.getpid())})
+
+
+def apex_marks(tiled, args: tuple, marks: tuple | None) -> tuple | None:
+    """``marks`` (the input's nonzero vertex markers) plus the markers of the swap
+    apexes this tile's piece takes from the other tile (``args``: its
+    :func:`~hammesh.parallel.run.finish_args`): such a point is on none of this piece's
+    constrained edges, so its marker comes from the tile that holds them (the border
+    rows' ``z_mark``), and both pieces give it the same."""
+    if marks is None:
+        return None
+    ids, values = [marks[0]], [marks[1]]
+    for ji, (gid, _) in (args[12] or {}).items():
+        j = tiled.plan.joins[ji]
+        bu = tiled.borders[j.u_tile]
+        mark = int(bu.z_mark[int(np.flatnonzero(bu.row == j.u_row)[0])]) if bu.z_mark is not None else 0
+        if mark and gid not in set(marks[0].tolist()):
+            ids.append(np.array([gid], np.int64))
+            values.append(np.array([mark], np.int64))
+    return np.concatenate(ids), np.concatenate(values)
 
 
 def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
@@ -323,14 +352,20 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             fargs = finish_args(tiled)
             types = piece_types(max((a[11] for a in fargs), default=0), int(comps.sum()),
                                 int(tiled.mesh_triangles.sum()))
+            marks = domain_marks(domain)
+            # (the serial path writes the markers when any is nonzero: any input vertex's or segment's)
+            if not (len(marks[0]) or np.any(tiled.decomposition.segment_markers != 0)):
+                marks = None
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                types, pure=False, **on_holder(runner, h))
+                                                types, apex_marks(tiled, a, marks), pure=False,
+                                                **on_holder(runner, h))
                                   for i, (h, a) in enumerate(zip(tiled.outcomes, fargs))])
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
         order = sorted(range(len(done)), key=lambda i: done[i][2])
         write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done),
-                    cycles=len(comps) > 1, part=parts is not None, types=types)
+                    cycles=len(comps) > 1, part=parts is not None, types=types,
+                    point_arrays=None if marks is None else {VERTEX_MARKER: ("Int32", 1)})
         for i, d in enumerate(done):
             if d[1] == 0:
                 (work / d[0]).unlink()
@@ -361,7 +396,9 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                      "tile_seconds": {**tiled.tile_seconds,
                                       **{k: sum(x[5][k] for x in done)
                                          for k in ("finish", "write", "cpu_finish", "cpu_write")}},
-                     "tile_steps": [{**st, **x[5]} for st, x in zip(tiled.tile_steps, done)],
+                     "tile_steps": [{**st, **{k: v for k, v in x[5].items() if k != "clock"},
+                                     "piece_at": task_clock(x[5]["clock"], "piece_at")["piece_at"]}
+                                    for st, x in zip(tiled.tile_steps, done)],
                      "since_start": {**tiled.since_start, "end": since_start()},
                      "driver_cpu": {**tiled.driver_cpu, "end": time.process_time()},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},

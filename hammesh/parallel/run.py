@@ -24,14 +24,15 @@ from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.parallel.decoupled import (MAX_ROUNDS, bad_corner_vertices, coarse_min_angle, repair_rows,
                                         small_angle_vertices)
 from hammesh.parallel.joins import BorderRows, Plan, TilePiece, border_rows, finish_tile, plan_joins
+from hammesh.parallel.markers import input_vertex_markers, marked_inputs, point_markers
 from hammesh.parallel.tile_mesh import mesh_tile
 from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
-__all__ = ["LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
+__all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
-           "not_carried", "SUMMARIES_WITH_TILES"]
+           "not_carried", "SUMMARIES_WITH_TILES", "task_clock"]
 
 #: each tile's summary submitted with the tile (False: gathered after the last tile is done)
 SUMMARIES_WITH_TILES = True
@@ -117,6 +118,9 @@ class TileOutcome:
     mesh: Mesh | None = None
     ham: HamiltonianMesh | None = None
     spill: str | None = None
+    #: the task's wall clock (``time.time()``) at its start and end, and its worker's
+    #: process id: the report's timeline of the workers (``tile_steps``' ``at``, ``worker``)
+    clock: tuple = ()
 
     def small(self) -> "TileOutcome":
         return replace(self, mesh=None, ham=None)
@@ -135,6 +139,7 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     from hammesh.postprocess import hamiltonian
 
     register_sizeof()
+    e0 = time.time()
     t0, c0, h0 = time.perf_counter(), time.process_time(), time.thread_time()
     mesh = mesh_tile(tile, min_angle, max_area, lattice=lattice)
     t1, c1, h1 = time.perf_counter(), time.process_time(), time.thread_time()
@@ -145,7 +150,7 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     sec = {"mesh": t1 - t0, "cpu_mesh": c1 - c0, "thread_mesh": h1 - h0}
     if len(bad):
         return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
-                           border=None, seconds=sec)
+                           border=None, seconds=sec, clock=(e0, time.time(), os.getpid()))
     ham = hamiltonian(mesh, mode=mode, keep=keep, tree=tree)
     t2, c2 = time.perf_counter(), time.process_time()
     border = border_rows(ham, tile, tile.index)
@@ -157,7 +162,8 @@ def tile_task(tile, n_input: int, min_angle: float | None, max_area: float, mode
     sec.update(hamiltonian=t2 - t1, border=t3 - t2, spill=time.perf_counter() - t3,
                cpu_hamiltonian=c2 - c1, cpu_border=c3 - c2, cpu_spill=time.process_time() - c3)
     return TileOutcome(tile=tile.index, bad=bad, n_mesh_points=mesh.n_points, n_mesh_triangles=mesh.n_triangles,
-                       border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill)
+                       border=border, seconds=sec, mesh=mesh if keep_mesh else None, ham=ham, spill=spill,
+                       clock=(e0, time.time(), os.getpid()))
 
 
 def _outcome_nbytes(outcome: TileOutcome) -> int:
@@ -267,6 +273,16 @@ class Tiled:
     driver_cpu: dict = field(default_factory=dict)
 
 
+def task_clock(clock: tuple, key: str = "at") -> dict:
+    """A task's ``(start, end, pid)`` (wall clock, :class:`TileOutcome`'s ``clock``) as
+    ``{key: [start, end], "worker": pid}``, the times in seconds since this process
+    started (the driver's :func:`since_start`): the workers' timeline beside the driver's."""
+    if not clock:
+        return {}
+    zero = time.time() - since_start()
+    return {key: [clock[0] - zero, clock[1] - zero], "worker": int(clock[2])}
+
+
 def since_start() -> float:
     """Wall seconds since this process started (NaN where unknown): the driver's
     timeline in the report, imports and reading the domain included.
@@ -318,6 +334,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
     if starting:
+        run.tiles_coming()  # (no prefault task before the tiles now)
         warming = warm_workers(run, mode)
     t1b = time.perf_counter()
     # largest first (longest processing time first: the last tile to start is a small one)
@@ -375,7 +392,8 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                  mesh_triangles=mesh_triangles, ham_points=ham_points, rounds=rounds, borders=borders,
                  seconds={"decompose": t1 - t0, "start": t1b - t1, "tiles": t2 - t1b, "plan": t3 - t2},
                  tile_seconds=tile_seconds,
-                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds} for o in small],
+                 tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds, **task_clock(o.clock)}
+                             for o in small],
                  since_start={"decompose": s0, "submitted": s1, "tiles_done": s0 + (t2 - t0)},
                  driver_cpu={"decompose": p0, "submitted": p1, "tiles_done": p2})
 
@@ -519,9 +537,18 @@ def parallel_hamiltonian(domain: Domain, *, min_angle: float | None = None, max_
     report["triangles"] = int(len(h.triangles))
     if not_carried(domain):
         report["not_carried"] = not_carried(domain)
+    ids, marks = domain_marks(domain)  # (the output's first points are the input's, in order)
+    vmarks = point_markers(len(h.points), h.segments, h.segment_markers, (ids, marks))
     return HamiltonianMesh(points=h.points, triangles=h.triangles, segments=h.segments,
                            segment_markers=h.segment_markers, components=h.components, position=h.position,
-                           parent=h.parent, kind=h.kind, triangle_attributes=h.triangle_attributes, report=report)
+                           parent=h.parent, kind=h.kind, triangle_attributes=h.triangle_attributes, report=report,
+                           vertex_markers=vmarks)
+
+
+def domain_marks(domain: Domain) -> tuple[np.ndarray, np.ndarray]:
+    """The input vertices' nonzero markers as the serial path gives them
+    (:func:`~hammesh.parallel.markers.input_vertex_markers`): ``(ids, markers)``."""
+    return marked_inputs(input_vertex_markers(domain.vertex_markers, domain.segments, domain.segment_markers))
 
 
 def not_carried(domain: Domain) -> list[str]:
@@ -529,17 +556,13 @@ def not_carried(domain: Domain) -> list[str]:
     report's ``not_carried``, printed by the command as ``note:`` lines, as the serial
     path does): its vertex attributes (``Domain.vertex_attributes``, from a ``.node``
     or ``.poly``), which the serial Triangle backend interpolates to every output
-    point but the tiles do not take, and its nonzero vertex markers (the serial
-    output's ``vertex_markers``)."""
+    point but the tiles do not take. (Its vertex markers are carried since session 16:
+    :mod:`hammesh.parallel.markers`.)"""
     out = []
     va = getattr(domain, "vertex_attributes", None)
     k = int(np.shape(va)[-1]) if va is not None and np.ndim(va) == 2 else 0
     if k:
         out.append(f"vertex attributes ({k} per vertex): parallel meshing does not interpolate them "
-                   "(hammesh mesh without --workers/--tiles/--partitioned does)")
-    vm = getattr(domain, "vertex_markers", None)
-    if vm is not None and np.any(np.asarray(vm) != 0):
-        out.append("vertex markers: parallel meshing does not carry them to the output points "
                    "(hammesh mesh without --workers/--tiles/--partitioned does)")
     return out
 

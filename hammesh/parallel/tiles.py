@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from hammesh.domain import Domain
-from hammesh.errors import InvalidOptionError
+from hammesh.errors import InvalidOptionError, MeshingError
 from hammesh.meshing.options import MeshOptions, format_number
 from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points_many
 
@@ -51,6 +51,9 @@ WIDER_WINDOWS = (0.1, 0.2)
 CROSS_MARGIN_DEG = 10.0
 #: and stay this many local edge lengths away from vertices
 CLEARANCE = 1.0
+#: a cut keeps clear of the vertices on the box sides it ends on, too (and may end at
+#: another cut's end): :func:`_choose_cut`; False: only of those inside the box (before session 16)
+SIDE_VERTICES = True
 #: a cut closer to a vertex than this fraction of CLEARANCE is looked for in the wider windows too
 WIDEN_BELOW = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
@@ -210,6 +213,8 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     pts = np.array(out["vertices"], dtype=np.float64)
     pts[: len(vertices)] = vertices  # (as given: see without_subnormals)
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(tri) == 0:  # (as the serial path says it; Triangle's box.poly: an IndexError before)
+        raise MeshingError("Triangle produced no triangles (are all triangles inside holes?)")
     if len(regions):
         row = np.asarray(out["triangle_attributes"]).reshape(-1).round().astype(np.int64)
     else:
@@ -302,6 +307,8 @@ class _Builder:
         self.piece_origin = np.arange(len(segments), dtype=np.int64)
         self.piece_marker = markers.copy()
         self.cuts: list[_Cut] = []
+        #: vertex ids where a cut ends on an earlier cut (a later cut may end there too)
+        self.junctions: set[int] = set()
 
     def coords(self) -> np.ndarray:
         if len(self.points) > 1:
@@ -322,8 +329,34 @@ def _pieces_in_box(b: _Builder, box: np.ndarray) -> np.ndarray:
     return np.flatnonzero((mid[:, 0] > box[0]) & (mid[:, 0] < box[1]) & (mid[:, 1] > box[2]) & (mid[:, 1] < box[3]))
 
 
-def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> tuple[float, bool]:
-    """The cut position in [c_lo, c_hi] crossing segments at the largest angles, clear of vertices."""
+def _side_vertices(b: _Builder, box, axis: int, sides) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices already on the two box sides a cut along ``axis`` ends on (earlier
+    cuts), inside the box's span: their coordinates ``(n, 2)`` and whether each is a
+    junction (another cut's end, where this cut may end too)."""
+    o = 1 - axis
+    xy, junction = [], []
+    for side, end in ((sides[2 * o], box[2 * o]), (sides[2 * o + 1], box[2 * o + 1])):
+        if side < 0:
+            continue
+        for pos, vid in b.cuts[side].fixed:
+            if vid >= 0 and box[2 * axis] < pos < box[2 * axis + 1]:
+                q = np.empty(2)
+                q[axis], q[o] = pos, end
+                xy.append(q)
+                junction.append(vid in b.junctions)
+    return np.array(xy, np.float64).reshape(-1, 2), np.array(junction, bool)
+
+
+def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle, sides=None) -> tuple[float, bool]:
+    """The cut position in [c_lo, c_hi] crossing segments at the largest angles, clear of vertices.
+
+    The vertices on the box's sides where the cut ends count too (session 16): the
+    cuts of the two halves of a box were chosen each alone, and on a crack's domain
+    they ended 0.001 apart on the cut between them (1.539 and 1.540 with a local size
+    of 0.03): a separator piece that short made Triangle grade down to it, and the tiny
+    triangles there made the worst of the tile's Hamiltonian output (19.5 deg). A cut
+    may end exactly at another cut's end (a crossing of four tiles): those positions
+    are candidates, and clear of that vertex."""
     p = b.coords()
     # the vertices a separator must keep clear of: segment ends (the coarse mesh's
     # interior points are no features) and the user's vertices
@@ -332,8 +365,14 @@ def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> 
     feat[: b.n_input] = True
     inside = feat & (p[:, 0] > box[0]) & (p[:, 0] < box[1]) & (p[:, 1] > box[2]) & (p[:, 1] < box[3])
     v = p[inside]
+    snap = np.zeros(len(v), bool)
+    if sides is not None and SIDE_VERTICES:
+        on_side, junction = _side_vertices(b, box, axis, sides)
+        v, snap = np.concatenate([v, on_side]), np.concatenate([snap, junction])
     hv = sizer(v) if len(v) else np.zeros(0)
-    cand = np.unique(np.concatenate([np.linspace(c_lo, c_hi, CUT_CANDIDATES), [c_mid]]))
+    ends = v[snap, axis]
+    cand = np.unique(np.concatenate([np.linspace(c_lo, c_hi, CUT_CANDIDATES), [c_mid],
+                                     ends[(ends >= c_lo) & (ends <= c_hi)]]))
     pieces = b.pieces[_pieces_in_box(b, box)]
     a, e = p[pieces[:, 0]], p[pieces[:, 1]]
     d = e - a
@@ -342,6 +381,7 @@ def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle) -> 
     best, best_key = c_mid, None
     for c in cand:
         clear = np.abs(v[:, axis] - c) / hv if len(v) else np.array([np.inf])
+        clear[snap & (v[:, axis] == c)] = np.inf  # (ending at another cut's end)
         clear_min = float(clear.min()) if len(clear) else np.inf
         if clear_min == 0.0:
             continue
@@ -411,7 +451,7 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
             c_lo, c_hi = at(max(f - CUT_WINDOW, 0.02)), at(min(f + CUT_WINDOW, 0.98))
             # no good position near the balanced one: look further, then across the
             # other axis (balance costs less than an angle the mesher cannot meet)
-            c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
+            c, key = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle, sides)
             for wider in WIDER_WINDOWS:
                 if key[0] and key[1] >= WIDEN_BELOW:  # (a cut too close to a vertex makes a sliver tile)
                     break
@@ -421,11 +461,11 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
                     mid = float(np.interp(f * total, cw, xs))
                     lo_, hi_ = (float(np.interp(max(f - wider, 0.02) * total, cw, xs)),
                                 float(np.interp(min(f + wider, 0.98) * total, cw, xs)))
-                    c2, key2 = _choose_cut(b, box, ax, lo_, hi_, mid, sizer, min_angle)
+                    c2, key2 = _choose_cut(b, box, ax, lo_, hi_, mid, sizer, min_angle, sides)
                     if key2[:2] > key[:2]:
                         c, axis, key = c2, ax, key2
         if len(cx) == 0 or w.sum() <= 0:
-            c, _ = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle)
+            c, _ = _choose_cut(b, box, axis, c_lo, c_hi, c_mid, sizer, min_angle, sides)
         o = 1 - axis
         cut = _Cut(axis, c, float(box[2 * o]), float(box[2 * o + 1]))
         b.cuts.append(cut)
@@ -433,9 +473,15 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
         # the cut's ends on earlier cuts are junctions: one vertex on both lines
         for end, side in ((cut.lo, sides[2 * o]), (cut.hi, sides[2 * o + 1])):
             if side >= 0:
+                # (another cut's end at the same place: one vertex, four tiles around it)
+                there = [vid for pos, vid in b.cuts[side].fixed if pos == c and vid in b.junctions]
+                if there:
+                    cut.fixed.append((end, there[0]))
+                    continue
                 xy = np.empty(2)
                 xy[axis], xy[o] = c, end
                 vid = int(b.add_points(xy)[0])
+                b.junctions.add(vid)
                 cut.fixed.append((end, vid))
                 b.cuts[side].fixed.append((c, vid))
             else:

@@ -73,11 +73,11 @@ def test_a_failing_run_leaves_nothing_behind(tmp_path, monkeypatch):
     calls = []
     real = P._finish_and_write
 
-    def failing(outcome, args, path, components, parts, types=None):
+    def failing(outcome, args, path, components, parts, types=None, marks=None):
         calls.append(path)
         if len(calls) == 2:  # the first piece is written, the second fails
             raise OSError("disk full")
-        return real(outcome, args, path, components, parts, types)
+        return real(outcome, args, path, components, parts, types, marks)
 
     monkeypatch.setattr(P, "_finish_and_write", failing)
     out = tmp_path / "a" / "b" / "parts"

@@ -254,7 +254,7 @@ def test_the_parallel_command_ends_its_process_fast_and_whole(tmp_path):
                         "--partitioned", "-o", str(out), "--report", str(rep)], capture_output=True, text=True,
                        timeout=600)
     assert p.returncode == 0 and p.stderr == "", p.stderr
-    lines = [x for x in p.stdout.splitlines() if not x.startswith("note: ")]  # (the demo's vertex markers)
+    lines = p.stdout.splitlines()  # (no note: the demo's vertex markers are carried since session 16)
     assert len(lines) == 2 and lines[0].endswith("verified per tile and across separators")
     assert lines[1].startswith("wrote index:")
     assert json.loads(rep.read_text())["pieces"] >= 1
