@@ -127,8 +127,24 @@ def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -
         return []
     if suffix in (".obj", ".off") and meshio_format.point_colors(mesh) is not None:
         points.remove("color")  # written as vertex colours
-    return [f"cell data {x!r} ({suffix} holds geometry only)" for x in names] + [
+    lost = [f"cell data {x!r} ({suffix} holds geometry only)" for x in names] + [
         f"point data {x!r} ({suffix} holds geometry only)" for x in points]
+    segments = np.asarray(getattr(mesh, "segments", np.zeros((0, 2)))).reshape(-1, 2)
+    markers = np.asarray(getattr(mesh, "segment_markers", np.zeros(0))).reshape(-1)
+    vmarks = getattr(mesh, "vertex_markers", None)
+    if len(segments):  # (boundary conditions: a user must learn they are not in the file)
+        marked = f" and their markers {_marker_range(markers)}" if markers.size and markers.any() else ""
+        lost.append(f"{len(segments):,} constrained edges (segments){marked} ({suffix} holds geometry only)")
+    if vmarks is not None and np.asarray(vmarks).size and np.asarray(vmarks).any():
+        lost.append(f"vertex markers {_marker_range(np.asarray(vmarks))} ({suffix} holds geometry only)")
+    return lost
+
+
+def _marker_range(markers: np.ndarray) -> str:
+    """``1..5`` (the nonzero markers' range) for a note."""
+    nz = markers[markers != 0]
+    lo, hi = int(nz.min()), int(nz.max())
+    return str(lo) if lo == hi else f"{lo}..{hi}"
 
 
 def supported_suffixes() -> tuple[str, ...]:

@@ -54,3 +54,18 @@ def test_header_token_is_vtks_encoding():
     assert header_token("température") == "temp%C3%A9rature"
     assert header_token('a"b%c') == "a%22b%25c"
     assert header_token("") == "_"
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".off", ".stl"])
+def test_geometry_only_formats_name_the_lost_segments_and_markers(suffix):
+    from hammesh.io import unwritten_data
+
+    segs = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+    m = hammesh.Mesh(P, T, segments=segs, segment_markers=np.array([1, 2, 2, 5]),
+                     vertex_markers=np.array([1, 2, 2, 5, 0]))
+    lost = " | ".join(unwritten_data(m, f"m{suffix}"))
+    assert "4 constrained edges (segments) and their markers 1..5" in lost
+    assert "vertex markers 1..5" in lost
+    assert unwritten_data(m, "m.vtu") == []
+    bare = hammesh.Mesh(P, T, segments=segs)
+    assert [x for x in unwritten_data(bare, f"m{suffix}") if "markers" in x] == []
