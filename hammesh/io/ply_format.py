@@ -264,7 +264,7 @@ def _cast(values: np.ndarray, dt: np.dtype, element: str, name: str) -> np.ndarr
 
 
 def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vectors: dict[str, int],
-          names: dict[str, str]) -> RawMesh:
+          names: dict[str, dict[str, str]]) -> RawMesh:
     vertex = values.get("vertex", {})
     if not all(k in vertex for k in "xyz"):
         raise _Bad("no vertex element with properties x y z")
@@ -278,7 +278,8 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vector
             not_carried.append(f"vertex list property {name!r}")
         else:
             point_data[name] = v
-    point_data = {names.get(k, k): v for k, v in _joined_vectors(point_data, vectors).items()}
+    renamed = names.get("vertex", {})
+    point_data = {renamed.get(k, k): v for k, v in _joined_vectors(point_data, vectors).items()}
     blocks: list[CellBlock] = []
     cell_data: dict[str, list[np.ndarray]] = {}
     face = values.get("face", {})
@@ -297,7 +298,7 @@ def _mesh(elements: list[_Element], values: dict[str, dict[str, object]], vector
             else:
                 scalars[name] = v
         for name, v in join_components(_joined_vectors(scalars, vectors)).items():
-            cell_data[names.get(name, name)] = [v[r] for r in rows]
+            cell_data[names.get("face", {}).get(name, name)] = [v[r] for r in rows]
     edge = values.get("edge", {})
     if "vertex1" in edge and "vertex2" in edge:
         blocks.append(CellBlock("line", np.column_stack([edge["vertex1"], edge["vertex2"]]).astype(np.int64)))
@@ -315,13 +316,13 @@ _WRITE_TYPES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4"
                 "f4": "float", "f8": "double", "b1": "uchar"}
 
 
-def _ply_columns(data: dict[str, np.ndarray], rows: int,
-                 taken: set[str]) -> tuple[list[tuple[str, np.ndarray]], list[str], list[str]]:
+def _ply_columns(data: dict[str, np.ndarray], rows: int, taken: set[str],
+                 element: str) -> tuple[list[tuple[str, np.ndarray]], list[str], list[str]]:
     """``(property name, column)`` of every numeric array of ``data`` (a vector ``v`` as
     ``v_0``, ``v_1``...; 64-bit integers as ``int`` if they fit, else ``double``), the
     vectors as ``v:c`` for the header's ``comment hammesh vectors`` line, and
-    ``"token name"`` (``text_rows.header_token``'s encoding) for each ``comment hammesh
-    name`` line of a name that is not its property's."""
+    ``"element token name"`` (``text_rows.header_token``'s encoding) for each ``comment
+    hammesh name`` line of a name that is not its property's."""
     out, vectors, renamed = [], [], []
     for name, values in data.items():
         values = np.asarray(values)
@@ -345,7 +346,7 @@ def _ply_columns(data: dict[str, np.ndarray], rows: int,
         if c > 1:
             vectors.append(f"{token}:{c}")
         if token != name:
-            renamed.append(f"{token} {header_token(name)}")
+            renamed.append(f"{element} {token} {header_token(name)}")
     return out, vectors, renamed
 
 
@@ -378,15 +379,15 @@ def _header_vectors(data: bytes) -> dict[str, int]:
     return out
 
 
-def _header_names(data: bytes) -> dict[str, str]:
-    """``{property name: data name}`` from ``comment hammesh name TOKEN NAME`` header lines
-    (``NAME`` in ``text_rows.header_token``'s %XX encoding)."""
-    out: dict[str, str] = {}
+def _header_names(data: bytes) -> dict[str, dict[str, str]]:
+    """``{element: {property name: data name}}`` from ``comment hammesh name ELEMENT TOKEN
+    NAME`` header lines (``NAME`` in ``text_rows.header_token``'s %XX encoding)."""
+    out: dict[str, dict[str, str]] = {}
     end = data.find(b"end_header", 0, _MAX_HEADER)
     for raw in data[:max(end, 0)].decode("latin-1").splitlines():
         words = raw.split()
-        if words[:3] == ["comment", "hammesh", "name"] and len(words) == 5:
-            out[words[3]] = unquote(words[4])
+        if words[:3] == ["comment", "hammesh", "name"] and len(words) == 6:
+            out.setdefault(words[3], {})[words[4]] = unquote(words[5])
     return out
 
 
@@ -415,9 +416,9 @@ def write_ply(path: str | Path, points: np.ndarray, triangles: np.ndarray, *,
     triangles = np.asarray(triangles, dtype=np.int64)
     n, m = len(points), len(triangles)
     vertex = [("x", points[:, 0]), ("y", points[:, 1]), ("z", points[:, 2])]
-    vertex_props, vertex_vectors, vertex_names = _ply_columns(point_data or {}, n, {"x", "y", "z"})
+    vertex_props, vertex_vectors, vertex_names = _ply_columns(point_data or {}, n, {"x", "y", "z"}, "vertex")
     vertex += vertex_props
-    face_props, face_vectors, face_names = _ply_columns(cell_data or {}, m, {"vertex_indices"})
+    face_props, face_vectors, face_names = _ply_columns(cell_data or {}, m, {"vertex_indices"}, "face")
     binary = not face_props
     head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by hammesh"]
     if vertex_vectors or face_vectors:

@@ -27,8 +27,8 @@ def mesh_with(point_name: str, cell_name: str) -> hammesh.Mesh:
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(point_name=names, cell_name=names)
 def test_names_round_trip(tmp_path, suffix, point_name, cell_name):
-    if point_name == cell_name:
-        return
+    if point_name == cell_name or (suffix == ".msh" and '"' in point_name + cell_name):
+        return  # (Gmsh's string tags are quoted and have no escape: see docs/input.md)
     path = tmp_path / f"m{suffix}"
     hammesh.write(mesh_with(point_name, cell_name), path)
     back = hammesh.read_mesh(path)
