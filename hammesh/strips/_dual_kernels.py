@@ -50,6 +50,21 @@ def is_zero_area(pts, a, b, c, rtol):
     the rounding of a cross product); it changes no answer.
     """
     three = pts.shape[1] > 2
+    if not three and rtol >= 1e-14:
+        # the filter below in the plane, first and alone (six reads, one cross product):
+        # at 1M triangles the census of a half took 2.0 ms this way against 3.7 through
+        # the general code's selects (session 16); same answers (the filter decides
+        # nothing the exact test below would decide otherwise)
+        ux = pts[b, 0] - pts[a, 0]
+        uy = pts[b, 1] - pts[a, 1]
+        vx = pts[c, 0] - pts[b, 0]
+        vy = pts[c, 1] - pts[b, 1]
+        wx = pts[a, 0] - pts[c, 0]
+        wy = pts[a, 1] - pts[c, 1]
+        cross = ux * vy - uy * vx
+        lim = 2.0 * rtol * max(ux * ux + uy * uy, max(vx * vx + vy * vy, wx * wx + wy * wy))
+        if cross * cross > lim * lim:
+            return False
     # the sides as vectors: ab = b - a, bc = c - b, ca = a - c
     abx = pts[b, 0] - pts[a, 0]
     aby = pts[b, 1] - pts[a, 1]
@@ -105,7 +120,7 @@ def face_flags(pts, tri, rtol, flags):
         a = row(tri[t, 0])
         b = row(tri[t, 1])
         c = row(tri[t, 2])
-        if a == b or b == c or c == a:
+        if (a == b) | (b == c) | (c == a):  # one branch, not three (rarely taken)
             flags[t] = FACE_REPEATED
             n_rep += 1
         elif is_zero_area(pts, a, b, c, rtol):

@@ -204,10 +204,10 @@ def row_cells_into(tri, label, row_label):
 
 
 @kernel
-def rows_of_cells_into(tri, row_label, first, last, stash, lab, count, rows, half):
+def rows_of_cells_into(tri, row_label, first, last, stash, lab, count, half):
     """Copy the rows whose cell label (``row_label``, :func:`row_cells_into`) is in
-    ``[first, last)`` into ``half`` (their row numbers into ``rows``), cell after cell, in
-    input order inside a cell; returns how many.
+    ``[first, last)`` into ``half``, cell after cell, in input order inside a cell; returns
+    how many.
 
     A counting sort: one pass finds the rows and counts them per cell (``stash``, ``lab``:
     ``(m,)`` scratch; ``count``: ``(last - first + 1,)`` zeros), the second copies them to
@@ -232,7 +232,6 @@ def rows_of_cells_into(tri, row_label, first, last, stash, lab, count, rows, hal
         p = count[c]
         count[c] = p + 1
         q = row(p)
-        rows[q] = t
         half[q, 0] = tri[t, 0]
         half[q, 1] = tri[t, 1]
         half[q, 2] = tri[t, 2]
