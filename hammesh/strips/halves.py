@@ -12,8 +12,9 @@ the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_
 and the fingerprint of what its own part of the buffer draws
 (:func:`~hammesh.strips._fingerprint_kernels.draws_fingerprint`), so the proof of one half
 overlaps the encoding of the other.  The two buffers are joined by one restart index; the
-halves' fingerprints must add up to the input rows' (taken beside their labelling, on both
-threads): the proof reads no claim of the encoder (:mod:`hammesh.strips._fingerprint_kernels`).
+halves' fingerprints must add up to the input rows' (each thread then takes half of the
+input rows by their numbers, whichever half it encoded): the proof reads no claim of the
+encoder (:mod:`hammesh.strips._fingerprint_kernels`).
 
 A plane cuts few edges (0.18% of the dual edges of a q30 square at 100k triangles,
 0.06% at 1M), so the halves' covers end only a few more paths than one cover would
@@ -152,8 +153,11 @@ def _timed_half(clock, key, *args):
             clock[key] = time.thread_time() - t
 
 
-def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, stop, scratch, finish=None, whole=None) -> _Half:
-    """One half: rows in cell order, census, pairing, strips, the fingerprint of its part.
+def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, fp_rows, stop, scratch, finish=None,
+                 whole=None) -> _Half:
+    """One half: rows in cell order, census, pairing, strips, the fingerprint of its part;
+    then the fingerprint of input rows ``[0, m // 2)`` (side 0) or ``[m // 2, m)`` (side 1)
+    into ``fp_rows[0]``.
 
     ``row_label``: each input row's cell (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
     ``fp_keys``: the fingerprint's keys (:func:`~hammesh.strips._fingerprint_kernels.fingerprint_keys`),
@@ -204,7 +208,13 @@ def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, sto
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
         pillows = pillow_rows(rec, g.order, g.starts)
     # what this part draws, decoded from the buffer alone (no claim of the encoder read)
-    proof = None if fp_keys is None else draws_fingerprint(indices, restart, True, fp_keys)
+    proof = None
+    if fp_keys is not None:
+        proof = draws_fingerprint(indices, restart, True, fp_keys)
+        # half of the input rows, by their numbers: the halves' selection of rows is the
+        # encoder's, and a row both left out would not be missed in their own rows
+        mid = m // 2
+        rows_fingerprint_into((tri[:mid] if side == 0 else tri[mid:]).reshape(-1), fp_keys, fp_rows)
     return _Half(None, local, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
@@ -281,15 +291,6 @@ def encode_in_halves(
         scratch.give_back()  # nothing returned lives in the kept arrays
 
 
-def _label_rows(tri, label, row_label, keys, fingerprint) -> int:
-    """:func:`~hammesh.strips._halves_kernels.row_cells_into` on some rows, then (``keys`` given)
-    their :func:`~hammesh.strips._fingerprint_kernels.rows_fingerprint_into` into ``fingerprint[0]``."""
-    status = row_cells_into(tri, label, row_label)
-    if status == 0 and keys is not None:
-        rows_fingerprint_into(tri.reshape(-1), keys, fingerprint)
-    return status
-
-
 def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) -> GLStrip | None:
     """:func:`encode_in_halves` on checked arrays, its work arrays taken from ``scratch``."""
     m = len(tri)
@@ -306,13 +307,13 @@ def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) ->
         # the one-thread path names it
         row_label = scratch.take("row_label", m, cells.label.dtype)
         mid = m // 2
-        other = pool.submit(_label_rows, tri[mid:], cells.label, row_label[mid:], keys, fingerprint[1:])
-        if min(_label_rows(tri[:mid], cells.label, row_label[:mid], keys, fingerprint[:1]), other.result()) < 0:
+        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:])
+        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid]), other.result()) < 0:
             return None
-        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, 1, w_swap, restart, keys, stop,
-                             scratch, finish)
-        a = _timed_half(clock, "first", pts, tri, cells, row_label, 0, w_swap, restart, keys, stop, scratch, finish,
-                        None if finish else whole)
+        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, 1, w_swap, restart, keys,
+                             fingerprint[1:], stop, scratch, finish)
+        a = _timed_half(clock, "first", pts, tri, cells, row_label, 0, w_swap, restart, keys, fingerprint[:1], stop,
+                        scratch, finish, None if finish else whole)
         b = second.result()
     if a.failed or b.failed:
         return None
