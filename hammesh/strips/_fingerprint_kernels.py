@@ -116,21 +116,24 @@ def draws_fingerprint(indices, restart, use_restart, keys):
     their :func:`triangle_hash` (a :class:`DrawsFingerprint`).  A buffer cut just after a
     restart index: each part decodes as it does inside the whole, so the parts' counts and
     sums add up to the whole's."""
-    L = indices.shape[0]
-    s = np.uint64(0)
-    pos = 0  # position inside the current strip
-    k = 0
-    for i in range(L):
-        v = indices[i]
+    total = np.uint64(0)
+    count = 0
+    # the last two indices of the current strip (a window's first two) and how many of
+    # its indices have been read; a restart empties the window
+    first = np.int64(-1)
+    second = np.int64(-1)
+    seen = 0
+    for i in range(indices.shape[0]):
+        v = np.int64(indices[i])
         if use_restart and v == restart:
-            pos = 0
+            seen = 0
             continue
-        if pos >= 2:
-            a = indices[row(i - 2)]  # row(): no negative-index wraparound (see _cover_kernels)
-            b = indices[row(i - 1)]
-            if (a != b) & (b != v) & (a != v):
-                odd = pos % 2 == 1  # selects: the window's parity would be mispredicted
-                s += triangle_hash(b if odd else a, a if odd else b, v, keys)
-                k += 1
-        pos += 1
-    return DrawsFingerprint(k, s)
+        if (seen >= 2) & (first != second) & (second != v) & (first != v):
+            # odd position: drawn (second, first, v); selects, the parity is a coin toss
+            flip = (seen & 1) == 1
+            total += triangle_hash(second if flip else first, first if flip else second, v, keys)
+            count += 1
+        first = second
+        second = v
+        seen += 1
+    return DrawsFingerprint(count, total)
