@@ -179,13 +179,14 @@ def _timed_half(clock, key, *args):
             clock[key] = time.thread_time() - t
 
 
-def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, fp_rows, stop, scratch, finish=None,
-                 join=None) -> _Half:
+def _encode_half(pts, tri, cells, row_label, counts, side, w_swap, restart, fp_keys, fp_rows, stop, scratch,
+                 finish=None, join=None) -> _Half:
     """One half: rows in cell order, census, pairing, strips, the fingerprint of its part;
     then the fingerprint of input rows ``[0, m // 2)`` (side 0) or ``[m // 2, m)`` (side 1)
     into ``fp_rows[0]``.
 
-    ``row_label``: each input row's cell (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
+    ``row_label``, ``counts``: each input row's cell and the rows of each cell
+    (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
     ``fp_keys``: the fingerprint's keys (:func:`~hammesh.strips._fingerprint_kernels.fingerprint_keys`),
     ``None``: no proof.
 
@@ -197,8 +198,8 @@ def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, fp_
     where the work arrays come from (:mod:`hammesh.strips.scratch`; roles named by ``side``).
     """
     try:
-        h = _encode_half_work(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, fp_rows, stop, scratch,
-                              finish, join)
+        h = _encode_half_work(pts, tri, cells, row_label, counts, side, w_swap, restart, fp_keys, fp_rows, stop,
+                              scratch, finish, join)
     finally:
         if join is not None and side == 0:
             join.written.set()  # also when this half failed or raised: the other never waits forever
@@ -207,25 +208,25 @@ def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, fp_
     return h
 
 
-def _encode_half_work(pts, tri, cells, row_label, side, w_swap, restart, fp_keys, fp_rows, stop, scratch, finish,
-                      join) -> _Half:
+def _encode_half_work(pts, tri, cells, row_label, counts, side, w_swap, restart, fp_keys, fp_rows, stop, scratch,
+                      finish, join) -> _Half:
     """:func:`_encode_half` but for the second half's placing."""
     m, n = len(tri), len(pts)
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
     take = scratch.take
     # sized for any split, about half of each written (``written``: faulted in at once)
-    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # int32 records (checked by the caller): half the bytes
-    # the copy's scratch is reused afterwards (the census flags)
-    stash = take(f"{side}.stash", m, np.int32, written=1 / 2)
-    lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
-    k = int(rows_of_cells_into(tri, row_label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), part))
-    if stop[0]:
-        return _failed("the other half failed")
+    mine = counts[first:last]
+    k = int(mine.sum())
     if k < _SMALLEST_HALF * m:
         stop[0] = True
         return _failed("unbalanced")
-    part = part[:k]
-    n_zero = face_flags(pts, part, ZERO_AREA_RTOL, lab.view(np.int8)[:k])[1]
+    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)[:k]  # int32 records (checked by the caller): half the bytes
+    offsets = np.zeros(last - first, np.int64)
+    np.cumsum(mine[:-1], out=offsets[1:])
+    rows_of_cells_into(tri, row_label, first, last, offsets, part)
+    if stop[0]:
+        return _failed("the other half failed")
+    n_zero = face_flags(pts, part, ZERO_AREA_RTOL, take(f"{side}.flags", m, np.int8, written=1 / 2)[:k])[1]
     start = take(f"{side}.start", n + 1, np.int32)
     keys = take(f"{side}.keys", 3 * k, np.int64, huge=True)  # read and written at random: huge pages
     rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32, huge=True)
@@ -351,13 +352,15 @@ def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) ->
         # the one-thread path names it
         row_label = scratch.take("row_label", m, cells.label.dtype)
         mid = m // 2
-        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:])
-        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid]), other.result()) < 0:
+        counts = np.zeros((2, cells.cells), np.int64)  # rows of each cell, on each thread
+        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:], counts[1])
+        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid], counts[0]), other.result()) < 0:
             return None
-        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, 1, w_swap, restart, keys,
-                             fingerprint[1:], stop, scratch, finish, join)
-        a = _timed_half(clock, "first", pts, tri, cells, row_label, 0, w_swap, restart, keys, fingerprint[:1], stop,
-                        scratch, finish, join)
+        counts = counts[0] + counts[1]
+        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, counts, 1, w_swap, restart,
+                             keys, fingerprint[1:], stop, scratch, finish, join)
+        a = _timed_half(clock, "first", pts, tri, cells, row_label, counts, 0, w_swap, restart, keys, fingerprint[:1],
+                        stop, scratch, finish, join)
         b = second.result()
     if a.failed or b.failed:
         return None
