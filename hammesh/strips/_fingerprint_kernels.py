@@ -4,8 +4,8 @@ A buffer draws each input row once with its winding exactly when the multiset of
 triangles it draws (OpenGL's strip rules), each rotated to start at its least vertex
 (winding kept), equals the multiset of the input rows rotated the same way.  Both sides
 are summed here as 64-bit hashes (:func:`triangle_hash`, keyed per call): the input's rows
-in any order (:func:`rows_fingerprint_into`, beside the labelling of the rows, which reads
-them anyway), the buffer by its own decoder (:func:`draws_fingerprint`).  No claim of the
+in any order (:func:`rows_fingerprint_into`, half of them by their numbers on each of the
+halves' threads), the buffer by its own decoder (:func:`draws_fingerprint`).  No claim of the
 encoder is read (no draw order, no row copy); the sums and the count of draws decide.
 
 This is the additive multiset hash (MSet-Add-Hash) of Clarke, Devadas, van Dijk, Gassend
@@ -33,7 +33,7 @@ import numpy as np
 
 from hammesh.strips._numba import kernel, loop_helper, row
 
-__all__ = ["FingerprintKeys", "fingerprint_keys", "triangle_hash", "rows_fingerprint_into", "DrawsFingerprint",
+__all__ = ["fingerprint_keys", "triangle_hash", "rows_fingerprint_into", "DrawsFingerprint",
            "draws_fingerprint"]
 
 _M1 = np.uint64(0xFF51AFD7ED558CCD)  # MurmurHash3 fmix64's multipliers
@@ -44,12 +44,10 @@ _S32 = np.uint64(32)
 #: fewer than ``2**31`` points on this path).
 _OUTSIDE = np.int64(0xFFFFFFFF)
 
-#: The keys of :func:`triangle_hash`: ``(3,) uint64``, two odd multipliers and an offset.
-FingerprintKeys = np.ndarray
-
 
 def fingerprint_keys() -> np.ndarray:
-    """Three new random 64-bit keys (two of them odd) from the OS's entropy."""
+    """The keys of :func:`triangle_hash`, new: ``(3,) uint64``, two odd multipliers and an
+    offset, from the OS's entropy."""
     import secrets
 
     k = np.array([secrets.randbits(64) for _ in range(3)], np.uint64)
