@@ -10,7 +10,7 @@ import numpy as np
 from hammesh.strips._numba import kernel, loop_helper, row
 
 __all__ = ["decode_generalized_strips", "check_claimed_draws", "check_claimed_part", "claimed_part_status",
-           "decode_draws_into", "first_wrong_draw", "mark_drawn_row", "claimed_copy_status"]
+           "decode_draws_into", "first_wrong_draw", "mark_drawn_row"]
 
 
 @kernel
@@ -177,48 +177,3 @@ def mark_drawn_row(tri, drawn, k, t, seen):
     if (min(x, min(y, z)) < 0) | (not _same_rotation(x, y, z, tri[r, 0], tri[r, 1], tri[r, 2])):
         return 1
     return 0
-
-
-@kernel
-def claimed_copy_status(tri, indices, restart, use_restart, rows, local, seen, drawn, inv):
-    """:func:`check_claimed_part` for a claim made on a copy of some rows: draw ``j`` must be
-    input row ``rows[local[j]]`` with its winding.  Returns ``(status, j)``, 0 when every
-    draw is its claimed row (each marked in ``seen``, none twice); otherwise 1 a different
-    triangle, 2 / 3 more / fewer draws than claims, 4 a claim out of range or repeated,
-    at some failing draw ``j`` (not always the first: callers that need to name the problem
-    run :func:`~hammesh.strips.gl.verify_gl_strip`).
-
-    The same facts as :func:`check_claimed_part` on ``rows[local]``, checked in the copy's
-    order instead of the draw order: the claim is inverted first (``inv``: ``(len(rows),)``
-    int64 scratch), then the input rows are read as ``rows`` lists them, in ascending runs
-    (a half's rows are copied cell by cell, in input order inside a cell), and each is
-    compared with the draw that claims it.  No claimed order of input rows is written
-    (``np.take(rows, local)``, ~2 ms a half at 1M triangles), and reading the claim through
-    ``rows`` in the draw order had cost more (a dependent load in the gather loop): at 1M
-    this took 0.88 of the take and the draw-order proof (session 15).  ``drawn``: ``(len(local)
-    + 1, 3)`` ``int32`` scratch.
-    """
-    n = local.shape[0]
-    k = rows.shape[0]
-    count = decode_draws_into(indices, restart, use_restart, drawn)
-    if count > n:
-        return 2, n
-    if count < n:
-        return 3, count
-    for i in range(k):
-        inv[i] = -1
-    for j in range(n):
-        q = local[j]
-        if q < 0 or q >= k:
-            return 4, j
-        if inv[row(q)] >= 0:
-            return 4, j
-        inv[row(q)] = j
-    for i in range(k):
-        j = inv[i]
-        if j < 0:  # a copied row nobody claims: n < k, so another claim repeats (caught above)
-            continue
-        status = mark_drawn_row(tri, drawn, j, rows[i], seen)
-        if status != 0:
-            return status, j
-    return 0, -1

@@ -19,6 +19,8 @@ __all__ = [
     "FACE_REPEATED",
     "FACE_ZERO_AREA",
     "is_zero_area",
+    "CENSUS_BLOCK",
+    "clearly_nonzero_in_plane",
     "face_flags",
     "proper_twins_into",
     "orientation_count",
@@ -91,28 +93,80 @@ def is_zero_area(pts, a, b, c, rtol):
     return best == 0.0 or np.sqrt(cx * cx + cy * cy + cz * cz) <= rtol * best
 
 
+#: Rows a planar census reads at a time (:func:`face_flags`): their corners gathered into
+#: columns, then one loop the compiler vectorizes over them.
+CENSUS_BLOCK = 256
+
+
+@loop_helper
+def clearly_nonzero_in_plane(ax, ay, bx, by, cx, cy, n, rtol, out):
+    """``out[j]``: whether :func:`is_zero_area`'s filter already says "not zero area" for
+    the planar triangle ``j < n`` of these corner columns (twice its area above ``2 rtol``
+    times its longest side squared; ``rtol >= 1e-14``).  No branch: the loop runs on
+    vector registers (a half's census at 1M triangles 1.8-2.0 ms against 2.7-3.6 row by
+    row, session 16)."""
+    for j in range(n):
+        ux = bx[j] - ax[j]
+        uy = by[j] - ay[j]
+        vx = cx[j] - bx[j]
+        vy = cy[j] - by[j]
+        wx = ax[j] - cx[j]
+        wy = ay[j] - cy[j]
+        cross = ux * vy - uy * vx
+        lim = 2.0 * rtol * max(ux * ux + uy * uy, max(vx * vx + vy * vy, wx * wx + wy * wy))
+        out[j] = cross * cross > lim * lim
+
+
 @kernel
 def face_flags(pts, tri, rtol, flags):
     """Fill ``flags[t]``: 1 repeated vertex, 2 zero area (:func:`is_zero_area`), 0
     otherwise; return both counts.  Every index of ``tri`` must be in range (the callers'
     rows are checked: :func:`hammesh.halfedge.mesh_arrays`, or the halves' rows copy):
     they index the points as ``np.uint64``, without numba's negative-index wraparound
-    (:data:`~hammesh.strips._numba.row`; ~15% of the census at 1M triangles)."""
+    (:data:`~hammesh.strips._numba.row`; ~15% of the census at 1M triangles).
+
+    Planar points (and ``rtol >= 1e-14``): :data:`CENSUS_BLOCK` rows at a time, their
+    corners gathered into columns and :func:`clearly_nonzero_in_plane` run over them;
+    only the rows it does not clear get the exact test.  The same flags (the filter is
+    :func:`is_zero_area`'s own: it decides nothing the exact test would decide otherwise).
+    """
     m = tri.shape[0]
     n_rep = 0
     n_zero = 0
-    for t in range(m):
-        a = row(tri[t, 0])
-        b = row(tri[t, 1])
-        c = row(tri[t, 2])
-        if a == b or b == c or c == a:
-            flags[t] = FACE_REPEATED
-            n_rep += 1
-        elif is_zero_area(pts, a, b, c, rtol):
-            flags[t] = FACE_ZERO_AREA
-            n_zero += 1
-        else:
-            flags[t] = FACE_OK
+    planar = pts.shape[1] == 2 and rtol >= 1e-14
+    B = CENSUS_BLOCK if planar else 1
+    col = np.empty((6, B))
+    clear = np.zeros(B, np.bool_)
+    for t0 in range(0, m, B):
+        nb = min(B, m - t0)
+        if planar:
+            for j in range(nb):
+                t = t0 + j
+                a = row(tri[t, 0])
+                b = row(tri[t, 1])
+                c = row(tri[t, 2])
+                col[0, j] = pts[a, 0]
+                col[1, j] = pts[a, 1]
+                col[2, j] = pts[b, 0]
+                col[3, j] = pts[b, 1]
+                col[4, j] = pts[c, 0]
+                col[5, j] = pts[c, 1]
+            clearly_nonzero_in_plane(col[0], col[1], col[2], col[3], col[4], col[5], nb, rtol, clear)
+        for j in range(nb):
+            t = t0 + j
+            a = row(tri[t, 0])
+            b = row(tri[t, 1])
+            c = row(tri[t, 2])
+            if (a == b) | (b == c) | (c == a):  # one branch, not three (rarely taken)
+                flags[t] = FACE_REPEATED
+                n_rep += 1
+            elif clear[j]:
+                flags[t] = FACE_OK
+            elif is_zero_area(pts, a, b, c, rtol):
+                flags[t] = FACE_ZERO_AREA
+                n_zero += 1
+            else:
+                flags[t] = FACE_OK
     return n_rep, n_zero
 
 

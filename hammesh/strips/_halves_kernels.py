@@ -177,11 +177,12 @@ def vertex_cells_into(pts, axis, other, cut, lo_a, lo_b, h, n0, n1, ny, label):
 
 
 @kernel
-def row_cells_into(tri, label, row_label):
+def row_cells_into(tri, label, row_label, counts):
     """``row_label[t]``: the cell label of row ``t``'s least vertex index, for every row of
-    ``tri`` (the caller gives each thread a slice of the rows); returns 0, or -1 if a row
-    repeats a vertex, -2 if a row has a vertex index outside ``[0, len(label))`` (every
-    index is checked before it is used, so the caller needs no range pass of its own).
+    ``tri`` (the caller gives each thread a slice of the rows), and ``counts[c]`` (zeros
+    given) raised by the rows of each cell ``c``; returns 0, or -1 if a row repeats a
+    vertex, -2 if a row has a vertex index outside ``[0, len(label))`` (every index is
+    checked before it is used, so the caller needs no range pass of its own).
 
     The least vertex decides, so rows over the same three vertices (the two sides of a
     double-sided face) land in one cell.  Why a pass of its own: each half's copy
@@ -189,6 +190,7 @@ def row_cells_into(tri, label, row_label):
     look up their labels to find its own; on two threads, each labelling half of the rows
     once, the halves then scan ``m`` small labels instead (at 1M triangles that pass had
     been ~4.4 ms of a half's ~80 ms, half of it the same work done twice; session 15).
+    The counts let the copy put each row in its place in one pass (session 16).
     """
     n = label.shape[0]
     for t in range(tri.shape[0]):
@@ -199,41 +201,30 @@ def row_cells_into(tri, label, row_label):
             return -2
         if a == b or b == c or c == a:
             return -1
-        row_label[t] = label[row(min(a, min(b, c)))]  # checked in range: row() (see _cover_kernels)
+        cell = label[row(min(a, min(b, c)))]  # checked in range: row() (see _cover_kernels)
+        row_label[t] = cell
+        counts[row(cell)] += 1
     return 0
 
 
 @kernel
-def rows_of_cells_into(tri, row_label, first, last, stash, lab, count, rows, half):
+def rows_of_cells_into(tri, row_label, first, last, offsets, half):
     """Copy the rows whose cell label (``row_label``, :func:`row_cells_into`) is in
-    ``[first, last)`` into ``half`` (their row numbers into ``rows``), cell after cell, in
-    input order inside a cell; returns how many.
+    ``[first, last)`` into ``half``, cell after cell, in input order inside a cell.
 
-    A counting sort: one pass finds the rows and counts them per cell (``stash``, ``lab``:
-    ``(m,)`` scratch; ``count``: ``(last - first + 1,)`` zeros), the second copies them to
-    their cell's place.  Triangle's numbering is scattered; in cell order neighbouring
-    triangles are near each other in memory, which the pairing and the greedy strips read
-    at random (at 1M triangles the greedy strips ~20% faster, more than the second pass
-    costs).
+    ``offsets[c - first]``: where cell ``c``'s rows start in ``half`` (the running sums of
+    :func:`row_cells_into`'s counts; each is advanced past its cell's rows).  One pass: the
+    counts were taken by the labelling (until session 16 a counting sort of its own here,
+    two passes, ~1.3 ms more a half at 1M triangles).  Triangle's numbering is scattered;
+    in cell order neighbouring triangles are near each other in memory, which the pairing
+    and the greedy strips read at random (at 1M triangles the greedy strips ~20% faster).
     """
-    k = 0
     for t in range(row_label.shape[0]):
         l = row_label[t]
         if first <= l < last:
-            stash[row(k)] = t
-            lab[row(k)] = l - first
-            count[row(l - first + 1)] += 1
-            k += 1
-    for i in range(last - first):
-        count[i + 1] += count[i]
-    for i in range(k):
-        t = row(stash[i])
-        c = row(lab[i])
-        p = count[c]
-        count[c] = p + 1
-        q = row(p)
-        rows[q] = t
-        half[q, 0] = tri[t, 0]
-        half[q, 1] = tri[t, 1]
-        half[q, 2] = tri[t, 2]
-    return k
+            c = row(l - first)
+            q = row(offsets[c])
+            offsets[c] = q + 1
+            half[q, 0] = tri[t, 0]
+            half[q, 1] = tri[t, 1]
+            half[q, 2] = tri[t, 2]

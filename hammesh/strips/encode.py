@@ -381,7 +381,11 @@ def encode(
     verify : bool
         Decode the buffer with OpenGL's rules and compare with the mesh
         (:func:`~hammesh.strips.gl.verify_gl_strip`, two O(L) compiled passes against
-        the order the paths were meant to draw).  Costs ~10% of the encoding; leave on.
+        the order the paths were meant to draw; in two halves on two threads, from
+        ``halves.HALVES_FROM`` triangles, the multiset fingerprints of
+        :mod:`~hammesh.strips._fingerprint_kernels`, which read no claim: a wrong buffer
+        passes only by a 64-bit hash coincidence, and a failed one gets the full
+        comparison).  Costs ~3-10% of the encoding; leave on.
     cache : int, optional
         Lay the strips for a FIFO vertex cache of this many entries (at least 3): the
         cover's strips longer than ``cache.PIECE_LENGTH * cache`` triangles cut into equal

@@ -9,9 +9,12 @@ each half runs on its own thread: its rows copied out cell by cell of a grid
 pairing and the greedy strips read at random), its face census, its edge pairing
 straight into triangle records (:func:`~hammesh.strips._halves_kernels.pair_records_into`),
 the one-pass greedy strips (:func:`~hammesh.strips._greedy_strip_kernels.greedy_strip_buffer`)
-and the round-trip proof of its own part of the buffer against the input's rows
-(:func:`~hammesh.strips._decode_kernels.claimed_copy_status`), so the proof of one half
-overlaps the encoding of the other.  The two buffers are joined by one restart index.
+and the fingerprint of what its own part of the buffer draws
+(:func:`~hammesh.strips._fingerprint_kernels.draws_fingerprint`), so the proof of one half
+overlaps the encoding of the other.  The two buffers are joined by one restart index; the
+halves' fingerprints must add up to the input rows' (each thread then takes half of the
+input rows by their numbers, whichever half it encoded): the proof reads no claim of the
+encoder (:mod:`hammesh.strips._fingerprint_kernels`).
 
 A plane cuts few edges (0.18% of the dual edges of a q30 square at 100k triangles,
 0.06% at 1M), so the halves' covers end only a few more paths than one cover would
@@ -27,6 +30,7 @@ defects.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
@@ -34,8 +38,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from hammesh.errors import InvalidOptionError
-from hammesh.strips._decode_kernels import claimed_copy_status
 from hammesh.strips._dual_kernels import REC_TWIN, REC_WIDTH, count_pillows, face_flags, records_dtype
+from hammesh.strips._fingerprint_kernels import draws_fingerprint, fingerprint_keys, rows_fingerprint_into
 from hammesh.strips._greedy_strip_kernels import NO_SEED_ORDER, StripWork, greedy_strip_buffer
 from hammesh.strips._halves_kernels import (
     pair_records_into,
@@ -61,7 +65,8 @@ _SMALLEST_HALF = 1 / 8
 
 #: One half's result: its rows (numbers in its copy) in draw order, its part of the buffer, the
 #: greedy strip's figures, and what the join needs (pairing buckets, unpaired half-edges,
-#: census counts, proof status).  ``failed``: a reason to take the one-thread path.
+#: census counts, the :class:`~hammesh.strips._fingerprint_kernels.DrawsFingerprint` of its
+#: part or ``None``).  ``failed``: a reason to take the one-thread path.
 _Half = namedtuple(
     "_Half",
     ["failed", "order", "indices", "n_strips", "n_swaps", "max_index", "start", "keys", "loose", "n_loose",
@@ -139,6 +144,31 @@ def _failed(reason: str) -> _Half:
     return _Half(reason, *([None] * (len(_Half._fields) - 1)))
 
 
+class _Join:
+    """The one-pass buffer of the whole mesh, shared by the halves: the first half writes its
+    part at the head (``buffer``, made by it once it knows its size) and says how long it is
+    (``first_len``, -1 if it failed; ``written`` set either way); the second half then
+    places its own part after a restart index, on its own thread, and compares the copy
+    (``placed``).  The copy so runs while the first half still fingerprints its part, not
+    on the calling thread after both (~1.5 ms of the critical path at 1M triangles)."""
+
+    def __init__(self) -> None:
+        self.buffer: np.ndarray | None = None
+        self.first_len = -1
+        self.written = threading.Event()
+        self.placed = False
+
+    def place_second(self, indices: np.ndarray, restart: int) -> None:
+        """Copy the second half's part after the first's and a restart (waits for the first)."""
+        self.written.wait()
+        la, lb = self.first_len, len(indices)
+        if la < 0 or self.buffer is None or la + 1 + lb > len(self.buffer):
+            return
+        self.buffer[la] = restart
+        self.buffer[la + 1 : la + 1 + lb] = indices
+        self.placed = bool(np.array_equal(self.buffer[la + 1 : la + 1 + lb], indices))
+
+
 def _timed_half(clock, key, *args):
     """:func:`_encode_half`, its thread CPU seconds written to ``clock[key]`` (when a dict)."""
     t = time.thread_time()
@@ -149,35 +179,54 @@ def _timed_half(clock, key, *args):
             clock[key] = time.thread_time() - t
 
 
-def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, seen, stop, scratch, finish=None, whole=None) -> _Half:
-    """One half: rows in cell order, census, pairing, strips, proof of its part (``seen`` shared).
+def _encode_half(pts, tri, cells, row_label, counts, side, w_swap, restart, fp_keys, fp_rows, stop, scratch,
+                 finish=None, join=None) -> _Half:
+    """One half: rows in cell order, census, pairing, strips, the fingerprint of its part;
+    then the fingerprint of input rows ``[0, m // 2)`` (side 0) or ``[m // 2, m)`` (side 1)
+    into ``fp_rows[0]``.
 
-    ``row_label``: each input row's cell (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
+    ``row_label``, ``counts``: each input row's cell and the rows of each cell
+    (:func:`~hammesh.strips._halves_kernels.row_cells_into`).
+    ``fp_keys``: the fingerprint's keys (:func:`~hammesh.strips._fingerprint_kernels.fingerprint_keys`),
+    ``None``: no proof.
 
     ``finish``: ``None`` for the one-pass greedy strips, or the encoder
     ``(points, rows, records, twin) -> (indices, order, n_strips, n_swaps)`` of the
     default mode (:func:`hammesh.strips.encode.encode`'s cover, end moves and writer).
-    ``whole`` (one-pass only): a list to receive the buffer of the whole mesh, whose head
-    this half writes (and proves) in place.  ``scratch``: where the work arrays come from
-    (:mod:`hammesh.strips.scratch`; roles named by ``side``).
+    ``join`` (one-pass only): the :class:`_Join` of the whole buffer, whose head side 0
+    writes (and proves) in place and after which side 1 places its part.  ``scratch``:
+    where the work arrays come from (:mod:`hammesh.strips.scratch`; roles named by ``side``).
     """
+    try:
+        h = _encode_half_work(pts, tri, cells, row_label, counts, side, w_swap, restart, fp_keys, fp_rows, stop,
+                              scratch, finish, join)
+    finally:
+        if join is not None and side == 0:
+            join.written.set()  # also when this half failed or raised: the other never waits forever
+    if join is not None and side == 1 and not h.failed:
+        join.place_second(h.indices, restart)
+    return h
+
+
+def _encode_half_work(pts, tri, cells, row_label, counts, side, w_swap, restart, fp_keys, fp_rows, stop, scratch,
+                      finish, join) -> _Half:
+    """:func:`_encode_half` but for the second half's placing."""
     m, n = len(tri), len(pts)
     first, last = (0, cells.split) if side == 0 else (cells.split, cells.cells)
     take = scratch.take
     # sized for any split, about half of each written (``written``: faulted in at once)
-    rows = take(f"{side}.rows", m, np.int64, written=1 / 2)
-    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)  # int32 records (checked by the caller): half the bytes
-    # the copy's scratch is reused afterwards (the census flags, the inverted claim)
-    stash = take(f"{side}.stash", m, np.int64, written=1 / 2)
-    lab = take(f"{side}.lab", m, cells.label.dtype, written=1 / 2)
-    k = int(rows_of_cells_into(tri, row_label, first, last, stash, lab, np.zeros(last - first + 1, np.int64), rows, part))
-    if stop[0]:
-        return _failed("the other half failed")
+    mine = counts[first:last]
+    k = int(mine.sum())
     if k < _SMALLEST_HALF * m:
         stop[0] = True
         return _failed("unbalanced")
-    rows, part = rows[:k], part[:k]
-    n_zero = face_flags(pts, part, ZERO_AREA_RTOL, lab.view(np.int8)[:k])[1]
+    part = take(f"{side}.part", (m, 3), np.int32, written=1 / 2)[:k]  # int32 records (checked by the caller): half the bytes
+    offsets = np.zeros(last - first, np.int64)
+    np.cumsum(mine[:-1], out=offsets[1:])
+    rows_of_cells_into(tri, row_label, first, last, offsets, part)
+    if stop[0]:
+        return _failed("the other half failed")
+    n_zero = face_flags(pts, part, ZERO_AREA_RTOL, take(f"{side}.flags", m, np.int8, written=1 / 2)[:k])[1]
     start = take(f"{side}.start", n + 1, np.int32)
     keys = take(f"{side}.keys", 3 * k, np.int64, huge=True)  # read and written at random: huge pages
     rec = take(f"{side}.rec", (k, REC_WIDTH), np.int32, huge=True)
@@ -186,29 +235,31 @@ def _encode_half(pts, tri, cells, row_label, side, w_swap, restart, seen, stop, 
     if paired.pairs < 0 or stop[0]:
         stop[0] = True
         return _failed("an edge is not proper")
-    draws = None
     if finish is not None:
         pillows = int(count_pillows(rec))
         twin = rec[:, REC_TWIN : REC_TWIN + 3].astype(np.int64).reshape(-1)  # one copy (C order), not two
         indices, local, n_strips, n_swaps = finish(pts, part.astype(np.int64), rec, twin)
         max_index = -1  # the writer checked the restart index itself
     else:
-        if whole is not None:
+        head = join is not None and side == 0
+        if head:
             # bound of the whole buffer: this half's 4 k, a restart, the other half's 4 (m - k)
-            whole.append(np.empty(4 * m + 1, np.int64))
-        work = _half_work(k, None if whole is None else whole[0][: 4 * k], scratch, side)
+            join.buffer = np.empty(4 * m + 1, np.int64)
+        work = _half_work(k, join.buffer[: 4 * k] if head else None, scratch, side)
         g = greedy_strip_buffer(rec, w_swap, restart, work)
         indices, local, n_strips, n_swaps, max_index = g.indices, g.order, len(g.starts) - 1, g.n_swaps, g.max_index
+        if head:  # its part is final: the second half may place its own after it
+            join.first_len = len(indices)
+            join.written.set()
         pillows = pillow_rows(rec, g.order, g.starts)
-        draws = work.bucket.reshape(-1)  # the queue is spent: its 4 k faulted-in int32 hold the proof's draws
-    proof = -1
-    if seen is not None:
-        # the claim: draw j is input row rows[local[j]]; proved, not trusted, in the copy's
-        # order (the copy's scratch ``stash`` holds the inverted claim)
-        if draws is None or len(draws) < 3 * (len(local) + 1):
-            draws = np.empty(3 * (len(local) + 1), np.int32)
-        proof = int(claimed_copy_status(tri, indices, restart, True, rows, local, seen,
-                                        draws[: 3 * (len(local) + 1)].reshape(-1, 3), stash[:k])[0])
+    # what this part draws, decoded from the buffer alone (no claim of the encoder read)
+    proof = None
+    if fp_keys is not None:
+        proof = draws_fingerprint(indices, restart, True, fp_keys)
+        # half of the input rows, by their numbers: the halves' selection of rows is the
+        # encoder's, and a row both left out would not be missed in their own rows
+        mid = m // 2
+        rows_fingerprint_into((tri[:mid] if side == 0 else tri[mid:]).reshape(-1), fp_keys, fp_rows)
     return _Half(None, local, indices, n_strips, n_swaps, max_index, start, keys, loose,
                  int(paired.n_loose), int(paired.pairs), int(n_zero), pillows, proof)
 
@@ -288,12 +339,10 @@ def encode_in_halves(
 def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) -> GLStrip | None:
     """:func:`encode_in_halves` on checked arrays, its work arrays taken from ``scratch``."""
     m = len(tri)
-    seen = None
-    if verify:
-        seen = scratch.take("seen", m, np.bool_)
-        seen.fill(False)
+    keys = fingerprint_keys() if verify else None
+    fingerprint = np.zeros(2, np.uint64)  # the input rows', a half of them on each thread
     stop = np.zeros(1, np.bool_)
-    whole: list[np.ndarray] = []
+    join = None if finish else _Join()
     with ThreadPoolExecutor(1) as pool:
         cells = vertex_cells(pts, m, pool=pool)
         if not cells.finite:
@@ -303,13 +352,15 @@ def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) ->
         # the one-thread path names it
         row_label = scratch.take("row_label", m, cells.label.dtype)
         mid = m // 2
-        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:])
-        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid]), other.result()) < 0:
+        counts = np.zeros((2, cells.cells), np.int64)  # rows of each cell, on each thread
+        other = pool.submit(row_cells_into, tri[mid:], cells.label, row_label[mid:], counts[1])
+        if min(row_cells_into(tri[:mid], cells.label, row_label[:mid], counts[0]), other.result()) < 0:
             return None
-        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, 1, w_swap, restart, seen, stop,
-                             scratch, finish)
-        a = _timed_half(clock, "first", pts, tri, cells, row_label, 0, w_swap, restart, seen, stop, scratch, finish,
-                        None if finish else whole)
+        counts = counts[0] + counts[1]
+        second = pool.submit(_timed_half, clock, "second", pts, tri, cells, row_label, counts, 1, w_swap, restart,
+                             keys, fingerprint[1:], stop, scratch, finish, join)
+        a = _timed_half(clock, "first", pts, tri, cells, row_label, counts, 0, w_swap, restart, keys, fingerprint[:1],
+                        stop, scratch, finish, join)
         b = second.result()
     if a.failed or b.failed:
         return None
@@ -318,23 +369,28 @@ def _joined_halves(pts, tri, restart, verify, w_swap, finish, clock, scratch) ->
     if not (ab.ok and ba.ok) or a.pairs + b.pairs + ab.proper < m:
         return None  # a defect across the cut, or maybe a dual forest: the one-thread path
     la, lb = len(a.indices), len(b.indices)
-    if whole:
-        indices = whole[0][: la + lb + 1]  # the first half's part is in place
-        in_place = True
+    placed = join is not None and join.placed  # the second half placed its part itself
+    if join is not None:
+        indices = join.buffer[: la + lb + 1]  # the first half's part is in place
     else:
         indices = np.empty(la + lb + 1, np.int64)
         indices[:la] = a.indices
-        in_place = False
-    indices[la] = restart
-    indices[la + 1 :] = b.indices
+    if not placed:
+        indices[la] = restart
+        indices[la + 1 :] = b.indices
     S = a.n_strips + b.n_strips
     if 0 <= restart <= max(a.max_index, b.max_index) and np.count_nonzero(indices == restart) != S - 1:
         raise InvalidOptionError(f"restart index {restart} is a vertex index of the mesh")
-    # each half was proved where it was written (the first in place with the one-pass
-    # writer): compare the copies
-    proved = a.proof == 0 and b.proof == 0 and len(a.order) + len(b.order) == m and indices[la] == restart
-    copied = np.array_equal(indices[la + 1 :], b.indices) and (in_place or np.array_equal(indices[:la], a.indices))
-    if verify and not (proved and copied and seen.all()):
-        verify_gl_strip(tri, indices, restart)  # the claim failed: the full comparison names the problem
+    if verify:
+        # each half's draws were fingerprinted where they were written (the first in place
+        # with the one-pass writer): m draws whose hashes add up to the input rows', and
+        # the copies equal; otherwise the full comparison names the problem
+        drawn = (int(a.proof.sum) + int(b.proof.sum)) % 2**64  # the kernels sum modulo 2**64
+        rows = (int(fingerprint[0]) + int(fingerprint[1])) % 2**64
+        proved = a.proof.count + b.proof.count == m and drawn == rows and indices[la] == restart
+        copied = (placed or np.array_equal(indices[la + 1 :], b.indices)) and (
+            join is not None or np.array_equal(indices[:la], a.indices))
+        if not (proved and copied):
+            verify_gl_strip(tri, indices, restart)
     defects = MeshDefects(repeated_vertex=0, zero_area=a.zero_area + b.zero_area, double_sided=(a.pillows + b.pillows) // 2)
     return GLStrip(indices, restart, m, S, a.n_swaps + b.n_swaps, defects=defects)

@@ -217,3 +217,35 @@ def test_zero_area_rule_is_one_answer_for_every_rotation_and_the_reversed_row(se
     got = zero_area_rows(p, np.array(rows)).tolist()
     assert got == [_zero_area_reference(p, r) for r in rows]
     assert len(set(got)) == 1
+
+
+# m up to 700: up to three blocks of CENSUS_BLOCK = 256 rows, the last one partial
+@given(st.integers(0, 2**32 - 1), st.sampled_from([2, 3]), st.integers(1, 700))
+@settings(max_examples=40, deadline=None)
+def test_census_over_several_blocks_flags_each_row_as_the_plain_rule(seed, d, m):
+    """face_flags reads planar rows CENSUS_BLOCK at a time (corners gathered into columns, the
+    filter vectorized): every row's flag is still the plain rule's, slivers, repeated
+    vertices and a last partial block included."""
+    from hammesh.strips._dual_kernels import FACE_OK, FACE_REPEATED, FACE_ZERO_AREA, face_flags
+    from hammesh.strips.defects import ZERO_AREA_RTOL
+
+    rng = np.random.default_rng(seed)
+    n = 60
+    p = rng.normal(size=(n, d)) * 10.0 ** rng.integers(-3, 4)
+    # some points on the line through points 0 and 1: rows over them are slivers or exact zeros
+    for i in range(2, 12):
+        p[i] = p[0] + rng.choice([0.0, 0.5, 2.0, rng.uniform(-1, 2)]) * (p[1] - p[0])
+        p[i] += rng.choice([0.0, 1e-15, 1e-9]) * np.linalg.norm(p[1] - p[0]) * rng.normal(size=d)
+    tri = rng.integers(0, n, size=(m, 3))
+    line = rng.random(m) < 0.3
+    tri[line] = np.c_[rng.integers(0, 12, (int(line.sum()), 3))]
+    flags = np.full(m, -1, np.int8)
+    n_rep, n_zero = face_flags(p, tri.astype(np.int64), ZERO_AREA_RTOL, flags)
+    want = []
+    for a, b, c in tri.tolist():
+        if a == b or b == c or c == a:
+            want.append(FACE_REPEATED)
+        else:
+            want.append(FACE_ZERO_AREA if _zero_area_reference(p, (a, b, c)) else FACE_OK)
+    assert flags.tolist() == want
+    assert (n_rep, n_zero) == (want.count(FACE_REPEATED), want.count(FACE_ZERO_AREA))

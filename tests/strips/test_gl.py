@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from hammesh.errors import InvalidMeshError, InvalidOptionError, VerificationError
@@ -289,37 +289,3 @@ def test_one_pass_restart_encoder_names_bad_paths():
     u = int(d.neighbor_triangles[0][d.neighbor_triangles[0] >= 0][0])
     with pytest.raises(InvalidMeshError, match="turns back"):
         restart_strip(d.triangles, d.twin, np.array([0, u, 0]), np.array([0, 3]), RESTART_INDEX)
-
-
-@given(st.integers(0, 2**32 - 1), st.integers(0, 7))
-@settings(max_examples=80, deadline=None)
-def test_proof_in_the_copys_order_decides_as_the_draw_order_proof(seed, corrupt):
-    """claimed_copy_status (the claim on a copy of the rows, checked in the copy's order) accepts
-    exactly the buffers and claims check_claimed_part accepts on rows[local], for every fault
-    (5: a claim out of the copy's range, 6: the copy lists a row twice, 7: a claimed row
-    already drawn by the other part of the buffer, marked in the shared ``seen``)."""
-    from hammesh.strips._decode_kernels import check_claimed_part, claimed_copy_status
-
-    m, d, rng, order, idx, claim = _faulty_claim(seed, corrupt)
-    tri = d.triangles.astype(np.int64)
-    rows = rng.permutation(len(tri)).astype(np.int64)  # the copy: every row once, in some order
-    where = np.empty_like(rows)
-    where[rows] = np.arange(len(rows))
-    local = where[np.asarray(claim, np.int64)]
-    if corrupt == 5:
-        local[int(rng.integers(len(local)))] = len(rows)
-    if corrupt == 6:
-        rows[int(rng.integers(len(rows)))] = rows[int(rng.integers(len(rows)))]
-    idx = idx.astype(np.int64)
-    n = len(local)
-    seen = np.zeros(len(tri), np.bool_)
-    if corrupt == 7:
-        seen[int(order[int(rng.integers(len(order)))])] = True
-    got = claimed_copy_status(tri, idx, RESTART_INDEX, True, rows, local, seen.copy(),
-                              np.empty((n + 1, 3), np.int32), np.empty(len(rows), np.int64))
-    claim_rows = np.where((local >= 0) & (local < len(rows)), rows[np.clip(local, 0, len(rows) - 1)], -1)
-    want = check_claimed_part(tri, idx, RESTART_INDEX, True, claim_rows, seen.copy())
-    assert (int(got[0]) == 0) == (int(want[0]) == 0)
-    assert int(got[0]) in (0, 1, 2, 3, 4)
-    if corrupt in (2, 3, 4, 5, 7):
-        assert int(got[0]) != 0

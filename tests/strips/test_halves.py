@@ -199,19 +199,22 @@ def test_pairing_and_shared_edges_match_a_brute_force_count(seed, n, kind):
     label = rng.integers(0, 6, len(m.points)).astype(np.int32)  # cells 0-2: side 0, 3-5: side 1
     row_label = np.full(len(tri), -7, np.int32)
     mid = int(rng.integers(len(tri) + 1))  # two threads' slices, anywhere
-    assert row_cells_into(tri[:mid], label, row_label[:mid]) == 0 == row_cells_into(tri[mid:], label, row_label[mid:])
+    counts = np.zeros((2, 6), np.int64)
+    assert row_cells_into(tri[:mid], label, row_label[:mid], counts[0]) == 0
+    assert row_cells_into(tri[mid:], label, row_label[mid:], counts[1]) == 0
     assert np.array_equal(row_label, label[tri.min(1)])
+    assert np.array_equal(counts.sum(0), np.bincount(label[tri.min(1)], minlength=6))
     parts = []
     for first, last in ((0, 3), (3, 6)):
-        rows = np.empty(len(tri), np.int64)
-        part = np.empty((len(tri), 3), np.int64)
-        count = np.zeros(last - first + 1, np.int64)
-        k = rows_of_cells_into(tri, row_label, first, last, np.empty(len(tri), np.int64), np.empty(len(tri), np.int32), count, rows, part)
+        part = np.full((len(tri), 3), -9, np.int64)
+        offsets = np.r_[0, np.cumsum(counts.sum(0)[first : last - 1])].astype(np.int64)
+        k = int(counts.sum(0)[first:last].sum())
+        rows_of_cells_into(tri, row_label, first, last, offsets, part)
+        assert (part[k:] == -9).all()  # nothing written past this side's rows
         # the rows of these cells, cell after cell, in input order inside a cell
         cell = label[tri.min(1)]
         mine = np.flatnonzero((cell >= first) & (cell < last))
-        assert np.array_equal(rows[:k], mine[np.argsort(cell[mine], kind="stable")])
-        assert np.array_equal(part[:k], tri[rows[:k]])
+        assert k == len(mine) and np.array_equal(part[:k], tri[mine[np.argsort(cell[mine], kind="stable")]])
         part = part[:k]
         start = np.empty(len(m.points) + 1, np.int32)
         keys = np.empty(3 * k, np.int64)
@@ -322,11 +325,11 @@ def test_row_cells_refuse_a_bad_row_before_using_its_indices(seed, fault):
     m = delaunay_mesh(seed % 997, 40)
     label = rng.integers(0, 4, len(m.points)).astype(np.int32)
     out = np.empty(len(m.triangles), np.int32)
-    assert row_cells_into(m.triangles, label, out) == 0
+    assert row_cells_into(m.triangles, label, out, np.zeros(4, np.int64)) == 0
     tri = m.triangles.copy()
     t = int(rng.integers(len(tri)))
     if fault == "repeat":
         tri[t, 2] = tri[t, 0]
     else:
         tri[t, int(rng.integers(3))] = -1 if fault == "negative" else len(m.points)
-    assert row_cells_into(tri, label, out) == (-1 if fault == "repeat" else -2)
+    assert row_cells_into(tri, label, out, np.zeros(4, np.int64)) == (-1 if fault == "repeat" else -2)

@@ -23,12 +23,12 @@ def test_the_grid_is_a_ccw_mesh_of_two_triangles_a_quad():
 
 _FRESH = r"""
 import json
-from hammesh.strips import _decode_kernels, _dual_kernels, _greedy_strip_kernels, _halves_kernels
+from hammesh.strips import _dual_kernels, _fingerprint_kernels, _greedy_strip_kernels, _halves_kernels
 from hammesh.strips.warm import prepare
 kernels = [_halves_kernels.vertex_cells_into, _halves_kernels.row_cells_into, _halves_kernels.rows_of_cells_into,
            _dual_kernels.face_flags,
            _halves_kernels.pair_records_into, _greedy_strip_kernels._greedy_strip_into,
-           _decode_kernels.claimed_copy_status, _halves_kernels.shared_edges]
+           _fingerprint_kernels.rows_fingerprint_into, _fingerprint_kernels.draws_fingerprint, _halves_kernels.shared_edges]
 before = [len(k.signatures) for k in kernels]
 t = prepare(fast=True)
 t.join()
@@ -40,7 +40,7 @@ def test_prepare_loads_the_fast_paths_kernels_in_a_fresh_process():
     """Before: none of encode(fast=True)'s two-halves kernels is loaded; after the thread: all."""
     out = subprocess.run([sys.executable, "-c", _FRESH], capture_output=True, text=True, check=True).stdout
     before, after = json.loads(out.strip().splitlines()[-1])
-    assert before == [0] * len(before) == [0] * 8 and all(n >= 1 for n in after)
+    assert before == [0] * len(before) == [0] * 9 and all(n >= 1 for n in after)
 
 
 def test_the_grid_goes_through_both_halves_in_both_modes():
