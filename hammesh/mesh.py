@@ -145,14 +145,18 @@ class Mesh:
         if not isinstance(self.info, dict):
             raise InvalidMeshError(f"info must be a dict, got {type(self.info).__name__}")
         m = len(self.triangles)
-        if self.triangle_attributes.ndim != 2 or self.triangle_attributes.shape[0] != m:
-            object.__setattr__(
-                self, "triangle_attributes", np.zeros((m, 0), dtype=np.float64)
-            )
-        if len(self.segment_markers) != len(self.segments):
-            object.__setattr__(
-                self, "segment_markers", np.zeros(len(self.segments), dtype=np.int64)
-            )
+        attrs = self.triangle_attributes
+        if attrs.ndim == 1 and len(attrs) == m and m:  # (one column given flat)
+            object.__setattr__(self, "triangle_attributes", attrs.reshape(m, 1))
+        elif attrs.size == 0 or (attrs.ndim == 2 and attrs.shape[0] == m == 0):
+            object.__setattr__(self, "triangle_attributes", np.zeros((m, 0), dtype=np.float64))
+        elif attrs.ndim != 2 or attrs.shape[0] != m:  # (given data is never dropped in silence)
+            raise InvalidMeshError(f"triangle_attributes has shape {attrs.shape}: must be (m, k) with one row "
+                                   f"per triangle (m = {m})")
+        if self.segment_markers.size == 0:
+            object.__setattr__(self, "segment_markers", np.zeros(len(self.segments), dtype=np.int64))
+        elif len(self.segment_markers) != len(self.segments):
+            raise InvalidMeshError(f"{len(self.segment_markers)} segment_markers for {len(self.segments)} segments")
         _fit_vertex_markers(self)
         _fit_names(self)
         _fit_point_data(self)
@@ -167,11 +171,14 @@ class Mesh:
 
 
 def _fit_vertex_markers(obj: Any) -> None:
-    """``obj.vertex_markers`` as ``(n,) int64``: zeros if missing or of the wrong length."""
+    """``obj.vertex_markers`` as ``(n,) int64``: zeros if missing (empty); the error if of
+    another length (given data is never dropped in silence)."""
     n = len(obj.points)
     markers = obj.vertex_markers
-    if markers is None or np.shape(markers) != (n,):
+    if markers is None or np.size(markers) == 0:
         object.__setattr__(obj, "vertex_markers", np.zeros(n, dtype=np.int64))
+    elif np.shape(markers) != (n,):
+        raise InvalidMeshError(f"vertex_markers has shape {np.shape(markers)}: must be one per point (n = {n})")
     elif markers.dtype != np.int64:
         object.__setattr__(obj, "vertex_markers", np.asarray(markers).astype(np.int64))
 

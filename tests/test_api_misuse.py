@@ -61,3 +61,23 @@ def test_subpackages_reachable_after_plain_import():
             "import types; assert isinstance(hammesh.verify, types.FunctionType); "
             "assert isinstance(hammesh.partition, types.FunctionType)")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"triangle_attributes": np.array([[1.0], [2.0], [3.0]])}, "triangle_attributes"),
+    ({"vertex_markers": np.array([5, 6, 7])}, "vertex_markers"),
+    ({"segments": np.array([[0, 1]]), "segment_markers": np.array([4, 9])}, "segment_markers"),
+])
+def test_mesh_fields_of_another_length_are_refused(kwargs, needle):
+    from hammesh.errors import InvalidMeshError
+
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
+    with pytest.raises(InvalidMeshError, match=needle):
+        hammesh.Mesh(pts, T, **kwargs)
+
+
+def test_mesh_fields_absent_or_flat_are_taken():
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
+    m = hammesh.Mesh(pts, T, triangle_attributes=np.array([7.0, 8.0]), segments=np.array([[0, 1]]))
+    assert m.triangle_attributes.tolist() == [[7.0], [8.0]]
+    assert m.segment_markers.tolist() == [0] and m.vertex_markers.tolist() == [0, 0, 0, 0]
