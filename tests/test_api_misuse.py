@@ -81,3 +81,17 @@ def test_mesh_fields_absent_or_flat_are_taken():
     m = hammesh.Mesh(pts, T, triangle_attributes=np.array([7.0, 8.0]), segments=np.array([[0, 1]]))
     assert m.triangle_attributes.tolist() == [[7.0], [8.0]]
     assert m.segment_markers.tolist() == [0] and m.vertex_markers.tolist() == [0, 0, 0, 0]
+
+
+def test_triangle_files_with_a_byte_order_mark(tmp_path):
+    poly = "4 2 0 0\n1 0 0\n2 1 0\n3 1 1\n4 0 1\n4 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n0\n"
+    (tmp_path / "b.poly").write_text("\ufeff" + poly, encoding="utf-8")
+    dom = hammesh.read_domain(tmp_path / "b.poly")
+    assert len(dom.vertices) == 4 and len(dom.segments) == 4
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=25, max_area=0.1))
+    hammesh.write(h, tmp_path / "h.ele")
+    for name in ("h.node", "h.ele"):
+        text = (tmp_path / name).read_text(encoding="utf-8")
+        (tmp_path / name).write_text("\ufeff" + text, encoding="utf-8")
+    back = hammesh.read_mesh(tmp_path / "h.ele")
+    np.testing.assert_array_equal(back.triangles, h.triangles)
