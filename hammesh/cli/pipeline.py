@@ -221,6 +221,15 @@ def _make_dir(directory: Path) -> list[Path]:
     return list(reversed(missing))
 
 
+def _repair_lines(repairs: list) -> list[str]:
+    """One line saying what the input needed (the report lists every repair)."""
+    if not repairs:
+        return []
+    said = [r if isinstance(r, str) else str(r.get("defect", r)) if isinstance(r, dict) else str(r) for r in repairs]
+    more = f" and {len(said) - 1} more (the report's 'repairs')" if len(said) > 1 else ""
+    return [f"repaired: {said[0]}{more}"]
+
+
 def summary(h: HamiltonianMesh) -> str:
     """A few human lines about a verified Hamiltonian mesh."""
     r = h.report
@@ -243,6 +252,7 @@ def summary(h: HamiltonianMesh) -> str:
             if r.get("below_parent_rule")
             else ""
         ),
+        *_repair_lines(r.get("repairs") or []),
         "seconds: "
         + ", ".join(
             f"{k} {v:.3f}" for k, v in (("mesh", mesh_s), ("hamiltonian", sec.get("hamiltonian")), ("verify", sec.get("verify"))) if v is not None

@@ -592,7 +592,7 @@ def _planar(points: np.ndarray, path: Path, dim: int | None, repairs: list[str])
     z = points[:, 2]
     if not len(z) or np.all(z == z[0]):  # (no points: nothing varies; "no triangles" follows)
         if len(z) and z[0] != 0:
-            repairs.append(f"all points at z = {z[0]:.17g}: read as a planar mesh")
+            repairs.append(f"all points at z = {z[0]:.17g}: read as a planar mesh (written at z = 0)")
         return points[:, :2]
     if dim is None:
         return points

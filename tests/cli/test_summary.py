@@ -23,3 +23,20 @@ def test_summary_names_triangles_below_the_parent_rule_only_when_there_are_some(
             assert f"{below:,} new triangle(s) below {keep:g} x" in text
         seen.add(below > 0)
     assert seen == {True, False}  # both lines were looked at
+
+
+def test_summary_says_what_the_input_needed(tmp_path, capsys):
+    import meshio
+    import numpy as np
+
+    from hammesh.cli import main
+
+    pts = np.array([[0, 0, 5], [1, 0, 5], [1, 1, 5], [0, 1, 5.0]])
+    meshio.Mesh(pts, [("quad", np.array([[0, 1, 2, 3]]))]).write(tmp_path / "q.vtu")
+    assert main(["mesh", str(tmp_path / "q.vtu"), "-o", str(tmp_path / "o.vtu")]) == 0
+    out = capsys.readouterr().out
+    lines = [x for x in out.splitlines() if x.startswith("repaired: ")]
+    assert len(lines) == 1 and "z = 5" in lines[0] and "(written at z = 0)" in lines[0]
+    assert "and 1 more (the report's 'repairs')" in lines[0]  # (the quad split)
+    m = hammesh.quality_mesh(_box(), max_area=0.5)
+    assert "repaired" not in summary(hammesh.hamiltonian(m))
