@@ -95,3 +95,29 @@ def test_triangle_files_with_a_byte_order_mark(tmp_path):
         (tmp_path / name).write_text("\ufeff" + text, encoding="utf-8")
     back = hammesh.read_mesh(tmp_path / "h.ele")
     np.testing.assert_array_equal(back.triangles, h.triangles)
+
+
+@pytest.mark.parametrize("scale", [1e-70, 1e-150])
+def test_domain_too_small_for_float64_is_refused_naming_its_extent(scale):
+    from hammesh.errors import InvalidDomainError
+
+    with pytest.raises(InvalidDomainError, match="spans only"):
+        hammesh.Domain.from_polygon(np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) * scale)
+
+
+def test_small_domain_above_the_limit_is_meshed():
+    s = 1e-40
+    dom = hammesh.Domain.from_polygon(np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) * s)
+    h = hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=30, max_area=0.01 * s * s))
+    assert h.report["verified"] and h.report["min_angle_output_deg"] >= 15
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e-300])
+def test_point_set_too_small_is_refused_not_called_collinear(scale):
+    from hammesh.errors import InvalidDomainError
+    from hammesh.pointset import hamiltonian_triangulation
+
+    p = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [0.5, 0.4]])
+    with pytest.raises(InvalidDomainError, match="span only"):
+        hamiltonian_triangulation(p * scale)
+    assert len(hamiltonian_triangulation(p * 1e-100)) == 4

@@ -21,10 +21,13 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["validate_domain", "check_fields", "point_array", "MAX_ABS_COORDINATE"]
+__all__ = ["validate_domain", "check_fields", "point_array", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
 
 #: Beyond this magnitude Triangle's floating-point predicates overflow.
 MAX_ABS_COORDINATE = 1e30
+#: Below this extent (largest coordinate difference) Triangle's and the certificate's
+#: products underflow: a 1e-90 square fails in Triangle, a 1e-120 one in the certificate.
+MIN_EXTENT = 1e-60
 _XY = ("x coordinate", "y coordinate")
 
 
@@ -120,6 +123,11 @@ def check_fields(domain) -> None:
 
     if n < 3:
         raise InvalidDomainError(f"a domain needs at least 3 vertices, got {n}")
+    extent = float((vertices.max(axis=0) - vertices.min(axis=0)).max())
+    if 0 < extent < MIN_EXTENT:
+        raise InvalidDomainError(
+            f"the domain spans only {extent:.3g}: below {MIN_EXTENT:g} Triangle's areas and angles underflow "
+            "float64 (rescale the domain; the mesh does not change)")
     if s:
         _check_segment_indices(segments, n)
 

@@ -15,10 +15,13 @@ from hammesh.domain.validate import point_array
 from hammesh.errors import InvalidDomainError
 from hammesh.pointset._kernels import all_collinear, hull_boundary
 
-__all__ = ["as_points", "Hull", "convex_hull", "MAX_COORDINATE"]
+__all__ = ["as_points", "Hull", "convex_hull", "MAX_COORDINATE", "MIN_EXTENT"]
 
 #: Largest coordinate magnitude: differences squared stay finite in float64.
 MAX_COORDINATE = 1e150
+#: Smallest extent (largest coordinate difference) of a point set: products of two
+#: differences stay normal float64 numbers.
+MIN_EXTENT = 1e-150
 
 
 def as_points(points: np.ndarray) -> np.ndarray:
@@ -43,6 +46,12 @@ def as_points(points: np.ndarray) -> np.ndarray:
         raise InvalidDomainError(
             f"coordinates reach {big:.3g}: orientation tests overflow float64 beyond "
             f"{MAX_COORDINATE:.0e}; scale the points (the triangulation does not change)"
+        )
+    extent = float((pts.max(axis=0) - pts.min(axis=0)).max())
+    if 0 < extent < MIN_EXTENT:  # orientation products underflow (reported as "collinear" before)
+        raise InvalidDomainError(
+            f"the points span only {extent:.3g}: orientation tests underflow float64 below "
+            f"{MIN_EXTENT:.0e}; scale the points (the triangulation does not change)"
         )
     order = np.lexsort((pts[:, 1], pts[:, 0]))
     s = pts[order]
