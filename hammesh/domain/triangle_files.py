@@ -45,7 +45,7 @@ class _Lines:
     def __init__(self, path: Path):
         self.name = path.name
         try:
-            text = path.read_text(encoding="utf-8-sig")  # (a BOM, as some Windows editors save, is no data)
+            text = path.read_text(encoding="utf-8").removeprefix("\ufeff")  # (a BOM, as Windows editors save, is no data)
         except FileNotFoundError:
             raise FileFormatError(f"{path}: file not found") from None
         except UnicodeDecodeError:

@@ -155,7 +155,7 @@ class _Tokens:
         if not path.is_file():
             raise FileFormatError(f"{path}: file not found")
         try:
-            text = path.read_text(encoding="utf-8-sig")  # (a BOM is no data)
+            text = path.read_text(encoding="utf-8").removeprefix("\ufeff")  # (a BOM is no data)
         except UnicodeDecodeError:
             raise FileFormatError(f"{path}: not a text file") from None
         except OSError as exc:

@@ -270,7 +270,7 @@ def test_defect9_constant_z_is_planar(tmp_path, capsys):
     meshio.write(src, meshio.Mesh(pts, [("triangle", np.array([[0, 1, 2], [0, 2, 3]]))]))
     rep = tmp_path / "r.json"
     assert main(["mesh", str(src), "-o", str(tmp_path / "o.vtu"), "--report", str(rep)]) == 0
-    assert json.loads(rep.read_text())["repairs"] == ["all points at z = 5: read as a planar mesh"]
+    assert json.loads(rep.read_text())["repairs"] == ["all points at z = 5: read as a planar mesh (written at z = 0)"]
 
 
 def test_defect9_points_scaled_by_1e200_are_not_called_collinear(tmp_path, capsys):

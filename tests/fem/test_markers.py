@@ -119,8 +119,8 @@ def test_point_markers_round_trip(tmp_path, plate, suffix):
 def test_mesh_without_point_markers_gets_zeros():
     m = hammesh.Mesh(np.array([[0.0, 0], [1, 0], [0, 1]]), np.array([[0, 1, 2]]))
     assert m.vertex_markers.tolist() == [0, 0, 0]
-    m = hammesh.Mesh(m.points, m.triangles, vertex_markers=[1, 2])  # wrong length
-    assert m.vertex_markers.tolist() == [0, 0, 0]
+    with pytest.raises(hammesh.errors.InvalidMeshError, match="vertex_markers"):  # wrong length: never zeroed in silence
+        hammesh.Mesh(m.points, m.triangles, vertex_markers=[1, 2])
 
 
 NONZERO = st.integers(-5, 5).filter(bool)

@@ -112,7 +112,7 @@ def test_angle_bound_is_enforced(pair) -> None:
 def test_input_segment_that_is_no_input_edge_is_named(pair) -> None:
     m, h = pair
     # an input that claims a constrained edge it does not have: a diagonal of the square
-    bad = replace(m, segments=np.r_[m.segments, [[0, 2]]])
+    bad = replace(m, segments=np.r_[m.segments, [[0, 2]]], segment_markers=np.r_[m.segment_markers, [1]])
     s = len(m.segments)
     with pytest.raises(hammesh.VerificationError, match=f"input mesh is not a valid triangulation: segment {s} "):
         verify(h, reference=bad)
