@@ -44,6 +44,9 @@ __all__ = [
     "vertex_half_edges",
     "mark_segments",
     "vertex_neighbors",
+    "neighbor_rows_into",
+    "twins_in_rows_into",
+    "twins_agree",
 ]
 
 
@@ -686,6 +689,73 @@ def renumber_half_edges_into(twin, marks, order, inverse, twin_new, marks_new, l
             twin_new[3 * i + k] = -1 if g < 0 else 3 * inverse[g // 3] + g % 3
             if carry:
                 marks_new[3 * i + k] = marks[3 * t + k]
+
+
+@njit(cache=True, nogil=True)
+def neighbor_rows_into(nbr, order, inverse, rows, lo, hi):
+    """New rows ``lo..hi`` (new row ``i`` is old row ``order[i]``): ``rows[3 i + k]``, the
+    new number of the triangle that the old neighbour array ``nbr`` names across edge
+    ``k`` (-1 stays). Returns False if a neighbour is out of range (below -1 or not a
+    row): the array is not to be trusted.
+
+    The first of :func:`twins_from_neighbor_rows`' two passes: the only one with
+    scattered reads (``nbr``'s old rows and ``inverse``), the reads
+    :func:`renumber_half_edges_into` makes of the old twins; the rows of the
+    neighbours PREFETCH_ROWS rows ahead are asked for now, as in
+    :func:`_twins_from_neighbors_into`. No branch on the values read: a branch that
+    mispredicts stalls the misses under way (measured 0.065 against 0.048 s at 1.5 M
+    triangles, one thread)."""
+    m = nbr.shape[0]
+    ok = True
+    for i in range(lo, hi):
+        ahead = i + PREFETCH_ROWS
+        if ahead < hi:
+            _prefetch_row(nbr, order[ahead])
+        t = order[i]
+        for k in range(3):
+            u = nbr[t, k]
+            ok &= (u >= -1) & (u < m)
+            r = inverse[min(max(u, 0), m - 1)]
+            rows[3 * i + k] = r if u >= 0 else -1
+    return ok
+
+
+@njit(cache=True, nogil=True)
+def twins_in_rows_into(tri, twin, lo, hi):
+    """Rows ``lo..hi``, in place: ``twin[h]`` holds the row across ``h``
+    (:func:`neighbor_rows_into`; -1 stays) and becomes the half-edge of that row that
+    runs ``h``'s edge the other way. Returns False if that row holds no such half-edge.
+    Reads only nearby rows on a renumbered mesh (``hammesh.halfedge.locality``)."""
+    ok = True
+    for i in range(lo, hi):
+        for k in range(3):
+            h = 3 * i + k
+            u = twin[h]
+            if u < 0:
+                continue
+            a = tri[i, k]
+            b = tri[i, (k + 1) % 3]
+            r0 = tri[u, 0]
+            r1 = tri[u, 1]
+            r2 = tri[u, 2]
+            m0 = (r0 == b) & (r1 == a)
+            m1 = (r1 == b) & (r2 == a)
+            m2 = (r2 == b) & (r0 == a)
+            ok &= m0 | m1 | m2
+            twin[h] = 3 * u + np.int64(m1) + 2 * np.int64(m2)
+    return ok
+
+
+@njit(cache=True, nogil=True)
+def twins_agree(twin, lo, hi):
+    """Whether every half-edge of rows ``lo..hi`` with a twin is its twin's twin (each
+    claimed neighbour names the row back)."""
+    ok = True
+    for h in range(3 * lo, 3 * hi):
+        g = twin[h]
+        if g >= 0:
+            ok &= twin[g] == h
+    return ok
 
 
 @njit(cache=True, nogil=True)
