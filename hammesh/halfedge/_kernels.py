@@ -43,6 +43,7 @@ __all__ = [
     "half_edge_twins_reference",
     "vertex_half_edges",
     "mark_segments",
+    "mark_segments_into",
     "vertex_neighbors",
     "neighbor_rows_into",
     "twins_in_rows_into",
@@ -499,12 +500,22 @@ def mark_segments(tri, twin, vh, segments):
     """Flag the half-edges lying on constrained edges.
 
     Returns ``(is_con (3m,) bool, found (s,) bool)``: ``found[s]`` tells whether
-    segment s is an edge of the mesh. O(degree) per segment by rotation around its
-    first vertex; segments not found that way (a vertex where two fans only touch)
-    are looked up in one pass over all half-edges (no typed dict: it would compile
-    numba's dictionary with the kernel, about 10 s on a fresh checkout).
+    segment s is an edge of the mesh (:func:`mark_segments_into`).
     """
     is_con = np.zeros(twin.shape[0], np.bool_)
+    return is_con, mark_segments_into(tri, twin, vh, segments, is_con)
+
+
+@njit(cache=True)
+def mark_segments_into(tri, twin, vh, segments, is_con):
+    """:func:`mark_segments` into ``is_con`` (``(3m,)`` bool, False on entry: a caller's
+    buffer); returns ``found``.
+
+    O(degree) per segment by rotation around its first vertex; segments not found
+    that way (a vertex where two fans only touch) are looked up in one pass over all
+    half-edges (no typed dict: it would compile numba's dictionary with the kernel,
+    about 10 s on a fresh checkout).
+    """
     found = np.zeros(segments.shape[0], np.bool_)
     buf = np.empty(64, np.int64)
     for s in range(segments.shape[0]):
@@ -558,7 +569,7 @@ def mark_segments(tri, twin, vh, segments):
                     if ends[i, 0] == lo and ends[i, 1] == hi:
                         is_con[h] = True
                         found[ends[i, 2]] = True
-    return is_con, found
+    return found
 
 
 @njit(cache=True)
@@ -653,12 +664,16 @@ def scatter_by_key_into(key, place, order, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_new):
+def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_new, leaving):
     """Vertices numbered by first use along the new rows (``tri[order]``), then the
     unused ones in their old order: ``vertex_order[j]`` is old vertex of new ``j``,
     ``vertex_new`` the inverse (-1 on entry); ``tri_new`` the new rows in new numbers.
-    One serial pass (each first use takes the next number)."""
+    One serial pass (each first use takes the next number). ``leaving`` (``(n_points,)``,
+    -1 on entry, or empty: not asked): a half-edge of the new rows leaving each new
+    vertex, the one of its first use (what :func:`vertex_half_edges` finds, without its
+    pass over the rows)."""
     nxt = 0
+    ask = leaving.shape[0] > 0
     for i in range(order.shape[0]):
         t = order[i]
         for k in range(3):
@@ -669,6 +684,8 @@ def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_n
                 vertex_new[v] = j
                 vertex_order[j] = v
                 nxt += 1
+                if ask:
+                    leaving[j] = 3 * i + k
             tri_new[i, k] = j
     for v in range(n_points):
         if vertex_new[v] < 0:

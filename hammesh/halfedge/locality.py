@@ -247,7 +247,8 @@ def renumber_from_neighbors(
 
     # (the neighbours' pass is the shorter here: 1.5 M rows 0.022 against the vertex
     # pass's 0.032 s, so it takes all its rows: 0.035 -> 0.032 s for the pair)
-    r, vertex_new = _renumbered(pts, tri, keys, room, True, rows_across, 0)
+    leaving = np.full(len(pts), -1, np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
+    r, vertex_new = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving)
     if not all(ok):
         return None
     spans = row_ranges(len(tri), threads.THREAD_MIN_ROWS)
@@ -257,20 +258,19 @@ def renumber_from_neighbors(
         return None
     if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_agree(r.twin, lo, hi)) for lo, hi in spans])):
         return None
-    vh = _kernels.vertex_half_edges(r.triangles, len(pts))
     segs = vertex_new[np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)]
-    is_con, found = _kernels.mark_segments(r.triangles, r.twin, vh, segs)
-    r.marks[:] = is_con
-    return r, found
+    r.marks[:] = False
+    return r, _kernels.mark_segments_into(r.triangles, r.twin, leaving, segs, r.marks)
 
 
 def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: tuple[int, int], carry: bool,
-                half_edges, side_share: int) -> tuple[Renumbered, np.ndarray]:
+                half_edges, side_share: int, leaving: np.ndarray | None = None) -> tuple[Renumbered, np.ndarray]:
     """The renumbering of :func:`renumber_local` with its half-edge pass
     ``half_edges(order, inverse, twin_new, marks_new, lo, hi)`` (new rows ``lo..hi``);
     ``carry``: a marks buffer to fill; the vertex pass's thread also takes the first
-    ``1 / side_share`` of the half-edge pass's rows (none if 0). Also returns
-    ``vertex_new`` (old -> new vertex)."""
+    ``1 / side_share`` of the half-edge pass's rows (none if 0); ``leaving``: filled
+    with a half-edge leaving each new vertex (``renumber_vertices_into``). Also
+    returns ``vertex_new`` (old -> new vertex)."""
     m, n = len(tri), len(pts)
     order, inverse = cell_order(pts, tri, keys)
     rt, rp = (max(0, int(r)) for r in room)
@@ -285,7 +285,8 @@ def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: t
     cut = m // side_share if threads.cores() > 1 and side_share else 0
 
     def vertices_first() -> None:
-        _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new)
+        _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new,
+                                        np.zeros(0, np.int64) if leaving is None else leaving)
         half_edges(order, inverse, twin_new, marks_new, 0, cut)
 
     run_all([vertices_first, lambda: half_edges(order, inverse, twin_new, marks_new, cut, m)])
