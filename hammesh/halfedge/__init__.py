@@ -2,8 +2,9 @@
 
 ``prepare_mesh`` checks a planar input and orients it counter-clockwise;
 ``half_edges`` pairs its half-edges (``local_half_edges``: once, in the renumbered
-order); ``HalfEdges`` holds the pairing and the vertex rotations; ``renumber_local`` renumbers a mesh along a Hilbert curve so that
-neighbours sit near each other in memory (``locality``). The constructions run on
+order); ``HalfEdges`` holds the pairing and the vertex rotations; ``renumber_local``
+renumbers a mesh along a Hilbert curve so that neighbours sit near each other in
+memory (``locality``). The constructions run on
 these; the certificates (``hammesh.verify``) find the same facts with their own code.
 """
 
@@ -14,4 +15,5 @@ from hammesh.halfedge.locality import Renumbered, cell_order, renumber_from_neig
 
 #: the kernels other packages call directly (strips' dual graph, sparse mode, point sets)
 __all__ = ["HalfEdges", "half_edges", "mesh_arrays", "prepare_mesh", "match_half_edges", "local_half_edges",
-           "half_edge_twins", "half_edge_twins_packed", "bucket_half_edges_into", "orient_ccw", "Renumbered", "renumber_local", "renumber_from_neighbors", "cell_order", "restore_vertices"]
+           "half_edge_twins", "half_edge_twins_packed", "bucket_half_edges_into", "orient_ccw", "Renumbered",
+           "renumber_local", "renumber_from_neighbors", "cell_order", "restore_vertices"]

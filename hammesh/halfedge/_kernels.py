@@ -715,7 +715,7 @@ def neighbor_rows_into(nbr, order, inverse, rows, lo, hi):
     ``k`` (-1 stays). Returns False if a neighbour is out of range (below -1 or not a
     row): the array is not to be trusted.
 
-    The first of :func:`twins_from_neighbor_rows`' two passes: the only one with
+    The first pass of ``locality.renumber_from_neighbors``' matching: the only one with
     scattered reads (``nbr``'s old rows and ``inverse``), the reads
     :func:`renumber_half_edges_into` makes of the old twins; the rows of the
     neighbours PREFETCH_ROWS rows ahead are asked for now, as in
