@@ -245,7 +245,7 @@ def local_half_edges(clean: Mesh, room: tuple[int, int] = (0, 0)) -> locality.Re
 
     With a neighbour array to try (Triangle's, rows not reversed) the twins are
     matched in the new order (``locality.renumber_from_neighbors``: at 1.5 M triangles
-    0.04 s CPU and 0.02-0.04 s of the serial path fewer than matching them in the
+    ~0.035 s CPU and ~0.02 s of the serial path fewer than matching them in the
     input's order and renumbering them, docs/sparse.md, session 16); otherwise, or if
     the neighbours are not to be trusted, as ``prepare_mesh`` matches them, then
     renumbered. ``marks``: the half-edges on a segment. ``room``: as
