@@ -37,8 +37,8 @@ from hammesh.halfedge import _kernels
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "cell_order", "cell_grid", "grid_frame", "cell_keys",
-           "empty_cell_keys", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
+__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "renumber_from_neighbors", "cell_order", "cell_grid",
+           "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
 
 #: average triangles per grid cell of the order (a cell's triangles keep their order)
 TRIANGLES_PER_CELL = 4
@@ -199,6 +199,78 @@ def renumber_local(
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     mk = np.zeros(0, np.bool_) if marks is None else np.ascontiguousarray(marks, dtype=np.bool_)
+
+    def half_edges(order, inverse, twin_new, marks_new, lo, hi) -> None:
+        _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new, lo, hi)
+
+    return _renumbered(pts, tri, keys, room, len(mk) > 0, half_edges, VERTEX_SIDE_SHARE)[0]
+
+
+def renumber_from_neighbors(
+    points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray, segments: np.ndarray,
+    keys: CellKeys | None = None, room: tuple[int, int] = (0, 0),
+) -> tuple[Renumbered, np.ndarray] | None:
+    """:func:`renumber_local` of a mesh whose twins are not matched yet: matched once,
+    in the new order, from a neighbour array in the old one (Triangle's).
+
+    ``renumber_local`` renumbers twins matched in the input's order: two passes of
+    scattered reads (the matching's and the renumbering's). Here the renumbering's
+    pass reads the neighbour array instead (``_kernels.neighbor_rows_into``: which
+    new row lies across each half-edge), and the matching runs on the renumbered
+    rows, where a neighbour's row is near (``twins_in_rows_into``, ``twins_agree``).
+    The neighbours are trusted on the test ``_kernels.twins_from_neighbors`` makes:
+    each one in range, holding the edge the other way and naming the row back.
+
+    Parameters
+    ----------
+    points, triangles, keys, room
+        As :func:`renumber_local` (``triangles`` counter-clockwise, no repeated vertex).
+    neighbors : (m, 3) int64
+        ``neighbors[t, k]``: the triangle across edge ``(k, k + 1)`` of ``t``, -1 none.
+    segments : (s, 2) int64
+        Constrained edges (old vertex numbers), marked in ``marks``.
+
+    Returns
+    -------
+    (Renumbered, found) or None
+        ``marks``: the half-edges on a segment; ``found[s]``: whether segment ``s`` is
+        an edge of the mesh. None if the neighbours are not to be trusted (then the
+        caller matches the half-edges itself; ``keys`` are consumed either way).
+    """
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    nbr = np.ascontiguousarray(neighbors, dtype=np.int64)
+    ok: list[bool] = []
+
+    def rows_across(order, inverse, twin_new, marks_new, lo, hi) -> None:
+        ok.append(_kernels.neighbor_rows_into(nbr, order, inverse, twin_new, lo, hi))
+
+    # (the neighbours' pass is the shorter here: 1.5 M rows 0.022 against the vertex
+    # pass's 0.032 s, so it takes all its rows: 0.035 -> 0.032 s for the pair)
+    leaving = np.full(len(pts), -1, np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
+    r, vertex_new = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving)
+    if not all(ok):
+        return None
+    spans = row_ranges(len(tri), threads.THREAD_MIN_ROWS)
+    # rows across -> twins (in place: each range reads only rows); then each twin's twin
+    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_in_rows_into(r.triangles, r.twin, lo, hi))
+                        for lo, hi in spans])):
+        return None
+    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_agree(r.twin, lo, hi)) for lo, hi in spans])):
+        return None
+    segs = vertex_new[np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)]
+    r.marks[:] = False
+    return r, _kernels.mark_segments_into(r.triangles, r.twin, leaving, segs, r.marks)
+
+
+def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: tuple[int, int], carry: bool,
+                half_edges, side_share: int, leaving: np.ndarray | None = None) -> tuple[Renumbered, np.ndarray]:
+    """The renumbering of :func:`renumber_local` with its half-edge pass
+    ``half_edges(order, inverse, twin_new, marks_new, lo, hi)`` (new rows ``lo..hi``);
+    ``carry``: a marks buffer to fill; the vertex pass's thread also takes the first
+    ``1 / side_share`` of the half-edge pass's rows (none if 0); ``leaving``: filled
+    with a half-edge leaving each new vertex (``renumber_vertices_into``). Also
+    returns ``vertex_new`` (old -> new vertex)."""
     m, n = len(tri), len(pts)
     order, inverse = cell_order(pts, tri, keys)
     rt, rp = (max(0, int(r)) for r in room)
@@ -206,24 +278,24 @@ def renumber_local(
     vertex_new = np.full(n, -1, np.int64)
     vertex_order = np.empty(n, np.int64)
     twin_new = fresh(3 * (m + rt), np.int64)[: 3 * m]
-    marks_new = fresh(3 * (m + rt) if len(mk) else 0, np.bool_)[: 3 * m if len(mk) else 0]
+    marks_new = fresh(3 * (m + rt) if carry else 0, np.bool_)[: 3 * m if carry else 0]
     # the serial vertex pass on one thread, the twins (reading the inverse) on the other;
     # the twins' pass is the longer (1.5 M rows: 0.044 against 0.032 s), so the vertex
     # pass's thread also takes the first VERTEX_SIDE_SHARE of the twins' rows
-    cut = m // VERTEX_SIDE_SHARE if threads.cores() > 1 else 0
+    cut = m // side_share if threads.cores() > 1 and side_share else 0
 
     def vertices_first() -> None:
-        _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new)
-        _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new, 0, cut)
+        _kernels.renumber_vertices_into(tri, order, n, vertex_new, vertex_order, tri_new,
+                                        np.zeros(0, np.int64) if leaving is None else leaving)
+        half_edges(order, inverse, twin_new, marks_new, 0, cut)
 
-    run_all([vertices_first, lambda: _kernels.renumber_half_edges_into(tw, mk, order, inverse, twin_new, marks_new,
-                                                                        cut, m)])
+    run_all([vertices_first, lambda: half_edges(order, inverse, twin_new, marks_new, cut, m)])
     pts_new = fresh((n + rp,) + pts.shape[1:], np.float64)[:n]
     run_all([
         (lambda lo=lo, hi=hi: _kernels.gather_points_into(pts, vertex_order, pts_new, lo, hi))
         for lo, hi in row_ranges(n, threads.THREAD_MIN_ROWS)
     ])
-    return Renumbered(pts_new, tri_new, twin_new, marks_new, order, vertex_order)
+    return Renumbered(pts_new, tri_new, twin_new, marks_new, order, vertex_order), vertex_new
 
 
 def restore_vertices(rows: np.ndarray, vertex_order: np.ndarray) -> np.ndarray:

@@ -17,11 +17,11 @@ from hammesh.planar_overlap import find_overlap
 from hammesh.point_data import carry_point_data
 from hammesh.postprocess.incircle import TREES, incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
-from hammesh.postprocess.kept_cycle import kept_cycle
+from hammesh.postprocess.kept_cycle import cycle_runs, kept_cycle
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
-from hammesh.halfedge import prepare_mesh
+from hammesh.halfedge import HalfEdges, match_half_edges, prepare_mesh
 
 __all__ = ["hamiltonian", "incircle_hamiltonian", "sparse_hamiltonian", "incenters", "MODES", "load_kernels",
            "RESERVE_TAKEN", "RESERVE_AFTER_COVER"]
@@ -102,7 +102,7 @@ def load_kernels(mode: str = "sparse") -> None:
         _loaded_modes.add(mode)
 
 
-def refuse_overlap(clean: Mesh, he) -> None:
+def refuse_overlap(clean: Mesh, he: HalfEdges | None) -> None:
     """Refuse a planar input mesh two of whose triangles overlap without sharing an edge.
 
     The validation sees overlaps across a shared edge (a triangle turned over); two
@@ -112,7 +112,7 @@ def refuse_overlap(clean: Mesh, he) -> None:
     with a boundary edge need testing (``hammesh.planar_overlap``): cheap next to the
     construction. Triangle's own meshes (``quality_mesh``) are planar by construction.
     """
-    pair = find_overlap(clean.points, clean.triangles, twin=he.twin)
+    pair = find_overlap(clean.points, clean.triangles, twin=None if he is None else he.twin)
     if pair is not None:
         i, j = pair
         raise InvalidMeshError(f"triangles {i} and {j} overlap (a planar mesh covers each point once): "
@@ -249,7 +249,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         # (Thm 2.4 needs no angle; sparse mode renumbers big meshes by the cells the
         # orientation pass finds: sparse.LOCAL_MIN_TRIANGLES)
         local = mode == "sparse" and len(shape) == 2 and shape[0] >= sparse_module.LOCAL_MIN_TRIANGLES
-        clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle", cells=local)
+        # (sparse mode matches a big mesh's half-edges once, in its renumbered order)
+        clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle", cells=local, match=not local)
         if not mesh.info.get("backend"):  # (not Triangle's own mesh: see refuse_overlap)
             refuse_overlap(clean, he)
         rows = prepared = vmarks = None
@@ -269,7 +270,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         else:
             # rows that already walk a cycle per piece (hammesh's own output read back) are
             # kept: a construction would only add triangles (kept_cycle)
-            out = kept_cycle(clean, he) if tree == "quadtree" else None
+            if he is None and tree == "quadtree" and cycle_runs(clean.triangles) is not None:
+                he, is_con = match_half_edges(clean)  # (kept_cycle reads the input's pairing)
+            out = kept_cycle(clean, he) if tree == "quadtree" and he is not None else None
             claim = None if out is None else he.twin  # (the same rows: the input's pairing)
             if out is None:
                 out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover, tree=tree)

@@ -60,7 +60,8 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from hammesh.halfedge import half_edge_twins, orient_ccw, renumber_local, restore_vertices
+from hammesh.halfedge import (half_edge_twins, local_half_edges, match_half_edges, orient_ccw, renumber_local,
+                              restore_vertices)
 from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, cycle_positions
 from hammesh.pages import fresh, reserved
@@ -2348,8 +2349,17 @@ def _numbered_back(r: SparseResult, loc, points: np.ndarray, started: tuple[floa
     return replace(r, parent=parent, mid_a=mid_a, mid_b=mid_b, counts=counts)
 
 
+def _region_edges(twin: np.ndarray, attrs: np.ndarray) -> np.ndarray:
+    """Half-edges whose row's attributes (``attrs``, a row per triangle) differ from
+    their twin's."""
+    inner = twin >= 0
+    differ = np.zeros(len(twin), np.bool_)
+    differ[inner] = (attrs[np.flatnonzero(inner) // 3] != attrs[twin[inner] // 3]).any(axis=1)
+    return differ
+
+
 def sparse_hamiltonian(
-    mesh: Mesh, he: HalfEdges, is_con: np.ndarray, *, keep: float = KEEP,
+    mesh: Mesh, he: HalfEdges | None, is_con: np.ndarray | None, *, keep: float = KEEP,
     beside_cover: Callable[[], object] | None = None, tree: str = "quadtree",
 ) -> tuple[HamiltonianMesh, np.ndarray]:
     """Build the sparse Hamiltonian cycle mesh (unverified; see ``hammesh.hamiltonian``).
@@ -2358,8 +2368,10 @@ def sparse_hamiltonian(
     ----------
     mesh : Mesh
         Counter-clockwise, validated (``hammesh.halfedge.prepare_mesh``).
-    he : HalfEdges
-    is_con : (3 m,) bool
+    he : HalfEdges or None
+    is_con : (3 m,) bool or None
+        None both (``prepare_mesh(..., cells=True, match=False)``): matched here, on a
+        big mesh once in the renumbered order (``hammesh.halfedge.local_half_edges``).
     keep : float
         The local quality rule's factor (``sparse_cycles``).
     beside_cover : callable, optional
@@ -2379,25 +2391,29 @@ def sparse_hamiltonian(
     n, m = mesh.n_points, mesh.n_triangles
     seen = mesh.info.get("validated")  # found by prepare_mesh's orientation pass
     amin = float(seen["min_angle"] if seen else orient_ccw(pts, tri).min_angle)
+    local = m >= LOCAL_MIN_TRIANGLES and pts.shape[1] == 2
+    if he is None and not local:
+        he, is_con = match_half_edges(mesh)
     pinned = is_con
     attr = np.asarray(mesh.triangle_attributes)
-    if attr.size and m and (attr != attr[:1]).any():
-        # an edge between two regions is kept where it is (split only at its
-        # midpoint): a moved edge would carry one region's attribute into the other
-        a2 = attr.reshape(m, -1)
-        tw = he.twin
-        inner = tw >= 0
-        differ = np.zeros(3 * m, np.bool_)
-        differ[inner] = (a2[np.arange(3 * m)[inner] // 3] != a2[tw[inner] // 3]).any(axis=1)
-        pinned = is_con | differ
-    if m >= LOCAL_MIN_TRIANGLES and pts.shape[1] == 2:
+    # an edge between two regions is kept where it is (split only at its midpoint): a
+    # moved edge would carry one region's attribute into the other
+    regions = bool(attr.size and m and (attr != attr[:1]).any())
+    if regions and he is not None:
+        pinned = is_con | _region_edges(he.twin, attr.reshape(m, -1))
+    if local:
         t0, c0 = time.perf_counter(), time.process_time()
-        # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
-        keys = seen.pop("cells", None) if seen else None
         # room after the rows and points: the ring fans and joins and the Steiner points
         # are appended in place (``_longer``), not by copying every array
         rt, rp = ROOM_ROWS, ROOM_ROWS + m // STEINER_ROOM_DIVISOR
-        loc = renumber_local(pts, tri, he.twin, pinned, keys, room=(rt, rp))
+        if he is None:  # (matched once, in the new order: ``prepare_mesh(match=False)``)
+            loc = local_half_edges(mesh, room=(rt, rp))
+            if regions:
+                loc.marks[:] |= _region_edges(loc.twin, attr.reshape(m, -1)[loc.triangle_order])
+        else:
+            # (the cell keys the validation found, if asked: ``prepare_mesh(cells=True)``; used once)
+            keys = seen.pop("cells", None) if seen else None
+            loc = renumber_local(pts, tri, he.twin, pinned, keys, room=(rt, rp))
         for a, rows in ((loc.triangles, m + rt), (loc.twin, 3 * (m + rt)), (loc.marks, 3 * (m + rt)),
                         (loc.points, n + rp)):
             _keep_room(a, rows)

@@ -135,3 +135,123 @@ def test_keys_found_by_the_validation_give_the_same_renumbering(monkeypatch) -> 
     plain, _, _ = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri))
     assert plain.info["validated"]["cells"] is None
     np.testing.assert_array_equal(plain.triangles, clean.triangles)
+
+
+def _with_neighbours(seed: int, n: int):
+    """A Delaunay mesh with its neighbour array in Triangle's convention (``nbr[t, k]``
+    across edge ``(k, k + 1)``) and some segments: hull edges and a few inner edges."""
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    d = Delaunay(pts)
+    tri = d.simplices.astype(np.int64)  # (scipy's rows are counter-clockwise)
+    nbr = d.neighbors[:, [2, 0, 1]].astype(np.int64)
+    hull = d.convex_hull.astype(np.int64)
+    inner = tri[rng.integers(0, len(tri), 3), :2]
+    return pts, tri, nbr, np.concatenate([hull[: 1 + len(hull) // 2], inner])
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10**6), st.integers(3, 900), st.sampled_from([7, 60, 10**9]))
+def test_twins_matched_once_in_the_new_order_are_the_renumbered_twins(seed: int, n: int, min_rows: int) -> None:
+    """``renumber_from_neighbors`` (the twins matched once, in the new order, from the old
+    neighbour array) gives what matching in the old order and renumbering gives:
+    rows, points, orders, twins and segment marks, whatever the number of row ranges."""
+    from hammesh.halfedge import renumber_from_neighbors
+
+    pts, tri, nbr, segs = _with_neighbours(seed, n)
+    tw, bad = half_edge_twins(tri, len(pts))
+    assert bad < 0
+    vh = _kernels.vertex_half_edges(tri, len(pts))
+    marks, found = _kernels.mark_segments(tri, tw, vh, segs)
+    assert found.all()
+    before = threads.THREAD_MIN_ROWS
+    threads.THREAD_MIN_ROWS = min_rows
+    try:
+        got = renumber_from_neighbors(pts, tri, nbr, segs, room=(5, 3))
+        want = renumber_local(pts, tri, tw, marks)
+    finally:
+        threads.THREAD_MIN_ROWS = before
+    assert got is not None
+    r, found_new = got
+    assert found_new.all()
+    for f in want._fields:
+        np.testing.assert_array_equal(getattr(r, f), getattr(want, f), err_msg=f)
+
+
+def _spoil(tri: np.ndarray, nbr: np.ndarray, how: str) -> np.ndarray:
+    """``nbr`` with one entry wrong in way ``how``."""
+    nbr = nbr.copy()
+    t = int(np.argmax((nbr >= 0).all(axis=1)))
+    u = int(nbr[t, 0])
+    if how in ("far", "negative", "self"):
+        nbr[t, 0] = {"far": len(tri), "negative": -7, "self": t}[how]
+    elif how == "one_sided":  # t names u, u does not name t back
+        nbr[u, list(nbr[u]).index(t)] = -1
+    elif how == "other_row":  # t names a row that does not hold the edge
+        nbr[t, 0] = int(nbr[t, 1])
+    elif how == "swapped":  # two entries of a row exchanged
+        nbr[t, [0, 1]] = nbr[t, [1, 0]]
+    return nbr
+
+
+@pytest.mark.parametrize("how", ["far", "negative", "self", "one_sided", "other_row", "swapped"])
+def test_neighbours_refused_in_the_new_order_exactly_when_in_the_old(how: str) -> None:
+    """The matching in the new order trusts a neighbour array on the test the old
+    order's makes (``twins_from_neighbors``): refused alike, and then
+    ``local_half_edges`` matches the half-edges itself, as ``prepare_mesh`` does."""
+    from hammesh.halfedge import local_half_edges, prepare_mesh, renumber_from_neighbors
+
+    pts, tri, nbr, segs = _with_neighbours(3, 400)
+    bad_nbr = _spoil(tri, nbr, how)
+    assert _kernels.twins_from_neighbors(tri, bad_nbr)[1] >= 0
+    assert renumber_from_neighbors(pts, tri, bad_nbr, segs) is None
+    m = hammesh.Mesh(points=pts, triangles=tri, segments=segs, neighbors=bad_nbr)
+    clean, he, con = prepare_mesh(m, cells=True)
+    want = renumber_local(clean.points, clean.triangles, he.twin, con)
+    lazy, none_he, none_con = prepare_mesh(m, cells=True, match=False)
+    assert none_he is None and none_con is None
+    got = local_half_edges(lazy)
+    for f in want._fields:
+        np.testing.assert_array_equal(getattr(got, f), getattr(want, f), err_msg=f)
+
+
+def test_an_edge_of_three_triangles_is_accepted_or_refused_alike() -> None:
+    """Three triangles on one edge: with neighbours that pair two of them consistently
+    (the third claims none) both orders accept them and give the same twins; without
+    neighbours both refuse the edge with the same message, naming the input's rows."""
+    from hammesh.halfedge import local_half_edges, prepare_mesh
+
+    pts = np.array([[0, 0], [1, 0], [0.5, 1], [0.5, -1], [0.6, 0.9]], float)
+    tri = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])  # rows 0 and 2 both run 0 -> 1
+    nbr = np.array([[1, -1, -1], [0, -1, -1], [-1, -1, -1]])
+    m = hammesh.Mesh(points=pts, triangles=tri, neighbors=nbr)
+    clean, he, con = prepare_mesh(m, cells=True)
+    want = renumber_local(clean.points, clean.triangles, he.twin, con)
+    got = local_half_edges(prepare_mesh(m, cells=True, match=False)[0])
+    for f in want._fields:
+        np.testing.assert_array_equal(getattr(got, f), getattr(want, f), err_msg=f)
+    plain = hammesh.Mesh(points=pts, triangles=tri)
+    with pytest.raises(hammesh.InvalidMeshError) as old:
+        prepare_mesh(plain)
+    with pytest.raises(hammesh.InvalidMeshError) as new:
+        local_half_edges(prepare_mesh(plain, cells=True, match=False)[0])
+    assert str(new.value) == str(old.value) and "triangle" in str(old.value)
+
+
+@pytest.mark.parametrize("trusted", [True, False])
+def test_a_segment_off_the_mesh_is_named_as_the_input_gave_it(trusted: bool) -> None:
+    """A segment that is no edge: the same message from the matching in the new order
+    (segment number and the input's vertex numbers) as from ``prepare_mesh``."""
+    from hammesh.halfedge import local_half_edges, prepare_mesh
+
+    pts, tri, nbr, segs = _with_neighbours(5, 300)
+    a, b = int(tri[0, 0]), int(tri[-1, 1])
+    assert not ((tri == a).any(axis=1) & (tri == b).any(axis=1)).any()  # (no edge a b)
+    segs = np.concatenate([segs, [[a, b]], segs[:2]])
+    m = hammesh.Mesh(points=pts, triangles=tri, segments=segs, neighbors=nbr if trusted else None)
+    with pytest.raises(hammesh.InvalidMeshError) as old:
+        prepare_mesh(m)
+    with pytest.raises(hammesh.InvalidMeshError) as new:
+        local_half_edges(prepare_mesh(m, cells=True, match=False)[0])
+    assert str(new.value) == str(old.value)
+    assert f"segment {len(segs) - 3} [{a}, {b}]" in str(old.value)

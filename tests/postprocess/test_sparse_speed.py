@@ -576,3 +576,32 @@ def test_an_error_in_the_other_threads_swap_test_reaches_the_caller(monkeypatch)
     t.join(120)
     assert not t.is_alive(), "the caller waits for ever on the other thread's answer"
     assert got and "other thread" in str(got[0])
+
+
+def test_renumbered_input_refuses_bad_segments_and_keeps_own_cycles_alike(monkeypatch) -> None:
+    """With the half-edges matched in the renumbered order (``sparse.LOCAL_MIN_TRIANGLES``
+    reached): a segment off the mesh is named as without renumbering, and hammesh's own
+    output read back is kept as it is (its pairing taken in the input's order)."""
+    from dataclasses import replace
+
+    from hammesh.postprocess import sparse
+
+    dom = _domain("loops")
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=area, isolate=False)
+    a, b = int(m.triangles[0, 0]), int(m.triangles[-1, 1])
+    assert not ((m.triangles == a).any(axis=1) & (m.triangles == b).any(axis=1)).any()
+    bad = replace(m, segments=np.concatenate([m.segments, [[a, b]]]),
+                  segment_markers=np.concatenate([m.segment_markers, [1]]))
+    said = []
+    for least in (10**12, 100):
+        monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", least)
+        with pytest.raises(hammesh.InvalidMeshError) as err:
+            hammesh.hamiltonian(bad)
+        said.append(str(err.value))
+    assert said[0] == said[1] and f"[{a}, {b}] is not an edge" in said[0]
+    h = hammesh.hamiltonian(m)
+    own = hammesh.Mesh(h.points, h.triangles, segments=h.segments, segment_markers=h.segment_markers)
+    again = hammesh.hamiltonian(own)
+    assert again.report["kept_input_cycle"] and again.report["steiner_points"] == 0
+    np.testing.assert_array_equal(again.triangles, own.triangles)
