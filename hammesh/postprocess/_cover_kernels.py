@@ -709,12 +709,15 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
     """
     m = nb.shape[0]
     hit = False
-    nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     n = 0
     for t in frees:
         if active[t] and mate[t] < 0:
             n += 1
+    # the paths' triangles (their flips logged): the only ones a chain can newly pair
+    # (before this phase every partner is a neighbour); rows are written as used
+    log = np.empty((m + 64 if n >= 2 else 0, 4), np.int64)
+    nlog = np.zeros(1, np.int64)
     touched = np.empty(m + 16 if n >= 2 else 0, np.int32)  # a search touches a triangle once
     guided = n >= 2 and pts.shape[0] > 0
     keys = np.empty(m + 8 if guided else 0)  # the heap's keys, beside queue
@@ -728,13 +731,20 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
             if guided:
                 _nearest_free_centroid(t, frees, active, mate, tri, pts, goal, guide_weight)
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                m + 8, CHAIN, -1, nolog, nonlog, nonlog, (tri, pts, goal, keys, cost))
+                                m + 8, CHAIN, -1, log, nlog, nonlog, (tri, pts, goal, keys, cost))
             if f >= 0:
                 hit = True
                 n -= 2
     if not hit:
         return s
-    for x in range(m):  # matched across a chain: its triangles are left uncovered
+    if nlog[0] <= log.shape[0]:  # the triangles of the paths, in index order, each once
+        pairs = np.empty(nlog[0], np.int64)
+        for j in range(nlog[0]):
+            pairs[j] = log[j, 0]
+        pairs = np.unique(pairs)
+    else:  # (paths longer than the log: every triangle)
+        pairs = np.arange(m)
+    for x in pairs:  # matched across a chain: its triangles are left uncovered
         y = mate[x]
         if not active[x] or y < x:
             continue
