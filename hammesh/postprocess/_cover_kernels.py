@@ -1337,7 +1337,26 @@ def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
     """Rotate the candidate vertices (``star_candidates_into``) in vertex order, each
     checked again against the rotations before it (alternation, distinct merged
     cycles); then renumber ``cyc``. Returns the number of cycles merged away."""
-    m = cyc.shape[0]
+    table = np.empty(max(n_cyc, 1), np.int64)
+    merged = rotate_candidates_table(twin, is_cov, cyc, n_cyc, vh, cand, cell, table)
+    if merged > 0:
+        renumber_cycles_into(cyc, table, 0, cyc.shape[0])
+    return merged
+
+
+@njit(cache=True, nogil=True)
+def renumber_cycles_into(cyc, table, lo, hi):
+    """``cyc[t] = table[cyc[t]]`` for the covered triangles of rows lo..hi."""
+    for t in range(lo, hi):
+        if cyc[t] >= 0:
+            cyc[t] = table[cyc[t]]
+
+
+@njit(cache=True, nogil=True)
+def rotate_candidates_table(twin, is_cov, cyc, n_cyc, vh, cand, cell, table):
+    """``rotate_candidates`` but the renumbering: ``table[c]`` (``n_cyc`` rows) is each
+    old cycle id's new one (``renumber_cycles_into``: rows on threads), ``cyc`` is
+    left as it was. Returns the number of cycles merged away."""
     uf = np.arange(max(n_cyc, 1))
     spokes = np.empty(32, np.int64)
     roots = np.empty(16, np.int64)
@@ -1377,12 +1396,8 @@ def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
             if new_id[r] < 0:
                 new_id[r] = n_new
                 n_new += 1
-        table = np.empty(max(n_cyc, 1), np.int64)  # each old id's new one: no find per row
-        for c in range(n_cyc):
+        for c in range(n_cyc):  # each old id's new one: no find per row
             table[c] = new_id[_find(uf, c)]
-        for t in range(m):
-            if cyc[t] >= 0:
-                cyc[t] = table[cyc[t]]
     return merged
 
 

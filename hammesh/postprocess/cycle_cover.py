@@ -333,7 +333,10 @@ def cycle_cover(
         run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
         run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
                  for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
-        n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
+        table = np.empty(max(n_cyc, 1), np.int64)
+        n_rot = int(_k.rotate_candidates_table(tw, is_cov, cyc, n_cyc, vh, cand, cl, table))
+        if n_rot:  # the new ids: rows on two threads
+            run_all([partial(_k.renumber_cycles_into, cyc, table, lo, hi) for lo, hi in spans])
         n_cyc -= n_rot
     mark("rotate")
     n_rec = n_shift = 0
