@@ -390,25 +390,20 @@ def steps_table(target: int, repeat: int, local: bool = False) -> None:
 
 def phases_table(target: int, repeat: int) -> None:
     """Thread CPU per phase of the cover's matching, on sparse mode's arguments (``--phases``)."""
+    from unittest import mock
+
     import hammesh
     import hammesh.postprocess.cycle_cover as cc
     import hammesh.postprocess.sparse as sparse
     from hammesh.postprocess import _cover_kernels as ck
 
     mesh, _ = plate_mesh(target)
-    got = {}
-    real = sparse.cycle_cover
-
-    def capture(tri, tw, **kw):
-        got.update(tri=np.ascontiguousarray(tri, np.int64), tw=tw, good=kw["good"], points=kw["points"])
-        return real(tri, tw, **kw)
-
-    sparse.cycle_cover = capture
-    try:
+    # sparse mode's arguments to the cover: the call a wrapping mock records
+    with mock.patch.object(sparse, "cycle_cover", wraps=sparse.cycle_cover) as spy:
         hammesh.hamiltonian(mesh, mode="sparse")
-    finally:
-        sparse.cycle_cover = real
-    tri, tw, pts = got["tri"], got["tw"], got["points"]
+    (tri, tw), kw = spy.call_args
+    tri, pts = np.ascontiguousarray(tri, np.int64), kw["points"]
+    got = {"good": kw["good"]}
     m = len(tri)
     g = np.ascontiguousarray(got["good"], np.bool_).reshape(m, 3)
     times: dict = {}

@@ -641,18 +641,9 @@ def test_guided_search_finds_a_path_iff_breadth_first_does(seed: int, n: int, gx
     # chain of degree-2 triangles)
     from hammesh.postprocess import _cover_kernels as ck
 
-    rng = np.random.default_rng(seed)
-    pts = rng.random((n, 2))
-    tri = Delaunay(pts).simplices.astype(np.int64)
+    pts, tri, nb, alive, active, mate, work, s = _shuffled_greedy(seed, n, 1.0, np.int64)
     m = len(tri)
-    nb = ck.neighbors(half_edges(tri, n).twin, m)
-    alive, deg = ck.peel(nb, m)
-    active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int64)
-    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     queue, touched = np.empty(m + 16, np.int64), np.empty(m + 16, np.int64)
-    order = rng.permutation(np.flatnonzero(active))
-    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, queue, mate)
     nolog, nonlog = np.empty((0, 4), np.int64), np.zeros(1, np.int64)
     guide = (tri, pts, np.array([gx, gy, 30.0, 50.0]), np.empty(m + 16), np.empty(m))  # (x, y, scale, chain cost)
     kind = getattr(ck, mode)
@@ -718,25 +709,36 @@ def test_guided_chain_searches_leave_fewer_uncovered_in_all(monkeypatch) -> None
     assert total["guided"] < total["bfs"]
 
 
-def _defects_state(seed: int, n: int, keep: float):
-    """A punched Delaunay mesh's matching after a greedy in a shuffled order (no
-    searches) and ``search_frees`` of 8 triangles: many defects for the drop phase.
-    Returns ``(nb, alive, active, mate, work, s, frees)``."""
+def _shuffled_greedy(seed: int, n: int, keep: float, dtype):
+    """A Delaunay mesh of ``n`` random points (each triangle kept with probability
+    ``keep``: dual bridges, parity defects) and its matching after a greedy in a
+    shuffled order, no searches (many triangles left free); triangle ids ``dtype``.
+    Returns ``(points, triangles, nb, alive, active, mate, work, next lca stamp)``."""
     from hammesh.postprocess import _cover_kernels as ck
 
     rng = np.random.default_rng(seed)
     pts = rng.random((n, 2))
     tri = Delaunay(pts).simplices.astype(np.int64)
-    tri = tri[rng.random(len(tri)) < keep]
+    if keep < 1.0:
+        tri = tri[rng.random(len(tri)) < keep]
     m = len(tri)
     nb = ck.neighbors(half_edges(tri, n).twin, m)
     alive, deg = ck.peel(nb, m)
     active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int32)
-    work = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
-    order = rng.permutation(np.flatnonzero(active)).astype(np.int32)
-    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, np.empty(m + 16, np.int32),
-                            mate)
+    mate = np.full(m, -1, dtype)
+    work = (np.empty(m, dtype), np.empty(m, dtype), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    order = rng.permutation(np.flatnonzero(active)).astype(dtype)
+    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, np.empty(m + 16, dtype), mate)
+    return pts, tri, nb, alive, active, mate, work, s
+
+
+def _defects_state(seed: int, n: int, keep: float):
+    """``_shuffled_greedy`` (int32 ids, as the cover's) and ``search_frees`` of 8
+    triangles: many defects for the drop phase. Returns ``(nb, alive, active, mate,
+    work, s, frees)``."""
+    from hammesh.postprocess import _cover_kernels as ck
+
+    _p, _t, nb, alive, active, mate, work, s = _shuffled_greedy(seed, n, keep, np.int32)
     frees, s = ck.search_frees(nb, active, alive, mate, *work, s, 8)
     return nb, alive, active, mate, work, s, frees
 
