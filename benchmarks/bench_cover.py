@@ -483,9 +483,9 @@ def phases_table(target: int, repeat: int) -> None:
     for name, v in times.items():
         v = np.array(v)
         if name == "drop, parts A / B":  # (the two parts' thread CPU)
-            print(f"  {name:22s} {np.median(v[:, 0]) * 1e3:7.1f} / {np.median(v[:, 1]) * 1e3:.1f} ms CPU")
+            print(f"  {name:26s} {np.median(v[:, 0]) * 1e3:7.1f} / {np.median(v[:, 1]) * 1e3:.1f} ms CPU")
             continue
-        print(f"  {name:22s} {np.median(v[:, 1]) * 1e3:7.1f} ms CPU {np.median(v[:, 0]) * 1e3:7.1f} ms wall; "
+        print(f"  {name:26s} {np.median(v[:, 1]) * 1e3:7.1f} ms CPU {np.median(v[:, 0]) * 1e3:7.1f} ms wall; "
               f"free after: {frees_left.get(name, '')}", flush=True)
 
 
