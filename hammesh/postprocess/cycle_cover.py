@@ -335,8 +335,8 @@ def cycle_cover(
                  for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
         table = np.empty(max(n_cyc, 1), np.int64)
         n_rot = int(_k.rotate_candidates_table(tw, is_cov, cyc, n_cyc, vh, cand, cl, table))
-        if n_rot:  # the new ids: rows on two threads
-            run_all([partial(_k.renumber_cycles_into, cyc, table, lo, hi) for lo, hi in spans])
+        # the new ids: rows on two threads (none: the kernel loaded all the same, see _drop_defects)
+        run_all([partial(_k.renumber_cycles_into, cyc, table, lo, hi if n_rot else lo) for lo, hi in spans])
         n_cyc -= n_rot
     mark("rotate")
     n_rec = n_shift = 0
@@ -428,8 +428,13 @@ def _drop_defects(nb: np.ndarray, active: np.ndarray, alive: np.ndarray, mate: n
     rounds = DROP_ROUNDS
     cut = defect_cut(frees, active, mate) if two else 0
     if cut <= 0:
-        s, n_drop, _w, _n = _k.drop_defects(nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
-                                            rounds, frees, nomark)
+        s, n_drop, w, _n = _k.drop_defects(nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
+                                           rounds, frees, nomark)
+        # the side-by-side path's kernels called on nothing: a small mesh's cover (as
+        # ``load_kernels`` makes one) loads them, not a big mesh's first call (~10 ms each)
+        _k.copy_state_into(mate, active, alive, mate, active, alive, 0, 0)
+        _k.writes_meet(nomark, w, 0, w, 0)
+        _k.copy_writes(w, 0, mate, active, alive, mate, active, alive)
         return int(s), int(n_drop)
     mate2, active2, alive2 = np.empty_like(mate), np.empty_like(active), np.empty_like(alive)
     run_all([partial(_k.copy_state_into, mate, active, alive, mate2, active2, alive2, lo, hi)
