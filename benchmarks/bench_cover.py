@@ -18,6 +18,7 @@ largest cycle's share (a winding cover: issue 14).
     python benchmarks/bench_cover.py --steps [--target 1500000] [--repeat 5]
     python benchmarks/bench_cover.py --steps --local [--target 1500000] [--repeat 5]
     python benchmarks/bench_cover.py --fresh 3 [--target 1500000]
+    python benchmarks/bench_cover.py --phases [--target 1500000] [--repeat 5]
 
 ``--fresh N``: the cover's first call in a fresh process, as sparse mode makes it: the
 sparse ``hamiltonian()`` of the plate is run once with ``cycle_cover``'s arguments
@@ -27,6 +28,14 @@ peer, in that process), load the cover's kernels on a small mesh (as ``quality_m
 does while Triangle runs), then time the first and a second ``cycle_cover`` on those
 arguments: wall and process CPU (the side thread included), CPU per step, the
 cover's shape, and first call / raw Triangle in wall and in CPU (median printed).
+
+``--phases`` (session 16): the matching's phases one by one on the arguments sparse
+mode gives the cover (captured as for ``--fresh``), each timed in thread CPU and wall
+seconds on the calling thread, median of ``--repeat`` rounds: per half the
+breadth-first order, the greedy with its online searches and the searches from what
+it left; then ``search_frees``, the parity defects' drop phase serially and in two
+parts side by side (``cycle_cover._drop_defects``: the main thread's CPU, and the
+wall), and the chain phase; with the free triangles each phase leaves.
 
 ``--corpus``: the sparse ``hamiltonian()`` on the ~16k-triangle q30 meshes of
 ``bench_sparse.py`` (8 domains): the cover's uncovered triangles per mesh and in all,
@@ -379,6 +388,107 @@ def steps_table(target: int, repeat: int, local: bool = False) -> None:
     print(f"{'wall':16s}" + "".join(f"{np.median(wall[k]):11.3f}" for k in data))
 
 
+def phases_table(target: int, repeat: int) -> None:
+    """Thread CPU per phase of the cover's matching, on sparse mode's arguments (``--phases``)."""
+    from unittest import mock
+
+    import hammesh
+    import hammesh.postprocess.cycle_cover as cc
+    import hammesh.postprocess.sparse as sparse
+    from hammesh.postprocess import _cover_kernels as ck
+
+    mesh, _ = plate_mesh(target)
+    # sparse mode's arguments to the cover: the call a wrapping mock records
+    with mock.patch.object(sparse, "cycle_cover", wraps=sparse.cycle_cover) as spy:
+        hammesh.hamiltonian(mesh, mode="sparse")
+    (tri, tw), kw = spy.call_args
+    tri, pts = np.ascontiguousarray(tri, np.int64), kw["points"]
+    got = {"good": kw["good"]}
+    m = len(tri)
+    g = np.ascontiguousarray(got["good"], np.bool_).reshape(m, 3)
+    times: dict = {}
+    frees_left: dict = {}
+
+    def lap(name, t0, left=None):
+        t1 = time.perf_counter(), time.thread_time()
+        times.setdefault(name, []).append((t1[0] - t0[0], t1[1] - t0[1]))
+        if left is not None:
+            frees_left[name] = left
+        return t1
+
+    def n_free(active, mate):
+        return int((active & (mate < 0)).sum())
+
+    for _ in range(repeat):
+        nb = np.empty((m, 3), np.int32)
+        ck.neighbors_into(tw, nb, 0, m)
+        alive, deg = ck.peel(nb, m)
+        active = alive & (deg == 3)
+        side = np.zeros(m, np.int8)
+        side[cc._quadrant_cut(pts, tri, m):] = 1
+        mate = np.full(m, -1, np.int32)
+        work = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+        s = 0
+        for half in (0, 1):
+            t0 = time.perf_counter(), time.thread_time()
+            act = np.zeros(m, np.bool_)
+            act[side == half] = active[side == half]
+            order = ck._bfs_order(nb, side, half)
+            t0 = lap(f"half {half}: order", t0)
+            queue = np.empty(cc.ONLINE_BUDGET + 2016, np.int32)
+            # (each half's stamps start at 0, as in match_half: the halves touch disjoint triangles)
+            sh = ck._greedy_matching(nb, act, m, g, order, cc.ONLINE_BUDGET, *work, queue, mate)
+            t0 = lap(f"half {half}: greedy+online", t0, n_free(act, mate))
+            sh = ck._augment_every_free(nb, act, act, mate, *work, sh, queue, 2000)
+            lap(f"half {half}: searches", t0, n_free(act, mate))
+            s = max(s, sh)
+        t0 = time.perf_counter(), time.thread_time()
+        frees, s = ck.search_frees(nb, active, alive, mate, *work, s, 2000)
+        t0 = lap("search_frees", t0, n_free(active, mate))
+        state = (mate.copy(), active.copy(), alive.copy())
+        s1, _d = cc._drop_defects(nb, active, alive, mate, work, s, frees, False)
+        t0 = lap("drop, serial", t0, n_free(active, mate))
+        after = (mate.copy(), active.copy(), alive.copy())
+        mate[:], active[:], alive[:] = state
+        batches: list = []  # per run_all: each call's thread CPU (the first runs on this thread)
+
+        def metered(calls, real_run=cc.run_all):
+            def one(c):
+                c0 = time.thread_time()
+                out = c()
+                return out, time.thread_time() - c0
+            got_ = real_run([lambda c=c: one(c) for c in calls])
+            batches.append([g_[1] for g_ in got_])
+            return [g_[0] for g_ in got_]
+
+        cc.run_all = metered
+        try:
+            t0 = time.perf_counter(), time.thread_time()
+            s, _d = cc._drop_defects(nb, active, alive, mate, work, s1 + 1, frees, True)
+            t1 = time.perf_counter(), time.thread_time()
+        finally:
+            cc.run_all = metered.__defaults__[0]
+        # the critical path in CPU: this thread's work outside the side-by-side calls,
+        # plus the slower call of each pass (what the wall is on two free cores)
+        crit = t1[1] - t0[1] - sum(b[0] for b in batches) + sum(max(b) for b in batches)
+        times.setdefault("drop, two parts: critical", []).append((t1[0] - t0[0], crit))
+        times.setdefault("drop, parts A / B", []).append(tuple(batches[-1][:2]) if len(batches) > 1 else (0, 0))
+        t0 = lap("drop, two parts", t0, n_free(active, mate))
+        same = all(np.array_equal(a, b) for a, b in zip(after, (mate, active, alive)))
+        frees_left["drop, two parts"] = f"{frees_left['drop, two parts']} (serial's state: {same})"
+        ck.chain_frees(nb, active, alive, mate, *work, s, frees, tri, pts, cc.GUIDE_WEIGHT, cc.CHAIN_COST)
+        lap("chain", t0, n_free(active, mate))
+    print(f"m = {m:,}; median of {repeat} rounds, calling thread (drop, two parts: the main thread's part; "
+          f"'critical': its work outside the two-thread passes plus each pass's slower thread, in CPU)")
+    for name, v in times.items():
+        v = np.array(v)
+        if name == "drop, parts A / B":  # (the two parts' thread CPU)
+            print(f"  {name:26s} {np.median(v[:, 0]) * 1e3:7.1f} / {np.median(v[:, 1]) * 1e3:.1f} ms CPU")
+            continue
+        print(f"  {name:26s} {np.median(v[:, 1]) * 1e3:7.1f} ms CPU {np.median(v[:, 0]) * 1e3:7.1f} ms wall; "
+              f"free after: {frees_left.get(name, '')}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--target", type=int, default=None, help="triangles of the input mesh (1.5M; --cells: 100k)")
@@ -389,7 +499,11 @@ def main() -> None:
     ap.add_argument("--steps", action="store_true", help="CPU per cover step, Triangle's vs local numberings")
     ap.add_argument("--local", action="store_true", help="--steps, renumber_local: quadtree vs quadrant halves")
     ap.add_argument("--fresh", type=int, default=0, help="first cycle_cover in N fresh processes, as sparse calls it")
+    ap.add_argument("--phases", action="store_true", help="thread CPU per phase of the cover's matching")
     args = ap.parse_args()
+    if args.phases:
+        phases_table(args.target or 1_500_000, args.repeat)
+        return
     if args.fresh > 0:
         fresh_table(args.target or 1_500_000, args.fresh)
         return

@@ -227,7 +227,7 @@ def _drop(u, nb, active, alive, mate, log, nlog):
 
 @njit(cache=True, nogil=True)
 def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, queue, budget, mode, take, log,
-             nlog, seen, guide):
+             nlog, seen, guide, mark=None):
     """Edmonds' blossom search for an augmenting path from the free vertex ``r``.
 
     Blossoms are contracted with a union-find over bases (``fa``); the arrays are
@@ -262,6 +262,10 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
     Edmonds' search is correct in any expansion order; a search that must cross the
     mesh to the free triangle near the goal (``CHAIN`` searches between distant
     parity defects) then explores a band along the way instead of a disc.
+
+    ``mark`` ((m,) bool, optional): set on every triangle the search may have read
+    (those it touched and their neighbours): ``drop_defects`` checks a speculative
+    run against it.
 
     Returns ``(found, next lca stamp, extra)``: ``found`` the far end of the path
     applied (the dropped triangle after a drop, now not ``alive``) or -1; ``extra``
@@ -374,6 +378,14 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
         label[x] = -1
         parent[x] = -1
         fa[x] = x
+    if mark is not None:  # (a search reads the triangles it touches and their neighbours)
+        for i in range(n_t):
+            x = touched[i]
+            mark[x] = True
+            for k in range(3):
+                y = nb[x, k]
+                if y >= 0:
+                    mark[y] = True
     return found, s, extra
 
 
@@ -534,8 +546,24 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
 
 
 @njit(cache=True, nogil=True)
+def _record_writes(log, nlog, writes, n_w):
+    """Append the triangles of ``log[:nlog]`` (``_log``) to ``writes[:n_w]`` (grown by
+    doubling); returns ``(writes, n_w)``, ``n_w`` -1 once a log overflowed (unknown)."""
+    n = nlog[0]
+    if n_w < 0 or n > log.shape[0]:
+        return writes, -1
+    if n_w + n > writes.shape[0]:
+        grown = np.empty(2 * (n_w + n) + 64, np.int64)
+        grown[:n_w] = writes[:n_w]
+        writes = grown
+    for j in range(n):
+        writes[n_w + j] = log[j, 0]
+    return writes, n_w + n
+
+
+@njit(cache=True, nogil=True)
 def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, plain_budget, budget,
-                   rounds, frees):
+                   rounds, frees, mark=None):
     """Fix free degree-3 triangles by leaving interior triangles uncovered (``DROP``).
 
     A degree-3 triangle the matching cannot pair (a parity defect: typically two
@@ -550,20 +578,31 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
     defect moves: the partner freed is searched from in turn, at most ``rounds``
     times). A sequence that ends with a triangle still free is undone (``_undo``):
     drops that fix nothing would only add uncovered triangles.
-    Returns ``(next lca stamp, triangles dropped)``.
+
+    ``mark`` ((m,) bool, optional): set on every triangle read (``_augment``'s
+    ``mark``, and each free triangle looked at), for ``drop_defects``.
+    Returns ``(next lca stamp, triangles dropped, writes, n_writes)``: the triangles
+    whose state (``mate``, ``active``, ``alive``) the kept sequences changed are among
+    ``writes[:n_writes]`` (``n_writes`` -1: not known, a log overflowed).
     """
     n_drop = 0
     log = np.empty(((2 * rounds + 4) * (max(budget, plain_budget) + 16) + 64, 4), np.int64)
     nlog = np.zeros(1, np.int64)
+    writes = np.empty(64, np.int64)
+    n_w = 0
     seen = np.empty(4, np.int64)
     noguide = _no_guide()
     for t in frees:  # the free triangles, in index order (the list only shrinks)
+        if mark is not None:
+            mark[t] = True
         if not active[t] or mate[t] >= 0:
             continue
         r = t  # a longer augmenting path first: it leaves nothing uncovered
+        nlog[0] = 0
         f0, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                             plain_budget, OBSERVE, -1, log, nlog, seen, noguide)
+                             plain_budget, OBSERVE, -1, log, nlog, seen, noguide, mark)
         if f0 >= 0:
+            writes, n_w = _record_writes(log, nlog, writes, n_w)
             continue
         nlog[0] = 0
         fixed = False
@@ -578,15 +617,15 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 extra = seen[2] if seen[2] >= 0 and seen[3] < budget else -1
                 if seen[0] >= 0 and seen[1] < budget:  # the search stops there
                     found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                               queue, budget, DROP, -1, log, nlog, seen, noguide)
+                                               queue, budget, DROP, -1, log, nlog, seen, noguide, mark)
             else:
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                           budget, DROP, -1, log, nlog, seen, noguide)
+                                           budget, DROP, -1, log, nlog, seen, noguide, mark)
             if found < 0:
                 if extra < 0 or it == rounds:
                     break
                 found, s, extra = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched,
-                                           queue, budget, DROP, extra, log, nlog, seen, noguide)
+                                           queue, budget, DROP, extra, log, nlog, seen, noguide, mark)
                 if found < 0:  # the same search again: it stops at the same triangle
                     break
             if not alive[found]:
@@ -596,14 +635,15 @@ def _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched
                 break
             r = extra  # freed by the drop: an augmenting path first, then drop again
             f2, s, _x = _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                 budget, OBSERVE, -1, log, nlog, seen, noguide)
+                                 budget, OBSERVE, -1, log, nlog, seen, noguide, mark)
             if f2 >= 0:
                 fixed = True
                 break
             known = True
         if fixed or not _undo(log, nlog, mate, active, alive):
             n_drop += drops
-    return s, n_drop
+            writes, n_w = _record_writes(log, nlog, writes, n_w)
+    return s, n_drop, writes, n_w
 
 
 @njit(cache=True, nogil=True)
@@ -669,12 +709,15 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
     """
     m = nb.shape[0]
     hit = False
-    nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
     n = 0
     for t in frees:
         if active[t] and mate[t] < 0:
             n += 1
+    # the paths' triangles (their flips logged): the only ones a chain can newly pair
+    # (before this phase every partner is a neighbour); rows are written as used
+    log = np.empty((m + 64 if n >= 2 else 0, 4), np.int64)
+    nlog = np.zeros(1, np.int64)
     touched = np.empty(m + 16 if n >= 2 else 0, np.int32)  # a search touches a triangle once
     guided = n >= 2 and pts.shape[0] > 0
     keys = np.empty(m + 8 if guided else 0)  # the heap's keys, beside queue
@@ -688,13 +731,20 @@ def _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue,
             if guided:
                 _nearest_free_centroid(t, frees, active, mate, tri, pts, goal, guide_weight)
             f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
-                                m + 8, CHAIN, -1, nolog, nonlog, nonlog, (tri, pts, goal, keys, cost))
+                                m + 8, CHAIN, -1, log, nlog, nonlog, (tri, pts, goal, keys, cost))
             if f >= 0:
                 hit = True
                 n -= 2
     if not hit:
         return s
-    for x in range(m):  # matched across a chain: its triangles are left uncovered
+    if nlog[0] <= log.shape[0]:  # the triangles of the paths, in index order, each once
+        pairs = np.empty(nlog[0], np.int64)
+        for j in range(nlog[0]):
+            pairs[j] = log[j, 0]
+        pairs = np.unique(pairs)
+    else:  # (paths longer than the log: every triangle)
+        pairs = np.arange(m)
+    for x in pairs:  # matched across a chain: its triangles are left uncovered
         y = mate[x]
         if not active[x] or y < x:
             continue
@@ -1017,21 +1067,11 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
 
 
 @njit(cache=True, nogil=True)
-def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget, plain_budget, drop_budget,
-                    drop_rounds, tri, pts, guide_weight, chain_cost):
-    """From the matchings of the halves (or cells) to the matching the cover complements.
-
-    Searches of ``budget`` triangles over the whole graph from each triangle still
-    free (those left at the split between the halves, mostly: the join across it);
-    the parity defects (``_drop_matching``: searches of ``plain_budget``, then of
-    ``drop_budget`` triangles, skipped if ``drop_rounds < 0``), then chains
-    (``_chain_matching``, best-first towards the nearest free triangle when ``pts``,
-    the points of ``tri``, has rows). The free triangles are listed once (the phases only
-    match them; a drop sequence that frees another either matches it or is undone).
-    Then ``cover_edges_into`` (rows on threads) and ``settle_cover``.
-
-    Returns ``(n_free_after_matching, n_dropped)``.
-    """
+def search_frees(nb, active, alive, mate, parent, fa, label, stamp, s, budget):
+    """The first phase of ``finish_matching``: the triangles still free (index order)
+    and a search of ``budget`` triangles over the whole graph from each (those left at
+    the split between the halves, mostly: the join across it). Returns ``(frees,
+    next lca stamp)``; ``frees`` lists them all, matched since or not."""
     m = nb.shape[0]
     n = 0
     for t in range(m):
@@ -1043,7 +1083,7 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
         if active[t] and mate[t] < 0:
             frees[n] = t
             n += 1
-    queue = np.empty(m + 8, np.int32)
+    queue = np.empty(budget + 16, np.int32)
     touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
@@ -1052,17 +1092,104 @@ def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget
         if mate[t] < 0:
             _f, s, _x = _augment(t, nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue, budget,
                                  PLAIN, -1, nolog, nonlog, nonlog, noguide)
-    n_drop = 0
-    if drop_rounds >= 0:
-        touched_d = np.empty(max(budget, plain_budget, drop_budget) + 16, np.int32)
-        s, n_drop = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched_d, queue,
-                                   plain_budget, drop_budget, drop_rounds, frees)
-    s = _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,
-                        chain_cost)
+    return frees, s
+
+
+@njit(cache=True, nogil=True)
+def drop_defects(nb, active, alive, mate, parent, fa, label, stamp, s, plain_budget, drop_budget, drop_rounds,
+                 frees, mark):
+    """``_drop_matching`` from the free triangles ``frees`` (the second phase of
+    ``finish_matching``); ``mark`` ((m,) bool, or empty: not kept) is set on every
+    triangle read. Returns ``(next lca stamp, dropped, writes, n_writes)``.
+
+    Two runs over two parts of the free list, side by side (``cycle_cover``: the
+    second on a copy of ``mate``, ``active``, ``alive`` with its own search arrays),
+    give the serial run's state exactly when the second read no triangle the first
+    wrote (``writes_meet``): its writes are then copied over (``copy_writes``); else
+    the second part runs again after the first."""
+    big = max(plain_budget, drop_budget)
+    touched = np.empty(big + 16, np.int32)
+    queue = np.empty(big + 16, np.int32)
+    if mark.shape[0] > 0:
+        s, n_drop, writes, n_w = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                                plain_budget, drop_budget, drop_rounds, frees, mark)
+    else:
+        s, n_drop, writes, n_w = _drop_matching(nb, active, alive, mate, parent, fa, label, stamp, s, touched, queue,
+                                                plain_budget, drop_budget, drop_rounds, frees)
+    return s, n_drop, writes, n_w
+
+
+@njit(cache=True, nogil=True)
+def writes_meet(mark, writes, n_w, other, n_other):
+    """Whether the triangles ``writes[:n_w]`` (one run's writes) meet what another
+    read (``mark``) or wrote (``other[:n_other]``): True if either count is -1."""
+    if n_w < 0 or n_other < 0:
+        return True
+    for j in range(n_other):
+        mark[other[j]] = True
+    for j in range(n_w):
+        if mark[writes[j]]:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def copy_writes(writes, n_w, mate, active, alive, mate_to, active_to, alive_to):
+    """The state of the triangles ``writes[:n_w]`` copied into the ``_to`` arrays."""
+    for j in range(n_w):
+        t = writes[j]
+        mate_to[t] = mate[t]
+        active_to[t] = active[t]
+        alive_to[t] = alive[t]
+
+
+@njit(cache=True, nogil=True)
+def copy_state_into(mate, active, alive, mate_to, active_to, alive_to, lo, hi):
+    """``mate``, ``active``, ``alive`` rows lo..hi copied into the ``_to`` arrays."""
+    for t in range(lo, hi):
+        mate_to[t] = mate[t]
+        active_to[t] = active[t]
+        alive_to[t] = alive[t]
+
+
+@njit(cache=True, nogil=True)
+def chain_frees(nb, active, alive, mate, parent, fa, label, stamp, s, frees, tri, pts, guide_weight, chain_cost):
+    """The last phase of ``finish_matching``: ``_chain_matching`` from ``frees``.
+    Returns the number of triangles still free."""
+    queue = np.empty(nb.shape[0] + 8, np.int32)
+    _chain_matching(nb, active, alive, mate, parent, fa, label, stamp, s, queue, frees, tri, pts, guide_weight,
+                    chain_cost)
     n_free = 0
     for t in frees:
         if active[t] and mate[t] < 0:
             n_free += 1
+    return n_free
+
+
+@njit(cache=True, nogil=True)
+def finish_matching(nb, active, alive, mate, parent, fa, label, stamp, s, budget, plain_budget, drop_budget,
+                    drop_rounds, tri, pts, guide_weight, chain_cost):
+    """From the matchings of the halves (or cells) to the matching the cover complements.
+
+    Searches of ``budget`` triangles over the whole graph from each triangle still
+    free (``search_frees``); the parity defects (``_drop_matching``: searches of
+    ``plain_budget``, then of ``drop_budget`` triangles, skipped if ``drop_rounds <
+    0``), then chains (``_chain_matching``, best-first towards the nearest free
+    triangle when ``pts``, the points of ``tri``, has rows). The free triangles are
+    listed once (the phases only match them; a drop sequence that frees another
+    either matches it or is undone). Then ``cover_edges_into`` (rows on threads) and
+    ``settle_cover``. Serial; ``cycle_cover`` runs the drop phase in two parts side
+    by side (``drop_defects``), with the same result.
+
+    Returns ``(n_free_after_matching, n_dropped)``.
+    """
+    frees, s = search_frees(nb, active, alive, mate, parent, fa, label, stamp, s, budget)
+    n_drop = 0
+    if drop_rounds >= 0:
+        s, n_drop, _w, _n = drop_defects(nb, active, alive, mate, parent, fa, label, stamp, s, plain_budget,
+                                         drop_budget, drop_rounds, frees, np.zeros(0, np.bool_))
+    n_free = chain_frees(nb, active, alive, mate, parent, fa, label, stamp, s, frees, tri, pts, guide_weight,
+                         chain_cost)
     return n_free, n_drop
 
 
@@ -1210,7 +1337,26 @@ def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
     """Rotate the candidate vertices (``star_candidates_into``) in vertex order, each
     checked again against the rotations before it (alternation, distinct merged
     cycles); then renumber ``cyc``. Returns the number of cycles merged away."""
-    m = cyc.shape[0]
+    table = np.empty(max(n_cyc, 1), np.int64)
+    merged = rotate_candidates_table(twin, is_cov, cyc, n_cyc, vh, cand, cell, table)
+    if merged > 0:
+        renumber_cycles_into(cyc, table, 0, cyc.shape[0])
+    return merged
+
+
+@njit(cache=True, nogil=True)
+def renumber_cycles_into(cyc, table, lo, hi):
+    """``cyc[t] = table[cyc[t]]`` for the covered triangles of rows lo..hi."""
+    for t in range(lo, hi):
+        if cyc[t] >= 0:
+            cyc[t] = table[cyc[t]]
+
+
+@njit(cache=True, nogil=True)
+def rotate_candidates_table(twin, is_cov, cyc, n_cyc, vh, cand, cell, table):
+    """``rotate_candidates`` but the renumbering: ``table[c]`` (``n_cyc`` rows) is each
+    old cycle id's new one (``renumber_cycles_into``: rows on threads), ``cyc`` is
+    left as it was. Returns the number of cycles merged away."""
     uf = np.arange(max(n_cyc, 1))
     spokes = np.empty(32, np.int64)
     roots = np.empty(16, np.int64)
@@ -1250,12 +1396,8 @@ def rotate_candidates(twin, is_cov, cyc, n_cyc, vh, cand, cell):
             if new_id[r] < 0:
                 new_id[r] = n_new
                 n_new += 1
-        table = np.empty(max(n_cyc, 1), np.int64)  # each old id's new one: no find per row
-        for c in range(n_cyc):
+        for c in range(n_cyc):  # each old id's new one: no find per row
             table[c] = new_id[_find(uf, c)]
-        for t in range(m):
-            if cyc[t] >= 0:
-                cyc[t] = table[cyc[t]]
     return merged
 
 

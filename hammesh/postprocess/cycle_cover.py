@@ -35,7 +35,7 @@ from hammesh.threads import row_ranges, run_all
 __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
     "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves", "CHAIN_COST", "GUIDE_WEIGHT",
-    "GUIDE_MIN_TRIANGLES", "JoinRule", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
+    "GUIDE_MIN_TRIANGLES", "JoinRule", "defect_cut", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -303,15 +303,16 @@ def cycle_cover(
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     guide = points is not None and m >= GUIDE_MIN_TRIANGLES
     pts = np.ascontiguousarray(points, dtype=np.float64) if guide else np.zeros((0, 2))
-    finish = partial(
-        _k.finish_matching,
-        nb, active, alive, mate, *work, s, int(budget), DEFECT_SEARCH_BUDGET, DROP_BUDGET, DROP_ROUNDS if drop else -1,
-        tri, pts, float(GUIDE_WEIGHT), float(CHAIN_COST),
-    )
-    if len(spans) > 1:  # the defects' searches are serial: the other core faults in the arrays used next
-        (n_free, n_drop), later = run_all([finish, partial(_Later, m, triangles, rotate)])
+    frees, s = _k.search_frees(nb, active, alive, mate, *work, s, int(budget))
+    n_drop = 0
+    if drop:
+        s, n_drop = _drop_defects(nb, active, alive, mate, work, s, frees, len(spans) > 1)
+    chain = partial(_k.chain_frees, nb, active, alive, mate, *work, s, frees, tri, pts, float(GUIDE_WEIGHT),
+                    float(CHAIN_COST))
+    if len(spans) > 1:  # the chain searches are serial: the other core faults in the arrays used next
+        n_free, later = run_all([chain, partial(_Later, m, triangles, rotate)])
     else:
-        (n_free, n_drop), later = finish(), _Later(m, triangles, rotate)
+        n_free, later = chain(), _Later(m, triangles, rotate)
     mark("finish_matching")
     # one path for every size (one thread below THREAD_MIN_ROWS rows), so a small
     # mesh compiles the kernels a big one uses
@@ -332,7 +333,10 @@ def cycle_cover(
         run_all([partial(_k.star_prefilter_into, tri, is_cov, vh, skip, lo, hi) for lo, hi in spans])
         run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
                  for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
-        n_rot = int(_k.rotate_candidates(tw, is_cov, cyc, n_cyc, vh, cand, cl))
+        table = np.empty(max(n_cyc, 1), np.int64)
+        n_rot = int(_k.rotate_candidates_table(tw, is_cov, cyc, n_cyc, vh, cand, cl, table))
+        # the new ids: rows on two threads (none: the kernel loaded all the same, see _drop_defects)
+        run_all([partial(_k.renumber_cycles_into, cyc, table, lo, hi if n_rot else lo) for lo, hi in spans])
         n_cyc -= n_rot
     mark("rotate")
     n_rec = n_shift = 0
@@ -401,6 +405,77 @@ class _Later:
         self.vh = fresh(self.n_pts, np.int32 if 3 * m < 2**31 else np.int64, -1)
         self.skip = fresh(self.n_pts, np.bool_, 0)
         self.cand = fresh(self.n_pts, np.bool_, 0)
+
+
+def _drop_defects(nb: np.ndarray, active: np.ndarray, alive: np.ndarray, mate: np.ndarray, work: tuple, s: int,
+                  frees: np.ndarray, two: bool) -> tuple[int, int]:
+    """The parity defects' drop phase (``_cover_kernels.drop_defects``) from ``frees``,
+    in place; returns ``(next lca stamp, triangles dropped)``, as the serial phase.
+
+    With ``two`` threads and at least two defects, the free list is cut in two
+    (``defect_cut``) and the parts run side by side, speculatively: the first on
+    the arrays, the second on a copy of ``mate``, ``active``, ``alive`` (its own
+    search arrays) marking every triangle it reads. If the first part wrote none of
+    them (``writes_meet``: the searches' regions did not meet, or only where
+    nothing was kept) the second's writes are copied over, which is the serial
+    run's state; else the second part runs again after the first (as serially).
+    Each defect's searches label up to ``DEFECT_SEARCH_BUDGET`` triangles, most of
+    them failing: measured at 1.5 M (docs/partition.md, session 16) 9 searches of
+    100 k triangles, 50 ms of one core.
+    """
+    m = len(mate)
+    nomark = np.zeros(0, np.bool_)
+    rounds = DROP_ROUNDS
+    cut = defect_cut(frees, active, mate) if two else 0
+    if cut <= 0:
+        s, n_drop, w, _n = _k.drop_defects(nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
+                                           rounds, frees, nomark)
+        # the side-by-side path's kernels called on nothing: a small mesh's cover (as
+        # ``load_kernels`` makes one) loads them, not a big mesh's first call (~10 ms each)
+        _k.copy_state_into(mate, active, alive, mate, active, alive, 0, 0)
+        _k.writes_meet(nomark, w, 0, w, 0)
+        _k.copy_writes(w, 0, mate, active, alive, mate, active, alive)
+        return int(s), int(n_drop)
+    mate2, active2, alive2 = np.empty_like(mate), np.empty_like(active), np.empty_like(alive)
+    run_all([partial(_k.copy_state_into, mate, active, alive, mate2, active2, alive2, lo, hi)
+             for lo, hi in row_ranges(m, threads.THREAD_MIN_ROWS)])
+    # the second part's search arrays: label -1, stamps zero (fresh pages), the rest set as touched
+    work2 = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    seen = np.zeros(m, np.bool_)
+    first, second = run_all([
+        partial(_k.drop_defects, nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET, rounds,
+                frees[:cut], nomark),
+        partial(_k.drop_defects, nb, active2, alive2, mate2, *work2, 0, DEFECT_SEARCH_BUDGET, DROP_BUDGET, rounds,
+                frees[cut:], seen),
+    ])
+    s, n_drop, w1, n1 = first
+    _s2, n_drop2, w2, n2 = second
+    if _k.writes_meet(seen, w1, n1, w2, n2):  # (rare: the regions met) serially, as without threads
+        s, n_drop2, _w, _n = _k.drop_defects(nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET,
+                                             rounds, frees[cut:], nomark)
+    else:
+        _k.copy_writes(w2, n2, mate2, active2, alive2, mate, active, alive)
+    return int(s), int(n_drop) + int(n_drop2)
+
+
+def defect_cut(frees: np.ndarray, active: np.ndarray, mate: np.ndarray) -> int:
+    """Where ``_drop_defects`` cuts the free list (its position; 0: not cut): before
+    the middle one of the triangles still free, so that each part has about half the
+    defects (each costs about the same: mostly failed searches of the full budget),
+    or before its neighbour if the middle gap of row numbers is under a quarter of the
+    mean gap (rows in a local order are near where they are numbered: two defects that
+    close may well pair up, and the parts' searches would meet)."""
+    still = np.flatnonzero(active[frees] & (mate[frees] < 0))
+    n = len(still)
+    if n < 2:
+        return 0
+    rows = frees[still]
+    gap = np.diff(rows)  # gap[i - 1]: before the i-th still free
+    i = n // 2
+    if 4 * gap[i - 1] * (n - 1) < rows[-1] - rows[0]:
+        near = [j for j in (i - 1, i + 1) if 1 <= j <= n - 1]
+        i = max(near, key=lambda j: gap[j - 1]) if near else i
+    return int(still[i])
 
 
 def cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray | None = None,

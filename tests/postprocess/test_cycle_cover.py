@@ -641,18 +641,9 @@ def test_guided_search_finds_a_path_iff_breadth_first_does(seed: int, n: int, gx
     # chain of degree-2 triangles)
     from hammesh.postprocess import _cover_kernels as ck
 
-    rng = np.random.default_rng(seed)
-    pts = rng.random((n, 2))
-    tri = Delaunay(pts).simplices.astype(np.int64)
+    pts, tri, nb, alive, active, mate, work, s = _shuffled_greedy(seed, n, 1.0, np.int64)
     m = len(tri)
-    nb = ck.neighbors(half_edges(tri, n).twin, m)
-    alive, deg = ck.peel(nb, m)
-    active = alive & (deg == 3)
-    mate = np.full(m, -1, np.int64)
-    work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     queue, touched = np.empty(m + 16, np.int64), np.empty(m + 16, np.int64)
-    order = rng.permutation(np.flatnonzero(active))
-    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, queue, mate)
     nolog, nonlog = np.empty((0, 4), np.int64), np.zeros(1, np.int64)
     guide = (tri, pts, np.array([gx, gy, 30.0, 50.0]), np.empty(m + 16), np.empty(m))  # (x, y, scale, chain cost)
     kind = getattr(ck, mode)
@@ -716,3 +707,110 @@ def test_guided_chain_searches_leave_fewer_uncovered_in_all(monkeypatch) -> None
                 oracle_check(m.triangles, c)
                 total[arm] += c.n_uncovered
     assert total["guided"] < total["bfs"]
+
+
+def _shuffled_greedy(seed: int, n: int, keep: float, dtype):
+    """A Delaunay mesh of ``n`` random points (each triangle kept with probability
+    ``keep``: dual bridges, parity defects) and its matching after a greedy in a
+    shuffled order, no searches (many triangles left free); triangle ids ``dtype``.
+    Returns ``(points, triangles, nb, alive, active, mate, work, next lca stamp)``."""
+    from hammesh.postprocess import _cover_kernels as ck
+
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    if keep < 1.0:
+        tri = tri[rng.random(len(tri)) < keep]
+    m = len(tri)
+    nb = ck.neighbors(half_edges(tri, n).twin, m)
+    alive, deg = ck.peel(nb, m)
+    active = alive & (deg == 3)
+    mate = np.full(m, -1, dtype)
+    work = (np.empty(m, dtype), np.empty(m, dtype), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    order = rng.permutation(np.flatnonzero(active)).astype(dtype)
+    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, np.empty(m + 16, dtype), mate)
+    return pts, tri, nb, alive, active, mate, work, s
+
+
+def _defects_state(seed: int, n: int, keep: float):
+    """``_shuffled_greedy`` (int32 ids, as the cover's) and ``search_frees`` of 8
+    triangles: many defects for the drop phase. Returns ``(nb, alive, active, mate,
+    work, s, frees)``."""
+    from hammesh.postprocess import _cover_kernels as ck
+
+    _p, _t, nb, alive, active, mate, work, s = _shuffled_greedy(seed, n, keep, np.int32)
+    frees, s = ck.search_frees(nb, active, alive, mate, *work, s, 8)
+    return nb, alive, active, mate, work, s, frees
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(30, 400), keep=st.floats(0.75, 1.0),
+       budget=st.sampled_from([6, 40, 100_000]), at=st.floats(0.0, 1.0))
+def test_drop_phase_side_by_side_is_the_serial_phase(seed: int, n: int, keep: float, budget: int, at: float) -> None:
+    # the drop phase in two parts side by side (the second on copies, checked after)
+    # leaves exactly the serial phase's matching and flags, wherever the list is cut:
+    # where the parts' searches met, the second part runs again after the first
+    import hammesh.postprocess.cycle_cover as cc
+
+    nb, alive, active, mate, work, s, frees = _defects_state(seed, n, keep)
+    cut = int(round(at * len(frees)))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(cc, "DEFECT_SEARCH_BUDGET", budget)
+        mp.setattr(cc, "DROP_BUDGET", budget)
+        serial = [mate.copy(), active.copy(), alive.copy()]
+        s1, d1 = cc._drop_defects(nb, serial[1], serial[2], serial[0], tuple(a.copy() for a in work), s, frees, False)
+        mp.setattr(cc, "defect_cut", lambda *a: cut)
+        split = [mate.copy(), active.copy(), alive.copy()]
+        s2, d2 = cc._drop_defects(nb, split[1], split[2], split[0], work, s, frees, True)
+    for a, b in zip(serial, split):
+        np.testing.assert_array_equal(a, b)
+    assert d1 == d2
+    assert (work[2] == -1).all()  # the search labels left clean for the chain phase
+
+
+def test_drop_phase_speculation_is_checked(monkeypatch) -> None:
+    # the check is not vacuous: over cuts of one list, some second parts read what
+    # the first wrote (run again) and some did not (their writes copied)
+    import hammesh.postprocess.cycle_cover as cc
+    from hammesh.postprocess import _cover_kernels as ck
+
+    outcomes = []
+    real = ck.writes_meet
+
+    def spy(*a):
+        outcomes.append(bool(real(*a)))
+        return outcomes[-1]
+
+    monkeypatch.setattr(cc._k, "writes_meet", spy)
+    monkeypatch.setattr(cc, "DEFECT_SEARCH_BUDGET", 40)
+    monkeypatch.setattr(cc, "DROP_BUDGET", 40)
+    for seed in range(6):
+        nb, alive, active, mate, work, s, frees = _defects_state(seed, 300, 0.9)
+        for cut in range(1, len(frees)):
+            monkeypatch.setattr(cc, "defect_cut", lambda *a, c=cut: c)
+            st_ = (mate.copy(), active.copy(), alive.copy())
+            cc._drop_defects(nb, st_[1], st_[2], st_[0], tuple(a.copy() for a in work), s, frees, True)
+    assert True in outcomes and False in outcomes
+
+
+@given(rows=st.lists(st.integers(0, 10**6), min_size=0, max_size=40, unique=True), m_extra=st.integers(0, 5))
+def test_defect_cut_splits_the_free_defects(rows: list, m_extra: int) -> None:
+    # a position in the free list with free triangles on both sides (0 if fewer than
+    # two are free), about half of them before it
+    from hammesh.postprocess.cycle_cover import defect_cut
+
+    rows = np.array(sorted(rows), np.int64)
+    m = (int(rows.max()) + 1 if len(rows) else 1) + m_extra
+    active = np.zeros(m, np.bool_)
+    active[rows] = True
+    mate = np.full(m, -1, np.int32)
+    mate[rows[::3]] = 0  # every third matched since
+    cut = defect_cut(rows, active, mate)
+    still = (active[rows] & (mate[rows] < 0))
+    n = int(still.sum())
+    if n < 2:
+        assert cut == 0
+        return
+    before, after = int(still[:cut].sum()), int(still[cut:].sum())
+    assert before >= 1 and after >= 1
+    assert abs(before - n // 2) <= 1
