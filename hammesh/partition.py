@@ -56,6 +56,7 @@ __all__ = [
     "edge_cut",
     "part_components",
     "cycle_runs",
+    "rows_share_an_edge",
 ]
 
 
@@ -274,6 +275,11 @@ def _check_parts(part, k, a, b):
     return _Check(count, cut)
 
 
+def rows_share_an_edge(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Whether rows ``x[i]`` and ``y[i]`` have two corners (an edge) in common."""
+    return (x[:, :, None] == y[:, None, :]).any(axis=2).sum(axis=1) >= 2
+
+
 def cycle_runs(triangles: np.ndarray) -> np.ndarray:
     """Run lengths of the cycles of triangles stored in cycle order.
 
@@ -285,10 +291,7 @@ def cycle_runs(triangles: np.ndarray) -> np.ndarray:
     m = len(tri)
     if m == 0:
         return np.zeros(0, np.int64)
-
-    def shared(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return (x[:, :, None] == y[:, None, :]).any(axis=2).sum(axis=1) >= 2
-
+    shared = rows_share_an_edge
     link = shared(tri[:-1], tri[1:])
     ends = np.concatenate([np.flatnonzero(~link), [m - 1]])
     starts = np.concatenate([[0], ends[:-1] + 1])

@@ -17,7 +17,7 @@ from hammesh.planar_overlap import find_overlap
 from hammesh.point_data import carry_point_data
 from hammesh.postprocess.incircle import TREES, incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
-from hammesh.postprocess.kept_cycle import cycle_runs, kept_cycle
+from hammesh.postprocess.kept_cycle import kept_cycle, kept_runs
 from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
@@ -202,10 +202,7 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: s
 def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> HamiltonianMesh:
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if isinstance(mesh, HamiltonianMesh):  # (its cycle is the input's order: kept_cycle)
-        mesh = Mesh(mesh.points, mesh.triangles, segments=mesh.segments, segment_markers=mesh.segment_markers,
-                    triangle_attributes=mesh.triangle_attributes,
-                    vertex_markers=mesh.vertex_markers if mesh.vertex_markers is not None else np.zeros(0, np.int64),
-                    attribute_names=mesh.attribute_names, point_data=dict(mesh.point_data))
+        mesh = mesh.as_mesh()
     if mode not in MODES:
         raise InvalidOptionError(f"mode must be one of {sorted(MODES)}, got {mode!r}")
     if isinstance(keep, (bool, np.bool_)) or not (isinstance(keep, numbers.Real) and 0.0 <= keep <= 1.0):
@@ -270,9 +267,10 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         else:
             # rows that already walk a cycle per piece (hammesh's own output read back) are
             # kept: a construction would only add triangles (kept_cycle)
-            if he is None and tree == "quadtree" and cycle_runs(clean.triangles) is not None:
+            runs = kept_runs(clean.triangles) if tree == "quadtree" else None
+            if runs is not None and he is None:
                 he, is_con = match_half_edges(clean)  # (kept_cycle reads the input's pairing)
-            out = kept_cycle(clean, he) if tree == "quadtree" and he is not None else None
+            out = None if runs is None else kept_cycle(clean, he, runs)
             claim = None if out is None else he.twin  # (the same rows: the input's pairing)
             if out is None:
                 out, claim = sparse_hamiltonian(clean, he, is_con, keep=keep, beside_cover=beside_cover, tree=tree)

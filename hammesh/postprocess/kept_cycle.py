@@ -14,9 +14,11 @@ from __future__ import annotations
 import numpy as np
 
 from hammesh.halfedge import HalfEdges
-from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh
+from hammesh.errors import InvalidMeshError
+from hammesh.mesh import KIND_NAMES, HamiltonianMesh, Mesh, cycle_positions
+from hammesh.partition import cycle_runs, rows_share_an_edge
 
-__all__ = ["cycle_runs", "kept_cycle", "PREFIX_ROWS"]
+__all__ = ["kept_runs", "kept_cycle", "PREFIX_ROWS"]
 
 #: rows tested first: a mesh in another order (Triangle's) is told apart on them
 PREFIX_ROWS = 64
@@ -24,39 +26,28 @@ PREFIX_ROWS = 64
 _INPUT_KIND = KIND_NAMES.index("input")
 
 
-def _share_an_edge(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Whether rows ``a[i]`` and ``b[i]`` have exactly two corners in common."""
-    common = (a[:, :, None] == b[:, None, :]).any(axis=2).sum(axis=1)
-    return common == 2
+def kept_runs(triangles: np.ndarray) -> np.ndarray | None:
+    """Run lengths if the rows walk closed dual cycles of three rows or more, else None.
 
-
-def cycle_runs(triangles: np.ndarray) -> np.ndarray | None:
-    """Lengths of the runs of rows that walk closed dual cycles, or None.
-
-    The rows are cut where two consecutive rows share no edge; every run must close
-    (its last row shares an edge with its first) and have three rows at least.
-    Only the rows are read: whether the runs are the mesh's pieces is
-    :func:`kept_cycle`'s question.
+    ``hammesh.partition.cycle_runs`` cuts the rows into runs and checks that each
+    closes; a run of one or two rows is no cycle to keep (two rows meet across one edge
+    only; the construction handles such pieces). Only the rows are read: whether the
+    runs are the mesh's pieces is :func:`kept_cycle`'s question.
     """
     t = np.asarray(triangles)
-    m = len(t)
-    if m == 0 or t.ndim != 2 or t.shape[1] != 3:
+    if len(t) == 0 or t.ndim != 2 or t.shape[1] != 3:
         return None
-    head = min(m, PREFIX_ROWS)
-    if head > 1 and not _share_an_edge(t[: head - 1], t[1:head]).all():
-        return None  # (a cheap no for Triangle's order and most others)
-    steps = _share_an_edge(t[:-1], t[1:])
-    starts = np.concatenate([[0], np.flatnonzero(~steps) + 1])
-    ends = np.concatenate([starts[1:], [m]])
-    lengths = ends - starts
-    # (a dual cycle has three rows at least: two rows meet across one edge only, and a
-    # lone triangle has no cycle to keep; the construction handles such pieces)
-    if lengths.min() < 3 or not _share_an_edge(t[ends - 1], t[starts]).all():
+    head = t[:PREFIX_ROWS]
+    if not rows_share_an_edge(head[:-1], head[1:]).all():
+        return None  # (a cheap no for Triangle's order and most others, on every call)
+    try:
+        lengths = cycle_runs(t)
+    except InvalidMeshError:  # (a run that does not close)
         return None
-    return lengths.astype(np.int64)
+    return lengths if lengths.min() >= 3 else None
 
 
-def kept_cycle(clean: Mesh, he: HalfEdges) -> HamiltonianMesh | None:
+def kept_cycle(clean: Mesh, he: HalfEdges, lengths: np.ndarray | None = None) -> HamiltonianMesh | None:
     """``clean`` as a Hamiltonian mesh if its rows already walk one cycle per piece.
 
     Parameters
@@ -67,6 +58,8 @@ def kept_cycle(clean: Mesh, he: HalfEdges) -> HamiltonianMesh | None:
     he : HalfEdges
         Its half-edges: a run of rows is a piece when no interior edge joins it to
         another run (two cycles in one piece would need joining).
+    lengths : (c,) int64, optional
+        :func:`kept_runs` of its rows, if the caller has them.
 
     Returns
     -------
@@ -75,7 +68,8 @@ def kept_cycle(clean: Mesh, he: HalfEdges) -> HamiltonianMesh | None:
         ``"input"``, ``parent`` the identity; None when the rows are
         in no such order. Unverified (``hammesh.hamiltonian`` certifies it).
     """
-    lengths = cycle_runs(clean.triangles)
+    if lengths is None:
+        lengths = kept_runs(clean.triangles)
     if lengths is None:
         return None
     m = len(clean.triangles)
@@ -96,7 +90,7 @@ def kept_cycle(clean: Mesh, he: HalfEdges) -> HamiltonianMesh | None:
         segments=clean.segments,
         segment_markers=clean.segment_markers,
         components=lengths,
-        position=np.arange(m, dtype=np.int64) - np.repeat(np.cumsum(lengths) - lengths, lengths),
+        position=cycle_positions(lengths),
         parent=np.arange(m, dtype=np.int64),
         kind=np.full(m, _INPUT_KIND, dtype=np.int8),
         triangle_attributes=clean.triangle_attributes,

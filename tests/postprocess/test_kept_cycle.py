@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 import hammesh
 from hammesh.mesh import KIND_NAMES
-from hammesh.postprocess.kept_cycle import cycle_runs
+from hammesh.postprocess.kept_cycle import kept_runs
 from tests.helpers import assert_cycles, assert_tiling_and_bound, dual_pieces, plate, star_pslg
 
 
@@ -57,7 +57,7 @@ def test_two_cycles_in_one_piece_are_joined_not_kept():
     n = len(tri)
     for cut in range(3, n - 3):
         a, b = tri[:cut], tri[cut:]
-        runs = cycle_runs(np.vstack([a, b]))
+        runs = kept_runs(np.vstack([a, b]))
         if runs is not None and len(runs) == 2:
             break
     else:  # no such split of this cycle: reverse half of it instead (still not one cycle)
@@ -78,18 +78,18 @@ def test_incircle_and_fishbone_still_construct():
     assert not fish.report.get("kept_input_cycle")
 
 
-def test_cycle_runs_refuses_other_orders():
+def test_kept_runs_refuses_other_orders():
     h = hammesh.hamiltonian(plate(n_loops=0, pieces=1))
     tri = h.triangles
-    assert cycle_runs(tri).tolist() == [len(tri)]
+    assert kept_runs(tri).tolist() == [len(tri)]
     rng = np.random.default_rng(0)
-    assert cycle_runs(tri[rng.permutation(len(tri))]) is None
+    assert kept_runs(tri[rng.permutation(len(tri))]) is None
     swapped = tri.copy()
     swapped[[5, len(tri) // 2]] = swapped[[len(tri) // 2, 5]]
-    assert cycle_runs(swapped) is None
-    assert cycle_runs(np.zeros((0, 3), dtype=np.int64)) is None
-    assert cycle_runs(np.array([[3, 0, 1], [1, 2, 3]])) is None  # (two rows: one edge, no cycle)
-    assert cycle_runs(np.array([[0, 1, 2]])) is None
+    assert kept_runs(swapped) is None
+    assert kept_runs(np.zeros((0, 3), dtype=np.int64)) is None
+    assert kept_runs(np.array([[3, 0, 1], [1, 2, 3]])) is None  # (two rows: one edge, no cycle)
+    assert kept_runs(np.array([[0, 1, 2]])) is None
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
