@@ -37,9 +37,13 @@ def kept_runs(triangles: np.ndarray) -> np.ndarray | None:
     t = np.asarray(triangles)
     if len(t) == 0 or t.ndim != 2 or t.shape[1] != 3:
         return None
+    # a cheap no for Triangle's order and most others, on every call: the runs that end
+    # among the first rows must be closed cycles of three rows or more
     head = t[:PREFIX_ROWS]
-    if not rows_share_an_edge(head[:-1], head[1:]).all():
-        return None  # (a cheap no for Triangle's order and most others, on every call)
+    ends = np.flatnonzero(~rows_share_an_edge(head[:-1], head[1:]))
+    starts = np.r_[0, ends[:-1] + 1]
+    if (ends - starts < 2).any() or not rows_share_an_edge(head[ends], head[starts]).all():
+        return None
     try:
         lengths = cycle_runs(t)
     except InvalidMeshError:  # (a run that does not close)

@@ -100,3 +100,15 @@ def test_any_rotation_of_own_cycles_is_kept(dom, shift):
     rows = np.concatenate([s + np.roll(np.arange(c), shift % c) for s, c in zip(starts, h.components)])
     m = replace(as_input(h), triangles=h.triangles[rows], triangle_attributes=h.triangle_attributes[rows])
     assert_kept(m, hammesh.hamiltonian(m))
+
+
+def test_small_pieces_among_the_first_rows_are_kept():
+    # pieces of a few rows each: their runs end within the rows looked at first
+    h = hammesh.hamiltonian(plate(n_loops=0, pieces=3, max_area=0.3))
+    assert len(h.components) == 3 and h.n_triangles < 64
+    m = as_input(h)
+    assert kept_runs(m.triangles).tolist() == h.components.tolist()
+    assert_kept(m, hammesh.hamiltonian(m))
+    back = replace(m, triangles=m.triangles[::-1].copy(), triangle_attributes=m.triangle_attributes[::-1].copy())
+    assert kept_runs(back.triangles).tolist() == h.components[::-1].tolist()
+    assert_kept(back, hammesh.hamiltonian(back))
