@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         "timeout": args.timeout,
     }
     if not isinstance(source, Domain):
-        given = [k for k, v in options.items() if v not in (None, False, "triangle")]
+        given = ["--" + k.replace("_", "-") for k, v in options.items() if v not in (None, False, "triangle")]
         if given:
             raise InvalidOptionError(
                 f"{args.input} is already a mesh; meshing options ({', '.join(given)}) apply to .poly/.node domains"

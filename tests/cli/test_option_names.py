@@ -38,3 +38,13 @@ def test_library_keeps_its_parameter_names():
     assert info.value.option == "min_angle"
     again = pickle.loads(pickle.dumps(info.value))  # (as a Dask worker hands it back)
     assert type(again) is InvalidOptionError and again.option == "min_angle" and str(again) == str(info.value)
+
+
+def test_meshing_options_on_a_mesh_are_named_as_given(tmp_path, capsys):
+    out = tmp_path / "m.vtu"
+    assert main(["mesh", DEMO, "-q", "30", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["mesh", str(out), "-q", "30", "-a", "1", "-o", str(tmp_path / "o.vtu")]) == 2
+    err = capsys.readouterr().err
+    assert "(--min-angle, --max-area)" in err and "min_angle" not in err
+    assert not (tmp_path / "o.vtu").exists()
