@@ -1,6 +1,7 @@
 """Geomview OFF reading with faces of any size and the colours OFF files carry; vectorised.
 
-``[C][N][ST]OFF`` (optionally followed by the counts on the same line), ``<vertices>
+``[C][N][ST]OFF`` (optionally followed by the counts on the same line; a file without
+the keyword, starting with its counts, is read as plain ``OFF``), ``<vertices>
 <faces> <edges>``, then one ``x y z`` line per vertex and one ``k i0 .. ik-1`` line per
 face; ``#`` starts a comment.  Faces of 4 or more corners are split by
 :func:`hammesh.io.meshio_format.to_mesh`.  meshio 5 reads triangles only and drops
@@ -64,6 +65,9 @@ def read_off(path: str | Path) -> RawMesh:
         raise FileFormatError(f"{path}: not an OFF file (no OFF keyword)")
     head = data[lines.starts[0]:lines.ends[0]].split()
     keyword = _KEYWORD.fullmatch(head[0])
+    headless = keyword is None and 2 <= len(head) <= 3 and all(t.isdigit() for t in head)
+    if headless:  # Geomview: "recommended but optional, as many existing files lack this keyword"
+        keyword, head = _KEYWORD.fullmatch(b"OFF"), [b"OFF", *head]
     if keyword is None:
         if not head[0].upper().endswith(b"OFF"):
             raise FileFormatError(f"{path}: not an OFF file (no OFF keyword)")

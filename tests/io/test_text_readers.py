@@ -115,8 +115,10 @@ def off_texts(draw) -> tuple[str, np.ndarray, list[list[int]], np.ndarray | None
     faces = [draw(st.lists(st.integers(0, nv - 1), min_size=3, max_size=6)) for _ in range(nf)]
     colours = np.array(draw(st.lists(st.lists(st.integers(0, 255), min_size=3, max_size=3),
                                      min_size=nf, max_size=nf))) if draw(st.booleans()) else None
-    same_line = draw(st.booleans())
-    head = f"OFF {nv} {nf} 0\n" if same_line else f"OFF\n# a comment\n{nv} {nf} 0\n"
+    # the keyword on the counts' line, on its own line, or absent (Geomview: "recommended
+    # but optional, as many existing files lack this keyword")
+    head = draw(st.sampled_from([f"OFF {nv} {nf} 0\n", f"OFF\n# a comment\n{nv} {nf} 0\n", f"# a cube\n{nv} {nf} 0\n",
+                                 f"{nv} {nf}\n"]))
     body = "".join(" ".join(repr(float(x)) for x in p) + "\n" for p in points)
     for i, f in enumerate(faces):
         body += f"{len(f)} " + " ".join(map(str, f))
@@ -168,6 +170,7 @@ def test_coff_vertex_colours_and_face_colours_reach_the_output(tmp_path):
     (".off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n", r"m\.off:6: a face line is not 'k i0 .. ik-1'"),
     (".off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", r"declares 3 vertices and 2 faces"),
     (".off", "4OFF\n1 0 0\n0 0 0 0\n", r"4D and n-dimensional"),
+    (".off", "3 1 x\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", r"not an OFF file \(no OFF keyword\)"),
 ])
 def test_bad_records_are_named_with_their_line(tmp_path, suffix, text, message):
     path = tmp_path / f"m{suffix}"
