@@ -7,19 +7,21 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from hammesh import params
-from hammesh.errors import FileFormatError, InvalidMeshError, VerificationError
+from hammesh.errors import FileFormatError, InvalidMeshError, InvalidOptionError, VerificationError
 
 if TYPE_CHECKING:
     import numpy as np
 
     from hammesh.mesh import Mesh
 
-HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles"
+HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles (or paths: --path)"
 EXAMPLES = """examples:
   hammesh check plate.vtu
   hammesh check plate.obj --min-angle 14.9     # also require a minimum angle
   hammesh check bunny-cycle.ply                # a 3D surface from `hammesh surface`
-Each connected piece must be stored as one run of triangles that closes into a cycle,
+  hammesh check outline.vtu --path             # a path from `hammesh polygon`
+Each connected piece must be stored as one run of triangles that closes into a cycle
+(with --path: each triangle of the run shares an edge with the next),
 and every constrained edge stored in the file (line cells, or the .poly next to a .ele)
 must be an edge of the triangles; no two triangles of a planar mesh may overlap (exact
 test); exit 0 if verified, 3 if not, 2 if the file cannot
@@ -30,6 +32,9 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", type=Path, help="mesh file written by hammesh (any supported format)")
     p.add_argument("--min-angle", type=float, help="also require every angle >= this (degrees)")
     p.add_argument("--report", type=Path, help="write the check's figures as JSON")
+    p.add_argument("--path", action="store_true",
+                   help="require a Hamiltonian path per piece instead of a cycle (what `hammesh polygon` and, for "
+                        "some inputs, `hammesh points` write)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,14 +52,14 @@ def run(args: argparse.Namespace) -> int:
         raise FileFormatError(f"{args.mesh}: no such file")
     mesh = read_mesh(args.mesh, dim=None)
     try:  # (a readable file that is no valid mesh fails the check: exit 3, not 2)
-        runs, stats, triangles = _certify(mesh)
+        runs, stats, triangles = _certify(mesh, path=args.path)
     except InvalidMeshError as exc:
         raise VerificationError(str(exc)) from None
     except VerificationError as exc:
-        if _is_path(mesh.triangles):  # say what it is: `hammesh points`/`polygon` make paths
+        if not args.path and _is_path(mesh.triangles):  # say what it is: `hammesh points`/`polygon` make paths
             raise VerificationError(
                 f"{exc}; the triangles form a Hamiltonian path, not a cycle (it does not close), "
-                "as `hammesh points`/`polygon` make for some inputs") from None
+                "as `hammesh points`/`polygon` make for some inputs: check it with --path") from None
         raise
     if args.min_angle is not None and stats["min_angle_output_deg"] < args.min_angle:
         raise VerificationError(
@@ -64,18 +69,23 @@ def run(args: argparse.Namespace) -> int:
                   "repairs": collect_repairs(mesh)})
     if args.report is not None:
         write_report(stats, args.report)
+    kind = "path(s)" if args.path else "cycle(s)"
     print(
-        f"OK {args.mesh}: {len(triangles):,} triangles in {len(runs)} Hamiltonian cycle(s); "
+        f"OK {args.mesh}: {len(triangles):,} triangles in {len(runs)} Hamiltonian {kind}; "
         f"angles {stats['min_angle_output_deg']:.2f}..{stats['max_angle_output_deg']:.2f} deg"
     )
     return 0
 
 
-def _certify(mesh: Mesh) -> tuple[np.ndarray, dict, np.ndarray]:
-    """``(runs, figures, triangles)`` of the certificate of a read mesh (planar or 3D)."""
+def _certify(mesh: Mesh, path: bool = False) -> tuple[np.ndarray, dict, np.ndarray]:
+    """``(runs, figures, triangles)`` of the certificate of a read mesh (planar or 3D);
+    ``path``: each piece a Hamiltonian path (:mod:`hammesh.verify.path`), planar only."""
     from hammesh.planar_overlap import find_overlap
     from hammesh.verify.certificate import verify_stored_cycle_mesh
+    from hammesh.verify.path import verify_stored_path_mesh
 
+    if path and mesh.points.shape[1] == 3:
+        raise InvalidOptionError("--path checks planar meshes (`hammesh surface` writes cycles)")
     if mesh.points.shape[1] == 3:  # a 3D surface: the surface certificate (angles in 3D)
         from hammesh.surface.files import weld_surface
         from hammesh.verify.surface import infer_surface_runs, verify_surface
@@ -89,7 +99,8 @@ def _certify(mesh: Mesh) -> tuple[np.ndarray, dict, np.ndarray]:
     else:
         triangles = mesh.triangles
         # the half-edges are paired once (the certificate's kernel), for all three checks
-        runs, stats, twin = verify_stored_cycle_mesh(mesh.points, triangles, segments=mesh.segments)
+        verify_stored = verify_stored_path_mesh if path else verify_stored_cycle_mesh
+        runs, stats, twin = verify_stored(mesh.points, triangles, segments=mesh.segments)
         pair = find_overlap(mesh.points, triangles, twin=twin)  # no input to compare with: test the plane
         if pair is not None:
             raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
