@@ -58,6 +58,14 @@ Format notes (meshio 5.3):
   (``readline`` at end of file returns ``""`` and they skip it as a blank line), so
   those headers are checked first.  A binary PLY whose face list is cut short is read
   silently by meshio; the face count of the header is checked afterwards.
+* meshio's Gmsh reader trusts the file's counts: a flipped bit in a node tag makes it
+  allocate ``max tag + 1`` entries (16 GiB for a tag of 2^31), a string-tag count of
+  2^31 makes it read past the end of the file for minutes. ``.msh`` files are read in
+  a child process (:func:`hammesh.meshing.isolate.run_isolated`, the result's arrays
+  handed back without a copy) whose address space may grow by
+  :data:`GMSH_MEMORY_BASE` + :data:`GMSH_MEMORY_PER_BYTE` x the file's size, stopped
+  after :data:`GMSH_SECONDS_BASE` + :data:`GMSH_SECONDS_PER_MB` x its megabytes: such
+  a file is refused (``FileFormatError``) in seconds, within bounded memory.
 """
 
 from __future__ import annotations
@@ -66,6 +74,7 @@ import contextlib
 import io
 import os
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -440,6 +449,51 @@ def _first_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {detail}" if detail else type(exc).__name__
 
 
+#: What a ``.msh`` read may add to its child's address space: a base (meshio, numpy's
+#: work arrays) plus this many times the file's size (a binary node is 32 bytes on
+#: disk and ~40 in memory; tag maps of a densely numbered file add 8 per tag).
+GMSH_MEMORY_BASE = 1 << 30
+GMSH_MEMORY_PER_BYTE = 32
+#: Seconds a ``.msh`` read may take: a base plus this many per megabyte (meshio reads
+#: ~50 MB/s of binary Gmsh on this project's VM: a 40x margin).
+GMSH_SECONDS_BASE = 10.0
+GMSH_SECONDS_PER_MB = 0.5
+
+
+def _guarded_gmsh_read(path: Path, formats: tuple[str, ...]) -> Any:
+    """:func:`_meshio_read` of a ``.msh`` file in a child process with a memory and a time
+    budget scaled to the file's size (see the module docstring)."""
+    from hammesh.errors import MeshingError
+    from hammesh.meshing.isolate import run_isolated
+
+    size = path.stat().st_size
+    budget = GMSH_MEMORY_BASE + GMSH_MEMORY_PER_BYTE * size
+    seconds = GMSH_SECONDS_BASE + GMSH_SECONDS_PER_MB * size / 1e6
+    try:
+        return run_isolated(_budgeted_meshio_read, (path, formats, budget), name="meshio's Gmsh reader", timeout=round(seconds, 1))
+    except MeshingError as exc:  # (stopped, or out of the budget: the file's counts, not the machine)
+        raise FileFormatError(f"{path}: {exc} (corrupt counts?)") from None
+
+
+def _budgeted_meshio_read(path: Path, formats: tuple[str, ...], budget: int) -> Any:
+    """:func:`_meshio_read` with this process's address space capped at its size now plus
+    ``budget`` bytes (run in :func:`_guarded_gmsh_read`'s child: the cap dies with it)."""
+    import resource
+
+    with open("/proc/self/status") as f:
+        size = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    limit = size + budget
+    if soft != resource.RLIM_INFINITY:
+        limit = min(limit, soft)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+    try:
+        return _meshio_read(path, formats)
+    except MemoryError:
+        raise FileFormatError(f"{path}: sizes beyond {budget / 2**30:.1f} GiB for a file of "
+                              f"{path.stat().st_size:,} bytes (corrupt counts?)") from None
+
+
 def _meshio_read(path: Path, formats: tuple[str, ...]) -> Any:
     import meshio
 
@@ -503,6 +557,8 @@ def _read_raw(path: Path, suffix: str) -> Any:
                 f"{' and '.join(DATASETS)}; e.g. pyvista: "
                 "pv.read(path).cast_to_unstructured_grid().save('grid.vtu')"
             )
+    if suffix == ".msh" and sys.platform.startswith("linux"):  # (its counts: see the module docstring)
+        return _guarded_gmsh_read(path, _FORMATS[suffix][0])
     return _meshio_read(path, _FORMATS[suffix][0])
 
 
