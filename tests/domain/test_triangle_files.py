@@ -265,3 +265,16 @@ def test_write_poly_overwrites_and_rejects_non_domain(tmp_path):
     assert len(read_poly(path).vertices) == 3
     with pytest.raises(TypeError, match="needs a Domain"):
         write_poly({"vertices": [[0, 0]]}, path)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero") or not hasattr(os, "mkfifo"), reason="POSIX devices and FIFOs")
+@pytest.mark.parametrize("name", ["zero.poly", "zero.node", "fifo.poly"])
+def test_a_device_or_a_pipe_is_refused_not_read_without_end(tmp_path, name):
+    # (/dev/zero behind a .poly name was read until the memory cap: 2.5 GB, then killed)
+    path = tmp_path / name
+    if name.startswith("fifo"):
+        os.mkfifo(path)  # (reading would block forever: no writer)
+    else:
+        path.symlink_to("/dev/zero")
+    with pytest.raises(FileFormatError, match="not a regular file"):
+        read_domain(path)
