@@ -45,7 +45,7 @@ class _Lines:
     def __init__(self, path: Path):
         self.name = path.name
         if path.exists() and not path.is_file():  # (a device or a pipe: /dev/zero would be read without end)
-            raise FileFormatError(f"{path}: not a regular file")
+            raise FileFormatError(f"{path}: {'is a directory' if path.is_dir() else 'not a regular file'}")
         try:
             text = path.read_text(encoding="utf-8").removeprefix("\ufeff")  # (a BOM, as Windows editors save, is no data)
         except FileNotFoundError:
