@@ -56,6 +56,9 @@ class InputFacts:
     min_angle: float  # radians
     area: float
     boundary: np.ndarray  # sorted directed boundary edge keys, rows counter-clockwise
+    #: the input's rows as the caller gave them (int64; no copy where they were): only
+    #: read where the float areas disagree (:func:`hammesh.verify.certificate.area_rounding_bound`)
+    triangles: np.ndarray | None = None
 
 
 def _bad_input(msg: str) -> None:
@@ -138,4 +141,5 @@ def input_facts(mesh: Mesh) -> InputFacts:
         min_angle=float(scan.min_angle),
         area=float(scan.total_area),
         boundary=np.sort(boundary),
+        triangles=tri,
     )
