@@ -26,7 +26,7 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["check_resolution", "closest_pair_ulps", "snap_steiner_points", "MIN_FEATURE_ULPS"]
+__all__ = ["check_resolution", "closest_pair_ulps", "snap_steiner_points", "check_rounding", "MIN_FEATURE_ULPS"]
 
 #: Two distinct vertices closer than this many ulps of their coordinates are refused.
 MIN_FEATURE_ULPS = 4096.0
@@ -102,6 +102,45 @@ def check_resolution(vertices: np.ndarray) -> None:
             f"coordinates of {mag:.3g}: the incenters of a Hamiltonian mesh cannot be placed "
             f"that finely (its half-angle guarantee would fail); translate the domain nearer "
             f"the origin or scale it up (features of at least {MIN_FEATURE_ULPS:.0f} ulps)")
+
+
+def check_rounding(points: np.ndarray, triangles: np.ndarray, bound: float) -> None:
+    """Refuse an output whose rows below the angle ``bound`` (radians) are all explained
+    by float64 rounding: each misses it by less than rounding a corner by one ulp can
+    turn an angle (``2 x spacing(|coordinate|) / shortest side``).
+
+    Thm 2.4's bound is tight (an incenter triangle has exactly half an input angle), so
+    where the mesh's triangles are only ~1e6 ulps wide (a 1e-4 feature at offset 1e7:
+    coordinates in metres, features of a tenth of a millimetre) no float64 incenter keeps
+    it to the certificate's 1e-9, in any frame; the input's closest vertices
+    (:func:`check_resolution`) may still be far apart in ulps, because the refinement
+    makes the small triangles. Nothing is refused when a row misses by more (a fault of
+    the construction: the caller's ``VerificationError`` stands).
+
+    Raises
+    ------
+    InvalidDomainError
+        Naming the worst row, its size in ulps and the way out.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.asarray(triangles, dtype=np.int64)
+    angle = _min_angles(pts, tri)
+    low = np.flatnonzero(angle < bound)
+    if len(low) == 0:
+        return
+    corners = pts[tri[low]]  # (k, 3, 2)
+    sides = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).min(axis=1)
+    mag = np.abs(corners).max(axis=(1, 2))
+    turn = 2.0 * np.spacing(np.maximum(mag, np.finfo(float).tiny)) / np.maximum(sides, np.finfo(float).tiny)
+    if (bound - angle[low] > turn).any():
+        return
+    w = int(np.argmax(bound - angle[low]))
+    ulps = sides[w] / np.spacing(max(mag[w], np.finfo(float).tiny))
+    raise InvalidDomainError(
+        f"triangle {int(low[w])} misses the half-angle bound by {np.degrees(bound - angle[low[w]]):.2g} deg, "
+        f"which rounding to float64 explains: its shortest side is only {ulps:.3g} float64 steps (ulps) at "
+        f"coordinates of {mag[w]:.3g}, and Thm 2.4's bound is exact (an incenter halves an angle); use "
+        "mode='sparse', or translate the domain nearer the origin")
 
 
 def _min_angles(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from hammesh import pages, params, threads
-from hammesh.domain.resolution import check_resolution, snap_steiner_points
+from hammesh.domain.resolution import check_resolution, check_rounding, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidMeshError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
 from hammesh.planar_overlap import find_overlap
@@ -293,6 +293,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
             if stats is None:
                 raise InvalidDomainError(f"{limit} (the certificate found: {exc})") from exc
         else:
+            # (the input's vertices are far apart in ulps, the refinement's triangles may
+            # not be: say so where rounding explains every row below the bound)
+            check_rounding(out.points, out.triangles, 0.5 * ref_facts.min_angle)
             raise
     t2 = time.perf_counter()
     report = dict(out.report)
