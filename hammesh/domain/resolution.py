@@ -104,7 +104,7 @@ def check_resolution(vertices: np.ndarray) -> None:
             f"the origin or scale it up (features of at least {MIN_FEATURE_ULPS:.0f} ulps)")
 
 
-def check_rounding(points: np.ndarray, triangles: np.ndarray, bound: float) -> None:
+def check_rounding(points: np.ndarray, triangles: np.ndarray, bound: float, mode: str = "incircle") -> None:
     """Refuse an output whose rows below the angle ``bound`` (radians) are all explained
     by float64 rounding: each misses it by less than rounding a corner by one ulp can
     turn an angle (``2 x spacing(|coordinate|) / shortest side``).
@@ -136,11 +136,12 @@ def check_rounding(points: np.ndarray, triangles: np.ndarray, bound: float) -> N
         return
     w = int(np.argmax(bound - angle[low]))
     ulps = sides[w] / np.spacing(max(mag[w], np.finfo(float).tiny))
+    why, way = ((", and Thm 2.4's bound is exact (an incenter halves an angle)", "use mode='sparse', or ")
+                if mode == "incircle" else ("", ""))
     raise InvalidDomainError(
         f"triangle {int(low[w])} misses the half-angle bound by {np.degrees(bound - angle[low[w]]):.2g} deg, "
         f"which rounding to float64 explains: its shortest side is only {ulps:.3g} float64 steps (ulps) at "
-        f"coordinates of {mag[w]:.3g}, and Thm 2.4's bound is exact (an incenter halves an angle); use "
-        "mode='sparse', or translate the domain nearer the origin")
+        f"coordinates of {mag[w]:.3g}{why}; {way}translate the domain nearer the origin or scale it up")
 
 
 def _min_angles(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
