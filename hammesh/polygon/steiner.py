@@ -23,7 +23,9 @@ minimum strictly convex decomposition is used (it always has such a rooting).
 Hertel--Mehlhorn on request, and with holes (a minimum is NP-hard there): drop every
 diagonal of a triangulation whose removal keeps the two merged angles strictly convex,
 at most 4 times the minimum number of pieces; a few removal orders are tried and the
-fewest pieces kept.  Vertices with a straight angle are left out of the
+fewest pieces kept (with holes: where the construction from the first order fails its
+certificate, e.g. a vertex one ulp off a line whose rounded midpoints make a fan
+degenerate, up to ``HOLE_ORDERS`` other orders are tried).  Vertices with a straight angle are left out of the
 Hertel--Mehlhorn decomposition (they lie on piece sides).
 
 Complexity: ``O(n)`` after the decomposition; the minimum one costs ``O(n^2)`` for the
@@ -37,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammesh.errors import InvalidOptionError
+from hammesh.errors import InvalidOptionError, VerificationError
 from hammesh.polygon._polygon import Polygon, as_polygon
 from hammesh.polygon.min_convex import minimum_convex_faces
 from hammesh.polygon.verify import verify_polygon_triangulation
@@ -147,10 +149,18 @@ def steiner_hamiltonian_result(points, kind: str = "cycle", *, holes=None,
     if kind not in KINDS:
         raise InvalidOptionError(f"kind must be one of {', '.join(map(repr, KINDS))}, got {kind!r}")
     if holes is not None and len(holes):
-        res = _with_holes(points, holes, kind, decomposition)
         rings = [np.asarray(points, dtype=np.float64)] + [np.asarray(h, dtype=np.float64) for h in holes]
-        verify_polygon_triangulation(rings, res.points, res.triangles, kind)
-        return res
+        for attempt in range(HOLE_ORDERS):
+            res = _with_holes(points, holes, kind, decomposition, attempt)
+            try:
+                verify_polygon_triangulation(rings, res.points, res.triangles, kind)
+                return res
+            except VerificationError:
+                # a vertex one ulp off a line (an outline vertex under a hole's side) can
+                # leave a fan of rounded midpoints degenerate; another removal order of
+                # the diagonals gives other pieces (nothing unverified is returned)
+                if attempt == HOLE_ORDERS - 1:
+                    raise
     poly = as_polygon(points)
     pieces, diagonals, method = _decompose(poly, _check_decomposition(poly, decomposition))
     pts, tri = _construct(poly, pieces, diagonals, kind)
@@ -163,7 +173,12 @@ def steiner_hamiltonian_result(points, kind: str = "cycle", *, holes=None,
                          method=method, pieces=[poly.order[np.asarray(p, dtype=np.int64)] for p in pieces])
 
 
-def _with_holes(points, holes, kind, decomposition) -> SteinerResult:
+#: Removal orders of Hertel--Mehlhorn's diagonals tried with holes before a failed
+#: certificate stands: the triangulation's order, reversed, then seeded shuffles.
+HOLE_ORDERS = 6
+
+
+def _with_holes(points, holes, kind, decomposition, attempt: int = 0) -> SteinerResult:
     from hammesh.polygon._holes import as_domain, triangulate_domain
 
     if decomposition not in DECOMPOSITIONS:
@@ -177,7 +192,12 @@ def _with_holes(points, holes, kind, decomposition) -> SteinerResult:
     nb = triangle_neighbors(tri)
     t_idx, k_idx = np.nonzero(nb >= 0)
     keep = t_idx < nb[t_idx, k_idx]
-    faces = _hertel_mehlhorn(P, tri, nb, t_idx[keep], k_idx[keep])
+    t_idx, k_idx = t_idx[keep], k_idx[keep]
+    if attempt:  # (see HOLE_ORDERS)
+        order = (np.arange(len(t_idx))[::-1] if attempt == 1
+                 else np.random.default_rng(attempt).permutation(len(t_idx)))
+        t_idx, k_idx = t_idx[order], k_idx[order]
+    faces = _hertel_mehlhorn(P, tri, nb, t_idx, k_idx)
     boundary = set(zip(range(dom.n), dom.nxt.tolist()))
     diagonals = {}
     for f, face in enumerate(faces):

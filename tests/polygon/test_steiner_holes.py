@@ -58,3 +58,15 @@ def test_invalid_holes():
         polygon.steiner_hamiltonian(SQUARE, holes=[[[1, 1], [2, 2], [3, 3]]])
     with pytest.raises(InvalidOptionError, match="not available with holes"):
         polygon.steiner_hamiltonian(SQUARE, holes=HOLES, decomposition="optimal")
+
+
+@pytest.mark.parametrize("x0", [1.0000000000000002, 2.0000000000000004])
+@pytest.mark.parametrize("kind", ["path", "cycle"])
+def test_an_outline_vertex_one_ulp_off_a_holes_side(x0, kind):
+    # (session 17's tester: the first removal order left a fan of rounded midpoints
+    # degenerate, exit 3; another order of Hertel-Mehlhorn's diagonals verifies)
+    outer = np.array([[x0, 0], [4, 0], [4, 3], [0, 3], [0, 0]])
+    hole = np.array([[1, 1], [2, 1], [2, 2], [1, 2]], float)
+    res = polygon.steiner_hamiltonian_result(outer, kind, holes=[hole])  # (verified inside, else raises)
+    assert res.n_steiner <= len(res.pieces) - 1  # (Thm 2.3: k - 1 for a cycle, a path at most that)
+    assert len(res.triangles) >= len(outer) + len(hole)
