@@ -20,6 +20,7 @@ EXAMPLES = """examples:
   hammesh check plate.obj --min-angle 14.9     # also require a minimum angle
   hammesh check bunny-cycle.ply                # a 3D surface from `hammesh surface`
   hammesh check outline.vtu --path             # a path from `hammesh polygon`
+  hammesh check folded.vtu --surface           # a flat surface (all z equal) from `hammesh surface`
 Each connected piece must be stored as one run of triangles that closes into a cycle
 (with --path: each triangle of the run shares an edge with the next),
 and every constrained edge stored in the file (line cells, or the .poly next to a .ele)
@@ -32,6 +33,9 @@ def add_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", type=Path, help="mesh file written by hammesh (any supported format)")
     p.add_argument("--min-angle", type=float, help="also require every angle >= this (degrees)")
     p.add_argument("--report", type=Path, help="write the check's figures as JSON")
+    p.add_argument("--surface", action="store_true",
+                   help="check as a 3D surface (the surface certificate) even where every point has the same z: "
+                        "a flat surface from `hammesh surface` may fold over itself")
     p.add_argument("--path", action="store_true",
                    help="require a Hamiltonian path per piece instead of a cycle (what `hammesh polygon` and, for "
                         "some inputs, `hammesh points` write)")
@@ -50,12 +54,17 @@ def run(args: argparse.Namespace) -> int:
     check_outputs({"--report": args.report}, [args.mesh])
     if not args.mesh.exists():
         raise FileFormatError(f"{args.mesh}: no such file")
-    mesh = read_mesh(args.mesh, dim=None)
+    if args.surface and args.path:
+        raise InvalidOptionError("--surface and --path exclude each other (`hammesh surface` writes cycles)")
+    mesh = read_mesh(args.mesh, dim=3 if args.surface else None)
     try:  # (a readable file that is no valid mesh fails the check: exit 3, not 2)
         runs, stats, triangles = _certify(mesh, path=args.path)
     except InvalidMeshError as exc:
         raise VerificationError(str(exc)) from None
     except VerificationError as exc:
+        if mesh.points.shape[1] == 2 and ("inverted" in str(exc) or "overlap" in str(exc)):
+            raise VerificationError(f"{exc} (a flat surface from `hammesh surface` may fold over itself: check it "
+                                    "with --surface)") from None
         if not args.path and _is_path(mesh.triangles):  # say what it is: `hammesh points`/`polygon` make paths
             raise VerificationError(
                 f"{exc}; the triangles form a Hamiltonian path, not a cycle (it does not close), "

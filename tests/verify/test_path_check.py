@@ -15,10 +15,11 @@ from hypothesis import strategies as st
 from hammesh.errors import VerificationError
 from hammesh.polygon import steiner_hamiltonian
 from hammesh.verify.path import verify_stored_path_mesh
-from tests.polygon.shapes import comb, star
+from tests.polygon.shapes import comb, dented
 
 polygons = st.one_of(
-    st.builds(star, st.integers(5, 30), st.integers(0, 10_000)),
+    st.builds(lambda n, r, seed: dented(n, min(r, n // 4), seed), st.integers(6, 30), st.integers(0, 6),
+              st.integers(0, 10_000)),
     st.builds(comb, st.integers(1, 6)),
 )
 
@@ -95,3 +96,27 @@ def test_cli_check_path(tmp_path):
     assert cycle.returncode == 3 and "--path" in cycle.stderr
     path = subprocess.run(run + ["check", str(out), "--path"], capture_output=True, text=True)
     assert path.returncode == 0 and "Hamiltonian path(s)" in path.stdout
+
+
+def test_cli_check_surface_of_a_folded_flat_surface(tmp_path):
+    # a flat (z = 0) surface folded over itself along x = 1: `hammesh surface` verifies it;
+    # plain check reads a constant-z file as planar (inverted rows) and says to use --surface
+    import meshio
+
+    p = np.array([[x, y, 0.0] for y in range(3) for x in range(3)], float)
+    t = []
+    for j in range(2):
+        for i in range(2):
+            a = j * 3 + i
+            t += [[a, a + 1, a + 4], [a, a + 4, a + 3]]
+    p[[2, 5, 8], 0] = 0.5
+    src, out = tmp_path / "fold.obj", tmp_path / "fold_s.vtu"
+    meshio.Mesh(p, [("triangle", np.array(t))]).write(src)
+    run = [sys.executable, "-m", "hammesh"]
+    assert subprocess.run(run + ["surface", str(src), "-o", str(out)], capture_output=True).returncode == 0
+    plain = subprocess.run(run + ["check", str(out)], capture_output=True, text=True)
+    assert plain.returncode == 3 and "--surface" in plain.stderr
+    surface = subprocess.run(run + ["check", str(out), "--surface"], capture_output=True, text=True)
+    assert surface.returncode == 0, surface.stderr
+    both = subprocess.run(run + ["check", str(out), "--surface", "--path"], capture_output=True, text=True)
+    assert both.returncode == 2 and len(both.stderr.strip().splitlines()) == 1
