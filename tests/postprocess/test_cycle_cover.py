@@ -588,7 +588,8 @@ def test_chain_phase_pairs_what_unbounded_searches_pair(name: str) -> None:
     order = np.random.default_rng(5).permutation(np.flatnonzero(active))
     work = (np.empty(m, np.int64), np.empty(m, np.int64), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     queue = np.empty(m + 16, np.int64)
-    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, queue, mate)
+    s = ck._greedy_matching(nb, active, m, no_edge_rule(), np.full(3 * m, EDGE_NOT_GOOD, np.int8), order, 0, *work,
+                            queue, mate)
     frees = np.flatnonzero(active & (mate < 0))
     assert len(frees) >= 2
     one = mate.copy()
@@ -781,7 +782,8 @@ def _shuffled_greedy(seed: int, n: int, keep: float, dtype):
     mate = np.full(m, -1, dtype)
     work = (np.empty(m, dtype), np.empty(m, dtype), np.full(m, -1, np.int8), np.zeros(m, np.int64))
     order = rng.permutation(np.flatnonzero(active)).astype(dtype)
-    s = ck._greedy_matching(nb, active, m, np.zeros((m, 3), np.bool_), order, 0, *work, np.empty(m + 16, dtype), mate)
+    s = ck._greedy_matching(nb, active, m, no_edge_rule(), np.full(3 * m, EDGE_NOT_GOOD, np.int8), order, 0, *work,
+                            np.empty(m + 16, dtype), mate)
     return pts, tri, nb, alive, active, mate, work, s
 
 
