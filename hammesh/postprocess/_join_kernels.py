@@ -943,6 +943,9 @@ def good_half_edges_into(pts, tri, twin, pinned, amin, keep, hi, swaps, edge_spl
     Sets ``good[h]`` and ``good[twin[h]]`` (both halves; ``good`` starts all False): no
     list of inner edges, no scatter afterwards. Threads may share ``good``: each edge
     is judged (and its two bytes written) by the one thread holding its lower half.
+    Sparse mode's cover judges only the edges its matching asks about, by the same
+    test (``cycle_cover(..., judge=True)``); this whole-mesh pass serves the
+    re-colouring of small meshes, which reads every edge.
     """
     cos_hi = math.cos(hi)
     for h in range(lo, hi_h):
