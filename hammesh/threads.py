@@ -80,9 +80,10 @@ def _shared_pool() -> ThreadPoolExecutor:
 
 
 def _forget_pool() -> None:  # (a forked child has none of its parent's threads)
-    global _pool, _later
+    global _pool, _later, _later_lock
     _pool = None
-    _later = None
+    _later = None  # (work its parent had queued is the parent's)
+    _later_lock = threading.Lock()  # (another thread may have held it at the fork)
 
 
 os.register_at_fork(after_in_child=_forget_pool)

@@ -181,3 +181,26 @@ def test_later_runs_in_order_off_the_caller_or_inline_on_one_core() -> None:
         assert seen[-1] == ("inline", me)
     finally:
         threads.limit(old)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="fork is POSIX's")
+def test_later_in_a_forked_child_runs_on_its_own_thread() -> None:
+    # the parent's background thread is not in a forked child: the child starts its own
+    import multiprocessing as mp
+
+    threads.later(lambda: None)  # (the parent's thread exists)
+    threads.wait_later()
+    ctx = mp.get_context("fork")
+    out = ctx.Queue()
+
+    def child(q) -> None:
+        seen = []
+        threads.later(seen.append, 1)
+        threads.wait_later()
+        q.put(seen)
+
+    p = ctx.Process(target=child, args=(out,))
+    p.start()
+    got = out.get(timeout=30)
+    p.join(30)
+    assert p.exitcode == 0 and got == [1]
