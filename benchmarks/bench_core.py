@@ -45,7 +45,10 @@ per step, the main thread's CPU outside the threaded passes plus each pass's lar
 call's thread CPU (``hammesh.threads.run_all``), plus the time the main thread waits on
 the cover swap tests' other thread beyond its own share (``sparse._SwapTests``): about
 what the call's wall time is on two free cores. Compare two trees by running it in
-each, alternating.
+each, alternating. Beside it (session 17) each sparse step's process CPU (the report's
+``step_cpu_seconds``) and ``idle`` = 2 x critical - CPU: the other core's idle time in
+that step on two free cores (negative: more than two threads' work, e.g. the
+certificate's look at the input beside the improvement).
 
 **Thin strips** (session 16; one triangle wide, the dual a path, every triangle
 uncovered): sparse against incircle, process CPU per size, in one process:
@@ -299,6 +302,7 @@ def _critical_child(dom, min_angle: float, max_area: float, mode: str) -> dict:
     t, c = time.perf_counter() - t, _cpu() - c
     steps = {b[0]: b[1] - a[1] for a, b in zip(marks, marks[1:]) if b[0] != "<end>"}
     return {"wall": t, "cpu": c, "critical": marks[-1][1] - marks[0][1], "steps": steps,
+            "step_cpu": dict(h.report.get("step_cpu_seconds", {})),
             "verified": bool(h.report["verified"]), "load": os.getloadavg()[0]}
 
 
@@ -311,9 +315,18 @@ def critical_paths(args: argparse.Namespace) -> None:
         runs.append(r)
         print(f"  critical path {r['critical']:.3f} s, wall {r['wall']:.3f} s, CPU {r['cpu']:.3f} s, "
               f"load {r['load']:.1f}", flush=True)
-    print(f"first call, mode={args.mode}: critical-path estimate per step, median of {len(runs)} (CPU s)")
+    print(f"first call, mode={args.mode}: critical-path estimate per step, median of {len(runs)} (CPU s); "
+          f"the step's process CPU (sparse steps) and the other core's idle time there (2 x critical - CPU)")
     for k in runs[0]["steps"]:
-        print(f"  {k:<26}{statistics.median(r['steps'].get(k, 0.0) for r in runs):8.3f}")
+        crit = statistics.median(r["steps"].get(k, 0.0) for r in runs)
+        line = f"  {k:<26}{crit:8.3f}"
+        # (input_angles' critical path holds the renumbering, whose CPU the report counts
+        # with the mapping back under "locality": no CPU column there)
+        if k != "input_angles" and all(k in r.get("step_cpu", {}) for r in runs):
+            cpu = statistics.median(r["step_cpu"][k] for r in runs)
+            idle = statistics.median(2 * r["steps"].get(k, 0.0) - r["step_cpu"][k] for r in runs)
+            line += f"   CPU {cpu:6.3f}  idle {idle:6.3f}"
+        print(line)
     for k in ("critical", "wall", "cpu"):
         v = [r[k] for r in runs]
         print(f"  {'whole call: ' + k:<26}{statistics.median(v):8.3f}  ({min(v):.3f}-{max(v):.3f})")

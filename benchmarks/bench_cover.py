@@ -22,7 +22,7 @@ largest cycle's share (a winding cover: issue 14).
 
 ``--fresh N``: the cover's first call in a fresh process, as sparse mode makes it: the
 sparse ``hamiltonian()`` of the plate is run once with ``cycle_cover``'s arguments
-captured (rows renumbered by ``renumber_local``, the judged ``good`` edges) into a
+captured (rows renumbered by ``renumber_local``, the rule its matching judges edges by) into a
 temporary file; N children each time raw Triangle's first call on the plate (the
 peer, in that process), load the cover's kernels on a small mesh (as ``quality_mesh``
 does while Triangle runs), then time the first and a second ``cycle_cover`` on those
@@ -176,7 +176,7 @@ sys.path.insert(0, sys.argv[3])
 from bench_cover import plate_domain
 from hammesh.halfedge import half_edges
 from hammesh.meshing import MeshOptions, triangle_switches
-from hammesh.postprocess.cycle_cover import cycle_cover
+from hammesh.postprocess.cycle_cover import JoinRule, cycle_cover
 def cpu():
     r = resource.getrusage(resource.RUSAGE_SELF)
     return r.ru_utime + r.ru_stime
@@ -190,13 +190,15 @@ del raw
 g = np.mgrid[0:60, 0:60].reshape(2, -1).T.astype(float)
 p = g + 0.01 * np.random.default_rng(1).random(g.shape)
 t = Delaunay(p).simplices.astype(np.int64)
-cycle_cover(t, half_edges(t, len(p)).twin, points=p, online=256, good=np.zeros(3 * len(t), bool))  # kernels loaded
+small = JoinRule(np.full(len(t), 0.5), 0.9, 2.2, np.zeros(3 * len(t), bool))
+cycle_cover(t, half_edges(t, len(p)).twin, points=p, online=256, rule=small, judge=True)  # kernels loaded
 z = np.load(sys.argv[1])
-tri, tw, good, pts = z["tri"], z["tw"], z["good"], z["points"]
+tri, tw, pts = z["tri"], z["tw"], z["points"]
+rule = JoinRule(z["amin"], float(z["keep"]), float(z["hi"]), z["pinned"], bool(z["swaps"]), bool(z["edge_splits"]))
 for call in ("first", "second"):
     clock = {}
     w, c = time.perf_counter(), cpu()
-    cov = cycle_cover(tri, tw, good=good, points=pts, local=bool(z["local"]), clock=clock)
+    cov = cycle_cover(tri, tw, rule=rule, judge=bool(z["judge"]), points=pts, local=bool(z["local"]), clock=clock)
     w, c = time.perf_counter() - w, cpu() - c
     steps = " ".join(f"{k}={v[1]:.3f}" for k, v in clock.items())
     print(f"FRESH {call} {w:.4f} {c:.4f} cycles {cov.n_cycles} uncovered {cov.n_uncovered}; CPU per step {steps}")
@@ -220,7 +222,9 @@ def fresh_table(target: int, runs: int) -> None:
         real = sparse.cycle_cover
 
         def capture(tri, tw, **kw):
-            np.savez(path, tri=tri, tw=tw, good=kw["good"], points=kw["points"], local=kw["local"])
+            r = kw["rule"]
+            np.savez(path, tri=tri, tw=tw, points=kw["points"], local=kw["local"], judge=kw["judge"], amin=r.amin,
+                     keep=r.keep, hi=r.hi, pinned=r.pinned, swaps=r.swaps, edge_splits=r.edge_splits)
             return real(tri, tw, **kw)
 
         sparse.cycle_cover = capture
@@ -396,6 +400,7 @@ def phases_table(target: int, repeat: int) -> None:
     import hammesh.postprocess.cycle_cover as cc
     import hammesh.postprocess.sparse as sparse
     from hammesh.postprocess import _cover_kernels as ck
+    from hammesh.postprocess import _join_kernels as J
 
     mesh, _ = plate_mesh(target)
     # sparse mode's arguments to the cover: the call a wrapping mock records
@@ -403,9 +408,9 @@ def phases_table(target: int, repeat: int) -> None:
         hammesh.hamiltonian(mesh, mode="sparse")
     (tri, tw), kw = spy.call_args
     tri, pts = np.ascontiguousarray(tri, np.int64), kw["points"]
-    got = {"good": kw["good"]}
     m = len(tri)
-    g = np.ascontiguousarray(got["good"], np.bool_).reshape(m, 3)
+    r = kw["rule"]  # (sparse mode judges the edges as the greedy asks: ``cycle_cover(..., judge=True)``)
+    e_rule = J.edge_rule(pts, tri, tw, r.pinned, r.amin, r.keep, r.hi, r.swaps, r.edge_splits)
     times: dict = {}
     frees_left: dict = {}
 
@@ -428,6 +433,7 @@ def phases_table(target: int, repeat: int) -> None:
         side[cc._quadrant_cut(pts, tri, m):] = 1
         mate = np.full(m, -1, np.int32)
         work = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+        memo = np.zeros(3 * m, np.int8)  # (no edge judged yet)
         s = 0
         for half in (0, 1):
             t0 = time.perf_counter(), time.thread_time()
@@ -437,11 +443,12 @@ def phases_table(target: int, repeat: int) -> None:
             t0 = lap(f"half {half}: order", t0)
             queue = np.empty(cc.ONLINE_BUDGET + 2016, np.int32)
             # (each half's stamps start at 0, as in match_half: the halves touch disjoint triangles)
-            sh = ck._greedy_matching(nb, act, m, g, order, cc.ONLINE_BUDGET, *work, queue, mate)
+            sh = ck._greedy_matching(nb, act, m, e_rule, memo, order, cc.ONLINE_BUDGET, *work, queue, mate)
             t0 = lap(f"half {half}: greedy+online", t0, n_free(act, mate))
             sh = ck._augment_every_free(nb, act, act, mate, *work, sh, queue, 2000)
             lap(f"half {half}: searches", t0, n_free(act, mate))
             s = max(s, sh)
+        judged = int(np.count_nonzero(memo[tw >= 0])), int(np.count_nonzero(tw >= 0))
         t0 = time.perf_counter(), time.thread_time()
         frees, s = ck.search_frees(nb, active, alive, mate, *work, s, 2000)
         t0 = lap("search_frees", t0, n_free(active, mate))
@@ -480,6 +487,8 @@ def phases_table(target: int, repeat: int) -> None:
         lap("chain", t0, n_free(active, mate))
     print(f"m = {m:,}; median of {repeat} rounds, calling thread (drop, two parts: the main thread's part; "
           f"'critical': its work outside the two-thread passes plus each pass's slower thread, in CPU)")
+    print(f"  inner half-edges the greedy judged: {judged[0]:,} of {judged[1]:,} "
+          f"({100 * judged[0] / max(judged[1], 1):.1f} %)")
     for name, v in times.items():
         v = np.array(v)
         if name == "drop, parts A / B":  # (the two parts' thread CPU)

@@ -44,6 +44,8 @@ import weakref
 
 import numpy as np
 
+from hammesh import threads
+
 __all__ = ["fresh", "advise", "reserve", "release", "reserved", "trim", "MADV_NOHUGEPAGE", "MADV_POPULATE_WRITE",
            "RESERVE_SECONDS", "RESERVE_MIN_ARRAY"]
 
@@ -192,7 +194,9 @@ def _from_reserve(nbytes: int) -> np.ndarray | None:
         return None
     length = -(-nbytes // _PAGE) * _PAGE
     buf = (ctypes.c_char * length).from_address(addr)
-    weakref.finalize(buf, _libc.munmap, addr, length)  # the array's memory dies with it
+    # the array's memory dies with it, given back on the background thread (``threads.later``:
+    # off the caller's path)
+    weakref.finalize(buf, threads.later, _libc.munmap, addr, length)
     return np.frombuffer(buf, np.uint8, nbytes)
 
 

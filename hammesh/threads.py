@@ -16,11 +16,14 @@ cluster started elsewhere: ``HAMMESH_THREADS=1 dask worker ... --nworkers K``).
 from __future__ import annotations
 
 import os
+import queue
+import sys
 import threading
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
 from typing import Any, Callable
 
-__all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "THREAD_MIN_ROWS"]
+__all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "THREAD_MIN_ROWS", "later",
+           "wait_later"]
 
 #: Rows per thread below which a row pass runs in one call (tests lower it to exercise
 #: the threaded paths on small meshes).
@@ -77,8 +80,10 @@ def _shared_pool() -> ThreadPoolExecutor:
 
 
 def _forget_pool() -> None:  # (a forked child has none of its parent's threads)
-    global _pool
+    global _pool, _later, _later_lock
     _pool = None
+    _later = None  # (work its parent had queued is the parent's)
+    _later_lock = threading.Lock()  # (another thread may have held it at the fork)
 
 
 os.register_at_fork(after_in_child=_forget_pool)
@@ -133,3 +138,58 @@ def side_executor() -> Executor:
     ``isinstance(side, InlineExecutor)`` and run serially instead.
     """
     return ThreadPoolExecutor(1) if cores() > 1 else InlineExecutor()
+
+
+_later: queue.SimpleQueue | None = None
+_later_lock = threading.Lock()
+
+
+def later(fn: Callable[..., Any], *args: Any) -> None:
+    """Run ``fn(*args)`` on the process's background thread, after what was handed to
+    it before, or now where this process may use one thread (:func:`cores` is 1) or
+    is shutting down.
+
+    For work nobody waits for, whose cost should leave the caller's path: a dead
+    array's pages given back to the system (``hammesh.pages``: at 1.5 M triangles a
+    sparse ``hamiltonian()`` unmaps ~540 MB in ~44 pieces as its arrays die, 36 ms of
+    the main thread's CPU, ~0.1 s of its wall time under load; docs/sparse.md,
+    session 17). The background thread is started when first needed (a daemon: work
+    still queued at exit is dropped; a forked child starts its own). Errors are not
+    raised (there is no caller to raise them to).
+    """
+    global _later
+    if cores() < 2 or sys.is_finalizing():
+        fn(*args)
+        return
+    with _later_lock:
+        q = _later
+        if q is None:
+            q = queue.SimpleQueue()
+            try:
+                threading.Thread(target=_run_later, args=(q,), name="hammesh-later", daemon=True).start()
+            except RuntimeError:  # (no new threads: the interpreter is going down)
+                q = None
+            _later = q
+    if q is None:
+        fn(*args)
+    else:
+        q.put((fn, args))
+
+
+def wait_later() -> None:
+    """Return once everything handed to :func:`later` so far has run."""
+    with _later_lock:
+        q = _later
+    if q is not None:
+        done = threading.Event()
+        q.put((done.set, ()))
+        done.wait()
+
+
+def _run_later(q: queue.SimpleQueue) -> None:
+    while True:
+        fn, args = q.get()
+        try:
+            fn(*args)
+        except Exception:  # noqa: BLE001  (no caller to tell; the next work still runs)
+            pass

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hammesh.postprocess._join_kernels import EDGE_GOOD, EDGE_NOT_GOOD, EDGE_UNKNOWN, edge_meets_rule
 from hammesh.postprocess._thm24_kernels import edge_class as _edge_class
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
@@ -452,13 +453,20 @@ def _bfs_order(nb, side, half):
 
 
 @njit(cache=True, nogil=True)
-def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stamp, queue, mate):
+def _greedy_matching(nb, active, m, rule, good, order, online, parent, fa, label, stamp, queue, mate):
     """Karp-Sipser: match the degree-3 triangles among themselves, forced pairs first.
 
-    Where a triangle has a choice, its partner is one across a ``good[t, k]`` edge if
-    any (matched edges are where the cover's cycles can later be joined: sparse mode
-    marks the edges whose join keeps the local quality rule), then the one with the
-    fewest free candidates of its own.
+    Where a triangle has a choice, its partner is one across a good edge if any
+    (matched edges are where the cover's cycles can later be joined: sparse mode
+    prefers the edges whose join keeps the local quality rule), then the one with the
+    fewest free candidates of its own. ``good`` (int8, one entry per half-edge:
+    ``_join_kernels.EDGE_UNKNOWN``, ``EDGE_NOT_GOOD``, ``EDGE_GOOD``) holds what is
+    known; an edge not judged yet is judged by ``rule`` (``_join_kernels.EdgeRule``:
+    ``edge_meets_rule`` of its lower half-edge, as ``good_half_edges_into`` judges it)
+    when first asked, and both halves noted. Only the edges between a triangle and two
+    or three free neighbours are asked (with one the partner is forced): about a
+    third of a big mesh's edges (docs/sparse.md, session 17). Two halves may share
+    ``good``: an edge across the split is never asked.
 
     Free choices are taken in ``order`` (breadth-first, ``_bfs_order``): the greedy
     then sweeps a front, and a triangle it strands (no free neighbour left) has free
@@ -471,6 +479,10 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
     next lca stamp.
     """
     n = order.shape[0]
+    # (the rule's arrays taken out once: ``edge_meets_rule`` called from this loop, not
+    # through a helper taking the rule, which doubled the judging's cost)
+    pts, tri, twin, pinned, amin = rule.pts, rule.tri, rule.twin, rule.pinned, rule.amin
+    keep, cos_hi, swaps, edge_splits = rule.keep, rule.cos_hi, rule.swaps, rule.edge_splits
     stack = np.empty(4 * n + 16, np.int32)  # a triangle is pushed once, then once per neighbour matched
     touched = np.empty(online + 16, np.int32)
     nolog = np.empty((0, 4), np.int64)
@@ -507,10 +519,28 @@ def _greedy_matching(nb, active, m, good, order, online, parent, fa, label, stam
         # partner: a good edge first, then the fewest free candidates of its own
         best = -1
         best_good = False
+        n_free = 0
         for k in range(3):
             u = nb[t, k]
             if u >= 0 and active[u] and mate[u] < 0:
-                gk = good[t, k]
+                n_free += 1
+        for k in range(3):
+            u = nb[t, k]
+            if u >= 0 and active[u] and mate[u] < 0:
+                gk = False
+                if n_free > 1:
+                    h = 3 * t + k
+                    v = good[h]
+                    if v == EDGE_UNKNOWN:
+                        g = twin[h]
+                        v = EDGE_NOT_GOOD
+                        if g >= 0 and edge_meets_rule(pts, tri, twin, pinned, min(h, g), amin, keep, cos_hi, swaps,
+                                                      edge_splits):
+                            v = EDGE_GOOD
+                        good[h] = v
+                        if g >= 0:
+                            good[g] = v
+                    gk = v == EDGE_GOOD
                 if best < 0 or (gk and not best_good) or (gk == best_good and hdeg[u] < hdeg[best]):
                     best = u
                     best_good = gk
@@ -987,7 +1017,7 @@ def neighbors_into(twin, nb, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, label, stamp):
+def match_half(nb, active, side, half, rule, good, online, budget, mate, parent, fa, label, stamp):
     """Match the degree-3 triangles of one half (``side[t] == half``) among themselves.
 
     The greedy (``_greedy_matching``) sweeps the half breadth-first (with ``online``
@@ -1021,7 +1051,7 @@ def match_half(nb, active, side, half, good, online, budget, mate, parent, fa, l
             if act[t]:
                 order[n] = t
                 n += 1
-    s = _greedy_matching(nb, act, m, good, order, online, parent, fa, label, stamp, queue, mate)
+    s = _greedy_matching(nb, act, m, rule, good, order, online, parent, fa, label, stamp, queue, mate)
     touched = np.empty(budget + 8, np.int32)
     nolog = np.empty((0, 4), np.int64)
     nonlog = np.zeros(1, np.int64)
@@ -1050,7 +1080,7 @@ def _augment_every_free(nb, active, alive, mate, parent, fa, label, stamp, s, qu
 
 
 @njit(cache=True, nogil=True)
-def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent, fa, label, stamp):
+def match_cells(nb, active, alive, deg, cell, rule, good, online, budget, mate, parent, fa, label, stamp):
     """The matching inside quadtree cells (``cycle_cover(..., cell_size=)``): every dual
     edge across a cell border is matched first (``_pin_borders``), so that the cover's
     cycles stay inside the cells; then the greedy and its searches run inside each cell
@@ -1062,7 +1092,7 @@ def match_cells(nb, active, alive, deg, cell, good, online, budget, mate, parent
     one = np.zeros(m, np.int8)
     order = _bfs_order(nbc, one, 0) if online > 0 else np.arange(m).astype(np.int32)
     queue = np.empty(m + 8, np.int32)
-    s = _greedy_matching(nbc, inner, m, good, order, online, parent, fa, label, stamp, queue, mate)
+    s = _greedy_matching(nbc, inner, m, rule, good, order, online, parent, fa, label, stamp, queue, mate)
     return _augment_every_free(nbc, inner, alive, mate, parent, fa, label, stamp, s, queue, budget)
 
 

@@ -34,6 +34,7 @@ Serial, nopython, ``cache=True``; O(number of candidate edges).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -829,7 +830,7 @@ def _cos_at(ox, oy, qx, qy, rx, ry):
 
 
 @njit(cache=True, nogil=True)
-def _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
+def edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
     """Does the swap or the midpoint split over half-edge ``h`` meet the rule?
 
     By corner cosines (``lo <= angle <= hi`` iff ``cos hi <= cos <= cos lo``), the
@@ -909,11 +910,11 @@ def good_edges_into(pts, tri, twin, pinned, he, amin, keep, hi, swaps, edge_spli
     """``good[i]``: does the swap or the midpoint split over half-edge ``he[i]`` meet the rule?
 
     Planar only; the yes/no of :func:`score_joins_into` without placement, by cosines
-    (:func:`_edge_meets_rule`).
+    (:func:`edge_meets_rule`).
     """
     cos_hi = math.cos(hi)
     for i in range(he.shape[0]):
-        good[i] = _edge_meets_rule(pts, tri, twin, pinned, he[i], amin, keep, cos_hi, swaps, edge_splits)
+        good[i] = edge_meets_rule(pts, tri, twin, pinned, he[i], amin, keep, cos_hi, swaps, edge_splits)
 
 
 #: Step halvings of the placement in :func:`placed_good_into` (as ``sparse.PLACE_ITERS``).
@@ -942,13 +943,60 @@ def good_half_edges_into(pts, tri, twin, pinned, amin, keep, hi, swaps, edge_spl
     Sets ``good[h]`` and ``good[twin[h]]`` (both halves; ``good`` starts all False): no
     list of inner edges, no scatter afterwards. Threads may share ``good``: each edge
     is judged (and its two bytes written) by the one thread holding its lower half.
+    Sparse mode's cover judges only the edges its matching asks about, by the same
+    test (``cycle_cover(..., judge=True)``); this whole-mesh pass serves the
+    re-colouring of small meshes, which reads every edge.
     """
     cos_hi = math.cos(hi)
     for h in range(lo, hi_h):
         g = twin[h]
-        if g > h and _edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
+        if g > h and edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_splits):
             good[h] = True
             good[g] = True
+
+
+class EdgeRule(NamedTuple):
+    """What an edge is judged good by (planar): :func:`good_half_edges_into`'s
+    arguments, ``cos_hi`` the cosine of its ``hi`` (:func:`cos_of`, as that kernel
+    takes it). A numba argument: the cover's greedy matching judges the edges it has
+    to choose between by it (:func:`edge_meets_rule` of the edge's lower half-edge,
+    ``cycle_cover(..., judge=True)``)."""
+
+    pts: np.ndarray  # (n, 2) float64
+    tri: np.ndarray  # (m, 3) int64
+    twin: np.ndarray  # (3 m,) int64
+    pinned: np.ndarray  # (3 m,) bool
+    amin: np.ndarray  # (m,) float64: each triangle's smallest angle, radians
+    keep: float
+    cos_hi: float
+    swaps: bool
+    edge_splits: bool
+
+
+def edge_rule(pts, tri, twin, pinned, amin, keep: float, hi: float, swaps: bool, edge_splits: bool) -> EdgeRule:
+    """An :class:`EdgeRule` with the types its kernels are compiled for (contiguous
+    arrays, Python scalars): one compiled version for every caller."""
+    return EdgeRule(np.ascontiguousarray(pts, dtype=np.float64), np.ascontiguousarray(tri, dtype=np.int64),
+                    np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(pinned, dtype=np.bool_),
+                    np.ascontiguousarray(amin, dtype=np.float64), float(keep), float(cos_of(float(hi))),
+                    bool(swaps), bool(edge_splits))
+
+
+def no_edge_rule() -> EdgeRule:
+    """An :class:`EdgeRule` that is never asked (every edge already judged)."""
+    return edge_rule(np.zeros((0, 2)), np.zeros((0, 3), np.int64), np.zeros(0, np.int64), np.zeros(0, np.bool_),
+                     np.zeros(0), 0.0, 0.0, False, False)
+
+
+@njit(cache=True, nogil=True)
+def cos_of(x):
+    """``math.cos`` as the kernels compute it (:func:`good_half_edges_into`'s ``cos_hi``)."""
+    return math.cos(x)
+
+
+#: the cover's memo of good edges (``_cover_kernels._greedy_matching``, one int8 per
+#: half-edge): an edge not judged yet, judged not good, judged good
+EDGE_UNKNOWN, EDGE_NOT_GOOD, EDGE_GOOD = 0, 1, 2
 
 
 @njit(cache=True, nogil=True)

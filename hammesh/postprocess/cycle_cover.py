@@ -111,6 +111,8 @@ class JoinRule(NamedTuple):
     keep: float  # the rule's factor
     hi: float  # the largest angle allowed, radians
     pinned: np.ndarray  # (3 m,) bool: constrained half-edges (split only at their midpoint)
+    swaps: bool = True  # joins by swaps allowed (``judge``: what a good edge may be)
+    edge_splits: bool = True  # joins by edge splits allowed
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,6 +173,7 @@ def cycle_cover(
     clock: dict | None = None,
     cells: np.ndarray | None = None,
     rule: JoinRule | None = None,
+    judge: bool = False,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -232,6 +235,12 @@ def cycle_cover(
         good join are merged into others by re-colouring a few vertices
         (``_recolour_kernels``); with ``rule`` and planar ``points`` that step also
         counts the splits that meet the rule once placed as good joins.
+    judge : bool
+        With ``rule`` and planar ``points``, instead of ``good``: an edge is good if
+        its swap or midpoint split meets ``rule`` (``_join_kernels.edge_meets_rule``, the
+        test sparse mode's ``good`` was made by), judged when the greedy matching first
+        has to choose across it; only those edges are judged (re-colouring, on small
+        meshes, judges the rest). The same cover as with ``good`` made ahead.
 
     Returns
     -------
@@ -252,7 +261,18 @@ def cycle_cover(
     limit = m if arc_limit is None else int(arc_limit)
     if online is None:
         online = ONLINE_BUDGET if m >= ONLINE_MIN_TRIANGLES else 0
-    g = np.zeros((m, 3), np.bool_) if good is None else np.ascontiguousarray(good, dtype=np.bool_).reshape(m, 3)
+    # the good edges as the matching's memo (int8 per half-edge, ``_join_kernels.EDGE_*``):
+    # judged as the matching asks (``judge``), or all known ahead
+    lazy = judge and rule is not None and points is not None and np.shape(points)[1] == 2
+    if lazy:
+        e_rule = _j.edge_rule(points, triangles, tw, rule.pinned, rule.amin, rule.keep, rule.hi, rule.swaps,
+                              rule.edge_splits)
+        g = fresh(3 * m, np.int8, _j.EDGE_UNKNOWN)
+    else:
+        e_rule = _j.no_edge_rule()
+        g = np.full(3 * m, _j.EDGE_NOT_GOOD, np.int8)
+        if good is not None:
+            g[np.ascontiguousarray(good, dtype=np.bool_).reshape(-1)] = _j.EDGE_GOOD
     quad = cell = None
     if cell_size is None:
         cell_size = CELL_SIZE
@@ -283,7 +303,7 @@ def cycle_cover(
     stamp = fresh(m, np.int64, 0) if reserved() >= 8 * m else np.zeros(m, np.int64)
     work = (fresh(m, np.int32), fresh(m, np.int32), fresh(m, np.int8, -1), stamp)
     if cell is not None:
-        s = _k.match_cells(nb, active, alive, deg, cell, g, int(online), int(budget), mate, *work)
+        s = _k.match_cells(nb, active, alive, deg, cell, e_rule, g, int(online), int(budget), mate, *work)
     else:
         # from ONLINE_MIN_TRIANGLES on (planar) the two halves of the count quadtree's
         # top split (in a local row order: the row halves) are matched side by side,
@@ -295,7 +315,7 @@ def cycle_cover(
         elif split:
             side = _halves(np.ascontiguousarray(points, dtype=np.float64), triangles, spans)
         mark("halves")
-        calls = [partial(_k.match_half, nb, active, side, half, g, int(online), int(budget), mate, *work)
+        calls = [partial(_k.match_half, nb, active, side, half, e_rule, g, int(online), int(budget), mate, *work)
                  for half in ((0, 1) if split else (0,))]
         s = max(run_all(calls) if len(spans) > 1 else [c() for c in calls])
     mark("match_halves")
@@ -340,9 +360,16 @@ def cycle_cover(
         n_cyc -= n_rot
     mark("rotate")
     n_rec = n_shift = 0
-    if rotate and good is not None and 0 < m < RECOLOUR_BELOW and cell is None:
+    if rotate and (good is not None or lazy) and 0 < m < RECOLOUR_BELOW and cell is None:
         tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
-        g_rec = g.reshape(-1)
+        if lazy:  # (every edge judged: re-colouring reads them all; the same answers)
+            g = np.zeros(3 * m, np.bool_)
+            _j.good_half_edges_into(np.ascontiguousarray(points, dtype=np.float64), tri_c, tw, e_rule.pinned,
+                                    e_rule.amin, e_rule.keep, float(rule.hi), e_rule.swaps, e_rule.edge_splits, 0,
+                                    3 * m, g)
+        else:
+            g = g == _j.EDGE_GOOD
+        g_rec = g
         if rule is not None and points is not None and np.shape(points)[1] == 2:
             g_rec = g_rec.copy()  # (the joins as Kruskal sees them: placed splits too)
             _j.placed_good_into(np.ascontiguousarray(points, dtype=np.float64), tri_c, tw,
@@ -350,7 +377,7 @@ def cycle_cover(
                                 np.ascontiguousarray(rule.amin, dtype=np.float64), float(rule.keep), float(rule.hi),
                                 g_rec)
         n_rec, n_shift = _rk.recolour_merges(
-            tri_c, tw, is_cov, cyc, int(n_cyc), g.reshape(-1), g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
+            tri_c, tw, is_cov, cyc, int(n_cyc), g, g_rec, int(tri_c.max()) + 1, RECOLOUR_NODE, RECOLOUR_SET,
             RECOLOUR_CANDIDATES, RECOLOUR_ROUNDS, RECOLOUR_SHIFT, RECOLOUR_LONG_WALK,
         )
         n_rec, n_shift = int(n_rec), int(n_shift)

@@ -101,8 +101,6 @@ SCORE_MIN_ROWS = 20_000
 #: runs in one call: the placement passes are a few thousand rows at 1.5 M triangles,
 #: serial on the main thread before (0.03-0.04 s) while the other core idled
 PLACE_MIN_ROWS = 1_000
-#: edges per thread below which judging the edges for the cover runs in one call
-EDGE_MIN_ROWS = 50_000
 #: rows per thread below which ``triangle_facts`` runs in one call: its passes over the
 #: new rows (~35 k at 1.5 M: the report, the target repair, the kept rows' sample) ran
 #: serial, ~18 ms on the main thread; a pass on ``hammesh.threads``' kept pool starts
@@ -1884,17 +1882,11 @@ def sparse_cycles(
     fish = None  # (tree="fishbone": sparse_cells' cells and classes)
     if use_cover:
         # edges whose join (swap or midpoint split) keeps the rule: the cover's
-        # matching prefers them as its non-cover edges, where cycles get joined
-        if pts.shape[1] == 2:
-            good = fresh(3 * m, np.bool_, 0)
-            _row_pass(
-                lambda lo, hi_: _j.good_half_edges_into(
-                    pts, tri, tw, con, amin_t, float(keep), hi, bool(swaps), bool(edge_splits), lo, hi_, good
-                ),
-                3 * m,
-                EDGE_MIN_ROWS,
-            )
-        else:
+        # matching prefers them as its non-cover edges, where cycles get joined.
+        # Planar: judged inside the matching, only where it has to choose
+        # (``cycle_cover(..., judge=True)``: a third of the edges at 1.5 M)
+        good = None
+        if pts.shape[1] != 2:
             inner = np.flatnonzero(tw > np.arange(3 * m))
             g_kind = np.zeros(len(inner), np.int8)
             g_slack = np.empty(len(inner))
@@ -1917,9 +1909,10 @@ def sparse_cycles(
         if beside_cover is not None and not late:
             beside_cover()
         fish = fishbone_cells(pts, tri, tw) if tree == "fishbone" and pts.shape[1] == 2 else None  # (issue 14)
-        rule = JoinRule(amin_t, float(keep), hi, con) if pts.shape[1] == 2 else None  # (re-colouring's judge)
+        # (the matching's and the re-colouring's judge)
+        rule = JoinRule(amin_t, float(keep), hi, con, bool(swaps), bool(edge_splits)) if pts.shape[1] == 2 else None
         cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
-                            cells=None if fish is None else fish.cell)
+                            cells=None if fish is None else fish.cell, judge=rule is not None)
     else:
         if beside_cover is not None:
             beside_cover()

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from hammesh import pages
+from hammesh import pages, threads
 from hammesh.pages import fresh
 
 
@@ -91,6 +91,7 @@ def test_an_array_from_the_reserve_frees_its_memory_when_it_dies(no_reserve) -> 
     assert _vma(addr)
     del a
     gc.collect()
+    threads.wait_later()  # (unmapped on the background thread: ``threads.later``)
     assert not _vma(addr)  # unmapped (nothing else was mapped there meanwhile)
 
 
@@ -155,3 +156,51 @@ def test_sparse_mode_keeps_only_its_share_of_the_reserve(no_reserve, monkeypatch
     share = postprocess.RESERVE_TAKEN["sparse"] * m.n_triangles
     assert seen and seen[0] <= max(share + pages._PAGE, 0) < 16 << 20
     assert pages.reserved() == 0
+
+
+def test_later_runs_in_order_off_the_caller_or_inline_on_one_core() -> None:
+    # ``threads.later`` (where the reserve's arrays are unmapped): one background thread,
+    # in submission order, errors dropped; inline where the process may use one thread
+    import threading
+
+    me = threading.get_ident()
+    seen: list = []
+    for i in range(50):
+        threads.later(lambda i=i: seen.append((i, threading.get_ident())))
+    threads.wait_later()
+    assert [i for i, _ in seen] == list(range(50))
+    if threads.cores() > 1:
+        assert len({t for _, t in seen}) == 1 and seen[0][1] != me
+    threads.later(lambda: 1 / 0)
+    threads.later(lambda: seen.append(("after an error", threading.get_ident())))
+    threads.wait_later()
+    assert seen[-1][0] == "after an error"
+    old = threads.limit(1)
+    try:
+        threads.later(lambda: seen.append(("inline", threading.get_ident())))
+        assert seen[-1] == ("inline", me)
+    finally:
+        threads.limit(old)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="fork is POSIX's")
+def test_later_in_a_forked_child_runs_on_its_own_thread() -> None:
+    # the parent's background thread is not in a forked child: the child starts its own
+    import multiprocessing as mp
+
+    threads.later(lambda: None)  # (the parent's thread exists)
+    threads.wait_later()
+    ctx = mp.get_context("fork")
+    out = ctx.Queue()
+
+    def child(q) -> None:
+        seen = []
+        threads.later(seen.append, 1)
+        threads.wait_later()
+        q.put(seen)
+
+    p = ctx.Process(target=child, args=(out,))
+    p.start()
+    got = out.get(timeout=30)
+    p.join(30)
+    assert p.exitcode == 0 and got == [1]

@@ -107,7 +107,6 @@ def test_threaded_scoring_gives_the_same_mesh(monkeypatch) -> None:
     m = hammesh.quality_mesh(bundled_domain("face"), min_angle=30, max_area=None)
     one = hammesh.hamiltonian(m)
     monkeypatch.setattr(sparse, "SCORE_MIN_ROWS", 7)
-    monkeypatch.setattr(sparse, "EDGE_MIN_ROWS", 11)
     monkeypatch.setattr(threads, "THREAD_MIN_ROWS", 13)
     many = hammesh.hamiltonian(m)
     np.testing.assert_array_equal(one.triangles, many.triangles)
