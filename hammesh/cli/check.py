@@ -12,8 +12,6 @@ from hammesh.errors import FileFormatError, InvalidMeshError, InvalidOptionError
 if TYPE_CHECKING:
     import numpy as np
 
-    from hammesh.mesh import Mesh
-
 HELP = "re-verify that a mesh file's triangles, in file order, form Hamiltonian cycles (or paths: --path)"
 EXAMPLES = """examples:
   hammesh check plate.vtu
@@ -46,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
     # neither the readers nor the certificate's kernels (numba)
     from hammesh.io import check_outputs, read_mesh, write_report
     from hammesh.io.report import collect_repairs
+    from hammesh.verify.stored import verify_stored_mesh
 
     if args.min_angle is not None:
         params.number("--min-angle", args.min_angle, low=0, high=60, what="degrees")
@@ -58,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidOptionError("--surface and --path exclude each other (`hammesh surface` writes cycles)")
     mesh = read_mesh(args.mesh, dim=3 if args.surface else None)
     try:  # (a readable file that is no valid mesh fails the check: exit 3, not 2)
-        runs, stats, triangles = _certify(mesh, path=args.path)
+        runs, stats, triangles = verify_stored_mesh(mesh, path=args.path)
     except InvalidMeshError as exc:
         raise VerificationError(str(exc)) from None
     except VerificationError as exc:
@@ -84,36 +83,6 @@ def run(args: argparse.Namespace) -> int:
         f"angles {stats['min_angle_output_deg']:.2f}..{stats['max_angle_output_deg']:.2f} deg"
     )
     return 0
-
-
-def _certify(mesh: Mesh, path: bool = False) -> tuple[np.ndarray, dict, np.ndarray]:
-    """``(runs, figures, triangles)`` of the certificate of a read mesh (planar or 3D);
-    ``path``: each piece a Hamiltonian path (:mod:`hammesh.verify.path`), planar only."""
-    from hammesh.planar_overlap import find_overlap
-    from hammesh.verify.certificate import verify_stored_cycle_mesh
-    from hammesh.verify.path import verify_stored_path_mesh
-
-    if path and mesh.points.shape[1] == 3:
-        raise InvalidOptionError("--path checks planar meshes (`hammesh surface` writes cycles)")
-    if mesh.points.shape[1] == 3:  # a 3D surface: the surface certificate (angles in 3D)
-        from hammesh.surface.files import weld_surface
-        from hammesh.verify.surface import infer_surface_runs, verify_surface
-
-        # coincident points merged as `hammesh surface` merges them: only where their data
-        # agree (a cylinder's cap and side meet at the rim with other normals: two points)
-        welded = weld_surface(mesh.points, mesh.triangles, mesh.point_data)
-        points, triangles = welded.points, welded.triangles
-        runs = infer_surface_runs(triangles, len(points))
-        stats = verify_surface(points, triangles, runs)
-    else:
-        triangles = mesh.triangles
-        # the half-edges are paired once (the certificate's kernel), for all three checks
-        verify_stored = verify_stored_path_mesh if path else verify_stored_cycle_mesh
-        runs, stats, twin = verify_stored(mesh.points, triangles, segments=mesh.segments)
-        pair = find_overlap(mesh.points, triangles, twin=twin)  # no input to compare with: test the plane
-        if pair is not None:
-            raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
-    return runs, stats, triangles
 
 
 def _is_path(triangles: np.ndarray) -> bool:

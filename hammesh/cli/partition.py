@@ -6,13 +6,14 @@ import argparse
 from pathlib import Path
 
 from hammesh import params
-from hammesh.errors import FileFormatError
+from hammesh.errors import FileFormatError, InvalidMeshError, VerificationError
 
 HELP = "cut the Hamiltonian cycle(s) of a mesh file into K connected, balanced parts"
 EXAMPLES = """examples:
   hammesh partition plate.vtu -k 64 -o plate-64.vtu              # 'part' cell array
   hammesh partition plate.vtu -k 8 -o plate-8.msh --renumber rcm --report parts.json
-The file's triangles must be in Hamiltonian cycle order (any mesh 'hammesh mesh' wrote).
+The file's triangles must be in Hamiltonian cycle order (any mesh 'hammesh mesh' wrote);
+the file is certified first, as 'hammesh check' does (exit 2 if it fails).
 Each cycle (connected piece) is cut into consecutive stretches of (almost) equal size;
 the edge cut, balance and a connectivity check are printed and written to --report."""
 
@@ -30,6 +31,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from hammesh.io import check_outputs, read_mesh, write, write_report
     from hammesh.partition import partitioned
+    from hammesh.verify.stored import verify_stored_mesh
 
     params.integer("-k", args.parts, low=1, what="number of parts")
     if args.report is not None and args.report.suffix.lower() != ".json":
@@ -38,6 +40,13 @@ def run(args: argparse.Namespace) -> int:
     if not args.mesh.exists():
         raise FileFormatError(f"{args.mesh}: no such file")
     mesh = read_mesh(args.mesh)
+    # the file's rows are cut as the cycle they claim to be: certified first, as
+    # `hammesh check` would (a moved vertex made overlapping "parts" before, session 17)
+    try:
+        verify_stored_mesh(mesh)
+    except (VerificationError, InvalidMeshError) as exc:
+        raise InvalidMeshError(f"{args.mesh}: not a verified Hamiltonian cycle mesh in cycle order ({exc}); "
+                               "`hammesh mesh` makes one") from None
     out = partitioned(mesh, args.parts, renumber=args.renumber)
     r = out.report["partition"]
     write(out, args.output)

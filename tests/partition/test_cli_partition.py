@@ -90,3 +90,25 @@ def test_mesh_refuses_zero_parts(tmp_path, capsys) -> None:
     out = tmp_path / "d.vtu"
     assert main(["mesh", str(DEMO), "-q", "25", "-a", "0.05", "-o", str(out), "--parts", "0"]) == 2
     assert not out.exists()
+
+
+@pytest.mark.parametrize("fault", ["moved vertex", "swapped rows"])
+def test_partition_refuses_a_file_that_is_no_cycle_mesh(tmp_path, fault: str, capsys) -> None:
+    # (session 17's tester: a vertex moved far in hammesh's own output was cut into
+    # "all parts connected" parts, and `hammesh check` refused the written file)
+    src = tmp_path / "d.vtu"
+    assert main(["mesh", str(DEMO), "-q", "30", "-a", "0.05", "-o", str(src)]) == 0
+    m = meshio.read(src)
+    if fault == "moved vertex":
+        m.points[m.cells[0].data[10, 0], 0] += 3.0
+    else:
+        block = m.cells[0].data
+        block[[3, len(block) // 2]] = block[[len(block) // 2, 3]]
+    bad, out = tmp_path / "bad.vtu", tmp_path / "p.vtu"
+    meshio.write(bad, m)
+    capsys.readouterr()
+    assert main(["partition", str(bad), "-k", "3", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a verified Hamiltonian cycle mesh" in err[0]
+    assert not out.exists()
+    assert main(["partition", str(src), "-k", "3", "-o", str(out)]) == 0  # (the file as written is cut)
