@@ -1,4 +1,5 @@
-"""``hammesh check --path`` (:mod:`hammesh.verify.path`): a path mesh written by the
+"""``hammesh check`` of what hammesh writes (:mod:`hammesh.verify.stored`): ``--path``
+(:mod:`hammesh.verify.path`): a path mesh written by the
 polygon constructions passes; every mutation that breaks a promise of a path mesh
 fails, naming the fault."""
 
@@ -120,3 +121,21 @@ def test_cli_check_surface_of_a_folded_flat_surface(tmp_path):
     assert surface.returncode == 0, surface.stderr
     both = subprocess.run(run + ["check", str(out), "--surface", "--path"], capture_output=True, text=True)
     assert both.returncode == 2 and len(both.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".ply", ".obj"])
+def test_check_of_a_double_sided_surface_output(tmp_path, suffix):
+    # (session 17's tester: a double-sided face keeps both sides, their Steiner points
+    # lie at one place as two vertices; `check` welded them and refused the output)
+    import meshio
+
+    from hammesh.surface.shapes import double_sided
+
+    pts, tri = double_sided()
+    src, out = tmp_path / "ds.vtu", tmp_path / f"ds_s{suffix}"
+    meshio.Mesh(pts, [("triangle", tri)]).write(src)
+    run = [sys.executable, "-m", "hammesh"]
+    made = subprocess.run(run + ["surface", str(src), "-o", str(out)], capture_output=True, text=True)
+    assert made.returncode == 0, made.stderr
+    checked = subprocess.run(run + ["check", str(out)], capture_output=True, text=True)
+    assert checked.returncode == 0, checked.stderr
