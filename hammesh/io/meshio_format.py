@@ -82,6 +82,7 @@ import numpy as np
 
 from hammesh.errors import FileFormatError, InvalidMeshError, NotPlanarError
 from hammesh.io.atomic import atomic_path
+from hammesh.io.paths import require_file
 from hammesh.io import tags, vtu
 from hammesh.io.raw import RawMesh
 from hammesh.io.text_rows import header_token
@@ -597,8 +598,7 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     """
     path = Path(path)
     suffix = _suffix(path)
-    if not path.is_file():
-        raise FileFormatError(f"{path}: file not found")
+    require_file(path)
     try:
         raw = _read_raw(path, suffix)
         return to_mesh(raw, path, dim=dim, strict=strict)

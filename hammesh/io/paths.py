@@ -20,12 +20,25 @@ from pathlib import Path
 
 from hammesh.errors import OutputError
 
-__all__ = ["check_outputs", "written_files", "read_files", "TRIANGLE_SIBLINGS"]
+__all__ = ["check_outputs", "written_files", "read_files", "require_file", "TRIANGLE_SIBLINGS"]
 
 #: Triangle's file family: writing or reading one member may touch the others.
 TRIANGLE_SIBLINGS = (".node", ".poly", ".ele")
 
 _NAME_MAX = 255
+
+
+def require_file(path: str | os.PathLike[str], needed_by: str | None = None) -> None:
+    """Refuse an input that is not a regular file, in one wording for every reader:
+    ``no such file``, ``is a directory``, or ``not a regular file`` (a device or a pipe:
+    ``/dev/zero`` behind a ``.poly`` name was read until the memory cap)."""
+    from hammesh.errors import FileFormatError
+
+    p = Path(path)
+    if p.is_file():
+        return
+    why = "is a directory" if p.is_dir() else "not a regular file" if p.exists() else "no such file"
+    raise FileFormatError(f"{p}: {why}" + (f" (needed by {needed_by})" if needed_by else ""))
 
 
 def written_files(path: str | os.PathLike[str]) -> list[Path]:

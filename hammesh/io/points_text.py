@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from hammesh.errors import FileFormatError
+from hammesh.io.paths import require_file
 
 __all__ = ["read_points"]
 
@@ -25,8 +26,7 @@ def read_points(path: str | Path) -> np.ndarray:
         Missing or malformed file (the message names file and line).
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileFormatError(f"{path}: no such file")
+    require_file(path)
     suffix = path.suffix.lower()
     if suffix == ".node":
         from hammesh.domain import read_node

@@ -17,6 +17,7 @@ import numpy as np
 from hammesh.domain.validate import point_array
 from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io.guard import reading
+from hammesh.io.paths import require_file
 from hammesh.io.points_text import read_points
 
 __all__ = ["read_polygon", "read_polygon_rings", "write_triangulation", "POLYGON_SUFFIXES"]
@@ -55,8 +56,7 @@ def read_polygon_rings(path: str | Path) -> tuple[np.ndarray, list[np.ndarray]]:
         Missing or malformed file, or several polygons.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileFormatError(f"{path}: no such file")
+    require_file(path)
     suffix = path.suffix.lower()
     with reading(path):
         if suffix == ".poly":

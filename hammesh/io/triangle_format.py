@@ -41,6 +41,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, triangle_cell_data
+from hammesh.io.paths import require_file
 from hammesh.io.text_rows import header_token, write_rows
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
@@ -152,8 +153,7 @@ class _Tokens:
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        if not path.is_file():
-            raise FileFormatError(f"{path}: file not found")
+        require_file(path)
         try:
             text = path.read_text(encoding="utf-8").removeprefix("\ufeff")  # (a BOM is no data)
         except UnicodeDecodeError:
@@ -387,10 +387,8 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         The message names the file and, where it applies, the line.
     """
     node_path, poly_path, ele_path = _siblings(path)
-    if not ele_path.is_file():
-        raise FileFormatError(f"{ele_path}: file not found")
-    if not node_path.is_file():
-        raise FileFormatError(f"{node_path}: file not found (needed by {ele_path.name})")
+    require_file(ele_path)
+    require_file(node_path, needed_by=ele_path.name)
     points, base, vmarks, point_data = _read_node(node_path)
     n = len(points)
 

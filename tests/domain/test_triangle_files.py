@@ -203,9 +203,9 @@ def test_malformed_node(tmp_path):
 
 
 def test_missing_and_binary_files(tmp_path):
-    with pytest.raises(FileFormatError, match=r"nope\.poly: file not found"):
+    with pytest.raises(FileFormatError, match=r"nope\.poly: no such file"):
         read_poly(tmp_path / "nope.poly")
-    with pytest.raises(FileFormatError, match=r"nope\.node: file not found"):
+    with pytest.raises(FileFormatError, match=r"nope\.node: no such file"):
         read_domain(tmp_path / "nope.node")
     (tmp_path / "bin.node").write_bytes(b"\xff\xfe\x00\x01")
     with pytest.raises(FileFormatError, match=r"bin\.node: not a text file"):

@@ -200,7 +200,7 @@ def test_truncated_vtu(tmp_path, two_cycles, cut):
 
 
 def test_missing_file_and_unknown_suffix(tmp_path, hexagon):
-    with pytest.raises(FileFormatError, match="nothing.vtu: file not found"):
+    with pytest.raises(FileFormatError, match="nothing.vtu: no such file"):
         meshio_format.read(tmp_path / "nothing.vtu")
     with pytest.raises(FileFormatError, match="supported"):
         meshio_format.write(hexagon, tmp_path / "m.xyz")

@@ -149,10 +149,10 @@ def test_bad_poly_is_reported(tmp_path):
 
 def test_missing_node_or_ele(tmp_path):
     (tmp_path / "lonely.ele").write_text("1 3 0\n0 0 1 2\n")
-    with pytest.raises(FileFormatError, match=r"lonely\.node: file not found \(needed by lonely\.ele\)"):
+    with pytest.raises(FileFormatError, match=r"lonely\.node: no such file \(needed by lonely\.ele\)"):
         triangle_format.read_ele(tmp_path / "lonely.ele")
     (tmp_path / "alone.node").write_text(NODE_0)
-    with pytest.raises(FileFormatError, match=r"alone\.ele: file not found"):
+    with pytest.raises(FileFormatError, match=r"alone\.ele: no such file"):
         triangle_format.read_ele(tmp_path / "alone.node")
 
 
