@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     from hammesh.partition import partitioned
     from hammesh.verify.stored import verify_stored_mesh
 
-    params.integer("-k", args.parts, low=1, what="number of parts")
+    params.integer("--parts", args.parts, low=1, what="number of parts")
     if args.report is not None and args.report.suffix.lower() != ".json":
         raise FileFormatError(f"{args.report}: the report is JSON; use a .json file name")
     check_outputs({"-o": args.output, "--report": args.report}, [args.mesh])

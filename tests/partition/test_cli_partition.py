@@ -55,7 +55,7 @@ def test_partition_command_round_trip(tmp_path, capsys) -> None:
     assert json.loads(rep.read_text())["partition"]["k"] == 8
 
 
-@pytest.mark.parametrize("argv, message", [(["-k", "0"], "-k=0"), (["-k", "-3"], "-k=-3")])
+@pytest.mark.parametrize("argv, message", [(["-k", "0"], "--parts=0"), (["-k", "-3"], "--parts=-3")])
 def test_partition_command_refuses_bad_options(tmp_path, argv, message, capsys) -> None:
     src = tmp_path / "d.vtu"
     assert main(["mesh", str(DEMO), "-q", "25", "-a", "0.05", "-o", str(src)]) == 0
