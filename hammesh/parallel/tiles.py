@@ -37,7 +37,7 @@ from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points
 
 __all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "coupled_ends", "without_subnormals",
            "COARSE_TRIANGLES",
-           "COUPLED_DEG"]
+           "COUPLED_DEG", "CUT_TOUCH"]
 
 #: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
 COARSE_TRIANGLES = 20_000
@@ -54,6 +54,13 @@ CLEARANCE = 1.0
 #: a cut keeps clear of the vertices on the box sides it ends on, too (and may end at
 #: another cut's end): :func:`_choose_cut`; False: only of those inside the box (before session 16)
 SIDE_VERTICES = True
+#: a cut position closer than this times the box's extent to a vertex (and not at it,
+#: as at another cut's end) is never taken (session 17): the cut's crossings with the
+#: segments ending there would lie that close to the vertex, and a separator would pass
+#: it as close, input that crashes Triangle (SIGSEGV; ``tile_mesh.NEAR_RELATIVE``).
+#: Before, only a cut exactly at a vertex was refused; any other was only ranked low
+#: and taken when no candidate crossed the segments at a good angle.
+CUT_TOUCH = 1e-9
 #: a cut closer to a vertex than this fraction of CLEARANCE is looked for in the wider windows too
 WIDEN_BELOW = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
@@ -379,12 +386,14 @@ def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle, sid
     sin_cross = np.abs(d[:, axis]) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
     need = math.radians(min(90.0, (min_angle or 20.0) + CROSS_MARGIN_DEG))
     best, best_key = c_mid, None
+    touch = CUT_TOUCH * float(max(box[1] - box[0], box[3] - box[2]))
     for c in cand:
-        clear = np.abs(v[:, axis] - c) / hv if len(v) else np.array([np.inf])
-        clear[snap & (v[:, axis] == c)] = np.inf  # (ending at another cut's end)
-        clear_min = float(clear.min()) if len(clear) else np.inf
-        if clear_min == 0.0:
+        gap = np.abs(v[:, axis] - c)
+        at_end = snap & (v[:, axis] == c)  # (ending at another cut's end)
+        if (gap[~at_end] <= touch).any():
             continue
+        clear = np.where(at_end, np.inf, gap / hv) if len(v) else np.array([np.inf])
+        clear_min = float(clear.min())
         crossing = (a[:, axis] - c) * (e[:, axis] - c) < 0
         ang = float(np.arcsin(np.clip(sin_cross[crossing].min(), 0, 1))) if crossing.any() else math.pi / 2
         # an angle the mesher cannot meet is fatal; closeness to vertices is repaired
