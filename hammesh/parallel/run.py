@@ -570,7 +570,7 @@ def not_carried(domain: Domain) -> list[str]:
 def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
     """Estimated triangle count of a Triangle run: the domain's area (one constrained
     triangulation, no refinement) over ``AREA_FILL x max_area``."""
-    import triangle
+    from hammesh.parallel.guard import triangulate_guarded
 
     check_bounds(min_angle, max_area)  # (before the estimate divides by it)
 
@@ -581,7 +581,7 @@ def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
         data["segments"] = np.array(domain.segments, dtype=np.int32)
     if len(domain.holes):
         data["holes"] = np.array(domain.holes)
-    out = triangle.triangulate(data, ("p" if len(domain.segments) else "pc") + "Q")
+    out = triangulate_guarded(data, ("p" if len(domain.segments) else "pc") + "Q", "the domain's area")
     p, t = np.asarray(out["vertices"]), np.asarray(out.get("triangles", np.zeros((0, 3), int)))
     e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
     area = float(np.abs(0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])).sum())

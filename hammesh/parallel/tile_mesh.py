@@ -9,12 +9,13 @@ import numpy as np
 from hammesh.errors import MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.options import format_number
+from hammesh.parallel.guard import triangulate_guarded
 from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
            "LATTICE_BAND", "LATTICE_BLOCK", "LATTICE_ORDER", "lattice_blocks", "load_tile_kernels",
-           "outline_hole_points", "NEAR_RELATIVE", "ISOLATED_SECONDS", "input_fault", "triangulate_tile"]
+           "outline_hole_points"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -37,79 +38,9 @@ LATTICE_BLOCK = 2
 #: 0.48-0.77 against 0.52-0.85): sparse mode now renumbers big meshes by cells itself
 #: (``sparse.LOCAL_MIN_TRIANGLES``), so the curve no longer pays for itself.
 LATTICE_ORDER = "rows"
-#: Triangle's input is suspect when two of its points, or a point and the inside of a
-#: segment, are closer than this times the input's extent (:func:`input_fault`).
-#: Measured (session 17, ``pq30a..Yn`` on a square with an inner loop and a hole, 60
-#: random cases per distance): two points 0 / 1e-16 / 1e-15 / 1e-14 / 1e-13 apart
-#: crashed Triangle (SIGSEGV) in 60 / 12 / 1 / 1 / 0 cases, hung past 10 s in 0 / 5 /
-#: 4 / 0 / 1; a point 1e-16 / 1e-15 off a segment crashed it in 6 / 1; from 1e-12 on
-#: none. An exact duplicate point crashes it whenever a segment uses it (the
-#: ``triangle`` package's own issues #68 and #70: "random" segfaults on such input).
-NEAR_RELATIVE = 1e-11
-#: a suspect tile input runs in a child process (:func:`triangulate_tile`), stopped
-#: after this many seconds (Triangle loops without end on some such inputs)
-ISOLATED_SECONDS = 300.0
 #: no lattice when the tile's box holds more than this many lattice points per
 #: estimated triangle of the tile (about 0.5 of them are inside when the tile fills it)
 LATTICE_BOX_FILL = 8.0
-
-
-def input_fault(vertices: np.ndarray, segments: np.ndarray) -> str | None:
-    """What makes Triangle's input suspect, or None: two points, or a point and the
-    inside of a segment, closer than :data:`NEAR_RELATIVE` times the input's extent.
-
-    Why: such input crashes Triangle (SIGSEGV, the interpreter with it: a Dask worker
-    dies, a command exits -11) or makes it loop for ever (measured at
-    :data:`NEAR_RELATIVE`). A tile's own input never has it (the cuts keep clear of
-    every vertex, ``tiles.CUT_TOUCH``; lattice points keep steps away from every
-    segment), so this is the guard for what no rule foresaw. ~1-5 ms per tile (one
-    sort and a sweep, :func:`~hammesh.parallel._kernels.near_feature`).
-    """
-    from hammesh.parallel._kernels import near_feature
-
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    if len(v) < 2:
-        return None
-    extent = float(np.ptp(v, axis=0).max())
-    tol = NEAR_RELATIVE * max(extent, float(np.abs(v).max()))
-    kind, i, j = near_feature(v, np.lexsort((v[:, 1], v[:, 0])), np.ascontiguousarray(segments, dtype=np.int64), tol)
-    if kind == 0:
-        return f"points {i} and {j} lie {float(np.hypot(*(v[i] - v[j]))):.3g} apart"
-    if kind == 1:
-        return f"point {i} lies within {tol:.3g} of the inside of segment {j}"
-    return None
-
-
-def _triangulate_plain(data: dict, switches: str) -> dict:
-    import triangle
-
-    return dict(triangle.triangulate(data, switches))
-
-
-def triangulate_tile(data: dict, switches: str, tile: int, seconds: float | None = None) -> dict:
-    """Triangle's ``triangulate(data, switches)`` for a tile: in this process, unless
-    :func:`input_fault` finds the input suspect; then in a child process
-    (:func:`hammesh.meshing.isolate.run_isolated`), where a crash or a hang becomes a
-    :class:`~hammesh.errors.MeshingError` naming the tile instead of taking this
-    process (a Dask worker, the command) down.
-
-    Why not always a child: per tile the fork, the pipe and the copy-on-write faults
-    cost ~0.01-0.02 s CPU of a worker of ~700 MB (measured, session 17), ~1 % of the
-    6M command's CPU over its tiles, for inputs the decomposition never makes.
-    ``seconds``: the child's time limit (default :data:`ISOLATED_SECONDS`).
-    """
-    fault = input_fault(data["vertices"], data.get("segments", np.zeros((0, 2), np.int64)))
-    if fault is None:
-        return _triangulate_plain(data, switches)
-    from hammesh.meshing.isolate import run_isolated
-
-    try:
-        return run_isolated(_triangulate_plain, (data, switches), name=f"Triangle (tile {tile}: {fault})",
-                            timeout=ISOLATED_SECONDS if seconds is None else seconds)
-    except MeshingError:
-        raise
-    except Exception as exc:  # (Triangle's own failure in the child: said as one)
-        raise MeshingError(f"Triangle failed on tile {tile} ({fault}): {exc}") from None
 
 
 def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,
@@ -377,7 +308,7 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
                                                 dtype=np.int32)[:, None],
         "holes": np.ascontiguousarray(np.concatenate([np.asarray(tile.holes, np.float64).reshape(-1, 2), hole_xy])),
     }
-    out = triangulate_tile(data, tile_switches(min_angle, max_area), tile.index)
+    out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}")
     bt = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     bp = np.asarray(out["vertices"], dtype=np.float64)
     if len(bt) == 0 or len(bp) < k + nb or not np.array_equal(bp[: k + nb], verts):
@@ -486,7 +417,7 @@ def _mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bo
     }
     if len(tile.holes):
         data["holes"] = np.ascontiguousarray(tile.holes, dtype=np.float64)
-    out = triangulate_tile(data, tile_switches(min_angle, max_area), tile.index)
+    out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}")
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(tri) == 0:
         raise MeshingError(f"Triangle produced no triangles for tile {tile.index}")

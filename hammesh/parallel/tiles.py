@@ -172,9 +172,9 @@ def _tri_area(p: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _hull_segments(vertices: np.ndarray) -> np.ndarray:
-    import triangle
+    from hammesh.parallel.guard import triangulate_guarded
 
-    out = triangle.triangulate({"vertices": np.array(vertices)}, "pcQ")
+    out = triangulate_guarded({"vertices": np.array(vertices)}, "pcQ", "the domain's hull")
     return np.asarray(out["segments"], dtype=np.int64).reshape(-1, 2)
 
 
@@ -198,7 +198,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     """Triangle's coarse quality mesh of the domain: points, triangles, region rows,
     and its subsegments with the user segment each lies on (Triangle's own grading of
     the segments near small angles and close features, kept by the tiles)."""
-    import triangle
+    from hammesh.parallel.guard import triangulate_guarded
 
     ext = np.ptp(vertices, axis=0)
     area_bound = max(float(ext[0] * ext[1]) / COARSE_TRIANGLES, 4.0 * max_area)
@@ -216,7 +216,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
         reg[:, 3] = -1.0
         data["regions"] = reg
         sw += "A"
-    out = triangle.triangulate(data, sw + "Q")
+    out = triangulate_guarded(data, sw + "Q", "the coarse mesh")
     pts = np.array(out["vertices"], dtype=np.float64)
     pts[: len(vertices)] = vertices  # (as given: see without_subnormals)
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 import hammesh
 from hammesh.parallel import assemble, check_union, mesh_decoupled
-from hammesh.parallel.tile_mesh import input_fault
+from hammesh.parallel.guard import input_fault
 from tests.helpers import angles_deg, star_pslg
 
 

@@ -3,7 +3,7 @@
 Session 17: once in CI a tile's in-process ``triangle.triangulate`` crashed the
 interpreter (SIGSEGV). Two points closer than ~1e-13 of the input's extent (an exact
 duplicate used by a segment always), or a point ~1e-15 off a segment's inside, crash
-Triangle or make it loop. ``tile_mesh.triangulate_tile`` sends such input to a child
+Triangle or make it loop. ``guard.triangulate_guarded`` sends such input to a child
 process (a crash becomes a MeshingError); the decomposition never makes it
 (``tiles.CUT_TOUCH``). Every call that might crash runs in a forked child here, so a
 regression fails a test instead of killing pytest.
@@ -23,7 +23,8 @@ import hammesh
 from hammesh.errors import MeshingError
 from hammesh.parallel import decompose
 from hammesh.parallel._kernels import near_feature
-from hammesh.parallel.tile_mesh import NEAR_RELATIVE, input_fault, lattice_grid, mesh_tile, triangulate_tile
+from hammesh.parallel.guard import NEAR_RELATIVE, input_fault, triangulate_guarded
+from hammesh.parallel.tile_mesh import lattice_grid, mesh_tile
 
 SWITCHES = "pq30a0.002YnQ"
 
@@ -94,7 +95,7 @@ def test_an_exact_duplicate_is_flagged_and_the_guard_keeps_the_process():
     assert all(input_fault(c["vertices"], c["segments"]) is not None for c in cases)
     for data in cases[:3]:
         try:
-            out = triangulate_tile(data, SWITCHES, tile=7, seconds=30)
+            out = triangulate_guarded(data, SWITCHES, "tile 7", seconds=30)
         except MeshingError as exc:
             assert "tile 7" in str(exc)
         else:  # (a mesh is fine too: the point is that this process lives)
@@ -113,7 +114,7 @@ def test_close_points_never_take_the_process_down(seed, kind, gap):
     data = _moved(_band_like(rng), rng, kind, gap)
     fault = input_fault(data["vertices"], data["segments"])
     assert fault is not None or (kind == "on" and gap == 0.0)
-    status, value = _in_child(lambda: _triangles(triangulate_tile(data, SWITCHES, tile=1, seconds=5)))
+    status, value = _in_child(lambda: _triangles(triangulate_guarded(data, SWITCHES, "tile 1", seconds=5)))
     assert status in ("ok", "error"), (status, value)
     if status == "error":
         assert value.startswith("MeshingError") and "tile 1" in value, value
@@ -160,13 +161,13 @@ def test_no_real_tile_input_is_suspect(area, n_tiles):
     dom = hammesh.read_domain("hammesh/data/demo.poly")
     d = decompose(dom, min_angle=30, max_area=area, n_tiles=n_tiles)
     seen = []
-    real = tm.triangulate_tile
+    real = tm.triangulate_guarded
 
-    def spy(data, switches, tile, seconds=None):
+    def spy(data, switches, what, seconds=None):
         seen.append(input_fault(data["vertices"], data["segments"]))
-        return real(data, switches, tile, seconds)
+        return real(data, switches, what, seconds)
 
-    tm.triangulate_tile = spy
+    tm.triangulate_guarded = spy
     try:
         for t in d.tiles:
             assert input_fault(t.vertices, t.segments) is None
@@ -174,7 +175,7 @@ def test_no_real_tile_input_is_suspect(area, n_tiles):
             m = mesh_tile(t, 30, area)
             assert m.info.get("lattice") == "band"
     finally:
-        tm.triangulate_tile = real
+        tm.triangulate_guarded = real
     assert seen == [None] * len(d.tiles)
 
 
@@ -187,3 +188,21 @@ def test_the_relative_tolerance_scales_with_the_input():
     far = _moved(_band_like(np.random.default_rng(5)), np.random.default_rng(6), "near", 1e3 * NEAR_RELATIVE)
     assert input_fault(far["vertices"], far["segments"]) is None
     assert input_fault(far["vertices"] * 1e6, far["segments"]) is None
+
+
+def test_a_domain_with_points_1e16_apart_ends_in_a_meshing_error(monkeypatch):
+    """The driver's own Triangle calls (the domain's area, the coarse mesh) go through
+    the guard too: a user's domain with two vertices 1e-16 apart, both used by a
+    segment, gives the serial path's kind of error, and this process lives (Triangle
+    refines this one without end in its child: stopped after 3 s here)."""
+    import hammesh.parallel.guard as guard
+    from hammesh.parallel import parallel_hamiltonian
+
+    monkeypatch.setattr(guard, "ISOLATED_SECONDS", 3.0)
+    v = [[0, 0], [1, 0], [1, 1], [0, 1], [0.3, 0.3], [0.3 + 1e-16, 0.3], [0.6, 0.6]]
+    dom = hammesh.Domain(vertices=v, segments=[[0, 1], [1, 2], [2, 3], [3, 0], [4, 6], [5, 6]])
+    assert input_fault(np.array(dom.vertices), np.array(dom.segments)) is not None
+    status, value = _in_child(lambda: parallel_hamiltonian(dom, min_angle=30, max_area=1e-3, tiles=2).n_triangles)
+    assert status in ("ok", "error"), (status, value)
+    if status == "error":
+        assert value.startswith("MeshingError") and "1.11e-16 apart" in value, value
