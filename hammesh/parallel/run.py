@@ -340,13 +340,19 @@ def gather_widening(run, summaries: list, raises: list | None = None) -> list:
         if 0 < left < workers:
             k = max(share, (os.cpu_count() or 1) // left)
             if k != (raised or share):
-                run.run(set_threads, k)
+                try:
+                    run.run(set_threads, k)
+                except Exception:  # noqa: BLE001 - optional: a worker gone is the gather's to report
+                    continue
                 raised = k
                 if raises is not None:
                     raises.append([left, k, since_start()])
     small = run.gather(summaries)
     if raised is not None:
-        run.run(set_threads, share)  # (the pieces run on every worker again)
+        try:
+            run.run(set_threads, share)  # (the pieces run on every worker again)
+        except Exception:  # noqa: BLE001 - as above; the pieces' tasks report a worker gone
+            pass
     return small
 
 
