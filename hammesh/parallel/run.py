@@ -32,6 +32,7 @@ from hammesh.parallel.union import assemble, check_union
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
+           "MOST_BALANCE_TILES", "MIN_FOURTH_TILE",
            "not_carried", "SUMMARIES_WITH_TILES", "task_clock", "gather_widening"]
 
 #: each tile's summary submitted with the tile (False: gathered after the last tile is done)
@@ -46,6 +47,11 @@ MIN_BALANCED_TILE = 500_000
 MORE_BALANCE_TILES = 3
 #: estimated triangles per tile below which the third tile per worker is not made
 MIN_THIRD_TILE = 800_000
+#: tiles per worker for balance when each still keeps ``MIN_FOURTH_TILE`` triangles
+#: (session 17; ``MOST_BALANCE_TILES = 3`` restores session 13's rule)
+MOST_BALANCE_TILES = 4
+#: estimated triangles per tile below which the fourth tile per worker is not made
+MIN_FOURTH_TILE = 700_000
 
 
 class _Done:
@@ -87,7 +93,12 @@ def default_tiles(estimate: float, workers: int) -> int:
     the four tile tasks still took 1.54-1.86 s and the last one's end decided the
     tiles' stage; six tiles of 1M ended it sooner, with less CPU in all (interleaved
     fresh runs, wall 5.22 s against 5.40 s median). At 3M six tiles of 0.5M were
-    slower than four (3.88 s against 3.62 s): docs/scale.md.
+    slower than four (3.88 s against 3.62 s): docs/scale.md. Four per worker
+    (``MOST_BALANCE_TILES``, session 17) while each keeps ``MIN_FOURTH_TILE``: the 6M
+    demo's eight tiles cost 0.75-0.95 s CPU each against 0.90-1.39 s for six (the
+    tile tasks' sum 6.47-6.73 s against 6.70-6.80 s, one process, interleaved), and
+    the workers ended together (busy 6.3 / 6.3, 6.4 / 6.3, 4.0 / 4.0 s against 6.0 /
+    5.6, 6.6 / 6.0, 5.5 / 5.1 s with six; whole CPU the same, 1.81 x raw).
     """
     w = max(1, int(workers))
     per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
@@ -95,6 +106,8 @@ def default_tiles(estimate: float, workers: int) -> int:
         per = max(per, BALANCE_TILES)
     if w > 1 and estimate >= MORE_BALANCE_TILES * w * MIN_THIRD_TILE:
         per = max(per, MORE_BALANCE_TILES)
+    if w > 1 and estimate >= MOST_BALANCE_TILES * w * MIN_FOURTH_TILE:
+        per = max(per, MOST_BALANCE_TILES)
     return w * per
 
 
