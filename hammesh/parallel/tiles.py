@@ -61,6 +61,9 @@ SIDE_VERTICES = True
 #: Before, only a cut exactly at a vertex was refused; any other was only ranked low
 #: and taken when no candidate crossed the segments at a good angle.
 CUT_TOUCH = 1e-9
+#: a coarse edge lying on a cut counts as inside the domain (:func:`_line_cover`,
+#: session 17); False: only triangles the cut crosses (before, kept for the A/B)
+LINE_EDGES = True
 #: a cut closer to a vertex than this fraction of CLEARANCE is looked for in the wider windows too
 WIDEN_BELOW = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
@@ -511,13 +514,23 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
 
 
 def _line_cover(ptsc: np.ndarray, tric: np.ndarray, axis: int, c: float) -> np.ndarray:
-    """Merged intervals (along the line) where the line ``axis = c`` is inside the coarse mesh."""
+    """Merged intervals (along the line) where the line ``axis = c`` is inside the coarse mesh.
+
+    A coarse edge lying on the line counts too (session 17): the coarse mesh's
+    Steiner points can sit exactly on a cut (a point at (0, 0) between an inner
+    loop's vertices at (+-0.207, 0), the cut at y = 0), and the triangles on either
+    side only touch the line there; before, that stretch was taken for outside the
+    domain, no separator was made on it, and Triangle ate the loop's inside from one
+    tile's hull (the union's check failed: a separator edge in one tile only)."""
     o = 1 - axis
-    P = ptsc[tric]  # (t, 3, 2)
-    lo_ax, hi_ax = P[:, :, axis].min(axis=1), P[:, :, axis].max(axis=1)
+    P_all = ptsc[tric]  # (t, 3, 2)
+    lo_ax, hi_ax = P_all[:, :, axis].min(axis=1), P_all[:, :, axis].max(axis=1)
     hit = (lo_ax < c) & (hi_ax > c)
-    P = P[hit]
-    if len(P) == 0:
+    on = P_all[:, :, axis] == c
+    flat = (on.sum(axis=1) == 2) & LINE_EDGES  # (one edge on the line: its interval)
+    E = P_all[flat][on[flat]].reshape(-1, 2, 2)[:, :, o]
+    P = P_all[hit]
+    if len(P) == 0 and len(E) == 0:
         return np.zeros((0, 2))
     lo = np.full(len(P), np.inf)
     hi = np.full(len(P), -np.inf)
@@ -530,10 +543,11 @@ def _line_cover(ptsc: np.ndarray, tric: np.ndarray, axis: int, c: float) -> np.n
         val = p[:, o] + t * (q[:, o] - p[:, o])
         lo = np.where(s, np.minimum(lo, val), lo)
         hi = np.where(s, np.maximum(hi, val), hi)
+    lo, hi = np.concatenate([lo, E.min(axis=1)]), np.concatenate([hi, E.max(axis=1)])
     order = np.argsort(lo)
     lo, hi = lo[order], hi[order]
     run_hi = np.maximum.accumulate(hi)
-    tol = 1e-12 * max(1.0, float(np.abs(P).max()))
+    tol = 1e-12 * max(1.0, float(np.abs(P_all[hit | flat]).max()))
     start = np.concatenate([[True], lo[1:] > run_hi[:-1] + tol])
     first = np.flatnonzero(start)
     last = np.concatenate([first[1:] - 1, [len(lo) - 1]])
