@@ -24,8 +24,11 @@ __all__ = ["NEAR_RELATIVE", "ISOLATED_SECONDS", "input_fault", "triangulate_guar
 #: random cases per distance): two points 0 / 1e-16 / 1e-15 / 1e-14 / 1e-13 apart
 #: crashed Triangle (SIGSEGV) in 60 / 12 / 1 / 1 / 0 cases, hung past 10 s in 0 / 5 /
 #: 4 / 0 / 1; a point 1e-16 / 1e-15 off a segment crashed it in 6 / 1; from 1e-12 on
-#: none. An exact duplicate point crashes it whenever a segment uses it (the
-#: ``triangle`` package's own issues #68 and #70: "random" segfaults on such input).
+#: none. An exact duplicate point a segment uses crashed it in all 60 (a process
+#: that had imported only ``triangle`` and numpy, each case in a forked child); in
+#: other processes 0-6 of 8 such cases (the read lands on the heap: whether it
+#: faults depends on the process; the ``triangle`` package's issues #68 and #70 report
+#: "random" segfaults on such input).
 NEAR_RELATIVE = 1e-11
 #: a suspect tile input runs in a child process (:func:`triangulate_guarded`), stopped
 #: after this many seconds (Triangle loops without end on some such inputs)
