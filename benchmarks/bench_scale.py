@@ -186,8 +186,13 @@ EARLY = ("import sys; import hammesh.parallel.command as c, hammesh.parallel.til
 #: ``python -c`` running the command with ``command.START_BEFORE_IMPORTS`` (argv[1])
 #: set, 0 or 1
 #: the command with one switch of hammesh.parallel.cluster set (argv[1]: name, argv[2]: 0/1)
-CLUSTER_SWITCH = ("import sys; import hammesh.parallel.cluster as c; getattr(c, sys.argv[1]); "
-                  "setattr(c, sys.argv[1], bool(int(sys.argv[2]))); "
+#: ``--switch NAME`` (``hammesh.parallel.cluster.NAME``) or ``module.NAME``
+#: (``hammesh.parallel.module.NAME``): a boolean is set on / off; any other value is
+#: kept (on) or set to its type's zero (off: ``run.TILE_GRADE`` 0.0, equal tiles)
+CLUSTER_SWITCH = ("import sys, importlib; m, _, n = sys.argv[1].rpartition('.'); "
+                  "c = importlib.import_module('hammesh.parallel.' + (m or 'cluster')); v = getattr(c, n); "
+                  "on = bool(int(sys.argv[2])); "
+                  "setattr(c, n, on) if isinstance(v, bool) else (None if on else setattr(c, n, type(v)(0))); "
                   "from hammesh.cli import main; sys.exit(main(sys.argv[3:]))")
 
 IMPORTS_FIRST = ("import sys; import hammesh.parallel.command as c; c.START_BEFORE_IMPORTS = bool(int(sys.argv[1])); "
@@ -612,7 +617,9 @@ def imports_ab(a) -> int:
 def switch_ab(a) -> int:
     """``--switch-ab R --switch NAME``: interleaved fresh processes with the boolean
     ``hammesh.parallel.cluster.NAME`` on / off (e.g. ``NO_HUGEPAGE_ADVICE``; both run
-    through ``cli.main`` in a ``python -c``); the raw call first, for the ratios."""
+    through ``cli.main`` in a ``python -c``), or ``module.NAME`` of another parallel
+    module (``run.TILE_GRADE``: its default against 0, :data:`CLUSTER_SWITCH`); the
+    raw call first, for the ratios."""
     area, w, r = _ab_start(a)
     mode = a.modes.split(",")[0]
     _interleaved_ab(a.switch_ab, a.switch, lambda on: ours(area, w, a.tiles, mode, a.out_dir, switch=(a.switch, on)))

@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["area_sum", "edges_within_into", "label_pieces_into", "lattice_mark_inside_into", "lattice_clear_near_segments_into",
-           "lattice_clear_near_points_into", "lattice_triangles_into", "lattice_mesh_into"]
+           "lattice_clear_near_points_into", "lattice_triangles_into", "lattice_mesh_into", "near_feature"]
 
 
 @njit(cache=True, nogil=True)
@@ -251,3 +251,64 @@ def lattice_mesh_into(index: np.ndarray, nx: int, corners: np.ndarray, neighbors
                 neighbors[t, 0] = _lattice_at(index, j, 2 * (i + 1 - o))
                 neighbors[t, 1] = _lattice_at(index, j + 1, 2 * i)
                 neighbors[t, 2] = _lattice_at(index, j, 2 * (i - o))
+
+
+@njit(cache=True, nogil=True)
+def near_feature(points: np.ndarray, order: np.ndarray, segments: np.ndarray, tol: float) -> tuple[int, int, int]:
+    """The first pair of features closer than ``tol`` (in x and in y for two points):
+    ``(0, i, j)`` two points (exact duplicates included), ``(1, i, s)`` point ``i`` and
+    the inside of segment ``s`` (not one of its ends), ``(-1, -1, -1)`` none.
+
+    ``order``: the points sorted by x, then y (``np.lexsort((y, x))``). Both searches
+    go over the runs of equal x within ``tol`` (a segment's: its x-extent) and search
+    each run by y: a lattice's points share their column's x, and a sweep over x alone
+    would visit a whole column per point."""
+    n = order.shape[0]
+    xs = np.empty(n)
+    ys = np.empty(n)
+    for a in range(n):
+        xs[a] = points[order[a], 0]
+        ys[a] = points[order[a], 1]
+    run_end = np.empty(n, np.int64)  # (the end of the run of equal x holding a)
+    e = n
+    for a in range(n - 1, -1, -1):
+        if a + 1 < n and xs[a + 1] != xs[a]:
+            e = a + 1
+        run_end[a] = e
+    for a in range(n):
+        if a + 1 < run_end[a] and ys[a + 1] - ys[a] <= tol:
+            return 0, order[a], order[a + 1]
+        b = run_end[a]
+        while b < n and xs[b] - xs[a] <= tol:
+            e = run_end[b]
+            k = b + np.searchsorted(ys[b:e], ys[a] - tol)
+            if k < e and ys[k] <= ys[a] + tol:
+                return 0, order[a], order[k]
+            b = e
+    for s in range(segments.shape[0]):
+        p, q = segments[s, 0], segments[s, 1]
+        if p < 0 or q < 0 or p >= points.shape[0] or q >= points.shape[0]:
+            continue
+        px, py, qx, qy = points[p, 0], points[p, 1], points[q, 0], points[q, 1]
+        dx, dy = qx - px, qy - py
+        length2 = dx * dx + dy * dy
+        if length2 == 0.0:
+            continue
+        ylo, yhi = min(py, qy) - tol, max(py, qy) + tol
+        b = np.searchsorted(xs, min(px, qx) - tol)  # (a run's start)
+        while b < n and xs[b] <= max(px, qx) + tol:
+            e = run_end[b]
+            k = b + np.searchsorted(ys[b:e], ylo)
+            while k < e and ys[k] <= yhi:
+                i = order[k]
+                k += 1
+                if i == p or i == q:
+                    continue
+                t = ((points[i, 0] - px) * dx + (points[i, 1] - py) * dy) / length2
+                if t <= 0.0 or t >= 1.0:
+                    continue
+                cross = (points[i, 0] - px) * dy - (points[i, 1] - py) * dx
+                if cross * cross <= tol * tol * length2:
+                    return 1, i, s
+            b = e
+    return -1, -1, -1

@@ -8,7 +8,7 @@ from typing import Iterator
 
 from hammesh.errors import HammeshError, InvalidOptionError
 
-__all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
+__all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "local_workers", "set_threads", "TAIL_THREADS", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
            "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA",
            "dask_installed", "DASK_MISSING", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
@@ -204,6 +204,8 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             # thread could not be left in the caller's, its "current client" is per context)
             c = distributed.Client(cluster, timeout=START_TIMEOUT)
             stack.callback(c.close)
+            _local_clients.append((c, workers))
+            stack.callback(_local_clients.remove, (c, workers))
             # the workers share this machine's cores: each threaded pass of a worker gets its
             # share, not every core (N workers x C threads on C cores only thrash)
             kept = c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
@@ -220,6 +222,35 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             raise ClusterError(f"the local Dask cluster of {workers} workers did not start within "
                                f"{START_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from exc
     return c
+
+
+#: when fewer tiles are left running than a local cluster has workers, the workers'
+#: threads per pass are raised to the cores over the tiles left (:func:`set_threads`,
+#: ``run.run_tiles``), and set back before the pieces; False: the share stays fixed
+TAIL_THREADS = True
+
+_local_clients: list = []  # (the clients of the local clusters started here, while they live)
+
+
+def local_workers(runner) -> int | None:
+    """The worker count of a local cluster this process started (``runner``: its
+    client, or a :class:`Starting` handle), None for any other runner: only there do
+    the workers share this machine's cores in the way :func:`worker_threads` assumes."""
+    if isinstance(runner, Starting):
+        return runner.n_workers
+    for c, n in _local_clients:
+        if c is runner:
+            return n
+    return None
+
+
+def set_threads(n: int) -> int | None:
+    """On a worker: cap its threads per pass at ``n`` (:func:`hammesh.threads.limit`);
+    run by ``Client.run`` in the worker's event loop, beside a running tile task,
+    whose next passes take it (a pass reads the cap when it starts)."""
+    from hammesh import threads
+
+    return threads.limit(int(n))
 
 
 def worker_setup(n_threads: int) -> bool:

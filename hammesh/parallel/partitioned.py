@@ -400,6 +400,7 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                                      "piece_at": task_clock(x[5]["clock"], "piece_at")["piece_at"]}
                                     for st, x in zip(tiled.tile_steps, done)],
                      "since_start": {**tiled.since_start, "end": since_start()},
+                     "tail_threads": tiled.tail_threads,
                      "driver_cpu": {**tiled.driver_cpu, "end": time.process_time()},
                      "peak_rss_mb": {"driver": peak_rss_mb(), "workers": worker_rss}},
     }

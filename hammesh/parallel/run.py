@@ -32,7 +32,8 @@ from hammesh.parallel.union import assemble, check_union
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
            "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
-           "not_carried", "SUMMARIES_WITH_TILES", "task_clock"]
+           "MOST_BALANCE_TILES", "MIN_FOURTH_TILE",
+           "not_carried", "SUMMARIES_WITH_TILES", "task_clock", "gather_widening"]
 
 #: each tile's summary submitted with the tile (False: gathered after the last tile is done)
 SUMMARIES_WITH_TILES = True
@@ -46,6 +47,11 @@ MIN_BALANCED_TILE = 500_000
 MORE_BALANCE_TILES = 3
 #: estimated triangles per tile below which the third tile per worker is not made
 MIN_THIRD_TILE = 800_000
+#: tiles per worker for balance when each still keeps ``MIN_FOURTH_TILE`` triangles
+#: (session 17; ``MOST_BALANCE_TILES = 3`` restores session 13's rule)
+MOST_BALANCE_TILES = 4
+#: estimated triangles per tile below which the fourth tile per worker is not made
+MIN_FOURTH_TILE = 700_000
 
 
 class _Done:
@@ -87,7 +93,12 @@ def default_tiles(estimate: float, workers: int) -> int:
     the four tile tasks still took 1.54-1.86 s and the last one's end decided the
     tiles' stage; six tiles of 1M ended it sooner, with less CPU in all (interleaved
     fresh runs, wall 5.22 s against 5.40 s median). At 3M six tiles of 0.5M were
-    slower than four (3.88 s against 3.62 s): docs/scale.md.
+    slower than four (3.88 s against 3.62 s): docs/scale.md. Four per worker
+    (``MOST_BALANCE_TILES``, session 17) while each keeps ``MIN_FOURTH_TILE``: the 6M
+    demo's eight tiles cost 0.75-0.95 s CPU each against 0.90-1.39 s for six (the
+    tile tasks' sum 6.47-6.73 s against 6.70-6.80 s, one process, interleaved), and
+    the workers ended together (busy 6.3 / 6.3, 6.4 / 6.3, 4.0 / 4.0 s against 6.0 /
+    5.6, 6.6 / 6.0, 5.5 / 5.1 s with six; whole CPU the same, 1.81 x raw).
     """
     w = max(1, int(workers))
     per = max(1, int(np.ceil(estimate / (w * TRIANGLES_PER_TILE) - 0.2)))
@@ -95,6 +106,8 @@ def default_tiles(estimate: float, workers: int) -> int:
         per = max(per, BALANCE_TILES)
     if w > 1 and estimate >= MORE_BALANCE_TILES * w * MIN_THIRD_TILE:
         per = max(per, MORE_BALANCE_TILES)
+    if w > 1 and estimate >= MOST_BALANCE_TILES * w * MIN_FOURTH_TILE:
+        per = max(per, MOST_BALANCE_TILES)
     return w * per
 
 
@@ -271,6 +284,9 @@ class Tiled:
     #: this process's CPU seconds (every thread: the main one, the cluster's start,
     #: Dask's scheduler and client) at the same points
     driver_cpu: dict = field(default_factory=dict)
+    #: the workers' threads per pass raised at the tail (:func:`gather_widening`):
+    #: ``[tiles left, threads, seconds since this process started]`` per raise
+    tail_threads: list = field(default_factory=list)
 
 
 def task_clock(clock: tuple, key: str = "at") -> dict:
@@ -306,6 +322,51 @@ def since_start() -> float:
         return time.time() - psutil.Process().create_time()
     except Exception:  # pragma: no cover - no psutil, or no such process information
         return float("nan")
+
+
+def gather_widening(run, summaries: list, raises: list | None = None) -> list:
+    """``run.gather(summaries)``; on a local cluster (:func:`~hammesh.parallel.cluster.local_workers`)
+    with :data:`~hammesh.parallel.cluster.TAIL_THREADS`, each time a tile ends with
+    fewer tiles left than workers, the workers' threads per pass go up to the cores
+    over the tiles left, and back to their share once all are done; each raise is
+    appended to ``raises`` as ``[tiles left, threads, seconds since the start]``.
+
+    Why: tiles of equal triangle counts do not cost the same (the 6M demo's sparse
+    ``hamiltonian()`` 0.8-1.35 s CPU per 1M-triangle tile, nothing in the
+    decomposition predicts which), so one worker ends its last tile first and idles
+    while the other finishes its own (0.2-1.2 s in the runs of session 16). With two
+    threads a tile's sparse ``hamiltonian()`` runs its threaded passes and the
+    certificate's side work beside its main thread: measured on two 1M tiles of the
+    6M demo, in one process, main thread CPU 0.89 -> 0.60 s and 1.32 -> 1.02-1.23 s,
+    process CPU +7-13 %. The output does not depend on the thread count.
+    """
+    from hammesh.parallel.cluster import TAIL_THREADS, local_workers, set_threads, worker_threads
+
+    workers = local_workers(run)
+    if not TAIL_THREADS or workers is None or workers < 2 or not summaries:
+        return run.gather(summaries)
+    from distributed import as_completed
+
+    share, raised, left = worker_threads(workers), None, len(summaries)
+    for _ in as_completed(summaries):
+        left -= 1
+        if 0 < left < workers:
+            k = max(share, (os.cpu_count() or 1) // left)
+            if k != (raised or share):
+                try:
+                    run.run(set_threads, k)
+                except Exception:  # noqa: BLE001 - optional: a worker gone is the gather's to report
+                    continue
+                raised = k
+                if raises is not None:
+                    raises.append([left, k, since_start()])
+    small = run.gather(summaries)
+    if raised is not None:
+        try:
+            run.run(set_threads, share)  # (the pieces run on every worker again)
+        except Exception:  # noqa: BLE001 - as above; the pieces' tasks report a worker gone
+            pass
+    return small
 
 
 def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles: int, runner=None,
@@ -352,11 +413,12 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     # holds the outcome as soon as the tile is done, not in a round after the last one
     summaries = [run.submit(_small, h, pure=False) for h in handles] if SUMMARIES_WITH_TILES else None
     s1, p1 = since_start(), time.process_time()
+    raises: list = []
     if summaries is None:
         wait_for(run, handles)  # done: their holders are known
         small = run.gather([run.submit(_small, h, pure=False, **on_holder(run, h)) for h in handles])
     else:
-        small = run.gather(summaries)  # (a tile's error is raised here)
+        small = gather_widening(run, summaries, raises)  # (a tile's error is raised here)
     del warming, summaries
     rounds = 0
     while any(len(o.bad) for o in small):
@@ -395,7 +457,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                  tile_steps=[{"triangles": int(o.n_mesh_triangles), **o.seconds, **task_clock(o.clock)}
                              for o in small],
                  since_start={"decompose": s0, "submitted": s1, "tiles_done": s0 + (t2 - t0)},
-                 driver_cpu={"decompose": p0, "submitted": p1, "tiles_done": p2})
+                 driver_cpu={"decompose": p0, "submitted": p1, "tiles_done": p2}, tail_threads=raises)
 
 
 def finish_args(tiled: Tiled) -> list[tuple]:
@@ -570,7 +632,7 @@ def not_carried(domain: Domain) -> list[str]:
 def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
     """Estimated triangle count of a Triangle run: the domain's area (one constrained
     triangulation, no refinement) over ``AREA_FILL x max_area``."""
-    import triangle
+    from hammesh.parallel.guard import triangulate_guarded
 
     check_bounds(min_angle, max_area)  # (before the estimate divides by it)
 
@@ -581,7 +643,7 @@ def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
         data["segments"] = np.array(domain.segments, dtype=np.int32)
     if len(domain.holes):
         data["holes"] = np.array(domain.holes)
-    out = triangle.triangulate(data, ("p" if len(domain.segments) else "pc") + "Q")
+    out = triangulate_guarded(data, ("p" if len(domain.segments) else "pc") + "Q", "the domain's area")
     p, t = np.asarray(out["vertices"]), np.asarray(out.get("triangles", np.zeros((0, 3), int)))
     e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
     area = float(np.abs(0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])).sum())

@@ -9,6 +9,7 @@ import numpy as np
 from hammesh.errors import MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.options import format_number
+from hammesh.parallel.guard import triangulate_guarded
 from hammesh.parallel.tiles import Tile
 
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
@@ -275,8 +276,6 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
     edges). The lattice's triangles have 60-degree angles and area ``AREA_FILL x
     max_area``, so the whole mesh meets both bounds, as Triangle's own run would.
     """
-    import triangle
-
     from hammesh.parallel._kernels import label_pieces_into, lattice_mesh_into, lattice_triangles_into
     from hammesh.parallel.union import min_angles_deg
 
@@ -309,7 +308,7 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
                                                 dtype=np.int32)[:, None],
         "holes": np.ascontiguousarray(np.concatenate([np.asarray(tile.holes, np.float64).reshape(-1, 2), hole_xy])),
     }
-    out = triangle.triangulate(data, tile_switches(min_angle, max_area))
+    out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}")
     bt = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     bp = np.asarray(out["vertices"], dtype=np.float64)
     if len(bt) == 0 or len(bp) < k + nb or not np.array_equal(bp[: k + nb], verts):
@@ -405,8 +404,6 @@ def mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: boo
 
 
 def _mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bool) -> Mesh:
-    import triangle
-
     grid = lattice_grid(tile, max_area) if lattice else None
     if grid is not None and LATTICE_BAND:
         band = mesh_band(tile, grid, min_angle, max_area)
@@ -420,7 +417,7 @@ def _mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bo
     }
     if len(tile.holes):
         data["holes"] = np.ascontiguousarray(tile.holes, dtype=np.float64)
-    out = triangle.triangulate(data, tile_switches(min_angle, max_area))
+    out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}")
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(tri) == 0:
         raise MeshingError(f"Triangle produced no triangles for tile {tile.index}")

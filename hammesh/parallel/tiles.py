@@ -37,7 +37,7 @@ from hammesh.parallel.sizing import AREA_FILL, EDGE_PER_SQRT_AREA, graded_points
 
 __all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments", "coupled_ends", "without_subnormals",
            "COARSE_TRIANGLES",
-           "COUPLED_DEG"]
+           "COUPLED_DEG", "CUT_TOUCH"]
 
 #: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
 COARSE_TRIANGLES = 20_000
@@ -54,6 +54,16 @@ CLEARANCE = 1.0
 #: a cut keeps clear of the vertices on the box sides it ends on, too (and may end at
 #: another cut's end): :func:`_choose_cut`; False: only of those inside the box (before session 16)
 SIDE_VERTICES = True
+#: a cut position closer than this times the box's extent to a vertex (and not at it,
+#: as at another cut's end) is never taken (session 17): the cut's crossings with the
+#: segments ending there would lie that close to the vertex, and a separator would pass
+#: it as close, input that crashes Triangle (SIGSEGV; ``tile_mesh.NEAR_RELATIVE``).
+#: Before, only a cut exactly at a vertex was refused; any other was only ranked low
+#: and taken when no candidate crossed the segments at a good angle.
+CUT_TOUCH = 1e-9
+#: a coarse edge lying on a cut counts as inside the domain (:func:`_line_cover`,
+#: session 17); False: only triangles the cut crosses (before, kept for the A/B)
+LINE_EDGES = True
 #: a cut closer to a vertex than this fraction of CLEARANCE is looked for in the wider windows too
 WIDEN_BELOW = 0.5
 #: a separator's subsegment is at most this times its distance to a vertex off its line
@@ -165,9 +175,9 @@ def _tri_area(p: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _hull_segments(vertices: np.ndarray) -> np.ndarray:
-    import triangle
+    from hammesh.parallel.guard import triangulate_guarded
 
-    out = triangle.triangulate({"vertices": np.array(vertices)}, "pcQ")
+    out = triangulate_guarded({"vertices": np.array(vertices)}, "pcQ", "the domain's hull")
     return np.asarray(out["segments"], dtype=np.int64).reshape(-1, 2)
 
 
@@ -191,7 +201,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
     """Triangle's coarse quality mesh of the domain: points, triangles, region rows,
     and its subsegments with the user segment each lies on (Triangle's own grading of
     the segments near small angles and close features, kept by the tiles)."""
-    import triangle
+    from hammesh.parallel.guard import triangulate_guarded
 
     ext = np.ptp(vertices, axis=0)
     area_bound = max(float(ext[0] * ext[1]) / COARSE_TRIANGLES, 4.0 * max_area)
@@ -209,7 +219,7 @@ def _coarse_mesh(vertices, segments, holes, regions, min_angle, max_area):
         reg[:, 3] = -1.0
         data["regions"] = reg
         sw += "A"
-    out = triangle.triangulate(data, sw + "Q")
+    out = triangulate_guarded(data, sw + "Q", "the coarse mesh")
     pts = np.array(out["vertices"], dtype=np.float64)
     pts[: len(vertices)] = vertices  # (as given: see without_subnormals)
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
@@ -379,12 +389,14 @@ def _choose_cut(b: _Builder, box, axis, c_lo, c_hi, c_mid, sizer, min_angle, sid
     sin_cross = np.abs(d[:, axis]) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-300)
     need = math.radians(min(90.0, (min_angle or 20.0) + CROSS_MARGIN_DEG))
     best, best_key = c_mid, None
+    touch = CUT_TOUCH * float(max(box[1] - box[0], box[3] - box[2]))
     for c in cand:
-        clear = np.abs(v[:, axis] - c) / hv if len(v) else np.array([np.inf])
-        clear[snap & (v[:, axis] == c)] = np.inf  # (ending at another cut's end)
-        clear_min = float(clear.min()) if len(clear) else np.inf
-        if clear_min == 0.0:
+        gap = np.abs(v[:, axis] - c)
+        at_end = snap & (v[:, axis] == c)  # (ending at another cut's end)
+        if (gap[~at_end] <= touch).any():
             continue
+        clear = np.where(at_end, np.inf, gap / hv) if len(v) else np.array([np.inf])
+        clear_min = float(clear.min())
         crossing = (a[:, axis] - c) * (e[:, axis] - c) < 0
         ang = float(np.arcsin(np.clip(sin_cross[crossing].min(), 0, 1))) if crossing.any() else math.pi / 2
         # an angle the mesher cannot meet is fatal; closeness to vertices is repaired
@@ -502,13 +514,23 @@ def _kd_split(b: _Builder, root, n_tiles, centroid, weight, sizer, min_angle):
 
 
 def _line_cover(ptsc: np.ndarray, tric: np.ndarray, axis: int, c: float) -> np.ndarray:
-    """Merged intervals (along the line) where the line ``axis = c`` is inside the coarse mesh."""
+    """Merged intervals (along the line) where the line ``axis = c`` is inside the coarse mesh.
+
+    A coarse edge lying on the line counts too (session 17): the coarse mesh's
+    Steiner points can sit exactly on a cut (a point at (0, 0) between an inner
+    loop's vertices at (+-0.207, 0), the cut at y = 0), and the triangles on either
+    side only touch the line there; before, that stretch was taken for outside the
+    domain, no separator was made on it, and Triangle ate the loop's inside from one
+    tile's hull (the union's check failed: a separator edge in one tile only)."""
     o = 1 - axis
-    P = ptsc[tric]  # (t, 3, 2)
-    lo_ax, hi_ax = P[:, :, axis].min(axis=1), P[:, :, axis].max(axis=1)
+    P_all = ptsc[tric]  # (t, 3, 2)
+    lo_ax, hi_ax = P_all[:, :, axis].min(axis=1), P_all[:, :, axis].max(axis=1)
     hit = (lo_ax < c) & (hi_ax > c)
-    P = P[hit]
-    if len(P) == 0:
+    on = P_all[:, :, axis] == c
+    flat = (on.sum(axis=1) == 2) & LINE_EDGES  # (one edge on the line: its interval)
+    E = P_all[flat][on[flat]].reshape(-1, 2, 2)[:, :, o]
+    P = P_all[hit]
+    if len(P) == 0 and len(E) == 0:
         return np.zeros((0, 2))
     lo = np.full(len(P), np.inf)
     hi = np.full(len(P), -np.inf)
@@ -521,10 +543,11 @@ def _line_cover(ptsc: np.ndarray, tric: np.ndarray, axis: int, c: float) -> np.n
         val = p[:, o] + t * (q[:, o] - p[:, o])
         lo = np.where(s, np.minimum(lo, val), lo)
         hi = np.where(s, np.maximum(hi, val), hi)
+    lo, hi = np.concatenate([lo, E.min(axis=1)]), np.concatenate([hi, E.max(axis=1)])
     order = np.argsort(lo)
     lo, hi = lo[order], hi[order]
     run_hi = np.maximum.accumulate(hi)
-    tol = 1e-12 * max(1.0, float(np.abs(P).max()))
+    tol = 1e-12 * max(1.0, float(np.abs(P_all[hit | flat]).max()))
     start = np.concatenate([[True], lo[1:] > run_hi[:-1] + tol])
     first = np.flatnonzero(start)
     last = np.concatenate([first[1:] - 1, [len(lo) - 1]])

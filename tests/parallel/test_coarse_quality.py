@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 import hammesh
 from hammesh.parallel import assemble, check_union, mesh_decoupled
+from hammesh.parallel.guard import input_fault
 from tests.helpers import angles_deg, star_pslg
 
 
@@ -23,6 +24,8 @@ def _union_meets(dom, q, a, n_tiles):
     single = hammesh.quality_mesh(dom, min_angle=q, max_area=a, isolate=False)
     single_min = float(angles_deg(single.points, single.triangles).min())
     r = mesh_decoupled(dom, min_angle=q, max_area=a, n_tiles=n_tiles)
+    # no tile gives Triangle points that close (it crashed on such input, session 17)
+    assert all(input_fault(t.vertices, t.segments) is None for t in r.decomposition.tiles)
     u = assemble(r.decomposition, list(r.meshes))
     facts = check_union(r.decomposition, u, single_run_min_angle=single_min)
     # independent of the check: the test's own angles and areas
@@ -203,3 +206,28 @@ def test_a_subnormal_coordinate_is_meshed_and_kept():
     r = _union_meets(dom, 30.0, 5e-3, 2)
     u = assemble(r.decomposition, list(r.meshes))
     assert u.points[0, 1] == 5e-324 and u.points[0, 0] == 0.6
+
+
+#: a random domain (hypothesis, session 17) whose coarse mesh has a Steiner point at
+#: (0, 0) between its inner loop's vertices at (+-0.207, 0): at 7 tiles a cut runs
+#: along y = 0 on coarse edges, and that stretch was taken for outside the domain
+LOOP_ON_CUT = [[0.75, 0.0], [0.66409202, 0.34854238], [0.42604856, 0.6172379], [0.09040251, 0.74453166],
+               [-0.26595367, 0.70126218], [-0.74851075, 0.66312266], [-0.97094182, 0.23931566],
+               [-0.97094182, -0.23931566], [-0.74851075, -0.66312266], [-0.22162805, -0.58438515],
+               [0.1054696, -0.86862026], [0.56806475, -0.82298387], [0.66409202, -0.34854238],
+               [0.20703125, 0.0], [0.0, 0.20703125], [-0.20703125, 0.0], [0.0, -0.20703125]]
+
+
+def test_a_cut_along_coarse_edges_keeps_its_separator(monkeypatch):
+    """The cut y = 0 lies on coarse edges inside the loop: it gets its separator, the
+    union conforms (before: a separator edge in one tile only, the loop's inside
+    eaten from the other tile's hull; the check catches it with the fix switched off)."""
+    import hammesh.parallel.tiles as tiles
+    from hammesh.errors import VerificationError
+
+    segs = [[i, (i + 1) % 13] for i in range(13)] + [[13, 14], [14, 15], [15, 16], [16, 13]]
+    dom = hammesh.Domain(vertices=LOOP_ON_CUT, segments=segs)
+    _union_meets(dom, 30.0, 0.005, 7)
+    monkeypatch.setattr(tiles, "LINE_EDGES", False)
+    with pytest.raises(VerificationError, match="not shared by two tiles"):
+        _union_meets(dom, 30.0, 0.005, 7)

@@ -205,8 +205,9 @@ def test_locate_in_triangles_finds_the_holder(seed):
 
 
 @pytest.mark.parametrize("estimate, workers, tiles", [
-    (1e5, 2, 2), (1.9e6, 2, 2), (2e6, 2, 4), (3e6, 2, 4), (4.7e6, 2, 4), (4.8e6, 2, 6), (6.1e6, 2, 6),
-    (7.5e6, 2, 6), (6.1e6, 1, 2), (1e8, 2, 34), (3e6, 8, 8), (8e6, 8, 16), (2e7, 8, 24),
+    (1e5, 2, 2), (1.9e6, 2, 2), (2e6, 2, 4), (3e6, 2, 4), (4.7e6, 2, 4), (4.8e6, 2, 6), (5.5e6, 2, 6),
+    (5.6e6, 2, 8), (6.1e6, 2, 8), (7.5e6, 2, 8), (6.1e6, 1, 2), (1e8, 2, 34), (3e6, 8, 8), (8e6, 8, 16),
+    (2e7, 8, 24), (2.3e7, 8, 32),
 ])
 def test_default_tiles_are_a_multiple_of_the_workers(estimate, workers, tiles):
     from hammesh.parallel.run import TRIANGLES_PER_TILE, default_tiles
