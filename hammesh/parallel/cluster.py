@@ -198,7 +198,10 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
         try:
             cluster = stack.enter_context(distributed.LocalCluster(
                 n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                silence_logs=logging.ERROR, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                # (CRITICAL: a worker's "failed to communicate with scheduler during heartbeat"
+                # ERROR and its 30-line traceback raced the shutdown of a successful run, 1 in
+                # ~20; a task's failure reaches the driver through its future, not the log)
+                silence_logs=logging.CRITICAL, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 death_timeout=START_TIMEOUT))
             # (closed by the stack, not entered as a context: a client entered in the starting
             # thread could not be left in the caller's, its "current client" is per context)

@@ -97,9 +97,9 @@ def check_options(args: argparse.Namespace) -> None:
     from hammesh.parallel.cluster import DASK_MISSING, dask_installed
 
     if args.workers is not None:
-        params.number("--workers", args.workers, low=1, high=4096, what="workers")
+        params.integer("--workers", args.workers, low=1, high=4096, what="workers")
     if args.tiles is not None:
-        params.number("--tiles", args.tiles, low=1, high=1_000_000, what="tiles")
+        params.integer("--tiles", args.tiles, low=1, high=1_000_000, what="tiles")
     if args.workers is not None and args.scheduler is not None:
         raise InvalidOptionError("--workers starts a local cluster, --scheduler uses a running one: give one")
     if (args.workers is not None or args.scheduler is not None) and not dask_installed():

@@ -41,6 +41,12 @@ __all__ = ["Tile", "Decomposition", "decompose", "check_bounds", "split_segments
 
 #: area bound of the coarse mesh: bounding box area / COARSE_TRIANGLES
 COARSE_TRIANGLES = 20_000
+#: the fewest estimated triangles a tile may hold (``decompose`` refuses more tiles): at
+#: ~3 a tile (64 tiles of a 185-triangle domain) the separators made 128,052 triangles,
+#: 2,000 tiles of the demo at ``-a 0.002`` gave a tile no triangle (an internal error,
+#: session 17). Small on purpose: the coarse-size tests decompose small meshes into many
+#: tiles; 16 tiles of that domain (12 a tile) still make 4.7x its triangles
+MIN_TILE_TRIANGLES = 10
 #: a cut may move this fraction of its box's estimated count off the balanced position
 CUT_WINDOW = 0.04
 #: cut positions tried in the window
@@ -799,6 +805,11 @@ def decompose(domain: Domain, *, min_angle: float | None, max_area: float, n_til
     bound_c = np.full(len(tric), float(max_area))
     sizer = _Sizer(ptsc, tric, bound_c)
     weight = area_c / (AREA_FILL * bound_c)
+    most = max(1, int(weight.sum() // MIN_TILE_TRIANGLES))
+    if n_tiles > most:  # (the separators of tiles this small outnumber their triangles: up to 692x)
+        raise InvalidOptionError(
+            f"tiles={int(n_tiles)} is too many for this domain: about {weight.sum():,.0f} triangles, at most "
+            f"{most} tile(s) of {MIN_TILE_TRIANGLES} or more", option="tiles")
     centroid = ptsc[tric].mean(axis=1)
 
     b = _Builder(ptsc, segs, markers)
