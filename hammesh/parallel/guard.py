@@ -67,7 +67,8 @@ def _triangulate_plain(data: dict, switches: str) -> dict:
     return dict(triangle.triangulate(data, switches))
 
 
-def triangulate_guarded(data: dict, switches: str, what: str, seconds: float | None = None) -> dict:
+def triangulate_guarded(data: dict, switches: str, what: str, seconds: float | None = None,
+                        isolate: bool = False) -> dict:
     """Triangle's ``triangulate(data, switches)`` (of a tile, or the driver's coarse
     mesh of the whole domain: ``what`` names it in messages): in this process, unless
     :func:`input_fault` finds the input suspect; then in a child process
@@ -78,11 +79,13 @@ def triangulate_guarded(data: dict, switches: str, what: str, seconds: float | N
     Why not always a child: per tile the fork, the pipe and the copy-on-write faults
     cost ~0.01-0.02 s CPU of a worker of ~700 MB (measured, session 17), ~1 % of the
     6M command's CPU over its tiles, for inputs the decomposition never makes.
-    ``seconds``: the child's time limit (default :data:`ISOLATED_SECONDS`).
+    ``seconds``: the child's time limit (default :data:`ISOLATED_SECONDS`). ``isolate``:
+    a child whatever the input (the lattice band: see ``tile_mesh.mesh_band``).
     """
     fault = input_fault(data["vertices"], data.get("segments", np.zeros((0, 2), np.int64)))
-    if fault is None:
+    if fault is None and not isolate:
         return _triangulate_plain(data, switches)
+    fault = fault or "isolated"
     from hammesh.meshing.isolate import run_isolated
 
     try:

@@ -27,6 +27,14 @@ LATTICE_GRADING = 2.0
 #: triangles are made here (:func:`mesh_band`); False: Triangle gets the lattice's
 #: points and triangulates them too (the order before session 10, kept for the A/B)
 LATTICE_BAND = True
+#: the band's Triangle call of a tile estimated below this many triangles runs in a
+#: child process (``guard.triangulate_guarded``'s ``isolate``): it crashed the
+#: interpreter twice (SIGSEGV in ``mesh_band``, clean checkouts: CI of session 16, a
+#: fresh venv of session 17, both in the random coarse-domain tests) on input the guard
+#: does not flag. Not above: at 6M (tiles of 0.75M) a child per band took the sparse
+#: command from 1.05 to 1.53 x raw Triangle (the fork of a ~700 MB worker, the result's
+#: copy); a small tile's fork costs ~10 ms
+BAND_ISOLATED_BELOW = 200_000
 #: the lattice's triangles are numbered in blocks of this many strips and cells
 #: (:func:`~hammesh.parallel._kernels.lattice_triangles_into`: neighbours close in memory)
 LATTICE_BLOCK = 2
@@ -308,7 +316,15 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
                                                 dtype=np.int32)[:, None],
         "holes": np.ascontiguousarray(np.concatenate([np.asarray(tile.holes, np.float64).reshape(-1, 2), hole_xy])),
     }
-    out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}")
+    # (in a child process, always: the band's Triangle call crashed the interpreter twice
+    # on clean checkouts -- CI session 16, a fresh venv session 17 -- on input the guard
+    # does not flag, heap-dependent, never reproduced in forked children; a failure
+    # there falls back to the tile's plain run below)
+    try:
+        out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}'s band",
+                                  isolate=tile.estimate < BAND_ISOLATED_BELOW)
+    except MeshingError:
+        return None
     bt = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     bp = np.asarray(out["vertices"], dtype=np.float64)
     if len(bt) == 0 or len(bp) < k + nb or not np.array_equal(bp[: k + nb], verts):

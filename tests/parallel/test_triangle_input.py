@@ -163,9 +163,9 @@ def test_no_real_tile_input_is_suspect(area, n_tiles):
     seen = []
     real = tm.triangulate_guarded
 
-    def spy(data, switches, what, seconds=None):
+    def spy(data, switches, what, seconds=None, isolate=False):
         seen.append(input_fault(data["vertices"], data["segments"]))
-        return real(data, switches, what, seconds)
+        return real(data, switches, what, seconds, isolate)
 
     tm.triangulate_guarded = spy
     try:
@@ -206,3 +206,25 @@ def test_a_domain_with_points_1e16_apart_ends_in_a_meshing_error(monkeypatch):
     assert status in ("ok", "error"), (status, value)
     if status == "error":
         assert value.startswith("MeshingError") and "1.11e-16 apart" in value, value
+
+
+def test_a_small_tiles_band_runs_in_a_child_and_a_big_ones_here(monkeypatch):
+    """The band's Triangle call of a tile below ``BAND_ISOLATED_BELOW`` estimated
+    triangles runs in a child (it crashed the interpreter twice on clean checkouts),
+    a bigger tile's here (a child per 0.75M band cost the 6M command 1.05 -> 1.53x)."""
+    import hammesh.parallel.tile_mesh as tm
+
+    dom = hammesh.read_domain("hammesh/data/demo.poly")
+    d = decompose(dom, min_angle=30, max_area=1e-3, n_tiles=2)
+    asked = []
+    real = tm.triangulate_guarded
+
+    def spy(data, switches, what, seconds=None, isolate=False):
+        asked.append(isolate)
+        return real(data, switches, what, seconds, isolate)
+
+    monkeypatch.setattr(tm, "triangulate_guarded", spy)
+    t = d.tiles[0]
+    assert mesh_tile(t, 30, 1e-3).info.get("lattice") == "band" and asked == [True]
+    monkeypatch.setattr(tm, "BAND_ISOLATED_BELOW", 0)
+    assert mesh_tile(t, 30, 1e-3).info.get("lattice") == "band" and asked == [True, False]
