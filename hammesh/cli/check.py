@@ -43,6 +43,7 @@ def run(args: argparse.Namespace) -> int:
     # imported here, not with the CLI: ``hammesh --help`` and a refused option import
     # neither the readers nor the certificate's kernels (numba)
     from hammesh.io import check_outputs, read_mesh, write_report
+    from hammesh.io.paths import require_file
     from hammesh.io.report import collect_repairs
     from hammesh.verify.stored import verify_stored_mesh
 
@@ -51,8 +52,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report is not None and args.report.suffix.lower() != ".json":
         raise FileFormatError(f"{args.report}: the report is JSON; use a .json file name")
     check_outputs({"--report": args.report}, [args.mesh])
-    if not args.mesh.exists():
-        raise FileFormatError(f"{args.mesh}: no such file")
+    require_file(args.mesh)  # (no such file / is a directory / not a regular file: as every reader says)
     if args.surface and args.path:
         raise InvalidOptionError("--surface and --path exclude each other (`hammesh surface` writes cycles)")
     mesh = read_mesh(args.mesh, dim=3 if args.surface else None)

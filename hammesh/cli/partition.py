@@ -30,6 +30,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from hammesh.io import check_outputs, read_mesh, write, write_report
+    from hammesh.io.paths import require_file
     from hammesh.partition import partitioned
     from hammesh.verify.stored import verify_stored_mesh
 
@@ -37,8 +38,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report is not None and args.report.suffix.lower() != ".json":
         raise FileFormatError(f"{args.report}: the report is JSON; use a .json file name")
     check_outputs({"-o": args.output, "--report": args.report}, [args.mesh])
-    if not args.mesh.exists():
-        raise FileFormatError(f"{args.mesh}: no such file")
+    require_file(args.mesh)  # (no such file / is a directory / not a regular file: as every reader says)
     mesh = read_mesh(args.mesh)
     # the file's rows are cut as the cycle they claim to be: certified first, as
     # `hammesh check` would (a moved vertex made overlapping "parts" before, session 17)

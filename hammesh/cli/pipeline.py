@@ -21,6 +21,7 @@ from hammesh.cli.inputs import DOMAIN_SUFFIXES
 from hammesh.domain import Domain, read_domain
 from hammesh.errors import FileFormatError, InvalidDomainError
 from hammesh.io import check_outputs, read_mesh, supported_suffixes, unwritten_data, write, write_report
+from hammesh.io.paths import require_file
 from hammesh.io.guard import reading
 from hammesh.io.paths import written_files
 from hammesh.io.report import collect_repairs
@@ -81,8 +82,7 @@ def load_input(path: Path, *, strict: bool = False) -> Domain | Mesh:
 
     ``strict``: refuse an input that would need repairs instead of repairing it.
     """
-    if not path.exists():
-        raise FileFormatError(f"{path}: no such file")
+    require_file(path)  # (no such file / is a directory / not a regular file: as every reader says)
     if path.suffix.lower() in DOMAIN_SUFFIXES:
         with reading(path):
             if strict and accepts(read_domain, "strict"):

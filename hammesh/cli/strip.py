@@ -60,6 +60,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from hammesh import params
     from hammesh.io import check_outputs, read_mesh
+    from hammesh.io.paths import require_file
     from hammesh.strips.choose import MAX_RESTART_INDEX, choose_strip
     from hammesh.strips.files import STRIP_SUFFIXES, write_strip
 
@@ -68,8 +69,7 @@ def run(args: argparse.Namespace) -> int:
     params.integer("--restart-index", args.restart_index, low=0, high=MAX_RESTART_INDEX,
                    what="GL index buffers are uint32")
     check_outputs({"-o": args.output}, [args.mesh])
-    if not args.mesh.exists():
-        raise FileFormatError(f"{args.mesh}: no such file")
+    require_file(args.mesh)  # (no such file / is a directory / not a regular file: as every reader says)
     if args.generalized and args.method == "christofides":
         raise params.invalid("--method", args.method, "not 'christofides' with --generalized")
     if args.cache is not None:

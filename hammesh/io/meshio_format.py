@@ -479,20 +479,10 @@ def _guarded_gmsh_read(path: Path, formats: tuple[str, ...]) -> Any:
 def _budgeted_meshio_read(path: Path, formats: tuple[str, ...], budget: int) -> Any:
     """:func:`_meshio_read` with this process's address space capped at its size now plus
     ``budget`` bytes (run in :func:`_guarded_gmsh_read`'s child: the cap dies with it)."""
-    import resource
+    from hammesh.meshing.isolate import limit_memory
 
-    with open("/proc/self/status") as f:
-        size = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
-    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    limit = size + budget
-    if soft != resource.RLIM_INFINITY:
-        limit = min(limit, soft)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-    try:
-        return _meshio_read(path, formats)
-    except MemoryError:
-        raise FileFormatError(f"{path}: sizes beyond {budget / 2**30:.1f} GiB for a file of "
-                              f"{path.stat().st_size:,} bytes (corrupt counts?)") from None
+    limit_memory(extra=budget)
+    return _meshio_read(path, formats)  # (a MemoryError there is one of its "cannot read" causes)
 
 
 def _meshio_read(path: Path, formats: tuple[str, ...]) -> Any:

@@ -150,15 +150,17 @@ def _proc_kb(path: str, key: str) -> int:
     raise ValueError(f"{key} not in {path}")
 
 
-def limit_memory(fraction: float | None = None) -> int | None:
+def limit_memory(fraction: float | None = None, *, extra: int | None = None) -> int | None:
     """Cap this process's address space (``RLIMIT_AS``) at its size now plus ``fraction``
-    (default :data:`MEMORY_FRACTION`) of the available memory; the limit set, or None
-    where there is no ``/proc`` or ``resource`` (not Linux), or a tighter one is set."""
+    (default :data:`MEMORY_FRACTION`) of the available memory, or plus ``extra`` bytes;
+    the limit set, or None where there is no ``/proc`` or ``resource`` (not Linux), or a
+    tighter one is set."""
     try:
         import resource
 
         share = MEMORY_FRACTION if fraction is None else fraction
-        limit = _proc_kb("/proc/self/status", "VmSize") * 1024 + int(share * _proc_kb("/proc/meminfo", "MemAvailable") * 1024)
+        more = int(share * _proc_kb("/proc/meminfo", "MemAvailable") * 1024) if extra is None else int(extra)
+        limit = _proc_kb("/proc/self/status", "VmSize") * 1024 + more
         soft, hard = resource.getrlimit(resource.RLIMIT_AS)
         if hard != resource.RLIM_INFINITY:
             limit = min(limit, hard)

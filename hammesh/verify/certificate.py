@@ -78,6 +78,7 @@ __all__ = [
     "ANGLE_RTOL",
     "AREA_RTOL",
     "area_rounding_bound",
+    "has_edges",
     "ROUNDING_RTOL_MAX",
     "row_angles",
 ]
@@ -463,7 +464,7 @@ def _certify(
             _fail(f"constrained edges reference vertices outside 0..{n - 1}")
         inner = np.flatnonzero(~_on_boundary(segs, b_out))  # boundary edges are edges
         if len(inner):
-            found = _has_edges(tri, n, segs[inner])
+            found = has_edges(tri, n, segs[inner])
             if not found.all():
                 s = int(inner[np.argmin(found)])
                 _fail(f"constrained edge {s} {segs[s].tolist()} is not an edge of the mesh")
@@ -593,7 +594,7 @@ def _on_boundary(segs: np.ndarray, keys: np.ndarray) -> np.ndarray:
     return out
 
 
-def _has_edges(tri: np.ndarray, n: int, edges: np.ndarray) -> np.ndarray:
+def has_edges(tri: np.ndarray, n: int, edges: np.ndarray) -> np.ndarray:
     """Which undirected ``edges`` (k, 2) are edges of ``tri`` (one pass over its half-edges)."""
     keys = undirected_keys(edges, n)
     want = np.unique(keys)
@@ -612,7 +613,7 @@ def _check_segments_kept(pts: np.ndarray, tri: np.ndarray, segs: np.ndarray, b_o
     if len(inner) == 0:
         return
     n = len(pts)
-    missing = inner[~_has_edges(tri, n, segs[inner])]
+    missing = inner[~has_edges(tri, n, segs[inner])]
     if len(missing) == 0:
         return
     a, b = segs[missing, 0], segs[missing, 1]
@@ -626,7 +627,7 @@ def _check_segments_kept(pts: np.ndarray, tri: np.ndarray, segs: np.ndarray, b_o
     hi = np.searchsorted(pc[cand], mc, side="right")
     seg_of = np.repeat(np.arange(len(missing)), hi - lo)
     c = cand[np.concatenate([np.arange(i, j) for i, j in zip(lo, hi)]) if len(seg_of) else np.zeros(0, int)]
-    halves = _has_edges(tri, n, np.c_[a[seg_of], c]) & _has_edges(tri, n, np.c_[c, b[seg_of]])
+    halves = has_edges(tri, n, np.c_[a[seg_of], c]) & has_edges(tri, n, np.c_[c, b[seg_of]])
     ok = np.zeros(len(missing), dtype=bool)
     ok[seg_of[halves]] = True
     if not ok.all():

@@ -29,6 +29,7 @@ import numpy as np
 from hammesh.errors import InvalidMeshError, VerificationError
 from hammesh.predicates import orient_many
 from hammesh.verify._kernels import angle_area_stats
+from hammesh.verify.certificate import has_edges
 from hammesh.verify.runs import infer_runs_and_pairing
 
 __all__ = ["verify_stored_path_mesh"]
@@ -96,9 +97,7 @@ def _check_segments(tri: np.ndarray, segments: np.ndarray, n: int) -> None:
     """Every stored constrained edge is an edge of the triangles (either direction)."""
     if segments.ndim != 2 or segments.shape[1] != 2 or (segments < 0).any() or (segments >= n).any():
         raise VerificationError(f"the stored constrained edges are not pairs of vertices 0..{n - 1}")
-    e = np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    s = np.sort(segments, axis=1)
-    missing = np.flatnonzero(~np.isin(s[:, 0] * n + s[:, 1], e[:, 0] * n + e[:, 1]))
+    missing = np.flatnonzero(~has_edges(tri, n, segments))
     if len(missing):
         a, b = segments[missing[0]].tolist()
         raise VerificationError(f"constrained edge ({a}, {b}) is not an edge of the triangles")

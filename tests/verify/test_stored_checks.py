@@ -10,10 +10,10 @@ import sys
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from hammesh.errors import VerificationError
+from hammesh.errors import InvalidDomainError, VerificationError
 from hammesh.polygon import steiner_hamiltonian
 from hammesh.verify.path import verify_stored_path_mesh
 from tests.polygon.shapes import comb, dented
@@ -26,7 +26,10 @@ polygons = st.one_of(
 
 
 def _path_mesh(points: np.ndarray, kind: str = "path") -> tuple[np.ndarray, np.ndarray]:
-    q, t = steiner_hamiltonian(points, kind)
+    try:
+        q, t = steiner_hamiltonian(points, kind)
+    except InvalidDomainError:  # (a dented polygon with few corners may cross itself)
+        assume(False)
     return np.asarray(q, dtype=np.float64), np.asarray(t, dtype=np.int64)
 
 
