@@ -64,7 +64,25 @@ class MeshingError(HammeshError, RuntimeError):
 
 
 class VerificationError(HammeshError, AssertionError):
-    """An output failed its certificate (cycle, orientation, angles, area, conformity)."""
+    """An output failed its certificate (cycle, orientation, angles, area, conformity).
+
+    ``check`` names the failed check for callers that react to one kind of failure
+    (never parse the message): ``"input"`` (shapes, indices, non-finite values),
+    ``"cycle"`` (a run breaks or crosses), ``"orientation"`` (an inverted or degenerate
+    triangle), ``"overlap"`` (an edge used twice in one direction, a duplicate triangle,
+    triangles that overlap in the plane), ``"domain"`` (area, boundary, points or
+    constrained edges not kept), ``"angle"`` (a triangle below the angle bound) or
+    ``None`` where a check does not say.
+    """
+
+    CHECKS = ("input", "cycle", "orientation", "overlap", "domain", "angle")
+
+    def __init__(self, message: str = "", *, check: str | None = None) -> None:
+        super().__init__(message)
+        self.check = check
+
+    def __reduce__(self):  # (keeps ``check`` across processes: Dask workers raise it)
+        return (type(self), self.args, {"check": self.check})
 
 
 class OutputError(HammeshError, OSError):

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     except InvalidMeshError as exc:
         raise VerificationError(str(exc)) from None
     except VerificationError as exc:
-        if mesh.points.shape[1] == 2 and ("inverted" in str(exc) or "overlap" in str(exc)):
+        if mesh.points.shape[1] == 2 and exc.check in ("orientation", "overlap"):
             raise VerificationError(f"{exc} (a flat surface from `hammesh surface` may fold over itself: check it "
                                     "with --surface)") from None
         if not args.path and _is_path(mesh.triangles):  # say what it is: `hammesh points`/`polygon` make paths

@@ -295,7 +295,7 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         else:
             # (the input's vertices are far apart in ulps, the refinement's triangles may
             # not be: say so where rounding explains every row below the bound)
-            if " has angle " in str(exc) and " below " in str(exc):  # (only the angle item: no other fault)
+            if exc.check == "angle":  # (only the angle bound failed: no other fault)
                 check_rounding(out.points, out.triangles, 0.5 * ref_facts.min_angle, mode)
             raise
     t2 = time.perf_counter()

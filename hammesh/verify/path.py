@@ -58,11 +58,11 @@ def verify_stored_path_mesh(
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     if not np.isfinite(pts).all():
-        raise VerificationError(f"point {int(np.argmax(~np.isfinite(pts).all(axis=1)))} is not finite")
+        raise VerificationError(f"point {int(np.argmax(~np.isfinite(pts).all(axis=1)))} is not finite", check="input")
     try:
         runs, twin = infer_runs_and_pairing(tri, len(pts))
     except InvalidMeshError as exc:  # (a file's rows that are no valid mesh fail the check)
-        raise VerificationError(str(exc)) from None
+        raise VerificationError(str(exc), check="input") from None
     m = len(tri)
     # triangle t links to t + 1 when one of its half-edges is paired with one of t + 1's
     neighbour = np.where(twin >= 0, twin // 3, -1).reshape(m, 3)
@@ -74,12 +74,12 @@ def verify_stored_path_mesh(
     if len(broken):
         t = int(broken[0])
         raise VerificationError(f"path breaks at triangle {t}: it shares no edge with triangle {t + 1}, the next "
-                                "of its piece's run")
+                                "of its piece's run", check="cycle")
     sign = orient_many(pts, tri)
     if (sign <= 0).any():
         t = int(np.flatnonzero(sign <= 0)[0])
         what = "degenerate (zero area)" if sign[t] == 0 else "clockwise"
-        raise VerificationError(f"triangle {t} {tri[t].tolist()} is {what} by the exact orientation test")
+        raise VerificationError(f"triangle {t} {tri[t].tolist()} is {what} by the exact orientation test", check="orientation")
     if segments is not None and len(segments):
         _check_segments(tri, np.asarray(segments, dtype=np.int64), len(pts))
     first = ends - runs + 1
@@ -96,8 +96,8 @@ def verify_stored_path_mesh(
 def _check_segments(tri: np.ndarray, segments: np.ndarray, n: int) -> None:
     """Every stored constrained edge is an edge of the triangles (either direction)."""
     if segments.ndim != 2 or segments.shape[1] != 2 or (segments < 0).any() or (segments >= n).any():
-        raise VerificationError(f"the stored constrained edges are not pairs of vertices 0..{n - 1}")
+        raise VerificationError(f"the stored constrained edges are not pairs of vertices 0..{n - 1}", check="input")
     missing = np.flatnonzero(~has_edges(tri, n, segments))
     if len(missing):
         a, b = segments[missing[0]].tolist()
-        raise VerificationError(f"constrained edge ({a}, {b}) is not an edge of the triangles")
+        raise VerificationError(f"constrained edge ({a}, {b}) is not an edge of the triangles", check="domain")

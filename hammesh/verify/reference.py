@@ -62,7 +62,7 @@ class InputFacts:
 
 
 def _bad_input(msg: str) -> None:
-    raise VerificationError(f"the input mesh is not a valid triangulation: {msg}")
+    raise VerificationError(f"the input mesh is not a valid triangulation: {msg}", check="input")
 
 
 def input_facts(mesh: Mesh) -> InputFacts:

@@ -51,7 +51,7 @@ def infer_runs_and_pairing(triangles: np.ndarray, n_points: int) -> tuple[np.nda
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     m = len(tri)
     if m == 0:
-        raise VerificationError("the mesh has no triangles")
+        raise VerificationError("the mesh has no triangles", check="input")
     if tri.min() < 0 or tri.max() >= n_points:
         raise InvalidMeshError(f"triangles reference vertices outside 0..{n_points - 1}")
     twin, bad = _kernels.half_edge_twins(tri, int(n_points))  # the certificate's own
@@ -72,6 +72,6 @@ def infer_runs_and_pairing(triangles: np.ndarray, n_points: int) -> tuple[np.nda
         first_repeat = int(starts[repeat.min()])
         raise VerificationError(
             f"connected piece of triangle {first_repeat} is not stored as one consecutive "
-            "run of triangles (each piece must be one cycle)"
+            "run of triangles (each piece must be one cycle)", check="cycle"
         )
     return np.diff(np.r_[starts, m]).astype(np.int64), twin

@@ -78,5 +78,5 @@ def verify_stored_mesh(mesh: Mesh, *, path: bool = False) -> tuple[np.ndarray, d
         runs, stats, twin = verify_stored(mesh.points, triangles, segments=mesh.segments)
         pair = find_overlap(mesh.points, triangles, twin=twin)  # no input to compare with: test the plane
         if pair is not None:
-            raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap")
+            raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap", check="overlap")
     return runs, stats, triangles

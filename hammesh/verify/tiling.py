@@ -35,18 +35,18 @@ def triangulation_boundary_keys(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
     n = len(pts)
     used = np.bincount(tri.reshape(-1), minlength=n) > 0
     if not used.all():
-        raise VerificationError(f"point {int(np.argmin(used))} is not a vertex of the triangulation")
+        raise VerificationError(f"point {int(np.argmin(used))} is not a vertex of the triangulation", check="domain")
     sign = orient_many(pts, tri)
     if (sign <= 0).any():
         t = int(np.argmax(sign <= 0))
         raise VerificationError(
-            f"triangle {t} {tri[t].tolist()} is {'degenerate' if sign[t] == 0 else 'clockwise'}"
+            f"triangle {t} {tri[t].tolist()} is {'degenerate' if sign[t] == 0 else 'clockwise'}", check="orientation"
         )
     twin, dup = _kernels.half_edge_twins(tri, n)
     if dup >= 0:
         t, k = divmod(int(dup), 3)
         raise VerificationError(
-            f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the same direction"
+            f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is used twice in the same direction", check="overlap"
         )
     free = _kernels.boundary_half_edges(tri, twin)
     return np.sort(free[:, 0].astype(np.int64) * n + free[:, 1])

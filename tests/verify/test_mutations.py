@@ -376,6 +376,24 @@ CASES = {
 }
 
 
+#: the ``check`` each damage must be reported under (callers react to it, never to the text)
+CHECKS = {
+    "missing triangle": {"cycle", "domain"},
+    "duplicated triangle": {"cycle", "overlap"},
+    "rows swapped": {"cycle"},
+    "run length off by one": {"input"},
+    "cycle split in two": {"cycle"},
+    "flipped orientation": {"orientation"},
+    "moved input vertex": {"domain"},
+    "incenter outside its triangle": {"orientation"},
+    "vertex out of range": {"input"},
+    "point not finite": {"input"},
+    "midpoint off the segment": {"domain"},
+    "output segment not an edge": {"domain"},
+    "small angle": {"angle"},
+}
+
+
 #: Sparse mode splits no constrained edge on the loops plate: its midpoint case is incircle's.
 DAMAGES = [(mode, what) for mode in MODES for what in sorted(CASES)
            if not (mode == "sparse" and what == "midpoint off the segment")]
@@ -385,8 +403,10 @@ DAMAGES = [(mode, what) for mode in MODES for what in sorted(CASES)
 def test_damaged_output_is_rejected(mode: str, what: str) -> None:
     m, h = made(mode)
     hammesh.verify(h, m)  # the intact output passes
-    with pytest.raises(hammesh.VerificationError, match=CASES[what]):
+    with pytest.raises(hammesh.VerificationError, match=CASES[what]) as caught:
         hammesh.verify(damaged(h, what, m), m)
+    assert caught.value.check in CHECKS[what]
+    assert caught.value.check in hammesh.VerificationError.CHECKS
 
 
 # ---------------------------------------------------------------- point sets and polygons
