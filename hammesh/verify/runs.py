@@ -34,9 +34,11 @@ def infer_runs(triangles: np.ndarray, n_points: int) -> np.ndarray:
     Raises
     ------
     VerificationError
-        A piece is split over several runs (its triangles are not consecutive).
+        A piece is split over several runs (its triangles are not consecutive:
+        ``check="cycle"``), or the mesh is not edge-manifold: an edge shared by more than
+        two triangles or by two in one direction (``check="overlap"``).
     InvalidMeshError
-        The mesh is not edge-manifold.
+        A triangle references a vertex outside ``0..n_points - 1``.
     """
     return infer_runs_and_pairing(triangles, n_points)[0]
 
@@ -57,9 +59,9 @@ def infer_runs_and_pairing(triangles: np.ndarray, n_points: int) -> tuple[np.nda
     twin, bad = _kernels.half_edge_twins(tri, int(n_points))  # the certificate's own
     if bad >= 0:
         t, k = divmod(int(bad), 3)
-        raise InvalidMeshError(
+        raise VerificationError(
             f"edge ({tri[t, k]}, {tri[t, (k + 1) % 3]}) of triangle {t} is shared by more than two "
-            "triangles or by two triangles in the same direction (non-manifold edge or overlap)"
+            "triangles or by two triangles in the same direction (non-manifold edge or overlap)", check="overlap"
         )
     h = np.flatnonzero(twin >= 0)
     graph = coo_matrix((np.ones(len(h), dtype=np.int8), (h // 3, twin[h] // 3)), shape=(m, m))

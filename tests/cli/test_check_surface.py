@@ -79,3 +79,23 @@ def test_surface_notes_the_point_data_a_format_cannot_hold(tmp_path: Path, capsy
     assert "note: not written: point data 'temperature' (.obj holds geometry only)" in capsys.readouterr().out
     assert main(["surface", str(src), "-o", str(tmp_path / "t.ply")]) == 0  # (.ply holds it)
     assert "note:" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("damage, hint", [("flip", True), ("swap", False)])
+def test_check_hints_at_surface_only_for_orientation_faults(tmp_path: Path, damage: str, hint: bool, capsys) -> None:
+    """A flat file with an inverted triangle may be a folded surface (say --surface); a broken
+    cycle is not (no hint). The hint follows ``VerificationError.check``, not the message."""
+    from tests.helpers import plate
+
+    h = hammesh.hamiltonian(plate(1, 1, max_area=0.02))
+    tri = h.triangles.copy()
+    if damage == "flip":
+        tri[5] = tri[5, ::-1]
+    else:
+        tri[[3, 40]] = tri[[40, 3]]
+    out = tmp_path / "bad.vtu"
+    hammesh.write(replace(h, triangles=tri), out)
+    assert main(["check", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert ("check it with --surface" in err) == hint
+    assert ("overlap" in err) == (damage == "flip")  # (a flipped row uses its edges in the neighbours' direction)
