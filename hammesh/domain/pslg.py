@@ -16,7 +16,7 @@ from dataclasses import InitVar, dataclass, field
 import numpy as np
 
 from hammesh.domain.repair import Repair, repair_graph
-from hammesh.domain.validate import check_fields, point_array
+from hammesh.domain.validate import check_fields, point_array, refuse_complex
 from hammesh.errors import InvalidDomainError
 
 __all__ = ["Domain"]
@@ -243,6 +243,7 @@ def _vertex_attributes(value, n: int) -> np.ndarray:
     """``(n, k) float64`` vertex attributes (``(n, 0)`` for None)."""
     if value is None:
         return np.zeros((n, 0), np.float64)
+    refuse_complex(value, "vertex_attributes")
     try:
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -320,6 +321,7 @@ def _side_markers(markers, sides, name, default):
 def _as_float(value, name, ncols):
     if value is None:  # "none of these" (holes=None, regions=None)
         return np.zeros((0, ncols), np.float64)
+    refuse_complex(value, name)
     try:
         arr = np.array(value, dtype=np.float64)  # always a copy
     except (TypeError, ValueError) as exc:

@@ -21,7 +21,7 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["validate_domain", "check_fields", "point_array", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
+__all__ = ["validate_domain", "check_fields", "point_array", "refuse_complex", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
 
 #: Beyond this magnitude Triangle's floating-point predicates overflow.
 MAX_ABS_COORDINATE = 1e30
@@ -29,6 +29,24 @@ MAX_ABS_COORDINATE = 1e30
 #: products underflow: a 1e-90 square fails in Triangle, a 1e-120 one in the certificate.
 MIN_EXTENT = 1e-60
 _XY = ("x coordinate", "y coordinate")
+
+
+def refuse_complex(value, what: str) -> None:
+    """Refuse complex numbers, which numpy would cast to their real part (ComplexWarning).
+
+    Raises
+    ------
+    InvalidDomainError
+        Naming ``what``.
+    """
+    kind = value.dtype.kind if isinstance(value, np.ndarray) else None
+    if kind is None and not isinstance(value, (str, bytes)):
+        try:
+            kind = np.asarray(value).dtype.kind
+        except (TypeError, ValueError):  # (ragged: the caller's conversion names it)
+            return
+    if kind == "c":
+        raise InvalidDomainError(f"{what} are complex numbers; give real x and y columns")
 
 
 def point_array(value, what: str, rows: str = "k") -> np.ndarray:
@@ -39,8 +57,9 @@ def point_array(value, what: str, rows: str = "k") -> np.ndarray:
     Raises
     ------
     InvalidDomainError
-        Not numbers, or not of shape ``(k, 2)``.
+        Not numbers (complex numbers too), or not of shape ``(k, 2)``.
     """
+    refuse_complex(value, what)
     try:
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:

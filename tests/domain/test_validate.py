@@ -8,6 +8,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+
+import hammesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -316,3 +318,26 @@ def test_translation_far_from_origin_keeps_small_features():
     pts = np.array(SQUARE, float) * 100 + off
     inner = np.array([[40, 40], [60, 40], [50, 41]], float) + off
     Domain(np.r_[pts, inner], RING + [[4, 5], [5, 6], [6, 4]])
+
+
+@pytest.mark.parametrize("field", ["vertices", "holes", "ring", "vertex_attributes"])
+def test_complex_numbers_are_refused_not_cast(field: str) -> None:
+    """numpy would keep only the real part (a ComplexWarning): the domain says what is wrong."""
+    import warnings
+
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=complex)
+    square[2, 1] = 1 + 1e-3j
+    real = square.real
+    segs = [[0, 1], [1, 2], [2, 3], [3, 0]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # (no ComplexWarning on the way to the error)
+        with pytest.raises(hammesh.InvalidDomainError, match="complex numbers"):
+            if field == "vertices":
+                hammesh.Domain(vertices=square, segments=segs)
+            elif field == "holes":
+                hammesh.Domain(vertices=real, segments=segs, holes=[[0.5 + 0.1j, 0.5]])
+            elif field == "ring":
+                hammesh.Domain.from_polygon(square)
+            else:
+                hammesh.Domain(vertices=real, segments=segs, vertex_attributes=square[:, :1])
+        hammesh.Domain(vertices=real, segments=segs)  # the real square is fine
