@@ -8,11 +8,10 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-
-import hammesh
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import hammesh
 from hammesh.domain import Domain, validate_domain
 from hammesh.errors import HammeshError, InvalidDomainError
 
