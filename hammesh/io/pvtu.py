@@ -33,7 +33,7 @@ from hammesh.io.cell_data import join_components, split_components
 from hammesh.io.tags import VERTEX_MARKER
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name, cycle_positions
 
-__all__ = ["read", "write", "write_piece", "write_raw_chunks", "write_index", "read_pieces", "PIECE_CELL_DATA",
+__all__ = ["read", "write", "write_piece", "write_raw_chunks", "write_index", "read_pieces", "piece_cells", "index_counts", "PIECE_CELL_DATA",
            "CYCLE_CELL_DATA", "VTK_TRIANGLE", "named_attributes", "OWN_CELL_DATA"]
 
 #: cell data of every piece (name -> VTK type)
@@ -173,8 +173,14 @@ def write_raw_chunks(path: str | os.PathLike[str], arrays: list[tuple], n_points
 def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: int = 0, *, cycles: bool = True,
                 part: bool = False, types: dict[str, str] | None = None,
                 cell_arrays: dict[str, tuple[str, int]] | None = None,
-                point_arrays: dict[str, tuple[str, int]] | None = None) -> None:
+                point_arrays: dict[str, tuple[str, int]] | None = None, cells: list[int] | None = None) -> None:
     """Write the ``.pvtu`` index listing ``pieces`` (file names relative to it), in order.
+
+    The index also records how many triangles each piece holds and their total
+    (``NumberOfCells`` on each ``Piece`` and on ``PUnstructuredGrid``; VTK readers
+    ignore them), so that :func:`read` notices a piece left out of the index or a piece
+    file replaced: ``cells`` gives the counts, else they are read from the pieces'
+    headers (hammesh's own pieces; a piece whose header cannot be read leaves them out).
 
     Its cell data are the pieces': :data:`PIECE_CELL_DATA`, :data:`CYCLE_CELL_DATA`
     when ``cycles`` (more than one cycle), ``part`` when ``part``, ``n_attributes``
@@ -188,7 +194,11 @@ def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: i
     path = Path(path)
     root = ET.Element("VTKFile", type="PUnstructuredGrid", version="1.0", byte_order="LittleEndian",
                       header_type="UInt64")
-    grid = ET.SubElement(root, "PUnstructuredGrid", GhostLevel="0")
+    if cells is None:
+        cells = [piece_cells(path.parent / src) for src in pieces]
+    counted = all(c is not None for c in cells) and len(cells) == len(pieces)
+    grid = ET.SubElement(root, "PUnstructuredGrid", GhostLevel="0",
+                         **({"NumberOfCells": str(sum(cells)), "NumberOfPieces": str(len(pieces))} if counted else {}))
     pd = ET.SubElement(grid, "PPointData")
     ET.SubElement(pd, "PDataArray", type=types.get("global_id", "Int64"), Name="global_id")
     for name, (typ, ncomp) in (point_arrays or {}).items():
@@ -203,11 +213,39 @@ def write_index(path: str | os.PathLike[str], pieces: list[str], n_attributes: i
         ET.SubElement(cd, "PDataArray", type=typ, Name=name, **({"NumberOfComponents": str(ncomp)} if ncomp > 1 else {}))
     pp = ET.SubElement(grid, "PPoints")
     ET.SubElement(pp, "PDataArray", type="Float64", NumberOfComponents="3")
-    for src in pieces:
-        ET.SubElement(grid, "Piece", Source=str(src))
+    for i, src in enumerate(pieces):
+        ET.SubElement(grid, "Piece", Source=str(src), **({"NumberOfCells": str(cells[i])} if counted else {}))
     tmp = path.with_name(path.name + ".part")
     ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
     os.replace(tmp, path)
+
+
+def piece_cells(piece: str | os.PathLike[str]) -> int | None:
+    """The ``NumberOfCells`` a ``.vtu`` piece's header declares (its first ``Piece``
+    element, within the first 64 KiB), or None if there is none to read."""
+    import re
+
+    try:
+        with open(piece, "rb") as f:
+            head = f.read(65536)
+    except OSError:
+        return None
+    match = re.search(rb"<Piece\b[^>]*\bNumberOfCells=\"(\d+)\"", head)
+    return None if match is None else int(match.group(1))
+
+
+def index_counts(path: str | os.PathLike[str]) -> tuple[int | None, int | None, list[int | None]]:
+    """What an index records of its pieces (:func:`write_index`): the total number of
+    triangles, the number of pieces and each listed piece's count (None where absent)."""
+    root = ET.parse(path).getroot()
+    grid = root.find("PUnstructuredGrid")
+
+    def count(element, name: str) -> int | None:
+        value = None if element is None else element.get(name)
+        return int(value) if value is not None and value.isdigit() else None
+
+    return (count(grid, "NumberOfCells"), count(grid, "NumberOfPieces"),
+            [count(p, "NumberOfCells") for p in ([] if grid is None else grid.findall("Piece"))])
 
 
 def read_pieces(path: str | os.PathLike[str]) -> list[Path]:
@@ -273,7 +311,8 @@ def _read_piece(piece: Path):
     import meshio
 
     try:
-        m = meshio.read(str(piece), file_format="vtu")
+        # (the format's reader raises; meshio.read(file_format=) prints and calls sys.exit(1))
+        m = meshio.vtu.read(str(piece))
     except Exception as exc:  # meshio raises many kinds, also on files VTK reads (LZ4 pieces)
         from hammesh.io.vtk_xml import read_vtk_xml
 
@@ -319,8 +358,15 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     ``global_id`` the point data (those every piece holds).
     """
     ids, xy, tris, pos, attrs, names, pdata = [], [], [], [], [], [], []
-    for piece in read_pieces(path):
+    pieces = read_pieces(path)
+    total, n_pieces, listed = index_counts(path)
+    if n_pieces is not None and n_pieces != len(pieces):
+        raise FileFormatError(f"{path}: the index lists {len(pieces)} pieces; it was written with {n_pieces}")
+    for i, piece in enumerate(pieces):
         got = _read_piece(piece)
+        if listed[i] is not None and listed[i] != (0 if got is None else len(got[2])):
+            raise FileFormatError(f"{piece}: holds {0 if got is None else len(got[2]):,} triangles; the index "
+                                  f"says {listed[i]:,}")
         if got is None:
             continue
         gid, pts, t, gp, attr, nm, pd = got
@@ -336,15 +382,29 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     gids = np.concatenate(ids)
     n = int(gids.max()) + 1
     points = np.full((n, 2), np.nan)
-    points[gids] = np.concatenate(xy)
+    xy_all = np.concatenate(xy)
+    points[gids] = xy_all
+    # a point several pieces hold (a separator's) must be the same point in each
+    moved = np.flatnonzero((points[gids] != xy_all).any(axis=1) & ~np.isnan(xy_all).any(axis=1))
+    if len(moved):
+        raise FileFormatError(f"{path}: point {int(gids[moved[0]])} (global_id) lies at different places in "
+                              "two pieces")
     tri = np.concatenate(tris)
+    if total is not None and total != len(tri):
+        raise FileFormatError(f"{path}: the pieces hold {len(tri):,} triangles; the index says {total:,}")
     width = min(a.shape[1] for a in attrs)
     attr = np.concatenate([a[:, :width] for a in attrs])
     attr_names = names[0][:width] if all(nm[:width] == names[0][:width] for nm in names) else ()
     if all(x == f"attribute_{i}" for i, x in enumerate(attr_names)):
         attr_names = ()
     if all(p is not None for p in pos):
-        order = np.argsort(np.concatenate(pos), kind="stable")
+        position = np.concatenate(pos)
+        order = np.argsort(position, kind="stable")
+        # (the rows' order is the cycle's: every position 0..m-1 exactly once)
+        if not np.array_equal(position[order], np.arange(len(position))):
+            gap = int(np.flatnonzero(position[order] != np.arange(len(position)))[0])
+            raise FileFormatError(f"{path}: global_position does not number the {len(position):,} triangles "
+                                  f"0..{len(position) - 1} (position {gap} is missing or repeated)")
         tri, attr = tri[order], attr[order]
     used = np.zeros(n, bool)
     used[tri.ravel()] = True
