@@ -735,6 +735,10 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
     info.update(read_info)
     if not_carried:
         info["not_carried"] = not_carried
+    if "cycle_position" in raw.cell_data:  # a Hamiltonian mesh's own fields: `hammesh check` compares them
+        fields = {k: _origin_values(raw.cell_data[k], tri_origin, len(triangles)) for k in CYCLE_FIELDS
+                  if k in raw.cell_data}
+        info["cycle_fields"] = {k: v for k, v in fields.items() if v is not None and v.ndim == 1}
     return Mesh(
         points=points,
         triangles=np.ascontiguousarray(triangles),

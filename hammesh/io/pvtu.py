@@ -279,7 +279,7 @@ def _columns(cell_data: dict[str, np.ndarray], m: int) -> tuple[np.ndarray, tupl
 
 def _read_piece(piece: Path):
     """``(global_id, points (n, 2), triangles (local), global_position or None,
-    attributes, attribute names, point data)`` of one piece, or None if it has no
+    attributes, attribute names, point data, hammesh's own cell fields)`` of one piece, or None if it has no
     triangles. hammesh's own raw pieces are read directly
     (:func:`hammesh.io.vtu.read_raw`), any other ``.vtu`` by meshio."""
     try:
@@ -307,7 +307,8 @@ def _read_piece(piece: Path):
         if any(len(v) != len(t) for v in cells.values()) or any(len(v) != n for v in pdata.values()):
             raise FileFormatError(f"{piece}: an array's length is not its piece's")
         attr, names = _columns(cells, len(t))
-        return gid, np.asarray(pts)[:, :2], t, None if gp is None else gp.astype(np.int64), attr, names, pdata
+        own = {k: np.asarray(v) for k, v in cells.items() if k in OWN_CELL_DATA and k != "global_position"}
+        return gid, np.asarray(pts)[:, :2], t, None if gp is None else gp.astype(np.int64), attr, names, pdata, own
     import meshio
 
     try:
@@ -331,8 +332,10 @@ def _read_piece(piece: Path):
              if np.asarray(v[blocks[0]]).dtype.kind in "biuf"}
     attr, names = _columns(cells, len(t))
     pdata = {k: np.asarray(v) for k, v in m.point_data.items() if k != "global_id" and np.asarray(v).dtype.kind in "biuf"}
+    own = {k: v for k, v in cells.items() if k in OWN_CELL_DATA and k != "global_position" and v.ndim == 1}
     return (gid, np.asarray(m.points)[:, :2], t,
-            np.concatenate([np.asarray(gp[i]) for i in blocks]).astype(np.int64) if gp else None, attr, names, pdata)
+            np.concatenate([np.asarray(gp[i]) for i in blocks]).astype(np.int64) if gp else None, attr, names, pdata,
+            own)
 
 
 def _escape(name: str) -> str:
@@ -357,7 +360,7 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     ``attribute_names`` unless all are ``attribute_<i>``), point arrays other than
     ``global_id`` the point data (those every piece holds).
     """
-    ids, xy, tris, pos, attrs, names, pdata = [], [], [], [], [], [], []
+    ids, xy, tris, pos, attrs, names, pdata, owns = [], [], [], [], [], [], [], []
     pieces = read_pieces(path)
     total, n_pieces, listed = index_counts(path)
     if n_pieces is not None and n_pieces != len(pieces):
@@ -369,7 +372,8 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
                                   f"says {listed[i]:,}")
         if got is None:
             continue
-        gid, pts, t, gp, attr, nm, pd = got
+        gid, pts, t, gp, attr, nm, pd, own = got
+        owns.append(own)
         ids.append(gid)
         xy.append(pts)
         tris.append(gid[t])
@@ -406,6 +410,11 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
             raise FileFormatError(f"{path}: global_position does not number the {len(position):,} triangles "
                                   f"0..{len(position) - 1} (position {gap} is missing or repeated)")
         tri, attr = tri[order], attr[order]
+    else:
+        order = np.arange(len(tri))
+    # the cycle's own fields every piece holds, in row order (`hammesh check` compares them)
+    fields = {k: np.concatenate([np.asarray(o[k]).reshape(-1) for o in owns])[order]
+              for k in owns[0] if all(k in o and np.size(o[k]) == len(t) for o, t in zip(owns, tris))}
     used = np.zeros(n, bool)
     used[tri.ravel()] = True
     if np.isnan(points[used]).any():
@@ -424,7 +433,8 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     marks = point_data.pop(VERTEX_MARKER, None)
     marks = np.zeros(0, np.int64) if marks is None or np.asarray(marks).dtype.kind not in "iu" else np.asarray(marks, np.int64)
     return Mesh(points=points, triangles=tri, triangle_attributes=attr, attribute_names=attr_names,
-                point_data=point_data, vertex_markers=marks, info={"pieces": len(tris)})
+                point_data=point_data, vertex_markers=marks,
+                info={"pieces": len(tris), **({"cycle_fields": fields} if fields else {})})
 
 
 def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:

@@ -423,9 +423,12 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
 
     names = _comment_names(tok, k)
     attribute_names: tuple[str, ...] = ()
+    info: dict = {}
     if names is not None:  # a Hamiltonian mesh's cycle fields are the output's, not attributes
         hamiltonian = "cycle_position" in names
         kept = [j for j, name in enumerate(names) if not (hamiltonian and name in _CYCLE_FIELDS)]
+        if hamiltonian:  # (kept aside: `hammesh check` compares them with the rows)
+            info["cycle_fields"] = {name: attrs[:, j].copy() for j, name in enumerate(names) if name in _CYCLE_FIELDS}
         attrs = attrs[:, kept]
         attribute_names = tuple(names[j] for j in kept)
 
@@ -443,4 +446,5 @@ def read_ele(path: str | os.PathLike[str]) -> Mesh:
         vertex_markers=vmarks,
         attribute_names=attribute_names,
         point_data=point_data,
+        info=info,
     )

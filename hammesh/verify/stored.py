@@ -15,9 +15,51 @@ from typing import Any
 import numpy as np
 
 from hammesh.errors import InvalidOptionError, VerificationError
-from hammesh.mesh import Mesh
+from hammesh.mesh import KIND_NAMES, Mesh
 
-__all__ = ["verify_stored_mesh"]
+__all__ = ["verify_stored_mesh", "check_stored_fields"]
+
+
+def check_stored_fields(fields: dict[str, np.ndarray] | None, runs: np.ndarray, n_kinds: int) -> None:
+    """Compare the cycle fields a file stores beside its rows with what the rows are.
+
+    A viewer sorts by ``cycle_position`` and colours by ``cycle_id`` (docs/report.md), so
+    they must say what the certificate derived from the rows' order: ``cycle_position``
+    the row's place in its piece's run (0 at the run's first row), ``cycle_id`` the
+    run's number; ``kind`` one of the ``n_kinds`` kinds, ``parent`` and ``part`` whole
+    numbers (``parent`` -1 where no input triangle is the parent). Derived here from
+    ``runs`` alone.
+
+    Raises
+    ------
+    VerificationError
+        Naming the field and the first row that disagrees.
+    """
+    if not fields:
+        return
+    runs = np.asarray(runs, dtype=np.int64)
+    m = int(runs.sum())
+    starts = np.repeat(np.cumsum(runs) - runs, runs)
+    derived = {"cycle_position": np.arange(m) - starts, "cycle_id": np.repeat(np.arange(len(runs)), runs)}
+    for name, values in fields.items():
+        values = np.asarray(values)
+        if values.shape != (m,):
+            raise VerificationError(f"stored {name} has {values.size} values for {m} triangles", check="input")
+        whole = np.isfinite(values) & (values == np.round(values)) if values.dtype.kind == "f" else np.ones(m, bool)
+        if name in derived:
+            bad = np.flatnonzero(~whole | (values != derived[name]))
+            if len(bad):
+                i = int(bad[0])
+                raise VerificationError(f"stored {name} of triangle {i} is {values[i]!r}; its place in the rows "
+                                        f"says {int(derived[name][i])}", check="cycle")
+        else:
+            low = {"kind": 0, "parent": -1}.get(name, 0)
+            high = n_kinds - 1 if name == "kind" else np.inf
+            bad = np.flatnonzero(~whole | (values < low) | (values > high))
+            if len(bad):
+                i = int(bad[0])
+                raise VerificationError(f"stored {name} of triangle {i} is {values[i]!r}, not a whole number in "
+                                        f"{low}..{'' if high == np.inf else int(high)}", check="input")
 
 
 def verify_stored_mesh(mesh: Mesh, *, path: bool = False) -> tuple[np.ndarray, dict[str, Any], np.ndarray]:
@@ -79,4 +121,5 @@ def verify_stored_mesh(mesh: Mesh, *, path: bool = False) -> tuple[np.ndarray, d
         pair = find_overlap(mesh.points, triangles, twin=twin)  # no input to compare with: test the plane
         if pair is not None:
             raise VerificationError(f"triangles {pair[0]} and {pair[1]} overlap", check="overlap")
+    check_stored_fields((mesh.info or {}).get("cycle_fields"), runs, len(KIND_NAMES))
     return runs, stats, triangles
