@@ -10,7 +10,7 @@ import numpy as np
 from hammesh import params
 from hammesh.errors import InvalidOptionError
 
-__all__ = ["MeshOptions", "MAX_MIN_ANGLE", "MAX_TRIANGLES", "format_number", "hull_area",
+__all__ = ["MeshOptions", "MAX_MIN_ANGLE", "MAX_TRIANGLES", "STEINER_BUDGET", "format_number", "hull_area",
            "region_areas", "check_sizes"]
 
 #: Triangle provably terminates for min angles up to 20.7 degrees and in practice up
@@ -19,6 +19,12 @@ MAX_MIN_ANGLE = 34.0
 #: Refusing a run whose area bound implies more triangles than this (memory: ~200 B
 #: per triangle through the whole pipeline).
 MAX_TRIANGLES = 50_000_000
+#: Quality refinement (``-q``, ``-D``) without a ``max_steiner`` of the caller's stops after
+#: this many added points (Triangle's ``-S``): a domain whose thin part or far vertex needs
+#: more (a 1e-9 wedge needs ~1e9) is refused after a bounded run instead of meshing until
+#: memory is gone. An area bound that passes ``check_sizes`` needs at most ~0.8 points per
+#: ``area / max_area``, 40 M: below the budget.
+STEINER_BUDGET = MAX_TRIANGLES
 
 
 def format_number(x: float) -> str:

@@ -8,13 +8,15 @@ import numpy as np
 import triangle  # imported here, not in the forked child (which then imports nothing)
 
 from hammesh.domain import Domain
+from hammesh.errors import InvalidDomainError
+from hammesh.meshing import options
 from hammesh.meshing.options import MeshOptions, format_number
 from hammesh.mesh import Mesh
 
 #: An ``np.empty``-like allocator: ``alloc(shape, dtype) -> ndarray``.
 Allocator = Callable[..., np.ndarray]
 
-__all__ = ["triangle_switches", "mesh_with_triangle", "Allocator"]
+__all__ = ["triangle_switches", "mesh_with_triangle", "refines", "Allocator"]
 
 
 def triangle_switches(domain: Domain, opts: MeshOptions) -> str:
@@ -32,7 +34,15 @@ def triangle_switches(domain: Domain, opts: MeshOptions) -> str:
         sw += "D"
     if opts.max_steiner is not None:
         sw += "S" + str(int(opts.max_steiner))
+    elif refines(opts):
+        sw += "S" + str(options.STEINER_BUDGET)
     return sw + "n"
+
+
+def refines(opts: MeshOptions) -> bool:
+    """Whether Triangle adds points for quality (``-q``, ``-D``), which a thin part of the
+    domain can make unbounded (an area bound alone is estimated by ``check_sizes``)."""
+    return opts.min_angle is not None or opts.conforming_delaunay
 
 
 def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = np.empty) -> Mesh:
@@ -59,6 +69,14 @@ def mesh_with_triangle(domain: Domain, opts: MeshOptions, *, alloc: Allocator = 
         reg[~np.isfinite(reg[:, 3]), 3] = -1.0  # Triangle: negative = no regional limit
         data["regions"] = reg
     out = triangle.triangulate(data, triangle_switches(domain, opts))
+    added = len(out.get("vertices", ())) - len(data["vertices"])
+    if opts.max_steiner is None and refines(opts) and added >= options.STEINER_BUDGET:
+        quality = f"min angle {format_number(opts.min_angle)}" if opts.min_angle is not None else "conforming Delaunay"
+        raise InvalidDomainError(
+            f"the domain needs more than {options.STEINER_BUDGET:,} added points to reach {quality} (a part far "
+            "thinner than the whole, or a vertex far from the rest); mesh it in pieces, or give max_steiner "
+            "(--max-steiner) to accept a mesh that stops short of the angle"
+        )
     raw_tri = out.get("triangles", np.zeros((0, 3), dtype=np.int32)).reshape(-1, 3)
     m = len(raw_tri)
     tri = alloc((m, 3), np.int64)
