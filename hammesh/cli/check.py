@@ -42,6 +42,7 @@ def add_args(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # imported here, not with the CLI: ``hammesh --help`` and a refused option import
     # neither the readers nor the certificate's kernels (numba)
+    from hammesh.domain.validate import check_extent
     from hammesh.io import check_outputs, read_mesh, write_report
     from hammesh.io.paths import require_file
     from hammesh.io.report import collect_repairs
@@ -56,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if args.surface and args.path:
         raise InvalidOptionError("--surface and --path exclude each other (`hammesh surface` writes cycles)")
     mesh = read_mesh(args.mesh, dim=3 if args.surface else None)
+    check_extent(mesh.points, InvalidMeshError, str(args.mesh))  # (unverifiable input: exit 2, not a failed check)
     try:  # (a readable file that is no valid mesh fails the check: exit 3, not 2)
         runs, stats, triangles = verify_stored_mesh(mesh, path=args.path)
     except InvalidMeshError as exc:

@@ -21,7 +21,7 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["validate_domain", "check_fields", "point_array", "refuse_complex", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
+__all__ = ["validate_domain", "check_fields", "point_array", "refuse_complex", "check_extent", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
 
 #: Beyond this magnitude Triangle's floating-point predicates overflow.
 MAX_ABS_COORDINATE = 1e30
@@ -29,6 +29,21 @@ MAX_ABS_COORDINATE = 1e30
 #: products underflow: a 1e-90 square fails in Triangle, a 1e-120 one in the certificate.
 MIN_EXTENT = 1e-60
 _XY = ("x coordinate", "y coordinate")
+
+
+def check_extent(points: np.ndarray, error: type[Exception], what: str = "the mesh") -> None:
+    """Refuse points spanning less than :data:`MIN_EXTENT` (and more than nothing): their
+    areas and angles underflow float64 in Triangle and in the certificate.
+
+    ``error``: the exception class to raise (``InvalidDomainError``, ``InvalidMeshError``).
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) == 0:
+        return
+    extent = float((pts.max(axis=0) - pts.min(axis=0)).max())
+    if 0 < extent < MIN_EXTENT:
+        raise error(f"{what} spans only {extent:.3g}: below {MIN_EXTENT:g} areas and angles underflow float64 "
+                    "(rescale it; the mesh does not change)")
 
 
 def refuse_complex(value, what: str) -> None:
@@ -142,11 +157,7 @@ def check_fields(domain) -> None:
 
     if n < 3:
         raise InvalidDomainError(f"a domain needs at least 3 vertices, got {n}")
-    extent = float((vertices.max(axis=0) - vertices.min(axis=0)).max())
-    if 0 < extent < MIN_EXTENT:
-        raise InvalidDomainError(
-            f"the domain spans only {extent:.3g}: below {MIN_EXTENT:g} Triangle's areas and angles underflow "
-            "float64 (rescale the domain; the mesh does not change)")
+    check_extent(vertices, InvalidDomainError, "the domain")
     if s:
         _check_segment_indices(segments, n)
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hammesh.halfedge import _kernels, locality
-from hammesh.domain.validate import MAX_ABS_COORDINATE
+from hammesh.domain.validate import MAX_ABS_COORDINATE, check_extent
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
 
@@ -91,7 +91,8 @@ def mesh_arrays(
     ------
     InvalidMeshError
         Wrong shapes or dtype, no triangles, a non-finite point or one beyond
-        ``MAX_ABS_COORDINATE`` (squared lengths overflow), an index out of range
+        ``MAX_ABS_COORDINATE`` (squared lengths overflow), points spanning less than
+        ``MIN_EXTENT`` (areas underflow), an index out of range
         (the message names the point or triangle).
     """
     pts = np.asarray(points)
@@ -116,6 +117,7 @@ def mesh_arrays(
             f"point {i} {pts[i].tolist()} is beyond |x| <= {MAX_ABS_COORDINATE:g} "
             "(squared lengths would overflow)"
         )
+    check_extent(pts, InvalidMeshError)
     n = len(pts)
     if tri.min() < 0 or tri.max() >= n:
         out = (tri < 0) | (tri >= n)

@@ -608,9 +608,13 @@ def _drop_zero_area(points: np.ndarray, triangles: np.ndarray, origin: list[tupl
                     strict: bool, repairs: list[str]) -> tuple[np.ndarray, list[tuple[int, np.ndarray]]]:
     """A planar mesh file's triangles without those of zero area (exact test), as VTK
     keeps them but no Hamiltonian mesh can (a zero angle): they hold no area, so the
-    domain is the same; the repair is reported (refused with ``strict``)."""
+    domain is the same; the repair is reported (refused with ``strict``). Points spanning
+    less than ``MIN_EXTENT`` are refused first: there the exact test itself underflows
+    and would call triangles of positive area flat."""
+    from hammesh.domain.validate import check_extent
     from hammesh.predicates import orient_rows
 
+    check_extent(points, FileFormatError, str(path))
     p = points[triangles]
     flat = orient_rows(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]),
                        np.ascontiguousarray(p[:, 2])) == 0
