@@ -724,12 +724,14 @@ def to_mesh(raw: Any, path: Path, *, dim: int | None = 2, strict: bool = False) 
     attributes, names = _attribute_columns(raw.cell_data, tri_origin, len(triangles), not_carried)
     point_data = _point_data(raw.point_data, to_original, n, not_carried)
 
-    markers = np.zeros(len(segments), dtype=np.int64)
+    markers, marker_key = np.zeros(len(segments), dtype=np.int64), None
     for key in (SEGMENT_MARKER, "gmsh:physical"):
         column = _block_column(raw.cell_data.get(key), seg_block_ids, len(segments))
         if column is not None and np.all(column == np.round(column)):
-            markers = column.astype(np.int64)
+            markers, marker_key = column.astype(np.int64), key
             break
+    if seg_blocks:
+        markers, marker_key = _line_cell_data(raw.cell_data, seg_block_ids, markers, marker_key, not_carried)
     if not seg_blocks:
         from_fields = _edge_field_segments(raw.cell_data, tri_origin, triangles)
         if from_fields is not None:
@@ -909,6 +911,30 @@ def _edge_field_segments(
     if not (np.all(flags == np.round(flags)) and np.all(marks == np.round(marks))):
         return None
     return tags.segments_from_edge_fields(triangles, flags.astype(np.int64), marks.astype(np.int64))
+
+
+def _line_cell_data(cell_data: Any, seg_block_ids: list[int], markers: np.ndarray, marker_key: str | None,
+                    not_carried: list[str]) -> tuple[np.ndarray, str | None]:
+    """The line cells' other fields: the first whole-numbered one becomes the segment
+    markers when no ``segment_marker`` or Gmsh physical tag gave them (a VTK file's
+    boundary-condition ids on its lines: they reach the output as ``edge_marker``); any
+    other field with a nonzero value on a line is listed in ``not_carried`` (one marker per
+    segment is what a planar straight-line graph holds). Zeros carry nothing."""
+    n = len(markers)
+    for key, per_block in cell_data.items():
+        if key == marker_key or key in _OWN_CELL_DATA or key in _CYCLE_CELL_DATA or key.startswith(("gmsh:", "skfem:")):
+            continue
+        column = _block_column(per_block, seg_block_ids, n)
+        if column is None or not np.any(column != 0):
+            continue
+        whole = bool(np.all(np.isfinite(column)) and np.all(column == np.round(column))
+                     and np.abs(column).max() <= np.iinfo(np.int32).max)
+        if marker_key is None and whole:
+            markers, marker_key = column.astype(np.int64), key
+        else:
+            why = f"a segment holds one marker: {marker_key!r} gave them" if marker_key else "not whole numbers"
+            not_carried.append(f"cell data {key!r} on {n} line cells ({why})")
+    return markers, marker_key
 
 
 def _block_column(per_block: Any, block_ids: list[int], length: int) -> np.ndarray | None:
