@@ -20,7 +20,7 @@ from pathlib import Path
 
 from hammesh.errors import OutputError
 
-__all__ = ["check_outputs", "written_files", "read_files", "require_file", "TRIANGLE_SIBLINGS"]
+__all__ = ["check_outputs", "written_files", "read_files", "require_file", "wrote_it", "refuse_foreign_companions", "TRIANGLE_SIBLINGS"]
 
 #: Triangle's file family: writing or reading one member may touch the others.
 TRIANGLE_SIBLINGS = (".node", ".poly", ".ele")
@@ -54,6 +54,35 @@ def written_files(path: str | os.PathLike[str]) -> list[Path]:
     if path.suffix.lower() == ".pvtu":
         return [path, path.with_name(path.stem + ".0.vtu")]
     return [path]
+
+
+def wrote_it(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` starts as hammesh's Triangle-format writer starts every file
+    (``# hammesh ...``): such a companion of a ``.ele``/``.node`` output is replaced, any
+    other file (the user's domain ``NAME.poly``) is not."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(10) == b"# hammesh "
+    except OSError:
+        return False
+
+
+def refuse_foreign_companions(path: str | os.PathLike[str], label: str | None = None) -> None:
+    """Refuse a mesh output whose writer would also replace a file hammesh did not write:
+    ``-o plate.ele`` writes ``plate.node`` and ``plate.poly`` too, and ``plate.poly`` may be
+    the user's domain (Triangle itself writes ``plate.1.*`` for that reason).
+
+    Raises
+    ------
+    OutputError
+        Naming the file that would be replaced (and ``label``, the option, if given).
+    """
+    path = Path(path)
+    for f in written_files(path):
+        if f != path and f.suffix.lower() in TRIANGLE_SIBLINGS and f.is_file() and not wrote_it(f):
+            raise OutputError(f"{f}: exists and is not a file hammesh wrote; writing {path.name} would replace it "
+                              "(a Triangle mesh is the .node/.ele/.poly triple); move it or choose another output "
+                              f"name{f' ({label})' if label else ''}")
 
 
 def read_files(path: str | os.PathLike[str]) -> list[Path]:
@@ -142,3 +171,4 @@ def check_outputs(
                 if _same(ident, other_ident):
                     raise OutputError(f"{f}: given twice as output ({other_label} and {label})")
             outputs_seen.append((label, f, ident))
+        refuse_foreign_companions(given, label)  # (after the input checks: theirs is the better message)

@@ -41,7 +41,7 @@ import numpy as np
 from hammesh.errors import FileFormatError, InvalidMeshError
 from hammesh.io.atomic import atomic_paths
 from hammesh.io.cell_data import ATTRIBUTE_PREFIX, CYCLE_FIELDS, join_components, triangle_cell_data
-from hammesh.io.paths import require_file
+from hammesh.io.paths import refuse_foreign_companions, require_file
 from hammesh.io.text_rows import header_token, write_rows
 from hammesh.io.validate import validate_mesh
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
@@ -74,8 +74,15 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
         Validated first (:func:`hammesh.io.validate.validate_mesh`).
     path : path-like
         ``<stem>.ele`` or ``<stem>.node``; both name the same three files.
+
+    Raises
+    ------
+    OutputError
+        A companion file (the two not named) exists and is not one hammesh wrote: the
+        user's domain ``<stem>.poly`` is never replaced by a mesh's segment file.
     """
     node_path, poly_path, ele_path = _siblings(path)
+    refuse_foreign_companions(path)
     validate_mesh(mesh)
     if np.shape(mesh.points)[1] != 2:
         raise InvalidMeshError(
