@@ -410,7 +410,7 @@ def phases_table(target: int, repeat: int) -> None:
     tri, pts = np.ascontiguousarray(tri, np.int64), kw["points"]
     m = len(tri)
     r = kw["rule"]  # (sparse mode judges the edges as the greedy asks: ``cycle_cover(..., judge=True)``)
-    e_rule = J.edge_rule(pts, tri, tw, r.pinned, r.amin, r.keep, r.hi, r.swaps, r.edge_splits)
+    e_rule = J.edge_rule(pts, tri, tw, r.pinned, r.amin, r.keep, r.hi, r.swaps, r.edge_splits, r.corners)
     times: dict = {}
     frees_left: dict = {}
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammesh.postprocess._join_kernels import EDGE_GOOD, EDGE_NOT_GOOD, EDGE_UNKNOWN, edge_meets_rule
+from hammesh.postprocess._join_kernels import EDGE_GOOD, EDGE_NOT_GOOD, EDGE_UNKNOWN, corners_rule_out, edge_meets_rule
 from hammesh.postprocess._thm24_kernels import edge_class as _edge_class
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
@@ -483,6 +483,8 @@ def _greedy_matching(nb, active, m, rule, good, order, online, parent, fa, label
     # through a helper taking the rule, which doubled the judging's cost)
     pts, tri, twin, pinned, amin = rule.pts, rule.tri, rule.twin, rule.pinned, rule.amin
     keep, cos_hi, swaps, edge_splits = rule.keep, rule.cos_hi, rule.swaps, rule.edge_splits
+    corners = rule.corners  # (the necessary test first, off the corner angles: no point read)
+    by_corners = corners.shape[0] > 0
     stack = np.empty(4 * n + 16, np.int32)  # a triangle is pushed once, then once per neighbour matched
     touched = np.empty(online + 16, np.int32)
     nolog = np.empty((0, 4), np.int64)
@@ -534,8 +536,9 @@ def _greedy_matching(nb, active, m, rule, good, order, online, parent, fa, label
                     if v == EDGE_UNKNOWN:
                         g = twin[h]
                         v = EDGE_NOT_GOOD
-                        if g >= 0 and edge_meets_rule(pts, tri, twin, pinned, min(h, g), amin, keep, cos_hi, swaps,
-                                                      edge_splits):
+                        if g >= 0 and not (by_corners and corners_rule_out(corners, twin, h, amin, keep)) and \
+                                edge_meets_rule(pts, tri, twin, pinned, min(h, g), amin, keep, cos_hi, swaps,
+                                                edge_splits):
                             v = EDGE_GOOD
                         good[h] = v
                         if g >= 0:

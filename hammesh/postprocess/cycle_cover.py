@@ -113,6 +113,7 @@ class JoinRule(NamedTuple):
     pinned: np.ndarray  # (3 m,) bool: constrained half-edges (split only at their midpoint)
     swaps: bool = True  # joins by swaps allowed (``judge``: what a good edge may be)
     edge_splits: bool = True  # joins by edge splits allowed
+    corners: np.ndarray | None = None  # (m, 3) float32: the corner angles, if known (``judge``'s first test)
 
 
 @dataclass(frozen=True, eq=False)
@@ -266,7 +267,7 @@ def cycle_cover(
     lazy = judge and rule is not None and points is not None and np.shape(points)[1] == 2
     if lazy:
         e_rule = _j.edge_rule(points, triangles, tw, rule.pinned, rule.amin, rule.keep, rule.hi, rule.swaps,
-                              rule.edge_splits)
+                              rule.edge_splits, rule.corners)
         g = fresh(3 * m, np.int8, _j.EDGE_UNKNOWN)
     else:
         e_rule = _j.no_edge_rule()
