@@ -194,7 +194,8 @@ small = JoinRule(np.full(len(t), 0.5), 0.9, 2.2, np.zeros(3 * len(t), bool))
 cycle_cover(t, half_edges(t, len(p)).twin, points=p, online=256, rule=small, judge=True)  # kernels loaded
 z = np.load(sys.argv[1])
 tri, tw, pts = z["tri"], z["tw"], z["points"]
-rule = JoinRule(z["amin"], float(z["keep"]), float(z["hi"]), z["pinned"], bool(z["swaps"]), bool(z["edge_splits"]))
+rule = JoinRule(z["amin"], float(z["keep"]), float(z["hi"]), z["pinned"], bool(z["swaps"]), bool(z["edge_splits"]),
+                z["corners"] if len(z["corners"]) else None)
 for call in ("first", "second"):
     clock = {}
     w, c = time.perf_counter(), cpu()
@@ -224,7 +225,8 @@ def fresh_table(target: int, runs: int) -> None:
         def capture(tri, tw, **kw):
             r = kw["rule"]
             np.savez(path, tri=tri, tw=tw, points=kw["points"], local=kw["local"], judge=kw["judge"], amin=r.amin,
-                     keep=r.keep, hi=r.hi, pinned=r.pinned, swaps=r.swaps, edge_splits=r.edge_splits)
+                     keep=r.keep, hi=r.hi, pinned=r.pinned, swaps=r.swaps, edge_splits=r.edge_splits,
+                     corners=np.zeros((0, 3), np.float32) if r.corners is None else r.corners)
             return real(tri, tw, **kw)
 
         sparse.cycle_cover = capture
@@ -410,7 +412,7 @@ def phases_table(target: int, repeat: int) -> None:
     tri, pts = np.ascontiguousarray(tri, np.int64), kw["points"]
     m = len(tri)
     r = kw["rule"]  # (sparse mode judges the edges as the greedy asks: ``cycle_cover(..., judge=True)``)
-    e_rule = J.edge_rule(pts, tri, tw, r.pinned, r.amin, r.keep, r.hi, r.swaps, r.edge_splits)
+    e_rule = J.edge_rule(pts, tri, tw, r.pinned, r.amin, r.keep, r.hi, r.swaps, r.edge_splits, r.corners)
     times: dict = {}
     frees_left: dict = {}
 

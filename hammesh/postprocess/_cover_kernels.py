@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammesh.postprocess._join_kernels import EDGE_GOOD, EDGE_NOT_GOOD, EDGE_UNKNOWN, edge_meets_rule
+from hammesh.postprocess._join_kernels import EDGE_GOOD, EDGE_NOT_GOOD, EDGE_UNKNOWN, corners_rule_out, edge_meets_rule
 from hammesh.postprocess._thm24_kernels import edge_class as _edge_class
 from hammesh.postprocess._thm24_kernels import find_root as _find
 
@@ -483,6 +483,8 @@ def _greedy_matching(nb, active, m, rule, good, order, online, parent, fa, label
     # through a helper taking the rule, which doubled the judging's cost)
     pts, tri, twin, pinned, amin = rule.pts, rule.tri, rule.twin, rule.pinned, rule.amin
     keep, cos_hi, swaps, edge_splits = rule.keep, rule.cos_hi, rule.swaps, rule.edge_splits
+    corners = rule.corners  # (the necessary test first, off the corner angles: no point read)
+    by_corners = corners.shape[0] > 0
     stack = np.empty(4 * n + 16, np.int32)  # a triangle is pushed once, then once per neighbour matched
     touched = np.empty(online + 16, np.int32)
     nolog = np.empty((0, 4), np.int64)
@@ -534,8 +536,9 @@ def _greedy_matching(nb, active, m, rule, good, order, online, parent, fa, label
                     if v == EDGE_UNKNOWN:
                         g = twin[h]
                         v = EDGE_NOT_GOOD
-                        if g >= 0 and edge_meets_rule(pts, tri, twin, pinned, min(h, g), amin, keep, cos_hi, swaps,
-                                                      edge_splits):
+                        if g >= 0 and not (by_corners and corners_rule_out(corners, twin, h, amin, keep)) and \
+                                edge_meets_rule(pts, tri, twin, pinned, min(h, g), amin, keep, cos_hi, swaps,
+                                                edge_splits):
                             v = EDGE_GOOD
                         good[h] = v
                         if g >= 0:
@@ -1460,14 +1463,26 @@ def rotate_stars(tri, twin, is_cov, cyc, n_cyc, n_points, cell):
 
 
 @njit(cache=True, nogil=True)
-def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
+def _cover_next_nb(nb, is_cov, cur, prev):
+    """:func:`_cover_next` read off the neighbour rows (``nb``, int32: 12 bytes a row
+    against the twins' 24, no division)."""
+    nxt = -1
+    for k in range(3):
+        if is_cov[3 * cur + k] and nb[cur, k] != prev:
+            nxt = nb[cur, k]
+    return nxt
+
+
+@njit(cache=True, nogil=True)
+def cycle_segments_into(nb, is_cov, side, half, cyc, smin, send):
     """The cover cycles cut at the split into runs inside one half (``side == half``).
 
     Triangles are taken in index order; each one not yet on a run starts one and walks
     its cycle both ways while it stays in the half. ``cyc[t]``: the run's number (in
     this half, in order of the runs' first triangles), ``smin[i]`` its smallest
     triangle, ``send[i, 0:2]`` the triangles of the other half its two ends lead to
-    (-1, -1: a whole cycle inside the half). The two halves write disjoint triangles
+    (-1, -1: a whole cycle inside the half). ``nb``: the neighbour rows
+    (``neighbors_into``). The two halves write disjoint triangles
     of ``cyc``: they run side by side, and ``link_segments`` joins the runs.
     Returns the number of runs.
     """
@@ -1492,11 +1507,11 @@ def cycle_segments_into(twin, is_cov, side, half, cyc, smin, send):
         send[n, 1] = -1
         for d in range(2):
             prev = s
-            cur = twin[3 * s + (k1 if d == 0 else k2)] // 3
+            cur = nb[s, k1 if d == 0 else k2]
             while cur >= 0 and cur != s and side[cur] == half:
                 cyc[cur] = n
                 lo = min(lo, cur)
-                prev, cur = cur, _cover_next(twin, is_cov, cur, prev)
+                prev, cur = cur, _cover_next_nb(nb, is_cov, cur, prev)
             if cur == s:  # closed inside the half
                 break
             if cur < 0:  # a broken chain (a surface whose two cover edges lead to one

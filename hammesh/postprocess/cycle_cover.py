@@ -113,6 +113,7 @@ class JoinRule(NamedTuple):
     pinned: np.ndarray  # (3 m,) bool: constrained half-edges (split only at their midpoint)
     swaps: bool = True  # joins by swaps allowed (``judge``: what a good edge may be)
     edge_splits: bool = True  # joins by edge splits allowed
+    corners: np.ndarray | None = None  # (m, 3) float32: the corner angles, if known (``judge``'s first test)
 
 
 @dataclass(frozen=True, eq=False)
@@ -266,7 +267,7 @@ def cycle_cover(
     lazy = judge and rule is not None and points is not None and np.shape(points)[1] == 2
     if lazy:
         e_rule = _j.edge_rule(points, triangles, tw, rule.pinned, rule.amin, rule.keep, rule.hi, rule.swaps,
-                              rule.edge_splits)
+                              rule.edge_splits, rule.corners)
         g = fresh(3 * m, np.int8, _j.EDGE_UNKNOWN)
     else:
         e_rule = _j.no_edge_rule()
@@ -343,7 +344,8 @@ def cycle_cover(
     mark("settle_cover")
     if cell is not None:
         side = np.zeros(m, np.int8)  # one half (as without the split): runs are whole cycles
-    cyc, n_cyc = cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc)
+    # (the walks read nb where it is the twins' own: cells cut it at their borders)
+    cyc, n_cyc = cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc, nb if cell is None else None)
     mark("cycle_ids")
     n_rot = 0
     if rotate and n_cyc > 1:
@@ -506,19 +508,25 @@ def defect_cut(frees: np.ndarray, active: np.ndarray, mate: np.ndarray) -> int:
 
 
 def cycle_ids_by_halves(twin: np.ndarray, is_cov: np.ndarray, side: np.ndarray | None = None,
-                        spans: list | None = None, cyc: np.ndarray | None = None):
+                        spans: list | None = None, cyc: np.ndarray | None = None, nb: np.ndarray | None = None):
     """Cycle id of each covered triangle (-1: uncovered) and the number of cycles, as
     ``_cover_kernels.cycle_ids`` numbers them, on two threads: each half's runs of the
     cycles (``cycle_segments_into``), joined where they cross the split, then
     relabelled (into ``cyc``, all -1, if given). ``side`` (int8, 0 or 1 per triangle;
     default: one half) and ``spans`` (row ranges; default ``row_ranges``) choose the
-    split and the threads."""
-    m = len(twin) // 3
+    split and the threads. ``nb``: the neighbour rows of ``twin``
+    (``_cover_kernels.neighbors_into``, int32), if the caller has them; made here if not
+    (the walks read them: half the bytes of the twins)."""
+    tw = np.ascontiguousarray(twin, dtype=np.int64)
+    m = len(tw) // 3
     side = np.zeros(m, np.int8) if side is None else side
     spans = row_ranges(m, threads.THREAD_MIN_ROWS) if spans is None else spans
     cyc = np.full(m, -1, np.int64) if cyc is None else cyc
+    if nb is None:
+        nb = np.empty((m, 3), np.int32)
+        run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
     runs = [(np.empty(m, np.int64), np.empty((m, 2), np.int64)) for _ in range(2)]  # pages touched as used
-    calls = [partial(_k.cycle_segments_into, twin, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)]
+    calls = [partial(_k.cycle_segments_into, nb, is_cov, side, h, cyc, *runs[h]) for h in (0, 1)]
     n0, n1 = run_all(calls) if len(spans) > 1 else [c() for c in calls]
     ids, n = _k.link_segments(cyc, side, n0, *runs[0], n1, *runs[1])
     run_all([partial(_k.relabel_segments_into, cyc, side, n0, ids, lo, hi) for lo, hi in spans])

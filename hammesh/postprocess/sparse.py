@@ -173,21 +173,25 @@ def triangle_angles(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
 
 
 def triangle_facts(
-    points: np.ndarray, triangles: np.ndarray, room: int = 0
+    points: np.ndarray, triangles: np.ndarray, room: int = 0, corners: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Smallest and largest angle of every triangle, the worst radius ratio and its row.
 
     One threaded pass (``_join_kernels.triangle_min_max_into``): the angles the local
     rule needs and the report's worst circumradius / (2 x inradius) (``row`` -1 if
     no triangle is worse than equilateral). ``room``: rows of memory left after the
-    smallest angles (``_longer`` grows them in place).
+    smallest angles (``_longer`` grows them in place). ``corners`` ((m, 3) float32,
+    planar): filled with every corner's angle on the way (the cover's first test of
+    an edge, ``cycle_cover.JoinRule.corners``).
     """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     lo = _with_room(fresh(len(tri) + room, np.float64), len(tri))  # (from quality_mesh's reserve, if any: no faults)
     hi = fresh(len(tri), np.float64)
-    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b])), len(tri),
-                      FACTS_MIN_ROWS)
+    cn = np.zeros((0, 3), np.float32)
+    parts = _row_pass(lambda a, b: (a, *_j.triangle_min_max_into(pts, tri[a:b], lo[a:b], hi[a:b],
+                                                                 cn if corners is None else corners[a:b])),
+                      len(tri), FACTS_MIN_ROWS)
     worst, row = 1.0, -1
     for a, w, r in parts:
         if r >= 0 and w > worst:
@@ -1873,7 +1877,10 @@ def sparse_cycles(
     n, m = len(pts), len(tri)
     steps = _Steps()
     room = ROOM_ROWS if fans and pts.shape[1] == 2 else 0  # (only planar ring fans grow arrays)
-    amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room)
+    # the corner angles too where the cover's matching judges edges (planar): its first
+    # test reads them instead of the points (``_join_kernels.corners_rule_out``)
+    corners = fresh((m, 3), np.float32) if use_cover and pts.shape[1] == 2 else None
+    amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room, corners)
     steps.done("input_angles")
     amax_in = float(amax_t.max()) if m else 0.0  # (the input's largest angle, once: an O(m) pass)
     hi = amax_in + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
@@ -1910,9 +1917,11 @@ def sparse_cycles(
             beside_cover()
         fish = fishbone_cells(pts, tri, tw) if tree == "fishbone" and pts.shape[1] == 2 else None  # (issue 14)
         # (the matching's and the re-colouring's judge)
-        rule = JoinRule(amin_t, float(keep), hi, con, bool(swaps), bool(edge_splits)) if pts.shape[1] == 2 else None
+        rule = JoinRule(amin_t, float(keep), hi, con, bool(swaps), bool(edge_splits),
+                        corners) if pts.shape[1] == 2 else None
         cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
                             cells=None if fish is None else fish.cell, judge=rule is not None)
+        rule = corners = None  # (the corner angles' pages given back: only the cover reads them)
     else:
         if beside_cover is not None:
             beside_cover()

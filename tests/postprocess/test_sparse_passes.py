@@ -32,6 +32,53 @@ def _reference_facts(pts: np.ndarray, tri: np.ndarray):
     return ang.min(axis=1), ang.max(axis=1), ratio
 
 
+def _reference_corners(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """The angle at ``tri[t, k]`` of every row, by numpy's arccos."""
+    p = pts[tri]
+    out = np.empty(tri.shape)
+    for k in range(3):
+        u = p[:, (k + 1) % 3] - p[:, k]
+        v = p[:, (k + 2) % 3] - p[:, k]
+        c = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+        out[:, k] = np.arccos(np.clip(c, -1, 1))
+    return out
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    xy=arrays(np.float64, (4, 2), elements=st.floats(-10, 10, allow_nan=False).map(lambda x: round(x, 2))),
+    at=st.floats(0.5, 1.5),
+    nudge=st.sampled_from([0.0, 1e-9, -1e-9, 1e-6, -1e-6]),
+    pinned=st.booleans(),
+)
+def test_corners_rule_out_only_what_the_full_test_refuses(xy, at, nudge, pinned) -> None:
+    """The cover's first test of an edge, off the corner angles (``corners_rule_out``),
+    is only ever True where ``edge_meets_rule`` says no, with the rule's angle put
+    right at (``at`` ~ 1, ``nudge``) the smaller corner opposite the edge."""
+    from hammesh.halfedge import half_edges
+    from hammesh.postprocess import _join_kernels as J
+    from hammesh.postprocess.sparse import triangle_facts
+
+    tri = np.array([[0, 1, 2], [1, 0, 3]], np.int64)  # edge 0-1 shared: 2 on one side, 3 on the other
+    e = xy[1] - xy[0]
+    side = [e[0] * (xy[k, 1] - xy[0, 1]) - e[1] * (xy[k, 0] - xy[0, 0]) for k in (2, 3)]
+    scale = np.ptp(xy, axis=0).max()
+    if not (side[0] > 1e-2 * scale**2 and side[1] < -1e-2 * scale**2):
+        return  # (both triangles counter-clockwise, well away from degenerate)
+    tw = half_edges(tri, 4).twin
+    corners = np.empty((2, 3), np.float32)
+    amin, amax, _, _ = triangle_facts(xy, tri, corners=corners)
+    opposite = min(corners[0, 2], corners[1, 2])
+    keep = min(1.0, max(0.0, at * (opposite / (2.0 * amin.min())) + nudge))
+    h = 0  # (row 0's edge 0-1)
+    pin = np.zeros(6, np.bool_)
+    pin[[0, tw[0]]] = pinned
+    meets = J.edge_meets_rule(xy, tri, tw, pin, h, amin, keep, float(np.cos(amax.max() + 0.1)), True, True)
+    for x in (h, int(tw[h])):
+        if J.corners_rule_out(corners, tw, x, amin, keep):
+            assert not meets
+
+
 def _pinning_domain(name: str) -> hammesh.Domain:
     """A bundled domain, or constrained loops inside a plate, or two regions (whose shared
     edges are pinned too)."""
@@ -66,13 +113,17 @@ def test_triangle_facts_match_numpy(pts, seed, min_rows) -> None:
         return
     old = threads.THREAD_MIN_ROWS
     threads.THREAD_MIN_ROWS = min_rows  # several row ranges side by side, or one
+    corners = np.full((len(tri), 3), np.nan, np.float32) if pts.shape[1] == 2 else None
     try:
-        lo, hi, worst, row = triangle_facts(pts, tri)
+        lo, hi, worst, row = triangle_facts(pts, tri, corners=corners)
     finally:
         threads.THREAD_MIN_ROWS = old
     rlo, rhi, ratio = _reference_facts(pts, tri)
     np.testing.assert_allclose(lo, rlo, atol=1e-7)
     np.testing.assert_allclose(hi, rhi, atol=1e-7)
+    if corners is not None:  # every corner's angle, at tri[t, k], from the same pass
+        np.testing.assert_allclose(corners, _reference_corners(pts, tri), atol=1e-6)
+        assert np.array_equal(corners.min(axis=1), lo.astype(np.float32))
     assert worst == pytest.approx(max(1.0, ratio.max()), rel=1e-6)
     if row >= 0:
         assert ratio[row] == pytest.approx(ratio.max(), rel=1e-6)
