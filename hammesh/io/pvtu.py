@@ -30,7 +30,7 @@ import numpy as np
 from hammesh.errors import FileFormatError
 from hammesh.io import vtu
 from hammesh.io.cell_data import join_components, split_components
-from hammesh.io.tags import VERTEX_MARKER
+from hammesh.io.tags import EDGE_MARKER, SEGMENT_EDGES, VERTEX_MARKER, edge_fields, segments_from_edge_fields
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name, cycle_positions
 
 __all__ = ["read", "write", "write_piece", "write_raw_chunks", "write_index", "read_pieces", "piece_cells", "index_counts", "PIECE_CELL_DATA",
@@ -45,7 +45,9 @@ CYCLE_CELL_DATA = {"cycle_id": "Int64", "cycle_position": "Int64"}
 #: VTK cell type of a triangle
 VTK_TRIANGLE = 5
 #: hammesh's own cell data in a piece (every other cell array is a triangle attribute)
-OWN_CELL_DATA = frozenset({*PIECE_CELL_DATA, *CYCLE_CELL_DATA, "part"})
+#: the constrained edges, per triangle (:mod:`hammesh.io.tags`), when the mesh has any
+EDGE_CELL_DATA = {SEGMENT_EDGES: ("Int64", 1), EDGE_MARKER: ("Int64", 3)}
+OWN_CELL_DATA = frozenset({*PIECE_CELL_DATA, *CYCLE_CELL_DATA, "part", *EDGE_CELL_DATA})
 
 
 def named_attributes(attributes: np.ndarray, names: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
@@ -70,7 +72,8 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
                 position: np.ndarray, cycle_id: np.ndarray | None, cycle_position: np.ndarray | None,
                 parent: np.ndarray, kind: np.ndarray, attributes: np.ndarray, part: np.ndarray | None = None,
                 local: bool = False, attribute_names: tuple[str, ...] = (),
-                point_data: dict[str, np.ndarray] | None = None) -> None:
+                point_data: dict[str, np.ndarray] | None = None,
+                edges: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """Write one piece: ``triangles`` in global point ids (``local``: indices into
     ``point_ids``/``points`` already), rows in cycle order.
 
@@ -78,6 +81,10 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     ``attributes (m, k)`` are named as the serial ``.vtu`` writer names them
     (:func:`named_attributes`: ``attribute_names``, else ``attribute_<i>``);
     ``point_data``: per-point arrays (the mesh's, in ``points``' order), written as point data.
+
+    ``edges`` (optional): the constrained edges as ``(segment_edges (m,), edge_marker (m, 3))``
+    of these rows (:func:`hammesh.io.tags.edge_fields`), written as the serial ``.vtu``
+    writes them.
 
     ``part`` (optional): a ``part`` cell array (``--parts``). Written as raw appended
     binary (:func:`hammesh.io.vtu.write_raw`) into ``NAME.part`` and renamed: never a half-written piece.
@@ -111,6 +118,9 @@ def write_piece(path: str | os.PathLike[str], point_ids: np.ndarray, points: np.
     if part is not None:
         cell["part"] = part
     arrays += [("CellData", k, "Int64", np.asarray(v), 1) for k, v in cell.items()]
+    if edges is not None:
+        arrays += [("CellData", SEGMENT_EDGES, "Int64", np.asarray(edges[0], np.int64), 1),
+                   ("CellData", EDGE_MARKER, "Int64", np.asarray(edges[1], np.int64).reshape(m, 3), 3)]
     arrays += [("CellData", _escape(k), "Float64", v, 1 if v.ndim == 1 else v.shape[1])
                for k, v in named_attributes(attributes, attribute_names).items()]
     arrays += [("Points", "", "Float64", pts3, 3),
@@ -414,7 +424,15 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
         order = np.arange(len(tri))
     # the cycle's own fields every piece holds, in row order (`hammesh check` compares them)
     fields = {k: np.concatenate([np.asarray(o[k]).reshape(-1) for o in owns])[order]
-              for k in owns[0] if all(k in o and np.size(o[k]) == len(t) for o, t in zip(owns, tris))}
+              for k in owns[0] if k not in EDGE_CELL_DATA
+              and all(k in o and np.size(o[k]) == len(t) for o, t in zip(owns, tris))}
+    segments, seg_marks = np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
+    if all(SEGMENT_EDGES in o and EDGE_MARKER in o for o in owns):  # the constrained edges, per triangle
+        flags = np.concatenate([np.asarray(o[SEGMENT_EDGES], np.int64).reshape(-1) for o in owns])[order]
+        marks = np.concatenate([np.asarray(o[EDGE_MARKER], np.int64).reshape(-1, 3) for o in owns])[order]
+        if len(flags) != len(tri) or len(marks) != len(tri):
+            raise FileFormatError(f"{path}: a piece's segment_edges or edge_marker is not one row per triangle")
+        segments, seg_marks = segments_from_edge_fields(tri, flags, marks)
     used = np.zeros(n, bool)
     used[tri.ravel()] = True
     if np.isnan(points[used]).any():
@@ -433,7 +451,7 @@ def read(path: str | os.PathLike[str], *, dim: int | None = 2, strict: bool = Fa
     marks = point_data.pop(VERTEX_MARKER, None)
     marks = np.zeros(0, np.int64) if marks is None or np.asarray(marks).dtype.kind not in "iu" else np.asarray(marks, np.int64)
     return Mesh(points=points, triangles=tri, triangle_attributes=attr, attribute_names=attr_names,
-                point_data=point_data, vertex_markers=marks,
+                point_data=point_data, vertex_markers=marks, segments=segments, segment_markers=seg_marks,
                 info={"pieces": len(tris), **({"cycle_fields": fields} if fields else {})})
 
 
@@ -458,9 +476,11 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
                        else np.zeros(0), dtype=np.int64)
     if marks.shape == (len(mesh.points),) and marks.any():
         point_data.setdefault(VERTEX_MARKER, marks)
+    edges = edge_fields(mesh) if len(np.asarray(mesh.segments).reshape(-1, 2)) else None
     write_piece(piece, np.arange(len(mesh.points)), mesh.points[:, :2], mesh.triangles, np.arange(m), cid, cpos,
-                parent, kind, attrs, attribute_names=names, point_data=point_data)
+                parent, kind, attrs, attribute_names=names, point_data=point_data, edges=edges)
     write_index(path, [piece.name], cycles=cid is not None,
-                cell_arrays={k: ("Float64", 1 if v.ndim == 1 else v.shape[1])
-                             for k, v in named_attributes(attrs, names).items()},
+                cell_arrays={**({} if edges is None else EDGE_CELL_DATA),
+                             **{k: ("Float64", 1 if v.ndim == 1 else v.shape[1])
+                                for k, v in named_attributes(attrs, names).items()}},
                 point_arrays={k: (_vtk_type(v), 1 if v.ndim == 1 else v.shape[1]) for k, v in point_data.items()})

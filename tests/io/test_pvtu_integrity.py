@@ -101,3 +101,21 @@ def test_a_moved_shared_point_is_refused(two_pieces: Path, tmp_path: Path) -> No
     assert pvtu.piece_cells(d / "piece_0001.vtu") == len(t)
     r = check(d / "mesh.pvtu")
     assert r.returncode == 2 and "different places" in r.stderr, r.stderr
+
+
+def test_a_pvtu_keeps_the_constrained_edges_and_markers(tmp_path: Path) -> None:
+    """tester18 r08: the serial .pvtu dropped the segments (the boundary conditions) in silence."""
+    from tests.helpers import plate
+
+    h = hammesh.hamiltonian(plate(2, 1, max_area=0.01))
+    assert len(h.segments) and h.segment_markers.any()
+    hammesh.write(h, tmp_path / "h.pvtu")
+    back = hammesh.read_mesh(tmp_path / "h.pvtu")
+
+    def edges(m) -> set:
+        return {(min(a, b), max(a, b), k) for (a, b), k in zip(m.segments.tolist(), m.segment_markers.tolist())}
+
+    assert edges(back) == edges(h)
+    assert hammesh.io.unwritten_data(h, tmp_path / "h.pvtu") == []
+    r = check(tmp_path / "h.pvtu")
+    assert r.returncode == 0, r.stderr
