@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from hammesh.domain.validate import check_extent
     from hammesh.io import check_outputs, read_mesh, write_report
     from hammesh.io.paths import require_file
-    from hammesh.io.report import collect_repairs
+    from hammesh.io.report import collect_repairs, format_angle
     from hammesh.verify.stored import verify_stored_mesh
 
     if args.min_angle is not None:
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     kind = "path(s)" if args.path else "cycle(s)"
     print(
         f"OK {args.mesh}: {len(triangles):,} triangles in {len(runs)} Hamiltonian {kind}; "
-        f"angles {stats['min_angle_output_deg']:.2f}..{stats['max_angle_output_deg']:.2f} deg"
+        f"angles {format_angle(stats['min_angle_output_deg'])}..{format_angle(stats['max_angle_output_deg'])} deg"
     )
     return 0
 

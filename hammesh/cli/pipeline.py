@@ -24,7 +24,7 @@ from hammesh.io import check_outputs, read_mesh, supported_suffixes, unwritten_d
 from hammesh.io.paths import require_file
 from hammesh.io.guard import reading
 from hammesh.io.paths import written_files
-from hammesh.io.report import collect_repairs
+from hammesh.io.report import collect_repairs, format_angle
 from hammesh.mesh import HamiltonianMesh, Mesh
 from hammesh.meshing import quality_mesh
 from hammesh.postprocess import hamiltonian
@@ -244,8 +244,8 @@ def summary(h: HamiltonianMesh) -> str:
             if "cycles_before_merging" in r
             else ", the input's cycle order kept" if r.get("kept_input_cycle") else ""
         ),
-        f"min angle {r['min_angle_input_deg']:.2f} -> {r['min_angle_output_deg']:.2f} deg "
-        f"(bound: half), max angle {r['max_angle_output_deg']:.2f} deg"
+        f"min angle {format_angle(r['min_angle_input_deg'])} -> {format_angle(r['min_angle_output_deg'])} deg "
+        f"(bound: half), max angle {format_angle(r['max_angle_output_deg'])} deg"
         + (  # sparse mode's local rule (issue 13): said where a join could not keep it
             f"; {r['below_parent_rule']:,} new triangle(s) below {r['keep']:g} x their parents' "
             f"smallest angle (worst {r['worst_parent_ratio']:.2f} x)"

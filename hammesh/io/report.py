@@ -18,7 +18,7 @@ import numpy as np
 
 from hammesh.io.atomic import atomic_write_text
 
-__all__ = ["write_report", "to_json_value", "collect_repairs"]
+__all__ = ["write_report", "to_json_value", "collect_repairs", "format_angle"]
 
 
 def to_json_value(value: Any, where: str = "report") -> Any:
@@ -107,3 +107,18 @@ def write_report(report: dict[str, Any], path: str | os.PathLike[str]) -> None:
     """
     text = json.dumps(to_json_value(report), indent=2, sort_keys=True, allow_nan=False)
     atomic_write_text(path, text + "\n")
+
+
+def format_angle(degrees: float) -> str:
+    """An angle for a summary line: two decimals, except where two decimals would call a
+    sliver 0.00 or 180.00 (a point set's splitter triangulation has angles of 2e-6 deg):
+    ``format_angle(2.4e-06) == "2.4e-06"``, ``format_angle(179.999941) == "179.999941"``.
+
+    >>> format_angle(30.0), format_angle(2.4e-06), format_angle(179.999941), format_angle(0.0)
+    ('30.00', '2.4e-06', '179.999941', '0.00')
+    """
+    if 0 < degrees < 0.005:
+        return f"{degrees:.2g}"
+    if 179.995 < degrees < 180:  # (decimals down to the second significant digit of 180 - x)
+        return f"{degrees:.{min(15, 1 - math.floor(math.log10(180 - degrees)))}f}"
+    return f"{degrees:.2f}"
