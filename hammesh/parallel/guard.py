@@ -81,10 +81,20 @@ def triangulate_guarded(data: dict, switches: str, what: str, seconds: float | N
     6M command's CPU over its tiles, for inputs the decomposition never makes.
     ``seconds``: the child's time limit (default :data:`ISOLATED_SECONDS`). ``isolate``:
     a child whatever the input (the lattice band: see ``tile_mesh.mesh_band``).
+    Triangle's internal error in this process (the ``triangle`` wrapper's
+    ``RuntimeError``) is a :class:`~hammesh.errors.MeshingError` too.
     """
     fault = input_fault(data["vertices"], data.get("segments", np.zeros((0, 2), np.int64)))
     if fault is None and not isolate:
-        return _triangulate_plain(data, switches)
+        try:
+            return _triangulate_plain(data, switches)
+        except RuntimeError as exc:
+            # Triangle's internal error ("Topological inconsistency", "Unable to
+            # locate PSLG vertex", ...): the ``triangle`` wrapper (20250106) jumps out
+            # of the C code (``longjmp``) and raises RuntimeError; said as a
+            # MeshingError as the child's is, so the band falls back to the plain run
+            # and a command says one line, not a traceback (session 18)
+            raise MeshingError(f"Triangle failed on {what}: {exc}") from None
     fault = fault or "isolated"
     from hammesh.meshing.isolate import run_isolated
 
