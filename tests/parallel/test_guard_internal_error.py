@@ -71,3 +71,23 @@ def test_the_flagged_input_fails_in_a_child_as_a_meshing_error():
     assert input_fault(np.array(VERTICES), np.array(SEGMENTS)) is not None
     with pytest.raises(MeshingError, match="the test's tile"):
         triangulate_guarded(_data(), SWITCHES, "the test's tile")
+
+
+@pytest.mark.parametrize("change, said", [
+    (lambda d: d.update(segment_markers=np.zeros((3, 1), np.int32)), "3 segment markers for 2 segments"),
+    (lambda d: d.update(segments=np.array([[1, 0], [2, 5]], np.int32)), "not ending at the 5 vertices"),
+    (lambda d: d.update(segments=np.array([[1, 0], [-1, 3]], np.int32)), "not ending at the 5 vertices"),
+    (lambda d: d.update(holes=np.zeros((2, 3))), "holes of shape (2, 3)"),
+])
+def test_a_malformed_input_is_refused_before_triangle_reads_it(change, said):
+    """Markers longer than the segments made Triangle read segment ends past the
+    segments' array (valgrind: invalid reads in ``formskeleton``): refused, never run."""
+    from hammesh.parallel.guard import malformed, triangulate_guarded
+
+    data = _data()
+    data["segment_markers"] = np.zeros((2, 1), np.int32)
+    assert malformed(data) is None
+    change(data)
+    assert said in malformed(data)
+    with pytest.raises(MeshingError, match="internal error: Triangle's input for the test's tile is malformed"):
+        triangulate_guarded(data, SWITCHES, "the test's tile")
