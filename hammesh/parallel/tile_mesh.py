@@ -66,9 +66,10 @@ def holes_in_hull(vertices: np.ndarray, holes: np.ndarray) -> np.ndarray:
     it. Triangle's ``carveholes`` skips a hole point outside the input's bounding box
     only, then ``locate``s it, which assumes a point inside the triangulation: from a
     hull triangle it may step across the hull into Triangle's outer "dummy" triangle,
-    whose corners are NULL, and read them (SIGSEGV in ``preciselocate``; the
-    interpreter crash of sessions 16-17, session 18: one band input in 5,000
-    examples of the random-domain test's generator, every run, any heap). A point
+    whose corners are NULL, and read them (SIGSEGV in ``preciselocate``, every run,
+    any heap: one band input in ~5,000 examples of the random-domain test's generator,
+    session 18; very likely the interpreter crash of sessions 16-17, the same call on
+    input the guard does not flag). A point
     outside the hull is in no triangle Triangle makes, so dropping it changes nothing
     (49 such inputs of that generator: the same mesh without it in 42; in the other 7
     it was the only hole, and an empty hole array made the wrapper fail, hence
