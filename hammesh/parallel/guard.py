@@ -16,7 +16,7 @@ import numpy as np
 
 from hammesh.errors import MeshingError
 
-__all__ = ["NEAR_RELATIVE", "ISOLATED_SECONDS", "input_fault", "triangulate_guarded"]
+__all__ = ["NEAR_RELATIVE", "ISOLATED_SECONDS", "input_fault", "malformed", "triangulate_guarded"]
 
 #: Triangle's input is suspect when two of its points, or a point and the inside of a
 #: segment, are closer than this times the input's extent (:func:`input_fault`).
@@ -61,6 +61,34 @@ def input_fault(vertices: np.ndarray, segments: np.ndarray) -> str | None:
     return None
 
 
+def malformed(data: dict) -> str | None:
+    """What makes Triangle's input dict inconsistent, or None: vertices not ``(n, 2)``,
+    a segment end not a vertex, segment markers not one per segment, holes not
+    ``(h, 2)`` (values are the domain's validation's: ``hammesh.domain.validate``).
+
+    Why: the ``triangle`` wrapper takes each count from the array it sets last
+    (``segment_markers`` after ``segments``): markers longer than the segments make
+    Triangle read segment ends past the segments' array (``formskeleton``; valgrind:
+    invalid reads, session 18), i.e. whatever the heap holds there, a crash or a
+    stray segment depending on the process. Cheap (a few reductions), so every call
+    checks it; the tiles' own inputs never have it (5,567 band and plain inputs of the
+    random-domain tests' generator, session 18).
+    """
+    v = np.asarray(data["vertices"])
+    if v.ndim != 2 or v.shape[1] != 2:
+        return f"vertices of shape {v.shape} (not (n, 2))"
+    s = np.asarray(data.get("segments", np.zeros((0, 2), np.int64)))
+    if s.size and (s.ndim != 2 or s.shape[1] != 2 or int(s.min()) < 0 or int(s.max()) >= len(v)):
+        return f"segments of shape {s.shape} not ending at the {len(v)} vertices"
+    markers = data.get("segment_markers")
+    if markers is not None and len(markers) != len(s.reshape(-1, 2)):
+        return f"{len(markers)} segment markers for {len(s.reshape(-1, 2))} segments"
+    h = np.asarray(data.get("holes", np.zeros((0, 2))))
+    if h.size and (h.ndim != 2 or h.shape[1] != 2):
+        return f"holes of shape {h.shape} (not (h, 2))"
+    return None
+
+
 def _triangulate_plain(data: dict, switches: str) -> dict:
     import triangle
 
@@ -81,10 +109,23 @@ def triangulate_guarded(data: dict, switches: str, what: str, seconds: float | N
     6M command's CPU over its tiles, for inputs the decomposition never makes.
     ``seconds``: the child's time limit (default :data:`ISOLATED_SECONDS`). ``isolate``:
     a child whatever the input (the lattice band: see ``tile_mesh.mesh_band``).
+    Triangle's internal error in this process (the ``triangle`` wrapper's
+    ``RuntimeError``) is a :class:`~hammesh.errors.MeshingError` too.
     """
+    wrong = malformed(data)
+    if wrong is not None:  # (our own bug: no run of Triangle, here or in a child, reads it right)
+        raise MeshingError(f"internal error: Triangle's input for {what} is malformed: {wrong}")
     fault = input_fault(data["vertices"], data.get("segments", np.zeros((0, 2), np.int64)))
     if fault is None and not isolate:
-        return _triangulate_plain(data, switches)
+        try:
+            return _triangulate_plain(data, switches)
+        except RuntimeError as exc:
+            # Triangle's internal error ("Topological inconsistency", "Unable to
+            # locate PSLG vertex", ...): the ``triangle`` wrapper (20250106) jumps out
+            # of the C code (``longjmp``) and raises RuntimeError; said as a
+            # MeshingError as the child's is, so the band falls back to the plain run
+            # and a command says one line, not a traceback (session 18)
+            raise MeshingError(f"Triangle failed on {what}: {exc}") from None
     fault = fault or "isolated"
     from hammesh.meshing.isolate import run_isolated
 

@@ -15,7 +15,7 @@ from hammesh.parallel.tiles import Tile
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
            "LATTICE_BAND", "LATTICE_BLOCK", "LATTICE_ORDER", "lattice_blocks", "load_tile_kernels",
-           "outline_hole_points"]
+           "outline_hole_points", "holes_in_hull", "HULL_TOLERANCE"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -49,6 +49,47 @@ LATTICE_ORDER = "rows"
 #: no lattice when the tile's box holds more than this many lattice points per
 #: estimated triangle of the tile (about 0.5 of them are inside when the tile fills it)
 LATTICE_BOX_FILL = 8.0
+
+
+#: a hole point is given to Triangle unless it lies farther than this times the
+#: input's extent outside the convex hull of the input's points (:func:`holes_in_hull`)
+HULL_TOLERANCE = 1e-12
+
+
+def holes_in_hull(vertices: np.ndarray, holes: np.ndarray) -> np.ndarray:
+    """The hole points (``(h, 2)``) that lie in the convex hull of ``vertices`` (or
+    within :data:`HULL_TOLERANCE` of the extent outside it): the only ones Triangle may
+    be given.
+
+    Why: a tile takes every domain hole whose point lies in its box
+    (``tiles._make_tiles``), and the tile's own piece of the domain need not surround
+    it. Triangle's ``carveholes`` skips a hole point outside the input's bounding box
+    only, then ``locate``s it, which assumes a point inside the triangulation: from a
+    hull triangle it may step across the hull into Triangle's outer "dummy" triangle,
+    whose corners are NULL, and read them (SIGSEGV in ``preciselocate``, every run,
+    any heap: one band input in ~5,000 examples of the random-domain test's generator,
+    session 18; very likely the interpreter crash of sessions 16-17, the same call on
+    input the guard does not flag). A point
+    outside the hull is in no triangle Triangle makes, so dropping it changes nothing
+    (49 such inputs of that generator: the same mesh without it in 42; in the other 7
+    it was the only hole, and an empty hole array made the wrapper fail, hence
+    callers leave the key out then).
+    """
+    from scipy.spatial import ConvexHull
+    from scipy.spatial import QhullError
+
+    h = np.asarray(holes, dtype=np.float64).reshape(-1, 2)
+    v = np.asarray(vertices, dtype=np.float64)
+    if len(h) == 0 or len(v) < 3:
+        return h
+    try:
+        hull = ConvexHull(v)
+    except QhullError:  # (all points on a line: Triangle fails on the input anyway)
+        return h
+    extent = max(float(np.ptp(v, axis=0).max()), float(np.abs(v).max()))
+    # (qhull's facets: unit outward normal n and offset c, n . x + c <= 0 inside)
+    outside = h @ hull.equations[:, :2].T + hull.equations[:, 2]
+    return h[(outside <= HULL_TOLERANCE * extent).all(axis=1)]
 
 
 def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,
@@ -314,8 +355,11 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
         "segments": np.ascontiguousarray(np.concatenate([tile.segments, outline]), dtype=np.int32),
         "segment_markers": np.ascontiguousarray(np.concatenate([tile.segment_markers, np.zeros(len(outline), np.int64)]),
                                                 dtype=np.int32)[:, None],
-        "holes": np.ascontiguousarray(np.concatenate([np.asarray(tile.holes, np.float64).reshape(-1, 2), hole_xy])),
     }
+    # (the lattice's points lie inside the tile: the hull of the tile's own vertices is the input's)
+    holes = np.concatenate([holes_in_hull(tile.vertices, tile.holes), hole_xy])
+    if len(holes):
+        data["holes"] = np.ascontiguousarray(holes)
     # (in a child process, always: the band's Triangle call crashed the interpreter twice
     # on clean checkouts -- CI session 16, a fresh venv session 17 -- on input the guard
     # does not flag, heap-dependent, never reproduced in forked children; a failure
@@ -431,8 +475,9 @@ def _mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bo
         "segments": np.ascontiguousarray(tile.segments, dtype=np.int32),
         "segment_markers": np.ascontiguousarray(tile.segment_markers, dtype=np.int32)[:, None],
     }
-    if len(tile.holes):
-        data["holes"] = np.ascontiguousarray(tile.holes, dtype=np.float64)
+    holes = holes_in_hull(tile.vertices, tile.holes)  # (the lattice's points lie inside the tile)
+    if len(holes):
+        data["holes"] = np.ascontiguousarray(holes)
     out = triangulate_guarded(data, tile_switches(min_angle, max_area), f"tile {tile.index}")
     tri = np.asarray(out.get("triangles", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(tri) == 0:
