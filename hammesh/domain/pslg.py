@@ -15,7 +15,7 @@ from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 
-from hammesh.domain.repair import Repair, repair_graph
+from hammesh.domain.repair import Repair, drop_outside_holes, repair_graph
 from hammesh.domain.validate import check_fields, point_array, refuse_complex
 from hammesh.errors import InvalidDomainError
 
@@ -116,13 +116,14 @@ class Domain:
                              strict=bool(strict))
         if graph.repairs and attributes.shape[1]:
             attributes = carry_vertex_attributes(vertices, segments, attributes, graph.vertices)
+        holes, dropped = drop_outside_holes(graph.vertices, holes, bool(strict))
         values.update(vertices=graph.vertices, segments=graph.segments,
                       segment_markers=graph.segment_markers, vertex_markers=graph.vertex_markers,
-                      vertex_attributes=attributes)
+                      vertex_attributes=attributes, holes=holes)
         for name, value in values.items():
             value.setflags(write=False)
             object.__setattr__(self, name, value)
-        object.__setattr__(self, "repairs", graph.repairs)
+        object.__setattr__(self, "repairs", tuple(graph.repairs) + dropped)
 
     def __repr__(self) -> str:
         fixed = f", {len(self.repairs)} repairs" if self.repairs else ""

@@ -40,14 +40,15 @@ from typing import NamedTuple
 import numpy as np
 
 from hammesh.domain import intersections as ix
+from hammesh.domain.validate import holes_inside_hull
 from hammesh.errors import InvalidDomainError
 from hammesh.predicates import orient_rows
 
-__all__ = ["Repair", "RepairedGraph", "repair_graph", "REPAIR_KINDS", "MAX_ROUNDS"]
+__all__ = ["Repair", "RepairedGraph", "repair_graph", "drop_outside_holes", "REPAIR_KINDS", "MAX_ROUNDS"]
 
 #: Every repair kind, in the order repairs are made.
 REPAIR_KINDS = ("duplicate_vertex", "zero_length_segment", "duplicate_segment",
-                "vertex_on_segment", "collinear_overlap", "crossing")
+                "vertex_on_segment", "collinear_overlap", "crossing", "hole_outside")
 #: Noding rounds before a graph whose crossing points keep creating defects is refused.
 MAX_ROUNDS = 4
 #: Candidate tests above which the grid is not used to find all defects at once...
@@ -111,6 +112,32 @@ def _pt(p) -> str:
 
 def _where(points) -> tuple:
     return tuple((float(p[0]), float(p[1])) for p in np.asarray(points)[:_WHERE])
+
+
+# ----------------------------------------------------------------------------- holes
+
+def drop_outside_holes(vertices: np.ndarray, holes: np.ndarray, strict: bool) -> tuple[np.ndarray, tuple]:
+    """The hole points inside the convex hull of ``vertices`` and the repair that dropped
+    the others (``()`` if none): a point outside is in no triangle, and Triangle's
+    ``carveholes`` may crash locating one that lies inside the bounding box
+    (:func:`hammesh.domain.validate.holes_in_hull`).
+
+    Raises
+    ------
+    InvalidDomainError
+        With ``strict``, naming the first such hole point.
+    """
+    if len(holes) == 0:
+        return holes, ()
+    keep = holes_inside_hull(vertices, holes)
+    if keep.all():
+        return holes, ()
+    out = holes[~keep]
+    defect = f"hole point {int(np.argmin(keep))} at {_pt(out[0])} lies outside the convex hull of the vertices"
+    if strict:
+        raise InvalidDomainError(defect)
+    return holes[keep], (Repair("hole_outside", len(out), _where(out), defect,
+                                "dropped: it is in no triangle (Triangle could crash locating it)"),)
 
 
 # ----------------------------------------------------------------------------- vertices

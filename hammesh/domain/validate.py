@@ -21,7 +21,7 @@ import numpy as np
 
 from hammesh.errors import InvalidDomainError
 
-__all__ = ["validate_domain", "check_fields", "point_array", "refuse_complex", "check_extent", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
+__all__ = ["validate_domain", "check_fields", "point_array", "refuse_complex", "check_extent", "holes_in_hull", "holes_inside_hull", "HULL_TOLERANCE", "MAX_ABS_COORDINATE", "MIN_EXTENT"]
 
 #: Beyond this magnitude Triangle's floating-point predicates overflow.
 MAX_ABS_COORDINATE = 1e30
@@ -44,6 +44,54 @@ def check_extent(points: np.ndarray, error: type[Exception], what: str = "the me
     if 0 < extent < MIN_EXTENT:
         raise error(f"{what} spans only {extent:.3g}: below {MIN_EXTENT:g} areas and angles underflow float64 "
                     "(rescale it; the mesh does not change)")
+
+
+#: a hole point is given to Triangle unless it lies farther than this times the
+#: input's extent outside the convex hull of the input's points (:func:`holes_in_hull`)
+HULL_TOLERANCE = 1e-12
+
+
+def holes_in_hull(vertices: np.ndarray, holes: np.ndarray) -> np.ndarray:
+    """The hole points (``(h, 2)``) that lie in the convex hull of ``vertices`` (or
+    within :data:`HULL_TOLERANCE` of the extent outside it): the only ones Triangle may
+    be given.
+
+    Why (in a tile, where session 18 found it): a tile takes every domain hole whose point lies in its box
+    (``tiles._make_tiles``), and the tile's own piece of the domain need not surround
+    it. Triangle's ``carveholes`` skips a hole point outside the input's bounding box
+    only, then ``locate``s it, which assumes a point inside the triangulation: from a
+    hull triangle it may step across the hull into Triangle's outer "dummy" triangle,
+    whose corners are NULL, and read them (SIGSEGV in ``preciselocate``, every run,
+    any heap: one band input in ~5,000 examples of the random-domain test's generator,
+    session 18; very likely the interpreter crash of sessions 16-17, the same call on
+    input the guard does not flag). A point
+    outside the hull is in no triangle Triangle makes, so dropping it changes nothing
+    (49 such inputs of that generator: the same mesh without it in 42; in the other 7
+    it was the only hole, and an empty hole array made the wrapper fail, hence
+    callers leave the key out then).
+    """
+    h = np.asarray(holes, dtype=np.float64).reshape(-1, 2)
+    return h[holes_inside_hull(vertices, h)]
+
+
+def holes_inside_hull(vertices: np.ndarray, holes: np.ndarray) -> np.ndarray:
+    """``(h,) bool``: which hole points :func:`holes_in_hull` keeps."""
+    h = np.asarray(holes, dtype=np.float64).reshape(-1, 2)
+    v = np.asarray(vertices, dtype=np.float64)
+    keep = np.ones(len(h), dtype=bool)
+    if len(h) == 0 or len(v) < 3:
+        return keep
+    from scipy.spatial import ConvexHull
+    from scipy.spatial import QhullError
+
+    try:
+        hull = ConvexHull(v)
+    except QhullError:  # (all points on a line: Triangle fails on the input anyway)
+        return keep
+    extent = max(float(np.ptp(v, axis=0).max()), float(np.abs(v).max()))
+    # (qhull's facets: unit outward normal n and offset c, n . x + c <= 0 inside)
+    outside = h @ hull.equations[:, :2].T + hull.equations[:, 2]
+    return (outside <= HULL_TOLERANCE * extent).all(axis=1)
 
 
 def refuse_complex(value, what: str) -> None:

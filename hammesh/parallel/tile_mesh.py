@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hammesh.domain.validate import holes_in_hull
 from hammesh.errors import MeshingError
 from hammesh.mesh import Mesh
 from hammesh.meshing.options import format_number
@@ -15,7 +16,7 @@ from hammesh.parallel.tiles import Tile
 __all__ = ["tile_switches", "mesh_tile", "mesh_band", "region_attributes", "locate_in_triangles", "lattice_points",
            "lattice_grid", "LatticeGrid", "lattice_spacing", "LATTICE_CLEARANCE", "LATTICE_GRADING", "LATTICE_BOX_FILL",
            "LATTICE_BAND", "LATTICE_BLOCK", "LATTICE_ORDER", "lattice_blocks", "load_tile_kernels",
-           "outline_hole_points", "holes_in_hull", "HULL_TOLERANCE"]
+           "outline_hole_points"]
 
 #: lattice points keep this many lattice steps from every segment (Triangle fills the
 #: band between the segments' subsegments and the lattice, grading as it does)
@@ -49,47 +50,6 @@ LATTICE_ORDER = "rows"
 #: no lattice when the tile's box holds more than this many lattice points per
 #: estimated triangle of the tile (about 0.5 of them are inside when the tile fills it)
 LATTICE_BOX_FILL = 8.0
-
-
-#: a hole point is given to Triangle unless it lies farther than this times the
-#: input's extent outside the convex hull of the input's points (:func:`holes_in_hull`)
-HULL_TOLERANCE = 1e-12
-
-
-def holes_in_hull(vertices: np.ndarray, holes: np.ndarray) -> np.ndarray:
-    """The hole points (``(h, 2)``) that lie in the convex hull of ``vertices`` (or
-    within :data:`HULL_TOLERANCE` of the extent outside it): the only ones Triangle may
-    be given.
-
-    Why: a tile takes every domain hole whose point lies in its box
-    (``tiles._make_tiles``), and the tile's own piece of the domain need not surround
-    it. Triangle's ``carveholes`` skips a hole point outside the input's bounding box
-    only, then ``locate``s it, which assumes a point inside the triangulation: from a
-    hull triangle it may step across the hull into Triangle's outer "dummy" triangle,
-    whose corners are NULL, and read them (SIGSEGV in ``preciselocate``, every run,
-    any heap: one band input in ~5,000 examples of the random-domain test's generator,
-    session 18; very likely the interpreter crash of sessions 16-17, the same call on
-    input the guard does not flag). A point
-    outside the hull is in no triangle Triangle makes, so dropping it changes nothing
-    (49 such inputs of that generator: the same mesh without it in 42; in the other 7
-    it was the only hole, and an empty hole array made the wrapper fail, hence
-    callers leave the key out then).
-    """
-    from scipy.spatial import ConvexHull
-    from scipy.spatial import QhullError
-
-    h = np.asarray(holes, dtype=np.float64).reshape(-1, 2)
-    v = np.asarray(vertices, dtype=np.float64)
-    if len(h) == 0 or len(v) < 3:
-        return h
-    try:
-        hull = ConvexHull(v)
-    except QhullError:  # (all points on a line: Triangle fails on the input anyway)
-        return h
-    extent = max(float(np.ptp(v, axis=0).max()), float(np.abs(v).max()))
-    # (qhull's facets: unit outward normal n and offset c, n . x + c <= 0 inside)
-    outside = h @ hull.equations[:, :2].T + hull.equations[:, 2]
-    return h[(outside <= HULL_TOLERANCE * extent).all(axis=1)]
 
 
 def region_attributes(tile: Tile, points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,

@@ -91,8 +91,10 @@ def test_inputs_are_copied_and_stored_arrays_read_only():
 
 def test_replace_revalidates():
     d = Domain(SQUARE, RING)
-    d2 = dataclasses.replace(d, holes=[[3.0, 3.0]])
-    assert d2.holes.tolist() == [[3.0, 3.0]]
+    d2 = dataclasses.replace(d, holes=[[0.25, 0.75]])
+    assert d2.holes.tolist() == [[0.25, 0.75]]
+    d3 = dataclasses.replace(d, holes=[[3.0, 3.0]])  # (outside the hull: dropped, reported)
+    assert d3.holes.tolist() == [] and [r.kind for r in d3.repairs] == ["hole_outside"]
     with pytest.raises(InvalidDomainError, match=r"segments 4 and 5 cross"):
         dataclasses.replace(d, segments=RING + [[0, 2], [1, 3]], segment_markers=None,
                             strict=True)

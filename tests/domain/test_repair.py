@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import hammesh
@@ -312,3 +312,22 @@ def test_closest_pair_brute_force_agrees_with_the_tree():
     d2 = d[:2000, :2000]
     i, j = np.unravel_index(np.argmin(d2), d2.shape)
     assert {small[0], small[1]} == {i, j}
+
+
+@given(st.floats(0.05, 0.95), st.floats(0.05, 0.95))
+@settings(max_examples=40, deadline=None)
+def test_hole_points_outside_the_hull_are_dropped_and_reported(x: float, y: float) -> None:
+    """A hole point inside the bounding box but outside the hull (Triangle's carveholes may
+    crash locating it: session 18) is dropped and reported; one inside is kept."""
+    import hammesh
+
+    tri = dict(vertices=[[0, 0], [2, 0], [0, 2]], segments=[[0, 1], [1, 2], [2, 0]])
+    inside, outside = [x, y], [2 - x / 2, 2 - y / 2]  # (x + y <= 2 inside; the second beyond the long side)
+    assume(inside[0] + inside[1] < 1.9 and outside[0] + outside[1] > 2.05)
+    d = hammesh.Domain(**tri, holes=[outside, inside])
+    assert d.holes.tolist() == [inside]
+    assert [r.kind for r in d.repairs] == ["hole_outside"] and d.repairs[0].count == 1
+    assert "outside the convex hull" in d.repairs[0].defect
+    with pytest.raises(hammesh.InvalidDomainError, match="outside the convex hull"):
+        hammesh.Domain(**tri, holes=[outside], strict=True)
+    assert hammesh.Domain(**tri, holes=[inside]).repairs == ()

@@ -24,7 +24,8 @@ from hammesh.errors import MeshingError
 from hammesh.meshing.isolate import run_isolated
 from hammesh.parallel import decompose
 from hammesh.parallel import tile_mesh
-from hammesh.parallel.tile_mesh import holes_in_hull, mesh_tile
+from hammesh.domain.validate import holes_in_hull
+from hammesh.parallel.tile_mesh import mesh_tile
 from tests.parallel.test_coarse_quality import BEND, _with_square_hole
 
 CRASH = Path(__file__).with_name("band_hole_outside_hull.json")
