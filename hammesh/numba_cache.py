@@ -61,7 +61,8 @@ def guard_stale_indexes() -> bool:
 
     Wraps ``numba.core.caching.IndexDataCacheFile._load_index`` (an index that does not
     unpickle reads as empty, as numba already treats an index of another numba
-    version) and ``.load`` (an entry that does not unpickle is not found). Any numba
+    version) and ``.load`` (an entry that does not unpickle, or holds another
+    signature's code after numba's unlocked save raced, is not found). Any numba
     cache in this process benefits; a fresh cache is read exactly as before. Returns
     False if this numba has no such methods (nothing patched). Idempotent.
     """
@@ -84,9 +85,24 @@ def guard_stale_indexes() -> bool:
 
     def _load(self, key):  # type: ignore[no-untyped-def]
         try:
-            return load(self, key)
+            data = load(self, key)
         except Exception:  # noqa: BLE001 - an entry naming a moved module: a miss
             return None
+        try:
+            # numba's save is not locked: two processes compiling one kernel for two
+            # signatures at once both name their entry "<prefix>.<k>.nbc" and one
+            # overwrites the other, so the index can map a signature to the other
+            # signature's machine code (numba issues #4807, #10128; session 18 made a
+            # toy kernel return 4619567317775286272 for 7 that way). An entry whose
+            # stored signature is not the key's is a miss: numba compiles and saves
+            # it again.
+            stored = tuple(data[3].args)
+            wanted = tuple(getattr(key[0], "args", key[0]))
+            if stored != wanted:
+                return None
+        except Exception:  # noqa: BLE001 - another layout: trust numba's own lookup
+            pass
+        return data
 
     _load_index._hammesh_guard = True  # type: ignore[attr-defined]
     _load._hammesh_guard = True  # type: ignore[attr-defined]

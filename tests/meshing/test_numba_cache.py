@@ -73,3 +73,30 @@ def test_guard_is_installed_on_import_and_idempotent() -> None:
     before = IndexDataCacheFile._load_index
     assert numba_cache.guard_stale_indexes()
     assert IndexDataCacheFile._load_index is before  # not wrapped twice
+
+
+def test_an_entry_holding_another_signatures_code_is_a_cache_miss(tmp_path) -> None:
+    """numba's unlocked save: two processes compiling one kernel for two signatures at once
+    both write entry ``.1.nbc``, and the index can map ``int64`` to ``float64``'s machine
+    code (the kernel then returned 4619567317775286272 for 7). Built here from two caches:
+    the int64 index with the float64 entry. With the guard the entry is a miss."""
+    pkg = tmp_path / "racepkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "mod.py").write_text("from numba import njit\n\n\n@njit(cache=True)\ndef f(x):\n    return x\n")
+    ints, floats, mixed = (tmp_path / name for name in ("ints", "floats", "mixed"))
+    assert _run(tmp_path, "from racepkg.mod import f; print(f(7))", ints).stdout.strip() == "7"
+    assert _run(tmp_path, "from racepkg.mod import f; print(f(7.5))", floats).stdout.strip() == "7.5"
+    index = [p for p in ints.rglob("*.nbi")]
+    entry = [p for p in floats.rglob("*.nbc")]
+    assert len(index) == 1 and len(entry) == 1
+    target = mixed / index[0].relative_to(ints).parent
+    target.mkdir(parents=True)
+    (target / index[0].name).write_bytes(index[0].read_bytes())
+    (target / entry[0].name).write_bytes(entry[0].read_bytes())
+    guard = (
+        "import importlib.util as u; s = u.spec_from_file_location('nc', %r); m = u.module_from_spec(s); "
+        "s.loader.exec_module(m); assert m.guard_stale_indexes(); " % str(GUARD)
+    )
+    guarded = _run(tmp_path, guard + "from racepkg.mod import f; print(f(7))", mixed)
+    assert guarded.returncode == 0 and guarded.stdout.strip() == "7", guarded.stdout + guarded.stderr
