@@ -175,3 +175,11 @@ def test_msh_output_keeps_physical_surfaces_of_a_small_mesh(tmp_path):
     for i, c in enumerate(m.cells):
         if c.type == "triangle":
             np.testing.assert_array_equal(m.cell_data["gmsh:physical"][i], m.cell_data["physical"][i])
+
+
+@pytest.mark.xfail(strict=True, reason="tester18 r08: .pvtu output drops constrained edges and markers silently")
+def test_pvtu_output_keeps_or_reports_the_segments(tmp_path, capsys):
+    out, rep = tmp_path / "s.pvtu", tmp_path / "s.json"
+    assert main(["mesh", str(DEMO), "-q", "30", "-a", "0.05", "-o", str(out), "--report", str(rep)]) == 0
+    noted = "constrained edges" in capsys.readouterr().out
+    assert len(hammesh.read_mesh(out).segments) > 0 or noted
