@@ -20,6 +20,12 @@ from hammesh.mesh import KIND_NAMES, Mesh
 __all__ = ["verify_stored_mesh", "check_stored_fields"]
 
 
+def _number(value) -> str:
+    """A stored value as a file shows it: 7, not np.float64(7.0)."""
+    v = float(value)
+    return str(int(v)) if v.is_integer() else repr(v)
+
+
 def check_stored_fields(fields: dict[str, np.ndarray] | None, runs: np.ndarray, n_kinds: int) -> None:
     """Compare the cycle fields a file stores beside its rows with what the rows are.
 
@@ -50,15 +56,15 @@ def check_stored_fields(fields: dict[str, np.ndarray] | None, runs: np.ndarray, 
             bad = np.flatnonzero(~whole | (values != derived[name]))
             if len(bad):
                 i = int(bad[0])
-                raise VerificationError(f"stored {name} of triangle {i} is {values[i]!r}; its place in the rows "
-                                        f"says {int(derived[name][i])}", check="cycle")
+                raise VerificationError(f"stored {name} of triangle {i} is {_number(values[i])}; its place in the "
+                                        f"rows says {int(derived[name][i])}", check="cycle")
         else:
             low = {"kind": 0, "parent": -1}.get(name, 0)
             high = n_kinds - 1 if name == "kind" else np.inf
             bad = np.flatnonzero(~whole | (values < low) | (values > high))
             if len(bad):
                 i = int(bad[0])
-                raise VerificationError(f"stored {name} of triangle {i} is {values[i]!r}, not a whole number in "
+                raise VerificationError(f"stored {name} of triangle {i} is {_number(values[i])}, not a whole number in "
                                         f"{low}..{'' if high == np.inf else int(high)}", check="input")
 
 
