@@ -30,7 +30,7 @@ from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split
 from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
-           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start", "decompose_beside", "DECOMPOSE_IN_CHILD",
+           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start", "decompose_beside", "DECOMPOSE_IN_CHILD", "DECOMPOSE_MODULES",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
            "MOST_BALANCE_TILES", "MIN_FOURTH_TILE",
            "not_carried", "SUMMARIES_WITH_TILES", "task_clock", "gather_widening"]
@@ -463,6 +463,12 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
 #: while a local cluster starts in this process's background, the domain is decomposed
 #: in a forked child (:func:`decompose_beside`); False: in this thread
 DECOMPOSE_IN_CHILD = True
+#: the modules :func:`~hammesh.parallel.tiles.decompose` imports on first use: imported
+#: before the child is forked. A child forked while another thread (the cluster's
+#: start, which imports ``scipy.spatial`` too) was inside the import of a module
+#: would wait for ever on that module's lock if it imported it.
+DECOMPOSE_MODULES = ("scipy.spatial", "triangle", "hammesh.parallel.guard", "hammesh.parallel._kernels",
+                     "hammesh.meshing.isolate")
 
 
 def decompose_beside(run, domain: Domain, **kw) -> Decomposition:
@@ -482,6 +488,10 @@ def decompose_beside(run, domain: Domain, **kw) -> Decomposition:
     from hammesh.parallel.forked import can_fork, in_child
 
     if DECOMPOSE_IN_CHILD and isinstance(run, Starting) and not run.started() and can_fork():
+        import importlib
+
+        for name in DECOMPOSE_MODULES:  # (here, waiting for another thread's import of one to end)
+            importlib.import_module(name)
         guard_forks()
         ok, decomp = in_child(decompose, domain, **kw)
         if ok:

@@ -125,6 +125,20 @@ def test_decompose_beside_raises_the_decompositions_own_error():
         run.decompose_beside(_Booting(), dom, min_angle=30, max_area=1e-3, n_tiles=2)
 
 
+def test_the_decomposition_imports_nothing_beyond_its_listed_modules(tmp_path):
+    """A Python caller's first decomposition (a fresh process: only the domain read
+    and ``run.DECOMPOSE_MODULES`` imported) imports no module but numba's own, which it
+    loads under numba's compiler lock (held across forks): the child forked for it
+    never waits on a module lock another thread held at the fork."""
+    code = (f"import sys, importlib; import hammesh; from hammesh.parallel import run; "
+            f"[importlib.import_module(n) for n in run.DECOMPOSE_MODULES]; "
+            f"from hammesh.parallel.tiles import decompose; d = hammesh.read_domain({DEMO!r}); "
+            f"before = set(sys.modules); decompose(d, min_angle=30, max_area=1e-4, n_tiles=4); "
+            f"print(sorted(m for m in set(sys.modules) - before if m.split('.')[0] != 'numba' and m != 'cmath'))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+
+
 #: ``hammesh argv[2:]`` in a fresh process with ``run.DECOMPOSE_IN_CHILD`` = ``argv[1]``
 _SWITCHED = ("import sys; import hammesh.parallel.run as r; r.DECOMPOSE_IN_CHILD = bool(int(sys.argv[1])); "
              "from hammesh.cli import main; sys.exit(main(sys.argv[2:]))")
@@ -210,3 +224,35 @@ def test_hamiltonian_is_the_same_when_the_cap_is_raised_while_it_runs(monkeypatc
     assert used and all(used)
     assert np.array_equal(ref.triangles, got.triangles) and np.array_equal(ref.points, got.points)
     assert np.array_equal(ref.position, got.position)
+
+
+#: a one-worker local cluster whose driver loads no kernel before the fork
+#: (``KERNELS_BEFORE_FORK`` off): the worker's own loading task runs first of its tasks
+WORKER_LOADS = """
+import json
+import hammesh.parallel.cluster as cl
+cl.KERNELS_BEFORE_FORK = False
+
+def held():
+    from hammesh.parallel import _kernels as k
+    names = ("lattice_mark_inside_into", "lattice_triangles_into", "lattice_mesh_into")
+    return {n: len(getattr(k, n).signatures) for n in names}
+
+if __name__ == "__main__":
+    with cl.runner_for(workers=1, mode="sparse") as (c, _):
+        worker = c.submit(held, pure=False).result()
+    print(json.dumps({"method": cl.start_method(), "driver": held(), "worker": worker}))
+"""
+
+
+@pytest.mark.slow
+def test_without_kernels_before_the_fork_each_worker_loads_them_first(tmp_path):
+    """``cluster.KERNELS_BEFORE_FORK`` off: the driver loads no kernel for its workers,
+    and each worker's first task loads them (before any tile: priority)."""
+    pytest.importorskip("distributed")
+    script = tmp_path / "loads.py"
+    script.write_text(WORKER_LOADS)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=600, check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert all(v >= 1 for v in got["worker"].values()), got
+    assert all(v == 0 for v in got["driver"].values()), got
