@@ -22,7 +22,7 @@ import threading
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
 from typing import Any, Callable
 
-__all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "THREAD_MIN_ROWS", "later",
+__all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "LaterThreadExecutor", "THREAD_MIN_ROWS", "later",
            "wait_later"]
 
 #: Rows per thread below which a row pass runs in one call (tests lower it to exercise
@@ -128,16 +128,49 @@ class InlineExecutor(Executor):
         return f
 
 
+class LaterThreadExecutor(InlineExecutor):
+    """An :class:`InlineExecutor` that turns into one thread once the process may use
+    two (:func:`cores` read at each ``submit``, not when it was made).
+
+    Why: a local cluster's worker caps its threads at its share of the cores and
+    raises the cap at the tail, when fewer tiles are left than workers
+    (``cluster.TAIL_THREADS``). ``hamiltonian()`` chose its side executor when it
+    started, so a tile that had started under a cap of 1 ran its certificate's side
+    work inline to the end, beside an idle core (session 17: no effect of the raise
+    could be measured). Work submitted after the raise now goes to a thread of its
+    own; once there, every later call goes there too (one thread: the order kept).
+    It is still an :class:`InlineExecutor` to callers that check: those made their
+    serial choice at the start (a row stream) and keep it.
+    """
+
+    def __init__(self) -> None:
+        self._pool: ThreadPoolExecutor | None = None
+        self._lock = threading.Lock()
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:
+        if self._pool is None and cores() < 2:
+            return super().submit(fn, *args, **kwargs)
+        with self._lock:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(1, thread_name_prefix="hammesh-side")
+        return self._pool.submit(fn, *args, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
 def side_executor() -> Executor:
     """One thread for work beside the caller's (``hammesh()``'s certificate and page
     faults), or, when this process may use one thread only (:func:`cores` is 1: one
-    core, or a cap of 1, e.g. a local cluster with a worker per core), an
-    :class:`InlineExecutor`: the side work then runs in the caller's thread and the
-    process never has two threads computing. Use it as a context manager, like a pool.
-    A caller whose side work waits for its own (a row stream) must check
-    ``isinstance(side, InlineExecutor)`` and run serially instead.
+    core, or a cap of 1, e.g. a local cluster with a worker per core), a
+    :class:`LaterThreadExecutor`: the side work then runs in the caller's thread and
+    the process never has two threads computing, unless the cap is raised before the
+    work is submitted. Use it as a context manager, like a pool. A caller whose side
+    work waits for its own (a row stream) must check ``isinstance(side,
+    InlineExecutor)`` and run serially instead.
     """
-    return ThreadPoolExecutor(1) if cores() > 1 else InlineExecutor()
+    return ThreadPoolExecutor(1) if cores() > 1 else LaterThreadExecutor()
 
 
 _later: queue.SimpleQueue | None = None

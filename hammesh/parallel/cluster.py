@@ -9,7 +9,7 @@ from typing import Iterator
 from hammesh.errors import HammeshError, InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "local_workers", "set_threads", "TAIL_THREADS", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
-           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA",
+           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA", "KERNELS_BEFORE_FORK", "load_worker_kernels", "guard_forks",
            "dask_installed", "DASK_MISSING", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
@@ -182,12 +182,8 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
         importlib.import_module(name)
     _hold_numba_lock_across_fork()
     method = start_method()
-    if mode is not None and method == "fork":
-        from hammesh.parallel.tile_mesh import load_tile_kernels
-        from hammesh.postprocess import load_kernels
-
-        load_kernels(mode)
-        load_tile_kernels()  # (the lattice's: each worker loaded them in its first tile, ~0.25 s CPU)
+    if mode is not None and method == "fork" and KERNELS_BEFORE_FORK:
+        load_worker_kernels(mode)
     # one process per worker, one thread each: Triangle and the kernels hold their core;
     # Dask's shutdown chatter (nanny warnings) is not the user's business
     with dask.config.set({"distributed.worker.multiprocessing-method": method, **QUIET_CLUSTER, **TILE_QUEUE}):
@@ -212,6 +208,12 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             # the workers share this machine's cores: each threaded pass of a worker gets its
             # share, not every core (N workers x C threads on C cores only thrash)
             kept = c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
+            if mode is not None and not (method == "fork" and KERNELS_BEFORE_FORK):
+                # each worker loads its kernels itself, first of its tasks, on its own core
+                # (the futures are held until the cluster closes)
+                loading = [c.submit(load_worker_kernels, mode, workers=[addr], allow_other_workers=False,
+                                    pure=False, priority=1 << 21) for addr in kept]
+                stack.callback(loading.clear)
             # (only while the driver is still decomposing: once its tiles are ready the
             # prefault would only delay them, session 16)
             if PREFAULT and kept and all(kept.values()) and not (submitting is not None and submitting.is_set()):
@@ -225,6 +227,23 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             raise ClusterError(f"the local Dask cluster of {workers} workers did not start within "
                                f"{START_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from exc
     return c
+
+
+#: a local cluster's forked workers start with the mode's kernels loaded by the driver
+#: before the fork (:func:`load_worker_kernels` in the cluster's thread); False: the
+#: driver forks without them and each worker loads them in a task of its own, queued
+#: before the tiles
+KERNELS_BEFORE_FORK = True
+
+
+def load_worker_kernels(mode: str) -> None:
+    """Load the compiled kernels a tile's task runs (``hamiltonian()``'s of ``mode``,
+    the lattice's) into this process."""
+    from hammesh.parallel.tile_mesh import load_tile_kernels
+    from hammesh.postprocess import load_kernels
+
+    load_kernels(mode)
+    load_tile_kernels()  # (the lattice's: each worker loaded them in its first tile, ~0.25 s CPU)
 
 
 #: when fewer tiles are left running than a local cluster has workers, the workers'
@@ -416,6 +435,10 @@ class Starting:
         self.n_workers = n_workers
         self._submitting = submitting
 
+    def started(self) -> bool:
+        """Whether the start is over (up, or failed)."""
+        return self._future.done()
+
     def tiles_coming(self) -> None:
         """The caller has its tiles to submit: the starting thread queues no
         :func:`prefault` before them (a worker faults its memory in only while the
@@ -428,6 +451,14 @@ class Starting:
 
 
 _fork_guarded = False
+_fork_guard_lock = threading.Lock()
+
+
+def guard_forks() -> None:
+    """Make every later ``os.fork`` of this process wait while another thread is inside
+    numba's compiler or writes a log record (:func:`_hold_numba_lock_across_fork`):
+    before forking a child beside the cluster's start (:mod:`hammesh.parallel.forked`)."""
+    _hold_numba_lock_across_fork()
 
 
 def _hold_numba_lock_across_fork() -> None:
@@ -441,17 +472,18 @@ def _hold_numba_lock_across_fork() -> None:
     Logging's handlers likewise (:func:`_take_log_handlers`).
     """
     global _fork_guarded
-    if _fork_guarded:
-        return
     import os
 
     from numba.core.compiler_lock import global_compiler_lock
 
-    os.register_at_fork(before=global_compiler_lock.acquire, after_in_parent=global_compiler_lock.release,
-                        after_in_child=global_compiler_lock.release)
-    os.register_at_fork(before=_take_log_handlers, after_in_parent=_give_log_handlers,
-                        after_in_child=_give_log_handlers)
-    _fork_guarded = True
+    with _fork_guard_lock:  # (the main thread and the cluster's may both ask: hooks once)
+        if _fork_guarded:
+            return
+        os.register_at_fork(before=global_compiler_lock.acquire, after_in_parent=global_compiler_lock.release,
+                            after_in_child=global_compiler_lock.release)
+        os.register_at_fork(before=_take_log_handlers, after_in_parent=_give_log_handlers,
+                            after_in_child=_give_log_handlers)
+        _fork_guarded = True
 
 
 _held_handlers: list = []

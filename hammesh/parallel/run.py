@@ -30,7 +30,7 @@ from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split
 from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
-           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start",
+           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start", "decompose_beside", "DECOMPOSE_IN_CHILD", "DECOMPOSE_MODULES",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
            "MOST_BALANCE_TILES", "MIN_FOURTH_TILE",
            "not_carried", "SUMMARIES_WITH_TILES", "task_clock", "gather_widening"]
@@ -392,7 +392,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     starting = isinstance(run, Starting)  # (a local cluster starting beside the decomposition)
     # (the futures are held until the tiles are done: Dask forgets a task nobody holds)
     warming = [] if starting else warm_workers(run, mode)
-    decomp = decompose(domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
+    decomp = decompose_beside(run, domain, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
     t1 = time.perf_counter()
     if starting:
         run.tiles_coming()  # (no prefault task before the tiles now)
@@ -458,6 +458,45 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
                              for o in small],
                  since_start={"decompose": s0, "submitted": s1, "tiles_done": s0 + (t2 - t0)},
                  driver_cpu={"decompose": p0, "submitted": p1, "tiles_done": p2}, tail_threads=raises)
+
+
+#: while a local cluster starts in this process's background, the domain is decomposed
+#: in a forked child (:func:`decompose_beside`); False: in this thread
+DECOMPOSE_IN_CHILD = True
+#: the modules :func:`~hammesh.parallel.tiles.decompose` imports on first use: imported
+#: before the child is forked. A child forked while another thread (the cluster's
+#: start, which imports ``scipy.spatial`` too) was inside the import of a module
+#: would wait for ever on that module's lock if it imported it.
+DECOMPOSE_MODULES = ("scipy.spatial", "triangle", "hammesh.parallel.guard", "hammesh.parallel._kernels",
+                     "hammesh.meshing.isolate")
+
+
+def decompose_beside(run, domain: Domain, **kw) -> Decomposition:
+    """:func:`~hammesh.parallel.tiles.decompose` of ``domain``; in a forked child
+    (:func:`hammesh.parallel.forked.in_child`) while ``run`` is a local cluster still
+    starting in this process (a :class:`~hammesh.parallel.cluster.Starting` handle).
+
+    Why: the cluster's start (importing Dask, loading the mode's kernels for the
+    workers to inherit, the scheduler) runs in a thread of this process, and the
+    decomposition in its main thread took turns with it for the interpreter's lock
+    while the machine's other core waited (measured at 6M: the driver's CPU to the
+    tiles' submission about equal to its wall time). The child's decomposition is
+    the same (the same code on the same input); where no child could make it (no
+    fork here, an error, a crash) this thread makes it, and raises its error.
+    """
+    from hammesh.parallel.cluster import Starting, guard_forks
+    from hammesh.parallel.forked import can_fork, in_child
+
+    if DECOMPOSE_IN_CHILD and isinstance(run, Starting) and not run.started() and can_fork():
+        import importlib
+
+        for name in DECOMPOSE_MODULES:  # (here, waiting for another thread's import of one to end)
+            importlib.import_module(name)
+        guard_forks()
+        ok, decomp = in_child(decompose, domain, **kw)
+        if ok:
+            return decomp
+    return decompose(domain, **kw)
 
 
 def finish_args(tiled: Tiled) -> list[tuple]:
