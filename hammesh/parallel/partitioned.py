@@ -38,7 +38,7 @@ from hammesh.parallel.markers import given_at, point_markers
 from hammesh.parallel.run import (decompose_estimate, default_tiles, domain_marks, finish_args, not_carried, on_holder,
                                   outcome_hamiltonian, progress_bar, run_tiles, since_start, task_clock)
 
-__all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target",
+__all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target", "is_output_file",
            "piece_types", "int_type", "spill_wanted", "HELD_BYTES_PER_TRIANGLE", "SPILL_SHARE"]
 
 INDEX_NAME = "mesh.pvtu"
@@ -281,7 +281,9 @@ def apex_marks(tiled, args: tuple, marks: tuple | None) -> tuple | None:
 
 def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
     """Refuse an output directory that is a file, holds an input, or is not empty
-    (unless ``force``: then its content is replaced once the new one is complete)."""
+    (unless ``force`` and it holds an earlier partitioned output and nothing else: then
+    that is replaced once the new one is complete). The current directory or one above
+    it is never replaced (it cannot be renamed away; the run would fail at its end)."""
     if out.exists() and not out.is_dir():
         raise OutputError(f"{out}: --partitioned writes a directory; this is a file")
     target = out.resolve()
@@ -289,8 +291,26 @@ def check_target(out: Path, *, force: bool = False, inputs: tuple = ()) -> None:
         q = Path(p).resolve()
         if q == target or target in q.parents:
             raise OutputError(f"{out}: holds the input {p}; choose another output directory")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise OutputError(f"{out}: directory exists and is not empty (--force replaces its content)")
+    if not (out.is_dir() and any(out.iterdir())):
+        return
+    if not force:
+        raise OutputError(f"{out}: directory exists and is not empty (--force replaces an earlier "
+                          "partitioned output)")
+    cwd = Path.cwd().resolve()
+    if target == cwd or target in cwd.parents:
+        raise OutputError(f"{out}: is the current directory or holds it; --force cannot replace it")
+    foreign = sorted(p.name for p in out.iterdir() if not is_output_file(p))
+    if foreign:
+        raise OutputError(f"{out}: holds {foreign[0]!r}{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}, "
+                          "not an earlier partitioned output; --force replaces only mesh.pvtu and piece_*.vtu")
+
+
+def is_output_file(path: Path) -> bool:
+    """A file a partitioned output holds: the index or a piece (what ``--force`` may replace)."""
+    import re
+
+    return path.is_file() and not path.is_symlink() and (
+        path.name == INDEX_NAME or re.fullmatch(r"piece_\d{4,}\.vtu", path.name) is not None)
 
 
 def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_angle: float | None = None,

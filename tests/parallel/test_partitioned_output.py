@@ -43,7 +43,7 @@ def test_non_empty_directory_is_refused_and_left_as_it_was(tmp_path, capsys):
 def test_force_replaces_the_content_no_stale_piece_survives(tmp_path, capsys):
     out = tmp_path / "parts"
     out.mkdir()
-    for name in ("piece_0000.vtu", "piece_0007.vtu", "notes.txt"):
+    for name in ("piece_0000.vtu", "piece_0007.vtu", "mesh.pvtu"):
         (out / name).write_text("old")
     assert main([*ARGS, "--tiles", "3", "--partitioned", "--force", "-o", str(out)]) == 0
     capsys.readouterr()
@@ -53,11 +53,34 @@ def test_force_replaces_the_content_no_stale_piece_survives(tmp_path, capsys):
     assert main(["check", str(out / "mesh.pvtu")]) == 0
 
 
+@pytest.mark.parametrize("other", ["notes.txt", "sub/data.bin", "piece_0001.vtu.bak"])
+def test_force_never_removes_what_is_not_an_earlier_output(tmp_path, capsys, other: str):
+    """tester18 r10: --force replaced a whole directory tree, the user's files included."""
+    out = tmp_path / "results"
+    (out / other).parent.mkdir(parents=True, exist_ok=True)
+    (out / other).write_text("the user's")
+    (out / "piece_0000.vtu").write_text("old")
+    assert main([*ARGS, "--tiles", "2", "--partitioned", "--force", "-o", str(out)]) == 2
+    assert "not an earlier partitioned output" in _one_line_error(capsys)
+    assert (out / other).read_text() == "the user's" and (out / "piece_0000.vtu").read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]
+
+
+def test_force_refuses_the_current_directory_before_any_work(tmp_path, capsys, monkeypatch):
+    (tmp_path / "piece_0000.vtu").write_text("old")
+    monkeypatch.chdir(tmp_path)
+    assert main([*ARGS, "--tiles", "2", "--partitioned", "--force", "-o", "."]) == 2
+    assert "current directory" in _one_line_error(capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["piece_0000.vtu"]
+
+
 def test_an_empty_directory_is_used_without_force(tmp_path, capsys):
     out = tmp_path / "empty"
     out.mkdir()
     assert main([*ARGS, "--tiles", "2", "--partitioned", "-o", str(out)]) == 0
     assert (out / "mesh.pvtu").is_file()
+    # the pieces hold no constrained edges yet: said, never in silence (tester18 r08)
+    assert "note: not written: the constrained edges (the domain's 53 segments" in capsys.readouterr().out
 
 
 def test_directory_holding_the_input_is_refused_even_with_force(tmp_path, capsys):
