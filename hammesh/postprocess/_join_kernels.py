@@ -663,6 +663,13 @@ def _across(tri, twin, pinned, poly, phe, n, i):
     return y, kg
 
 
+#: ``fan_groups``' mark (in ``group``, reset to -1 before it returns) of a start that
+#: took in no neighbour: every pair fan with it was tried and failed, so a later start
+#: does not search the same fan again (on a mesh of slivers, where no pair fan keeps
+#: the bounds, half of ``fan_groups``' searches)
+LONE = -2
+
+
 @njit(cache=True, nogil=True)
 def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_group, iters, is_cov, absorb, unc,
                group):
@@ -717,6 +724,8 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
     tphe = np.empty(cap, np.int64)
     members = np.empty(cap, np.int64)
     starts = np.empty((cap, 2))
+    lone = np.empty(k_unc, np.int64)
+    n_lone = 0
     for s in unc:
         if cyc[s] >= 0 or group[s] >= 0:
             continue
@@ -733,8 +742,8 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
             grown = False
             for i in range(n):
                 y, kg = _across(tri, twin, pinned, poly, phe, n, i)
-                if y < 0 or cyc[y] >= 0 or group[y] >= 0:
-                    continue
+                if y < 0 or cyc[y] >= 0 or group[y] >= 0 or (nm == 1 and group[y] == LONE):
+                    continue  # (a lone start tried this pair's fan already: the same fan)
                 dup = False
                 for j in range(nm):
                     if members[j] == y:
@@ -761,6 +770,9 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
             if not grown:
                 break
         if nm < 2:
+            group[s] = LONE
+            lone[n_lone] = s
+            n_lone += 1
             continue
         y_in = -1
         if absorb and nm < max_group:
@@ -783,6 +795,9 @@ def fan_groups(pts, tri, twin, pinned, cyc, amin, keep, hi, floor, hi_fan, max_g
             n_c += 1
         ng += 1
         off[ng] = n_c
+    for j in range(n_lone):
+        if group[lone[j]] == LONE:  # (a later group may have taken it in)
+            group[lone[j]] = -1
     return group, fan_pt[:ng], gmin_out[:ng], off[: ng + 1], corners[:n_c], hes[:n_c], absorbed[:ng], apex[:ng]
 
 
