@@ -110,7 +110,7 @@ def test_pvtu_piece_unreadable_is_a_file_format_error(tmp_path):
 @pytest.mark.slow
 def test_check_rejects_pvtu_without_its_last_piece(tmp_path):
     out = tmp_path / "part"
-    rc = subprocess.run([sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", "0.01", "--workers", "2",
+    rc = subprocess.run([sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", "0.01", "--tiles", "2",
                          "--partitioned", "-o", str(out)], capture_output=True, timeout=900).returncode
     assert rc == 0
     index = out / "mesh.pvtu"

@@ -185,7 +185,9 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
             import numpy as np
 
             marks = np.asarray(source.segment_markers)
-            marked = f" and their markers {int(marks.min())}..{int(marks.max())}" if marks.any() else ""
+            nz = marks[marks != 0]
+            marked = "" if not len(nz) else f" and their markers {int(nz.min())}" + (
+                f"..{int(nz.max())}" if nz.max() > nz.min() else "")
             rep["not_carried"] = [*rep.get("not_carried", []), (
                 f"not written: the constrained edges (the domain's {len(source.segments):,} segments, subdivided)"
                 f"{marked}: the partitioned pieces hold no segments yet (a .vtu or a .pvtu without --partitioned "
