@@ -11,7 +11,7 @@ from hypothesis.extra.numpy import arrays
 import hammesh
 import hammesh.postprocess.cycle_cover as cycle_cover_module
 from hammesh import threads
-from tests.helpers import bundled_domain, plate_with_loops, square
+from tests.helpers import angles_deg, bundled_domain, plate_with_loops, square
 
 
 def _reference_facts(pts: np.ndarray, tri: np.ndarray):
@@ -30,18 +30,6 @@ def _reference_facts(pts: np.ndarray, tri: np.ndarray):
     a16 = 4 * (np.einsum("ij,ij->i", u, u) * np.einsum("ij,ij->i", v, v) - np.einsum("ij,ij->i", u, v) ** 2)
     ratio = ln[0] * ln[1] * ln[2] * (ln[0] + ln[1] + ln[2]) / a16
     return ang.min(axis=1), ang.max(axis=1), ratio
-
-
-def _reference_corners(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """The angle at ``tri[t, k]`` of every row, by numpy's arccos."""
-    p = pts[tri]
-    out = np.empty(tri.shape)
-    for k in range(3):
-        u = p[:, (k + 1) % 3] - p[:, k]
-        v = p[:, (k + 2) % 3] - p[:, k]
-        c = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
-        out[:, k] = np.arccos(np.clip(c, -1, 1))
-    return out
 
 
 @settings(max_examples=300, deadline=None)
@@ -122,7 +110,7 @@ def test_triangle_facts_match_numpy(pts, seed, min_rows) -> None:
     np.testing.assert_allclose(lo, rlo, atol=1e-7)
     np.testing.assert_allclose(hi, rhi, atol=1e-7)
     if corners is not None:  # every corner's angle, at tri[t, k], from the same pass
-        np.testing.assert_allclose(corners, _reference_corners(pts, tri), atol=1e-6)
+        np.testing.assert_allclose(corners, np.radians(angles_deg(pts, tri)), atol=1e-6)
         assert np.array_equal(corners.min(axis=1), lo.astype(np.float32))
     assert worst == pytest.approx(max(1.0, ratio.max()), rel=1e-6)
     if row >= 0:
