@@ -61,7 +61,7 @@ from hammesh.io import meshio_format, pvtu, triangle_format
 from hammesh.io.paths import check_outputs
 from hammesh.io.points_text import read_points
 from hammesh.io.polygon_files import read_polygon
-from hammesh.io.report import write_report
+from hammesh.io.report import marker_range, write_report
 from hammesh.mesh import HamiltonianMesh, Mesh, attribute_name
 
 __all__ = [
@@ -133,18 +133,11 @@ def unwritten_data(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -
     markers = np.asarray(getattr(mesh, "segment_markers", np.zeros(0))).reshape(-1)
     vmarks = getattr(mesh, "vertex_markers", None)
     if len(segments):  # (boundary conditions: a user must learn they are not in the file)
-        marked = f" and their markers {_marker_range(markers)}" if markers.size and markers.any() else ""
+        marked = f" and their markers {marker_range(markers)}" if markers.size and markers.any() else ""
         lost.append(f"{len(segments):,} constrained edges (segments){marked} ({suffix} holds geometry only)")
     if vmarks is not None and np.asarray(vmarks).size and np.asarray(vmarks).any():
-        lost.append(f"vertex markers {_marker_range(np.asarray(vmarks))} ({suffix} holds geometry only)")
+        lost.append(f"vertex markers {marker_range(np.asarray(vmarks))} ({suffix} holds geometry only)")
     return lost
-
-
-def _marker_range(markers: np.ndarray) -> str:
-    """``1..5`` (the nonzero markers' range) for a note."""
-    nz = markers[markers != 0]
-    lo, hi = int(nz.min()), int(nz.max())
-    return str(lo) if lo == hi else f"{lo}..{hi}"
 
 
 def supported_suffixes() -> tuple[str, ...]:

@@ -342,7 +342,7 @@ def _read_piece(piece: Path):
              if np.asarray(v[blocks[0]]).dtype.kind in "biuf"}
     attr, names = _columns(cells, len(t))
     pdata = {k: np.asarray(v) for k, v in m.point_data.items() if k != "global_id" and np.asarray(v).dtype.kind in "biuf"}
-    own = {k: v for k, v in cells.items() if k in OWN_CELL_DATA and k != "global_position" and v.ndim == 1}
+    own = {k: v for k, v in cells.items() if k in OWN_CELL_DATA and k != "global_position"}
     return (gid, np.asarray(m.points)[:, :2], t,
             np.concatenate([np.asarray(gp[i]) for i in blocks]).astype(np.int64) if gp else None, attr, names, pdata,
             own)

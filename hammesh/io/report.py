@@ -18,7 +18,7 @@ import numpy as np
 
 from hammesh.io.atomic import atomic_write_text
 
-__all__ = ["write_report", "to_json_value", "collect_repairs", "format_angle"]
+__all__ = ["write_report", "to_json_value", "collect_repairs", "format_angle", "marker_range"]
 
 
 def to_json_value(value: Any, where: str = "report") -> Any:
@@ -122,3 +122,10 @@ def format_angle(degrees: float) -> str:
     if 179.995 < degrees < 180:  # (decimals down to the second significant digit of 180 - x)
         return f"{degrees:.{min(15, 1 - math.floor(math.log10(180 - degrees)))}f}"
     return f"{degrees:.2f}"
+
+
+def marker_range(markers: np.ndarray) -> str:
+    """``1..5`` (the nonzero markers' range) for a note; at least one marker is nonzero."""
+    nz = markers[markers != 0]
+    lo, hi = int(nz.min()), int(nz.max())
+    return str(lo) if lo == hi else f"{lo}..{hi}"

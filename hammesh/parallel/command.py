@@ -182,12 +182,9 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
                                 lattice=not args.no_lattice, tree=tree)
         stack.close()  # (the local cluster: closed once the output is in place)
         if len(source.segments):  # never in silence: the pieces hold no constrained edges yet (tester18 r08)
-            import numpy as np
+            from hammesh.io.report import marker_range
 
-            marks = np.asarray(source.segment_markers)
-            nz = marks[marks != 0]
-            marked = "" if not len(nz) else f" and their markers {int(nz.min())}" + (
-                f"..{int(nz.max())}" if nz.max() > nz.min() else "")
+            marked = f" and their markers {marker_range(source.segment_markers)}" if source.segment_markers.any() else ""
             rep["not_carried"] = [*rep.get("not_carried", []), (
                 f"not written: the constrained edges (the domain's {len(source.segments):,} segments, subdivided)"
                 f"{marked}: the partitioned pieces hold no segments yet (a .vtu or a .pvtu without --partitioned "
