@@ -143,7 +143,7 @@ def drop_outside_holes(vertices: np.ndarray, holes: np.ndarray, strict: bool) ->
 
 def _first_on_segment(xy: np.ndarray, segs: np.ndarray, pts: np.ndarray) -> tuple[int, str, int] | None:
     """``(point, "vertex" | "segment", index)`` of the lowest-numbered point of ``pts``
-    lying exactly on a vertex or a segment of the graph (exact: coordinate comparisons
+    lying exactly on a segment's end or on a segment of the graph (exact: coordinate comparisons
     and the orientation predicate), or None.
 
     The segments each point may lie on are found by a sweep in x (a segment's x range
@@ -151,10 +151,11 @@ def _first_on_segment(xy: np.ndarray, segs: np.ndarray, pts: np.ndarray) -> tupl
     if not len(pts):
         return None
     hits = []
-    on_vertex = np.isin(pts[:, 0] + 1j * pts[:, 1], xy[:, 0] + 1j * xy[:, 1])
+    ends = np.unique(segs)  # (a vertex on no segment is inside one region: any of its triangles will do)
+    on_vertex = np.isin(pts[:, 0] + 1j * pts[:, 1], xy[ends, 0] + 1j * xy[ends, 1])
     if on_vertex.any():
         i = int(np.argmax(on_vertex))
-        hits.append((i, "vertex", int(np.flatnonzero((xy == pts[i]).all(axis=1))[0])))
+        hits.append((i, "vertex", int(ends[np.flatnonzero((xy[ends] == pts[i]).all(axis=1))[0]])))
     if len(segs):
         a, b = xy[segs[:, 0]], xy[segs[:, 1]]
         order = np.argsort(pts[:, 0], kind="stable")

@@ -42,6 +42,17 @@ def test_region_point_on_a_segment_or_vertex_is_refused(point, on):
         _domain(regions=[[*point, 7.0, np.nan]])
 
 
+def test_a_hole_point_on_a_vertex_of_no_segment_is_accepted():
+    """A vertex on no segment lies inside one region: every triangle round it is in
+    the hole, whichever Triangle's point location returns; accepted as Triangle does."""
+    v = np.array(OUTER + INNER + [[2, 2]], float)
+    dom = hammesh.Domain(vertices=v, segments=np.array(SEGMENTS), holes=np.array([[2.0, 2.0]]))
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=0.5, isolate=False)
+    a, b, c = (m.points[m.triangles[:, k]] for k in range(3))
+    area = 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    assert area.sum() == pytest.approx(12.0)
+
+
 def test_points_off_the_segments_mesh_as_before():
     """The hole inside the square removes it, a region point inside the ring marks the
     ring; a point next to a segment (one ulp off) is fine."""
