@@ -227,9 +227,11 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     par = h.report["parallel"]
     print(f"{h.n_triangles:,} triangles in {len(h.components)} Hamiltonian cycle(s) over {par['tiles']} tiles "
           f"({par['joins']} joins), verified; min angle {h.report['min_angle_output_deg']:.2f} deg")
+    from hammesh.io.paths import wrote_text  # (a .ele output's .node/.poly named too)
+
     for label, path in (("mesh", args.output), ("report", args.report)):
         if path is not None:
-            print(f"wrote {label}: {path}")
+            print(f"wrote {label}: {wrote_text(path) if label == 'mesh' else path}")
     for x in h.report.get("not_carried", []):
         print(f"note: {x}")
     return 0
