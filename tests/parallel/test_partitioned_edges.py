@@ -85,3 +85,33 @@ def test_an_edge_no_row_holds_and_nobody_asked_about_stops():
     hu, au, lu = _u_tile()
     with pytest.raises(VerificationError, match="held by no row"):
         P._edge_entries(hu, lu, au, frozenset(), ())
+
+
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_asking_every_swap_changes_nothing(tmp_path, monkeypatch, mode):
+    """The lending tasks asked about every swap (not only those with an end on a user
+    segment, :func:`partitioned.lent_swaps`): on the demo's tiles they lend nothing (a
+    join's triangles have cycle neighbours across both other edges, in their own tile)
+    and the stitched segments are still the one-file run's."""
+    import hammesh
+    from hammesh.parallel.run import parallel_hamiltonian
+
+    asked = []
+
+    def every_swap(tiled):
+        out = {j.index: (j.u_tile, j.t_tile) for j in tiled.plan.joins if j.swap and j.u_tile != j.t_tile}
+        asked.append(len(out))
+        return out
+
+    lent = []
+    real = P._lent_edges
+    monkeypatch.setattr(P, "lent_swaps", every_swap)
+    monkeypatch.setattr(P, "_lent_edges", lambda o, a: lent.append(real(o, a)) or lent[-1])
+    dom = hammesh.read_domain("hammesh/data/demo.poly")
+    P.write_partitioned(dom, tmp_path / "o", min_angle=30, max_area=2e-3, tiles=6, mode=mode)
+    assert asked and asked[0] > 0 and len(lent) > 0 and all(x == {} for x in lent)
+    back = hammesh.read_mesh(tmp_path / "o" / "mesh.pvtu")
+    whole = parallel_hamiltonian(dom, min_angle=30, max_area=2e-3, tiles=6, mode=mode)
+    key = sorted(zip(back.segments[:, 0].tolist(), back.segments[:, 1].tolist(), back.segment_markers.tolist()))
+    assert key == sorted(zip(whole.segments[:, 0].tolist(), whole.segments[:, 1].tolist(),
+                             whole.segment_markers.tolist()))
