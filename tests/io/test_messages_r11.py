@@ -67,3 +67,15 @@ def test_a_pvtu_that_cannot_be_written_names_the_file_and_leaves_nothing(tmp_pat
     hammesh.write(h, tmp_path / "m.pvtu")
     assert np.array_equal(hammesh.read_mesh(tmp_path / "m.pvtu").triangles, h.triangles)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.0.vtu", "m.pvtu"]
+
+
+def test_the_one_based_note_only_where_the_message_numbers_something(tmp_path):
+    tiny = tmp_path / "tiny.poly"
+    tiny.write_text("3 2 0 0\n1 0 0\n2 1e-299 0\n3 0 1e-299\n3 0\n1 1 2\n2 2 3\n3 3 1\n0\n")
+    with pytest.raises(hammesh.InvalidDomainError) as info:
+        hammesh.read_domain(tiny)
+    assert "spans only" in str(info.value) and "zero-based" not in str(info.value)
+    cross = tmp_path / "x.poly"
+    cross.write_text("4 2 0 0\n1 0 0\n2 1 1\n3 1 0\n4 0 1\n2 0\n1 1 2\n2 3 4\n0\n")
+    with pytest.raises(hammesh.InvalidDomainError, match=r"segments 0 and 1 cross .*\(indices zero-based"):
+        hammesh.read_domain(cross, strict=True)
