@@ -341,8 +341,13 @@ def _fan_overlap_into(pts, tri, start, rows, corner, order, buf, out):
                 j = m
                 k = a
                 while i < m or j < b:
-                    if j >= b or (i < m and not _before(pts, v, tri[rows[order[lo + j]], (corner[order[lo + j]] + 1) % 3],
-                                                         tri[rows[order[lo + i]], (corner[order[lo + i]] + 1) % 3])):
+                    if j < b and i < m:  # (stable: the left run's first on ties)
+                        p = tri[rows[order[lo + j]], (corner[order[lo + j]] + 1) % 3]
+                        q = tri[rows[order[lo + i]], (corner[order[lo + i]] + 1) % 3]
+                        take_left = not _before(pts, v, p, q)
+                    else:
+                        take_left = j >= b
+                    if take_left:
                         buf[lo + k] = order[lo + i]
                         i += 1
                     else:

@@ -602,12 +602,19 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
             asked = lent_swaps(tiled) if edges else {}
             # (a swap's far side lends its constrained edges: a small task on its tile's
             # worker, whose result goes to the other tile's task, not through the driver)
+            lenders = sorted({u for u, _ in asked.values()})
             lent = {u: runner.submit(_lent_edges, tiled.outcomes[u], fargs[u], pure=False, priority=1,
-                                     **on_holder(runner, tiled.outcomes[u])) for u in sorted({u for u, _ in asked.values()})}
+                                     **on_holder(runner, tiled.outcomes[u])) for u in lenders}
+
+            def lending(i: int) -> tuple:
+                """Tile ``i``'s swaps asked about (None: no edges written) and the lending
+                tasks it waits for (the ones lending to it, and its own: its spill file is
+                read by both)."""
+                own = None if not edges else frozenset(ji for ji, (u, _) in asked.items() if u == i)
+                return own, *[lent[u] for u in sorted({u for u, t in asked.values() if i in (t, u)})]
+
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                types, apex_marks(tiled, a, marks),
-                                                None if not edges else frozenset(ji for ji, (u, _) in asked.items() if u == i),
-                                                *[lent[u] for u in sorted({u for u, t in asked.values() if i in (t, u)})],
+                                                types, apex_marks(tiled, a, marks), *lending(i),
                                                 pure=False, **on_holder(runner, h))
                                   for i, (h, a) in enumerate(zip(tiled.outcomes, fargs))])
             t2 = time.perf_counter()
