@@ -159,8 +159,10 @@ def test_line_cell_data_is_carried_or_reported(tmp_path):
     assert {7, 8, 9, 10} <= markers or noted
 
 
-@pytest.mark.xfail(strict=True, reason="tester18 r06: small .msh outputs flatten the physical surface tags")
 def test_msh_output_keeps_physical_surfaces_of_a_small_mesh(tmp_path):
+    """r06 (fixed in session 19): 5 points, 4 segment markers and two surface tags are
+    more Gmsh entities than nodes; the segments' entities are merged (their markers
+    stay in ``segment_marker``), not the triangles'."""
     src = _square_with_lines(tmp_path / "tags.msh",
                              **{"gmsh:physical": [np.array([11, 12, 13, 14]), np.array([100, 100, 200, 200])],
                                 "gmsh:geometrical": [np.array([1, 2, 3, 4]), np.ones(4, int)]})
@@ -170,6 +172,10 @@ def test_msh_output_keeps_physical_surfaces_of_a_small_mesh(tmp_path):
     for i, c in enumerate(m.cells):
         if c.type == "triangle":
             np.testing.assert_array_equal(m.cell_data["gmsh:physical"][i], m.cell_data["physical"][i])
+    assert {100, 200} <= set(np.concatenate([m.cell_data["gmsh:physical"][i] for i, c in enumerate(m.cells)
+                                             if c.type == "triangle"]).tolist())
+    back = hammesh.read_mesh(out)
+    assert sorted(back.segment_markers.tolist()) == [11, 12, 13, 14]
 
 
 def test_pvtu_output_keeps_or_reports_the_segments(tmp_path, capsys):

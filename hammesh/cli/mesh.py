@@ -130,6 +130,8 @@ def run(args: argparse.Namespace) -> int:
     h = run_pipeline(source, options, outputs, mode=args.mode, keep=args.keep, tree=tree, strict=args.strict,
                      finish=finish)
     print(summary(h))
+    from hammesh.io.paths import wrote_text  # (a .ele output's .node/.poly named too)
+
     for label, path in (
         ("mesh", args.output),
         ("report", args.report),
@@ -137,5 +139,5 @@ def run(args: argparse.Namespace) -> int:
         ("strip", args.strip),
     ):
         if path is not None:
-            print(f"wrote {label}: {path}")
+            print(f"wrote {label}: {wrote_text(path) if label == 'mesh' else path}")
     return 0

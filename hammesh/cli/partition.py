@@ -59,10 +59,12 @@ def run(args: argparse.Namespace) -> int:
         except BaseException:
             args.output.unlink(missing_ok=True)  # no half-finished set of outputs
             raise
+    from hammesh.io.paths import wrote_text
+
     print(
         f"{args.mesh}: {out.n_triangles:,} triangles -> {r['k']} parts of {r['size_min']:,}..{r['size_max']:,} "
         f"(imbalance {r['imbalance']:.4f}), edge cut {r['edge_cut']:,}, "
-        f"{'all parts connected' if r['connected'] else 'NOT all parts connected'}; wrote {args.output}"
+        f"{'all parts connected' if r['connected'] else 'NOT all parts connected'}; wrote {wrote_text(args.output)}"
     )
     if "numbering" in out.report:
         nb = out.report["numbering"]

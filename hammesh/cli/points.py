@@ -62,9 +62,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(pts):,} points ({hull.h} on the hull) -> {len(tri):,} triangles, {shape}, verified")
     if args.output is not None:
         from hammesh.io import write
+        from hammesh.io.paths import wrote_text
 
         write(mesh, args.output)
-        print(f"wrote mesh: {args.output}")
+        print(f"wrote mesh: {wrote_text(args.output)}")
     if args.png is not None:
         from hammesh.plot import plot_cycle
 

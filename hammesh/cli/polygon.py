@@ -87,7 +87,9 @@ def run(args: argparse.Namespace) -> int:
         plot_polygon_path(pts, Q, T, args.png, closed=closed, holes=holes,
                           title=f"{args.input.name}: {what}")
     print(f"{n_in} vertices: {what}, {len(T)} triangles")
+    from hammesh.io.paths import wrote_text  # (a .ele output's .node/.poly named too)
+
     for label, path in (("triangulation", args.output), ("picture", args.png)):
         if path is not None:
-            print(f"wrote {label}: {path}")
+            print(f"wrote {label}: {wrote_text(path) if label == 'triangulation' else path}")
     return 0

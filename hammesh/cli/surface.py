@@ -67,7 +67,9 @@ def run(args: argparse.Namespace) -> int:
     )
     for note in r.get("not_carried", []):
         print(f"note: {note}")
+    from hammesh.io.paths import wrote_text  # (a .ele output's .node/.poly named too)
+
     for label, path in (("surface", args.output), ("report", args.report)):
         if path is not None:
-            print(f"wrote {label}: {path}")
+            print(f"wrote {label}: {wrote_text(path) if label == 'surface' else path}")
     return 0

@@ -43,6 +43,8 @@ def read_domain(path, *, strict: bool = False) -> Domain:
     reader = READERS.get(path.suffix.lower())
     if reader is None:
         known = ", ".join(sorted(READERS))
-        raise FileFormatError(
-            f"{path.name}: unknown domain file suffix {path.suffix!r} (known: {known})")
+        if path.exists() and not path.is_file():  # (the whole path, and what it is: tester18 r11)
+            why = "is a directory" if path.is_dir() else "not a regular file"
+            raise FileFormatError(f"{path}: {why}; a domain is a file (known: {known})")
+        raise FileFormatError(f"{path}: unknown domain file suffix {path.suffix!r} (known: {known})")
     return reader(path, strict=strict)

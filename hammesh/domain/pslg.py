@@ -15,7 +15,7 @@ from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 
-from hammesh.domain.repair import Repair, drop_outside_holes, repair_graph
+from hammesh.domain.repair import Repair, drop_outside_holes, refuse_points_on_segments, repair_graph
 from hammesh.domain.validate import check_fields, point_array, refuse_complex
 from hammesh.errors import InvalidDomainError
 
@@ -117,6 +117,7 @@ class Domain:
         if graph.repairs and attributes.shape[1]:
             attributes = carry_vertex_attributes(vertices, segments, attributes, graph.vertices)
         holes, dropped = drop_outside_holes(graph.vertices, holes, bool(strict))
+        refuse_points_on_segments(graph.vertices, graph.segments, holes, regions)
         values.update(vertices=graph.vertices, segments=graph.segments,
                       segment_markers=graph.segment_markers, vertex_markers=graph.vertex_markers,
                       vertex_attributes=attributes, holes=holes)

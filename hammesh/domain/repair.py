@@ -44,7 +44,8 @@ from hammesh.domain.validate import holes_inside_hull
 from hammesh.errors import InvalidDomainError
 from hammesh.predicates import orient_rows
 
-__all__ = ["Repair", "RepairedGraph", "repair_graph", "drop_outside_holes", "REPAIR_KINDS", "MAX_ROUNDS"]
+__all__ = ["Repair", "RepairedGraph", "repair_graph", "drop_outside_holes", "refuse_points_on_segments", "REPAIR_KINDS",
+           "MAX_ROUNDS"]
 
 #: Every repair kind, in the order repairs are made.
 REPAIR_KINDS = ("duplicate_vertex", "zero_length_segment", "duplicate_segment",
@@ -138,6 +139,79 @@ def drop_outside_holes(vertices: np.ndarray, holes: np.ndarray, strict: bool) ->
         raise InvalidDomainError(defect)
     return holes[keep], (Repair("hole_outside", len(out), _where(out), defect,
                                 "dropped: it is in no triangle (Triangle could crash locating it)"),)
+
+
+def _first_on_segment(xy: np.ndarray, segs: np.ndarray, pts: np.ndarray) -> tuple[int, str, int] | None:
+    """``(point, "vertex" | "segment", index)`` of the lowest-numbered point of ``pts``
+    lying exactly on a segment's end or on a segment of the graph (exact: coordinate comparisons
+    and the orientation predicate), or None.
+
+    The segments each point may lie on are found by a sweep in x (a segment's x range
+    against the points sorted by x), then its y range, then ``orient == 0``."""
+    if not len(pts):
+        return None
+    hits = []
+    ends = np.unique(segs)  # (a vertex on no segment is inside one region: any of its triangles will do)
+    on_vertex = np.isin(pts[:, 0] + 1j * pts[:, 1], xy[ends, 0] + 1j * xy[ends, 1])
+    if on_vertex.any():
+        i = int(np.argmax(on_vertex))
+        hits.append((i, "vertex", int(ends[np.flatnonzero((xy[ends] == pts[i]).all(axis=1))[0]])))
+    if len(segs):
+        a, b = xy[segs[:, 0]], xy[segs[:, 1]]
+        order = np.argsort(pts[:, 0], kind="stable")
+        px = pts[order, 0]
+        lo = np.searchsorted(px, np.minimum(a[:, 0], b[:, 0]), "left")
+        hi = np.searchsorted(px, np.maximum(a[:, 0], b[:, 0]), "right")
+        count = hi - lo
+        if count.sum():
+            seg = np.repeat(np.arange(len(segs)), count)
+            ramp = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+            pt = order[np.repeat(lo, count) + ramp]
+            y = pts[pt, 1]
+            inside = (y >= np.minimum(a[seg, 1], b[seg, 1])) & (y <= np.maximum(a[seg, 1], b[seg, 1]))
+            seg, pt = seg[inside], pt[inside]
+            if len(seg):
+                on = orient_rows(np.ascontiguousarray(a[seg]), np.ascontiguousarray(b[seg]),
+                                 np.ascontiguousarray(pts[pt])) == 0
+                if on.any():
+                    k = np.flatnonzero(on)
+                    j = k[np.lexsort((seg[k], pt[k]))[0]]
+                    hits.append((int(pt[j]), "segment", int(seg[j])))
+    return min(hits, key=lambda h: (h[0], h[1] == "segment")) if hits else None
+
+
+def refuse_points_on_segments(vertices: np.ndarray, segments: np.ndarray, holes: np.ndarray,
+                              regions: np.ndarray) -> None:
+    """Refuse a hole or region point that lies exactly on a segment or a vertex.
+
+    Why: Triangle (``carveholes``, ``regionplague``) starts from the triangle its point
+    location returns for the point, and for a point on an edge that is either side's:
+    a square hole whose hole point lies on its bottom side removed the ring around it
+    instead (8 of 32 triangles kept), the same point on its top side the square; a
+    region point on a corner gave its attribute to one side or the other. Triangle
+    accepts such input but what it makes of it is chance, not the user's domain
+    (hammesh gave either silently before session 19); a point off the segment, on
+    the side meant, says it.
+
+    Raises
+    ------
+    InvalidDomainError
+        Naming the point, where it is and the segment or vertex it lies on.
+    """
+    xy = np.asarray(vertices, dtype=np.float64).reshape(-1, 2)
+    segs = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    for what, pts, meaning in (("hole", np.asarray(holes, np.float64).reshape(-1, 2),
+                                "which side is the hole"),
+                               ("region", np.asarray(regions, np.float64).reshape(-1, 4)[:, :2],
+                                "which side the region is")):
+        hit = _first_on_segment(xy, segs, np.ascontiguousarray(pts))
+        if hit is None:
+            continue
+        i, kind, j = hit
+        on = (f"vertex {j} of the domain" if kind == "vertex" else
+              f"segment {j} ({_pt(xy[segs[j, 0]])} to {_pt(xy[segs[j, 1]])})")
+        raise InvalidDomainError(f"{what} point {i} at {_pt(pts[i])} lies exactly on {on}: Triangle would pick "
+                                 f"{meaning} by chance; move it off, into the side meant")
 
 
 # ----------------------------------------------------------------------------- vertices

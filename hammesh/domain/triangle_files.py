@@ -159,7 +159,9 @@ def _make_domain(name, base, strict, **arrays):
     try:
         return Domain(**arrays, strict=strict)
     except InvalidDomainError as exc:
-        note = " (indices zero-based; the file numbers from 1)" if base == 1 else ""
+        # (only where the message numbers something: tester18 r11 saw it after "spans only 1e-299")
+        numbered = re.search(r"\b(?:vertex|vertices|segments?|point|region|hole)\s+\d", str(exc)) is not None
+        note = " (indices zero-based; the file numbers from 1)" if base == 1 and numbered else ""
         raise InvalidDomainError(f"{name}: {exc}{note}") from None
 
 

@@ -389,9 +389,9 @@ def _gmsh_blocks(
     into named boundaries and subdomains.
 
     Each entity needs a node (see the module notes): with more entities than points
-    (pathological meshes) the triangles and then the segments are merged into one
-    entity, the physical tag of its first cell (names dropped); ``segment_marker``
-    and ``attribute_<i>`` stay exact.
+    (tiny meshes) the segments and then the triangles are merged into one entity, the
+    physical tag of its first cell (names dropped); ``segment_marker`` and
+    ``attribute_<i>`` stay exact.
     """
     n, m = len(mesh.points), len(triangles)
     segments = np.asarray(mesh.segments, dtype=np.int64).reshape(-1, 2)
@@ -404,10 +404,13 @@ def _gmsh_blocks(
     marker_names = {int(k): tags.boundary_name(k) for k in np.unique(markers)}
     tri_runs = _runs(physical)
     line_groups = [order[g] for g in _runs(markers[order])] if len(order) else []
+    # (the segments first: their markers stay exact in ``segment_marker``, which hammesh's
+    # and meshio's readers take; the triangles' tags are what a solver's materials are
+    # read from. Before session 19 the triangles went first: tester18 r06)
+    if len(tri_runs) + len(line_groups) > n and line_groups:
+        line_groups, marker_names = [order], {}
     if len(tri_runs) + len(line_groups) > n:
         tri_runs, region_names = [np.arange(m)], {}
-    if len(tri_runs) + len(line_groups) > n:
-        line_groups, marker_names = [order], {}
 
     # (Gmsh's own tags are re-derived here from the first attribute: not written twice)
     tri_data = split_components({k: v for k, v in triangle_cell_data(mesh).items() if k not in _GMSH_TAGS},

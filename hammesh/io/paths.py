@@ -20,7 +20,8 @@ from pathlib import Path
 
 from hammesh.errors import OutputError
 
-__all__ = ["check_outputs", "written_files", "read_files", "require_file", "wrote_it", "refuse_foreign_companions", "TRIANGLE_SIBLINGS"]
+__all__ = ["check_outputs", "written_files", "wrote_text", "read_files", "require_file", "wrote_it", "refuse_foreign_companions",
+           "TRIANGLE_SIBLINGS"]
 
 #: Triangle's file family: writing or reading one member may touch the others.
 TRIANGLE_SIBLINGS = (".node", ".poly", ".ele")
@@ -54,6 +55,19 @@ def written_files(path: str | os.PathLike[str]) -> list[Path]:
     if path.suffix.lower() == ".pvtu":
         return [path, path.with_name(path.stem + ".0.vtu")]
     return [path]
+
+
+def wrote_text(path: str | os.PathLike[str]) -> str:
+    """``path`` as a "wrote" line names it, with the files its writer adds beside it
+    (:func:`written_files`: ``plate.ele (and plate.node, plate.poly)``), so that nothing
+    written goes unsaid.
+
+    >>> wrote_text("out/plate.ele"), wrote_text("m.vtu")
+    ('out/plate.ele (and out/plate.node, out/plate.poly)', 'm.vtu')
+    """
+    path = Path(path)
+    others = ", ".join(str(f) for f in written_files(path) if f != path)
+    return f"{path} (and {others})" if others else str(path)
 
 
 def wrote_it(path: str | os.PathLike[str]) -> bool:

@@ -477,10 +477,19 @@ def write(mesh: Mesh | HamiltonianMesh, path: str | os.PathLike[str]) -> None:
     if marks.shape == (len(mesh.points),) and marks.any():
         point_data.setdefault(VERTEX_MARKER, marks)
     edges = edge_fields(mesh) if len(np.asarray(mesh.segments).reshape(-1, 2)) else None
-    write_piece(piece, np.arange(len(mesh.points)), mesh.points[:, :2], mesh.triangles, np.arange(m), cid, cpos,
-                parent, kind, attrs, attribute_names=names, point_data=point_data, edges=edges)
-    write_index(path, [piece.name], cycles=cid is not None,
-                cell_arrays={**({} if edges is None else EDGE_CELL_DATA),
-                             **{k: ("Float64", 1 if v.ndim == 1 else v.shape[1])
-                                for k, v in named_attributes(attrs, names).items()}},
-                point_arrays={k: (_vtk_type(v), 1 if v.ndim == 1 else v.shape[1]) for k, v in point_data.items()})
+    from hammesh.errors import OutputError
+    from hammesh.io.atomic import atomic_paths
+
+    # both files or neither, and a failure names the file (tester18 r11: "[Errno 27] File
+    # too large" named nothing, and a failed index left the piece behind)
+    with atomic_paths([piece, path]) as (piece_tmp, index_tmp):
+        try:
+            write_piece(piece_tmp, np.arange(len(mesh.points)), mesh.points[:, :2], mesh.triangles, np.arange(m), cid,
+                        cpos, parent, kind, attrs, attribute_names=names, point_data=point_data, edges=edges)
+        except OSError as exc:
+            raise OutputError(f"{piece}: cannot write ({exc.strerror or exc})") from None
+        write_index(index_tmp, [piece.name], cycles=cid is not None, cells=[m],
+                    cell_arrays={**({} if edges is None else EDGE_CELL_DATA),
+                                 **{k: ("Float64", 1 if v.ndim == 1 else v.shape[1])
+                                    for k, v in named_attributes(attrs, names).items()}},
+                    point_arrays={k: (_vtk_type(v), 1 if v.ndim == 1 else v.shape[1]) for k, v in point_data.items()})

@@ -52,7 +52,8 @@ BLOCK_BYTES = 32768
 LEVEL = 1
 
 #: numpy dtype of each VTK type of a raw piece (:func:`write_raw`, :func:`read_raw`)
-RAW_DTYPES = {"Float64": "f8", "Int64": "i8", "UInt8": "u1", "Int32": "i4", "Float32": "f4", "UInt64": "u8"}
+RAW_DTYPES = {"Float64": "f8", "Int64": "i8", "UInt8": "u1", "Int32": "i4", "Float32": "f4", "UInt64": "u8", "Int8": "i1",
+              "Int16": "i2"}
 
 _VTK_TYPES = {
     np.dtype(np.int8): "Int8", np.dtype(np.int16): "Int16", np.dtype(np.int32): "Int32",

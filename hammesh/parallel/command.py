@@ -181,14 +181,6 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
                                 force=args.force, inputs=inputs, progress=progress,
                                 lattice=not args.no_lattice, tree=tree)
         stack.close()  # (the local cluster: closed once the output is in place)
-        if len(source.segments):  # never in silence: the pieces hold no constrained edges yet (tester18 r08)
-            from hammesh.io.report import marker_range
-
-            marked = f" and their markers {marker_range(source.segment_markers)}" if source.segment_markers.any() else ""
-            rep["not_carried"] = [*rep.get("not_carried", []), (
-                f"not written: the constrained edges (the domain's {len(source.segments):,} segments, subdivided)"
-                f"{marked}: the partitioned pieces hold no segments yet (a .vtu or a .pvtu without --partitioned "
-                "keeps them)")]
         if args.report is not None:
             write_report(rep, args.report)
         par = rep["parallel"]
@@ -235,9 +227,11 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     par = h.report["parallel"]
     print(f"{h.n_triangles:,} triangles in {len(h.components)} Hamiltonian cycle(s) over {par['tiles']} tiles "
           f"({par['joins']} joins), verified; min angle {h.report['min_angle_output_deg']:.2f} deg")
+    from hammesh.io.paths import wrote_text  # (a .ele output's .node/.poly named too)
+
     for label, path in (("mesh", args.output), ("report", args.report)):
         if path is not None:
-            print(f"wrote {label}: {path}")
+            print(f"wrote {label}: {wrote_text(path) if label == 'mesh' else path}")
     for x in h.report.get("not_carried", []):
         print(f"note: {x}")
     return 0

@@ -31,15 +31,16 @@ import numpy as np
 
 from hammesh import params
 from hammesh.domain import Domain
-from hammesh.errors import InvalidOptionError, OutputError
-from hammesh.io.tags import VERTEX_MARKER
+from hammesh.errors import InvalidOptionError, OutputError, VerificationError
+from hammesh.io.tags import EDGE_MARKER, SEGMENT_EDGES, VERTEX_MARKER
 from hammesh.partition import spread_parts
 from hammesh.parallel.markers import given_at, point_markers
 from hammesh.parallel.run import (decompose_estimate, default_tiles, domain_marks, finish_args, not_carried, on_holder,
                                   outcome_hamiltonian, progress_bar, run_tiles, since_start, task_clock)
 
 __all__ = ["write_partitioned", "INDEX_NAME", "piece_name", "stretch_parts", "parts_per_cycle", "check_target", "is_output_file",
-           "piece_types", "int_type", "spill_wanted", "HELD_BYTES_PER_TRIANGLE", "SPILL_SHARE"]
+           "piece_types", "int_type", "marker_type", "lent_swaps", "spill_wanted", "HELD_BYTES_PER_TRIANGLE",
+           "SPILL_SHARE"]
 
 INDEX_NAME = "mesh.pvtu"
 
@@ -94,17 +95,23 @@ def int_type(bound: int) -> str:
     return "Int32" if int(bound) < 2**31 else "Int64"
 
 
-def piece_types(n_points: int, n_rows: int, n_parents: int) -> dict[str, str]:
+def piece_types(n_points: int, n_rows: int, n_parents: int, markers: np.ndarray | None = None) -> dict[str, str]:
     """VTK type of the pieces' integer point and cell data, the same in every piece
     (the index lists one type per array): 32-bit while the whole output's point ids,
     rows and parent rows fit, ``kind`` one byte (an index into ``KIND_NAMES``).
+    ``markers`` (the segment markers, when the pieces hold the constrained edges):
+    ``segment_edges`` one byte (six bits), ``edge_marker`` the narrowest type that
+    holds them (:func:`marker_type`).
 
     Why: the pieces are our own format (``hammesh.read_mesh``/``hammesh check`` read
     any integer type) and their bytes are the write step's cost: with every integer
     array 64-bit an incircle row took ~81 bytes, with these ~52."""
     rows = int_type(n_rows)
-    return {"global_id": int_type(n_points), "global_position": rows, "cycle_id": rows, "cycle_position": rows,
-            "part": rows, "parent": int_type(n_parents), "kind": "UInt8"}
+    out = {"global_id": int_type(n_points), "global_position": rows, "cycle_id": rows, "cycle_position": rows,
+           "part": rows, "parent": int_type(n_parents), "kind": "UInt8"}
+    if markers is not None:
+        out.update({SEGMENT_EDGES: "UInt8", EDGE_MARKER: marker_type(markers)})
+    return out
 
 
 def parts_per_cycle(components: np.ndarray, k: int) -> np.ndarray:
@@ -144,8 +151,169 @@ def stretch_parts(position: np.ndarray, components: np.ndarray, k: int) -> np.nd
     return owner[cyc]
 
 
+def marker_type(markers: np.ndarray) -> str:
+    """The narrowest signed VTK integer type holding every value of ``markers`` (the
+    pieces' ``edge_marker``: almost all zeros, three per row, so its width is most of
+    what the constrained edges add to a piece's bytes)."""
+    mk = np.asarray(markers, dtype=np.int64).reshape(-1)
+    lo, hi = (int(mk.min()), int(mk.max())) if len(mk) else (0, 0)
+    for name, bits in (("Int8", 8), ("Int16", 16), ("Int32", 32)):
+        if -(1 << (bits - 1)) <= lo and hi < (1 << (bits - 1)):
+            return name
+    return "Int64"
+
+
+def _removed_rows(args: tuple) -> np.ndarray:
+    """The tile's rows its joins replace (sorted)."""
+    tile, joins = args[1], args[4]
+    return np.array(sorted({j.t_row for j in joins if j.t_tile == tile} | {j.u_row for j in joins if j.u_tile == tile}),
+                    np.int64)
+
+
+def _lent_rows(args: tuple) -> np.ndarray:
+    """The tile's rows that are the far side ``u`` of a swap whose triangles another
+    tile's piece holds (its edges ``a d`` and ``d b`` go there: ``A1 = a d c``, ``A2 = d b c``)."""
+    tile = args[1]
+    return np.array(sorted({j.u_row for j in args[4] if j.swap and j.u_tile == tile and j.t_tile != tile}), np.int64)
+
+
+def _global_ids(args: tuple, local: np.ndarray) -> np.ndarray:
+    """Global ids of a tile's local points (as :func:`~hammesh.parallel.joins.piece_layout` numbers them)."""
+    tile, mesh_offset, n_mesh, ham_offset = args[0], args[5], args[6], args[7]
+    z = np.asarray(local, np.int64)
+    k = len(tile.vertex_ids)
+    return np.where(z < k, tile.vertex_ids[np.minimum(z, max(k - 1, 0))] if k else 0,
+                    np.where(z < n_mesh, mesh_offset + z - k, ham_offset + z - n_mesh))
+
+
+def _lent_edges(outcome, args: tuple) -> dict:
+    """On the worker of a tile ``U``: the constrained edges of its swap rows ``u`` that
+    no row of its own piece will hold (``u``'s edges ``a d``, ``d b`` go to the other
+    tile's rows ``A1``, ``A2``; another of ``U``'s rows, or its join rows, may hold
+    them too, and then ``U``'s piece flags them). ``{join index: [(first, second,
+    marker), ...]}``, global ids in the segment's direction; an edge two such swaps
+    share goes to the one of lower index. The segments are few: the scan of the
+    rows is made only for those that are constrained edges."""
+    h = outcome_hamiltonian(outcome, drop_spill=False)
+    tile = args[1]
+    lent = _lent_rows(args)
+    out: dict[int, list] = {}
+    if not len(lent):
+        return out
+    tri = np.asarray(h.triangles, dtype=np.int64)
+    seg = np.asarray(h.segments, dtype=np.int64).reshape(-1, 2)
+    mk = np.asarray(h.segment_markers, dtype=np.int64).reshape(-1)
+    g = _global_ids(args, seg)
+    sep = np.isin(np.sort(g, axis=1) @ np.array([args[11], 1]), args[10])
+    seg, mk, g = seg[~sep], mk[~sep], g[~sep]
+    row_join = {j.u_row: j.index for j in args[4] if j.swap and j.u_tile == tile and j.t_tile != tile}
+    for r in lent.tolist():
+        for k in range(3):
+            p, q = int(tri[r, k]), int(tri[r, (k + 1) % 3])
+            hit = np.flatnonzero(((seg[:, 0] == p) & (seg[:, 1] == q)) | ((seg[:, 0] == q) & (seg[:, 1] == p)))
+            if not len(hit):
+                continue
+            holders = np.flatnonzero((tri == p).any(axis=1) & (tri == q).any(axis=1))
+            if not np.isin(holders, lent).all():
+                continue  # (another row of U: U's piece holds it)
+            if row_join[r] != min(row_join[int(x)] for x in holders):
+                continue
+            s = int(hit[0])
+            out.setdefault(row_join[r], []).append((int(g[s, 0]), int(g[s, 1]), int(mk[s])))
+    return out
+
+
+def _edge_entries(h, lay, args: tuple, lent_joins, lent: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The piece's constrained edges as sparse per-row fields: ``(keys, flags,
+    markers (k, 3))`` for the rows holding one (key: a tile row ``r``, or ``m + k`` for
+    join row ``k``), in :func:`hammesh.io.tags.edge_fields`' encoding: each edge once in
+    the whole output, with its direction.
+
+    Each of the tile's constrained edges (its separators left out: interior edges of
+    the union) goes to the row :func:`~hammesh.io.tags.segment_slots` picks (the one
+    in which it runs forwards), else to the other row holding it when a join replaced
+    the first, else to the join row that now holds it (a join's new rows keep the
+    replaced triangles' other edges), else it is the far side of a swap the other
+    tile's piece holds (``lent_joins``: the swaps the driver asked about; anything else
+    is an internal error, never a silent loss). ``lent``: the edges other tiles lend
+    to this piece's swap rows (:func:`_lent_edges`).
+    """
+    from hammesh.io.tags import segment_slots
+
+    tri = np.asarray(h.triangles, dtype=np.int64)
+    m = len(tri)
+    seg = np.asarray(lay.local_segments, dtype=np.int64).reshape(-1, 2)
+    gseg = np.asarray(lay.segments, dtype=np.int64).reshape(-1, 2)
+    mk = np.asarray(lay.segment_markers, dtype=np.int64).reshape(-1)
+    slots = segment_slots(tri, seg)
+    if slots is None:
+        raise VerificationError(f"tile {args[1]}: its constrained edges are not edges of its triangles once each")
+    removed = np.zeros(m + 1, bool)
+    removed[_removed_rows(args)] = True
+    slot, other = slots.slot.copy(), slots.other
+    moved = removed[slot // 3]
+    use_other = moved & (other >= 0) & ~removed[np.where(other >= 0, other // 3, m)]
+    slot[use_other] = other[use_other]
+    keys = slot // 3
+    corner = tri.reshape(-1)[slot]
+    backwards = corner != seg[:, 0]
+    at = slot % 3
+    placed = ~(moved & ~use_other)
+    keys, at, backwards = keys.astype(np.int64), at.astype(np.int64), backwards
+    extra_k, extra_at, extra_back, extra_mk = [], [], [], []
+    gj = lay.point_ids[lay.join_triangles] if len(lay.join_triangles) else np.zeros((0, 3), np.int64)
+
+    def find_in_joins(first: int, second: int):
+        for c in range(3):
+            fwd = np.flatnonzero((gj[:, c] == first) & (gj[:, (c + 1) % 3] == second))
+            if len(fwd):
+                return int(fwd[0]), c, False
+            bwd = np.flatnonzero((gj[:, c] == second) & (gj[:, (c + 1) % 3] == first))
+            if len(bwd):
+                return int(bwd[0]), c, True
+        return None
+
+    lent_rows = {j.u_row for j in args[4] if j.index in lent_joins and j.u_tile == args[1]}
+    for i in np.flatnonzero(~placed).tolist():
+        got = find_in_joins(int(gseg[i, 0]), int(gseg[i, 1]))
+        if got is None:
+            rows = {int(slots.slot[i] // 3)} | ({int(other[i] // 3)} if other[i] >= 0 else set())
+            if not rows <= lent_rows:
+                raise VerificationError(f"tile {args[1]}: constrained edge {gseg[i].tolist()} is held by no row "
+                                        "of its piece")
+            continue  # (the other tile's piece flags it: _lent_edges)
+        extra_k.append(m + got[0])
+        extra_at.append(got[1])
+        extra_back.append(got[2])
+        extra_mk.append(mk[i])
+    mine = {j.index for j in args[4] if j.t_tile == args[1]}
+    for edges in lent:
+        for ji, items in edges.items():
+            if ji not in mine:
+                continue  # (its own, lent away: passed to order the spill file's reads)
+            for first, second, marker in items:
+                got = find_in_joins(first, second)
+                if got is None:
+                    raise VerificationError(f"tile {args[1]}: the swap of join {ji} holds no edge "
+                                            f"{[first, second]}")
+                extra_k.append(m + got[0])
+                extra_at.append(got[1])
+                extra_back.append(got[2])
+                extra_mk.append(marker)
+    keys = np.concatenate([keys[placed], np.asarray(extra_k, np.int64)])
+    at = np.concatenate([at[placed], np.asarray(extra_at, np.int64)])
+    backwards = np.concatenate([backwards[placed], np.asarray(extra_back, bool)])
+    marker = np.concatenate([mk[placed], np.asarray(extra_mk, np.int64)])
+    uk, inv = np.unique(keys, return_inverse=True)
+    flags = np.zeros(len(uk), np.int64)
+    np.add.at(flags, inv, (1 << at) + (backwards.astype(np.int64) << (at + 3)))  # (distinct slots: + is |)
+    marks = np.zeros((len(uk), 3), np.int64)
+    marks[inv, at] = marker
+    return uk, flags, marks
+
+
 def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, parts: int | None,
-                      types: dict[str, str] | None = None, marks: tuple | None = None):
+                      types: dict[str, str] | None = None, marks: tuple | None = None, edges=None, *lent: dict):
     """On the tile's worker: number its rows globally (its side of the joins), write its
     piece. Returns ``(file name, rows, first global position, attribute width, part sizes)``.
 
@@ -157,6 +325,11 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     ``marks``: the input vertices' nonzero markers (:func:`~hammesh.parallel.run.domain_marks`):
     the piece's points get a ``vertex_marker`` array as the serial path's output
     (:func:`~hammesh.parallel.markers.point_markers`); None: none written.
+    ``edges``: None, no constrained edges written; else the joins whose far swap side
+    this tile lends (:func:`_lent_edges`, asked by the driver) and ``lent`` the edges
+    other tiles lend to it: the piece gets ``segment_edges`` and ``edge_marker`` as the
+    serial ``.vtu`` (:func:`hammesh.io.tags.edge_fields`), from :func:`_edge_entries`'
+    few rows (every other row zeros: one reused buffer, no per-row array made).
     """
     from hammesh.io.pvtu import VTK_TRIANGLE, write_raw_chunks
     from hammesh.parallel.joins import CHUNK_ROWS, piece_layout
@@ -246,6 +419,33 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
                         by_position(cycle_position))]
     if parts is not None:
         arrays.append(("CellData", "part", ty.get("part", "Int64"), 1, mr, by_position(part_of)))
+    if edges is not None:
+        ekey, eflag, emark = _edge_entries(h, lay, args, edges, lent)
+        widest = max((c for _, _, c in spans), default=1)
+
+        def sparse_rows(values: np.ndarray, width: int):
+            """A per-row field that is zero but on the rows ``ekey`` (``values``), in piece order."""
+            def gen():
+                zero = np.zeros((widest, width), values.dtype)
+                for _, r, c in spans:
+                    if isinstance(r, slice):
+                        start, _, step = r.indices(m)
+                        lo, hi = (start, start + c) if step == 1 else (start - c + 1, start + 1)
+                    else:
+                        lo = hi = m + r
+                        hi += 1
+                    i0, i1 = np.searchsorted(ekey, (lo, hi))
+                    if i0 == i1:
+                        yield zero[:c]
+                        continue
+                    out = np.zeros((c, width), values.dtype)
+                    forward = not isinstance(r, slice) or step == 1
+                    out[(ekey[i0:i1] - lo) if forward else (start - ekey[i0:i1])] = values[i0:i1]
+                    yield out
+            return gen
+
+        arrays += [("CellData", SEGMENT_EDGES, ty.get(SEGMENT_EDGES, "Int64"), 1, mr, sparse_rows(eflag[:, None], 1)),
+                   ("CellData", EDGE_MARKER, ty.get(EDGE_MARKER, "Int64"), 3, 3 * mr, sparse_rows(emark, 3))]
     arrays += [("CellData", f"attribute_{i}", "Float64", 1, mr, rows(attrs[:, i], lay.join_attributes[:, i]))
                for i in range(w)]
     arrays += [("Points", "", "Float64", 3, 3 * n_points, points(False)),
@@ -258,6 +458,26 @@ def _finish_and_write(outcome, args: tuple, path: str, components: np.ndarray, p
     return (Path(path).name, mr, first, w, sizes,
             {"finish": t1 - t0, "write": time.perf_counter() - t1, "cpu_finish": c1 - c0,
              "cpu_write": time.process_time() - c1, "clock": (e0, time.time(), os.getpid())})
+
+
+def lent_swaps(tiled) -> dict[int, tuple[int, int]]:
+    """The swaps whose far side ``u`` may lend a constrained edge to the other tile's
+    piece (:func:`_lent_edges`): ``{join index: (u tile, t tile)}``.
+
+    Asked only where it can happen: a constrained edge ``a d`` or ``d b`` of ``u = b a
+    d`` (``ab`` on a separator, ``d`` off its line) is a piece of a user segment
+    through ``a`` or ``b``, and a separator's end on a user segment is where the cut
+    crossed it, an end of the segment's pieces (:func:`~hammesh.parallel.tiles.decompose`
+    cuts them there). Few: most joins' ends are on no user segment, and then no task
+    is made. A piece that nevertheless finds such an edge not asked about stops with
+    an internal error (:func:`_edge_entries`), never drops it."""
+    d = tiled.decomposition
+    ends = np.unique(np.asarray(d.segments, np.int64)[~np.asarray(d.separator, bool)])
+    out = {}
+    for j in tiled.plan.joins:
+        if j.swap and j.u_tile != j.t_tile and np.isin([j.a, j.b], ends).any():
+            out[j.index] = (j.u_tile, j.t_tile)
+    return out
 
 
 def apex_marks(tiled, args: tuple, marks: tuple | None) -> tuple | None:
@@ -370,21 +590,42 @@ def write_partitioned(domain: Domain, directory: str | os.PathLike[str], *, min_
                 raise InvalidOptionError(f"--parts {parts}: more parts than the {int(comps.sum()):,} triangles")
             t1 = time.perf_counter()
             fargs = finish_args(tiled)
+            d = tiled.decomposition
+            # the constrained edges (the serial path writes them when the domain has segments)
+            edges = bool(len(domain.segments))
             types = piece_types(max((a[11] for a in fargs), default=0), int(comps.sum()),
-                                int(tiled.mesh_triangles.sum()))
+                                int(tiled.mesh_triangles.sum()), d.segment_markers[~d.separator] if edges else None)
             marks = domain_marks(domain)
             # (the serial path writes the markers when any is nonzero: any input vertex's or segment's)
             if not (len(marks[0]) or np.any(tiled.decomposition.segment_markers != 0)):
                 marks = None
+            asked = lent_swaps(tiled) if edges else {}
+            # (a swap's far side lends its constrained edges: a small task on its tile's
+            # worker, whose result goes to the other tile's task, not through the driver)
+            lenders = sorted({u for u, _ in asked.values()})
+            lent = {u: runner.submit(_lent_edges, tiled.outcomes[u], fargs[u], pure=False, priority=1,
+                                     **on_holder(runner, tiled.outcomes[u])) for u in lenders}
+
+            def lending(i: int) -> tuple:
+                """Tile ``i``'s swaps asked about (None: no edges written) and the lending
+                tasks it waits for (the ones lending to it, and its own: its spill file is
+                read by both)."""
+                own = None if not edges else frozenset(ji for ji, (u, _) in asked.items() if u == i)
+                return own, *[lent[u] for u in sorted({u for u, t in asked.values() if i in (t, u)})]
+
             done = runner.gather([runner.submit(_finish_and_write, h, a, str(work / piece_name(i)), comps, parts,
-                                                types, apex_marks(tiled, a, marks), pure=False,
-                                                **on_holder(runner, h))
+                                                types, apex_marks(tiled, a, marks), *lending(i),
+                                                pure=False, **on_holder(runner, h))
                                   for i, (h, a) in enumerate(zip(tiled.outcomes, fargs))])
             t2 = time.perf_counter()
             worker_rss = peak_rss_workers(runner)
         order = sorted(range(len(done)), key=lambda i: done[i][2])
-        write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], max(d[3] for d in done),
+        width = max(x[3] for x in done)
+        write_index(work / INDEX_NAME, [done[i][0] for i in order if done[i][1] > 0], width,
                     cycles=len(comps) > 1, part=parts is not None, types=types,
+                    cell_arrays=None if not edges else {SEGMENT_EDGES: (types[SEGMENT_EDGES], 1),
+                                                        EDGE_MARKER: (types[EDGE_MARKER], 3),
+                                                        **{f"attribute_{i}": ("Float64", 1) for i in range(width)}},
                     point_arrays=None if marks is None else {VERTEX_MARKER: ("Int32", 1)})
         for i, d in enumerate(done):
             if d[1] == 0:

@@ -131,3 +131,92 @@ def test_two_meshes_stacked_are_found_from_their_boundary(seed, n, shift, turn):
     assert (got is None) == (want is None)
     if got is not None:
         assert _pair_overlaps(pts2, both, got)
+
+
+def _fan(angles, radii, closed=True):
+    """Triangles ``(0, i, i + 1)`` round point 0, rim points at ``angles`` (radians,
+    increasing) and ``radii``; ``closed``: the last rim point joined to the first."""
+    n = len(angles)
+    pts = np.r_[[[0.0, 0.0]], np.c_[radii * np.cos(angles), radii * np.sin(angles)]]
+    k = n if closed else n - 1
+    tri = np.c_[np.zeros(k, np.int64), 1 + np.arange(k), 1 + (np.arange(k) + 1) % n]
+    return pts, tri
+
+
+def test_a_fan_of_50k_triangles_is_checked_in_near_linear_time():
+    """A user's fan round one vertex: every bounding box holds the centre, so every pair
+    was a candidate (32k triangles: 15 s before session 19, 0.05 s after); the pairs
+    sharing the centre are decided by the angular order round it."""
+    import time
+
+    n = 50_000
+    pts, tri = _fan(2 * np.pi * np.arange(n) / n, np.ones(n))
+    start = time.perf_counter()
+    assert find_overlap(pts, tri) is None
+    assert time.perf_counter() - start < 8.0  # (quadratic: > 30 s)
+    two = _fan(4 * np.pi * np.arange(2 * n) / (2 * n), 1 + np.arange(2 * n) / (4 * n))  # wound twice
+    start = time.perf_counter()
+    pair = find_overlap(*two)
+    assert pair is not None and time.perf_counter() - start < 8.0
+    assert _pair_overlaps(two[0], two[1], pair)
+
+
+def _precondition(pts, tri) -> bool:
+    """find_overlap's: counter-clockwise with positive area, each directed edge once."""
+    from hammesh.predicates import orient
+
+    if any(orient(*pts[a], *pts[b], *pts[c]) <= 0 for a, b, c in tri.tolist()):
+        return False
+    d = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    return len(np.unique(d, axis=0)) == len(d)
+
+
+@settings(max_examples=80, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(17, 120), turn=st.floats(0.5, 2.2),
+       closed=st.booleans(), mutate=st.sampled_from(["none", "apex", "copy"]))
+def test_fans_with_one_wrong_triangle_are_found(seed, n, turn, closed, mutate):
+    """Fans round a vertex of more than ``FAN_DEGREE`` triangles (rim angles random,
+    spanning ``turn`` turns: more than one overlaps itself; closed or not), one rim
+    point moved along its ray or one triangle stored again slightly turned (sharing
+    the centre only): an overlap is reported iff the brute force sees one, and the
+    pair reported overlaps."""
+    rng = np.random.default_rng(seed)
+    ang = np.sort(rng.random(n)) * 2 * np.pi * turn
+    ang = ang[np.concatenate([[True], np.diff(ang) > 1e-9])]
+    pts, tri = _fan(ang, rng.uniform(0.5, 1.5, len(ang)), closed=closed)
+    k = int(rng.integers(len(tri)))
+    if mutate == "apex":
+        pts[tri[k, 2]] *= rng.uniform(0.3, 3.0)
+    elif mutate == "copy":
+        c, s_ = np.cos(0.3 * rng.random()), np.sin(0.3 * rng.random())
+        pts = np.vstack([pts, pts[tri[k, 1:]] @ np.array([[c, s_], [-s_, c]]) * 0.9])
+        tri = np.vstack([tri, [[0, len(pts) - 2, len(pts) - 1]]])
+    if len(ang) < 17 or not _precondition(pts, tri):
+        return
+    want = _brute_force(pts, tri)
+    got = find_overlap(pts, tri)
+    assert (got is None) == (want is None)
+    if got is not None:
+        assert _pair_overlaps(pts, tri, got)
+    if not closed and ang[-1] - ang[0] > 2 * np.pi + 1e-6:  # (wound more than once: the rim passes its start)
+        assert got is not None
+
+
+def test_check_refuses_a_fan_wound_twice(tmp_path, capsys):
+    """A fan wound twice round its centre: one cycle of counter-clockwise triangles,
+    every directed edge once, yet covering the disc twice: ``hammesh check`` exit 3."""
+    import meshio
+
+    from hammesh.cli import main
+
+    n = 200
+    pts, tri = _fan(4 * np.pi * np.arange(n) / n, 1 + np.arange(n) / (2 * n))
+    path = tmp_path / "fan2.vtu"
+    meshio.write(path, meshio.Mesh(np.c_[pts, np.zeros(len(pts))], [("triangle", tri)]))
+    assert main(["check", str(path)]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "overlap" in err
+    one = tmp_path / "fan1.vtu"
+    pts, tri = _fan(2 * np.pi * np.arange(n) / n, np.ones(n))
+    meshio.write(one, meshio.Mesh(np.c_[pts, np.zeros(len(pts))], [("triangle", tri)]))
+    assert main(["check", str(one)]) == 0
