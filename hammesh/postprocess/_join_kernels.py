@@ -58,17 +58,21 @@ def corner_atan2(y, x):
     denominator are formed before it), where the Taylor series to ``t^27`` is exact to
     ~2e-17 (next term ``0.268^29 / 29``). The classic three-interval reduction of
     Cody & Waite, *Software Manual for the Elementary Functions* (1980), ch. 11.
-    ``(0, 0)`` is 0, ``(0, x < 0)`` is pi, as ``math.atan2``.
+    ``(0, +0)`` is 0, ``(0, x < 0)`` and ``(0, -0)`` are pi, as ``math.atan2``.
     """
     ax = abs(x)
     big = y > ax
     num = ax if big else y
     den = y if big else ax
+    if den < 1e-290 or den > 1e290:  # (subnormal or near overflow: the fold below would round off)
+        f = 1e300 if den < 1e-290 else 1e-300
+        num *= f
+        den *= f
     low = num <= 0.2679491924311227 * den  # (tan 15 deg)
     tn = num if low else 1.7320508075688772 * num - den
     td = den if low else 1.7320508075688772 * den + num
     if td == 0.0:
-        return 0.0 if x >= 0.0 else math.pi
+        return math.pi if math.copysign(1.0, x) < 0.0 else 0.0  # (as atan2: (0, -0.0) is pi)
     t = tn / td
     z = t * t
     z2 = z * z

@@ -94,6 +94,12 @@ PLACE_REACH_DEG = 10.0
 PLACE_TAKEN = True
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
+#: outputs of this many rows or more: the improvement works only on the new rows that
+#: miss issue 13's absolute targets (angle below ``keep`` x the input's smallest or above
+#: its largest + 5 degrees) and on the Steiner points at their corners; below, on every
+#: new row (the local rule's misses too). Session 19: at 1.5 M the rows that meet the
+#: targets and miss only their parents' rule were most of the step's work (``_improve``)
+IMPROVE_ALL_BELOW = 100_000
 #: candidate joins per thread below which scoring runs in one call (a placement is
 #: ~100x the work of an angle row, so threads pay off far below THREAD_MIN_ROWS)
 SCORE_MIN_ROWS = 20_000
@@ -2249,12 +2255,16 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     clock = np.zeros(1, np.int64)
     judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
     new = np.flatnonzero(kind != 3)
+    only_missing = len(out) >= IMPROVE_ALL_BELOW
     for _ in range(IMPROVE_ROUNDS):
+        tries = _missing_rows(pts, out, new, lo_global, hi) if only_missing else new
+        if only_missing and not len(tries):
+            break
         # (the tries that fail as the rows are now, found on both cores; the loop skips them)
-        _ik.failing_flips(pts, out, twin, pinned, starts, lengths, float(hi), new, touched, failed, clock,
+        _ik.failing_flips(pts, out, twin, pinned, starts, lengths, float(hi), tries, touched, failed, clock,
                           IMPROVE_MIN_ROWS)
         flips = _ik.improve_flips(
-            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new, touched, failed,
+            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, tries, touched, failed,
             clock,
         )
         n_flips += flips
@@ -2262,6 +2272,9 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
             new = np.flatnonzero(kind != 3)
         if first_steiner >= len(pts):
             break
+        if only_missing:  # the points on no row missing the targets: as if judged now and left
+            # (judged again once a row around them changes, as any point left alone)
+            _leave_points_off(out, _missing_rows(pts, out, new, lo_global, hi), first_steiner, judged, int(clock[0]))
         moved = _ik.smooth_steiner(
             pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock,
             judged, SMOOTH_MIN_POINTS,
@@ -2272,6 +2285,21 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     repaired, facts = _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
     n_moved += repaired
     return out, twin, kind, pm, int(n_flips), int(n_moved), facts
+
+
+def _missing_rows(pts: np.ndarray, out: np.ndarray, rows: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``rows`` whose smallest angle is below ``lo`` or whose largest is above ``hi``."""
+    a_lo, a_hi, _, _ = triangle_facts(pts, out[rows])
+    return rows[(a_lo < lo) | (a_hi > hi)]
+
+
+def _leave_points_off(out: np.ndarray, rows: np.ndarray, first: int, judged: np.ndarray, now: int) -> None:
+    """Mark every Steiner point (``>= first``) that is no corner of ``rows`` judged at clock
+    ``now`` (``_improve_kernels.smooth_steiner`` then leaves it while its star is unchanged)."""
+    on = np.zeros(len(judged), np.bool_)
+    v = out[rows].ravel()
+    on[v[v >= first] - first] = True
+    judged[~on] = now
 
 
 def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float):
