@@ -241,8 +241,12 @@ def _join_order(
     idx = np.flatnonzero(usable)
     kk = np.where(meets[idx], kind[idx], 0)
     tier = np.where(meets[idx], 0, np.where(whole[idx], 1, 2))
-    if cls is None:
-        return idx[np.lexsort((-slack[idx], kk, tier))]
+    if cls is None:  # (one stable sort of one key: tier, kind, then the slack, which lies in
+        # [-pi, pi], so 8 apart per class keeps the classes apart; slacks within ~1e-14 of
+        # each other keep the index order, where lexsort's three passes compared them
+        # exactly: 0.6 x the time, session 19)
+        key = (3 * tier + kk) * 8.0 - slack[idx]
+        return idx[np.argsort(key, kind="stable")]
     if first:
         return idx[np.lexsort((-slack[idx], kk, tier, cls[idx]))]
     return idx[np.lexsort((-slack[idx], cls[idx], kk, tier))]
