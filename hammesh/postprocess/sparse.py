@@ -94,6 +94,11 @@ PLACE_REACH_DEG = 10.0
 PLACE_TAKEN = True
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
+#: with a page reserve, ``sparse_cycles``' ``beside_cover`` (the certificate's look at the
+#: input, ~0.1 s on one thread at 1.5 M) starts as the plan starts: its Python leaves the
+#: other core idle (~0.1 s at 1.5 M, session 17's ``--critical``); False: after the output
+#: rows, beside the improvement, which since session 19 is too short to hide it
+SIDE_BEFORE_PLAN = True
 #: outputs of this many rows or more: the improvement works only on the new rows that
 #: miss issue 13's absolute targets (angle below ``keep`` x the input's smallest or above
 #: its largest + 5 degrees) and on the Steiner points at their corners; below, on every
@@ -2014,6 +2019,9 @@ def sparse_cycles(
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls, fish is not None)
         steps.done("place_splits")
+        if use_cover and late and SIDE_BEFORE_PLAN:  # (the plan: Python on one core, bar the swap tests)
+            beside_cover()
+            late = False
         no_absorb = np.zeros(m, np.bool_)
         for attempt in range(4):
             if attempt == 3:
