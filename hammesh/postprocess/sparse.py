@@ -2286,7 +2286,9 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
             break
         if only_missing:  # the points on no row missing the targets: as if judged now and left
             # (judged again once a row around them changes, as any point left alone)
-            _leave_points_off(out, _missing_rows(pts, out, new, lo_global, hi), first_steiner, judged, int(clock[0]))
+            # (the rows as the flips left them; none: the ones the flips were tried on)
+            _leave_points_off(out, _missing_rows(pts, out, new, lo_global, hi) if flips else tries, first_steiner,
+                              judged, int(clock[0]))
         moved = _ik.smooth_steiner(
             pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock,
             judged, SMOOTH_MIN_POINTS,
