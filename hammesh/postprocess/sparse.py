@@ -1867,6 +1867,8 @@ def sparse_cycles(
         Planar only: after the joins, flip edges the cycle crosses between two
         consecutive triangles where that keeps the cycle and raises the pair's
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
+        From ``IMPROVE_ALL_BELOW`` output rows on, only around the new rows that miss
+        the absolute targets (``keep`` x the input's smallest angle, its largest + 5 degrees).
     beside_cover : callable, optional
         Called once, to hand work that needs nothing of the construction to another
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
