@@ -1873,10 +1873,10 @@ def sparse_cycles(
         Called once, to hand work that needs nothing of the construction to another
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
         there, and without a page reserve faults one for the steps after the cover):
-        as the cover starts, or, where ``hammesh.pages`` holds a reserve, after the
-        output rows, beside the improvement, the report and the mapping back, which
-        run on one core bar a few short passes (the cover's matching, the output
-        rows' walk and gather and, on big meshes, the cover swaps' tests run on two).
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, as the plan
+        starts (``SIDE_BEFORE_PLAN``: its Python runs on one core bar the cover swaps'
+        tests; the cover's matching, the scores and the placements before it take
+        both), else after the output rows, beside the improvement.
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
