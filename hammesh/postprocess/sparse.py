@@ -94,6 +94,17 @@ PLACE_REACH_DEG = 10.0
 PLACE_TAKEN = True
 #: rounds of improvement flips and Steiner point moves
 IMPROVE_ROUNDS = 3
+#: with a page reserve, ``sparse_cycles``' ``beside_cover`` (the certificate's look at the
+#: input, ~0.1 s on one thread at 1.5 M) starts as the plan starts: its Python leaves the
+#: other core idle (~0.1 s at 1.5 M, session 17's ``--critical``); False: after the output
+#: rows, beside the improvement, which since session 19 is too short to hide it
+SIDE_BEFORE_PLAN = True
+#: outputs of this many rows or more: the improvement works only on the new rows that
+#: miss issue 13's absolute targets (angle below ``keep`` x the input's smallest or above
+#: its largest + 5 degrees) and on the Steiner points at their corners; below, on every
+#: new row (the local rule's misses too). Session 19: at 1.5 M the rows that meet the
+#: targets and miss only their parents' rule were most of the step's work (``_improve``)
+IMPROVE_ALL_BELOW = 100_000
 #: candidate joins per thread below which scoring runs in one call (a placement is
 #: ~100x the work of an angle row, so threads pay off far below THREAD_MIN_ROWS)
 SCORE_MIN_ROWS = 20_000
@@ -235,8 +246,12 @@ def _join_order(
     idx = np.flatnonzero(usable)
     kk = np.where(meets[idx], kind[idx], 0)
     tier = np.where(meets[idx], 0, np.where(whole[idx], 1, 2))
-    if cls is None:
-        return idx[np.lexsort((-slack[idx], kk, tier))]
+    if cls is None:  # (one stable sort of one key: tier, kind, then the slack, which lies in
+        # [-pi, pi], so 8 apart per class keeps the classes apart; slacks within ~1e-14 of
+        # each other keep the index order, where lexsort's three passes compared them
+        # exactly: 0.6 x the time, session 19)
+        key = (3 * tier + kk) * 8.0 - slack[idx]
+        return idx[np.argsort(key, kind="stable")]
     if first:
         return idx[np.lexsort((-slack[idx], kk, tier, cls[idx]))]
     return idx[np.lexsort((-slack[idx], cls[idx], kk, tier))]
@@ -1852,14 +1867,16 @@ def sparse_cycles(
         Planar only: after the joins, flip edges the cycle crosses between two
         consecutive triangles where that keeps the cycle and raises the pair's
         smallest angle (``_improve_kernels``): the join's cavity re-triangulated.
+        From ``IMPROVE_ALL_BELOW`` output rows on, only around the new rows that miss
+        the absolute targets (``keep`` x the input's smallest angle, its largest + 5 degrees).
     beside_cover : callable, optional
         Called once, to hand work that needs nothing of the construction to another
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
         there, and without a page reserve faults one for the steps after the cover):
-        as the cover starts, or, where ``hammesh.pages`` holds a reserve, after the
-        output rows, beside the improvement, the report and the mapping back, which
-        run on one core bar a few short passes (the cover's matching, the output
-        rows' walk and gather and, on big meshes, the cover swaps' tests run on two).
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, as the plan
+        starts (``SIDE_BEFORE_PLAN``: its Python runs on one core bar the cover swaps'
+        tests; the cover's matching, the scores and the placements before it take
+        both), else after the output rows, beside the improvement.
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
@@ -2004,6 +2021,9 @@ def sparse_cycles(
         whole = (newmin >= keep * min_angle) & (newmax <= hi)
         order = _join_order(ckind, slack, newmin, pmin, whole, cls, fish is not None)
         steps.done("place_splits")
+        if use_cover and late and SIDE_BEFORE_PLAN:  # (the plan: Python on one core, bar the swap tests)
+            beside_cover()
+            late = False
         no_absorb = np.zeros(m, np.bool_)
         for attempt in range(4):
             if attempt == 3:
@@ -2249,12 +2269,16 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     clock = np.zeros(1, np.int64)
     judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
     new = np.flatnonzero(kind != 3)
+    only_missing = len(out) >= IMPROVE_ALL_BELOW
     for _ in range(IMPROVE_ROUNDS):
+        tries = _missing_rows(pts, out, new, lo_global, hi) if only_missing else new
+        if only_missing and not len(tries):
+            break
         # (the tries that fail as the rows are now, found on both cores; the loop skips them)
-        _ik.failing_flips(pts, out, twin, pinned, starts, lengths, float(hi), new, touched, failed, clock,
+        _ik.failing_flips(pts, out, twin, pinned, starts, lengths, float(hi), tries, touched, failed, clock,
                           IMPROVE_MIN_ROWS)
         flips = _ik.improve_flips(
-            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, new, touched, failed,
+            pts, out, twin, pinned, starts, lengths, pm, kind, float(hi), 4 * len(out) + 16, tries, touched, failed,
             clock,
         )
         n_flips += flips
@@ -2262,6 +2286,11 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
             new = np.flatnonzero(kind != 3)
         if first_steiner >= len(pts):
             break
+        if only_missing:  # the points on no row missing the targets: as if judged now and left
+            # (judged again once a row around them changes, as any point left alone)
+            # (the rows as the flips left them; none: the ones the flips were tried on)
+            _leave_points_off(out, _missing_rows(pts, out, new, lo_global, hi) if flips else tries, first_steiner,
+                              judged, int(clock[0]))
         moved = _ik.smooth_steiner(
             pts, out, twin, pinned, pm, first_steiner, float(keep), float(hi), PLACE_ITERS, new, touched, clock,
             judged, SMOOTH_MIN_POINTS,
@@ -2272,6 +2301,21 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     repaired, facts = _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
     n_moved += repaired
     return out, twin, kind, pm, int(n_flips), int(n_moved), facts
+
+
+def _missing_rows(pts: np.ndarray, out: np.ndarray, rows: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``rows`` whose smallest angle is below ``lo`` or whose largest is above ``hi``."""
+    a_lo, a_hi, _, _ = triangle_facts(pts, out[rows])
+    return rows[(a_lo < lo) | (a_hi > hi)]
+
+
+def _leave_points_off(out: np.ndarray, rows: np.ndarray, first: int, judged: np.ndarray, now: int) -> None:
+    """Mark every Steiner point (``>= first``) that is no corner of ``rows`` judged at clock
+    ``now`` (``_improve_kernels.smooth_steiner`` then leaves it while its star is unchanged)."""
+    on = np.zeros(len(judged), np.bool_)
+    v = out[rows].ravel()
+    on[v[v >= first] - first] = True
+    judged[~on] = now
 
 
 def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float):

@@ -392,6 +392,57 @@ def test_thin_strip_is_fast_and_linear() -> None:
     assert t2 < 20.0
 
 
+@pytest.mark.parametrize("name, div, keep", [("A", 3000, 0.9), ("A", 3000, 1.0), ("face", 16000, 1.0)])
+def test_improvement_on_big_outputs_works_only_where_the_targets_are_missed(name: str, div: int, keep: float,
+                                                                           monkeypatch) -> None:
+    # session 19: from ``IMPROVE_ALL_BELOW`` output rows the improvement step flips and
+    # moves only around the new rows that miss issue 13's absolute targets; every row
+    # it changes is one of those, the one after it in its cycle (a flip's partner), or
+    # in the star of a Steiner point at a corner of one; the targets' misses and the
+    # extremes are never worse than without the step, and the certificate holds
+    from hammesh.halfedge import _kernels, prepare_mesh
+    from hammesh.postprocess import sparse
+    from hammesh.postprocess.sparse import sparse_cycles
+
+    dom = bundled_domain(name)
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / div)
+    clean, he, is_con = prepare_mesh(m)
+    amin = float(clean.info["validated"]["min_angle"])
+    monkeypatch.setattr(sparse, "ALT_MERGE_TRIES", 0)  # (joins below the rule left: work to do)
+    monkeypatch.setattr(sparse, "IMPROVE_ALL_BELOW", 1)
+    runs = {imp: sparse_cycles(clean.points, clean.triangles, he.twin, is_con, amin, keep=keep, improve=imp)
+            for imp in (False, True)}
+    off, on = runs[False], runs[True]
+    assert len(on.triangles) == len(off.triangles) and len(on.points) == len(off.points)
+    assert on.counts["steiner_moved"] > 0
+    lo, hi = np.degrees(keep * amin), off.counts["max_angle_input_deg"] + 5.0
+    a_off, a_on = _angles(off.points, off.triangles), _angles(on.points, on.triangles)
+    miss = (a_off.min(axis=1) < lo - 1e-9) | (a_off.max(axis=1) > hi + 1e-9)
+    assert ((a_on.min(axis=1) < lo - 1e-9) | (a_on.max(axis=1) > hi + 1e-9)).sum() <= miss.sum()
+    assert a_on.min() >= a_off.min() - 1e-9 and a_on.max() <= max(a_off.max(), hi) + 1e-9
+    # where the step may reach: missing rows, their cycle successors, the stars of
+    # Steiner points at their corners (rows are changed in place: the same row numbers)
+    n_in = len(clean.points)
+    starts = np.cumsum(on.lengths) - on.lengths
+    run = np.repeat(np.arange(len(on.lengths)), on.lengths)
+    i = np.arange(len(on.triangles))
+    nxt = np.where(i + 1 < starts[run] + on.lengths[run], i + 1, starts[run])
+    prv = np.where(i > starts[run], i - 1, starts[run] + on.lengths[run] - 1)
+    reach = miss | miss[prv] | miss[nxt]
+    pts_of_miss = off.triangles[miss].ravel()
+    reach |= np.isin(off.triangles, pts_of_miss[pts_of_miss >= n_in]).any(axis=1)
+    changed = (on.triangles != off.triangles).any(axis=1)
+    moved = np.flatnonzero((on.points != off.points).any(axis=1))
+    changed |= np.isin(on.triangles, moved).any(axis=1)
+    assert changed.any()
+    assert not (changed & ~reach).any(), np.flatnonzero(changed & ~reach)[:10]
+    twin, dup = _kernels.half_edge_twins(on.triangles, len(on.points))
+    assert dup < 0
+    np.testing.assert_array_equal(on.claim, twin)
+    h = hammesh.hamiltonian(m)
+    assert_sparse_certificate(m, h)
+
+
 @pytest.mark.parametrize("name", ["face", "square_circle_hole"])
 def test_improvement_flips_keep_the_cycle_and_never_worsen(name: str, monkeypatch) -> None:
     # issue 13: the cavity of a join re-triangulated by flips of edges the cycle

@@ -531,3 +531,44 @@ def test_improvement_worked_out_ahead_on_both_cores_gives_the_same_mesh(name: st
     for a, b in ((ahead.points, serial.points), (ahead.triangles, serial.triangles), (ahead.kind, serial.kind),
                  (ahead.parent, serial.parent), (ahead.components, serial.components)):
         np.testing.assert_array_equal(a, b)
+
+
+_finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=400, deadline=None)
+@given(_finite, _finite, st.floats(1e-300, 1e300))
+def test_corner_atan2_is_atan2_within_rounding(y, x, scale):
+    """``_join_kernels.corner_atan2`` (a corner's angle, ``y = |cross| >= 0``) agrees with
+    ``math.atan2`` to a few units in the last place at any scale, signs of ``x`` and the
+    special points ``(0, +0)`` (0) and ``(0, x <= -0)`` (pi) included."""
+    import math
+
+    from hammesh.postprocess._join_kernels import corner_atan2
+
+    yy, xx = abs(y) * scale, x * scale
+    if not (math.isfinite(yy) and math.isfinite(xx)):
+        return
+    got = corner_atan2(yy, xx)
+    want = math.atan2(yy, xx)
+    assert abs(got - want) <= 1e-15, (yy, xx, got, want)
+    assert 0.0 <= got <= math.pi
+
+
+def test_corner_atan2_special_points_and_folds():
+    """Exact where ``math.atan2`` is: the axes and the diagonals' folds (tan 15 degrees,
+    45 degrees, the swap of ``|x|`` and ``y``) land on the right side."""
+    import math
+
+    from hammesh.postprocess._join_kernels import corner_atan2
+
+    assert corner_atan2(0.0, 0.0) == 0.0
+    assert corner_atan2(0.0, -0.0) == math.pi
+    assert corner_atan2(0.0, 2.0) == 0.0
+    assert corner_atan2(0.0, -2.0) == math.pi
+    assert corner_atan2(3.0, 0.0) == pytest.approx(0.5 * math.pi, abs=1e-16)
+    for deg in (1e-9, 0.1, 14.999, 15.0, 15.001, 29.9, 30.0, 44.999, 45.0, 45.001, 60.0, 89.999, 90.0,
+                90.001, 120.0, 135.0, 165.0, 179.999):
+        a = math.radians(deg)
+        assert corner_atan2(math.sin(a), math.cos(a)) == pytest.approx(math.atan2(math.sin(a), math.cos(a)),
+                                                                         abs=5e-16), deg

@@ -605,3 +605,32 @@ def test_renumbered_input_refuses_bad_segments_and_keeps_own_cycles_alike(monkey
     again = hammesh.hamiltonian(own)
     assert again.report["kept_input_cycle"] and again.report["steiner_points"] == 0
     np.testing.assert_array_equal(again.triangles, own.triangles)
+
+
+@pytest.mark.parametrize("before_plan", [True, False])
+def test_side_work_starts_once_as_the_plan_starts_when_pages_are_reserved(before_plan: bool, monkeypatch) -> None:
+    """With a page reserve, ``sparse_cycles``' ``beside_cover`` (the certificate's look at
+    the input) is called exactly once: as the plan starts (``SIDE_BEFORE_PLAN``, session
+    19: the plan's Python leaves the other core idle), else after the output rows (the
+    improvement's start); without a reserve, as the cover starts."""
+    from hammesh.halfedge import prepare_mesh
+    from hammesh.postprocess import sparse
+
+    m = hammesh.quality_mesh(bundled_domain("face"), min_angle=30, max_area=None)
+    clean, he, is_con = prepare_mesh(m)
+    amin = float(clean.info["validated"]["min_angle"])
+    log: list[str] = []
+    for name, tag in (("plan_merges", "plan"), ("emit", "rows")):
+        real = getattr(sparse._k, name)
+        monkeypatch.setattr(sparse._k, name, lambda *a, _r=real, _t=tag, **k: (log.append(_t), _r(*a, **k))[1])
+    real_cover = sparse.cycle_cover
+    monkeypatch.setattr(sparse, "cycle_cover", lambda *a, **k: (log.append("cover"), real_cover(*a, **k))[1])
+    monkeypatch.setattr(sparse, "SIDE_BEFORE_PLAN", before_plan)
+    for reserve, want in ((1, ["cover", "side", "plan", "rows"] if before_plan else ["cover", "plan", "rows", "side"]),
+                          (0, ["side", "cover", "plan", "rows"])):
+        log.clear()
+        monkeypatch.setattr(sparse, "reserved", lambda r=reserve: r)
+        sparse.sparse_cycles(clean.points, clean.triangles, he.twin, is_con, amin,
+                             beside_cover=lambda: log.append("side"))
+        assert [x for i, x in enumerate(log) if x not in log[:i]] == want, log
+        assert log.count("side") == 1
