@@ -107,6 +107,11 @@ def mesh_arrays(
     if not np.issubdtype(tri.dtype, np.integer):
         raise InvalidMeshError(f"triangles must be integers, got dtype {tri.dtype}")
     pts = np.ascontiguousarray(pts, dtype=np.float64)
+    if tri.dtype.kind == "u" and tri.max() >= len(pts):  # before the cast wraps 2**64-1 to -1
+        t, k = np.argwhere(tri >= len(pts))[0]
+        raise InvalidMeshError(
+            f"triangle {t} references vertex {int(tri[t, k])} but there are only {len(pts)} points"
+        )
     tri = np.ascontiguousarray(tri, dtype=np.int64)
     if not np.isfinite(pts).all():  # (the row-wise search only on failure: 4x slower)
         i = int(np.argmin(np.isfinite(pts).all(axis=1)))

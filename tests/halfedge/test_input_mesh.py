@@ -29,6 +29,7 @@ def mesh(points=SQ, triangles=TWO, **kw) -> hammesh.Mesh:
         (mesh(points=[[0, 0], [1, 0], [1, 1e200], [0, 1]]), "point 2"),
         (mesh(triangles=[[0, 1, 2], [0, 2, 7]]), "vertex 7"),
         (mesh(triangles=[[0, 1, 2], [0, -1, 3]]), "vertex -1"),
+        (mesh(triangles=np.array([[0, 1, 2], [0, 2**64 - 1, 3]], dtype=np.uint64)), "triangle 1 .*vertex 18446744073709551615"),
         (mesh(triangles=[[0, 1, 2], [0, 2, 2]]), "triangle 1"),
         (mesh(points=[[0, 0], [1, 0], [2, 0], [0, 1]], triangles=[[0, 1, 2], [0, 2, 3]]), "triangle 0 .*zero area"),
         (mesh(triangles=np.zeros((0, 3), int)), "no triangles"),
