@@ -25,8 +25,8 @@ EARLY_START = True
 #: kept for the A/B in ``benchmarks/bench_scale.py --imports-ab``)
 START_BEFORE_IMPORTS = True
 #: ``--workers N`` (a local cluster) reads the domain, estimates it and decomposes it in
-#: a child forked at the command's start, before any thread (:func:`prepare_beside`);
-#: False: the driver reads it and decomposes it beside the cluster's start (session 18)
+#: a child forked once the driver's imports are done (:func:`prepare_beside`); False:
+#: the driver reads it and decomposes it beside the cluster's start (session 18)
 PREPARE_IN_CHILD = True
 
 _freezing = False
@@ -113,33 +113,44 @@ def prepare(path, strict: bool, min_angle: float | None, max_area: float, tiles:
 
 
 @contextlib.contextmanager
-def prepare_beside(args: argparse.Namespace):
+def prepare_beside(args: argparse.Namespace, started):
     """A :class:`~hammesh.parallel.forked.Child` running :func:`prepare` for ``--workers
-    N``, forked here (the command's start), or None (:data:`PREPARE_IN_CHILD` off, no
-    local cluster, another thread in this process, no fork here). Killed on the way
-    out unless :func:`read_source` took its result.
+    N``, forked here, or None (:data:`PREPARE_IN_CHILD` off, no local cluster starting
+    in this process's background: ``started`` is not a
+    :class:`~hammesh.parallel.cluster.Starting` handle still starting, no fork here).
+    Killed on the way out unless :func:`read_source` took its result. Called once the
+    driver's imports are done (:func:`import_driver_modules`): reading, estimating and
+    decomposing then import nothing but numba's own, under its compiler lock, which
+    the fork holds (``tests/parallel/test_startup.py``), so the child waits on no
+    module lock the cluster's thread (importing Dask) may hold.
 
-    Why: up to the tiles' submission the driver is one interpreter, its threads
-    taking turns for its lock: its imports, Dask's, the mode's kernels loaded for
-    the workers to inherit, the cluster's start (the cluster's thread), reading the
-    domain (0.2-0.25 s CPU: the domain's checks load their kernels) and the estimate
-    (the main thread), while the machine's other core waited for the tiles but for
-    the decomposition (session 18: a child forked after the reading). Forked here,
-    while this process has one thread (no lock held by another thread can be
-    inherited), the child imports what reading and decomposing need, reads, estimates
-    and decomposes on the other core, beside the driver's imports and the cluster's
-    start; the driver neither reads nor decomposes. The child's imports are made
-    twice (~0.6 s CPU, on the core that waited). Its output is the driver's own: the
-    same calls on the same file (:func:`read_source` hands the decomposition on
-    through :func:`~hammesh.parallel.run.offer_decomposition`); where it gives none
-    (bad input, a crash) the driver reads the domain itself and raises its error.
+    Why: up to the tiles' submission the driver is one interpreter whose threads take
+    turns for its lock: its imports and Dask's, then the mode's kernels loaded for the
+    workers to inherit and the cluster's start (the cluster's thread) beside reading
+    the domain (0.2-0.25 s CPU: the domain's checks load their kernels) and the
+    estimate (the main thread), while the machine's other core waited but for the
+    decomposition (session 18's child, forked after the reading). This child reads,
+    estimates and decomposes on the other core: the driver's thread neither reads nor
+    decomposes. (Forked at the command's very start instead, before any thread, it
+    made every import a second time: +1.3 s CPU, and under load, with no core
+    waiting, later tiles, session 19.) Its output is the driver's own: the same calls
+    on the same file (:func:`read_source` hands the decomposition on through
+    :func:`~hammesh.parallel.run.offer_decomposition`); where it gives none (bad
+    input, a crash) the driver reads the domain itself and raises its error.
     """
-    child = None
-    if PREPARE_IN_CHILD and EARLY_START and args.workers is not None and threading.active_count() == 1:
-        from hammesh.parallel.forked import Child
+    from hammesh.parallel.cluster import Starting
+    from hammesh.parallel.forked import Child, can_fork
 
+    child = None
+    if PREPARE_IN_CHILD and isinstance(started, Starting) and not started.started() and can_fork():
+        from hammesh.parallel.cluster import guard_forks
+        from hammesh.parallel.run import DECOMPOSE_MODULES
+
+        for name in DECOMPOSE_MODULES:  # (imported already by the driver's imports: nothing)
+            importlib.import_module(name)
+        guard_forks()
         child = Child.start(prepare, args.input, args.strict, args.min_angle, args.max_area, args.tiles,
-                            args.workers)
+                            started.n_workers)
     try:
         yield child
     finally:
@@ -221,12 +232,12 @@ def run_parallel(args: argparse.Namespace) -> int:
     if cluster.SINGLE_ARENA and args.workers is not None:
         cluster.single_arena()  # (before the cluster's thread: its forked workers inherit it)
     with contextlib.ExitStack() as stack:
-        child = stack.enter_context(prepare_beside(args))  # (before the cluster's thread: one thread here)
         ready = threading.Event()
         if not START_BEFORE_IMPORTS:
             import_driver_modules()
         started = stack.enter_context(early_cluster(args, ready))
         import_driver_modules()  # (imported already: nothing)
+        child = stack.enter_context(prepare_beside(args, started))  # (before the cluster may fork: not in numba)
         ready.set()
         return _run(args, started, stack, child)
 

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+from concurrent.futures import Future
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ import hammesh
 from hammesh.cli import main
 from hammesh.errors import FileFormatError
 from hammesh.parallel import command, forked, run
+from hammesh.parallel.cluster import Starting
 from hammesh.parallel.tiles import decompose
 
 DEMO = Path(hammesh.__file__).parent / "data" / "demo.poly"
@@ -40,21 +42,22 @@ def _same_decomposition(a, b) -> None:
         assert np.array_equal(s.vertex_ids, t.vertex_ids) and s.estimate == t.estimate
 
 
-@pytest.fixture
-def one_thread(monkeypatch):
-    """The command's process as it starts (one thread; pytest-xdist runs threads of its own)."""
-    monkeypatch.setattr(command.threading, "active_count", lambda: 1)
+class _Booting(Starting):
+    """A local cluster's handle whose start never ends (only ``started`` and ``n_workers`` are asked)."""
+
+    def __init__(self, n: int = 2) -> None:
+        super().__init__(Future(), n)
 
 
 @needs_fork
 @pytest.mark.parametrize("tiles", [None, 3])
-def test_the_child_reads_and_decomposes_as_the_driver_would(one_thread, monkeypatch, tiles):
+def test_the_child_reads_and_decomposes_as_the_driver_would(monkeypatch, tiles):
     """The domain and decomposition from the child are the driver's own (the same
     calls: default tiles for 2 workers, or --tiles), made in another process; the
     tiles' run takes the offered decomposition instead of decomposing again."""
     args = _args(tiles=tiles)
     here = hammesh.read_domain(DEMO)
-    with command.prepare_beside(args) as child:
+    with command.prepare_beside(args, _Booting()) as child:
         assert child is not None
         domain = command.read_source(args, child)
     assert np.array_equal(domain.vertices, here.vertices) and np.array_equal(domain.segments, here.segments)
@@ -82,36 +85,27 @@ def test_an_offer_is_taken_only_for_its_own_domain_and_keywords(monkeypatch):
 
 
 @needs_fork
-def test_bad_input_read_in_the_child_is_raised_by_the_driver_itself(one_thread, tmp_path):
+def test_bad_input_read_in_the_child_is_raised_by_the_driver_itself(tmp_path):
     bad = tmp_path / "bad.poly"
     bad.write_text("4 2 0 0\n1 0 0\n2 1 x\n")
     args = _args(bad)
-    with command.prepare_beside(args) as child:
+    with command.prepare_beside(args, _Booting()) as child:
         assert child is not None
         with pytest.raises(FileFormatError, match="bad.poly"):
             command.read_source(args, child)
 
 
-def test_no_child_beside_another_thread_nor_without_a_local_cluster():
-    """A fork beside another thread could inherit a lock it holds (a module's import):
-    the child is made only while the process has one thread, and only for a local
-    cluster (``--workers``: its worker count sets the default tiles)."""
-    stop = threading.Event()
-    t = threading.Thread(target=stop.wait)
-    t.start()
-    try:
-        with command.prepare_beside(_args()) as child:
+def test_no_child_without_a_local_cluster_starting_or_with_the_switch_off(monkeypatch):
+    """Only for a local cluster still starting in this process (its worker count sets
+    the default tiles; a cluster given by ``--scheduler`` or already up: the driver
+    reads the domain itself)."""
+    done = Future()
+    done.set_result(None)
+    for started in (None, run.LocalRunner(), Starting(done, 2)):
+        with command.prepare_beside(_args(), started) as child:
             assert child is None
-    finally:
-        stop.set()
-        t.join()
-
-
-def test_no_child_without_workers_or_with_the_switch_off(one_thread, monkeypatch):
-    with command.prepare_beside(_args(workers=None)) as child:
-        assert child is None
     monkeypatch.setattr(command, "PREPARE_IN_CHILD", False)
-    with command.prepare_beside(_args()) as child:
+    with command.prepare_beside(_args(), _Booting()) as child:
         assert child is None
 
 
