@@ -236,27 +236,14 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
 KERNELS_BEFORE_FORK = True
 
 
-_loaded_modes: set = set()  # (the modes load_worker_kernels loaded here; forked workers inherit it)
-
-
 def load_worker_kernels(mode: str) -> None:
     """Load the compiled kernels a tile's task runs (``hamiltonian()``'s of ``mode``,
-    the lattice's) into this process; nothing the second time.
-
-    ``hamiltonian()`` of the lattice's own warm-up mesh
-    (:func:`~hammesh.parallel.tile_mesh.load_tile_kernels`), not
-    :func:`hammesh.postprocess.load_kernels`: that one makes its mesh from a
-    :class:`~hammesh.domain.Domain`, whose checks load kernels no tile runs (0.2-0.3 s
-    CPU of the driver's serial start, session 19); the few kernels only big outputs
-    take load in each worker's first tile that takes them (~0.08 s CPU).
-    """
-    if mode in _loaded_modes:
-        return
+    the lattice's) into this process."""
     from hammesh.parallel.tile_mesh import load_tile_kernels
-    from hammesh.postprocess import hamiltonian
+    from hammesh.postprocess import load_kernels
 
-    hamiltonian(load_tile_kernels(), mode=mode)  # (the lattice's kernels too: each worker loaded them in its first tile)
-    _loaded_modes.add(mode)
+    load_kernels(mode)
+    load_tile_kernels()  # (the lattice's: each worker loaded them in its first tile, ~0.25 s CPU)
 
 
 #: when fewer tiles are left running than a local cluster has workers, the workers'
@@ -321,8 +308,7 @@ def pause_gc() -> None:
     (session 19); the driver's start is serial up to the tiles' submission. The
     processes forked meanwhile inherit the pause: the workers end it in
     :func:`worker_setup`, the decomposition's child exits within its task.
-    (Python's own advice for a long-lived process's start: ``gc.disable`` there,
-    ``gc.freeze`` after it; the ``gc`` module's documentation.)
+    (The ``gc`` module's documentation advises ``gc.freeze`` after such a start.)
     """
     global _gc_paused
     import gc

@@ -14,7 +14,7 @@ from hammesh import params
 from hammesh.errors import InvalidOptionError
 
 __all__ = ["run_parallel", "check_options", "freeze_at_exit", "early_cluster", "import_driver_modules", "DRIVER_MODULES",
-           "EARLY_START", "START_BEFORE_IMPORTS", "prepare", "prepare_beside", "read_source", "PREPARE_IN_CHILD"]
+           "EARLY_START", "START_BEFORE_IMPORTS"]
 
 #: ``--workers N`` starts its local cluster before the domain is read (in a thread of
 #: its own: importing Dask, forking the workers), not after; False: after (the order
@@ -24,10 +24,6 @@ EARLY_START = True
 #: meanwhile and forks once they are done); False: after them (session 12's order,
 #: kept for the A/B in ``benchmarks/bench_scale.py --imports-ab``)
 START_BEFORE_IMPORTS = True
-#: ``--workers N`` (a local cluster) reads the domain, estimates it and decomposes it in
-#: a child forked once the driver's imports are done (:func:`prepare_beside`); False:
-#: the driver reads it and decomposes it beside the cluster's start (session 18)
-PREPARE_IN_CHILD = True
 
 _freezing = False
 
@@ -94,88 +90,6 @@ def early_cluster(args: argparse.Namespace, ready: threading.Event | None = None
         yield runner
 
 
-def prepare(path, strict: bool, min_angle: float | None, max_area: float, tiles: int | None, workers: int):
-    """``(domain, decomposition)``: what the parallel path reads and decomposes first
-    (``load_input``, the estimate, the default tiles for ``workers``, the
-    decomposition: the calls the driver makes, in that order, with the same values),
-    or None for an input that is not a domain."""
-    from hammesh.cli.pipeline import load_input
-    from hammesh.domain import Domain
-    from hammesh.parallel.run import decompose_estimate, default_tiles
-    from hammesh.parallel.tiles import decompose
-
-    source = load_input(path, strict=strict)
-    if not isinstance(source, Domain):
-        return None
-    if tiles is None:
-        tiles = default_tiles(decompose_estimate(source, min_angle, max_area), workers)
-    return source, decompose(source, min_angle=min_angle, max_area=max_area, n_tiles=tiles)
-
-
-@contextlib.contextmanager
-def prepare_beside(args: argparse.Namespace, started):
-    """A :class:`~hammesh.parallel.forked.Child` running :func:`prepare` for ``--workers
-    N``, forked here, or None (:data:`PREPARE_IN_CHILD` off, no local cluster starting
-    in this process's background: ``started`` is not a
-    :class:`~hammesh.parallel.cluster.Starting` handle still starting, no fork here).
-    Killed on the way out unless :func:`read_source` took its result. Called once the
-    driver's imports are done (:func:`import_driver_modules`): reading, estimating and
-    decomposing then import nothing but numba's own, under its compiler lock, which
-    the fork holds (``tests/parallel/test_startup.py``), so the child waits on no
-    module lock the cluster's thread (importing Dask) may hold.
-
-    Why: up to the tiles' submission the driver is one interpreter whose threads take
-    turns for its lock: its imports and Dask's, then the mode's kernels loaded for the
-    workers to inherit and the cluster's start (the cluster's thread) beside reading
-    the domain (0.2-0.25 s CPU: the domain's checks load their kernels) and the
-    estimate (the main thread), while the machine's other core waited but for the
-    decomposition (session 18's child, forked after the reading). This child reads,
-    estimates and decomposes on the other core: the driver's thread neither reads nor
-    decomposes. (Forked at the command's very start instead, before any thread, it
-    made every import a second time: +1.3 s CPU, and under load, with no core
-    waiting, later tiles, session 19.) Its output is the driver's own: the same calls
-    on the same file (:func:`read_source` hands the decomposition on through
-    :func:`~hammesh.parallel.run.offer_decomposition`); where it gives none (bad
-    input, a crash) the driver reads the domain itself and raises its error.
-    """
-    from hammesh.parallel.cluster import Starting
-    from hammesh.parallel.forked import Child, can_fork
-
-    child = None
-    if PREPARE_IN_CHILD and isinstance(started, Starting) and not started.started() and can_fork():
-        from hammesh.parallel.cluster import guard_forks
-        from hammesh.parallel.run import DECOMPOSE_MODULES
-
-        for name in DECOMPOSE_MODULES:  # (imported already by the driver's imports: nothing)
-            importlib.import_module(name)
-        guard_forks()
-        child = Child.start(prepare, args.input, args.strict, args.min_angle, args.max_area, args.tiles,
-                            started.n_workers)
-    try:
-        yield child
-    finally:
-        if child is not None:
-            child.close()
-
-
-def read_source(args: argparse.Namespace, child):
-    """The input (``load_input``): the domain :func:`prepare_beside`'s child read,
-    its decomposition offered to the tiles' run, or read here (no child, or no result
-    from it: this process then meets the input's error first hand)."""
-    from hammesh.cli.pipeline import load_input
-
-    if child is not None:
-        ok, made = child.result()
-        if ok and made is not None:
-            from hammesh.parallel.run import offer_decomposition
-
-            domain, decomposition = made
-            offer_decomposition(domain, decomposition, min_angle=args.min_angle, max_area=args.max_area,
-                                n_tiles=decomposition.n_tiles)
-            return domain
-    return load_input(args.input, strict=args.strict)
-
-
 def check_options(args: argparse.Namespace) -> None:
     """Refuse the options the parallel path cannot run with: checks that import no
     library module (made before the local cluster starts)."""
@@ -240,15 +154,14 @@ def run_parallel(args: argparse.Namespace) -> int:
             import_driver_modules()
         started = stack.enter_context(early_cluster(args, ready))
         import_driver_modules()  # (imported already: nothing)
-        child = stack.enter_context(prepare_beside(args, started))  # (before the cluster may fork: not in numba)
         ready.set()
-        return _run(args, started, stack, child)
+        return _run(args, started, stack)
 
 
-def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack, child=None) -> int:
+def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack) -> int:
     """:func:`run_parallel` once the cluster is starting; ``stack`` closes it."""
     from hammesh.cli.mesh import spanning_tree
-    from hammesh.cli.pipeline import Outputs
+    from hammesh.cli.pipeline import Outputs, load_input
     from hammesh.domain import Domain
 
     tree = spanning_tree(args)  # (as the serial path: fishbone with --parts unless --tree)
@@ -262,7 +175,7 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack, child=N
         from hammesh.parallel.partitioned import write_partitioned
 
         Outputs(report=args.report, inputs=(args.input,)).check()
-        source = read_source(args, child)
+        source = load_input(args.input, strict=args.strict)
         if not isinstance(source, Domain):
             raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
         rep = write_partitioned(source, args.output, min_angle=args.min_angle, max_area=args.max_area,
@@ -299,7 +212,7 @@ def _run(args: argparse.Namespace, started, stack: contextlib.ExitStack, child=N
     outputs = Outputs(mesh=args.output, report=args.report, inputs=(args.input,))
     outputs.check()
     runner, _ = stack.enter_context(runner_for(scheduler=args.scheduler))
-    source = read_source(args, child)
+    source = load_input(args.input, strict=args.strict)
     if not isinstance(source, Domain):
         raise InvalidOptionError(f"{args.input}: parallel meshing takes a domain")
     client = started if started is not None else None if args.scheduler is None else runner

@@ -16,7 +16,7 @@ import signal
 import sys
 from typing import Any, Callable
 
-__all__ = ["in_child", "can_fork", "Child"]
+__all__ = ["in_child", "can_fork"]
 
 
 def can_fork() -> bool:
@@ -41,86 +41,45 @@ def in_child(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[bool, A
     process's buffers. An exception in this process while it waits (``Terminated``
     on SIGTERM, Ctrl-C) kills and reaps the child before it propagates.
     """
-    child = Child.start(fn, *args, **kwargs)
-    if child is None:
+    if not can_fork():
         return False, None
+    r, w = os.pipe()
     try:
-        return child.result()
-    finally:
-        child.close()
-
-
-class Child:
-    """``fn(*args, **kwargs)`` running in a forked child of this process from
-    :meth:`start` on, while this process goes on; :meth:`result` waits for it (as
-    :func:`in_child` does), :meth:`close` kills and reaps a child whose result nobody
-    asked for (an error of the caller meanwhile)."""
-
-    def __init__(self, pid: int, fd: int) -> None:
-        self._pid, self._fd = pid, fd
-        self._outcome: tuple[bool, Any] | None = None
-
-    @classmethod
-    def start(cls, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> "Child | None":
-        """Fork the child (None: no fork here, or the fork failed)."""
-        if not can_fork():
-            return None
-        r, w = os.pipe()
-        try:
-            pid = os.fork()
-        except OSError:
-            os.close(r)
-            os.close(w)
-            return None
-        if pid == 0:  # the child
-            code = 1
-            try:
-                os.close(r)
-                signal.signal(signal.SIGINT, signal.SIG_DFL)  # (the parent handles the user's Ctrl-C)
-                data = pickle.dumps(fn(*args, **kwargs), protocol=pickle.HIGHEST_PROTOCOL)
-                with os.fdopen(w, "wb") as f:  # (a parent gone: EPIPE, and this child ends)
-                    f.write(data)
-                code = 0
-            except BaseException:  # noqa: BLE001 - the parent runs fn itself and sees the error
-                pass
-            finally:
-                os._exit(code)
+        pid = os.fork()
+    except OSError:
+        os.close(r)
         os.close(w)
-        return cls(pid, r)
-
-    def result(self) -> tuple[bool, Any]:
-        """``(True, value)``, or ``(False, None)`` when the child gave none (as :func:`in_child`)."""
-        if self._outcome is not None:
-            return self._outcome
-        done = False
+        return False, None
+    if pid == 0:  # the child
+        code = 1
         try:
-            with os.fdopen(self._fd, "rb") as f:
-                self._fd = -1
-                data = f.read()  # (until the child closes its end: done or dead; the GIL is released)
-            _, status = os.waitpid(self._pid, 0)
-            done = True
+            os.close(r)
+            signal.signal(signal.SIGINT, signal.SIG_DFL)  # (the parent handles the user's Ctrl-C)
+            data = pickle.dumps(fn(*args, **kwargs), protocol=pickle.HIGHEST_PROTOCOL)
+            with os.fdopen(w, "wb") as f:
+                f.write(data)
+            code = 0
+        except BaseException:  # noqa: BLE001 - the parent runs fn itself and sees the error
+            pass
         finally:
-            if not done:
-                self.close()
-        self._pid = 0
-        self._outcome = (False, None)
-        if os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0 and data:
+            os._exit(code)
+    os.close(w)
+    done = False
+    try:
+        with os.fdopen(r, "rb") as f:
+            data = f.read()  # (until the child closes its end: done or dead; the GIL is released)
+        _, status = os.waitpid(pid, 0)
+        done = True
+    finally:
+        if not done:
             try:
-                self._outcome = (True, pickle.loads(data))
-            except Exception:  # noqa: BLE001 - (the caller runs fn itself)
-                pass
-        return self._outcome
-
-    def close(self) -> None:
-        """Kill and reap the child if it is still there (nothing once :meth:`result` returned)."""
-        if self._fd >= 0:
-            os.close(self._fd)
-            self._fd = -1
-        if self._pid:
-            try:
-                os.kill(self._pid, signal.SIGKILL)
-                os.waitpid(self._pid, 0)
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
             except OSError:
                 pass
-            self._pid = 0
-            self._outcome = (False, None)
+    if not (os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0) or not data:
+        return False, None
+    try:
+        return True, pickle.loads(data)
+    except Exception:  # noqa: BLE001 - (the caller runs fn itself)
+        return False, None

@@ -30,7 +30,7 @@ from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split
 from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
-           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start", "decompose_beside", "offer_decomposition", "DECOMPOSE_IN_CHILD", "DECOMPOSE_MODULES",
+           "outcome_hamiltonian", "parallel_hamiltonian", "default_tiles", "TRIANGLES_PER_TILE", "progress_bar", "since_start", "decompose_beside", "DECOMPOSE_IN_CHILD", "DECOMPOSE_MODULES",
            "register_sizeof", "BALANCE_TILES", "MIN_BALANCED_TILE", "MORE_BALANCE_TILES", "MIN_THIRD_TILE",
            "MOST_BALANCE_TILES", "MIN_FOURTH_TILE",
            "not_carried", "SUMMARIES_WITH_TILES", "task_clock", "gather_widening"]
@@ -472,18 +472,6 @@ DECOMPOSE_MODULES = ("scipy.spatial", "triangle", "hammesh.parallel.guard", "ham
                      "hammesh.meshing.isolate")
 
 
-_offered: list = []  # (at most one: [(domain, decompose's keywords, its decomposition)])
-
-
-def offer_decomposition(domain: Domain, decomposition: Decomposition, **kw) -> None:
-    """Hand the next :func:`decompose_beside` of this very ``domain`` object with these
-    keywords (``min_angle``, ``max_area``, ``n_tiles``) its decomposition, made already
-    (``hammesh mesh --workers``: in a child forked at the command's start, which read
-    the domain too, :func:`hammesh.parallel.command.prepare_beside`). Used once; a
-    call with another domain or other keywords drops it and decomposes."""
-    _offered[:] = [(domain, dict(kw), decomposition)]
-
-
 def decompose_beside(run, domain: Domain, **kw) -> Decomposition:
     """:func:`~hammesh.parallel.tiles.decompose` of ``domain``; in a forked child
     (:func:`hammesh.parallel.forked.in_child`) while ``run`` is a local cluster still
@@ -500,9 +488,6 @@ def decompose_beside(run, domain: Domain, **kw) -> Decomposition:
     from hammesh.parallel.cluster import Starting, guard_forks
     from hammesh.parallel.forked import can_fork, in_child
 
-    offered = _offered.pop() if _offered else None
-    if offered is not None and offered[0] is domain and offered[1] == kw:
-        return offered[2]
     if DECOMPOSE_IN_CHILD and isinstance(run, Starting) and not run.started() and can_fork():
         import importlib
 
@@ -706,9 +691,9 @@ def decompose_estimate(domain: Domain, min_angle, max_area) -> float:
 
 
 def _warm(mode: str) -> None:
-    from hammesh.parallel.cluster import load_worker_kernels
+    from hammesh.postprocess import load_kernels
 
-    load_worker_kernels(mode)  # (nothing in a worker forked after the driver loaded them)
+    load_kernels(mode)
 
 
 def warm_workers(runner, mode: str = "sparse") -> list:

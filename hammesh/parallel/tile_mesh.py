@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -464,20 +464,6 @@ def _mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bo
     )
 
 
-@dataclass(frozen=True)
-class _Outline:
-    """A domain's fields as :func:`~hammesh.parallel.tiles.decompose` reads them, taken
-    as they are: the unit square of :func:`load_tile_kernels` (a
-    :class:`~hammesh.domain.Domain` checks its input, and those checks' kernels,
-    ~0.2-0.3 s CPU to load, are none of a tile's)."""
-
-    vertices: np.ndarray = field(default_factory=lambda: np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float64))
-    segments: np.ndarray = field(default_factory=lambda: np.array([[0, 1], [1, 2], [2, 3], [3, 0]], np.int64))
-    segment_markers: np.ndarray = field(default_factory=lambda: np.ones(4, np.int64))
-    holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.float64))
-    regions: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), np.float64))
-
-
 def load_tile_kernels() -> Mesh:
     """Load (or, with a stale numba cache, compile) the compiled kernels of a tile's
     mesh with its lattice into this process: :func:`mesh_tile` of a small square
@@ -488,16 +474,15 @@ def load_tile_kernels() -> Mesh:
     the lattice's kernels were loaded by each worker in its first tile, inside the
     tile's measured mesh step, and compiled there by every worker at once after an
     edit or an install had made numba's cache stale. Loaded in the driver before the
-    fork, the workers start with them. The square is decomposed as it is, not made a
-    :class:`~hammesh.domain.Domain` (:class:`_Outline`): the driver loads the kernels
-    on its serial start, and the domain's checks are not a tile's (session 19).
+    fork, the workers start with them.
     """
+    from hammesh.domain import Domain
     from hammesh.parallel.tiles import decompose
 
     from hammesh.parallel._kernels import label_pieces_into
 
     area = 1e-3
-    d = decompose(_Outline(), min_angle=30, max_area=area, n_tiles=1)
+    d = decompose(Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]]), min_angle=30, max_area=area, n_tiles=1)
     m = mesh_tile(d.tiles[0], 30, area)
     # (the regions' flood fill, which a tile of one region does not run)
     label = np.empty(m.n_triangles, np.int64)
