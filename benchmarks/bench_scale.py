@@ -148,7 +148,7 @@ def cache_bytecode(out_dir: str | None, modes: list[str], python: str | None = N
         try:
             subprocess.run([python or sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", "1e-3", "--mode", mode,
                             "--workers", "2", "--partitioned", "-o", str(Path(tmp) / "out")],
-                           capture_output=True, text=True, check=True, env=env)
+                           capture_output=True, text=True, check=True, env=env, cwd=NEUTRAL_CWD)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
     return (f"bytecode: {'was cached' if cached else 'was NOT cached (imports compiled from source)'}; "
@@ -167,9 +167,16 @@ def max_area_for(triangles: float) -> float:
     return probe * est / triangles
 
 
+#: the measured processes' working directory: not a source tree (``python -c``/``-m``
+#: put it first on ``sys.path``, so a checkout there would shadow the installation
+#: measured: session 19's first A/B against main, run from this worktree, ran this
+#: tree's code on both sides)
+NEUTRAL_CWD = tempfile.gettempdir()
+
+
 def raw(area: float) -> dict:
     out = subprocess.run([sys.executable, "-c", RAW, str(DEMO), repr(area)], capture_output=True, text=True,
-                         check=True)
+                         check=True, cwd=NEUTRAL_CWD)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -223,7 +230,7 @@ def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str |
             cmd += ["--tiles", str(tiles)]
         load = os.getloadavg()[0]
         t, before = time.perf_counter(), os.times()
-        done = subprocess.run(cmd, capture_output=True, text=True)
+        done = subprocess.run(cmd, capture_output=True, text=True, cwd=NEUTRAL_CWD)
         sec, after = time.perf_counter() - t, os.times()
         if done.returncode != 0:
             raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}):\n{done.stderr[-2000:]}")
