@@ -77,6 +77,13 @@ Before measuring, every mode runs once small with ``PYTHONDONTWRITEBYTECODE`` un
 source (``--source-imports``: measure without it); the first line says whether the
 bytecode was cached before.
 
+``--vs-ab R --vs-python PY``: the whole command of this installation against another's
+(``PY``: e.g. ``/work/venvs/main/bin/python``, an editable install of ``main``), ``R``
+interleaved rounds per mode, a raw call per round, both installations' bytecode cached
+first: the submission, the driver's CPU, wall / raw per run and their medians.
+
+    python benchmarks/bench_scale.py --sizes 6e6 --workers 2 --modes sparse,incircle --vs-ab 3 --vs-python /work/venvs/main/bin/python
+
 ``--ab R``: the whole command against one raw call, ``R`` rounds per mode of fresh
 processes alternating session 10's switches on / off (the early cluster start and
 the band tiles; the import changes cannot be switched off), after one uncounted 0.2M
@@ -118,7 +125,7 @@ print(json.dumps({"seconds": sec, "cpu_seconds": cpu, "triangles": int(len(out["
 """
 
 
-def cache_bytecode(out_dir: str | None, modes: list[str]) -> str:
+def cache_bytecode(out_dir: str | None, modes: list[str], python: str | None = None) -> str:
     """Let Python cache the bytecode of every module the command imports (driver and
     workers), by one small run per mode with ``PYTHONDONTWRITEBYTECODE`` unset; what
     it says about the cache before.
@@ -128,7 +135,8 @@ def cache_bytecode(out_dir: str | None, modes: list[str]) -> str:
     compiles numpy, numba, scipy, Dask and hammesh from source: measured 1.9 s of a
     3.1 s driver start at 6M. ``pip install`` compiles at install time, so a user's
     command does not pay it, and the raw call's imports are not timed at all.
-    ``--source-imports`` measures without this step.
+    ``--source-imports`` measures without this step. ``python``: another interpreter
+    (``--vs-python``: its own installation's modules; "was cached" then speaks of this one's).
     """
     import importlib.util
 
@@ -138,9 +146,9 @@ def cache_bytecode(out_dir: str | None, modes: list[str]) -> str:
     for mode in modes:
         tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
         try:
-            subprocess.run([sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", "1e-3", "--mode", mode,
+            subprocess.run([python or sys.executable, "-m", "hammesh", "mesh", str(DEMO), "-q", "30", "-a", "1e-3", "--mode", mode,
                             "--workers", "2", "--partitioned", "-o", str(Path(tmp) / "out")],
-                           capture_output=True, text=True, check=True, env=env)
+                           capture_output=True, text=True, check=True, env=env, cwd=NEUTRAL_CWD)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
     return (f"bytecode: {'was cached' if cached else 'was NOT cached (imports compiled from source)'}; "
@@ -159,9 +167,16 @@ def max_area_for(triangles: float) -> float:
     return probe * est / triangles
 
 
+#: the measured processes' working directory: not a source tree (``python -c``/``-m``
+#: put it first on ``sys.path``, so a checkout there would shadow the installation
+#: measured: session 19's first A/B against main, run from this worktree, ran this
+#: tree's code on both sides)
+NEUTRAL_CWD = tempfile.gettempdir()
+
+
 def raw(area: float) -> dict:
     out = subprocess.run([sys.executable, "-c", RAW, str(DEMO), repr(area)], capture_output=True, text=True,
-                         check=True)
+                         check=True, cwd=NEUTRAL_CWD)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -201,13 +216,13 @@ IMPORTS_FIRST = ("import sys; import hammesh.parallel.command as c; c.START_BEFO
 
 def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str | None,
          early: bool | None = None, band: bool = True, start_first: bool | None = None,
-         switch: tuple[str, bool] | None = None) -> dict:
+         switch: tuple[str, bool] | None = None, python: str | None = None) -> dict:
     tmp = tempfile.mkdtemp(prefix="bench_scale.", dir=out_dir)
     try:
         rep = Path(tmp) / "report.json"
         head = ([sys.executable, "-c", CLUSTER_SWITCH, switch[0], str(int(switch[1]))] if switch is not None else
                 [sys.executable, "-c", IMPORTS_FIRST, str(int(start_first))] if start_first is not None else
-                [sys.executable, "-m", "hammesh"] if early is None else
+                [python or sys.executable, "-m", "hammesh"] if early is None else
                 [sys.executable, "-c", EARLY, str(int(early)), str(int(band))])
         cmd = [*head, "mesh", str(DEMO), "-q", "30", "-a", repr(area), "--mode", mode,
                "--workers", str(workers), "--partitioned", "-o", str(Path(tmp) / "out"), "--report", str(rep)]
@@ -215,7 +230,7 @@ def ours(area: float, workers: int, tiles: int | None, mode: str, out_dir: str |
             cmd += ["--tiles", str(tiles)]
         load = os.getloadavg()[0]
         t, before = time.perf_counter(), os.times()
-        done = subprocess.run(cmd, capture_output=True, text=True)
+        done = subprocess.run(cmd, capture_output=True, text=True, cwd=NEUTRAL_CWD)
         sec, after = time.perf_counter() - t, os.times()
         if done.returncode != 0:
             raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}):\n{done.stderr[-2000:]}")
@@ -343,7 +358,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--switch-ab", type=int, metavar="ROUNDS",
                     help="A/B of the whole command, a boolean of hammesh.parallel.cluster (--switch NAME) on / off")
     ap.add_argument("--switch", default="NO_HUGEPAGE_ADVICE", help="with --switch-ab: the switch's name")
+    ap.add_argument("--vs-ab", type=int, metavar="ROUNDS",
+                    help="A/B of the whole command, this installation against --vs-python's (e.g. main's venv)")
+    ap.add_argument("--vs-python", help="with --vs-ab: the other installation's python")
     a = ap.parse_args(argv)
+    if a.vs_ab:
+        return vs_ab(a)
     if a.switch_ab:
         return switch_ab(a)
     if a.tile_ab:
@@ -575,10 +595,11 @@ def _worker_busy(steps: list, workers: int) -> str:
     return " / ".join(f"{b:.1f}" for b in busy)
 
 
-def _interleaved_ab(rounds: int, name: str, run) -> int:
+def _interleaved_ab(rounds: int, name: str, run) -> dict:
     """Fresh processes ``run(True)`` / ``run(False)`` interleaved (the order swapped every
     round); per run the seconds from the process's start to the tiles' submission, the
-    driver's CPU to it, the wall time and the whole command's CPU, then the medians."""
+    driver's CPU to it, the wall time and the whole command's CPU, then the medians;
+    returns the reports per arm (``{True: [...], False: [...]}``)."""
     got: dict = {True: [], False: []}
     for r in range(rounds):
         for flag in ((True, False) if r % 2 == 0 else (False, True)):
@@ -600,7 +621,7 @@ def _interleaved_ab(rounds: int, name: str, run) -> int:
         wall = statistics.median(o["wall"] for o in got[flag])
         cpu = statistics.median(o["tree_cpu"] for o in got[flag])
         print(f"{name}={int(flag)}: submitted median {sub:.2f} s, wall median {wall:.2f}, whole CPU median {cpu:.2f}")
-    return 0
+    return got
 
 
 def imports_ab(a) -> int:
@@ -610,8 +631,9 @@ def imports_ab(a) -> int:
     ``python -c``, so neither ends by ``cli.fast_exit``)."""
     area = max_area_for(float(a.sizes.split(",")[0]))
     w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
-    return _interleaved_ab(a.imports_ab, "start_first",
-                           lambda first: ours(area, w, a.tiles, mode, a.out_dir, start_first=first))
+    _interleaved_ab(a.imports_ab, "start_first",
+                    lambda first: ours(area, w, a.tiles, mode, a.out_dir, start_first=first))
+    return 0
 
 
 def switch_ab(a) -> int:
@@ -627,12 +649,48 @@ def switch_ab(a) -> int:
     return 0
 
 
+def vs_ab(a) -> int:
+    """``--vs-ab R --vs-python PY``: the whole command of this installation (``this=1``)
+    against another's (``this=0``, e.g. ``/work/venvs/main/bin/python``: its editable
+    tree), interleaved fresh processes per mode, both run as ``python -m hammesh`` (so
+    both end by ``cli.fast_exit``); a raw call per round and the wall / raw ratios.
+
+    Both installations' bytecode is cached first (:func:`cache_bytecode`): with
+    ``PYTHONDONTWRITEBYTECODE`` set, the modules a branch edited compile from source in
+    every process (session 19: that alone put a branch's start ~0.1 s behind main's).
+    """
+    if not a.vs_python:
+        raise SystemExit("--vs-ab needs --vs-python PYTHON (the other installation's interpreter)")
+    area, w = max_area_for(float(a.sizes.split(",")[0])), int(a.workers.split(",")[0])
+    if not a.source_imports:
+        print(cache_bytecode(a.out_dir, a.modes.split(",")))
+        cache_bytecode(a.out_dir, a.modes.split(","), a.vs_python)
+    for mode in a.modes.split(","):
+        raws: list = []
+
+        def run(this: bool, mode=mode) -> dict:
+            if this:  # (a raw call each round, before its pair)
+                raws.append(raw(area))
+            o = ours(area, w, a.tiles, mode, a.out_dir, python=None if this else a.vs_python)
+            o["ratio"] = o["wall"] / raws[-1]["seconds"]
+            return o
+
+        print(f"mode {mode}: this installation (this=1) against {a.vs_python} (this=0)")
+        got = _interleaved_ab(a.vs_ab, "this", run)
+        ratios = {k: [o["ratio"] for o in v] for k, v in got.items()}
+        print(f"  raw calls: {', '.join('%.2f' % r_['seconds'] for r_ in raws)} s wall; wall / raw (the round's "
+              f"raw call): this=1 {', '.join('%.3f' % x for x in ratios[True])} (median "
+              f"{statistics.median(ratios[True]):.3f}), this=0 {', '.join('%.3f' % x for x in ratios[False])} "
+              f"(median {statistics.median(ratios[False]):.3f})")
+    return 0
+
+
 def startup_ab(a) -> int:
     """``--startup``: interleaved fresh processes, early cluster start on / off."""
     area = max_area_for(float(a.sizes.split(",")[0]))
     w, mode = int(a.workers.split(",")[0]), a.modes.split(",")[0]
-    return _interleaved_ab(a.startup, "early",
-                           lambda early: ours(area, w, a.tiles, mode, a.out_dir, early=early, band=True))
+    _interleaved_ab(a.startup, "early", lambda early: ours(area, w, a.tiles, mode, a.out_dir, early=early, band=True))
+    return 0
 
 
 if __name__ == "__main__":

@@ -145,7 +145,10 @@ def run_parallel(args: argparse.Namespace) -> int:
 
     if cluster.SINGLE_ARENA and args.workers is not None:
         cluster.single_arena()  # (before the cluster's thread: its forked workers inherit it)
+    if cluster.PAUSE_GC and args.workers is not None:
+        cluster.pause_gc()  # (until the tiles are submitted: run.run_tiles)
     with contextlib.ExitStack() as stack:
+        stack.callback(cluster.resume_gc)  # (an error before the submission)
         ready = threading.Event()
         if not START_BEFORE_IMPORTS:
             import_driver_modules()

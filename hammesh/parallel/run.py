@@ -381,7 +381,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     meshed by Triangle alone, without the interior lattice (docs/scale.md); ``tree``:
     as :func:`hammesh.hamiltonian` takes it, in every tile.
     """
-    from hammesh.parallel.cluster import Starting
+    from hammesh.parallel.cluster import Starting, resume_gc
     from hammesh.postprocess.incircle import TREES
 
     params.choice("tree", tree, TREES)  # (here, not in every tile's task)
@@ -413,6 +413,7 @@ def run_tiles(domain: Domain, *, min_angle: float | None, max_area: float, tiles
     # holds the outcome as soon as the tile is done, not in a round after the last one
     summaries = [run.submit(_small, h, pure=False) for h in handles] if SUMMARIES_WITH_TILES else None
     s1, p1 = since_start(), time.process_time()
+    resume_gc()  # (the command's serial start is over: cluster.pause_gc)
     raises: list = []
     if summaries is None:
         wait_for(run, handles)  # done: their holders are known

@@ -38,7 +38,10 @@ def test_bench_scale_runs(extra, needle):
     (["--tile-ab", "1"], ["mesh: band", "sparse: band"]),
     (["--order-ab", "1"], ["mesh: order rows", "sparse: order rows"]),
     (["--tiles-ab", "1", "--workers", "2"], ["sparse default tiles: wall / raw median",
-                                             "sparse one per worker: wall / raw median"])])
+                                             "sparse one per worker: wall / raw median"]),
+    (["--switch-ab", "1", "--switch", "PAUSE_GC"], ["PAUSE_GC=1: submitted median", "PAUSE_GC=0: submitted median"]),
+    (["--vs-ab", "1", "--vs-python", sys.executable], ["this=1: submitted median", "this=0: submitted median",
+                                                       "wall / raw (the round's raw call): this=1"])])
 def test_bench_scale_ab_modes_run(extra, needles):
     """The A/B modes (session 10's switches on / off, session 12's tiles) keep running
     at a tiny size (without caching the bytecode first: ``--source-imports``)."""
@@ -48,3 +51,8 @@ def test_bench_scale_ab_modes_run(extra, needles):
     assert proc.returncode == 0, proc.stderr[-2000:]
     for needle in needles:
         assert needle in proc.stdout
+
+
+def test_bench_scale_vs_ab_needs_the_other_python():
+    proc = subprocess.run([sys.executable, str(BENCH), "--vs-ab", "1"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1 and "--vs-python" in proc.stderr

@@ -79,7 +79,10 @@ def test_bad_parallel_options_exit_2(tmp_path, capsys, argv, what):
 def test_local_dask_cluster_of_two_workers(tmp_path, capsys, run_cli):
     pytest.importorskip("distributed")
     out = tmp_path / "parts"
-    rc, _, err, left = run_cli(["mesh", DEMO, "-q", "30", "-a", "2e-3", "--workers", "2", "--partitioned", "-o", str(out)])
+    # (the suite's first local cluster may compile every kernel of a fresh numba cache:
+    # 2.4 min at load ~1, past 600 s at load ~10; conftest's WATCHDOG_S, 900, less a minute)
+    rc, _, err, left = run_cli(["mesh", DEMO, "-q", "30", "-a", "2e-3", "--workers", "2", "--partitioned", "-o", str(out)],
+                               timeout=840)
     assert rc == 0 and left == []
     assert err == ""  # no Dask chatter (port warnings, nanny logs) for the user
     assert main(["check", str(out / "mesh.pvtu")]) == 0

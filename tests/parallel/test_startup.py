@@ -254,9 +254,9 @@ def test_the_parallel_command_ends_its_process_fast_and_whole(tmp_path):
                         "--partitioned", "-o", str(out), "--report", str(rep)], capture_output=True, text=True,
                        timeout=600)
     assert p.returncode == 0 and p.stderr == "", p.stderr
-    lines = p.stdout.splitlines()  # (no note: the demo's vertex markers are carried since session 16)
-    assert len(lines) == 2 and lines[0].endswith("verified per tile and across separators")
-    assert lines[1].startswith("wrote index:")
+    lines = p.stdout.splitlines()  # (and the notes of what the pieces do not hold: the segments, until they do)
+    assert len(lines) >= 2 and lines[0].endswith("verified per tile and across separators")
+    assert lines[1].startswith("wrote index:") and all(x.startswith("note: ") for x in lines[2:]), lines
     assert json.loads(rep.read_text())["pieces"] >= 1
     assert main(["check", str(out / "mesh.pvtu")]) == 0
     left = [q.pid for q in psutil.process_iter(["cmdline"]) if str(out) in " ".join(q.info["cmdline"] or [])]
