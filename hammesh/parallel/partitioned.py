@@ -259,7 +259,7 @@ def _edge_entries(h, lay, args: tuple, lent_joins, lent: dict) -> tuple[np.ndarr
     backwards = corner != seg[:, 0]
     at = slot % 3
     placed = ~(moved & ~use_other)
-    keys, at, backwards = keys.astype(np.int64), at.astype(np.int64), backwards
+    keys, at = keys.astype(np.int64), at.astype(np.int64)
     extra_k, extra_at, extra_back, extra_mk = [], [], [], []
     gj = lay.point_ids[lay.join_triangles] if len(lay.join_triangles) else np.zeros((0, 3), np.int64)
 
