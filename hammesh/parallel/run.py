@@ -26,7 +26,7 @@ from hammesh.parallel.decoupled import (MAX_ROUNDS, bad_corner_vertices, coarse_
 from hammesh.parallel.joins import BorderRows, Plan, TilePiece, border_rows, finish_tile, plan_joins
 from hammesh.parallel.markers import input_vertex_markers, marked_inputs, point_markers
 from hammesh.parallel.tile_mesh import mesh_tile
-from hammesh.parallel.tiles import Decomposition, check_bounds, decompose, split_segments
+from hammesh.parallel.tiles import MIN_TILE_TRIANGLES, Decomposition, check_bounds, decompose, split_segments
 from hammesh.parallel.union import assemble, check_union
 
 __all__ = ["domain_marks", "LocalRunner", "Tiled", "TileOutcome", "tile_task", "run_tiles", "finish_args", "finish_outcome", "finish_all",
@@ -108,7 +108,11 @@ def default_tiles(estimate: float, workers: int) -> int:
         per = max(per, MORE_BALANCE_TILES)
     if w > 1 and estimate >= MOST_BALANCE_TILES * w * MIN_FOURTH_TILE:
         per = max(per, MOST_BALANCE_TILES)
-    return w * per
+    # never more than the domain holds (``decompose`` refuses tiles of fewer than
+    # MIN_TILE_TRIANGLES): a small domain with ``--workers 2`` was refused, exit 2, where
+    # the serial command meshes it (session 20: Triangle's ``A`` at -a 0.02, ~7 triangles);
+    # the estimate is ``decompose``'s own up to rounding, hence the margin
+    return max(1, min(w * per, int(estimate * (1.0 - 1e-9) // MIN_TILE_TRIANGLES)))
 
 
 @dataclass(frozen=True, eq=False)

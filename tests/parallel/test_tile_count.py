@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import hammesh
 from hammesh.errors import InvalidOptionError
@@ -35,3 +37,19 @@ def test_the_cli_says_it_in_one_line(tmp_path):
                         "2000", "-o", str(out)], capture_output=True, text=True, timeout=300)
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "--tiles=2000" in p.stderr
     assert not out.exists()
+
+
+@settings(max_examples=25, deadline=None)
+@given(area_exp=st.floats(-3.5, 1.0), workers=st.integers(2, 64))
+def test_the_default_tile_count_is_one_the_domain_holds(area_exp: float, workers: int):
+    # ``--workers N`` without ``--tiles`` on a small domain: the default count is one
+    # ``decompose`` takes (it was refused, exit 2, session 20: Triangle's A at -a 0.02)
+    from hammesh.parallel.run import decompose_estimate, default_tiles
+
+    dom = hammesh.read_domain(DEMO)
+    area = 10.0 ** area_exp
+    est = decompose_estimate(dom, 30, area)
+    n = default_tiles(est, workers)
+    assert 1 <= n and (n == 1 or est / n >= MIN_TILE_TRIANGLES)
+    if n < 64:  # (the big counts are the balance tiles' business, tested elsewhere)
+        assert decompose(dom, min_angle=30, max_area=area, n_tiles=n).n_tiles == n
