@@ -114,6 +114,10 @@ class Mesh:
         (:func:`triangle_neighbors`).
     info : dict
         Provenance: backend, switches, meshing seconds (``quality_mesh`` fills it).
+        ``info["rows_local"] = True`` says the rows are already numbered so that
+        neighbours lie near each other in memory (``hammesh.parallel``'s lattice
+        tiles): sparse mode then skips its renumbering for locality
+        (:func:`hammesh.postprocess.sparse.renumbers`).
     vertex_markers : (n,) int64
         Boundary marker of each point (Triangle's ``pointmarkers``; zeros if unknown).
     attribute_names : tuple of str

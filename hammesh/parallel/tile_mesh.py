@@ -396,7 +396,10 @@ def mesh_band(tile: Tile, grid: LatticeGrid, min_angle: float | None, max_area: 
         attrs = np.concatenate([inside, tile.region_attribute[where][label]])[:, None]
     return Mesh(points=points, triangle_attributes=attrs, triangles=tri, segments=segs, segment_markers=marks,
                 neighbors=nbr, info={"backend": "triangle", "switches": tile_switches(min_angle, max_area),
-                                     "tile": tile.index, "lattice": "band"})
+                                     "tile": tile.index, "lattice": "band",
+                                     # (98 % lattice rows, strip by strip: sparse mode need
+                                     # not renumber them, ``sparse.renumbers``)
+                                     "rows_local": True})
 
 
 def mesh_tile(tile: Tile, min_angle: float | None, max_area: float, lattice: bool = True) -> Mesh:

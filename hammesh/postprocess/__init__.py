@@ -245,7 +245,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
             start_facts()
         # (Thm 2.4 needs no angle; sparse mode renumbers big meshes by the cells the
         # orientation pass finds: sparse.LOCAL_MIN_TRIANGLES)
-        local = mode == "sparse" and len(shape) == 2 and shape[0] >= sparse_module.LOCAL_MIN_TRIANGLES
+        local = mode == "sparse" and len(shape) == 2 and sparse_module.renumbers(
+            shape[0], np.shape(mesh.points)[1] if np.ndim(mesh.points) == 2 else 0, mesh.info)
         # (sparse mode matches a big mesh's half-edges once, in its renumbered order)
         clean, he, is_con = prepare_mesh(mesh, measure=mode != "incircle", cells=local, match=not local)
         if not mesh.info.get("backend"):  # (not Triangle's own mesh: see refuse_overlap)

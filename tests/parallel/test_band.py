@@ -77,6 +77,10 @@ def test_band_mesh_keeps_the_bounds_conforms_and_counts_as_triangles_own(a, n_ti
     for t in d.tiles:
         m, plain = _band_and_plain(t, a, monkeypatch)
         assert m.info.get("lattice") == "band" and plain.info.get("lattice") is None
+        # the rows are local (sparse mode skips its renumbering: ``sparse.renumbers``):
+        # neighbours near each other in memory, nine in ten within a tenth of the rows
+        gap = np.abs(m.neighbors - np.arange(m.n_triangles)[:, None])[m.neighbors >= 0]
+        assert m.info.get("rows_local") is True and np.percentile(gap, 90) <= 0.1 * m.n_triangles
         k = len(t.vertices)
         assert np.array_equal(m.points[:k], t.vertices)
         assert np.isin(np.arange(len(m.points)), m.triangles).all()  # every point used

@@ -634,3 +634,28 @@ def test_side_work_starts_once_as_the_plan_starts_when_pages_are_reserved(before
                              beside_cover=lambda: log.append("side"))
         assert [x for i, x in enumerate(log) if x not in log[:i]] == want, log
         assert log.count("side") == 1
+
+
+def test_rows_local_hint_skips_the_renumbering(monkeypatch) -> None:
+    """``info["rows_local"]`` (``hammesh.parallel``'s lattice tiles set it): sparse mode
+    does not renumber the rows however many they are, and the output is the one of a
+    mesh below ``LOCAL_MIN_TRIANGLES`` (same rows, same cycle), certified; without the
+    hint the same mesh is renumbered."""
+    from dataclasses import replace
+
+    from hammesh.postprocess import sparse
+
+    dom = _domain("loops")
+    area = 0.0005 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=area, isolate=False)
+    monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", 10**12)
+    plain = hammesh.hamiltonian(m)
+    monkeypatch.setattr(sparse, "LOCAL_MIN_TRIANGLES", 100)
+    renumbered = hammesh.hamiltonian(m)
+    hinted = hammesh.hamiltonian(replace(m, info={**m.info, "rows_local": True}))
+    assert "locality" in renumbered.report["step_seconds"]
+    assert "locality" not in hinted.report["step_seconds"] and hinted.report["verified"]
+    np.testing.assert_array_equal(hinted.triangles, plain.triangles)
+    np.testing.assert_array_equal(hinted.points, plain.points)
+    assert sparse.renumbers(10**6, 2, {}) and not sparse.renumbers(10**6, 2, {"rows_local": True})
+    assert not sparse.renumbers(10**6, 3, {}) and not sparse.renumbers(10, 2, {})
