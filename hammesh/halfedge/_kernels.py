@@ -32,6 +32,14 @@ from hammesh.prefetch import prefetch_row
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
+#: (the shared cache hint, ``hammesh.prefetch``; the name this module's kernels use)
+_prefetch_row = prefetch_row
+
+
+#: rows ahead whose points / neighbours' rows / old rows a pass over scattered reads
+#: asks for (:func:`_orient_ccw_into`, :func:`_twins_from_neighbors_into`, ...)
+PREFETCH_ROWS = 16
+
 __all__ = [
     "Oriented",
     "orient_ccw",
@@ -120,7 +128,9 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
     """Rows ``lo..hi``: flips, the first bad row, smallest sin^2, area; ``out`` (if not
     empty) gets the counter-clockwise rows; ``used`` empty: no angle, area or used;
     ``key`` (if not empty) each row's cell key (:func:`cell_key`), ``count`` their
-    histogram over this range."""
+    histogram over this range. The rows' points lie scattered (the input's numbering):
+    those of the row ``PREFETCH_ROWS`` on are asked for now (``hammesh.prefetch``; at
+    1.5 M triangles, one thread, 0.059 -> 0.044 s)."""
     write = out.shape[0] == tri.shape[0]
     measure = used.shape[0] == points.shape[0]
     keyed = key.shape[0] == tri.shape[0]
@@ -128,7 +138,13 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
     bad = -1
     best_s2 = np.inf
     total = 0.0
+    n = points.shape[0]
     for t in range(lo, hi):
+        if t + PREFETCH_ROWS < hi:
+            for k in range(3):
+                v = tri[t + PREFETCH_ROWS, k]
+                if v >= 0 and v < n:
+                    _prefetch_row(points, v)
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
@@ -185,14 +201,6 @@ def _area_sin2(points, p0, p1, p2):
     lb = bx * bx + by * by
     lc = cx * cx + cy * cy
     return cr, cr * cr / max(la * lb, max(lb * lc, lc * la))
-
-
-#: (the shared cache hint, ``hammesh.prefetch``; the name this module's kernels use)
-_prefetch_row = prefetch_row
-
-
-#: rows ahead whose neighbours' rows :func:`_twins_from_neighbors_into` prefetches
-PREFETCH_ROWS = 16
 
 
 def twins_from_neighbors(tri, nbr):

@@ -29,6 +29,7 @@ from numba import njit
 
 from hammesh import threads
 from hammesh.pages import fresh
+from hammesh.prefetch import prefetch_row
 from hammesh.threads import row_ranges, run_all
 
 from hammesh.postprocess._join_kernels import (
@@ -1026,16 +1027,31 @@ def _row_positions_into(rows, pos, lo, hi):
         pos[rows[i]] = i
 
 
+#: places ahead whose row :func:`_gather_rows_into` asks for (a cache hint)
+GATHER_AHEAD = 16
+
+
 @njit(cache=True, nogil=True)
 def _gather_rows_into(
     rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed, face_tw, amin,
     out2, parent2, partner2, kind2, pm, claim, con, pinned, lo, hi,
 ):
     """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place;
-    ``pinned`` empty: no pinned edges written)."""
+    ``pinned`` empty: no pinned edges written). The rows in cycle order jump about the
+    virtual rows: the row ``GATHER_AHEAD`` places on is asked for now (its triangle,
+    twins and angle, or its new row; ``hammesh.prefetch``): at 1.5 M triangles, one
+    thread, 0.057 -> 0.039 s, the same values (session 20)."""
     m = tri.shape[0]
     pin = pinned.shape[0] == claim.shape[0]
     for i in range(lo, hi):
+        if i + GATHER_AHEAD < hi:
+            y = rows[i + GATHER_AHEAD]
+            if y < m:
+                prefetch_row(tri, y)
+                prefetch_row(twin_in, 3 * y)
+                prefetch_row(amin, y)
+            else:
+                prefetch_row(out_new, y - m)
         x = rows[i]
         for j in range(3):
             h = 3 * x + j
