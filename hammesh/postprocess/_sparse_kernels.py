@@ -560,9 +560,11 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
+        by_key = packed >> ib  # (the keys in sorted order: the matching reads them in a row)
     else:
         srt = np.argsort(keys, kind="stable")
-    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt)
+        by_key = keys[srt]
+    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt)
     return tw_new, changed, face_tw, bad
 
 
@@ -574,16 +576,13 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
     ``packed`` empty where that needs more than 62 bits)."""
     m = tri.shape[0]
     k = out.shape[0]
-    n_ch = 0
-    for t in range(m):
-        if status[t] != PASS:
-            n_ch += 1
-    changed = np.empty(n_ch, np.int64)
+    changed = np.empty(m, np.int64)  # (one pass over the statuses: only the pages written are touched)
     n_ch = 0
     for t in range(m):
         if status[t] != PASS:
             changed[n_ch] = t
             n_ch += 1
+    changed = changed[:n_ch]
     face_tw = np.full(3 * n_ch, -1, np.int64)
     tw_new = np.empty(3 * k, np.int64)
     rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
@@ -623,16 +622,17 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
 
 
 @njit(cache=True, nogil=True)
-def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt):
+def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt):
     """:func:`new_row_twins`' second half: the half-edges ``rest`` in the order ``srt`` of
-    their ``keys``, paired where two share a key (``tw_new``, ``face_tw`` filled); returns
+    their keys (``by_key``: the keys in that order, read in a row rather than through
+    ``srt``), paired where two share a key (``tw_new``, ``face_tw`` filled); returns
     -1 or a virtual half-edge whose edge is used twice in one direction or by three rows."""
     m = tri.shape[0]
     n = rest.shape[0]
     i = 0
     while i < n:
         e = i + 1
-        while e < n and keys[srt[e]] == keys[srt[i]]:
+        while e < n and by_key[e] == by_key[i]:
             e += 1
         h = rest[srt[i]]
         if e - i == 1:
