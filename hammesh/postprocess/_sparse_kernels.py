@@ -576,13 +576,16 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
     ``packed`` empty where that needs more than 62 bits)."""
     m = tri.shape[0]
     k = out.shape[0]
-    changed = np.empty(m, np.int64)  # (one pass over the statuses: only the pages written are touched)
+    n_ch = 0
+    for t in range(m):
+        if status[t] != PASS:
+            n_ch += 1
+    changed = np.empty(n_ch, np.int64)
     n_ch = 0
     for t in range(m):
         if status[t] != PASS:
             changed[n_ch] = t
             n_ch += 1
-    changed = changed[:n_ch]
     face_tw = np.full(3 * n_ch, -1, np.int64)
     tw_new = np.empty(3 * k, np.int64)
     rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
