@@ -220,6 +220,36 @@ def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
     return run_all([partial(fill, lo, hi) for lo, hi in spans])
 
 
+#: tied keys beyond which :func:`stable_argsort` sorts again stably instead of fixing the ties
+STABLE_TIES_MAX = 256
+
+
+def stable_argsort(key: np.ndarray) -> np.ndarray:
+    """``np.argsort(key, kind="stable")`` of a float array, by numpy's faster unstable
+    sort: equal keys lie together after it, and each run of them put back in index
+    order is exactly the stable order (ties by index). ~0.6 x the time for ~120 k
+    keys (``_join_order``'s sort, twice a call: 6.4 -> ~4 ms each at 1.5 M
+    triangles, session 20). NaN keys, or more than ``STABLE_TIES_MAX`` tied places:
+    the stable sort itself."""
+    o = np.argsort(key)
+    if len(o) < 2:
+        return o
+    ks = key[o]
+    if np.isnan(ks[-1]):  # (NaN sorts last; NaNs never compare equal)
+        return np.argsort(key, kind="stable")
+    tie = np.flatnonzero(ks[1:] == ks[:-1])
+    if len(tie) > STABLE_TIES_MAX:
+        return np.argsort(key, kind="stable")
+    i = 0
+    while i < len(tie):  # each run of equal keys o[a:b], a = tie[i], in index order
+        a = b = int(tie[i])
+        while i < len(tie) and tie[i] == b:
+            b += 1
+            i += 1
+        o[a:b + 1] = np.sort(o[a:b + 1])
+    return o
+
+
 def _join_order(
     kind: np.ndarray, slack: np.ndarray, newmin: np.ndarray, pmin: np.ndarray, whole: np.ndarray,
     cls: np.ndarray | None = None, first: bool = False,
@@ -251,7 +281,7 @@ def _join_order(
         # each other keep the index order, where lexsort's three passes compared them
         # exactly: 0.6 x the time, session 19)
         key = (3 * tier + kk) * 8.0 - slack[idx]
-        return idx[np.argsort(key, kind="stable")]
+        return idx[stable_argsort(key)]
     if first:
         return idx[np.lexsort((-slack[idx], kk, tier, cls[idx]))]
     return idx[np.lexsort((-slack[idx], cls[idx], kk, tier))]
