@@ -780,6 +780,7 @@ def load_output_kernels() -> None:
     swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
                     none, none)
+    blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
     # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
     fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)
     map_through_into(r.copy(), r.copy(), 0, k)
@@ -1089,6 +1090,16 @@ def _gather_rows_into(
         if q >= 0 and amin[q] < a:
             a = amin[q]
         pm[i] = a
+
+
+@njit(cache=True, nogil=True)
+def blocked_rows_into(status, is_fan, cyc, out, lo, hi):
+    """Rows ``lo..hi`` no alternating cycle of the cover swaps may pass
+    (``sparse._alternating_merges``): in a step of the plan, a fan or uncovered. One
+    threaded pass instead of three numpy passes and their temporaries (5 ms at 1.5 M
+    on the main thread)."""
+    for t in range(lo, hi):
+        out[t] = status[t] != PASS or is_fan[t] or cyc[t] < 0
 
 
 @njit(cache=True, nogil=True)

@@ -940,7 +940,7 @@ def _ring_joins(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, o
     steps (:class:`PlanSteps`).
     """
     tasks = []  # (misses the targets, slack, t, u or -1)
-    taken = order[np.unique(join[steps_at.joined(join)])]
+    taken = order[steps_at.taken(join, len(order))]
     low = taken[slack[taken] < 0.0]
     t_of, u_of = cand[low] // 3, tw[cand[low]] // 3
     both = (cover.cycle[t_of] >= 0) & (cover.cycle[u_of] >= 0)
@@ -1403,6 +1403,14 @@ class PlanSteps(NamedTuple):
         """The half-edges still with a bridge, ascending (``np.flatnonzero(slot != PLAIN)``)."""
         return self.slots[slot[self.slots] != _k.PLAIN]
 
+    def taken(self, join: np.ndarray, n_cand: int) -> np.ndarray:
+        """The places in Kruskal's order of the joins still taken, ascending
+        (``np.unique(join[self.joined(join)])``, by a mask of the ``n_cand`` places
+        instead of a sort: ~27 k entries at 1.5 M, 1.5-3 ms -> ~0.3 ms)."""
+        is_taken = np.zeros(n_cand, np.bool_)
+        is_taken[join[self.joined(join)]] = True
+        return np.flatnonzero(is_taken)
+
 
 def _place_taken(
     score, order, join, cand, ckind, slack, newmin, newmax, point, global_lo: float, hi: float, con, tw, cycle, status,
@@ -1419,7 +1427,7 @@ def _place_taken(
     pair's ``status`` and the plan's ``counts`` follow a change of kind. Returns the
     number of joins improved. ``steps_at``: the plan's steps (:class:`PlanSteps`).
     """
-    taken = order[np.unique(join[steps_at.joined(join)])]
+    taken = order[steps_at.taken(join, len(order))]
     low = taken[(slack[taken] < 0.0) & ~con[cand[taken]]]
     if not len(low):
         return 0
@@ -1676,7 +1684,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     cyc[:] = cover.cycle
     # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
     # or on a swap taken before (an O(m) pass, only where some join is tried)
-    blocked = (status != _k.PASS) | is_fan[: len(status)] | (cyc < 0)
+    blocked = fresh(len(status), np.bool_)
+    _row_pass(lambda lo_, hi_: _k.blocked_rows_into(status, is_fan, cyc, blocked, lo_, hi_), len(status))
     blocked[slotted // 3] = True
     used: set[int] = set()
     root = np.arange(cover.n_cycles, dtype=np.int64)  # merged cycle ids: union-find
