@@ -7,7 +7,9 @@ scattered reads overlaps them). A hint only: it changes no value, and an address
 past the array's end is never formed (the callers ask only for rows in range).
 Shared by the construction's renumbering (``hammesh.halfedge``) and the
 certificate's passes over the caller's rows (``hammesh.verify``), as the exact
-predicates are: it computes nothing either could share.
+predicates are: it computes nothing either could share. (Kernels cached by numba
+hold its code compiled in, and numba checks only each kernel's own file: a change
+here needs their ``__pycache__`` entries cleared.)
 """
 
 from __future__ import annotations
