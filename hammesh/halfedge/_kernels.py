@@ -24,15 +24,21 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from llvmlite import ir
-from numba import njit, types
-from numba.core import cgutils
-from numba.extending import intrinsic
+from numba import njit
 
 from hammesh import threads
 from hammesh.predicates import ERRBOUND, orient_points
+from hammesh.prefetch import prefetch_row
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
+
+#: (the shared cache hint, ``hammesh.prefetch``; the name this module's kernels use)
+_prefetch_row = prefetch_row
+
+
+#: rows ahead whose points / neighbours' rows / old rows a pass over scattered reads
+#: asks for (:func:`_orient_ccw_into`, :func:`_twins_from_neighbors_into`, ...)
+PREFETCH_ROWS = 16
 
 __all__ = [
     "Oriented",
@@ -122,7 +128,9 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
     """Rows ``lo..hi``: flips, the first bad row, smallest sin^2, area; ``out`` (if not
     empty) gets the counter-clockwise rows; ``used`` empty: no angle, area or used;
     ``key`` (if not empty) each row's cell key (:func:`cell_key`), ``count`` their
-    histogram over this range."""
+    histogram over this range. The rows' points lie scattered (the input's numbering):
+    those of the row ``PREFETCH_ROWS`` on are asked for now (``hammesh.prefetch``; at
+    1.5 M triangles, one thread, 0.059 -> 0.044 s)."""
     write = out.shape[0] == tri.shape[0]
     measure = used.shape[0] == points.shape[0]
     keyed = key.shape[0] == tri.shape[0]
@@ -130,7 +138,13 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
     bad = -1
     best_s2 = np.inf
     total = 0.0
+    n = points.shape[0]
     for t in range(lo, hi):
+        if t + PREFETCH_ROWS < hi:
+            for k in range(3):
+                v = tri[t + PREFETCH_ROWS, k]
+                if v >= 0 and v < n:
+                    _prefetch_row(points, v)
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
@@ -187,33 +201,6 @@ def _area_sin2(points, p0, p1, p2):
     lb = bx * bx + by * by
     lc = cx * cx + cy * cy
     return cr, cr * cr / max(la * lb, max(lb * lc, lc * la))
-
-
-@intrinsic
-def _prefetch_row(typingctx, arr, i):
-    """Ask the processor to fetch the cache line of ``arr[i, 0]`` now (LLVM's
-    ``llvm.prefetch``: a read, kept in all cache levels). A hint: no effect on any
-    value; any layout (the address is numba's own item pointer)."""
-
-    def codegen(context, builder, signature, args):
-        aryty = signature.args[0]
-        arr = context.make_array(aryty)(context, builder, args[0])
-        zero = context.get_constant(types.intp, 0)
-        idx = context.cast(builder, args[1], signature.args[1], types.intp)
-        ptr = cgutils.get_item_pointer(context, builder, aryty, arr, [idx, zero], wraparound=False)
-        i8p = ir.IntType(8).as_pointer()
-        i32 = ir.IntType(32)
-        name = "llvm.prefetch.p0"
-        fn = builder.module.globals.get(name) or ir.Function(
-            builder.module, ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32]), name=name)
-        builder.call(fn, [builder.bitcast(ptr, i8p), ir.Constant(i32, 0), ir.Constant(i32, 3), ir.Constant(i32, 1)])
-        return context.get_dummy_value()
-
-    return types.void(arr, i), codegen
-
-
-#: rows ahead whose neighbours' rows :func:`_twins_from_neighbors_into` prefetches
-PREFETCH_ROWS = 16
 
 
 def twins_from_neighbors(tri, nbr):
@@ -671,10 +658,15 @@ def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_n
     One serial pass (each first use takes the next number). ``leaving`` (``(n_points,)``,
     -1 on entry, or empty: not asked): a half-edge of the new rows leaving each new
     vertex, the one of its first use (what :func:`vertex_half_edges` finds, without its
-    pass over the rows)."""
+    pass over the rows). The old row ``PREFETCH_ROWS`` rows ahead is asked for now
+    (``order`` jumps across the old rows: 0.037 -> 0.028 s at 1.5 M triangles, one
+    thread, the same numbers)."""
     nxt = 0
     ask = leaving.shape[0] > 0
-    for i in range(order.shape[0]):
+    m = order.shape[0]
+    for i in range(m):
+        if i + PREFETCH_ROWS < m:
+            _prefetch_row(tri, order[i + PREFETCH_ROWS])
         t = order[i]
         for k in range(3):
             v = tri[t, k]

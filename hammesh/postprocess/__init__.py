@@ -95,6 +95,11 @@ def load_kernels(mode: str = "sparse") -> None:
             m = quality_mesh(square, min_angle=30, max_area=0.05, isolate=False)  # (the renumbering, from
             tw = half_edge_twins(m.triangles, m.n_points)[0]  # sparse.LOCAL_MIN_TRIANGLES triangles)
             restore_vertices(renumber_local(m.points, m.triangles, tw, tw < 0).triangles, np.arange(m.n_points))
+            # (and the twins matched once from Triangle's neighbours in the new order,
+            # ``prepare_mesh(match=False)``: 4 kernels, ~13 ms of a first call's main thread)
+            from hammesh.halfedge import local_half_edges
+
+            local_half_edges(prepare_mesh(m, measure=True, cells=True, match=False)[0])
             from hammesh.postprocess.sparse import kept_radius_ratio  # (when the worst input triangle is joined)
 
             kept_radius_ratio(m.points, m.triangles, np.full(m.n_triangles, 3, np.int8), np.arange(m.n_triangles),

@@ -29,6 +29,7 @@ from numba import njit
 
 from hammesh import threads
 from hammesh.pages import fresh
+from hammesh.prefetch import prefetch_row
 from hammesh.threads import row_ranges, run_all
 
 from hammesh.postprocess._join_kernels import (
@@ -559,9 +560,11 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
+        by_key = packed >> ib  # (the keys in sorted order: the matching reads them in a row)
     else:
         srt = np.argsort(keys, kind="stable")
-    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt)
+        by_key = keys[srt]
+    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt)
     return tw_new, changed, face_tw, bad
 
 
@@ -622,16 +625,17 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
 
 
 @njit(cache=True, nogil=True)
-def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, keys, srt):
+def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt):
     """:func:`new_row_twins`' second half: the half-edges ``rest`` in the order ``srt`` of
-    their ``keys``, paired where two share a key (``tw_new``, ``face_tw`` filled); returns
+    their keys (``by_key``: the keys in that order, read in a row rather than through
+    ``srt``), paired where two share a key (``tw_new``, ``face_tw`` filled); returns
     -1 or a virtual half-edge whose edge is used twice in one direction or by three rows."""
     m = tri.shape[0]
     n = rest.shape[0]
     i = 0
     while i < n:
         e = i + 1
-        while e < n and keys[srt[e]] == keys[srt[i]]:
+        while e < n and by_key[e] == by_key[i]:
             e += 1
         h = rest[srt[i]]
         if e - i == 1:
@@ -776,6 +780,7 @@ def load_output_kernels() -> None:
     swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
                     none, none)
+    blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
     # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
     fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)
     map_through_into(r.copy(), r.copy(), 0, k)
@@ -1026,16 +1031,31 @@ def _row_positions_into(rows, pos, lo, hi):
         pos[rows[i]] = i
 
 
+#: places ahead whose row :func:`_gather_rows_into` asks for (a cache hint)
+GATHER_AHEAD = 16
+
+
 @njit(cache=True, nogil=True)
 def _gather_rows_into(
     rows, pos, tri, twin_in, status, out_new, parent_new, partner_new, kind_new, tw_new, changed, face_tw, amin,
     out2, parent2, partner2, kind2, pm, claim, con, pinned, lo, hi,
 ):
     """Final rows ``lo..hi`` of :func:`rows_in_cycle_order` (``pos``: every row's final place;
-    ``pinned`` empty: no pinned edges written)."""
+    ``pinned`` empty: no pinned edges written). The rows in cycle order jump about the
+    virtual rows: the row ``GATHER_AHEAD`` places on is asked for now (its triangle,
+    twins and angle, or its new row; ``hammesh.prefetch``): at 1.5 M triangles, one
+    thread, 0.057 -> 0.039 s, the same values (session 20)."""
     m = tri.shape[0]
     pin = pinned.shape[0] == claim.shape[0]
     for i in range(lo, hi):
+        if i + GATHER_AHEAD < hi:
+            y = rows[i + GATHER_AHEAD]
+            if y < m:
+                prefetch_row(tri, y)
+                prefetch_row(twin_in, 3 * y)
+                prefetch_row(amin, y)
+            else:
+                prefetch_row(out_new, y - m)
         x = rows[i]
         for j in range(3):
             h = 3 * x + j
@@ -1070,6 +1090,16 @@ def _gather_rows_into(
         if q >= 0 and amin[q] < a:
             a = amin[q]
         pm[i] = a
+
+
+@njit(cache=True, nogil=True)
+def blocked_rows_into(status, is_fan, cyc, out, lo, hi):
+    """Rows ``lo..hi`` no alternating cycle of the cover swaps may pass
+    (``sparse._alternating_merges``): in a step of the plan, a fan or uncovered. One
+    threaded pass instead of three numpy passes and their temporaries (5 ms at 1.5 M
+    on the main thread)."""
+    for t in range(lo, hi):
+        out[t] = status[t] != PASS or is_fan[t] or cyc[t] < 0
 
 
 @njit(cache=True, nogil=True)

@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from hammesh.predicates import orient_points
+from hammesh.prefetch import prefetch_row
 
 __all__ = [
     "RowChecks",
@@ -395,6 +396,13 @@ def _shared(tri, i, j):
     return shared
 
 
+#: rows ahead whose points (and, scanning the input, bucket counts) a pass over rows
+#: whose vertices lie scattered asks for now (``hammesh.prefetch``: a cache hint, no
+#: value changes). At 1.5 M triangles, one thread: the row checks 0.061 -> 0.050 s,
+#: the input's scan 0.025 -> 0.018, the bucket fill 0.026 -> 0.019 (session 20)
+AHEAD_ROWS = 16
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
     """The certificate's per-row checks in one pass over a cycle-ordered mesh.
@@ -455,6 +463,11 @@ def certify_row_range(points, tri, runs, pair, lo, hi, used, cons_fail):
         if runs[r] < 3 and bad_consec < 0 and r_start >= lo:
             bad_consec = r_start
         for i in range(max(r_start, lo), min(r_end, hi)):
+            if i + AHEAD_ROWS < hi:
+                for k in range(3):
+                    v = tri[i + AHEAD_ROWS, k]
+                    if v >= 0 and v < n:
+                        prefetch_row(points, v)
             p0 = tri[i, 0]
             p1 = tri[i, 1]
             p2 = tri[i, 2]
@@ -644,7 +657,14 @@ def scan_input_into(points, tri, flip, used, start):
     n_flipped = 0
     best_s2 = np.inf
     total = 0.0
-    for t in range(tri.shape[0]):
+    m = tri.shape[0]
+    for t in range(m):
+        if t + AHEAD_ROWS < m:
+            for k in range(3):
+                v = tri[t + AHEAD_ROWS, k]
+                if v >= 0 and v < n:
+                    prefetch_row(points, v)
+                    prefetch_row(start, v)
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
@@ -688,6 +708,9 @@ def input_boundary_into(tri, flip, start, keys):
     The halves' identities are not needed (no twin array): the boundary edge comes
     back from its bucket and key.
 
+    Every vertex must be in ``0..n-1`` (the scan's ``bad_index`` is -1: the bucket fill
+    asks for ``start`` rows ahead by the rows' vertices).
+
     Returns ``(boundary, ok)``: boundary edge keys ``x * 2**32 + y`` (unsorted) and
     False if some edge is used wrongly (then ``boundary`` is incomplete: the caller
     names the edge with :func:`half_edge_twins`).
@@ -697,6 +720,9 @@ def input_boundary_into(tri, flip, start, keys):
     for v in range(nv):
         start[v + 1] += start[v]
     for t in range(m):  # afterwards start[v] is the end of bucket v
+        if t + AHEAD_ROWS < m:
+            for k in range(3):
+                prefetch_row(start, tri[t + AHEAD_ROWS, k])  # (in range: the scan checked every row)
         if flip[t]:
             r0 = tri[t, 2]
             r2 = tri[t, 0]

@@ -572,3 +572,30 @@ def test_corner_atan2_special_points_and_folds():
         a = math.radians(deg)
         assert corner_atan2(math.sin(a), math.cos(a)) == pytest.approx(math.atan2(math.sin(a), math.cos(a)),
                                                                          abs=5e-16), deg
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    arrays(np.float64, st.integers(0, 300), elements=st.sampled_from([-1.5, -0.25, 0.0, 0.25, 3.0, 8.0, np.nan])),
+    st.booleans(),
+)
+def test_stable_argsort_is_numpys_stable_order(key, spread) -> None:
+    """``sparse.stable_argsort`` (an unstable sort with its ties put back in index order,
+    session 20) gives exactly ``np.argsort(kind="stable")``: many ties, NaNs, and (spread)
+    keys made distinct but close."""
+    from hammesh.postprocess.sparse import stable_argsort
+
+    if spread:
+        key = key + np.arange(len(key)) % 3 * 1e-15
+    assert np.array_equal(stable_argsort(key.copy()), np.argsort(key, kind="stable"))
+
+
+def test_stable_argsort_many_ties_falls_back() -> None:
+    """More tied places than ``STABLE_TIES_MAX``: still numpy's stable order."""
+    from hammesh.postprocess import sparse
+
+    key = np.repeat(np.arange(50.0), 20)[::-1].copy()
+    assert np.array_equal(sparse.stable_argsort(key), np.argsort(key, kind="stable"))
+    few = np.linspace(0, 1, 5000)
+    few[100:110] = 0.5
+    assert np.array_equal(sparse.stable_argsort(few), np.argsort(few, kind="stable"))
