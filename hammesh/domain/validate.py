@@ -40,7 +40,13 @@ def check_extent(points: np.ndarray, error: type[Exception], what: str = "the me
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) == 0:
         return
-    extent = float((pts.max(axis=0) - pts.min(axis=0)).max())
+    # each column's range by 1-D reductions: numpy's ``pts.max(axis=0)`` over an (n, 2)
+    # array runs an inner loop of 2 per row, ~35x slower (82 ms against 2.3 ms for
+    # 0.77 M points; ``hammesh check`` and the readers pass every file's points here)
+    cols = pts.reshape(len(pts), -1)
+    if cols.shape[1] == 0:
+        return
+    extent = max(float(cols[:, j].max() - cols[:, j].min()) for j in range(cols.shape[1]))
     if 0 < extent < MIN_EXTENT:
         raise error(f"{what} spans only {extent:.3g}: below {MIN_EXTENT:g} areas and angles underflow float64 "
                     "(rescale it; the mesh does not change)")

@@ -340,3 +340,21 @@ def test_complex_numbers_are_refused_not_cast(field: str) -> None:
             else:
                 hammesh.Domain(vertices=real, segments=segs, vertex_attributes=square[:, :1])
         hammesh.Domain(vertices=real, segments=segs)  # the real square is fine
+
+
+@settings(max_examples=120, deadline=None)
+@given(n=st.integers(1, 40), scales=st.lists(st.sampled_from([0.0, 1e-70, 1e-61, 1e-59, 1.0, 1e6]), min_size=2,
+                                              max_size=3), seed=st.integers(0, 2**31 - 1))
+def test_check_extent_refuses_exactly_the_spans_below_the_floor(n, scales, seed):
+    # the columns' ranges (1-D reductions) are the whole array's range per axis: refused
+    # exactly where the largest span is positive and below MIN_EXTENT, whichever column it is
+    from hammesh.domain.validate import MIN_EXTENT, check_extent
+    from hammesh.errors import InvalidMeshError
+
+    pts = np.random.default_rng(seed).random((n, len(scales))) * np.array(scales)
+    span = float((pts.max(axis=0) - pts.min(axis=0)).max())
+    if 0 < span < MIN_EXTENT:
+        with pytest.raises(InvalidMeshError, match="spans only"):
+            check_extent(pts, InvalidMeshError)
+    else:
+        check_extent(pts, InvalidMeshError)
