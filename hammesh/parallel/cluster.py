@@ -182,7 +182,8 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
         importlib.import_module(name)
     _hold_numba_lock_across_fork()
     method = start_method()
-    if mode is not None and method == "fork" and KERNELS_BEFORE_FORK:
+    inherit = mode is not None and method == "fork" and KERNELS_BEFORE_FORK  # (the workers start with the kernels)
+    if inherit:
         if ZYGOTE and start_zygote(stack, mode):
             method = "forkserver"  # (the workers are forked by the zygote, which loads the kernels)
         else:
@@ -211,7 +212,7 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             # the workers share this machine's cores: each threaded pass of a worker gets its
             # share, not every core (N workers x C threads on C cores only thrash)
             kept = c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
-            if mode is not None and not (method == "fork" and KERNELS_BEFORE_FORK):
+            if mode is not None and not inherit:
                 # each worker loads its kernels itself, first of its tasks, on its own core
                 # (the futures are held until the cluster closes)
                 loading = [c.submit(load_worker_kernels, mode, workers=[addr], allow_other_workers=False,
