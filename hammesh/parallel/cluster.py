@@ -302,6 +302,8 @@ def start_zygote(stack: contextlib.ExitStack, mode: str) -> bool:
             forkserver.main(listener.fileno(), alive_r, [])
         except SystemExit:  # (the fork server's end: the driver closed its pipe)
             pass
+        except KeyboardInterrupt:  # (^C reached the whole process group: the driver reports it)
+            code = 1
         except BaseException:
             code = 1
             import traceback
