@@ -9,7 +9,7 @@ from typing import Iterator
 from hammesh.errors import HammeshError, InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "local_workers", "set_threads", "TAIL_THREADS", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
-           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA", "KERNELS_BEFORE_FORK", "ZYGOTE", "start_zygote", "load_worker_kernels", "guard_forks",
+           "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA", "KERNELS_BEFORE_FORK", "load_worker_kernels", "guard_forks",
            "dask_installed", "DASK_MISSING", "pause_gc", "resume_gc", "PAUSE_GC", "quiet_llvm_lock", "QUIET_LLVM_LOCK", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
@@ -182,12 +182,8 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
         importlib.import_module(name)
     _hold_numba_lock_across_fork()
     method = start_method()
-    inherit = mode is not None and method == "fork" and KERNELS_BEFORE_FORK  # (the workers start with the kernels)
-    if inherit:
-        if ZYGOTE and start_zygote(stack, mode):
-            method = "forkserver"  # (the workers are forked by the zygote, which loads the kernels)
-        else:
-            load_worker_kernels(mode)
+    if mode is not None and method == "fork" and KERNELS_BEFORE_FORK:
+        load_worker_kernels(mode)
     # one process per worker, one thread each: Triangle and the kernels hold their core;
     # Dask's shutdown chatter (nanny warnings) is not the user's business
     with dask.config.set({"distributed.worker.multiprocessing-method": method, **QUIET_CLUSTER, **TILE_QUEUE}):
@@ -212,7 +208,7 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             # the workers share this machine's cores: each threaded pass of a worker gets its
             # share, not every core (N workers x C threads on C cores only thrash)
             kept = c.run(worker_setup, worker_threads(workers), callback_timeout=START_TIMEOUT)
-            if mode is not None and not inherit:
+            if mode is not None and not (method == "fork" and KERNELS_BEFORE_FORK):
                 # each worker loads its kernels itself, first of its tasks, on its own core
                 # (the futures are held until the cluster closes)
                 loading = [c.submit(load_worker_kernels, mode, workers=[addr], allow_other_workers=False,
@@ -231,116 +227,6 @@ def _start_local(stack: contextlib.ExitStack, workers: int, mode: str | None, mo
             raise ClusterError(f"the local Dask cluster of {workers} workers did not start within "
                                f"{START_TIMEOUT:g} s ({type(exc).__name__}: {exc})") from exc
     return c
-
-
-#: a local cluster's workers are forked by a zygote (:func:`start_zygote`) that loads
-#: the mode's kernels beside the driver's start, instead of by the driver once it has
-#: loaded them itself (with :data:`KERNELS_BEFORE_FORK`, on Linux)
-ZYGOTE = True
-
-
-def _forkserver_state():
-    """multiprocessing's fork server handle of this process, if its fields are the ones
-    :func:`start_zygote` sets (CPython 3.10-3.13's ``multiprocessing.forkserver``;
-    3.14 added an authentication key to the protocol), else None."""
-    try:
-        from multiprocessing import forkserver
-    except ImportError:  # pragma: no cover - no fork server on this system
-        return None
-    fs = getattr(forkserver, "_forkserver", None)
-    needed = ("_forkserver_address", "_forkserver_alive_fd", "_forkserver_pid", "_lock")
-    if fs is None or not all(hasattr(fs, a) for a in needed) or hasattr(fs, "_forkserver_authkey") \
-            or not callable(getattr(forkserver, "main", None)):
-        return None
-    return fs
-
-
-def start_zygote(stack: contextlib.ExitStack, mode: str) -> bool:
-    """Fork this process into a zygote that loads ``mode``'s kernels and then serves
-    multiprocessing's fork server protocol, so that a local cluster started with the
-    ``forkserver`` method forks its workers from it; stopped by ``stack``. False (nothing
-    done) where this Python's fork server is not the one this knows, or one runs already.
-
-    Why: the workers must start with the kernels loaded (a worker loading its own
-    spends ~0.5 s CPU on its first tile, each worker again), and the driver loading
-    them before it forks its workers puts that load on its serial start: one
-    interpreter, taking turns with the reading of the domain and the cluster's start,
-    while the second core waits. In the zygote (forked once the driver's imports are
-    done, so nothing is imported twice) the load runs on the second core beside them.
-    The zygote is forked where the workers were (the cluster's thread, the same fork
-    guards: :func:`_hold_numba_lock_across_fork`) and the workers it forks inherit
-    everything the driver had at that point, as forked workers did. It ends when the
-    driver closes its end of the fork server's pipe (the cluster's close, or the
-    driver's exit).
-    """
-    import os
-    import socket
-
-    fs = _forkserver_state()
-    if fs is None or fs._forkserver_pid is not None:
-        return False
-    from multiprocessing import connection, forkserver, resource_tracker, util
-
-    resource_tracker.ensure_running()  # (before the fork: the workers share the driver's tracker)
-    address = connection.arbitrary_address("AF_UNIX")
-    listener = socket.socket(socket.AF_UNIX)
-    listener.bind(address)
-    if not util.is_abstract_socket_namespace(address):
-        os.chmod(address, 0o600)
-    listener.listen()
-    alive_r, alive_w = os.pipe()
-
-    def fork() -> None:
-        pid = os.fork()
-        if pid:
-            forked.append(pid)
-            return
-        code = 0  # the zygote
-        try:
-            os.close(alive_w)
-            load_worker_kernels(mode)
-            forkserver.main(listener.fileno(), alive_r, [])
-        except SystemExit:  # (the fork server's end: the driver closed its pipe)
-            pass
-        except KeyboardInterrupt:  # (^C reached the whole process group: the driver reports it)
-            code = 1
-        except BaseException:
-            code = 1
-            import traceback
-
-            traceback.print_exc()
-        finally:
-            os._exit(code)
-
-    # (forked from a plain thread of its own: a worker whose one thread was an executor's
-    # would try to join itself at its exit, concurrent.futures' atexit hook)
-    forked: list[int] = []
-    t = threading.Thread(target=fork, name="hammesh-zygote-fork")
-    t.start()
-    t.join()
-    os.close(alive_r)
-    if not forked:  # pragma: no cover - the fork failed (its error went to stderr)
-        os.close(alive_w)
-        listener.close()
-        return False
-    pid = forked[0]
-    listener.close()
-    with fs._lock:
-        fs._forkserver_address, fs._forkserver_alive_fd, fs._forkserver_pid = address, alive_w, pid
-
-    def stop() -> None:
-        with fs._lock:
-            if fs._forkserver_pid != pid:
-                return
-            fs._forkserver_address = fs._forkserver_alive_fd = fs._forkserver_pid = None
-        os.close(alive_w)  # (the zygote's end of file: it exits)
-        os.waitpid(pid, 0)
-        if not util.is_abstract_socket_namespace(address):
-            with contextlib.suppress(OSError):
-                os.unlink(address)
-
-    stack.callback(stop)
-    return True
 
 
 #: a local cluster's forked workers start with the mode's kernels loaded by the driver
