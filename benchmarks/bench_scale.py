@@ -667,10 +667,15 @@ def vs_ab(a) -> int:
         cache_bytecode(a.out_dir, a.modes.split(","), a.vs_python)
     for mode in a.modes.split(","):
         raws: list = []
+        calls = [0]
 
         def run(this: bool, mode=mode) -> dict:
-            if this:  # (a raw call each round, before its pair)
+            # a raw call each round, before the first of its pair (whichever side runs
+            # first: before session 20 only before this installation's, so a round that
+            # began with the other's took the previous round's raw call for it)
+            if calls[0] % 2 == 0:
                 raws.append(raw(area))
+            calls[0] += 1
             o = ours(area, w, a.tiles, mode, a.out_dir, python=None if this else a.vs_python)
             o["ratio"] = o["wall"] / raws[-1]["seconds"]
             return o

@@ -10,7 +10,7 @@ from hammesh.errors import HammeshError, InvalidOptionError
 
 __all__ = ["runner_for", "start_method", "worker_threads", "worker_setup", "local_workers", "set_threads", "TAIL_THREADS", "retain_freed_memory", "no_hugepage_advice", "NO_HUGEPAGE_ADVICE", "Starting",
            "prefault", "PREFAULT", "PREFAULT_MB", "PREFAULT_BLOCK_MB", "single_arena", "SINGLE_ARENA", "KERNELS_BEFORE_FORK", "load_worker_kernels", "guard_forks",
-           "dask_installed", "DASK_MISSING", "pause_gc", "resume_gc", "PAUSE_GC", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
+           "dask_installed", "DASK_MISSING", "pause_gc", "resume_gc", "PAUSE_GC", "quiet_llvm_lock", "QUIET_LLVM_LOCK", "QUIET_CLUSTER", "TILE_QUEUE", "START_TIMEOUT", "ClusterError"]
 
 DASK_MISSING = "parallel meshing on workers needs Dask: pip install hammesh[dask]"
 
@@ -329,6 +329,42 @@ def resume_gc() -> None:
         _gc_paused = False
         gc.freeze()
         gc.enable()
+
+
+#: ``hammesh mesh --workers`` drops numba's event hooks on llvmlite's lock in its
+#: process (:func:`quiet_llvm_lock`) before its kernels load
+QUIET_LLVM_LOCK = True
+
+
+def quiet_llvm_lock() -> int:
+    """Drop numba's event hooks on llvmlite's lock in this process (and the processes
+    it forks later); returns how many were dropped (0 where llvmlite keeps them
+    elsewhere: nothing done).
+
+    Why: loading a compiled kernel from numba's cache makes some 230 calls into LLVM
+    (parsing the kernel's bitcode, listing the symbols it defines), each taking
+    llvmlite's lock, and numba hooks two events on every take and release of that
+    lock (``numba:llvm_lock``, ``numba.core.base``): Python objects made and
+    broadcast to no listener, ~8 us a call. The mode's kernels loaded before the
+    workers fork are on the command's serial start: measured (the sparse mode's 81
+    kernels and the lattice's, fresh processes, three alternating rounds, load ~4):
+    0.68-0.83 s CPU with the hooks, 0.52-0.64 s without. Their one use is the lock's
+    time in a dispatcher's compile metadata (``get_metadata()['timers']``), which is
+    then 0; nothing else listens. Not done for a Python caller's process.
+    """
+    try:
+        import numba.core.base  # noqa: F401  (registers the hooks at its import)
+        from llvmlite.binding import ffi
+
+        hooks = list(ffi.lib._lock._cblist)
+    except (ImportError, AttributeError):
+        return 0
+    dropped = 0
+    for acquire, release in hooks:
+        if getattr(acquire, "__module__", None) == "numba.core.base":
+            ffi.unregister_lock_callback(acquire, release)
+            dropped += 1
+    return dropped
 
 
 #: a local cluster's workers fault in ``PREFAULT_MB`` of heap at their start (:func:`prefault`)

@@ -154,6 +154,8 @@ def run_parallel(args: argparse.Namespace) -> int:
             import_driver_modules()
         started = stack.enter_context(early_cluster(args, ready))
         import_driver_modules()  # (imported already: nothing)
+        if cluster.QUIET_LLVM_LOCK and args.workers is not None:
+            cluster.quiet_llvm_lock()  # (before any kernel loads: the cluster's thread waits for ``ready``)
         ready.set()
         return _run(args, started, stack)
 
