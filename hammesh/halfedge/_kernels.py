@@ -32,10 +32,6 @@ from hammesh.prefetch import prefetch_row
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-#: (the shared cache hint, ``hammesh.prefetch``; the name this module's kernels use)
-_prefetch_row = prefetch_row
-
-
 #: rows ahead whose points / neighbours' rows / old rows a pass over scattered reads
 #: asks for (:func:`_orient_ccw_into`, :func:`_twins_from_neighbors_into`, ...)
 PREFETCH_ROWS = 16
@@ -144,7 +140,7 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
             for k in range(3):
                 v = tri[t + PREFETCH_ROWS, k]
                 if v >= 0 and v < n:
-                    _prefetch_row(points, v)
+                    prefetch_row(points, v)
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
@@ -249,8 +245,8 @@ def _twins_from_neighbors_into(tri, nbr, twin, lo, hi):
             for k in range(3):
                 u = nbr[ahead, k]
                 if ahead < u < m:
-                    _prefetch_row(tri, u)
-                    _prefetch_row(nbr, u)
+                    prefetch_row(tri, u)
+                    prefetch_row(nbr, u)
         if tri[t, 0] == tri[t, 1] or tri[t, 1] == tri[t, 2] or tri[t, 2] == tri[t, 0]:
             return 3 * t, n_match, n_lower
         for k in range(3):
@@ -666,7 +662,7 @@ def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_n
     m = order.shape[0]
     for i in range(m):
         if i + PREFETCH_ROWS < m:
-            _prefetch_row(tri, order[i + PREFETCH_ROWS])
+            prefetch_row(tri, order[i + PREFETCH_ROWS])
         t = order[i]
         for k in range(3):
             v = tri[t, k]
@@ -719,7 +715,7 @@ def neighbor_rows_into(nbr, order, inverse, rows, lo, hi):
     for i in range(lo, hi):
         ahead = i + PREFETCH_ROWS
         if ahead < hi:
-            _prefetch_row(nbr, order[ahead])
+            prefetch_row(nbr, order[ahead])
         t = order[i]
         for k in range(3):
             u = nbr[t, k]
