@@ -39,6 +39,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --ceilings --target 100000   # what following a compact sweep could cut
     python benchmarks/bench_partition.py --blocks 4096,1024,256 --target 300000   # a ring of compact blocks
     python benchmarks/bench_partition.py --blocks 4096,1024 --along walk   # blocks of the incircle walk
+    python benchmarks/bench_partition.py --colourings --target 100000   # sparse cycles as vertex colourings
 
 ``--ceilings`` (session 15) measures, on Triangle's mesh itself (sparse mode's output is
 that mesh plus 0.3 % Steiner points), the cut of orders and partitions a sparse cycle
@@ -50,6 +51,11 @@ blocks (a generalized Hilbert curve's runs of ``B`` triangles, smoothed), each b
 walked once: as an ideal sweep, or along its own sparse cycle (sparse mode on the block
 alone: its Steiner points, smallest angle, and the blocks that could be spliced into the
 ring with none); beside the sparse cycle's own ratio and its cover's largest cycle alone.
+
+``--colourings`` (session 21) measures sparse cycles as vertex colourings
+(``benchmarks/partition_colourings.py``): repairs of a compact induced vertex tree's
+uncovered triangles, each colouring's largest cycle cut against METIS's on Triangle's
+mesh; then sparse mode with its cover replaced by the compact tree's (its price and cut).
 
 ``--modes sparse-fishbone`` is ``hamiltonian(mesh, mode="sparse", tree="fishbone")``
 (``hammesh.postprocess.sparse_cells``); with it a table of its price against sparse
@@ -189,6 +195,104 @@ def _print_ceilings(domains, target: int, ks: list[int]) -> None:
                   f"{np.bincount(pp, minlength=k).max() * k / m:.3f}) "
                   f"| {kc / mc:.2f} ({kdis}) "
                   f"| {' | '.join(cells)} |", flush=True)
+
+
+def _largest_cycle_cut(tri, twin, colour, a, b, nb, ks: list[int], mcs: list[float]) -> tuple:
+    """``(cycles, largest share, uncovered share, [cut / METIS per k])`` of a colouring's
+    cover: its largest cycle's stretches (best shift), the other triangles given a
+    neighbour's part (``--colourings``)."""
+    from hammesh.partition import edge_cut
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
+    from partition_ceilings import cover_cycle_order, stretch_parts
+    from partition_colourings import cover_of, cycle_sizes
+
+    is_cov = cover_of(tri, twin, colour)
+    cyc, n_cyc = cycle_ids_by_halves(twin, is_cov)
+    m = len(tri)
+    sizes = cycle_sizes(cyc, n_cyc)
+    big = int(np.argmax(sizes))
+    order = cover_cycle_order(twin, is_cov, cyc, big)
+    local = np.full(m, -1, np.int64)
+    local[order] = np.arange(len(order))
+    on = (local[a] >= 0) & (local[b] >= 0)
+    cuts = []
+    for k, mc in zip(ks, mcs):
+        part = np.full(m, -1, np.int64)
+        part[order] = stretch_parts(np.arange(len(order)), k, local[a[on]], local[b[on]])
+        cuts.append(edge_cut(_fill_parts(part, nb), a, b) / mc)
+    return int(n_cyc), sizes[big] / m, float((cyc < 0).mean()), cuts
+
+
+def _print_colourings(domains, target: int, ks: list[int]) -> None:
+    """``--colourings``: sparse cycles as vertex colourings (``partition_colourings``).
+    First on Triangle's mesh, the largest cycle of each colouring's cover cut as a cycle
+    (the rest given a neighbour's part) / METIS's (median of 3 seeds); then through
+    sparse mode itself, its cover replaced by ``compact_cover``: the price and the cut."""
+    import os
+    import sys
+
+    import hammesh
+    from hammesh.partition import dual_edges, partition
+    from hammesh.postprocess import sparse as sp
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import partition_colourings as pc
+    from partition_ceilings import vertex_tree_cover
+
+    print("| domain | triangles | colouring | uncovered | cycles | largest | " + " | ".join(f"k = {k}" for k in ks) + " |")
+    print("|---|---|---|---|---|---|" + "---|" * len(ks))
+    for name, dom, area in domains:
+        mesh, a, b, twin, nb = _input_mesh(dom, area, target)
+        tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+        m, pts = len(tri), mesh.points
+        bnd = pc.boundary_vertices(tri, twin, mesh.n_points)
+        mcs = [_metis_median(k, a, b, m) for k in ks]
+        tree = vertex_tree_cover(pts, tri, twin).inside.astype(np.int8)
+        defer = pc.deferring_tree(pts, tri, twin)[0].astype(np.int8)
+        rows = [("vertex tree (quadtree classes)", tree), ("the same, deferring doomed triangles", defer)]
+        seeded = pc.colour_of_cover(tri, twin, pc.seeded_cover(pts, tri, twin, tree).is_cov, bnd)[0]
+        rows.append(("cover seeded from the tree, no rotations", seeded))
+        for levels, label in ((0, "in index order"), (10, "by scale, 10 levels")):
+            c = seeded.copy()
+            pc.scale_rotations(pts, tri, twin, c, levels)
+            rows.append((f"the same, rotations {label}", c))
+        for lmax in (4, 16, 64):
+            c = defer.copy()
+            pc.small_loop_adds(tri, twin, c, lmax)
+            pc.capped_rotations(tri, twin, c, 2000)
+            rows.append((f"deferring tree, loops <= {lmax + 2} added, capped rotations", c))
+        for label, c in rows:
+            n_cyc, big, unc, cuts = _largest_cycle_cut(tri, twin, c, a, b, nb, ks, mcs)
+            print(f"| {name} | {m:,} | {label} | {unc:.2%} | {n_cyc:,} | {big:.1%} | "
+                  + " | ".join(f"{x:.2f}" for x in cuts) + " |", flush=True)
+    print("\nThrough sparse mode (its cover replaced by partition_colourings.compact_cover; the output certified):\n")
+    print("| domain | cover | triangles | Steiner points | min / max angle | rows below the parent rule | "
+          + " | ".join(f"k = {k}" for k in ks) + " | CPU s | cover's cycles / uncovered |")
+    print("|---|---|---|---|---|---|" + "---|" * len(ks) + "---|---|")
+    for name, dom, area in domains:
+        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
+        for label, lmax in (("sparse's own (default)", None), ("compact: deferring tree only", 0),
+                            ("compact: + loops <= 18, capped rotations", 16)):
+            orig = sp.cycle_cover
+            if lmax is not None:
+                pc.LMAX = lmax
+                sp.cycle_cover = pc.compact_cover
+            try:
+                c0 = time.process_time()
+                h = hammesh.hamiltonian(mesh, mode="sparse")
+                cpu = time.process_time() - c0
+            finally:
+                sp.cycle_cover = orig
+            r, m = h.report, h.n_triangles
+            ha, hb = dual_edges(h.triangles, h.n_points)
+            cuts = []
+            for k in ks:
+                p = partition(h, k)
+                cuts.append(f"{p.edge_cut / _metis_median(k, ha, hb, m):.2f}" + ("" if p.connected else " (NOT connected)"))
+            info = f"{pc.LAST['cycles']:,} / {pc.LAST['uncovered']:,}" if lmax is not None else ""
+            print(f"| {name} | {label} | {m:,} | {r['steiner_points']:,} ({r['steiner_points'] / m:.2%}) "
+                  f"| {r['min_angle_output_deg']:.1f} / {r['max_angle_output_deg']:.1f} | {r['below_parent_rule']:,} "
+                  f"| {' | '.join(cuts)} | {cpu:.2f} | {info} |", flush=True)
 
 
 def _print_blocks(domains, target: int, ks: list[int], sizes: list[int], along: str = "curve") -> None:
@@ -761,6 +865,9 @@ def main() -> None:
                          "mesh (partition_ceilings.py)")
     ap.add_argument("--along", choices=("curve", "walk"), default="curve",
                     help="--blocks: runs of a generalized Hilbert curve, or of the incircle walk on the same mesh")
+    ap.add_argument("--colourings", action="store_true",
+                    help="only sparse cycles as vertex colourings (partition_colourings.py): repairs of a compact "
+                         "vertex tree, on Triangle's mesh and through sparse mode")
     ap.add_argument("--plot", metavar="DIR", default="",
                     help="also draw each partition (parts coloured) to DIR/<domain>_<mode>_<k>.png")
     args = ap.parse_args()
@@ -796,6 +903,9 @@ def main() -> None:
         return
     if args.ceilings:
         _print_ceilings([d for d in _domains() if d[0] in chosen], args.target, ks)
+        return
+    if args.colourings:
+        _print_colourings([d for d in _domains() if d[0] in chosen], args.target, ks)
         return
     if args.blocks:
         _print_blocks([d for d in _domains() if d[0] in chosen], args.target, ks,

@@ -1,0 +1,153 @@
+"""Sparse cycles as vertex colourings (``benchmarks/partition_colourings.py``, issue 14,
+session 21): the cover and the colouring are two views of one thing, the repairs keep
+every mixed triangle mixed and cover more, the rotations merge exactly the cycles they
+count, the grown trees are induced trees, and sparse mode certifies what it makes from
+the compact cover."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import hammesh
+from hammesh.halfedge import half_edges
+from hammesh.postprocess.cycle_cover import cycle_cover, cycle_ids_by_halves
+
+_bench = Path(__file__).parents[2] / "benchmarks"
+sys.path.insert(0, str(_bench))  # (partition_colourings imports nothing of its siblings; bench_partition does)
+_spec = importlib.util.spec_from_file_location("partition_colourings", _bench / "partition_colourings.py")
+pc = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(pc)
+_spec2 = importlib.util.spec_from_file_location("partition_ceilings", _bench / "partition_ceilings.py")
+ceil = importlib.util.module_from_spec(_spec2)
+_spec2.loader.exec_module(ceil)
+
+
+def _mesh(w: float = 2.0, hole: bool = True, area: float = 0.004):
+    a = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    holes = [np.c_[np.cos(a), np.sin(a)] * 0.25 + [w / 2, 0.5]] if hole else []
+    dom = hammesh.Domain.from_polygon([[0, 0], [w, 0], [w, 1], [0, 1]], holes=holes)
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+
+
+def _arrays(mesh):
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    return mesh.points, tri, half_edges(tri, mesh.n_points).twin
+
+
+def _is_induced_tree(inside: np.ndarray, tri: np.ndarray) -> bool:
+    """Connected, and one edge fewer than vertices (so no cycle), by a plain count."""
+    e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+    e = e[inside[e[:, 0]] & inside[e[:, 1]]]
+    v = np.flatnonzero(inside)
+    if len(e) != len(v) - 1:
+        return False
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(inside)
+    g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    _, comp = connected_components(g, directed=False)
+    return len(np.unique(comp[v])) == 1
+
+
+def _n_cycles(tri, twin, colour) -> int:
+    return int(cycle_ids_by_halves(twin, pc.cover_of(tri, twin, colour))[1])
+
+
+@settings(max_examples=8, deadline=None)
+@given(w=st.floats(1.0, 3.0), hole=st.booleans())
+def test_a_cover_and_its_colouring_are_one_thing(w: float, hole: bool) -> None:
+    pts, tri, twin = _arrays(_mesh(w, hole, 0.01))
+    cov = cycle_cover(tri, twin)
+    bnd = pc.boundary_vertices(tri, twin, len(pts))
+    colour, conflicts = pc.colour_of_cover(tri, twin, cov.is_cov, bnd)
+    if conflicts == 0:  # (a cycle round the hole does not separate: no colouring then)
+        assert (pc.cover_of(tri, twin, colour) == cov.is_cov).all()
+        s = colour[tri].sum(axis=1)
+        assert ((s == 0) | (s == 3)).sum() == cov.n_uncovered
+    # and back: any colouring's cover gives it again (up to a swap)
+    c = np.random.default_rng(int(w * 100)).integers(0, 2, len(pts)).astype(np.int8)
+    c[bnd] = 0  # (the cover never crosses the boundary: its edges must be one colour)
+    back, conflicts = pc.colour_of_cover(tri, twin, pc.cover_of(tri, twin, c))
+    assert conflicts == 0
+    assert (back == c).all() or (back == 1 - c).all()
+
+
+def test_the_deferring_tree_is_an_induced_tree_that_covers_more() -> None:
+    pts, tri, twin = _arrays(_mesh())
+    bnd = pc.boundary_vertices(tri, twin, len(pts))
+    plain, none = pc.deferring_tree(pts, tri, twin, max_defer=0)
+    assert none == 0
+    assert (plain == ceil.vertex_tree_cover(pts, tri, twin).inside).all()
+    inside, deferrals = pc.deferring_tree(pts, tri, twin)
+    assert deferrals > 0
+    for t in (plain, inside):
+        assert _is_induced_tree(t, tri) and not t[bnd].any()
+    assert (inside[tri].sum(axis=1) == 0).sum() < (plain[tri].sum(axis=1) == 0).sum()
+    assert _n_cycles(tri, twin, inside.astype(np.int8)) == 1
+
+
+@pytest.mark.parametrize("lmax", [2, 16])
+def test_small_loop_adds_cover_more_and_unmix_nothing(lmax: int) -> None:
+    pts, tri, twin = _arrays(_mesh())
+    c = pc.deferring_tree(pts, tri, twin)[0].astype(np.int8)
+    before = c[tri].sum(axis=1)
+    adds, leaves, made = pc.small_loop_adds(tri, twin, c, lmax)
+    after = c[tri].sum(axis=1)
+    assert adds > 0 and (after == 3).sum() == 0
+    assert ((before == 1) | (before == 2) <= (after == 1) | (after == 2)).all()  # mixed stays mixed
+    assert (after == 0).sum() <= (before == 0).sum() - adds
+    assert not c[pc.boundary_vertices(tri, twin, len(pts))].any()
+    # a leaf extends the tree; an island or a short loop adds one small cycle
+    assert leaves <= adds
+    assert _n_cycles(tri, twin, c) <= 1 + made
+
+
+def test_rotations_merge_exactly_what_they_count() -> None:
+    pts, tri, twin = _arrays(_mesh())
+    c = pc.deferring_tree(pts, tri, twin)[0].astype(np.int8)
+    pc.small_loop_adds(tri, twin, c, 16)
+    mixed = np.isin(c[tri].sum(axis=1), (1, 2))
+    n0 = _n_cycles(tri, twin, c)
+    for rotate in (lambda x: pc.capped_rotations(tri, twin, x, 200), lambda x: pc.scale_rotations(pts, tri, twin, x, 6),
+                   lambda x: pc.scale_rotations(pts, tri, twin, x, 0)):
+        x = c.copy()
+        merged = rotate(x)
+        assert merged > 0
+        assert (np.isin(x[tri].sum(axis=1), (1, 2)) == mixed).all()  # the same triangles covered
+        assert _n_cycles(tri, twin, x) == n0 - merged
+
+
+def test_the_seeded_cover_covers_what_the_matching_covers() -> None:
+    pts, tri, twin = _arrays(_mesh())
+    tree = pc.deferring_tree(pts, tri, twin, max_defer=0)[0].astype(np.int8)
+    cov = pc.seeded_cover(pts, tri, twin, tree)
+    assert cov.n_uncovered < 0.01 * len(tri) < (tree[tri].sum(axis=1) == 0).sum()
+    assert cov.n_cycles > 1
+
+
+def test_sparse_mode_certifies_the_compact_cover(monkeypatch) -> None:
+    from hammesh.partition import partition
+    from hammesh.postprocess import sparse as sp
+
+    mesh = _mesh(area=0.002)
+    monkeypatch.setattr(sp, "cycle_cover", pc.compact_cover)
+    h = hammesh.hamiltonian(mesh, mode="sparse")  # (verified inside: a VerificationError fails the test)
+    assert pc.LAST["cycles"] >= 1
+    assert h.n_triangles >= mesh.n_triangles
+    p = partition(h, 8)
+    assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+
+
+def test_the_vertex_fishbone_tree_is_an_induced_tree() -> None:
+    pts, tri, twin = _arrays(_mesh(hole=False))
+    for axis in (0, 1):
+        inside = pc.vertex_fishbone_tree(pts, tri, twin, axis)
+        assert _is_induced_tree(inside, tri)
+        assert (inside[tri].sum(axis=1) == 0).mean() < 0.2
