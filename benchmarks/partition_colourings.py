@@ -476,7 +476,13 @@ def capped_rotations(tri: np.ndarray, twin: np.ndarray, colour: np.ndarray, big:
                                       np.arange(n, dtype=np.int64)))
 
 
-#: ``compact_cover``'s settings (the benchmark's ``--colourings`` sets them per row)
+#: ``compact_cover``'s settings (the benchmark's ``--colourings`` sets them per row):
+#: the tree (``"quadtree"``: :func:`deferring_tree`; ``"fishbone"``:
+#: :func:`vertex_fishbone_tree` with ``FISH_AXIS``, ``MIN_CELL``), the deferrals, the
+#: small loops' bound (0: none) and the capped rotations' bound
+TREE = "quadtree"
+FISH_AXIS = 0
+MIN_CELL = 1024
 LMAX = 16
 BIG = 2000
 DEFER = 8
@@ -485,16 +491,19 @@ LAST: dict = {}
 
 
 def compact_cover(triangles: np.ndarray, twin: np.ndarray, **kw):
-    """A ``cycle_cover`` stand-in (same call; ``points`` used, the rest ignored): the
-    deferring vertex tree (``DEFER`` deferrals a vertex, 0: none), small loops added
-    (``LMAX``, 0: none), small cycles merged by capped rotations (``BIG``)."""
+    """A ``cycle_cover`` stand-in (same call; ``points`` used, the rest ignored): a
+    vertex tree (``TREE``, deferring ``DEFER`` times a vertex, 0: none), small loops
+    added (``LMAX``, 0: none), small cycles merged by capped rotations (``BIG``)."""
     from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
 
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     n = int(tri.max()) + 1
     pts = np.ascontiguousarray(np.asarray(kw["points"])[:n, :2], dtype=np.float64)
-    c = deferring_tree(pts, tri, tw, 64, DEFER)[0].astype(np.int8)
+    if TREE == "fishbone":
+        c = vertex_fishbone_tree(pts, tri, tw, FISH_AXIS, MIN_CELL, 5.0, DEFER).astype(np.int8)
+    else:
+        c = deferring_tree(pts, tri, tw, 64, DEFER)[0].astype(np.int8)
     LAST.clear()
     LAST["tree_uncovered"] = int((c[tri].sum(axis=1) == 0).sum())
     if LMAX > 0:
@@ -518,17 +527,46 @@ def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int) -> np.ndarr
 
 
 @njit(cache=True)
-def _grow_weighted_into(ptr, idx, wts, boundary, seed, inside):
-    """Prim's search (float weights per adjacency entry) growing an induced tree."""
+def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, inside, penalty, max_defer):
+    """Prim's search (float weights per adjacency entry) growing an induced tree, with
+    ``_grow_deferring_into``'s deferral of a vertex that would doom triangles."""
     n = len(boundary)
     count = np.zeros(n, np.int64)
+    defer = np.zeros(n, np.int64)
+    mark = np.zeros(n, np.int64)
     heap = [(0.0, np.int64(0), np.int64(seed))]
     seq = 1
     size = 0
+    stamp = 0
     while len(heap):
-        _, _, v = heapq.heappop(heap)
+        key, _, v = heapq.heappop(heap)
         if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
             continue
+        if size > 0 and defer[v] < max_defer:
+            stamp += 1
+            for j in range(ptr[v], ptr[v + 1]):
+                w = idx[j]
+                if not inside[w] and not boundary[w] and count[w] == 1:
+                    mark[w] = stamp
+            doomed = 0
+            for j in range(ptr[v], ptr[v + 1]):
+                w = idx[j]
+                if mark[w] != stamp:
+                    continue
+                for jj in range(vt_ptr[w], vt_ptr[w + 1]):
+                    t = vt_idx[jj]
+                    dead = True
+                    for k in range(3):
+                        x = tri[t, k]
+                        if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
+                            dead = False
+                    if dead:
+                        doomed += 1
+            if doomed > 0:
+                defer[v] += 1
+                heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
+                seq += 1
+                continue
         inside[v] = True
         size += 1
         for j in range(ptr[v], ptr[v + 1]):
@@ -540,8 +578,51 @@ def _grow_weighted_into(ptr, idx, wts, boundary, seed, inside):
     return size
 
 
+#: ``vertex_fishbone_tree``: each spine a shortest path through its band (else the whole band)
+STRAIGHT_SPINES = True
+
+
+@njit(cache=True)
+def _spine_paths_into(ptr, idx, cand, lab, order, spine):
+    """For each cell's band of spine candidates (``order``: by cell, then along the
+    line), each connected piece's shortest path (breadth-first, inside the band) from its
+    first vertex along the line to the farthest one it reaches along the line."""
+    n = cand.shape[0]
+    seen = np.zeros(n, np.bool_)
+    par = np.full(n, -1, np.int64)
+    pos = np.full(n, -1, np.int64)
+    for i in range(order.shape[0]):
+        pos[order[i]] = i
+    queue = np.empty(order.shape[0] + 1, np.int64)
+    for i in range(order.shape[0]):
+        s = order[i]
+        if seen[s]:
+            continue
+        seen[s] = True
+        par[s] = -1
+        head, tail = 0, 1
+        queue[0] = s
+        far = s
+        while head < tail:
+            u = queue[head]
+            head += 1
+            if pos[u] > pos[far]:
+                far = u
+            for j in range(ptr[u], ptr[u + 1]):
+                w = idx[j]
+                if cand[w] and not seen[w] and lab[w] == lab[s]:
+                    seen[w] = True
+                    par[w] = u
+                    queue[tail] = w
+                    tail += 1
+        x = far
+        while x >= 0:
+            spine[x] = True
+            x = par[x]
+
+
 def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
-                         min_cell: int = 8) -> np.ndarray:
+                         min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0) -> np.ndarray:
     """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
     vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
     spine is the path of vertices just below its cell's median line (each with a
@@ -552,7 +633,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     last."""
     n = len(points)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
-    ptr, idx, _, _ = vertex_maps(tri, n)
+    ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n)
     src = np.repeat(np.arange(n), np.diff(ptr))
     keep = src < idx
     a, b = src[keep], idx[keep]
@@ -576,9 +657,16 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
         far = points[:, along] >= _cell_medians(side, points[:, along], 2 * 4**level)[side]
         region = 2 * side + far
         cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
+        cand = np.zeros(n, bool)
+        cand[np.where(upper[a], b, a)[cross]] = True
+        cand &= ~bnd
         spine = np.zeros(n, bool)
-        spine[np.where(upper[a], b, a)[cross]] = True
-        spine &= ~bnd
+        if STRAIGHT_SPINES:  # an induced path: a shortest path along each piece of the band
+            o = np.flatnonzero(cand)
+            o = o[np.lexsort((points[o, along], lab[o]))].astype(np.int64)
+            _spine_paths_into(ptr, idx, cand, lab, o, spine)
+        else:
+            spine = cand
         lab = np.where((lab >= 0) & ~spine, region, -1)
         spine_level[spine] = level
     deepest = np.full(len(a), -1)
@@ -614,7 +702,8 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     cen = points[~bnd].mean(axis=0)
     seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
     inside = np.zeros(n, np.bool_)
-    _grow_weighted_into(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), bnd, int(seed), inside)
+    _grow_weighted_into(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd, int(seed),
+                        inside, float(penalty), int(max_defer))
     return inside
 
 
