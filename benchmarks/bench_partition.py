@@ -261,6 +261,16 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
             pc.small_loop_adds(tri, twin, c, lmax)
             pc.capped_rotations(tri, twin, c, 2000)
             rows.append((f"deferring tree, loops <= {lmax + 2} added, capped rotations", c))
+        axis, angle = pc.FISH_FRAMES[name]
+        fish = pc.vertex_fishbone_tree(pc.turned(pts, angle), tri, twin, axis, levels=2).astype(np.int8)
+        rows.append((f"vertex fishbone, 2 levels (axis {axis}, turned {angle:g})", fish))
+        fish = pc.vertex_fishbone_tree(pc.turned(pts, angle), tri, twin, axis, penalty=5.0, max_defer=8,
+                                       levels=2).astype(np.int8)
+        rows.append(("the same, deferring doomed triangles", fish))
+        c = fish.copy()
+        pc.small_loop_adds(tri, twin, c, 4)
+        pc.capped_rotations(tri, twin, c, 2000)
+        rows.append(("the same, loops <= 6 added, capped rotations", c))
         for label, c in rows:
             n_cyc, big, unc, cuts = _largest_cycle_cut(tri, twin, c, a, b, nb, ks, mcs)
             print(f"| {name} | {m:,} | {label} | {unc:.2%} | {n_cyc:,} | {big:.1%} | "
@@ -271,11 +281,15 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
     print("|---|---|---|---|---|---|" + "---|" * len(ks) + "---|---|")
     for name, dom, area in domains:
         mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
-        for label, lmax in (("sparse's own (default)", None), ("compact: deferring tree only", 0),
-                            ("compact: + loops <= 18, capped rotations", 16)):
+        pc.FISH_AXIS, pc.FISH_ANGLE = pc.FISH_FRAMES[name]
+        for label, tree, lmax in (("sparse's own (default)", None, None),
+                                  ("quadtree vertex tree, deferring", "quadtree", 0),
+                                  ("the same, loops <= 18, capped rotations", "quadtree", 16),
+                                  ("vertex fishbone, 2 levels, deferring", "fishbone", 0),
+                                  ("the same, loops <= 6, capped rotations", "fishbone", 4)):
             orig = sp.cycle_cover
             if lmax is not None:
-                pc.LMAX = lmax
+                pc.TREE, pc.LMAX = tree, lmax
                 sp.cycle_cover = pc.compact_cover
             try:
                 c0 = time.process_time()

@@ -39,7 +39,12 @@ from hammesh.postprocess._thm24_kernels import edge_class, quadtree_coords
 
 __all__ = ["vertex_maps", "boundary_vertices", "colour_of_cover", "cover_of", "flip_keeps_mixed", "deferring_tree",
            "small_loop_adds", "scale_rotations", "capped_rotations", "compact_cover", "vertex_fishbone_tree",
-           "cycle_sizes"]
+           "cycle_sizes", "seeded_cover", "turned", "FISH_FRAMES"]
+
+#: the vertex fishbone's frame per benchmark domain (axis, turn in degrees): the plate's
+#: top spine along y between its holes (session 11's choice); the gear's turn the best
+#: k = 64 of eight frames at 300 000 triangles (docs/partition.md, session 21)
+FISH_FRAMES = {"plate_2_holes": (1, 0.0), "gear": (0, 75.0), "square": (1, 0.0), "rect_2x1": (0, 0.0)}
 
 
 def vertex_maps(tri: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -478,11 +483,12 @@ def capped_rotations(tri: np.ndarray, twin: np.ndarray, colour: np.ndarray, big:
 
 #: ``compact_cover``'s settings (the benchmark's ``--colourings`` sets them per row):
 #: the tree (``"quadtree"``: :func:`deferring_tree`; ``"fishbone"``:
-#: :func:`vertex_fishbone_tree` with ``FISH_AXIS``, ``MIN_CELL``), the deferrals, the
+#: :func:`vertex_fishbone_tree` with ``FISH_AXIS``, ``FISH_LEVELS``), the deferrals, the
 #: small loops' bound (0: none) and the capped rotations' bound
 TREE = "quadtree"
 FISH_AXIS = 0
-MIN_CELL = 1024
+FISH_ANGLE = 0.0  # degrees: the fishbone's axes turned counter-clockwise
+FISH_LEVELS = 2
 LMAX = 16
 BIG = 2000
 DEFER = 8
@@ -501,7 +507,8 @@ def compact_cover(triangles: np.ndarray, twin: np.ndarray, **kw):
     n = int(tri.max()) + 1
     pts = np.ascontiguousarray(np.asarray(kw["points"])[:n, :2], dtype=np.float64)
     if TREE == "fishbone":
-        c = vertex_fishbone_tree(pts, tri, tw, FISH_AXIS, MIN_CELL, 5.0, DEFER).astype(np.int8)
+        c = vertex_fishbone_tree(turned(pts, FISH_ANGLE), tri, tw, FISH_AXIS, penalty=5.0, max_defer=DEFER,
+                                 levels=FISH_LEVELS).astype(np.int8)
     else:
         c = deferring_tree(pts, tri, tw, 64, DEFER)[0].astype(np.int8)
     LAST.clear()
@@ -514,6 +521,14 @@ def compact_cover(triangles: np.ndarray, twin: np.ndarray, **kw):
     n_unc = int((cyc < 0).sum())
     LAST.update(cycles=int(n_cyc), uncovered=n_unc)
     return CycleCover(is_cov=is_cov, cycle=cyc, n_cycles=int(n_cyc), n_uncovered=n_unc, n_unmatched=0)
+
+
+def turned(points: np.ndarray, angle: float) -> np.ndarray:
+    """``points`` (n, 2) in axes turned counter-clockwise by ``angle`` degrees."""
+    if not angle:
+        return points
+    t = np.radians(angle)
+    return np.ascontiguousarray(points @ np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]))
 
 
 def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int) -> np.ndarray:
@@ -622,7 +637,8 @@ def _spine_paths_into(ptr, idx, cand, lab, order, spine):
 
 
 def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
-                         min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0) -> np.ndarray:
+                         min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
+                         levels: int = 0) -> np.ndarray:
     """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
     vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
     spine is the path of vertices just below its cell's median line (each with a
@@ -630,7 +646,8 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     bottom-up, cells first, blocks the spine beside each cell): spines from the top
     level down, each child hung by its own spine's end nearest where its line meets the
     parent's (the deepest cells by any vertex), the deepest cells' insides next, walls
-    last."""
+    last. ``levels`` (> 0) fixes the depth, else cells of about ``min_cell`` vertices;
+    ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral."""
     n = len(points)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
     ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n)
@@ -638,7 +655,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     keep = src < idx
     a, b = src[keep], idx[keep]
     bnd = boundary_vertices(tri, twin, n)
-    depth = max(1, int(np.log(max(n / min_cell, 1.0)) / np.log(4.0)))
+    depth = levels if levels > 0 else max(1, int(np.log(max(n / min_cell, 1.0)) / np.log(4.0)))
     lab = np.zeros(n, np.int64)
     region = np.zeros(n, np.int64)
     spine_level = np.full(n, -1)

@@ -132,12 +132,15 @@ def test_the_seeded_cover_covers_what_the_matching_covers() -> None:
     assert cov.n_cycles > 1
 
 
-def test_sparse_mode_certifies_the_compact_cover(monkeypatch) -> None:
+@pytest.mark.parametrize("tree", ["quadtree", "fishbone"])
+def test_sparse_mode_certifies_the_compact_cover(monkeypatch, tree: str) -> None:
     from hammesh.partition import partition
     from hammesh.postprocess import sparse as sp
 
     mesh = _mesh(area=0.002)
     monkeypatch.setattr(sp, "cycle_cover", pc.compact_cover)
+    monkeypatch.setattr(pc, "TREE", tree)
+    monkeypatch.setattr(pc, "LMAX", 4)
     h = hammesh.hamiltonian(mesh, mode="sparse")  # (verified inside: a VerificationError fails the test)
     assert pc.LAST["cycles"] >= 1
     assert h.n_triangles >= mesh.n_triangles
@@ -145,9 +148,35 @@ def test_sparse_mode_certifies_the_compact_cover(monkeypatch) -> None:
     assert p.connected and p.sizes.max() - p.sizes.min() <= 1
 
 
-def test_the_vertex_fishbone_tree_is_an_induced_tree() -> None:
-    pts, tri, twin = _arrays(_mesh(hole=False))
+@pytest.mark.parametrize("straight", [True, False])
+def test_the_vertex_fishbone_tree_is_an_induced_tree(monkeypatch, straight: bool) -> None:
+    monkeypatch.setattr(pc, "STRAIGHT_SPINES", straight)
+    pts, tri, twin = _arrays(_mesh(area=0.002))
+    bnd = pc.boundary_vertices(tri, twin, len(pts))
     for axis in (0, 1):
-        inside = pc.vertex_fishbone_tree(pts, tri, twin, axis)
-        assert _is_induced_tree(inside, tri)
-        assert (inside[tri].sum(axis=1) == 0).mean() < 0.2
+        plain = pc.vertex_fishbone_tree(pts, tri, twin, axis, levels=2)
+        deferring = pc.vertex_fishbone_tree(pc.turned(pts, 30.0), tri, twin, axis, penalty=5.0, max_defer=8, levels=2)
+        for inside in (plain, deferring):
+            assert _is_induced_tree(inside, tri) and not inside[bnd].any()
+        unc = [(t[tri].sum(axis=1) == 0).sum() for t in (plain, deferring)]
+        assert unc[1] < unc[0]
+
+
+def test_straight_spines_are_shortest_paths_through_their_band() -> None:
+    # a band: the vertices of a strip of a grid mesh; its spine must be a path from
+    # the band's first vertex along the line to its last, and induced (shortest)
+    pts, tri, twin = _arrays(_mesh(hole=False, area=0.002))
+    n = len(pts)
+    ptr, idx, _, _ = pc.vertex_maps(tri, n)
+    cand = np.abs(pts[:, 1] - 0.5) < 0.06
+    lab = np.zeros(n, np.int64)
+    o = np.flatnonzero(cand)
+    o = o[np.argsort(pts[o, 0], kind="stable")].astype(np.int64)
+    spine = np.zeros(n, bool)
+    pc._spine_paths_into(ptr, idx, cand, lab, o, spine)
+    sv = np.flatnonzero(spine)
+    assert o[0] in sv and spine[cand].sum() < cand.sum()
+    e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+    e = e[spine[e[:, 0]] & spine[e[:, 1]]]
+    deg = np.bincount(e.ravel(), minlength=n)[sv]
+    assert len(e) == len(sv) - 1 and deg.max() <= 2  # a path (one piece: the band is connected)
