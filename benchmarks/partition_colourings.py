@@ -531,14 +531,30 @@ def turned(points: np.ndarray, angle: float) -> np.ndarray:
     return np.ascontiguousarray(points @ np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]))
 
 
-def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int) -> np.ndarray:
+def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int, weight: np.ndarray | None = None) -> np.ndarray:
+    """Per cell id, the value at which the cell's members (by ``value``) reach half
+    their count, or half their ``weight``; NaN for an empty cell."""
     o = np.lexsort((value, cell))
     cnt = np.bincount(cell, minlength=n_cells)
     start = np.r_[0, np.cumsum(cnt)[:-1]]
     med = np.full(n_cells, np.nan)
     full = cnt > 0
-    med[full] = value[o][start[full] + cnt[full] // 2]
+    if weight is None:
+        med[full] = value[o][start[full] + cnt[full] // 2]
+        return med
+    w = weight[o]
+    cum = np.cumsum(w)
+    before = np.r_[0.0, cum][start]  # weight before each cell's first member
+    half = before + 0.5 * np.bincount(cell, weights=weight, minlength=n_cells)
+    # first member of each cell whose cumulative weight reaches half the cell's
+    at = np.searchsorted(cum, half[full], side="left")
+    med[full] = value[o][np.minimum(at, start[full] + cnt[full] - 1)]
     return med
+
+
+#: ``vertex_fishbone_tree``'s medians weigh each vertex by its triangles / 3 (the
+#: walk's rows are triangles), not 1
+ROW_WEIGHTS = False
 
 
 @njit(cache=True)
@@ -656,6 +672,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     a, b = src[keep], idx[keep]
     bnd = boundary_vertices(tri, twin, n)
     depth = levels if levels > 0 else max(1, int(np.log(max(n / min_cell, 1.0)) / np.log(4.0)))
+    wt = np.bincount(tri.ravel(), minlength=n) / 3.0 if ROW_WEIGHTS else None
     lab = np.zeros(n, np.int64)
     region = np.zeros(n, np.int64)
     spine_level = np.full(n, -1)
@@ -664,14 +681,14 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
         labels.append(lab)
         along = (axis + level) % 2
         across = 1 - along
-        line = _cell_medians(region, points[:, across], 4**level)
+        line = _cell_medians(region, points[:, across], 4**level, wt)
         lines.append(line)
         if level == depth:
             break
         at = line[region]
         upper = points[:, across] >= at
         side = 2 * region + upper
-        far = points[:, along] >= _cell_medians(side, points[:, along], 2 * 4**level)[side]
+        far = points[:, along] >= _cell_medians(side, points[:, along], 2 * 4**level, wt)[side]
         region = 2 * side + far
         cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
         cand = np.zeros(n, bool)

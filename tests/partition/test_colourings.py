@@ -180,3 +180,20 @@ def test_straight_spines_are_shortest_paths_through_their_band() -> None:
     e = e[spine[e[:, 0]] & spine[e[:, 1]]]
     deg = np.bincount(e.ravel(), minlength=n)[sv]
     assert len(e) == len(sv) - 1 and deg.max() <= 2  # a path (one piece: the band is connected)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 3), st.floats(-10, 10), st.floats(0.1, 5.0)), min_size=1, max_size=60))
+def test_weighted_cell_medians_halve_the_weight(rows) -> None:
+    cell = np.array([r[0] for r in rows])
+    value = np.array([r[1] for r in rows])
+    weight = np.array([r[2] for r in rows])
+    med = pc._cell_medians(cell, value, 4, weight)
+    for c in range(4):
+        own = cell == c
+        if not own.any():
+            assert np.isnan(med[c])
+            continue
+        total = weight[own].sum()
+        assert weight[own & (value < med[c])].sum() < 0.5 * total + 1e-9
+        assert weight[own & (value <= med[c])].sum() >= 0.5 * total - 1e-9
