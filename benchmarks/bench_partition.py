@@ -282,21 +282,28 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
     for name, dom, area in domains:
         mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=area / (0.63 * target))
         pc.FISH_AXIS, pc.FISH_ANGLE = pc.FISH_FRAMES[name]
-        for label, tree, lmax in (("sparse's own (default)", None, None),
-                                  ("quadtree vertex tree, deferring", "quadtree", 0),
-                                  ("the same, loops <= 18, capped rotations", "quadtree", 16),
-                                  ("vertex fishbone, 2 levels, deferring", "fishbone", 0),
-                                  ("the same, loops <= 6, capped rotations", "fishbone", 4)):
-            orig = sp.cycle_cover
+        # (``reroute`` False: sparse's re-routes through uncovered boundary triangles off,
+        # ``REROUTE_DEPTH = 0``: they split the cover's cycle into long arcs that the
+        # joins splice back in another order)
+        for label, tree, lmax, reroute in (("sparse's own (default)", None, None, True),
+                                           ("quadtree vertex tree, deferring", "quadtree", 0, True),
+                                           ("the same, loops <= 18, capped rotations", "quadtree", 16, True),
+                                           ("vertex fishbone, 2 levels, deferring", "fishbone", 0, True),
+                                           ("the same, loops <= 6, capped rotations", "fishbone", 4, True),
+                                           ("vertex fishbone, deferring; sparse's re-routes off", "fishbone", 0,
+                                            False)):
+            orig, depth = sp.cycle_cover, sp.REROUTE_DEPTH
             if lmax is not None:
                 pc.TREE, pc.LMAX = tree, lmax
                 sp.cycle_cover = pc.compact_cover
+            if not reroute:
+                sp.REROUTE_DEPTH = 0
             try:
                 c0 = time.process_time()
                 h = hammesh.hamiltonian(mesh, mode="sparse")
                 cpu = time.process_time() - c0
             finally:
-                sp.cycle_cover = orig
+                sp.cycle_cover, sp.REROUTE_DEPTH = orig, depth
             r, m = h.report, h.n_triangles
             ha, hb = dual_edges(h.triangles, h.n_points)
             cuts = []
