@@ -39,7 +39,7 @@ from hammesh.postprocess._thm24_kernels import edge_class, quadtree_coords
 
 __all__ = ["vertex_maps", "boundary_vertices", "colour_of_cover", "cover_of", "flip_keeps_mixed", "deferring_tree",
            "small_loop_adds", "scale_rotations", "capped_rotations", "compact_cover", "vertex_fishbone_tree",
-           "cycle_sizes", "seeded_cover", "turned", "FISH_FRAMES"]
+           "cycle_sizes", "seeded_cover", "turned", "FISH_FRAMES", "order_jumps"]
 
 #: the vertex fishbone's frame per benchmark domain (axis, turn in degrees): the plate's
 #: top spine along y between its holes (session 11's choice); the gear's turn the best
@@ -777,3 +777,31 @@ def seeded_cover(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, colour: 
         return cc.cycle_cover(tri, twin, online=0, rotate=False, points=points)
     finally:
         ck.match_half = orig
+
+
+def order_jumps(points_in: np.ndarray, tri_in: np.ndarray, order_in: np.ndarray, points_out: np.ndarray,
+                tri_out: np.ndarray, big: int = 10_000) -> tuple[int, int]:
+    """``(jumps, largest)``: how far an output cycle (``tri_out``'s rows in order) strays
+    from an input cycle (``order_in``: ``tri_in``'s rows in cycle order). Each output row
+    that is an input triangle unchanged (found by its centroid, to 1e-7) is placed at its
+    position along the input cycle; ``jumps`` counts consecutive placed rows more than
+    ``big`` positions apart (the short way round), ``largest`` the largest such step: a
+    cycle that only had small pieces inserted has none; one cut into long arcs and
+    spliced in another order has one per splice (session 21: sparse's re-routes)."""
+    pos = np.full(len(tri_in), -1, np.int64)
+    pos[order_in] = np.arange(len(order_in))
+
+    def key(p, t):
+        c = np.round(p[t].mean(axis=1) * 1e7).astype(np.int64)
+        return c[:, 0] * np.int64(1 << 32) + c[:, 1]
+
+    kin, kout = key(points_in, tri_in), key(points_out, tri_out)
+    srt = np.argsort(kin, kind="stable")
+    i = np.minimum(np.searchsorted(kin[srt], kout), len(kin) - 1)
+    q = np.where(kin[srt][i] == kout, pos[srt[i]], -1)
+    q = q[q >= 0]
+    if len(q) < 2:
+        return 0, 0
+    d = np.abs(np.diff(q))
+    d = np.minimum(d, len(order_in) - d)
+    return int((d > big).sum()), int(d.max())

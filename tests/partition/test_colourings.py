@@ -197,3 +197,18 @@ def test_weighted_cell_medians_halve_the_weight(rows) -> None:
         total = weight[own].sum()
         assert weight[own & (value < med[c])].sum() < 0.5 * total + 1e-9
         assert weight[own & (value <= med[c])].sum() >= 0.5 * total - 1e-9
+
+
+def test_order_jumps_count_the_splices() -> None:
+    pts, tri, twin = _arrays(_mesh(hole=False, area=0.002))
+    m = len(tri)
+    order = np.random.default_rng(3).permutation(m)  # any cycle order of the rows
+    assert pc.order_jumps(pts, tri, order, pts, tri[order], big=10) == (0, 1)
+    # two arcs swapped: one splice where they meet (and none at the cycle's wrap)
+    half = m // 2
+    spliced = np.r_[order[half:], order[:half][::-1]]
+    jumps, largest = pc.order_jumps(pts, tri, order, pts, tri[spliced], big=10)
+    assert jumps == 1 and largest > 10
+    # an inserted new triangle (not an input one) is skipped
+    assert pc.order_jumps(pts, tri, order, np.r_[pts, [[9.0, 9.0]]],
+                          np.r_[tri[order][:5], [[len(pts), 0, 1]], tri[order][5:]], big=10)[0] == 0
