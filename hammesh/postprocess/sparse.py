@@ -2520,9 +2520,18 @@ def sparse_hamiltonian(
             loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True,
             tree=tree,
         )
-        r = _numbered_back(r, loc, pts, (t0, c0))
+        # (the arrays the construction dropped as it returned, ~290 MB at 1.5 M, are given
+        # back after these two-thread passes, not beside them: ``threads.later_held``)
+        with threads.later_held():
+            r = _numbered_back(r, loc, pts, (t0, c0))
     else:
         r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover, tree=tree)
+    with threads.later_held():
+        return _as_output(mesh, r, n, m)
+
+
+def _as_output(mesh: Mesh, r: SparseResult, n: int, m: int) -> tuple[HamiltonianMesh, np.ndarray]:
+    """``sparse_hamiltonian``'s result from the construction's (in the input's numbering)."""
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)
