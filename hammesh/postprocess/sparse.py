@@ -1930,10 +1930,12 @@ def sparse_cycles(
         Called once, to hand work that needs nothing of the construction to another
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
         there, and without a page reserve faults one for the steps after the cover):
-        as the cover starts, or, where ``hammesh.pages`` holds a reserve, as the plan
-        starts (``SIDE_BEFORE_PLAN``: its Python runs on one core bar the cover swaps'
-        tests; the cover's matching, the scores and the placements before it take
-        both), else after the output rows, beside the improvement.
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, as the
+        splits are placed (``SIDE_BEFORE_PLACING``: their sorts and open candidates,
+        then the plan's Python, run on one core, and it is mostly done before the
+        cover swaps' tests take two threads; the cover's matching and the scores take
+        both), or as the plan starts (``SIDE_BEFORE_PLAN`` alone), else after the
+        output rows, beside the improvement.
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
