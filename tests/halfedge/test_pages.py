@@ -211,6 +211,24 @@ def test_later_held_keeps_the_background_work_for_the_blocks_end() -> None:
     assert seen == [1, 2, 3]
 
 
+def test_later_held_waits_at_most_later_hold_max(monkeypatch) -> None:
+    # blocks of several threads that overlap without end must not keep the background
+    # work (a process's dead pages) forever: it runs ``LATER_HOLD_MAX`` after the first opened
+    import time
+
+    if threads.cores() < 2:
+        pytest.skip("one thread: nothing in the background to hold")
+    threads.wait_later()
+    monkeypatch.setattr(threads, "LATER_HOLD_MAX", 0.2)
+    seen: list = []
+    with threads.later_held():
+        t0 = time.monotonic()
+        threads.later(lambda: seen.append(time.monotonic() - t0))
+        while not seen and time.monotonic() - t0 < 10:
+            time.sleep(0.01)
+        assert seen and 0.15 <= seen[0] < 5.0
+
+
 @pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="fork is POSIX's")
 def test_later_in_a_forked_child_runs_on_its_own_thread() -> None:
     # the parent's background thread is not in a forked child: the child starts its own
