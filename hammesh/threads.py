@@ -19,11 +19,13 @@ import os
 import queue
 import sys
 import threading
+import time
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
-from typing import Any, Callable
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator
 
 __all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "LaterThreadExecutor", "THREAD_MIN_ROWS", "later",
-           "wait_later"]
+           "wait_later", "later_held", "LATER_HOLD_MAX"]
 
 #: Rows per thread below which a row pass runs in one call (tests lower it to exercise
 #: the threaded paths on small meshes).
@@ -80,10 +82,11 @@ def _shared_pool() -> ThreadPoolExecutor:
 
 
 def _forget_pool() -> None:  # (a forked child has none of its parent's threads)
-    global _pool, _later, _later_lock
+    global _pool, _later, _later_lock, _gate, _holds, _draining
     _pool = None
     _later = None  # (work its parent had queued is the parent's)
     _later_lock = threading.Lock()  # (another thread may have held it at the fork)
+    _gate, _holds, _draining = threading.Condition(), 0, 0  # (the parent's holds are its own)
 
 
 os.register_at_fork(after_in_child=_forget_pool)
@@ -175,6 +178,16 @@ def side_executor() -> Executor:
 
 _later: queue.SimpleQueue | None = None
 _later_lock = threading.Lock()
+#: :func:`later_held`'s state: blocks open, since when some block has been open, and
+#: :func:`wait_later` calls under way (they let the queue run through a hold: a caller
+#: inside one must not wait forever)
+_gate = threading.Condition()
+_holds = 0
+_held_since = 0.0
+_draining = 0
+#: the longest :func:`later_held` keeps the background work waiting (seconds): blocks
+#: of several threads that overlap without end must not keep a process's dead pages
+LATER_HOLD_MAX = 1.0
 
 
 def later(fn: Callable[..., Any], *args: Any) -> None:
@@ -210,18 +223,58 @@ def later(fn: Callable[..., Any], *args: Any) -> None:
 
 
 def wait_later() -> None:
-    """Return once everything handed to :func:`later` so far has run."""
+    """Return once everything handed to :func:`later` so far has run (also inside a
+    :func:`later_held` block: the queue runs while this waits)."""
+    global _draining
     with _later_lock:
         q = _later
     if q is not None:
         done = threading.Event()
-        q.put((done.set, ()))
-        done.wait()
+        with _gate:
+            _draining += 1
+            _gate.notify_all()
+        try:
+            q.put((done.set, ()))
+            done.wait()
+        finally:
+            with _gate:
+                _draining -= 1
+
+
+@contextmanager
+def later_held() -> Iterator[None]:
+    """Work handed to :func:`later` waits until the block ends (the piece under way
+    finishes first); it is queued as before and runs, in order, afterwards.
+
+    For a stretch whose threads want every core, where the background thread's work
+    would take one from them: at 1.5 M triangles the arrays a sparse construction drops
+    as it ends are ~290 MB, ~25-30 ms of ``munmap`` CPU that ran beside the
+    certificate's two row threads (docs/sparse.md, session 21). Holds nest and may
+    overlap between threads; the work waits while any is open, at most
+    ``LATER_HOLD_MAX`` seconds from when the first of them opened.
+    """
+    global _holds, _held_since
+    with _gate:
+        if _holds == 0:
+            _held_since = time.monotonic()
+        _holds += 1
+    try:
+        yield
+    finally:
+        with _gate:
+            _holds = max(0, _holds - 1)
+            _gate.notify_all()
 
 
 def _run_later(q: queue.SimpleQueue) -> None:
     while True:
         fn, args = q.get()
+        with _gate:  # (a hold open: wait for its end, unless someone waits for the queue)
+            while _holds and not _draining:
+                left = _held_since + LATER_HOLD_MAX - time.monotonic()
+                if left <= 0:  # (held too long: on, until no block is open)
+                    break
+                _gate.wait(left)
         try:
             fn(*args)
         except Exception:  # noqa: BLE001  (no caller to tell; the next work still runs)

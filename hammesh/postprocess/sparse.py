@@ -99,6 +99,10 @@ IMPROVE_ROUNDS = 3
 #: other core idle (~0.1 s at 1.5 M, session 17's ``--critical``); False: after the output
 #: rows, beside the improvement, which since session 19 is too short to hide it
 SIDE_BEFORE_PLAN = True
+#: with ``SIDE_BEFORE_PLAN``, start it earlier still: as the splits are placed (their
+#: Kruskal orders and open candidates leave the other core idle, ~0.04 s at 1.5 M), so
+#: that most of it is done before the plan's cover swaps test on two threads
+SIDE_BEFORE_PLACING = True
 #: outputs of this many rows or more: the improvement works only on the new rows that
 #: miss issue 13's absolute targets (angle below ``keep`` x the input's smallest or above
 #: its largest + 5 degrees) and on the Steiner points at their corners; below, on every
@@ -234,17 +238,19 @@ def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
     return run_all([partial(fill, lo, hi) for lo, hi in spans])
 
 
-#: tied keys beyond which :func:`stable_argsort` sorts again stably instead of fixing the ties
-STABLE_TIES_MAX = 256
+#: tied places beyond which :func:`stable_argsort` sorts again stably instead of fixing the ties
+STABLE_TIES_MAX = 16_384
 
 
 def stable_argsort(key: np.ndarray) -> np.ndarray:
     """``np.argsort(key, kind="stable")`` of a float array, by numpy's faster unstable
     sort: equal keys lie together after it, and each run of them put back in index
     order is exactly the stable order (ties by index). ~0.6 x the time for ~120 k
-    keys (``_join_order``'s sort, twice a call: 6.4 -> ~4 ms each at 1.5 M
-    triangles, session 20). NaN keys, or more than ``STABLE_TIES_MAX`` tied places:
-    the stable sort itself."""
+    keys (``_join_order``'s sort, twice a call, session 20). The runs are put back
+    together, by one small sort of the tied places (session 21: at 1.5 M triangles
+    ~400 tied places among 67 k keys, over the 256 a loop of one sort per run took,
+    so both calls paid the unstable sort and then the stable one: 9.5 ms each). NaN
+    keys, or more than ``STABLE_TIES_MAX`` tied places: the stable sort itself."""
     o = np.argsort(key)
     if len(o) < 2:
         return o
@@ -254,13 +260,11 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
     tie = np.flatnonzero(ks[1:] == ks[:-1])
     if len(tie) > STABLE_TIES_MAX:
         return np.argsort(key, kind="stable")
-    i = 0
-    while i < len(tie):  # each run of equal keys o[a:b], a = tie[i], in index order
-        a = b = int(tie[i])
-        while i < len(tie) and tie[i] == b:
-            b += 1
-            i += 1
-        o[a:b + 1] = np.sort(o[a:b + 1])
+    if len(tie):
+        at = np.union1d(tie, tie + 1)  # the places in runs of equal keys, in order
+        run = np.cumsum(np.concatenate([[0], ks[at[1:]] != ks[at[:-1]]]))  # (equal keys: one run)
+        sub = o[at]
+        o[at] = sub[np.lexsort((sub, run))]  # each run's indices in increasing order
     return o
 
 
@@ -1926,10 +1930,12 @@ def sparse_cycles(
         Called once, to hand work that needs nothing of the construction to another
         thread (``hammesh.hamiltonian`` starts the certificate's look at the input
         there, and without a page reserve faults one for the steps after the cover):
-        as the cover starts, or, where ``hammesh.pages`` holds a reserve, as the plan
-        starts (``SIDE_BEFORE_PLAN``: its Python runs on one core bar the cover swaps'
-        tests; the cover's matching, the scores and the placements before it take
-        both), else after the output rows, beside the improvement.
+        as the cover starts, or, where ``hammesh.pages`` holds a reserve, as the
+        splits are placed (``SIDE_BEFORE_PLACING``: their sorts and open candidates,
+        then the plan's Python, run on one core, and it is mostly done before the
+        cover swaps' tests take two threads; the cover's matching and the scores take
+        both), or as the plan starts (``SIDE_BEFORE_PLAN`` alone), else after the
+        output rows, beside the improvement.
     local : bool
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
@@ -2058,6 +2064,9 @@ def sparse_cycles(
         # still use the join after all joins meeting the rule unplaced (``open_candidates``)
         score(every, 0)
         steps.done("score_joins")
+        if use_cover and late and SIDE_BEFORE_PLAN and SIDE_BEFORE_PLACING:
+            beside_cover()
+            late = False
         if place_iters > 0 and edge_splits and pts.shape[1] == 2:  # also when empty: load_kernels loads it
             whole = (newmin >= keep * min_angle) & (newmax <= hi)
             order = _join_order(ckind, slack, newmin, pmin, whole, cls, fish is not None)
@@ -2520,9 +2529,18 @@ def sparse_hamiltonian(
             loc.points, loc.triangles, loc.twin, loc.marks, amin, keep=keep, beside_cover=beside_cover, local=True,
             tree=tree,
         )
-        r = _numbered_back(r, loc, pts, (t0, c0))
+        # (the arrays the construction dropped as it returned, ~290 MB at 1.5 M, are given
+        # back after these two-thread passes, not beside them: ``threads.later_held``)
+        with threads.later_held():
+            r = _numbered_back(r, loc, pts, (t0, c0))
     else:
         r = sparse_cycles(pts, tri, he.twin, pinned, amin, keep=keep, beside_cover=beside_cover, tree=tree)
+    with threads.later_held():
+        return _as_output(mesh, r, n, m)
+
+
+def _as_output(mesh: Mesh, r: SparseResult, n: int, m: int) -> tuple[HamiltonianMesh, np.ndarray]:
+    """``sparse_hamiltonian``'s result from the construction's (in the input's numbering)."""
     n_inc = r.counts["incenters"]
     segs, markers = split_segments(
         mesh.segments, mesh.segment_markers, r.mid_a, r.mid_b, n + r.counts["fans"] + n_inc, len(r.points)

@@ -183,6 +183,52 @@ def test_later_runs_in_order_off_the_caller_or_inline_on_one_core() -> None:
         threads.limit(old)
 
 
+def test_later_held_keeps_the_background_work_for_the_blocks_end() -> None:
+    # session 21: ``threads.later_held`` (the certificate's row threads want both cores):
+    # work handed to ``later`` inside the block waits, in order, and runs after it;
+    # ``wait_later`` inside a block still returns (the queue runs while it waits)
+    import time
+
+    threads.wait_later()
+    seen: list = []
+    if threads.cores() < 2:  # (one thread: nothing in the background to hold)
+        with threads.later_held():
+            threads.later(seen.append, 1)
+        assert seen == [1]
+        return
+    with threads.later_held():
+        threads.later(seen.append, 1)
+        with threads.later_held():  # (nested: the outer block still holds)
+            threads.later(seen.append, 2)
+        time.sleep(0.05)
+        assert seen == []
+        threads.wait_later()
+        assert seen == [1, 2]
+        threads.later(seen.append, 3)
+        time.sleep(0.05)
+        assert seen == [1, 2]
+    threads.wait_later()
+    assert seen == [1, 2, 3]
+
+
+def test_later_held_waits_at_most_later_hold_max(monkeypatch) -> None:
+    # blocks of several threads that overlap without end must not keep the background
+    # work (a process's dead pages) forever: it runs ``LATER_HOLD_MAX`` after the first opened
+    import time
+
+    if threads.cores() < 2:
+        pytest.skip("one thread: nothing in the background to hold")
+    threads.wait_later()
+    monkeypatch.setattr(threads, "LATER_HOLD_MAX", 0.2)
+    seen: list = []
+    with threads.later_held():
+        t0 = time.monotonic()
+        threads.later(lambda: seen.append(time.monotonic() - t0))
+        while not seen and time.monotonic() - t0 < 10:
+            time.sleep(0.01)
+        assert seen and 0.15 <= seen[0] < 5.0
+
+
 @pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="fork is POSIX's")
 def test_later_in_a_forked_child_runs_on_its_own_thread() -> None:
     # the parent's background thread is not in a forked child: the child starts its own

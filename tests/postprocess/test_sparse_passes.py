@@ -590,12 +590,20 @@ def test_stable_argsort_is_numpys_stable_order(key, spread) -> None:
     assert np.array_equal(stable_argsort(key.copy()), np.argsort(key, kind="stable"))
 
 
-def test_stable_argsort_many_ties_falls_back() -> None:
-    """More tied places than ``STABLE_TIES_MAX``: still numpy's stable order."""
+@pytest.mark.parametrize("ties_max", [None, 10])
+def test_stable_argsort_many_ties(ties_max, monkeypatch) -> None:
+    """Many tied places (fixed together, session 21), and beyond ``STABLE_TIES_MAX``
+    (the stable sort again): numpy's stable order either way."""
     from hammesh.postprocess import sparse
 
+    if ties_max is not None:
+        monkeypatch.setattr(sparse, "STABLE_TIES_MAX", ties_max)
     key = np.repeat(np.arange(50.0), 20)[::-1].copy()
     assert np.array_equal(sparse.stable_argsort(key), np.argsort(key, kind="stable"))
     few = np.linspace(0, 1, 5000)
     few[100:110] = 0.5
+    few[4000:4003] = few[17]
     assert np.array_equal(sparse.stable_argsort(few), np.argsort(few, kind="stable"))
+    rng = np.random.default_rng(21)
+    mixed = rng.integers(0, 700, 60_000) * 0.125 - rng.integers(0, 3, 60_000) * 8.0
+    assert np.array_equal(sparse.stable_argsort(mixed), np.argsort(mixed, kind="stable"))

@@ -607,12 +607,16 @@ def test_renumbered_input_refuses_bad_segments_and_keeps_own_cycles_alike(monkey
     np.testing.assert_array_equal(again.triangles, own.triangles)
 
 
-@pytest.mark.parametrize("before_plan", [True, False])
-def test_side_work_starts_once_as_the_plan_starts_when_pages_are_reserved(before_plan: bool, monkeypatch) -> None:
+@pytest.mark.parametrize("before_plan, before_placing", [(True, True), (True, False), (False, False)])
+def test_side_work_starts_once_as_the_plan_starts_when_pages_are_reserved(before_plan: bool, before_placing: bool,
+                                                                          monkeypatch) -> None:
     """With a page reserve, ``sparse_cycles``' ``beside_cover`` (the certificate's look at
-    the input) is called exactly once: as the plan starts (``SIDE_BEFORE_PLAN``, session
-    19: the plan's Python leaves the other core idle), else after the output rows (the
-    improvement's start); without a reserve, as the cover starts."""
+    the input) is called exactly once: as the splits are placed (``SIDE_BEFORE_PLACING``,
+    session 21: their sorts and open candidates leave the other core idle, and it is
+    then mostly done before the plan's swap tests take two threads), else as the plan
+    starts (``SIDE_BEFORE_PLAN``, session 19: the plan's Python leaves the other core
+    idle), else after the output rows (the improvement's start); without a reserve, as
+    the cover starts."""
     from hammesh.halfedge import prepare_mesh
     from hammesh.postprocess import sparse
 
@@ -620,14 +624,16 @@ def test_side_work_starts_once_as_the_plan_starts_when_pages_are_reserved(before
     clean, he, is_con = prepare_mesh(m)
     amin = float(clean.info["validated"]["min_angle"])
     log: list[str] = []
-    for name, tag in (("plan_merges", "plan"), ("emit", "rows")):
+    for name, tag in (("open_candidates", "place"), ("plan_merges", "plan"), ("emit", "rows")):
         real = getattr(sparse._k, name)
         monkeypatch.setattr(sparse._k, name, lambda *a, _r=real, _t=tag, **k: (log.append(_t), _r(*a, **k))[1])
     real_cover = sparse.cycle_cover
     monkeypatch.setattr(sparse, "cycle_cover", lambda *a, **k: (log.append("cover"), real_cover(*a, **k))[1])
     monkeypatch.setattr(sparse, "SIDE_BEFORE_PLAN", before_plan)
-    for reserve, want in ((1, ["cover", "side", "plan", "rows"] if before_plan else ["cover", "plan", "rows", "side"]),
-                          (0, ["side", "cover", "plan", "rows"])):
+    monkeypatch.setattr(sparse, "SIDE_BEFORE_PLACING", before_placing)
+    late = (["cover", "side", "place", "plan", "rows"] if before_placing else
+            ["cover", "place", "side", "plan", "rows"] if before_plan else ["cover", "place", "plan", "rows", "side"])
+    for reserve, want in ((1, late), (0, ["side", "cover", "place", "plan", "rows"])):
         log.clear()
         monkeypatch.setattr(sparse, "reserved", lambda r=reserve: r)
         sparse.sparse_cycles(clean.points, clean.triangles, he.twin, is_con, amin,

@@ -166,6 +166,42 @@ def test_threaded_row_checks_equal_one_pass(pair, monkeypatch) -> None:
             assert split.min_area < 0 and split.argmin_area == broken == split.bad_orientation
 
 
+@pytest.mark.parametrize("cores", [2, 3])
+def test_row_checks_run_a_side_task_once_after_a_range_when_the_cores_are_taken(pair, monkeypatch, cores) -> None:
+    """Session 21: with as many row ranges as cores, the side task (the claim's boundary
+    keys) runs once, after the range that ends first, and the caller's thread takes a
+    range (no pool of three threads beside an idle caller); the checks are the one-call
+    result and the side task's result comes back."""
+    import threading
+
+    import hammesh.threads as row_threads
+    from hammesh.verify import certificate
+
+    _, h = pair
+    monkeypatch.setattr(row_threads, "THREAD_MIN_ROWS", 7)
+    monkeypatch.setattr(row_threads.os, "cpu_count", lambda: cores)
+    one = certify_all(h.points, h.triangles, h.components)
+    ran: list = []
+    real = _kernels.certify_row_range
+
+    def spy(*a):
+        ran.append(threading.get_ident())
+        return real(*a)
+
+    monkeypatch.setattr(certificate._kernels, "certify_row_range", spy)
+    sides: list = []
+    empty = np.empty(0, dtype=np.int64)
+    used = np.zeros(len(h.points), dtype=bool)
+    split, got = certificate._certify_rows(h.points, h.triangles, h.components, empty, used,
+                                           side=lambda: sides.append(1) or "keys")
+    assert got == "keys" and sides == [1]
+    assert len(ran) == cores and threading.get_ident() in ran
+    for name in ("bad_index", "bad_consecutive", "bad_pair", "cross_run", "argmin", "argmax", "bad_orientation"):
+        assert getattr(split, name) == getattr(one, name), name
+    assert np.isclose(split.total_area, one.total_area, rtol=1e-12)
+    assert np.array_equal(used, np.bincount(h.triangles.ravel(), minlength=len(h.points)) > 0)
+
+
 def test_threaded_certificate_names_the_bad_row(pair, monkeypatch) -> None:
     import hammesh.threads as row_threads
 
