@@ -607,3 +607,64 @@ def test_stable_argsort_many_ties(ties_max, monkeypatch) -> None:
     rng = np.random.default_rng(21)
     mixed = rng.integers(0, 700, 60_000) * 0.125 - rng.integers(0, 3, 60_000) * 8.0
     assert np.array_equal(sparse.stable_argsort(mixed), np.argsort(mixed, kind="stable"))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    rounds=st.lists(st.tuples(st.integers(0, 6), st.integers(0, 4), st.booleans()), min_size=1, max_size=5),
+    lo_deg=st.floats(10, 40),
+    hi_deg=st.floats(80, 130),
+)
+def test_missing_rows_measuring_only_stamped_rows_equals_a_full_pass(seed, rounds, lo_deg, hi_deg) -> None:
+    """``sparse._MissingRows`` (the improvement step's repeated ask, measuring only the rows
+    stamped in ``touched`` since it last measured) answers what a full pass over the rows
+    answers, as points move and rows change corners and join the asked set, each change
+    stamped with the advanced clock as the step's kernels stamp it."""
+    from hammesh.postprocess import sparse
+
+    rng = np.random.default_rng(seed)
+    pts = rng.random((40, 2))
+    tri = np.array([rng.choice(40, 3, replace=False) for _ in range(60)], np.int64)
+    touched = np.zeros(len(tri), np.int64)
+    clock = np.zeros(1, np.int64)
+    ask = sparse._MissingRows(touched, clock)
+    rows = np.flatnonzero(rng.random(len(tri)) < 0.5)
+    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
+    for moves, flips, grow in rounds:
+        for v in rng.choice(40, moves, replace=False):  # a point moved: its rows stamped
+            pts[v] += rng.normal(0.0, 0.05, 2)
+            clock[0] += 1
+            touched[np.flatnonzero((tri == v).any(axis=1))] = clock[0]
+        for x in rng.choice(len(tri), flips, replace=False):  # a row's corners changed
+            tri[x] = rng.choice(40, 3, replace=False)
+            clock[0] += 1
+            touched[x] = clock[0]
+        if grow:  # rows joining the asked set (flips make kept rows new)
+            rows = np.union1d(rows, rng.choice(len(tri), 5))
+        np.testing.assert_array_equal(ask(pts, tri, rows, lo, hi), sparse._missing_rows(pts, tri, rows, lo, hi))
+
+
+@pytest.mark.parametrize("name", ["A", "face"])
+def test_improvement_asks_missing_rows_as_a_full_pass_answers(name: str, monkeypatch) -> None:
+    """On a mesh where the improvement step asks only the rows missing the targets
+    (``IMPROVE_ALL_BELOW`` lowered) and both flips and moves happen, every ask of the
+    incremental ``_MissingRows`` equals a full pass over the rows as they are then: the
+    flips' and moves' stamps in ``touched`` cover every row whose angles changed."""
+    from hammesh.postprocess import sparse
+
+    m = hammesh.quality_mesh(bundled_domain(name), min_angle=30)
+    monkeypatch.setattr(sparse, "IMPROVE_ALL_BELOW", 0)
+    real = sparse._MissingRows.__call__
+    asks = []
+
+    def checked(self, pts, out, rows, lo, hi):
+        got = real(self, pts, out, rows, lo, hi)
+        np.testing.assert_array_equal(got, sparse._missing_rows(pts, out, rows, lo, hi))
+        asks.append(self.at)
+        return got
+
+    monkeypatch.setattr(sparse._MissingRows, "__call__", checked)
+    h = hammesh.hamiltonian(m, mode="sparse")
+    assert h.report["improvement_flips"] > 0 and h.report["steiner_moved"] > 0
+    assert len(asks) >= 3 and asks[-1] > asks[0]  # (asked again after rows changed)
