@@ -2361,7 +2361,9 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
         n_moved += moved
         if moved == 0:
             break
-    repaired, facts = _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor)
+    # (the loop's ask, its measurements up to date, gives the repair's first round: only_missing)
+    repaired, facts = _repair_targets(pts, out, twin, pinned, kind, first_steiner, lo_global, hi, floor,
+                                      missing_rows if only_missing else None)
     n_moved += repaired
     return out, twin, kind, pm, int(n_flips), int(n_moved), facts
 
@@ -2420,7 +2422,8 @@ def _leave_points_off(out: np.ndarray, rows: np.ndarray, first: int, judged: np.
     judged[~on] = now
 
 
-def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float):
+def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float, hi: float, floor: float,
+                    missing_rows: _MissingRows | None = None):
     """Move the Steiner points of rows that miss issue 13's absolute targets (in place).
 
     After the improvement step, the new rows with an angle below ``lo`` (``keep`` x
@@ -2430,16 +2433,23 @@ def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float,
     rounds. Returns the number of moves and the new rows' facts ``(new, smallest,
     largest angle, worst radius ratio)`` if the last ones measured are the final rows'
     (no move after them; else None): the report's (``local_quality``), not measured again.
+    ``missing_rows``: the improvement step's ask (:class:`_MissingRows`, with the
+    same ``lo`` and ``hi``), which gives the first round's rows from the rows changed
+    since it last measured; the full pass is then made only where no point moves
+    (the report's facts), not where the next round measures again anyway.
     """
     new = np.flatnonzero(kind != 3)
     if not len(new) or first_steiner >= len(pts):
         return 0, None
     moved = 0
     final = None
-    for _ in range(IMPROVE_ROUNDS):
-        a_lo, a_hi, ratio, _ = triangle_facts(pts, out[new])
-        final = (new, a_lo, a_hi, ratio)
-        miss = new[(a_lo < lo) | (a_hi > hi)]
+    for r in range(IMPROVE_ROUNDS):
+        if r == 0 and missing_rows is not None:
+            miss = missing_rows(pts, out, new, lo, hi)
+        else:
+            a_lo, a_hi, ratio, _ = triangle_facts(pts, out[new])
+            final = (new, a_lo, a_hi, ratio)
+            miss = new[(a_lo < lo) | (a_hi > hi)]
         rc = np.argwhere(out[miss] >= first_steiner)
         if not len(rc):
             break
@@ -2451,6 +2461,9 @@ def _repair_targets(pts, out, twin, pinned, kind, first_steiner: int, lo: float,
             final = None  # (points moved since)
         else:
             break
+    if final is None and moved == 0:  # (the first round's ask, no point moved: the report's facts)
+        a_lo, a_hi, ratio, _ = triangle_facts(pts, out[new])
+        final = (new, a_lo, a_hi, ratio)
     return moved, final
 
 
