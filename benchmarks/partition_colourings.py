@@ -489,6 +489,7 @@ TREE = "quadtree"
 FISH_AXIS = 0
 FISH_ANGLE = 0.0  # degrees: the fishbone's axes turned counter-clockwise
 FISH_LEVELS = 2
+FISH_FILL = "grow"  # the deepest cells: ``"grow"`` breadth-first, ``"comb"`` teeth across the spine
 LMAX = 16
 BIG = 2000
 DEFER = 8
@@ -508,7 +509,7 @@ def compact_cover(triangles: np.ndarray, twin: np.ndarray, **kw):
     pts = np.ascontiguousarray(np.asarray(kw["points"])[:n, :2], dtype=np.float64)
     if TREE == "fishbone":
         c = vertex_fishbone_tree(turned(pts, FISH_ANGLE), tri, tw, FISH_AXIS, penalty=5.0, max_defer=DEFER,
-                                 levels=FISH_LEVELS).astype(np.int8)
+                                 levels=FISH_LEVELS, fill=FISH_FILL).astype(np.int8)
     else:
         c = deferring_tree(pts, tri, tw, 64, DEFER)[0].astype(np.int8)
     LAST.clear()
@@ -654,7 +655,7 @@ def _spine_paths_into(ptr, idx, cand, lab, order, spine):
 
 def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
                          min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
-                         levels: int = 0) -> np.ndarray:
+                         levels: int = 0, fill: str = "grow", pitch: float = 0.02) -> np.ndarray:
     """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
     vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
     spine is the path of vertices just below its cell's median line (each with a
@@ -730,6 +731,9 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
         walls = np.flatnonzero(sel & ~sa & ~sb)
         w[walls] = 2e5 + np.abs(mid[walls, 1 - along] - lines[level][labels[level][a[walls]]]) / scale
     s2, d2, w2 = np.r_[a, b], np.r_[b, a], np.r_[w, w]
+    if fill == "comb":
+        w2 = _comb_keys(points, s2, d2, w2, np.r_[deepest, deepest] == depth, labels[depth - 1][d2],
+                        lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
     o = np.lexsort((d2, s2))
     wptr = np.searchsorted(s2[o], np.arange(n + 1)).astype(np.int64)
     top = np.flatnonzero((spine_level == 0) & ~bnd)
@@ -739,6 +743,24 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     _grow_weighted_into(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd, int(seed),
                         inside, float(penalty), int(max_defer))
     return inside
+
+
+def _comb_keys(points, src, dst, keys, deep, parent, parent_line, along, base, pitch, scale):
+    """Prim's keys of the directed edges ``src -> dst`` inside the deepest cells for the
+    comb fill: ``dst``'s distance from its parent's spine line (the spine runs along
+    ``along``) in whole steps of ``pitch`` median edges, ties by its coordinate along
+    the spine. The growth sweeps away from the spine, so each inside vertex extends the
+    tooth it is next to across the spine (and a vertex that would touch two teeth stays
+    out): teeth about one vertex row wide, outside rows between them. (A deferral's
+    penalty is counted in steps: 5 steps of 0.05 edges put a vertex back by a quarter
+    of an edge.)"""
+    keys = keys.copy()
+    v = dst[deep]
+    d = points[v] - points[src[deep]]
+    step = pitch * float(np.median(np.sqrt((d ** 2).sum(1))))
+    off = np.floor(np.abs(points[v, 1 - along] - parent_line[parent[deep]]) / step)
+    keys[deep] = base + off + (points[v, along] - points[:, along].min()) / scale
+    return keys
 
 
 def seeded_cover(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, colour: np.ndarray):
