@@ -271,6 +271,9 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
         pc.small_loop_adds(tri, twin, c, 4)
         pc.capped_rotations(tri, twin, c, 2000)
         rows.append(("the same, loops <= 6 added, capped rotations", c))
+        comb = pc.vertex_fishbone_tree(pc.turned(pts, angle), tri, twin, axis, penalty=5.0, max_defer=8, levels=2,
+                                       fill="comb").astype(np.int8)
+        rows.append(("vertex fishbone, deferring, deepest cells as combs", comb))
         for label, c in rows:
             n_cyc, big, unc, cuts = _largest_cycle_cut(tri, twin, c, a, b, nb, ks, mcs)
             print(f"| {name} | {m:,} | {label} | {unc:.2%} | {n_cyc:,} | {big:.1%} | "
@@ -285,14 +288,16 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
         # (``reroute`` False: sparse's re-routes through uncovered boundary triangles off,
         # ``REROUTE_DEPTH = 0``: they split the cover's cycle into long arcs that the
         # joins splice back in another order)
-        for label, tree, lmax, reroute in (("sparse's own (default)", None, None, True),
-                                           ("quadtree vertex tree, deferring", "quadtree", 0, True),
-                                           ("the same, loops <= 18, capped rotations", "quadtree", 16, True),
-                                           ("vertex fishbone, 2 levels, deferring", "fishbone", 0, True),
-                                           ("the same, loops <= 6, capped rotations", "fishbone", 4, True),
-                                           ("vertex fishbone, deferring; sparse's re-routes off", "fishbone", 0,
-                                            False)):
+        for label, tree, lmax, reroute, fill in (
+                ("sparse's own (default)", None, None, True, "grow"),
+                ("quadtree vertex tree, deferring", "quadtree", 0, True, "grow"),
+                ("the same, loops <= 18, capped rotations", "quadtree", 16, True, "grow"),
+                ("vertex fishbone, 2 levels, deferring", "fishbone", 0, True, "grow"),
+                ("the same, loops <= 6, capped rotations", "fishbone", 4, True, "grow"),
+                ("vertex fishbone, deferring; sparse's re-routes off", "fishbone", 0, False, "grow"),
+                ("vertex fishbone, deferring, combs; re-routes off", "fishbone", 0, False, "comb")):
             orig, depth = sp.cycle_cover, sp.REROUTE_DEPTH
+            pc.FISH_FILL = fill
             if lmax is not None:
                 pc.TREE, pc.LMAX = tree, lmax
                 sp.cycle_cover = pc.compact_cover

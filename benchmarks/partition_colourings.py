@@ -25,7 +25,9 @@ distinct.
   benchmark swaps it in for sparse mode's own; sparse's joins and fans do the rest and
   the output is certified as usual);
 * :func:`vertex_fishbone_tree`: session 11's fishbone cells made on the vertices, grown
-  top-down (a prototype: it cut more than the quadtree vertex tree).
+  top-down; its deepest cells grown breadth-first or (``fill="comb"``, the second round
+  of session 21) as combs, teeth across the parent's spine, which leaves a third of the
+  uncovered triangles.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ import heapq
 import numpy as np
 from numba import njit
 
+from hammesh.errors import InvalidOptionError
 from hammesh.postprocess._thm24_kernels import edge_class, quadtree_coords
 
 __all__ = ["vertex_maps", "boundary_vertices", "colour_of_cover", "cover_of", "flip_keeps_mixed", "deferring_tree",
@@ -664,7 +667,12 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     level down, each child hung by its own spine's end nearest where its line meets the
     parent's (the deepest cells by any vertex), the deepest cells' insides next, walls
     last. ``levels`` (> 0) fixes the depth, else cells of about ``min_cell`` vertices;
-    ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral."""
+    ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral. ``fill``: the deepest
+    cells grown breadth-first from where they hang (``"grow"``: equal keys), or as combs
+    (``"comb"``: a sweep away from the parent's spine, :func:`_comb_keys`, in steps of
+    ``pitch`` median edges; the deferral's penalty then counts steps)."""
+    if fill not in ("grow", "comb"):
+        raise InvalidOptionError(f"fill must be 'grow' or 'comb', not {fill!r}")
     n = len(points)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
     ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n)
