@@ -173,7 +173,8 @@ def _lattice(nx: int = 60, ny: int = 52, jitter: float = 0.0):
     pts += np.random.default_rng(1).uniform(-jitter, jitter, pts.shape)
     tri = Delaunay(pts).simplices.astype(np.int64)
     p = pts[tri]
-    area = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    area = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
     tri[area < 0] = tri[area < 0][:, ::-1]
     tri = np.ascontiguousarray(tri[np.abs(area) > 0.3])
     return pts, tri, half_edges(tri, len(pts)).twin
