@@ -16,6 +16,7 @@ from hypothesis import given, settings, strategies as st
 
 import hammesh
 from hammesh.halfedge import half_edges
+from hammesh.postprocess import comb_cover as comb
 from hammesh.postprocess.cycle_cover import cycle_cover, cycle_ids_by_halves
 
 _bench = Path(__file__).parents[2] / "benchmarks"
@@ -151,7 +152,7 @@ def test_sparse_mode_certifies_the_compact_cover(monkeypatch, tree: str, fill: s
 
 @pytest.mark.parametrize("straight", [True, False])
 def test_the_vertex_fishbone_tree_is_an_induced_tree(monkeypatch, straight: bool) -> None:
-    monkeypatch.setattr(pc, "STRAIGHT_SPINES", straight)
+    monkeypatch.setattr(comb, "STRAIGHT_SPINES", straight)
     pts, tri, twin = _arrays(_mesh(area=0.002))
     bnd = pc.boundary_vertices(tri, twin, len(pts))
     for axis in (0, 1):
@@ -207,8 +208,8 @@ def test_the_comb_keys_sweep_away_from_the_spine() -> None:
     pts = rng.uniform(0, 1, (200, 2))
     src, dst = rng.integers(0, 200, 400), rng.integers(0, 200, 400)
     deep = rng.random(400) < 0.7
-    keys = pc._comb_keys(pts, src, dst, np.full(400, 7.0), deep, np.zeros(400, np.int64), np.array([0.5]), 0, 20.0,
-                         0.5, 4.0)
+    keys = comb.comb_keys(pts, src, dst, np.full(400, 7.0), deep, np.zeros(400, np.int64), np.array([0.5]), 0, 20.0,
+                          0.5, 4.0)
     assert (keys[~deep] == 7.0).all()
     v = dst[deep]
     step = 0.5 * np.median(np.linalg.norm(pts[v] - pts[src[deep]], axis=1))
@@ -231,8 +232,7 @@ def test_straight_spines_are_shortest_paths_through_their_band() -> None:
     lab = np.zeros(n, np.int64)
     o = np.flatnonzero(cand)
     o = o[np.argsort(pts[o, 0], kind="stable")].astype(np.int64)
-    spine = np.zeros(n, bool)
-    pc._spine_paths_into(ptr, idx, cand, lab, o, spine)
+    spine = comb.spine_paths(ptr, idx, cand, lab, o)
     sv = np.flatnonzero(spine)
     assert o[0] in sv and spine[cand].sum() < cand.sum()
     e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
@@ -247,7 +247,7 @@ def test_weighted_cell_medians_halve_the_weight(rows) -> None:
     cell = np.array([r[0] for r in rows])
     value = np.array([r[1] for r in rows])
     weight = np.array([r[2] for r in rows])
-    med = pc._cell_medians(cell, value, 4, weight)
+    med = comb.cell_medians(cell, value, 4, weight)
     for c in range(4):
         own = cell == c
         if not own.any():
