@@ -33,14 +33,12 @@ distinct.
 
 from __future__ import annotations
 
-import heapq
-
 import numpy as np
 from numba import njit
 
 from hammesh.postprocess._thm24_kernels import edge_class, quadtree_coords
-from hammesh.postprocess.comb_cover import (boundary_vertices, cover_of, turned, vertex_fishbone_tree,  # noqa: F401
-                                            vertex_maps)
+from hammesh.postprocess.comb_cover import (boundary_vertices, cover_of, grow_induced_tree, turned,  # noqa: F401
+                                            vertex_fishbone_tree, vertex_maps)
 
 __all__ = ["vertex_maps", "boundary_vertices", "colour_of_cover", "cover_of", "flip_keeps_mixed", "deferring_tree",
            "small_loop_adds", "scale_rotations", "capped_rotations", "compact_cover", "vertex_fishbone_tree",
@@ -143,68 +141,19 @@ def flip_keeps_mixed(v, tri, vt_ptr, vt_idx, colour):
 
 
 @njit(cache=True)
-def _grow_deferring_into(ptr, idx, vt_ptr, vt_idx, tri, boundary, q, seed, inside, penalty, max_defer):
-    """Prim's search over the vertices from ``seed``, lowest ``edge_class`` first; a
-    vertex joins when it is interior and exactly one neighbour is inside (so the inside
-    is an induced tree). A vertex whose joining would doom a triangle (its three
-    vertices outside, each on the boundary or with two inside neighbours) is pushed
-    back by ``penalty`` times the triangles it dooms, at most ``max_defer`` times.
-    Returns ``(size, deferrals)``."""
-    n = len(boundary)
-    count = np.zeros(n, np.int64)
-    defer = np.zeros(n, np.int64)
-    mark = np.zeros(n, np.int64)
-    heap = [(np.int64(0), np.int64(0), np.int64(seed))]
-    seq = 1
-    size = 0
-    stamp = 0
-    deferrals = 0
-    while len(heap):
-        key, _, v = heapq.heappop(heap)
-        if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
-            continue
-        if size > 0 and defer[v] < max_defer:
-            stamp += 1
-            for j in range(ptr[v], ptr[v + 1]):  # the neighbours that could join until now
-                w = idx[j]
-                if not inside[w] and not boundary[w] and count[w] == 1:
-                    mark[w] = stamp
-            doomed = 0
-            for j in range(ptr[v], ptr[v + 1]):
-                w = idx[j]
-                if mark[w] != stamp:
-                    continue
-                for jj in range(vt_ptr[w], vt_ptr[w + 1]):
-                    t = vt_idx[jj]
-                    dead = True
-                    for k in range(3):
-                        x = tri[t, k]
-                        if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
-                            dead = False
-                    if dead:
-                        doomed += 1
-            if doomed > 0:
-                defer[v] += 1
-                deferrals += 1
-                heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
-                seq += 1
-                continue
-        inside[v] = True
-        size += 1
+def _edge_class_keys_into(ptr, idx, q, keys):
+    """Each adjacency entry ``v -> idx[j]``'s key: the count quadtree's ``edge_class``."""
+    for v in range(ptr.shape[0] - 1):
         for j in range(ptr[v], ptr[v + 1]):
-            w = idx[j]
-            count[w] += 1
-            if not inside[w] and not boundary[w] and count[w] == 1:
-                heapq.heappush(heap, (np.int64(edge_class(q[v], q[w])), np.int64(seq), np.int64(w)))
-                seq += 1
-    return size, deferrals
+            keys[j] = edge_class(q[v], q[idx[j]])
 
 
 def deferring_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, penalty: int = 64,
                    max_defer: int = 8) -> tuple[np.ndarray, int]:
     """``(inside, deferrals)``: the induced vertex tree of ``partition_ceilings.vertex_tree_cover``
     (the count quadtree's classes on the vertices, seeded at the interior vertex nearest
-    the mean point), grown by :func:`_grow_deferring_into`; ``max_defer = 0`` gives
+    the mean point), grown by ``comb_cover.grow_induced_tree`` (lowest ``edge_class`` first,
+    deferring a vertex at most ``max_defer`` times); ``max_defer = 0`` gives
     ``vertex_tree_cover``'s tree. ``points`` (n, 2); ``tri`` (m, 3) int64; ``twin`` (3 m,)."""
     n = len(points)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
@@ -216,9 +165,10 @@ def deferring_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, penalt
     if not len(interior):
         return inside, 0
     seed = interior[np.argmin(((points[interior] - points.mean(axis=0)) ** 2).sum(axis=1))]
-    _, deferrals = _grow_deferring_into(ptr, idx, vt_ptr, vt_idx, tri, boundary, q, int(seed), inside, int(penalty),
-                                        int(max_defer))
-    return inside, int(deferrals)
+    keys = np.empty(len(idx), np.float64)
+    _edge_class_keys_into(ptr, idx, q, keys)
+    return tuple(grow_induced_tree(ptr, idx, keys, vt_ptr, vt_idx, tri, boundary, int(seed), float(penalty),
+                                   int(max_defer)))
 
 
 @njit(cache=True)

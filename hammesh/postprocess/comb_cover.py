@@ -27,6 +27,7 @@ smallest angle 15 degrees).
 from __future__ import annotations
 
 import heapq
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -34,13 +35,30 @@ from numba import njit
 from hammesh.errors import InvalidOptionError
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
 
-__all__ = ["vertex_maps", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
-           "grow_induced_tree", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES"]
+__all__ = ["InducedTree", "VertexMaps", "vertex_maps", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
+           "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES"]
 
 
-def vertex_maps(tri: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(ptr, idx, vt_ptr, vt_idx)``: each vertex's neighbours (``idx[ptr[v]:ptr[v+1]]``)
-    and triangles (``vt_idx[vt_ptr[v]:vt_ptr[v+1]]``), int64."""
+class InducedTree(NamedTuple):
+    """A grown induced vertex tree: ``inside`` (n,) bool, and how many times a vertex
+    was deferred."""
+
+    inside: np.ndarray
+    deferrals: int
+
+
+class VertexMaps(NamedTuple):
+    """Each vertex's neighbours (``idx[ptr[v]:ptr[v+1]]``) and triangles
+    (``vt_idx[vt_ptr[v]:vt_ptr[v+1]]``), int64."""
+
+    ptr: np.ndarray
+    idx: np.ndarray
+    vt_ptr: np.ndarray
+    vt_idx: np.ndarray
+
+
+def vertex_maps(tri: np.ndarray, n: int) -> VertexMaps:
+    """The :class:`VertexMaps` of ``tri`` (m, 3) int64 over ``n`` vertices."""
     e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     e = np.unique(np.sort(e, axis=1), axis=0)
     both = np.concatenate([e, e[:, ::-1]])
@@ -50,7 +68,7 @@ def vertex_maps(tri: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.nda
     flat = tri.ravel()
     tv = np.argsort(flat, kind="stable")
     vt_ptr = np.searchsorted(flat[tv], np.arange(n + 1)).astype(np.int64)
-    return ptr, idx, vt_ptr, (tv // 3).astype(np.int64)
+    return VertexMaps(ptr, idx, vt_ptr, (tv // 3).astype(np.int64))
 
 
 def boundary_vertices(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
@@ -97,13 +115,41 @@ def cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int, weight: np.n
 
 
 @njit(cache=True)
+def triangles_doomed_by(v, ptr, idx, vt_ptr, vt_idx, tri, boundary, inside, count, mark, stamp):
+    """The triangles that ``v``'s joining the induced tree would leave monochrome for
+    good: round the neighbours that could join until now (interior, outside, one inside
+    neighbour; marked ``stamp`` in ``mark``), those whose three vertices are outside and
+    each on the boundary or unable to join after ``v`` (two inside neighbours, or a
+    marked neighbour of ``v``)."""
+    for j in range(ptr[v], ptr[v + 1]):
+        w = idx[j]
+        if not inside[w] and not boundary[w] and count[w] == 1:
+            mark[w] = stamp
+    doomed = 0
+    for j in range(ptr[v], ptr[v + 1]):
+        w = idx[j]
+        if mark[w] != stamp:
+            continue
+        for jj in range(vt_ptr[w], vt_ptr[w + 1]):
+            t = vt_idx[jj]
+            dead = True
+            for k in range(3):
+                x = tri[t, k]
+                if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
+                    dead = False
+            if dead:
+                doomed += 1
+    return doomed
+
+
+@njit(cache=True)
 def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, inside, penalty, max_defer):
     """Prim's search from ``seed`` (a heap of ``(key, sequence, vertex)``; float keys per
     adjacency entry ``wts``) growing an induced tree into ``inside``: a vertex joins when
     it is interior and exactly one neighbour is inside. A vertex whose joining would
     *doom* a triangle (its three vertices outside, each on the boundary or with two
     inside neighbours, so none can join any more) is pushed back by ``penalty`` times
-    the triangles it dooms, at most ``max_defer`` times. Returns the tree's size."""
+    the triangles it dooms, at most ``max_defer`` times. Returns ``(size, deferrals)``."""
     n = len(boundary)
     count = np.zeros(n, np.int64)
     defer = np.zeros(n, np.int64)
@@ -112,32 +158,17 @@ def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, insi
     seq = 1
     size = 0
     stamp = 0
+    deferrals = 0
     while len(heap):
         key, _, v = heapq.heappop(heap)
         if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
             continue
         if size > 0 and defer[v] < max_defer:
             stamp += 1
-            for j in range(ptr[v], ptr[v + 1]):
-                w = idx[j]
-                if not inside[w] and not boundary[w] and count[w] == 1:
-                    mark[w] = stamp
-            doomed = 0
-            for j in range(ptr[v], ptr[v + 1]):
-                w = idx[j]
-                if mark[w] != stamp:
-                    continue
-                for jj in range(vt_ptr[w], vt_ptr[w + 1]):
-                    t = vt_idx[jj]
-                    dead = True
-                    for k in range(3):
-                        x = tri[t, k]
-                        if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
-                            dead = False
-                    if dead:
-                        doomed += 1
+            doomed = triangles_doomed_by(v, ptr, idx, vt_ptr, vt_idx, tri, boundary, inside, count, mark, stamp)
             if doomed > 0:
                 defer[v] += 1
+                deferrals += 1
                 heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
                 seq += 1
                 continue
@@ -149,19 +180,19 @@ def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, insi
             if not inside[w] and not boundary[w] and count[w] == 1:
                 heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
                 seq += 1
-    return size
+    return size, deferrals
 
 
 def grow_induced_tree(ptr: np.ndarray, idx: np.ndarray, wts: np.ndarray, vt_ptr: np.ndarray, vt_idx: np.ndarray,
                       tri: np.ndarray, boundary: np.ndarray, seed: int, penalty: float = 0.0,
-                      max_defer: int = 0) -> np.ndarray:
-    """(n,) bool: the induced vertex tree of :func:`_grow_weighted_into` from ``seed``
-    (``ptr``, ``idx``: the neighbours as :func:`vertex_maps`; ``wts`` each adjacency
-    entry's key, float64; ``vt_ptr``, ``vt_idx``: the vertices' triangles)."""
+                      max_defer: int = 0) -> InducedTree:
+    """The induced vertex tree of :func:`_grow_weighted_into` from ``seed`` (``ptr``,
+    ``idx``: the neighbours as :func:`vertex_maps`; ``wts`` each adjacency entry's key,
+    float64; ``vt_ptr``, ``vt_idx``: the vertices' triangles)."""
     inside = np.zeros(len(boundary), np.bool_)
-    _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, int(seed), inside, float(penalty),
-                        int(max_defer))
-    return inside
+    _, deferrals = _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, int(seed), inside,
+                                       float(penalty), int(max_defer))
+    return InducedTree(inside, int(deferrals))
 
 
 #: ``vertex_fishbone_tree``: each spine a shortest path through its band (else the whole band)
@@ -305,7 +336,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     cen = points[~bnd].mean(axis=0)
     seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
     return grow_induced_tree(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd,
-                             int(seed), float(penalty), int(max_defer))
+                             int(seed), float(penalty), int(max_defer)).inside
 
 
 def comb_keys(points: np.ndarray, src: np.ndarray, dst: np.ndarray, keys: np.ndarray, deep: np.ndarray,
