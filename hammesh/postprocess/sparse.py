@@ -563,9 +563,11 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     losing both its cover edges (``z`` is left off instead of ``t``), or by one path
     from ``u`` that ends at ``w`` (nothing left off). ``z`` is taken only if a ring
     fan over it meets the targets (``_best_ring``); the cover's cycles may merge or
-    split (the joins take it from there). Returns the new cover and the number of
-    triangles re-routed.
+    split (the joins take it from there). ``depth``: the removals along each path
+    (None: ``REROUTE_DEPTH``). Returns the new cover and the number of triangles
+    re-routed.
     """
+    depth = REROUTE_DEPTH if depth is None else depth  # (``tree="comb"``: 0)
     m = len(tri)
     rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows):
@@ -592,10 +594,9 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                     continue
                 avoid = {t} | touched_set
                 from_w: dict[int, list] = {}
-                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, REROUTE_DEPTH if depth is None else depth):
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, depth):
                     from_w.setdefault(y, []).append((nodes, flips))
-                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, u, avoid, REROUTE_DEPTH if depth is None else depth,
-                                                             w):
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, u, avoid, depth, w):
                     cands = []
                     if y == w:  # the path ends at w, which gave t its edge: nothing left off
                         if best is None or best[3] >= 0 or len(flips) < best[0]:
