@@ -36,6 +36,7 @@ writes it, renumbered along the cycle, by RCM (scipy) and along a Hilbert curve.
     python benchmarks/bench_partition.py --trees --target 100000   # other spanning trees (partition_trees.py)
     python benchmarks/bench_partition.py --sparse-cells 0,1024,4096 --target 100000   # sparse: cell-confined covers
     python benchmarks/bench_partition.py --modes sparse,sparse-fishbone --repeat 3   # sparse's fishbone option
+    python benchmarks/bench_partition.py --modes sparse,sparse-comb --target 300000   # sparse's comb option
     python benchmarks/bench_partition.py --ceilings --target 100000   # what following a compact sweep could cut
     python benchmarks/bench_partition.py --blocks 4096,1024,256 --target 300000   # a ring of compact blocks
     python benchmarks/bench_partition.py --blocks 4096,1024 --along walk   # blocks of the incircle walk
@@ -60,7 +61,8 @@ mesh; then sparse mode with its cover replaced by the compact tree's (its price 
 ``--modes sparse-fishbone`` is ``hamiltonian(mesh, mode="sparse", tree="fishbone")``
 (``hammesh.postprocess.sparse_cells``); with it a table of its price against sparse
 mode's default on the same input (Steiner points, angles, rows below the parent rule,
-the call's process CPU).
+the call's process CPU). ``--modes sparse-comb`` (session 21) is ``tree="comb"``
+(``hammesh.postprocess.comb_cover``), with the same table.
 """
 
 from __future__ import annotations
@@ -95,7 +97,7 @@ def _domains():
 #: opt-in compact cycle, ``hammesh.postprocess.sparse_cells``; plain ``sparse`` is
 #: sparse mode's default, the cover left free).
 MODES = {"incircle": ("incircle", "fishbone"), "sparse": ("sparse", "quadtree"),
-         "sparse-fishbone": ("sparse", "fishbone")}
+         "sparse-fishbone": ("sparse", "fishbone"), "sparse-comb": ("sparse", "comb")}
 
 
 def _metis_median(k: int, a: np.ndarray, b: np.ndarray, m: int, seeds: int = 3) -> float:
@@ -271,6 +273,9 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
         pc.small_loop_adds(tri, twin, c, 4)
         pc.capped_rotations(tri, twin, c, 2000)
         rows.append(("the same, loops <= 6 added, capped rotations", c))
+        comb = pc.vertex_fishbone_tree(pc.turned(pts, angle), tri, twin, axis, penalty=5.0, max_defer=8, levels=2,
+                                       fill="comb").astype(np.int8)
+        rows.append(("vertex fishbone, deferring, deepest cells as combs", comb))
         for label, c in rows:
             n_cyc, big, unc, cuts = _largest_cycle_cut(tri, twin, c, a, b, nb, ks, mcs)
             print(f"| {name} | {m:,} | {label} | {unc:.2%} | {n_cyc:,} | {big:.1%} | "
@@ -285,14 +290,16 @@ def _print_colourings(domains, target: int, ks: list[int]) -> None:
         # (``reroute`` False: sparse's re-routes through uncovered boundary triangles off,
         # ``REROUTE_DEPTH = 0``: they split the cover's cycle into long arcs that the
         # joins splice back in another order)
-        for label, tree, lmax, reroute in (("sparse's own (default)", None, None, True),
-                                           ("quadtree vertex tree, deferring", "quadtree", 0, True),
-                                           ("the same, loops <= 18, capped rotations", "quadtree", 16, True),
-                                           ("vertex fishbone, 2 levels, deferring", "fishbone", 0, True),
-                                           ("the same, loops <= 6, capped rotations", "fishbone", 4, True),
-                                           ("vertex fishbone, deferring; sparse's re-routes off", "fishbone", 0,
-                                            False)):
+        for label, tree, lmax, reroute, fill in (
+                ("sparse's own (default)", None, None, True, "grow"),
+                ("quadtree vertex tree, deferring", "quadtree", 0, True, "grow"),
+                ("the same, loops <= 18, capped rotations", "quadtree", 16, True, "grow"),
+                ("vertex fishbone, 2 levels, deferring", "fishbone", 0, True, "grow"),
+                ("the same, loops <= 6, capped rotations", "fishbone", 4, True, "grow"),
+                ("vertex fishbone, deferring; sparse's re-routes off", "fishbone", 0, False, "grow"),
+                ("vertex fishbone, deferring, combs; re-routes off", "fishbone", 0, False, "comb")):
             orig, depth = sp.cycle_cover, sp.REROUTE_DEPTH
+            pc.FISH_FILL = fill
             if lmax is not None:
                 pc.TREE, pc.LMAX = tree, lmax
                 sp.cycle_cover = pc.compact_cover
@@ -393,14 +400,14 @@ def _mesh(dom, area: float, target: int, mode: str):
     return hammesh.hamiltonian(mesh, mode=how, tree=tree), mesh
 
 
-def _sparse_price(name: str, mesh, repeat: int) -> list[str]:
-    """Sparse mode's default against ``tree="fishbone"`` on the same input: Steiner
+def _sparse_price(name: str, mesh, repeat: int, option: str = "sparse-fishbone") -> list[str]:
+    """Sparse mode's default against ``option`` (``tree="fishbone"`` or ``"comb"``) on the same input: Steiner
     points, min / max angle, rows below the parent rule, and the ``hamiltonian``
     call's process CPU (first call of each in this process, then ``repeat`` more
     alternating: median and range) and their ratio."""
     import hammesh
 
-    cpu: dict = {"sparse": [], "sparse-fishbone": []}
+    cpu: dict = {"sparse": [], option: []}
     out: dict = {}
     for _ in range(1 + max(repeat, 0)):
         for mode in cpu:
@@ -865,7 +872,8 @@ def main() -> None:
     ap.add_argument("--domains", default="plate_2_holes,gear",
                     help="comma-separated: plate_2_holes, gear (the issue's), square, rect_2x1 (hole-free controls)")
     ap.add_argument("--modes", default="incircle,sparse,sparse-fishbone",
-                    help="comma-separated: incircle, sparse, sparse-fishbone (sparse mode's tree=\"fishbone\")")
+                    help="comma-separated: incircle, sparse, sparse-fishbone, sparse-comb (sparse mode's "
+                         "tree=\"fishbone\", \"comb\")")
     ap.add_argument("--ks", default="8,64", help="comma-separated part counts")
     ap.add_argument("--trees", action="store_true",
                     help="only the incircle cut of other spanning trees (benchmarks/partition_trees.py) vs METIS")
@@ -942,8 +950,8 @@ def main() -> None:
             h, mesh = _mesh(dom, area, args.target, mode)
             if mode == "incircle":
                 forests.append(_forest_row(name, mesh, args.repeat))
-            if mode == "sparse-fishbone":
-                price += _sparse_price(name, mesh, args.repeat)
+            if mode in ("sparse-fishbone", "sparse-comb"):
+                price += _sparse_price(name, mesh, args.repeat, mode)
             a, b = dual_edges(h.triangles)
             m = h.n_triangles
             g = coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(m, m))
@@ -984,7 +992,7 @@ def main() -> None:
     print(f"\nworst cut ratio {worst:.2f} (target <= 1.5, goal 1.1); all connected and balanced: {ok}; "
           f"smallest METIS / partition time {slow:.1f} (target >= 20)")
     if price:
-        print("\nSparse mode's price of tree=\"fishbone\" (same input; hamiltonian process CPU: first call, then "
+        print("\nSparse mode's price of its tree options (same input; hamiltonian process CPU: first call, then "
               "median (range) of --repeat more, alternating):\n")
         print("| domain | mode | triangles | Steiner points | min / max angle | rows below the parent rule "
               "| CPU s first | CPU s median (range) | / sparse |")

@@ -24,18 +24,21 @@ distinct.
 * :func:`compact_cover`: the three above as a ``cycle_cover`` for sparse mode (the
   benchmark swaps it in for sparse mode's own; sparse's joins and fans do the rest and
   the output is certified as usual);
-* :func:`vertex_fishbone_tree`: session 11's fishbone cells made on the vertices, grown
-  top-down (a prototype: it cut more than the quadtree vertex tree).
+* ``vertex_fishbone_tree`` (now in ``hammesh.postprocess.comb_cover``, with
+  ``vertex_maps``, ``boundary_vertices``, ``cover_of``, ``turned``, re-exported here):
+  session 11's fishbone cells made on the vertices, grown top-down; its deepest cells
+  grown breadth-first or (``fill="comb"``) as combs, which sparse mode takes as
+  ``tree="comb"``.
 """
 
 from __future__ import annotations
-
-import heapq
 
 import numpy as np
 from numba import njit
 
 from hammesh.postprocess._thm24_kernels import edge_class, quadtree_coords
+from hammesh.postprocess.comb_cover import (boundary_vertices, cover_of, grow_induced_tree, turned,  # noqa: F401
+                                            vertex_fishbone_tree, vertex_maps)
 
 __all__ = ["vertex_maps", "boundary_vertices", "colour_of_cover", "cover_of", "flip_keeps_mixed", "deferring_tree",
            "small_loop_adds", "scale_rotations", "capped_rotations", "compact_cover", "vertex_fishbone_tree",
@@ -45,30 +48,6 @@ __all__ = ["vertex_maps", "boundary_vertices", "colour_of_cover", "cover_of", "f
 #: top spine along y between its holes (session 11's choice); the gear's turn the best
 #: k = 64 of eight frames at 300 000 triangles (docs/partition.md, session 21)
 FISH_FRAMES = {"plate_2_holes": (1, 0.0), "gear": (0, 75.0), "square": (1, 0.0), "rect_2x1": (0, 0.0)}
-
-
-def vertex_maps(tri: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(ptr, idx, vt_ptr, vt_idx)``: each vertex's neighbours (``idx[ptr[v]:ptr[v+1]]``)
-    and triangles (``vt_idx[vt_ptr[v]:vt_ptr[v+1]]``), int64."""
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    both = np.concatenate([e, e[:, ::-1]])
-    both = both[np.lexsort((both[:, 1], both[:, 0]))]
-    ptr = np.searchsorted(both[:, 0], np.arange(n + 1)).astype(np.int64)
-    idx = np.ascontiguousarray(both[:, 1]).astype(np.int64)
-    flat = tri.ravel()
-    tv = np.argsort(flat, kind="stable")
-    vt_ptr = np.searchsorted(flat[tv], np.arange(n + 1)).astype(np.int64)
-    return ptr, idx, vt_ptr, (tv // 3).astype(np.int64)
-
-
-def boundary_vertices(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
-    """(n,) bool: the ends of the boundary half-edges (``twin < 0``)."""
-    bh = np.flatnonzero(twin < 0)
-    b = np.zeros(n, np.bool_)
-    b[tri[bh // 3, bh % 3]] = True
-    b[tri[bh // 3, (bh % 3 + 1) % 3]] = True
-    return b
 
 
 @njit(cache=True)
@@ -127,11 +106,6 @@ def colour_of_cover(tri: np.ndarray, twin: np.ndarray, is_cov: np.ndarray,
     return colour, int(conflicts)
 
 
-def cover_of(tri: np.ndarray, twin: np.ndarray, colour: np.ndarray) -> np.ndarray:
-    """(3 m,) bool: the cover of a colouring, the interior half-edges whose ends differ."""
-    return ((colour[tri] != colour[np.roll(tri, -1, axis=1)]).ravel()) & (np.asarray(twin) >= 0)
-
-
 def cycle_sizes(cyc: np.ndarray, n_cyc: int) -> np.ndarray:
     """Triangles per cycle id (``cyc`` -1 for uncovered)."""
     return np.bincount(cyc[cyc >= 0], minlength=n_cyc).astype(np.int64)
@@ -167,68 +141,19 @@ def flip_keeps_mixed(v, tri, vt_ptr, vt_idx, colour):
 
 
 @njit(cache=True)
-def _grow_deferring_into(ptr, idx, vt_ptr, vt_idx, tri, boundary, q, seed, inside, penalty, max_defer):
-    """Prim's search over the vertices from ``seed``, lowest ``edge_class`` first; a
-    vertex joins when it is interior and exactly one neighbour is inside (so the inside
-    is an induced tree). A vertex whose joining would doom a triangle (its three
-    vertices outside, each on the boundary or with two inside neighbours) is pushed
-    back by ``penalty`` times the triangles it dooms, at most ``max_defer`` times.
-    Returns ``(size, deferrals)``."""
-    n = len(boundary)
-    count = np.zeros(n, np.int64)
-    defer = np.zeros(n, np.int64)
-    mark = np.zeros(n, np.int64)
-    heap = [(np.int64(0), np.int64(0), np.int64(seed))]
-    seq = 1
-    size = 0
-    stamp = 0
-    deferrals = 0
-    while len(heap):
-        key, _, v = heapq.heappop(heap)
-        if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
-            continue
-        if size > 0 and defer[v] < max_defer:
-            stamp += 1
-            for j in range(ptr[v], ptr[v + 1]):  # the neighbours that could join until now
-                w = idx[j]
-                if not inside[w] and not boundary[w] and count[w] == 1:
-                    mark[w] = stamp
-            doomed = 0
-            for j in range(ptr[v], ptr[v + 1]):
-                w = idx[j]
-                if mark[w] != stamp:
-                    continue
-                for jj in range(vt_ptr[w], vt_ptr[w + 1]):
-                    t = vt_idx[jj]
-                    dead = True
-                    for k in range(3):
-                        x = tri[t, k]
-                        if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
-                            dead = False
-                    if dead:
-                        doomed += 1
-            if doomed > 0:
-                defer[v] += 1
-                deferrals += 1
-                heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
-                seq += 1
-                continue
-        inside[v] = True
-        size += 1
+def _edge_class_keys_into(ptr, idx, q, keys):
+    """Each adjacency entry ``v -> idx[j]``'s key: the count quadtree's ``edge_class``."""
+    for v in range(ptr.shape[0] - 1):
         for j in range(ptr[v], ptr[v + 1]):
-            w = idx[j]
-            count[w] += 1
-            if not inside[w] and not boundary[w] and count[w] == 1:
-                heapq.heappush(heap, (np.int64(edge_class(q[v], q[w])), np.int64(seq), np.int64(w)))
-                seq += 1
-    return size, deferrals
+            keys[j] = edge_class(q[v], q[idx[j]])
 
 
 def deferring_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, penalty: int = 64,
                    max_defer: int = 8) -> tuple[np.ndarray, int]:
     """``(inside, deferrals)``: the induced vertex tree of ``partition_ceilings.vertex_tree_cover``
     (the count quadtree's classes on the vertices, seeded at the interior vertex nearest
-    the mean point), grown by :func:`_grow_deferring_into`; ``max_defer = 0`` gives
+    the mean point), grown by ``comb_cover.grow_induced_tree`` (lowest ``edge_class`` first,
+    deferring a vertex at most ``max_defer`` times); ``max_defer = 0`` gives
     ``vertex_tree_cover``'s tree. ``points`` (n, 2); ``tri`` (m, 3) int64; ``twin`` (3 m,)."""
     n = len(points)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
@@ -240,9 +165,10 @@ def deferring_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, penalt
     if not len(interior):
         return inside, 0
     seed = interior[np.argmin(((points[interior] - points.mean(axis=0)) ** 2).sum(axis=1))]
-    _, deferrals = _grow_deferring_into(ptr, idx, vt_ptr, vt_idx, tri, boundary, q, int(seed), inside, int(penalty),
-                                        int(max_defer))
-    return inside, int(deferrals)
+    keys = np.empty(len(idx), np.float64)
+    _edge_class_keys_into(ptr, idx, q, keys)
+    return tuple(grow_induced_tree(ptr, idx, keys, vt_ptr, vt_idx, tri, boundary, int(seed), float(penalty),
+                                   int(max_defer)))
 
 
 @njit(cache=True)
@@ -489,6 +415,7 @@ TREE = "quadtree"
 FISH_AXIS = 0
 FISH_ANGLE = 0.0  # degrees: the fishbone's axes turned counter-clockwise
 FISH_LEVELS = 2
+FISH_FILL = "grow"  # the deepest cells: ``"grow"`` breadth-first, ``"comb"`` teeth across the spine
 LMAX = 16
 BIG = 2000
 DEFER = 8
@@ -508,7 +435,7 @@ def compact_cover(triangles: np.ndarray, twin: np.ndarray, **kw):
     pts = np.ascontiguousarray(np.asarray(kw["points"])[:n, :2], dtype=np.float64)
     if TREE == "fishbone":
         c = vertex_fishbone_tree(turned(pts, FISH_ANGLE), tri, tw, FISH_AXIS, penalty=5.0, max_defer=DEFER,
-                                 levels=FISH_LEVELS).astype(np.int8)
+                                 levels=FISH_LEVELS, fill=FISH_FILL).astype(np.int8)
     else:
         c = deferring_tree(pts, tri, tw, 64, DEFER)[0].astype(np.int8)
     LAST.clear()
@@ -521,224 +448,6 @@ def compact_cover(triangles: np.ndarray, twin: np.ndarray, **kw):
     n_unc = int((cyc < 0).sum())
     LAST.update(cycles=int(n_cyc), uncovered=n_unc)
     return CycleCover(is_cov=is_cov, cycle=cyc, n_cycles=int(n_cyc), n_uncovered=n_unc, n_unmatched=0)
-
-
-def turned(points: np.ndarray, angle: float) -> np.ndarray:
-    """``points`` (n, 2) in axes turned counter-clockwise by ``angle`` degrees."""
-    if not angle:
-        return points
-    t = np.radians(angle)
-    return np.ascontiguousarray(points @ np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]))
-
-
-def _cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int, weight: np.ndarray | None = None) -> np.ndarray:
-    """Per cell id, the value at which the cell's members (by ``value``) reach half
-    their count, or half their ``weight``; NaN for an empty cell."""
-    o = np.lexsort((value, cell))
-    cnt = np.bincount(cell, minlength=n_cells)
-    start = np.r_[0, np.cumsum(cnt)[:-1]]
-    med = np.full(n_cells, np.nan)
-    full = cnt > 0
-    if weight is None:
-        med[full] = value[o][start[full] + cnt[full] // 2]
-        return med
-    w = weight[o]
-    cum = np.cumsum(w)
-    before = np.r_[0.0, cum][start]  # weight before each cell's first member
-    half = before + 0.5 * np.bincount(cell, weights=weight, minlength=n_cells)
-    # first member of each cell whose cumulative weight reaches half the cell's
-    at = np.searchsorted(cum, half[full], side="left")
-    med[full] = value[o][np.minimum(at, start[full] + cnt[full] - 1)]
-    return med
-
-
-#: ``vertex_fishbone_tree``'s medians weigh each vertex by its triangles / 3 (the
-#: walk's rows are triangles), not 1
-ROW_WEIGHTS = False
-
-
-@njit(cache=True)
-def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, inside, penalty, max_defer):
-    """Prim's search (float weights per adjacency entry) growing an induced tree, with
-    ``_grow_deferring_into``'s deferral of a vertex that would doom triangles."""
-    n = len(boundary)
-    count = np.zeros(n, np.int64)
-    defer = np.zeros(n, np.int64)
-    mark = np.zeros(n, np.int64)
-    heap = [(0.0, np.int64(0), np.int64(seed))]
-    seq = 1
-    size = 0
-    stamp = 0
-    while len(heap):
-        key, _, v = heapq.heappop(heap)
-        if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
-            continue
-        if size > 0 and defer[v] < max_defer:
-            stamp += 1
-            for j in range(ptr[v], ptr[v + 1]):
-                w = idx[j]
-                if not inside[w] and not boundary[w] and count[w] == 1:
-                    mark[w] = stamp
-            doomed = 0
-            for j in range(ptr[v], ptr[v + 1]):
-                w = idx[j]
-                if mark[w] != stamp:
-                    continue
-                for jj in range(vt_ptr[w], vt_ptr[w + 1]):
-                    t = vt_idx[jj]
-                    dead = True
-                    for k in range(3):
-                        x = tri[t, k]
-                        if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
-                            dead = False
-                    if dead:
-                        doomed += 1
-            if doomed > 0:
-                defer[v] += 1
-                heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
-                seq += 1
-                continue
-        inside[v] = True
-        size += 1
-        for j in range(ptr[v], ptr[v + 1]):
-            w = idx[j]
-            count[w] += 1
-            if not inside[w] and not boundary[w] and count[w] == 1:
-                heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
-                seq += 1
-    return size
-
-
-#: ``vertex_fishbone_tree``: each spine a shortest path through its band (else the whole band)
-STRAIGHT_SPINES = True
-
-
-@njit(cache=True)
-def _spine_paths_into(ptr, idx, cand, lab, order, spine):
-    """For each cell's band of spine candidates (``order``: by cell, then along the
-    line), each connected piece's shortest path (breadth-first, inside the band) from its
-    first vertex along the line to the farthest one it reaches along the line."""
-    n = cand.shape[0]
-    seen = np.zeros(n, np.bool_)
-    par = np.full(n, -1, np.int64)
-    pos = np.full(n, -1, np.int64)
-    for i in range(order.shape[0]):
-        pos[order[i]] = i
-    queue = np.empty(order.shape[0] + 1, np.int64)
-    for i in range(order.shape[0]):
-        s = order[i]
-        if seen[s]:
-            continue
-        seen[s] = True
-        par[s] = -1
-        head, tail = 0, 1
-        queue[0] = s
-        far = s
-        while head < tail:
-            u = queue[head]
-            head += 1
-            if pos[u] > pos[far]:
-                far = u
-            for j in range(ptr[u], ptr[u + 1]):
-                w = idx[j]
-                if cand[w] and not seen[w] and lab[w] == lab[s]:
-                    seen[w] = True
-                    par[w] = u
-                    queue[tail] = w
-                    tail += 1
-        x = far
-        while x >= 0:
-            spine[x] = True
-            x = par[x]
-
-
-def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
-                         min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
-                         levels: int = 0) -> np.ndarray:
-    """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
-    vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
-    spine is the path of vertices just below its cell's median line (each with a
-    neighbour of the same cell above it). Grown *top-down* (an induced tree grown
-    bottom-up, cells first, blocks the spine beside each cell): spines from the top
-    level down, each child hung by its own spine's end nearest where its line meets the
-    parent's (the deepest cells by any vertex), the deepest cells' insides next, walls
-    last. ``levels`` (> 0) fixes the depth, else cells of about ``min_cell`` vertices;
-    ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral."""
-    n = len(points)
-    tri = np.ascontiguousarray(tri, dtype=np.int64)
-    ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n)
-    src = np.repeat(np.arange(n), np.diff(ptr))
-    keep = src < idx
-    a, b = src[keep], idx[keep]
-    bnd = boundary_vertices(tri, twin, n)
-    depth = levels if levels > 0 else max(1, int(np.log(max(n / min_cell, 1.0)) / np.log(4.0)))
-    wt = np.bincount(tri.ravel(), minlength=n) / 3.0 if ROW_WEIGHTS else None
-    lab = np.zeros(n, np.int64)
-    region = np.zeros(n, np.int64)
-    spine_level = np.full(n, -1)
-    labels, lines = [], []
-    for level in range(depth + 1):
-        labels.append(lab)
-        along = (axis + level) % 2
-        across = 1 - along
-        line = _cell_medians(region, points[:, across], 4**level, wt)
-        lines.append(line)
-        if level == depth:
-            break
-        at = line[region]
-        upper = points[:, across] >= at
-        side = 2 * region + upper
-        far = points[:, along] >= _cell_medians(side, points[:, along], 2 * 4**level, wt)[side]
-        region = 2 * side + far
-        cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
-        cand = np.zeros(n, bool)
-        cand[np.where(upper[a], b, a)[cross]] = True
-        cand &= ~bnd
-        spine = np.zeros(n, bool)
-        if STRAIGHT_SPINES:  # an induced path: a shortest path along each piece of the band
-            o = np.flatnonzero(cand)
-            o = o[np.lexsort((points[o, along], lab[o]))].astype(np.int64)
-            _spine_paths_into(ptr, idx, cand, lab, o, spine)
-        else:
-            spine = cand
-        lab = np.where((lab >= 0) & ~spine, region, -1)
-        spine_level[spine] = level
-    deepest = np.full(len(a), -1)
-    for level, lb in enumerate(labels):
-        deepest[(lb[a] == lb[b]) & (lb[a] >= 0)] = level
-    mid = 0.5 * (points[a] + points[b])
-    scale = 2.0 * float(np.ptp(points, axis=0).max()) + 1e-300
-    w = np.full(len(a), 1e6)
-    for level in range(depth + 1):
-        sel = deepest == level
-        base = 10.0 * level
-        if level == depth:
-            w[sel] = base
-            continue
-        along = (axis + level) % 2
-        sa, sb = spine_level[a] == level, spine_level[b] == level
-        w[sel & sa & sb] = base
-        hang = np.flatnonzero(sel & (sa ^ sb))
-        kid = np.where(sa, b, a)[hang]
-        child = labels[level + 1][kid]
-        target = np.empty((len(hang), 2))
-        target[:, along] = lines[level + 1][np.maximum(child, 0)]
-        target[:, 1 - along] = lines[level][labels[level][a[hang]]]
-        own = (spine_level[kid] == level + 1) | (level + 1 == depth)
-        d = np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
-        w[hang] = np.where(own, base + 1.0 + d, 1e5 + d)
-        walls = np.flatnonzero(sel & ~sa & ~sb)
-        w[walls] = 2e5 + np.abs(mid[walls, 1 - along] - lines[level][labels[level][a[walls]]]) / scale
-    s2, d2, w2 = np.r_[a, b], np.r_[b, a], np.r_[w, w]
-    o = np.lexsort((d2, s2))
-    wptr = np.searchsorted(s2[o], np.arange(n + 1)).astype(np.int64)
-    top = np.flatnonzero((spine_level == 0) & ~bnd)
-    cen = points[~bnd].mean(axis=0)
-    seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
-    inside = np.zeros(n, np.bool_)
-    _grow_weighted_into(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd, int(seed),
-                        inside, float(penalty), int(max_defer))
-    return inside
 
 
 def seeded_cover(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, colour: np.ndarray):

@@ -56,11 +56,12 @@ def add_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("partition and numbering (issue 14; docs/partition.md)")
     g.add_argument("--parts", type=int, metavar="K",
                    help="cut the cycle into K connected, balanced parts: a 'part' cell array in the output")
-    g.add_argument("--tree", choices=("quadtree", "fishbone"),
+    g.add_argument("--tree", choices=("quadtree", "fishbone", "comb"),
                    help="incircle mode's spanning tree: fishbone (the default with --parts) sweeps the domain so "
                         "that parts cut close to METIS, ~20%% slower; quadtree (the default otherwise) is the fastest. "
                         "Sparse mode: fishbone confines the cover to the fishbone's cells (an opt-in: more Steiner "
-                        "points, lower angles; docs/partition.md)")
+                        "points, lower angles; docs/partition.md); comb (sparse mode only) a compact cover from "
+                        "an induced vertex tree: cuts ~1.3x METIS, ~0.6%% Steiner points, angles down to ~15 deg")
     g.add_argument("--renumber", choices=NUMBERINGS,
                    help="renumber the vertices (bandwidth/profile in the report)")
     g = p.add_argument_group("parallel (decoupled tiles, docs/scale.md; domain inputs with -a)")

@@ -171,14 +171,16 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: s
         replaces and <= the input's largest angle + 5 degrees where any join can
         (the report counts where none could); the proven floor (>= 1/2 the input's
         minimum) holds regardless. Ignored by ``"incircle"``.
-    tree : {"quadtree", "fishbone"}
+    tree : {"quadtree", "fishbone", "comb"}
         Incircle mode's dual spanning tree (``hammesh.postprocess.incircle.TREES``):
         ``"fishbone"`` makes the cycle sweep the domain so that ``hammesh.partition``'s
         stretches cut close to METIS (docs/partition.md), at about +20 % of this call's
         time; ``"quadtree"`` (the default) is the fastest. Sparse mode: ``"fishbone"``
         confines the cover to the fishbone's cells and joins them in its class order
         (``hammesh.postprocess.sparse_cells``; an opt-in: it costs Steiner points and
-        angles), ``"quadtree"`` (the default) leaves the cover free.
+        angles), ``"comb"`` takes ``hammesh.postprocess.comb_cover``'s (issue 14: cut
+        ~1.3 x METIS, ~0.6 % Steiner points, smallest angle ~15 degrees; docs/partition.md),
+        ``"quadtree"`` (the default) leaves the cover free.
 
     Returns
     -------
@@ -213,8 +215,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
     if isinstance(keep, (bool, np.bool_)) or not (isinstance(keep, numbers.Real) and 0.0 <= keep <= 1.0):
         raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
     keep = float(keep)  # (a numpy scalar is welcome; the kernels take a float)
-    if tree not in TREES:
-        raise InvalidOptionError(f"tree must be one of {sorted(TREES)}, got {tree!r}")
+    if tree not in TREES and not (tree == "comb" and mode == "sparse"):
+        raise InvalidOptionError(f"tree must be one of {sorted(TREES)} (sparse mode also 'comb'), got {tree!r}")
     t0 = time.perf_counter()
     taken, shape = RESERVE_TAKEN.get(mode), np.shape(mesh.triangles)
     if taken is not None and len(shape) == 2 and pages.reserved():  # pages it will not take: back now

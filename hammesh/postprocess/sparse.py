@@ -70,6 +70,7 @@ from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
 from hammesh.postprocess.cycle_cover import CycleCover, JoinRule, cycle_cover, cycle_ids_by_halves, join_classes
+from hammesh.postprocess.comb_cover import comb_cover
 from hammesh.postprocess.sparse_cells import fishbone_cells, join_classes as fish_classes
 from hammesh.halfedge import HalfEdges
 from hammesh import threads
@@ -554,7 +555,8 @@ def _flip_cover(tw, is_cov, flips) -> None:
         is_cov[tw[h]] = is_cov[h]
 
 
-def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi: float, floor2: float):
+def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi: float, floor2: float,
+             depth: int | None = None):
     """Re-route the cover through uncovered triangles that neither a join nor a ring fan can keep.
 
     For such a triangle ``t`` (on the boundary, typically: its corners at the
@@ -565,9 +567,11 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     losing both its cover edges (``z`` is left off instead of ``t``), or by one path
     from ``u`` that ends at ``w`` (nothing left off). ``z`` is taken only if a ring
     fan over it meets the targets (``_best_ring``); the cover's cycles may merge or
-    split (the joins take it from there). Returns the new cover and the number of
-    triangles re-routed.
+    split (the joins take it from there). ``depth``: the removals along each path
+    (None: ``REROUTE_DEPTH``). Returns the new cover and the number of triangles
+    re-routed.
     """
+    depth = REROUTE_DEPTH if depth is None else depth  # (``tree="comb"``: 0)
     m = len(tri)
     rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows):
@@ -594,9 +598,9 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                     continue
                 avoid = {t} | touched_set
                 from_w: dict[int, list] = {}
-                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, REROUTE_DEPTH):
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, w, avoid | {u}, depth):
                     from_w.setdefault(y, []).append((nodes, flips))
-                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, u, avoid, REROUTE_DEPTH, w):
+                for y, nodes, flips in _alternating_paths(tw, is_cov, cycle, u, avoid, depth, w):
                     cands = []
                     if y == w:  # the path ends at w, which gave t its edge: nothing left off
                         if best is None or best[3] >= 0 or len(flips) < best[0]:
@@ -1940,9 +1944,10 @@ def sparse_cycles(
         The rows are in ``renumber_local``'s order (``sparse_hamiltonian`` from
         ``LOCAL_MIN_TRIANGLES`` on): the cover splits them at a quadrant border of that
         order (``cycle_cover(..., local=True)``).
-    tree : {"quadtree", "fishbone"}
+    tree : {"quadtree", "fishbone", "comb"}
         ``"fishbone"`` (planar): the cover confined to the fishbone's cells and bands,
         the joins in its class order (``sparse_cells``, issue 14: a compact cycle).
+        ``"comb"`` (planar): ``comb_cover``'s compact cycle, the re-routes off.
     """
     if not 0.0 <= keep <= 1.0:
         raise InvalidOptionError(f"keep must be between 0 and 1, got {keep!r}")
@@ -1995,8 +2000,11 @@ def sparse_cycles(
         # (the matching's and the re-colouring's judge)
         rule = JoinRule(amin_t, float(keep), hi, con, bool(swaps), bool(edge_splits),
                         corners) if pts.shape[1] == 2 else None
-        cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
-                            cells=None if fish is None else fish.cell, judge=rule is not None)
+        if tree == "comb" and pts.shape[1] == 2:  # (issue 14: ``comb_cover``, docs/partition.md)
+            cover = comb_cover(pts, tri, tw)
+        else:
+            cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
+                                cells=None if fish is None else fish.cell, judge=rule is not None)
         rule = corners = None  # (the corner angles' pages given back: only the cover reads them)
     else:
         if beside_cover is not None:
@@ -2027,7 +2035,8 @@ def sparse_cycles(
         n, m = len(pts), len(tri)
     n_ring = n_reroute = 0
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:  # (every size: session 10)
-        cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor)
+        cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor,
+                                    0 if tree == "comb" else None)  # (they would splice the comb's cycle)
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
             pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
         )
@@ -2537,8 +2546,8 @@ def sparse_hamiltonian(
         The local quality rule's factor (``sparse_cycles``).
     beside_cover : callable, optional
         Called once beside the construction (``sparse_cycles``).
-    tree : {"quadtree", "fishbone"}
-        ``sparse_cycles``' (``"fishbone"``: a compact cycle, ``sparse_cells``).
+    tree : {"quadtree", "fishbone", "comb"}
+        ``sparse_cycles``' (``"fishbone"``, ``"comb"``: compact cycles).
 
     Returns
     -------

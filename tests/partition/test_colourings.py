@@ -16,6 +16,7 @@ from hypothesis import given, settings, strategies as st
 
 import hammesh
 from hammesh.halfedge import half_edges
+from hammesh.postprocess import comb_cover as comb
 from hammesh.postprocess.cycle_cover import cycle_cover, cycle_ids_by_halves
 
 _bench = Path(__file__).parents[2] / "benchmarks"
@@ -132,14 +133,15 @@ def test_the_seeded_cover_covers_what_the_matching_covers() -> None:
     assert cov.n_cycles > 1
 
 
-@pytest.mark.parametrize("tree", ["quadtree", "fishbone"])
-def test_sparse_mode_certifies_the_compact_cover(monkeypatch, tree: str) -> None:
+@pytest.mark.parametrize("tree, fill", [("quadtree", "grow"), ("fishbone", "grow"), ("fishbone", "comb")])
+def test_sparse_mode_certifies_the_compact_cover(monkeypatch, tree: str, fill: str) -> None:
     from hammesh.partition import partition
     from hammesh.postprocess import sparse as sp
 
     mesh = _mesh(area=0.002)
     monkeypatch.setattr(sp, "cycle_cover", pc.compact_cover)
     monkeypatch.setattr(pc, "TREE", tree)
+    monkeypatch.setattr(pc, "FISH_FILL", fill)
     monkeypatch.setattr(pc, "LMAX", 4)
     h = hammesh.hamiltonian(mesh, mode="sparse")  # (verified inside: a VerificationError fails the test)
     assert pc.LAST["cycles"] >= 1
@@ -150,7 +152,7 @@ def test_sparse_mode_certifies_the_compact_cover(monkeypatch, tree: str) -> None
 
 @pytest.mark.parametrize("straight", [True, False])
 def test_the_vertex_fishbone_tree_is_an_induced_tree(monkeypatch, straight: bool) -> None:
-    monkeypatch.setattr(pc, "STRAIGHT_SPINES", straight)
+    monkeypatch.setattr(comb, "STRAIGHT_SPINES", straight)
     pts, tri, twin = _arrays(_mesh(area=0.002))
     bnd = pc.boundary_vertices(tri, twin, len(pts))
     for axis in (0, 1):
@@ -160,6 +162,64 @@ def test_the_vertex_fishbone_tree_is_an_induced_tree(monkeypatch, straight: bool
             assert _is_induced_tree(inside, tri) and not inside[bnd].any()
         unc = [(t[tri].sum(axis=1) == 0).sum() for t in (plain, deferring)]
         assert unc[1] < unc[0]
+
+
+def _lattice(nx: int = 60, ny: int = 52, jitter: float = 0.0):
+    """A triangular lattice's Delaunay triangles (CCW, the flat ones at its ragged
+    sides dropped), its points moved by up to ``jitter`` edges."""
+    from scipy.spatial import Delaunay
+
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny))
+    pts = np.c_[(i + 0.5 * (j % 2)).ravel(), (j * np.sqrt(3) / 2).ravel()].astype(float)
+    pts += np.random.default_rng(1).uniform(-jitter, jitter, pts.shape)
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    p = pts[tri]
+    u, v = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    area = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    tri[area < 0] = tri[area < 0][:, ::-1]
+    tri = np.ascontiguousarray(tri[np.abs(area) > 0.3])
+    return pts, tri, half_edges(tri, len(pts)).twin
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.15])
+def test_the_comb_fill_is_an_induced_tree_that_covers_more(jitter: float) -> None:
+    # the deepest cells as combs (teeth across the parent's spine, outside rows between
+    # them): still one induced tree (one cycle), and on a lattice-like mesh fewer
+    # monochrome triangles than the breadth-first fill (rows that alternate leave none);
+    # cells of a few hundred vertices at least (at 1 500 triangles, cells of ~40
+    # vertices, the comb loses one frame in four)
+    for pts, tri, twin in (_lattice(jitter=jitter), _arrays(_mesh(area=0.0005))):
+        bnd = pc.boundary_vertices(tri, twin, len(pts))
+        for axis in (0, 1):
+            for angle in (0.0, 30.0):
+                unc = []
+                for fill in ("grow", "comb"):
+                    inside = pc.vertex_fishbone_tree(pc.turned(pts, angle), tri, twin, axis, penalty=5.0, max_defer=8,
+                                                     levels=2, fill=fill)
+                    assert _is_induced_tree(inside, tri) and not inside[bnd].any()
+                    assert _n_cycles(tri, twin, inside.astype(np.int8)) == 1
+                    unc.append((inside[tri].sum(axis=1) == 0).sum())
+                assert unc[1] < unc[0], (axis, angle, unc)
+
+
+def test_the_comb_keys_sweep_away_from_the_spine() -> None:
+    # a key grows with the whole steps from the spine line; along the spine it adds < 1
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(0, 1, (200, 2))
+    src, dst = rng.integers(0, 200, 400), rng.integers(0, 200, 400)
+    deep = rng.random(400) < 0.7
+    keys = comb.comb_keys(pts, src, dst, np.full(400, 7.0), deep, np.zeros(400, np.int64), np.array([0.5]), 0, 20.0,
+                          0.5, 4.0)
+    assert (keys[~deep] == 7.0).all()
+    v = dst[deep]
+    step = 0.5 * np.median(np.linalg.norm(pts[v] - pts[src[deep]], axis=1))
+    assert np.array_equal(np.floor(keys[deep] - 20.0), np.floor(np.abs(pts[v, 1] - 0.5) / step))
+
+
+def test_an_unknown_fill_is_an_option_error() -> None:
+    pts, tri, twin = _arrays(_mesh(hole=False, area=0.02))
+    with pytest.raises(hammesh.errors.InvalidOptionError):
+        pc.vertex_fishbone_tree(pts, tri, twin, fill="zigzag")
 
 
 def test_straight_spines_are_shortest_paths_through_their_band() -> None:
@@ -172,8 +232,7 @@ def test_straight_spines_are_shortest_paths_through_their_band() -> None:
     lab = np.zeros(n, np.int64)
     o = np.flatnonzero(cand)
     o = o[np.argsort(pts[o, 0], kind="stable")].astype(np.int64)
-    spine = np.zeros(n, bool)
-    pc._spine_paths_into(ptr, idx, cand, lab, o, spine)
+    spine = comb.spine_paths(ptr, idx, cand, lab, o)
     sv = np.flatnonzero(spine)
     assert o[0] in sv and spine[cand].sum() < cand.sum()
     e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
@@ -188,7 +247,7 @@ def test_weighted_cell_medians_halve_the_weight(rows) -> None:
     cell = np.array([r[0] for r in rows])
     value = np.array([r[1] for r in rows])
     weight = np.array([r[2] for r in rows])
-    med = pc._cell_medians(cell, value, 4, weight)
+    med = comb.cell_medians(cell, value, 4, weight)
     for c in range(4):
         own = cell == c
         if not own.any():

@@ -1,0 +1,403 @@
+"""The comb cover: sparse mode's compact cycle cover from an induced vertex tree
+(``hamiltonian(mesh, mode="sparse", tree="comb")``, issue 14; measured in
+docs/partition.md, "Session 21", prototyped in ``benchmarks/partition_colourings.py``).
+
+A cycle cover of a planar mesh's dual graph is a 2-colouring of the vertices in which
+every triangle is *mixed*: the cover crosses the edges whose ends differ, a monochrome
+triangle is uncovered. With the boundary outside, the walk round an *induced tree* of
+inside vertices is one cycle through every mixed triangle. This module grows such a
+tree so that the cycle sweeps the domain compactly (its stretches cut close to METIS):
+
+* session 11's fishbone cells made on the vertices (:func:`vertex_fishbone_tree`): each
+  level's spine a shortest path just below its cell's median line, grown top-down, each
+  child hung by its own spine's end;
+* the deepest cells filled as *combs* (:func:`comb_keys`): a sweep away from the
+  parent's spine, so that teeth one vertex row wide run across it with outside rows
+  between them (alternating rows leave no monochrome triangle);
+* a vertex whose joining would leave a triangle monochrome for good is deferred
+  (:func:`grow_induced_tree`).
+
+:func:`comb_cover` returns what ``cycle_cover`` returns; sparse mode joins and fans the
+uncovered triangles (about 1 %) as usual, with its re-routes off (they would splice
+the cycle into long arcs), and certifies the output. No theorem: measured (plate
+300 000 triangles: 0.62 % Steiner points, cut 1.27 / 1.35 x METIS at k = 8 / 64;
+smallest angle 15 degrees).
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from hammesh.errors import InvalidOptionError
+from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
+
+__all__ = ["InducedTree", "VertexMaps", "vertex_maps", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
+           "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES"]
+
+
+class InducedTree(NamedTuple):
+    """A grown induced vertex tree: ``inside`` (n,) bool, and how many times a vertex
+    was deferred."""
+
+    inside: np.ndarray
+    deferrals: int
+
+
+class VertexMaps(NamedTuple):
+    """Each vertex's neighbours (``idx[ptr[v]:ptr[v+1]]``) and triangles
+    (``vt_idx[vt_ptr[v]:vt_ptr[v+1]]``), int64."""
+
+    ptr: np.ndarray
+    idx: np.ndarray
+    vt_ptr: np.ndarray
+    vt_idx: np.ndarray
+
+
+def vertex_maps(tri: np.ndarray, n: int) -> VertexMaps:
+    """The :class:`VertexMaps` of ``tri`` (m, 3) int64 over ``n`` vertices."""
+    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    both = np.concatenate([e, e[:, ::-1]])
+    both = both[np.lexsort((both[:, 1], both[:, 0]))]
+    ptr = np.searchsorted(both[:, 0], np.arange(n + 1)).astype(np.int64)
+    idx = np.ascontiguousarray(both[:, 1]).astype(np.int64)
+    flat = tri.ravel()
+    tv = np.argsort(flat, kind="stable")
+    vt_ptr = np.searchsorted(flat[tv], np.arange(n + 1)).astype(np.int64)
+    return VertexMaps(ptr, idx, vt_ptr, (tv // 3).astype(np.int64))
+
+
+def boundary_vertices(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
+    """(n,) bool: the ends of the boundary half-edges (``twin < 0``)."""
+    bh = np.flatnonzero(twin < 0)
+    b = np.zeros(n, np.bool_)
+    b[tri[bh // 3, bh % 3]] = True
+    b[tri[bh // 3, (bh % 3 + 1) % 3]] = True
+    return b
+
+
+def cover_of(tri: np.ndarray, twin: np.ndarray, colour: np.ndarray) -> np.ndarray:
+    """(3 m,) bool: the cover of a colouring, the interior half-edges whose ends differ."""
+    return ((colour[tri] != colour[np.roll(tri, -1, axis=1)]).ravel()) & (np.asarray(twin) >= 0)
+
+
+def turned(points: np.ndarray, angle: float) -> np.ndarray:
+    """``points`` (n, 2) in axes turned counter-clockwise by ``angle`` degrees."""
+    if not angle:
+        return points
+    t = np.radians(angle)
+    return np.ascontiguousarray(points @ np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]))
+
+
+def cell_medians(cell: np.ndarray, value: np.ndarray, n_cells: int, weight: np.ndarray | None = None) -> np.ndarray:
+    """Per cell id, the value at which the cell's members (by ``value``) reach half
+    their count, or half their ``weight``; NaN for an empty cell."""
+    o = np.lexsort((value, cell))
+    cnt = np.bincount(cell, minlength=n_cells)
+    start = np.r_[0, np.cumsum(cnt)[:-1]]
+    med = np.full(n_cells, np.nan)
+    full = cnt > 0
+    if weight is None:
+        med[full] = value[o][start[full] + cnt[full] // 2]
+        return med
+    w = weight[o]
+    cum = np.cumsum(w)
+    before = np.r_[0.0, cum][start]  # weight before each cell's first member
+    half = before + 0.5 * np.bincount(cell, weights=weight, minlength=n_cells)
+    # first member of each cell whose cumulative weight reaches half the cell's
+    at = np.searchsorted(cum, half[full], side="left")
+    med[full] = value[o][np.minimum(at, start[full] + cnt[full] - 1)]
+    return med
+
+
+@njit(cache=True)
+def triangles_doomed_by(v, ptr, idx, vt_ptr, vt_idx, tri, boundary, inside, count, mark, stamp):
+    """The triangles that ``v``'s joining the induced tree would leave monochrome for
+    good: round the neighbours that could join until now (interior, outside, one inside
+    neighbour; marked ``stamp`` in ``mark``), those whose three vertices are outside and
+    each on the boundary or unable to join after ``v`` (two inside neighbours, or a
+    marked neighbour of ``v``)."""
+    for j in range(ptr[v], ptr[v + 1]):
+        w = idx[j]
+        if not inside[w] and not boundary[w] and count[w] == 1:
+            mark[w] = stamp
+    doomed = 0
+    for j in range(ptr[v], ptr[v + 1]):
+        w = idx[j]
+        if mark[w] != stamp:
+            continue
+        for jj in range(vt_ptr[w], vt_ptr[w + 1]):
+            t = vt_idx[jj]
+            dead = True
+            for k in range(3):
+                x = tri[t, k]
+                if x == v or inside[x] or not (mark[x] == stamp or boundary[x] or count[x] >= 2):
+                    dead = False
+            if dead:
+                doomed += 1
+    return doomed
+
+
+@njit(cache=True)
+def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, inside, penalty, max_defer):
+    """Prim's search from ``seed`` (a heap of ``(key, sequence, vertex)``; float keys per
+    adjacency entry ``wts``) growing an induced tree into ``inside``: a vertex joins when
+    it is interior and exactly one neighbour is inside. A vertex whose joining would
+    *doom* a triangle (its three vertices outside, each on the boundary or with two
+    inside neighbours, so none can join any more) is pushed back by ``penalty`` times
+    the triangles it dooms, at most ``max_defer`` times. Returns ``(size, deferrals)``."""
+    n = len(boundary)
+    count = np.zeros(n, np.int64)
+    defer = np.zeros(n, np.int64)
+    mark = np.zeros(n, np.int64)
+    heap = [(0.0, np.int64(0), np.int64(seed))]
+    seq = 1
+    size = 0
+    stamp = 0
+    deferrals = 0
+    while len(heap):
+        key, _, v = heapq.heappop(heap)
+        if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
+            continue
+        if size > 0 and defer[v] < max_defer:
+            stamp += 1
+            doomed = triangles_doomed_by(v, ptr, idx, vt_ptr, vt_idx, tri, boundary, inside, count, mark, stamp)
+            if doomed > 0:
+                defer[v] += 1
+                deferrals += 1
+                heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
+                seq += 1
+                continue
+        inside[v] = True
+        size += 1
+        for j in range(ptr[v], ptr[v + 1]):
+            w = idx[j]
+            count[w] += 1
+            if not inside[w] and not boundary[w] and count[w] == 1:
+                heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
+                seq += 1
+    return size, deferrals
+
+
+def grow_induced_tree(ptr: np.ndarray, idx: np.ndarray, wts: np.ndarray, vt_ptr: np.ndarray, vt_idx: np.ndarray,
+                      tri: np.ndarray, boundary: np.ndarray, seed: int, penalty: float = 0.0,
+                      max_defer: int = 0) -> InducedTree:
+    """The induced vertex tree of :func:`_grow_weighted_into` from ``seed`` (``ptr``,
+    ``idx``: the neighbours as :func:`vertex_maps`; ``wts`` each adjacency entry's key,
+    float64; ``vt_ptr``, ``vt_idx``: the vertices' triangles)."""
+    inside = np.zeros(len(boundary), np.bool_)
+    _, deferrals = _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, int(seed), inside,
+                                       float(penalty), int(max_defer))
+    return InducedTree(inside, int(deferrals))
+
+
+#: ``vertex_fishbone_tree``: each spine a shortest path through its band (else the whole band)
+STRAIGHT_SPINES = True
+
+
+@njit(cache=True)
+def _spine_paths_into(ptr, idx, cand, lab, order, spine):
+    """For each cell's band of spine candidates (``order``: by cell, then along the
+    line), each connected piece's shortest path (breadth-first, inside the band) from its
+    first vertex along the line to the farthest one it reaches along the line."""
+    n = cand.shape[0]
+    seen = np.zeros(n, np.bool_)
+    par = np.full(n, -1, np.int64)
+    pos = np.full(n, -1, np.int64)
+    for i in range(order.shape[0]):
+        pos[order[i]] = i
+    queue = np.empty(order.shape[0] + 1, np.int64)
+    for i in range(order.shape[0]):
+        s = order[i]
+        if seen[s]:
+            continue
+        seen[s] = True
+        par[s] = -1
+        head, tail = 0, 1
+        queue[0] = s
+        far = s
+        while head < tail:
+            u = queue[head]
+            head += 1
+            if pos[u] > pos[far]:
+                far = u
+            for j in range(ptr[u], ptr[u + 1]):
+                w = idx[j]
+                if cand[w] and not seen[w] and lab[w] == lab[s]:
+                    seen[w] = True
+                    par[w] = u
+                    queue[tail] = w
+                    tail += 1
+        x = far
+        while x >= 0:
+            spine[x] = True
+            x = par[x]
+
+def spine_paths(ptr: np.ndarray, idx: np.ndarray, cand: np.ndarray, lab: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """(n,) bool: the spines of :func:`_spine_paths_into` (``cand``: the bands' vertices;
+    ``lab``: their cells; ``order``: the candidates by cell, then along the line)."""
+    spine = np.zeros(len(cand), np.bool_)
+    _spine_paths_into(ptr, idx, cand, lab, order, spine)
+    return spine
+
+
+def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
+                         min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
+                         levels: int = 0, fill: str = "grow", pitch: float = 0.02) -> np.ndarray:
+    """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
+    vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
+    spine is the path of vertices just below its cell's median line (each with a
+    neighbour of the same cell above it). Grown *top-down* (an induced tree grown
+    bottom-up, cells first, blocks the spine beside each cell): spines from the top
+    level down, each child hung by its own spine's end nearest where its line meets the
+    parent's (the deepest cells by any vertex), the deepest cells' insides next, walls
+    last. ``levels`` (> 0) fixes the depth, else cells of about ``min_cell`` vertices;
+    ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral. ``fill``: the deepest
+    cells grown breadth-first from where they hang (``"grow"``: equal keys), or as combs
+    (``"comb"``: a sweep away from the parent's spine, :func:`comb_keys`, in steps of
+    ``pitch`` median edges; the deferral's penalty then counts steps)."""
+    if fill not in ("grow", "comb"):
+        raise InvalidOptionError(f"fill must be 'grow' or 'comb', not {fill!r}")
+    n = len(points)
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n)
+    src = np.repeat(np.arange(n), np.diff(ptr))
+    keep = src < idx
+    a, b = src[keep], idx[keep]
+    bnd = boundary_vertices(tri, twin, n)
+    depth = levels if levels > 0 else max(1, int(np.log(max(n / min_cell, 1.0)) / np.log(4.0)))
+    lab = np.zeros(n, np.int64)
+    region = np.zeros(n, np.int64)
+    spine_level = np.full(n, -1)
+    labels, lines = [], []
+    for level in range(depth + 1):
+        labels.append(lab)
+        along = (axis + level) % 2
+        across = 1 - along
+        line = cell_medians(region, points[:, across], 4**level)
+        lines.append(line)
+        if level == depth:
+            break
+        at = line[region]
+        upper = points[:, across] >= at
+        side = 2 * region + upper
+        far = points[:, along] >= cell_medians(side, points[:, along], 2 * 4**level)[side]
+        region = 2 * side + far
+        cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
+        cand = np.zeros(n, bool)
+        cand[np.where(upper[a], b, a)[cross]] = True
+        cand &= ~bnd
+        spine = np.zeros(n, bool)
+        if STRAIGHT_SPINES:  # an induced path: a shortest path along each piece of the band
+            o = np.flatnonzero(cand)
+            o = o[np.lexsort((points[o, along], lab[o]))].astype(np.int64)
+            spine = spine_paths(ptr, idx, cand, lab, o)
+        else:
+            spine = cand
+        lab = np.where((lab >= 0) & ~spine, region, -1)
+        spine_level[spine] = level
+    deepest = np.full(len(a), -1)
+    for level, lb in enumerate(labels):
+        deepest[(lb[a] == lb[b]) & (lb[a] >= 0)] = level
+    mid = 0.5 * (points[a] + points[b])
+    scale = 2.0 * float(np.ptp(points, axis=0).max()) + 1e-300
+    w = np.full(len(a), 1e6)
+    for level in range(depth + 1):
+        sel = deepest == level
+        base = 10.0 * level
+        if level == depth:
+            w[sel] = base
+            continue
+        along = (axis + level) % 2
+        sa, sb = spine_level[a] == level, spine_level[b] == level
+        w[sel & sa & sb] = base
+        hang = np.flatnonzero(sel & (sa ^ sb))
+        kid = np.where(sa, b, a)[hang]
+        child = labels[level + 1][kid]
+        target = np.empty((len(hang), 2))
+        target[:, along] = lines[level + 1][np.maximum(child, 0)]
+        target[:, 1 - along] = lines[level][labels[level][a[hang]]]
+        own = (spine_level[kid] == level + 1) | (level + 1 == depth)
+        d = np.sqrt(((mid[hang] - target) ** 2).sum(1)) / scale
+        w[hang] = np.where(own, base + 1.0 + d, 1e5 + d)
+        walls = np.flatnonzero(sel & ~sa & ~sb)
+        w[walls] = 2e5 + np.abs(mid[walls, 1 - along] - lines[level][labels[level][a[walls]]]) / scale
+    s2, d2, w2 = np.r_[a, b], np.r_[b, a], np.r_[w, w]
+    if fill == "comb":
+        w2 = comb_keys(points, s2, d2, w2, np.r_[deepest, deepest] == depth, labels[depth - 1][d2],
+                        lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
+    o = np.lexsort((d2, s2))
+    wptr = np.searchsorted(s2[o], np.arange(n + 1)).astype(np.int64)
+    top = np.flatnonzero((spine_level == 0) & ~bnd)
+    cen = points[~bnd].mean(axis=0)
+    seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
+    return grow_induced_tree(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd,
+                             int(seed), float(penalty), int(max_defer)).inside
+
+
+def comb_keys(points: np.ndarray, src: np.ndarray, dst: np.ndarray, keys: np.ndarray, deep: np.ndarray,
+              parent: np.ndarray, parent_line: np.ndarray, along: int, base: float, pitch: float,
+              scale: float) -> np.ndarray:
+    """Prim's keys of the directed edges ``src -> dst`` inside the deepest cells for the
+    comb fill: ``dst``'s distance from its parent's spine line (the spine runs along
+    ``along``) in whole steps of ``pitch`` median edges, ties by its coordinate along
+    the spine. The growth sweeps away from the spine, so each inside vertex extends the
+    tooth it is next to across the spine (and a vertex that would touch two teeth stays
+    out): teeth about one vertex row wide, outside rows between them. (A deferral's
+    penalty is counted in steps: 5 steps of 0.05 edges put a vertex back by a quarter
+    of an edge.)"""
+    keys = keys.copy()
+    v = dst[deep]
+    d = points[v] - points[src[deep]]
+    step = pitch * float(np.median(np.sqrt((d ** 2).sum(1))))
+    off = np.floor(np.abs(points[v, 1 - along] - parent_line[parent[deep]]) / step)
+    keys[deep] = base + off + (points[v, along] - points[:, along].min()) / scale
+    return keys
+
+
+def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis: int | None = None,
+               angle: float = 0.0, levels: int = 2, penalty: float = 5.0, max_defer: int = 8,
+               pitch: float = 0.02) -> CycleCover:
+    """The comb cover of a planar mesh: the cover of :func:`vertex_fishbone_tree`'s
+    induced tree (``fill="comb"``), as ``cycle_cover`` returns it.
+
+    Parameters
+    ----------
+    points : (n', 2) float64
+        Rows past the triangles' largest vertex are ignored (room left by the caller).
+    triangles : (m, 3) int64, counter-clockwise
+    twin : (3 m,) int64, -1 on the boundary
+    axis : int, optional
+        The top spine runs along this axis (of the axes turned by ``angle``); default:
+        across the domain's bounding box the short way (x if the box is taller than
+        wide, else y: session 11's fishbone crosses the domain shortest).
+    angle : float
+        Degrees the fishbone's axes are turned counter-clockwise.
+    levels, penalty, max_defer, pitch
+        :func:`vertex_fishbone_tree`'s (session 21's measured settings).
+
+    Returns
+    -------
+    CycleCover
+        ``is_cov``, ``cycle`` (-1: uncovered), ``n_cycles`` (1 on a connected domain),
+        ``n_uncovered``; ``n_unmatched`` 0.
+    """
+    tri = np.ascontiguousarray(triangles, dtype=np.int64)
+    tw = np.ascontiguousarray(twin, dtype=np.int64)
+    n = int(tri.max()) + 1 if len(tri) else 0
+    pts = turned(np.ascontiguousarray(np.asarray(points)[:n, :2], dtype=np.float64), angle)
+    if axis is None:
+        ext = np.ptp(pts, axis=0) if n else np.ones(2)
+        axis = 0 if ext[1] > ext[0] else 1
+    if axis not in (0, 1):
+        raise InvalidOptionError(f"axis must be 0 or 1, got {axis!r}")
+    inside = vertex_fishbone_tree(pts, tri, tw, int(axis), penalty=penalty, max_defer=max_defer, levels=levels,
+                                  fill="comb", pitch=pitch)
+    is_cov = cover_of(tri, tw, inside.astype(np.int8))
+    cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
+    return CycleCover(is_cov=is_cov, cycle=cyc, n_cycles=int(n_cyc), n_uncovered=int((cyc < 0).sum()),
+                      n_unmatched=0)
