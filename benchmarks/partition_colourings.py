@@ -295,6 +295,16 @@ def _rotation_roots(v, tri, vt_ptr, vt_idx, c, cyc, uf, roots):
 
 
 @njit(cache=True)
+def _rotation_candidate(v, tri, vt_ptr, vt_idx, boundary, c, cyc, uf, roots):
+    """The distinct cycles (their union-find roots, into ``roots``) that a star
+    rotation at interior vertex ``v`` would merge, or 0 where ``v`` cannot flip
+    without unmixing a triangle (or is on the boundary)."""
+    if boundary[v] or not flip_keeps_mixed(v, tri, vt_ptr, vt_idx, c):
+        return 0
+    return _rotation_roots(v, tri, vt_ptr, vt_idx, c, cyc, uf, roots)
+
+
+@njit(cache=True)
 def _scale_rotations_into(tri, vt_ptr, vt_idx, boundary, c, cyc, uf, bx0, bx1, by0, by1, px, py, levels, order):
     merged = 0
     roots = np.empty(64, np.int64)
@@ -304,9 +314,7 @@ def _scale_rotations_into(tri, vt_ptr, vt_idx, boundary, c, cyc, uf, bx0, bx1, b
             changed = 0
             for i in range(order.shape[0]):
                 v = order[i]
-                if boundary[v] or not flip_keeps_mixed(v, tri, vt_ptr, vt_idx, c):
-                    continue
-                nr = _rotation_roots(v, tri, vt_ptr, vt_idx, c, cyc, uf, roots)
+                nr = _rotation_candidate(v, tri, vt_ptr, vt_idx, boundary, c, cyc, uf, roots)
                 if nr == 0:
                     continue
                 x0, x1, y0, y1 = px[v], px[v], py[v], py[v]
@@ -365,9 +373,7 @@ def _capped_rotations_into(tri, vt_ptr, vt_idx, boundary, c, cyc, uf, size, big,
         changed = 0
         for i in range(order.shape[0]):
             v = order[i]
-            if boundary[v] or not flip_keeps_mixed(v, tri, vt_ptr, vt_idx, c):
-                continue
-            nr = _rotation_roots(v, tri, vt_ptr, vt_idx, c, cyc, uf, roots)
+            nr = _rotation_candidate(v, tri, vt_ptr, vt_idx, boundary, c, cyc, uf, roots)
             if nr == 0:
                 continue
             nbig = 0
