@@ -18,7 +18,7 @@ from hammesh.point_data import carry_point_data
 from hammesh.postprocess.incircle import TREES, incenters, incircle_hamiltonian, incircle_streaming, walk_arrays
 from hammesh.postprocess import sparse as sparse_module
 from hammesh.postprocess.kept_cycle import kept_cycle, kept_runs
-from hammesh.postprocess.sparse import KEEP, sparse_hamiltonian
+from hammesh.postprocess.sparse import KEEP, SPARSE_TREES, sparse_hamiltonian
 from hammesh.verify.certificate import certify, claim_structure
 from hammesh.verify.reference import input_facts
 from hammesh.halfedge import HalfEdges, match_half_edges, prepare_mesh
@@ -215,8 +215,9 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
     if isinstance(keep, (bool, np.bool_)) or not (isinstance(keep, numbers.Real) and 0.0 <= keep <= 1.0):
         raise InvalidOptionError(f"keep must be a number between 0 and 1, got {keep!r}")
     keep = float(keep)  # (a numpy scalar is welcome; the kernels take a float)
-    if tree not in TREES and not (tree == "comb" and mode == "sparse"):
-        raise InvalidOptionError(f"tree must be one of {sorted(TREES)} (sparse mode also 'comb'), got {tree!r}")
+    trees = SPARSE_TREES if mode == "sparse" else tuple(TREES)  # (each mode names its own)
+    if tree not in trees:
+        raise InvalidOptionError(f"tree must be one of {list(trees)} in {mode} mode, got {tree!r}")
     t0 = time.perf_counter()
     taken, shape = RESERVE_TAKEN.get(mode), np.shape(mesh.triangles)
     if taken is not None and len(shape) == 2 and pages.reserved():  # pages it will not take: back now

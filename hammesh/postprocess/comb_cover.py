@@ -330,12 +330,11 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     if fill == "comb":
         w2 = comb_keys(points, s2, d2, w2, np.r_[deepest, deepest] == depth, labels[depth - 1][d2],
                         lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
-    o = np.lexsort((d2, s2))
-    wptr = np.searchsorted(s2[o], np.arange(n + 1)).astype(np.int64)
+    o = np.lexsort((d2, s2))  # (the keys in vertex_maps' order: by source, then neighbour)
     top = np.flatnonzero((spine_level == 0) & ~bnd)
     cen = points[~bnd].mean(axis=0)
     seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
-    return grow_induced_tree(wptr, d2[o].astype(np.int64), w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd,
+    return grow_induced_tree(ptr, idx, w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd,
                              int(seed), float(penalty), int(max_defer)).inside
 
 

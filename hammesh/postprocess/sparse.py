@@ -78,7 +78,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "sparse_hamiltonian", "renumbers", "SparseResult", "sparse_cycles", "local_quality", "kept_radius_ratio", "triangle_angles", "triangle_facts", "KEEP",
-    "corner_bound", "join_bounds", "PlanSteps",
+    "corner_bound", "join_bounds", "PlanSteps", "SPARSE_TREES",
 ]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
@@ -512,6 +512,9 @@ def _best_ring(pts, tri, tw, con, is_cov, cycle, blocked, t, lo: float, hi: floa
 
 #: removals along each alternating path a re-route may take (``_reroute``)
 REROUTE_DEPTH = 4
+#: ``tree=`` names sparse mode takes: its own free cover (``"quadtree"``), the fishbone's
+#: cells (``"fishbone"``, ``sparse_cells``), the comb cover (``"comb"``, ``comb_cover``)
+SPARSE_TREES = ("quadtree", "fishbone", "comb")
 
 
 def _alternating_paths(tw, is_cov, cycle, start: int, avoid: set, depth: int, stop: int = -1):
