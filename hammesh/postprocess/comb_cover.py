@@ -269,6 +269,8 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     keep = src < idx
     a, b = src[keep], idx[keep]
     bnd = boundary_vertices(tri, twin, n)
+    if bnd.all():  # no interior vertex (a fan, a strip one triangle wide): no tree; all uncovered
+        return np.zeros(n, np.bool_)
     depth = levels if levels > 0 else max(1, int(np.log(max(n / min_cell, 1.0)) / np.log(4.0)))
     lab = np.zeros(n, np.int64)
     region = np.zeros(n, np.int64)

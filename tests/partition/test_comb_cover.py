@@ -115,3 +115,15 @@ def test_the_cli_takes_tree_comb(tmp_path) -> None:
         p = subprocess.run([sys.executable, "-m", "hammesh", "mesh", str(poly), "-q", "30", "-a", "0.002", *args,
                             "-o", str(tmp_path / "x.vtu")], capture_output=True, text=True)
         assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+@pytest.mark.parametrize("outline", [[[0, 0], [1, 0], [0, 1]], [[0, 0], [3, 0], [3, 0.05], [0, 0.05]]])
+def test_comb_without_an_interior_vertex_is_certified(outline) -> None:
+    """A single triangle and a strip one triangle wide have no interior vertex: no tree,
+    every triangle uncovered, and sparse mode still makes a certified cycle of them."""
+    mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon(outline))
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    cov = comb.comb_cover(mesh.points, tri, half_edges(tri, mesh.n_points).twin)
+    assert cov.n_uncovered == len(tri) and not cov.is_cov.any()
+    h = hammesh.hamiltonian(mesh, tree="comb")
+    assert h.report["verified"] and len(h.components) == 1
