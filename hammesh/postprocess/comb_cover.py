@@ -33,10 +33,12 @@ import numpy as np
 from numba import njit
 
 from hammesh.errors import InvalidOptionError
+from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
 
 __all__ = ["InducedTree", "VertexMaps", "vertex_maps", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
-           "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES"]
+           "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES",
+           "VertexRing", "vertex_ring", "FRAMES"]
 
 
 class InducedTree(NamedTuple):
@@ -55,6 +57,46 @@ class VertexMaps(NamedTuple):
     idx: np.ndarray
     vt_ptr: np.ndarray
     vt_idx: np.ndarray
+
+
+class VertexRing(NamedTuple):
+    """The ring frame on vertices (:func:`vertex_ring`): the fishbone's top spine is the
+    hole's rim, ``SECTORS`` sectors hang from it."""
+
+    #: (n, 2) float64: each vertex as (radius, angle from the seam x a median radius)
+    points: np.ndarray
+    #: (n,) bool: the vertices of the hole the sectors hang round
+    hole: np.ndarray
+    #: (SECTORS - 1,) float64: the sector borders (angle coordinate), by triangles walked
+    cuts: np.ndarray
+    #: the hole's mean radius (where each sector hangs from the rim)
+    r_in: float
+    #: the angle coordinate's range (an edge across the seam spans more than half of it)
+    span: float
+
+
+def vertex_ring(points: np.ndarray, tri: np.ndarray, twin: np.ndarray) -> VertexRing | None:
+    """The ring frame of a domain that wraps round a hole (session 13's decision, seam and
+    polar coordinates: ``_fishbone_kernels.ring_frame``), else None; the sector borders
+    recounted for the walk round a *vertex* tree: the triangles touching the hole lie on
+    the rim's hole side, walked after the last sector, so they count nothing on the way
+    out (the incircle walk's rim triangles count ``RIM_FORWARD`` of their three rows)."""
+    m = len(tri)
+    if m == 0:
+        return None
+    sample = np.arange(0, m, max(1, m // fk.FISH_SAMPLE))
+    ring = fk.ring_frame(points, tri, twin, sample)
+    if ring is None:
+        return None
+    pts, span = ring.points, float(ring.span)
+    s = pts[tri, 1]
+    wrap = (s.max(axis=1) - s.min(axis=1) > 0.5 * span)[:, None] & (s < 0.5 * span)
+    c = np.where(wrap, s + span, s).mean(axis=1) % span  # (a triangle across the seam unwrapped)
+    o = np.argsort(c, kind="stable")
+    out = np.cumsum(~ring.hole[tri[o]].any(axis=1))
+    at = np.searchsorted(out, np.arange(1, fk.SECTORS) * (m / fk.SECTORS))
+    cuts = c[o][np.minimum(at, m - 1)]
+    return VertexRing(pts, ring.hole, cuts, float(ring.r_in), span)
 
 
 def vertex_maps(tri: np.ndarray, n: int) -> VertexMaps:
@@ -247,7 +289,8 @@ def spine_paths(ptr: np.ndarray, idx: np.ndarray, cand: np.ndarray, lab: np.ndar
 
 def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
                          min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
-                         levels: int = 0, fill: str = "grow", pitch: float = 0.02) -> np.ndarray:
+                         levels: int = 0, fill: str = "grow", pitch: float = 0.02,
+                         ring: VertexRing | None = None) -> np.ndarray:
     """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
     vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
     spine is the path of vertices just below its cell's median line (each with a
@@ -259,7 +302,11 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral. ``fill``: the deepest
     cells grown breadth-first from where they hang (``"grow"``: equal keys), or as combs
     (``"comb"``: a sweep away from the parent's spine, :func:`comb_keys`, in steps of
-    ``pitch`` median edges; the deferral's penalty then counts steps)."""
+    ``pitch`` median edges; the deferral's penalty then counts steps). ``ring``
+    (:func:`vertex_ring`; ``points`` are then its polar ``points`` and ``axis`` 1): level
+    0's spine is the hole's rim (the interior vertices next to it, a shortest path cut
+    open at the seam) and its children the ``SECTORS`` sectors, each hung by its own
+    spine (the radial line through its median angle) nearest the rim."""
     if fill not in ("grow", "comb"):
         raise InvalidOptionError(f"fill must be 'grow' or 'comb', not {fill!r}")
     n = len(points)
@@ -276,23 +323,35 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     region = np.zeros(n, np.int64)
     spine_level = np.full(n, -1)
     labels, lines = [], []
+    cells = 1
     for level in range(depth + 1):
         labels.append(lab)
         along = (axis + level) % 2
         across = 1 - along
-        line = cell_medians(region, points[:, across], 4**level)
+        top_ring = ring is not None and level == 0
+        line = np.array([ring.r_in]) if top_ring else cell_medians(region, points[:, across], cells)
         lines.append(line)
         if level == depth:
             break
-        at = line[region]
-        upper = points[:, across] >= at
-        side = 2 * region + upper
-        far = points[:, along] >= cell_medians(side, points[:, along], 2 * 4**level)[side]
-        region = 2 * side + far
-        cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
         cand = np.zeros(n, bool)
-        cand[np.where(upper[a], b, a)[cross]] = True
-        cand &= ~bnd
+        if top_ring:  # the rim: the interior vertices next to the hole; the sectors by angle
+            region = np.searchsorted(ring.cuts, points[:, 1], side="right")
+            cells = len(ring.cuts) + 1
+            cand[idx[ring.hole[src]]] = True
+            cand &= ~bnd
+            # cut the band open at the seam: an edge across it loses its later end
+            wrap = cand[a] & cand[b] & (np.abs(points[a, 1] - points[b, 1]) > 0.5 * ring.span)
+            cand[np.where(points[a, 1] > points[b, 1], a, b)[wrap]] = False
+        else:
+            at = line[region]
+            upper = points[:, across] >= at
+            side = 2 * region + upper
+            far = points[:, along] >= cell_medians(side, points[:, along], 2 * cells)[side]
+            region = 2 * side + far
+            cells *= 4
+            cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
+            cand[np.where(upper[a], b, a)[cross]] = True
+            cand &= ~bnd
         spine = np.zeros(n, bool)
         if STRAIGHT_SPINES:  # an induced path: a shortest path along each piece of the band
             o = np.flatnonzero(cand)
@@ -360,9 +419,14 @@ def comb_keys(points: np.ndarray, src: np.ndarray, dst: np.ndarray, keys: np.nda
     return keys
 
 
+#: ``comb_cover``'s frames: ``"auto"`` the ring frame round a hole the domain wraps
+#: round (:func:`vertex_ring`), else the kd frame; ``"kd"`` always the kd frame.
+FRAMES = ("auto", "kd")
+
+
 def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis: int | None = None,
                angle: float = 0.0, levels: int = 2, penalty: float = 5.0, max_defer: int = 8,
-               pitch: float = 0.02) -> CycleCover:
+               pitch: float = 0.02, frame: str = "auto") -> CycleCover:
     """The comb cover of a planar mesh: the cover of :func:`vertex_fishbone_tree`'s
     induced tree (``fill="comb"``), as ``cycle_cover`` returns it.
 
@@ -380,6 +444,9 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
         Degrees the fishbone's axes are turned counter-clockwise.
     levels, penalty, max_defer, pitch
         :func:`vertex_fishbone_tree`'s (session 21's measured settings).
+    frame : {"auto", "kd"}
+        ``"auto"``: round a hole that the domain wraps round, the ring frame
+        (:func:`vertex_ring`; ``axis`` and ``angle`` then unused), else the kd frame.
 
     Returns
     -------
@@ -387,17 +454,24 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
         ``is_cov``, ``cycle`` (-1: uncovered), ``n_cycles`` (1 on a connected domain),
         ``n_uncovered``; ``n_unmatched`` 0.
     """
+    if frame not in FRAMES:
+        raise InvalidOptionError(f"frame must be one of {FRAMES}, not {frame!r}")
+    if axis not in (None, 0, 1):
+        raise InvalidOptionError(f"axis must be 0 or 1, got {axis!r}")
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     n = int(tri.max()) + 1 if len(tri) else 0
-    pts = turned(np.ascontiguousarray(np.asarray(points)[:n, :2], dtype=np.float64), angle)
-    if axis is None:
-        ext = np.ptp(pts, axis=0) if n else np.ones(2)
-        axis = 0 if ext[1] > ext[0] else 1
-    if axis not in (0, 1):
-        raise InvalidOptionError(f"axis must be 0 or 1, got {axis!r}")
+    pts = np.ascontiguousarray(np.asarray(points)[:n, :2], dtype=np.float64)
+    ring = vertex_ring(pts, tri, tw) if frame == "auto" else None
+    if ring is not None:
+        pts, axis = ring.points, 1  # (level 0 runs along the rim: the angle coordinate)
+    else:
+        pts = turned(pts, angle)
+        if axis is None:
+            ext = np.ptp(pts, axis=0) if n else np.ones(2)
+            axis = 0 if ext[1] > ext[0] else 1
     inside = vertex_fishbone_tree(pts, tri, tw, int(axis), penalty=penalty, max_defer=max_defer, levels=levels,
-                                  fill="comb", pitch=pitch)
+                                  fill="comb", pitch=pitch, ring=ring)
     is_cov = cover_of(tri, tw, inside.astype(np.int8))
     cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
     return CycleCover(is_cov=is_cov, cycle=cyc, n_cycles=int(n_cyc), n_uncovered=int((cyc < 0).sum()),
