@@ -41,7 +41,7 @@ from hammesh.errors import InvalidOptionError
 from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
 
-__all__ = ["InducedTree", "VertexMaps", "vertex_maps", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
+__all__ = ["InducedTree", "VertexMaps", "vertex_maps", "reverse_entries", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
            "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES",
            "VertexRing", "vertex_ring", "FRAMES"]
 
@@ -103,18 +103,79 @@ def vertex_ring(points: np.ndarray, tri: np.ndarray, twin: np.ndarray) -> Vertex
     return VertexRing(pts, ring.hole, cuts, float(ring.r_in), span)
 
 
+@njit(cache=True, nogil=True)
+def _vertex_maps_into(tri, vt_ptr, vt_idx, deg, buf):
+    """Each vertex's triangles (``vt_ptr``, ``vt_idx``: a counting sort, by triangle)
+    and its neighbours' count ``deg`` with the neighbours, sorted, at ``buf[vt_ptr[v] *
+    2:]`` (each of its triangles names two, every neighbour at least once)."""
+    n = vt_ptr.shape[0] - 1
+    m = tri.shape[0]
+    for t in range(m):
+        for k in range(3):
+            vt_ptr[tri[t, k] + 1] += 1
+    for v in range(n):
+        vt_ptr[v + 1] += vt_ptr[v]
+    fill = vt_ptr[:-1].copy()
+    for t in range(m):
+        for k in range(3):
+            v = tri[t, k]
+            vt_idx[fill[v]] = t
+            fill[v] += 1
+    for v in range(n):
+        lo = 2 * vt_ptr[v]
+        c = 0
+        for jj in range(vt_ptr[v], vt_ptr[v + 1]):
+            t = vt_idx[jj]
+            for k in range(3):
+                w = tri[t, k]
+                if w == v:
+                    continue
+                # insertion into the sorted run, duplicates dropped
+                i = c
+                while i > 0 and buf[lo + i - 1] > w:
+                    i -= 1
+                if i > 0 and buf[lo + i - 1] == w:
+                    continue
+                for q in range(c, i, -1):
+                    buf[lo + q] = buf[lo + q - 1]
+                buf[lo + i] = w
+                c += 1
+        deg[v] = c
+
+
 def vertex_maps(tri: np.ndarray, n: int) -> VertexMaps:
-    """The :class:`VertexMaps` of ``tri`` (m, 3) int64 over ``n`` vertices."""
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    both = np.concatenate([e, e[:, ::-1]])
-    both = both[np.lexsort((both[:, 1], both[:, 0]))]
-    ptr = np.searchsorted(both[:, 0], np.arange(n + 1)).astype(np.int64)
-    idx = np.ascontiguousarray(both[:, 1]).astype(np.int64)
-    flat = tri.ravel()
-    tv = np.argsort(flat, kind="stable")
-    vt_ptr = np.searchsorted(flat[tv], np.arange(n + 1)).astype(np.int64)
-    return VertexMaps(ptr, idx, vt_ptr, (tv // 3).astype(np.int64))
+    """The :class:`VertexMaps` of ``tri`` (m, 3) int64 over ``n`` vertices: neighbours
+    sorted, triangles in index order."""
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    vt_ptr = np.zeros(n + 1, np.int64)
+    vt_idx = np.empty(3 * len(tri), np.int64)
+    deg = np.zeros(n, np.int64)
+    buf = np.empty(6 * len(tri), np.int64)
+    _vertex_maps_into(tri, vt_ptr, vt_idx, deg, buf)
+    ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(deg, out=ptr[1:])
+    # each vertex's run starts at 2 vt_ptr[v] in buf: keep its first deg[v] entries
+    keep = np.arange(len(buf)) - np.repeat(2 * vt_ptr[:-1], 2 * np.diff(vt_ptr)) < np.repeat(deg, 2 * np.diff(vt_ptr))
+    return VertexMaps(ptr, buf[keep], vt_ptr, vt_idx)
+
+
+@njit(cache=True, nogil=True)
+def _reverse_entries_into(ptr, idx, rev):
+    for v in range(ptr.shape[0] - 1):
+        for j in range(ptr[v], ptr[v + 1]):
+            w = idx[j]
+            for jj in range(ptr[w], ptr[w + 1]):
+                if idx[jj] == v:
+                    rev[j] = jj
+                    break
+
+
+def reverse_entries(ptr: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """(len(idx),) int64: for each adjacency entry ``v -> w`` of :func:`vertex_maps`, the
+    position of ``w -> v``."""
+    rev = np.empty(len(idx), np.int64)
+    _reverse_entries_into(ptr, idx, rev)
+    return rev
 
 
 def boundary_vertices(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
@@ -408,11 +469,15 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
         w[hang] = np.where(own, base + 1.0 + d, 1e5 + d)
         walls = np.flatnonzero(sel & ~sa & ~sb)
         w[walls] = 2e5 + np.abs(mid[walls, 1 - along] - lines[level][labels[level][a[walls]]]) / scale
-    s2, d2, w2 = np.r_[a, b], np.r_[b, a], np.r_[w, w]
+    # the keys in vertex_maps' order (by source, then neighbour): each edge's twice
+    pos = np.flatnonzero(keep)
+    twice = np.empty(len(idx), np.int64)
+    twice[pos] = np.arange(len(pos))
+    twice[reverse_entries(ptr, idx)[pos]] = np.arange(len(pos))
+    w2 = w[twice]
     if fill == "comb":
-        w2 = comb_keys(points, s2, d2, w2, np.r_[deepest, deepest] == depth, labels[depth - 1][d2],
-                        lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
-    o = np.lexsort((d2, s2))  # (the keys in vertex_maps' order: by source, then neighbour)
+        w2 = comb_keys(points, src, idx, w2, deepest[twice] == depth, labels[depth - 1][idx],
+                       lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
     if ring is not None:
         seed = np.r_[np.flatnonzero(ring.hole), _sector_hangs(points, ptr, idx, ring.hole, spine_level, labels[1],
                                                               len(ring.cuts) + 1)]
@@ -421,7 +486,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
         top = np.flatnonzero((spine_level == 0) & ~bnd)
         cen = points[~bnd].mean(axis=0)
         seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
-    return grow_induced_tree(ptr, idx, w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd,
+    return grow_induced_tree(ptr, idx, w2.astype(np.float64), vt_ptr, vt_idx, tri, bnd,
                              seed, float(penalty), int(max_defer)).inside
 
 
