@@ -493,7 +493,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
 def _sector_hangs(points, ptr, idx, hole, spine_level, sector, sectors):
     """The vertices that hang each sector from the hole: its radial spine's innermost
     vertex, and if that is not next to the hole, its neighbour next to the hole nearest
-    the centre."""
+    the centre (if it has none, nothing: the sector is reached by the growth)."""
     n = len(hole)
     src = np.repeat(np.arange(n), np.diff(ptr))
     next_to = np.zeros(n, bool)
@@ -505,12 +505,13 @@ def _sector_hangs(points, ptr, idx, hole, spine_level, sector, sectors):
         if not len(sp):
             continue
         x = int(sp[np.argmin(points[sp, 0])])
-        out.append(x)
-        if not next_to[x]:
-            nb = idx[ptr[x]:ptr[x + 1]]
-            nb = nb[next_to[nb]]
-            if len(nb):
-                out.append(int(nb[np.argmin(points[nb, 0])]))
+        if next_to[x]:
+            out.append(x)
+            continue
+        nb = idx[ptr[x]:ptr[x + 1]]
+        nb = nb[next_to[nb]]
+        if len(nb):  # (else no seed: one apart from the hole would be a second tree; the growth reaches it)
+            out += [x, int(nb[np.argmin(points[nb, 0])])]
     return np.array(out, np.int64)
 
 
