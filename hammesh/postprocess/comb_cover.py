@@ -15,13 +15,18 @@ tree so that the cycle sweeps the domain compactly (its stretches cut close to M
   parent's spine, so that teeth one vertex row wide run across it with outside rows
   between them (alternating rows leave no monochrome triangle);
 * a vertex whose joining would leave a triangle monochrome for good is deferred
-  (:func:`grow_induced_tree`).
+  (:func:`grow_induced_tree`);
+* round a hole that the domain wraps round (a gear, an annulus: session 13's *ring
+  frame*, :func:`vertex_ring`), the hole's own vertices are the top spine, all inside,
+  and eight sectors hang from it, each a fishbone whose spine is its radial middle
+  line: the walk sweeps round the ring once (the colouring is then one cycle round
+  the hole with trees hanging from it, still one cycle of the cover).
 
 :func:`comb_cover` returns what ``cycle_cover`` returns; sparse mode joins and fans the
 uncovered triangles (about 1 %) as usual, with its re-routes off (they would splice
 the cycle into long arcs), and certifies the output. No theorem: measured (plate
 300 000 triangles: 0.62 % Steiner points, cut 1.27 / 1.35 x METIS at k = 8 / 64;
-smallest angle 15 degrees).
+the gear, ring frame, 0.66 %, 1.27 / 1.38; smallest angle 15 degrees).
 """
 
 from __future__ import annotations
@@ -33,10 +38,12 @@ import numpy as np
 from numba import njit
 
 from hammesh.errors import InvalidOptionError
+from hammesh.postprocess import _fishbone_kernels as fk
 from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
 
-__all__ = ["InducedTree", "VertexMaps", "vertex_maps", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
-           "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES"]
+__all__ = ["InducedTree", "VertexMaps", "vertex_maps", "reverse_entries", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
+           "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES",
+           "VertexRing", "vertex_ring", "FRAMES"]
 
 
 class InducedTree(NamedTuple):
@@ -57,18 +64,118 @@ class VertexMaps(NamedTuple):
     vt_idx: np.ndarray
 
 
+class VertexRing(NamedTuple):
+    """The ring frame on vertices (:func:`vertex_ring`): the fishbone's top spine is the
+    hole's rim, ``SECTORS`` sectors hang from it."""
+
+    #: (n, 2) float64: each vertex as (radius, angle from the seam x a median radius)
+    points: np.ndarray
+    #: (n,) bool: the vertices of the hole the sectors hang round
+    hole: np.ndarray
+    #: (SECTORS - 1,) float64: the sector borders (angle coordinate), by triangles walked
+    cuts: np.ndarray
+    #: the hole's mean radius (where each sector hangs from the rim)
+    r_in: float
+    #: the angle coordinate's range (an edge across the seam spans more than half of it)
+    span: float
+
+
+def vertex_ring(points: np.ndarray, tri: np.ndarray, twin: np.ndarray) -> VertexRing | None:
+    """The ring frame of a domain that wraps round a hole, else None: session 13's
+    decision, seam and polar coordinates (``_fishbone_kernels.ring_frame``), with the
+    sector borders recounted for the walk round the hole's vertices: the walk sweeps
+    the ring once and never comes back along the hole, so every triangle counts one
+    row on the way round (the incircle walk's rim triangles count ``RIM_FORWARD`` of
+    their three rows on the way out), and the borders are the octiles of the sampled
+    triangles' angles."""
+    m = len(tri)
+    if m == 0:
+        return None
+    sample = np.arange(0, m, max(1, m // fk.FISH_SAMPLE))
+    ring = fk.ring_frame(points, tri, twin, sample)
+    if ring is None:
+        return None
+    pts, span = ring.points, float(ring.span)
+    s = pts[tri[sample], 1]
+    wrap = (s.max(axis=1) - s.min(axis=1) > 0.5 * span)[:, None] & (s < 0.5 * span)
+    c = np.sort(np.where(wrap, s + span, s).mean(axis=1) % span)  # (a triangle across the seam unwrapped)
+    cuts = c[np.arange(1, fk.SECTORS) * len(c) // fk.SECTORS]
+    return VertexRing(pts, ring.hole, cuts, float(ring.r_in), span)
+
+
+@njit(cache=True, nogil=True)
+def _vertex_maps_into(tri, vt_ptr, vt_idx, deg, buf):
+    """Each vertex's triangles (``vt_ptr``, ``vt_idx``: a counting sort, by triangle)
+    and its neighbours' count ``deg`` with the neighbours, sorted, at ``buf[vt_ptr[v] *
+    2:]`` (each of its triangles names two, every neighbour at least once)."""
+    n = vt_ptr.shape[0] - 1
+    m = tri.shape[0]
+    for t in range(m):
+        for k in range(3):
+            vt_ptr[tri[t, k] + 1] += 1
+    for v in range(n):
+        vt_ptr[v + 1] += vt_ptr[v]
+    fill = vt_ptr[:-1].copy()
+    for t in range(m):
+        for k in range(3):
+            v = tri[t, k]
+            vt_idx[fill[v]] = t
+            fill[v] += 1
+    for v in range(n):
+        lo = 2 * vt_ptr[v]
+        c = 0
+        for jj in range(vt_ptr[v], vt_ptr[v + 1]):
+            t = vt_idx[jj]
+            for k in range(3):
+                w = tri[t, k]
+                if w == v:
+                    continue
+                # insertion into the sorted run, duplicates dropped
+                i = c
+                while i > 0 and buf[lo + i - 1] > w:
+                    i -= 1
+                if i > 0 and buf[lo + i - 1] == w:
+                    continue
+                for q in range(c, i, -1):
+                    buf[lo + q] = buf[lo + q - 1]
+                buf[lo + i] = w
+                c += 1
+        deg[v] = c
+
+
 def vertex_maps(tri: np.ndarray, n: int) -> VertexMaps:
-    """The :class:`VertexMaps` of ``tri`` (m, 3) int64 over ``n`` vertices."""
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    both = np.concatenate([e, e[:, ::-1]])
-    both = both[np.lexsort((both[:, 1], both[:, 0]))]
-    ptr = np.searchsorted(both[:, 0], np.arange(n + 1)).astype(np.int64)
-    idx = np.ascontiguousarray(both[:, 1]).astype(np.int64)
-    flat = tri.ravel()
-    tv = np.argsort(flat, kind="stable")
-    vt_ptr = np.searchsorted(flat[tv], np.arange(n + 1)).astype(np.int64)
-    return VertexMaps(ptr, idx, vt_ptr, (tv // 3).astype(np.int64))
+    """The :class:`VertexMaps` of ``tri`` (m, 3) int64 over ``n`` vertices: neighbours
+    sorted, triangles in index order."""
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    vt_ptr = np.zeros(n + 1, np.int64)
+    vt_idx = np.empty(3 * len(tri), np.int64)
+    deg = np.zeros(n, np.int64)
+    buf = np.empty(6 * len(tri), np.int64)
+    _vertex_maps_into(tri, vt_ptr, vt_idx, deg, buf)
+    ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(deg, out=ptr[1:])
+    # each vertex's run starts at 2 vt_ptr[v] in buf: keep its first deg[v] entries
+    keep = np.arange(len(buf)) - np.repeat(2 * vt_ptr[:-1], 2 * np.diff(vt_ptr)) < np.repeat(deg, 2 * np.diff(vt_ptr))
+    return VertexMaps(ptr, buf[keep], vt_ptr, vt_idx)
+
+
+@njit(cache=True, nogil=True)
+def _reverse_entries_into(ptr, idx, rev):
+    for v in range(ptr.shape[0] - 1):
+        for j in range(ptr[v], ptr[v + 1]):
+            w = idx[j]
+            for jj in range(ptr[w], ptr[w + 1]):
+                if idx[jj] == v:
+                    rev[j] = jj
+                    break
+
+
+def reverse_entries(ptr: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """(len(idx),) int64: for each adjacency entry ``v -> w`` of :func:`vertex_maps`, the
+    position of ``w -> v``."""
+    rev = np.empty(len(idx), np.int64)
+    _reverse_entries_into(ptr, idx, rev)
+    return rev
 
 
 def boundary_vertices(tri: np.ndarray, twin: np.ndarray, n: int) -> np.ndarray:
@@ -143,9 +250,10 @@ def triangles_doomed_by(v, ptr, idx, vt_ptr, vt_idx, tri, boundary, inside, coun
 
 
 @njit(cache=True)
-def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, inside, penalty, max_defer):
-    """Prim's search from ``seed`` (a heap of ``(key, sequence, vertex)``; float keys per
-    adjacency entry ``wts``) growing an induced tree into ``inside``: a vertex joins when
+def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seeds, inside, penalty, max_defer):
+    """Prim's search from ``seeds`` (all inside first, whatever their neighbours; then a
+    heap of ``(key, sequence, vertex)``; float keys per adjacency entry ``wts``) growing
+    an induced tree into ``inside``: a vertex joins when
     it is interior and exactly one neighbour is inside. A vertex whose joining would
     *doom* a triangle (its three vertices outside, each on the boundary or with two
     inside neighbours, so none can join any more) is pushed back by ``penalty`` times
@@ -154,11 +262,23 @@ def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, insi
     count = np.zeros(n, np.int64)
     defer = np.zeros(n, np.int64)
     mark = np.zeros(n, np.int64)
-    heap = [(0.0, np.int64(0), np.int64(seed))]
+    heap = [(0.0, np.int64(0), np.int64(0))]
+    heap.pop()  # (typed empty)
     seq = 1
     size = 0
     stamp = 0
     deferrals = 0
+    for v in seeds:
+        if inside[v]:
+            continue
+        inside[v] = True
+        size += 1
+        for j in range(ptr[v], ptr[v + 1]):
+            w = idx[j]
+            count[w] += 1
+            if not inside[w] and not boundary[w] and count[w] == 1:
+                heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
+                seq += 1
     while len(heap):
         key, _, v = heapq.heappop(heap)
         if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
@@ -184,13 +304,15 @@ def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seed, insi
 
 
 def grow_induced_tree(ptr: np.ndarray, idx: np.ndarray, wts: np.ndarray, vt_ptr: np.ndarray, vt_idx: np.ndarray,
-                      tri: np.ndarray, boundary: np.ndarray, seed: int, penalty: float = 0.0,
+                      tri: np.ndarray, boundary: np.ndarray, seed, penalty: float = 0.0,
                       max_defer: int = 0) -> InducedTree:
-    """The induced vertex tree of :func:`_grow_weighted_into` from ``seed`` (``ptr``,
-    ``idx``: the neighbours as :func:`vertex_maps`; ``wts`` each adjacency entry's key,
-    float64; ``vt_ptr``, ``vt_idx``: the vertices' triangles)."""
+    """The induced vertex tree of :func:`_grow_weighted_into` from ``seed`` (a vertex, or
+    an array of vertices put inside first; ``ptr``, ``idx``: the neighbours as
+    :func:`vertex_maps`; ``wts`` each adjacency entry's key, float64; ``vt_ptr``,
+    ``vt_idx``: the vertices' triangles)."""
     inside = np.zeros(len(boundary), np.bool_)
-    _, deferrals = _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, int(seed), inside,
+    seeds = np.atleast_1d(np.asarray(seed, dtype=np.int64))
+    _, deferrals = _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seeds, inside,
                                        float(penalty), int(max_defer))
     return InducedTree(inside, int(deferrals))
 
@@ -247,7 +369,8 @@ def spine_paths(ptr: np.ndarray, idx: np.ndarray, cand: np.ndarray, lab: np.ndar
 
 def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, axis: int = 0,
                          min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
-                         levels: int = 0, fill: str = "grow", pitch: float = 0.02) -> np.ndarray:
+                         levels: int = 0, fill: str = "grow", pitch: float = 0.02,
+                         ring: VertexRing | None = None) -> np.ndarray:
     """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
     vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
     spine is the path of vertices just below its cell's median line (each with a
@@ -259,7 +382,16 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     ``penalty``, ``max_defer``: :func:`deferring_tree`'s deferral. ``fill``: the deepest
     cells grown breadth-first from where they hang (``"grow"``: equal keys), or as combs
     (``"comb"``: a sweep away from the parent's spine, :func:`comb_keys`, in steps of
-    ``pitch`` median edges; the deferral's penalty then counts steps)."""
+    ``pitch`` median edges; the deferral's penalty then counts steps). ``ring``
+    (:func:`vertex_ring`; ``points`` are then its polar ``points`` and ``axis`` 1): level
+    0's spine is the hole's own boundary vertices, all inside, and its children the
+    ``SECTORS`` sectors, each hung from the hole by its own spine (the radial line
+    through its median angle), whose innermost vertex is put inside (with its
+    neighbour next to the hole if it is not): the walk then sweeps round the ring once,
+    sector after sector, with no strip along the hole to come back by. Not an induced
+    tree then: one cycle round the hole (the hole is no triangle), and each hanging
+    vertex next to two hole vertices leaves their triangle monochrome (about
+    ``SECTORS`` triangles uncovered)."""
     if fill not in ("grow", "comb"):
         raise InvalidOptionError(f"fill must be 'grow' or 'comb', not {fill!r}")
     n = len(points)
@@ -276,25 +408,34 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     region = np.zeros(n, np.int64)
     spine_level = np.full(n, -1)
     labels, lines = [], []
+    cells = 1
     for level in range(depth + 1):
         labels.append(lab)
         along = (axis + level) % 2
         across = 1 - along
-        line = cell_medians(region, points[:, across], 4**level)
+        top_ring = ring is not None and level == 0
+        line = np.array([ring.r_in]) if top_ring else cell_medians(region, points[:, across], cells)
         lines.append(line)
         if level == depth:
             break
-        at = line[region]
-        upper = points[:, across] >= at
-        side = 2 * region + upper
-        far = points[:, along] >= cell_medians(side, points[:, along], 2 * 4**level)[side]
-        region = 2 * side + far
-        cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
         cand = np.zeros(n, bool)
-        cand[np.where(upper[a], b, a)[cross]] = True
-        cand &= ~bnd
+        if top_ring:  # the hole's vertices are the spine (below); the sectors by angle
+            region = np.searchsorted(ring.cuts, points[:, 1], side="right")
+            cells = len(ring.cuts) + 1
+        else:
+            at = line[region]
+            upper = points[:, across] >= at
+            side = 2 * region + upper
+            far = points[:, along] >= cell_medians(side, points[:, along], 2 * cells)[side]
+            region = 2 * side + far
+            cells *= 4
+            cross = (lab[a] == lab[b]) & (lab[a] >= 0) & (upper[a] != upper[b])
+            cand[np.where(upper[a], b, a)[cross]] = True
+            cand &= ~bnd
         spine = np.zeros(n, bool)
-        if STRAIGHT_SPINES:  # an induced path: a shortest path along each piece of the band
+        if top_ring:
+            spine = ring.hole.copy()
+        elif STRAIGHT_SPINES:  # an induced path: a shortest path along each piece of the band
             o = np.flatnonzero(cand)
             o = o[np.lexsort((points[o, along], lab[o]))].astype(np.int64)
             spine = spine_paths(ptr, idx, cand, lab, o)
@@ -328,16 +469,50 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
         w[hang] = np.where(own, base + 1.0 + d, 1e5 + d)
         walls = np.flatnonzero(sel & ~sa & ~sb)
         w[walls] = 2e5 + np.abs(mid[walls, 1 - along] - lines[level][labels[level][a[walls]]]) / scale
-    s2, d2, w2 = np.r_[a, b], np.r_[b, a], np.r_[w, w]
+    # the keys in vertex_maps' order (by source, then neighbour): each edge's twice
+    pos = np.flatnonzero(keep)
+    twice = np.empty(len(idx), np.int64)
+    twice[pos] = np.arange(len(pos))
+    twice[reverse_entries(ptr, idx)[pos]] = np.arange(len(pos))
+    w2 = w[twice]
     if fill == "comb":
-        w2 = comb_keys(points, s2, d2, w2, np.r_[deepest, deepest] == depth, labels[depth - 1][d2],
-                        lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
-    o = np.lexsort((d2, s2))  # (the keys in vertex_maps' order: by source, then neighbour)
-    top = np.flatnonzero((spine_level == 0) & ~bnd)
-    cen = points[~bnd].mean(axis=0)
-    seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
-    return grow_induced_tree(ptr, idx, w2[o].astype(np.float64), vt_ptr, vt_idx, tri, bnd,
-                             int(seed), float(penalty), int(max_defer)).inside
+        w2 = comb_keys(points, src, idx, w2, deepest[twice] == depth, labels[depth - 1][idx],
+                       lines[depth - 1], (axis + depth - 1) % 2, 10.0 * depth, pitch, scale)
+    if ring is not None:
+        seed = np.r_[np.flatnonzero(ring.hole), _sector_hangs(points, ptr, idx, ring.hole, spine_level, labels[1],
+                                                              len(ring.cuts) + 1)]
+        bnd = bnd & ~ring.hole
+    else:
+        top = np.flatnonzero((spine_level == 0) & ~bnd)
+        cen = points[~bnd].mean(axis=0)
+        seed = top[np.argmin(((points[top] - cen) ** 2).sum(1))] if len(top) else np.flatnonzero(~bnd)[0]
+    return grow_induced_tree(ptr, idx, w2.astype(np.float64), vt_ptr, vt_idx, tri, bnd,
+                             seed, float(penalty), int(max_defer)).inside
+
+
+def _sector_hangs(points, ptr, idx, hole, spine_level, sector, sectors):
+    """The vertices that hang each sector from the hole: its radial spine's innermost
+    vertex, and if that is not next to the hole, its neighbour next to the hole nearest
+    the centre (if it has none, nothing: the sector is reached by the growth)."""
+    n = len(hole)
+    src = np.repeat(np.arange(n), np.diff(ptr))
+    next_to = np.zeros(n, bool)
+    next_to[idx[hole[src]]] = True
+    next_to &= ~hole
+    out = []
+    for j in range(sectors):
+        sp = np.flatnonzero((spine_level == 1) & (sector == j))
+        if not len(sp):
+            continue
+        x = int(sp[np.argmin(points[sp, 0])])
+        if next_to[x]:
+            out.append(x)
+            continue
+        nb = idx[ptr[x]:ptr[x + 1]]
+        nb = nb[next_to[nb]]
+        if len(nb):  # (else no seed: one apart from the hole would be a second tree; the growth reaches it)
+            out += [x, int(nb[np.argmin(points[nb, 0])])]
+    return np.array(out, np.int64)
 
 
 def comb_keys(points: np.ndarray, src: np.ndarray, dst: np.ndarray, keys: np.ndarray, deep: np.ndarray,
@@ -360,9 +535,14 @@ def comb_keys(points: np.ndarray, src: np.ndarray, dst: np.ndarray, keys: np.nda
     return keys
 
 
+#: ``comb_cover``'s frames: ``"auto"`` the ring frame round a hole the domain wraps
+#: round (:func:`vertex_ring`), else the kd frame; ``"kd"`` always the kd frame.
+FRAMES = ("auto", "kd")
+
+
 def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis: int | None = None,
                angle: float = 0.0, levels: int = 2, penalty: float = 5.0, max_defer: int = 8,
-               pitch: float = 0.02) -> CycleCover:
+               pitch: float = 0.02, frame: str = "auto") -> CycleCover:
     """The comb cover of a planar mesh: the cover of :func:`vertex_fishbone_tree`'s
     induced tree (``fill="comb"``), as ``cycle_cover`` returns it.
 
@@ -380,6 +560,9 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
         Degrees the fishbone's axes are turned counter-clockwise.
     levels, penalty, max_defer, pitch
         :func:`vertex_fishbone_tree`'s (session 21's measured settings).
+    frame : {"auto", "kd"}
+        ``"auto"``: round a hole that the domain wraps round, the ring frame
+        (:func:`vertex_ring`; ``axis`` and ``angle`` then unused), else the kd frame.
 
     Returns
     -------
@@ -387,17 +570,24 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
         ``is_cov``, ``cycle`` (-1: uncovered), ``n_cycles`` (1 on a connected domain),
         ``n_uncovered``; ``n_unmatched`` 0.
     """
+    if frame not in FRAMES:
+        raise InvalidOptionError(f"frame must be one of {FRAMES}, not {frame!r}")
+    if axis not in (None, 0, 1):
+        raise InvalidOptionError(f"axis must be 0 or 1, got {axis!r}")
     tri = np.ascontiguousarray(triangles, dtype=np.int64)
     tw = np.ascontiguousarray(twin, dtype=np.int64)
     n = int(tri.max()) + 1 if len(tri) else 0
-    pts = turned(np.ascontiguousarray(np.asarray(points)[:n, :2], dtype=np.float64), angle)
-    if axis is None:
-        ext = np.ptp(pts, axis=0) if n else np.ones(2)
-        axis = 0 if ext[1] > ext[0] else 1
-    if axis not in (0, 1):
-        raise InvalidOptionError(f"axis must be 0 or 1, got {axis!r}")
+    pts = np.ascontiguousarray(np.asarray(points)[:n, :2], dtype=np.float64)
+    ring = vertex_ring(pts, tri, tw) if frame == "auto" else None
+    if ring is not None:
+        pts, axis = ring.points, 1  # (level 0 runs along the rim: the angle coordinate)
+    else:
+        pts = turned(pts, angle)
+        if axis is None:
+            ext = np.ptp(pts, axis=0) if n else np.ones(2)
+            axis = 0 if ext[1] > ext[0] else 1
     inside = vertex_fishbone_tree(pts, tri, tw, int(axis), penalty=penalty, max_defer=max_defer, levels=levels,
-                                  fill="comb", pitch=pitch)
+                                  fill="comb", pitch=pitch, ring=ring)
     is_cov = cover_of(tri, tw, inside.astype(np.int8))
     cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
     return CycleCover(is_cov=is_cov, cycle=cyc, n_cycles=int(n_cyc), n_uncovered=int((cyc < 0).sum()),

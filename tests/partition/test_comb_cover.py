@@ -127,3 +127,96 @@ def test_comb_without_an_interior_vertex_is_certified(outline) -> None:
     assert cov.n_uncovered == len(tri) and not cov.is_cov.any()
     h = hammesh.hamiltonian(mesh, tree="comb")
     assert h.report["verified"] and len(h.components) == 1
+
+
+def _annulus(r_hole: float, area: float, offset: tuple[float, float] = (0.0, 0.0), teeth: bool = False,
+             sides: int = 48) -> hammesh.Mesh:
+    """A disc (or session 13's 12-tooth gear) round a round hole."""
+    a = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    circ = np.c_[np.cos(a), np.sin(a)]
+    outer = circ
+    if teeth:
+        k = np.arange(96)
+        r = np.where((k // 4) % 2 == 0, 1.0, 0.8)
+        outer = np.c_[r * np.cos(2 * np.pi * k / 96), r * np.sin(2 * np.pi * k / 96)]
+    dom = hammesh.Domain.from_polygon(outer, holes=[circ * r_hole + offset])
+    return hammesh.quality_mesh(dom, min_angle=30, max_area=area)
+
+
+def _ring_colouring(mesh: hammesh.Mesh):
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    twin = half_edges(tri, mesh.n_points).twin
+    pts = np.ascontiguousarray(mesh.points[:, :2])
+    ring = comb.vertex_ring(pts, tri, twin)
+    return tri, twin, pts, ring
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(r_hole=st.floats(0.15, 0.6), ox=st.floats(-0.1, 0.1), oy=st.floats(-0.1, 0.1), sides=st.integers(20, 64))
+def test_the_ring_frame_cover_is_one_cycle_round_the_hole(r_hole: float, ox: float, oy: float, sides: int) -> None:
+    """Round a hole the domain wraps round, the comb's colouring is the hole's vertices
+    with trees hanging from them: every hole vertex inside, no other boundary vertex,
+    the inside vertices connected, and without the hole's vertices a forest; the cover
+    is its one cycle through exactly the mixed triangles, and sparse mode certifies it."""
+    mesh = _annulus(r_hole, np.pi * (1 - r_hole**2) / 5000, (ox, oy), sides=sides)
+    tri, twin, pts, ring = _ring_colouring(mesh)
+    assert ring is not None
+    n = len(pts)
+    inside = comb.vertex_fishbone_tree(ring.points, tri, twin, 1, penalty=5.0, max_defer=8, levels=2, fill="comb",
+                                       ring=ring)
+    bnd = comb.boundary_vertices(tri, twin, n)
+    assert inside[ring.hole].all() and not inside[bnd & ~ring.hole].any()
+    e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+    e_in = e[inside[e[:, 0]] & inside[e[:, 1]]]
+    g = coo_matrix((np.ones(len(e_in)), (e_in[:, 0], e_in[:, 1])), shape=(n, n))
+    assert len(np.unique(connected_components(g, directed=False)[1][inside])) == 1
+    trees = inside & ~ring.hole
+    e_t = e[trees[e[:, 0]] & trees[e[:, 1]]]
+    g = coo_matrix((np.ones(len(e_t)), (e_t[:, 0], e_t[:, 1])), shape=(n, n))
+    pieces = len(np.unique(connected_components(g, directed=False)[1][trees]))
+    assert len(e_t) == trees.sum() - pieces  # a forest
+    cov = comb.comb_cover(mesh.points, tri, twin)
+    mixed = (inside[tri].sum(axis=1) % 3) != 0
+    np.testing.assert_array_equal(mixed, cov.cycle >= 0)
+    assert cov.n_cycles == 1 and cov.n_uncovered < 0.05 * len(tri)
+    h = hammesh.hamiltonian(mesh, mode="sparse", tree="comb")
+    assert h.report["verified"] and len(h.components) == 1
+    assert_tiling_and_bound(mesh, h)
+    for k in (8, 64):
+        p = partition(h, k)
+        assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+
+
+def test_the_ring_frame_is_taken_only_round_a_hole_the_domain_wraps_round() -> None:
+    # the gear and an annulus wrap round their hole; a 2 x 1 box round a hole is too
+    # long (session 13's RING_ASPECT), the plate's two holes hold neither the centre
+    assert _ring_colouring(_annulus(0.3, 0.002, teeth=True))[3] is not None
+    assert _ring_colouring(_annulus(0.3, 0.002))[3] is not None
+    assert _ring_colouring(_rect(2.0, 2.0 / 5000, (1.0, 0.5)))[3] is None
+    a = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    circ = np.c_[np.cos(a), np.sin(a)]
+    plate = hammesh.Domain.from_polygon([[0, 0], [4, 0], [4, 2], [0, 2]], holes=[circ * 0.45 + [1, 1], circ * 0.3 + [3, 1]])
+    assert _ring_colouring(hammesh.quality_mesh(plate, min_angle=30, max_area=0.002))[3] is None
+
+
+@pytest.mark.parametrize("teeth", [True, False])
+def test_the_ring_frame_cuts_less_than_the_kd_frame(monkeypatch, teeth: bool) -> None:
+    # measured (session 22, sparse mode, k = 8): gear 176 against 239 cut edges at 4 909
+    # triangles, 377 against 529 at 19 792; annulus 204 / 292 and 396 / 576; asserted < 0.85
+    mesh = _annulus(0.3, 2.3 / (0.63 * 6000), teeth=teeth)
+    import functools
+
+    from hammesh.postprocess import sparse
+
+    ring = hammesh.hamiltonian(mesh, mode="sparse", tree="comb")
+    monkeypatch.setattr(sparse, "comb_cover", functools.partial(comb.comb_cover, frame="kd"))
+    kd = hammesh.hamiltonian(mesh, mode="sparse", tree="comb")
+    assert ring.report["verified"] and kd.report["verified"]
+    assert partition(ring, 8).edge_cut < 0.85 * partition(kd, 8).edge_cut
+
+
+def test_comb_cover_refuses_an_unknown_frame() -> None:
+    mesh = _rect(1.0, 0.01)
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    with pytest.raises(InvalidOptionError, match="frame"):
+        comb.comb_cover(mesh.points, tri, half_edges(tri, mesh.n_points).twin, frame="polar")
