@@ -33,7 +33,7 @@ from hammesh.prefetch import prefetch_row
 from hammesh.threads import row_ranges, run_all
 
 from hammesh.postprocess._join_kernels import (
-    CORNER_BOUND_RTOL, half_smallest_corner, place_fan, quad_corners, swap_merge_outcome,
+    CORNER_BOUND_RTOL, half_smallest_corner, place_fan, quad_corners, swap_merge_outcome, new_walk_memo,
 )
 from hammesh.postprocess._thm24_kernels import find_root as _find
 from hammesh.postprocess._thm24_kernels import lower_bound
@@ -739,18 +739,21 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
 
 
 @njit(cache=True, nogil=True)
-def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wide, pos, plen):
+def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wide, pos, plen, m_table, m_steps,
+                    m_state):
     """``_join_kernels.swap_merge_outcome`` of the alternating cycle ``c`` of ``buf`` /
     ``starts`` (``alternating_cycles_into``'s output), its group the cycle's triangles,
-    sorted, as the caller's ``np.unique`` makes it. Reads only: two threads test one
-    task's cycles at once (``sparse._SwapTests``).
+    sorted, as the caller's ``np.unique`` makes it. Reads only, bar the calling
+    thread's own walk memo (``m_*``, a ``_join_kernels.WalkMemo``): two threads test
+    one task's cycles at once (``sparse._SwapTests``).
     """
     fl = buf[starts[c]:starts[c + 1]]
     tris = np.empty(2 * fl.shape[0], np.int64)
     for i in range(fl.shape[0]):
         tris[2 * i] = fl[i] // 3
         tris[2 * i + 1] = twin[fl[i]] // 3
-    return swap_merge_outcome(twin, is_cov, cyc, root, fl, np.unique(tris), ca, cb, budget, wide, pos, plen)
+    return swap_merge_outcome(twin, is_cov, cyc, root, fl, np.unique(tris), ca, cb, budget, wide, pos, plen, m_table,
+                              m_steps, m_state)
 
 
 def load_output_kernels() -> None:
@@ -779,7 +782,7 @@ def load_output_kernels() -> None:
     twin = np.array([3, 4, 5, 0, 1, 2], np.int64)
     swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
-                    none, none)
+                    none, none, *new_walk_memo(2, 8))
     blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
     # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
     fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)

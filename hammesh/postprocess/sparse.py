@@ -1591,12 +1591,15 @@ class _SwapTests:
     its count of answers other than 1 lasts, so exactly there unless an answer 1 came
     before and was not taken; then :meth:`answer` asks again. The tests of one task
     cost from microseconds to ~5 ms each (walks on the big cycle that end undecided at
-    ``ALT_MERGE_WALK``): at 1.5 M triangles ~430 of them, 0.06 s.
+    ``ALT_MERGE_WALK``): at 1.5 M triangles ~430 of them, 0.06 s. Each thread walks
+    through a walk memo of its own (``memos``: the caller's, the other thread's;
+    ``_join_kernels.WalkMemo``), kept over the tasks until the cover changes.
     """
 
-    def __init__(self, pool: ThreadPoolExecutor, cover_args: tuple, n: int, ca: int, cb: int, wide: int, pos, plen):
+    def __init__(self, pool: ThreadPoolExecutor, cover_args: tuple, n: int, ca: int, cb: int, wide: int, pos, plen,
+                 memos: tuple):
         self.args, self.n, self.wide, self.cb = cover_args, n, wide, (ca, cb, ALT_MERGE_WALK)
-        self.pp = (pos, plen)
+        self.pp, self.memos = (pos, plen), memos
         self.answers = np.full(n, -1, np.int64)
         self.next, self.read, self.ended = 0, 0, False
         self.lock = threading.Condition()
@@ -1614,13 +1617,13 @@ class _SwapTests:
             self.next = c + 1
             return c
 
-    def _test(self, c: int, wide: bool) -> int:
-        return _k.swap_outcome_of(*self.args, c, *self.cb, wide, *self.pp)
+    def _test(self, c: int, wide: bool, mine: bool = True) -> int:
+        return _k.swap_outcome_of(*self.args, c, *self.cb, wide, *self.pp, *self.memos[0 if mine else 1])
 
     def _run(self) -> None:
         try:
             while (c := self._claim(ahead=True)) >= 0:
-                a = self._test(c, c < self.wide)
+                a = self._test(c, c < self.wide, mine=False)
                 with self.lock:
                     self.answers[c] = a
                     self.lock.notify_all()
@@ -1789,6 +1792,9 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     starts = np.empty(checks + 1, np.int64)
     # big meshes: a task's tests shared by two threads (``_SwapTests``)
     pool = ThreadPoolExecutor(1) if not small and threads.cores() > 1 else None
+    # the walks each thread made on this cover (big meshes: the same links are walked
+    # again and again, ``_join_kernels.ring_outside_pairs_memo``), cleared when it changes
+    memos = tuple(_j.new_walk_memo(steps=0 if small else _j.WALK_MEMO_STEPS) for _ in range(2))
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
@@ -1799,7 +1805,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         wider = n_wider
         tests = None
         if pool is not None and n > 1:
-            tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen)
+            tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen, memos)
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
@@ -1808,7 +1814,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                 merges = tests.answer(c, wider > 0)
             else:
                 merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, _flip_group(tw, fl), ca, cb,
-                                               ALT_MERGE_WALK, wider > 0, pos, plen)
+                                               ALT_MERGE_WALK, wider > 0, pos, plen, *memos[0])
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1836,6 +1842,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             if tests is not None:
                 tests.stop()  # (before the cover changes under the other thread's test)
             _flip_cover(tw, is_cov, flips)
+            for memo in memos:  # (both threads idle: the other one stopped above)
+                _j.clear_walk_memo(memo)
             blocked[list(group)] = True
             used.update(group)
             for merged, inside in gone:
