@@ -155,12 +155,14 @@ class Plan(NamedTuple):
     bad: np.ndarray  # (m,) bool
 
 
-def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, room=0) -> Plan:
+def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, joinable, room=0) -> Plan:
     """Join the cover cycles and the uncovered triangles into one cycle per piece
     (:func:`_plan_merges_into`; its big arrays from ``hammesh.pages``: a first call
-    faults no pages for them where ``quality_mesh`` left a reserve). ``room``: rows of
-    memory left after ``status``, ``slot``, ``swap_he`` and ``join`` (each the start of
-    a buffer that much longer), for a caller that appends rows to the plan later."""
+    faults no pages for them where ``quality_mesh`` left a reserve). ``joinable``:
+    :func:`join_candidates` of this cover (all of them; ``cand`` is the caller's choice
+    of them, in its order). ``room``: rows of memory left after ``status``, ``slot``,
+    ``swap_he`` and ``join`` (each the start of a buffer that much longer), for a
+    caller that appends rows to the plan later."""
     m = tri.shape[0]
     status = fresh(m + room, np.int8)[:m]
     slot = fresh(3 * (m + room), np.int8)[: 3 * m]
@@ -169,10 +171,7 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     unc = np.flatnonzero(cyc < 0)  # (the union-finds' nodes: cycles and these, ``_node``)
     uf = np.empty(n_cyc + len(unc), np.int64)
     pu = np.empty(n_cyc + len(unc), np.int64)
-    # the half-edges between two different nodes, one range per core, in order
-    parts = run_all([partial(_crossing_range, twin, cyc, lo, hi)
-                     for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
-    cross = parts[0] if len(parts) == 1 else np.concatenate(parts)
+    cross = crossing_half_edges(twin, cyc, unc, joinable)
     counts, bad = _plan_merges_into(
         tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf,
         pu, cross,
@@ -180,18 +179,18 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     return Plan(status, slot, swap_he, join, counts, bad)
 
 
-@njit(cache=True, nogil=True)
-def _crossing_range(twin, cyc, lo, hi):
-    """Half-edges ``lo..hi`` between two different nodes (cover cycles, uncovered
-    triangles), both directions, ascending (:func:`plan_merges`)."""
-    out = np.empty(hi - lo, np.int64)
-    n = 0
-    for h in range(lo, hi):
-        g, ct, cu = _sides(twin, cyc, h)
-        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
-            out[n] = h
-            n += 1
-    return out[:n]
+def crossing_half_edges(twin, cyc, unc, joinable) -> np.ndarray:
+    """One half-edge of each edge between two different nodes (cover cycles, uncovered
+    triangles), in no order (:func:`plan_merges`), from ``joinable``
+    (:func:`join_candidates` of ``cyc``: one side of each such edge with a covered
+    triangle) and the edges between two of the uncovered triangles ``unc``
+    (ascending), instead of a pass over every half-edge (at 1.5 M triangles ~45 ms
+    CPU)."""
+    hs = (3 * unc[:, None] + np.arange(3)).reshape(-1)
+    g = twin[hs]
+    between = g > hs  # (the lower half: each edge once)
+    between[between] = cyc[g[between] // 3] < 0
+    return np.concatenate([joinable, hs[between]])
 
 
 @njit(cache=True, nogil=True)
@@ -219,8 +218,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
     int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch,
     ``unc`` the uncovered triangles ascending, :func:`_node`), any
-    contents; ``cross``: the half-edges between two different nodes, ascending
-    (:func:`_crossing_range`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
+    contents; ``cross``: one half-edge of each edge between two different nodes, in
+    any order (:func:`crossing_half_edges`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
     swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
     ``bad`` flags the triangles of connected pieces left as more than one node (an
     absorbed triangle was some cycle's only way out): the caller retries without
@@ -237,7 +236,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     for x in range(uf.shape[0]):
         uf[x] = x
         pu[x] = x
-    n_cross = cross.shape[0]  # (half-edges between two different nodes, both directions)
+    n_cross = cross.shape[0]  # (edges between two different nodes, one half-edge each)
     n_abs = 0
     n_join = 0
     n_merge = 0
@@ -268,11 +267,12 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
                 n_join += 1
         else:
             n_edge += 1
-    # pieces (``pu``: components of the node graph over the crossing edges), and the
-    # crossing edges (one half each) whose nodes Kruskal left apart: union-find sets
-    # only grow, so the stages below can join no others, and they take these in
-    # the same order as all of them (a stage's pass over every crossing edge cost
-    # more than the plan's Kruskal). None left: one node per piece already
+    # pieces (``pu``: components of the node graph over the crossing edges, whatever
+    # their order), and the crossing edges (one half each) whose nodes Kruskal left
+    # apart: union-find sets only grow, so the stages below can join no others, and
+    # they take these in ascending order, as a pass over all of them would (a stage's
+    # pass over every crossing edge cost more than the plan's Kruskal). None left:
+    # one node per piece already
     n_apart = 0
     for i in range(n_cross):
         h = cross[i]
@@ -283,12 +283,13 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
         b = _find(pu, nu)
         if a != b:
             pu[a] = b
-        if g > h and _find(uf, nt) != _find(uf, nu):
-            cross[n_apart] = h  # (n_apart <= i: read already)
+        if _find(uf, nt) != _find(uf, nu):
+            cross[n_apart] = min(h, g)  # (the lower half; n_apart <= i: read already)
             n_apart += 1
     counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
     if n_apart == 0:
         return counts, np.zeros(m, np.bool_)
+    cross[:n_apart].sort()
     is_split = np.zeros(m, np.bool_)
     for t in range(m):
         is_split[t] = status[t] == SPLIT

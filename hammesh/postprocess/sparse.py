@@ -2111,7 +2111,8 @@ def sparse_cycles(
             if attempt == 3:
                 no_absorb[:] = True
             status, slot, swap_he, join, counts, bad = _k.plan_merges(
-                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges, room
+                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges, cand,
+                room,
             )
             for a, rows in ((status, m + room), (slot, 3 * (m + room)), (swap_he, m + room), (join, m + room)):
                 _keep_room(a, rows)  # (the ring joins append rows to the plan: ``_ring_joins``)
