@@ -219,8 +219,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch,
     ``unc`` the uncovered triangles ascending, :func:`_node`), any
     contents; ``cross``: one half-edge of each edge between two different nodes, in
-    any order (:func:`crossing_half_edges`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
-    swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
+    any order (:func:`crossing_half_edges`; overwritten); returns ``(counts, bad)``:
+    ``join[t]`` the index in ``cand`` of t's swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
     ``bad`` flags the triangles of connected pieces left as more than one node (an
     absorbed triangle was some cycle's only way out): the caller retries without
     absorbing there.

@@ -1794,7 +1794,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     pool = ThreadPoolExecutor(1) if not small and threads.cores() > 1 else None
     # the walks each thread made on this cover (big meshes: the same links are walked
     # again and again, ``_join_kernels.ring_outside_pairs_memo``), cleared when it changes
-    memos = tuple(_j.new_walk_memo(steps=0 if small else _j.WALK_MEMO_STEPS) for _ in range(2))
+    memos = tuple(_j.new_walk_memo(2, 0) if small else _j.new_walk_memo(steps=_j.WALK_MEMO_STEPS) for _ in range(2))
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
