@@ -557,7 +557,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
     sort one way only, so the matching is the same.
     """
-    changed, face_tw, tw_new, rest, keys, packed, ib = _row_twin_keys(out, tri, twin_in, status, n_points)
+    changed, face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys(out, tri, twin_in, status, n_points)
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
@@ -565,55 +565,59 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     else:
         srt = np.argsort(keys, kind="stable")
         by_key = keys[srt]
-    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt)
+    bad = _match_row_twins(face_tw, tw_new, rest, by_key, srt, facing)
     return tw_new, changed, face_tw, bad
 
 
 @njit(cache=True, nogil=True)
 def _row_twin_keys(out, tri, twin_in, status, n_points):
     """:func:`new_row_twins`' first half: ``(changed, face_tw, tw_new, rest, keys, packed,
-    ib)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected edge keys,
-    ``packed`` the keys shifted by ``ib`` bits with their index below (``ib`` -1 and
-    ``packed`` empty where that needs more than 62 bits)."""
+    ib, facing)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected
+    edge keys, ``packed`` the keys shifted by ``ib`` bits with their index below (``ib``
+    -1 and ``packed`` empty where that needs more than 62 bits); ``facing[i]`` where
+    ``rest[i]``'s twin is written: ``s`` = new row ``i'``'s edge ``j`` at ``3 i' + j`` of
+    ``tw_new``, a kept half-edge facing half-edge ``j`` of ``changed[r]`` at ``3 k + 3 r +
+    j`` (``face_tw[3 r + j]``: known here, not searched for in ``changed`` by the
+    matching), ``~s`` where the edge runs from its larger end point (two that run the
+    same way: an edge used twice in one direction)."""
     m = tri.shape[0]
     k = out.shape[0]
-    n_ch = 0
-    for t in range(m):
-        if status[t] != PASS:
-            n_ch += 1
-    changed = np.empty(n_ch, np.int64)
+    changed = np.empty(m, np.int64)  # (one pass; the unused tail's pages never touched)
     n_ch = 0
     for t in range(m):
         if status[t] != PASS:
             changed[n_ch] = t
             n_ch += 1
+    changed = changed[:n_ch]
     face_tw = np.full(3 * n_ch, -1, np.int64)
     tw_new = np.empty(3 * k, np.int64)
     rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
+    keys = np.empty(3 * k + 3 * n_ch, np.int64)
+    facing = np.empty(3 * k + 3 * n_ch, np.int64)
     n = 0
-    for i in range(3 * k):
-        rest[n] = 3 * m + i
-        n += 1
+    for i in range(k):
+        for j in range(3):
+            a = out[i, j]
+            b = out[i, (j + 1) % 3]
+            rest[n] = 3 * (m + i) + j
+            keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+            facing[n] = 3 * i + j if a < b else ~(3 * i + j)
+            n += 1
     for r in range(n_ch):
         u = changed[r]
         for j in range(3):
             g = twin_in[3 * u + j]
             if g >= 0 and status[g // 3] == PASS:
+                x = g // 3
+                a = tri[x, g - 3 * x]
+                b = tri[x, (g - 3 * x + 1) % 3]
                 rest[n] = g
+                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+                facing[n] = 3 * (k + r) + j if a < b else ~(3 * (k + r) + j)
                 n += 1
     rest = rest[:n]
-    keys = np.empty(n, np.int64)
-    for i in range(n):
-        h = rest[i]
-        x = h // 3
-        j = h - 3 * x
-        if x >= m:
-            a = out[x - m, j]
-            b = out[x - m, (j + 1) % 3]
-        else:
-            a = tri[x, j]
-            b = tri[x, (j + 1) % 3]
-        keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
+    keys = keys[:n]
+    facing = facing[:n]
     ib = 1
     while (1 << ib) < n:
         ib += 1
@@ -621,51 +625,46 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
         packed = np.empty(n, np.int64)
         for i in range(n):
             packed[i] = (keys[i] << ib) | i
-        return changed, face_tw, tw_new, rest, keys, packed, ib
-    return changed, face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1
+        return changed, face_tw, tw_new, rest, keys, packed, ib, facing
+    return changed, face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1, facing
 
 
 @njit(cache=True, nogil=True)
-def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt):
+def _match_row_twins(face_tw, tw_new, rest, by_key, srt, facing):
     """:func:`new_row_twins`' second half: the half-edges ``rest`` in the order ``srt`` of
     their keys (``by_key``: the keys in that order, read in a row rather than through
-    ``srt``), paired where two share a key (``tw_new``, ``face_tw`` filled); returns
-    -1 or a virtual half-edge whose edge is used twice in one direction or by three rows."""
-    m = tri.shape[0]
+    ``srt``), paired where two share a key (``tw_new``, ``face_tw`` filled at the places
+    ``facing`` names, :func:`_row_twin_keys`); returns -1 or a virtual half-edge whose
+    edge is used twice in one direction or by three rows."""
+    k3 = tw_new.shape[0]
     n = rest.shape[0]
     i = 0
     while i < n:
         e = i + 1
         while e < n and by_key[e] == by_key[i]:
             e += 1
-        h = rest[srt[i]]
         if e - i == 1:
-            if h >= 3 * m:
-                tw_new[h - 3 * m] = -1
+            s = facing[srt[i]]
+            s = s if s >= 0 else ~s
+            if s < k3:
+                tw_new[s] = -1
         elif e - i == 2:
+            h = rest[srt[i]]
             g = rest[srt[i + 1]]
-            if _start(out, tri, m, h) == _start(out, tri, m, g):
+            sh = facing[srt[i]]
+            sg = facing[srt[i + 1]]
+            if (sh >= 0) == (sg >= 0):
                 return max(h, g)  # one edge twice in one direction
-            for x, y in ((h, g), (g, h)):
-                if x >= 3 * m:
-                    tw_new[x - 3 * m] = y
+            for s, y in ((sh, g), (sg, h)):
+                s = s if s >= 0 else ~s
+                if s < k3:
+                    tw_new[s] = y
                 else:  # a kept half-edge: filed under the input half-edge it faces
-                    f = twin_in[x]
-                    r = lower_bound(changed, f // 3)
-                    face_tw[3 * r + f % 3] = y
+                    face_tw[s - k3] = y
         else:
             return rest[srt[i + 2]]
         i = e
     return -1
-
-
-@njit(cache=True, nogil=True)
-def _start(out, tri, m, h):
-    """First vertex of virtual half-edge ``h``."""
-    x = h // 3
-    if x >= m:
-        return out[x - m, h - 3 * x]
-    return tri[x, h - 3 * x]
 
 
 @njit(cache=True, nogil=True)
