@@ -391,7 +391,7 @@ def _swap_links(cov_1, cov_2, bit_1, bit_2, bit_diag):
 
 
 @njit(cache=True)
-def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
+def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points, changed):
     """The new output triangles, with the two edges the cycle crosses in each.
 
     Only triangles a join changes get rows here: a triangle kept whole (status
@@ -400,7 +400,9 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     ``m + i``, see :func:`walk_links`): at 1.5 M triangles ~99 % of the rows are
     never copied before the final gather.
 
-    ``split_rows``: the split triangles (status ``SPLIT``), ascending; the incenter of
+    ``changed``: the triangles whose status is not ``PASS``, ascending (the passes go
+    over these, ~2 % of the rows, not all m). ``split_rows``: the split triangles
+    (status ``SPLIT``), ascending; the incenter of
     ``split_rows[i]`` is vertex ``n_points + i`` (counted along the rows; a bridge's
     other end found by binary search: where a numbering of every row was a cumulative
     sum over all of them); midpoints follow, in order of first emission.
@@ -419,12 +421,10 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     n_split = 0
     n_midh = 0
     n_edge = 0  # two rows each
-    n_pass = 0
-    for t in range(m):  # (one pass: a bridge's midpoint slots are a split triangle's)
+    n_pass = m - changed.shape[0]
+    for t in changed:  # (one pass: a bridge's midpoint slots are a split triangle's)
         st = status[t]
-        if st == PASS:
-            n_pass += 1
-        elif st == EDGE:
+        if st == EDGE:
             n_edge += 1
         elif st == SPLIT:
             n_split += 1
@@ -439,12 +439,11 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     mid_of = np.full(n_midh, -1, np.int64)
     if n_midh:
         i = 0
-        for t in range(m):
-            if status[t] == SPLIT:
-                for h in range(3 * t, 3 * t + 3):
-                    if slot[h] == MID:
-                        mid_hs[i] = h
-                        i += 1
+        for t in split_rows:
+            for h in range(3 * t, 3 * t + 3):
+                if slot[h] == MID:
+                    mid_hs[i] = h
+                    i += 1
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
@@ -458,11 +457,9 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     n_all = n_points + n_split
     pos = 0
     n_inc = 0
-    for t in range(m):
+    for t in changed:
         st = status[t]
-        if st == PASS:
-            continue
-        elif st == SWAP or st == EDGE:
+        if st == SWAP or st == EDGE:
             h = swap_he[t]
             g = twin[h]
             if g < h:
@@ -533,7 +530,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
-def new_row_twins(out, tri, twin_in, status, n_points):
+def new_row_twins(out, tri, twin_in, status, n_points, changed):
     """Half-edge twins where the output differs from the input.
 
     Virtual rows (see :func:`emit`): ``t < m`` is input triangle t kept whole (its
@@ -547,7 +544,8 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     half-edge facing half-edge k of ``changed[r]`` (:func:`_faced` reads them);
     ``bad`` -1 or a virtual half-edge whose edge is used twice in one direction or by
     three rows. What ``hammesh.halfedge.half_edge_twins`` gives on the whole output,
-    at a fraction of the passes.
+    at a fraction of the passes. ``changed``: the triangles whose status is not
+    ``PASS``, ascending (the caller's, returned as it is).
 
     The keys are sorted with their index packed below them (a plain sort of distinct
     int64s: the stable argsort it replaced, 0.018 s at 1.5 M, was most of this), or
@@ -557,7 +555,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
     sort one way only, so the matching is the same.
     """
-    changed, face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys(out, tri, twin_in, status, n_points)
+    face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys(out, tri, twin_in, status, n_points, changed)
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
@@ -570,9 +568,9 @@ def new_row_twins(out, tri, twin_in, status, n_points):
 
 
 @njit(cache=True, nogil=True)
-def _row_twin_keys(out, tri, twin_in, status, n_points):
-    """:func:`new_row_twins`' first half: ``(changed, face_tw, tw_new, rest, keys, packed,
-    ib, facing)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected
+def _row_twin_keys(out, tri, twin_in, status, n_points, changed):
+    """:func:`new_row_twins`' first half: ``(face_tw, tw_new, rest, keys, packed, ib,
+    facing)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected
     edge keys, ``packed`` the keys shifted by ``ib`` bits with their index below (``ib``
     -1 and ``packed`` empty where that needs more than 62 bits); ``facing[i]`` where
     ``rest[i]``'s twin is written: ``s`` = new row ``i'``'s edge ``j`` at ``3 i' + j`` of
@@ -582,13 +580,7 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
     same way: an edge used twice in one direction)."""
     m = tri.shape[0]
     k = out.shape[0]
-    changed = np.empty(m, np.int64)  # (one pass; the unused tail's pages never touched)
-    n_ch = 0
-    for t in range(m):
-        if status[t] != PASS:
-            changed[n_ch] = t
-            n_ch += 1
-    changed = changed[:n_ch]
+    n_ch = changed.shape[0]
     face_tw = np.full(3 * n_ch, -1, np.int64)
     tw_new = np.empty(3 * k, np.int64)
     rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
@@ -625,8 +617,8 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
         packed = np.empty(n, np.int64)
         for i in range(n):
             packed[i] = (keys[i] << ib) | i
-        return changed, face_tw, tw_new, rest, keys, packed, ib, facing
-    return changed, face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1, facing
+        return face_tw, tw_new, rest, keys, packed, ib, facing
+    return face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1, facing
 
 
 @njit(cache=True, nogil=True)

@@ -2149,10 +2149,12 @@ def sparse_cycles(
             n, m, n_fan = len(pts), len(tri), n_fan + n_rj
         break  # the ring joins patch the plan (``_ring_joins``): it is not made again
     steps.done("plan_joins")
-    split_rows = np.flatnonzero(status == _k.SPLIT)  # (few: the incenters' triangles)
+    # the triangles a join changes (~2 % at 1.5 M: the output's passes go over these)
+    changed = np.flatnonzero(status != _k.PASS)
+    split_rows = changed[status[changed] == _k.SPLIT]  # (few: the incenters' triangles)
     # new rows only; a triangle kept whole stays the input's row until the gather
     out, link, parent, partner, kind, mid_a, mid_b, mid_t = _k.emit(
-        tri, tw, cover.is_cov, status, slot, swap_he, split_rows, n
+        tri, tw, cover.is_cov, status, slot, swap_he, split_rows, n, changed
     )
     n_split = len(split_rows)
     mids = 0.5 * (pts[mid_a] + pts[mid_b])
@@ -2161,7 +2163,7 @@ def sparse_cycles(
     inc = _incenters(pts, tri[split_rows])
     all_pts = _longer(pts, len(inc) + len(mids))  # (in place where the points have room)
     all_pts[len(pts):] = np.concatenate([inc, mids])
-    tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts))
+    tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts), changed)
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of virtual row {int(dup) // 3} used twice")
     # (the walk's table of links, then the gather's row places: one buffer)

@@ -317,13 +317,14 @@ def test_new_row_twins_name_an_edge_used_twice() -> None:
     twin_in = np.array([3, -1, -1, 0, -1, -1])
     status = np.array([PASS, SWAP], np.int8)
     ok = np.array([[1, 0, 4], [4, 0, 3], [1, 4, 3]])  # t1 replaced, edge 1 -> 0 kept
-    tw, changed, face_tw, bad = new_row_twins(ok, tri, twin_in, status, 5)
+    ch = np.flatnonzero(status != PASS)
+    tw, changed, face_tw, bad = new_row_twins(ok, tri, twin_in, status, 5, ch)
     assert bad == -1 and list(changed) == [1]
     assert tw[0] == 0 and face_tw[0] == 6  # kept 0 -> 1 pairs with new row 0's 1 -> 0 (virtual 3 x 2 + 0)
     twice = np.array([[0, 1, 4]])  # 0 -> 1 again, in the kept row's direction
-    assert new_row_twins(twice, tri, twin_in, status, 5)[3] >= 0
+    assert new_row_twins(twice, tri, twin_in, status, 5, ch)[3] >= 0
     three = np.array([[1, 0, 4], [1, 0, 3]])  # a third row on edge 0-1
-    assert new_row_twins(three, tri, twin_in, status, 5)[3] >= 0
+    assert new_row_twins(three, tri, twin_in, status, 5, ch)[3] >= 0
 
 @pytest.mark.parametrize("name", ["A", "la", "face"])
 def test_new_row_twins_are_the_virtual_meshs_twins(name: str, monkeypatch) -> None:
@@ -337,8 +338,8 @@ def test_new_row_twins_are_the_virtual_meshs_twins(name: str, monkeypatch) -> No
     seen = []
     real = sk.new_row_twins
 
-    def spy(out, tri, twin_in, status, n_points):
-        got = real(out, tri, twin_in, status, n_points)
+    def spy(out, tri, twin_in, status, n_points, changed):
+        got = real(out, tri, twin_in, status, n_points, changed)
         seen.append((out.copy(), tri.copy(), twin_in.copy(), status.copy(), n_points, [np.copy(a) for a in got[:3]],
                      got[3]))
         return got
