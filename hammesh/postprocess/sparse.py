@@ -2334,11 +2334,12 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     the kept rows' entries found already (the output rows' gather), the new rows'
     are found here.
     """
+    new = np.flatnonzero(kind != 3)  # (the new rows: an O(m) pass, made once for both uses)
     if pinned is None:
         pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
     else:  # (the new rows only: the kept rows', ~99 % of them, came with the gather)
         pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b,
-                                         rows=np.flatnonzero(kind != 3), pinned=pinned)
+                                         rows=new, pinned=pinned)
     # the caller's rows, claim, kinds and parents' angles are its own fresh arrays:
     # changed in place, not copied (4 x 1.5 M rows of fresh bytes saved)
     out = np.ascontiguousarray(out, dtype=np.int64)
@@ -2353,7 +2354,6 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     failed = fresh(len(out), np.int64, -1)
     clock = np.zeros(1, np.int64)
     judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
-    new = np.flatnonzero(kind != 3)
     only_missing = len(out) >= IMPROVE_ALL_BELOW
     missing_rows = _MissingRows(touched, clock)  # (the rows changed since the last ask measured again)
     for _ in range(IMPROVE_ROUNDS):
