@@ -172,6 +172,9 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     uf = np.empty(n_cyc + len(unc), np.int64)
     pu = np.empty(n_cyc + len(unc), np.int64)
     cross = crossing_half_edges(twin, cyc, unc, joinable)
+    # (the plan's arrays set to "nothing planned" one range per core: O(m), ~30 MB)
+    run_all([partial(_plan_fill_range, cyc, status, slot, swap_he, join, lo, hi)
+             for lo, hi in row_ranges(m, threads.THREAD_MIN_ROWS)])
     counts, bad = _plan_merges_into(
         tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf,
         pu, cross,
@@ -191,6 +194,18 @@ def crossing_half_edges(twin, cyc, unc, joinable) -> np.ndarray:
     between = g > hs  # (the lower half: each edge once)
     between[between] = cyc[g[between] // 3] < 0
     return np.concatenate([joinable, hs[between]])
+
+
+@njit(cache=True, nogil=True)
+def _plan_fill_range(cyc, status, slot, swap_he, join, lo, hi):
+    """Rows ``lo..hi`` of the plan before any step (:func:`_plan_merges_into`): no join,
+    plain slots, an uncovered triangle split (unless a join absorbs it)."""
+    for h in range(3 * lo, 3 * hi):
+        slot[h] = PLAIN
+    for t in range(lo, hi):
+        status[t] = SPLIT if cyc[t] < 0 else PASS
+        swap_he[t] = -1
+        join[t] = -1
 
 
 @njit(cache=True, nogil=True)
@@ -216,23 +231,17 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
 
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
-    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch,
-    ``unc`` the uncovered triangles ascending, :func:`_node`), any
-    contents; ``cross``: one half-edge of each edge between two different nodes, in
-    any order (:func:`crossing_half_edges`; overwritten); returns ``(counts, bad)``:
-    ``join[t]`` the index in ``cand`` of t's swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
+    int64``, handed in as :func:`_plan_fill_range` leaves them (and the union-finds
+    ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch, any contents; ``unc`` the
+    uncovered triangles ascending, :func:`_node`); ``cross``: one half-edge of each
+    edge between two different nodes, in any order (:func:`crossing_half_edges`;
+    overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
+    swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
     ``bad`` flags the triangles of connected pieces left as more than one node (an
     absorbed triangle was some cycle's only way out): the caller retries without
     absorbing there.
     """
     m = tri.shape[0]
-    nh = 3 * m
-    for h in range(nh):
-        slot[h] = PLAIN
-    for t in range(m):
-        status[t] = SPLIT if cyc[t] < 0 else PASS  # uncovered triangles are split unless absorbed
-        swap_he[t] = -1
-        join[t] = -1
     for x in range(uf.shape[0]):
         uf[x] = x
         pu[x] = x
@@ -290,10 +299,7 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     if n_apart == 0:
         return counts, np.zeros(m, np.bool_)
     cross[:n_apart].sort()
-    is_split = np.zeros(m, np.bool_)
-    for t in range(m):
-        is_split[t] = status[t] == SPLIT
-    for stage in range(4):
+    for stage in range(4):  # (a triangle is split iff its status says so, from here on)
         for i in range(n_apart):
             h = cross[i]
             g = twin[h]
@@ -304,8 +310,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
             u = g // 3
             if status[t] >= SWAP or status[u] >= SWAP:
                 continue
-            st = is_split[t] and cyc[t] < 0
-            su = is_split[u] and cyc[u] < 0
+            st = status[t] == SPLIT and cyc[t] < 0
+            su = status[u] == SPLIT and cyc[u] < 0
             if stage == 0 and not (st and su):
                 continue
             if stage == 1 and not (st != su):
@@ -322,8 +328,6 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
             kind = MID if (con or not flip_bridges) else FLIP
             slot[h] = kind
             slot[g] = kind
-            is_split[t] = True
-            is_split[u] = True
             status[t] = SPLIT
             status[u] = SPLIT
             n_merge += 1

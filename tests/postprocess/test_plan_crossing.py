@@ -84,6 +84,7 @@ def test_plan_does_not_depend_on_the_crossing_order(name) -> None:
             m = len(tri)
             arrays = (np.empty(m, np.int8), np.empty(3 * m, np.int8), np.empty(m, np.int64), np.empty(m, np.int64))
             uf, pu = np.empty(n_cyc + len(unc), np.int64), np.empty(n_cyc + len(unc), np.int64)
+            sk._plan_fill_range(cyc, *arrays, 0, m)
             counts, bad = sk._plan_merges_into(tri, tw, is_con, cyc, n_cyc, unc, cand[order], ckind[order],
                                                np.zeros(m, np.bool_), True, *arrays, uf, pu, c.copy())
             plans.append([a.tolist() for a in (*arrays, counts, bad)])
