@@ -123,7 +123,7 @@ def _check(name, area, seed, size, rows, steps, flip) -> None:
 
 
 def test_memo_cleared_forgets_every_walk() -> None:
-    tri, tw, cover = _cover("face", 0.05)
+    tri, tw, cover = _cover("face", 0.5)
     rng = np.random.default_rng(1)
     sets = _link_sets(tw, cover.is_cov, cover.cycle, rng, 8, 30)
     memo = J.new_walk_memo()
