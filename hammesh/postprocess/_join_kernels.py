@@ -1185,6 +1185,15 @@ def _link_index(links, g):
     return -1
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _link_in_range(links, lo, hi, g):
+    """:func:`_link_index` of ``g``, ``lo``/``hi`` the least and greatest link: a walk
+    far from the group (most of its steps) is told apart by two comparisons."""
+    if g < lo or g > hi:
+        return -1
+    return _link_index(links, g)
+
+
 @njit(cache=True, nogil=True)
 def cover_exit(twin, is_cov, e):
     """The cover edge by which a cycle leaves the triangle it entered by half-edge
@@ -1321,6 +1330,7 @@ def ring_outside_pairs(twin, is_cov, links, budget):
     pair = np.full(n, -1, np.int64)
     deduced = -1
     cur = links.copy()  # the half-edge each walk last crossed, on the side it came from
+    lo, hi = links.min(), links.max()
     left = n
     steps = 0
     while left > 2 and steps < budget:
@@ -1331,7 +1341,7 @@ def ring_outside_pairs(twin, is_cov, links, budget):
             steps += 1
             if f < 0:
                 return np.full(n, -1, np.int64), -1  # not a closed cycle: undecided
-            j = _link_index(links, twin[f])
+            j = _link_in_range(links, lo, hi, twin[f])
             if j >= 0:
                 if j != i and pair[j] < 0:
                     pair[i] = j
@@ -1341,6 +1351,174 @@ def ring_outside_pairs(twin, is_cov, links, budget):
                     return np.full(n, -1, np.int64), -1
             else:
                 cur[i] = f
+    if left == 2:
+        a = -1
+        for i in range(n):
+            if pair[i] < 0:
+                if a < 0:
+                    a = i
+                else:
+                    pair[a] = i
+                    pair[i] = a
+                    deduced = a
+    return pair, deduced
+
+
+#: a walk memo's table rows (a power of two; at most half of them used) and steps
+#: (``new_walk_memo``); at 1.5 M triangles the swap tests of one cover start ~900
+#: distinct walks, most under 2 k steps
+WALK_MEMO_ROWS = 1 << 11
+WALK_MEMO_STEPS = 1 << 19
+#: the first room a walk's steps get in the memo (then doubled where it outgrows it)
+WALK_MEMO_CHUNK = 256
+
+
+class WalkMemo(NamedTuple):
+    """The cover walks one thread made from border half-edges (:func:`ring_outside_pairs_memo`).
+
+    ``table (rows, 4) int64``: per start half-edge (open addressing on column 0, -1
+    empty) the offset, count and room of its steps in ``steps (k,) int64``, each the
+    half-edge the walk entered (the twin of the cover edge it left by; -1: the cycle
+    does not go on); ``state (2,) int64``: the steps' top and the rows used. Valid
+    for one cover: cleared (:func:`clear_walk_memo`) when the cover changes.
+    """
+
+    table: np.ndarray
+    steps: np.ndarray
+    state: np.ndarray
+
+
+def new_walk_memo(rows: int = WALK_MEMO_ROWS, steps: int = WALK_MEMO_STEPS) -> WalkMemo:
+    """An empty :class:`WalkMemo` (``rows`` a power of two); ``steps`` 0: none (plain walks)."""
+    memo = WalkMemo(np.empty((rows, 4), np.int64), np.empty(steps, np.int64), np.zeros(2, np.int64))
+    clear_walk_memo(memo)
+    return memo
+
+
+def clear_walk_memo(memo: WalkMemo) -> None:
+    """Forget every walk (the cover changed)."""
+    memo.table[:, 0] = -1
+    memo.state[:] = 0
+
+
+@njit(cache=True, nogil=True)
+def _memo_row(table, state, h):
+    """``table``'s row of start half-edge ``h``, made (no steps yet) where it has none;
+    -1 if the table is half full (the walk is then not kept)."""
+    mask = table.shape[0] - 1
+    i = (h * 0x9E3779B1) & mask
+    while table[i, 0] >= 0:
+        if table[i, 0] == h:
+            return i
+        i = (i + 1) & mask
+    if 2 * (state[1] + 1) > table.shape[0]:
+        return -1
+    table[i, 0] = h
+    table[i, 1] = 0
+    table[i, 2] = 0
+    table[i, 3] = 0
+    state[1] += 1
+    return i
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _entered_next(twin, is_cov, g):
+    """The half-edge a cover walk enters next after entering by ``g``: ``twin`` of
+    ``cover_exit`` (-1 where the cycle does not go on)."""
+    x = g // 3
+    for k in range(3):
+        h = 3 * x + k
+        if h != g and is_cov[h]:
+            return twin[h] if twin[h] >= 0 else -1
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def _memo_keep(table, steps, state, row, g):
+    """Append step ``g`` to memo row ``row`` (its count of steps is the step's index):
+    in its room, else grown in place where it is the last row, else moved to the top
+    with twice the room; not kept where the memo is full. Returns the row's offset."""
+    off, n, cap = table[row, 1], table[row, 2], table[row, 3]
+    if n == cap:
+        top = state[0]
+        if cap > 0 and off + cap == top:  # the last row: grow in place
+            grow = min(cap, steps.shape[0] - top)
+            table[row, 3] = cap + grow
+            state[0] = top + grow
+        else:
+            room = max(2 * cap, WALK_MEMO_CHUNK)
+            if top + room <= steps.shape[0]:
+                for i in range(n):
+                    steps[top + i] = steps[off + i]
+                table[row, 1] = top
+                table[row, 3] = room
+                state[0] = top + room
+        off, cap = table[row, 1], table[row, 3]
+    if n < cap:
+        steps[off + n] = g
+        table[row, 2] = n + 1
+    return off
+
+
+@njit(cache=True, nogil=True)
+def ring_outside_pairs_memo(twin, is_cov, links, budget, table, steps, state):
+    """:func:`ring_outside_pairs` (the same answer, the same lock-step budget) with
+    each link's walk read from a :class:`WalkMemo` where an earlier call on this
+    cover walked it (the swap tests of one cover walk the same links again and again:
+    at 1.5 M triangles 71 % of the slow tests' walk starts; a step read from the memo
+    is one read in a row where a walk's is two scattered ones), and kept there."""
+    n = links.shape[0]
+    pair = np.full(n, -1, np.int64)
+    deduced = -1
+    rows = np.empty(n, np.int64)
+    off = np.zeros(n, np.int64)  # where each walk's kept steps start
+    have = np.zeros(n, np.int64)  # how many there are (the row's count, while it grows)
+    room = np.zeros(n, np.int64)  # and room for
+    cur = np.empty(n, np.int64)  # the half-edge each walk entered last
+    done = np.zeros(n, np.int64)  # its steps
+    for i in range(n):
+        r = _memo_row(table, state, links[i])
+        rows[i] = r
+        if r >= 0:
+            off[i] = table[r, 1]
+            have[i] = table[r, 2]
+            room[i] = table[r, 3]
+        cur[i] = twin[links[i]]
+    lo, hi = links.min(), links.max()
+    left = n
+    n_steps = 0
+    while left > 2 and n_steps < budget:
+        for i in range(n):
+            if pair[i] >= 0:
+                continue
+            k = done[i]
+            if k < have[i]:
+                g = steps[off[i] + k]
+            else:
+                g = _entered_next(twin, is_cov, cur[i])
+                if k == have[i] and rows[i] >= 0:  # (the walk is the row's longest: kept)
+                    r = rows[i]
+                    if k < room[i]:
+                        steps[off[i] + k] = g
+                        table[r, 2] = k + 1
+                    else:
+                        off[i] = _memo_keep(table, steps, state, r, g)
+                        room[i] = table[r, 3]
+                    have[i] = table[r, 2]
+            done[i] = k + 1
+            n_steps += 1
+            if g < 0:
+                return np.full(n, -1, np.int64), -1  # not a closed cycle: undecided
+            j = _link_in_range(links, lo, hi, g)
+            if j >= 0:
+                if j != i and pair[j] < 0:
+                    pair[i] = j
+                    pair[j] = i
+                    left -= 2
+                else:
+                    return np.full(n, -1, np.int64), -1
+            else:
+                cur[i] = g
     if left == 2:
         a = -1
         for i in range(n):
@@ -1407,7 +1585,7 @@ def load_ring_kernels() -> None:
     cycle_positions_into(twin, is_cov, pos, plen)
     for p in (pos, np.empty(0, np.int64)):
         swap_merge_outcome(twin, is_cov, np.zeros(2, np.int64), np.zeros(1, np.int64), buf[:2], np.arange(2), 0, 0, 0,
-                           True, p, plen)
+                           True, p, plen, *new_walk_memo(2, 0 if len(p) else 8))
     # the ring fans' polygon and point (``sparse._union_polygon``, ``_best_ring``; since
     # session 14's re-colouring the covers of small meshes reach them): two triangles
     from hammesh.postprocess import _sparse_kernels as _sk  # (at call time: it imports this module)
@@ -1761,11 +1939,13 @@ def swap_only_merges(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_
     other cycle crossing ``group`` one cycle of its own? (:func:`swap_merge_outcome`'s
     first answer; ``any_merge``: its second, True wherever no cycle splits and some merge)."""
     none = np.empty(0, np.int64)
-    return swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge, none, none) > 0
+    return swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, any_merge, none, none,
+                              np.empty((0, 4), np.int64), none, none) > 0
 
 
 @njit(cache=True, nogil=True)
-def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wide, pos, plen):
+def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wide, pos, plen, m_table, m_steps,
+                       m_state):
     """Does swapping the cover along ``flips`` make cycles ``ca`` and ``cb`` one and leave every
     other cycle crossing ``group`` one cycle of its own? (``sparse._alternating_merges``' test)
 
@@ -1786,7 +1966,9 @@ def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wi
 
     With ``pos`` and ``plen`` (``cycle_positions_into`` on this cover; empty: walk)
     the outside pairing is read off the positions (``pairs_by_position``): no walk, no
-    budget, so no check is left undecided.
+    budget, so no check is left undecided. Else the walks go through the
+    :class:`WalkMemo` ``m_table``, ``m_steps``, ``m_state`` of this cover
+    (:func:`ring_outside_pairs_memo`; empty ``m_steps``: plain walks), the same answers.
     """
     ng = group.shape[0]
     nf = flips.shape[0]
@@ -1872,6 +2054,8 @@ def swap_merge_outcome(twin, is_cov, cyc, root, flips, group, ca, cb, budget, wi
             hs[a] = links[sel[a]]
         if pos.shape[0]:
             pair = pairs_by_position(twin, pos, plen, hs)
+        elif m_steps.shape[0]:
+            pair, _ = ring_outside_pairs_memo(twin, is_cov, hs, budget, m_table, m_steps, m_state)
         else:
             pair, _ = ring_outside_pairs(twin, is_cov, hs, budget)
         for a in range(ns):

@@ -33,7 +33,7 @@ from hammesh.prefetch import prefetch_row
 from hammesh.threads import row_ranges, run_all
 
 from hammesh.postprocess._join_kernels import (
-    CORNER_BOUND_RTOL, half_smallest_corner, place_fan, quad_corners, swap_merge_outcome,
+    CORNER_BOUND_RTOL, half_smallest_corner, place_fan, quad_corners, swap_merge_outcome, new_walk_memo,
 )
 from hammesh.postprocess._thm24_kernels import find_root as _find
 from hammesh.postprocess._thm24_kernels import lower_bound
@@ -155,12 +155,14 @@ class Plan(NamedTuple):
     bad: np.ndarray  # (m,) bool
 
 
-def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, room=0) -> Plan:
+def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_bridges, joinable, room=0) -> Plan:
     """Join the cover cycles and the uncovered triangles into one cycle per piece
     (:func:`_plan_merges_into`; its big arrays from ``hammesh.pages``: a first call
-    faults no pages for them where ``quality_mesh`` left a reserve). ``room``: rows of
-    memory left after ``status``, ``slot``, ``swap_he`` and ``join`` (each the start of
-    a buffer that much longer), for a caller that appends rows to the plan later."""
+    faults no pages for them where ``quality_mesh`` left a reserve). ``joinable``:
+    :func:`join_candidates` of this cover (all of them; ``cand`` is the caller's choice
+    of them, in its order). ``room``: rows of memory left after ``status``, ``slot``,
+    ``swap_he`` and ``join`` (each the start of a buffer that much longer), for a
+    caller that appends rows to the plan later."""
     m = tri.shape[0]
     status = fresh(m + room, np.int8)[:m]
     slot = fresh(3 * (m + room), np.int8)[: 3 * m]
@@ -169,10 +171,10 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     unc = np.flatnonzero(cyc < 0)  # (the union-finds' nodes: cycles and these, ``_node``)
     uf = np.empty(n_cyc + len(unc), np.int64)
     pu = np.empty(n_cyc + len(unc), np.int64)
-    # the half-edges between two different nodes, one range per core, in order
-    parts = run_all([partial(_crossing_range, twin, cyc, lo, hi)
-                     for lo, hi in row_ranges(twin.shape[0], threads.THREAD_MIN_ROWS)])
-    cross = parts[0] if len(parts) == 1 else np.concatenate(parts)
+    cross = crossing_half_edges(twin, cyc, unc, joinable)
+    # (the plan's arrays set to "nothing planned" one range per core: O(m), ~30 MB)
+    run_all([partial(_plan_fill_range, cyc, status, slot, swap_he, join, lo, hi)
+             for lo, hi in row_ranges(m, threads.THREAD_MIN_ROWS)])
     counts, bad = _plan_merges_into(
         tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf,
         pu, cross,
@@ -180,18 +182,30 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     return Plan(status, slot, swap_he, join, counts, bad)
 
 
+def crossing_half_edges(twin, cyc, unc, joinable) -> np.ndarray:
+    """One half-edge of each edge between two different nodes (cover cycles, uncovered
+    triangles), in no order (:func:`plan_merges`), from ``joinable``
+    (:func:`join_candidates` of ``cyc``: one side of each such edge with a covered
+    triangle) and the edges between two of the uncovered triangles ``unc``
+    (ascending), instead of a pass over every half-edge (at 1.5 M triangles ~45 ms
+    CPU)."""
+    hs = (3 * unc[:, None] + np.arange(3)).reshape(-1)
+    g = twin[hs]
+    between = g > hs  # (the lower half: each edge once)
+    between[between] = cyc[g[between] // 3] < 0
+    return np.concatenate([joinable, hs[between]])
+
+
 @njit(cache=True, nogil=True)
-def _crossing_range(twin, cyc, lo, hi):
-    """Half-edges ``lo..hi`` between two different nodes (cover cycles, uncovered
-    triangles), both directions, ascending (:func:`plan_merges`)."""
-    out = np.empty(hi - lo, np.int64)
-    n = 0
-    for h in range(lo, hi):
-        g, ct, cu = _sides(twin, cyc, h)
-        if g >= 0 and (ct < 0 or cu < 0 or ct != cu):
-            out[n] = h
-            n += 1
-    return out[:n]
+def _plan_fill_range(cyc, status, slot, swap_he, join, lo, hi):
+    """Rows ``lo..hi`` of the plan before any step (:func:`_plan_merges_into`): no join,
+    plain slots, an uncovered triangle split (unless a join absorbs it)."""
+    for h in range(3 * lo, 3 * hi):
+        slot[h] = PLAIN
+    for t in range(lo, hi):
+        status[t] = SPLIT if cyc[t] < 0 else PASS
+        swap_he[t] = -1
+        join[t] = -1
 
 
 @njit(cache=True, nogil=True)
@@ -217,27 +231,21 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     ``flip_bridges``, else a midpoint (surfaces: keeps the geometry exactly).
 
     Fills ``status (m,) int8, slot (3m,) int8, swap_he (m,) int64, join (m,)
-    int64`` (and the union-finds ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch,
-    ``unc`` the uncovered triangles ascending, :func:`_node`), any
-    contents; ``cross``: the half-edges between two different nodes, ascending
-    (:func:`_crossing_range`; overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
+    int64``, handed in as :func:`_plan_fill_range` leaves them (and the union-finds
+    ``uf``, ``pu``: ``(n_cyc + len(unc),)`` int64 scratch, any contents; ``unc`` the
+    uncovered triangles ascending, :func:`_node`); ``cross``: one half-edge of each
+    edge between two different nodes, in any order (:func:`crossing_half_edges`;
+    overwritten); returns ``(counts, bad)``: ``join[t]`` the index in ``cand`` of t's
     swap or split, ``counts = [swaps_absorb, swaps_join, bridges, edge_splits]`` and
     ``bad`` flags the triangles of connected pieces left as more than one node (an
     absorbed triangle was some cycle's only way out): the caller retries without
     absorbing there.
     """
     m = tri.shape[0]
-    nh = 3 * m
-    for h in range(nh):
-        slot[h] = PLAIN
-    for t in range(m):
-        status[t] = SPLIT if cyc[t] < 0 else PASS  # uncovered triangles are split unless absorbed
-        swap_he[t] = -1
-        join[t] = -1
     for x in range(uf.shape[0]):
         uf[x] = x
         pu[x] = x
-    n_cross = cross.shape[0]  # (half-edges between two different nodes, both directions)
+    n_cross = cross.shape[0]  # (edges between two different nodes, one half-edge each)
     n_abs = 0
     n_join = 0
     n_merge = 0
@@ -268,11 +276,12 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
                 n_join += 1
         else:
             n_edge += 1
-    # pieces (``pu``: components of the node graph over the crossing edges), and the
-    # crossing edges (one half each) whose nodes Kruskal left apart: union-find sets
-    # only grow, so the stages below can join no others, and they take these in
-    # the same order as all of them (a stage's pass over every crossing edge cost
-    # more than the plan's Kruskal). None left: one node per piece already
+    # pieces (``pu``: components of the node graph over the crossing edges, whatever
+    # their order), and the crossing edges (one half each) whose nodes Kruskal left
+    # apart: union-find sets only grow, so the stages below can join no others, and
+    # they take these in ascending order, as a pass over all of them would (a stage's
+    # pass over every crossing edge cost more than the plan's Kruskal). None left:
+    # one node per piece already
     n_apart = 0
     for i in range(n_cross):
         h = cross[i]
@@ -283,16 +292,14 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
         b = _find(pu, nu)
         if a != b:
             pu[a] = b
-        if g > h and _find(uf, nt) != _find(uf, nu):
-            cross[n_apart] = h  # (n_apart <= i: read already)
+        if _find(uf, nt) != _find(uf, nu):
+            cross[n_apart] = min(h, g)  # (the lower half; n_apart <= i: read already)
             n_apart += 1
     counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
     if n_apart == 0:
         return counts, np.zeros(m, np.bool_)
-    is_split = np.zeros(m, np.bool_)
-    for t in range(m):
-        is_split[t] = status[t] == SPLIT
-    for stage in range(4):
+    cross[:n_apart].sort()
+    for stage in range(4):  # (a triangle is split iff its status says so, from here on)
         for i in range(n_apart):
             h = cross[i]
             g = twin[h]
@@ -303,8 +310,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
             u = g // 3
             if status[t] >= SWAP or status[u] >= SWAP:
                 continue
-            st = is_split[t] and cyc[t] < 0
-            su = is_split[u] and cyc[u] < 0
+            st = status[t] == SPLIT and cyc[t] < 0
+            su = status[u] == SPLIT and cyc[u] < 0
             if stage == 0 and not (st and su):
                 continue
             if stage == 1 and not (st != su):
@@ -321,8 +328,6 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
             kind = MID if (con or not flip_bridges) else FLIP
             slot[h] = kind
             slot[g] = kind
-            is_split[t] = True
-            is_split[u] = True
             status[t] = SPLIT
             status[u] = SPLIT
             n_merge += 1
@@ -390,7 +395,7 @@ def _swap_links(cov_1, cov_2, bit_1, bit_2, bit_diag):
 
 
 @njit(cache=True)
-def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
+def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points, changed):
     """The new output triangles, with the two edges the cycle crosses in each.
 
     Only triangles a join changes get rows here: a triangle kept whole (status
@@ -399,7 +404,9 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     ``m + i``, see :func:`walk_links`): at 1.5 M triangles ~99 % of the rows are
     never copied before the final gather.
 
-    ``split_rows``: the split triangles (status ``SPLIT``), ascending; the incenter of
+    ``changed``: the triangles whose status is not ``PASS``, ascending (the passes go
+    over these, ~2 % of the rows, not all m). ``split_rows``: the split triangles
+    (status ``SPLIT``), ascending; the incenter of
     ``split_rows[i]`` is vertex ``n_points + i`` (counted along the rows; a bridge's
     other end found by binary search: where a numbering of every row was a cumulative
     sum over all of them); midpoints follow, in order of first emission.
@@ -418,12 +425,10 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     n_split = 0
     n_midh = 0
     n_edge = 0  # two rows each
-    n_pass = 0
-    for t in range(m):  # (one pass: a bridge's midpoint slots are a split triangle's)
+    n_pass = m - changed.shape[0]
+    for t in changed:  # (one pass: a bridge's midpoint slots are a split triangle's)
         st = status[t]
-        if st == PASS:
-            n_pass += 1
-        elif st == EDGE:
+        if st == EDGE:
             n_edge += 1
         elif st == SPLIT:
             n_split += 1
@@ -438,12 +443,11 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     mid_of = np.full(n_midh, -1, np.int64)
     if n_midh:
         i = 0
-        for t in range(m):
-            if status[t] == SPLIT:
-                for h in range(3 * t, 3 * t + 3):
-                    if slot[h] == MID:
-                        mid_hs[i] = h
-                        i += 1
+        for t in split_rows:
+            for h in range(3 * t, 3 * t + 3):
+                if slot[h] == MID:
+                    mid_hs[i] = h
+                    i += 1
     n_midh += n_edge  # one midpoint per pair
     out = np.empty((total, 3), np.int64)
     link = np.zeros(total, np.uint8)
@@ -457,11 +461,9 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     n_all = n_points + n_split
     pos = 0
     n_inc = 0
-    for t in range(m):
+    for t in changed:
         st = status[t]
-        if st == PASS:
-            continue
-        elif st == SWAP or st == EDGE:
+        if st == SWAP or st == EDGE:
             h = swap_he[t]
             g = twin[h]
             if g < h:
@@ -532,7 +534,7 @@ def emit(tri, twin, is_cov, status, slot, swap_he, split_rows, n_points):
     return out[:pos], link[:pos], parent[:pos], partner[:pos], kind[:pos], mid_a[:n_mid], mid_b[:n_mid], mid_t[:n_mid]
 
 
-def new_row_twins(out, tri, twin_in, status, n_points):
+def new_row_twins(out, tri, twin_in, status, n_points, changed):
     """Half-edge twins where the output differs from the input.
 
     Virtual rows (see :func:`emit`): ``t < m`` is input triangle t kept whole (its
@@ -546,7 +548,8 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     half-edge facing half-edge k of ``changed[r]`` (:func:`_faced` reads them);
     ``bad`` -1 or a virtual half-edge whose edge is used twice in one direction or by
     three rows. What ``hammesh.halfedge.half_edge_twins`` gives on the whole output,
-    at a fraction of the passes.
+    at a fraction of the passes. ``changed``: the triangles whose status is not
+    ``PASS``, ascending (the caller's, returned as it is).
 
     The keys are sorted with their index packed below them (a plain sort of distinct
     int64s: the stable argsort it replaced, 0.018 s at 1.5 M, was most of this), or
@@ -556,7 +559,7 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
     sort one way only, so the matching is the same.
     """
-    changed, face_tw, tw_new, rest, keys, packed, ib = _row_twin_keys(out, tri, twin_in, status, n_points)
+    face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys(out, tri, twin_in, status, n_points, changed)
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
@@ -564,55 +567,53 @@ def new_row_twins(out, tri, twin_in, status, n_points):
     else:
         srt = np.argsort(keys, kind="stable")
         by_key = keys[srt]
-    bad = _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt)
+    bad = _match_row_twins(face_tw, tw_new, rest, by_key, srt, facing)
     return tw_new, changed, face_tw, bad
 
 
 @njit(cache=True, nogil=True)
-def _row_twin_keys(out, tri, twin_in, status, n_points):
-    """:func:`new_row_twins`' first half: ``(changed, face_tw, tw_new, rest, keys, packed,
-    ib)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected edge keys,
-    ``packed`` the keys shifted by ``ib`` bits with their index below (``ib`` -1 and
-    ``packed`` empty where that needs more than 62 bits)."""
+def _row_twin_keys(out, tri, twin_in, status, n_points, changed):
+    """:func:`new_row_twins`' first half: ``(face_tw, tw_new, rest, keys, packed, ib,
+    facing)``; ``rest`` the virtual half-edges to match, ``keys`` their undirected
+    edge keys, ``packed`` the keys shifted by ``ib`` bits with their index below (``ib``
+    -1 and ``packed`` empty where that needs more than 62 bits); ``facing[i]`` where
+    ``rest[i]``'s twin is written: ``s`` = new row ``i'``'s edge ``j`` at ``3 i' + j`` of
+    ``tw_new``, a kept half-edge facing half-edge ``j`` of ``changed[r]`` at ``3 k + 3 r +
+    j`` (``face_tw[3 r + j]``: known here, not searched for in ``changed`` by the
+    matching), ``~s`` where the edge runs from its larger end point (two that run the
+    same way: an edge used twice in one direction)."""
     m = tri.shape[0]
     k = out.shape[0]
-    n_ch = 0
-    for t in range(m):
-        if status[t] != PASS:
-            n_ch += 1
-    changed = np.empty(n_ch, np.int64)
-    n_ch = 0
-    for t in range(m):
-        if status[t] != PASS:
-            changed[n_ch] = t
-            n_ch += 1
+    n_ch = changed.shape[0]
     face_tw = np.full(3 * n_ch, -1, np.int64)
     tw_new = np.empty(3 * k, np.int64)
     rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
+    keys = np.empty(3 * k + 3 * n_ch, np.int64)
+    facing = np.empty(3 * k + 3 * n_ch, np.int64)
     n = 0
-    for i in range(3 * k):
-        rest[n] = 3 * m + i
-        n += 1
+    for i in range(k):
+        for j in range(3):
+            a = out[i, j]
+            b = out[i, (j + 1) % 3]
+            rest[n] = 3 * (m + i) + j
+            keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+            facing[n] = 3 * i + j if a < b else ~(3 * i + j)
+            n += 1
     for r in range(n_ch):
         u = changed[r]
         for j in range(3):
             g = twin_in[3 * u + j]
             if g >= 0 and status[g // 3] == PASS:
+                x = g // 3
+                a = tri[x, g - 3 * x]
+                b = tri[x, (g - 3 * x + 1) % 3]
                 rest[n] = g
+                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+                facing[n] = 3 * (k + r) + j if a < b else ~(3 * (k + r) + j)
                 n += 1
     rest = rest[:n]
-    keys = np.empty(n, np.int64)
-    for i in range(n):
-        h = rest[i]
-        x = h // 3
-        j = h - 3 * x
-        if x >= m:
-            a = out[x - m, j]
-            b = out[x - m, (j + 1) % 3]
-        else:
-            a = tri[x, j]
-            b = tri[x, (j + 1) % 3]
-        keys[i] = min(a, b) * np.int64(n_points) + max(a, b)
+    keys = keys[:n]
+    facing = facing[:n]
     ib = 1
     while (1 << ib) < n:
         ib += 1
@@ -620,51 +621,46 @@ def _row_twin_keys(out, tri, twin_in, status, n_points):
         packed = np.empty(n, np.int64)
         for i in range(n):
             packed[i] = (keys[i] << ib) | i
-        return changed, face_tw, tw_new, rest, keys, packed, ib
-    return changed, face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1
+        return face_tw, tw_new, rest, keys, packed, ib, facing
+    return face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1, facing
 
 
 @njit(cache=True, nogil=True)
-def _match_row_twins(out, tri, twin_in, changed, face_tw, tw_new, rest, by_key, srt):
+def _match_row_twins(face_tw, tw_new, rest, by_key, srt, facing):
     """:func:`new_row_twins`' second half: the half-edges ``rest`` in the order ``srt`` of
     their keys (``by_key``: the keys in that order, read in a row rather than through
-    ``srt``), paired where two share a key (``tw_new``, ``face_tw`` filled); returns
-    -1 or a virtual half-edge whose edge is used twice in one direction or by three rows."""
-    m = tri.shape[0]
+    ``srt``), paired where two share a key (``tw_new``, ``face_tw`` filled at the places
+    ``facing`` names, :func:`_row_twin_keys`); returns -1 or a virtual half-edge whose
+    edge is used twice in one direction or by three rows."""
+    k3 = tw_new.shape[0]
     n = rest.shape[0]
     i = 0
     while i < n:
         e = i + 1
         while e < n and by_key[e] == by_key[i]:
             e += 1
-        h = rest[srt[i]]
         if e - i == 1:
-            if h >= 3 * m:
-                tw_new[h - 3 * m] = -1
+            s = facing[srt[i]]
+            s = s if s >= 0 else ~s
+            if s < k3:
+                tw_new[s] = -1
         elif e - i == 2:
+            h = rest[srt[i]]
             g = rest[srt[i + 1]]
-            if _start(out, tri, m, h) == _start(out, tri, m, g):
+            sh = facing[srt[i]]
+            sg = facing[srt[i + 1]]
+            if (sh >= 0) == (sg >= 0):
                 return max(h, g)  # one edge twice in one direction
-            for x, y in ((h, g), (g, h)):
-                if x >= 3 * m:
-                    tw_new[x - 3 * m] = y
+            for s, y in ((sh, g), (sg, h)):
+                s = s if s >= 0 else ~s
+                if s < k3:
+                    tw_new[s] = y
                 else:  # a kept half-edge: filed under the input half-edge it faces
-                    f = twin_in[x]
-                    r = lower_bound(changed, f // 3)
-                    face_tw[3 * r + f % 3] = y
+                    face_tw[s - k3] = y
         else:
             return rest[srt[i + 2]]
         i = e
     return -1
-
-
-@njit(cache=True, nogil=True)
-def _start(out, tri, m, h):
-    """First vertex of virtual half-edge ``h``."""
-    x = h // 3
-    if x >= m:
-        return out[x - m, h - 3 * x]
-    return tri[x, h - 3 * x]
 
 
 @njit(cache=True, nogil=True)
@@ -739,18 +735,21 @@ def walk_links(status, is_cov, link_new, parent_new, twin_in, tw_new, changed, f
 
 
 @njit(cache=True, nogil=True)
-def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wide, pos, plen):
+def swap_outcome_of(twin, is_cov, cyc, root, buf, starts, c, ca, cb, budget, wide, pos, plen, m_table, m_steps,
+                    m_state):
     """``_join_kernels.swap_merge_outcome`` of the alternating cycle ``c`` of ``buf`` /
     ``starts`` (``alternating_cycles_into``'s output), its group the cycle's triangles,
-    sorted, as the caller's ``np.unique`` makes it. Reads only: two threads test one
-    task's cycles at once (``sparse._SwapTests``).
+    sorted, as the caller's ``np.unique`` makes it. Reads only, bar the calling
+    thread's own walk memo (``m_*``, a ``_join_kernels.WalkMemo``): two threads test
+    one task's cycles at once (``sparse._SwapTests``).
     """
     fl = buf[starts[c]:starts[c + 1]]
     tris = np.empty(2 * fl.shape[0], np.int64)
     for i in range(fl.shape[0]):
         tris[2 * i] = fl[i] // 3
         tris[2 * i + 1] = twin[fl[i]] // 3
-    return swap_merge_outcome(twin, is_cov, cyc, root, fl, np.unique(tris), ca, cb, budget, wide, pos, plen)
+    return swap_merge_outcome(twin, is_cov, cyc, root, fl, np.unique(tris), ca, cb, budget, wide, pos, plen, m_table,
+                              m_steps, m_state)
 
 
 def load_output_kernels() -> None:
@@ -779,7 +778,7 @@ def load_output_kernels() -> None:
     twin = np.array([3, 4, 5, 0, 1, 2], np.int64)
     swap_outcome_of(twin, np.array([True, True, False, True, True, False]), np.zeros(2, np.int64),
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
-                    none, none)
+                    none, none, *new_walk_memo(2, 8))
     blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
     # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
     fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)

@@ -1591,12 +1591,15 @@ class _SwapTests:
     its count of answers other than 1 lasts, so exactly there unless an answer 1 came
     before and was not taken; then :meth:`answer` asks again. The tests of one task
     cost from microseconds to ~5 ms each (walks on the big cycle that end undecided at
-    ``ALT_MERGE_WALK``): at 1.5 M triangles ~430 of them, 0.06 s.
+    ``ALT_MERGE_WALK``): at 1.5 M triangles ~430 of them, 0.06 s. Each thread walks
+    through a walk memo of its own (``memos``: the caller's, the other thread's;
+    ``_join_kernels.WalkMemo``), kept over the tasks until the cover changes.
     """
 
-    def __init__(self, pool: ThreadPoolExecutor, cover_args: tuple, n: int, ca: int, cb: int, wide: int, pos, plen):
+    def __init__(self, pool: ThreadPoolExecutor, cover_args: tuple, n: int, ca: int, cb: int, wide: int, pos, plen,
+                 memos: tuple):
         self.args, self.n, self.wide, self.cb = cover_args, n, wide, (ca, cb, ALT_MERGE_WALK)
-        self.pp = (pos, plen)
+        self.pp, self.memos = (pos, plen), memos
         self.answers = np.full(n, -1, np.int64)
         self.next, self.read, self.ended = 0, 0, False
         self.lock = threading.Condition()
@@ -1614,13 +1617,13 @@ class _SwapTests:
             self.next = c + 1
             return c
 
-    def _test(self, c: int, wide: bool) -> int:
-        return _k.swap_outcome_of(*self.args, c, *self.cb, wide, *self.pp)
+    def _test(self, c: int, wide: bool, mine: bool = True) -> int:
+        return _k.swap_outcome_of(*self.args, c, *self.cb, wide, *self.pp, *self.memos[0 if mine else 1])
 
     def _run(self) -> None:
         try:
             while (c := self._claim(ahead=True)) >= 0:
-                a = self._test(c, c < self.wide)
+                a = self._test(c, c < self.wide, mine=False)
                 with self.lock:
                     self.answers[c] = a
                     self.lock.notify_all()
@@ -1789,6 +1792,9 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     starts = np.empty(checks + 1, np.int64)
     # big meshes: a task's tests shared by two threads (``_SwapTests``)
     pool = ThreadPoolExecutor(1) if not small and threads.cores() > 1 else None
+    # the walks each thread made on this cover (big meshes: the same links are walked
+    # again and again, ``_join_kernels.ring_outside_pairs_memo``), cleared when it changes
+    memos = tuple(_j.new_walk_memo(2, 0) if small else _j.new_walk_memo(steps=_j.WALK_MEMO_STEPS) for _ in range(2))
     done = 0
     for h0 in tasks:
         t, u = h0 // 3, int(tw[h0] // 3)
@@ -1799,7 +1805,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         wider = n_wider
         tests = None
         if pool is not None and n > 1:
-            tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen)
+            tests = _SwapTests(pool, (tw, is_cov, cyc, root, buf, starts), n, ca, cb, wider, pos, plen, memos)
         for c in range(n):
             fl = buf[starts[c]:starts[c + 1]]
             # (1: ca and cb merge alone; 2, asked while ``wider`` lasts: more cycles merge,
@@ -1808,7 +1814,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
                 merges = tests.answer(c, wider > 0)
             else:
                 merges = _j.swap_merge_outcome(tw, is_cov, cyc, root, fl, _flip_group(tw, fl), ca, cb,
-                                               ALT_MERGE_WALK, wider > 0, pos, plen)
+                                               ALT_MERGE_WALK, wider > 0, pos, plen, *memos[0])
             if merges != 1:
                 if wider <= 0:
                     continue
@@ -1836,6 +1842,8 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
             if tests is not None:
                 tests.stop()  # (before the cover changes under the other thread's test)
             _flip_cover(tw, is_cov, flips)
+            for memo in memos:  # (both threads idle: the other one stopped above)
+                _j.clear_walk_memo(memo)
             blocked[list(group)] = True
             used.update(group)
             for merged, inside in gone:
@@ -2103,7 +2111,8 @@ def sparse_cycles(
             if attempt == 3:
                 no_absorb[:] = True
             status, slot, swap_he, join, counts, bad = _k.plan_merges(
-                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges, room
+                tri, tw, con, cover.cycle, cover.n_cycles, cand[order], ckind[order], no_absorb, flip_bridges, cand,
+                room,
             )
             for a, rows in ((status, m + room), (slot, 3 * (m + room)), (swap_he, m + room), (join, m + room)):
                 _keep_room(a, rows)  # (the ring joins append rows to the plan: ``_ring_joins``)
@@ -2140,10 +2149,12 @@ def sparse_cycles(
             n, m, n_fan = len(pts), len(tri), n_fan + n_rj
         break  # the ring joins patch the plan (``_ring_joins``): it is not made again
     steps.done("plan_joins")
-    split_rows = np.flatnonzero(status == _k.SPLIT)  # (few: the incenters' triangles)
+    # the triangles a join changes (~2 % at 1.5 M: the output's passes go over these)
+    changed = np.flatnonzero(status != _k.PASS)
+    split_rows = changed[status[changed] == _k.SPLIT]  # (few: the incenters' triangles)
     # new rows only; a triangle kept whole stays the input's row until the gather
     out, link, parent, partner, kind, mid_a, mid_b, mid_t = _k.emit(
-        tri, tw, cover.is_cov, status, slot, swap_he, split_rows, n
+        tri, tw, cover.is_cov, status, slot, swap_he, split_rows, n, changed
     )
     n_split = len(split_rows)
     mids = 0.5 * (pts[mid_a] + pts[mid_b])
@@ -2152,7 +2163,7 @@ def sparse_cycles(
     inc = _incenters(pts, tri[split_rows])
     all_pts = _longer(pts, len(inc) + len(mids))  # (in place where the points have room)
     all_pts[len(pts):] = np.concatenate([inc, mids])
-    tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts))
+    tw_new, changed, face_tw, dup = _k.new_row_twins(out, tri, tw, status, len(all_pts), changed)
     if dup >= 0:
         raise VerificationError(f"internal error: output edge of virtual row {int(dup) // 3} used twice")
     # (the walk's table of links, then the gather's row places: one buffer)
@@ -2323,11 +2334,12 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     the kept rows' entries found already (the output rows' gather), the new rows'
     are found here.
     """
+    new = np.flatnonzero(kind != 3)  # (the new rows: an O(m) pass, made once for both uses)
     if pinned is None:
         pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b)
     else:  # (the new rows only: the kept rows', ~99 % of them, came with the gather)
         pinned = _ik.pinned_output_edges(out, parent, partner, tri, tw, con, int(first_mid), mid_a, mid_b,
-                                         rows=np.flatnonzero(kind != 3), pinned=pinned)
+                                         rows=new, pinned=pinned)
     # the caller's rows, claim, kinds and parents' angles are its own fresh arrays:
     # changed in place, not copied (4 x 1.5 M rows of fresh bytes saved)
     out = np.ascontiguousarray(out, dtype=np.int64)
@@ -2342,7 +2354,6 @@ def _improve(pts, out, claim, kind, pm, lengths, tri, tw, con, parent, partner, 
     failed = fresh(len(out), np.int64, -1)
     clock = np.zeros(1, np.int64)
     judged = np.full(max(len(pts) - first_steiner, 0), -1, np.int64)  # (and each Steiner point's last look)
-    new = np.flatnonzero(kind != 3)
     only_missing = len(out) >= IMPROVE_ALL_BELOW
     missing_rows = _MissingRows(touched, clock)  # (the rows changed since the last ask measured again)
     for _ in range(IMPROVE_ROUNDS):

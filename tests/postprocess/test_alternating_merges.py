@@ -84,6 +84,8 @@ def test_local_swap_decision_equals_relabelling_the_cover(name: str) -> None:
     # ``ALT_POSITIONS_BELOW`` triangles) instead of walked: the same answers
     pos, plen = np.empty(len(tri), np.int64), np.empty(len(tri), np.int64)
     J.cycle_positions_into(tw, is_cov, pos, plen)
+    plain = J.new_walk_memo(2, 0)  # (no memo: plain walks)
+    memo = J.new_walk_memo()  # the walks kept over all the checks on this cover: the same answers
     yes = no = wider = 0
     for h0 in between[:40]:
         t, u = h0 // 3, tw[h0] // 3
@@ -105,11 +107,17 @@ def test_local_swap_decision_equals_relabelling_the_cover(name: str) -> None:
             assert wide or not local
             wider += wide and not local
             # both answers from one walk, as ``sparse._alternating_merges`` asks them
-            both = J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, True, none, none)
+            both = J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, True, none, none,
+                                        *plain)
             assert both == (1 if local else 2 if wide else 0)
             assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 10**9, False, none,
-                                        none) == int(local)
-            assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 0, True, pos, plen) == both
+                                        none, *plain) == int(local)
+            assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], 0, True, pos, plen,
+                                        *plain) == both
+            for budget in (10**9, 40):  # (40: walks cut off by the budget, undecided)
+                assert J.swap_merge_outcome(tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], budget, True, none,
+                                            none, *memo) == J.swap_merge_outcome(
+                    tw, is_cov, cyc, root, fl, group, cyc[t], cyc[u], budget, True, none, none, *plain)
     assert yes >= 1 and no >= 1 and wider >= 1  # every answer exercised
 
 

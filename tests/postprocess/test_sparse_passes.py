@@ -317,13 +317,58 @@ def test_new_row_twins_name_an_edge_used_twice() -> None:
     twin_in = np.array([3, -1, -1, 0, -1, -1])
     status = np.array([PASS, SWAP], np.int8)
     ok = np.array([[1, 0, 4], [4, 0, 3], [1, 4, 3]])  # t1 replaced, edge 1 -> 0 kept
-    tw, changed, face_tw, bad = new_row_twins(ok, tri, twin_in, status, 5)
+    ch = np.flatnonzero(status != PASS)
+    tw, changed, face_tw, bad = new_row_twins(ok, tri, twin_in, status, 5, ch)
     assert bad == -1 and list(changed) == [1]
     assert tw[0] == 0 and face_tw[0] == 6  # kept 0 -> 1 pairs with new row 0's 1 -> 0 (virtual 3 x 2 + 0)
     twice = np.array([[0, 1, 4]])  # 0 -> 1 again, in the kept row's direction
-    assert new_row_twins(twice, tri, twin_in, status, 5)[3] >= 0
+    assert new_row_twins(twice, tri, twin_in, status, 5, ch)[3] >= 0
     three = np.array([[1, 0, 4], [1, 0, 3]])  # a third row on edge 0-1
-    assert new_row_twins(three, tri, twin_in, status, 5)[3] >= 0
+    assert new_row_twins(three, tri, twin_in, status, 5, ch)[3] >= 0
+
+@pytest.mark.parametrize("name", ["A", "la", "face"])
+def test_new_row_twins_are_the_virtual_meshs_twins(name: str, monkeypatch) -> None:
+    # the twins ``new_row_twins`` matches (new rows', and the kept half-edges' facing a
+    # changed triangle, filed where ``_faced`` reads them) are those of the whole
+    # virtual output (kept input rows, then the new rows) paired from scratch
+    from hammesh.halfedge import half_edge_twins
+    from hammesh.postprocess import _sparse_kernels as sk
+    from hammesh.postprocess import sparse
+
+    seen = []
+    real = sk.new_row_twins
+
+    def spy(out, tri, twin_in, status, n_points, changed):
+        got = real(out, tri, twin_in, status, n_points, changed)
+        seen.append((out.copy(), tri.copy(), twin_in.copy(), status.copy(), n_points, [np.copy(a) for a in got[:3]],
+                     got[3]))
+        return got
+
+    monkeypatch.setattr(sparse._k, "new_row_twins", spy)
+    dom = bundled_domain(name)
+    for area in (None, 0.002 * float(np.ptp(dom.vertices[:, 0]) * np.ptp(dom.vertices[:, 1]))):
+        hammesh.hamiltonian(hammesh.quality_mesh(dom, min_angle=30, max_area=area, isolate=False))
+    assert len(seen) == 2
+    for out, tri, twin_in, status, n_points, (tw_new, changed, face_tw), bad in seen:
+        m, k = len(tri), len(out)
+        kept = np.flatnonzero(status == sk.PASS)
+        assert bad == -1 and changed.tolist() == np.flatnonzero(status != sk.PASS).tolist()
+        rows = np.concatenate([tri[kept], out])
+        virtual = np.concatenate([kept, m + np.arange(k)])  # each row's virtual id
+        tw, _ = half_edge_twins(rows, n_points)
+        to_virtual = np.where(tw >= 0, 3 * virtual[np.maximum(tw, 0) // 3] + np.maximum(tw, 0) % 3, -1)
+        np.testing.assert_array_equal(tw_new, to_virtual[3 * len(kept):])
+        # kept half-edges facing a changed triangle: under the changed triangle's half-edge
+        row_of = np.full(m, -1)
+        row_of[kept] = np.arange(len(kept))
+        want = np.full(3 * len(changed), -1)
+        for r, u in enumerate(changed.tolist()):
+            for j in range(3):
+                g = twin_in[3 * u + j]
+                if g >= 0 and status[g // 3] == sk.PASS:
+                    want[3 * r + j] = to_virtual[3 * row_of[g // 3] + g % 3]
+        np.testing.assert_array_equal(face_tw, want)
+
 
 def _shuffled_cycle_rows(h: hammesh.HamiltonianMesh, seed: int):
     """``h``'s rows shuffled, with the link bits of each row (the edges its cycle crosses)."""

@@ -477,10 +477,10 @@ def test_new_row_twins_packed_sort_matches_its_argsort_fallback(name: str, monke
     seen = []
     real = sk.new_row_twins
 
-    def spy(out, tri, tw, status, n_points):
-        got = real(out, tri, tw, status, n_points)
+    def spy(out, tri, tw, status, n_points, changed):
+        got = real(out, tri, tw, status, n_points, changed)
         # n_points this large needs more than 62 bits with the index: the argsort path
-        big = real(out, tri, tw, status, 1 << 31)
+        big = real(out, tri, tw, status, 1 << 31, changed)
         seen.append(len(out))
         for a, b in zip(got[:3], big[:3]):
             np.testing.assert_array_equal(a, b)

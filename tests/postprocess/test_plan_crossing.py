@@ -1,0 +1,93 @@
+"""The plan's crossing half-edges (``_sparse_kernels.crossing_half_edges``).
+
+``plan_merges`` needs every edge between two different nodes (cover cycles,
+uncovered triangles), one half-edge each. They are read off the join candidates (and
+the edges between two uncovered triangles) instead of a pass over all 3 m half-edges:
+on any labelling of the triangles that must be exactly the edges the pass finds, and
+the plan must not depend on their order or on which half of each is given.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import hammesh
+from hammesh.halfedge import prepare_mesh
+from hammesh.postprocess import _sparse_kernels as sk
+from hammesh.postprocess.cycle_cover import cycle_cover
+from tests.helpers import bundled_domain
+
+_MESHES: dict = {}
+
+
+def _cover(name: str, area: float):
+    if (name, area) not in _MESHES:
+        m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=area)
+        clean, he, _ = prepare_mesh(m)
+        _MESHES[name, area] = clean.triangles, he.twin, cycle_cover(clean.triangles, he.twin)
+    return _MESHES[name, area]
+
+
+def _crossing_by_a_pass(tw, cyc) -> list:
+    """The lower half-edge of every edge whose two triangles are different nodes (the reference)."""
+    h = np.flatnonzero(tw > np.arange(len(tw)))
+    ct, cu = cyc[h // 3], cyc[tw[h] // 3]
+    return sorted(h[(ct < 0) | (cu < 0) | (ct != cu)].tolist())
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    name=st.sampled_from(["face", "la", "double_hex", "A"]),
+    seed=st.integers(0, 2**31 - 1),
+    off=st.sampled_from([0.0, 0.001, 0.05, 0.5, 1.0]),
+    relabel=st.booleans(),
+)
+def test_crossing_half_edges_are_the_passs(name, seed, off, relabel) -> None:
+    tri, tw, cover = _cover(name, 0.5)
+    rng = np.random.default_rng(seed)
+    cyc = cover.cycle.copy()
+    if relabel:  # (any labelling: few cycles, so neighbours often share one)
+        cyc = rng.integers(0, 4, len(cyc)).astype(np.int64)
+    cyc[rng.random(len(cyc)) < off] = -1  # uncovered triangles, up to all of them
+    unc = np.flatnonzero(cyc < 0)
+    got = sk.crossing_half_edges(tw, cyc, unc, sk.join_candidates(tw, cyc))
+    lower = np.minimum(got, tw[got]).tolist()
+    assert len(set(lower)) == len(lower)  # each edge once
+    assert sorted(lower) == _crossing_by_a_pass(tw, cyc)
+
+
+@pytest.mark.parametrize("name", ["face", "la", "A"])
+def test_plan_does_not_depend_on_the_crossing_order(name) -> None:
+    # the plan from the crossing half-edges ascending (the pass's order) and shuffled:
+    # the same statuses, slots, joins and counts (the bridges' stages take the edges
+    # Kruskal left apart in ascending order either way)
+    tri, tw, cover = _cover(name, 0.5)
+    rng = np.random.default_rng(7)
+    bridges = 0
+    for off in (0.0, 0.02, 0.3):
+        cyc = cover.cycle.copy()
+        cyc[rng.random(len(cyc)) < off] = -1
+        n_cyc = int(cyc.max()) + 1
+        unc = np.flatnonzero(cyc < 0)
+        cand = sk.join_candidates(tw, cyc)
+        order = rng.permutation(len(cand))[: len(cand) // 3]  # (a third: Kruskal leaves nodes apart)
+        ckind = rng.integers(1, 3, len(cand)).astype(np.int8)
+        cross = np.sort(sk.crossing_half_edges(tw, cyc, unc, cand))
+        is_con = np.zeros(len(tw), np.bool_)
+        is_con[rng.random(len(tw)) < 0.05] = True
+        plans = []
+        flipped = np.where(rng.random(len(cross)) < 0.5, cross, tw[cross])  # (either half of each)
+        for c in (cross, rng.permutation(cross), rng.permutation(flipped)):
+            m = len(tri)
+            arrays = (np.empty(m, np.int8), np.empty(3 * m, np.int8), np.empty(m, np.int64), np.empty(m, np.int64))
+            uf, pu = np.empty(n_cyc + len(unc), np.int64), np.empty(n_cyc + len(unc), np.int64)
+            sk._plan_fill_range(cyc, *arrays, 0, m)
+            counts, bad = sk._plan_merges_into(tri, tw, is_con, cyc, n_cyc, unc, cand[order], ckind[order],
+                                               np.zeros(m, np.bool_), True, *arrays, uf, pu, c.copy())
+            plans.append([a.tolist() for a in (*arrays, counts, bad)])
+        assert plans[0] == plans[1] == plans[2]
+        bridges += plans[0][4][2]
+    assert bridges > 0
