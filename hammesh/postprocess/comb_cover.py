@@ -540,14 +540,16 @@ def comb_keys(points: np.ndarray, src: np.ndarray, dst: np.ndarray, keys: np.nda
     return keys
 
 
-def lone_join_bounds(points: np.ndarray, tri: np.ndarray, twin: np.ndarray) -> np.ndarray:
+def lone_join_bounds(points: np.ndarray, tri: np.ndarray, twin: np.ndarray,
+                     corners: np.ndarray | None = None) -> np.ndarray:
     """(m,) float64, radians: what sparse mode's joins could keep at best at each
     triangle if the cover left it off alone (every neighbour covered): the formula of
     ``sparse.join_bounds`` (one join divides the corners opposite the edge it crosses,
     in the triangle and its neighbour; a bridge splits the triangle at its incenter),
     for every triangle. A triangle with a boundary edge opposite a wide corner
-    (33/33/114 degrees) bounds any join to about 16 degrees."""
-    c = triangle_corners(points, tri)
+    (33/33/114 degrees) bounds any join to about 16 degrees. ``corners``: the
+    :func:`triangle_corners` if at hand."""
+    c = triangle_corners(points, tri) if corners is None else corners
     g = np.asarray(twin).reshape(-1, 3)
     inner = g >= 0
     gg = np.where(inner, g, 0)
@@ -794,7 +796,7 @@ FRAMES = ("auto", "kd")
 
 def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis: int | None = None,
                angle: float = 0.0, levels: int = 2, penalty: float = 5.0, max_defer: int = 8,
-               pitch: float = 0.02, frame: str = "auto", keep: float = 0.9, mend: int = 12) -> CycleCover:
+               pitch: float = 0.02, frame: str = "auto", keep: float = 0.9, mend: int = 6) -> CycleCover:
     """The comb cover of a planar mesh: the cover of :func:`vertex_fishbone_tree`'s
     induced tree (``fill="comb"``), as ``cycle_cover`` returns it.
 
@@ -847,7 +849,10 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
         if axis is None:
             ext = np.ptp(pts, axis=0) if n else np.ones(2)
             axis = 0 if ext[1] > ext[0] else 1
-    bad = lone_join_bounds(pts0, tri, tw) < keep * triangle_corners(pts0, tri).min() if keep > 0 and n else None
+    bad = None
+    if keep > 0 and n:
+        corners = triangle_corners(pts0, tri)
+        bad = lone_join_bounds(pts0, tri, tw, corners) < keep * corners.min()
     first = rim_apexes(tri, tw, n, bad) if bad is not None else None
     inside = vertex_fishbone_tree(pts, tri, tw, int(axis), penalty=penalty, max_defer=max_defer, levels=levels,
                                   fill="comb", pitch=pitch, ring=ring, first=first)
