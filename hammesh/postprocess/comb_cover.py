@@ -16,6 +16,13 @@ tree so that the cycle sweeps the domain compactly (its stretches cut close to M
   between them (alternating rows leave no monochrome triangle);
 * a vertex whose joining would leave a triangle monochrome for good is deferred
   (:func:`grow_induced_tree`);
+* where no join could keep sparse mode's rule at a triangle left monochrome (its
+  :func:`lone_join_bounds` below ``keep`` x the input's smallest angle: mostly a
+  boundary triangle whose inner vertex stays outside where two teeth meet the boundary),
+  the inner vertex of such a boundary triangle joins first in its cell
+  (:func:`rim_apexes`), and :func:`mend_tree` moves the grown tree locally (swaps that
+  keep it a tree; lone joins that close cycles of a few edges) to leave fewer and
+  better monochrome triangles;
 * round a hole that the domain wraps round (a gear, an annulus: session 13's *ring
   frame*, :func:`vertex_ring`), the hole's own vertices are the top spine, all inside,
   and eight sectors hang from it, each a fishbone whose spine is its radial middle
@@ -23,10 +30,11 @@ tree so that the cycle sweeps the domain compactly (its stretches cut close to M
   the hole with trees hanging from it, still one cycle of the cover).
 
 :func:`comb_cover` returns what ``cycle_cover`` returns; sparse mode joins and fans the
-uncovered triangles (about 1 %) as usual, with its re-routes off (they would splice
+uncovered triangles (0.7 %) as usual, with its re-routes off (they would splice
 the cycle into long arcs), and certifies the output. No theorem: measured (plate
-300 000 triangles: 0.62 % Steiner points, cut 1.27 / 1.35 x METIS at k = 8 / 64;
-the gear, ring frame, 0.66 %, 1.27 / 1.38; smallest angle 15 degrees).
+300 000 triangles: 0.52 % Steiner points, cut 1.38 / 1.34 x METIS at k = 8 / 64;
+the gear, ring frame, 0.53 %, 1.20 / 1.38; smallest angle 16-17 degrees, where the
+default keeps 27; docs/partition.md, "Session 22, second round").
 """
 
 from __future__ import annotations
@@ -829,7 +837,9 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
     Returns
     -------
     CycleCover
-        ``is_cov``, ``cycle`` (-1: uncovered), ``n_cycles`` (1 on a connected domain),
+        ``is_cov``, ``cycle`` (-1: uncovered), ``n_cycles`` (1 on a connected domain,
+        plus the small cycles closed by :func:`mend_tree`'s lone joins: 5 on the gear at
+        300 000 triangles; sparse mode joins them as the default cover's),
         ``n_uncovered``; ``n_unmatched`` 0.
     """
     if frame not in FRAMES:
