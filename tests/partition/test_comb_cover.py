@@ -44,7 +44,7 @@ def test_the_comb_cover_is_one_cycle_round_an_induced_tree(w: float, hole) -> No
     mesh = _rect(w, w / 5000, hole)
     tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
     twin = half_edges(tri, mesh.n_points).twin
-    cov = comb.comb_cover(mesh.points, tri, twin)
+    cov = comb.comb_cover(mesh.points, tri, twin, keep=0.0, mend=0)  # (the tree as grown: mend_tree's own test below)
     m = len(tri)
     # the cover's half-edges pair up under twin; each covered triangle has two, an
     # uncovered one none
@@ -175,7 +175,7 @@ def test_the_ring_frame_cover_is_one_cycle_round_the_hole(r_hole: float, ox: flo
     g = coo_matrix((np.ones(len(e_t)), (e_t[:, 0], e_t[:, 1])), shape=(n, n))
     pieces = len(np.unique(connected_components(g, directed=False)[1][trees]))
     assert len(e_t) == trees.sum() - pieces  # a forest
-    cov = comb.comb_cover(mesh.points, tri, twin)
+    cov = comb.comb_cover(mesh.points, tri, twin, keep=0.0, mend=0)  # (the tree as grown)
     mixed = (inside[tri].sum(axis=1) % 3) != 0
     np.testing.assert_array_equal(mixed, cov.cycle >= 0)
     assert cov.n_cycles == 1 and cov.n_uncovered < 0.05 * len(tri)
@@ -220,3 +220,127 @@ def test_comb_cover_refuses_an_unknown_frame() -> None:
     tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
     with pytest.raises(InvalidOptionError, match="frame"):
         comb.comb_cover(mesh.points, tri, half_edges(tri, mesh.n_points).twin, frame="polar")
+
+
+def _mended(w: float, hole, short: int, area: float = 1 / 3000):
+    """A rectangle's comb tree as grown and as :func:`comb.mend_tree` leaves it (the
+    weights as ``comb_cover``'s)."""
+    mesh = _rect(w, w * area, hole)
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    twin = half_edges(tri, mesh.n_points).twin
+    pts = np.ascontiguousarray(mesh.points[:, :2])
+    n = len(pts)
+    bad = comb.lone_join_bounds(pts, tri, twin) < 0.9 * comb.triangle_corners(pts, tri).min()
+    axis = 0 if np.ptp(pts[:, 1]) > np.ptp(pts[:, 0]) else 1
+    grown = comb.vertex_fishbone_tree(pts, tri, twin, axis, penalty=5.0, max_defer=8, levels=2, fill="comb",
+                                      first=comb.rim_apexes(tri, twin, n, bad))
+    inside = grown.copy()
+    weight = np.where(bad, comb.BAD_WEIGHT, 1.0)
+    bnd = comb.boundary_vertices(tri, twin, n)
+    moves = comb.mend_tree(inside, comb.vertex_maps(tri, n), tri, bnd, np.zeros(n, bool), weight, 3, 12, short)
+    return tri, twin, bnd, weight, grown, inside, moves
+
+
+def _monochrome_weight(inside, tri, weight) -> float:
+    c = inside[tri]
+    return float(weight[(c == c[:, :1]).all(axis=1)].sum())
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(w=st.floats(0.7, 2.5), holed=st.booleans(), hx=st.floats(0.3, 0.7))
+def test_mending_keeps_the_tree_and_takes_weight_off(w: float, holed: bool, hx: float) -> None:
+    """``mend_tree`` without lone joins: still an induced tree, no boundary vertex
+    inside, so the cover is one cycle through exactly the mixed triangles; the
+    monochrome weight never grows, and falls when a move was made."""
+    tri, twin, bnd, weight, grown, inside, moves = _mended(w, (hx * w, 0.5) if holed else None, 0)
+    assert _induced_tree(inside, tri) and not (inside & bnd).any()
+    before, after = _monochrome_weight(grown, tri, weight), _monochrome_weight(inside, tri, weight)
+    assert after <= before and (moves == 0 or after < before)
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
+    cover = comb.cover_of(tri, twin, inside.astype(np.int8))
+    cyc, n_cyc = cycle_ids_by_halves(twin, cover)
+    assert n_cyc == 1
+    np.testing.assert_array_equal(cyc >= 0, (inside[tri].sum(axis=1) % 3) != 0)
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(w=st.floats(0.7, 2.5), holed=st.booleans(), hx=st.floats(0.3, 0.7))
+def test_lone_joins_close_only_short_cycles(w: float, holed: bool, hx: float) -> None:
+    """With lone joins (``short`` 3): connected, each extra edge closing a cycle of at
+    most 3 + 2 edges (the inside graph's cycle rank is at most the lone joins'), the
+    weight down, and the cover one cycle per independent cycle plus one."""
+    tri, twin, bnd, weight, grown, inside, moves = _mended(w, (hx * w, 0.5) if holed else None, 3)
+    assert _monochrome_weight(inside, tri, weight) <= _monochrome_weight(grown, tri, weight)
+    e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+    e = e[inside[e[:, 0]] & inside[e[:, 1]]]
+    v = np.flatnonzero(inside)
+    n = len(inside)
+    g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    assert len(np.unique(connected_components(g, directed=False)[1][v])) == 1
+    rank = len(e) - len(v) + 1
+    assert 0 <= rank <= (comb.MAX_ALONE - 1) * moves
+    # every inside edge off a spanning tree closes a short cycle: drop it, its ends stay near
+    from scipy.sparse.csgraph import breadth_first_order, shortest_path
+    _, pred = breadth_first_order(g + g.T, v[0], directed=False)
+    tree_edge = (pred[e[:, 0]] == e[:, 1]) | (pred[e[:, 1]] == e[:, 0])
+    extra = e[~tree_edge]
+    if len(extra):
+        h = coo_matrix((np.ones(int(tree_edge.sum())), (e[tree_edge, 0], e[tree_edge, 1])), shape=(n, n))
+        d = shortest_path(h, directed=False, unweighted=True, indices=np.unique(extra[:, 0]))
+        row = {x: i for i, x in enumerate(np.unique(extra[:, 0]))}
+        # (the spanning tree is not the one the moves saw: a cycle of 5 edges may take a detour of 2 extra edges)
+        assert all(d[row[a], b] <= 3 + 2 + 2 * rank for a, b in extra)
+    from hammesh.postprocess.cycle_cover import cycle_ids_by_halves
+    cyc, n_cyc = cycle_ids_by_halves(twin, comb.cover_of(tri, twin, inside.astype(np.int8)))
+    assert 1 <= n_cyc <= 1 + rank
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), frac=st.floats(0.2, 0.8))
+def test_swap_gain_is_the_weight_recounted(seed: int, frac: float) -> None:
+    mesh = _rect(1.0, 0.01)
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    rng = np.random.default_rng(seed)
+    n = int(tri.max()) + 1
+    inside = rng.random(n) < frac
+    weight = rng.random(len(tri)) * 5
+    maps = comb.vertex_maps(tri, n)
+    for _ in range(10):
+        w = int(rng.choice(np.flatnonzero(~inside)))
+        p = int(rng.choice(np.flatnonzero(inside))) if rng.random() < 0.7 else -1
+        g = comb.swap_gain(w, p, maps.vt_ptr, maps.vt_idx, tri, inside, weight)
+        after = inside.copy()
+        after[w] = True
+        if p >= 0:
+            after[p] = False
+        want = _monochrome_weight(inside, tri, weight) - _monochrome_weight(after, tri, weight)
+        assert g == pytest.approx(want, abs=1e-9)
+
+
+def test_lone_join_bounds_are_sparse_modes_at_isolated_triangles() -> None:
+    from hammesh.postprocess.sparse import join_bounds
+    mesh = _rect(1.5, 1.5 / 3000, (0.7, 0.5))
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    twin = half_edges(tri, mesh.n_points).twin
+    cov = comb.comb_cover(mesh.points, tri, twin, keep=0.0, mend=0)
+    rows, bound, _ = join_bounds(mesh.points, tri, twin, cov.cycle)
+    assert len(rows)
+    np.testing.assert_allclose(comb.lone_join_bounds(mesh.points, tri, twin)[rows], bound, atol=1e-12)
+
+
+def test_rim_apexes_are_the_inner_corners_of_bad_boundary_triangles() -> None:
+    mesh = _rect(1.0, 0.002)
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    twin = half_edges(tri, mesh.n_points).twin
+    n = int(tri.max()) + 1
+    every = comb.rim_apexes(tri, twin, n, np.ones(len(tri), bool))
+    bnd = comb.boundary_vertices(tri, twin, n)
+    one_edge = (twin.reshape(-1, 3) < 0).sum(axis=1) == 1
+    # each boundary triangle's third vertex, and nothing else
+    want = np.zeros(n, bool)
+    for t in np.flatnonzero(one_edge):
+        k = int(np.flatnonzero(twin[3 * t:3 * t + 3] < 0)[0])
+        want[tri[t, (k + 2) % 3]] = True
+    np.testing.assert_array_equal(every, want)
+    assert not comb.rim_apexes(tri, twin, n, np.zeros(len(tri), bool)).any()
+    assert (every & ~bnd).sum() > 0
