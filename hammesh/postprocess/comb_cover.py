@@ -259,6 +259,21 @@ def triangles_doomed_by(v, ptr, idx, vt_ptr, vt_idx, tri, boundary, inside, coun
 
 
 @njit(cache=True)
+def _put_inside(v, ptr, idx, wts, boundary, inside, count, heap, seq):
+    """``v`` joins the tree: its neighbours count one more inside neighbour, and each
+    that now has exactly one (and could join) goes on ``heap`` at its entry's key, in
+    sequence from ``seq``. Returns the next sequence number."""
+    inside[v] = True
+    for j in range(ptr[v], ptr[v + 1]):
+        w = idx[j]
+        count[w] += 1
+        if not inside[w] and not boundary[w] and count[w] == 1:
+            heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
+            seq += 1
+    return seq
+
+
+@njit(cache=True)
 def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seeds, inside, penalty, max_defer, weight):
     """Prim's search from ``seeds`` (all inside first, whatever their neighbours; then a
     heap of ``(key, sequence, vertex)``; float keys per adjacency entry ``wts``) growing
@@ -280,14 +295,8 @@ def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seeds, ins
     for v in seeds:
         if inside[v]:
             continue
-        inside[v] = True
+        seq = _put_inside(v, ptr, idx, wts, boundary, inside, count, heap, seq)
         size += 1
-        for j in range(ptr[v], ptr[v + 1]):
-            w = idx[j]
-            count[w] += 1
-            if not inside[w] and not boundary[w] and count[w] == 1:
-                heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
-                seq += 1
     while len(heap):
         key, _, v = heapq.heappop(heap)
         if inside[v] or boundary[v] or (size > 0 and count[v] != 1):
@@ -301,14 +310,8 @@ def _grow_weighted_into(ptr, idx, wts, vt_ptr, vt_idx, tri, boundary, seeds, ins
                 heapq.heappush(heap, (key + penalty * doomed, np.int64(seq), np.int64(v)))
                 seq += 1
                 continue
-        inside[v] = True
+        seq = _put_inside(v, ptr, idx, wts, boundary, inside, count, heap, seq)
         size += 1
-        for j in range(ptr[v], ptr[v + 1]):
-            w = idx[j]
-            count[w] += 1
-            if not inside[w] and not boundary[w] and count[w] == 1:
-                heapq.heappush(heap, (wts[j], np.int64(seq), np.int64(w)))
-                seq += 1
     return size, deferrals
 
 
