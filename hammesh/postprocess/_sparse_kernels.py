@@ -264,6 +264,11 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     return _bridges_into(tri, twin, is_con, cyc, n_cyc, unc, flip_bridges, status, slot, uf, pu, cross, ends, counts)
 
 
+#: candidates ahead whose twin (``PLAN_AHEAD2``), then whose triangles' rows
+#: (``PLAN_AHEAD1``) :func:`_kruskal_joins_into` asks for
+PLAN_AHEAD1, PLAN_AHEAD2 = 8, 16
+
+
 @njit(cache=True, nogil=True)
 def _kruskal_joins_into(twin, cyc, n_cyc, unc, cand, ckind, no_absorb, status, swap_he, join, uf):
     """Stage A of :func:`_plan_merges_into`: the judged joins ``cand`` taken best first
@@ -274,7 +279,17 @@ def _kruskal_joins_into(twin, cyc, n_cyc, unc, cand, ckind, no_absorb, status, s
     n_abs = 0
     n_join = 0
     n_edge = 0
-    for i in range(cand.shape[0]):
+    n = cand.shape[0]
+    for i in range(n):
+        if i + PLAN_AHEAD2 < n:  # (the candidates are scattered: their rows asked for ahead)
+            prefetch_row(twin, cand[i + PLAN_AHEAD2])
+        if i + PLAN_AHEAD1 < n:
+            a = cand[i + PLAN_AHEAD1]
+            b = twin[a] // 3
+            prefetch_row(swap_he, a // 3)
+            prefetch_row(swap_he, b)
+            prefetch_row(cyc, a // 3)
+            prefetch_row(cyc, b)
         h = cand[i]
         g = twin[h]
         t = h // 3
