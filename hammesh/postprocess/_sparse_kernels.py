@@ -225,7 +225,6 @@ def _plan_fill_range(cyc, status, slot, swap_he, join, lo, hi):
         join[t] = -1
 
 
-@njit(cache=True, nogil=True)
 def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot,
                       swap_he, join, uf, pu, cross):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
@@ -258,6 +257,8 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     absorbed triangle was some cycle's only way out): the caller retries without
     absorbing there.
     """
+    # (three kernels called from here, not one kernel calling them: the ones
+    # ``plan_merges`` calls on a big mesh, loaded by ``load_kernels``' small one)
     ends = np.empty((cross.shape[0], 2), np.int64)
     counts = _kruskal_joins_into(twin, cyc, n_cyc, unc, cand, ckind, no_absorb, status, swap_he, join, uf)
     _pieces_into(twin, cyc, n_cyc, unc, cross, pu, ends)
