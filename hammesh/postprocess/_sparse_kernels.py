@@ -162,7 +162,9 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     :func:`join_candidates` of this cover (all of them; ``cand`` is the caller's choice
     of them, in its order). ``room``: rows of memory left after ``status``, ``slot``,
     ``swap_he`` and ``join`` (each the start of a buffer that much longer), for a
-    caller that appends rows to the plan later."""
+    caller that appends rows to the plan later. From ``PLAN_SIDE_MIN_ROWS`` rows (and
+    two cores) the pieces (:func:`_pieces_into`) are found on the other core beside
+    Kruskal's joins (:func:`_kruskal_joins_into`); the plan is the serial one."""
     m = tri.shape[0]
     status = fresh(m + room, np.int8)[:m]
     slot = fresh(3 * (m + room), np.int8)[: 3 * m]
