@@ -162,7 +162,9 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     :func:`join_candidates` of this cover (all of them; ``cand`` is the caller's choice
     of them, in its order). ``room``: rows of memory left after ``status``, ``slot``,
     ``swap_he`` and ``join`` (each the start of a buffer that much longer), for a
-    caller that appends rows to the plan later."""
+    caller that appends rows to the plan later. From ``PLAN_SIDE_MIN_ROWS`` rows (and
+    two cores) the pieces (:func:`_pieces_into`) are found on the other core beside
+    Kruskal's joins (:func:`_kruskal_joins_into`); the plan is the serial one."""
     m = tri.shape[0]
     status = fresh(m + room, np.int8)[:m]
     slot = fresh(3 * (m + room), np.int8)[: 3 * m]
@@ -175,11 +177,28 @@ def plan_merges(tri, twin, is_con, cyc, n_cyc, cand, ckind, no_absorb, flip_brid
     # (the plan's arrays set to "nothing planned" one range per core: O(m), ~30 MB)
     run_all([partial(_plan_fill_range, cyc, status, slot, swap_he, join, lo, hi)
              for lo, hi in row_ranges(m, threads.THREAD_MIN_ROWS)])
-    counts, bad = _plan_merges_into(
-        tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join, uf,
-        pu, cross,
-    )
+    if m < PLAN_SIDE_MIN_ROWS or threads.cores() < 2:
+        counts, bad = _plan_merges_into(
+            tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot, swap_he, join,
+            uf, pu, cross,
+        )
+        return Plan(status, slot, swap_he, join, counts, bad)
+    # the pieces (the node graph's components over the crossing edges) need nothing of
+    # Kruskal's joins: found on the other core meanwhile, with each crossing edge's two
+    # nodes, which the bridges' stages then read in a row instead of looking them up
+    ends = np.empty((len(cross), 2), np.int64)
+    counts = run_all([
+        partial(_kruskal_joins_into, twin, cyc, n_cyc, unc, cand, ckind, no_absorb, status, swap_he, join, uf),
+        partial(_pieces_into, twin, cyc, n_cyc, unc, cross, pu, ends),
+    ])[0]
+    counts, bad = _bridges_into(tri, twin, is_con, cyc, n_cyc, unc, flip_bridges, status, slot, uf, pu, cross, ends,
+                                counts)
     return Plan(status, slot, swap_he, join, counts, bad)
+
+
+#: rows from which :func:`plan_merges` finds the pieces on another core beside
+#: Kruskal's joins (below: one serial kernel, the thread hand-off not worth it)
+PLAN_SIDE_MIN_ROWS = 200_000
 
 
 def crossing_half_edges(twin, cyc, unc, joinable) -> np.ndarray:
@@ -208,7 +227,6 @@ def _plan_fill_range(cyc, status, slot, swap_he, join, lo, hi):
         join[t] = -1
 
 
-@njit(cache=True, nogil=True)
 def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb, flip_bridges, status, slot,
                       swap_he, join, uf, pu, cross):
     """Join the cover cycles and the uncovered triangles into one cycle per piece.
@@ -241,16 +259,40 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     absorbed triangle was some cycle's only way out): the caller retries without
     absorbing there.
     """
-    m = tri.shape[0]
+    # (three kernels called from here, not one kernel calling them: the ones
+    # ``plan_merges`` calls on a big mesh, loaded by ``load_kernels``' small one)
+    ends = np.empty((cross.shape[0], 2), np.int64)
+    counts = _kruskal_joins_into(twin, cyc, n_cyc, unc, cand, ckind, no_absorb, status, swap_he, join, uf)
+    _pieces_into(twin, cyc, n_cyc, unc, cross, pu, ends)
+    return _bridges_into(tri, twin, is_con, cyc, n_cyc, unc, flip_bridges, status, slot, uf, pu, cross, ends, counts)
+
+
+#: candidates ahead whose twin (``PLAN_AHEAD2``), then whose triangles' rows
+#: (``PLAN_AHEAD1``) :func:`_kruskal_joins_into` asks for
+PLAN_AHEAD1, PLAN_AHEAD2 = 8, 16
+
+
+@njit(cache=True, nogil=True)
+def _kruskal_joins_into(twin, cyc, n_cyc, unc, cand, ckind, no_absorb, status, swap_he, join, uf):
+    """Stage A of :func:`_plan_merges_into`: the judged joins ``cand`` taken best first
+    where they join two nodes of the union-find ``uf`` (reset here). Returns
+    ``counts = [swaps_absorb, swaps_join, 0, edge_splits]``."""
     for x in range(uf.shape[0]):
         uf[x] = x
-        pu[x] = x
-    n_cross = cross.shape[0]  # (edges between two different nodes, one half-edge each)
     n_abs = 0
     n_join = 0
-    n_merge = 0
     n_edge = 0
-    for i in range(cand.shape[0]):
+    n = cand.shape[0]
+    for i in range(n):
+        if i + PLAN_AHEAD2 < n:  # (the candidates are scattered: their rows asked for ahead)
+            prefetch_row(twin, cand[i + PLAN_AHEAD2])
+        if i + PLAN_AHEAD1 < n:
+            a = cand[i + PLAN_AHEAD1]
+            b = twin[a] // 3
+            prefetch_row(swap_he, a // 3)
+            prefetch_row(swap_he, b)
+            prefetch_row(cyc, a // 3)
+            prefetch_row(cyc, b)
         h = cand[i]
         g = twin[h]
         t = h // 3
@@ -276,6 +318,37 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
                 n_join += 1
         else:
             n_edge += 1
+    return np.array([n_abs, n_join, 0, n_edge], np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _pieces_into(twin, cyc, n_cyc, unc, cross, pu, ends):
+    """The pieces of :func:`_plan_merges_into`: the union-find ``pu`` (reset here) of
+    the node graph over the crossing half-edges ``cross``, whatever their order, and
+    ``ends[i]``: the nodes of ``cross[i]``'s two triangles. Reads only ``cross``, so it
+    runs beside :func:`_kruskal_joins_into`."""
+    for x in range(pu.shape[0]):
+        pu[x] = x
+    for i in range(cross.shape[0]):
+        h = cross[i]
+        nt = _node(cyc, n_cyc, unc, h // 3)
+        nu = _node(cyc, n_cyc, unc, twin[h] // 3)
+        ends[i, 0] = nt
+        ends[i, 1] = nu
+        a = _find(pu, nt)
+        b = _find(pu, nu)
+        if a != b:
+            pu[a] = b
+
+
+@njit(cache=True, nogil=True)
+def _bridges_into(tri, twin, is_con, cyc, n_cyc, unc, flip_bridges, status, slot, uf, pu, cross, ends, counts):
+    """Stages B-F of :func:`_plan_merges_into` after :func:`_kruskal_joins_into`
+    (``uf``, ``counts``) and :func:`_pieces_into` (``pu``, ``ends``); ``cross`` is
+    overwritten. Returns ``(counts, bad)``."""
+    m = tri.shape[0]
+    n_cross = cross.shape[0]
+    n_merge = 0
     # pieces (``pu``: components of the node graph over the crossing edges, whatever
     # their order), and the crossing edges (one half each) whose nodes Kruskal left
     # apart: union-find sets only grow, so the stages below can join no others, and
@@ -284,18 +357,10 @@ def _plan_merges_into(tri, twin, is_con, cyc, n_cyc, unc, cand, ckind, no_absorb
     # one node per piece already
     n_apart = 0
     for i in range(n_cross):
-        h = cross[i]
-        g = twin[h]
-        nt = _node(cyc, n_cyc, unc, h // 3)
-        nu = _node(cyc, n_cyc, unc, g // 3)
-        a = _find(pu, nt)
-        b = _find(pu, nu)
-        if a != b:
-            pu[a] = b
-        if _find(uf, nt) != _find(uf, nu):
-            cross[n_apart] = min(h, g)  # (the lower half; n_apart <= i: read already)
+        if _find(uf, ends[i, 0]) != _find(uf, ends[i, 1]):
+            h = cross[i]
+            cross[n_apart] = min(h, twin[h])  # (the lower half; n_apart <= i: read already)
             n_apart += 1
-    counts = np.array([n_abs, n_join, n_merge, n_edge], np.int64)
     if n_apart == 0:
         return counts, np.zeros(m, np.bool_)
     cross[:n_apart].sort()

@@ -1707,13 +1707,17 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
         return cover, 0
     # (copies in pages of the reserve: 15 MB at 1.5 M that would fault in here)
     is_cov = fresh(cover.is_cov.shape, np.bool_)
-    is_cov[:] = cover.is_cov
     cyc = fresh(cover.cycle.shape, cover.cycle.dtype)  # (the decisions read the ids as the swaps before left them)
-    cyc[:] = cover.cycle
     # triangles no alternating cycle may pass: in a step of the plan, a fan, uncovered,
     # or on a swap taken before (an O(m) pass, only where some join is tried)
     blocked = fresh(len(status), np.bool_)
-    _row_pass(lambda lo_, hi_: _k.blocked_rows_into(status, is_fan, cyc, blocked, lo_, hi_), len(status))
+
+    def rows(lo_: int, hi_: int) -> None:  # (the copies one range per core too: numpy's copy frees the GIL)
+        cyc[lo_:hi_] = cover.cycle[lo_:hi_]
+        is_cov[3 * lo_:3 * hi_] = cover.is_cov[3 * lo_:3 * hi_]
+        _k.blocked_rows_into(status, is_fan, cyc, blocked, lo_, hi_)
+
+    _row_pass(rows, len(status))
     blocked[slotted // 3] = True
     used: set[int] = set()
     root = np.arange(cover.n_cycles, dtype=np.int64)  # merged cycle ids: union-find
