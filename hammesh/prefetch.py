@@ -5,8 +5,9 @@ of ``arr`` now, so that a loop can ask for the row it will read some iterations
 ahead while it works on the current one (a pass bound by the latency of its
 scattered reads overlaps them). A hint only: it changes no value, and an address
 past the array's end is never formed (the callers ask only for rows in range).
-Shared by the construction's renumbering (``hammesh.halfedge``) and the
-certificate's passes over the caller's rows (``hammesh.verify``), as the exact
+Shared by the construction's renumbering (``hammesh.halfedge``), sparse mode's
+plan of joins (``_sparse_kernels``' Kruskal) and the certificate's passes over the
+caller's rows (``hammesh.verify``), as the exact
 predicates are: it computes nothing either could share. (Kernels cached by numba
 hold its code compiled in, and numba checks only each kernel's own file: a change
 here needs their ``__pycache__`` entries cleared.)
