@@ -1309,6 +1309,21 @@ def pairs_by_position(twin, pos, plen, hs):
     return pair
 
 
+@njit(cache=True, nogil=True, inline="always")
+def pair_last_two(pair):
+    """Pair the two links a walk left unpaired (``pair`` -1: the rest are paired, so
+    they can only join each other) and return the first of them (the deduced pair)."""
+    a = -1
+    for i in range(pair.shape[0]):
+        if pair[i] < 0:
+            if a < 0:
+                a = i
+            else:
+                pair[a] = i
+                pair[i] = a
+    return a
+
+
 @njit(cache=True, nogil=True)
 def ring_outside_pairs(twin, is_cov, links, budget):
     """Which links of a ring fan's group the cover cycles join *outside* the group.
@@ -1352,15 +1367,7 @@ def ring_outside_pairs(twin, is_cov, links, budget):
             else:
                 cur[i] = f
     if left == 2:
-        a = -1
-        for i in range(n):
-            if pair[i] < 0:
-                if a < 0:
-                    a = i
-                else:
-                    pair[a] = i
-                    pair[i] = a
-                    deduced = a
+        deduced = pair_last_two(pair)
     return pair, deduced
 
 
@@ -1520,15 +1527,7 @@ def ring_outside_pairs_memo(twin, is_cov, links, budget, table, steps, state):
             else:
                 cur[i] = g
     if left == 2:
-        a = -1
-        for i in range(n):
-            if pair[i] < 0:
-                if a < 0:
-                    a = i
-                else:
-                    pair[a] = i
-                    pair[i] = a
-                    deduced = a
+        deduced = pair_last_two(pair)
     return pair, deduced
 
 
