@@ -47,7 +47,7 @@ from numba import njit
 
 from hammesh.errors import InvalidOptionError
 from hammesh.postprocess import _fishbone_kernels as fk
-from hammesh.postprocess.cycle_cover import CycleCover, cycle_ids_by_halves
+from hammesh.postprocess.cycle_cover import CycleCover, corner_angle, cycle_ids_by_halves, lone_join_bound
 
 __all__ = ["InducedTree", "VertexMaps", "vertex_maps", "reverse_entries", "boundary_vertices", "cover_of", "turned", "cell_medians", "spine_paths",
            "grow_induced_tree", "triangles_doomed_by", "vertex_fishbone_tree", "comb_keys", "comb_cover", "STRAIGHT_SPINES",
@@ -557,7 +557,7 @@ def lone_join_bounds(points: np.ndarray, tri: np.ndarray, twin: np.ndarray,
     triangle if the cover left it off alone (every neighbour covered): the formula of
     ``sparse.join_bounds`` (one join divides the corners opposite the edge it crosses,
     in the triangle and its neighbour; a bridge splits the triangle at its incenter),
-    for every triangle. A triangle with a boundary edge opposite a wide corner
+    for every triangle (``cycle_cover.lone_join_bound``). A triangle with a boundary edge opposite a wide corner
     (33/33/114 degrees) bounds any join to about 16 degrees. ``corners``: the
     :func:`triangle_corners` if at hand."""
     c = triangle_corners(points, tri) if corners is None else corners
@@ -565,20 +565,14 @@ def lone_join_bounds(points: np.ndarray, tri: np.ndarray, twin: np.ndarray,
     inner = g >= 0
     gg = np.where(inner, g, 0)
     u_opp = c[gg // 3, (gg % 3 + 2) % 3]  # the neighbour's corner opposite the shared edge
-    t_opp = c[:, [2, 0, 1]]  # the corner opposite edge k (from corner k to k + 1) is k + 2
-    per_edge = np.where(inner, 0.5 * np.minimum(t_opp, u_opp), 0.0)
-    return np.maximum(per_edge.max(axis=1), 0.5 * c.min(axis=1))
+    return lone_join_bound(c, u_opp, inner)
 
 
 def triangle_corners(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
     """(m, 3) float64, radians: each triangle's corner at each of its vertices."""
-    p = np.asarray(points)[:, :2][tri]
-    out = np.empty(tri.shape)
-    for k in range(3):
-        u = p[:, (k + 1) % 3] - p[:, k]
-        v = p[:, (k + 2) % 3] - p[:, k]
-        out[:, k] = np.arctan2(np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]), (u * v).sum(1))
-    return out
+    pts = np.asarray(points)[:, :2]
+    rows = np.arange(len(tri))
+    return np.stack([corner_angle(pts, tri, rows, np.full(len(tri), k)) for k in range(3)], axis=1)
 
 
 def rim_apexes(tri: np.ndarray, twin: np.ndarray, n: int, bad: np.ndarray) -> np.ndarray:

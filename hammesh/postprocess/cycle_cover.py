@@ -36,6 +36,7 @@ __all__ = [
     "CycleCover", "cycle_cover", "join_classes", "ONLINE_BUDGET", "ONLINE_MIN_TRIANGLES", "CELL_SIZE",
     "DEFECT_SEARCH_BUDGET", "DROP_BUDGET", "DROP_ROUNDS", "cycle_ids_by_halves", "CHAIN_COST", "GUIDE_WEIGHT",
     "GUIDE_MIN_TRIANGLES", "JoinRule", "defect_cut", "RECOLOUR_BELOW", "RECOLOUR_SET", "RECOLOUR_NODE", "RECOLOUR_CANDIDATES",
+    "corner_angle", "lone_join_bound",
 ]
 
 #: Triangles per quadtree cell that the cover's cycles are confined to by default
@@ -109,6 +110,33 @@ RECOLOUR_CANDIDATES = 64
 RECOLOUR_ROUNDS = 3
 RECOLOUR_SHIFT = 2
 RECOLOUR_LONG_WALK = 25_000
+
+
+def corner_angle(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Angle (radians) at corner ``k`` of triangles ``t`` (2D or 3D points)."""
+    p, q, r = pts[tri[t, k]], pts[tri[t, (k + 1) % 3]], pts[tri[t, (k + 2) % 3]]
+    u, v = q - p, r - p
+    if pts.shape[1] == 2:
+        cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    else:
+        cross = np.linalg.norm(np.cross(u, v), axis=1)
+    return np.arctan2(cross, (u * v).sum(axis=1))
+
+
+def lone_join_bound(t_corner: np.ndarray, u_opp: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """What any join can keep at best at a triangle the cover leaves off alone (every
+    neighbour covered), radians, per row: a join over edge ``k`` (a swap, or a split
+    with its point anywhere in the quadrilateral) divides the two corners opposite it,
+    the triangle's (``t_corner[:, k + 2]``) and the neighbour's (``u_opp[:, k]``), so one
+    of its angles is at most half the smaller; a bridge splits the triangle at its
+    incenter, halving every corner. ``t_corner`` (r, 3): the triangle's corners;
+    ``u_opp`` (r, 3): the neighbour's corner opposite each edge (any value where
+    ``inner`` (r, 3) is False: a boundary edge, no join over it). Shared by sparse
+    mode's report (``sparse.join_bounds``) and the comb cover's choice of where to
+    grow (``comb_cover.lone_join_bounds``)."""
+    t_opp = t_corner[:, [2, 0, 1]]  # the corner opposite edge k (from corner k to k + 1) is k + 2
+    per_edge = np.where(inner, 0.5 * np.minimum(t_opp, u_opp), 0.0)
+    return np.maximum(per_edge.max(axis=1), 0.5 * t_corner.min(axis=1))
 
 
 class JoinRule(NamedTuple):

@@ -69,7 +69,8 @@ from hammesh.postprocess.conform import split_segments
 from hammesh.postprocess import _improve_kernels as _ik
 from hammesh.postprocess import _join_kernels as _j
 from hammesh.postprocess import _sparse_kernels as _k
-from hammesh.postprocess.cycle_cover import CycleCover, JoinRule, cycle_cover, cycle_ids_by_halves, join_classes
+from hammesh.postprocess.cycle_cover import (CycleCover, JoinRule, corner_angle, cycle_cover, cycle_ids_by_halves,
+                                            join_classes, lone_join_bound)
 from hammesh.postprocess.comb_cover import comb_cover
 from hammesh.postprocess.sparse_cells import fishbone_cells, join_classes as fish_classes
 from hammesh.halfedge import HalfEdges
@@ -1325,17 +1326,6 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
     return (pts2, tri2, tw2, con2, cover2, amin2, orig2, fan2), applied
 
 
-def _corner_at(pts: np.ndarray, tri: np.ndarray, t: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Angle (radians) at corner ``k`` of triangles ``t`` (2D or 3D points)."""
-    p, q, r = pts[tri[t, k]], pts[tri[t, (k + 1) % 3]], pts[tri[t, (k + 2) % 3]]
-    u, v = q - p, r - p
-    if pts.shape[1] == 2:
-        cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
-    else:
-        cross = np.linalg.norm(np.cross(u, v), axis=1)
-    return np.arctan2(cross, (u * v).sum(axis=1))
-
-
 def corner_bound(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray) -> float:
     """Half the smallest boundary corner: no Hamiltonian triangulation of the domain does better.
 
@@ -1361,7 +1351,7 @@ def corner_bound(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray) ->
         if not len(idx):
             break
         t, k = cur_t[idx], cur_k[idx]
-        theta[idx] += _corner_at(pts, tri, t, k)
+        theta[idx] += corner_angle(pts, tri, t, k)
         g = twin[3 * t + k]  # the edge leaving b in t, seen from the next triangle
         go = g >= 0
         idx, g = idx[go], g[go]
@@ -1398,13 +1388,10 @@ def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cyc
     if not len(unc):
         return unc, np.zeros(0), np.zeros(0, np.bool_)
     ks = np.arange(3)
-    t_corner = np.stack([_corner_at(pts, tri, unc, np.full(len(unc), k)) for k in ks], axis=1)
+    t_corner = np.stack([corner_angle(pts, tri, unc, np.full(len(unc), k)) for k in ks], axis=1)
     gg = np.where(inner, g, 0)
-    u_opp = _corner_at(pts, tri, (gg // 3).ravel(), ((gg % 3 + 2) % 3).ravel()).reshape(gg.shape)
-    t_opp = t_corner[:, [2, 0, 1]]  # the corner opposite edge k (from corner k to k + 1) is k + 2
-    per_edge = np.where(inner, 0.5 * np.minimum(t_opp, u_opp), 0.0)
-    bound = np.maximum(per_edge.max(axis=1), 0.5 * t_corner.min(axis=1))
-    return unc, bound, ~inner.all(axis=1)
+    u_opp = corner_angle(pts, tri, (gg // 3).ravel(), ((gg % 3 + 2) % 3).ravel()).reshape(gg.shape)
+    return unc, lone_join_bound(t_corner, u_opp, inner), ~inner.all(axis=1)
 
 
 class PlanSteps(NamedTuple):
