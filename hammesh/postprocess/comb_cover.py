@@ -384,7 +384,7 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
                          min_cell: int = 1024, penalty: float = 0.0, max_defer: int = 0,
                          levels: int = 0, fill: str = "grow", pitch: float = 0.02,
                          ring: VertexRing | None = None, first: np.ndarray | None = None,
-                         weight: np.ndarray | None = None) -> np.ndarray:
+                         weight: np.ndarray | None = None, maps: VertexMaps | None = None) -> np.ndarray:
     """(n,) bool: an induced vertex tree in session 11's fishbone cells made on the
     vertices (``partition_trees.fishbone_labels``; no gap joins round holes). A level's
     spine is the path of vertices just below its cell's median line (each with a
@@ -405,12 +405,13 @@ def vertex_fishbone_tree(points: np.ndarray, tri: np.ndarray, twin: np.ndarray, 
     sector after sector, with no strip along the hole to come back by. Not an induced
     tree then: one cycle round the hole (the hole is no triangle), and each hanging
     vertex next to two hole vertices leaves their triangle monochrome (about
-    ``SECTORS`` triangles uncovered)."""
+    ``SECTORS`` triangles uncovered). ``maps``: :func:`vertex_maps` of ``tri`` if the
+    caller made them already."""
     if fill not in ("grow", "comb"):
         raise InvalidOptionError(f"fill must be 'grow' or 'comb', not {fill!r}")
     n = len(points)
     tri = np.ascontiguousarray(tri, dtype=np.int64)
-    ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n)
+    ptr, idx, vt_ptr, vt_idx = vertex_maps(tri, n) if maps is None else maps  # (the caller's, if made)
     src = np.repeat(np.arange(n), np.diff(ptr))
     keep = src < idx
     a, b = src[keep], idx[keep]
@@ -861,13 +862,14 @@ def comb_cover(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, axis
         corners = triangle_corners(pts0, tri)
         bad = lone_join_bounds(pts0, tri, tw, corners) < keep * corners.min()
     first = rim_apexes(tri, tw, n, bad) if bad is not None else None
+    maps = vertex_maps(tri, n)  # (once: the growth's and the mending's)
     inside = vertex_fishbone_tree(pts, tri, tw, int(axis), penalty=penalty, max_defer=max_defer, levels=levels,
-                                  fill="comb", pitch=pitch, ring=ring, first=first)
+                                  fill="comb", pitch=pitch, ring=ring, first=first, maps=maps)
     if mend > 0 and n:
         bnd = boundary_vertices(tri, tw, n)
         fixed = ring.hole if ring is not None else np.zeros(n, np.bool_)
         weight = np.where(bad, BAD_WEIGHT, 1.0) if bad is not None else np.ones(len(tri))
-        mend_tree(inside, vertex_maps(tri, n), tri, bnd & ~fixed, fixed, weight, MEND_REACH, int(mend), MEND_SHORT)
+        mend_tree(inside, maps, tri, bnd & ~fixed, fixed, weight, MEND_REACH, int(mend), MEND_SHORT)
     is_cov = cover_of(tri, tw, inside.astype(np.int8))
     cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
     return CycleCover(is_cov=is_cov, cycle=cyc, n_cycles=int(n_cyc), n_uncovered=int((cyc < 0).sum()),
