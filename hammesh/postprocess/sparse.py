@@ -1970,6 +1970,7 @@ def sparse_cycles(
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
     cos_fold = math.cos(math.radians(max_fold_deg)) if max_fold_deg < 180 else -2.0
     fish = None  # (tree="fishbone": sparse_cells' cells and classes)
+    combed = False  # (tree="comb": the comb's cover taken)
     if use_cover:
         # edges whose join (swap or midpoint split) keeps the rule: the cover's
         # matching prefers them as its non-cover edges, where cycles get joined.
@@ -2002,9 +2003,13 @@ def sparse_cycles(
         # (the matching's and the re-colouring's judge)
         rule = JoinRule(amin_t, float(keep), hi, con, bool(swaps), bool(edge_splits),
                         corners) if pts.shape[1] == 2 else None
+        cover = None
         if tree == "comb" and pts.shape[1] == 2:  # (issue 14: ``comb_cover``, docs/partition.md)
             cover = comb_cover(pts, tri, tw)
-        else:
+            if not cover.is_cov.any():  # no interior vertex, no vertex tree (a ring one
+                cover = None  # triangle wide): the free cover, which may still find a cycle
+        combed = cover is not None
+        if cover is None:
             cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
                                 cells=None if fish is None else fish.cell, judge=rule is not None)
         rule = corners = None  # (the corner angles' pages given back: only the cover reads them)
@@ -2038,7 +2043,7 @@ def sparse_cycles(
     n_ring = n_reroute = 0
     if use_cover and fans and pts.shape[1] == 2 and cover.n_uncovered:  # (every size: session 10)
         cover, n_reroute = _reroute(pts, tri, tw, con, cover, is_fan, amin_p, keep * min_angle, hi, 2.0 * floor,
-                                    0 if tree == "comb" else None)  # (they would splice the comb's cycle)
+                                    0 if combed else None)  # (they would splice the comb's cycle)
         pts, tri, tw, con, cover, amin_p, orig_of, is_fan, n_ring = _ring_fans(
             pts, tri, tw, con, cover, amin_p, orig_of, is_fan, keep * min_angle, hi, 2.0 * floor
         )

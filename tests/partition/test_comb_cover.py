@@ -129,6 +129,23 @@ def test_comb_without_an_interior_vertex_is_certified(outline) -> None:
     assert h.report["verified"] and len(h.components) == 1
 
 
+def test_comb_without_an_interior_vertex_takes_the_free_cover() -> None:
+    """A ring one triangle wide has no interior vertex, so no vertex tree, but its dual
+    is a cycle: ``tree="comb"`` gives what the free cover gives (no Steiner point),
+    not one incenter per triangle."""
+    a = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    circ = np.c_[np.cos(a), np.sin(a)]
+    mesh = hammesh.quality_mesh(hammesh.Domain.from_polygon(circ, holes=[0.97 * circ]), min_angle=25)
+    tri = np.ascontiguousarray(mesh.triangles, dtype=np.int64)
+    twin = half_edges(tri, mesh.n_points).twin
+    assert not comb.comb_cover(mesh.points, tri, twin).is_cov.any()  # (the case: no tree)
+    free = hammesh.hamiltonian(mesh)
+    h = hammesh.hamiltonian(mesh, tree="comb")
+    assert h.report["verified"] and len(h.components) == 1
+    assert h.report["steiner_points"] == free.report["steiner_points"]
+    np.testing.assert_array_equal(h.triangles, free.triangles)
+
+
 def _annulus(r_hole: float, area: float, offset: tuple[float, float] = (0.0, 0.0), teeth: bool = False,
              sides: int = 48) -> hammesh.Mesh:
     """A disc (or session 13's 12-tooth gear) round a round hole."""
