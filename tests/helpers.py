@@ -232,3 +232,33 @@ def plate(n_loops: int, pieces: int, max_area: float = 0.004) -> hammesh.Mesh:
     holes = [[2.0 * p - 0.5, 0.5] for p in range(1, pieces)]
     dom = hammesh.Domain(vertices=v, segments=segs, holes=holes or None)
     return hammesh.quality_mesh(dom, min_angle=30, max_area=max_area)
+
+
+_BUNDLED_COVERS: dict = {}
+
+
+def bundled_cover(name: str, area: float):
+    """``(triangles, twin, cycle_cover(...))`` of a q30 mesh of Triangle's bundled domain
+    ``name`` with ``max_area=area`` (made once per process: the walk and plan tests share it)."""
+    if (name, area) not in _BUNDLED_COVERS:
+        from hammesh.halfedge import prepare_mesh
+        from hammesh.postprocess.cycle_cover import cycle_cover
+
+        m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=area)
+        clean, he, _ = prepare_mesh(m)
+        _BUNDLED_COVERS[name, area] = clean.triangles, he.twin, cycle_cover(clean.triangles, he.twin)
+    return _BUNDLED_COVERS[name, area]
+
+
+def blob(tw: np.ndarray, rng: np.random.Generator, start: int, size: int) -> tuple[list, set]:
+    """A breadth-first blob of at most ``size`` triangles from ``start`` over the
+    half-edge twins ``tw``, neighbours in ``rng``'s order (what the swap tests group):
+    its triangles in the order reached, and them as a set."""
+    group, seen = [start], {start}
+    for x in group:
+        for k in rng.permutation(3).tolist():
+            g = tw[3 * x + k]
+            if g >= 0 and g // 3 not in seen and len(group) < size:
+                seen.add(g // 3)
+                group.append(g // 3)
+    return group, seen

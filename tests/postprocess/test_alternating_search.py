@@ -18,7 +18,7 @@ import hammesh
 from hammesh.halfedge import prepare_mesh
 from hammesh.postprocess import _join_kernels as J
 from hammesh.postprocess.cycle_cover import cycle_cover
-from tests.helpers import bundled_domain
+from tests.helpers import blob, bundled_domain
 
 
 def _plain_search(twin, is_cov, blocked, h0, depth, max_cycles, budget=10**9):
@@ -155,13 +155,7 @@ def test_positions_pair_links_as_the_walks_do(name, area, seed, size) -> None:
     # a random group: a breadth-first blob of ``size`` triangles
     rng = np.random.default_rng(seed)
     start = int(rng.choice(np.flatnonzero(on)))
-    group, seen = [start], {start}
-    for x in group:
-        for k in rng.permutation(3).tolist():
-            g = tw[3 * x + k]
-            if g >= 0 and g // 3 not in seen and len(group) < size:
-                seen.add(g // 3)
-                group.append(g // 3)
+    group, seen = blob(tw, rng, start, size)
     links = [3 * x + k for x in group for k in range(3)
              if is_cov[3 * x + k] and tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in seen]
     by_cycle: dict = {}

@@ -15,20 +15,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import hammesh
-from hammesh.halfedge import prepare_mesh
 from hammesh.postprocess import _sparse_kernels as sk
-from hammesh.postprocess.cycle_cover import cycle_cover
-from tests.helpers import bundled_domain
+from tests.helpers import bundled_cover
 
-_MESHES: dict = {}
-
-
-def _cover(name: str, area: float):
-    if (name, area) not in _MESHES:
-        m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=area)
-        clean, he, _ = prepare_mesh(m)
-        _MESHES[name, area] = clean.triangles, he.twin, cycle_cover(clean.triangles, he.twin)
-    return _MESHES[name, area]
 
 
 def _crossing_by_a_pass(tw, cyc) -> list:
@@ -46,7 +35,7 @@ def _crossing_by_a_pass(tw, cyc) -> list:
     relabel=st.booleans(),
 )
 def test_crossing_half_edges_are_the_passs(name, seed, off, relabel) -> None:
-    tri, tw, cover = _cover(name, 0.5)
+    tri, tw, cover = bundled_cover(name, 0.5)
     rng = np.random.default_rng(seed)
     cyc = cover.cycle.copy()
     if relabel:  # (any labelling: few cycles, so neighbours often share one)
@@ -64,7 +53,7 @@ def test_plan_does_not_depend_on_the_crossing_order(name) -> None:
     # the plan from the crossing half-edges ascending (the pass's order) and shuffled:
     # the same statuses, slots, joins and counts (the bridges' stages take the edges
     # Kruskal left apart in ascending order either way)
-    tri, tw, cover = _cover(name, 0.5)
+    tri, tw, cover = bundled_cover(name, 0.5)
     rng = np.random.default_rng(7)
     bridges = 0
     for off in (0.0, 0.02, 0.3):
@@ -132,7 +121,7 @@ def test_plan_merges_threaded_is_the_serial_kernels(name, seed, off, share) -> N
     # plan_merges on a big mesh finds the pieces on another core beside Kruskal's
     # joins (whose candidates' rows it asks for ahead): the same plan as the serial
     # kernel, and Kruskal's joins those of a plain Python pass
-    tri, tw, cover = _cover(name, 0.5)
+    tri, tw, cover = bundled_cover(name, 0.5)
     rng = np.random.default_rng(seed)
     cyc = cover.cycle.copy()
     cyc[rng.random(len(cyc)) < off] = -1

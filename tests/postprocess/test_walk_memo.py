@@ -16,20 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import hammesh
-from hammesh.halfedge import prepare_mesh
 from hammesh.postprocess import _join_kernels as J
-from hammesh.postprocess.cycle_cover import cycle_cover
-from tests.helpers import bundled_domain
+from tests.helpers import blob, bundled_cover, bundled_domain
 
-_MESHES: dict = {}
-
-
-def _cover(name: str, area: float):
-    if (name, area) not in _MESHES:
-        m = hammesh.quality_mesh(bundled_domain(name), min_angle=30, max_area=area)
-        clean, he, _ = prepare_mesh(m)
-        _MESHES[name, area] = clean.triangles, he.twin, cycle_cover(clean.triangles, he.twin)
-    return _MESHES[name, area]
 
 
 def _link_sets(tw, is_cov, cyc, rng, n_groups: int, size: int) -> list:
@@ -40,13 +29,7 @@ def _link_sets(tw, is_cov, cyc, rng, n_groups: int, size: int) -> list:
     sets = []
     for _ in range(n_groups):
         start = int(rng.choice(on)) if len(on) else int(rng.integers(m))
-        group, seen = [start], {start}
-        for x in group:
-            for k in rng.permutation(3).tolist():
-                g = tw[3 * x + k]
-                if g >= 0 and g // 3 not in seen and len(group) < size:
-                    seen.add(g // 3)
-                    group.append(g // 3)
+        group, seen = blob(tw, rng, start, size)
         links = [3 * x + k for x in group for k in range(3)
                  if is_cov[3 * x + k] and tw[3 * x + k] >= 0 and tw[3 * x + k] // 3 not in seen]
         by_cycle: dict = {}
@@ -88,7 +71,7 @@ def test_memo_keeps_long_walks_as_walked(seed, steps) -> None:
 
 
 def _check(name, area, seed, size, rows, steps, flip) -> None:
-    tri, tw, cover = _cover(name, area)
+    tri, tw, cover = bundled_cover(name, area)
     rng = np.random.default_rng(seed)
     is_cov = cover.is_cov.copy()
     if flip:  # (not a cover any more: walks end off it, or loop without meeting a link)
@@ -123,7 +106,7 @@ def _check(name, area, seed, size, rows, steps, flip) -> None:
 
 
 def test_memo_cleared_forgets_every_walk() -> None:
-    tri, tw, cover = _cover("face", 0.5)
+    tri, tw, cover = bundled_cover("face", 0.5)
     rng = np.random.default_rng(1)
     sets = _link_sets(tw, cover.is_cov, cover.cycle, rng, 8, 30)
     memo = J.new_walk_memo()
