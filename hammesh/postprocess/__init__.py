@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from hammesh import pages, params, threads
+from hammesh import idle, pages, params, threads
 from hammesh.domain.resolution import check_resolution, check_rounding, snap_steiner_points
 from hammesh.errors import InvalidDomainError, InvalidMeshError, InvalidOptionError, VerificationError
 from hammesh.mesh import HamiltonianMesh, Mesh, output_vertex_markers
@@ -61,6 +61,11 @@ RESERVE_TAKEN = {"incircle": 288, "sparse": 400}
 RESERVE_AFTER_COVER = 173
 #: triangles below which sparse mode makes no reserve of its own (few pages to fault)
 SIDE_RESERVE_MIN_TRIANGLES = 200_000
+#: sparse mode's certificate looks at the input on a thread of the lowest priority
+#: (:mod:`hammesh.idle`, Linux): it takes only what the construction leaves of the
+#: cores, instead of a third of two of them where the construction runs two threads
+#: (session 23; off: the side executor's thread, as incircle mode)
+LOOK_ON_IDLE_CORE = True
 
 
 _loaded = threading.Lock()
@@ -238,12 +243,14 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         # validation and the passes before the cover use both)
         facts = []
 
-        def start_facts() -> None:
+        def start_facts(on_idle: bool = False) -> None:
             if not facts:
-                facts.append(side.submit(input_facts, mesh))
+                on_idle = on_idle and LOOK_ON_IDLE_CORE and idle.available() and not isinstance(
+                    side, threads.InlineExecutor)
+                facts.append(idle.on_idle_core(input_facts, mesh) if on_idle else side.submit(input_facts, mesh))
 
         def beside_cover() -> None:  # (sparse: the other core is mostly idle during the cover)
-            start_facts()
+            start_facts(on_idle=True)
             m = shape[0] if len(shape) == 2 else 0
             if m >= SIDE_RESERVE_MIN_TRIANGLES and not pages.reserved() and not isinstance(
                 side, threads.InlineExecutor

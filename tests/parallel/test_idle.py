@@ -1,0 +1,127 @@
+"""hammesh.idle: work on a thread of the lowest priority, taken over by a caller that cannot wait."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import hammesh
+from hammesh import idle
+from tests.helpers import bundled_domain, hull_area
+
+pytestmark = pytest.mark.skipif(not idle.available(), reason="a thread's own nice value is Linux semantics")
+
+
+def _own_nice() -> int:
+    return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+
+
+def _may_raise_priority() -> bool:
+    """Whether this process may give a thread back a higher priority (privileged)."""
+    out = []
+
+    def probe() -> None:
+        tid = threading.get_native_id()
+        nice = os.getpriority(os.PRIO_PROCESS, tid)
+        if nice >= idle.IDLE_NICE:
+            out.append(False)
+            return
+        os.setpriority(os.PRIO_PROCESS, tid, idle.IDLE_NICE)
+        try:
+            os.setpriority(os.PRIO_PROCESS, tid, nice)
+            out.append(True)
+        except OSError:
+            out.append(False)
+
+    t = threading.Thread(target=probe)
+    t.start()
+    t.join()
+    return out[0]
+
+
+def test_the_work_runs_at_the_lowest_priority_and_leaves_the_caller_as_it_was() -> None:
+    before = _own_nice()
+    task = idle.on_idle_core(_own_nice)
+    while not task.done():
+        time.sleep(0.001)
+    assert task.result() == max(before, idle.IDLE_NICE)
+    assert task.made_by == "idle"
+    assert _own_nice() == before  # (the caller's thread is not the one lowered)
+
+
+def test_an_exception_of_the_work_is_raised_in_the_caller() -> None:
+    def fails(x: int) -> int:
+        raise ValueError(f"bad {x}")
+
+    task = idle.on_idle_core(fails, 7)
+    with pytest.raises(ValueError, match="bad 7"):
+        task.result()
+
+
+def _blocked_on_the_idle_thread(release: threading.Event, started: threading.Event | None = None):
+    def work(x: int) -> str:
+        if threading.current_thread().name == "hammesh-idle":
+            if started is not None:
+                started.set()
+            release.wait(10)  # (a thread that gets no core: starved by other processes)
+            return f"thread {x}"
+        return f"caller {x}"
+
+    return work
+
+
+def test_a_caller_that_cannot_raise_the_thread_back_takes_the_work_over(monkeypatch) -> None:
+    real = os.setpriority
+
+    def unprivileged(which: int, who: int, prio: int) -> None:  # (no thread's priority goes up)
+        if prio < os.getpriority(which, who):
+            raise PermissionError(13, "Permission denied")
+        real(which, who, prio)
+
+    monkeypatch.setattr(os, "setpriority", unprivileged)
+    release = threading.Event()
+    task = idle.on_idle_core(_blocked_on_the_idle_thread(release), 3)
+    t = time.perf_counter()
+    try:
+        assert task.result() == "caller 3"
+        assert task.made_by == "caller"
+        assert time.perf_counter() - t >= idle.TAKEOVER_GRACE
+        assert not task.done()
+    finally:
+        release.set()
+
+
+@pytest.mark.skipif(not _may_raise_priority(), reason="this process may not raise a thread's priority")
+def test_a_privileged_caller_raises_the_thread_back_and_waits_for_it() -> None:
+    release, started = threading.Event(), threading.Event()
+    task = idle.on_idle_core(_blocked_on_the_idle_thread(release, started), 5)
+    assert started.wait(10)  # (its priority lowered before the work starts)
+    timer = threading.Timer(2 * idle.TAKEOVER_GRACE, release.set)
+    timer.start()
+    assert task.result() == "thread 5"  # (it waited past the grace: it did not take over)
+    assert task.made_by == "raised"
+    timer.join()
+
+
+def test_sparse_mode_takes_its_certificates_look_from_the_idle_core(monkeypatch) -> None:
+    made = []
+    real = idle.on_idle_core
+
+    def spy(fn, *args):
+        task = real(fn, *args)
+        made.append((fn, args, task))
+        return task
+
+    monkeypatch.setattr(idle, "on_idle_core", spy)
+    dom = bundled_domain("face")
+    mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 2000)
+    h = hammesh.hamiltonian(mesh, mode="sparse")
+    assert h.report["verified"]
+    ours = [(fn, task) for fn, args, task in made if args[0] is mesh]  # (not the kernel loading's)
+    assert [fn.__qualname__ for fn, _ in ours] == ["input_facts"]
+    assert ours[0][1].made_by in ("idle", "raised", "caller")
+    assert list(h.components) == [len(h.triangles)]  # (one cycle: the rows in walk order)
