@@ -107,8 +107,23 @@ def input_facts(mesh: Mesh) -> InputFacts:
         _bad_input(f"triangle {t} {tri[t].tolist()} is degenerate (exact orientation test)")
     if not (np.isfinite(scan.min_angle) and np.isfinite(scan.total_area)):
         _bad_input("angles and areas are not finite (coordinates too large or too small)")
+    # the constrained edges are looked up in the matching's buckets (no pass of their
+    # own); a bad segment array is named after the rows' faults, as before
+    segs = np.asarray(mesh.segments)
+    segs = np.zeros((0, 2), dtype=np.int64) if segs.size == 0 else segs
+    seg_fault = None
+    if segs.ndim != 2 or segs.shape[1] != 2 or not np.issubdtype(segs.dtype, np.integer):
+        seg_fault = f"segments have shape {segs.shape}, not (s, 2) integers"
+    else:
+        segs = np.ascontiguousarray(segs, dtype=np.int64)
+        if len(segs) and (segs.min() < 0 or segs.max() >= n):
+            s = int(np.argmax(((segs < 0) | (segs >= n)).any(axis=1)))
+            seg_fault = f"segment {s} {segs[s].tolist()} references a vertex outside 0..{n - 1}"
+    seg_keys = undirected_keys(segs, n) if seg_fault is None else np.zeros(0, np.int64)
+    want = np.unique(seg_keys)
+    found = np.zeros(len(want), np.bool_)
     keys = fresh(3 * m, np.int32 if 2 * n + 1 < 2**31 else np.int64)
-    boundary, ok = _kernels.input_boundary_into(tri, flip, start, keys)
+    boundary, ok = _kernels.input_boundary_into(tri, flip, start, keys, want, found)
     del keys
     if not ok:  # name the edge: the rows counter-clockwise, paired with half-edge names
         ccw = tri.copy()
@@ -119,18 +134,10 @@ def input_facts(mesh: Mesh) -> InputFacts:
             f"edge ({ccw[t, k]}, {ccw[t, (k + 1) % 3]}) of triangle {t} is shared by more than two "
             "triangles or by two on the same side (non-manifold edge or overlap)"
         )
-    segs = np.asarray(mesh.segments)
-    segs = np.zeros((0, 2), dtype=np.int64) if segs.size == 0 else segs
-    if segs.ndim != 2 or segs.shape[1] != 2 or not np.issubdtype(segs.dtype, np.integer):
-        _bad_input(f"segments have shape {segs.shape}, not (s, 2) integers")
-    segs = np.ascontiguousarray(segs, dtype=np.int64)
+    if seg_fault is not None:
+        _bad_input(seg_fault)
     if len(segs):
-        if segs.min() < 0 or segs.max() >= n:
-            s = int(np.argmax(((segs < 0) | (segs >= n)).any(axis=1)))
-            _bad_input(f"segment {s} {segs[s].tolist()} references a vertex outside 0..{n - 1}")
-        keys = undirected_keys(segs, n)
-        want = np.unique(keys)
-        found = _kernels.find_edges(tri, n, want)[np.searchsorted(want, keys)]  # undirected
+        found = found[np.searchsorted(want, seg_keys)]  # (undirected)
         if not found.all():
             s = int(np.argmin(found))
             _bad_input(f"segment {s} {segs[s].tolist()} is not an edge of the mesh")

@@ -200,14 +200,42 @@ def test_input_boundary_equals_a_dictionary_of_edges(seed: int, key_dtype) -> No
     scan = _kernels.scan_input_into(pts, given_rows, seen, used, start)
     np.testing.assert_array_equal(seen, flip)
     assert scan.n_flipped == flip.sum() and scan.bad < 0 and scan.bad_index < 0
-    got, ok = _kernels.input_boundary_into(given_rows, seen, start, np.empty(3 * len(ccw), key_dtype))
+    # constrained edges asked for: some edges of the mesh (the fan's centre's among
+    # them), and pairs of vertices that are not an edge
+    edges = {(min(a, b), max(a, b)) for row in ccw.tolist() for a, b in zip(row, row[1:] + row[:1])}
+    pairs = list(edges)[: int(rng.integers(0, len(edges)))] + [(0, 1), (0, k // 2), (1, k + 1), (2, 2)]
+    want = np.unique([a * n + b for a, b in pairs]).astype(np.int64)
+    found = np.zeros(len(want), bool)
+    got, ok = _kernels.input_boundary_into(given_rows, seen, start, np.empty(3 * len(ccw), key_dtype), want, found)
     assert ok
     np.testing.assert_array_equal(np.sort(got), boundary_by_dict(ccw))
+    np.testing.assert_array_equal(found, [divmod(int(w), n) in edges for w in want])
 
 
 @pytest.mark.parametrize("tri", BAD_EDGES)
 def test_input_boundary_refuses_a_bad_edge(tri) -> None:
     tri = np.array(tri, np.int64)
     start = np.r_[0, np.bincount(np.minimum(tri, np.roll(tri, -1, axis=1)).ravel(), minlength=5)].astype(np.int64)
-    _, ok = _kernels.input_boundary_into(tri, np.zeros(len(tri), bool), start, np.empty(tri.size, np.int32))
+    none = np.zeros(0, np.int64)
+    _, ok = _kernels.input_boundary_into(tri, np.zeros(len(tri), bool), start, np.empty(tri.size, np.int32), none,
+                                         np.zeros(0, bool))
     assert not ok
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_constrained_edges_are_found_either_way_round(seed: int) -> None:
+    """Every edge of a mesh, named in either direction and in any order, is a
+    constrained edge the certificate finds; a pair of vertices that is no edge is named."""
+    rng = np.random.default_rng(seed)
+    m = grid_mesh(int(rng.integers(2, 6)), int(rng.integers(1, 6)))
+    tri = np.asarray(m.triangles, np.int64)
+    e = np.r_[tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]
+    e = e[rng.permutation(len(e))][: int(rng.integers(1, len(e) + 1))]
+    e = np.where(rng.random((len(e), 1)) < 0.5, e, e[:, ::-1])
+    f = input_facts(hammesh.Mesh(points=m.points, triangles=tri, segments=e))
+    np.testing.assert_array_equal(f.segments, e)
+    n = len(m.points)
+    far = np.array([[0, n - 1]])  # opposite corners of the grid: never an edge
+    with pytest.raises(hammesh.VerificationError, match=f"segment {len(e)} \\[0, {n - 1}\\] is not an edge"):
+        input_facts(hammesh.Mesh(points=m.points, triangles=tri, segments=np.r_[e, far]))
