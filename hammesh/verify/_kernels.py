@@ -24,6 +24,11 @@ __all__ = [
     "InputScan",
     "scan_input_into",
     "input_boundary_into",
+    "match_small_bucket",
+    "match_sorted_bucket",
+    "bucket_has",
+    "put_boundary_edge",
+    "SMALL_BUCKET",
     "find_edges",
     "hull_chain",
     "sort_range",
@@ -694,6 +699,76 @@ def scan_input_into(points, tri, flip, used, start):
     return InputScan(bad_index, bad, n_flipped, np.arcsin(np.sqrt(min(max(best_s2, 0.0), 1.0))), total)
 
 
+#: buckets of at most this many keys are matched by counting (:func:`match_small_bucket`)
+SMALL_BUCKET = 24
+
+
+@njit(cache=True, nogil=True)
+def put_boundary_edge(out, nb, v, key):
+    """Append bucket ``v``'s half-edge ``key`` as a directed edge key ``x * 2**32 + y``."""
+    o = key >> 1
+    if key & 1:  # runs from o down to v
+        out[nb] = np.int64(o) * KEY_SHIFT + v
+    else:
+        out[nb] = np.int64(v) * KEY_SHIFT + o
+    return nb + 1
+
+
+@njit(cache=True, nogil=True)
+def match_small_bucket(keys, s0, s1, v, out, nb):
+    """Match the halves in ``keys[s0:s1]`` (vertex ``v``'s bucket) by counting.
+
+    For each key: how often it occurs (once, or an edge is used twice in one
+    direction) and how often its reverse ``key ^ 1`` does (at most once, or three
+    triangles share the edge); one with no reverse is a boundary edge, appended to
+    ``out``. Quadratic in the bucket, but without the unpredictable branches of a
+    sort: at 1.5 M triangles (buckets of 0-18 keys) 34 ms where the insertion sort
+    and scan took 45 (session 23). Returns ``(nb, ok)``.
+    """
+    ok = True
+    for i in range(s0, s1):
+        ki = keys[i]
+        kp = ki ^ 1
+        same = 0
+        back = 0
+        for j in range(s0, s1):
+            same += keys[j] == ki
+            back += keys[j] == kp
+        if same != 1 or back > 1:
+            ok = False
+        elif back == 0:
+            nb = put_boundary_edge(out, nb, v, ki)
+    return nb, ok
+
+
+@njit(cache=True, nogil=True)
+def match_sorted_bucket(keys, s0, s1, v, out, nb):
+    """Match the halves in the sorted ``keys[s0:s1]``: an edge's halves are neighbours.
+    Returns ``(nb, ok)`` as :func:`match_small_bucket`."""
+    ok = True
+    i = s0
+    while i < s1:
+        o = keys[i] >> 1
+        j = i + 1
+        while j < s1 and keys[j] >> 1 == o:
+            j += 1
+        if j - i == 1:  # one half: a boundary edge
+            nb = put_boundary_edge(out, nb, v, keys[i])
+        elif j - i != 2 or keys[i] & 1 == keys[i + 1] & 1:
+            ok = False
+        i = j
+    return nb, ok
+
+
+@njit(cache=True, nogil=True)
+def bucket_has(keys, s0, s1, hi):
+    """Whether vertex ``v``'s bucket ``keys[s0:s1]`` holds a half of edge ``(v, hi)``."""
+    for j in range(s0, s1):
+        if keys[j] >> 1 == hi:
+            return True
+    return False
+
+
 @njit(cache=True, nogil=True)
 def input_boundary_into(tri, flip, start, keys, want, found):
     """The input's directed boundary edges, by the certificate's own bucket matching.
@@ -702,9 +777,10 @@ def input_boundary_into(tri, flip, start, keys, want, found):
     its bucket sizes (``start[v + 1]``: edges whose lower vertex is ``v``) and is
     consumed. Each half-edge ``x -> y`` goes into the bucket of ``min(x, y)`` as the
     key ``2 max(x, y) + (x > y)`` (``keys``: ``3 m`` entries, int32 when ``2 n`` fits);
-    each bucket is sorted (insertion sort; :func:`sort_range` for a high-degree vertex), so an
-    edge's halves are neighbours: one half alone is a boundary edge, one each way a
-    pair, anything else an edge used twice in one direction or by three triangles.
+    in each bucket an edge's halves are matched (:func:`match_small_bucket`; a
+    high-degree vertex's bucket is sorted, :func:`match_sorted_bucket`): one half
+    alone is a boundary edge, one each way a pair, anything else an edge used twice in
+    one direction or by three triangles.
     The halves' identities are not needed (no twin array): the boundary edge comes
     back from its bucket and key.
 
@@ -713,7 +789,7 @@ def input_boundary_into(tri, flip, start, keys, want, found):
 
     ``want`` holds sorted undirected keys ``lo * n + hi`` (``n`` = ``start.shape[0] - 1``,
     ``lo < hi``: the constrained edges) and ``found[i]`` is set where the mesh has edge
-    ``want[i]``: each is looked up in its lower vertex's sorted bucket, so the
+    ``want[i]``: each is looked up in its lower vertex's bucket, so the
     constrained edges cost no pass over the rows of their own (:func:`find_edges`
     is that pass: 9 ms at 1.5 M triangles, session 23).
 
@@ -759,39 +835,15 @@ def input_boundary_into(tri, flip, start, keys, want, found):
     w = 0  # the next wanted edge
     for v in range(nv):
         s1 = start[v]
-        at = s0  # (the bucket's keys below a wanted edge's, passed)
-        if s1 - s0 > 24:  # a high-degree vertex
+        if s1 - s0 > SMALL_BUCKET:  # a high-degree vertex
             sort_range(keys, s0, s1)
+            nb, fine = match_sorted_bucket(keys, s0, s1, v, out, nb)
         else:
-            for i in range(s0 + 1, s1):  # insertion sort
-                kv = keys[i]
-                j = i
-                while j > s0 and keys[j - 1] > kv:
-                    keys[j] = keys[j - 1]
-                    j -= 1
-                keys[j] = kv
-        while w < want.shape[0] and want[w] // nv == v:  # (the constrained edges at v, by hi)
-            hi = want[w] - v * nv
-            while at < s1 and keys[at] >> 1 < hi:
-                at += 1
-            if at < s1 and keys[at] >> 1 == hi:
-                found[w] = True
+            nb, fine = match_small_bucket(keys, s0, s1, v, out, nb)
+        ok = ok and fine
+        while w < want.shape[0] and want[w] // nv == v:  # (the constrained edges at v)
+            found[w] = bucket_has(keys, s0, s1, want[w] - v * nv)
             w += 1
-        i = s0
-        while i < s1:
-            o = keys[i] >> 1
-            j = i + 1
-            while j < s1 and keys[j] >> 1 == o:
-                j += 1
-            if j - i == 1:  # one half: a boundary edge
-                if keys[i] & 1:  # runs from o down to v
-                    out[nb] = np.int64(o) * KEY_SHIFT + v
-                else:
-                    out[nb] = np.int64(v) * KEY_SHIFT + o
-                nb += 1
-            elif j - i != 2 or keys[i] & 1 == keys[i + 1] & 1:
-                ok = False
-            i = j
         s0 = s1
     return out[:nb].copy(), ok
 
