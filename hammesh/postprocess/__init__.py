@@ -61,11 +61,11 @@ RESERVE_TAKEN = {"incircle": 288, "sparse": 400}
 RESERVE_AFTER_COVER = 173
 #: triangles below which sparse mode makes no reserve of its own (few pages to fault)
 SIDE_RESERVE_MIN_TRIANGLES = 200_000
-#: sparse mode's certificate looks at the input on a thread of the lowest priority
-#: (:mod:`hammesh.idle`, Linux): it takes only what the construction leaves of the
-#: cores, instead of a third of two of them where the construction runs two threads
-#: (session 23; off: the side executor's thread, as incircle mode)
-LOOK_ON_IDLE_CORE = True
+#: per mode, whether the certificate looks at the input on a thread of the lowest
+#: priority (:mod:`hammesh.idle`, Linux): it takes only what the construction leaves
+#: of the cores, instead of a third of two of them where the construction runs two
+#: threads (session 23); else on the side executor's thread
+LOOK_ON_IDLE_CORE = {"sparse": True, "incircle": False}
 
 
 _loaded = threading.Lock()
@@ -243,14 +243,14 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         # validation and the passes before the cover use both)
         facts = []
 
-        def start_facts(on_idle: bool = False) -> None:
+        def start_facts() -> None:
             if not facts:
-                on_idle = on_idle and LOOK_ON_IDLE_CORE and idle.available() and not isinstance(
+                on_idle = LOOK_ON_IDLE_CORE.get(mode, False) and idle.available() and not isinstance(
                     side, threads.InlineExecutor)
                 facts.append(idle.on_idle_core(input_facts, mesh) if on_idle else side.submit(input_facts, mesh))
 
         def beside_cover() -> None:  # (sparse: the other core is mostly idle during the cover)
-            start_facts(on_idle=True)
+            start_facts()
             m = shape[0] if len(shape) == 2 else 0
             if m >= SIDE_RESERVE_MIN_TRIANGLES and not pages.reserved() and not isinstance(
                 side, threads.InlineExecutor
