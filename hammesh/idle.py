@@ -15,8 +15,9 @@ The risk of the lowest priority is starvation: under other processes' load the
 thread may get almost nothing, and the caller would wait for it. So the caller never
 waits long: :meth:`IdleTask.result` returns the thread's result if it is there;
 else it gives the thread back its old priority where the system lets a thread raise
-its priority (privileged processes) and waits; else it waits at most
-:data:`TAKEOVER_GRACE` and then runs the work itself. Abandoned work runs out on its
+its priority (privileged processes) and waits; else it waits at most as long as
+the work would take it (the caller's estimate, ``grace``) and then runs the work
+itself: it never loses more than the work's own time. Abandoned work runs out on its
 daemon thread, at nice 19, and its result is dropped (it never holds up the
 process's exit).
 
@@ -37,8 +38,7 @@ __all__ = ["IdleTask", "on_idle_core", "available", "IDLE_NICE", "TAKEOVER_GRACE
 #: the thread's nice value (the lowest priority a normal thread may have)
 IDLE_NICE = 19
 #: seconds the caller waits for a thread it cannot raise back before it runs the
-#: work itself (about half of the certificate's look at 1.5 M triangles: on a quiet
-#: machine the thread, alone on the core the caller leaves, finishes in that time)
+#: work itself, where it gave no estimate of the work's time
 TAKEOVER_GRACE = 0.05
 #: "nice" (nice 19) or "sched_idle" (Linux's SCHED_IDLE: preempted at once by any
 #: thread that wakes) -- session 23's experiment
@@ -53,8 +53,8 @@ def available() -> bool:
 class IdleTask:
     """``fn(*args)`` on a daemon thread at nice :data:`IDLE_NICE` (see :func:`on_idle_core`)."""
 
-    def __init__(self, fn: Callable[..., Any], args: tuple) -> None:
-        self._fn, self._args = fn, args
+    def __init__(self, fn: Callable[..., Any], args: tuple, grace: float = TAKEOVER_GRACE) -> None:
+        self._fn, self._args, self._grace = fn, args, float(grace)
         self._done = threading.Event()
         self._lock = threading.Lock()  # guards _tid, _nice, _abandoned
         self._tid: int | None = None
@@ -121,7 +121,7 @@ class IdleTask:
         if self._raise_back():
             self._done.wait()
             return self._outcome("raised")
-        if self._done.wait(TAKEOVER_GRACE):
+        if self._done.wait(self._grace):
             return self._outcome("idle")
         with self._lock:
             self._abandoned = True
@@ -129,11 +129,12 @@ class IdleTask:
         return self._fn(*self._args)
 
 
-def on_idle_core(fn: Callable[..., Any], *args: Any) -> IdleTask:
+def on_idle_core(fn: Callable[..., Any], *args: Any, grace: float = TAKEOVER_GRACE) -> IdleTask:
     """Start ``fn(*args)`` on a thread of its own at the lowest priority.
 
     ``fn`` must be safe to run twice at once on the same arguments (the caller may take
-    over while the thread still runs): it must not write to them. Call only where
-    :func:`available`.
+    over while the thread still runs): it must not write to them. ``grace``: about the
+    seconds ``fn`` takes on a core of its own (the longest :meth:`IdleTask.result`
+    waits for a thread it cannot raise back). Call only where :func:`available`.
     """
-    return IdleTask(fn, args)
+    return IdleTask(fn, args, grace)

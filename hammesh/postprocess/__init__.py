@@ -5,7 +5,9 @@ from __future__ import annotations
 import numbers
 import threading
 import time
+from contextlib import contextmanager
 from dataclasses import replace
+from typing import Iterator
 
 import numpy as np
 
@@ -66,6 +68,13 @@ SIDE_RESERVE_MIN_TRIANGLES = 200_000
 #: of the cores, instead of a third of two of them where the construction runs two
 #: threads (session 23); else on the side executor's thread
 LOOK_ON_IDLE_CORE = {"sparse": True, "incircle": False}
+#: sparse mode on the idle core: "placing" (the look starts as the splits are placed)
+#: or "gated" (its scan starts with the call, its matching as the splits are placed)
+LOOK_START = "placing"
+#: the certificate's look at the input, seconds per input triangle on one core (0.08 s
+#: at 1.5 M, session 23): the longest a caller waits for the idle core's look before
+#: it looks itself (``hammesh.idle``; where it may not raise the thread back)
+LOOK_SECONDS_PER_TRIANGLE = 5.5e-8
 
 
 _loaded = threading.Lock()
@@ -212,6 +221,16 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: s
         pages.release()
 
 
+@contextmanager
+def _set_on_exit(event: threading.Event) -> Iterator[None]:
+    """Set ``event`` when the block ends, also by an exception (a thread waiting for it
+    must not wait forever)."""
+    try:
+        yield
+    finally:
+        event.set()
+
+
 def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> HamiltonianMesh:
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if isinstance(mesh, HamiltonianMesh):  # (its cycle is the input's order: kept_cycle)
@@ -231,7 +250,8 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
     # a second thread works beside the construction: the walk's arrays (while the
     # input is checked), the input's side of the certificate, and (incircle) the row
     # checks of the rows the walk has finished
-    with threads.side_executor() as side:  # (inline when this process may use one thread)
+    gate = threading.Event()  # (the look's matching waits for it where it starts gated)
+    with threads.side_executor() as side, _set_on_exit(gate):  # (side: inline where this process may use one thread)
         ready = None
         shape = np.shape(mesh.triangles)
         if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
@@ -242,12 +262,20 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
         # sparse mode's cover, which leaves the other core idle most of its time (the
         # validation and the passes before the cover use both)
         facts = []
+        on_idle = LOOK_ON_IDLE_CORE.get(mode, False) and idle.available() and not isinstance(
+            side, threads.InlineExecutor)
+        gate.set()
+        grace = LOOK_SECONDS_PER_TRIANGLE * (shape[0] if len(shape) == 2 else 0)
 
         def start_facts() -> None:
+            gate.set()
             if not facts:
-                on_idle = LOOK_ON_IDLE_CORE.get(mode, False) and idle.available() and not isinstance(
-                    side, threads.InlineExecutor)
-                facts.append(idle.on_idle_core(input_facts, mesh) if on_idle else side.submit(input_facts, mesh))
+                facts.append(idle.on_idle_core(input_facts, mesh, grace=grace) if on_idle
+                             else side.submit(input_facts, mesh))
+
+        if on_idle and mode == "sparse" and LOOK_START == "gated":
+            gate.clear()
+            facts.append(idle.on_idle_core(input_facts, mesh, gate, grace=grace))
 
         def beside_cover() -> None:  # (sparse: the other core is mostly idle during the cover)
             start_facts()

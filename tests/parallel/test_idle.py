@@ -84,12 +84,12 @@ def test_a_caller_that_cannot_raise_the_thread_back_takes_the_work_over(monkeypa
 
     monkeypatch.setattr(os, "setpriority", unprivileged)
     release = threading.Event()
-    task = idle.on_idle_core(_blocked_on_the_idle_thread(release), 3)
+    task = idle.on_idle_core(_blocked_on_the_idle_thread(release), 3, grace=0.2)
     t = time.perf_counter()
     try:
         assert task.result() == "caller 3"
         assert task.made_by == "caller"
-        assert time.perf_counter() - t >= idle.TAKEOVER_GRACE
+        assert 0.2 <= time.perf_counter() - t < 5  # (it waited the grace, not for the thread)
         assert not task.done()
     finally:
         release.set()
@@ -100,7 +100,7 @@ def test_a_privileged_caller_raises_the_thread_back_and_waits_for_it() -> None:
     release, started = threading.Event(), threading.Event()
     task = idle.on_idle_core(_blocked_on_the_idle_thread(release, started), 5)
     assert started.wait(10)  # (its priority lowered before the work starts)
-    timer = threading.Timer(2 * idle.TAKEOVER_GRACE, release.set)
+    timer = threading.Timer(2 * idle.TAKEOVER_GRACE, release.set)  # (longer than the grace)
     timer.start()
     assert task.result() == "thread 5"  # (it waited past the grace: it did not take over)
     assert task.made_by == "raised"
@@ -111,9 +111,9 @@ def test_sparse_mode_takes_its_certificates_look_from_the_idle_core(monkeypatch)
     made = []
     real = idle.on_idle_core
 
-    def spy(fn, *args):
-        task = real(fn, *args)
-        made.append((fn, args, task))
+    def spy(fn, *args, grace):
+        task = real(fn, *args, grace=grace)
+        made.append((fn, args, task, grace))
         return task
 
     monkeypatch.setattr(idle, "on_idle_core", spy)
@@ -121,7 +121,8 @@ def test_sparse_mode_takes_its_certificates_look_from_the_idle_core(monkeypatch)
     mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 2000)
     h = hammesh.hamiltonian(mesh, mode="sparse")
     assert h.report["verified"]
-    ours = [(fn, task) for fn, args, task in made if args[0] is mesh]  # (not the kernel loading's)
-    assert [fn.__qualname__ for fn, _ in ours] == ["input_facts"]
+    ours = [(fn, task, grace) for fn, args, task, grace in made if args[0] is mesh]  # (not the kernel loading's)
+    assert [fn.__qualname__ for fn, _, _ in ours] == ["input_facts"]
     assert ours[0][1].made_by in ("idle", "raised", "caller")
+    assert 0 < ours[0][2] < 0.01  # (a small mesh: a caller never waits long for its look)
     assert list(h.components) == [len(h.triangles)]  # (one cycle: the rows in walk order)
