@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hammesh.halfedge import _kernels, locality
-from hammesh.domain.validate import MAX_ABS_COORDINATE, check_extent, column_ranges
+from hammesh.domain.validate import MAX_ABS_COORDINATE, check_extent
 from hammesh.errors import InvalidMeshError
 from hammesh.mesh import Mesh
 
@@ -95,6 +95,14 @@ def mesh_arrays(
         ``MIN_EXTENT`` (areas underflow), an index out of range
         (the message names the point or triangle).
     """
+    return _checked_arrays(points, triangles, dims)[:2]
+
+
+def _checked_arrays(
+    points: np.ndarray, triangles: np.ndarray, dims: tuple[int, ...]
+) -> tuple[np.ndarray, np.ndarray, tuple[list[float], list[float]]]:
+    """:func:`mesh_arrays` and the points' column ranges it found (``(lo, hi)``, as
+    ``hammesh.domain.validate.column_ranges``: for the cells' grid)."""
     pts = np.asarray(points)
     tri = np.asarray(triangles)
     if pts.ndim != 2 or pts.shape[1] not in dims:
@@ -113,10 +121,12 @@ def mesh_arrays(
             f"triangle {t} references vertex {int(tri[t, k])} but there are only {len(pts)} points"
         )
     tri = np.ascontiguousarray(tri, dtype=np.int64)
-    if not np.isfinite(pts).all():  # (the row-wise search only on failure: 4x slower)
+    # (one compiled pass per row range, both cores, for every check below; the
+    # row-wise searches for the messages only on failure)
+    finite, lo, hi, least, most = _kernels.input_ranges(pts, tri)
+    if not finite:
         i = int(np.argmin(np.isfinite(pts).all(axis=1)))
         raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
-    lo, hi = column_ranges(pts) if len(pts) else ([], [])  # (not pts.min(axis=0): 35x slower)
     if len(pts) and max(-min(lo), max(hi)) > MAX_ABS_COORDINATE:  # planar and 3D alike
         i = int(np.argmax(np.abs(pts).max(axis=1) > MAX_ABS_COORDINATE))
         raise InvalidMeshError(
@@ -125,13 +135,13 @@ def mesh_arrays(
         )
     check_extent(pts, InvalidMeshError, ranges=(lo, hi))
     n = len(pts)
-    if tri.min() < 0 or tri.max() >= n:
+    if least < 0 or most >= n:
         out = (tri < 0) | (tri >= n)
         t = int(np.argmax(out.any(axis=1)))
         raise InvalidMeshError(
             f"triangle {t} references vertex {int(tri[t][out[t]][0])} but there are only {n} points"
         )
-    return pts, tri
+    return pts, tri, (lo, hi)
 
 
 def prepare_mesh(
@@ -168,12 +178,12 @@ def prepare_mesh(
         triangle with a repeated vertex or zero area, a non-manifold edge, a segment
         that is not an edge of the mesh.
     """
-    pts, tri = mesh_arrays(mesh.points, mesh.triangles)
+    pts, tri, ranges = _checked_arrays(mesh.points, mesh.triangles, (2,))
     n = len(pts)
     used = np.zeros(n, dtype=np.bool_) if measure else None
     keys = None
     if cells and measure:  # (the bounding box only of finite points, checked above)
-        grid = locality.cell_grid(pts, len(tri))
+        grid = locality.cell_grid(pts, len(tri), ranges=ranges)
         keys = locality.empty_cell_keys(grid, len(tri))
     tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(
         pts, tri, used, measure=measure, cells=None if keys is None else (grid, keys)

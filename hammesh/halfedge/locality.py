@@ -79,7 +79,7 @@ class CellKeys(NamedTuple):
     """Each triangle's cell key and the keys' histogram per row range (:func:`cell_keys`)."""
 
     key: np.ndarray  # (m,) int64; :func:`cell_order` overwrites it with the inverse order
-    count: np.ndarray  # (ranges, 4**bits) int64
+    count: np.ndarray  # (ranges, 4**bits) int64; :func:`cell_order` overwrites it with the sort's slots
     spans: list  # the row ranges, [(lo, hi), ...]
 
 
@@ -91,20 +91,26 @@ TABLE_MIN_CELLS = 32_768
 VERTEX_SIDE_SHARE = 8
 
 
-def grid_frame(points: np.ndarray, m: int) -> tuple[float, float, float, int]:
+def grid_frame(points: np.ndarray, m: int, ranges: tuple[list[float], list[float]] | None = None
+               ) -> tuple[float, float, float, int]:
     """``(x0, y0, scale, bits)`` of :func:`cell_grid` without its Hilbert table: cell
     ``(int((x - x0) * scale), int((y - y0) * scale))`` (clamped to ``2**bits - 1``) of a
-    point, for code that needs only the cells (the cover's quadrant cut)."""
+    point, for code that needs only the cells (the cover's quadrant cut).
+    ``ranges``: the points' column ranges ``(lo, hi)``, if the caller has them
+    (``hammesh.domain.validate.column_ranges``; the validation's)."""
     pts = np.asarray(points)
     bits = cell_bits(m)
-    x0, y0 = float(pts[:, 0].min()), float(pts[:, 1].min())
-    side = max(float(pts[:, 0].max()) - x0, float(pts[:, 1].max()) - y0)
+    if ranges is None:
+        ranges = ([float(pts[:, 0].min()), float(pts[:, 1].min())], [float(pts[:, 0].max()), float(pts[:, 1].max())])
+    (x0, y0), (x1, y1) = ranges[0][:2], ranges[1][:2]
+    side = max(x1 - x0, y1 - y0)
     return x0, y0, (1 << bits) / side if side > 0 else 0.0, bits
 
 
-def cell_grid(points: np.ndarray, m: int) -> CellGrid:
-    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`)."""
-    x0, y0, scale, bits = grid_frame(points, m)
+def cell_grid(points: np.ndarray, m: int, ranges: tuple[list[float], list[float]] | None = None) -> CellGrid:
+    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`);
+    ``ranges`` as :func:`grid_frame`'s."""
+    x0, y0, scale, bits = grid_frame(points, m, ranges)
     table = np.empty(1 << (2 * bits), np.int64)
     # (a cell's key is a chain of ``bits`` steps, ~20 ns, a triangle row's pass ~5 ns:
     # threads from TABLE_MIN_CELLS cells each; 512 x 512 cells ran serially before, 6 ms)
@@ -146,7 +152,8 @@ def cell_order(
     order inside a cell is the input's whatever the number of threads). Planar
     (``points`` (n, 2)); the centroid's first two coordinates otherwise. ``keys``:
     the keys found already (:func:`cell_keys` or a pass that filled
-    :func:`empty_cell_keys`); their ``key`` array becomes ``inverse``.
+    :func:`empty_cell_keys`); their ``key`` array becomes ``inverse``, their ``count``
+    the sort's slots (both consumed).
     """
     m = len(triangles)
     order = fresh(m, np.int64)
@@ -154,10 +161,9 @@ def cell_order(
         return order, np.zeros(0, np.int64)
     if keys is None:
         keys = cell_keys(points, triangles)
-    key, count, spans = keys
+    key, place, spans = keys
     # each range's first slot of each key: keys in order, ranges in order inside a key
-    flat = count.T.ravel()
-    place = (np.cumsum(flat) - flat).reshape(count.shape[1], len(spans)).T.copy()
+    _kernels.first_slots_in_place(place)  # (the histogram is not needed after it)
     run_all([
         (lambda r=r, lo=lo, hi=hi: _kernels.scatter_by_key_into(key, place[r], order, lo, hi))
         for r, (lo, hi) in enumerate(spans)
@@ -247,7 +253,7 @@ def renumber_from_neighbors(
 
     # (the neighbours' pass is the shorter here: 1.5 M rows 0.022 against the vertex
     # pass's 0.032 s, so it takes all its rows: 0.035 -> 0.032 s for the pair)
-    leaving = np.full(len(pts), -1, np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
+    leaving = fresh(len(pts), np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
     r, vertex_new = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving)
     if not all(ok):
         return None
@@ -275,8 +281,8 @@ def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: t
     order, inverse = cell_order(pts, tri, keys)
     rt, rp = (max(0, int(r)) for r in room)
     tri_new = fresh((m + rt, 3), np.int64)[:m]
-    vertex_new = np.full(n, -1, np.int64)
-    vertex_order = np.empty(n, np.int64)
+    vertex_new = fresh(n, np.int64, 0)  # (from the reserve: zeroed already)
+    vertex_order = fresh(n, np.int64)
     twin_new = fresh(3 * (m + rt), np.int64)[: 3 * m]
     marks_new = fresh(3 * (m + rt) if carry else 0, np.bool_)[: 3 * m if carry else 0]
     # the serial vertex pass on one thread, the twins (reading the inverse) on the other;
