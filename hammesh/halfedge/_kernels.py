@@ -64,18 +64,19 @@ class Oriented(NamedTuple):
     area: float  # their total area
 
 
-def input_ranges(points, tri):
+def input_ranges(points, tri, indices=True):
     """What a mesh's checks read off its arrays, in one pass per row range (threads):
     ``(finite, lo, hi, least, most)``: whether every coordinate is finite, each
     column's smallest and largest value (``(d,)`` float64 lists: ``[]`` without
     points; meaningful only if finite) and the smallest and largest vertex index (0
-    and -1 without triangles).
+    and -1 without triangles, or with ``indices=False``: not read, for a caller whose
+    next pass over the rows checks them, :func:`orient_ccw`).
 
     Replaces numpy's six passes on the main thread (``isfinite().all()``, a minimum and
     a maximum of each column, ``tri.min()``, ``tri.max()``: ~12 ms at 1.5 M triangles,
     the other core idle)."""
-    n, m = points.shape[0], tri.shape[0]
-    k = len(row_ranges(max(n, m), threads.THREAD_MIN_ROWS))
+    n, m = points.shape[0], (tri.shape[0] if indices else 0)
+    k = len(row_ranges(max(n, tri.shape[0]), threads.THREAD_MIN_ROWS))
     parts = run_all([
         (lambda i=i: _input_ranges_of(points, tri, n * i // k, n * (i + 1) // k, m * i // k, m * (i + 1) // k))
         for i in range(k)
@@ -119,7 +120,9 @@ def orient_ccw(points, tri, used=None, measure=True, cells=None):
     """Counter-clockwise rows of ``tri`` (rows with negative area reversed).
 
     Returns an :class:`Oriented`: ``bad`` is -1 or the first triangle with a repeated
-    vertex or zero area; the smallest angle (radians) and the total area of the
+    vertex, zero area or a vertex index out of range (such a row is read no further:
+    the validation checks the indices here, ``input_ranges(indices=False)``, not in a
+    pass of their own); the smallest angle (radians) and the total area of the
     counter-clockwise rows come from the same pass (a construction needs the angle for
     its bound; the certificate measures the input again with its own code).
     ``used`` (bool per point), if given, is set for every vertex of a triangle.
@@ -196,6 +199,10 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
+        if min(a, min(b, c)) < 0 or max(a, max(b, c)) >= n:
+            if bad < 0:
+                bad = t
+            continue
         left = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1])
         right = (points[b, 1] - points[a, 1]) * (points[c, 0] - points[a, 0])
         cr = left - right

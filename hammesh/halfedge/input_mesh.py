@@ -99,10 +99,12 @@ def mesh_arrays(
 
 
 def _checked_arrays(
-    points: np.ndarray, triangles: np.ndarray, dims: tuple[int, ...]
+    points: np.ndarray, triangles: np.ndarray, dims: tuple[int, ...], indices: bool = True
 ) -> tuple[np.ndarray, np.ndarray, tuple[list[float], list[float]]]:
     """:func:`mesh_arrays` and the points' column ranges it found (``(lo, hi)``, as
-    ``hammesh.domain.validate.column_ranges``: for the cells' grid)."""
+    ``hammesh.domain.validate.column_ranges``: for the cells' grid). ``indices=False``:
+    the vertex indices not checked (signed ones: the caller's orientation pass checks
+    them as it reads the rows, then :func:`_refuse_bad_index`)."""
     pts = np.asarray(points)
     tri = np.asarray(triangles)
     if pts.ndim != 2 or pts.shape[1] not in dims:
@@ -123,7 +125,7 @@ def _checked_arrays(
     tri = np.ascontiguousarray(tri, dtype=np.int64)
     # (one compiled pass per row range, both cores, for every check below; the
     # row-wise searches for the messages only on failure)
-    finite, lo, hi, least, most = _kernels.input_ranges(pts, tri)
+    finite, lo, hi, least, most = _kernels.input_ranges(pts, tri, indices)
     if not finite:
         i = int(np.argmin(np.isfinite(pts).all(axis=1)))
         raise InvalidMeshError(f"point {i} has a non-finite coordinate {pts[i].tolist()}")
@@ -134,14 +136,19 @@ def _checked_arrays(
             "(squared lengths would overflow)"
         )
     check_extent(pts, InvalidMeshError, ranges=(lo, hi))
-    n = len(pts)
-    if least < 0 or most >= n:
-        out = (tri < 0) | (tri >= n)
+    if least < 0 or most >= len(pts) or not len(pts):  # (no points: every index is out of range)
+        _refuse_bad_index(tri, len(pts))
+    return pts, tri, (lo, hi)
+
+
+def _refuse_bad_index(tri: np.ndarray, n: int) -> None:
+    """Raise naming the first triangle with a vertex index out of range, if any."""
+    out = (tri < 0) | (tri >= n)
+    if out.any():
         t = int(np.argmax(out.any(axis=1)))
         raise InvalidMeshError(
             f"triangle {t} references vertex {int(tri[t][out[t]][0])} but there are only {n} points"
         )
-    return pts, tri, (lo, hi)
 
 
 def prepare_mesh(
@@ -178,17 +185,20 @@ def prepare_mesh(
         triangle with a repeated vertex or zero area, a non-manifold edge, a segment
         that is not an edge of the mesh.
     """
-    pts, tri, ranges = _checked_arrays(mesh.points, mesh.triangles, (2,))
+    # (the indices are checked by the orientation pass, which reads the rows anyway)
+    pts, tri, ranges = _checked_arrays(mesh.points, mesh.triangles, (2,), indices=False)
     n = len(pts)
     used = np.zeros(n, dtype=np.bool_) if measure else None
     keys = None
     if cells and measure:  # (the bounding box only of finite points, checked above)
         grid = locality.cell_grid(pts, len(tri), ranges=ranges)
         keys = locality.empty_cell_keys(grid, len(tri))
+    rows = tri
     tri, n_flipped, bad_t, min_angle, area = _kernels.orient_ccw(
-        pts, tri, used, measure=measure, cells=None if keys is None else (grid, keys)
+        pts, rows, used, measure=measure, cells=None if keys is None else (grid, keys)
     )
     if bad_t >= 0:
+        _refuse_bad_index(rows, n)  # (first, as mesh_arrays would have)
         t = int(bad_t)
         row = np.asarray(mesh.triangles)[t].tolist()
         what = "repeats a vertex" if len(set(row)) < 3 else "has zero area"

@@ -285,3 +285,29 @@ def test_validation_hands_its_ranges_to_the_grid(monkeypatch) -> None:
     keys = clean.info["validated"]["cells"]
     want = locality.cell_keys(pts, clean.triangles, locality.cell_grid(pts, len(tri)))
     np.testing.assert_array_equal(keys.key, want.key)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.integers(4, 120), st.sampled_from([-2, -1, 0, 3]), st.booleans(), st.booleans())
+def test_indices_out_of_range_are_found_by_the_orientation_pass(seed: int, n: int, off: int, earlier: bool,
+                                                                threaded: bool) -> None:
+    """The validation checks vertex indices in its orientation pass (no pass of their
+    own): ``orient_ccw`` names a row with an index out of range as bad without reading
+    its points, and ``prepare_mesh`` names the first such row, as ``mesh_arrays`` does,
+    before any row with a repeated vertex or zero area."""
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    t = int(rng.integers(0, len(tri)))
+    tri[t, int(rng.integers(0, 3))] = off - 2 if off < 0 else n + off  # (-4, -3, n, n + 3)
+    if earlier and t > 0:
+        tri[t - 1, 1] = tri[t - 1, 0]  # a repeated vertex before it
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(threads, "THREAD_MIN_ROWS", 3 if threaded else 10**9)
+        o = _kernels.orient_ccw(pts, tri)
+        assert o.bad == (t - 1 if earlier and t > 0 else t)
+        with pytest.raises(hammesh.InvalidMeshError) as got:
+            prepare_mesh(mesh(points=pts, triangles=tri), cells=True, match=False)
+        with pytest.raises(hammesh.InvalidMeshError) as want:
+            hammesh.halfedge.mesh_arrays(pts, tri)
+    assert str(got.value) == str(want.value) and f"triangle {t} references vertex" in str(got.value)
