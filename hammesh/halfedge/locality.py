@@ -254,15 +254,15 @@ def renumber_from_neighbors(
     # (the neighbours' pass is the shorter here: 1.5 M rows 0.022 against the vertex
     # pass's 0.032 s, so it takes all its rows: 0.035 -> 0.032 s for the pair)
     leaving = fresh(len(pts), np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
-    r, vertex_new = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving)
-    if not all(ok):
+    # rows across -> twins (in place: each range reads only rows; the neighbours'
+    # values are in range even where not trusted), with the points' gather: one wait fewer
+    r, vertex_new, parts = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving,
+                                       _kernels.twins_in_rows_into)
+    if not all(ok) or not all(parts):
         return None
-    spans = row_ranges(len(tri), threads.THREAD_MIN_ROWS)
-    # rows across -> twins (in place: each range reads only rows); then each twin's twin
-    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_in_rows_into(r.triangles, r.twin, lo, hi))
-                        for lo, hi in spans])):
-        return None
-    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_agree(r.twin, lo, hi)) for lo, hi in spans])):
+    # then each twin's twin
+    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_agree(r.twin, lo, hi))
+                        for lo, hi in row_ranges(len(tri), threads.THREAD_MIN_ROWS)])):
         return None
     segs = vertex_new[np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)]
     r.marks[:] = False
@@ -270,13 +270,16 @@ def renumber_from_neighbors(
 
 
 def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: tuple[int, int], carry: bool,
-                half_edges, side_share: int, leaving: np.ndarray | None = None) -> tuple[Renumbered, np.ndarray]:
+                half_edges, side_share: int, leaving: np.ndarray | None = None, rows_after=None
+                ) -> tuple[Renumbered, np.ndarray, list]:
     """The renumbering of :func:`renumber_local` with its half-edge pass
     ``half_edges(order, inverse, twin_new, marks_new, lo, hi)`` (new rows ``lo..hi``);
     ``carry``: a marks buffer to fill; the vertex pass's thread also takes the first
     ``1 / side_share`` of the half-edge pass's rows (none if 0); ``leaving``: filled
-    with a half-edge leaving each new vertex (``renumber_vertices_into``). Also
-    returns ``vertex_new`` (old -> new vertex)."""
+    with a half-edge leaving each new vertex (``renumber_vertices_into``);
+    ``rows_after(tri_new, twin_new, lo, hi)``, if given: a pass over the new rows run
+    with the points' gather (one wait for both). Also returns ``vertex_new`` (old ->
+    new vertex) and ``rows_after``'s results, one per row range."""
     m, n = len(tri), len(pts)
     order, inverse = cell_order(pts, tri, keys)
     rt, rp = (max(0, int(r)) for r in room)
@@ -297,11 +300,15 @@ def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: t
 
     run_all([vertices_first, lambda: half_edges(order, inverse, twin_new, marks_new, cut, m)])
     pts_new = fresh((n + rp,) + pts.shape[1:], np.float64)[:n]
-    run_all([
-        (lambda lo=lo, hi=hi: _kernels.gather_points_into(pts, vertex_order, pts_new, lo, hi))
-        for lo, hi in row_ranges(n, threads.THREAD_MIN_ROWS)
-    ])
-    return Renumbered(pts_new, tri_new, twin_new, marks_new, order, vertex_order), vertex_new
+    spans = row_ranges(max(n, m if rows_after else 0), threads.THREAD_MIN_ROWS)
+
+    def gather_and_after(i: int):
+        k = len(spans)
+        _kernels.gather_points_into(pts, vertex_order, pts_new, n * i // k, n * (i + 1) // k)
+        return None if rows_after is None else rows_after(tri_new, twin_new, m * i // k, m * (i + 1) // k)
+
+    after = run_all([(lambda i=i: gather_and_after(i)) for i in range(len(spans))])
+    return Renumbered(pts_new, tri_new, twin_new, marks_new, order, vertex_order), vertex_new, after
 
 
 def restore_vertices(rows: np.ndarray, vertex_order: np.ndarray) -> np.ndarray:
