@@ -28,6 +28,7 @@ call 2.603 -> 2.403 s CPU, the renumbering and mapping back 0.14 s of it
 from __future__ import annotations
 
 import math
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -37,8 +38,9 @@ from hammesh.halfedge import _kernels
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "renumber_from_neighbors", "cell_order", "cell_grid",
-           "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
+__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "renumber_from_neighbors", "cell_order", "cell_grid", "hilbert_table",
+           "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "cell_bits", "TRIANGLES_PER_CELL",
+           "MAX_CELL_BITS"]
 
 #: average triangles per grid cell of the order (a cell's triangles keep their order)
 TRIANGLES_PER_CELL = 4
@@ -107,18 +109,40 @@ def grid_frame(points: np.ndarray, m: int, ranges: tuple[list[float], list[float
     return x0, y0, (1 << bits) / side if side > 0 else 0.0, bits
 
 
+_tables: dict[int, np.ndarray] = {}
+_tables_lock = threading.Lock()
+
+
+def hilbert_table(bits: int) -> np.ndarray:
+    """``table[x << bits | y]``: the Hilbert key of cell ``(x, y)`` of the ``2**bits`` a
+    side grid, made once per process and size and shared (callers must not write
+    into it; at most ``MAX_CELL_BITS + 1`` tables, 8 MB for the largest).
+
+    Why kept: the table depends on the size only, and making it is ~3 ms of the
+    validation's critical path at 1.5 M triangles (both cores, 512 x 512 cells): a
+    process that expects a mesh can make it while it waits (``quality_mesh`` while
+    Triangle runs), and a second call never pays it."""
+    bits = int(bits)
+    with _tables_lock:
+        table = _tables.get(bits)
+    if table is None:
+        table = np.empty(1 << (2 * bits), np.int64)
+        # (a cell's key is a chain of ``bits`` steps, ~20 ns, a triangle row's pass ~5 ns:
+        # threads from TABLE_MIN_CELLS cells each; 512 x 512 cells ran serially before, 6 ms)
+        run_all([
+            (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
+            for lo, hi in row_ranges(1 << bits, max(1, TABLE_MIN_CELLS >> bits))
+        ])
+        with _tables_lock:
+            table = _tables.setdefault(bits, table)
+    return table
+
+
 def cell_grid(points: np.ndarray, m: int, ranges: tuple[list[float], list[float]] | None = None) -> CellGrid:
     """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`);
-    ``ranges`` as :func:`grid_frame`'s."""
+    ``ranges`` as :func:`grid_frame`'s. Its table is :func:`hilbert_table`'s (shared)."""
     x0, y0, scale, bits = grid_frame(points, m, ranges)
-    table = np.empty(1 << (2 * bits), np.int64)
-    # (a cell's key is a chain of ``bits`` steps, ~20 ns, a triangle row's pass ~5 ns:
-    # threads from TABLE_MIN_CELLS cells each; 512 x 512 cells ran serially before, 6 ms)
-    run_all([
-        (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
-        for lo, hi in row_ranges(1 << bits, max(1, TABLE_MIN_CELLS >> bits))
-    ])
-    return CellGrid(x0, y0, scale, bits, table)
+    return CellGrid(x0, y0, scale, bits, hilbert_table(bits))
 
 
 def empty_cell_keys(grid: CellGrid, m: int) -> CellKeys:

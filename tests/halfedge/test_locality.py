@@ -311,3 +311,21 @@ def test_grid_frame_from_the_validations_ranges_is_the_same(seed: int, n: int) -
     a, b = cell_grid(pts, len(tri), ranges), cell_grid(pts, len(tri))
     assert a[:4] == b[:4]
     np.testing.assert_array_equal(a.table, b.table)
+
+
+@pytest.mark.parametrize("bits", [1, 4, 7])
+def test_hilbert_tables_are_made_once_per_size(bits: int, monkeypatch) -> None:
+    """``hilbert_table`` makes a size's table once (in row ranges when threads are
+    allowed, the same keys) and hands the same array to every grid of that size."""
+    from hammesh.halfedge import locality
+
+    monkeypatch.setattr(locality, "_tables", {})
+    monkeypatch.setattr(locality, "TABLE_MIN_CELLS", 1)  # (several ranges)
+    want = np.empty(1 << (2 * bits), np.int64)
+    _kernels.hilbert_table_into(bits, want, 0, 1 << bits)
+    made = locality.hilbert_table(bits)
+    np.testing.assert_array_equal(made, want)
+    assert locality.hilbert_table(bits) is made
+    pts = np.random.default_rng(bits).random((50, 2))
+    m = 4 * 4**bits  # (a mesh size whose grid has 2**bits cells a side)
+    assert cell_bits(m) == bits and locality.cell_grid(pts, m).table is made
