@@ -329,3 +329,28 @@ def test_hilbert_tables_are_made_once_per_size(bits: int, monkeypatch) -> None:
     pts = np.random.default_rng(bits).random((50, 2))
     m = 4 * 4**bits  # (a mesh size whose grid has 2**bits cells a side)
     assert cell_bits(m) == bits and locality.cell_grid(pts, m).table is made
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.integers(3, 200), st.sampled_from([1, 5, 9, 10**9]))
+def test_orientation_pass_counts_every_key_once(seed: int, n: int, min_rows: int) -> None:
+    """The orientation pass counts each row's key ``KEY_AHEAD_ROWS`` rows after finding it
+    (the histogram entry asked for meanwhile) and the last rows' at the end: the keys
+    and each range's histogram are ``cell_keys``', whatever the range lengths (shorter
+    than that lag too) and with rows given clockwise."""
+    from hammesh.halfedge import locality
+
+    pts, tri = _delaunay(seed, n)
+    tri[::2] = tri[::2, ::-1]
+    before = threads.THREAD_MIN_ROWS
+    threads.THREAD_MIN_ROWS = min_rows
+    try:
+        grid = locality.cell_grid(pts, len(tri))
+        keys = locality.empty_cell_keys(grid, len(tri))
+        ccw = _kernels.orient_ccw(pts, tri, cells=(grid, keys)).triangles
+        want = locality.cell_keys(pts, ccw, grid)  # (the centroid of the counter-clockwise corners)
+    finally:
+        threads.THREAD_MIN_ROWS = before
+    assert keys.spans == want.spans
+    np.testing.assert_array_equal(keys.key, want.key)
+    np.testing.assert_array_equal(keys.count, want.count)
