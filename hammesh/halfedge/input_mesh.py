@@ -176,7 +176,9 @@ def prepare_mesh(
 
     The returned mesh's ``info["validated"]`` holds what the orientation pass found on
     the way: ``min_angle`` (radians), ``total`` (area) and ``used`` (bool per point),
-    for a construction's own use (sparse mode's bound); the certificate never reads it.
+    for a construction's own use (sparse mode's bound), and ``ranges``, the points'
+    column ranges ``(lo, hi)`` (a renumbering keeps them: ``locality.grid_frame``'s
+    ``ranges``); the certificate never reads it.
 
     Raises
     ------
@@ -232,7 +234,7 @@ def prepare_mesh(
         triangle_attributes=attrs,
         # found on the way, for a construction's bound (sparse mode's local rule)
         info={**mesh.info, "validated": {"min_angle": min_angle, "total": area, "used": used, "cells": keys,
-                                         "neighbors": nbr if he is None else None}}
+                                         "neighbors": nbr if he is None else None, "ranges": ranges}}
         if measure
         else dict(mesh.info),
     )

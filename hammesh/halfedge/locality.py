@@ -38,9 +38,9 @@ from hammesh.halfedge import _kernels
 from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
-__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "renumber_from_neighbors", "cell_order", "cell_grid", "hilbert_table",
-           "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "cell_bits", "TRIANGLES_PER_CELL",
-           "MAX_CELL_BITS"]
+__all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "renumber_from_neighbors", "cell_order", "cell_grid",
+           "hilbert_table", "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "cell_bits",
+           "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
 
 #: average triangles per grid cell of the order (a cell's triangles keep their order)
 TRIANGLES_PER_CELL = 4

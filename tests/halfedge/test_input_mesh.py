@@ -311,3 +311,12 @@ def test_indices_out_of_range_are_found_by_the_orientation_pass(seed: int, n: in
         with pytest.raises(hammesh.InvalidMeshError) as want:
             hammesh.halfedge.mesh_arrays(pts, tri)
     assert str(got.value) == str(want.value) and f"triangle {t} references vertex" in str(got.value)
+
+
+def test_validated_ranges_are_the_points_column_ranges() -> None:
+    """``info["validated"]["ranges"]``: each column's least and greatest coordinate, for a
+    construction's grid (``locality.grid_frame(..., ranges=)``) without another look."""
+    rng = np.random.default_rng(5)
+    pts = rng.random((300, 2)) * [2.0, 7.0] - [5.0, 1.0]
+    clean = prepare_mesh(mesh(points=pts, triangles=Delaunay(pts).simplices))[0]
+    assert clean.info["validated"]["ranges"] == (list(pts.min(axis=0)), list(pts.max(axis=0)))
