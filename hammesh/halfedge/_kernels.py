@@ -35,9 +35,13 @@ from hammesh.threads import row_ranges, run_all
 #: rows ahead whose points / neighbours' rows / old rows a pass over scattered reads
 #: asks for (:func:`_orient_ccw_into`, :func:`_twins_from_neighbors_into`, ...)
 PREFETCH_ROWS = 16
+#: :func:`_orient_ccw_into`: rows ahead whose cell key's table entry is asked for (and
+#: rows behind whose key is counted, its histogram entry asked for meanwhile)
+KEY_AHEAD_ROWS = 8
 
 __all__ = [
     "Oriented",
+    "input_ranges",
     "orient_ccw",
     "twins_from_neighbors",
     "half_edge_twins",
@@ -63,11 +67,65 @@ class Oriented(NamedTuple):
     area: float  # their total area
 
 
+def input_ranges(points, tri, indices=True):
+    """What a mesh's checks read off its arrays, in one pass per row range (threads):
+    ``(finite, lo, hi, least, most)``: whether every coordinate is finite, each
+    column's smallest and largest value (``(d,)`` float64 lists: ``[]`` without
+    points; meaningful only if finite) and the smallest and largest vertex index (0
+    and -1 without triangles, or with ``indices=False``: not read, for a caller whose
+    next pass over the rows checks them, :func:`orient_ccw`).
+
+    Replaces numpy's six passes on the main thread (``isfinite().all()``, a minimum and
+    a maximum of each column, ``tri.min()``, ``tri.max()``: ~12 ms at 1.5 M triangles,
+    the other core idle)."""
+    n, m = points.shape[0], (tri.shape[0] if indices else 0)
+    k = len(row_ranges(max(n, tri.shape[0]), threads.THREAD_MIN_ROWS))
+    parts = run_all([
+        (lambda i=i: _input_ranges_of(points, tri, n * i // k, n * (i + 1) // k, m * i // k, m * (i + 1) // k))
+        for i in range(k)
+    ])
+    finite = all(p[0] for p in parts)
+    lo = [float(min(p[1][j] for p in parts)) for j in range(points.shape[1])] if n else []
+    hi = [float(max(p[2][j] for p in parts)) for j in range(points.shape[1])] if n else []
+    least = min(p[3] for p in parts) if m else 0
+    most = max(p[4] for p in parts) if m else -1
+    return finite, lo, hi, int(least), int(most)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _input_ranges_of(points, tri, p_lo, p_hi, t_lo, t_hi):
+    """:func:`input_ranges` of points ``p_lo..p_hi`` and rows ``t_lo..t_hi``."""
+    d = points.shape[1]
+    lo = np.full(d, np.inf)
+    hi = np.full(d, -np.inf)
+    finite = True
+    for j in range(d):  # (a column at a time: the loop keeps its bounds in registers)
+        a = np.inf
+        b = -np.inf
+        for i in range(p_lo, p_hi):
+            x = points[i, j]
+            finite &= x - x == 0.0  # (NaN for NaN and the infinities)
+            a = min(a, x)
+            b = max(b, x)
+        lo[j] = a
+        hi[j] = b
+    least = np.iinfo(np.int64).max
+    most = np.iinfo(np.int64).min
+    for t in range(t_lo, t_hi):
+        for k in range(3):
+            v = tri[t, k]
+            least = min(least, v)
+            most = max(most, v)
+    return finite, lo, hi, least, most
+
+
 def orient_ccw(points, tri, used=None, measure=True, cells=None):
     """Counter-clockwise rows of ``tri`` (rows with negative area reversed).
 
     Returns an :class:`Oriented`: ``bad`` is -1 or the first triangle with a repeated
-    vertex or zero area; the smallest angle (radians) and the total area of the
+    vertex, zero area or a vertex index out of range (such a row is read no further:
+    the validation checks the indices here, ``input_ranges(indices=False)``, not in a
+    pass of their own); the smallest angle (radians) and the total area of the
     counter-clockwise rows come from the same pass (a construction needs the angle for
     its bound; the certificate measures the input again with its own code).
     ``used`` (bool per point), if given, is set for every vertex of a triangle.
@@ -126,7 +184,11 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
     ``key`` (if not empty) each row's cell key (:func:`cell_key`), ``count`` their
     histogram over this range. The rows' points lie scattered (the input's numbering):
     those of the row ``PREFETCH_ROWS`` on are asked for now (``hammesh.prefetch``; at
-    1.5 M triangles, one thread, 0.059 -> 0.044 s)."""
+    1.5 M triangles, one thread, 0.059 -> 0.044 s). So are the cell keys' table entry
+    (of the row ``KEY_AHEAD_ROWS`` on, whose points have arrived) and histogram entry
+    (counted ``KEY_AHEAD_ROWS`` rows later): both tables are 2 MB at 1.5 M triangles
+    and the rows' cells random in the input's order (one thread, best of 11: 37.5 ->
+    33.8 ms; the same keys and counts)."""
     write = out.shape[0] == tri.shape[0]
     measure = used.shape[0] == points.shape[0]
     keyed = key.shape[0] == tri.shape[0]
@@ -135,7 +197,20 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
     best_s2 = np.inf
     total = 0.0
     n = points.shape[0]
+    top = (1 << bits) - 1
     for t in range(lo, hi):
+        if keyed:
+            if t - KEY_AHEAD_ROWS >= lo:  # (a row with an index out of range has none)
+                kk = key[t - KEY_AHEAD_ROWS]
+                if kk >= 0:
+                    count[kk] += 1
+            ahead = t + KEY_AHEAD_ROWS
+            if ahead < hi:  # (only an address: the centroid in any order of the corners)
+                p, q, r = tri[ahead, 0], tri[ahead, 1], tri[ahead, 2]
+                if min(p, min(q, r)) >= 0 and max(p, max(q, r)) < n:
+                    ix = min(max(int(((points[p, 0] + points[q, 0] + points[r, 0]) / 3.0 - x0) * scale), 0), top)
+                    iy = min(max(int(((points[p, 1] + points[q, 1] + points[r, 1]) / 3.0 - y0) * scale), 0), top)
+                    prefetch_row(table, (ix << bits) | iy)
         if t + PREFETCH_ROWS < hi:
             for k in range(3):
                 v = tri[t + PREFETCH_ROWS, k]
@@ -144,6 +219,12 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
         a = tri[t, 0]
         b = tri[t, 1]
         c = tri[t, 2]
+        if min(a, min(b, c)) < 0 or max(a, max(b, c)) >= n:
+            if bad < 0:
+                bad = t
+            if keyed:
+                key[t] = -1
+            continue
         left = (points[b, 0] - points[a, 0]) * (points[c, 1] - points[a, 1])
         right = (points[b, 1] - points[a, 1]) * (points[c, 0] - points[a, 0])
         cr = left - right
@@ -163,7 +244,7 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
         if keyed:
             k = cell_key(points, a, b, c, x0, y0, scale, bits, table)
             key[t] = k
-            count[k] += 1
+            prefetch_row(count, k)  # (counted KEY_AHEAD_ROWS rows on)
         if measure:
             used[a] = True
             used[b] = True
@@ -172,6 +253,11 @@ def _orient_ccw_into(points, tri, out, used, lo, hi, x0, y0, scale, bits, table,
             total += 0.5 * cr2
             if s2 < best_s2:
                 best_s2 = s2
+    if keyed:  # (the last rows' keys)
+        for t in range(max(lo, hi - KEY_AHEAD_ROWS), hi):
+            kk = key[t]
+            if kk >= 0:
+                count[kk] += 1
     return n_flipped, bad, best_s2, total
 
 
@@ -634,6 +720,22 @@ def cell_keys_into(points, tri, x0, y0, scale, bits, table, key, count, lo, hi):
 
 
 @njit(cache=True, nogil=True)
+def first_slots_in_place(count):
+    """``count[r, k]`` (row range ``r``'s triangles of key ``k``) becomes the first slot
+    of that range's triangles of key ``k`` in a counting sort: all keys below ``k``,
+    then the ranges before ``r`` inside ``k`` (keys in order, ranges in order inside a
+    key). One pass over the histogram in place, where numpy's transpose, cumulative sum
+    and copy made three fresh 4 MB arrays (512 x 512 keys, two ranges: ~20 ms of the
+    main thread alone, the other core idle, at 1.5 M triangles)."""
+    s = 0
+    for k in range(count.shape[1]):
+        for r in range(count.shape[0]):
+            c = count[r, k]
+            count[r, k] = s
+            s += c
+
+
+@njit(cache=True, nogil=True)
 def scatter_by_key_into(key, place, order, lo, hi):
     """Rows ``lo..hi`` of a counting sort: ``order[place[key[t]]++] = t``, and ``key[t]``
     overwritten by that place (the inverse: the keys are not needed after it);
@@ -650,13 +752,16 @@ def scatter_by_key_into(key, place, order, lo, hi):
 def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_new, leaving):
     """Vertices numbered by first use along the new rows (``tri[order]``), then the
     unused ones in their old order: ``vertex_order[j]`` is old vertex of new ``j``,
-    ``vertex_new`` the inverse (-1 on entry); ``tri_new`` the new rows in new numbers.
-    One serial pass (each first use takes the next number). ``leaving`` (``(n_points,)``,
-    -1 on entry, or empty: not asked): a half-edge of the new rows leaving each new
-    vertex, the one of its first use (what :func:`vertex_half_edges` finds, without its
-    pass over the rows). The old row ``PREFETCH_ROWS`` rows ahead is asked for now
-    (``order`` jumps across the old rows: 0.037 -> 0.028 s at 1.5 M triangles, one
-    thread, the same numbers)."""
+    ``vertex_new`` the inverse (zero on entry: a page reserve's fresh memory, no fill
+    of its own on the main thread; it holds ``j + 1`` while the rows are read, and the
+    pass over the vertices for the unused ones leaves ``j``); ``tri_new`` the new rows
+    in new numbers. One serial pass (each first use takes the next number).
+    ``leaving`` (``(n_points,)``, any contents on entry, or empty: not asked): a
+    half-edge of the new rows leaving each new vertex, the one of its first use (what
+    :func:`vertex_half_edges` finds, without its pass over the rows), -1 for an unused
+    one. The old row ``PREFETCH_ROWS`` rows ahead is asked for now (``order`` jumps
+    across the old rows: 0.037 -> 0.028 s at 1.5 M triangles, one thread, the same
+    numbers)."""
     nxt = 0
     ask = leaving.shape[0] > 0
     m = order.shape[0]
@@ -666,20 +771,25 @@ def renumber_vertices_into(tri, order, n_points, vertex_new, vertex_order, tri_n
         t = order[i]
         for k in range(3):
             v = tri[t, k]
-            j = vertex_new[v]
+            j = vertex_new[v] - 1
             if j < 0:
                 j = nxt
-                vertex_new[v] = j
+                vertex_new[v] = j + 1
                 vertex_order[j] = v
                 nxt += 1
                 if ask:
                     leaving[j] = 3 * i + k
             tri_new[i, k] = j
+    if ask:
+        for j in range(nxt, n_points):
+            leaving[j] = -1
     for v in range(n_points):
-        if vertex_new[v] < 0:
-            vertex_new[v] = nxt
+        j = vertex_new[v] - 1
+        if j < 0:
+            j = nxt
             vertex_order[nxt] = v
             nxt += 1
+        vertex_new[v] = j
 
 
 @njit(cache=True, nogil=True)

@@ -28,6 +28,7 @@ call 2.603 -> 2.403 s CPU, the renumbering and mapping back 0.14 s of it
 from __future__ import annotations
 
 import math
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -38,7 +39,8 @@ from hammesh.pages import fresh
 from hammesh.threads import row_ranges, run_all
 
 __all__ = ["Renumbered", "CellGrid", "CellKeys", "renumber_local", "renumber_from_neighbors", "cell_order", "cell_grid",
-           "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
+           "hilbert_table", "grid_frame", "cell_keys", "empty_cell_keys", "restore_vertices", "cell_bits",
+           "TRIANGLES_PER_CELL", "MAX_CELL_BITS"]
 
 #: average triangles per grid cell of the order (a cell's triangles keep their order)
 TRIANGLES_PER_CELL = 4
@@ -79,7 +81,7 @@ class CellKeys(NamedTuple):
     """Each triangle's cell key and the keys' histogram per row range (:func:`cell_keys`)."""
 
     key: np.ndarray  # (m,) int64; :func:`cell_order` overwrites it with the inverse order
-    count: np.ndarray  # (ranges, 4**bits) int64
+    count: np.ndarray  # (ranges, 4**bits) int64; :func:`cell_order` overwrites it with the sort's slots
     spans: list  # the row ranges, [(lo, hi), ...]
 
 
@@ -91,28 +93,56 @@ TABLE_MIN_CELLS = 32_768
 VERTEX_SIDE_SHARE = 8
 
 
-def grid_frame(points: np.ndarray, m: int) -> tuple[float, float, float, int]:
+def grid_frame(points: np.ndarray, m: int, ranges: tuple[list[float], list[float]] | None = None
+               ) -> tuple[float, float, float, int]:
     """``(x0, y0, scale, bits)`` of :func:`cell_grid` without its Hilbert table: cell
     ``(int((x - x0) * scale), int((y - y0) * scale))`` (clamped to ``2**bits - 1``) of a
-    point, for code that needs only the cells (the cover's quadrant cut)."""
+    point, for code that needs only the cells (the cover's quadrant cut).
+    ``ranges``: the points' column ranges ``(lo, hi)``, if the caller has them
+    (``hammesh.domain.validate.column_ranges``; the validation's)."""
     pts = np.asarray(points)
     bits = cell_bits(m)
-    x0, y0 = float(pts[:, 0].min()), float(pts[:, 1].min())
-    side = max(float(pts[:, 0].max()) - x0, float(pts[:, 1].max()) - y0)
+    if ranges is None:
+        ranges = ([float(pts[:, 0].min()), float(pts[:, 1].min())], [float(pts[:, 0].max()), float(pts[:, 1].max())])
+    (x0, y0), (x1, y1) = ranges[0][:2], ranges[1][:2]
+    side = max(x1 - x0, y1 - y0)
     return x0, y0, (1 << bits) / side if side > 0 else 0.0, bits
 
 
-def cell_grid(points: np.ndarray, m: int) -> CellGrid:
-    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`)."""
-    x0, y0, scale, bits = grid_frame(points, m)
-    table = np.empty(1 << (2 * bits), np.int64)
-    # (a cell's key is a chain of ``bits`` steps, ~20 ns, a triangle row's pass ~5 ns:
-    # threads from TABLE_MIN_CELLS cells each; 512 x 512 cells ran serially before, 6 ms)
-    run_all([
-        (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
-        for lo, hi in row_ranges(1 << bits, max(1, TABLE_MIN_CELLS >> bits))
-    ])
-    return CellGrid(x0, y0, scale, bits, table)
+_tables: dict[int, np.ndarray] = {}
+_tables_lock = threading.Lock()
+
+
+def hilbert_table(bits: int) -> np.ndarray:
+    """``table[x << bits | y]``: the Hilbert key of cell ``(x, y)`` of the ``2**bits`` a
+    side grid, made once per process and size and shared (callers must not write
+    into it; at most ``MAX_CELL_BITS + 1`` tables, 8 MB for the largest).
+
+    Why kept: the table depends on the size only, and making it is ~3 ms of the
+    validation's critical path at 1.5 M triangles (both cores, 512 x 512 cells): a
+    process that expects a mesh can make it while it waits (``quality_mesh`` while
+    Triangle runs), and a second call never pays it."""
+    bits = int(bits)
+    with _tables_lock:
+        table = _tables.get(bits)
+    if table is None:
+        table = np.empty(1 << (2 * bits), np.int64)
+        # (a cell's key is a chain of ``bits`` steps, ~20 ns, a triangle row's pass ~5 ns:
+        # threads from TABLE_MIN_CELLS cells each; 512 x 512 cells ran serially before, 6 ms)
+        run_all([
+            (lambda lo=lo, hi=hi: _kernels.hilbert_table_into(bits, table, lo, hi))
+            for lo, hi in row_ranges(1 << bits, max(1, TABLE_MIN_CELLS >> bits))
+        ])
+        with _tables_lock:
+            table = _tables.setdefault(bits, table)
+    return table
+
+
+def cell_grid(points: np.ndarray, m: int, ranges: tuple[list[float], list[float]] | None = None) -> CellGrid:
+    """The grid over ``points``' bounding box for ``m`` triangles (:func:`cell_bits`);
+    ``ranges`` as :func:`grid_frame`'s. Its table is :func:`hilbert_table`'s (shared)."""
+    x0, y0, scale, bits = grid_frame(points, m, ranges)
+    return CellGrid(x0, y0, scale, bits, hilbert_table(bits))
 
 
 def empty_cell_keys(grid: CellGrid, m: int) -> CellKeys:
@@ -146,7 +176,8 @@ def cell_order(
     order inside a cell is the input's whatever the number of threads). Planar
     (``points`` (n, 2)); the centroid's first two coordinates otherwise. ``keys``:
     the keys found already (:func:`cell_keys` or a pass that filled
-    :func:`empty_cell_keys`); their ``key`` array becomes ``inverse``.
+    :func:`empty_cell_keys`); their ``key`` array becomes ``inverse``, their ``count``
+    the sort's slots (both consumed).
     """
     m = len(triangles)
     order = fresh(m, np.int64)
@@ -154,10 +185,9 @@ def cell_order(
         return order, np.zeros(0, np.int64)
     if keys is None:
         keys = cell_keys(points, triangles)
-    key, count, spans = keys
+    key, place, spans = keys
     # each range's first slot of each key: keys in order, ranges in order inside a key
-    flat = count.T.ravel()
-    place = (np.cumsum(flat) - flat).reshape(count.shape[1], len(spans)).T.copy()
+    _kernels.first_slots_in_place(place)  # (the histogram is not needed after it)
     run_all([
         (lambda r=r, lo=lo, hi=hi: _kernels.scatter_by_key_into(key, place[r], order, lo, hi))
         for r, (lo, hi) in enumerate(spans)
@@ -247,16 +277,16 @@ def renumber_from_neighbors(
 
     # (the neighbours' pass is the shorter here: 1.5 M rows 0.022 against the vertex
     # pass's 0.032 s, so it takes all its rows: 0.035 -> 0.032 s for the pair)
-    leaving = np.full(len(pts), -1, np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
-    r, vertex_new = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving)
-    if not all(ok):
+    leaving = fresh(len(pts), np.int64)  # (a half-edge leaving each vertex: the segments' rotations)
+    # rows across -> twins (in place: each range reads only rows; the neighbours'
+    # values are in range even where not trusted), with the points' gather: one wait fewer
+    r, vertex_new, parts = _renumbered(pts, tri, keys, room, True, rows_across, 0, leaving,
+                                       _kernels.twins_in_rows_into)
+    if not all(ok) or not all(parts):
         return None
-    spans = row_ranges(len(tri), threads.THREAD_MIN_ROWS)
-    # rows across -> twins (in place: each range reads only rows); then each twin's twin
-    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_in_rows_into(r.triangles, r.twin, lo, hi))
-                        for lo, hi in spans])):
-        return None
-    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_agree(r.twin, lo, hi)) for lo, hi in spans])):
+    # then each twin's twin
+    if not all(run_all([(lambda lo=lo, hi=hi: _kernels.twins_agree(r.twin, lo, hi))
+                        for lo, hi in row_ranges(len(tri), threads.THREAD_MIN_ROWS)])):
         return None
     segs = vertex_new[np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)]
     r.marks[:] = False
@@ -264,19 +294,22 @@ def renumber_from_neighbors(
 
 
 def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: tuple[int, int], carry: bool,
-                half_edges, side_share: int, leaving: np.ndarray | None = None) -> tuple[Renumbered, np.ndarray]:
+                half_edges, side_share: int, leaving: np.ndarray | None = None, rows_after=None
+                ) -> tuple[Renumbered, np.ndarray, list]:
     """The renumbering of :func:`renumber_local` with its half-edge pass
     ``half_edges(order, inverse, twin_new, marks_new, lo, hi)`` (new rows ``lo..hi``);
     ``carry``: a marks buffer to fill; the vertex pass's thread also takes the first
     ``1 / side_share`` of the half-edge pass's rows (none if 0); ``leaving``: filled
-    with a half-edge leaving each new vertex (``renumber_vertices_into``). Also
-    returns ``vertex_new`` (old -> new vertex)."""
+    with a half-edge leaving each new vertex (``renumber_vertices_into``);
+    ``rows_after(tri_new, twin_new, lo, hi)``, if given: a pass over the new rows run
+    with the points' gather (one wait for both). Also returns ``vertex_new`` (old ->
+    new vertex) and ``rows_after``'s results, one per row range."""
     m, n = len(tri), len(pts)
     order, inverse = cell_order(pts, tri, keys)
     rt, rp = (max(0, int(r)) for r in room)
     tri_new = fresh((m + rt, 3), np.int64)[:m]
-    vertex_new = np.full(n, -1, np.int64)
-    vertex_order = np.empty(n, np.int64)
+    vertex_new = fresh(n, np.int64, 0)  # (from the reserve: zeroed already)
+    vertex_order = fresh(n, np.int64)
     twin_new = fresh(3 * (m + rt), np.int64)[: 3 * m]
     marks_new = fresh(3 * (m + rt) if carry else 0, np.bool_)[: 3 * m if carry else 0]
     # the serial vertex pass on one thread, the twins (reading the inverse) on the other;
@@ -291,11 +324,15 @@ def _renumbered(pts: np.ndarray, tri: np.ndarray, keys: CellKeys | None, room: t
 
     run_all([vertices_first, lambda: half_edges(order, inverse, twin_new, marks_new, cut, m)])
     pts_new = fresh((n + rp,) + pts.shape[1:], np.float64)[:n]
-    run_all([
-        (lambda lo=lo, hi=hi: _kernels.gather_points_into(pts, vertex_order, pts_new, lo, hi))
-        for lo, hi in row_ranges(n, threads.THREAD_MIN_ROWS)
-    ])
-    return Renumbered(pts_new, tri_new, twin_new, marks_new, order, vertex_order), vertex_new
+    spans = row_ranges(max(n, m if rows_after else 0), threads.THREAD_MIN_ROWS)
+
+    def gather_and_after(i: int):
+        k = len(spans)
+        _kernels.gather_points_into(pts, vertex_order, pts_new, n * i // k, n * (i + 1) // k)
+        return None if rows_after is None else rows_after(tri_new, twin_new, m * i // k, m * (i + 1) // k)
+
+    after = run_all([(lambda i=i: gather_and_after(i)) for i in range(len(spans))])
+    return Renumbered(pts_new, tri_new, twin_new, marks_new, order, vertex_order), vertex_new, after
 
 
 def restore_vertices(rows: np.ndarray, vertex_order: np.ndarray) -> np.ndarray:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
@@ -244,3 +244,79 @@ def test_neighbour_array_entries_out_of_place_are_not_trusted(bad: str) -> None:
     assert _kernels.twins_from_neighbors(tri, nbr)[1] >= 0
     clean, he, _ = prepare_mesh(hammesh.Mesh(points=pts, triangles=tri, neighbors=nbr))
     np.testing.assert_array_equal(he.twin, half_edges(clean.triangles, len(pts)).twin)
+
+
+_coordinate = st.one_of(st.floats(-1e6, 1e6), st.sampled_from([np.nan, np.inf, -np.inf, 0.0, -0.0]))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 40), st.integers(1, 30), st.sampled_from([2, 3]), st.integers(0, 10**6),
+       st.booleans(), st.data())
+def test_input_ranges_are_numpys(n: int, m: int, d: int, seed: int, threaded: bool, data) -> None:
+    """``input_ranges`` (one compiled pass per row range) finds what numpy's passes find:
+    all coordinates finite, each column's range (when finite), the least and most index."""
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-5, 5, (n, d))
+    for _ in range(data.draw(st.integers(0, 3))):
+        pts[data.draw(st.integers(0, n - 1)), data.draw(st.integers(0, d - 1))] = data.draw(_coordinate)
+    tri = rng.integers(-3, n + 3, (m, 3)).astype(np.int64)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(threads, "THREAD_MIN_ROWS", 4 if threaded else 10**9)
+        finite, lo, hi, least, most = _kernels.input_ranges(pts, tri)
+    assert finite == bool(np.isfinite(pts).all())
+    if finite:
+        assert lo == list(pts.min(axis=0)) and hi == list(pts.max(axis=0))
+    assert (least, most) == (tri.min(), tri.max())
+
+
+def test_validation_hands_its_ranges_to_the_grid(monkeypatch) -> None:
+    """``prepare_mesh(cells=True)`` builds the cells' grid from the ranges its checks
+    found, without reading the points again."""
+    from hammesh.halfedge import locality
+
+    rng = np.random.default_rng(3)
+    pts = rng.random((200, 2)) * [3.0, 0.5] + [-1.0, 2.0]
+    tri = Delaunay(pts).simplices
+    seen = []
+    real = locality.grid_frame
+    monkeypatch.setattr(locality, "grid_frame", lambda p, m, ranges=None: seen.append(ranges) or real(p, m, ranges))
+    clean = prepare_mesh(mesh(points=pts, triangles=tri), cells=True)[0]
+    assert seen == [(list(pts.min(axis=0)), list(pts.max(axis=0)))]
+    keys = clean.info["validated"]["cells"]
+    want = locality.cell_keys(pts, clean.triangles, locality.cell_grid(pts, len(tri)))
+    np.testing.assert_array_equal(keys.key, want.key)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.integers(4, 120), st.sampled_from([-2, -1, 0, 3]), st.booleans(), st.booleans())
+def test_indices_out_of_range_are_found_by_the_orientation_pass(seed: int, n: int, off: int, earlier: bool,
+                                                                threaded: bool) -> None:
+    """The validation checks vertex indices in its orientation pass (no pass of their
+    own): ``orient_ccw`` names a row with an index out of range as bad without reading
+    its points, and ``prepare_mesh`` names the first such row, as ``mesh_arrays`` does,
+    before any row with a repeated vertex or zero area."""
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    tri = Delaunay(pts).simplices.astype(np.int64)
+    t = int(rng.integers(0, len(tri)))
+    tri[t, int(rng.integers(0, 3))] = off - 2 if off < 0 else n + off  # (-4, -3, n, n + 3)
+    if earlier and t > 0:
+        tri[t - 1, 1] = tri[t - 1, 0]  # a repeated vertex before it
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(threads, "THREAD_MIN_ROWS", 3 if threaded else 10**9)
+        o = _kernels.orient_ccw(pts, tri)
+        assert o.bad == (t - 1 if earlier and t > 0 else t)
+        with pytest.raises(hammesh.InvalidMeshError) as got:
+            prepare_mesh(mesh(points=pts, triangles=tri), cells=True, match=False)
+        with pytest.raises(hammesh.InvalidMeshError) as want:
+            hammesh.halfedge.mesh_arrays(pts, tri)
+    assert str(got.value) == str(want.value) and f"triangle {t} references vertex" in str(got.value)
+
+
+def test_validated_ranges_are_the_points_column_ranges() -> None:
+    """``info["validated"]["ranges"]``: each column's least and greatest coordinate, for a
+    construction's grid (``locality.grid_frame(..., ranges=)``) without another look."""
+    rng = np.random.default_rng(5)
+    pts = rng.random((300, 2)) * [2.0, 7.0] - [5.0, 1.0]
+    clean = prepare_mesh(mesh(points=pts, triangles=Delaunay(pts).simplices))[0]
+    assert clean.info["validated"]["ranges"] == (list(pts.min(axis=0)), list(pts.max(axis=0)))

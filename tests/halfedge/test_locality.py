@@ -255,3 +255,102 @@ def test_a_segment_off_the_mesh_is_named_as_the_input_gave_it(trusted: bool) -> 
         local_half_edges(prepare_mesh(m, cells=True, match=False)[0])
     assert str(new.value) == str(old.value)
     assert f"segment {len(segs) - 3} [{a}, {b}]" in str(old.value)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.integers(1, 4), st.integers(1, 40), st.integers(0, 10**6))
+def test_first_slots_are_the_counting_sorts(ranges: int, keys: int, seed: int) -> None:
+    """``first_slots_in_place`` turns each range's histogram into its first slot of each
+    key, as the prefix sum over keys, then ranges inside a key, says."""
+    count = np.random.default_rng(seed).integers(0, 4, (ranges, keys)).astype(np.int64)
+    flat = count.T.ravel()
+    want = (np.cumsum(flat) - flat).reshape(keys, ranges).T
+    got = count.copy()
+    _kernels.first_slots_in_place(got)
+    np.testing.assert_array_equal(got, want)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10**6), st.integers(3, 300), st.integers(0, 6))
+def test_vertices_renumbered_from_zeroed_memory(seed: int, n: int, unused: int) -> None:
+    """``renumber_vertices_into`` takes ``vertex_new`` zeroed (fresh pages, no fill) and
+    ``leaving`` with anything in it: the numbering is by first use, ``vertex_new`` its
+    inverse, ``leaving[j]`` a half-edge of the new rows leaving ``j`` (the first use),
+    -1 for the unused vertices, which come last."""
+    pts, tri = _delaunay(seed, n, unused)
+    order = np.random.default_rng(seed).permutation(len(tri)).astype(np.int64)
+    nv = len(pts)
+    vertex_new = np.zeros(nv, np.int64)
+    vertex_order = np.full(nv, 12345, np.int64)
+    tri_new = np.empty_like(tri)
+    leaving = np.full(nv, 12345, np.int64)
+    _kernels.renumber_vertices_into(tri, order, nv, vertex_new, vertex_order, tri_new, leaving)
+    np.testing.assert_array_equal(np.sort(vertex_order), np.arange(nv))
+    np.testing.assert_array_equal(vertex_new[vertex_order], np.arange(nv))
+    np.testing.assert_array_equal(vertex_order[tri_new], tri[order])
+    flat = tri_new.ravel()
+    first = np.full(nv, -1, np.int64)
+    first[flat[::-1]] = np.arange(len(flat))[::-1]  # (the first half-edge leaving each new vertex)
+    np.testing.assert_array_equal(leaving, first)
+    used = (first >= 0).sum()
+    assert (first[:used] >= 0).all() and used == nv - unused
+    assert (np.diff(first[:used]) > 0).all()  # numbered in order of first use
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10**6), st.integers(3, 300))
+def test_grid_frame_from_the_validations_ranges_is_the_same(seed: int, n: int) -> None:
+    """The grid over the bounding box the validation found (``ranges``) is the one
+    found from the points."""
+    from hammesh.halfedge.locality import cell_grid, grid_frame
+
+    pts, tri = _delaunay(seed, n)
+    pts = pts * np.random.default_rng(seed).uniform(0.1, 10.0, 2) - 3.0
+    ranges = (list(pts.min(axis=0)), list(pts.max(axis=0)))
+    assert grid_frame(pts, len(tri), ranges) == grid_frame(pts, len(tri))
+    a, b = cell_grid(pts, len(tri), ranges), cell_grid(pts, len(tri))
+    assert a[:4] == b[:4]
+    np.testing.assert_array_equal(a.table, b.table)
+
+
+@pytest.mark.parametrize("bits", [1, 4, 7])
+def test_hilbert_tables_are_made_once_per_size(bits: int, monkeypatch) -> None:
+    """``hilbert_table`` makes a size's table once (in row ranges when threads are
+    allowed, the same keys) and hands the same array to every grid of that size."""
+    from hammesh.halfedge import locality
+
+    monkeypatch.setattr(locality, "_tables", {})
+    monkeypatch.setattr(locality, "TABLE_MIN_CELLS", 1)  # (several ranges)
+    want = np.empty(1 << (2 * bits), np.int64)
+    _kernels.hilbert_table_into(bits, want, 0, 1 << bits)
+    made = locality.hilbert_table(bits)
+    np.testing.assert_array_equal(made, want)
+    assert locality.hilbert_table(bits) is made
+    pts = np.random.default_rng(bits).random((50, 2))
+    m = 4 * 4**bits  # (a mesh size whose grid has 2**bits cells a side)
+    assert cell_bits(m) == bits and locality.cell_grid(pts, m).table is made
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.integers(3, 200), st.sampled_from([1, 5, 9, 10**9]))
+def test_orientation_pass_counts_every_key_once(seed: int, n: int, min_rows: int) -> None:
+    """The orientation pass counts each row's key ``KEY_AHEAD_ROWS`` rows after finding it
+    (the histogram entry asked for meanwhile) and the last rows' at the end: the keys
+    and each range's histogram are ``cell_keys``', whatever the range lengths (shorter
+    than that lag too) and with rows given clockwise."""
+    from hammesh.halfedge import locality
+
+    pts, tri = _delaunay(seed, n)
+    tri[::2] = tri[::2, ::-1]
+    before = threads.THREAD_MIN_ROWS
+    threads.THREAD_MIN_ROWS = min_rows
+    try:
+        grid = locality.cell_grid(pts, len(tri))
+        keys = locality.empty_cell_keys(grid, len(tri))
+        ccw = _kernels.orient_ccw(pts, tri, cells=(grid, keys)).triangles
+        want = locality.cell_keys(pts, ccw, grid)  # (the centroid of the counter-clockwise corners)
+    finally:
+        threads.THREAD_MIN_ROWS = before
+    assert keys.spans == want.spans
+    np.testing.assert_array_equal(keys.key, want.key)
+    np.testing.assert_array_equal(keys.count, want.count)
