@@ -32,6 +32,8 @@ __all__ = [
     "triangle_switches",
     "expected_reserve",
     "expected_result",
+    "expected_triangles",
+    "TABLE_AHEAD_MIN_TRIANGLES",
 ]
 
 BACKENDS = {"triangle": mesh_with_triangle, "meshpy": mesh_with_meshpy}
@@ -90,7 +92,17 @@ def expected_result(domain: Domain, opts: MeshOptions) -> int:
     return _expected_bytes(domain, opts, RESULT_BYTES_PER_TRIANGLE, RESULT_MIN_BYTES)
 
 
-def _meanwhile(reserve_bytes: int = 0, loaded: threading.Event | None = None) -> None:
+def expected_triangles(domain: Domain, opts: MeshOptions) -> int:
+    """About how many triangles Triangle will make (an upper estimate; 0 without an area bound)."""
+    return _expected_bytes(domain, opts, 1, 0)
+
+
+#: from this many expected triangles on, the validation's Hilbert table is made while
+#: Triangle runs (sparse mode renumbers such meshes by their cells)
+TABLE_AHEAD_MIN_TRIANGLES = 100_000
+
+
+def _meanwhile(reserve_bytes: int = 0, loaded: threading.Event | None = None, triangles: int = 0) -> None:
     """While the mesher runs in its child, prepare what ``hamiltonian()`` needs next.
 
     The parent process only waits meanwhile. The first call of each compiled kernel
@@ -99,7 +111,10 @@ def _meanwhile(reserve_bytes: int = 0, loaded: threading.Event | None = None) ->
     both modes: the default (sparse) and Thm 2.4's incircle construction. Then
     ``reserve_bytes`` of memory are faulted in (``hammesh.pages.reserve``): on this
     project's VM a fresh page costs a host fault besides its zeroing, a third of the
-    first big ``hamiltonian()``'s system time (docs/benchmarks.md).
+    first big ``hamiltonian()``'s system time (docs/benchmarks.md). For an expected
+    mesh of ``triangles`` (from ``TABLE_AHEAD_MIN_TRIANGLES`` on) the validation's
+    Hilbert table of that size is made (``hammesh.halfedge.locality.hilbert_table``:
+    ~3 ms of the first call's critical path at 1.5 M, session 23).
     """
     try:
         from hammesh.postprocess import load_kernels
@@ -109,6 +124,10 @@ def _meanwhile(reserve_bytes: int = 0, loaded: threading.Event | None = None) ->
     finally:  # (the imports are done: the caller may import again, see quality_mesh)
         if loaded is not None:
             loaded.set()
+    if triangles >= TABLE_AHEAD_MIN_TRIANGLES:
+        from hammesh.halfedge import locality
+
+        locality.hilbert_table(locality.cell_bits(triangles))
     if reserve_bytes:
         pages.reserve(reserve_bytes)
 
@@ -197,7 +216,7 @@ def quality_mesh(
         # the child allocates its output arrays where this process maps them (no copy)
         mesh = run_isolated(
             func, (domain, opts), name=_NAMES[backend], timeout=timeout, alloc=True,
-            meanwhile=partial(_meanwhile, expected_reserve(domain, opts), loaded),
+            meanwhile=partial(_meanwhile, expected_reserve(domain, opts), loaded, expected_triangles(domain, opts)),
             prefault=expected_result(domain, opts) if backend == "triangle" else 0,
         )
     else:

@@ -142,6 +142,35 @@ def test_quality_mesh_faults_a_reserve_that_hamiltonian_takes(monkeypatch) -> No
     assert h.report["verified"] and pages.reserved() == 0
 
 
+def test_the_validations_hilbert_table_is_made_while_triangle_runs(monkeypatch) -> None:
+    """For a mesh expected at ``TABLE_AHEAD_MIN_TRIANGLES`` or more, the table of the
+    size the mesh turns out to need is made in the waiting thread; not for a small one."""
+    import threading
+
+    from hammesh import meshing
+    from hammesh.halfedge import locality
+
+    made = []
+    real = locality.hilbert_table
+    monkeypatch.setattr(locality, "hilbert_table", lambda bits: made.append((threading.current_thread().name, bits))
+                        or real(bits))
+    monkeypatch.setattr(meshing, "TABLE_AHEAD_MIN_TRIANGLES", 20_000)
+    dom = hammesh.Domain.from_polygon([[0, 0], [1, 0], [1, 1], [0, 1]])
+    ahead, sizes = {}, {}
+    for max_area in (5e-5, 5e-3):
+        made.clear()
+        mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=max_area)  # isolated (default)
+        for t in threading.enumerate():
+            if t.name == "hammesh-meanwhile":
+                t.join(300)
+        ahead[max_area] = [bits for name, bits in made if name == "hammesh-meanwhile"]
+        sizes[max_area] = mesh.n_triangles
+    # (the first call in a process loads the kernels there too, meshing tiny squares)
+    assert sizes[5e-5] >= 20_000 > sizes[5e-3]
+    bits = locality.cell_bits(sizes[5e-5])
+    assert ahead[5e-5][-1:] == [bits] and bits not in ahead[5e-3]
+
+
 def test_bench_core_child_leaves_no_file_behind(tmp_path) -> None:
     """The fresh child of ``benchmarks/bench_core.py`` with ``--path ""`` (no mesh to save)
     once wrote Triangle's time to ``.triangle`` in the working directory."""
