@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from functools import partial
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -212,6 +212,7 @@ def cycle_cover(
     cells: np.ndarray | None = None,
     rule: JoinRule | None = None,
     judge: bool = False,
+    beside: Callable[[np.ndarray], object] | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -279,6 +280,12 @@ def cycle_cover(
         test sparse mode's ``good`` was made by), judged when the greedy matching first
         has to choose across it; only those edges are judged (re-colouring, on small
         meshes, judges the rest). The same cover as with ``good`` made ahead.
+    beside : callable, optional
+        Called once with the cycle ids ((m,) int64) as soon as it is known which
+        triangles the cover leaves off (-1; the other ids may still change, so it must
+        read their signs only, and write nothing): on the other core beside the
+        rotations' serial merging where they run on two threads (one core idle there:
+        sparse mode's bounds for its report), else once the cover is done.
 
     Returns
     -------
@@ -385,6 +392,7 @@ def cycle_cover(
     cyc, n_cyc = cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc, nb if cell is None else None)
     mark("cycle_ids")
     n_rot = 0
+    recolours = rotate and (good is not None or lazy) and 0 < m < RECOLOUR_BELOW and cell is None
     if rotate and n_cyc > 1:
         cl = no_cell if cell is None else cell
         # the prefilter and the candidates on two threads, the rotations on one
@@ -393,13 +401,19 @@ def cycle_cover(
         run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
                  for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
         table = np.empty(max(n_cyc, 1), np.int64)
-        n_rot = int(_k.rotate_candidates_table(tw, is_cov, cyc, n_cyc, vh, cand, cl, table))
+        rot = partial(_k.rotate_candidates_table, tw, is_cov, cyc, n_cyc, vh, cand, cl, table)
+        # (the rotations keep every triangle's cover degree: the rows left off are known;
+        # re-colouring, on small meshes, may change them)
+        early = beside is not None and len(spans) > 1 and not recolours
+        n_rot = int(run_all([rot, partial(beside, cyc)])[0] if early else rot())
+        if early:
+            beside = None
         # the new ids: rows on two threads (none: the kernel loaded all the same, see _drop_defects)
         run_all([partial(_k.renumber_cycles_into, cyc, table, lo, hi if n_rot else lo) for lo, hi in spans])
         n_cyc -= n_rot
     mark("rotate")
     n_rec = n_shift = 0
-    if rotate and (good is not None or lazy) and 0 < m < RECOLOUR_BELOW and cell is None:
+    if recolours:
         tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
         if lazy:  # (every edge judged: re-colouring reads them all; the same answers)
             g = np.zeros(3 * m, np.bool_)
@@ -424,6 +438,8 @@ def cycle_cover(
             cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
             n_unc = int((cyc < 0).sum())
     mark("recolour")
+    if beside is not None:
+        beside(cyc)
     return CycleCover(
         is_cov=is_cov,
         cycle=cyc,

@@ -1967,6 +1967,15 @@ def sparse_cycles(
     corners = fresh((m, 3), np.float32) if use_cover and pts.shape[1] == 2 else None
     amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room, corners)
     steps.done("input_angles")
+
+    def lone_bounds(cycle: np.ndarray) -> tuple:  # (reads the signs of ``cycle`` only)
+        unc = np.flatnonzero(cycle < 0)
+        return unc, join_bounds(pts, tri, tw, cycle, unc)
+
+    # what the joins can keep at best where the cover leaves triangles off, and what
+    # no construction can beat at the boundary's corners (the report): made once the
+    # cover knows the rows it leaves off (``cycle_cover(..., beside=)``) or after it
+    bounds: list = []
     amax_in = float(amax_t.max()) if m else 0.0  # (the input's largest angle, once: an O(m) pass)
     hi = amax_in + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
@@ -2013,7 +2022,8 @@ def sparse_cycles(
         combed = cover is not None
         if cover is None:
             cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
-                                cells=None if fish is None else fish.cell, judge=rule is not None)
+                                cells=None if fish is None else fish.cell, judge=rule is not None,
+                                beside=lambda cycle: bounds.append((lone_bounds(cycle), corner_bound(pts, tri, tw))))
         rule = corners = None  # (the corner angles' pages given back: only the cover reads them)
     else:
         if beside_cover is not None:
@@ -2021,15 +2031,12 @@ def sparse_cycles(
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     steps.done("cover")
     n_unc0 = cover.n_uncovered
-    # what the joins can keep at best where the cover leaves triangles off, and what
-    # no construction can beat at the boundary's corners (the report; few rows)
-    def lone_bounds() -> tuple:
-        unc = np.flatnonzero(cover.cycle < 0)
-        return unc, join_bounds(pts, tri, tw, cover.cycle, unc)
-
-    # (two passes of numpy over the rows and half-edges, ~10 ms at 1.5 M: side by side;
-    # both read the arrays before the ring fans write rows of them in place)
-    (unc_all, (jb_rows, jb, jb_bnd)), c_bound = run_all([lone_bounds, partial(corner_bound, pts, tri, tw)])
+    # (the bounds: two passes of numpy over the rows and half-edges, ~10 ms at 1.5 M: beside the
+    # cover's rotations if it made them on two threads, else side by side here; both
+    # read the arrays before the ring fans write rows of them in place)
+    if not bounds:
+        bounds.append(run_all([partial(lone_bounds, cover.cycle), partial(corner_bound, pts, tri, tw)]))
+    (unc_all, (jb_rows, jb, jb_bnd)), c_bound = bounds[0]
     n_unc_bnd = int((tw[3 * unc_all[:, None] + np.arange(3)] < 0).any(axis=1).sum())
     steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
