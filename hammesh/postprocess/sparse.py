@@ -2168,7 +2168,7 @@ def sparse_cycles(
     n_split = len(split_rows)
     mids = 0.5 * (pts[mid_a] + pts[mid_b])
     placed = mid_t >= 0
-    mids[placed] = point[order][join[mid_t[placed]]]
+    mids[placed] = point[order[join[mid_t[placed]]]]  # (the few rows: no gather of every candidate)
     inc = _incenters(pts, tri[split_rows])
     all_pts = _longer(pts, len(inc) + len(mids))  # (in place where the points have room)
     all_pts[len(pts):] = np.concatenate([inc, mids])
@@ -2219,7 +2219,7 @@ def sparse_cycles(
     def counts_of() -> tuple[dict, int, int]:
         # (the new rows' counts, the kept ratio left out: 1 is no ratio's worst)
         q = local_quality(all_pts, out, pm, kind, keep, hi, 1.0, new_facts)
-        return q, int((slot == _k.FLIP).sum() // 2), int((slack[order][join[steps_at.joined(join)]] < 0).sum() // 2)
+        return q, int((slot == _k.FLIP).sum() // 2), int((slack[order[join[steps_at.joined(join)]]] < 0).sum() // 2)
 
     # the kept rows' ratio (~9 ms at 1.5 M, one core) on the other core beside the
     # counts; both read ``parent`` before it is mapped through the fans below
