@@ -523,14 +523,14 @@ def _drop_defects(nb: np.ndarray, active: np.ndarray, alive: np.ndarray, mate: n
         _k.writes_meet(nomark, w, 0, w, 0)
         _k.copy_writes(w, 0, mate, active, alive, mate, active, alive)
         return int(s), int(n_drop)
-    mate2, active2, alive2 = fresh(m, mate.dtype), fresh(m, active.dtype), fresh(m, alive.dtype)
+    mate2, active2, alive2 = np.empty_like(mate), np.empty_like(active), np.empty_like(alive)
     run_all([partial(_k.copy_state_into, mate, active, alive, mate2, active2, alive2, lo, hi)
              for lo, hi in row_ranges(m, threads.THREAD_MIN_ROWS)])
     # the second part's search arrays: label -1, stamps zero, the rest set as touched;
     # pages faulted ahead (``fresh``; the reserve's where there is one): faulted as the
     # searches touched them, the second part took ~1.8 x the first's CPU at 1.5 M
     work2 = (fresh(m, np.int32), fresh(m, np.int32), fresh(m, np.int8, -1), fresh(m, np.int64, 0))
-    seen = fresh(m, np.bool_, 0)
+    seen = np.zeros(m, np.bool_)
     first, second = run_all([
         partial(_k.drop_defects, nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET, rounds,
                 frees[:cut], nomark),
