@@ -580,11 +580,10 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows):
         return cover, 0
-    # copies with room after them: the ring fans and joins append rows in place (``_longer``)
-    is_cov = _longer(cover.is_cov, 0, None, 3 * ROOM_ROWS)
-    cycle = _longer(cover.cycle, 0, None, ROOM_ROWS)
-    if np.shares_memory(is_cov, cover.is_cov) or np.shares_memory(cycle, cover.cycle):
-        is_cov, cycle = cover.is_cov.copy(), cover.cycle.copy()  # (the cover's own had room: copied plainly)
+    # the cover's own arrays until a re-route is taken (the tries below flip and set
+    # them back), then copies with room after them: the ring fans and joins append rows
+    # in place (``_longer``), and the cover must stay as it was (``_relabel_group``)
+    is_cov, cycle = cover.is_cov, cover.cycle
     touched = np.zeros(m, np.bool_)
     fan_or_touched = is_fan.copy()  # is_fan | touched, and touched as a set: no O(m) pass per pair
     touched_set: set[int] = set()
@@ -631,6 +630,8 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                             best = (cost, add + flips_all, nodes_all, z)
         if best is None:
             continue
+        if is_cov is cover.is_cov:  # (the first re-route taken)
+            is_cov, cycle = _copy_with_room(cover.is_cov, 3 * ROOM_ROWS), _copy_with_room(cover.cycle, ROOM_ROWS)
         _, flips, nodes, z = best
         _flip_cover(tw, is_cov, flips)
         cycle[t] = cycle[nodes[0]]
@@ -1198,11 +1199,19 @@ def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
                 out[n:] = fill
             _keep_room(out, rows)  # (its owner is a new view object: a later call grows it too)
             return out
+    out = _copy_with_room(a, spare, extra)
+    if fill is not None:
+        out[n:] = fill
+    return out
+
+
+def _copy_with_room(a: np.ndarray, spare: int, extra: int = 0) -> np.ndarray:
+    """A copy of ``a`` with ``extra`` more rows (unspecified) in a ``hammesh.pages.fresh``
+    buffer with ``spare`` rows of room after it (``_longer`` grows into them)."""
+    n = len(a)
     buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
     out = buf[: n + extra]
     out[:n] = a
-    if fill is not None:
-        out[n:] = fill
     if spare and n:
         _keep_room(out, len(buf))
     return out
