@@ -79,7 +79,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "sparse_hamiltonian", "renumbers", "SparseResult", "sparse_cycles", "local_quality", "kept_radius_ratio", "triangle_angles", "triangle_facts", "KEEP",
-    "corner_bound", "join_bounds", "PlanSteps", "SPARSE_TREES",
+    "corner_bound", "join_bounds", "PlanSteps", "SPARSE_TREES", "kept_ratio_start", "kept_ratio_finish",
 ]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
@@ -2204,6 +2204,11 @@ def sparse_cycles(
     steps.done("output_rows")
     if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
         beside_cover()  # short passes; the swap tests and the output rows' passes take both)
+    # the report's worst ratio of the kept rows, begun beside the improvement (which
+    # leaves the other core mostly idle): the rows it keeps keep their points
+    kept_start = None
+    if improve and pts.shape[1] == 2 and len(out):
+        kept_start = threads.run_beside(kept_ratio_start, all_pts, out, kind, parent, amin_p)
     n_improve = n_moved = 0
     new_facts = None  # (the new rows' facts, if the improvement's last look is of the final rows)
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
@@ -2223,6 +2228,8 @@ def sparse_cycles(
             r_now = np.searchsorted(orig_of[:n_whole], ratio_row)
             if r_now < n_whole and orig_of[r_now] == ratio_row and (kind[parent == r_now] == 3).any():
                 return float(ratio_in)
+        if kept_start is not None:
+            return kept_ratio_finish(all_pts, out, kind, parent, amin_p, kept_start.result())
         return kept_radius_ratio(all_pts, out, kind, parent, amin_p)
 
     def counts_of() -> tuple[dict, int, int]:
@@ -2230,8 +2237,9 @@ def sparse_cycles(
         q = local_quality(all_pts, out, pm, kind, keep, hi, 1.0, new_facts)
         return q, int((slot == _k.FLIP).sum() // 2), int((slack[order[join[steps_at.joined(join)]]] < 0).sum() // 2)
 
-    # the kept rows' ratio (~9 ms at 1.5 M, one core) on the other core beside the
-    # counts; both read ``parent`` before it is mapped through the fans below
+    # the kept rows' ratio (what ``kept_ratio_start`` left, or ~9 ms at 1.5 M) on the
+    # other core beside the counts; both read ``parent`` before it is mapped through
+    # the fans below
     (quality, n_flip_pairs, n_split_below), kept_ratio = run_all([counts_of, kept_ratio_of])
     quality["radius_ratio_output"] = float(max(quality["radius_ratio_output"], kept_ratio))
     quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
@@ -2307,6 +2315,43 @@ def kept_radius_ratio(
     # (margin: the angles and the ratios are rounded apart)
     k = _k.kept_below(kind, parent, parent_min, bound * (1.0 + 1e-6), few)
     return max(r0, triangle_facts(points, rows[few[:k]])[2]) if k else r0
+
+
+def kept_ratio_start(
+    points: np.ndarray, rows: np.ndarray, kind: np.ndarray, parent: np.ndarray, parent_min: np.ndarray
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """``kept_radius_ratio``'s sample and search, while the improvement may still change
+    the rows (``kept_ratio_finish`` ends it on the final rows).
+
+    The improvement only turns kept rows (kind 3) into swapped ones (kind 4), never
+    back, and moves Steiner points only, which no kept row has: so the rows kept at
+    the end are kept throughout, with the same points. Returns ``(sample, r0, few)``:
+    the sampled rows read as kept, their worst ratio, and the rows read as kept whose
+    parent's smallest angle allows worse than ``r0``.
+    """
+    sample = np.arange(0, len(rows), KEPT_RATIO_STRIDE)
+    sample = sample[kind[sample] == 3]
+    r0 = triangle_facts(points, rows[sample])[2] if len(sample) else 1.0
+    bound = math.acos(0.5 * (1.0 + math.sqrt(1.0 - 1.0 / r0))) if r0 > 1.0 else math.pi
+    few = np.empty(len(rows), np.int64)  # (pages beyond the few rows written are never touched)
+    k = _k.kept_below(kind, parent, parent_min, bound * (1.0 + 1e-6), few)
+    return sample, r0, few[:k]
+
+
+def kept_ratio_finish(
+    points: np.ndarray, rows: np.ndarray, kind: np.ndarray, parent: np.ndarray, parent_min: np.ndarray, start: tuple
+) -> float:
+    """``kept_radius_ratio`` of the final rows from ``kept_ratio_start``'s ``start``.
+
+    If every sampled row is still kept, the sample is the one the final rows give (a
+    row kept at the end was read as kept), so is ``r0`` and its bound, and the rows to
+    measure are those of ``few`` still kept: the same value. Else measured anew.
+    """
+    sample, r0, few = start
+    if not (kind[sample] == 3).all():  # (a sampled row was swapped meanwhile)
+        return kept_radius_ratio(points, rows, kind, parent, parent_min)
+    few = few[kind[few] == 3]
+    return max(r0, triangle_facts(points, rows[few])[2]) if len(few) else r0
 
 
 def local_quality(
