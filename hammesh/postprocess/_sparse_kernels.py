@@ -845,8 +845,7 @@ def load_output_kernels() -> None:
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
                     none, none, *new_walk_memo(2, 8))
     blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
-    # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
-    fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)
+    # the parents mapped back (meshes with fans; renumbered ones)
     map_through_into(r.copy(), r.copy(), 0, k)
     from hammesh.postprocess._improve_kernels import load_improve_kernels  # (only when loading)
 
@@ -1024,7 +1023,8 @@ def rows_in_cycle_order(
     row is written by one thread only). The big arrays come from ``hammesh.pages``
     (the reserve ``quality_mesh`` faulted while Triangle ran, if any). ``scratch``: an int64
     array of at least one entry per virtual row, any contents (e.g. :func:`walk_links`'
-    ``ends``, done with), for the rows' final places; made here if None. ``con``
+    ``ends``, done with), for the rows' final places (``scratch[t]``: where virtual row
+    ``t`` went, afterwards); made here if None. ``con``
     (``(3 m,)`` bool, the input's pinned half-edges) and ``pinned`` (``(3 k,)`` bool):
     each kept row's pinned output edges written on the way (its input half-edge's
     ``con``, if inner), as ``_improve_kernels.pinned_output_edges`` finds them; the new
@@ -1180,15 +1180,6 @@ def map_through_into(a, table, lo, hi):
     a renumbering: one threaded pass, no fresh array to fault as ``table[a]`` makes)."""
     for i in range(lo, hi):
         a[i] = table[a[i]]
-
-
-@njit(cache=True, nogil=True)
-def fan_kinds_into(kind, is_fan, parent, lo, hi):
-    """Rows ``lo..hi``: a row kept whole (kind 3) whose parent is a fan triangle becomes
-    kind 0 (a side joined to a Steiner point), in place."""
-    for i in range(lo, hi):
-        if kind[i] == 3 and is_fan[parent[i]]:
-            kind[i] = 0
 
 
 @njit(cache=True, nogil=True, inline="always")

@@ -2199,8 +2199,10 @@ def sparse_cycles(
         order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
         ends, con=con, pinned=pinned_out,
     )
-    if n_fan:  # a fan triangle: a side joined to a Steiner point (one threaded pass, in place)
-        _row_pass(lambda lo, hi_: _k.fan_kinds_into(kind, is_fan, parent, lo, hi_), len(kind))
+    if n_fan:  # a fan triangle kept whole: a side joined to a Steiner point; its row is where
+        # the gather put it (its places left in ``ends``): the few fan rows, not a pass over all
+        fan_t = np.flatnonzero(is_fan)
+        kind[ends[fan_t[status[fan_t] == _k.PASS]]] = 0
     steps.done("output_rows")
     if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
         beside_cover()  # short passes; the swap tests and the output rows' passes take both)
