@@ -1211,7 +1211,11 @@ def _copy_with_room(a: np.ndarray, spare: int, extra: int = 0) -> np.ndarray:
     n = len(a)
     buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
     out = buf[: n + extra]
-    out[:n] = a
+
+    def rows(lo: int, hi: int) -> None:  # (one range per core: numpy's copy frees the GIL)
+        out[lo:hi] = a[lo:hi]
+
+    _row_pass(rows, n)
     if spare and n:
         _keep_room(out, len(buf))
     return out
