@@ -261,6 +261,32 @@ def test_open_candidates_are_those_kruskal_can_still_take() -> None:
     assert open_candidates(twin, cyc, 3, cand, np.zeros(4, bool)).all()
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_open_candidates_in_ranges_are_the_serial_ones(seed: int, monkeypatch) -> None:
+    """``open_candidates`` (the joins meeting the rule taken, then the rest judged in one
+    range per core against the roots) is ``_open_candidates_into`` (one serial pass),
+    on a cover's candidates with random ones meeting the rule."""
+    from hammesh.halfedge import half_edges
+    from hammesh.postprocess import _sparse_kernels as sk
+    from hammesh.postprocess.cycle_cover import cycle_cover
+
+    dom = bundled_domain("face")
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=0.5 if seed else 2.0, isolate=False)
+    twin = half_edges(msh.triangles, msh.n_points).twin
+    cov = cycle_cover(msh.triangles, twin, rotate=False)
+    cand = sk.join_candidates(twin, cov.cycle)
+    rng = np.random.default_rng(seed)
+    cand = cand[rng.permutation(len(cand))]
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", max(1, len(cand) // 3))
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    for share in (0.0, 0.1, 0.5, 1.0):
+        meets = rng.random(len(cand)) < share
+        unc = np.flatnonzero(cov.cycle < 0)
+        want = sk._open_candidates_into(twin, cov.cycle, cov.n_cycles, unc, cand, meets,
+                                        np.empty(cov.n_cycles + len(unc), np.int64), np.empty(len(cov.cycle), bool))
+        np.testing.assert_array_equal(sk.open_candidates(twin, cov.cycle, cov.n_cycles, cand, meets), want)
+
+
 @pytest.mark.parametrize("name", ["face", "gear"])
 def test_placing_only_open_candidates_loses_nothing(name: str, monkeypatch) -> None:
     """Placing every candidate's point (as before) gives no better mesh than placing the open ones."""
