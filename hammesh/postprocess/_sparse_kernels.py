@@ -670,7 +670,8 @@ def new_row_twins(out, tri, twin_in, status, n_points, changed):
     took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
     sort one way only, so the matching is the same.
     """
-    face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys(out, tri, twin_in, status, n_points, changed)
+    face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys_split(out, tri, twin_in, status, n_points,
+                                                                           changed)
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
@@ -680,6 +681,82 @@ def new_row_twins(out, tri, twin_in, status, n_points, changed):
         by_key = keys[srt]
     bad = _match_row_twins(face_tw, tw_new, rest, by_key, srt, facing)
     return tw_new, changed, face_tw, bad
+
+
+#: changed triangles from which :func:`_row_twin_keys_split` reads the kept half-edges
+#: facing them in two parts side by side (a random read each: ~5 ms of one core at 1.5 M)
+TWIN_KEYS_TWO_MIN = 20_000
+
+
+def _row_twin_keys_split(out, tri, twin_in, status, n_points, changed):
+    """:func:`_row_twin_keys` (the same arrays), the changed triangles' half in two parts
+    side by side from ``TWIN_KEYS_TWO_MIN`` of them on (where :func:`threads.cores`
+    allows): each writes its entries after the new rows' (the second from a place its
+    part cannot reach), the second's then moved down to follow the first's."""
+    k, n_ch = out.shape[0], changed.shape[0]
+    if n_ch < TWIN_KEYS_TWO_MIN or threads.cores() < 2:
+        return _row_twin_keys(out, tri, twin_in, status, n_points, changed)
+    face_tw = np.full(3 * n_ch, -1, np.int64)
+    tw_new = np.empty(3 * k, np.int64)
+    rest, keys, facing = (np.empty(3 * k + 3 * n_ch, np.int64) for _ in range(3))
+    half = n_ch // 2
+    first = partial(_twin_keys_into, out, tri, twin_in, status, n_points, changed, 0, half, 0, rest, keys, facing)
+    second = partial(_twin_keys_into, out, tri, twin_in, status, n_points, changed, half, n_ch, 3 * k + 3 * half,
+                     rest, keys, facing)
+    n1, n2 = run_all([first, second])
+    for a in (rest, keys, facing):  # (overlapping ranges: numpy copies through a buffer)
+        a[n1:n1 + n2] = a[3 * k + 3 * half: 3 * k + 3 * half + n2]
+    n = n1 + n2
+    rest, keys, facing = rest[:n], keys[:n], facing[:n]
+    packed, ib = _packed_keys(keys, n_points)
+    return face_tw, tw_new, rest, keys, packed, ib, facing
+
+
+@njit(cache=True, nogil=True)
+def _twin_keys_into(out, tri, twin_in, status, n_points, changed, r_lo, r_hi, at, rest, keys, facing):
+    """:func:`_row_twin_keys`' entries of the changed triangles ``r_lo..r_hi`` from place
+    ``at`` on (``r_lo`` 0: first the new rows', from place 0); returns the place after
+    the last written."""
+    m = tri.shape[0]
+    k = out.shape[0]
+    n = at
+    if r_lo == 0:
+        for i in range(k):
+            for j in range(3):
+                a = out[i, j]
+                b = out[i, (j + 1) % 3]
+                rest[n] = 3 * (m + i) + j
+                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+                facing[n] = 3 * i + j if a < b else ~(3 * i + j)
+                n += 1
+    for r in range(r_lo, r_hi):
+        u = changed[r]
+        for j in range(3):
+            g = twin_in[3 * u + j]
+            if g >= 0 and status[g // 3] == PASS:
+                x = g // 3
+                a = tri[x, g - 3 * x]
+                b = tri[x, (g - 3 * x + 1) % 3]
+                rest[n] = g
+                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+                facing[n] = 3 * (k + r) + j if a < b else ~(3 * (k + r) + j)
+                n += 1
+    return n - at if r_lo > 0 else n
+
+
+@njit(cache=True, nogil=True)
+def _packed_keys(keys, n_points):
+    """:func:`_row_twin_keys`' packing: ``(packed, ib)``, or an empty array and -1."""
+    n = keys.shape[0]
+    ib = 1
+    while (1 << ib) < n:
+        ib += 1
+    if n_points > 0 and (np.int64(n_points) * np.int64(n_points)) < (np.int64(1) << (62 - ib)):
+        packed = np.empty(n, np.int64)
+        for i in range(n):
+            packed[i] = (keys[i] << ib) | i
+        return packed, ib
+    return np.empty(0, np.int64), -1
 
 
 @njit(cache=True, nogil=True)
@@ -893,6 +970,12 @@ def load_output_kernels() -> None:
     blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
     # the parents mapped back (meshes with fans; renumbered ones)
     map_through_into(r.copy(), r.copy(), 0, k)
+    # the new rows' twin keys in two parts (``_row_twin_keys_split``, many changed rows)
+    tri = np.array([[0, 1, 2], [2, 1, 3]], np.int64)
+    kt = np.empty(12, np.int64)
+    _twin_keys_into(tri[:1], tri, np.array([-1, 4, -1, -1, 1, -1], np.int64), np.zeros(2, np.int8), 4,
+                    np.array([1], np.int64), 0, 1, 0, kt, kt.copy(), kt.copy())
+    _packed_keys(np.arange(3, dtype=np.int64), 4)
     from hammesh.postprocess._improve_kernels import load_improve_kernels  # (only when loading)
 
     load_improve_kernels()

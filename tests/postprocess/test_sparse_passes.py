@@ -11,7 +11,7 @@ from hypothesis.extra.numpy import arrays
 import hammesh
 import hammesh.postprocess.cycle_cover as cycle_cover_module
 from hammesh import threads
-from tests.helpers import angles_deg, bundled_domain, plate_with_loops, square
+from tests.helpers import angles_deg, bundled_domain, hull_area, plate_with_loops, square
 
 
 def _reference_facts(pts: np.ndarray, tri: np.ndarray):
@@ -760,3 +760,31 @@ def test_repair_from_the_improvements_ask_gives_the_same_mesh_and_report(name: s
             assert asked.report[key] == full.report[key], key
     for a, b in ((asked.points, full.points), (asked.triangles, full.triangles), (asked.kind, full.kind)):
         np.testing.assert_array_equal(a, b)
+
+
+def test_twin_keys_in_two_parts_give_the_same_output(monkeypatch) -> None:
+    """``_row_twin_keys_split`` in two parts (``TWIN_KEYS_TWO_MIN`` lowered) and in one
+    serial call (``_row_twin_keys``) give the same keys, so the same output, array for
+    array (and the same report)."""
+    from hammesh.postprocess import _sparse_kernels as sk
+
+    dom = bundled_domain("la")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000, isolate=False)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    one = hammesh.hamiltonian(m, mode="sparse")
+    calls = []
+    real = sk._twin_keys_into
+
+    def counted(*a):
+        calls.append(a[6])
+        return real(*a)
+
+    monkeypatch.setattr(sk, "TWIN_KEYS_TWO_MIN", 1)
+    monkeypatch.setattr(sk, "_twin_keys_into", counted)
+    two = hammesh.hamiltonian(m, mode="sparse")
+    assert len(calls) == 2 and calls[0] == 0 < calls[1]
+    for name in ("points", "triangles", "kind", "parent"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+    strip = ("step_seconds", "step_cpu_seconds", "seconds")
+    assert {k: v for k, v in one.report.items() if not any(s in k for s in strip)} == {
+        k: v for k, v in two.report.items() if not any(s in k for s in strip)}
