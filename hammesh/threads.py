@@ -24,7 +24,7 @@ from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
-__all__ = ["row_ranges", "run_all", "cores", "limit", "side_executor", "InlineExecutor", "LaterThreadExecutor", "THREAD_MIN_ROWS", "later",
+__all__ = ["row_ranges", "run_all", "run_beside", "cores", "limit", "side_executor", "InlineExecutor", "LaterThreadExecutor", "THREAD_MIN_ROWS", "later",
            "wait_later", "later_held", "LATER_HOLD_MAX"]
 
 #: Rows per thread below which a row pass runs in one call (tests lower it to exercise
@@ -112,6 +112,16 @@ def run_all(calls: list[Callable[[], Any]]) -> list[Any]:
         wait(rest)  # (the others write the caller's arrays too: done before it sees the error)
         raise
     return [first] + [f.result() for f in rest]
+
+
+def run_beside(fn: Callable[..., Any], *args: Any) -> Future:
+    """``fn(*args)`` started now on the pool :func:`run_all` uses; its future. For work
+    the caller needs later, beside its own (``fn`` must not need the caller's thread,
+    nor write what the caller reads). In the caller's thread, done when returned, where
+    this process may use one thread (:func:`cores` is 1)."""
+    if cores() < 2:
+        return InlineExecutor().submit(fn, *args)
+    return _shared_pool().submit(fn, *args)
 
 
 class InlineExecutor(Executor):

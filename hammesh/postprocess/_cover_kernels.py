@@ -393,12 +393,45 @@ def _augment(r, nb, active, alive, mate, parent, fa, label, stamp, s0, touched, 
 @njit(cache=True, nogil=True)
 def peel(nb, m):
     """Leave out triangles that cannot lie on a cycle (at most one neighbour left)."""
-    alive = np.ones(m, np.bool_)
     deg = np.zeros(m, np.int8)  # dual degree, 0-3
     for t in range(m):
         for k in range(3):
             if nb[t, k] >= 0:
                 deg[t] += 1
+    return _peel_degrees(nb, deg), deg
+
+
+@njit(cache=True, nogil=True)
+def neighbors_degrees_into(twin, nb, deg, lo, hi):
+    """``neighbors_into`` and each row's dual degree ``deg[t]`` (int8, 0-3), rows lo..hi:
+    :func:`peel_active`'s start, made on the neighbours' threads."""
+    for t in range(lo, hi):
+        d = 0
+        for k in range(3):
+            g = twin[3 * t + k]
+            if g >= 0:
+                nb[t, k] = g // 3
+                d += 1
+            else:
+                nb[t, k] = -1
+        deg[t] = d
+
+
+@njit(cache=True, nogil=True)
+def peel_active(nb, deg):
+    """:func:`peel` from the degrees ``deg`` (``neighbors_degrees_into``; lowered in
+    place as it peels): ``(alive, active)``, active the rows alive at degree 3."""
+    alive = _peel_degrees(nb, deg)
+    active = np.empty(nb.shape[0], np.bool_)
+    for t in range(nb.shape[0]):
+        active[t] = alive[t] and deg[t] == 3
+    return alive, active
+
+
+@njit(cache=True, nogil=True)
+def _peel_degrees(nb, deg):
+    m = nb.shape[0]
+    alive = np.ones(m, np.bool_)
     stack = np.empty(m + 1, np.int64)
     top = 0
     for t in range(m):
@@ -418,7 +451,7 @@ def peel(nb, m):
                 if deg[u] == 1:
                     stack[top] = u
                     top += 1
-    return alive, deg
+    return alive
 
 
 @njit(cache=True, nogil=True)

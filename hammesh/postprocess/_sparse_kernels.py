@@ -96,11 +96,62 @@ def _free_pair(twin, used, h):
 
 
 def open_candidates(twin, cyc, n_cyc, cand, meets):
-    """:func:`_open_candidates_into` with its union-find and marks from ``hammesh.pages``."""
+    """:func:`_open_candidates_into` with its union-find and marks from ``hammesh.pages``:
+    the joins meeting the rule taken on one core (:func:`_take_meeting_into`), then the
+    other candidates judged in one range per core (:func:`_open_rest_into`; at 1.5 M
+    the whole was ~12 ms of one core)."""
     m = cyc.shape[0]
     unc = np.flatnonzero(cyc < 0)
-    return _open_candidates_into(twin, cyc, n_cyc, unc, cand, meets, np.empty(n_cyc + len(unc), np.int64),
-                                 fresh(m, np.bool_))
+    uf, used = np.empty(n_cyc + len(unc), np.int64), fresh(m, np.bool_)
+    _take_meeting_into(twin, cyc, n_cyc, unc, cand, meets, uf, used)
+    out = np.zeros(cand.shape[0], np.bool_)
+    run_all([partial(_open_rest_into, twin, cyc, n_cyc, unc, cand, meets, uf, used, out, lo, hi)
+             for lo, hi in row_ranges(cand.shape[0], min(OPEN_MIN_ROWS, threads.THREAD_MIN_ROWS))])
+    return out
+
+
+#: candidates per thread from which :func:`open_candidates` judges them on two (a
+#: random read or three each: ~0.1 ms per thousand; 122 k at 1.5 M)
+OPEN_MIN_ROWS = 20_000
+
+
+@njit(cache=True, nogil=True)
+def _take_meeting_into(twin, cyc, n_cyc, unc, cand, meets, uf, used):
+    """:func:`_open_candidates_into`'s first part: the joins meeting the rule taken
+    (``used``, ``uf``), then every node's entry in ``uf`` set to its root (the second
+    part reads roots only: its ranges side by side write nothing shared)."""
+    m = cyc.shape[0]
+    for x in range(uf.shape[0]):
+        uf[x] = x
+    for t in range(m):
+        used[t] = False
+    for i in range(cand.shape[0]):
+        if not meets[i]:
+            continue
+        t, u, free = _free_pair(twin, used, cand[i])
+        if not free:
+            continue
+        rt = _find(uf, cyc[t])
+        ru = _find(uf, _node(cyc, n_cyc, unc, u))
+        if rt == ru:
+            continue
+        uf[rt] = ru
+        used[t] = True
+        used[u] = True
+    for x in range(uf.shape[0]):
+        uf[x] = _find(uf, x)
+
+
+@njit(cache=True, nogil=True)
+def _open_rest_into(twin, cyc, n_cyc, unc, cand, meets, uf, used, out, lo, hi):
+    """:func:`_open_candidates_into`'s second part over candidates ``lo..hi``, after
+    :func:`_take_meeting_into` (``uf``: each node's root)."""
+    for i in range(lo, hi):
+        if meets[i]:
+            continue
+        t, u, free = _free_pair(twin, used, cand[i])
+        if free:
+            out[i] = uf[cyc[t]] != uf[_node(cyc, n_cyc, unc, u)]
 
 
 @njit(cache=True, nogil=True)
@@ -624,7 +675,8 @@ def new_row_twins(out, tri, twin_in, status, n_points, changed):
     took 1-2 ms where the compiled ``ndarray.sort`` took 15-30 ms. Distinct values
     sort one way only, so the matching is the same.
     """
-    face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys(out, tri, twin_in, status, n_points, changed)
+    face_tw, tw_new, rest, keys, packed, ib, facing = _row_twin_keys_split(out, tri, twin_in, status, n_points,
+                                                                           changed)
     if ib >= 0:
         packed.sort()  # (in place: the index is the low bits)
         srt = packed & ((np.int64(1) << ib) - 1)
@@ -634,6 +686,82 @@ def new_row_twins(out, tri, twin_in, status, n_points, changed):
         by_key = keys[srt]
     bad = _match_row_twins(face_tw, tw_new, rest, by_key, srt, facing)
     return tw_new, changed, face_tw, bad
+
+
+#: changed triangles from which :func:`_row_twin_keys_split` reads the kept half-edges
+#: facing them in two parts side by side (a random read each: ~5 ms of one core at 1.5 M)
+TWIN_KEYS_TWO_MIN = 20_000
+
+
+def _row_twin_keys_split(out, tri, twin_in, status, n_points, changed):
+    """:func:`_row_twin_keys` (the same arrays), the changed triangles' half in two parts
+    side by side from ``TWIN_KEYS_TWO_MIN`` of them on (where :func:`threads.cores`
+    allows): each writes its entries after the new rows' (the second from a place its
+    part cannot reach), the second's then moved down to follow the first's."""
+    k, n_ch = out.shape[0], changed.shape[0]
+    if n_ch < TWIN_KEYS_TWO_MIN or threads.cores() < 2:
+        return _row_twin_keys(out, tri, twin_in, status, n_points, changed)
+    face_tw = np.full(3 * n_ch, -1, np.int64)
+    tw_new = np.empty(3 * k, np.int64)
+    rest, keys, facing = (np.empty(3 * k + 3 * n_ch, np.int64) for _ in range(3))
+    half = n_ch // 2
+    first = partial(_twin_keys_into, out, tri, twin_in, status, n_points, changed, 0, half, 0, rest, keys, facing)
+    second = partial(_twin_keys_into, out, tri, twin_in, status, n_points, changed, half, n_ch, 3 * k + 3 * half,
+                     rest, keys, facing)
+    n1, n2 = run_all([first, second])
+    for a in (rest, keys, facing):  # (overlapping ranges: numpy copies through a buffer)
+        a[n1:n1 + n2] = a[3 * k + 3 * half: 3 * k + 3 * half + n2]
+    n = n1 + n2
+    rest, keys, facing = rest[:n], keys[:n], facing[:n]
+    packed, ib = _packed_keys(keys, n_points)
+    return face_tw, tw_new, rest, keys, packed, ib, facing
+
+
+@njit(cache=True, nogil=True)
+def _twin_keys_into(out, tri, twin_in, status, n_points, changed, r_lo, r_hi, at, rest, keys, facing):
+    """:func:`_row_twin_keys`' entries of the changed triangles ``r_lo..r_hi`` from place
+    ``at`` on (``r_lo`` 0: first the new rows', from place 0); returns the place after
+    the last written."""
+    m = tri.shape[0]
+    k = out.shape[0]
+    n = at
+    if r_lo == 0:
+        for i in range(k):
+            for j in range(3):
+                a = out[i, j]
+                b = out[i, (j + 1) % 3]
+                rest[n] = 3 * (m + i) + j
+                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+                facing[n] = 3 * i + j if a < b else ~(3 * i + j)
+                n += 1
+    for r in range(r_lo, r_hi):
+        u = changed[r]
+        for j in range(3):
+            g = twin_in[3 * u + j]
+            if g >= 0 and status[g // 3] == PASS:
+                x = g // 3
+                a = tri[x, g - 3 * x]
+                b = tri[x, (g - 3 * x + 1) % 3]
+                rest[n] = g
+                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
+                facing[n] = 3 * (k + r) + j if a < b else ~(3 * (k + r) + j)
+                n += 1
+    return n - at if r_lo > 0 else n
+
+
+@njit(cache=True, nogil=True)
+def _packed_keys(keys, n_points):
+    """:func:`_row_twin_keys`' packing: ``(packed, ib)``, or an empty array and -1."""
+    n = keys.shape[0]
+    ib = 1
+    while (1 << ib) < n:
+        ib += 1
+    if n_points > 0 and (np.int64(n_points) * np.int64(n_points)) < (np.int64(1) << (62 - ib)):
+        packed = np.empty(n, np.int64)
+        for i in range(n):
+            packed[i] = (keys[i] << ib) | i
+        return packed, ib
+    return np.empty(0, np.int64), -1
 
 
 @njit(cache=True, nogil=True)
@@ -845,9 +973,14 @@ def load_output_kernels() -> None:
                     np.zeros(1, np.int64), np.array([2, 5], np.int64), np.array([0, 2], np.int64), 0, 0, 0, 0, True,
                     none, none, *new_walk_memo(2, 8))
     blocked_rows_into(np.zeros(k, np.int8), np.zeros(k, np.bool_), np.zeros(k, np.int64), np.empty(k, np.bool_), 0, k)
-    # the fans' kinds and the parents mapped back (meshes with fans; renumbered ones)
-    fan_kinds_into(np.full(k, 3, np.int8), np.zeros(k, np.bool_), r.copy(), 0, k)
+    # the parents mapped back (meshes with fans; renumbered ones)
     map_through_into(r.copy(), r.copy(), 0, k)
+    # the new rows' twin keys in two parts (``_row_twin_keys_split``, many changed rows)
+    tri = np.array([[0, 1, 2], [2, 1, 3]], np.int64)
+    kt = np.empty(12, np.int64)
+    _twin_keys_into(tri[:1], tri, np.array([-1, 4, -1, -1, 1, -1], np.int64), np.zeros(2, np.int8), 4,
+                    np.array([1], np.int64), 0, 1, 0, kt, kt.copy(), kt.copy())
+    _packed_keys(np.arange(3, dtype=np.int64), 4)
     from hammesh.postprocess._improve_kernels import load_improve_kernels  # (only when loading)
 
     load_improve_kernels()
@@ -1024,7 +1157,8 @@ def rows_in_cycle_order(
     row is written by one thread only). The big arrays come from ``hammesh.pages``
     (the reserve ``quality_mesh`` faulted while Triangle ran, if any). ``scratch``: an int64
     array of at least one entry per virtual row, any contents (e.g. :func:`walk_links`'
-    ``ends``, done with), for the rows' final places; made here if None. ``con``
+    ``ends``, done with), for the rows' final places (``scratch[t]``: where virtual row
+    ``t`` went, afterwards); made here if None. ``con``
     (``(3 m,)`` bool, the input's pinned half-edges) and ``pinned`` (``(3 k,)`` bool):
     each kept row's pinned output edges written on the way (its input half-edge's
     ``con``, if inner), as ``_improve_kernels.pinned_output_edges`` finds them; the new
@@ -1180,15 +1314,6 @@ def map_through_into(a, table, lo, hi):
     a renumbering: one threaded pass, no fresh array to fault as ``table[a]`` makes)."""
     for i in range(lo, hi):
         a[i] = table[a[i]]
-
-
-@njit(cache=True, nogil=True)
-def fan_kinds_into(kind, is_fan, parent, lo, hi):
-    """Rows ``lo..hi``: a row kept whole (kind 3) whose parent is a fan triangle becomes
-    kind 0 (a side joined to a Steiner point), in place."""
-    for i in range(lo, hi):
-        if kind[i] == 3 and is_fan[parent[i]]:
-            kind[i] = 0
 
 
 @njit(cache=True, nogil=True, inline="always")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from functools import partial
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -212,6 +212,7 @@ def cycle_cover(
     cells: np.ndarray | None = None,
     rule: JoinRule | None = None,
     judge: bool = False,
+    beside: Callable[[np.ndarray], object] | None = None,
 ) -> CycleCover:
     """Cover the dual graph of a triangle mesh with vertex-disjoint cycles.
 
@@ -279,6 +280,12 @@ def cycle_cover(
         test sparse mode's ``good`` was made by), judged when the greedy matching first
         has to choose across it; only those edges are judged (re-colouring, on small
         meshes, judges the rest). The same cover as with ``good`` made ahead.
+    beside : callable, optional
+        Called once with the cycle ids ((m,) int64) as soon as it is known which
+        triangles the cover leaves off (-1; the other ids may still change, so it must
+        read their signs only, and write nothing): on the other core beside the
+        rotations' serial merging where they run on two threads (one core idle there:
+        sparse mode's bounds for its report), else once the cover is done.
 
     Returns
     -------
@@ -323,15 +330,20 @@ def cycle_cover(
     # the big arrays from ``hammesh.pages``' reserve where there is one (a first call
     # faulted ~9 k pages here: 0.03 s of the neighbours' 0.04 s CPU at 1.5 M)
     nb = fresh((m, 3), np.int32)
-    run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
-    mark("neighbors")
-    if cells is not None:  # (issue 14: ``sparse_cells`` may keep every cycle off the borders)
-        confine(nb, cell)
-    if cell is not None:
+    if cell is None:  # (the dual degrees on the neighbours' threads: ~3 ms less of the peel's one core at 1.5 M)
+        deg = fresh(m, np.int8)
+        run_all([partial(_k.neighbors_degrees_into, tw, nb, deg, lo, hi) for lo, hi in spans])
+        mark("neighbors")
+        alive, active = _k.peel_active(nb, deg)
+    else:
+        run_all([partial(_k.neighbors_into, tw, nb, lo, hi) for lo, hi in spans])
+        mark("neighbors")
+        if cells is not None:  # (issue 14: ``sparse_cells`` may keep every cycle off the borders)
+            confine(nb, cell)
         _k.cut_cell_borders(nb, cell)
-    alive, deg = _k.peel(nb, m)
+        alive, deg = _k.peel(nb, m)
+        active = alive & (deg == 3)
     mark("peel")
-    active = alive & (deg == 3)
     mate = fresh(m, np.int32, -1)
     # the searches' parent, union-find, label (-1: none) and lca stamps: each search
     # sets what it touches, so only label is written ahead (int8; stamp's zeros: the
@@ -385,6 +397,7 @@ def cycle_cover(
     cyc, n_cyc = cycle_ids_by_halves(tw, is_cov, side, spans, later.cyc, nb if cell is None else None)
     mark("cycle_ids")
     n_rot = 0
+    recolours = rotate and (good is not None or lazy) and 0 < m < RECOLOUR_BELOW and cell is None
     if rotate and n_cyc > 1:
         cl = no_cell if cell is None else cell
         # the prefilter and the candidates on two threads, the rotations on one
@@ -393,13 +406,19 @@ def cycle_cover(
         run_all([partial(_k.star_candidates_into, tw, is_cov, cyc, vh, skip, cl, cand, lo, hi)
                  for lo, hi in row_ranges(n_pts, threads.THREAD_MIN_ROWS)])
         table = np.empty(max(n_cyc, 1), np.int64)
-        n_rot = int(_k.rotate_candidates_table(tw, is_cov, cyc, n_cyc, vh, cand, cl, table))
+        rot = partial(_k.rotate_candidates_table, tw, is_cov, cyc, n_cyc, vh, cand, cl, table)
+        # (the rotations keep every triangle's cover degree: the rows left off are known;
+        # re-colouring, on small meshes, may change them)
+        early = beside is not None and len(spans) > 1 and not recolours
+        n_rot = int(run_all([rot, partial(beside, cyc)])[0] if early else rot())
+        if early:
+            beside = None
         # the new ids: rows on two threads (none: the kernel loaded all the same, see _drop_defects)
         run_all([partial(_k.renumber_cycles_into, cyc, table, lo, hi if n_rot else lo) for lo, hi in spans])
         n_cyc -= n_rot
     mark("rotate")
     n_rec = n_shift = 0
-    if rotate and (good is not None or lazy) and 0 < m < RECOLOUR_BELOW and cell is None:
+    if recolours:
         tri_c = np.ascontiguousarray(triangles, dtype=np.int64)
         if lazy:  # (every edge judged: re-colouring reads them all; the same answers)
             g = np.zeros(3 * m, np.bool_)
@@ -424,6 +443,8 @@ def cycle_cover(
             cyc, n_cyc = cycle_ids_by_halves(tw, is_cov)
             n_unc = int((cyc < 0).sum())
     mark("recolour")
+    if beside is not None:
+        beside(cyc)
     return CycleCover(
         is_cov=is_cov,
         cycle=cyc,
@@ -505,8 +526,10 @@ def _drop_defects(nb: np.ndarray, active: np.ndarray, alive: np.ndarray, mate: n
     mate2, active2, alive2 = np.empty_like(mate), np.empty_like(active), np.empty_like(alive)
     run_all([partial(_k.copy_state_into, mate, active, alive, mate2, active2, alive2, lo, hi)
              for lo, hi in row_ranges(m, threads.THREAD_MIN_ROWS)])
-    # the second part's search arrays: label -1, stamps zero (fresh pages), the rest set as touched
-    work2 = (np.empty(m, np.int32), np.empty(m, np.int32), np.full(m, -1, np.int8), np.zeros(m, np.int64))
+    # the second part's search arrays: label -1, stamps zero, the rest set as touched;
+    # pages faulted ahead (``fresh``; the reserve's where there is one): faulted as the
+    # searches touched them, the second part took ~1.8 x the first's CPU at 1.5 M
+    work2 = (fresh(m, np.int32), fresh(m, np.int32), fresh(m, np.int8, -1), fresh(m, np.int64, 0))
     seen = np.zeros(m, np.bool_)
     first, second = run_all([
         partial(_k.drop_defects, nb, active, alive, mate, *work, s, DEFECT_SEARCH_BUDGET, DROP_BUDGET, rounds,

@@ -79,7 +79,7 @@ from hammesh.threads import row_ranges, run_all
 
 __all__ = [
     "sparse_hamiltonian", "renumbers", "SparseResult", "sparse_cycles", "local_quality", "kept_radius_ratio", "triangle_angles", "triangle_facts", "KEEP",
-    "corner_bound", "join_bounds", "PlanSteps", "SPARSE_TREES",
+    "corner_bound", "join_bounds", "PlanSteps", "SPARSE_TREES", "kept_ratio_start", "kept_ratio_finish",
 ]
 
 #: swaps must keep the smallest angle above ``(1 + SWAP_MARGIN) x`` half the input's
@@ -238,6 +238,13 @@ def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
     """
     spans = row_ranges(n, threads.THREAD_MIN_ROWS if min_rows is None else min_rows)
     return run_all([partial(fill, lo, hi) for lo, hi in spans])
+
+
+def _side_by_side(*calls: Callable[[], object]) -> list:
+    """The results of ``calls``, side by side (``hammesh.threads.run_all``) where this
+    process may use two threads, else one after the other in the caller's (a cap of one
+    thread starts none: ``run_all`` would start a pool for more calls than cores)."""
+    return run_all(list(calls)) if threads.cores() > 1 else [c() for c in calls]
 
 
 #: tied places beyond which :func:`stable_argsort` sorts again stably instead of fixing the ties
@@ -580,11 +587,10 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
     rows = _missing_targets(pts, tri, tw, con, cover.cycle, amin_t, lo, hi, 0.5 * floor2)
     if not len(rows):
         return cover, 0
-    # copies with room after them: the ring fans and joins append rows in place (``_longer``)
-    is_cov = _longer(cover.is_cov, 0, None, 3 * ROOM_ROWS)
-    cycle = _longer(cover.cycle, 0, None, ROOM_ROWS)
-    if np.shares_memory(is_cov, cover.is_cov) or np.shares_memory(cycle, cover.cycle):
-        is_cov, cycle = cover.is_cov.copy(), cover.cycle.copy()  # (the cover's own had room: copied plainly)
+    # the cover's own arrays until a re-route is taken (the tries below flip and set
+    # them back), then copies with room after them: the ring fans and joins append rows
+    # in place (``_longer``), and the cover must stay as it was (``_relabel_group``)
+    is_cov, cycle = cover.is_cov, cover.cycle
     touched = np.zeros(m, np.bool_)
     fan_or_touched = is_fan.copy()  # is_fan | touched, and touched as a set: no O(m) pass per pair
     touched_set: set[int] = set()
@@ -631,6 +637,8 @@ def _reroute(pts, tri, tw, con, cover: CycleCover, is_fan, amin_t, lo: float, hi
                             best = (cost, add + flips_all, nodes_all, z)
         if best is None:
             continue
+        if is_cov is cover.is_cov:  # (the first re-route taken)
+            is_cov, cycle = _copy_with_room(cover.is_cov, 3 * ROOM_ROWS), _copy_with_room(cover.cycle, ROOM_ROWS)
         _, flips, nodes, z = best
         _flip_cover(tw, is_cov, flips)
         cycle[t] = cycle[nodes[0]]
@@ -816,7 +824,7 @@ def _relabel_group(tw, old_cov, new_cov, cycle, n_cycles: int, group: set):
     # labels written above are final ids already: the gather maps ids through lut,
     # which leaves every id in use as a final id (lut[id] = id) and merges the rest
     rank = np.cumsum(alive[:n_new]) - 1
-    _j.relabel_cycles_into(out, rank[lut[:n_new]])
+    _relabel_cycles(out, rank[lut[:n_new]])
     return out, int(alive[:n_new].sum())
 
 
@@ -1198,14 +1206,32 @@ def _longer(a: np.ndarray, extra: int, fill=None, spare: int = 0) -> np.ndarray:
                 out[n:] = fill
             _keep_room(out, rows)  # (its owner is a new view object: a later call grows it too)
             return out
-    buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
-    out = buf[: n + extra]
-    out[:n] = a
+    out = _copy_with_room(a, spare, extra)
     if fill is not None:
         out[n:] = fill
+    return out
+
+
+def _copy_with_room(a: np.ndarray, spare: int, extra: int = 0) -> np.ndarray:
+    """A copy of ``a`` with ``extra`` more rows (unspecified) in a ``hammesh.pages.fresh``
+    buffer with ``spare`` rows of room after it (``_longer`` grows into them)."""
+    n = len(a)
+    buf = fresh((n + extra + spare,) + a.shape[1:], a.dtype)
+    out = buf[: n + extra]
+
+    def rows(lo: int, hi: int) -> None:  # (one range per core: numpy's copy frees the GIL)
+        out[lo:hi] = a[lo:hi]
+
+    _row_pass(rows, n)
     if spare and n:
         _keep_room(out, len(buf))
     return out
+
+
+def _relabel_cycles(cycle: np.ndarray, lut: np.ndarray) -> None:
+    """``cycle[t] = lut[cycle[t]]`` for the covered rows, in place, one row range per core
+    (``_join_kernels.relabel_cycles_into``: 1.5 M rows, ~2 ms of one core a call)."""
+    _row_pass(lambda lo, hi: _j.relabel_cycles_into(cycle[lo:hi], lut), len(cycle))
 
 
 def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, taken, accept=None, spare: int = 0):
@@ -1316,7 +1342,7 @@ def _apply_rings(pts, tri, tw, con, cover: CycleCover, amin_t, orig_of, is_fan, 
             alive[lut] = True
             rank = np.cumsum(alive) - 1
             n_cyc2 = int(alive.sum())
-            _j.relabel_cycles_into(cyc2, rank[lut])
+            _relabel_cycles(cyc2, rank[lut])
     cover2 = CycleCover(
         is_cov=is_cov2, cycle=cyc2, n_cycles=int(n_cyc2), n_uncovered=int((cyc2 < 0).sum()),
         n_unmatched=cover.n_unmatched, n_rotations=cover.n_rotations,
@@ -1359,7 +1385,8 @@ def corner_bound(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray) ->
     return 0.5 * float(theta.min())
 
 
-def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cycle: np.ndarray):
+def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cycle: np.ndarray,
+                uncovered: np.ndarray | None = None):
     """What joins can keep at the triangles a cover leaves off, at best (issue 13).
 
     An uncovered triangle ``t`` is absorbed by a join over one of its interior edges
@@ -1373,13 +1400,14 @@ def join_bounds(points: np.ndarray, triangles: np.ndarray, twin: np.ndarray, cyc
     33/33/114 degrees) that is ~ half of t's corners at ``a`` and ``b``. Only a cover
     that passes t keeps it whole.
 
+    ``uncovered``: ``np.flatnonzero(cycle < 0)`` if the caller has it (an O(m) pass).
     Returns ``(rows, bound, boundary)``: the *isolated* uncovered triangles (every
     neighbour covered; chains of uncovered triangles go to fans), each one's bound
     (radians) and whether it has a boundary edge.
     """
     pts = np.asarray(points, dtype=np.float64)
     tri = np.asarray(triangles, dtype=np.int64)
-    unc = np.flatnonzero(cycle < 0)
+    unc = np.flatnonzero(cycle < 0) if uncovered is None else uncovered
     he = 3 * unc[:, None] + np.arange(3)
     g = twin[he]
     inner = g >= 0
@@ -1866,7 +1894,7 @@ def _alternating_merges(tw, cover: CycleCover, is_fan, order, join, cand, slack,
     lut = lut_all
     alive = lut == np.arange(cover.n_cycles)
     rank = np.cumsum(alive) - 1
-    _j.relabel_cycles_into(cyc, rank[lut])
+    _relabel_cycles(cyc, rank[lut])
     return replace(cover, is_cov=is_cov, cycle=cyc, n_cycles=int(alive.sum())), done
 
 
@@ -1965,6 +1993,15 @@ def sparse_cycles(
     corners = fresh((m, 3), np.float32) if use_cover and pts.shape[1] == 2 else None
     amin_t, amax_t, ratio_in, ratio_row = triangle_facts(pts, tri, room, corners)
     steps.done("input_angles")
+
+    def lone_bounds(cycle: np.ndarray) -> tuple:  # (reads the signs of ``cycle`` only)
+        unc = np.flatnonzero(cycle < 0)
+        return unc, join_bounds(pts, tri, tw, cycle, unc)
+
+    # what the joins can keep at best where the cover leaves triangles off, and what
+    # no construction can beat at the boundary's corners (the report): made once the
+    # cover knows the rows it leaves off (``cycle_cover(..., beside=)``) or after it
+    bounds: list = []
     amax_in = float(amax_t.max()) if m else 0.0  # (the input's largest angle, once: an O(m) pass)
     hi = amax_in + math.radians(MAX_ANGLE_SLACK_DEG) if m else math.pi
     floor = 0.5 * min_angle * (1.0 + SWAP_MARGIN)
@@ -2011,7 +2048,8 @@ def sparse_cycles(
         combed = cover is not None
         if cover is None:
             cover = cycle_cover(tri, tw, good=good, points=pts, local=local, rule=rule,
-                                cells=None if fish is None else fish.cell, judge=rule is not None)
+                                cells=None if fish is None else fish.cell, judge=rule is not None,
+                                beside=lambda cycle: bounds.append((lone_bounds(cycle), corner_bound(pts, tri, tw))))
         rule = corners = None  # (the corner angles' pages given back: only the cover reads them)
     else:
         if beside_cover is not None:
@@ -2019,12 +2057,13 @@ def sparse_cycles(
         cover = CycleCover(np.zeros(3 * m, np.bool_), np.full(m, -1, np.int64), 0, m, 0)
     steps.done("cover")
     n_unc0 = cover.n_uncovered
-    # what the joins can keep at best where the cover leaves triangles off, and what
-    # no construction can beat at the boundary's corners (the report; few rows)
-    jb_rows, jb, jb_bnd = join_bounds(pts, tri, tw, cover.cycle)
-    unc_all = np.flatnonzero(cover.cycle < 0)
+    # (the bounds: two passes of numpy over the rows and half-edges, ~10 ms at 1.5 M: beside the
+    # cover's rotations if it made them on two threads, else side by side here; both
+    # read the arrays before the ring fans write rows of them in place)
+    if not bounds:
+        bounds.append(_side_by_side(partial(lone_bounds, cover.cycle), partial(corner_bound, pts, tri, tw)))
+    (unc_all, (jb_rows, jb, jb_bnd)), c_bound = bounds[0]
     n_unc_bnd = int((tw[3 * unc_all[:, None] + np.arange(3)] < 0).any(axis=1).sum())
-    c_bound = corner_bound(pts, tri, tw)
     steps.done("bounds")
     quad0 = cover.quad  # the cover's quadtree cells order the joins (``_join_order``)
     pts0, m0 = pts, m
@@ -2155,7 +2194,7 @@ def sparse_cycles(
     n_split = len(split_rows)
     mids = 0.5 * (pts[mid_a] + pts[mid_b])
     placed = mid_t >= 0
-    mids[placed] = point[order][join[mid_t[placed]]]
+    mids[placed] = point[order[join[mid_t[placed]]]]  # (the few rows: no gather of every candidate)
     inc = _incenters(pts, tri[split_rows])
     all_pts = _longer(pts, len(inc) + len(mids))  # (in place where the points have room)
     all_pts[len(pts):] = np.concatenate([inc, mids])
@@ -2177,11 +2216,18 @@ def sparse_cycles(
         order_rows, lengths, run_order, tri, tw, status, out, parent, partner, kind, tw_new, changed, face_tw, amin_p,
         ends, con=con, pinned=pinned_out,
     )
-    if n_fan:  # a fan triangle: a side joined to a Steiner point (one threaded pass, in place)
-        _row_pass(lambda lo, hi_: _k.fan_kinds_into(kind, is_fan, parent, lo, hi_), len(kind))
+    if n_fan:  # a fan triangle kept whole: a side joined to a Steiner point; its row is where
+        # the gather put it (its places left in ``ends``): the few fan rows, not a pass over all
+        fan_t = np.flatnonzero(is_fan)
+        kind[ends[fan_t[status[fan_t] == _k.PASS]]] = 0
     steps.done("output_rows")
     if use_cover and late:  # (the improvement, report and mapping back: one core, bar a few
         beside_cover()  # short passes; the swap tests and the output rows' passes take both)
+    # the report's worst ratio of the kept rows, begun beside the improvement (which
+    # leaves the other core mostly idle): the rows it keeps keep their points
+    kept_start = None
+    if improve and pts.shape[1] == 2 and len(out):
+        kept_start = threads.run_beside(kept_ratio_start, all_pts, out, kind, parent, amin_p)
     n_improve = n_moved = 0
     new_facts = None  # (the new rows' facts, if the improvement's last look is of the final rows)
     n0_input = len(pts0)  # Steiner points follow the input's (fan points first)
@@ -2191,16 +2237,30 @@ def sparse_cycles(
             n0_input, keep, keep * min_angle, floor, pinned_out,
         )
     steps.done("improve")
-    # the kept rows' worst radius ratio: the input's if its worst triangle is kept,
-    # else measured on the few kept rows whose smallest angle allows worse
-    worst_kept = False
-    if ratio_row >= 0:
-        n_whole = len(orig_of) - int(is_fan.sum())  # rows not in a fan, in input order
-        r_now = np.searchsorted(orig_of[:n_whole], ratio_row)
-        if r_now < n_whole and orig_of[r_now] == ratio_row:
-            worst_kept = bool((kind[parent == r_now] == 3).any())
-    kept_ratio = ratio_in if worst_kept else kept_radius_ratio(all_pts, out, kind, parent, amin_p)
-    quality = local_quality(all_pts, out, pm, kind, keep, hi, kept_ratio, new_facts)
+    n_fan_rows = int(is_fan.sum())
+
+    def kept_ratio_of() -> float:
+        # the kept rows' worst radius ratio: the input's if its worst triangle is kept,
+        # else measured on the few kept rows whose smallest angle allows worse
+        if ratio_row >= 0:
+            n_whole = len(orig_of) - n_fan_rows  # rows not in a fan, in input order
+            r_now = np.searchsorted(orig_of[:n_whole], ratio_row)
+            if r_now < n_whole and orig_of[r_now] == ratio_row and (kind[parent == r_now] == 3).any():
+                return float(ratio_in)
+        if kept_start is not None:
+            return kept_ratio_finish(all_pts, out, kind, parent, amin_p, kept_start.result())
+        return kept_radius_ratio(all_pts, out, kind, parent, amin_p)
+
+    def counts_of() -> tuple[dict, int, int]:
+        # (the new rows' counts, the kept ratio left out: 1 is no ratio's worst)
+        q = local_quality(all_pts, out, pm, kind, keep, hi, 1.0, new_facts)
+        return q, int((slot == _k.FLIP).sum() // 2), int((slack[order[join[steps_at.joined(join)]]] < 0).sum() // 2)
+
+    # the kept rows' ratio (what ``kept_ratio_start`` left, or ~9 ms at 1.5 M) on the
+    # other core beside the counts; both read ``parent`` before it is mapped through
+    # the fans below
+    (quality, n_flip_pairs, n_split_below), kept_ratio = _side_by_side(counts_of, kept_ratio_of)
+    quality["radius_ratio_output"] = float(max(quality["radius_ratio_output"], kept_ratio))
     quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)
     if n_fan:  # (in place: the rows' parents are this function's own array)
@@ -2214,7 +2274,7 @@ def sparse_cycles(
         "rerouted": int(n_reroute),
         "ring_joins": int(n_ring_join),
         "alternating_merges": int(n_alt),
-        "fan_triangles_replaced": int(m0 - (m - int(is_fan.sum()))),
+        "fan_triangles_replaced": int(m0 - (m - n_fan_rows)),
         "unmatched": int(cover.n_unmatched),
         "incenters": n_split,
         "midpoints": int(len(mid_a)),
@@ -2223,7 +2283,7 @@ def sparse_cycles(
         "edge_splits": int(counts[3]),
         "merges": int(counts.sum()),
         "bridges": int(counts[2]),
-        "flips": int((slot == _k.FLIP).sum() // 2),
+        "flips": n_flip_pairs,
         "retries": attempt,
         "joins_placed_after_plan": int(n_placed_late),
         "uncovered_boundary": n_unc_bnd,
@@ -2232,7 +2292,7 @@ def sparse_cycles(
         "corner_bound_deg": math.degrees(c_bound),
         "improvement_flips": int(n_improve),
         "steiner_moved": int(n_moved),
-        "joins_below_rule": int(counts[2]) + int((slack[order][join[steps_at.joined(join)]] < 0).sum() // 2),
+        "joins_below_rule": int(counts[2]) + n_split_below,
         **quality,
     }
     steps.done("report")
@@ -2274,6 +2334,43 @@ def kept_radius_ratio(
     # (margin: the angles and the ratios are rounded apart)
     k = _k.kept_below(kind, parent, parent_min, bound * (1.0 + 1e-6), few)
     return max(r0, triangle_facts(points, rows[few[:k]])[2]) if k else r0
+
+
+def kept_ratio_start(
+    points: np.ndarray, rows: np.ndarray, kind: np.ndarray, parent: np.ndarray, parent_min: np.ndarray
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """``kept_radius_ratio``'s sample and search, while the improvement may still change
+    the rows (``kept_ratio_finish`` ends it on the final rows).
+
+    The improvement only turns kept rows (kind 3) into swapped ones (kind 4), never
+    back, and moves Steiner points only, which no kept row has: so the rows kept at
+    the end are kept throughout, with the same points. Returns ``(sample, r0, few)``:
+    the sampled rows read as kept, their worst ratio, and the rows read as kept whose
+    parent's smallest angle allows worse than ``r0``.
+    """
+    sample = np.arange(0, len(rows), KEPT_RATIO_STRIDE)
+    sample = sample[kind[sample] == 3]
+    r0 = triangle_facts(points, rows[sample])[2] if len(sample) else 1.0
+    bound = math.acos(0.5 * (1.0 + math.sqrt(1.0 - 1.0 / r0))) if r0 > 1.0 else math.pi
+    few = np.empty(len(rows), np.int64)  # (pages beyond the few rows written are never touched)
+    k = _k.kept_below(kind, parent, parent_min, bound * (1.0 + 1e-6), few)
+    return sample, r0, few[:k]
+
+
+def kept_ratio_finish(
+    points: np.ndarray, rows: np.ndarray, kind: np.ndarray, parent: np.ndarray, parent_min: np.ndarray, start: tuple
+) -> float:
+    """``kept_radius_ratio`` of the final rows from ``kept_ratio_start``'s ``start``.
+
+    If every sampled row is still kept, the sample is the one the final rows give (a
+    row kept at the end was read as kept), so is ``r0`` and its bound, and the rows to
+    measure are those of ``few`` still kept: the same value. Else measured anew.
+    """
+    sample, r0, few = start
+    if not (kind[sample] == 3).all():  # (a sampled row was swapped meanwhile)
+        return kept_radius_ratio(points, rows, kind, parent, parent_min)
+    few = few[kind[few] == 3]
+    return max(r0, triangle_facts(points, rows[few])[2]) if len(few) else r0
 
 
 def local_quality(

@@ -64,3 +64,14 @@ def test_a_forked_child_makes_its_own_pool(two_cores):
         os._exit(0 if ok else 1)
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == 0
+
+
+def test_run_beside_runs_on_the_pool_or_inline(two_cores):
+    """``run_beside``: the call on a pool thread, its future; with one thread allowed, in
+    the caller's thread, done when returned."""
+    f = threads.run_beside(lambda x: (x, threading.get_ident()), 7)
+    value, ident = f.result()
+    assert value == 7 and ident != threading.get_ident()
+    threads.limit(1)
+    f = threads.run_beside(lambda x: (x, threading.get_ident()), 8)
+    assert f.done() and f.result() == (8, threading.get_ident())

@@ -10,6 +10,8 @@ cycles (hence disjoint), and ``cycle``/``n_cycles``/``n_uncovered`` say so.
 
 from __future__ import annotations
 
+import threading
+
 import networkx as nx
 import numpy as np
 import pytest
@@ -869,3 +871,52 @@ def test_defect_cut_splits_the_free_defects(rows: list, m_extra: int) -> None:
     before, after = int(still[:cut].sum()), int(still[cut:].sum())
     assert before >= 1 and after >= 1
     assert abs(before - n // 2) <= 1
+
+
+@pytest.mark.parametrize("min_rows", [500, None])
+def test_beside_reads_the_rows_left_off_once(min_rows, monkeypatch) -> None:
+    """``cycle_cover(..., beside=)`` is called once, with the rows the cover leaves off
+    (-1) as in the cover it returns: beside the rotations on two threads (rows per
+    thread lowered), or at the end; the cover is the one made without it."""
+    from hammesh import threads
+    from hammesh.halfedge import renumber_local
+
+    dom = bundled_domain("face")
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 4000)
+    loc = renumber_local(msh.points, msh.triangles, half_edges(msh.triangles, msh.n_points).twin)
+    tri, pts, twin = loc.triangles, loc.points, loc.twin
+    if min_rows is not None:
+        monkeypatch.setattr(threads, "THREAD_MIN_ROWS", min_rows)
+        monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    plain = cycle_cover(tri, twin, points=pts, online=256, local=True)
+    seen = []
+    cov = cycle_cover(tri, twin, points=pts, online=256, local=True,
+                      beside=lambda cyc: seen.append((threading.get_ident(), cyc < 0)))
+    assert len(seen) == 1
+    np.testing.assert_array_equal(seen[0][1], cov.cycle < 0)
+    assert plain.n_cycles > 1 and (seen[0][0] != threading.get_ident()) == (min_rows is not None)
+    np.testing.assert_array_equal(plain.is_cov, cov.is_cov)
+    np.testing.assert_array_equal(plain.cycle, cov.cycle)
+
+
+@pytest.mark.parametrize("name", ["A", "face", "double_hex"])
+def test_peel_from_degrees_is_peel(name: str) -> None:
+    """``neighbors_degrees_into`` on row ranges then ``peel_active``: ``peel``'s rows left
+    on, and the active rows (left on at degree 3), on meshes with ears."""
+    from hammesh.postprocess import _cover_kernels as ck
+
+    dom = bundled_domain(name)
+    msh = hammesh.quality_mesh(dom, min_angle=20, max_area=hull_area(dom) / 300)
+    tri = msh.triangles
+    m = len(tri)
+    twin = half_edges(tri, msh.n_points).twin
+    nb = ck.neighbors(twin, m)
+    alive, deg = ck.peel(nb, m)
+    assert not alive.all()  # (ears and what peeling them leaves)
+    nb2, deg2 = np.empty((m, 3), np.int32), np.empty(m, np.int8)
+    for lo, hi in ((0, m // 3), (m // 3, m)):
+        ck.neighbors_degrees_into(twin, nb2, deg2, lo, hi)
+    np.testing.assert_array_equal(nb2, nb)
+    alive2, active2 = ck.peel_active(nb2, deg2)
+    np.testing.assert_array_equal(alive2, alive)
+    np.testing.assert_array_equal(active2, alive & (deg == 3))

@@ -11,7 +11,7 @@ from hypothesis.extra.numpy import arrays
 import hammesh
 import hammesh.postprocess.cycle_cover as cycle_cover_module
 from hammesh import threads
-from tests.helpers import angles_deg, bundled_domain, plate_with_loops, square
+from tests.helpers import angles_deg, bundled_domain, hull_area, plate_with_loops, square
 
 
 def _reference_facts(pts: np.ndarray, tri: np.ndarray):
@@ -259,6 +259,32 @@ def test_open_candidates_are_those_kruskal_can_still_take() -> None:
     np.testing.assert_array_equal(open_candidates(twin, cyc, 3, cand, meets), [False, False, True, False])
     # nothing meets: every candidate is open
     assert open_candidates(twin, cyc, 3, cand, np.zeros(4, bool)).all()
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_open_candidates_in_ranges_are_the_serial_ones(seed: int, monkeypatch) -> None:
+    """``open_candidates`` (the joins meeting the rule taken, then the rest judged in one
+    range per core against the roots) is ``_open_candidates_into`` (one serial pass),
+    on a cover's candidates with random ones meeting the rule."""
+    from hammesh.halfedge import half_edges
+    from hammesh.postprocess import _sparse_kernels as sk
+    from hammesh.postprocess.cycle_cover import cycle_cover
+
+    dom = bundled_domain("face")
+    msh = hammesh.quality_mesh(dom, min_angle=30, max_area=0.5 if seed else 2.0, isolate=False)
+    twin = half_edges(msh.triangles, msh.n_points).twin
+    cov = cycle_cover(msh.triangles, twin, rotate=False)
+    cand = sk.join_candidates(twin, cov.cycle)
+    rng = np.random.default_rng(seed)
+    cand = cand[rng.permutation(len(cand))]
+    monkeypatch.setattr(threads, "THREAD_MIN_ROWS", max(1, len(cand) // 3))
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    for share in (0.0, 0.1, 0.5, 1.0):
+        meets = rng.random(len(cand)) < share
+        unc = np.flatnonzero(cov.cycle < 0)
+        want = sk._open_candidates_into(twin, cov.cycle, cov.n_cycles, unc, cand, meets,
+                                        np.empty(cov.n_cycles + len(unc), np.int64), np.empty(len(cov.cycle), bool))
+        np.testing.assert_array_equal(sk.open_candidates(twin, cov.cycle, cov.n_cycles, cand, meets), want)
 
 
 @pytest.mark.parametrize("name", ["face", "gear"])
@@ -734,3 +760,31 @@ def test_repair_from_the_improvements_ask_gives_the_same_mesh_and_report(name: s
             assert asked.report[key] == full.report[key], key
     for a, b in ((asked.points, full.points), (asked.triangles, full.triangles), (asked.kind, full.kind)):
         np.testing.assert_array_equal(a, b)
+
+
+def test_twin_keys_in_two_parts_give_the_same_output(monkeypatch) -> None:
+    """``_row_twin_keys_split`` in two parts (``TWIN_KEYS_TWO_MIN`` lowered) and in one
+    serial call (``_row_twin_keys``) give the same keys, so the same output, array for
+    array (and the same report)."""
+    from hammesh.postprocess import _sparse_kernels as sk
+
+    dom = bundled_domain("la")
+    m = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 6000, isolate=False)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 2)
+    one = hammesh.hamiltonian(m, mode="sparse")
+    calls = []
+    real = sk._twin_keys_into
+
+    def counted(*a):
+        calls.append(a[6])
+        return real(*a)
+
+    monkeypatch.setattr(sk, "TWIN_KEYS_TWO_MIN", 1)
+    monkeypatch.setattr(sk, "_twin_keys_into", counted)
+    two = hammesh.hamiltonian(m, mode="sparse")
+    assert len(calls) == 2 and calls[0] == 0 < calls[1]
+    for name in ("points", "triangles", "kind", "parent"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+    strip = ("step_seconds", "step_cpu_seconds", "seconds")
+    assert {k: v for k, v in one.report.items() if not any(s in k for s in strip)} == {
+        k: v for k, v in two.report.items() if not any(s in k for s in strip)}

@@ -665,3 +665,36 @@ def test_rows_local_hint_skips_the_renumbering(monkeypatch) -> None:
     np.testing.assert_array_equal(hinted.points, plain.points)
     assert sparse.renumbers(10**6, 2, {}) and not sparse.renumbers(10**6, 2, {"rows_local": True})
     assert not sparse.renumbers(10**6, 3, {}) and not sparse.renumbers(10, 2, {})
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_kept_ratio_begun_before_the_swaps_is_the_final_rows_ratio(seed: int, monkeypatch) -> None:
+    """``kept_ratio_start`` read while rows are still swapped away (kind 3 -> 4, rows
+    rewritten) and ``kept_ratio_finish`` on the final rows give ``kept_radius_ratio`` of
+    the final rows: by the rows read then if no sampled row was swapped, else anew."""
+    from hammesh.postprocess import sparse
+
+    dom = bundled_domain("A") if seed == 2 else hammesh.Domain.from_polygon(square(0, 0, 1))
+    m = hammesh.quality_mesh(dom, min_angle=(25, 30, 20)[seed], max_area=0.001 if seed < 2 else 0.5, isolate=False)
+    lo, _, _, _ = sparse.triangle_facts(m.points, m.triangles)
+    rng = np.random.default_rng(seed)
+    monkeypatch.setattr(sparse, "KEPT_RATIO_STRIDE", 7)
+    parent = np.arange(m.n_triangles)
+    ways = set()
+    for trial in range(40):
+        kind = np.where(rng.random(m.n_triangles) < rng.uniform(0.05, 1.0), 3, 0).astype(np.int8)
+        rows = m.triangles.copy()
+        start = sparse.kept_ratio_start(m.points, rows, kind, parent, lo)
+        # the improvement: some kept rows swapped (other points, kind 4); half the
+        # trials spare the sampled rows
+        kept = np.flatnonzero(kind == 3)
+        gone = kept[rng.random(len(kept)) < 0.2]
+        if trial % 2:
+            gone = gone[gone % 7 != 0]
+        kind[gone] = 4
+        rows[gone] = np.roll(rows[gone], 1, axis=0)
+        sampled_swapped = bool((gone % 7 == 0).any())
+        ways.add(sampled_swapped)
+        want = sparse.kept_radius_ratio(m.points, rows, kind, parent, lo)
+        assert sparse.kept_ratio_finish(m.points, rows, kind, parent, lo, start) == want
+    assert ways == {True, False}
