@@ -52,7 +52,9 @@ MODES = {"incircle": incircle_hamiltonian, "sparse": sparse_hamiltonian}
 #: copies), and the certificate's input facts (~26): measured at 1.5 M the reserve ran
 #: out in the output rows at 256; 352. Session 12: the cover's neighbours, matching,
 #: search arrays and cycle arrays (48: ~4 k pages fewer faulted in the cover at 1.5 M); 400.
-RESERVE_TAKEN = {"incircle": 288, "sparse": 400}
+#: Session 23: the drop phase's search arrays, the renumbering's vertex arrays and the
+#: certificate's narrowed claim (18 MB at 1.5 M, which missed at 400); 416.
+RESERVE_TAKEN = {"incircle": 288, "sparse": 416}
 
 #: Bytes per input triangle sparse mode takes from ``hammesh.pages`` after its cover
 #: (the open candidates 9, the plan 36, the walk 8 and its table of links 16 (then the
