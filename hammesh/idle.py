@@ -3,13 +3,16 @@ result the caller takes when it needs it, or makes itself.
 
 Why. Sparse mode's construction keeps two cores busy only part of the time; the
 certificate's look at the caller's input (:func:`hammesh.verify.reference.input_facts`,
-~0.1 s of one core at 1.5 M triangles) has to run somewhere. On the side executor's
+~0.08 s of one core at 1.5 M triangles) has to run somewhere. On the side executor's
 thread it was a third runnable thread wherever both cores were busy, and the
 scheduler shared the cores out evenly: the construction's main thread waited on the
 run queue (20 ms in ``plan_joins`` alone, at a load below 1; docs/sparse.md,
-session 22, third round). At nice 19 the same thread takes only what the
-construction leaves: measured on fresh 1.5 M calls, 19 each way, the call's wall went
-from 0.788 to 0.767 s (median; the paired median −30 ms).
+session 22, third round). As an idle thread it takes only what the construction
+leaves. Linux's ``SCHED_IDLE`` policy does that best: any normal thread that wakes
+preempts it at once, where a nice-19 thread keeps the core until the scheduler's next
+decision. Quiet fresh 1.5 M first calls, arms alternating (session 23): the call's
+wall 0.756 s with the look on the side executor's thread, 0.741 at nice 19, **0.729**
+as ``SCHED_IDLE`` (medians of 10; paired −31 ms, 8 of 10 faster).
 
 The risk of the lowest priority is starvation: under other processes' load the
 thread may get almost nothing, and the caller would wait for it. So the caller never
@@ -18,12 +21,11 @@ else it gives the thread back its old priority where the system lets a thread ra
 its priority (privileged processes) and waits; else it waits at most as long as
 the work would take it (the caller's estimate, ``grace``) and then runs the work
 itself: it never loses more than the work's own time. Abandoned work runs out on its
-daemon thread, at nice 19, and its result is dropped (it never holds up the
-process's exit).
+daemon thread and its result is dropped (it never holds up the process's exit).
 
-A thread's own nice value is Linux semantics (``setpriority(PRIO_PROCESS, tid)``
-names a thread there; elsewhere it names a process): :func:`available` is False on
-other systems, and callers run the work as before.
+A thread's own scheduling policy and nice value are Linux semantics (the calls name
+a thread there, a process elsewhere): :func:`available` is False on other systems,
+and callers run the work as before.
 """
 
 from __future__ import annotations
@@ -35,30 +37,56 @@ from typing import Any, Callable
 
 __all__ = ["IdleTask", "on_idle_core", "available", "IDLE_NICE", "TAKEOVER_GRACE"]
 
-#: the thread's nice value (the lowest priority a normal thread may have)
+#: the nice value of an idle thread where the system refuses ``SCHED_IDLE``
 IDLE_NICE = 19
 #: seconds the caller waits for a thread it cannot raise back before it runs the
 #: work itself, where it gave no estimate of the work's time
 TAKEOVER_GRACE = 0.05
-#: "nice" (nice 19) or "sched_idle" (Linux's SCHED_IDLE: preempted at once by any
-#: thread that wakes) -- session 23's experiment
-POLICY = "nice"
 
 
 def available() -> bool:
-    """True where a thread's nice value is its own (Linux)."""
-    return sys.platform.startswith("linux") and hasattr(os, "setpriority") and hasattr(threading, "get_native_id")
+    """True where a thread's scheduling is its own (Linux)."""
+    return (sys.platform.startswith("linux") and hasattr(os, "sched_setscheduler")
+            and hasattr(os, "setpriority") and hasattr(threading, "get_native_id"))
+
+
+def _lower(tid: int) -> tuple[str, int] | None:
+    """Make thread ``tid`` idle; return how to raise it back, or None where refused."""
+    try:
+        os.sched_setscheduler(tid, os.SCHED_IDLE, os.sched_param(0))
+        return ("policy", os.SCHED_OTHER)
+    except (OSError, AttributeError):
+        pass
+    try:
+        nice = os.getpriority(os.PRIO_PROCESS, tid)
+        os.setpriority(os.PRIO_PROCESS, tid, max(nice, IDLE_NICE))
+        return ("nice", nice)
+    except OSError:  # (a sandbox may refuse both: the work runs at the old priority)
+        return None
+
+
+def _raise(tid: int, how: tuple[str, int]) -> bool:
+    """Undo :func:`_lower` (False where this process may not raise a thread's priority)."""
+    kind, old = how
+    try:
+        if kind == "policy":
+            os.sched_setscheduler(tid, old, os.sched_param(0))
+        else:
+            os.setpriority(os.PRIO_PROCESS, tid, old)
+    except OSError:  # (unprivileged: RLIMIT_NICE keeps a lowered thread low)
+        return False
+    return True
 
 
 class IdleTask:
-    """``fn(*args)`` on a daemon thread at nice :data:`IDLE_NICE` (see :func:`on_idle_core`)."""
+    """``fn(*args)`` on a daemon thread of the lowest priority (see :func:`on_idle_core`)."""
 
     def __init__(self, fn: Callable[..., Any], args: tuple, grace: float = TAKEOVER_GRACE) -> None:
         self._fn, self._args, self._grace = fn, args, float(grace)
         self._done = threading.Event()
-        self._lock = threading.Lock()  # guards _tid, _nice, _abandoned
+        self._lock = threading.Lock()  # guards _tid, _how, _abandoned
         self._tid: int | None = None
-        self._nice: int | None = None  # the thread's priority before it was lowered
+        self._how: tuple[str, int] | None = None  # how to raise the thread back
         self._abandoned = False
         self._value: Any = None
         self._error: BaseException | None = None
@@ -70,16 +98,9 @@ class IdleTask:
 
     def _run(self) -> None:
         tid = threading.get_native_id()
-        try:
-            nice = os.getpriority(os.PRIO_PROCESS, tid)
-            if POLICY == "sched_idle":
-                os.sched_setscheduler(tid, os.SCHED_IDLE, os.sched_param(0))
-            else:
-                os.setpriority(os.PRIO_PROCESS, tid, max(nice, IDLE_NICE))
-        except OSError:  # (a sandbox may refuse: the work runs at the old priority)
-            nice = None
+        how = _lower(tid)
         with self._lock:
-            self._tid, self._nice = tid, nice
+            self._tid, self._how = tid, how
             if self._abandoned:  # (the caller took over before this thread ran)
                 return
         try:
@@ -90,19 +111,9 @@ class IdleTask:
             self._done.set()
 
     def _raise_back(self) -> bool:
-        """Give the thread its old priority back (True), where this process may."""
         with self._lock:
-            tid, nice = self._tid, self._nice
-        if tid is None or nice is None:
-            return False
-        try:
-            if POLICY == "sched_idle":
-                os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
-            else:
-                os.setpriority(os.PRIO_PROCESS, tid, nice)
-        except OSError:  # (unprivileged: a thread's priority cannot be raised again)
-            return False
-        return True
+            tid, how = self._tid, self._how
+        return tid is not None and how is not None and _raise(tid, how)
 
     def _outcome(self, made_by: str) -> Any:
         self.made_by = made_by

@@ -5,9 +5,7 @@ from __future__ import annotations
 import numbers
 import threading
 import time
-from contextlib import contextmanager
 from dataclasses import replace
-from typing import Iterator
 
 import numpy as np
 
@@ -65,14 +63,12 @@ RESERVE_TAKEN = {"incircle": 288, "sparse": 416}
 RESERVE_AFTER_COVER = 173
 #: triangles below which sparse mode makes no reserve of its own (few pages to fault)
 SIDE_RESERVE_MIN_TRIANGLES = 200_000
-#: per mode, whether the certificate looks at the input on a thread of the lowest
-#: priority (:mod:`hammesh.idle`, Linux): it takes only what the construction leaves
-#: of the cores, instead of a third of two of them where the construction runs two
-#: threads (session 23); else on the side executor's thread
-LOOK_ON_IDLE_CORE = {"sparse": True, "incircle": False}
-#: sparse mode on the idle core: "placing" (the look starts as the splits are placed)
-#: or "gated" (its scan starts with the call, its matching as the splits are placed)
-LOOK_START = "placing"
+#: whether the certificate looks at the input on a thread of the lowest priority
+#: (:mod:`hammesh.idle`, Linux): it takes only what the construction leaves of the
+#: cores, instead of a third of two of them where the construction runs two threads;
+#: else on the side executor's thread. Quiet fresh 1.5 M first calls (session 23):
+#: sparse 0.718 -> 0.704 s (medians of 6), incircle 0.441 -> 0.411 s (of 5)
+LOOK_ON_IDLE_CORE = True
 #: the certificate's look at the input, seconds per input triangle on one core (0.08 s
 #: at 1.5 M, session 23): the longest a caller waits for the idle core's look before
 #: it looks itself (``hammesh.idle``; where it may not raise the thread back)
@@ -223,16 +219,6 @@ def hamiltonian(mesh: Mesh, *, mode: str = "sparse", keep: float = KEEP, tree: s
         pages.release()
 
 
-@contextmanager
-def _set_on_exit(event: threading.Event) -> Iterator[None]:
-    """Set ``event`` when the block ends, also by an exception (a thread waiting for it
-    must not wait forever)."""
-    try:
-        yield
-    finally:
-        event.set()
-
-
 def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> HamiltonianMesh:
     params.instance("mesh", mesh, (Mesh, HamiltonianMesh), "a hammesh.Mesh")  # issue 12 #11
     if isinstance(mesh, HamiltonianMesh):  # (its cycle is the input's order: kept_cycle)
@@ -252,32 +238,26 @@ def _hamiltonian(mesh: Mesh, mode: str, keep: float, tree: str = "quadtree") -> 
     # a second thread works beside the construction: the walk's arrays (while the
     # input is checked), the input's side of the certificate, and (incircle) the row
     # checks of the rows the walk has finished
-    gate = threading.Event()  # (the look's matching waits for it where it starts gated)
-    with threads.side_executor() as side, _set_on_exit(gate):  # (side: inline where this process may use one thread)
+    with threads.side_executor() as side:  # (inline when this process may use one thread)
         ready = None
         shape = np.shape(mesh.triangles)
         if mode == "incircle" and len(shape) == 2 and shape[1] == 3:
             # (parent and kind: made of the input's pairing arrays once the forest is done)
             ready = side.submit(walk_arrays, 3 * shape[0], 3 * shape[0], False, np.shape(mesh.points)[0])
         # the certificate's own look at the caller's input (never at the construction's
-        # validated copy), beside the construction's validation (incircle) or beside
-        # sparse mode's cover, which leaves the other core idle most of its time (the
-        # validation and the passes before the cover use both)
+        # validated copy), on a thread of the lowest priority (``hammesh.idle``: it fills
+        # what the construction leaves of the cores), from the start (incircle) or from
+        # the placing of the splits on (sparse: its cover and the passes before keep
+        # both cores busy)
         facts = []
-        on_idle = LOOK_ON_IDLE_CORE.get(mode, False) and idle.available() and not isinstance(
+        on_idle = LOOK_ON_IDLE_CORE and idle.available() and not isinstance(
             side, threads.InlineExecutor)
-        gate.set()
         grace = LOOK_SECONDS_PER_TRIANGLE * (shape[0] if len(shape) == 2 else 0)
 
         def start_facts() -> None:
-            gate.set()
             if not facts:
                 facts.append(idle.on_idle_core(input_facts, mesh, grace=grace) if on_idle
                              else side.submit(input_facts, mesh))
-
-        if on_idle and mode == "sparse" and LOOK_START == "gated":
-            gate.clear()
-            facts.append(idle.on_idle_core(input_facts, mesh, gate, grace=grace))
 
         def beside_cover() -> None:  # (sparse: the other core is mostly idle during the cover)
             start_facts()

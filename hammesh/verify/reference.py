@@ -14,7 +14,6 @@ certificate's side of the comparison.
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -66,17 +65,13 @@ def _bad_input(msg: str) -> None:
     raise VerificationError(f"the input mesh is not a valid triangulation: {msg}", check="input")
 
 
-def input_facts(mesh: Mesh, gate: threading.Event | None = None) -> InputFacts:
+def input_facts(mesh: Mesh) -> InputFacts:
     """Derive the input's facts the certificate compares the output with.
 
     Parameters
     ----------
     mesh : Mesh
         The input as the caller gave it (either orientation of rows).
-    gate : threading.Event, optional
-        Set when the rest may run: the scan of the rows runs at once, the matching of
-        their half-edges waits for it (a caller that knows when the cores will be
-        free for the larger part).
 
     Raises
     ------
@@ -112,8 +107,6 @@ def input_facts(mesh: Mesh, gate: threading.Event | None = None) -> InputFacts:
         _bad_input(f"triangle {t} {tri[t].tolist()} is degenerate (exact orientation test)")
     if not (np.isfinite(scan.min_angle) and np.isfinite(scan.total_area)):
         _bad_input("angles and areas are not finite (coordinates too large or too small)")
-    if gate is not None:
-        gate.wait()
     # the constrained edges are looked up in the matching's buckets (no pass of their
     # own); a bad segment array is named after the rows' faults, as before
     segs = np.asarray(mesh.segments)

@@ -16,23 +16,20 @@ from tests.helpers import bundled_domain, hull_area
 pytestmark = pytest.mark.skipif(not idle.available(), reason="a thread's own nice value is Linux semantics")
 
 
-def _own_nice() -> int:
-    return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+def _own_priority() -> tuple[int, int]:
+    """The calling thread's scheduling policy and nice value."""
+    return os.sched_getscheduler(0), os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
 
 
 def _may_raise_priority() -> bool:
-    """Whether this process may give a thread back a higher priority (privileged)."""
+    """Whether this process may give an idle thread its normal priority back (privileged)."""
     out = []
 
     def probe() -> None:
         tid = threading.get_native_id()
-        nice = os.getpriority(os.PRIO_PROCESS, tid)
-        if nice >= idle.IDLE_NICE:
-            out.append(False)
-            return
-        os.setpriority(os.PRIO_PROCESS, tid, idle.IDLE_NICE)
         try:
-            os.setpriority(os.PRIO_PROCESS, tid, nice)
+            os.sched_setscheduler(tid, os.SCHED_IDLE, os.sched_param(0))
+            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
             out.append(True)
         except OSError:
             out.append(False)
@@ -44,13 +41,14 @@ def _may_raise_priority() -> bool:
 
 
 def test_the_work_runs_at_the_lowest_priority_and_leaves_the_caller_as_it_was() -> None:
-    before = _own_nice()
-    task = idle.on_idle_core(_own_nice)
+    before = _own_priority()
+    task = idle.on_idle_core(_own_priority)
     while not task.done():
         time.sleep(0.001)
-    assert task.result() == max(before, idle.IDLE_NICE)
+    policy, nice = task.result()
+    assert policy == os.SCHED_IDLE or nice == idle.IDLE_NICE
     assert task.made_by == "idle"
-    assert _own_nice() == before  # (the caller's thread is not the one lowered)
+    assert _own_priority() == before  # (the caller's thread is not the one lowered)
 
 
 def test_an_exception_of_the_work_is_raised_in_the_caller() -> None:
@@ -75,14 +73,20 @@ def _blocked_on_the_idle_thread(release: threading.Event, started: threading.Eve
 
 
 def test_a_caller_that_cannot_raise_the_thread_back_takes_the_work_over(monkeypatch) -> None:
-    real = os.setpriority
+    real_nice, real_policy = os.setpriority, os.sched_setscheduler
 
-    def unprivileged(which: int, who: int, prio: int) -> None:  # (no thread's priority goes up)
+    def unprivileged_nice(which: int, who: int, prio: int) -> None:  # (no thread's priority goes up)
         if prio < os.getpriority(which, who):
             raise PermissionError(13, "Permission denied")
-        real(which, who, prio)
+        real_nice(which, who, prio)
 
-    monkeypatch.setattr(os, "setpriority", unprivileged)
+    def unprivileged_policy(who: int, policy: int, param) -> None:  # (RLIMIT_NICE 0: no way out of SCHED_IDLE)
+        if os.sched_getscheduler(who) == os.SCHED_IDLE and policy != os.SCHED_IDLE:
+            raise PermissionError(1, "Operation not permitted")
+        real_policy(who, policy, param)
+
+    monkeypatch.setattr(os, "setpriority", unprivileged_nice)
+    monkeypatch.setattr(os, "sched_setscheduler", unprivileged_policy)
     release = threading.Event()
     task = idle.on_idle_core(_blocked_on_the_idle_thread(release), 3, grace=0.2)
     t = time.perf_counter()
@@ -107,7 +111,8 @@ def test_a_privileged_caller_raises_the_thread_back_and_waits_for_it() -> None:
     timer.join()
 
 
-def test_sparse_mode_takes_its_certificates_look_from_the_idle_core(monkeypatch) -> None:
+@pytest.mark.parametrize("mode", ["sparse", "incircle"])
+def test_the_certificates_look_comes_from_the_idle_core(monkeypatch, mode: str) -> None:
     made = []
     real = idle.on_idle_core
 
@@ -119,7 +124,7 @@ def test_sparse_mode_takes_its_certificates_look_from_the_idle_core(monkeypatch)
     monkeypatch.setattr(idle, "on_idle_core", spy)
     dom = bundled_domain("face")
     mesh = hammesh.quality_mesh(dom, min_angle=30, max_area=hull_area(dom) / 2000)
-    h = hammesh.hamiltonian(mesh, mode="sparse")
+    h = hammesh.hamiltonian(mesh, mode=mode)
     assert h.report["verified"]
     ours = [(fn, task, grace) for fn, args, task, grace in made if args[0] is mesh]  # (not the kernel loading's)
     assert [fn.__qualname__ for fn, _, _ in ours] == ["input_facts"]
