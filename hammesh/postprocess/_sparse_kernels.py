@@ -96,10 +96,18 @@ def _free_pair(twin, used, h):
 
 
 def open_candidates(twin, cyc, n_cyc, cand, meets):
-    """:func:`_open_candidates_into` with its union-find and marks from ``hammesh.pages``:
-    the joins meeting the rule taken on one core (:func:`_take_meeting_into`), then the
-    other candidates judged in one range per core (:func:`_open_rest_into`; at 1.5 M
-    the whole was ~12 ms of one core)."""
+    """Which candidate joins could still be taken after every join that meets the rule?
+
+    ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
+    joins meeting it are taken as :func:`plan_merges` takes them (union-find over the
+    nodes, one join per triangle); a candidate that does not meet it is *open* if its
+    two triangles are still free and its nodes still apart. Only open candidates can
+    gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
+    other): Kruskal never reaches the rest.
+
+    The joins meeting the rule are taken on one core (:func:`_take_meeting_into`), then
+    the other candidates judged in one range per core (:func:`_open_rest_into`; at
+    1.5 M the whole was ~12 ms of one core); the marks from ``hammesh.pages``."""
     m = cyc.shape[0]
     unc = np.flatnonzero(cyc < 0)
     uf, used = np.empty(n_cyc + len(unc), np.int64), fresh(m, np.bool_)
@@ -117,7 +125,7 @@ OPEN_MIN_ROWS = 20_000
 
 @njit(cache=True, nogil=True)
 def _take_meeting_into(twin, cyc, n_cyc, unc, cand, meets, uf, used):
-    """:func:`_open_candidates_into`'s first part: the joins meeting the rule taken
+    """:func:`open_candidates`' first part: the joins meeting the rule taken
     (``used``, ``uf``), then every node's entry in ``uf`` set to its root (the second
     part reads roots only: its ranges side by side write nothing shared)."""
     m = cyc.shape[0]
@@ -144,7 +152,7 @@ def _take_meeting_into(twin, cyc, n_cyc, unc, cand, meets, uf, used):
 
 @njit(cache=True, nogil=True)
 def _open_rest_into(twin, cyc, n_cyc, unc, cand, meets, uf, used, out, lo, hi):
-    """:func:`_open_candidates_into`'s second part over candidates ``lo..hi``, after
+    """:func:`open_candidates`' second part over candidates ``lo..hi``, after
     :func:`_take_meeting_into` (``uf``: each node's root)."""
     for i in range(lo, hi):
         if meets[i]:
@@ -152,47 +160,6 @@ def _open_rest_into(twin, cyc, n_cyc, unc, cand, meets, uf, used, out, lo, hi):
         t, u, free = _free_pair(twin, used, cand[i])
         if free:
             out[i] = uf[cyc[t]] != uf[_node(cyc, n_cyc, unc, u)]
-
-
-@njit(cache=True, nogil=True)
-def _open_candidates_into(twin, cyc, n_cyc, unc, cand, meets, uf, used):
-    """Which candidate joins could still be taken after every join that meets the rule?
-
-    ``cand`` in Kruskal's order, ``meets[i]`` its join meets the rule unplaced. The
-    joins meeting it are taken as :func:`plan_merges` takes them (union-find over the
-    nodes, one join per triangle); a candidate that does not meet it is *open* if its
-    two triangles are still free and its nodes still apart. Only open candidates can
-    gain from placing their split's Steiner point (``sparse.sparse_cycles`` places no
-    other): Kruskal never reaches the rest. ``unc``: the uncovered triangles,
-    ascending (:func:`_node`); ``uf`` (``(n_cyc + len(unc),)`` int64) and ``used``
-    (``(m,)`` bool): scratch, any contents.
-    """
-    m = cyc.shape[0]
-    for x in range(uf.shape[0]):
-        uf[x] = x
-    for t in range(m):
-        used[t] = False
-    for i in range(cand.shape[0]):
-        if not meets[i]:
-            continue
-        t, u, free = _free_pair(twin, used, cand[i])
-        if not free:
-            continue
-        rt = _find(uf, cyc[t])
-        ru = _find(uf, _node(cyc, n_cyc, unc, u))
-        if rt == ru:
-            continue
-        uf[rt] = ru
-        used[t] = True
-        used[u] = True
-    out = np.zeros(cand.shape[0], np.bool_)
-    for i in range(cand.shape[0]):
-        if meets[i]:
-            continue
-        t, u, free = _free_pair(twin, used, cand[i])
-        if free:
-            out[i] = _find(uf, cyc[t]) != _find(uf, _node(cyc, n_cyc, unc, u))
-    return out
 
 
 class Plan(NamedTuple):
@@ -775,7 +742,6 @@ def _row_twin_keys(out, tri, twin_in, status, n_points, changed):
     j`` (``face_tw[3 r + j]``: known here, not searched for in ``changed`` by the
     matching), ``~s`` where the edge runs from its larger end point (two that run the
     same way: an edge used twice in one direction)."""
-    m = tri.shape[0]
     k = out.shape[0]
     n_ch = changed.shape[0]
     face_tw = np.full(3 * n_ch, -1, np.int64)
@@ -783,39 +749,12 @@ def _row_twin_keys(out, tri, twin_in, status, n_points, changed):
     rest = np.empty(3 * k + 3 * n_ch, np.int64)  # virtual half-edges to match
     keys = np.empty(3 * k + 3 * n_ch, np.int64)
     facing = np.empty(3 * k + 3 * n_ch, np.int64)
-    n = 0
-    for i in range(k):
-        for j in range(3):
-            a = out[i, j]
-            b = out[i, (j + 1) % 3]
-            rest[n] = 3 * (m + i) + j
-            keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
-            facing[n] = 3 * i + j if a < b else ~(3 * i + j)
-            n += 1
-    for r in range(n_ch):
-        u = changed[r]
-        for j in range(3):
-            g = twin_in[3 * u + j]
-            if g >= 0 and status[g // 3] == PASS:
-                x = g // 3
-                a = tri[x, g - 3 * x]
-                b = tri[x, (g - 3 * x + 1) % 3]
-                rest[n] = g
-                keys[n] = min(a, b) * np.int64(n_points) + max(a, b)
-                facing[n] = 3 * (k + r) + j if a < b else ~(3 * (k + r) + j)
-                n += 1
+    n = _twin_keys_into(out, tri, twin_in, status, n_points, changed, 0, n_ch, 0, rest, keys, facing)
     rest = rest[:n]
     keys = keys[:n]
     facing = facing[:n]
-    ib = 1
-    while (1 << ib) < n:
-        ib += 1
-    if n_points > 0 and (np.int64(n_points) * np.int64(n_points)) < (np.int64(1) << (62 - ib)):
-        packed = np.empty(n, np.int64)
-        for i in range(n):
-            packed[i] = (keys[i] << ib) | i
-        return face_tw, tw_new, rest, keys, packed, ib, facing
-    return face_tw, tw_new, rest, keys, np.empty(0, np.int64), -1, facing
+    packed, ib = _packed_keys(keys, n_points)
+    return face_tw, tw_new, rest, keys, packed, ib, facing
 
 
 @njit(cache=True, nogil=True)

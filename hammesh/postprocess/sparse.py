@@ -2326,14 +2326,8 @@ def kept_radius_ratio(
     triangles: r0 ~2, a <= ~31.4 deg, 0.8 % of the rows (every kept row measured:
     0.17 s CPU when the input's worst triangle was joined).
     """
-    sample = np.arange(0, len(rows), KEPT_RATIO_STRIDE)
-    sample = sample[kind[sample] == 3]
-    r0 = triangle_facts(points, rows[sample])[2] if len(sample) else 1.0
-    bound = math.acos(0.5 * (1.0 + math.sqrt(1.0 - 1.0 / r0))) if r0 > 1.0 else math.pi
-    few = np.empty(len(rows), np.int64)  # (pages beyond the few rows written are never touched)
-    # (margin: the angles and the ratios are rounded apart)
-    k = _k.kept_below(kind, parent, parent_min, bound * (1.0 + 1e-6), few)
-    return max(r0, triangle_facts(points, rows[few[:k]])[2]) if k else r0
+    _, r0, few = kept_ratio_start(points, rows, kind, parent, parent_min)
+    return max(r0, triangle_facts(points, rows[few])[2]) if len(few) else r0
 
 
 def kept_ratio_start(
@@ -2353,6 +2347,7 @@ def kept_ratio_start(
     r0 = triangle_facts(points, rows[sample])[2] if len(sample) else 1.0
     bound = math.acos(0.5 * (1.0 + math.sqrt(1.0 - 1.0 / r0))) if r0 > 1.0 else math.pi
     few = np.empty(len(rows), np.int64)  # (pages beyond the few rows written are never touched)
+    # (margin: the angles and the ratios are rounded apart)
     k = _k.kept_below(kind, parent, parent_min, bound * (1.0 + 1e-6), few)
     return sample, r0, few[:k]
 
