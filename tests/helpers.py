@@ -206,6 +206,18 @@ def assert_tiling_and_bound(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> None
     assert a_out >= 0.5 * a_in * (1 - 1e-9), (a_in, a_out)
 
 
+def assert_one_cycle_in_balanced_parts(m: hammesh.Mesh, h: hammesh.HamiltonianMesh, ks: tuple[int, ...]) -> None:
+    """A certified output of one cycle, re-checked here (:func:`assert_tiling_and_bound`),
+    whose partitions into each ``k`` of ``ks`` parts are connected and balanced."""
+    from hammesh.partition import partition
+
+    assert h.report["verified"] and len(h.components) == 1
+    assert_tiling_and_bound(m, h)
+    for k in ks:
+        p = partition(h, k)
+        assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+
+
 def assert_certificate(m: hammesh.Mesh, h: hammesh.HamiltonianMesh) -> None:
     """Independent re-check of what the certificate promises, with Thm 2.4's counts."""
     assert_tiling_and_bound(m, h)

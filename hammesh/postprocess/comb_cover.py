@@ -639,18 +639,23 @@ def _around(v, w, vt_ptr, vt_idx, tri, inside, weight):
 
 
 @njit(cache=True, nogil=True)
+def _around_pair(w, p, vt_ptr, vt_idx, tri, inside, weight):
+    """The monochrome weight of ``w``'s triangles and (if ``p >= 0``) ``p``'s others."""
+    s = _around(w, -1, vt_ptr, vt_idx, tri, inside, weight)
+    if p >= 0:
+        s += _around(p, w, vt_ptr, vt_idx, tri, inside, weight)
+    return s
+
+
+@njit(cache=True, nogil=True)
 def swap_gain(w, p, vt_ptr, vt_idx, tri, inside, weight):
     """How much monochrome weight putting ``w`` inside and ``p`` (if >= 0) outside
     takes away (negative: adds)."""
-    before = _around(w, -1, vt_ptr, vt_idx, tri, inside, weight)
-    if p >= 0:
-        before += _around(p, w, vt_ptr, vt_idx, tri, inside, weight)
+    before = _around_pair(w, p, vt_ptr, vt_idx, tri, inside, weight)
     inside[w] = True
     if p >= 0:
         inside[p] = False
-    after = _around(w, -1, vt_ptr, vt_idx, tri, inside, weight)
-    if p >= 0:
-        after += _around(p, w, vt_ptr, vt_idx, tri, inside, weight)
+    after = _around_pair(w, p, vt_ptr, vt_idx, tri, inside, weight)
     inside[w] = False
     if p >= 0:
         inside[p] = True

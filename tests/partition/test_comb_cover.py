@@ -19,7 +19,7 @@ from hammesh.errors import InvalidOptionError
 from hammesh.halfedge import half_edges
 from hammesh.partition import partition
 from hammesh.postprocess import comb_cover as comb
-from tests.helpers import assert_tiling_and_bound
+from tests.helpers import assert_one_cycle_in_balanced_parts, assert_tiling_and_bound
 
 
 def _rect(w: float, area: float, hole: tuple[float, float] | None = None) -> hammesh.Mesh:
@@ -75,11 +75,7 @@ def test_sparse_comb_keeps_every_guarantee(w: float, hx: float, holed: bool) -> 
     angle bound), its partitions connected and balanced."""
     mesh = _rect(w, w / 4000, hole=(hx * w, 0.5) if holed else None)
     h = hammesh.hamiltonian(mesh, mode="sparse", tree="comb")
-    assert h.report["verified"] and len(h.components) == 1
-    assert_tiling_and_bound(mesh, h)
-    for k in (4, 8):
-        p = partition(h, k)
-        assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+    assert_one_cycle_in_balanced_parts(mesh, h, (4, 8))
 
 
 def test_the_comb_cuts_less_than_the_default_and_the_default_is_unchanged() -> None:
@@ -197,11 +193,7 @@ def test_the_ring_frame_cover_is_one_cycle_round_the_hole(r_hole: float, ox: flo
     np.testing.assert_array_equal(mixed, cov.cycle >= 0)
     assert cov.n_cycles == 1 and cov.n_uncovered < 0.05 * len(tri)
     h = hammesh.hamiltonian(mesh, mode="sparse", tree="comb")
-    assert h.report["verified"] and len(h.components) == 1
-    assert_tiling_and_bound(mesh, h)
-    for k in (8, 64):
-        p = partition(h, k)
-        assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+    assert_one_cycle_in_balanced_parts(mesh, h, (8, 64))
 
 
 def test_the_ring_frame_is_taken_only_round_a_hole_the_domain_wraps_round() -> None:

@@ -16,7 +16,7 @@ from hammesh.partition import partition
 from hammesh.postprocess import _thm24_kernels as K
 from hammesh.postprocess import sparse_cells as sc
 from hammesh.postprocess.cycle_cover import cycle_cover
-from tests.helpers import assert_tiling_and_bound
+from tests.helpers import assert_one_cycle_in_balanced_parts, assert_tiling_and_bound
 from tests.partition.test_forest import gear
 
 LOW = (1 << K.FISH_SHIFT) - 1
@@ -159,11 +159,7 @@ def test_sparse_fishbone_keeps_every_guarantee(aspect: float, hx: float, holed: 
         mp.setattr(sc, "CELL_TRIANGLES", cells)
         mp.setattr(sc, "STRICT", strict)
         h = hammesh.hamiltonian(mesh, mode="sparse", tree="fishbone")
-    assert h.report["verified"] and len(h.components) == 1
-    assert_tiling_and_bound(mesh, h)
-    for k in (4, 8):
-        p = partition(h, k)
-        assert p.connected and p.sizes.max() - p.sizes.min() <= 1
+    assert_one_cycle_in_balanced_parts(mesh, h, (4, 8))
 
 
 def test_gear_ring_frame_and_default_sparse_unchanged() -> None:
