@@ -98,10 +98,12 @@ def run_all(calls: list[Callable[[], Any]]) -> list[Any]:
     Up to :func:`cores` calls: the first in the caller's thread, the others on a pool
     kept for the process (a new pool per pass cost ~0.3 ms of thread starts, and a
     sparse ``hamiltonian()`` makes ~40 passes). More calls than that: a pool of
-    :func:`cores` threads for this call, so that no more run at once.
+    :func:`cores` threads for this call, so that no more run at once. Where this
+    process may use one thread (:func:`cores` is 1), one after the other in the
+    caller's: no thread is started.
     """
-    if len(calls) == 1:
-        return [calls[0]()]
+    if len(calls) == 1 or cores() < 2:
+        return [c() for c in calls]
     if len(calls) > cores():
         with ThreadPoolExecutor(cores()) as pool:
             return [f.result() for f in [pool.submit(c) for c in calls]]

@@ -240,13 +240,6 @@ def _row_pass(fill, n: int, min_rows: int | None = None) -> list:
     return run_all([partial(fill, lo, hi) for lo, hi in spans])
 
 
-def _side_by_side(*calls: Callable[[], object]) -> list:
-    """The results of ``calls``, side by side (``hammesh.threads.run_all``) where this
-    process may use two threads, else one after the other in the caller's (a cap of one
-    thread starts none: ``run_all`` would start a pool for more calls than cores)."""
-    return run_all(list(calls)) if threads.cores() > 1 else [c() for c in calls]
-
-
 #: tied places beyond which :func:`stable_argsort` sorts again stably instead of fixing the ties
 STABLE_TIES_MAX = 16_384
 
@@ -2061,7 +2054,7 @@ def sparse_cycles(
     # cover's rotations if it made them on two threads, else side by side here; both
     # read the arrays before the ring fans write rows of them in place)
     if not bounds:
-        bounds.append(_side_by_side(partial(lone_bounds, cover.cycle), partial(corner_bound, pts, tri, tw)))
+        bounds.append(run_all([partial(lone_bounds, cover.cycle), partial(corner_bound, pts, tri, tw)]))
     (unc_all, (jb_rows, jb, jb_bnd)), c_bound = bounds[0]
     n_unc_bnd = int((tw[3 * unc_all[:, None] + np.arange(3)] < 0).any(axis=1).sum())
     steps.done("bounds")
@@ -2259,7 +2252,7 @@ def sparse_cycles(
     # the kept rows' ratio (what ``kept_ratio_start`` left, or ~9 ms at 1.5 M) on the
     # other core beside the counts; both read ``parent`` before it is mapped through
     # the fans below
-    (quality, n_flip_pairs, n_split_below), kept_ratio = _side_by_side(counts_of, kept_ratio_of)
+    (quality, n_flip_pairs, n_split_below), kept_ratio = run_all([counts_of, kept_ratio_of])
     quality["radius_ratio_output"] = float(max(quality["radius_ratio_output"], kept_ratio))
     quality["max_angle_input_deg"] = math.degrees(amax_in) if m0 else 0.0
     quality["radius_ratio_input"] = float(ratio_in)

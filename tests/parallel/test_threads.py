@@ -59,6 +59,17 @@ def test_run_all_never_runs_more_calls_at_once_than_the_cap(monkeypatch, no_cap)
     assert peak[0] == 2
 
 
+def test_run_all_under_a_cap_of_one_runs_in_the_callers_thread_in_order(monkeypatch, no_cap):
+    import threading
+
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 8)
+    threads.limit(1)
+    seen = []
+    calls = [lambda i=i: seen.append((i, threading.get_ident())) or i for i in range(3)]
+    assert threads.run_all(calls) == [0, 1, 2]
+    assert seen == [(i, threading.get_ident()) for i in range(3)]
+
+
 @pytest.mark.parametrize("value, capped", [("1", True), ("junk", False), ("0", False), ("", False)])
 def test_environment_sets_the_cap_of_a_new_process(value, capped):
     env = {**os.environ, "HAMMESH_THREADS": value}

@@ -19,7 +19,7 @@ from hammesh.errors import InvalidOptionError
 from hammesh.halfedge import half_edges
 from hammesh.partition import partition
 from hammesh.postprocess import comb_cover as comb
-from tests.helpers import assert_one_cycle_in_balanced_parts, assert_tiling_and_bound
+from tests.helpers import assert_one_cycle_in_balanced_parts
 
 
 def _rect(w: float, area: float, hole: tuple[float, float] | None = None) -> hammesh.Mesh:

@@ -12,7 +12,6 @@ from scipy.sparse.csgraph import dijkstra
 
 import hammesh
 from hammesh.halfedge import prepare_mesh
-from hammesh.partition import partition
 from hammesh.postprocess import _thm24_kernels as K
 from hammesh.postprocess import sparse_cells as sc
 from hammesh.postprocess.cycle_cover import cycle_cover
