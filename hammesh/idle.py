@@ -53,8 +53,9 @@ def available() -> bool:
 def _lower(tid: int) -> tuple[str, int] | None:
     """Make thread ``tid`` idle; return how to raise it back, or None where refused."""
     try:
+        old = os.sched_getscheduler(tid)  # (the caller's own: a process run under chrt keeps it)
         os.sched_setscheduler(tid, os.SCHED_IDLE, os.sched_param(0))
-        return ("policy", os.SCHED_OTHER)
+        return ("policy", old)
     except (OSError, AttributeError):
         pass
     try:

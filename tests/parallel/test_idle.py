@@ -130,3 +130,26 @@ def test_the_certificates_look_comes_from_the_idle_core(monkeypatch, mode: str) 
     assert ours[0][1].made_by in ("idle", "raised", "caller")
     assert 0 < ours[0][2] < 0.01  # (a small mesh: a caller never waits long for its look)
     assert list(h.components) == [len(h.triangles)]  # (one cycle: the rows in walk order)
+
+
+@pytest.mark.skipif(not _may_raise_priority(), reason="this process may not raise a thread's priority")
+def test_a_thread_raised_back_gets_its_callers_policy_not_a_higher_one() -> None:
+    """A caller run as a batch job (``chrt -b``) hands its idle work back at batch policy."""
+    release, started, out = threading.Event(), threading.Event(), []
+
+    def work() -> int:
+        started.set()
+        release.wait(10)
+        return os.sched_getscheduler(0)
+
+    def batch_caller() -> None:
+        os.sched_setscheduler(0, os.SCHED_BATCH, os.sched_param(0))
+        task = idle.on_idle_core(work)
+        assert started.wait(10)
+        threading.Timer(0.05, release.set).start()
+        out.append((task.result(), task.made_by))
+
+    t = threading.Thread(target=batch_caller)
+    t.start()
+    t.join(30)
+    assert out == [(os.SCHED_BATCH, "raised")]
